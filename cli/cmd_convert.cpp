@@ -1,0 +1,63 @@
+// gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--compress]
+#include <memory>
+
+#include "cli/commands.h"
+#include "convert/export.h"
+#include "convert/import.h"
+
+namespace gtn::cli {
+
+namespace {
+struct ConvertArgs {
+  std::vector<std::string> inputs;
+  std::string output;
+  int split = 6;
+  bool weld = false;
+  bool compress = false;
+};
+
+int runConvert(const ConvertArgs& a) {
+  const OutputFormat out_format = detectOutputFormat(a.output);
+  if (out_format == OutputFormat::kUnknown)
+    return reportError(usageError(a.output + ": unknown output format (use .gtn, .vtu, .node or .ele)"));
+  for (const std::string& in : a.inputs) {
+    if (in == a.output) return reportError(usageError(a.output + ": the output would overwrite an input"));
+  }
+  ImportOptions options;
+  options.split = a.split;
+  options.weld = a.weld;
+  auto imported = importMesh(a.inputs, options);
+  if (!imported.isOk()) return reportError(imported.status());
+  printImportReport(a.inputs[0], imported->report);
+  TetMesh& mesh = imported->mesh;
+  Status st;
+  switch (out_format) {
+    case OutputFormat::kVtu: {
+      ExportOptions eo;
+      eo.compress = a.compress;
+      st = exportVtu(mesh, a.output, eo);
+      break;
+    }
+    case OutputFormat::kTetgen: st = exportTetgen(mesh, a.output); break;
+    case OutputFormat::kGtn: st = unsupported(".gtn output is not implemented yet"); break;
+    default: st = usageError("unknown output format");
+  }
+  if (!st.isOk()) return reportError(st);
+  return 0;
+}
+}  // namespace
+
+Command addConvertCommand(CLI::App& app) {
+  auto args = std::make_shared<ConvertArgs>();
+  CLI::App* sub = app.add_subcommand("convert", "Import a mesh (PLOT3D, TetGen, VTK, Medit, OFF) and write .gtn, .vtu or TetGen");
+  sub->add_option("inputs", args->inputs, "Input files (PLOT3D: grid [Q] [function] or .p3d; TetGen: basename or .node/.ele)")
+      ->required();
+  sub->add_option("-o,--output", args->output, "Output file: .gtn, .vtu, or .node/.ele (TetGen)")->required();
+  sub->add_option("--split", args->split, "Hexahedra into 5 (alternating) or 6 (consistent diagonals) tetrahedra")
+      ->check(CLI::IsMember({5, 6}));
+  sub->add_flag("--weld", args->weld, "PLOT3D: merge bit-identical points and drop collapsed tetrahedra");
+  sub->add_flag("--compress", args->compress, ".vtu: zlib-compress the data arrays");
+  return {sub, [args] { return runConvert(*args); }};
+}
+
+}  // namespace gtn::cli

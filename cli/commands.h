@@ -1,0 +1,33 @@
+// The `gtn` subcommands: each file registers one subcommand and returns the function that runs it.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+
+#include "convert/import.h"
+#include "mesh/status.h"
+
+namespace gtn::cli {
+
+using Runner = std::function<int()>;
+struct Command {
+  CLI::App* app;
+  Runner run;
+};
+
+Command addConvertCommand(CLI::App& app);
+Command addInfoCommand(CLI::App& app);
+
+// Prints "gtn: error: <message>" on standard error and returns the exit code for the status.
+int reportError(const Status& status);
+// Prints a warning line on standard error.
+void warn(const std::string& message);
+// Prints what an importer changed (flips, drops, welds, warnings) on standard error.
+void printImportReport(const std::string& input, const ImportReport& report);
+// The command line as the user typed it (for provenance).
+const std::string& commandLine();
+void setCommandLine(int argc, char** argv);
+
+}  // namespace gtn::cli

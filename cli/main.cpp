@@ -1,0 +1,64 @@
+// gtn: convert, inspect, validate, export and render irregular-grid volume data.
+#include <cstdio>
+#include <vector>
+
+#include "cli/commands.h"
+
+namespace gtn::cli {
+
+namespace {
+std::string g_command_line;
+}
+
+int reportError(const Status& status) {
+  std::fprintf(stderr, "gtn: error: %s\n", status.message().c_str());
+  return exitCodeFor(status.code());
+}
+
+void warn(const std::string& message) { std::fprintf(stderr, "gtn: warning: %s\n", message.c_str()); }
+
+void printImportReport(const std::string& input, const ImportReport& r) {
+  if (r.flipped) std::fprintf(stderr, "gtn: %s: flipped %zu tetrahedra to positive orientation\n", input.c_str(), r.flipped);
+  if (r.zero_volume)
+    std::fprintf(stderr, "gtn: %s: %zu tetrahedra have zero volume (kept)\n", input.c_str(), r.zero_volume);
+  if (r.dropped_cells) std::fprintf(stderr, "gtn: %s: dropped %zu cells\n", input.c_str(), r.dropped_cells);
+  if (r.welded_points)
+    std::fprintf(stderr, "gtn: %s: welded %zu points, dropped %zu collapsed tetrahedra\n", input.c_str(),
+                 r.welded_points, r.collapsed_tets);
+  if (r.steiner_points)
+    std::fprintf(stderr, "gtn: %s: added %zu Steiner points to split cells conformingly\n", input.c_str(),
+                 r.steiner_points);
+  for (const std::string& w : r.warnings) warn(input + ": " + w);
+}
+
+const std::string& commandLine() { return g_command_line; }
+
+void setCommandLine(int argc, char** argv) {
+  g_command_line.clear();
+  for (int i = 0; i < argc; ++i) {
+    if (i) g_command_line += ' ';
+    g_command_line += argv[i];
+  }
+}
+
+}  // namespace gtn::cli
+
+int main(int argc, char** argv) {
+  using namespace gtn::cli;
+  setCommandLine(argc, argv);
+  CLI::App app{"gtn: compressed irregular-grid volume data (tetrahedral meshes) - convert, inspect, export"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("gtn ") + GTN_VERSION_STRING);
+  std::vector<Command> commands;
+  commands.push_back(addConvertCommand(app));
+  commands.push_back(addInfoCommand(app));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  }
+  for (Command& c : commands)
+    if (c.app->parsed()) return c.run();
+  return 2;
+}

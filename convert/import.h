@@ -1,0 +1,40 @@
+// Importers: every supported input format into a TetMesh, orientation normalised, with a report of
+// what was changed on the way in. The dispatcher picks the format from each input's extension and
+// content.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+struct ImportOptions {
+  int split = 6;      // hexahedra into 5 (alternating parity) or 6 (consistent diagonals) tetrahedra
+  bool weld = false;  // PLOT3D: merge bit-identical points, drop tetrahedra that collapse
+};
+
+enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kOff, kGtn };
+const char* inputFormatName(InputFormat f);
+
+// Format of one input path from its extension and first bytes.
+InputFormat detectInputFormat(const std::string& path);
+
+// Imports the mesh that `inputs` describe together: one mesh file, a TetGen basename or any of its
+// files, or PLOT3D grid [+ Q] [+ function] files or a .p3d meta-file.
+StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const ImportOptions& options);
+
+// The importers (each in its own file under convert/).
+StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, const ImportOptions& options);
+StatusOr<ImportResult> importTetgen(const std::string& path, const ImportOptions& options);
+StatusOr<ImportResult> importVtkLegacy(const std::string& path, const ImportOptions& options);
+StatusOr<ImportResult> importVtu(const std::string& path, const ImportOptions& options);
+StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions& options);
+StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions& options);
+
+// Normalises orientation after an importer built `result.mesh`: flips negative tetrahedra, counts
+// flips and zero-volume cells into the report.
+void finishImport(ImportResult& result);
+
+}  // namespace gtn

@@ -1,0 +1,126 @@
+#include "convert/text_reader.h"
+
+#include <charconv>
+#include <cmath>
+
+namespace gtn {
+
+namespace {
+bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
+std::string shown(std::string_view token) {
+  std::string s(token.substr(0, 40));
+  for (char& c : s)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return "'" + s + (token.size() > 40 ? "...'" : "'");
+}
+
+template <class T>
+bool parseFloating(std::string_view token, T* out) {
+  if (token.empty()) return false;
+  if (token.front() == '+') token.remove_prefix(1);  // from_chars rejects a leading plus
+  const char* end = token.data() + token.size();
+  auto [ptr, ec] = std::from_chars(token.data(), end, *out);
+  if (ec == std::errc::result_out_of_range) return false;
+  return ec == std::errc() && ptr == end;
+}
+}  // namespace
+
+bool parseInt(std::string_view token, int64_t* out) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  const char* end = token.data() + token.size();
+  auto [ptr, ec] = std::from_chars(token.data(), end, *out);
+  return ec == std::errc() && ptr == end && !token.empty();
+}
+
+bool parseDouble(std::string_view token, double* out) { return parseFloating(token, out); }
+bool parseFloat(std::string_view token, float* out) { return parseFloating(token, out); }
+
+void TextReader::skipSpace(bool stop_at_newline) {
+  while (pos_ < text_.size()) {
+    const char c = text_[pos_];
+    if (c == '\n') {
+      if (stop_at_newline) return;
+      ++line_;
+      ++pos_;
+    } else if (isSpace(c)) {
+      ++pos_;
+    } else if (comment_ != '\0' && c == comment_) {
+      while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+    } else {
+      return;
+    }
+  }
+}
+
+bool TextReader::next(std::string_view* token) {
+  skipSpace(false);
+  if (pos_ >= text_.size()) {
+    token_line_ = line_;
+    return false;
+  }
+  const size_t start = pos_;
+  while (pos_ < text_.size() && !isSpace(text_[pos_]) && !(comment_ != '\0' && text_[pos_] == comment_)) ++pos_;
+  token_line_ = line_;
+  *token = text_.substr(start, pos_ - start);
+  return true;
+}
+
+bool TextReader::nextOnLine(std::string_view* token) {
+  skipSpace(true);
+  if (pos_ >= text_.size() || text_[pos_] == '\n') return false;
+  return next(token);
+}
+
+void TextReader::skipLine() {
+  while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+  if (pos_ < text_.size()) {
+    ++pos_;
+    ++line_;
+  }
+}
+
+bool TextReader::atEnd() {
+  skipSpace(false);
+  return pos_ >= text_.size();
+}
+
+void TextReader::seek(size_t offset) {
+  for (size_t i = pos_; i < offset && i < text_.size(); ++i)
+    if (text_[i] == '\n') ++line_;
+  pos_ = offset;
+}
+
+Status TextReader::error(const std::string& reason) const {
+  return invalidData(path_ + ":" + std::to_string(token_line_) + ": " + reason);
+}
+
+Status TextReader::errorAtEnd(const char* what) const {
+  return invalidData(path_ + ":" + std::to_string(token_line_) + ": file ends where " + what + " was expected");
+}
+
+StatusOr<int64_t> TextReader::readInt(const char* what) {
+  std::string_view tok;
+  if (!next(&tok)) return errorAtEnd(what);
+  int64_t v;
+  if (!parseInt(tok, &v)) return error("expected " + std::string(what) + " (an integer), found " + shown(tok));
+  return v;
+}
+
+StatusOr<double> TextReader::readDouble(const char* what) {
+  std::string_view tok;
+  if (!next(&tok)) return errorAtEnd(what);
+  double v;
+  if (!parseDouble(tok, &v)) return error("expected " + std::string(what) + " (a number), found " + shown(tok));
+  return v;
+}
+
+StatusOr<float> TextReader::readFloat(const char* what) {
+  std::string_view tok;
+  if (!next(&tok)) return errorAtEnd(what);
+  float v;
+  if (!parseFloat(tok, &v)) return error("expected " + std::string(what) + " (a number), found " + shown(tok));
+  return v;
+}
+
+}  // namespace gtn

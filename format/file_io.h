@@ -1,0 +1,42 @@
+// Reading whole inputs and writing outputs atomically (temporary file in the target's directory,
+// flushed, then renamed over the target): a failed run leaves no partial output.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "mesh/status.h"
+
+namespace gtn {
+
+// Reads a regular file (or "-" for standard input) whole. Errors name the file: missing, a directory,
+// unreadable. `max_bytes` bounds what is read from a pipe.
+StatusOr<std::string> readWholeFile(const std::string& path, uint64_t max_bytes = UINT64_MAX);
+
+// True when `path` names an existing regular file.
+bool isRegularFile(const std::string& path);
+
+// Writes `path` atomically: `write` receives a FILE* to a temporary file beside `path`; when it
+// returns ok, the file is flushed, synced and renamed to `path`; otherwise the temporary is removed.
+// "-" writes to standard output directly.
+Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write);
+
+// Convenience for writing one buffer atomically.
+Status writeBytesAtomically(const std::string& path, const void* data, size_t size);
+
+// Several outputs that must all appear or none (TetGen's .node/.ele/.face): each is written to a
+// temporary; commit() renames all; the destructor removes the temporaries of an uncommitted group.
+class AtomicFileGroup {
+ public:
+  ~AtomicFileGroup();
+  Status add(const std::string& path, const std::function<Status(std::FILE*)>& write);
+  Status commit();
+
+ private:
+  std::vector<std::pair<std::string, std::string>> files_;  // temporary, final
+  bool committed_ = false;
+};
+
+}  // namespace gtn

@@ -1,0 +1,73 @@
+#include "mesh/faces.h"
+
+#include <algorithm>
+
+namespace gtn {
+
+const int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+namespace {
+struct FaceKey {
+  uint32_t v[3];
+  uint32_t slot;  // 4 * tet + local face
+  bool operator<(const FaceKey& o) const {
+    if (v[0] != o.v[0]) return v[0] < o.v[0];
+    if (v[1] != o.v[1]) return v[1] < o.v[1];
+    return v[2] < o.v[2];
+  }
+  bool sameFace(const FaceKey& o) const { return v[0] == o.v[0] && v[1] == o.v[1] && v[2] == o.v[2]; }
+};
+}  // namespace
+
+FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
+  FaceAdjacency adj;
+  const size_t nt = mesh.tets.size();
+  adj.neighbor.assign(4 * nt, kNoNeighbor);
+  std::vector<FaceKey> keys(4 * nt);
+  for (size_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 4; ++k) {
+      FaceKey& key = keys[4 * t + k];
+      uint32_t a = mesh.tets[t][kTetFace[k][0]], b = mesh.tets[t][kTetFace[k][1]], c = mesh.tets[t][kTetFace[k][2]];
+      if (a > b) std::swap(a, b);
+      if (b > c) std::swap(b, c);
+      if (a > b) std::swap(a, b);
+      key.v[0] = a;
+      key.v[1] = b;
+      key.v[2] = c;
+      key.slot = static_cast<uint32_t>(4 * t + k);
+    }
+  }
+  std::sort(keys.begin(), keys.end());
+  size_t i = 0;
+  while (i < keys.size()) {
+    size_t j = i + 1;
+    while (j < keys.size() && keys[j].sameFace(keys[i])) ++j;
+    const size_t count = j - i;
+    ++adj.faces;
+    if (count == 1) {
+      ++adj.boundary_faces;
+    } else if (count == 2) {
+      adj.neighbor[keys[i].slot] = keys[i + 1].slot / 4;
+      adj.neighbor[keys[i + 1].slot] = keys[i].slot / 4;
+    } else {
+      ++adj.non_manifold_faces;
+      for (size_t m = i; m < j; ++m) adj.neighbor[keys[m].slot] = kNonManifold;
+    }
+    i = j;
+  }
+  return adj;
+}
+
+std::vector<Triangle> boundaryTriangles(const TetMesh& mesh, const FaceAdjacency& adjacency) {
+  std::vector<Triangle> out;
+  out.reserve(adjacency.boundary_faces);
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) {
+      if (adjacency.neighbor[4 * t + k] != kNoNeighbor) continue;
+      out.push_back({mesh.tets[t][kTetFace[k][0]], mesh.tets[t][kTetFace[k][1]], mesh.tets[t][kTetFace[k][2]]});
+    }
+  }
+  return out;
+}
+
+}  // namespace gtn

@@ -1,0 +1,38 @@
+// Face adjacency and the boundary surface of a tetrahedral mesh. Faces are identified by their three
+// vertex indices (not positions): unwelded coincident points give distinct faces, as in the paper's
+// Table 1 counts.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+// Local faces of a tetrahedron: face k is opposite vertex k, listed so that for a positively oriented
+// tetrahedron its normal (right-hand rule) points outward.
+extern const int kTetFace[4][3];
+
+constexpr uint32_t kNoNeighbor = 0xFFFFFFFFu;   // boundary face
+constexpr uint32_t kNonManifold = 0xFFFFFFFEu;  // face shared by three or more tetrahedra
+
+struct FaceAdjacency {
+  // neighbor[4 * t + k]: the tetrahedron across face k of tetrahedron t, kNoNeighbor on the boundary,
+  // kNonManifold where three or more tetrahedra share the face.
+  std::vector<uint32_t> neighbor;
+  uint64_t faces = 0;               // distinct triangles
+  uint64_t boundary_faces = 0;      // triangles in exactly one tetrahedron
+  uint64_t non_manifold_faces = 0;  // triangles in three or more tetrahedra
+};
+
+FaceAdjacency computeFaceAdjacency(const TetMesh& mesh);
+
+using Triangle = std::array<uint32_t, 3>;
+
+// Boundary triangles, outward oriented when the tetrahedra are positively oriented, in tetrahedron
+// order (tetrahedron index, then local face).
+std::vector<Triangle> boundaryTriangles(const TetMesh& mesh, const FaceAdjacency& adjacency);
+
+}  // namespace gtn

@@ -1,0 +1,37 @@
+// Statistics of a tetrahedral mesh, as `gtn info` prints them.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+struct FieldStats {
+  std::string name;
+  uint32_t components = 1;
+  ScalarType type = ScalarType::kFloat32;
+  bool per_cell = false;
+  double min = 0, max = 0;  // over all finite component values
+  uint64_t non_finite = 0;  // NaN or infinite values
+};
+
+struct MeshStats {
+  uint64_t points = 0, tets = 0, faces = 0, boundary_faces = 0, non_manifold_faces = 0;
+  double bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
+  double min_volume = 0, max_volume = 0, total_volume = 0;
+  uint64_t inverted = 0, zero_volume = 0;  // by exact predicates
+  uint64_t unreferenced_points = 0;        // points no tetrahedron uses
+  uint64_t coincident_points = 0;          // points at the same position as another (copies beyond the first)
+  std::vector<FieldStats> fields;
+};
+
+MeshStats computeMeshStats(const TetMesh& mesh);
+
+// Reorients every tetrahedron with negative volume (exact predicate) by swapping its last two
+// vertices; returns how many were flipped and counts zero-volume cells into *zero_volume.
+size_t normalizeOrientation(TetMesh& mesh, size_t* zero_volume);
+
+}  // namespace gtn

@@ -1,0 +1,52 @@
+#include "mesh/mesh_stream.h"
+
+#include <cstring>
+
+namespace gtn {
+
+Status TetMeshBuilder::beginLevel(const LevelHeader& header) {
+  header_ = header;
+  mesh_ = TetMesh();
+  boundary_.clear();
+  mesh_.coord_type = header.coord_type;
+  mesh_.metadata = header.metadata;
+  // Reserve only what the header promises within a sane bound; the stream itself is authoritative.
+  const uint64_t kReserveCap = uint64_t{1} << 26;
+  mesh_.coords.reserve(3 * std::min<uint64_t>(header.points, kReserveCap));
+  mesh_.tets.reserve(std::min<uint64_t>(header.tets, kReserveCap));
+  for (const FieldDesc& d : header.point_fields) {
+    mesh_.point_fields.emplace_back(d.name, d.components, d.type, 0);
+  }
+  for (const FieldDesc& d : header.cell_fields) {
+    mesh_.cell_fields.emplace_back(d.name, d.components, d.type, 0);
+  }
+  return Status::ok();
+}
+
+Status TetMeshBuilder::vertex(uint32_t id, const double xyz[3], const uint8_t* values) {
+  if (id != mesh_.numPoints()) return invalidData("mesh stream: vertex ids must be consecutive");
+  mesh_.coords.insert(mesh_.coords.end(), xyz, xyz + 3);
+  for (Field& f : mesh_.point_fields) {
+    const size_t n = f.components * f.valueSize();
+    f.bytes.insert(f.bytes.end(), values, values + n);
+    values += n;
+  }
+  return Status::ok();
+}
+
+Status TetMeshBuilder::boundaryTriangle(const uint32_t v[3]) {
+  boundary_.push_back({v[0], v[1], v[2]});
+  return Status::ok();
+}
+
+Status TetMeshBuilder::tet(const uint32_t v[4], const uint8_t* cell_values) {
+  mesh_.tets.push_back({v[0], v[1], v[2], v[3]});
+  for (Field& f : mesh_.cell_fields) {
+    const size_t n = f.components * f.valueSize();
+    f.bytes.insert(f.bytes.end(), cell_values, cell_values + n);
+    cell_values += n;
+  }
+  return Status::ok();
+}
+
+}  // namespace gtn

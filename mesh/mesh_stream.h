@@ -1,0 +1,75 @@
+// The mesh stream (ARCHITECTURE.md): the one event sequence the decoder produces and the simplifier,
+// the renderer and the in-memory builder consume, so that each piece of data passes through memory
+// once. Order of events for one level:
+//   beginLevel, then vertex/boundaryTriangle events for the boundary surface (each triangle after its
+//   three vertices), endBoundary, then vertex and tet events in peeling order (a tetrahedron after
+//   its four vertices), retireVertex once a vertex's last tetrahedron has been emitted, endLevel.
+// Vertex ids are assigned in emission order within the level: the k-th vertex event has id k.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+struct FieldDesc {
+  std::string name;
+  uint32_t components = 1;
+  ScalarType type = ScalarType::kFloat32;
+  size_t itemBytes() const { return components * scalarSize(type); }
+};
+
+struct LevelHeader {
+  uint32_t level = 0;          // 0 = the lossless mesh, i = stored mip level i
+  uint64_t merges = 0;         // merges of the merge tree already applied to this level
+  uint64_t points = 0;         // vertex events that will follow
+  uint64_t tets = 0;           // tet events that will follow
+  uint64_t boundary_triangles = 0;
+  ScalarType coord_type = ScalarType::kFloat64;
+  std::vector<FieldDesc> point_fields;  // values of a vertex event: these fields' items, concatenated
+  std::vector<FieldDesc> cell_fields;   // values of a tet event: these fields' items, concatenated
+  double bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
+  std::vector<std::pair<std::string, std::string>> metadata;
+};
+
+class MeshSink {
+ public:
+  virtual ~MeshSink() = default;
+  virtual Status beginLevel(const LevelHeader& header) = 0;
+  // `values` points at the concatenated items of header.point_fields (raw bytes in source type).
+  virtual Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) = 0;
+  // Outward-oriented boundary triangle of vertices already emitted.
+  virtual Status boundaryTriangle(const uint32_t v[3]) = 0;
+  virtual Status endBoundary() = 0;
+  // A positively oriented tetrahedron of vertices already emitted; `cell_values` as for vertex().
+  virtual Status tet(const uint32_t v[4], const uint8_t* cell_values) = 0;
+  // No later event refers to vertex `id`.
+  virtual Status retireVertex(uint32_t id) = 0;
+  virtual Status endLevel() = 0;
+};
+
+// A sink that assembles the stream into a TetMesh (the generic, whole-mesh consumer).
+class TetMeshBuilder : public MeshSink {
+ public:
+  Status beginLevel(const LevelHeader& header) override;
+  Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) override;
+  Status boundaryTriangle(const uint32_t v[3]) override;
+  Status endBoundary() override { return Status::ok(); }
+  Status tet(const uint32_t v[4], const uint8_t* cell_values) override;
+  Status retireVertex(uint32_t) override { return Status::ok(); }
+  Status endLevel() override { return Status::ok(); }
+
+  const LevelHeader& header() const { return header_; }
+  TetMesh& mesh() { return mesh_; }
+  const std::vector<std::array<uint32_t, 3>>& boundary() const { return boundary_; }
+
+ private:
+  LevelHeader header_;
+  TetMesh mesh_;
+  std::vector<std::array<uint32_t, 3>> boundary_;
+};
+
+}  // namespace gtn
