@@ -19,6 +19,10 @@ struct Command {
 
 Command addConvertCommand(CLI::App& app);
 Command addInfoCommand(CLI::App& app);
+Command addExportCommand(CLI::App& app);
+Command addValidateCommand(CLI::App& app);
+Command addRenderCommand(CLI::App& app);
+Command addCompareCommand(CLI::App& app);
 
 // Prints "gtn: error: <message>" on standard error and returns the exit code for the status.
 int reportError(const Status& status);

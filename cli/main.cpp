@@ -52,6 +52,10 @@ int main(int argc, char** argv) {
   std::vector<Command> commands;
   commands.push_back(addConvertCommand(app));
   commands.push_back(addInfoCommand(app));
+  commands.push_back(addExportCommand(app));
+  commands.push_back(addValidateCommand(app));
+  commands.push_back(addRenderCommand(app));
+  commands.push_back(addCompareCommand(app));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
