@@ -1,0 +1,55 @@
+// CONTRACT between codec/ (the lossless level codec) and format/ (the .gtn container), simplify/ and
+// render/. One "level" is one tetrahedral mesh (level 0 = the lossless source, level i = mip level i),
+// coded as independent byte streams that format/ stores as chunks. Owned by the codec; changes to this
+// header must stay compatible with its users.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "mesh/mesh_stream.h"
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+struct EncodeOptions {
+  // Reserved: keep the source's vertex and tetrahedron order (costs ~18-21 bits per tetrahedron).
+  bool keep_order = false;
+};
+
+// The coded streams of one level. `header` carries counts, field descriptions, bounding box and
+// metadata; format/ serialises it in the level's header chunk.
+struct EncodedLevel {
+  LevelHeader header;
+  std::vector<uint8_t> boundary;      // the boundary surface (a triangle mesh), coded compactly
+  std::vector<uint8_t> connectivity;  // the surface-peeling code of every tetrahedron
+  std::vector<uint8_t> geometry;      // coordinates, predicted in decoding order
+  std::vector<std::vector<uint8_t>> point_fields;  // one stream per header.point_fields entry
+  std::vector<std::vector<uint8_t>> cell_fields;   // one stream per header.cell_fields entry
+  // vertex_order[source vertex index] = the id the decoder gives that vertex (its emission order);
+  // tet_order[source tetrahedron index] = the tetrahedron's position in the decoded stream.
+  // Callers use these to store per-vertex data (the merge tree) in decoding order.
+  std::vector<uint32_t> vertex_order;
+  std::vector<uint64_t> tet_order;
+};
+
+// Encodes a mesh whose tetrahedra are positively oriented (zero-volume ones allowed).
+StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& options);
+
+// Views of the coded streams of one level as read back from a file.
+struct LevelPayload {
+  std::span<const uint8_t> boundary, connectivity, geometry;
+  std::vector<std::span<const uint8_t>> point_fields, cell_fields;
+};
+
+struct DecodeStats {
+  uint64_t peak_live_vertices = 0;  // largest number of vertices emitted and not yet retired
+};
+
+// Decodes one level and emits its events (mesh_stream.h order) to `sink`. Fails with kInvalidData,
+// never crashes, on any corrupt payload; `what` names the source in messages (file and level).
+Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink,
+                   DecodeStats* stats, const std::string& what);
+
+}  // namespace gtn
