@@ -1,0 +1,106 @@
+// Reading inputs and atomic outputs: a failed write leaves nothing behind and never touches the target.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+
+#include "convert/text_reader.h"
+#include "format/file_io.h"
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+TEST(FileIo, ReadErrorsNameTheFile) {
+  const std::string dir = test::tempDir("fileio-read");
+  auto r = readWholeFile(dir);
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().code(), StatusCode::kIo);
+  EXPECT_NE(r.status().message().find("directory"), std::string::npos);
+  r = readWholeFile(dir + "/missing.node");
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("missing.node"), std::string::npos);
+  test::writeFile(dir + "/big", std::string(100, 'x'));
+  EXPECT_FALSE(readWholeFile(dir + "/big", 10).isOk());
+  ASSERT_TRUE(readWholeFile(dir + "/big").isOk());
+  EXPECT_EQ(readWholeFile(dir + "/big").value().size(), 100u);
+}
+
+TEST(FileIo, FailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
+  const std::string dir = test::tempDir("fileio-atomic");
+  const std::string target = dir + "/out.vtu";
+  test::writeFile(target, "precious");
+  Status st = writeFileAtomically(target, [](std::FILE* f) {
+    std::fputs("half-written", f);
+    return invalidData("the exporter failed midway");
+  });
+  EXPECT_FALSE(st.isOk());
+  EXPECT_EQ(test::readFile(target), "precious");
+  size_t entries = 0;
+  for ([[maybe_unused]] auto& e : std::filesystem::directory_iterator(dir)) ++entries;
+  EXPECT_EQ(entries, 1u);
+  ASSERT_TRUE(writeBytesAtomically(target, "new", 3).isOk());
+  EXPECT_EQ(test::readFile(target), "new");
+}
+
+TEST(FileIo, GroupCommitsAllOrNothing) {
+  const std::string dir = test::tempDir("fileio-group");
+  {
+    AtomicFileGroup g;
+    ASSERT_TRUE(g.add(dir + "/a.node", [](std::FILE* f) { std::fputs("a", f); return Status::ok(); }).isOk());
+    ASSERT_FALSE(g.add(dir + "/a.ele", [](std::FILE*) { return invalidData("no"); }).isOk());
+  }
+  EXPECT_FALSE(test::fileExists(dir + "/a.node"));
+  EXPECT_TRUE(std::filesystem::is_empty(dir));
+  AtomicFileGroup g;
+  ASSERT_TRUE(g.add(dir + "/b.node", [](std::FILE* f) { std::fputs("b", f); return Status::ok(); }).isOk());
+  ASSERT_TRUE(g.commit().isOk());
+  EXPECT_EQ(test::readFile(dir + "/b.node"), "b");
+}
+
+TEST(TextReader, TokensNumbersCommentsAndLines) {
+  TextReader r("x.node", "# header\n3  3\t0 1 # trailing\n\n0 1.5e-3 -2 +7\n");
+  auto n = r.readInt("node count");
+  ASSERT_TRUE(n.isOk());
+  EXPECT_EQ(n.value(), 3);
+  EXPECT_EQ(r.line(), 2u);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(r.readInt("field").isOk());
+  ASSERT_TRUE(r.readInt("index").isOk());
+  auto d = r.readDouble("x");
+  ASSERT_TRUE(d.isOk());
+  EXPECT_EQ(d.value(), 1.5e-3);
+  EXPECT_EQ(r.line(), 4u);
+  ASSERT_TRUE(r.readDouble("y").isOk());
+  ASSERT_TRUE(r.readDouble("z").isOk());
+  auto missing = r.readDouble("attribute");
+  ASSERT_FALSE(missing.isOk());
+  EXPECT_NE(missing.status().message().find("x.node:"), std::string::npos);
+  EXPECT_NE(missing.status().message().find("attribute"), std::string::npos);
+  TextReader bad("y.ele", "1 2\nfoo\n");
+  ASSERT_TRUE(bad.readInt("a").isOk());
+  ASSERT_TRUE(bad.readInt("b").isOk());
+  auto v = bad.readInt("node index");
+  ASSERT_FALSE(v.isOk());
+  EXPECT_NE(v.status().message().find("y.ele:2:"), std::string::npos);
+  EXPECT_NE(v.status().message().find("'foo'"), std::string::npos);
+}
+
+TEST(TextReader, ShortestRoundTripTextReadsBackBitExact) {
+  const double values[] = {0.1, 1.0 / 3.0, 6.02214076e23, -4.9e-324, 123456789.123456789};
+  for (double x : values) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", x);
+    double y;
+    ASSERT_TRUE(parseDouble(buf, &y));
+    EXPECT_EQ(std::memcmp(&x, &y, sizeof x), 0) << buf;
+  }
+  float f;
+  ASSERT_TRUE(parseFloat("0.1", &f));
+  EXPECT_EQ(f, 0.1f);
+  double z;
+  EXPECT_FALSE(parseDouble("1.0x", &z));
+  EXPECT_FALSE(parseDouble("", &z));
+}
+
+}  // namespace
+}  // namespace gtn
