@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Installs what is missing (Debian 12, as root), builds Gatun in Release, and runs the main job on a
+# sample the project generates itself. Usage: bash scripts/setup.sh [--no-sample]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  build-essential cmake pkg-config
+  libcgal-dev libopenmesh-dev tetgen libzstd-dev zstd xz-utils libcli11-dev nlohmann-json3-dev
+  libxxhash-dev libpng-dev libtbb-dev libpugixml-dev zlib1g-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libfpzip-dev
+  python3 python3-numpy python3-vtk9 python3-meshio xvfb gnuplot-nox
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -q
+  apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j"$(nproc)"
+
+if [[ "${1:-}" != "--no-sample" ]]; then
+  mkdir -p out
+  ./build/gtn-make-sample out
+  ./build/gtn convert out/sample.xyz out/sample.q -o out/sample.vtu
+  ./build/gtn info out/sample.xyz out/sample.q
+fi
