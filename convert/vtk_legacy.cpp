@@ -1,10 +1,364 @@
-// PLACEHOLDER: replaced by the real importer.
+// Legacy VTK (.vtk) import: DATASET UNSTRUCTURED_GRID in ASCII or BINARY (big-endian), the classic
+// CELLS layout and the OFFSETS/CONNECTIVITY layout of version 5.1, point and cell attributes
+// (SCALARS, COLOR_SCALARS, VECTORS, NORMALS, TEXTURE_COORDINATES, TENSORS, TENSORS6, FIELD) kept in
+// their source types.
+#include <cctype>
+#include <cstring>
+
+#include "convert/cell_split.h"
 #include "convert/import.h"
+#include "convert/text_reader.h"
+#include "convert/vtk_common.h"
+#include "format/file_io.h"
 
 namespace gtn {
 
-StatusOr<ImportResult> importVtkLegacy(const std::string& path, const ImportOptions&) {
-  return unsupported("importVtkLegacy is not implemented yet");
+namespace {
+
+std::string upper(std::string_view s) {
+  std::string u(s);
+  for (char& c : u) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return u;
+}
+
+// Legacy names encode characters such as spaces as %XX.
+std::string decodeName(std::string_view s) {
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '%' && i + 2 < s.size() && std::isxdigit(static_cast<unsigned char>(s[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(s[i + 2]))) {
+      out += static_cast<char>(std::stoi(std::string(s.substr(i + 1, 2)), nullptr, 16));
+      i += 2;
+    } else {
+      out += s[i];
+    }
+  }
+  return out;
+}
+
+class LegacyReader {
+ public:
+  LegacyReader(const std::string& path, std::string_view text) : path_(path), text_(text), tr_(path, text, '\0') {}
+
+  StatusOr<ImportResult> read(const ImportOptions& options);
+
+ private:
+  Status header();
+  // Reads `count` values of `type` (ASCII tokens, or big-endian binary starting on the next line).
+  Status readValues(ScalarType type, uint64_t count, const std::string& what, std::vector<uint8_t>* out);
+  StatusOr<std::string> token(const char* what);
+  StatusOr<uint64_t> count(const char* what);
+  StatusOr<ScalarType> dataType(const std::string& what);
+  Status readIndexArray(uint64_t count, const std::string& what, std::vector<int64_t>* out, ScalarType type);
+  Status readPoints();
+  Status readCells();
+  Status readCellTypes();
+  Status readAttribute(const std::string& keyword);
+  Status readFieldData(std::vector<Field>* into);
+  void skipMetadata();
+
+  const std::string& path_;
+  std::string_view text_;
+  TextReader tr_;
+  bool binary_ = false;
+  ImportResult result_;
+  VtkCells cells_;
+  bool have_points_ = false, have_cells_ = false, have_types_ = false;
+  // The attribute section being read: 0 none, 1 POINT_DATA, 2 CELL_DATA.
+  int section_ = 0;
+  uint64_t section_items_ = 0;
+  std::vector<Field> cell_fields_;
+};
+
+StatusOr<std::string> LegacyReader::token(const char* what) {
+  std::string_view t;
+  if (!tr_.next(&t)) return tr_.errorAtEnd(what);
+  return std::string(t);
+}
+
+StatusOr<uint64_t> LegacyReader::count(const char* what) {
+  GTN_ASSIGN_OR_RETURN(int64_t v, tr_.readInt(what));
+  if (v < 0) return tr_.error(std::string(what) + " is negative");
+  return static_cast<uint64_t>(v);
+}
+
+StatusOr<ScalarType> LegacyReader::dataType(const std::string& what) {
+  GTN_ASSIGN_OR_RETURN(std::string name, token("a data type"));
+  ScalarType t;
+  if (!vtkLegacyTypeFromName(name, &t))
+    return Status(StatusCode::kUnsupported, path_ + ":" + std::to_string(tr_.line()) + ": " + what +
+                                                ": data type '" + name + "' is not supported");
+  return t;
+}
+
+Status LegacyReader::header() {
+  const size_t e1 = text_.find('\n');
+  if (text_.rfind("# vtk DataFile Version", 0) != 0 || e1 == std::string_view::npos)
+    return Status(StatusCode::kNotOurFile, path_ + ":1: not a legacy VTK file (no '# vtk DataFile Version' line)");
+  const size_t e2 = text_.find('\n', e1 + 1);  // the title line
+  if (e2 == std::string_view::npos) return invalidData(path_ + ":2: file ends in the title line");
+  tr_.seek(e2 + 1);
+  GTN_ASSIGN_OR_RETURN(std::string mode, token("ASCII or BINARY"));
+  const std::string m = upper(mode);
+  if (m != "ASCII" && m != "BINARY") return tr_.error("expected ASCII or BINARY, found '" + mode + "'");
+  binary_ = m == "BINARY";
+  return Status::ok();
+}
+
+Status LegacyReader::readValues(ScalarType type, uint64_t n, const std::string& what, std::vector<uint8_t>* out) {
+  const size_t size = scalarSize(type);
+  if (binary_) {
+    tr_.skipLine();
+    const size_t at = tr_.offset();
+    const size_t left = at <= text_.size() ? text_.size() - at : 0;
+    if (n > left / size)
+      return invalidData(path_ + ": byte offset " + std::to_string(at) + ": file ends inside the binary data of " +
+                         what + " (" + std::to_string(n) + " values of " + std::to_string(size) + " bytes need " +
+                         std::to_string(n * size) + " bytes, " + std::to_string(left) + " left)");
+    out->assign(text_.data() + at, text_.data() + at + n * size);
+    swapByteOrder(out->data(), out->size(), size);  // legacy binary is big-endian
+    tr_.seek(at + n * size);
+    return Status::ok();
+  }
+  // Every ASCII value takes at least two characters (digit and separator): bounds the allocation.
+  if (n > tr_.rest().size() / 2 + 1)
+    return tr_.error("file ends before the " + std::to_string(n) + " values of " + what);
+  out->resize(n * size);
+  std::string_view t;
+  for (uint64_t i = 0; i < n; ++i) {
+    if (!tr_.next(&t)) return tr_.errorAtEnd(("value " + std::to_string(i) + " of " + what).c_str());
+    if (!parseScalarToken(t, type, out->data() + i * size))
+      return tr_.error("value " + std::to_string(i) + " of " + what + " is not a " + scalarTypeName(type) + ": '" +
+                       std::string(t.substr(0, 40)) + "'");
+  }
+  return Status::ok();
+}
+
+Status LegacyReader::readIndexArray(uint64_t n, const std::string& what, std::vector<int64_t>* out, ScalarType type) {
+  std::vector<uint8_t> raw;
+  GTN_RETURN_IF_ERROR(readValues(type, n, what, &raw));
+  size_t bad = 0;
+  if (!scalarsToInt64(type, raw.data(), n, out, &bad))
+    return tr_.error(what + ": value " + std::to_string(bad) + " is not an index");
+  return Status::ok();
+}
+
+Status LegacyReader::readPoints() {
+  GTN_ASSIGN_OR_RETURN(uint64_t n, count("point count"));
+  GTN_ASSIGN_OR_RETURN(ScalarType type, dataType("POINTS"));
+  std::vector<uint8_t> raw;
+  if (n > UINT64_MAX / 3) return tr_.error("point count too large");
+  GTN_RETURN_IF_ERROR(readValues(type, 3 * n, "POINTS", &raw));
+  scalarsToDouble(type, raw.data(), 3 * n, &result_.mesh.coords);
+  result_.mesh.coord_type = type == ScalarType::kFloat32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+  have_points_ = true;
+  return Status::ok();
+}
+
+Status LegacyReader::readCells() {
+  GTN_ASSIGN_OR_RETURN(uint64_t a, count("cell count"));
+  GTN_ASSIGN_OR_RETURN(uint64_t b, count("cell list size"));
+  TextReader peek = tr_;
+  std::string_view t;
+  if (peek.next(&t) && upper(t) == "OFFSETS") {
+    // Version 5.1: CELLS <offsets> <connectivity>, then the two arrays with their own types.
+    tr_.next(&t);
+    GTN_ASSIGN_OR_RETURN(ScalarType ot, dataType("OFFSETS"));
+    GTN_RETURN_IF_ERROR(readIndexArray(a, "OFFSETS", &cells_.offsets, ot));
+    GTN_ASSIGN_OR_RETURN(std::string kw, token("CONNECTIVITY"));
+    if (upper(kw) != "CONNECTIVITY") return tr_.error("expected CONNECTIVITY after OFFSETS, found '" + kw + "'");
+    GTN_ASSIGN_OR_RETURN(ScalarType ct, dataType("CONNECTIVITY"));
+    GTN_RETURN_IF_ERROR(readIndexArray(b, "CONNECTIVITY", &cells_.connectivity, ct));
+    if (cells_.offsets.empty()) cells_.offsets.push_back(0);
+    for (size_t i = 1; i < cells_.offsets.size(); ++i)
+      if (cells_.offsets[i] < cells_.offsets[i - 1]) return tr_.error("OFFSETS decrease at entry " + std::to_string(i));
+  } else {
+    // Classic layout: per cell its point count, then the points (int32 in binary files).
+    std::vector<int64_t> list;
+    GTN_RETURN_IF_ERROR(readIndexArray(b, "CELLS", &list, ScalarType::kInt32));
+    cells_.offsets.assign(1, 0);
+    cells_.connectivity.clear();
+    cells_.offsets.reserve(a + 1);
+    cells_.connectivity.reserve(b);
+    size_t pos = 0;
+    for (uint64_t c = 0; c < a; ++c) {
+      if (pos >= list.size())
+        return tr_.error("CELLS: the list of " + std::to_string(b) + " numbers ends at cell " + std::to_string(c) +
+                         " of " + std::to_string(a));
+      const int64_t k = list[pos++];
+      if (k < 0 || static_cast<uint64_t>(k) > list.size() - pos)
+        return tr_.error("CELLS: cell " + std::to_string(c) + " has " + std::to_string(k) +
+                         " points, more than the list holds");
+      cells_.connectivity.insert(cells_.connectivity.end(), list.begin() + pos, list.begin() + pos + k);
+      pos += k;
+      cells_.offsets.push_back(static_cast<int64_t>(cells_.connectivity.size()));
+    }
+    if (pos != list.size())
+      return tr_.error("CELLS: " + std::to_string(list.size() - pos) + " numbers left over after " +
+                       std::to_string(a) + " cells");
+  }
+  have_cells_ = true;
+  return Status::ok();
+}
+
+Status LegacyReader::readCellTypes() {
+  GTN_ASSIGN_OR_RETURN(uint64_t n, count("cell type count"));
+  std::vector<int64_t> types;
+  GTN_RETURN_IF_ERROR(readIndexArray(n, "CELL_TYPES", &types, ScalarType::kInt32));
+  cells_.types.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (types[i] < 0 || types[i] > 255)
+      return tr_.error("CELL_TYPES: cell " + std::to_string(i) + " has type " + std::to_string(types[i]) +
+                       ", not a VTK cell type");
+    cells_.types[i] = static_cast<int32_t>(types[i]);
+  }
+  have_types_ = true;
+  return Status::ok();
+}
+
+void LegacyReader::skipMetadata() {
+  // METADATA blocks (version 5.1) end at the first empty line.
+  tr_.skipLine();
+  while (tr_.offset() < text_.size()) {
+    const size_t at = tr_.offset();
+    size_t end = text_.find('\n', at);
+    if (end == std::string_view::npos) end = text_.size();
+    bool blank = true;
+    for (size_t i = at; i < end; ++i) blank &= std::isspace(static_cast<unsigned char>(text_[i])) != 0;
+    tr_.skipLine();
+    if (blank) break;
+  }
+}
+
+Status LegacyReader::readFieldData(std::vector<Field>* into) {
+  GTN_ASSIGN_OR_RETURN(std::string field_name, token("field name"));
+  GTN_ASSIGN_OR_RETURN(uint64_t arrays, count("array count"));
+  for (uint64_t a = 0; a < arrays; ++a) {
+    GTN_ASSIGN_OR_RETURN(std::string name, token("array name"));
+    if (upper(name) == "METADATA") {  // belongs to the previous array
+      skipMetadata();
+      --a;
+      continue;
+    }
+    GTN_ASSIGN_OR_RETURN(uint64_t comps, count("component count"));
+    GTN_ASSIGN_OR_RETURN(uint64_t tuples, count("tuple count"));
+    GTN_ASSIGN_OR_RETURN(ScalarType type, dataType("FIELD array " + name));
+    if (comps == 0 || comps > 4096) return tr_.error("FIELD array " + name + ": bad component count");
+    if (tuples > UINT64_MAX / comps) return tr_.error("FIELD array " + name + ": too many values");
+    Field f(decodeName(name), static_cast<uint32_t>(comps), type, 0);
+    GTN_RETURN_IF_ERROR(readValues(type, comps * tuples, "FIELD array " + name, &f.bytes));
+    if (into) {
+      if (tuples != section_items_)
+        return tr_.error("FIELD array " + name + " has " + std::to_string(tuples) + " tuples, expected " +
+                         std::to_string(section_items_));
+      into->push_back(std::move(f));
+    }
+  }
+  return Status::ok();
+}
+
+Status LegacyReader::readAttribute(const std::string& kw) {
+  std::vector<Field>* into = section_ == 1 ? &result_.mesh.point_fields : &cell_fields_;
+  if (kw == "FIELD") return readFieldData(into);
+  GTN_ASSIGN_OR_RETURN(std::string name, token("attribute name"));
+  uint64_t comps = 0;
+  ScalarType type = ScalarType::kFloat32;
+  if (kw == "SCALARS") {
+    GTN_ASSIGN_OR_RETURN(type, dataType("SCALARS " + name));
+    comps = 1;
+    std::string_view t;
+    if (tr_.nextOnLine(&t)) {
+      int64_t c;
+      if (!parseInt(t, &c) || c < 1 || c > 4) return tr_.error("SCALARS " + name + ": bad component count");
+      comps = static_cast<uint64_t>(c);
+    }
+    TextReader peek = tr_;
+    if (peek.next(&t) && upper(t) == "LOOKUP_TABLE") {
+      tr_.next(&t);
+      GTN_ASSIGN_OR_RETURN(std::string table, token("lookup table name"));
+    }
+  } else if (kw == "COLOR_SCALARS") {
+    GTN_ASSIGN_OR_RETURN(comps, count("component count"));
+    if (comps < 1 || comps > 4) return tr_.error("COLOR_SCALARS " + name + ": bad component count");
+    type = binary_ ? ScalarType::kUInt8 : ScalarType::kFloat32;
+  } else if (kw == "LOOKUP_TABLE") {
+    // A table definition (colours for SCALARS): not mesh data, read past it.
+    GTN_ASSIGN_OR_RETURN(uint64_t entries, count("lookup table size"));
+    if (entries > UINT64_MAX / 4) return tr_.error("lookup table too large");
+    std::vector<uint8_t> skipped;
+    return readValues(binary_ ? ScalarType::kUInt8 : ScalarType::kFloat32, 4 * entries, "LOOKUP_TABLE " + name,
+                      &skipped);
+  } else if (kw == "VECTORS" || kw == "NORMALS") {
+    GTN_ASSIGN_OR_RETURN(type, dataType(kw + " " + name));
+    comps = 3;
+  } else if (kw == "TENSORS" || kw == "TENSORS6") {
+    GTN_ASSIGN_OR_RETURN(type, dataType(kw + " " + name));
+    comps = kw == "TENSORS" ? 9 : 6;
+  } else if (kw == "TEXTURE_COORDINATES") {
+    GTN_ASSIGN_OR_RETURN(comps, count("dimension"));
+    if (comps < 1 || comps > 3) return tr_.error("TEXTURE_COORDINATES " + name + ": bad dimension");
+    GTN_ASSIGN_OR_RETURN(type, dataType(kw + " " + name));
+  } else {
+    return tr_.error("unknown keyword '" + kw + "'");
+  }
+  Field f(decodeName(name), static_cast<uint32_t>(comps), type, 0);
+  if (section_items_ > UINT64_MAX / comps) return tr_.error(kw + " " + name + ": too many values");
+  GTN_RETURN_IF_ERROR(readValues(type, comps * section_items_, kw + " " + name, &f.bytes));
+  into->push_back(std::move(f));
+  return Status::ok();
+}
+
+StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
+  GTN_RETURN_IF_ERROR(header());
+  bool have_dataset = false;
+  std::string_view t;
+  while (tr_.next(&t)) {
+    const std::string kw = upper(t);
+    if (kw == "DATASET") {
+      GTN_ASSIGN_OR_RETURN(std::string type, token("dataset type"));
+      if (upper(type) != "UNSTRUCTURED_GRID")
+        return Status(StatusCode::kUnsupported, path_ + ":" + std::to_string(tr_.line()) + ": DATASET " + type +
+                                                    " is not supported (only UNSTRUCTURED_GRID holds tetrahedra)");
+      have_dataset = true;
+    } else if (kw == "POINTS") {
+      GTN_RETURN_IF_ERROR(readPoints());
+    } else if (kw == "CELLS") {
+      GTN_RETURN_IF_ERROR(readCells());
+    } else if (kw == "CELL_TYPES") {
+      GTN_RETURN_IF_ERROR(readCellTypes());
+    } else if (kw == "POINT_DATA" || kw == "CELL_DATA") {
+      GTN_ASSIGN_OR_RETURN(section_items_, count("item count"));
+      section_ = kw == "POINT_DATA" ? 1 : 2;
+      const uint64_t expected = section_ == 1 ? result_.mesh.numPoints() : cells_.types.size();
+      if (section_items_ != expected)
+        return tr_.error(kw + " " + std::to_string(section_items_) + " does not match the " +
+                         std::to_string(expected) + (section_ == 1 ? " points" : " cells"));
+    } else if (kw == "METADATA") {
+      skipMetadata();
+    } else if (kw == "FIELD" && section_ == 0) {
+      GTN_RETURN_IF_ERROR(readFieldData(nullptr));  // dataset-level field data (TIME, ...): not mesh data
+    } else if (section_ != 0) {
+      GTN_RETURN_IF_ERROR(readAttribute(kw));
+    } else {
+      return tr_.error("unexpected keyword '" + std::string(t.substr(0, 40)) + "'");
+    }
+  }
+  if (!have_dataset) return invalidData(path_ + ": no DATASET line");
+  if (!have_points_) return invalidData(path_ + ": no POINTS section");
+  if (!have_cells_ || !have_types_) return invalidData(path_ + ": no CELLS or no CELL_TYPES section");
+  if (cells_.types.size() + 1 != cells_.offsets.size())
+    return invalidData(path_ + ": CELL_TYPES lists " + std::to_string(cells_.types.size()) + " cells but CELLS " +
+                       std::to_string(cells_.offsets.size() - 1));
+  GTN_RETURN_IF_ERROR(finishVtkImport(path_, cells_, cell_fields_, options, &result_));
+  return std::move(result_);
+}
+
+}  // namespace
+
+StatusOr<ImportResult> importVtkLegacy(const std::string& path, const ImportOptions& options) {
+  GTN_ASSIGN_OR_RETURN(std::string text, readWholeFile(path));
+  LegacyReader reader(path, text);
+  return reader.read(options);
 }
 
 }  // namespace gtn

@@ -1,10 +1,404 @@
-// PLACEHOLDER: replaced by the real importer.
+// VTK XML UnstructuredGrid (.vtu) import: ascii, binary (base64) and appended (raw or base64) data
+// arrays, zlib-compressed or not, UInt32 or UInt64 headers, either byte order, several pieces.
+#include <pugixml.hpp>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "convert/cell_split.h"
 #include "convert/import.h"
+#include "convert/text_reader.h"
+#include "convert/vtk_common.h"
+#include "format/file_io.h"
 
 namespace gtn {
 
-StatusOr<ImportResult> importVtu(const std::string& path, const ImportOptions&) {
-  return unsupported("importVtu is not implemented yet");
+namespace {
+
+// zlib cannot expand one byte into more than 1032: bounds what a compressed block may claim.
+constexpr uint64_t kMaxZlibRatio = 1032;
+
+struct Array {
+  ScalarType type = ScalarType::kFloat32;
+  uint32_t components = 1;
+  std::vector<uint8_t> bytes;  // little-endian
+};
+
+class VtuReader {
+ public:
+  VtuReader(const std::string& path, const std::string& text) : path_(path), text_(text) {}
+  StatusOr<ImportResult> read(const ImportOptions& options);
+
+ private:
+  Status fail(const std::string& where, const std::string& reason) const {
+    return invalidData(path_ + ": " + where + ": " + reason);
+  }
+  // Reads one DataArray of `tuples` tuples into *out; `where` names it in messages.
+  Status readArray(const pugi::xml_node& node, uint64_t tuples, const std::string& where, Array* out);
+  Status decodeBinary(std::string_view b64, const std::string& where, std::vector<uint8_t>* out);
+  Status decodeRaw(size_t offset, const std::string& where, std::vector<uint8_t>* out);
+  uint64_t headerValue(const uint8_t* p) const;
+  Status inflateBlocks(const uint8_t* header, const uint8_t* blocks, size_t available, const std::string& where,
+                       std::vector<uint8_t>* out) const;
+  StatusOr<size_t> compressedHeaderBytes(const uint8_t* first3, const std::string& where) const;
+  Status readPiece(const pugi::xml_node& piece, size_t index);
+
+  const std::string& path_;
+  const std::string& text_;
+  bool big_endian_ = false;
+  int header_bytes_ = 4;
+  bool compressed_ = false;
+  bool appended_base64_ = false;
+  size_t appended_begin_ = 0, appended_end_ = 0;  // bytes after '_' in the file
+  ImportResult result_;
+  VtkCells cells_;
+  std::vector<Field> cell_fields_;
+  bool coords_float64_ = false;
+};
+
+uint64_t VtuReader::headerValue(const uint8_t* p) const {
+  uint64_t v = 0;
+  for (int i = 0; i < header_bytes_; ++i) {
+    const int shift = big_endian_ ? 8 * (header_bytes_ - 1 - i) : 8 * i;
+    v |= uint64_t{p[i]} << shift;
+  }
+  return v;
+}
+
+StatusOr<size_t> VtuReader::compressedHeaderBytes(const uint8_t* first3, const std::string& where) const {
+  const uint64_t blocks = headerValue(first3);
+  if (blocks > text_.size()) return fail(where, "compression header claims " + std::to_string(blocks) + " blocks");
+  return static_cast<size_t>((3 + blocks) * header_bytes_);
+}
+
+Status VtuReader::inflateBlocks(const uint8_t* header, const uint8_t* blocks, size_t available,
+                                const std::string& where, std::vector<uint8_t>* out) const {
+  const uint64_t num_blocks = headerValue(header);
+  const uint64_t block_size = headerValue(header + header_bytes_);
+  const uint64_t last_size = headerValue(header + 2 * header_bytes_);
+  uint64_t compressed_total = 0, total = 0;
+  for (uint64_t b = 0; b < num_blocks; ++b) {
+    const uint64_t c = headerValue(header + (3 + b) * header_bytes_);
+    const uint64_t u = (b + 1 == num_blocks && last_size != 0) ? last_size : block_size;
+    if (c > available || compressed_total > available - c)
+      return fail(where, "compressed block " + std::to_string(b) + " runs past the end of the data (" +
+                             std::to_string(available) + " bytes)");
+    if (u > kMaxZlibRatio * (c + 16))
+      return fail(where, "compressed block " + std::to_string(b) + " claims " + std::to_string(u) +
+                             " bytes from " + std::to_string(c));
+    compressed_total += c;
+    total += u;
+  }
+  out->resize(total);
+  uint64_t in_pos = 0, out_pos = 0;
+  for (uint64_t b = 0; b < num_blocks; ++b) {
+    const uint64_t c = headerValue(header + (3 + b) * header_bytes_);
+    const uint64_t u = (b + 1 == num_blocks && last_size != 0) ? last_size : block_size;
+    uLongf got = static_cast<uLongf>(u);
+    const int rc = uncompress(out->data() + out_pos, &got, blocks + in_pos, static_cast<uLong>(c));
+    if (rc != Z_OK || got != u)
+      return fail(where, "zlib block " + std::to_string(b) + " is corrupt (" +
+                             (rc == Z_OK ? "inflates to " + std::to_string(got) + " bytes, header says " +
+                                               std::to_string(u)
+                                         : std::string(zError(rc))) +
+                             ")");
+    in_pos += c;
+    out_pos += u;
+  }
+  return Status::ok();
+}
+
+Status VtuReader::decodeBinary(std::string_view b64, const std::string& where, std::vector<uint8_t>* out) {
+  // The header and the data may be base64-encoded apart (VTK) or together (some writers). Apart, the
+  // header's last quartet ends in '=' whenever its size is not a multiple of 3; when it is a multiple
+  // of 3 both encodings are the same text. The text may run on into the next appended array, so only
+  // the quartets this array needs are decoded.
+  auto decode = [&](std::string_view s, std::vector<uint8_t>* into, const char* what) -> Status {
+    if (!base64Decode(s, into)) return fail(where, std::string("bad base64 in the ") + what);
+    return Status::ok();
+  };
+  auto quartets = [](uint64_t bytes) { return (bytes + 2) / 3 * 4; };
+  std::vector<uint8_t> head;
+  const size_t first = compressed_ ? 3 * static_cast<size_t>(header_bytes_) : header_bytes_;
+  if (b64.size() < quartets(first)) return fail(where, "base64 data ends inside the header");
+  GTN_RETURN_IF_ERROR(decode(b64.substr(0, quartets(first)), &head, "header"));
+  size_t header_size = header_bytes_;
+  if (compressed_) {
+    GTN_ASSIGN_OR_RETURN(header_size, compressedHeaderBytes(head.data(), where));
+    if (b64.size() < quartets(header_size)) return fail(where, "base64 data ends inside the compression header");
+    GTN_RETURN_IF_ERROR(decode(b64.substr(0, quartets(header_size)), &head, "header"));
+  }
+  if (head.size() < header_size) return fail(where, "base64 data ends inside the header");
+  head.resize(header_size);
+  uint64_t data_size = 0;
+  if (compressed_) {
+    const uint64_t blocks = headerValue(head.data());
+    for (uint64_t b = 0; b < blocks; ++b) {
+      const uint64_t c = headerValue(head.data() + (3 + b) * header_bytes_);
+      if (c > b64.size()) return fail(where, "compressed block " + std::to_string(b) + " is longer than the data");
+      data_size += c;
+    }
+  } else {
+    data_size = headerValue(head.data());
+  }
+  const size_t header_chars = quartets(header_size);
+  const bool apart = header_size % 3 != 0 && b64[header_chars - 1] == '=';
+  const uint64_t need = apart ? header_chars + quartets(data_size) : quartets(header_size + data_size);
+  if (data_size > b64.size() || need > b64.size())
+    return fail(where, "base64 data is cut short: the header announces " + std::to_string(data_size) +
+                           " bytes, which need " + std::to_string(need) + " characters, but only " +
+                           std::to_string(b64.size()) + " are there");
+  std::vector<uint8_t> data;
+  if (apart) {
+    GTN_RETURN_IF_ERROR(decode(b64.substr(header_chars, quartets(data_size)), &data, "data"));
+  } else {
+    GTN_RETURN_IF_ERROR(decode(b64.substr(0, need), &data, "data"));
+    data.erase(data.begin(), data.begin() + header_size);
+  }
+  if (data.size() < data_size) return fail(where, "base64 data is shorter than its header says");
+  data.resize(data_size);
+  if (compressed_) return inflateBlocks(head.data(), data.data(), data.size(), where, out);
+  *out = std::move(data);
+  return Status::ok();
+}
+
+Status VtuReader::decodeRaw(size_t offset, const std::string& where, std::vector<uint8_t>* out) {
+  const size_t size = appended_end_ - appended_begin_;
+  if (offset > size || size - offset < static_cast<size_t>(header_bytes_))
+    return fail(where, "appended data offset " + std::to_string(offset) + " is past the end of the " +
+                           std::to_string(size) + " bytes of appended data");
+  const uint8_t* p = reinterpret_cast<const uint8_t*>(text_.data()) + appended_begin_ + offset;
+  size_t left = size - offset;
+  if (compressed_) {
+    if (left < 3 * static_cast<size_t>(header_bytes_)) return fail(where, "appended data ends inside the header");
+    GTN_ASSIGN_OR_RETURN(size_t header_size, compressedHeaderBytes(p, where));
+    if (left < header_size) return fail(where, "appended data ends inside the compression header");
+    return inflateBlocks(p, p + header_size, left - header_size, where, out);
+  }
+  const uint64_t n = headerValue(p);
+  left -= header_bytes_;
+  if (n > left)
+    return fail(where, "byte offset " + std::to_string(appended_begin_ + offset) + ": header says " +
+                           std::to_string(n) + " bytes but only " + std::to_string(left) + " remain in the file");
+  out->assign(p + header_bytes_, p + header_bytes_ + n);
+  return Status::ok();
+}
+
+Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const std::string& where, Array* out) {
+  const std::string type_name = node.attribute("type").as_string();
+  if (!vtkXmlTypeFromName(type_name, &out->type))
+    return Status(StatusCode::kUnsupported, path_ + ": " + where + ": data type '" + type_name + "' is not supported");
+  const int comps = node.attribute("NumberOfComponents").as_int(1);
+  if (comps < 1 || comps > 4096) return fail(where, "bad NumberOfComponents " + std::to_string(comps));
+  out->components = static_cast<uint32_t>(comps);
+  const size_t size = scalarSize(out->type);
+  const std::string format = node.attribute("format").as_string("ascii");
+  if (tuples > UINT64_MAX / comps / size) return fail(where, "too many values");
+  const uint64_t count = tuples * comps;
+  if (format == "ascii") {
+    const std::string_view body = node.text().get();
+    if (count > body.size() / 2 + 1)
+      return fail(where, "holds fewer than the " + std::to_string(count) + " values expected");
+    TextReader tr(path_, body, '\0');
+    out->bytes.resize(count * size);
+    std::string_view t;
+    for (uint64_t i = 0; i < count; ++i) {
+      if (!tr.next(&t)) return fail(where, "has " + std::to_string(i) + " values, expected " + std::to_string(count));
+      if (!parseScalarToken(t, out->type, out->bytes.data() + i * size))
+        return fail(where, "value " + std::to_string(i) + " '" + std::string(t.substr(0, 40)) + "' is not a " +
+                               scalarTypeName(out->type));
+    }
+    if (tr.next(&t)) return fail(where, "has more than the " + std::to_string(count) + " values expected");
+    return Status::ok();  // text is already in host (little-endian) order
+  }
+  if (format == "binary") {
+    std::string b64;
+    b64.reserve(std::strlen(node.text().get()));
+    for (const char* c = node.text().get(); *c; ++c)
+      if (!std::isspace(static_cast<unsigned char>(*c))) b64 += *c;
+    GTN_RETURN_IF_ERROR(decodeBinary(b64, where, &out->bytes));
+  } else if (format == "appended") {
+    if (appended_end_ == 0) return fail(where, "format=\"appended\" but the file has no <AppendedData>");
+    const long long offset = node.attribute("offset").as_llong(-1);
+    if (offset < 0) return fail(where, "appended array without a valid offset");
+    if (appended_base64_) {
+      const std::string_view region(text_.data() + appended_begin_, appended_end_ - appended_begin_);
+      if (static_cast<size_t>(offset) > region.size()) return fail(where, "appended data offset is past the end");
+      // Base64 runs until whitespace or the next array; every array starts on a quartet boundary.
+      std::string_view rest = region.substr(static_cast<size_t>(offset));
+      size_t end = 0;
+      while (end < rest.size() && !std::isspace(static_cast<unsigned char>(rest[end])) && rest[end] != '<') ++end;
+      rest = rest.substr(0, end);
+      GTN_RETURN_IF_ERROR(decodeBinary(rest, where, &out->bytes));
+    } else {
+      GTN_RETURN_IF_ERROR(decodeRaw(static_cast<size_t>(offset), where, &out->bytes));
+    }
+  } else {
+    return fail(where, "unknown format '" + format + "'");
+  }
+  if (out->bytes.size() != count * size)
+    return fail(where, "holds " + std::to_string(out->bytes.size()) + " bytes, expected " +
+                           std::to_string(count * size) + " (" + std::to_string(tuples) + " tuples of " +
+                           std::to_string(comps) + " " + vtkXmlTypeName(out->type) + ")");
+  if (big_endian_) swapByteOrder(out->bytes.data(), out->bytes.size(), size);
+  return Status::ok();
+}
+
+Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
+  const std::string at = "Piece " + std::to_string(index);
+  const long long np = piece.attribute("NumberOfPoints").as_llong(-1);
+  const long long nc = piece.attribute("NumberOfCells").as_llong(-1);
+  if (np < 0 || nc < 0) return fail(at, "missing or bad NumberOfPoints/NumberOfCells");
+  const size_t point_base = result_.mesh.numPoints();
+  const size_t cell_base = cells_.types.size();
+
+  const pugi::xml_node points = piece.child("Points").child("DataArray");
+  Array pts;
+  if (np > 0) {
+    if (!points) return fail(at, "no <Points> DataArray");
+    GTN_RETURN_IF_ERROR(readArray(points, static_cast<uint64_t>(np), at + " Points", &pts));
+    if (pts.components != 3) return fail(at + " Points", "NumberOfComponents is not 3");
+  }
+  std::vector<double> xyz;
+  scalarsToDouble(pts.type, pts.bytes.data(), pts.bytes.size() / scalarSize(pts.type), &xyz);
+  if (np > 0 && pts.type != ScalarType::kFloat32) coords_float64_ = true;
+  result_.mesh.coords.insert(result_.mesh.coords.end(), xyz.begin(), xyz.end());
+
+  const pugi::xml_node cells = piece.child("Cells");
+  Array conn, offs, types;
+  pugi::xml_node conn_node, offs_node, types_node;
+  for (pugi::xml_node a : cells.children("DataArray")) {
+    const std::string name = a.attribute("Name").as_string();
+    if (name == "connectivity") conn_node = a;
+    else if (name == "offsets") offs_node = a;
+    else if (name == "types") types_node = a;
+  }
+  if (nc > 0 && (!offs_node || !types_node || !conn_node))
+    return fail(at, "<Cells> lacks one of the connectivity, offsets and types arrays");
+  std::vector<int64_t> offsets, connectivity, type_values;
+  size_t bad = 0;
+  if (nc > 0) {
+    GTN_RETURN_IF_ERROR(readArray(offs_node, static_cast<uint64_t>(nc), at + " Cells offsets", &offs));
+    if (!scalarsToInt64(offs.type, offs.bytes.data(), static_cast<size_t>(nc), &offsets, &bad))
+      return fail(at + " Cells offsets", "value " + std::to_string(bad) + " is not an index");
+    GTN_RETURN_IF_ERROR(readArray(types_node, static_cast<uint64_t>(nc), at + " Cells types", &types));
+    if (!scalarsToInt64(types.type, types.bytes.data(), static_cast<size_t>(nc), &type_values, &bad))
+      return fail(at + " Cells types", "value " + std::to_string(bad) + " is not a cell type");
+    for (size_t c = 1; c < offsets.size(); ++c)
+      if (offsets[c] < offsets[c - 1]) return fail(at + " Cells offsets", "decrease at cell " + std::to_string(c));
+    if (offsets.front() < 0) return fail(at + " Cells offsets", "negative offset");
+    // The connectivity length is the last offset; it must be backed by the file (checked by readArray).
+    GTN_RETURN_IF_ERROR(readArray(conn_node, static_cast<uint64_t>(offsets.back()), at + " Cells connectivity", &conn));
+    if (!scalarsToInt64(conn.type, conn.bytes.data(), static_cast<size_t>(offsets.back()), &connectivity, &bad))
+      return fail(at + " Cells connectivity", "value " + std::to_string(bad) + " is not an index");
+  }
+  const int64_t conn_base = static_cast<int64_t>(cells_.connectivity.size());
+  for (size_t c = 0; c < type_values.size(); ++c) {
+    if (type_values[c] < 0 || type_values[c] > 255)
+      return fail(at + " Cells types", "cell " + std::to_string(c) + " has type " + std::to_string(type_values[c]));
+    cells_.types.push_back(static_cast<int32_t>(type_values[c]));
+    cells_.offsets.push_back(conn_base + offsets[c]);
+  }
+  for (int64_t v : connectivity) {
+    // Indices are local to the piece; out-of-range ones stay out of range after the shift.
+    if (v < 0 || v >= np)
+      return fail(at + " Cells connectivity",
+                  "refers to point " + std::to_string(v) + " but the piece has " + std::to_string(np) + " points");
+    cells_.connectivity.push_back(v + static_cast<int64_t>(point_base));
+  }
+
+  // Point and cell data: kept in file order, matched by name across pieces.
+  auto readData = [&](const char* section, uint64_t items, std::vector<Field>& fields, size_t items_before) -> Status {
+    size_t k = 0;
+    for (pugi::xml_node a : piece.child(section).children("DataArray")) {
+      const std::string name = a.attribute("Name").as_string();
+      const std::string where = at + " " + section + " '" + name + "'";
+      Array arr;
+      GTN_RETURN_IF_ERROR(readArray(a, items, where, &arr));
+      if (index == 0) {
+        Field f(name, arr.components, arr.type, 0);
+        f.bytes = std::move(arr.bytes);
+        fields.push_back(std::move(f));
+      } else {
+        if (k >= fields.size() || fields[k].name != name || fields[k].type != arr.type ||
+            fields[k].components != arr.components || fields[k].itemCount() != items_before)
+          return fail(where, "does not match the arrays of Piece 0 (pieces must carry the same arrays)");
+        fields[k].bytes.insert(fields[k].bytes.end(), arr.bytes.begin(), arr.bytes.end());
+      }
+      ++k;
+    }
+    if (k != fields.size()) return fail(at + " " + section, "does not carry the same arrays as Piece 0");
+    return Status::ok();
+  };
+  GTN_RETURN_IF_ERROR(readData("PointData", static_cast<uint64_t>(np), result_.mesh.point_fields, point_base));
+  GTN_RETURN_IF_ERROR(readData("CellData", static_cast<uint64_t>(nc), cell_fields_, cell_base));
+  return Status::ok();
+}
+StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
+  // Raw appended data after '_' is not XML: hand pugixml only what precedes it, closed again.
+  std::string xml_text;
+  std::string_view xml = text_;
+  const size_t appended = text_.find("<AppendedData");
+  if (appended != std::string::npos) {
+    const size_t tag_end = text_.find('>', appended);
+    const size_t underscore = tag_end == std::string::npos ? std::string::npos : text_.find('_', tag_end);
+    if (underscore == std::string::npos)
+      return invalidData(path_ + ": byte offset " + std::to_string(appended) +
+                         ": <AppendedData> without the '_' that starts its data");
+    appended_begin_ = underscore + 1;
+    const size_t close = text_.rfind("</AppendedData>");
+    appended_end_ = close == std::string::npos || close < appended_begin_ ? text_.size() : close;
+    xml_text.assign(text_.data(), underscore);
+    xml_text += "</AppendedData></VTKFile>";
+    xml = xml_text;
+  }
+  pugi::xml_document doc;
+  const pugi::xml_parse_result parsed = doc.load_buffer(xml.data(), xml.size(), pugi::parse_default, pugi::encoding_utf8);
+  if (!parsed)
+    return invalidData(path_ + ": byte offset " + std::to_string(parsed.offset) + ": not well-formed XML (" +
+                       parsed.description() + ")");
+  const pugi::xml_node root = doc.child("VTKFile");
+  if (!root) return Status(StatusCode::kNotOurFile, path_ + ": no <VTKFile> element: not a VTK XML file");
+  const std::string type = root.attribute("type").as_string();
+  if (type != "UnstructuredGrid")
+    return unsupported(path_ + ": VTKFile type \"" + type + "\" is not supported (only UnstructuredGrid)");
+  const std::string order = root.attribute("byte_order").as_string("LittleEndian");
+  if (order != "LittleEndian" && order != "BigEndian")
+    return invalidData(path_ + ": unknown byte_order \"" + order + "\"");
+  big_endian_ = order == "BigEndian";
+  const std::string header_type = root.attribute("header_type").as_string("UInt32");
+  if (header_type != "UInt32" && header_type != "UInt64")
+    return invalidData(path_ + ": unknown header_type \"" + header_type + "\"");
+  header_bytes_ = header_type == "UInt64" ? 8 : 4;
+  const std::string compressor = root.attribute("compressor").as_string();
+  if (!compressor.empty() && compressor != "vtkZLibDataCompressor")
+    return unsupported(path_ + ": compressor \"" + compressor +
+                       "\" is not supported (only vtkZLibDataCompressor; re-save the file with zlib or no compression)");
+  compressed_ = !compressor.empty();
+  if (appended_end_ != 0) {
+    const std::string encoding = root.child("AppendedData").attribute("encoding").as_string("raw");
+    if (encoding != "raw" && encoding != "base64")
+      return invalidData(path_ + ": unknown AppendedData encoding \"" + encoding + "\"");
+    appended_base64_ = encoding == "base64";
+  }
+  const pugi::xml_node grid = root.child("UnstructuredGrid");
+  if (!grid) return invalidData(path_ + ": no <UnstructuredGrid> element");
+  size_t pieces = 0;
+  for (pugi::xml_node piece : grid.children("Piece")) GTN_RETURN_IF_ERROR(readPiece(piece, pieces++));
+  if (pieces == 0) return invalidData(path_ + ": <UnstructuredGrid> has no <Piece>");
+  result_.mesh.coord_type = coords_float64_ ? ScalarType::kFloat64 : ScalarType::kFloat32;
+  if (result_.mesh.numPoints() == 0) result_.mesh.coord_type = ScalarType::kFloat64;
+  GTN_RETURN_IF_ERROR(finishVtkImport(path_, cells_, cell_fields_, options, &result_));
+  return std::move(result_);
+}
+
+}  // namespace
+
+StatusOr<ImportResult> importVtu(const std::string& path, const ImportOptions& options) {
+  GTN_ASSIGN_OR_RETURN(std::string text, readWholeFile(path));
+  VtuReader reader(path, text);
+  return reader.read(options);
 }
 
 }  // namespace gtn

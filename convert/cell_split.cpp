@@ -1,0 +1,218 @@
+#include "convert/cell_split.h"
+
+#include <array>
+#include <map>
+
+#include "convert/vtk_common.h"
+#include "mesh/hex_split.h"
+
+namespace gtn {
+
+namespace {
+
+// A face of a cell type in local vertex numbers, cyclic order; size 3 or 4.
+struct Face {
+  int n;
+  int v[4];
+};
+
+constexpr Face kHexFaces[] = {{4, {0, 1, 2, 3}}, {4, {4, 5, 6, 7}}, {4, {0, 1, 5, 4}},
+                              {4, {1, 2, 6, 5}}, {4, {2, 3, 7, 6}}, {4, {3, 0, 4, 7}}};
+constexpr Face kWedgeFaces[] = {{3, {0, 1, 2, 0}}, {3, {3, 4, 5, 0}}, {4, {0, 1, 4, 3}}, {4, {1, 2, 5, 4}},
+                                {4, {2, 0, 3, 5}}};
+constexpr Face kPyramidFaces[] = {{4, {0, 1, 2, 3}}, {3, {0, 1, 4, 0}}, {3, {1, 2, 4, 0}}, {3, {2, 3, 4, 0}},
+                                  {3, {3, 0, 4, 0}}};
+
+int expectedPoints(int type) {
+  switch (type) {
+    case kVtkTetra: return 4;
+    case kVtkHexahedron: return 8;
+    case kVtkWedge: return 6;
+    case kVtkPyramid: return 5;
+    case kVtkQuadraticTetra: return 10;
+    default: return -1;
+  }
+}
+
+// Position in the face's cycle of its vertex with the smallest global index.
+int minCorner(const Face& f, const uint32_t* g) {
+  int m = 0;
+  for (int k = 1; k < f.n; ++k)
+    if (g[f.v[k]] < g[f.v[m]]) m = k;
+  return m;
+}
+
+class Splitter {
+ public:
+  Splitter(std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell) : tets_(tets), tet_cell_(tet_cell) {}
+
+  void emit(const Tet& t, uint32_t cell) {
+    if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) {
+      ++collapsed_;
+      return;
+    }
+    tets_->push_back(t);
+    tet_cell_->push_back(cell);
+  }
+
+  // The cone from the cell's smallest-index vertex over the faces that do not contain it.
+  template <size_t N>
+  void cone(const Face (&faces)[N], const uint32_t* g, int num_vertices, uint32_t cell) {
+    int apex = 0;
+    for (int k = 1; k < num_vertices; ++k)
+      if (g[k] < g[apex]) apex = k;
+    for (const Face& f : faces) {
+      bool has_apex = false;
+      for (int k = 0; k < f.n; ++k) has_apex |= f.v[k] == apex;
+      if (has_apex) continue;
+      if (f.n == 3) {
+        emit({g[apex], g[f.v[0]], g[f.v[1]], g[f.v[2]]}, cell);
+      } else {
+        const int m = minCorner(f, g);
+        const int a = f.v[m], b = f.v[(m + 1) % 4], c = f.v[(m + 2) % 4], d = f.v[(m + 3) % 4];
+        emit({g[apex], g[a], g[b], g[c]}, cell);
+        emit({g[apex], g[a], g[c], g[d]}, cell);
+      }
+    }
+  }
+
+  // True when the hexahedron's six face diagonals (by the smallest-index rule) are the edges of one
+  // inscribed tetrahedron; *odd says which ({1,3,4,6} rather than {0,2,5,7}).
+  static bool fiveSplittable(const uint32_t* g, bool* odd) {
+    int even_count = 0;
+    for (const Face& f : kHexFaces) {
+      const int corner = f.v[minCorner(f, g)];
+      if (corner == 0 || corner == 2 || corner == 5 || corner == 7) ++even_count;
+    }
+    *odd = even_count == 0;
+    return even_count == 0 || even_count == 6;
+  }
+
+  void hex(const uint32_t* g, int split, uint32_t cell) {
+    bool odd = false;
+    if (split == 5 && fiveSplittable(g, &odd)) {
+      five_scratch_.clear();
+      splitHexFive(g, odd, five_scratch_);
+      for (const Tet& t : five_scratch_) emit(t, cell);
+      ++hex_five_;
+      return;
+    }
+    cone(kHexFaces, g, 8, cell);
+  }
+
+  size_t collapsed_ = 0;
+  size_t hex_five_ = 0;
+
+ private:
+  std::vector<Tet>* tets_;
+  std::vector<uint32_t>* tet_cell_;
+  std::vector<Tet> five_scratch_;
+};
+
+}  // namespace
+
+Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, int split,
+                     std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report) {
+  const size_t num_cells = cells.types.size();
+  if (cells.offsets.size() != num_cells + 1 || cells.offsets[0] != 0 ||
+      cells.offsets.back() != static_cast<int64_t>(cells.connectivity.size()))
+    return invalidData(path + ": cell offsets do not match the connectivity (" + std::to_string(cells.offsets.size()) +
+                       " offsets for " + std::to_string(num_cells) + " cells and " +
+                       std::to_string(cells.connectivity.size()) + " indices)");
+  if (num_cells >= UINT32_MAX) return unsupported(path + ": more than 2^32-1 cells");
+  if (num_points >= UINT32_MAX) return unsupported(path + ": more than 2^32-1 points");
+
+  // First pass: check everything and count, so that an unsupported type is reported with the number
+  // of cells that have it, before any work.
+  std::map<int, size_t> rejected;
+  size_t out_tets = 0, quadratic = 0, hexes = 0;
+  for (size_t c = 0; c < num_cells; ++c) {
+    const int type = cells.types[c];
+    const int want = expectedPoints(type);
+    if (want < 0) {
+      ++rejected[type];
+      continue;
+    }
+    const int64_t begin = cells.offsets[c], end = cells.offsets[c + 1];
+    if (end < begin || end - begin != want)
+      return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) + ") has " +
+                         std::to_string(end - begin) + " points, expected " + std::to_string(want));
+    for (int64_t k = begin; k < end; ++k) {
+      const int64_t v = cells.connectivity[k];
+      if (v < 0 || static_cast<uint64_t>(v) >= num_points)
+        return invalidData(path + ": cell " + std::to_string(c) + " refers to point " + std::to_string(v) +
+                           " but there are " + std::to_string(num_points) + " points");
+    }
+    switch (type) {
+      case kVtkTetra: out_tets += 1; break;
+      case kVtkQuadraticTetra: out_tets += 1; ++quadratic; break;
+      case kVtkHexahedron: out_tets += 6; ++hexes; break;
+      case kVtkWedge: out_tets += 3; break;
+      case kVtkPyramid: out_tets += 2; break;
+    }
+  }
+  if (!rejected.empty()) {
+    std::string list;
+    for (const auto& [type, count] : rejected) {
+      if (!list.empty()) list += ", ";
+      list += std::to_string(count) + " cell" + (count == 1 ? "" : "s") + " of type " + std::to_string(type) + " (" +
+              vtkCellTypeName(type) + ")";
+    }
+    return unsupported(path + ": unsupported cell types: " + list +
+                       "; only tetrahedra (10, 24), hexahedra (12), wedges (13) and pyramids (14) become tetrahedra");
+  }
+
+  tets->reserve(tets->size() + out_tets);
+  tet_cell->reserve(tet_cell->size() + out_tets);
+  Splitter splitter(tets, tet_cell);
+  uint32_t g[10];
+  for (size_t c = 0; c < num_cells; ++c) {
+    const int type = cells.types[c];
+    const int64_t begin = cells.offsets[c];
+    const int n = static_cast<int>(cells.offsets[c + 1] - begin);
+    for (int k = 0; k < n; ++k) g[k] = static_cast<uint32_t>(cells.connectivity[begin + k]);
+    const uint32_t cell = static_cast<uint32_t>(c);
+    switch (type) {
+      case kVtkTetra:
+      case kVtkQuadraticTetra:
+        // A flat input tetrahedron is kept as it is (finishImport reports it); only the pieces of
+        // split cells are dropped when a repeated index flattens them.
+        tets->push_back({g[0], g[1], g[2], g[3]});
+        tet_cell->push_back(cell);
+        break;
+      case kVtkHexahedron: splitter.hex(g, split, cell); break;
+      case kVtkWedge: splitter.cone(kWedgeFaces, g, 6, cell); break;
+      case kVtkPyramid: splitter.cone(kPyramidFaces, g, 5, cell); break;
+    }
+  }
+  if (quadratic)
+    report->warnings.push_back(std::to_string(quadratic) +
+                               " quadratic tetrahedra (VTK_QUADRATIC_TETRA) reduced to their 4 corners; their "
+                               "mid-edge points are kept as unreferenced points");
+  if (hexes && split == 5 && splitter.hex_five_ < hexes)
+    report->warnings.push_back(std::to_string(hexes - splitter.hex_five_) + " of " + std::to_string(hexes) +
+                               " hexahedra split into 6 tetrahedra: their face diagonals do not allow 5");
+  if (splitter.collapsed_) {
+    report->collapsed_tets += splitter.collapsed_;
+    report->warnings.push_back(std::to_string(splitter.collapsed_) +
+                               " tetrahedra of degenerate cells (repeated point indices) dropped");
+  }
+  return Status::ok();
+}
+
+Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
+                       const ImportOptions& options, ImportResult* result) {
+  std::vector<uint32_t> tet_cell;
+  GTN_RETURN_IF_ERROR(splitVtkCells(path, cells, result->mesh.numPoints(), options.split, &result->mesh.tets,
+                                    &tet_cell, &result->report));
+  for (const Field& f : cell_fields) {
+    if (f.itemCount() != cells.types.size())
+      return invalidData(path + ": cell field '" + f.name + "' has " + std::to_string(f.itemCount()) +
+                         " values for " + std::to_string(cells.types.size()) + " cells");
+    result->mesh.cell_fields.push_back(expandCellField(f, tet_cell));
+  }
+  finishImport(*result);
+  return result->mesh.checkConsistency(path);
+}
+
+}  // namespace gtn

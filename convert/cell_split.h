@@ -1,0 +1,45 @@
+// VTK cells into tetrahedra, conformingly: the legacy and XML VTK importers both hand their cells here.
+//
+// Rule: every quadrilateral face is cut along the diagonal through its vertex with the smallest global
+// index. Two cells sharing a face see the same four indices, so they cut it the same way. Each
+// hexahedron, wedge or pyramid is then split as the cone from its own smallest-index vertex v over the
+// faces that do not contain v (each already triangulated by the rule): every face that does contain v
+// has v as its smallest vertex, so its diagonal passes through v, which is exactly how the cone cuts
+// it. Hence the cut always agrees with the face rule and no configuration of Dompierre et al. (1999)
+// that needs a Steiner point can arise: hexahedra give 6 tetrahedra, wedges 3, pyramids 2, and
+// ImportReport::steiner_points stays 0. With split == 5 a hexahedron whose six face diagonals form
+// one of the two inscribed tetrahedra ({0,2,5,7} or {1,3,4,6}) is cut into 5 instead.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "convert/import.h"
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+// Cells as VTK lays them out: cell c has types[c] and the point indices
+// connectivity[offsets[c] .. offsets[c + 1]); offsets has one entry more than types, starting at 0.
+struct VtkCells {
+  std::vector<int32_t> types;
+  std::vector<int64_t> offsets{0};
+  std::vector<int64_t> connectivity;
+};
+
+// Splits every cell into tetrahedra: appends them to *tets and, for each, its source cell to
+// *tet_cell. Tetrahedra that a degenerate cell (a repeated point index) makes flat by repetition are
+// dropped and counted in report->collapsed_tets. Fails, naming `path`, when a cell type is not
+// supported (with the type's number, name and how many cells have it), when a cell has the wrong
+// number of points, or when an index is out of range.
+Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, int split,
+                     std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report);
+
+// The common end of both VTK importers: splits `cells` into result->mesh.tets (points and point
+// fields already set), spreads the per-cell fields over the tetrahedra into mesh.cell_fields, and
+// normalises orientation (finishImport).
+Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
+                       const ImportOptions& options, ImportResult* result);
+
+}  // namespace gtn
