@@ -1,0 +1,312 @@
+#include "validate/mesh_checks.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <xxhash.h>
+
+#include "mesh/predicates.h"
+
+namespace gtn {
+
+namespace {
+
+std::string tetPath(const std::string& scope, size_t t) { return scope + "/tets/" + std::to_string(t); }
+std::string pointPath(const std::string& scope, size_t p) { return scope + "/points/" + std::to_string(p); }
+
+bool allFinite(const double* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
+
+bool itemHasNonFinite(const Field& f, size_t item) {
+  const size_t base = item * f.components;
+  for (uint32_t c = 0; c < f.components; ++c) {
+    if (f.type == ScalarType::kFloat32) {
+      float v;
+      std::memcpy(&v, f.bytes.data() + 4 * (base + c), 4);
+      if (!std::isfinite(v)) return true;
+    } else {
+      double v;
+      std::memcpy(&v, f.bytes.data() + 8 * (base + c), 8);
+      if (!std::isfinite(v)) return true;
+    }
+  }
+  return false;
+}
+
+bool checkFieldSizes(const std::vector<Field>& fields, size_t items, const std::string& scope, const char* kind,
+                     ValidationReport& report) {
+  bool ok = true;
+  for (size_t i = 0; i < fields.size(); ++i) {
+    const Field& f = fields[i];
+    const size_t item_bytes = static_cast<size_t>(f.components) * f.valueSize();
+    if (item_bytes == 0 || f.bytes.size() != items * item_bytes) {
+      report.add(IssueCode::kFieldSizeMismatch, scope, scope + "/" + kind + "/" + std::to_string(i),
+                 std::string(kind) + " field '" + f.name + "' holds " + std::to_string(f.bytes.size()) +
+                     " bytes, expected " + std::to_string(items) + " items of " + std::to_string(item_bytes));
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+// Rotates a triangle so that its smallest vertex comes first (orientation kept).
+Triangle canonicalTriangle(Triangle t) {
+  while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+  return t;
+}
+
+}  // namespace
+
+bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& report, MeshCheckStats* stats) {
+  MeshCheckStats local;
+  MeshCheckStats& st = stats ? *stats : local;
+  const size_t np = mesh.numPoints(), nt = mesh.numTets();
+  st.points = np;
+  st.tets = nt;
+
+  bool fields_ok = checkFieldSizes(mesh.point_fields, np, scope, "point_fields", report);
+  fields_ok &= checkFieldSizes(mesh.cell_fields, nt, scope, "cell_fields", report);
+
+  // Indices: everything else walks the tetrahedra, so stop here when they are out of range.
+  bool indices_ok = true;
+  std::vector<uint8_t> bad_tet(nt, 0);
+  for (size_t t = 0; t < nt; ++t) {
+    const Tet& tet = mesh.tets[t];
+    bool in_range = true;
+    for (uint32_t v : tet) in_range &= v < np;
+    if (!in_range) {
+      report.add(IssueCode::kIndexOutOfRange, scope, tetPath(scope, t),
+                 "tetrahedron " + std::to_string(t) + " refers to a vertex >= " + std::to_string(np));
+      indices_ok = false;
+      bad_tet[t] = 1;
+      continue;
+    }
+    if (tet[0] == tet[1] || tet[0] == tet[2] || tet[0] == tet[3] || tet[1] == tet[2] || tet[1] == tet[3] ||
+        tet[2] == tet[3]) {
+      report.add(IssueCode::kRepeatedVertex, scope, tetPath(scope, t),
+                 "tetrahedron " + std::to_string(t) + " uses a vertex twice");
+      bad_tet[t] = 1;
+    }
+  }
+  report.setTotal(IssueCode::kIndexOutOfRange, scope, nt);
+  report.setTotal(IssueCode::kRepeatedVertex, scope, nt);
+  if (!indices_ok) return false;
+
+  // Coordinates and values.
+  std::vector<uint8_t> finite(np, 1);
+  for (size_t p = 0; p < np; ++p) {
+    if (!allFinite(mesh.point(p))) {
+      finite[p] = 0;
+      report.add(IssueCode::kNonFiniteCoordinate, scope, pointPath(scope, p),
+                 "point " + std::to_string(p) + " has a NaN or infinite coordinate");
+    }
+  }
+  report.setTotal(IssueCode::kNonFiniteCoordinate, scope, np);
+  if (fields_ok) {
+    auto scan = [&](const std::vector<Field>& fields, const char* kind, size_t items) {
+      for (size_t i = 0; i < fields.size(); ++i) {
+        const Field& f = fields[i];
+        if (!isFloatType(f.type)) continue;
+        const std::string fscope = scope + "/" + kind + "/" + f.name;
+        for (size_t item = 0; item < items; ++item) {
+          if (itemHasNonFinite(f, item)) {
+            report.add(IssueCode::kNonFiniteValue, fscope, fscope + "/" + std::to_string(item),
+                       "field '" + f.name + "' item " + std::to_string(item) + " is NaN or infinite");
+          }
+        }
+        report.setTotal(IssueCode::kNonFiniteValue, fscope, items);
+      }
+    };
+    scan(mesh.point_fields, "point_fields", np);
+    scan(mesh.cell_fields, "cell_fields", nt);
+  }
+
+  // Unreferenced points.
+  std::vector<uint8_t> used(np, 0);
+  for (const Tet& tet : mesh.tets) {
+    for (uint32_t v : tet) used[v] = 1;
+  }
+  for (size_t p = 0; p < np; ++p) {
+    if (!used[p]) {
+      ++st.unreferenced_points;
+      report.add(IssueCode::kUnreferencedPoint, scope, pointPath(scope, p));
+    }
+  }
+  report.setTotal(IssueCode::kUnreferencedPoint, scope, np);
+
+  // Orientation by exact predicates (only where all four points are finite: the filtered predicate
+  // must not see a NaN).
+  for (size_t t = 0; t < nt; ++t) {
+    if (bad_tet[t]) continue;
+    const Tet& tet = mesh.tets[t];
+    if (!finite[tet[0]] || !finite[tet[1]] || !finite[tet[2]] || !finite[tet[3]]) continue;
+    const int s = orient3d(mesh.point(tet[0]), mesh.point(tet[1]), mesh.point(tet[2]), mesh.point(tet[3]));
+    if (s < 0) {
+      ++st.inverted;
+      report.add(IssueCode::kInvertedTet, scope, tetPath(scope, t));
+    } else if (s == 0) {
+      ++st.zero_volume;
+      report.add(IssueCode::kZeroVolumeTet, scope, tetPath(scope, t));
+    }
+  }
+  report.setTotal(IssueCode::kInvertedTet, scope, nt);
+  report.setTotal(IssueCode::kZeroVolumeTet, scope, nt);
+
+  // Duplicate tetrahedra (same vertex set).
+  {
+    std::vector<std::pair<Tet, uint32_t>> sorted(nt);
+    for (size_t t = 0; t < nt; ++t) {
+      Tet s = mesh.tets[t];
+      std::sort(s.begin(), s.end());
+      sorted[t] = {s, static_cast<uint32_t>(t)};
+    }
+    std::sort(sorted.begin(), sorted.end());
+    for (size_t i = 1; i < sorted.size(); ++i) {
+      if (sorted[i].first == sorted[i - 1].first) {
+        report.add(IssueCode::kDuplicateTet, scope, tetPath(scope, sorted[i].second),
+                   "tetrahedron " + std::to_string(sorted[i].second) + " repeats tetrahedron " +
+                       std::to_string(sorted[i - 1].second));
+      }
+    }
+    report.setTotal(IssueCode::kDuplicateTet, scope, nt);
+  }
+
+  // Faces and the boundary surface.
+  const FaceAdjacency adj = computeFaceAdjacency(mesh);
+  st.faces = adj.faces;
+  st.boundary_faces = adj.boundary_faces;
+  if (adj.non_manifold_faces > 0) {
+    std::vector<std::string> paths;
+    for (size_t slot = 0; slot < adj.neighbor.size() && paths.size() < ValidationReport::kMaxPaths; ++slot) {
+      if (adj.neighbor[slot] == kNonManifold) paths.push_back(tetPath(scope, slot / 4) + "/faces/" + std::to_string(slot % 4));
+    }
+    report.addMany(IssueCode::kNonManifoldFace, scope, adj.non_manifold_faces, paths);
+  }
+  report.setTotal(IssueCode::kNonManifoldFace, scope, adj.faces);
+
+  const std::vector<Triangle> boundary = boundaryTriangles(mesh, adj);
+  // Directed boundary edges keyed by their undirected edge.
+  struct DirEdge {
+    uint64_t key;
+    bool forward;
+    bool operator<(const DirEdge& o) const { return key != o.key ? key < o.key : forward < o.forward; }
+  };
+  std::vector<DirEdge> dir_edges;
+  dir_edges.reserve(3 * boundary.size());
+  for (const Triangle& tri : boundary) {
+    for (int e = 0; e < 3; ++e) {
+      const uint32_t a = tri[e], b = tri[(e + 1) % 3];
+      const uint64_t lo = std::min(a, b), hi = std::max(a, b);
+      dir_edges.push_back({(lo << 32) | hi, a < b});
+    }
+  }
+  std::sort(dir_edges.begin(), dir_edges.end());
+  uint64_t boundary_edges = 0;
+  for (size_t i = 0; i < dir_edges.size();) {
+    size_t j = i + 1;
+    while (j < dir_edges.size() && dir_edges[j].key == dir_edges[i].key) ++j;
+    ++boundary_edges;
+    const std::string path = scope + "/boundary/edges/" + std::to_string(dir_edges[i].key >> 32) + "-" +
+                             std::to_string(dir_edges[i].key & 0xFFFFFFFFu);
+    if (j - i != 2) {
+      report.add(IssueCode::kBoundaryNotClosed, scope, path,
+                 "boundary edge " + path.substr(path.rfind('/') + 1) + " is in " + std::to_string(j - i) +
+                     " boundary triangles");
+    } else if (dir_edges[i].forward == dir_edges[i + 1].forward) {
+      report.add(IssueCode::kBoundaryOrientation, scope, path);
+    }
+    i = j;
+  }
+  report.setTotal(IssueCode::kBoundaryNotClosed, scope, boundary_edges);
+  report.setTotal(IssueCode::kBoundaryOrientation, scope, boundary_edges);
+  return true;
+}
+
+void checkStoredBoundary(const TetMesh& mesh, const std::vector<Triangle>& stored, const std::string& scope,
+                         ValidationReport& report) {
+  const FaceAdjacency adj = computeFaceAdjacency(mesh);
+  std::vector<Triangle> expected = boundaryTriangles(mesh, adj);
+  std::vector<Triangle> got = stored;
+  for (Triangle& t : expected) t = canonicalTriangle(t);
+  for (Triangle& t : got) t = canonicalTriangle(t);
+  std::sort(expected.begin(), expected.end());
+  std::sort(got.begin(), got.end());
+  const auto [extra, missing] = multisetDifference(got, expected);
+  if (extra || missing) {
+    report.add(IssueCode::kBoundaryMismatch, scope, scope + "/boundary",
+               "the stored boundary surface has " + std::to_string(got.size()) + " triangles, " +
+                   std::to_string(extra) + " of them not boundary faces of the tetrahedra; " +
+                   std::to_string(missing) + " of the " + std::to_string(expected.size()) +
+                   " boundary faces are missing");
+  }
+}
+
+std::vector<uint64_t> pointKeys(const TetMesh& mesh) {
+  const size_t np = mesh.numPoints();
+  std::vector<uint64_t> keys(np);
+  std::vector<uint8_t> buf;
+  for (size_t p = 0; p < np; ++p) {
+    buf.assign(reinterpret_cast<const uint8_t*>(mesh.point(p)), reinterpret_cast<const uint8_t*>(mesh.point(p) + 3));
+    for (const Field& f : mesh.point_fields) {
+      const size_t item = static_cast<size_t>(f.components) * f.valueSize();
+      if ((p + 1) * item <= f.bytes.size()) buf.insert(buf.end(), f.bytes.begin() + p * item, f.bytes.begin() + (p + 1) * item);
+    }
+    keys[p] = XXH3_64bits(buf.data(), buf.size());
+  }
+  return keys;
+}
+
+std::array<uint64_t, 2> tetKey(const uint64_t vertex_keys[4], bool flat, const uint8_t* cell_bytes,
+                               size_t cell_size) {
+  uint64_t k[5];
+  if (flat) {
+    std::copy(vertex_keys, vertex_keys + 4, k);
+    std::sort(k, k + 4);
+    k[4] = 1;
+  } else {
+    // Bring the smallest key first with an even permutation, then rotate the other three (a cyclic
+    // rotation of three is even too).
+    static const int kEven[4][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0}};
+    const int m = static_cast<int>(std::min_element(vertex_keys, vertex_keys + 4) - vertex_keys);
+    for (int i = 0; i < 4; ++i) k[i] = vertex_keys[kEven[m][i]];
+    while (k[1] > k[2] || k[1] > k[3]) {
+      const uint64_t t = k[1];
+      k[1] = k[2];
+      k[2] = k[3];
+      k[3] = t;
+    }
+    k[4] = 0;
+  }
+  const uint64_t seed = cell_size ? XXH3_64bits(cell_bytes, cell_size) : 0;
+  const XXH128_hash_t h = XXH3_128bits_withSeed(k, sizeof(k), seed);
+  return {h.high64, h.low64};
+}
+
+void cellBytes(const TetMesh& mesh, size_t t, std::vector<uint8_t>& out) {
+  out.clear();
+  for (const Field& f : mesh.cell_fields) {
+    const size_t item = static_cast<size_t>(f.components) * f.valueSize();
+    if ((t + 1) * item <= f.bytes.size()) out.insert(out.end(), f.bytes.begin() + t * item, f.bytes.begin() + (t + 1) * item);
+  }
+}
+
+std::vector<std::array<uint64_t, 2>> sortedTetKeys(const TetMesh& mesh, const std::vector<uint64_t>& point_keys) {
+  std::vector<std::array<uint64_t, 2>> keys;
+  keys.reserve(mesh.numTets());
+  std::vector<uint8_t> cells;
+  const size_t np = mesh.numPoints();
+  for (size_t t = 0; t < mesh.numTets(); ++t) {
+    const Tet& tet = mesh.tets[t];
+    if (tet[0] >= np || tet[1] >= np || tet[2] >= np || tet[3] >= np) continue;
+    const double *a = mesh.point(tet[0]), *b = mesh.point(tet[1]), *c = mesh.point(tet[2]), *d = mesh.point(tet[3]);
+    const bool finite = allFinite(a) && allFinite(b) && allFinite(c) && allFinite(d);
+    const bool flat = !finite || orient3d(a, b, c, d) == 0;
+    const uint64_t vk[4] = {point_keys[tet[0]], point_keys[tet[1]], point_keys[tet[2]], point_keys[tet[3]]};
+    cellBytes(mesh, t, cells);
+    keys.push_back(tetKey(vk, flat, cells.data(), cells.size()));
+  }
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+
+}  // namespace gtn

@@ -1,0 +1,65 @@
+// The mesh layer of the validator: checks on one decoded level held as a TetMesh, and the comparison
+// of two meshes up to a renumbering of vertices and tetrahedra.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "mesh/faces.h"
+#include "mesh/tet_mesh.h"
+#include "validate/report.h"
+
+namespace gtn {
+
+struct MeshCheckStats {
+  uint64_t points = 0, tets = 0, faces = 0, boundary_faces = 0;
+  uint64_t inverted = 0, zero_volume = 0, unreferenced_points = 0;
+};
+
+// Checks one level: indices in range and distinct, field sizes, finite coordinates (error) and values
+// (warning), unreferenced points (info), every face in at most two tetrahedra, no duplicate
+// tetrahedra, the boundary surface closed and consistently oriented, and each tetrahedron's
+// orientation by exact predicates (inverted: error; zero volume: warning). `scope` is the level's
+// logical path ("/levels/2"); messages locate items below it ("/levels/2/tets/1234"). Returns false
+// when the indices are too broken for any later check that walks the mesh.
+bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& report,
+               MeshCheckStats* stats = nullptr);
+
+// Checks that a boundary surface stored in the file (outward triangles) equals the boundary faces of
+// the level's tetrahedra, orientation included (BOUNDARY_MISMATCH).
+void checkStoredBoundary(const TetMesh& mesh, const std::vector<Triangle>& stored, const std::string& scope,
+                         ValidationReport& report);
+
+// A 64-bit key of each point: its coordinate bits and its point-field bytes. Two points have the same
+// key exactly when (up to hash collisions) they are bit-identical in position and values.
+std::vector<uint64_t> pointKeys(const TetMesh& mesh);
+
+// A 128-bit key of one tetrahedron from its vertices' keys and its cell-field bytes, invariant under
+// the even permutations of its vertices (orientation-preserving renumbering); for a flat tetrahedron
+// (zero volume, whose orientation is not defined) invariant under all permutations.
+std::array<uint64_t, 2> tetKey(const uint64_t vertex_keys[4], bool flat, const uint8_t* cell_bytes,
+                               size_t cell_size);
+
+// Sorted keys of every tetrahedron of `mesh` given its point keys (tetrahedra with an index out of
+// range are skipped).
+std::vector<std::array<uint64_t, 2>> sortedTetKeys(const TetMesh& mesh, const std::vector<uint64_t>& point_keys);
+
+// The number of items of `a` not matched in `b` and of `b` not in `a` (sorted multisets).
+template <class T>
+std::pair<uint64_t, uint64_t> multisetDifference(const std::vector<T>& a, const std::vector<T>& b) {
+  uint64_t only_a = 0, only_b = 0;
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (a[i] < b[j]) { ++only_a; ++i; }
+    else if (b[j] < a[i]) { ++only_b; ++j; }
+    else { ++i; ++j; }
+  }
+  return {only_a + (a.size() - i), only_b + (b.size() - j)};
+}
+
+// Cell-field bytes of tetrahedron t concatenated (as a level stores them) into `out`, for tetKey.
+void cellBytes(const TetMesh& mesh, size_t t, std::vector<uint8_t>& out);
+
+}  // namespace gtn
