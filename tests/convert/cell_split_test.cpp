@@ -1,0 +1,262 @@
+// Conforming splitting of VTK cells into tetrahedra: volumes add up exactly (no overlap, no gap),
+// shared faces are cut the same way from both sides (manifold, boundary = 2 x quads), for any vertex
+// numbering.
+#include "convert/cell_split.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <numeric>
+#include <random>
+#include <set>
+
+#include "convert/vtk_common.h"
+#include "mesh/mesh_stats.h"
+
+namespace gtn {
+namespace {
+
+// An nx x ny x nz grid of unit hexahedra whose points are numbered by a random permutation.
+struct Grid {
+  TetMesh mesh;
+  VtkCells cells;
+  size_t boundary_quads = 0;
+};
+
+Grid makeGrid(int nx, int ny, int nz, uint32_t seed) {
+  Grid g;
+  const int px = nx + 1, py = ny + 1, pz = nz + 1;
+  std::vector<uint32_t> perm(static_cast<size_t>(px) * py * pz);
+  std::iota(perm.begin(), perm.end(), 0);
+  std::mt19937 rng(seed);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  g.mesh.coords.resize(3 * perm.size());
+  auto id = [&](int i, int j, int k) { return perm[(static_cast<size_t>(k) * py + j) * px + i]; };
+  for (int k = 0; k < pz; ++k)
+    for (int j = 0; j < py; ++j)
+      for (int i = 0; i < px; ++i) {
+        double* p = &g.mesh.coords[3 * id(i, j, k)];
+        p[0] = i, p[1] = j, p[2] = k;
+      }
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const uint32_t h[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
+                               id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
+                               id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        g.cells.types.push_back(kVtkHexahedron);
+        g.cells.connectivity.insert(g.cells.connectivity.end(), h, h + 8);
+        g.cells.offsets.push_back(static_cast<int64_t>(g.cells.connectivity.size()));
+      }
+  g.boundary_quads = 2 * (static_cast<size_t>(nx) * ny + static_cast<size_t>(ny) * nz + static_cast<size_t>(nx) * nz);
+  return g;
+}
+
+ImportResult splitInto(const TetMesh& points, const VtkCells& cells, int split) {
+  ImportResult r;
+  r.mesh = points;
+  ImportOptions options;
+  options.split = split;
+  const Status st = finishVtkImport("grid", cells, {}, options, &r);
+  EXPECT_TRUE(st.isOk()) << st.message();
+  return r;
+}
+
+TEST(CellSplit, RandomlyNumberedHexGridsSplitConformingly) {
+  for (uint32_t seed = 1; seed <= 6; ++seed) {
+    Grid g = makeGrid(4, 3, 5, seed);
+    const size_t hexes = g.cells.types.size();
+    for (int split : {5, 6}) {
+      ImportResult r = splitInto(g.mesh, g.cells, split);
+      const MeshStats s = computeMeshStats(r.mesh);
+      EXPECT_EQ(s.non_manifold_faces, 0u) << "seed " << seed << " split " << split;
+      EXPECT_EQ(s.boundary_faces, 2 * g.boundary_quads) << "seed " << seed << " split " << split;
+      EXPECT_EQ(s.inverted, 0u);
+      EXPECT_EQ(s.zero_volume, 0u);
+      EXPECT_NEAR(s.total_volume, 4.0 * 3.0 * 5.0, 1e-9) << "overlap or gap; seed " << seed << " split " << split;
+      EXPECT_EQ(r.report.steiner_points, 0u);
+      if (split == 6) {
+        EXPECT_EQ(r.mesh.numTets(), 6 * hexes);
+      } else {
+        EXPECT_GE(r.mesh.numTets(), 5 * hexes);
+        EXPECT_LE(r.mesh.numTets(), 6 * hexes);
+      }
+    }
+  }
+}
+
+TEST(CellSplit, FiveWhenTheDiagonalsAllowItSixOtherwise) {
+  // Unit cube; the corners 0, 2, 5, 7 get the smallest numbers, so every face diagonal passes through
+  // two of them: the inscribed tetrahedron {0,2,5,7} exists and --split 5 gives 5 tetrahedra.
+  TetMesh cube;
+  const double corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  const uint32_t five_ids[8] = {0, 4, 1, 5, 6, 2, 7, 3};  // local corner -> global number
+  cube.coords.resize(24);
+  for (int c = 0; c < 8; ++c)
+    for (int d = 0; d < 3; ++d) cube.coords[3 * five_ids[c] + d] = corner[c][d];
+  VtkCells cells;
+  cells.types = {kVtkHexahedron};
+  cells.connectivity.assign(five_ids, five_ids + 8);
+  cells.offsets.push_back(8);
+  EXPECT_EQ(splitInto(cube, cells, 5).mesh.numTets(), 5u);
+  EXPECT_EQ(splitInto(cube, cells, 6).mesh.numTets(), 6u);
+  // Numbered 0..7 in VTK order, face (1,2,6,5) has its smallest corner 1: no 5-split.
+  TetMesh plain;
+  plain.coords.assign(&corner[0][0], &corner[0][0] + 24);
+  VtkCells identity;
+  identity.types = {kVtkHexahedron};
+  identity.connectivity = {0, 1, 2, 3, 4, 5, 6, 7};
+  identity.offsets.push_back(8);
+  ImportResult r = splitInto(plain, identity, 5);
+  EXPECT_EQ(r.mesh.numTets(), 6u);
+  ASSERT_EQ(r.report.warnings.size(), 1u);
+  EXPECT_NE(r.report.warnings[0].find("1 of 1 hexahedra split into 6"), std::string::npos);
+  EXPECT_DOUBLE_EQ(computeMeshStats(r.mesh).total_volume, 1.0);
+}
+
+TEST(CellSplit, MixedWedgesPyramidsHexesAndTetsConform) {
+  // A 2x1x1 block: the left cube as two wedges, the right cube as six pyramids around its centre,
+  // plus nothing else; numbering shuffled. Volume 2, manifold, boundary = 10 quads x 2.
+  for (uint32_t seed = 0; seed < 20; ++seed) {
+    std::vector<std::array<double, 3>> pts;
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 3; ++i) pts.push_back({double(i), double(j), double(k)});
+    pts.push_back({1.5, 0.5, 0.5});  // centre of the right cube, index 12
+    std::vector<uint32_t> perm(pts.size());
+    std::iota(perm.begin(), perm.end(), 0);
+    std::mt19937 rng(seed);
+    std::shuffle(perm.begin(), perm.end(), rng);
+    TetMesh mesh;
+    mesh.coords.resize(3 * pts.size());
+    for (size_t p = 0; p < pts.size(); ++p)
+      for (int d = 0; d < 3; ++d) mesh.coords[3 * perm[p] + d] = pts[p][d];
+    auto P = [&](int i, int j, int k) { return static_cast<int64_t>(perm[(k * 2 + j) * 3 + i]); };
+    const int64_t c = perm[12];
+    VtkCells cells;
+    auto add = [&](int type, std::vector<int64_t> ids) {
+      cells.types.push_back(type);
+      cells.connectivity.insert(cells.connectivity.end(), ids.begin(), ids.end());
+      cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+    };
+    // Left cube [0,1]: two wedges along y, cut by the plane through (0,0)-(1,1) in x/z... the prisms
+    // have triangles in the xz-plane at y = 0 and y = 1.
+    add(kVtkWedge, {P(0, 0, 0), P(1, 0, 0), P(1, 0, 1), P(0, 1, 0), P(1, 1, 0), P(1, 1, 1)});
+    add(kVtkWedge, {P(0, 0, 0), P(1, 0, 1), P(0, 0, 1), P(0, 1, 0), P(1, 1, 1), P(0, 1, 1)});
+    // Right cube [1,2]: six pyramids, one per face, apex at the centre.
+    add(kVtkPyramid, {P(1, 0, 0), P(2, 0, 0), P(2, 1, 0), P(1, 1, 0), c});
+    add(kVtkPyramid, {P(1, 0, 1), P(1, 1, 1), P(2, 1, 1), P(2, 0, 1), c});
+    add(kVtkPyramid, {P(1, 0, 0), P(1, 0, 1), P(2, 0, 1), P(2, 0, 0), c});
+    add(kVtkPyramid, {P(1, 1, 0), P(2, 1, 0), P(2, 1, 1), P(1, 1, 1), c});
+    add(kVtkPyramid, {P(1, 0, 0), P(1, 1, 0), P(1, 1, 1), P(1, 0, 1), c});
+    add(kVtkPyramid, {P(2, 0, 0), P(2, 0, 1), P(2, 1, 1), P(2, 1, 0), c});
+    ImportResult r = splitInto(mesh, cells, 6);
+    EXPECT_EQ(r.mesh.numTets(), 2u * 3 + 6u * 2);
+    const MeshStats s = computeMeshStats(r.mesh);
+    EXPECT_EQ(s.non_manifold_faces, 0u) << seed;
+    // Boundary: 10 unit squares as 2 triangles, except the two y faces of the left cube where the
+    // wedge triangles already are triangles (2 per square as well).
+    EXPECT_EQ(s.boundary_faces, 20u) << seed;
+    EXPECT_NEAR(s.total_volume, 2.0, 1e-12) << seed;
+    EXPECT_EQ(s.zero_volume, 0u);
+  }
+}
+
+TEST(CellSplit, CellFieldsSpreadOverTheTetrahedraOfTheirCell) {
+  Grid g = makeGrid(2, 1, 1, 7);
+  Field per_cell("region", 1, ScalarType::kInt32, 2);
+  per_cell.set<int32_t>(0, 0, 11);
+  per_cell.set<int32_t>(1, 0, 22);
+  ImportResult r;
+  r.mesh = g.mesh;
+  ASSERT_TRUE(finishVtkImport("grid", g.cells, {per_cell}, ImportOptions{}, &r).isOk());
+  ASSERT_EQ(r.mesh.cell_fields.size(), 1u);
+  const Field& f = r.mesh.cell_fields[0];
+  ASSERT_EQ(f.itemCount(), 12u);
+  for (size_t t = 0; t < 12; ++t) {
+    // The tet lies in cell 0 (x < 1) or cell 1 (x > 1): its centroid says which.
+    double cx = 0;
+    for (uint32_t v : r.mesh.tets[t]) cx += r.mesh.point(v)[0] / 4;
+    EXPECT_EQ(f.data<int32_t>()[t], cx < 1 ? 11 : 22);
+  }
+}
+
+TEST(CellSplit, QuadraticTetraKeepsCornersAndWarns) {
+  TetMesh mesh;
+  for (int i = 0; i < 10; ++i) mesh.coords.insert(mesh.coords.end(), {double(i % 2), double(i / 2 % 2), double(i / 4)});
+  mesh.coords[0] = 0, mesh.coords[1] = 0, mesh.coords[2] = 0;
+  mesh.coords[3] = 1, mesh.coords[4] = 0, mesh.coords[5] = 0;
+  mesh.coords[6] = 0, mesh.coords[7] = 1, mesh.coords[8] = 0;
+  mesh.coords[9] = 0, mesh.coords[10] = 0, mesh.coords[11] = 1;
+  VtkCells cells;
+  cells.types = {kVtkQuadraticTetra};
+  for (int i = 0; i < 10; ++i) cells.connectivity.push_back(i);
+  cells.offsets.push_back(10);
+  ImportResult r = splitInto(mesh, cells, 6);
+  ASSERT_EQ(r.mesh.numTets(), 1u);
+  std::set<uint32_t> corners(r.mesh.tets[0].begin(), r.mesh.tets[0].end());
+  EXPECT_EQ(corners, (std::set<uint32_t>{0, 1, 2, 3}));
+  ASSERT_EQ(r.report.warnings.size(), 1u);
+  EXPECT_NE(r.report.warnings[0].find("1 quadratic tetrahedra"), std::string::npos);
+  EXPECT_EQ(computeMeshStats(r.mesh).unreferenced_points, 6u);
+}
+
+TEST(CellSplit, RejectsUnsupportedTypesWithNameAndCount) {
+  VtkCells cells;
+  auto add = [&](int type, int n) {
+    cells.types.push_back(type);
+    for (int i = 0; i < n; ++i) cells.connectivity.push_back(i);
+    cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+  };
+  add(5, 3), add(5, 3), add(9, 4), add(10, 4), add(25, 20), add(1, 1), add(3, 2);
+  std::vector<Tet> tets;
+  std::vector<uint32_t> tet_cell;
+  ImportReport report;
+  const Status st = splitVtkCells("in.vtu", cells, 20, 6, &tets, &tet_cell, &report);
+  ASSERT_FALSE(st.isOk());
+  EXPECT_EQ(st.code(), StatusCode::kUnsupported);
+  for (const char* part : {"in.vtu", "2 cells of type 5 (VTK_TRIANGLE)", "1 cell of type 9 (VTK_QUAD)",
+                           "1 cell of type 25 (VTK_QUADRATIC_HEXAHEDRON)", "1 cell of type 1 (VTK_VERTEX)",
+                           "1 cell of type 3 (VTK_LINE)"})
+    EXPECT_NE(st.message().find(part), std::string::npos) << st.message() << " lacks " << part;
+}
+
+TEST(CellSplit, RejectsBadIndicesAndPointCounts) {
+  VtkCells cells;
+  cells.types = {kVtkTetra};
+  cells.connectivity = {0, 1, 2, 7};
+  cells.offsets.push_back(4);
+  std::vector<Tet> tets;
+  std::vector<uint32_t> tet_cell;
+  ImportReport report;
+  Status st = splitVtkCells("m.vtk", cells, 4, 6, &tets, &tet_cell, &report);
+  ASSERT_FALSE(st.isOk());
+  EXPECT_NE(st.message().find("m.vtk: cell 0 refers to point 7 but there are 4 points"), std::string::npos)
+      << st.message();
+  cells.types = {kVtkHexahedron};
+  cells.connectivity = {0, 1, 2, 3};
+  st = splitVtkCells("m.vtk", cells, 4, 6, &tets, &tet_cell, &report);
+  ASSERT_FALSE(st.isOk());
+  EXPECT_NE(st.message().find("has 4 points, expected 8"), std::string::npos) << st.message();
+}
+
+TEST(CellSplit, DegenerateHexahedronDropsFlatPieces) {
+  // A wedge written as a hexahedron with repeated points (common in VTK files): the pieces made flat
+  // by repetition are dropped and counted; what remains fills the wedge.
+  TetMesh mesh;
+  mesh.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1};
+  VtkCells cells;
+  cells.types = {kVtkHexahedron};
+  cells.connectivity = {0, 1, 2, 2, 3, 4, 5, 5};
+  cells.offsets.push_back(8);
+  ImportResult r = splitInto(mesh, cells, 6);
+  EXPECT_GT(r.report.collapsed_tets, 0u);
+  EXPECT_EQ(r.mesh.numTets() + r.report.collapsed_tets, 6u);
+  const MeshStats s = computeMeshStats(r.mesh);
+  EXPECT_DOUBLE_EQ(s.total_volume, 0.5);
+  EXPECT_EQ(s.non_manifold_faces, 0u);
+}
+
+}  // namespace
+}  // namespace gtn

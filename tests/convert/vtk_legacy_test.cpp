@@ -1,0 +1,311 @@
+// Legacy VTK import: the paper's Spx (ASCII) checked against an independent parse, and files written
+// here in ASCII and BINARY, classic and 5.1 layouts, with every attribute kind and data type.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+
+#include "convert/import.h"
+#include "mesh/mesh_stats.h"
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+using test::dataPath;
+using test::tempDir;
+using test::writeFile;
+
+TEST(VtkLegacy, SpxCountsAndBitExactValues) {
+  const std::string path = dataPath("vtk/spx.vtk");
+  auto r = importVtkLegacy(path, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const TetMesh& m = r->mesh;
+  const MeshStats s = computeMeshStats(m);
+  EXPECT_EQ(s.points, 2896u);
+  EXPECT_EQ(s.tets, 12936u);
+  EXPECT_EQ(s.faces, 27252u);
+  EXPECT_EQ(s.boundary_faces, 2760u);
+  EXPECT_EQ(s.non_manifold_faces, 0u);
+  EXPECT_EQ(s.inverted, 0u);
+  EXPECT_EQ(m.coord_type, ScalarType::kFloat32);
+
+  // Independent parse: strtof over the POINTS and the scalars' tokens.
+  const std::string text = test::readFile(path);
+  std::istringstream pts(text.substr(text.find("POINTS 2896 float") + 17));
+  for (size_t i = 0; i < 3 * 2896; ++i) {
+    std::string tok;
+    pts >> tok;
+    ASSERT_EQ(m.coords[i], static_cast<double>(std::strtof(tok.c_str(), nullptr))) << "coordinate " << i;
+  }
+  ASSERT_EQ(m.point_fields.size(), 1u);
+  const Field& f = m.point_fields[0];
+  EXPECT_EQ(f.name, "scalars");
+  EXPECT_EQ(f.type, ScalarType::kFloat32);
+  EXPECT_EQ(f.components, 1u);
+  std::istringstream sc(text.substr(text.find("LOOKUP_TABLE default") + 20));
+  std::vector<float> expected(2896);
+  for (float& v : expected) {
+    std::string tok;
+    sc >> tok;
+    v = std::strtof(tok.c_str(), nullptr);
+  }
+  ASSERT_EQ(f.bytes.size(), expected.size() * 4);
+  EXPECT_EQ(std::memcmp(f.bytes.data(), expected.data(), f.bytes.size()), 0);
+  EXPECT_FLOAT_EQ(static_cast<float>(computeMeshStats(m).fields[0].max), 2.254f);
+}
+
+// A dataset written by this test in any of the legacy dialects.
+struct Array {
+  std::string header;  // the line(s) before the values, with %T for the type keyword
+  const char* type_keyword;
+  ScalarType type;
+  uint32_t comps;
+  std::vector<double> values;
+};
+
+void putBigEndian(std::string& out, ScalarType type, double v) {
+  uint8_t b[8];
+  size_t n = scalarSize(type);
+  switch (type) {
+    case ScalarType::kInt8: { int8_t x = int8_t(v); std::memcpy(b, &x, 1); break; }
+    case ScalarType::kUInt8: { uint8_t x = uint8_t(v); std::memcpy(b, &x, 1); break; }
+    case ScalarType::kInt16: { int16_t x = int16_t(v); std::memcpy(b, &x, 2); break; }
+    case ScalarType::kUInt16: { uint16_t x = uint16_t(v); std::memcpy(b, &x, 2); break; }
+    case ScalarType::kInt32: { int32_t x = int32_t(v); std::memcpy(b, &x, 4); break; }
+    case ScalarType::kUInt32: { uint32_t x = uint32_t(v); std::memcpy(b, &x, 4); break; }
+    case ScalarType::kInt64: { int64_t x = int64_t(v); std::memcpy(b, &x, 8); break; }
+    case ScalarType::kUInt64: { uint64_t x = uint64_t(v); std::memcpy(b, &x, 8); break; }
+    case ScalarType::kFloat32: { float x = float(v); std::memcpy(b, &x, 4); break; }
+    case ScalarType::kFloat64: { std::memcpy(b, &v, 8); break; }
+  }
+  for (size_t i = 0; i < n; ++i) out += static_cast<char>(b[n - 1 - i]);
+}
+
+std::string block(bool binary, const Array& a) {
+  std::string s = a.header;
+  const size_t t = s.find("%T");
+  if (t != std::string::npos) s.replace(t, 2, a.type_keyword);
+  s += "\n";
+  if (binary) {
+    for (double v : a.values) putBigEndian(s, a.type, v);
+    s += "\n";
+  } else {
+    char buf[64];
+    for (size_t i = 0; i < a.values.size(); ++i) {
+      const char sep = (i + 1) % 6 == 0 ? '\n' : ' ';
+      if (isFloatType(a.type))
+        std::snprintf(buf, sizeof buf, "%.17g%c", a.values[i], sep);
+      else if (a.type == ScalarType::kUInt64)
+        std::snprintf(buf, sizeof buf, "%llu%c", static_cast<unsigned long long>(a.values[i]), sep);
+      else
+        std::snprintf(buf, sizeof buf, "%lld%c", static_cast<long long>(a.values[i]), sep);
+      s += buf;
+    }
+    s += "\n";
+  }
+  return s;
+}
+
+std::vector<double> ramp(size_t n, double start, double step) {
+  std::vector<double> v(n);
+  for (size_t i = 0; i < n; ++i) v[i] = start + step * static_cast<double>(i);
+  return v;
+}
+
+// Two unit hexahedra side by side (12 points), with point and cell attributes of many types.
+struct Dataset {
+  std::vector<Array> point_arrays, cell_arrays;
+  std::string text;
+};
+
+Dataset makeDataset(bool binary, bool v51) {
+  Dataset d;
+  std::string& s = d.text;
+  s = std::string("# vtk DataFile Version ") + (v51 ? "5.1" : "3.0") + "\nwritten by the Gatun tests\n" +
+      (binary ? "BINARY" : "ASCII") + "\nDATASET UNSTRUCTURED_GRID\n";
+  std::vector<double> xyz;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 3; ++i) xyz.insert(xyz.end(), {i * 0.5, j * 0.5 + 0.1, k * 0.25});
+  s += block(binary, {"POINTS 12 %T", "double", ScalarType::kFloat64, 3, xyz});
+  auto id = [](int i, int j, int k) { return double((k * 2 + j) * 3 + i); };
+  std::vector<double> conn;
+  for (int i = 0; i < 2; ++i)
+    conn.insert(conn.end(), {id(i, 0, 0), id(i + 1, 0, 0), id(i + 1, 1, 0), id(i, 1, 0), id(i, 0, 1),
+                             id(i + 1, 0, 1), id(i + 1, 1, 1), id(i, 1, 1)});
+  if (v51) {
+    s += "CELLS 3 16\n";
+    s += block(binary, {"OFFSETS %T", "vtktypeint64", ScalarType::kInt64, 1, {0, 8, 16}});
+    s += block(binary, {"CONNECTIVITY %T", "vtktypeint64", ScalarType::kInt64, 1, conn});
+  } else {
+    std::vector<double> list = {8};
+    list.insert(list.end(), conn.begin(), conn.begin() + 8);
+    list.push_back(8);
+    list.insert(list.end(), conn.begin() + 8, conn.end());
+    s += block(binary, {"CELLS 2 18", "", ScalarType::kInt32, 1, list});
+  }
+  s += block(binary, {"CELL_TYPES 2", "", ScalarType::kInt32, 1, {12, 12}});
+  d.point_arrays = {
+      {"SCALARS temperature %T 2\nLOOKUP_TABLE default", "int", ScalarType::kInt32, 2, ramp(24, -100000, 7919)},
+      {"SCALARS density %T\nLOOKUP_TABLE my_table", "float", ScalarType::kFloat32, 1, ramp(12, 0.125, 0.0625)},
+      {"VECTORS velocity %T", "double", ScalarType::kFloat64, 3, ramp(36, -1.0 / 3, 0.1)},
+      {"NORMALS normal %T", "float", ScalarType::kFloat32, 3, ramp(36, 0.5, -0.25)},
+      {"TENSORS stress %T", "float", ScalarType::kFloat32, 9, ramp(108, 1.5, 0.5)},
+      {"TENSORS6 strain %T", "double", ScalarType::kFloat64, 6, ramp(72, 1e-3, 1.0 / 7)},
+      {"FIELD FieldData 6\nnode%20id 1 12 %T", "unsigned_short", ScalarType::kUInt16, 1, ramp(12, 60000, 100)},
+      {"big 1 12 %T", "vtktypeint64", ScalarType::kInt64, 1, ramp(12, -4.0e15, 1.0e14)},
+      {"ul 2 12 %T", "unsigned_long", ScalarType::kUInt64, 2, ramp(24, 1.0e18, 3.0e15)},
+      {"c 1 12 %T", "char", ScalarType::kInt8, 1, ramp(12, -100, 17)},
+      {"uc 1 12 %T", "unsigned_char", ScalarType::kUInt8, 1, ramp(12, 250, -20)},
+      {"sh 3 12 %T", "short", ScalarType::kInt16, 3, ramp(36, -30000, 1700)},
+  };
+  d.cell_arrays = {
+      {"SCALARS region %T 1\nLOOKUP_TABLE default", "unsigned_int", ScalarType::kUInt32, 1, {4000000000.0, 7}},
+      {"FIELD FieldData 1\nweight 1 2 %T", "double", ScalarType::kFloat64, 1, {0.1, 0.2}},
+  };
+  s += "POINT_DATA 12\n";
+  for (const Array& a : d.point_arrays) s += block(binary, a);
+  s += "CELL_DATA 2\n";
+  for (const Array& a : d.cell_arrays) s += block(binary, a);
+  return d;
+}
+
+std::vector<uint8_t> littleEndian(const Array& a) {
+  std::string be;
+  for (double v : a.values) putBigEndian(be, a.type, v);
+  const size_t n = scalarSize(a.type);
+  std::vector<uint8_t> out(be.size());
+  for (size_t i = 0; i < be.size(); i += n)
+    for (size_t k = 0; k < n; ++k) out[i + k] = static_cast<uint8_t>(be[i + n - 1 - k]);
+  return out;
+}
+
+std::string fieldName(const std::string& header) {
+  std::istringstream in(header.substr(header.find("FIELD") == 0 ? header.find('\n') + 1 : 0));
+  std::string w1, w2;
+  in >> w1;
+  if (w1 == "SCALARS" || w1 == "VECTORS" || w1 == "NORMALS" || w1 == "TENSORS" || w1 == "TENSORS6") in >> w2;
+  else w2 = w1;
+  return w2 == "node%20id" ? "node id" : w2;
+}
+
+TEST(VtkLegacy, EveryAttributeKindAndTypeInEveryDialect) {
+  const std::string dir = tempDir("vtk_legacy_dialects");
+  TetMesh reference;
+  bool have_reference = false;
+  for (bool binary : {false, true}) {
+    for (bool v51 : {false, true}) {
+      SCOPED_TRACE(std::string(binary ? "BINARY" : "ASCII") + (v51 ? " 5.1" : " 3.0"));
+      const Dataset d = makeDataset(binary, v51);
+      const std::string path = dir + "/two_hexes_" + (binary ? "bin" : "ascii") + (v51 ? "_51" : "") + ".vtk";
+      writeFile(path, d.text);
+      auto r = importMesh({path}, ImportOptions{});
+      ASSERT_TRUE(r.isOk()) << r.status().message();
+      const TetMesh& m = r->mesh;
+      EXPECT_EQ(m.numPoints(), 12u);
+      EXPECT_EQ(m.numTets(), 12u);
+      EXPECT_EQ(m.coord_type, ScalarType::kFloat64);
+      EXPECT_EQ(m.coords[3 * 5 + 1], 0.6);
+      ASSERT_EQ(m.point_fields.size(), d.point_arrays.size());
+      for (size_t i = 0; i < d.point_arrays.size(); ++i) {
+        const Array& a = d.point_arrays[i];
+        const Field& f = m.point_fields[i];
+        EXPECT_EQ(f.name, fieldName(a.header));
+        EXPECT_EQ(f.type, a.type) << f.name;
+        EXPECT_EQ(f.components, a.comps) << f.name;
+        EXPECT_EQ(f.bytes, littleEndian(a)) << f.name;
+      }
+      ASSERT_EQ(m.cell_fields.size(), 2u);
+      EXPECT_EQ(m.cell_fields[0].name, "region");
+      EXPECT_EQ(m.cell_fields[0].type, ScalarType::kUInt32);
+      EXPECT_EQ(m.cell_fields[1].name, "weight");
+      for (size_t t = 0; t < 12; ++t) {
+        double cx = 0;
+        for (uint32_t v : m.tets[t]) cx += m.point(v)[0] / 4;
+        EXPECT_EQ(m.cell_fields[0].data<uint32_t>()[t], cx < 0.5 ? 4000000000u : 7u);
+        EXPECT_EQ(m.cell_fields[1].data<double>()[t], cx < 0.5 ? 0.1 : 0.2);
+      }
+      const MeshStats s = computeMeshStats(m);
+      EXPECT_EQ(s.boundary_faces, 20u);
+      EXPECT_EQ(s.non_manifold_faces, 0u);
+      EXPECT_DOUBLE_EQ(s.total_volume, 2 * 0.5 * 0.5 * 0.25);
+      // Every dialect gives the same mesh, bit for bit.
+      if (!have_reference) {
+        reference = m;
+        have_reference = true;
+      } else {
+        EXPECT_EQ(m.coords, reference.coords);
+        EXPECT_EQ(m.tets, reference.tets);
+        for (size_t i = 0; i < m.point_fields.size(); ++i)
+          EXPECT_EQ(m.point_fields[i].bytes, reference.point_fields[i].bytes);
+      }
+    }
+  }
+}
+
+void expectError(const std::string& path, const std::string& text, const std::string& part) {
+  writeFile(path, text);
+  auto r = importMesh({path}, ImportOptions{});
+  ASSERT_FALSE(r.isOk()) << "accepted: " << path;
+  EXPECT_NE(r.status().message().find(path), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find(part), std::string::npos) << r.status().message() << "\nlacks: " << part;
+}
+
+TEST(VtkLegacy, TruncatedBinaryDataFailsCleanlyAtEveryCut) {
+  const std::string dir = tempDir("vtk_legacy_cut");
+  const std::string text = makeDataset(true, false).text;
+  const size_t points_at = text.find("POINTS");
+  // Cut inside the binary POINTS block: the message says so.
+  expectError(dir + "/cut_points.vtk", text.substr(0, points_at + 40), "file ends inside the binary data of POINTS");
+  // Every other prefix: an error naming the file, never a crash, never success with partial data.
+  for (size_t cut = 0; cut + 1 < text.size(); cut += 5) {
+    const std::string path = dir + "/cut.vtk";
+    writeFile(path, text.substr(0, cut));
+    auto r = importVtkLegacy(path, ImportOptions{});
+    if (r.isOk()) {
+      // A cut between two whole attribute arrays leaves a valid, shorter file; never a partial mesh.
+      EXPECT_GE(cut, text.find("POINT_DATA")) << "accepted a prefix of " << cut << " bytes";
+      EXPECT_EQ(r->mesh.numTets(), 12u);
+      continue;
+    }
+    EXPECT_EQ(r.status().message().rfind(path, 0), 0u) << r.status().message();
+  }
+}
+
+TEST(VtkLegacy, RejectsOtherDatasetsCellTypesAndBadIndices) {
+  const std::string dir = tempDir("vtk_legacy_bad");
+  expectError(dir + "/sp.vtk",
+              "# vtk DataFile Version 3.0\nimage\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n",
+              "DATASET STRUCTURED_POINTS is not supported");
+  const std::string head = "# vtk DataFile Version 3.0\ntri\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+                           "0 0 0 1 0 0 0 1 0 0 0 1\n";
+  expectError(dir + "/tri.vtk", head + "CELLS 2 9\n3 0 1 2\n4 0 1 2 3\nCELL_TYPES 2\n5 10\n",
+              "1 cell of type 5 (VTK_TRIANGLE)");
+  expectError(dir + "/range.vtk", head + "CELLS 1 5\n4 0 1 2 4\nCELL_TYPES 1\n10\n",
+              "cell 0 refers to point 4 but there are 4 points");
+  expectError(dir + "/short.vtk", head + "CELLS 1 5\n4 0 1 2\n", "file ends");
+  expectError(dir + "/word.vtk", head + "CELLS 1 5\n4 0 1 x 3\nCELL_TYPES 1\n10\n", "is not a int32");
+  expectError(dir + "/pd.vtk", head + "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 5\n",
+              "POINT_DATA 5 does not match the 4 points");
+}
+
+TEST(VtkLegacy, QuadraticTetraKeepsCornersAndCountsMidEdgePoints) {
+  const std::string dir = tempDir("vtk_legacy_quadratic");
+  const std::string path = dir + "/q.vtk";
+  writeFile(path,
+            "# vtk DataFile Version 3.0\nq\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 10 double\n"
+            "0 0 0 1 0 0 0 1 0 0 0 1 .5 0 0 .5 .5 0 0 .5 0 0 0 .5 .5 0 .5 0 .5 .5\n"
+            "CELLS 1 11\n10 0 1 2 3 4 5 6 7 8 9\nCELL_TYPES 1\n24\n");
+  auto r = importMesh({path}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 1u);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("1 quadratic tetrahedra"), std::string::npos);
+  EXPECT_EQ(computeMeshStats(r->mesh).unreferenced_points, 6u);
+}
+
+}  // namespace
+}  // namespace gtn

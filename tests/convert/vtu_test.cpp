@@ -1,0 +1,646 @@
+// VTK XML (.vtu) import and export: the real datasets against an independent decoder written here,
+// round trips bit for bit, files read back by VTK's own reader and by meshio, files written by VTK
+// and meshio in every encoding read here, and malformed files rejected with the file's name.
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <unistd.h>
+
+#include "convert/export.h"
+#include "convert/import.h"
+#include "mesh/mesh_stats.h"
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+using test::dataPath;
+using test::readFile;
+using test::runShell;
+using test::tempDir;
+using test::writeFile;
+
+// ---- An independent minimal decoder for appended .vtu arrays (raw or base64, zlib or not). ----
+
+std::vector<uint8_t> fromBase64(const std::string& s) {
+  static const std::string chars = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::vector<uint8_t> out;
+  uint32_t acc = 0;
+  int bits = 0;
+  for (char c : s) {
+    if (c == '=') break;
+    const size_t v = chars.find(c);
+    if (v == std::string::npos) continue;
+    acc = (acc << 6) | static_cast<uint32_t>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<uint8_t>(acc >> bits));
+    }
+  }
+  return out;
+}
+
+struct Oracle {
+  std::string text;
+  size_t data_start = 0;
+  bool base64 = false, compressed = false;
+  int header = 4;
+
+  explicit Oracle(const std::string& path) : text(readFile(path)) {
+    const size_t a = text.find("<AppendedData");
+    base64 = text.find("encoding=\"base64\"", a) != std::string::npos && text.find("encoding=\"base64\"", a) < text.find('>', a);
+    data_start = text.find('_', text.find('>', a)) + 1;
+    compressed = text.find("vtkZLibDataCompressor") < a;
+    header = text.find("header_type=\"UInt64\"") < a ? 8 : 4;
+  }
+  uint64_t word(const std::vector<uint8_t>& b, size_t i) const {
+    uint64_t v = 0;
+    std::memcpy(&v, b.data() + i * header, header);
+    return v;
+  }
+  // Bytes of the array whose DataArray tag carries `key` (e.g. Name="Stress").
+  std::vector<uint8_t> array(const std::string& key) const {
+    const size_t tag = text.find(key);
+    EXPECT_NE(tag, std::string::npos) << key;
+    const size_t off_at = text.find("offset=\"", tag) + 8;
+    const size_t offset = std::stoull(text.substr(off_at, 20));
+    std::vector<uint8_t> head, body;
+    if (base64) {
+      // Compressed base64 arrays: header and blocks encoded apart (that is how these files are).
+      const std::vector<uint8_t> first = fromBase64(text.substr(data_start + offset, 4 * header));
+      const size_t nblocks = compressed ? word(first, 0) : 0;
+      const size_t header_bytes = compressed ? (3 + nblocks) * header : header;
+      const size_t header_chars = (header_bytes + 2) / 3 * 4;
+      head = fromBase64(text.substr(data_start + offset, header_chars));
+      size_t payload = 0;
+      if (compressed)
+        for (size_t b = 0; b < nblocks; ++b) payload += word(head, 3 + b);
+      else
+        payload = word(head, 0);
+      body = fromBase64(text.substr(data_start + offset + header_chars, (payload + 2) / 3 * 4));
+    } else {
+      const uint8_t* p = reinterpret_cast<const uint8_t*>(text.data()) + data_start + offset;
+      const size_t nblocks = compressed ? [&] { uint64_t v = 0; std::memcpy(&v, p, header); return v; }() : 0;
+      const size_t header_bytes = compressed ? (3 + nblocks) * header : header;
+      head.assign(p, p + header_bytes);
+      size_t payload = 0;
+      if (compressed)
+        for (size_t b = 0; b < nblocks; ++b) payload += word(head, 3 + b);
+      else
+        payload = word(head, 0);
+      body.assign(p + header_bytes, p + header_bytes + payload);
+    }
+    if (!compressed) return body;
+    std::vector<uint8_t> out;
+    size_t at = 0;
+    for (size_t b = 0; b < word(head, 0); ++b) {
+      const size_t usize = (b + 1 == word(head, 0) && word(head, 2)) ? word(head, 2) : word(head, 1);
+      std::vector<uint8_t> block(usize);
+      uLongf got = usize;
+      EXPECT_EQ(uncompress(block.data(), &got, body.data() + at, word(head, 3 + b)), Z_OK);
+      at += word(head, 3 + b);
+      out.insert(out.end(), block.begin(), block.end());
+    }
+    return out;
+  }
+};
+
+template <class T>
+std::vector<T> as(const std::vector<uint8_t>& b) {
+  std::vector<T> v(b.size() / sizeof(T));
+  std::memcpy(v.data(), b.data(), v.size() * sizeof(T));
+  return v;
+}
+
+ImportResult load(const std::string& path, int split = 6) {
+  ImportOptions o;
+  o.split = split;
+  auto r = importMesh({path}, o);
+  EXPECT_TRUE(r.isOk()) << r.status().message();
+  return r.isOk() ? std::move(r).value() : ImportResult{};
+}
+
+// ---- The real datasets. ----
+
+TEST(Vtu, LvGuccioneEveryArrayBitExact) {
+  const std::string path = dataPath("vtu/lv_guccione.vtu");
+  ImportResult r = load(path);
+  const TetMesh& m = r.mesh;
+  EXPECT_EQ(m.numPoints(), 9385u);
+  EXPECT_EQ(m.numTets(), 43072u);
+  EXPECT_EQ(r.report.flipped, 43072u);
+  EXPECT_EQ(m.coord_type, ScalarType::kFloat32);
+  const Oracle oracle(path);
+  const std::vector<float> xyz = as<float>(oracle.array("Name=\"Points\""));
+  ASSERT_EQ(xyz.size(), m.coords.size());
+  for (size_t i = 0; i < xyz.size(); ++i) ASSERT_EQ(m.coords[i], static_cast<double>(xyz[i])) << i;
+  const std::vector<int64_t> conn = as<int64_t>(oracle.array("Name=\"connectivity\""));
+  ASSERT_EQ(conn.size(), 4 * m.numTets());
+  for (size_t t = 0; t < m.numTets(); ++t) {
+    // Every tet was flipped by swapping its last two vertices.
+    EXPECT_EQ(m.tets[t][0], conn[4 * t]);
+    EXPECT_EQ(m.tets[t][1], conn[4 * t + 1]);
+    EXPECT_EQ(m.tets[t][2], conn[4 * t + 3]);
+    EXPECT_EQ(m.tets[t][3], conn[4 * t + 2]);
+  }
+  const std::vector<std::pair<std::string, uint32_t>> expected = {
+      {"Displacement", 3}, {"VonMises_stress", 1}, {"Stress", 6}, {"Cauchy_stress", 6}, {"Strain", 6},
+      {"Jacobian", 1},     {"Def_grad", 9},        {"Velocity", 3}, {"Pressure", 1},    {"Acceleration", 3}};
+  ASSERT_EQ(m.point_fields.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    const Field& f = m.point_fields[i];
+    EXPECT_EQ(f.name, expected[i].first);
+    EXPECT_EQ(f.components, expected[i].second);
+    EXPECT_EQ(f.type, ScalarType::kFloat64);
+    EXPECT_EQ(f.bytes, oracle.array("Name=\"" + f.name + "\"")) << f.name;
+  }
+  ASSERT_EQ(m.cell_fields.size(), 2u);
+  EXPECT_EQ(m.cell_fields[0].name, "E_VonMises");
+  EXPECT_EQ(m.cell_fields[0].bytes, oracle.array("Name=\"E_VonMises\""));
+  EXPECT_EQ(m.cell_fields[1].name, "E_Jacobian");
+  EXPECT_EQ(m.cell_fields[1].bytes, oracle.array("Name=\"E_Jacobian\""));
+  const MeshStats s = computeMeshStats(m);
+  EXPECT_EQ(s.inverted, 0u);
+  EXPECT_EQ(s.non_manifold_faces, 0u);
+}
+
+TEST(Vtu, RaptorAndOssiclesCounts) {
+  ImportResult raptor = load(dataPath("vtu/raptorTetra_19409.vtu"));
+  MeshStats s = computeMeshStats(raptor.mesh);
+  EXPECT_EQ(s.points, 5992u);
+  EXPECT_EQ(s.tets, 19409u);
+  EXPECT_EQ(s.unreferenced_points, 2u);
+  EXPECT_EQ(s.inverted, 0u);
+  ImportResult ossicles = load(dataPath("vtu/Ossicles.vtu"));
+  s = computeMeshStats(ossicles.mesh);
+  EXPECT_EQ(s.points, 1733u);
+  EXPECT_EQ(s.tets, 5058u);
+  EXPECT_EQ(s.non_manifold_faces, 0u);
+  EXPECT_EQ(ossicles.mesh.coord_type, ScalarType::kFloat32);
+}
+
+TEST(Vtu, FireHexahedraSplitConformingly) {
+  const std::string path = dataPath("vtu/fire_ug.vtu");
+  const Oracle oracle(path);
+  const std::vector<int32_t> conn = as<int32_t>(oracle.array("Name=\"connectivity\""));
+  const std::vector<uint8_t> types = oracle.array("Name=\"types\"");
+  ASSERT_EQ(types.size(), 10462u);
+  ASSERT_EQ(conn.size(), 8u * 10462);
+  for (uint8_t t : types) ASSERT_EQ(t, 12);
+  // Boundary quadrilaterals of the hexahedral mesh: faces used by one hexahedron only.
+  static const int kFaces[6][4] = {{0, 1, 2, 3}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  std::map<std::array<int32_t, 4>, int> quads;
+  for (size_t h = 0; h < types.size(); ++h)
+    for (const auto& f : kFaces) {
+      std::array<int32_t, 4> q = {conn[8 * h + f[0]], conn[8 * h + f[1]], conn[8 * h + f[2]], conn[8 * h + f[3]]};
+      std::sort(q.begin(), q.end());
+      ++quads[q];
+    }
+  size_t boundary_quads = 0;
+  for (const auto& [q, n] : quads) boundary_quads += n == 1;
+  EXPECT_EQ(boundary_quads, 3546u);
+  for (int split : {6, 5}) {
+    ImportResult r = load(path, split);
+    const MeshStats s = computeMeshStats(r.mesh);
+    EXPECT_EQ(s.points, 12323u);
+    EXPECT_GE(s.tets, 5u * 10462);
+    EXPECT_LE(s.tets, 6u * 10462);
+    if (split == 6) {
+      EXPECT_EQ(s.tets, 6u * 10462);
+    }
+    EXPECT_EQ(s.non_manifold_faces, 0u) << split;
+    EXPECT_EQ(s.inverted, 0u);
+    EXPECT_EQ(s.zero_volume, 0u);
+    EXPECT_EQ(s.boundary_faces, 2 * boundary_quads) << split;
+    EXPECT_EQ(r.report.steiner_points, 0u);
+    ASSERT_EQ(r.mesh.point_fields.size(), 6u);
+    EXPECT_EQ(r.mesh.point_fields[1].name, "uvw");
+    EXPECT_EQ(r.mesh.point_fields[1].components, 3u);
+    EXPECT_EQ(r.mesh.point_fields[0].bytes, oracle.array("Name=\"t\""));
+    EXPECT_EQ(r.mesh.point_fields[5].bytes, oracle.array("Name=\"mfrac\""));
+  }
+}
+
+// ---- Round trips. ----
+
+void expectSameMesh(const TetMesh& a, const TetMesh& b) {
+  EXPECT_EQ(a.coord_type, b.coord_type);
+  ASSERT_EQ(a.coords.size(), b.coords.size());
+  EXPECT_EQ(std::memcmp(a.coords.data(), b.coords.data(), a.coords.size() * sizeof(double)), 0);
+  EXPECT_EQ(a.tets, b.tets);
+  ASSERT_EQ(a.point_fields.size(), b.point_fields.size());
+  for (size_t i = 0; i < a.point_fields.size(); ++i) {
+    EXPECT_EQ(a.point_fields[i].name, b.point_fields[i].name);
+    EXPECT_EQ(a.point_fields[i].type, b.point_fields[i].type) << a.point_fields[i].name;
+    EXPECT_EQ(a.point_fields[i].components, b.point_fields[i].components) << a.point_fields[i].name;
+    EXPECT_EQ(a.point_fields[i].bytes, b.point_fields[i].bytes) << a.point_fields[i].name;
+  }
+  ASSERT_EQ(a.cell_fields.size(), b.cell_fields.size());
+  for (size_t i = 0; i < a.cell_fields.size(); ++i) {
+    EXPECT_EQ(a.cell_fields[i].name, b.cell_fields[i].name);
+    EXPECT_EQ(a.cell_fields[i].type, b.cell_fields[i].type);
+    EXPECT_EQ(a.cell_fields[i].components, b.cell_fields[i].components);
+    EXPECT_EQ(a.cell_fields[i].bytes, b.cell_fields[i].bytes) << a.cell_fields[i].name;
+  }
+}
+
+// A small mesh with float32 coordinates and fields of every type, NaN and extreme values included.
+TetMesh makeTypedMesh() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat32;
+  const int n = 3;
+  for (int k = 0; k <= n; ++k)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i)
+        m.coords.insert(m.coords.end(), {double(float(i * 0.1f)), double(float(j * 0.3f)), double(float(k * 0.7f + 0.01f))});
+  auto id = [&](int i, int j, int k) { return static_cast<uint32_t>((k * (n + 1) + j) * (n + 1) + i); };
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        // Six tetrahedra around the 0-6 diagonal, positively oriented for this cell shape.
+        const uint32_t h[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
+                               id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
+                               id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        static const int kSix[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+        for (const auto& t : kSix) m.tets.push_back({h[t[0]], h[t[1]], h[t[2]], h[t[3]]});
+      }
+  const size_t np = m.numPoints(), nt = m.numTets();
+  for (int t = 0; t < kNumScalarTypes; ++t) {
+    const ScalarType type = static_cast<ScalarType>(t);
+    const uint32_t comps = static_cast<uint32_t>(t % 3 + 1);
+    Field f(std::string("f_") + scalarTypeName(type), comps, type, np);
+    for (size_t b = 0; b < f.bytes.size(); ++b) f.bytes[b] = static_cast<uint8_t>((b * 131 + t * 17) ^ (b >> 3));
+    if (type == ScalarType::kFloat32) {
+      for (size_t i = 0; i < np * comps; ++i) f.data<float>()[i] = static_cast<float>(i) * 0.37f - 5.0f;
+      f.data<float>()[3] = std::numeric_limits<float>::quiet_NaN();
+    }
+    if (type == ScalarType::kFloat64)
+      for (size_t i = 0; i < np * comps; ++i) f.data<double>()[i] = static_cast<double>(i) / 3.0 - 1e300 * (i == 7);
+    m.point_fields.push_back(std::move(f));
+  }
+  Field region("region & <id>", 1, ScalarType::kInt16, nt);
+  for (size_t t = 0; t < nt; ++t) region.set<int16_t>(t, 0, static_cast<int16_t>(t % 5 - 2));
+  m.cell_fields.push_back(std::move(region));
+  Field q("quality", 2, ScalarType::kFloat64, nt);
+  for (size_t t = 0; t < nt; ++t) q.set<double>(t, 0, 1.0 / (t + 1)), q.set<double>(t, 1, -double(t));
+  m.cell_fields.push_back(std::move(q));
+  return m;
+}
+
+TEST(Vtu, RoundTripsBitForBit) {
+  const std::string dir = tempDir("vtu_roundtrip");
+  std::vector<std::pair<std::string, TetMesh>> meshes;
+  meshes.emplace_back("spx", load(dataPath("vtk/spx.vtk")).mesh);
+  meshes.emplace_back("lv", load(dataPath("vtu/lv_guccione.vtu")).mesh);
+  meshes.emplace_back("typed", makeTypedMesh());
+  for (const auto& [name, mesh] : meshes) {
+    ASSERT_TRUE(mesh.checkConsistency(name).isOk());
+    for (bool compress : {false, true}) {
+      SCOPED_TRACE(name + (compress ? " compressed" : " plain"));
+      const std::string out = dir + "/" + name + (compress ? "_z" : "") + ".vtu";
+      ExportOptions eo;
+      eo.compress = compress;
+      const Status st = exportVtu(mesh, out, eo);
+      ASSERT_TRUE(st.isOk()) << st.message();
+      const std::string text = readFile(out);
+      EXPECT_NE(text.find("header_type=\"UInt64\""), std::string::npos);
+      EXPECT_EQ(text.find("vtkZLibDataCompressor") != std::string::npos, compress);
+      ImportResult back = load(out);
+      EXPECT_EQ(back.report.flipped, 0u);
+      expectSameMesh(back.mesh, mesh);
+    }
+  }
+  // Compression pays on real data.
+  EXPECT_LT(readFile(dir + "/lv_z.vtu").size(), readFile(dir + "/lv.vtu").size());
+}
+
+// ---- Real clients: VTK's reader and meshio (Debian python3-vtk9, python3-meshio). ----
+
+bool pythonClientsAvailable(std::string* why) {
+  const char* probe = "/usr/bin/python3 -c 'import vtkmodules.vtkIOXML, meshio' 2>&1";
+  if (runShell(probe).exit_code == 0) return true;
+  static bool tried = false;
+  if (!tried && geteuid() == 0) {
+    tried = true;
+    runShell("apt-get install -y python3-vtk9 python3-meshio > /dev/null 2>&1");
+    if (runShell(probe).exit_code == 0) return true;
+  }
+  *why = "/usr/bin/python3 cannot import vtk and meshio (install python3-vtk9 and python3-meshio)";
+  return false;
+}
+
+const char* kClientScript = R"PY(
+import sys, json, zlib
+import numpy as np
+def crc(a): return zlib.crc32(np.ascontiguousarray(a).tobytes())
+def desc(a):
+    a = np.asarray(a)
+    return {"components": 1 if a.ndim == 1 else int(a.shape[1]), "type": a.dtype.name, "crc": crc(a),
+            "items": int(a.shape[0])}
+path = sys.argv[2]
+if sys.argv[1] == "vtk":
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    r = vtkXMLUnstructuredGridReader(); r.SetFileName(path); r.Update()
+    g = r.GetOutput()
+    pd, cd = g.GetPointData(), g.GetCellData()
+    out = {"points": g.GetNumberOfPoints(), "cells": g.GetNumberOfCells(),
+           "coords": desc(vtk_to_numpy(g.GetPoints().GetData())),
+           "conn_crc": crc(vtk_to_numpy(g.GetCells().GetConnectivityArray()).astype(np.int64)),
+           "types": sorted(set(int(t) for t in vtk_to_numpy(g.GetCellTypesArray()))),
+           "point_data": {pd.GetArrayName(i): desc(vtk_to_numpy(pd.GetArray(i))) for i in range(pd.GetNumberOfArrays())},
+           "cell_data": {cd.GetArrayName(i): desc(vtk_to_numpy(cd.GetArray(i))) for i in range(cd.GetNumberOfArrays())}}
+elif sys.argv[1] == "meshio":
+    import meshio
+    m = meshio.read(path)
+    tets = [c.data for c in m.cells if c.type == "tetra"]
+    out = {"points": len(m.points), "cells": sum(len(c.data) for c in m.cells), "coords": desc(m.points),
+           "conn_crc": crc(np.concatenate(tets).astype(np.int64)), "types": sorted(set(c.type for c in m.cells)),
+           "point_data": {k: desc(v) for k, v in m.point_data.items()},
+           "cell_data": {k: desc(np.concatenate(v)) for k, v in m.cell_data.items()}}
+else:
+    # Rewrites argv[2] with VTK's own writer in every encoding, into the folder argv[3].
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLUnstructuredGridWriter
+    r = vtkXMLUnstructuredGridReader(); r.SetFileName(path); r.Update()
+    names = []
+    for mode in ["ascii", "binary", "raw", "base64"]:
+        for comp in ["none", "zlib", "lz4"]:
+            for header in [32, 64]:
+                for order in ["le", "be"]:
+                    if mode == "ascii" and (comp != "none" or header != 32 or order != "le"): continue
+                    if comp == "lz4" and (mode != "raw" or header != 64 or order != "le"): continue
+                    w = vtkXMLUnstructuredGridWriter(); w.SetInputData(r.GetOutput())
+                    name = "%s/vtk_%s_%s_%d_%s.vtu" % (sys.argv[3], mode, comp, header, order)
+                    w.SetFileName(name)
+                    {"ascii": w.SetDataModeToAscii, "binary": w.SetDataModeToBinary,
+                     "raw": w.SetDataModeToAppended, "base64": w.SetDataModeToAppended}[mode]()
+                    w.SetEncodeAppendedData(1 if mode == "base64" else 0)
+                    {"none": w.SetCompressorTypeToNone, "zlib": w.SetCompressorTypeToZLib,
+                     "lz4": w.SetCompressorTypeToLZ4}[comp]()
+                    w.SetHeaderTypeToUInt32() if header == 32 else w.SetHeaderTypeToUInt64()
+                    w.SetByteOrderToLittleEndian() if order == "le" else w.SetByteOrderToBigEndian()
+                    if w.Write() != 1: sys.exit("write failed: " + name)
+                    names.append(name)
+    import meshio
+    m = meshio.read(path)
+    for opts in [("ascii", False, None), ("raw", True, None), ("zlib", True, "zlib"), ("lzma", True, "lzma")]:
+        name = "%s/meshio_%s.vtu" % (sys.argv[3], opts[0])
+        meshio.write(name, m, binary=opts[1], compression=opts[2])
+        names.append(name)
+    out = {"files": names}
+print(json.dumps(out))
+)PY";
+
+nlohmann::json runClient(const std::string& dir, const std::string& mode, const std::string& path,
+                         const std::string& extra = "") {
+  const std::string script = dir + "/client.py";
+  if (!test::fileExists(script)) writeFile(script, kClientScript);
+  const auto r = runShell("/usr/bin/python3 " + script + " " + mode + " '" + path + "' " + extra);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  try {
+    return nlohmann::json::parse(r.out);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "no JSON from the " << mode << " client: " << r.out << r.err;
+    return {};
+  }
+}
+
+void expectFieldSeen(const nlohmann::json& seen, const Field& f, size_t items) {
+  ASSERT_TRUE(seen.contains(f.name)) << f.name;
+  const auto& d = seen[f.name];
+  EXPECT_EQ(d["components"], f.components) << f.name;
+  EXPECT_EQ(d["type"], scalarTypeName(f.type)) << f.name;
+  EXPECT_EQ(d["items"], items) << f.name;
+  EXPECT_EQ(d["crc"], crc32(0, f.bytes.data(), static_cast<uInt>(f.bytes.size()))) << f.name;
+}
+
+TEST(Vtu, ExportedFilesReadByVtkAndMeshio) {
+  std::string why;
+  if (!pythonClientsAvailable(&why)) GTEST_SKIP() << why;
+  const std::string dir = tempDir("vtu_clients");
+  std::vector<std::pair<std::string, TetMesh>> meshes;
+  meshes.emplace_back("lv", load(dataPath("vtu/lv_guccione.vtu")).mesh);
+  meshes.emplace_back("typed", makeTypedMesh());
+  for (const auto& [name, mesh] : meshes) {
+    std::vector<int64_t> conn;
+    for (const Tet& t : mesh.tets) conn.insert(conn.end(), t.begin(), t.end());
+    const uLong conn_crc = crc32(0, reinterpret_cast<const Bytef*>(conn.data()), static_cast<uInt>(conn.size() * 8));
+    std::vector<uint8_t> xyz;
+    if (mesh.coord_type == ScalarType::kFloat32) {
+      std::vector<float> f(mesh.coords.begin(), mesh.coords.end());
+      xyz.assign(reinterpret_cast<uint8_t*>(f.data()), reinterpret_cast<uint8_t*>(f.data() + f.size()));
+    } else {
+      xyz.assign(reinterpret_cast<const uint8_t*>(mesh.coords.data()),
+                 reinterpret_cast<const uint8_t*>(mesh.coords.data() + mesh.coords.size()));
+    }
+    for (bool compress : {false, true}) {
+      const std::string out = dir + "/" + name + (compress ? "_z" : "") + ".vtu";
+      ExportOptions eo;
+      eo.compress = compress;
+      ASSERT_TRUE(exportVtu(mesh, out, eo).isOk());
+      for (const char* client : {"vtk", "meshio"}) {
+        SCOPED_TRACE(out + " read by " + client);
+        const nlohmann::json j = runClient(dir, client, out);
+        if (j.is_null()) continue;
+        EXPECT_EQ(j["points"], mesh.numPoints());
+        EXPECT_EQ(j["cells"], mesh.numTets());
+        EXPECT_EQ(j["conn_crc"], conn_crc);
+        EXPECT_EQ(j["coords"]["type"], scalarTypeName(mesh.coord_type));
+        EXPECT_EQ(j["coords"]["crc"], crc32(0, xyz.data(), static_cast<uInt>(xyz.size())));
+        EXPECT_EQ(j["types"].size(), 1u);
+        EXPECT_EQ(j["point_data"].size(), mesh.point_fields.size());
+        for (const Field& f : mesh.point_fields) expectFieldSeen(j["point_data"], f, mesh.numPoints());
+        EXPECT_EQ(j["cell_data"].size(), mesh.cell_fields.size());
+        for (const Field& f : mesh.cell_fields) expectFieldSeen(j["cell_data"], f, mesh.numTets());
+      }
+    }
+  }
+}
+
+TEST(Vtu, FilesWrittenByVtkAndMeshioInEveryEncoding) {
+  std::string why;
+  if (!pythonClientsAvailable(&why)) GTEST_SKIP() << why;
+  const std::string dir = tempDir("vtu_writers");
+  const TetMesh mesh = makeTypedMesh();
+  const std::string source = dir + "/typed.vtu";
+  ASSERT_TRUE(exportVtu(mesh, source, ExportOptions{}).isOk());
+  const nlohmann::json j = runClient(dir, "write", source, dir);
+  ASSERT_TRUE(j.contains("files"));
+  size_t read = 0;
+  for (const std::string file : j["files"]) {
+    SCOPED_TRACE(file);
+    auto r = importMesh({file}, ImportOptions{});
+    if (file.find("lz4") != std::string::npos || file.find("lzma") != std::string::npos) {
+      ASSERT_FALSE(r.isOk());
+      EXPECT_EQ(r.status().code(), StatusCode::kUnsupported);
+      EXPECT_NE(r.status().message().find("is not supported"), std::string::npos) << r.status().message();
+      EXPECT_NE(r.status().message().find(file), std::string::npos);
+      continue;
+    }
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    ++read;
+    const bool from_meshio = file.find("meshio_") != std::string::npos;
+    const bool ascii = file.find("_ascii") != std::string::npos;
+    TetMesh expected = mesh;
+    if (from_meshio) {
+      // meshio writes points as float64 and drops no array; otherwise its files are the same mesh.
+      expected.coord_type = r->mesh.coord_type;
+    }
+    if (ascii) {
+      // ASCII writers print floats with fewer digits than a round trip needs (and NaN their own way):
+      // check the structure and the integer arrays, which text carries exactly.
+      EXPECT_EQ(r->mesh.tets, expected.tets);
+      ASSERT_EQ(r->mesh.point_fields.size(), expected.point_fields.size());
+      for (size_t i = 0; i < expected.point_fields.size(); ++i) {
+        EXPECT_EQ(r->mesh.point_fields[i].name, expected.point_fields[i].name);
+        EXPECT_EQ(r->mesh.point_fields[i].type, expected.point_fields[i].type);
+        if (!isFloatType(expected.point_fields[i].type)) {
+          EXPECT_EQ(r->mesh.point_fields[i].bytes, expected.point_fields[i].bytes) << expected.point_fields[i].name;
+        }
+      }
+      continue;
+    }
+    expectSameMesh(r->mesh, expected);
+  }
+  EXPECT_EQ(read, 1u + 3 * 2 * 2 * 2 + 3);  // VTK: ascii + 3 binary modes x 2 compressors x 2 headers x 2 orders; meshio: 3
+}
+
+// ---- Hand-written files: several pieces; malformed inputs. ----
+
+const char* kTwoPieces = R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="4" NumberOfCells="1">
+      <PointData><DataArray type="Int32" Name="id" format="ascii">10 11 12 13</DataArray></PointData>
+      <CellData><DataArray type="Float32" Name="w" format="ascii">0.5</DataArray></CellData>
+      <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0 0 0 1</DataArray></Points>
+      <Cells>
+        <DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3</DataArray>
+        <DataArray type="Int32" Name="offsets" format="ascii">4</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">10</DataArray>
+      </Cells>
+    </Piece>
+    <Piece NumberOfPoints="4" NumberOfCells="1">
+      <PointData><DataArray type="Int32" Name="id" format="ascii">20 21 22 23</DataArray></PointData>
+      <CellData><DataArray type="Float32" Name="w" format="ascii">0.25</DataArray></CellData>
+      <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">2 0 0 3 0 0 2 1 0 2 0 1</DataArray></Points>
+      <Cells>
+        <DataArray type="Int32" Name="connectivity" format="ascii">CONN</DataArray>
+        <DataArray type="Int32" Name="offsets" format="ascii">4</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">TYPE</DataArray>
+      </Cells>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>
+)";
+
+std::string twoPieces(const std::string& conn, const std::string& type) {
+  std::string s = kTwoPieces;
+  s.replace(s.find("CONN"), 4, conn);
+  s.replace(s.find("TYPE"), 4, type);
+  return s;
+}
+
+TEST(Vtu, SeveralPiecesAreConcatenated) {
+  const std::string path = tempDir("vtu_pieces") + "/two.vtu";
+  writeFile(path, twoPieces("0 1 2 3", "10"));
+  ImportResult r = load(path);
+  ASSERT_EQ(r.mesh.numPoints(), 8u);
+  ASSERT_EQ(r.mesh.numTets(), 2u);
+  EXPECT_EQ(r.mesh.tets[1], (Tet{4, 5, 6, 7}));
+  ASSERT_EQ(r.mesh.point_fields.size(), 1u);
+  EXPECT_EQ(r.mesh.point_fields[0].type, ScalarType::kInt32);
+  EXPECT_EQ(r.mesh.point_fields[0].data<int32_t>()[5], 21);
+  ASSERT_EQ(r.mesh.cell_fields.size(), 1u);
+  EXPECT_EQ(r.mesh.cell_fields[0].data<float>()[1], 0.25f);
+}
+
+void expectError(const std::string& path, const std::string& part) {
+  auto r = importMesh({path}, ImportOptions{});
+  ASSERT_FALSE(r.isOk()) << "accepted " << path;
+  EXPECT_NE(r.status().message().find(path), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find(part), std::string::npos) << r.status().message() << "\nlacks: " << part;
+}
+
+TEST(Vtu, MalformedFilesFailWithTheFileNamed) {
+  const std::string dir = tempDir("vtu_bad");
+  writeFile(dir + "/type.vtu", twoPieces("0 1 2 3", "5"));
+  expectError(dir + "/type.vtu", "1 cell of type 5 (VTK_TRIANGLE)");
+  writeFile(dir + "/range.vtu", twoPieces("0 1 2 4", "10"));
+  expectError(dir + "/range.vtu", "refers to point 4 but the piece has 4 points");
+
+  const TetMesh mesh = makeTypedMesh();
+  ASSERT_TRUE(exportVtu(mesh, dir + "/plain.vtu", ExportOptions{}).isOk());
+  ExportOptions z;
+  z.compress = true;
+  ASSERT_TRUE(exportVtu(mesh, dir + "/z.vtu", z).isOk());
+  const std::string plain = readFile(dir + "/plain.vtu"), packed = readFile(dir + "/z.vtu");
+
+  // Truncated base64: the Points array loses its last 40 characters.
+  std::string cut = plain;
+  const size_t pts_end = cut.find("</DataArray>", cut.find("Name=\"Points\""));
+  cut.erase(pts_end - 41, 40);
+  writeFile(dir + "/short_b64.vtu", cut);
+  expectError(dir + "/short_b64.vtu", "Points: base64 data is cut short");
+  // A corrupt zlib block: bytes inside the Points blocks changed (after the separately encoded header).
+  std::string bad = packed;
+  const size_t data_at = bad.find('\n', bad.find("Name=\"Points\"")) + 1 + 200;
+  for (size_t i = 0; i < 30; ++i) bad[data_at + 32 + i] = bad[data_at + 32 + i] == 'A' ? 'B' : 'A';
+  writeFile(dir + "/bad_zlib.vtu", bad);
+  expectError(dir + "/bad_zlib.vtu", "zlib block 0 is corrupt");
+  // Not base64 at all.
+  std::string junk = plain;
+  junk[pts_end - 10] = '*';
+  writeFile(dir + "/junk.vtu", junk);
+  expectError(dir + "/junk.vtu", "bad base64");
+  // The XML cut in the middle.
+  writeFile(dir + "/half.vtu", plain.substr(0, plain.size() / 2));
+  expectError(dir + "/half.vtu", "not well-formed XML");
+  // Raw appended data cut short (the XML part is intact).
+  const std::string lv = readFile(dataPath("vtu/lv_guccione.vtu"));
+  writeFile(dir + "/lv_cut.vtu", lv.substr(0, lv.size() - 100000));
+  expectError(dir + "/lv_cut.vtu", "Piece 0");
+  // Not a VTK file, and a VTK file of another kind.
+  writeFile(dir + "/other.vtu", "<?xml version=\"1.0\"?><VTKFile type=\"PolyData\"></VTKFile>");
+  expectError(dir + "/other.vtu", "VTKFile type \"PolyData\" is not supported");
+
+  // Every prefix of a small compressed file fails cleanly (or, past the last array, still reads).
+  for (const std::string* whole : {&packed, &plain}) {
+    const size_t last = whole->rfind("</DataArray>");
+    for (size_t n = 0; n < whole->size(); n += 97) {
+      const std::string path = dir + "/prefix.vtu";
+      writeFile(path, whole->substr(0, n));
+      auto r = importVtu(path, ImportOptions{});
+      if (r.isOk()) {
+        EXPECT_GT(n, last) << "a prefix of " << n << " bytes was accepted";
+      } else {
+        EXPECT_EQ(r.status().message().rfind(path, 0), 0u) << r.status().message();
+      }
+    }
+  }
+}
+
+TEST(Vtu, CliConvertsAndReportsCutFiles) {
+  const std::string dir = tempDir("vtu_cli");
+  const auto conv = test::runGtn("convert '" + dataPath("vtk/spx.vtk") + "' -o '" + dir + "/spx.vtu'");
+  ASSERT_EQ(conv.exit_code, 0) << conv.err;
+  ImportResult r = load(dir + "/spx.vtu");
+  EXPECT_EQ(r.mesh.numTets(), 12936u);
+  const std::string text = readFile(dir + "/spx.vtu");
+  writeFile(dir + "/cut.vtu", text.substr(0, text.size() * 2 / 3));
+  const auto info = test::runGtn("info '" + dir + "/cut.vtu'");
+  EXPECT_TRUE(info.exit_code == 1 || info.exit_code == 3) << info.exit_code;
+  EXPECT_NE(info.err.find(dir + "/cut.vtu"), std::string::npos) << info.err;
+  EXPECT_EQ(std::count(info.err.begin(), info.err.end(), '\n'), 1) << info.err;
+  EXPECT_TRUE(info.out.empty()) << info.out;
+}
+
+}  // namespace
+}  // namespace gtn
