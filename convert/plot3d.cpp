@@ -1,10 +1,919 @@
-// PLACEHOLDER: replaced by the real importer.
+// PLOT3D importer: binary curvilinear grids (with an optional Q file and function file, or a
+// ParaView-style .p3d JSON meta-file naming them) into a tetrahedral mesh.
+//
+// PLOT3D files do not describe themselves, so every file is read by trying each interpretation
+// (byte order, no / 4-byte / 8-byte Fortran record markers, single grid or multi-grid with a leading
+// grid count, 2D or 3D, float32 or float64, IBLANK or not) and keeping those whose sizes match the
+// file exactly. Only the whole layout is read (all X, then all Y, then all Z per grid, i fastest).
+// When no interpretation fits exactly, one that fits with trailing zero bytes is accepted with a
+// warning; trailing data that is not zero is an error. When several fit, the import fails and lists
+// them: guessing would silently produce a wrong mesh.
+//
+// Policies (ARCHITECTURE.md / FORMATS.md):
+// - Points keep grid order (i fastest, then j, then k), blocks concatenated, in source precision.
+// - IBLANK: a cell with any hole vertex (IBLANK 0) is dropped and counted; fringe (negative) and wall
+//   (2) points are ordinary points. All points are kept and IBLANK becomes the int32 field "iblank".
+// - Blocks are never joined; --weld merges bit-identical points (across blocks too), keeps the first
+//   point's field values, and drops the tetrahedra that collapse.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
 #include "convert/import.h"
+#include "format/file_io.h"
+#include "mesh/hex_split.h"
+
+static_assert(std::endian::native == std::endian::little,
+              "Field holds little-endian bytes: a big-endian host would need byte swapping here");
 
 namespace gtn {
 
-StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, const ImportOptions&) {
-  return unsupported("importPlot3d is not implemented yet");
+namespace {
+
+enum class Kind { kGrid, kQ, kFunction };
+
+const char* kindName(Kind k) {
+  switch (k) {
+    case Kind::kGrid: return "grid";
+    case Kind::kQ: return "Q";
+    default: return "function";
+  }
+}
+
+// One interpretation of a PLOT3D file.
+struct Layout {
+  bool big_endian = true;
+  int marker = 0;  // Fortran record marker size in bytes: 0 (none), 4 or 8
+  bool multi_grid = false;
+  int ndim = 3;
+  int precision = 4;  // bytes per real
+  bool iblank = false;
+};
+
+std::string describeLayout(const Layout& l, Kind kind) {
+  std::string s = l.big_endian ? "big-endian" : "little-endian";
+  s += l.marker ? ", " + std::to_string(l.marker) + "-byte record markers" : ", no record markers";
+  s += l.multi_grid ? ", multi-grid" : ", single grid";
+  if (kind == Kind::kGrid) s += l.ndim == 3 ? ", 3D" : ", 2D";
+  s += l.precision == 4 ? ", float32" : ", float64";
+  if (kind == Kind::kGrid) s += l.iblank ? ", IBLANK" : ", no IBLANK";
+  return s;
+}
+
+// What the .p3d meta-file (or nothing) says about the layout; unset members are detected.
+struct Constraints {
+  std::optional<bool> big_endian;
+  std::optional<bool> fortran;  // record markers (of either size) or none
+  std::optional<bool> multi_grid;
+  std::optional<int> precision;
+  std::optional<bool> iblank;
+  std::optional<int> ndim;
+
+  bool allows(const Layout& l, Kind kind) const {
+    if (big_endian && *big_endian != l.big_endian) return false;
+    if (fortran && *fortran != (l.marker != 0)) return false;
+    if (multi_grid && *multi_grid != l.multi_grid) return false;
+    if (precision && *precision != l.precision) return false;
+    if (kind == Kind::kGrid && iblank && *iblank != l.iblank) return false;
+    if (kind == Kind::kGrid && ndim && *ndim != l.ndim) return false;
+    return true;
+  }
+};
+
+// A logical record: one piece, or several when it was written as Fortran subrecords.
+struct Piece {
+  uint64_t offset = 0, size = 0;
+};
+using Record = std::vector<Piece>;
+
+struct BlockDims {
+  int64_t n[3] = {1, 1, 1};
+  int64_t nvar = 0;  // function files only
+  uint64_t points() const { return static_cast<uint64_t>(n[0] * n[1] * n[2]); }
+};
+
+std::string dimsText(const BlockDims& b, int ndim = 3) {
+  std::string s = std::to_string(b.n[0]);
+  for (int a = 1; a < ndim; ++a) {
+    s += 'x';
+    s += std::to_string(b.n[a]);
+  }
+  return s;
+}
+
+std::string blocksText(const std::vector<BlockDims>& blocks) {
+  std::string s;
+  for (size_t g = 0; g < blocks.size() && g < 4; ++g) s += (g ? ", " : "") + dimsText(blocks[g]);
+  if (blocks.size() > 4) s += ", ... (" + std::to_string(blocks.size()) + " grids)";
+  return s;
+}
+
+// An interpretation that fits the file: where every block's records are.
+struct Fit {
+  Layout layout;
+  std::vector<BlockDims> blocks;
+  std::vector<Record> headers;  // Q files: the four freestream reals of each block
+  std::vector<Record> data;     // one record per block
+  uint64_t end = 0;             // first byte after the data
+};
+
+uint64_t loadUnsigned(const char* p, int size, bool big_endian) {
+  uint64_t v = 0;
+  for (int i = 0; i < size; ++i) {
+    const uint64_t b = static_cast<unsigned char>(p[big_endian ? i : size - 1 - i]);
+    v = (v << 8) | b;
+  }
+  return v;
+}
+
+int64_t loadSigned(const char* p, int size, bool big_endian) {
+  const uint64_t u = loadUnsigned(p, size, big_endian);
+  if (size == 4) return static_cast<int32_t>(static_cast<uint32_t>(u));
+  return static_cast<int64_t>(u);
+}
+
+double loadReal(const char* p, int precision, bool big_endian) {
+  const uint64_t u = loadUnsigned(p, precision, big_endian);
+  if (precision == 4) return static_cast<double>(std::bit_cast<float>(static_cast<uint32_t>(u)));
+  return std::bit_cast<double>(u);
+}
+
+// Copies one value of `size` bytes into little-endian order.
+void storeLittle(const char* src, int size, bool big_endian, uint8_t* dst) {
+  for (int i = 0; i < size; ++i) dst[i] = static_cast<uint8_t>(src[big_endian ? size - 1 - i : i]);
+}
+
+// Walks the records of one interpretation, checking every record marker against the file.
+class RecordCursor {
+ public:
+  RecordCursor(std::string_view bytes, const Layout& layout) : bytes_(bytes), layout_(layout) {}
+
+  // The next record, which must hold exactly `expected` bytes; `what` names it in `*why`.
+  bool next(uint64_t expected, const char* what, Record* out, std::string* why) {
+    out->clear();
+    const uint64_t size = bytes_.size();
+    if (layout_.marker == 0) {
+      if (expected > size - pos_) {
+        *why = std::string(what) + " needs " + std::to_string(expected) + " bytes at byte " + std::to_string(pos_) +
+               ", the file has " + std::to_string(size - pos_) + " left";
+        return false;
+      }
+      if (expected) out->push_back({pos_, expected});
+      pos_ += expected;
+      return true;
+    }
+    const uint64_t m = static_cast<uint64_t>(layout_.marker);
+    uint64_t p = pos_, total = 0;
+    for (;;) {
+      // Subrecords: a negative leading marker says the record continues in the next subrecord
+      // (gfortran's scheme for records over 2 GiB); each trailing marker repeats the length.
+      if (size - p < m) {
+        *why = std::string(what) + ": the file ends inside the record marker at byte " + std::to_string(p);
+        return false;
+      }
+      const int64_t head = loadSigned(bytes_.data() + p, layout_.marker, layout_.big_endian);
+      const uint64_t len = head < 0 ? uint64_t{0} - static_cast<uint64_t>(head) : static_cast<uint64_t>(head);
+      if (len > size - p - m || size - p - m - len < m) {
+        *why = std::string(what) + ": the record marker at byte " + std::to_string(p) + " says " +
+               std::to_string(len) + " bytes, past the end of the file";
+        return false;
+      }
+      const int64_t tail = loadSigned(bytes_.data() + p + m + len, layout_.marker, layout_.big_endian);
+      const uint64_t tail_len = tail < 0 ? uint64_t{0} - static_cast<uint64_t>(tail) : static_cast<uint64_t>(tail);
+      if (tail_len != len) {
+        *why = std::string(what) + ": the record marker at byte " + std::to_string(p) + " says " +
+               std::to_string(len) + " bytes but the closing marker at byte " + std::to_string(p + m + len) +
+               " says " + std::to_string(tail_len);
+        return false;
+      }
+      if (len) out->push_back({p + m, len});
+      total += len;
+      p += 2 * m + len;
+      if (total > expected) break;
+      if (head >= 0) break;
+    }
+    if (total != expected) {
+      *why = std::string(what) + ": the record at byte " + std::to_string(pos_) + " holds " + std::to_string(total) +
+             " bytes" + (total > expected ? " or more" : "") + ", expected " + std::to_string(expected);
+      return false;
+    }
+    pos_ = p;
+    return true;
+  }
+
+  uint64_t pos() const { return pos_; }
+
+ private:
+  std::string_view bytes_;
+  Layout layout_;
+  uint64_t pos_ = 0;
+};
+
+// The bytes of a record, contiguous (copied into `scratch` only when it has several subrecords).
+std::string_view recordBytes(std::string_view bytes, const Record& rec, std::string* scratch) {
+  if (rec.empty()) return {};
+  if (rec.size() == 1) return bytes.substr(rec[0].offset, rec[0].size);
+  scratch->clear();
+  for (const Piece& p : rec) scratch->append(bytes.substr(p.offset, p.size));
+  return *scratch;
+}
+
+// Tries one interpretation. On failure `*why` says what did not fit, `*header_ok` whether the grid
+// count and dimensions at least made sense and `*progress` how far the records checked out (both
+// for ranking the explanations).
+bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std::string* why, bool* header_ok,
+               uint64_t* progress) {
+  *header_ok = false;
+  const uint64_t size = bytes.size();
+  RecordCursor cursor(bytes, l);
+  struct ProgressOnExit {
+    const RecordCursor& c;
+    uint64_t* out;
+    ~ProgressOnExit() { *out = c.pos(); }
+  } progress_on_exit{cursor, progress};
+  Record rec;
+  std::string scratch;
+  int64_t ngrid = 1;
+  const int ints = kind == Kind::kFunction ? 4 : (kind == Kind::kGrid ? l.ndim : 3);
+  if (l.multi_grid) {
+    if (!cursor.next(4, "grid count", &rec, why)) return false;
+    const std::string_view v = recordBytes(bytes, rec, &scratch);
+    ngrid = loadSigned(v.data(), 4, l.big_endian);
+    if (ngrid < 1 || static_cast<uint64_t>(ngrid) > size / (4 * static_cast<uint64_t>(ints))) {
+      *why = "grid count " + std::to_string(ngrid) + " is impossible for a file of " + std::to_string(size) + " bytes";
+      return false;
+    }
+  }
+  const uint64_t dims_bytes = static_cast<uint64_t>(ngrid) * ints * 4;
+  if (!cursor.next(dims_bytes, "dimensions", &rec, why)) return false;
+  const std::string_view dv = recordBytes(bytes, rec, &scratch);
+  fit->blocks.assign(static_cast<size_t>(ngrid), BlockDims());
+  const uint64_t value_bytes = static_cast<uint64_t>(l.precision);
+  for (int64_t g = 0; g < ngrid; ++g) {
+    BlockDims& b = fit->blocks[static_cast<size_t>(g)];
+    uint64_t points = 1;
+    for (int a = 0; a < ints; ++a) {
+      const int64_t v = loadSigned(dv.data() + 4 * (g * ints + a), 4, l.big_endian);
+      // Every point takes at least one real in the file: a larger count cannot fit.
+      if (v < 1 || static_cast<uint64_t>(v) > size / value_bytes) {
+        *why = "dimension " + std::to_string(a + 1) + " of grid " + std::to_string(g + 1) + " is " + std::to_string(v);
+        return false;
+      }
+      if (a < 3 && a < l.ndim) {
+        b.n[a] = v;
+        points *= static_cast<uint64_t>(v);
+        if (points > size / value_bytes) {
+          *why = "grid " + std::to_string(g + 1) + " has more points than the file has bytes for";
+          return false;
+        }
+      } else if (kind == Kind::kFunction) {
+        b.nvar = v;
+      }
+    }
+  }
+  *header_ok = true;
+  fit->layout = l;
+  fit->headers.clear();
+  fit->data.assign(static_cast<size_t>(ngrid), Record());
+  for (int64_t g = 0; g < ngrid; ++g) {
+    const BlockDims& b = fit->blocks[static_cast<size_t>(g)];
+    const uint64_t n = b.points();
+    uint64_t per_point = 0;
+    if (kind == Kind::kGrid) per_point = l.ndim * value_bytes + (l.iblank ? 4 : 0);
+    if (kind == Kind::kQ) per_point = 5 * value_bytes;
+    if (kind == Kind::kFunction) {
+      if (static_cast<uint64_t>(b.nvar) > size / value_bytes / n) {
+        *why = "grid " + std::to_string(g + 1) + " (" + dimsText(b) + ", " + std::to_string(b.nvar) +
+               " variables) needs more bytes than the file has";
+        return false;
+      }
+      per_point = static_cast<uint64_t>(b.nvar) * value_bytes;
+    }
+    // n * per_point cannot overflow: n and nvar were bounded by the file size above.
+    const std::string block_name = "grid " + std::to_string(g + 1) + " (" +
+                                   dimsText(b, kind == Kind::kGrid ? l.ndim : 3) + ") data";
+    if (kind == Kind::kQ) {
+      Record header;
+      if (!cursor.next(4 * value_bytes, ("grid " + std::to_string(g + 1) + " freestream header").c_str(), &header, why))
+        return false;
+      fit->headers.push_back(std::move(header));
+    }
+    if (!cursor.next(n * per_point, block_name.c_str(), &fit->data[static_cast<size_t>(g)], why)) return false;
+  }
+  fit->end = cursor.pos();
+  return true;
+}
+
+struct Attempt {
+  Layout layout;
+  std::string why;
+  uint64_t progress = 0;  // bytes whose records checked out before the failure
+};
+
+struct Detection {
+  std::vector<Fit> exact;      // sizes match the file exactly
+  std::vector<Fit> zero_tail;  // data followed by zero bytes only
+  std::vector<Attempt> plausible;       // failed after a sensible header, or left non-zero trailing bytes
+  size_t header_failures = 0;           // failed at the grid count, dimensions or record markers
+};
+
+bool allZero(std::string_view s) {
+  return std::all_of(s.begin(), s.end(), [](char c) { return c == 0; });
+}
+
+Detection detect(std::string_view bytes, Kind kind, const Constraints& constraints) {
+  Detection d;
+  for (int be = 1; be >= 0; --be) {
+    for (int marker : {0, 4, 8}) {
+      for (int multi = 0; multi < 2; ++multi) {
+        for (int ndim : {3, 2}) {
+          if (ndim == 2 && kind != Kind::kGrid) continue;
+          for (int precision : {4, 8}) {
+            for (int iblank = 0; iblank < 2; ++iblank) {
+              if (iblank && kind != Kind::kGrid) continue;
+              Layout l;
+              l.big_endian = be != 0;
+              l.marker = marker;
+              l.multi_grid = multi != 0;
+              l.ndim = ndim;
+              l.precision = precision;
+              l.iblank = iblank != 0;
+              if (!constraints.allows(l, kind)) continue;
+              Fit fit;
+              std::string why;
+              bool header_ok = false;
+              uint64_t progress = 0;
+              if (!tryLayout(bytes, l, kind, &fit, &why, &header_ok, &progress)) {
+                if (header_ok) {
+                  d.plausible.push_back({l, why, progress});
+                } else {
+                  ++d.header_failures;
+                }
+                continue;
+              }
+              if (fit.end == bytes.size()) {
+                d.exact.push_back(std::move(fit));
+              } else if (allZero(bytes.substr(fit.end))) {
+                d.zero_tail.push_back(std::move(fit));
+              } else {
+                d.plausible.push_back({l, "grids " + blocksText(fit.blocks) + " end at byte " + std::to_string(fit.end) +
+                                              ", followed by " + std::to_string(bytes.size() - fit.end) +
+                                              " bytes that are not all zero",
+                                          fit.end});
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  // The interpretations that got furthest explain the failure best.
+  std::stable_sort(d.plausible.begin(), d.plausible.end(),
+                   [](const Attempt& a, const Attempt& b) { return a.progress > b.progress; });
+  return d;
+}
+
+std::string triedText(const Detection& d, Kind kind) {
+  std::string s = "tried big- and little-endian, no/4-byte/8-byte record markers, single and multi-grid, ";
+  s += kind == Kind::kGrid ? "2D and 3D, float32 and float64, with and without IBLANK" : "float32 and float64";
+  s += " (binary only: ASCII PLOT3D is not read)";
+  const size_t shown = std::min<size_t>(d.plausible.size(), 8);
+  for (size_t i = 0; i < shown; ++i)
+    s += "; [" + std::to_string(i + 1) + "] " + describeLayout(d.plausible[i].layout, kind) + ": " + d.plausible[i].why;
+  if (d.plausible.size() > shown) s += "; ... and " + std::to_string(d.plausible.size() - shown) + " more";
+  if (d.header_failures)
+    s += "; " + std::to_string(d.header_failures) +
+         " other interpretations fail at once (impossible grid count, dimensions or record markers)";
+  return s;
+}
+
+bool looksLikeText(std::string_view bytes) {
+  const std::string_view head = bytes.substr(0, 512);
+  return !head.empty() && std::all_of(head.begin(), head.end(), [](char c) {
+    const unsigned char u = static_cast<unsigned char>(c);
+    return u == '\n' || u == '\r' || u == '\t' || (u >= 32 && u < 127);
+  });
+}
+
+bool sameDims(const std::vector<BlockDims>& a, const std::vector<BlockDims>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t g = 0; g < a.size(); ++g) {
+    for (int k = 0; k < 3; ++k)
+      if (a[g].n[k] != b[g].n[k]) return false;
+  }
+  return true;
+}
+
+// Picks the one fit among `fits` that `accept` takes, preferring the grid file's byte order and
+// record markers when several remain. Empty when none; an error when still ambiguous.
+StatusOr<std::optional<Fit>> pickOne(const std::string& path, Kind kind, std::vector<Fit> fits,
+                                     const std::function<bool(const Fit&)>& accept, const Layout* prefer) {
+  std::vector<Fit> ok;
+  for (Fit& f : fits)
+    if (accept(f)) ok.push_back(std::move(f));
+  if (ok.size() > 1 && prefer) {
+    std::vector<Fit> same;
+    for (const Fit& f : ok)
+      if (f.layout.big_endian == prefer->big_endian && f.layout.marker == prefer->marker) same.push_back(f);
+    if (!same.empty()) ok = std::move(same);
+  }
+  if (ok.empty()) return std::optional<Fit>();
+  if (ok.size() == 1) return std::optional<Fit>(std::move(ok[0]));
+  std::string msg = path + ": ambiguous PLOT3D " + kindName(kind) + " file: " + std::to_string(ok.size()) +
+                    " interpretations fit it; name the layout in a .p3d meta-file:";
+  for (size_t i = 0; i < ok.size(); ++i)
+    msg += " [" + std::to_string(i + 1) + "] " + describeLayout(ok[i].layout, kind) + ": grids " + blocksText(ok[i].blocks) +
+           (i + 1 < ok.size() ? ";" : "");
+  return invalidData(msg);
+}
+
+struct Selected {
+  Fit fit;
+  bool found = false;
+};
+
+// Chooses the interpretation of one file: exact fits first, then fits followed by zero bytes
+// (with a warning). `accept` filters (Q and function files must match the grid).
+StatusOr<Selected> selectFit(const std::string& path, std::string_view bytes, Kind kind, const Detection& d,
+                          const std::function<bool(const Fit&)>& accept, const Layout* prefer,
+                          std::vector<std::string>* warnings) {
+  Selected s;
+  GTN_ASSIGN_OR_RETURN(std::optional<Fit> exact, pickOne(path, kind, d.exact, accept, prefer));
+  if (exact) {
+    s.fit = std::move(*exact);
+    s.found = true;
+    return s;
+  }
+  GTN_ASSIGN_OR_RETURN(std::optional<Fit> padded, pickOne(path, kind, d.zero_tail, accept, prefer));
+  if (padded) {
+    s.fit = std::move(*padded);
+    s.found = true;
+    warnings->push_back(path + ": ignored " + std::to_string(bytes.size() - s.fit.end) +
+                        " trailing zero bytes after the PLOT3D " + kindName(kind) + " data (from byte " +
+                        std::to_string(s.fit.end) + ")");
+  }
+  return s;
+}
+
+StatusOr<std::string> readInput(const std::string& path, Kind kind) {
+  GTN_ASSIGN_OR_RETURN(std::string bytes, readWholeFile(path));
+  if (bytes.empty()) return invalidData(path + ": PLOT3D " + kindName(kind) + " file is empty (0 bytes)");
+  return bytes;
+}
+
+Status noFitError(const std::string& path, std::string_view bytes, Kind kind, const Detection& d) {
+  std::string msg = path + ": not a PLOT3D " + kindName(kind) + " file this reader understands (" +
+                    std::to_string(bytes.size()) + " bytes): no interpretation fits its size exactly";
+  if (looksLikeText(bytes)) msg += "; it looks like text, and ASCII PLOT3D is not supported";
+  return invalidData(msg + "; " + triedText(d, kind));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The .p3d meta-file.
+
+struct P3dFiles {
+  std::string xyz, q, function;
+  Constraints constraints;
+  std::vector<std::string> warnings;
+};
+
+std::string directoryOf(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? "" : path.substr(0, slash + 1);
+}
+
+bool isP3dMeta(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  if (dot != std::string::npos && (slash == std::string::npos || dot > slash)) {
+    std::string ext = path.substr(dot + 1);
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == "p3d" || ext == "json") return true;
+  }
+  return false;
+}
+
+StatusOr<P3dFiles> readP3dMeta(const std::string& path) {
+  // A meta-file is a few hundred bytes; a large one is not a meta-file.
+  GTN_ASSIGN_OR_RETURN(std::string text, readWholeFile(path, 16u << 20));
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    return invalidData(path + ": not a valid .p3d JSON meta-file: byte " + std::to_string(e.byte) + ": " + e.what());
+  }
+  if (!j.is_object()) return invalidData(path + ": a .p3d meta-file must hold one JSON object");
+  P3dFiles out;
+  const std::string dir = directoryOf(path);
+  auto bad = [&](const std::string& key, const std::string& expected) {
+    return invalidData(path + ": key \"" + key + "\" must be " + expected + ", not " + j[key].dump());
+  };
+  bool auto_detect = false;
+  if (j.contains("auto-detect-format")) {
+    if (!j["auto-detect-format"].is_boolean()) return bad("auto-detect-format", "true or false");
+    auto_detect = j["auto-detect-format"].get<bool>();
+  }
+  nlohmann::json files;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& key = it.key();
+    const nlohmann::json& v = it.value();
+    if (key == "auto-detect-format") continue;
+    if (key == "filenames") {
+      files = v;
+      continue;
+    }
+    if (key == "format") {
+      if (!v.is_string() || (v != "binary" && v != "ascii")) return bad(key, "\"binary\" or \"ascii\"");
+      if (v == "ascii") return unsupported(path + ": ASCII PLOT3D (\"format\": \"ascii\") is not supported; only binary");
+      continue;
+    }
+    // ParaView ignores the layout keys when auto-detection is on; so do we.
+    if (key == "byte-order") {
+      if (!v.is_string() || (v != "big" && v != "little")) return bad(key, "\"big\" or \"little\"");
+      if (!auto_detect) out.constraints.big_endian = v == "big";
+    } else if (key == "precision") {
+      if (!v.is_number_integer() || (v != 32 && v != 64)) return bad(key, "32 or 64");
+      if (!auto_detect) out.constraints.precision = v.get<int>() / 8;
+    } else if (key == "multi-grid") {
+      if (!v.is_boolean()) return bad(key, "true or false");
+      if (!auto_detect) out.constraints.multi_grid = v.get<bool>();
+    } else if (key == "blanking") {
+      if (!v.is_boolean()) return bad(key, "true or false");
+      if (!auto_detect) out.constraints.iblank = v.get<bool>();
+    } else if (key == "language") {
+      if (!v.is_string() || (v != "C" && v != "Fortran")) return bad(key, "\"C\" or \"Fortran\"");
+      if (!auto_detect) out.constraints.fortran = v == "Fortran";
+    } else if (key == "2D") {
+      if (!v.is_boolean()) return bad(key, "true or false");
+      if (v.get<bool>()) return unsupported(path + ": \"2D\": true: 2D grids cannot become tetrahedra");
+      if (!auto_detect) out.constraints.ndim = 3;
+    } else {
+      out.warnings.push_back(path + ": ignored key \"" + key + "\"");
+    }
+  }
+  if (files.is_string() || files.is_object()) files = nlohmann::json::array({files});
+  if (!files.is_array() || files.empty())
+    return invalidData(path + ": \"filenames\" must list at least one entry with an \"xyz\" file");
+  // The first time step: the smallest "time", or the first entry when none has one.
+  size_t chosen = 0;
+  for (size_t i = 0; i < files.size(); ++i) {
+    const nlohmann::json& e = files[i];
+    if (!e.is_object() && !e.is_string()) return invalidData(path + ": \"filenames\"[" + std::to_string(i) + "] must be an object");
+    if (e.is_object() && e.contains("time") && !e["time"].is_number())
+      return invalidData(path + ": \"filenames\"[" + std::to_string(i) + "].time must be a number");
+    auto time_of = [](const nlohmann::json& x) { return x.is_object() && x.contains("time") ? x["time"].get<double>() : 0.0; };
+    if (time_of(e) < time_of(files[chosen])) chosen = i;
+  }
+  if (files.size() > 1)
+    out.warnings.push_back(path + ": " + std::to_string(files.size()) + " time steps listed; imported only the first (entry " +
+                           std::to_string(chosen + 1) + ")");
+  const nlohmann::json& e = files[chosen];
+  auto resolve = [&](const std::string& name) { return !name.empty() && name[0] == '/' ? name : dir + name; };
+  if (e.is_string()) {
+    out.xyz = resolve(e.get<std::string>());
+    return out;
+  }
+  for (const char* key : {"xyz", "q", "function"}) {
+    if (!e.contains(key)) continue;
+    if (!e[key].is_string() || e[key].get<std::string>().empty())
+      return invalidData(path + ": \"filenames\"[" + std::to_string(chosen) + "]." + key + " must be a file name");
+    const std::string p = resolve(e[key].get<std::string>());
+    if (std::string(key) == "xyz") out.xyz = p;
+    if (std::string(key) == "q") out.q = p;
+    if (std::string(key) == "function") out.function = p;
+  }
+  if (out.xyz.empty()) return invalidData(path + ": \"filenames\"[" + std::to_string(chosen) + "] names no \"xyz\" grid file");
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Building the mesh.
+
+std::string realText(double v, int precision) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, precision == 4 ? "%.9g" : "%.17g", v);
+  return buf;
+}
+
+// Copies `count` values of `size` bytes from a source record into field bytes (little-endian),
+// `stride` values apart in the field starting at value index `first`.
+void copyValues(const char* src, size_t count, int size, bool big_endian, Field* f, size_t first, size_t stride) {
+  uint8_t* dst = f->bytes.data();
+  for (size_t i = 0; i < count; ++i)
+    storeLittle(src + i * size, size, big_endian, dst + (first + i * stride) * static_cast<size_t>(size));
+}
+
+Status addGrid(const std::string& path, std::string_view bytes, const Fit& fit, TetMesh& mesh,
+               std::vector<int32_t>* iblank) {
+  const Layout& l = fit.layout;
+  uint64_t total = 0;
+  for (const BlockDims& b : fit.blocks) total += b.points();
+  if (total > UINT32_MAX) return unsupported(path + ": " + std::to_string(total) + " points exceed the 2^32 limit of a mesh");
+  mesh.coord_type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+  mesh.coords.resize(3 * total);
+  if (l.iblank) iblank->resize(total);
+  std::string scratch;
+  size_t base = 0;
+  for (size_t g = 0; g < fit.blocks.size(); ++g) {
+    const size_t n = fit.blocks[g].points();
+    const std::string_view v = recordBytes(bytes, fit.data[g], &scratch);
+    for (int a = 0; a < 3; ++a) {
+      const char* src = v.data() + a * n * l.precision;
+      for (size_t i = 0; i < n; ++i) {
+        const double x = loadReal(src + i * l.precision, l.precision, l.big_endian);
+        if (!std::isfinite(x)) {
+          const uint64_t offset = fit.data[g].size() == 1 ? fit.data[g][0].offset + (a * n + i) * l.precision : 0;
+          return invalidData(path + ": grid " + std::to_string(g + 1) + " point " + std::to_string(i) + ": " +
+                             "xyz"[a] + " coordinate is not finite" +
+                             (offset ? " (byte " + std::to_string(offset) + ")" : std::string()));
+        }
+        mesh.coords[3 * (base + i) + a] = x;
+      }
+    }
+    if (l.iblank) {
+      const char* src = v.data() + 3 * n * l.precision;
+      for (size_t i = 0; i < n; ++i)
+        (*iblank)[base + i] = static_cast<int32_t>(loadSigned(src + 4 * i, 4, l.big_endian));
+    }
+    base += n;
+  }
+  return Status::ok();
+}
+
+void addQ(std::string_view bytes, const Fit& fit, TetMesh& mesh, std::vector<std::string>* warnings,
+          const std::string& path) {
+  const Layout& l = fit.layout;
+  const size_t total = mesh.numPoints();
+  const ScalarType type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+  Field density("density", 1, type, total), momentum("momentum", 3, type, total),
+      energy("stagnation_energy", 1, type, total);
+  std::string scratch;
+  size_t base = 0;
+  double first_header[4] = {0, 0, 0, 0};
+  for (size_t g = 0; g < fit.blocks.size(); ++g) {
+    const size_t n = fit.blocks[g].points();
+    const std::string_view h = recordBytes(bytes, fit.headers[g], &scratch);
+    double header[4];
+    for (int k = 0; k < 4; ++k) header[k] = loadReal(h.data() + k * l.precision, l.precision, l.big_endian);
+    if (g == 0) {
+      std::copy(header, header + 4, first_header);
+    } else if (!std::equal(header, header + 4, first_header) && warnings->size() < 100) {
+      warnings->push_back(path + ": grid " + std::to_string(g + 1) +
+                          " has other freestream values than grid 1; metadata keeps grid 1's");
+    }
+    const std::string_view v = recordBytes(bytes, fit.data[g], &scratch);
+    const size_t p = static_cast<size_t>(l.precision);
+    copyValues(v.data(), n, l.precision, l.big_endian, &density, base, 1);
+    for (size_t c = 0; c < 3; ++c)
+      copyValues(v.data() + (1 + c) * n * p, n, l.precision, l.big_endian, &momentum, 3 * base + c, 3);
+    copyValues(v.data() + 4 * n * p, n, l.precision, l.big_endian, &energy, base, 1);
+    base += n;
+  }
+  mesh.point_fields.push_back(std::move(density));
+  mesh.point_fields.push_back(std::move(momentum));
+  mesh.point_fields.push_back(std::move(energy));
+  static const char* kKeys[4] = {"plot3d.fsmach", "plot3d.alpha", "plot3d.re", "plot3d.time"};
+  for (int k = 0; k < 4; ++k) mesh.setMetadata(kKeys[k], realText(first_header[k], l.precision));
+}
+
+Status addFunction(const std::string& path, std::string_view bytes, const Fit& fit, TetMesh& mesh) {
+  const Layout& l = fit.layout;
+  const int64_t nvar = fit.blocks[0].nvar;
+  for (size_t g = 1; g < fit.blocks.size(); ++g) {
+    if (fit.blocks[g].nvar != nvar)
+      return unsupported(path + ": grid " + std::to_string(g + 1) + " has " + std::to_string(fit.blocks[g].nvar) +
+                         " function variables, grid 1 has " + std::to_string(nvar) + ": fields need the same on every grid");
+  }
+  const size_t total = mesh.numPoints();
+  const ScalarType type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+  const size_t first = mesh.point_fields.size();
+  for (int64_t k = 0; k < nvar; ++k) mesh.point_fields.emplace_back("function_" + std::to_string(k), 1, type, total);
+  std::string scratch;
+  size_t base = 0;
+  for (size_t g = 0; g < fit.blocks.size(); ++g) {
+    const size_t n = fit.blocks[g].points();
+    const std::string_view v = recordBytes(bytes, fit.data[g], &scratch);
+    for (int64_t k = 0; k < nvar; ++k)
+      copyValues(v.data() + k * n * l.precision, n, l.precision, l.big_endian, &mesh.point_fields[first + k], base, 1);
+    base += n;
+  }
+  return Status::ok();
+}
+
+// Hexahedral cells into tetrahedra, block by block; cells with a hole vertex are dropped.
+void splitCells(const std::vector<BlockDims>& blocks, const std::vector<int32_t>& iblank, int split, TetMesh& mesh,
+                ImportReport& report) {
+  uint64_t cells = 0;
+  for (const BlockDims& b : blocks) cells += static_cast<uint64_t>((b.n[0] - 1) * (b.n[1] - 1) * (b.n[2] - 1));
+  mesh.tets.reserve(cells * static_cast<uint64_t>(split));
+  uint64_t base = 0;
+  for (const BlockDims& b : blocks) {
+    const uint64_t ni = b.n[0], nj = b.n[1], nk = b.n[2];
+    auto id = [&](uint64_t i, uint64_t j, uint64_t k) { return static_cast<uint32_t>(base + i + ni * (j + nj * k)); };
+    for (uint64_t k = 0; k + 1 < nk; ++k) {
+      for (uint64_t j = 0; j + 1 < nj; ++j) {
+        for (uint64_t i = 0; i + 1 < ni; ++i) {
+          const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+                                 id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+          if (!iblank.empty() && std::any_of(h, h + 8, [&](uint32_t v) { return iblank[v] == 0; })) {
+            ++report.dropped_cells;
+            continue;
+          }
+          if (split == 5) {
+            splitHexFive(h, (i + j + k) % 2 == 1, mesh.tets);
+          } else {
+            splitHexSix(h, mesh.tets);
+          }
+        }
+      }
+    }
+    base += b.points();
+  }
+}
+
+// --weld: merges points whose three coordinates are bit-identical into the first of them, drops the
+// tetrahedra that lose a vertex that way and compacts points and point fields.
+void weldPoints(TetMesh& mesh, ImportReport& report) {
+  const size_t n = mesh.numPoints();
+  auto bits = [&](size_t p, int a) { return std::bit_cast<uint64_t>(mesh.coords[3 * p + a]); };
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
+    for (int a = 0; a < 3; ++a)
+      if (bits(x, a) != bits(y, a)) return bits(x, a) < bits(y, a);
+    return x < y;
+  });
+  std::vector<uint32_t> rep(n);
+  for (size_t r = 0; r < n;) {
+    size_t e = r + 1;
+    while (e < n && bits(order[e], 0) == bits(order[r], 0) && bits(order[e], 1) == bits(order[r], 1) &&
+           bits(order[e], 2) == bits(order[r], 2))
+      ++e;
+    for (size_t q = r; q < e; ++q) rep[order[q]] = order[r];
+    r = e;
+  }
+  std::vector<uint32_t> new_index(n);
+  uint32_t kept = 0;
+  for (size_t p = 0; p < n; ++p) {
+    if (rep[p] == p) {
+      new_index[p] = kept;
+      if (kept != p) {
+        for (int a = 0; a < 3; ++a) mesh.coords[3 * kept + a] = mesh.coords[3 * p + a];
+        for (Field& f : mesh.point_fields) f.copyItem(f, p, kept);
+      }
+      ++kept;
+    }
+  }
+  report.welded_points = n - kept;
+  if (kept == n) return;
+  mesh.coords.resize(3 * static_cast<size_t>(kept));
+  for (Field& f : mesh.point_fields) f.bytes.resize(static_cast<size_t>(kept) * f.components * f.valueSize());
+  size_t out = 0;
+  for (const Tet& t : mesh.tets) {
+    Tet m = {new_index[rep[t[0]]], new_index[rep[t[1]]], new_index[rep[t[2]]], new_index[rep[t[3]]]};
+    if (m[0] == m[1] || m[0] == m[2] || m[0] == m[3] || m[1] == m[2] || m[1] == m[3] || m[2] == m[3]) continue;
+    mesh.tets[out++] = m;
+  }
+  report.collapsed_tets = mesh.tets.size() - out;
+  mesh.tets.resize(out);
+}
+
+}  // namespace
+
+StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, const ImportOptions& options) {
+  if (inputs.empty()) return usageError("no PLOT3D input given");
+  if (options.split != 5 && options.split != 6)
+    return usageError("--split must be 5 or 6, not " + std::to_string(options.split));
+  ImportResult result;
+  std::vector<std::string>& warnings = result.report.warnings;
+
+  std::string grid_path, second_path, function_path;
+  Constraints constraints;
+  const bool meta = isP3dMeta(inputs[0]);
+  for (size_t i = 1; i < inputs.size(); ++i) {
+    if (isP3dMeta(inputs[i]) || meta)
+      return usageError(inputs[i] + ": a .p3d meta-file names all the PLOT3D files; give it alone");
+  }
+  if (meta) {
+    GTN_ASSIGN_OR_RETURN(P3dFiles files, readP3dMeta(inputs[0]));
+    grid_path = files.xyz;
+    constraints = files.constraints;
+    warnings = files.warnings;
+    if (!files.q.empty()) second_path = files.q;
+    function_path = files.function;
+  } else {
+    if (inputs.size() > 3)
+      return usageError("PLOT3D takes a grid file, an optional Q file and an optional function file; got " +
+                        std::to_string(inputs.size()) + " inputs");
+    grid_path = inputs[0];
+    if (inputs.size() > 1) second_path = inputs[1];
+    if (inputs.size() > 2) function_path = inputs[2];
+  }
+
+  // The grid.
+  GTN_ASSIGN_OR_RETURN(std::string grid_bytes, readInput(grid_path, Kind::kGrid));
+  const Detection grid_detection = detect(grid_bytes, Kind::kGrid, constraints);
+  GTN_ASSIGN_OR_RETURN(Selected grid, selectFit(grid_path, grid_bytes, Kind::kGrid, grid_detection,
+                                             [](const Fit&) { return true; }, nullptr, &warnings));
+  if (!grid.found) return noFitError(grid_path, grid_bytes, Kind::kGrid, grid_detection);
+  if (grid.fit.layout.ndim == 2)
+    return unsupported(grid_path + ": a 2D PLOT3D grid (" + dimsText(grid.fit.blocks[0], 2) +
+                       (grid.fit.blocks.size() > 1 ? " and more" : "") + "; " +
+                       describeLayout(grid.fit.layout, Kind::kGrid) + "): only 3D grids can be split into tetrahedra");
+  for (size_t g = 0; g < grid.fit.blocks.size(); ++g) {
+    const BlockDims& b = grid.fit.blocks[g];
+    if (b.n[0] < 2 || b.n[1] < 2 || b.n[2] < 2)
+      return unsupported(grid_path + ": grid " + std::to_string(g + 1) + " is " + dimsText(b) +
+                         ": a dimension below 2 makes it a 2D (or 1D) grid, which has no cells to split into tetrahedra");
+  }
+  TetMesh& mesh = result.mesh;
+  std::vector<int32_t> iblank;
+  GTN_RETURN_IF_ERROR(addGrid(grid_path, grid_bytes, grid.fit, mesh, &iblank));
+  grid_bytes = std::string();  // free before reading the solution
+  const std::vector<BlockDims>& blocks = grid.fit.blocks;
+  auto matches_grid = [&](const Fit& f) { return sameDims(f.blocks, blocks); };
+
+  // The second input: a Q file when it fits the Q layout for this grid, else a function file.
+  std::string function_bytes;
+  if (!second_path.empty()) {
+    GTN_ASSIGN_OR_RETURN(std::string bytes, readInput(second_path, Kind::kQ));
+    const Detection dq = detect(bytes, Kind::kQ, constraints);
+    GTN_ASSIGN_OR_RETURN(Selected q, selectFit(second_path, bytes, Kind::kQ, dq, matches_grid, &grid.fit.layout, &warnings));
+    if (q.found) {
+      addQ(bytes, q.fit, mesh, &warnings, second_path);
+    } else if (meta) {
+      // The meta-file said it is a Q file.
+      const std::vector<Fit>& any = dq.exact.empty() ? dq.zero_tail : dq.exact;
+      if (!any.empty())
+        return invalidData(second_path + ": Q file dimensions " + blocksText(any[0].blocks) +
+                           " disagree with the grid's " + blocksText(blocks) + " (" + grid_path + ")");
+      return noFitError(second_path, bytes, Kind::kQ, dq);
+    } else {
+      if (!function_path.empty())
+        return invalidData(second_path + ": the second PLOT3D input must be a Q file for " + grid_path +
+                           " when a function file follows, and it is not");
+      function_path = second_path;
+      function_bytes = std::move(bytes);
+      const Detection df = detect(function_bytes, Kind::kFunction, constraints);
+      GTN_ASSIGN_OR_RETURN(Selected f, selectFit(second_path, function_bytes, Kind::kFunction, df, matches_grid,
+                                              &grid.fit.layout, &warnings));
+      if (!f.found) {
+        const std::vector<Fit>& qs = dq.exact.empty() ? dq.zero_tail : dq.exact;
+        const std::vector<Fit>& fs = df.exact.empty() ? df.zero_tail : df.exact;
+        if (!qs.empty())
+          return invalidData(second_path + ": Q file dimensions " + blocksText(qs[0].blocks) +
+                             " disagree with the grid's " + blocksText(blocks) + " (" + grid_path + ")");
+        if (!fs.empty())
+          return invalidData(second_path + ": function file dimensions " + blocksText(fs[0].blocks) +
+                             " disagree with the grid's " + blocksText(blocks) + " (" + grid_path + ")");
+        std::string msg = second_path + ": neither a PLOT3D Q file nor a function file for the grid " + grid_path +
+                          " (" + blocksText(blocks) + "); as a Q file: " + triedText(dq, Kind::kQ) +
+                          "; as a function file: " + triedText(df, Kind::kFunction);
+        if (looksLikeText(function_bytes)) msg += " (it looks like text: ASCII PLOT3D is not supported)";
+        return invalidData(msg);
+      }
+      GTN_RETURN_IF_ERROR(addFunction(second_path, function_bytes, f.fit, mesh));
+      function_path.clear();
+    }
+  }
+  if (!function_path.empty()) {
+    GTN_ASSIGN_OR_RETURN(function_bytes, readInput(function_path, Kind::kFunction));
+    const Detection df = detect(function_bytes, Kind::kFunction, constraints);
+    GTN_ASSIGN_OR_RETURN(Selected f, selectFit(function_path, function_bytes, Kind::kFunction, df, matches_grid,
+                                            &grid.fit.layout, &warnings));
+    if (!f.found) {
+      const std::vector<Fit>& fs = df.exact.empty() ? df.zero_tail : df.exact;
+      if (!fs.empty())
+        return invalidData(function_path + ": function file dimensions " + blocksText(fs[0].blocks) +
+                           " disagree with the grid's " + blocksText(blocks) + " (" + grid_path + ")");
+      return noFitError(function_path, function_bytes, Kind::kFunction, df);
+    }
+    GTN_RETURN_IF_ERROR(addFunction(function_path, function_bytes, f.fit, mesh));
+  }
+
+  if (!iblank.empty()) {
+    Field field("iblank", 1, ScalarType::kInt32, iblank.size());
+    std::memcpy(field.bytes.data(), iblank.data(), iblank.size() * sizeof(int32_t));
+    mesh.point_fields.push_back(std::move(field));
+  }
+  splitCells(blocks, iblank, options.split, mesh, result.report);
+  if (options.weld) weldPoints(mesh, result.report);
+
+  mesh.setMetadata("source.format", "plot3d");
+  mesh.setMetadata("plot3d.grids", std::to_string(blocks.size()));
+  mesh.setMetadata("plot3d.layout", describeLayout(grid.fit.layout, Kind::kGrid));
+  finishImport(result);
+  return result;
 }
 
 }  // namespace gtn

@@ -1,0 +1,789 @@
+// PLOT3D import: the paper's real datasets (bit-exact against an independent read, Table 1 counts),
+// synthetic files of every layout the detector must tell apart, bad input, --weld, the .p3d
+// meta-file, the sample generator and the CLI.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "convert/import.h"
+#include "mesh/mesh_stats.h"
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+using test::dataPath;
+
+// ---- Independent big-endian reads of the data files -------------------------------------------
+
+uint32_t be32(const std::string& bytes, size_t offset) {
+  return (static_cast<uint32_t>(static_cast<unsigned char>(bytes[offset])) << 24) |
+         (static_cast<uint32_t>(static_cast<unsigned char>(bytes[offset + 1])) << 16) |
+         (static_cast<uint32_t>(static_cast<unsigned char>(bytes[offset + 2])) << 8) |
+         static_cast<uint32_t>(static_cast<unsigned char>(bytes[offset + 3]));
+}
+
+uint32_t fieldBits32(const Field& f, size_t item, uint32_t comp) {
+  uint32_t v;
+  std::memcpy(&v, f.bytes.data() + (item * f.components + comp) * 4, 4);
+  return v;
+}
+
+StatusOr<ImportResult> importFiles(const std::vector<std::string>& files, int split = 6, bool weld = false) {
+  ImportOptions o;
+  o.split = split;
+  o.weld = weld;
+  return importMesh(files, o);
+}
+
+// Checks every coordinate and every Q value of a real dataset against the raw big-endian file.
+void expectBitExact(const ImportResult& r, const std::string& xyz_path, const std::string& q_path) {
+  const std::string xyz = test::readFile(xyz_path), q = test::readFile(q_path);
+  const size_t n = static_cast<size_t>(be32(xyz, 0)) * be32(xyz, 4) * be32(xyz, 8);
+  ASSERT_EQ(r.mesh.numPoints(), n);
+  ASSERT_EQ(r.mesh.coord_type, ScalarType::kFloat32);
+  size_t coord_mismatch = 0;
+  for (size_t p = 0; p < n; ++p) {
+    for (int a = 0; a < 3; ++a) {
+      const float expected = std::bit_cast<float>(be32(xyz, 12 + 4 * (a * n + p)));
+      if (std::bit_cast<uint64_t>(r.mesh.coords[3 * p + a]) != std::bit_cast<uint64_t>(static_cast<double>(expected)))
+        ++coord_mismatch;
+    }
+  }
+  EXPECT_EQ(coord_mismatch, 0u);
+  const Field* density = r.mesh.findPointField("density");
+  const Field* momentum = r.mesh.findPointField("momentum");
+  const Field* energy = r.mesh.findPointField("stagnation_energy");
+  ASSERT_TRUE(density && momentum && energy);
+  EXPECT_EQ(density->type, ScalarType::kFloat32);
+  EXPECT_EQ(density->components, 1u);
+  EXPECT_EQ(momentum->components, 3u);
+  EXPECT_EQ(energy->components, 1u);
+  ASSERT_EQ(density->itemCount(), n);
+  ASSERT_EQ(momentum->itemCount(), n);
+  ASSERT_EQ(energy->itemCount(), n);
+  const size_t data = 12 + 16;
+  size_t q_mismatch = 0;
+  for (size_t p = 0; p < n; ++p) {
+    q_mismatch += fieldBits32(*density, p, 0) != be32(q, data + 4 * p);
+    for (uint32_t c = 0; c < 3; ++c) q_mismatch += fieldBits32(*momentum, p, c) != be32(q, data + 4 * ((1 + c) * n + p));
+    q_mismatch += fieldBits32(*energy, p, 0) != be32(q, data + 4 * (4 * n + p));
+  }
+  EXPECT_EQ(q_mismatch, 0u);
+  static const char* kKeys[4] = {"plot3d.fsmach", "plot3d.alpha", "plot3d.re", "plot3d.time"};
+  for (int k = 0; k < 4; ++k) {
+    const std::string* v = r.mesh.findMetadata(kKeys[k]);
+    ASSERT_TRUE(v) << kKeys[k];
+    EXPECT_EQ(std::bit_cast<uint32_t>(std::stof(*v)), be32(q, 12 + 4 * k)) << kKeys[k] << " = " << *v;
+  }
+  ASSERT_TRUE(r.mesh.findMetadata("source.format"));
+  EXPECT_EQ(*r.mesh.findMetadata("source.format"), "plot3d");
+}
+
+TEST(Plot3dImport, BluntFinSplitFiveMatchesTableOne) {
+  const std::string xyz = dataPath("plot3d/bluntfinxyz.bin"), q = dataPath("plot3d/bluntfinq.bin");
+  auto r = importFiles({xyz, q}, 5);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const MeshStats s = computeMeshStats(r->mesh);
+  EXPECT_EQ(s.points, 40960u);
+  EXPECT_EQ(s.tets, 187395u);
+  EXPECT_EQ(s.faces, 381548u);
+  EXPECT_EQ(s.boundary_faces, 13516u);
+  EXPECT_EQ(s.non_manifold_faces, 0u);
+  EXPECT_EQ(s.inverted, 0u);
+  // The blunt fin has collapsed cells: they are kept and reported.
+  EXPECT_GT(r->report.zero_volume, 0u);
+  EXPECT_EQ(r->report.zero_volume, s.zero_volume);
+  EXPECT_EQ(r->report.dropped_cells, 0u);
+  EXPECT_EQ(r->report.welded_points, 0u);
+  // The Q file's 484 trailing zero bytes are accepted with a warning that counts them.
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("484 trailing zero bytes"), std::string::npos) << r->report.warnings[0];
+  EXPECT_NE(r->report.warnings[0].find("bluntfinq.bin"), std::string::npos);
+  expectBitExact(*r, xyz, q);
+  EXPECT_EQ(*r->mesh.findMetadata("plot3d.fsmach"), "2.95000005");
+  EXPECT_EQ(*r->mesh.findMetadata("plot3d.re"), "2100000");
+}
+
+TEST(Plot3dImport, CombustionChamberBothSplits) {
+  const std::string xyz = dataPath("plot3d/combxyz.bin"), q = dataPath("plot3d/combq.bin");
+  auto five = importFiles({xyz, q}, 5);
+  ASSERT_TRUE(five.isOk()) << five.status().message();
+  const MeshStats s5 = computeMeshStats(five->mesh);
+  EXPECT_EQ(s5.points, 47025u);
+  EXPECT_EQ(s5.tets, 215040u);
+  EXPECT_EQ(s5.faces, 437888u);
+  EXPECT_EQ(s5.boundary_faces, 15616u);
+  EXPECT_EQ(s5.non_manifold_faces, 0u);
+  EXPECT_EQ(s5.inverted, 0u);
+  EXPECT_EQ(five->report.zero_volume, s5.zero_volume);
+  EXPECT_TRUE(five->report.warnings.empty());
+  expectBitExact(*five, xyz, q);
+
+  auto six = importFiles({xyz, q}, 6);
+  ASSERT_TRUE(six.isOk()) << six.status().message();
+  const MeshStats s6 = computeMeshStats(six->mesh);
+  EXPECT_EQ(s6.points, 47025u);
+  EXPECT_EQ(s6.tets, 56u * 32u * 24u * 6u);
+  EXPECT_EQ(s6.boundary_faces, 15616u);
+  EXPECT_EQ(s6.non_manifold_faces, 0u);
+  EXPECT_EQ(s6.inverted, 0u);
+  EXPECT_EQ(six->report.zero_volume, s6.zero_volume);
+  // The Q header is all zero: the metadata says so rather than being left out.
+  EXPECT_EQ(*six->mesh.findMetadata("plot3d.fsmach"), "0");
+}
+
+TEST(Plot3dImport, BluntFinSplitSixIsConforming) {
+  auto r = importFiles({dataPath("plot3d/bluntfinxyz.bin")}, 6);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const MeshStats s = computeMeshStats(r->mesh);
+  EXPECT_EQ(s.tets, 39u * 31u * 31u * 6u);
+  EXPECT_EQ(s.boundary_faces, 13516u);
+  EXPECT_EQ(s.non_manifold_faces, 0u);
+  EXPECT_EQ(s.inverted, 0u);
+  EXPECT_TRUE(r->mesh.point_fields.empty());
+}
+
+// ---- Synthetic files ----------------------------------------------------------------------------
+
+struct Bytes {
+  bool big_endian = true;
+  std::string s;
+  void put(uint64_t v, int size) {
+    for (int i = 0; i < size; ++i) {
+      const int shift = 8 * (big_endian ? size - 1 - i : i);
+      s.push_back(static_cast<char>((v >> shift) & 0xFF));
+    }
+  }
+  void i32(int32_t v) { put(static_cast<uint32_t>(v), 4); }
+  void real(double v, int precision) {
+    if (precision == 4) {
+      put(std::bit_cast<uint32_t>(static_cast<float>(v)), 4);
+    } else {
+      put(std::bit_cast<uint64_t>(v), 8);
+    }
+  }
+};
+
+// A file of records, with Fortran record markers when `marker` is 4 or 8.
+struct RecordWriter {
+  bool big_endian = true;
+  int marker = 0;
+  std::string out;
+  void record(const std::string& payload) {
+    Bytes m{big_endian, ""};
+    if (marker) m.put(payload.size(), marker);
+    out += m.s + payload + m.s;
+  }
+  // One record split into subrecords of at most `chunk` bytes (negative leading markers on all but
+  // the last, negative trailing markers on all but the first: gfortran's scheme).
+  void subrecords(const std::string& payload, size_t chunk) {
+    for (size_t at = 0; at < payload.size(); at += chunk) {
+      const size_t len = std::min(chunk, payload.size() - at);
+      const bool more = at + len < payload.size(), continued = at > 0;
+      Bytes head{big_endian, ""}, tail{big_endian, ""};
+      head.i32(more ? -static_cast<int32_t>(len) : static_cast<int32_t>(len));
+      tail.i32(continued ? -static_cast<int32_t>(len) : static_cast<int32_t>(len));
+      out += head.s + payload.substr(at, len) + tail.s;
+    }
+  }
+};
+
+struct Block {
+  int n[3];
+  std::vector<double> x, y, z;
+  std::vector<int32_t> iblank;
+  size_t points() const { return static_cast<size_t>(n[0]) * n[1] * n[2]; }
+};
+
+// A right-handed sheared box grid starting at x = `origin`.
+Block boxBlock(int ni, int nj, int nk, double origin = 0.0) {
+  Block b{{ni, nj, nk}, {}, {}, {}, {}};
+  for (int k = 0; k < nk; ++k)
+    for (int j = 0; j < nj; ++j)
+      for (int i = 0; i < ni; ++i) {
+        b.x.push_back(origin + i + 0.125 * j);
+        b.y.push_back(j + 0.25 * k);
+        b.z.push_back(k + 0.0625 * (origin + i));
+      }
+  return b;
+}
+
+struct GridOptions {
+  bool big_endian = true;
+  int marker = 0;
+  bool multi = false;
+  int precision = 4;
+  bool iblank = false;
+  size_t subrecord_chunk = 0;  // > 0: write data records as subrecords of this size
+};
+
+std::string gridFile(const std::vector<Block>& blocks, const GridOptions& o) {
+  RecordWriter w{o.big_endian, o.marker, ""};
+  Bytes b{o.big_endian, ""};
+  if (o.multi) {
+    b.i32(static_cast<int32_t>(blocks.size()));
+    w.record(b.s);
+  }
+  b.s.clear();
+  for (const Block& g : blocks)
+    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+  w.record(b.s);
+  for (const Block& g : blocks) {
+    b.s.clear();
+    for (const auto* v : {&g.x, &g.y, &g.z})
+      for (double c : *v) b.real(c, o.precision);
+    if (o.iblank)
+      for (int32_t v : g.iblank) b.i32(v);
+    if (o.subrecord_chunk) {
+      w.subrecords(b.s, o.subrecord_chunk);
+    } else {
+      w.record(b.s);
+    }
+  }
+  return w.out;
+}
+
+// Q file with density = 1 + p/1000, momentum (p, -p, 2p), energy 3 + p for point p of each block.
+std::string qFile(const std::vector<Block>& blocks, const GridOptions& o) {
+  RecordWriter w{o.big_endian, o.marker, ""};
+  Bytes b{o.big_endian, ""};
+  if (o.multi) {
+    b.i32(static_cast<int32_t>(blocks.size()));
+    w.record(b.s);
+  }
+  b.s.clear();
+  for (const Block& g : blocks)
+    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+  w.record(b.s);
+  for (size_t gi = 0; gi < blocks.size(); ++gi) {
+    const Block& g = blocks[gi];
+    b.s.clear();
+    for (double v : {0.75, 2.5, 1.0e6, 0.125 + static_cast<double>(gi)}) b.real(v, o.precision);
+    w.record(b.s);
+    b.s.clear();
+    const size_t n = g.points();
+    for (int var = 0; var < 5; ++var)
+      for (size_t p = 0; p < n; ++p) {
+        const double d = static_cast<double>(p);
+        const double values[5] = {1 + d / 1000, d, -d, 2 * d, 3 + d};
+        b.real(values[var], o.precision);
+      }
+    w.record(b.s);
+  }
+  return w.out;
+}
+
+// Function file with `nvar` variables: value v * 100 + p.
+std::string functionFile(const std::vector<Block>& blocks, const GridOptions& o, int nvar) {
+  RecordWriter w{o.big_endian, o.marker, ""};
+  Bytes b{o.big_endian, ""};
+  if (o.multi) {
+    b.i32(static_cast<int32_t>(blocks.size()));
+    w.record(b.s);
+  }
+  b.s.clear();
+  for (const Block& g : blocks) {
+    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+    b.i32(nvar);
+  }
+  w.record(b.s);
+  for (const Block& g : blocks) {
+    b.s.clear();
+    for (int v = 0; v < nvar; ++v)
+      for (size_t p = 0; p < g.points(); ++p) b.real(v * 100.0 + static_cast<double>(p), o.precision);
+    w.record(b.s);
+  }
+  return w.out;
+}
+
+class Plot3dSynthetic : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = test::tempDir(std::string("plot3d-") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  }
+  std::string write(const std::string& name, const std::string& bytes) {
+    const std::string p = dir_ + "/" + name;
+    test::writeFile(p, bytes);
+    return p;
+  }
+  std::string dir_;
+};
+
+// Coordinates of the imported mesh equal the blocks' (converted to the file's precision).
+void expectCoords(const TetMesh& mesh, const std::vector<Block>& blocks, int precision) {
+  size_t base = 0, mismatch = 0;
+  for (const Block& g : blocks) {
+    for (size_t p = 0; p < g.points(); ++p) {
+      const double want[3] = {g.x[p], g.y[p], g.z[p]};
+      for (int a = 0; a < 3; ++a) {
+        const double w = precision == 4 ? static_cast<double>(static_cast<float>(want[a])) : want[a];
+        mismatch += std::bit_cast<uint64_t>(mesh.coords[3 * (base + p) + a]) != std::bit_cast<uint64_t>(w);
+      }
+    }
+    base += g.points();
+  }
+  EXPECT_EQ(base, mesh.numPoints());
+  EXPECT_EQ(mismatch, 0u);
+}
+
+TEST_F(Plot3dSynthetic, LittleEndianWithFourByteMarkers) {
+  const std::vector<Block> blocks = {boxBlock(4, 3, 5)};
+  GridOptions o;
+  o.big_endian = false;
+  o.marker = 4;
+  const std::string xyz = write("le4.xyz", gridFile(blocks, o));
+  const std::string q = write("le4.q", qFile(blocks, o));
+  auto r = importFiles({xyz, q}, 6);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.coord_type, ScalarType::kFloat32);
+  EXPECT_EQ(r->mesh.numTets(), 3u * 2u * 4u * 6u);
+  expectCoords(r->mesh, blocks, 4);
+  const Field* density = r->mesh.findPointField("density");
+  const Field* momentum = r->mesh.findPointField("momentum");
+  ASSERT_TRUE(density && momentum);
+  EXPECT_EQ(density->get(7, 0), static_cast<double>(static_cast<float>(1 + 7.0 / 1000)));
+  EXPECT_EQ(momentum->get(7, 0), 7.0);
+  EXPECT_EQ(momentum->get(7, 1), -7.0);
+  EXPECT_EQ(momentum->get(7, 2), 14.0);
+  EXPECT_EQ(r->mesh.findPointField("stagnation_energy")->get(59, 0), 62.0);
+  EXPECT_EQ(*r->mesh.findMetadata("plot3d.fsmach"), "0.75");
+  EXPECT_EQ(*r->mesh.findMetadata("plot3d.alpha"), "2.5");
+  EXPECT_EQ(*r->mesh.findMetadata("plot3d.re"), "1000000");
+  EXPECT_EQ(*r->mesh.findMetadata("plot3d.time"), "0.125");
+  const MeshStats s = computeMeshStats(r->mesh);
+  EXPECT_EQ(s.inverted, 0u);
+  EXPECT_EQ(s.zero_volume, 0u);
+  EXPECT_EQ(s.non_manifold_faces, 0u);
+}
+
+TEST_F(Plot3dSynthetic, MultiGridFloat64WithEightByteMarkers) {
+  // The second block touches the first along x = 3: blocks are not joined, so both keep their faces.
+  const std::vector<Block> blocks = {boxBlock(4, 3, 3), boxBlock(3, 3, 3, 3.0)};
+  GridOptions o;
+  o.marker = 8;
+  o.multi = true;
+  o.precision = 8;
+  const std::string xyz = write("m8.xyz", gridFile(blocks, o));
+  const std::string q = write("m8.q", qFile(blocks, o));
+  auto r = importFiles({xyz, q}, 5);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.coord_type, ScalarType::kFloat64);
+  EXPECT_EQ(r->mesh.numPoints(), 36u + 27u);
+  EXPECT_EQ(r->mesh.numTets(), (3u * 2u * 2u + 2u * 2u * 2u) * 5u);
+  expectCoords(r->mesh, blocks, 8);
+  const Field* density = r->mesh.findPointField("density");
+  ASSERT_TRUE(density);
+  EXPECT_EQ(density->type, ScalarType::kFloat64);
+  // Point 0 of the second block follows the 36 points of the first.
+  EXPECT_EQ(density->get(36, 0), 1.0);
+  EXPECT_EQ(density->get(35, 0), 1 + 35.0 / 1000);
+  EXPECT_EQ(*r->mesh.findMetadata("plot3d.grids"), "2");
+  EXPECT_EQ(*r->mesh.findMetadata("plot3d.re"), "1000000");
+  // The per-grid headers differ in time: the metadata keeps grid 1's and a warning says so.
+  EXPECT_EQ(*r->mesh.findMetadata("plot3d.time"), "0.125");
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  const MeshStats s = computeMeshStats(r->mesh);
+  EXPECT_EQ(s.coincident_points, 9u);
+  EXPECT_EQ(s.inverted, 0u);
+  EXPECT_EQ(s.non_manifold_faces, 0u);
+  // Each block is a closed box of its own: 2 triangles per boundary quad.
+  EXPECT_EQ(s.boundary_faces, 2u * 2u * (3 * 2 + 3 * 2 + 2 * 2) + 2u * 2u * (2 * 2 * 3));
+}
+
+TEST_F(Plot3dSynthetic, SubrecordsWithNegativeMarkers) {
+  const std::vector<Block> blocks = {boxBlock(3, 3, 3)};
+  GridOptions o;
+  o.marker = 4;
+  o.subrecord_chunk = 100;  // the 324-byte data record as subrecords of 100, 100, 100, 24
+  const std::string xyz = write("sub.xyz", gridFile(blocks, o));
+  auto r = importFiles({xyz}, 6);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  expectCoords(r->mesh, blocks, 4);
+  EXPECT_EQ(r->mesh.numTets(), 48u);
+}
+
+TEST_F(Plot3dSynthetic, IblankHolesDropCellsAndKeepTheField) {
+  std::vector<Block> blocks = {boxBlock(4, 4, 4)};
+  blocks[0].iblank.assign(64, 1);
+  blocks[0].iblank[1 + 4 * (1 + 4 * 1)] = 0;   // interior hole point (1,1,1): its 8 cells go
+  blocks[0].iblank[3 + 4 * (3 + 4 * 3)] = 0;   // corner hole (3,3,3): 1 more cell
+  blocks[0].iblank[2 + 4 * (0 + 4 * 0)] = -1;  // fringe point: kept
+  blocks[0].iblank[0 + 4 * (3 + 4 * 0)] = 2;   // wall point: kept
+  GridOptions o;
+  o.iblank = true;
+  o.big_endian = false;
+  const std::string xyz = write("ib.xyz", gridFile(blocks, o));
+  auto r = importFiles({xyz}, 6);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->report.dropped_cells, 9u);
+  EXPECT_EQ(r->mesh.numTets(), (27u - 9u) * 6u);
+  EXPECT_EQ(r->mesh.numPoints(), 64u);
+  const Field* ib = r->mesh.findPointField("iblank");
+  ASSERT_TRUE(ib);
+  EXPECT_EQ(ib->type, ScalarType::kInt32);
+  EXPECT_EQ(ib->components, 1u);
+  ASSERT_EQ(ib->itemCount(), 64u);
+  for (size_t p = 0; p < 64; ++p) EXPECT_EQ(ib->get(p, 0), blocks[0].iblank[p]) << p;
+  // Independently: the points of the cells that have no hole vertex are the referenced ones.
+  std::vector<int> used(64, 0);
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) {
+        std::vector<int> corners;
+        for (int c = 0; c < 8; ++c) corners.push_back((i + (c & 1)) + 4 * ((j + (c >> 1 & 1)) + 4 * (k + (c >> 2))));
+        if (std::any_of(corners.begin(), corners.end(), [&](int v) { return blocks[0].iblank[v] == 0; })) continue;
+        for (int v : corners) used[v] = 1;
+      }
+  EXPECT_EQ(used[2], 1);   // the fringe point
+  EXPECT_EQ(used[12], 1);  // the wall point
+  const MeshStats s = computeMeshStats(r->mesh);
+  EXPECT_EQ(s.inverted, 0u);
+  EXPECT_EQ(s.unreferenced_points, static_cast<uint64_t>(std::count(used.begin(), used.end(), 0)));
+}
+
+TEST_F(Plot3dSynthetic, LeftHandedBlockIsFlipped) {
+  Block b = boxBlock(3, 3, 3);
+  for (double& x : b.x) x = -x;  // mirror: every cell left-handed
+  const std::string xyz = write("left.xyz", gridFile({b}, GridOptions()));
+  auto r = importFiles({xyz}, 6);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->report.flipped, 48u);
+  EXPECT_EQ(computeMeshStats(r->mesh).inverted, 0u);
+}
+
+TEST_F(Plot3dSynthetic, FunctionFileAsSecondAndThirdInput) {
+  const std::vector<Block> blocks = {boxBlock(3, 4, 2)};
+  GridOptions o;
+  const std::string xyz = write("f.xyz", gridFile(blocks, o));
+  const std::string q = write("f.q", qFile(blocks, o));
+  const std::string fun = write("f.f", functionFile(blocks, o, 2));
+  auto second = importFiles({xyz, fun});
+  ASSERT_TRUE(second.isOk()) << second.status().message();
+  EXPECT_FALSE(second->mesh.findPointField("density"));
+  ASSERT_TRUE(second->mesh.findPointField("function_0") && second->mesh.findPointField("function_1"));
+  EXPECT_EQ(second->mesh.findPointField("function_1")->get(5, 0), 105.0);
+  auto third = importFiles({xyz, q, fun});
+  ASSERT_TRUE(third.isOk()) << third.status().message();
+  EXPECT_TRUE(third->mesh.findPointField("density"));
+  ASSERT_TRUE(third->mesh.findPointField("function_1"));
+  EXPECT_EQ(third->mesh.findPointField("function_0")->get(23, 0), 23.0);
+}
+
+TEST_F(Plot3dSynthetic, TwoDimensionalGridIsRejected) {
+  Bytes b;
+  b.i32(5);
+  b.i32(4);
+  for (int a = 0; a < 2; ++a)
+    for (int p = 0; p < 20; ++p) b.real(a * 10.0 + p, 4);
+  const std::string xyz = write("flat.xyz", b.s);
+  auto r = importFiles({xyz});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().code(), StatusCode::kUnsupported);
+  EXPECT_NE(r.status().message().find("2D"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("5x4"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find(xyz), std::string::npos);
+
+  // A 3D file with a dimension of 1 is a 2D grid too.
+  const std::string thin = write("thin.xyz", gridFile({boxBlock(4, 3, 1)}, GridOptions()));
+  auto t = importFiles({thin});
+  ASSERT_FALSE(t.isOk());
+  EXPECT_NE(t.status().message().find("4x3x1"), std::string::npos) << t.status().message();
+}
+
+// Ints 1 1 1 2 then six float32: "single grid 1x1x1, float64 + IBLANK" and "multi-grid, 1 grid
+// 1x1x2, float32" both fit its 40 bytes exactly.
+std::string ambiguousGrid() {
+  Bytes b;
+  for (int v : {1, 1, 1, 2}) b.i32(v);
+  for (int p = 0; p < 6; ++p) b.real(0.5 * p, 4);
+  return b.s;
+}
+
+TEST_F(Plot3dSynthetic, AmbiguousFileIsRejectedWithTheCandidates) {
+  const std::string xyz = write("amb.xyz", ambiguousGrid());
+  auto r = importFiles({xyz});
+  ASSERT_FALSE(r.isOk());
+  const std::string& m = r.status().message();
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidData);
+  EXPECT_NE(m.find("ambiguous"), std::string::npos) << m;
+  EXPECT_NE(m.find("single grid, 3D, float64, IBLANK: grids 1x1x1"), std::string::npos) << m;
+  EXPECT_NE(m.find("multi-grid, 3D, float32, no IBLANK: grids 1x1x2"), std::string::npos) << m;
+
+  // A .p3d meta-file that names the layout settles it.
+  write("amb.p3d", R"({"multi-grid": true, "precision": 32, "filenames": [{"xyz": "amb.xyz"}]})");
+  auto settled = importFiles({dir_ + "/amb.p3d"});
+  ASSERT_FALSE(settled.isOk());  // 1x1x2 is still a degenerate grid, but no longer ambiguous
+  EXPECT_NE(settled.status().message().find("1x1x2"), std::string::npos) << settled.status().message();
+  EXPECT_EQ(settled.status().message().find("ambiguous"), std::string::npos) << settled.status().message();
+}
+
+TEST_F(Plot3dSynthetic, TruncatedGridNamesFileOffsetAndReason) {
+  const std::string full = test::readFile(dataPath("plot3d/bluntfinxyz.bin"));
+  const std::string xyz = write("trunc.xyz", full.substr(0, 400000));
+  auto r = importFiles({xyz});
+  ASSERT_FALSE(r.isOk());
+  const std::string& m = r.status().message();
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidData);
+  EXPECT_NE(m.find(xyz), std::string::npos) << m;
+  EXPECT_NE(m.find("big-endian, no record markers, single grid, 3D, float32, no IBLANK: grid 1 (40x32x32) data "
+                   "needs 491520 bytes at byte 12, the file has 399988 left"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("ASCII PLOT3D is not read"), std::string::npos) << m;
+
+  // Every shorter prefix fails cleanly too (a sample of them, to keep the test fast).
+  for (size_t len : {1u, 4u, 11u, 12u, 13u, 491531u}) {
+    const std::string p = write("prefix.xyz", full.substr(0, len));
+    auto t = importFiles({p});
+    EXPECT_FALSE(t.isOk()) << len;
+  }
+}
+
+TEST_F(Plot3dSynthetic, BadInputsFailWithTheFileNamed) {
+  const std::string empty = write("empty.xyz", "");
+  auto e = importFiles({empty});
+  ASSERT_FALSE(e.isOk());
+  EXPECT_EQ(e.status().code(), StatusCode::kInvalidData);
+  EXPECT_NE(e.status().message().find(empty), std::string::npos);
+  EXPECT_NE(e.status().message().find("empty"), std::string::npos);
+
+  const std::string sub = dir_ + "/adir.xyz";
+  std::filesystem::create_directories(sub);
+  auto d = importFiles({sub});
+  ASSERT_FALSE(d.isOk());
+  EXPECT_EQ(d.status().code(), StatusCode::kIo);
+  EXPECT_NE(d.status().message().find(sub), std::string::npos);
+
+  auto missing = importFiles({dir_ + "/missing.xyz"});
+  ASSERT_FALSE(missing.isOk());
+  EXPECT_EQ(missing.status().code(), StatusCode::kIo);
+
+  // Non-zero bytes after the grid are an error, zero bytes a warning.
+  const std::string grid = gridFile({boxBlock(3, 3, 3)}, GridOptions());
+  auto junk = importFiles({write("junk.xyz", grid + std::string("\1\0\0\0", 4))});
+  ASSERT_FALSE(junk.isOk());
+  EXPECT_NE(junk.status().message().find("not all zero"), std::string::npos) << junk.status().message();
+  auto padded = importFiles({write("pad.xyz", grid + std::string(8, '\0'))});
+  ASSERT_TRUE(padded.isOk()) << padded.status().message();
+  ASSERT_EQ(padded->report.warnings.size(), 1u);
+  EXPECT_NE(padded->report.warnings[0].find("8 trailing zero bytes"), std::string::npos);
+
+  // Text is not read, and the message says so.
+  auto text = importFiles({write("ascii.xyz", "3 3 3\n0 1 2 0 1 2 0 1 2\n")});
+  ASSERT_FALSE(text.isOk());
+  EXPECT_NE(text.status().message().find("ASCII"), std::string::npos);
+
+  // A record marker that disagrees with its closing marker.
+  GridOptions o;
+  o.marker = 4;
+  std::string bad = gridFile({boxBlock(3, 3, 3)}, o);
+  bad[bad.size() - 1] ^= 1;
+  auto m = importFiles({write("badmarker.xyz", bad)});
+  ASSERT_FALSE(m.isOk());
+  EXPECT_NE(m.status().message().find("closing marker"), std::string::npos) << m.status().message();
+
+  // An absurd dimension must not make the reader allocate: it is rejected by size.
+  Bytes huge;
+  for (int v : {1 << 30, 1 << 30, 1 << 30}) huge.i32(v);
+  huge.s += std::string(64, '\0');
+  EXPECT_FALSE(importFiles({write("huge.xyz", huge.s)}).isOk());
+}
+
+TEST_F(Plot3dSynthetic, QDimensionsMustMatchTheGrid) {
+  const std::vector<Block> blocks = {boxBlock(3, 3, 3)};
+  const std::string xyz = write("g.xyz", gridFile(blocks, GridOptions()));
+  const std::string q = write("g.q", qFile({boxBlock(3, 3, 4)}, GridOptions()));
+  auto r = importFiles({xyz, q});
+  ASSERT_FALSE(r.isOk());
+  const std::string& m = r.status().message();
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidData);
+  EXPECT_NE(m.find(q), std::string::npos) << m;
+  EXPECT_NE(m.find("3x3x4"), std::string::npos) << m;
+  EXPECT_NE(m.find("disagree"), std::string::npos) << m;
+  EXPECT_NE(m.find("3x3x3"), std::string::npos) << m;
+
+  // A Q file truncated in its data says where.
+  const std::string full_q = qFile(blocks, GridOptions());
+  const std::string cut = write("t.q", full_q.substr(0, full_q.size() - 10));
+  auto t = importFiles({xyz, cut});
+  ASSERT_FALSE(t.isOk());
+  EXPECT_NE(t.status().message().find(cut), std::string::npos) << t.status().message();
+  EXPECT_NE(t.status().message().find("grid 1 (3x3x3) data needs 540 bytes at byte 28, the file has 530 left"),
+            std::string::npos)
+      << t.status().message();
+}
+
+TEST_F(Plot3dSynthetic, MetaFileNamesTheFilesRelativeToItself) {
+  const std::vector<Block> blocks = {boxBlock(3, 4, 3)};
+  GridOptions o;
+  o.big_endian = false;
+  o.marker = 4;
+  std::filesystem::create_directories(dir_ + "/sub");
+  write("sub/m.xyz", gridFile(blocks, o));
+  write("sub/m.q", qFile(blocks, o));
+  write("sub/m.f", functionFile(blocks, o, 3));
+  const std::string meta = write("sub/case.p3d", R"({
+    "auto-detect-format": false, "format": "binary", "byte-order": "little", "precision": 32,
+    "multi-grid": false, "blanking": false, "language": "Fortran",
+    "filenames": [ {"time": 2.0, "xyz": "m.xyz"}, {"time": 1.0, "xyz": "m.xyz", "q": "m.q", "function": "m.f"} ]
+  })");
+  auto r = importFiles({meta});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  expectCoords(r->mesh, blocks, 4);
+  EXPECT_TRUE(r->mesh.findPointField("density"));  // the entry with the smallest time
+  EXPECT_TRUE(r->mesh.findPointField("function_2"));
+  EXPECT_EQ(r->mesh.numTets(), 2u * 3u * 2u * 6u);
+
+  // Its layout keys are constraints: a wrong byte order finds nothing.
+  write("sub/wrong.p3d", R"({"byte-order": "big", "filenames": [{"xyz": "m.xyz"}]})");
+  auto wrong = importFiles({dir_ + "/sub/wrong.p3d"});
+  ASSERT_FALSE(wrong.isOk());
+  EXPECT_NE(wrong.status().message().find("m.xyz"), std::string::npos);
+
+  write("sub/bad.p3d", R"({"filenames": [ {"q": "m.q"} ]})");
+  auto bad = importFiles({dir_ + "/sub/bad.p3d"});
+  ASSERT_FALSE(bad.isOk());
+  EXPECT_NE(bad.status().message().find("xyz"), std::string::npos);
+
+  write("sub/broken.p3d", "{ \"filenames\": [ ");
+  EXPECT_FALSE(importFiles({dir_ + "/sub/broken.p3d"}).isOk());
+}
+
+TEST_F(Plot3dSynthetic, WeldMergesBitIdenticalPointsAndDropsCollapsedTets) {
+  // One cell whose top face collapses to a point: a pyramid.
+  Block b = boxBlock(2, 2, 2);
+  for (size_t p = 4; p < 8; ++p) {
+    b.x[p] = 0.5;
+    b.y[p] = 0.5;
+    b.z[p] = 1.0;
+  }
+  const std::string xyz = write("apex.xyz", gridFile({b}, GridOptions()));
+  auto plain = importFiles({xyz}, 6);
+  ASSERT_TRUE(plain.isOk()) << plain.status().message();
+  EXPECT_EQ(plain->mesh.numPoints(), 8u);
+  EXPECT_EQ(plain->mesh.numTets(), 6u);
+  EXPECT_EQ(plain->report.zero_volume, 4u);
+
+  auto six = importFiles({xyz}, 6, true);
+  ASSERT_TRUE(six.isOk()) << six.status().message();
+  EXPECT_EQ(six->report.welded_points, 3u);
+  EXPECT_EQ(six->report.collapsed_tets, 4u);
+  EXPECT_EQ(six->mesh.numPoints(), 5u);
+  EXPECT_EQ(six->mesh.numTets(), 2u);
+  EXPECT_EQ(six->report.zero_volume, 0u);
+  const MeshStats s = computeMeshStats(six->mesh);
+  EXPECT_EQ(s.coincident_points, 0u);
+  EXPECT_EQ(s.unreferenced_points, 0u);
+  EXPECT_EQ(s.inverted, 0u);
+
+  auto five = importFiles({xyz}, 5, true);
+  ASSERT_TRUE(five.isOk()) << five.status().message();
+  EXPECT_EQ(five->report.welded_points, 3u);
+  EXPECT_EQ(five->report.collapsed_tets, 3u);
+  EXPECT_EQ(five->mesh.numTets(), 2u);
+
+  // Real data: welding the blunt fin merges its singular lines.
+  auto fin = importFiles({dataPath("plot3d/bluntfinxyz.bin"), dataPath("plot3d/bluntfinq.bin")}, 6, true);
+  ASSERT_TRUE(fin.isOk()) << fin.status().message();
+  const MeshStats fs = computeMeshStats(fin->mesh);
+  EXPECT_GT(fin->report.welded_points, 0u);
+  EXPECT_EQ(fs.points, 40960u - fin->report.welded_points);
+  EXPECT_EQ(fs.tets, 39u * 31u * 31u * 6u - fin->report.collapsed_tets);
+  EXPECT_EQ(fs.coincident_points, 0u);
+  EXPECT_EQ(fs.inverted, 0u);
+  EXPECT_EQ(fin->mesh.findPointField("density")->itemCount(), fs.points);
+}
+
+// ---- Sample generator and CLI --------------------------------------------------------------------
+
+std::string makeSampleBinary() {
+  return (std::filesystem::path(GTN_BINARY).parent_path() / "gtn-make-sample").string();
+}
+
+TEST(Plot3dSample, GeneratorWritesAValidDeterministicSample) {
+  const std::string a = test::tempDir("plot3d-sample-a"), b = test::tempDir("plot3d-sample-b");
+  ASSERT_EQ(test::runShell(makeSampleBinary() + " " + a).exit_code, 0);
+  ASSERT_EQ(test::runShell(makeSampleBinary() + " " + b).exit_code, 0);
+  const std::string xyz = test::readFile(a + "/sample.xyz");
+  EXPECT_EQ(xyz.size(), 12u + 24u * 16u * 12u * 12u);
+  EXPECT_EQ(xyz, test::readFile(b + "/sample.xyz"));
+  EXPECT_EQ(test::readFile(a + "/sample.q"), test::readFile(b + "/sample.q"));
+  for (int split : {5, 6}) {
+    auto r = importFiles({a + "/sample.xyz", a + "/sample.q"}, split);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_TRUE(r->report.warnings.empty());
+    // Right-handed cells: the six-tetrahedra split (whose tables are positively oriented) needs no flip.
+    if (split == 6) {
+      EXPECT_EQ(r->report.flipped, 0u);
+    }
+    EXPECT_EQ(r->report.zero_volume, 0u);
+    const MeshStats s = computeMeshStats(r->mesh);
+    EXPECT_EQ(s.points, 24u * 16u * 12u);
+    EXPECT_EQ(s.tets, 23u * 15u * 11u * static_cast<unsigned>(split));
+    EXPECT_EQ(s.inverted, 0u);
+    EXPECT_EQ(s.non_manifold_faces, 0u);
+    EXPECT_EQ(s.coincident_points, 0u);
+    ASSERT_EQ(s.fields.size(), 3u);
+    EXPECT_GT(s.fields[0].min, 0.0);  // density
+    EXPECT_GT(s.fields[2].min, 0.0);  // stagnation energy
+    EXPECT_EQ(s.fields[0].non_finite + s.fields[1].non_finite + s.fields[2].non_finite, 0u);
+  }
+  EXPECT_EQ(test::runShell(makeSampleBinary()).exit_code, 2);
+}
+
+TEST(Plot3dCli, InfoJsonOnBluntFin) {
+  const test::RunResult info = test::runGtn("info " + dataPath("plot3d/bluntfinxyz.bin") + " " +
+                                            dataPath("plot3d/bluntfinq.bin") + " --split 5 --json");
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const nlohmann::json j = nlohmann::json::parse(info.out);
+  EXPECT_EQ(j["points"], 40960);
+  EXPECT_EQ(j["tets"], 187395);
+  EXPECT_EQ(j["faces"], 381548);
+  EXPECT_EQ(j["boundary_faces"], 13516);
+  EXPECT_EQ(j["inverted"], 0);
+  EXPECT_GT(j["zero_volume"].get<int>(), 0);
+  ASSERT_TRUE(j["bbox"].contains("min") && j["bbox"].contains("max"));
+  EXPECT_LT(j["bbox"]["min"][0].get<double>(), j["bbox"]["max"][0].get<double>());
+  ASSERT_EQ(j["fields"].size(), 3u);
+  EXPECT_EQ(j["fields"][0]["name"], "density");
+  EXPECT_EQ(j["fields"][0]["components"], 1);
+  EXPECT_EQ(j["fields"][0]["type"], "float32");
+  EXPECT_NEAR(j["fields"][0]["min"].get<double>(), 0.1926, 5e-5);
+  EXPECT_NEAR(j["fields"][0]["max"].get<double>(), 4.9775, 5e-5);
+  EXPECT_EQ(j["fields"][1]["name"], "momentum");
+  EXPECT_EQ(j["fields"][1]["components"], 3);
+  EXPECT_EQ(j["fields"][1]["type"], "float32");
+  EXPECT_LT(j["fields"][1]["min"].get<double>(), j["fields"][1]["max"].get<double>());
+  EXPECT_EQ(j["fields"][2]["name"], "stagnation_energy");
+  EXPECT_EQ(j["fields"][2]["components"], 1);
+  EXPECT_EQ(j["metadata"]["source.format"], "plot3d");
+  EXPECT_NE(info.err.find("484 trailing zero bytes"), std::string::npos) << info.err;
+}
+
+TEST(Plot3dCli, TruncatedInputFailsWithoutOutput) {
+  const std::string dir = test::tempDir("plot3d-cli-trunc");
+  const std::string xyz = dir + "/cut.xyz";
+  test::writeFile(xyz, test::readFile(dataPath("plot3d/bluntfinxyz.bin")).substr(0, 300001));
+  const std::string out = dir + "/x.vtu";
+  const test::RunResult r = test::runGtn("convert " + xyz + " " + dataPath("plot3d/bluntfinq.bin") + " -o " + out);
+  EXPECT_TRUE(r.exit_code == 1 || r.exit_code == 3) << r.exit_code << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find(xyz), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(test::fileExists(out));
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(entry.path().filename(), "cut.xyz") << "left behind: " << entry.path();
+}
+
+}  // namespace
+}  // namespace gtn
