@@ -1,10 +1,143 @@
-// PLACEHOLDER: replaced by the real importer.
+// Medit .mesh (ASCII) importer: keyword sections, each a count followed by that many entries of a
+// fixed number of values. Vertices and Tetrahedra are read (1-based, a reference number after each);
+// every other known section is skipped by its count, and an unknown keyword is an error (its entries
+// could not be skipped safely).
+#include <cctype>
+#include <cstring>
+
+#include "convert/ascii_rows.h"
 #include "convert/import.h"
+#include "format/file_io.h"
 
 namespace gtn {
 
+namespace {
+constexpr int64_t kMaxItems = 0xFFFFFFFDll;
+
+bool sameKeyword(std::string_view a, const char* b) {
+  if (a.size() != std::strlen(b)) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) return false;
+  }
+  return true;
+}
+
+// Sections skipped by count: values per entry, with -1 standing for the dimension.
+struct SkippedSection {
+  const char* keyword;
+  int values;
+};
+constexpr SkippedSection kSkipped[] = {
+    {"Edges", 3},           {"Triangles", 4},          {"Quadrilaterals", 5},
+    {"Prisms", 7},          {"Pentahedra", 7},         {"Pyramids", 6},
+    {"Hexahedra", 9},       {"EdgesP2", 4},            {"TrianglesP2", 7},
+    {"QuadrilateralsQ2", 10}, {"TetrahedraP2", 11},    {"HexahedraQ2", 28},
+    {"Corners", 1},         {"Ridges", 1},             {"RequiredVertices", 1},
+    {"RequiredEdges", 1},   {"RequiredTriangles", 1},  {"RequiredQuadrilaterals", 1},
+    {"RequiredTetrahedra", 1}, {"RequiredHexahedra", 1}, {"Normals", -1},
+    {"Tangents", -1},       {"NormalAtVertices", 2},   {"NormalAtTriangleVertices", 3},
+    {"NormalAtQuadrilateralVertices", 3}, {"TangentAtEdgeVertices", 3}, {"Crack", 2},
+};
+
+StatusOr<int64_t> readCount(TextReader& reader, int64_t values_per_entry, const std::string& what) {
+  GTN_ASSIGN_OR_RETURN(const int64_t count, reader.readInt((what + " count").c_str()));
+  if (count > kMaxItems) return reader.error(what + " count " + std::to_string(count) + " is too large");
+  GTN_RETURN_IF_ERROR(checkCountFits(reader, count, values_per_entry, what));
+  return count;
+}
+
+StatusOr<int32_t> readRef(TextReader& reader) {
+  std::string_view tok;
+  if (!reader.next(&tok)) return reader.errorAtEnd("a reference number");
+  GTN_ASSIGN_OR_RETURN(const int64_t v, parseIntToken(reader, tok, INT32_MIN, INT32_MAX, "reference number"));
+  return static_cast<int32_t>(v);
+}
+}  // namespace
+
 StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&) {
-  return unsupported("importMedit is not implemented yet");
+  GTN_ASSIGN_OR_RETURN(const std::string text, readWholeFile(path));
+  TextReader reader(path, text);
+  ImportResult result;
+  TetMesh& mesh = result.mesh;
+  int64_t dimension = 0;
+  bool have_vertices = false, have_tets = false, seen_keyword = false;
+  std::string_view tok;
+  while (true) {
+    if (!reader.next(&tok)) break;
+    if (sameKeyword(tok, "End")) break;
+    if (sameKeyword(tok, "MeshVersionFormatted")) {
+      GTN_ASSIGN_OR_RETURN(const int64_t version, reader.readInt("mesh version"));
+      if (version < 1 || version > 4) return reader.error("unknown MeshVersionFormatted " + std::to_string(version));
+    } else if (sameKeyword(tok, "Dimension")) {
+      GTN_ASSIGN_OR_RETURN(dimension, reader.readInt("dimension"));
+      if (dimension != 3) {
+        return reader.error("dimension " + std::to_string(dimension) +
+                            ": only 3-dimensional (tetrahedral) Medit meshes are supported");
+      }
+    } else if (sameKeyword(tok, "Vertices")) {
+      if (dimension != 3) return reader.error("Vertices before a 'Dimension 3' line");
+      if (have_vertices) return reader.error("a second Vertices section");
+      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, 4, "vertices"));
+      const size_t n = static_cast<size_t>(count);
+      mesh.coords.resize(3 * n);
+      Field ref("ref", 1, ScalarType::kInt32, n);
+      for (size_t i = 0; i < n; ++i) {
+        for (int c = 0; c < 3; ++c) {
+          GTN_ASSIGN_OR_RETURN(mesh.coords[3 * i + c], reader.readDouble("a vertex coordinate"));
+        }
+        GTN_ASSIGN_OR_RETURN(const int32_t r, readRef(reader));
+        ref.set<int32_t>(i, 0, r);
+      }
+      mesh.point_fields.push_back(std::move(ref));
+      have_vertices = true;
+    } else if (sameKeyword(tok, "Tetrahedra")) {
+      if (!have_vertices) return reader.error("Tetrahedra before Vertices is not supported");
+      if (have_tets) return reader.error("a second Tetrahedra section");
+      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, 5, "tetrahedra"));
+      const size_t nt = static_cast<size_t>(count);
+      const int64_t np = static_cast<int64_t>(mesh.numPoints());
+      mesh.tets.resize(nt);
+      Field ref("ref", 1, ScalarType::kInt32, nt);
+      for (size_t t = 0; t < nt; ++t) {
+        for (int k = 0; k < 4; ++k) {
+          GTN_ASSIGN_OR_RETURN(const int64_t v, reader.readInt("a vertex number"));
+          if (v < 1 || v > np) {
+            return reader.error("tetrahedron " + std::to_string(t + 1) + " refers to vertex " + std::to_string(v) +
+                                "; vertices are numbered 1 to " + std::to_string(np));
+          }
+          mesh.tets[t][k] = static_cast<uint32_t>(v - 1);
+        }
+        GTN_ASSIGN_OR_RETURN(const int32_t r, readRef(reader));
+        ref.set<int32_t>(t, 0, r);
+      }
+      mesh.cell_fields.push_back(std::move(ref));
+      have_tets = true;
+    } else {
+      const SkippedSection* section = nullptr;
+      for (const SkippedSection& s : kSkipped) {
+        if (sameKeyword(tok, s.keyword)) section = &s;
+      }
+      if (!section) {
+        if (!seen_keyword)
+          return Status(StatusCode::kNotOurFile, reader.error("not a Medit .mesh file: it starts with " +
+                                                              quotedToken(tok)).message());
+        return reader.error("unknown Medit section " + quotedToken(tok) + " (its entries cannot be skipped safely)");
+      }
+      if (dimension != 3) return reader.error(std::string(section->keyword) + " before a 'Dimension 3' line");
+      const int64_t values = section->values < 0 ? dimension : section->values;
+      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, values, section->keyword));
+      for (int64_t i = 0; i < count * values; ++i) {
+        if (!reader.next(&tok)) return reader.errorAtEnd((std::string(section->keyword) + " entries").c_str());
+      }
+    }
+    seen_keyword = true;
+  }
+  if (!have_vertices) return reader.error("no Vertices section");
+  if (!have_tets) return reader.error("no Tetrahedra section: a surface mesh is not a volume mesh");
+  finishImport(result);
+  mesh.setMetadata("source.format", "medit");
+  GTN_RETURN_IF_ERROR(mesh.checkConsistency(path));
+  return result;
 }
 
 }  // namespace gtn

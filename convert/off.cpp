@@ -1,10 +1,126 @@
-// PLACEHOLDER: replaced by the real importer.
+// Tetrahedral OFF importer, the format of the ZSweep and HAVS renderers: an optional keyword line
+// ("OFF", "TOFF", ...), the point and tetrahedron counts (on one line or two), `x y z s...` rows with
+// as many scalars per row as the first row has beyond x y z, then 0-based index rows, optionally
+// prefixed by 4. The format is line-oriented; '#' starts a comment.
+#include <cctype>
+
+#include "convert/ascii_rows.h"
 #include "convert/import.h"
+#include "format/file_io.h"
 
 namespace gtn {
 
+namespace {
+constexpr int64_t kMaxItems = 0xFFFFFFFDll;
+
+bool isOffKeyword(std::string_view token) {
+  if (token.size() < 3) return false;
+  const std::string_view tail = token.substr(token.size() - 3);
+  for (size_t i = 0; i < 3; ++i) {
+    if (std::toupper(static_cast<unsigned char>(tail[i])) != "OFF"[i]) return false;
+  }
+  return true;
+}
+}  // namespace
+
 StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) {
-  return unsupported("importOff is not implemented yet");
+  GTN_ASSIGN_OR_RETURN(const std::string text, readWholeFile(path));
+  TextReader reader(path, text);
+  std::vector<std::string_view> row;
+  if (!readRow(reader, &row)) return reader.errorAtEnd("the point count");
+
+  // Counts: after an optional keyword, on the same line or the following ones.
+  size_t first = 0;
+  int64_t probe;
+  if (!parseInt(row[0], &probe)) {
+    if (!isOffKeyword(row[0])) {
+      return Status(StatusCode::kNotOurFile,
+                    reader.error("expected the point count or an OFF keyword, found " + quotedToken(row[0])).message());
+    }
+    first = 1;
+  }
+  std::vector<int64_t> counts;
+  while (true) {
+    for (size_t j = first; j < row.size(); ++j) {
+      GTN_ASSIGN_OR_RETURN(const int64_t c, parseIntToken(reader, row[j], 0, kMaxItems,
+                                                          counts.empty() ? "point count" : "tetrahedron count"));
+      counts.push_back(c);
+    }
+    if (counts.size() >= 2) break;
+    if (!readRow(reader, &row)) return reader.errorAtEnd(counts.empty() ? "the point count" : "the tetrahedron count");
+    first = 0;
+  }
+  if (counts.size() > 3) return reader.error("more than three counts (points, tetrahedra, edges) on the count line");
+  const int64_t np = counts[0], nt = counts[1];
+  if (np == 0) return reader.error("no points");
+  GTN_RETURN_IF_ERROR(checkCountFits(reader, np, 3, "points"));
+
+  ImportResult result;
+  TetMesh& mesh = result.mesh;
+  size_t width = 0;
+  Field scalars;
+  size_t last_line = reader.line();
+  for (int64_t i = 0; i < np; ++i) {
+    if (!readRow(reader, &row)) return truncatedError(reader, last_line, i, np, "points");
+    last_line = reader.line();
+    if (i == 0) {
+      width = row.size();
+      if (width < 3) return reader.error("a point row needs x y z; found " + std::to_string(width) + " values");
+      GTN_RETURN_IF_ERROR(checkCountFits(reader, np - 1, static_cast<int64_t>(width), "points"));
+      mesh.coords.resize(3 * static_cast<size_t>(np));
+      if (width > 3) scalars = Field("scalar", static_cast<uint32_t>(width - 3), ScalarType::kFloat64, np);
+    } else if (row.size() != width) {
+      return reader.error("point row has " + std::to_string(row.size()) + " values; the first point row has " +
+                          std::to_string(width) + " (x y z and " + std::to_string(width - 3) + " scalars)");
+    }
+    for (size_t c = 0; c < width; ++c) {
+      GTN_ASSIGN_OR_RETURN(const double v, parseDoubleToken(reader, row[c], c < 3 ? "a coordinate" : "a scalar"));
+      if (c < 3) {
+        mesh.coords[3 * i + c] = v;
+      } else {
+        scalars.set<double>(static_cast<size_t>(i), static_cast<uint32_t>(c - 3), v);
+      }
+    }
+  }
+  if (width > 3) mesh.point_fields.push_back(std::move(scalars));
+
+  size_t tet_width = 0;
+  for (int64_t t = 0; t < nt; ++t) {
+    if (!readRow(reader, &row)) return truncatedError(reader, last_line, t, nt, "tetrahedra");
+    last_line = reader.line();
+    if (t == 0) {
+      tet_width = row.size();
+      if (tet_width != 4 && tet_width != 5) {
+        return reader.error("a tetrahedron row has 4 indices, optionally after a leading 4; found " +
+                            std::to_string(tet_width) + " values");
+      }
+      GTN_RETURN_IF_ERROR(checkCountFits(reader, nt - 1, static_cast<int64_t>(tet_width), "tetrahedra"));
+      mesh.tets.resize(static_cast<size_t>(nt));
+    } else if (row.size() != tet_width) {
+      return reader.error("tetrahedron row has " + std::to_string(row.size()) + " values; the first one has " +
+                          std::to_string(tet_width));
+    }
+    if (tet_width == 5) {
+      GTN_RETURN_IF_ERROR(parseIntToken(reader, row[0], 4, 4, "vertex count of a tetrahedron").status());
+    }
+    for (int k = 0; k < 4; ++k) {
+      GTN_ASSIGN_OR_RETURN(const int64_t v, parseIntToken(reader, row[tet_width - 4 + k], INT64_MIN, INT64_MAX,
+                                                          "a point index"));
+      if (v < 0 || v >= np) {
+        return reader.error("tetrahedron " + std::to_string(t) + " refers to point " + std::to_string(v) +
+                            "; points are numbered 0 to " + std::to_string(np - 1));
+      }
+      mesh.tets[static_cast<size_t>(t)][k] = static_cast<uint32_t>(v);
+    }
+  }
+  if (readRow(reader, &row)) {
+    return reader.error("more rows than the " + std::to_string(np) + " points and " + std::to_string(nt) +
+                        " tetrahedra the header announces");
+  }
+  finishImport(result);
+  mesh.setMetadata("source.format", "off");
+  GTN_RETURN_IF_ERROR(mesh.checkConsistency(path));
+  return result;
 }
 
 }  // namespace gtn

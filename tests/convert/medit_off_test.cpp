@@ -1,0 +1,303 @@
+// Medit .mesh and tetrahedral OFF import: the bunny dataset, OFF written from a TetGen mesh, syntax
+// variants and malformed inputs.
+#include <gtest/gtest.h>
+
+#include <charconv>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "convert/import.h"
+#include "mesh/mesh_stats.h"
+#include "mesh/predicates.h"
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+using test::dataPath;
+using test::tempDir;
+using test::writeFile;
+
+// Negatively oriented tetrahedra of a Medit file, counted by a separate minimal reader.
+size_t countNegativeMedit(const std::string& path) {
+  std::ifstream in(path);
+  std::string word;
+  std::vector<double> xyz;
+  size_t negative = 0;
+  while (in >> word) {
+    if (word == "Vertices") {
+      size_t n;
+      in >> n;
+      xyz.resize(3 * n);
+      for (size_t i = 0; i < n; ++i) {
+        int ref;
+        in >> xyz[3 * i] >> xyz[3 * i + 1] >> xyz[3 * i + 2] >> ref;
+      }
+    } else if (word == "Tetrahedra") {
+      size_t n;
+      in >> n;
+      for (size_t t = 0; t < n; ++t) {
+        size_t v[4];
+        int ref;
+        in >> v[0] >> v[1] >> v[2] >> v[3] >> ref;
+        if (orient3d(&xyz[3 * (v[0] - 1)], &xyz[3 * (v[1] - 1)], &xyz[3 * (v[2] - 1)], &xyz[3 * (v[3] - 1)]) < 0)
+          ++negative;
+      }
+    }
+  }
+  return negative;
+}
+
+TEST(MeditImport, Bunny) {
+  const std::string path = dataPath("medit/bunny.mesh");
+  auto r = importMedit(path, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const TetMesh& m = r->mesh;
+  EXPECT_EQ(m.numPoints(), 5433u);
+  EXPECT_EQ(m.numTets(), 34055u);
+  EXPECT_EQ(m.coord_type, ScalarType::kFloat64);
+  const MeshStats s = computeMeshStats(m);
+  EXPECT_EQ(s.inverted, 0u);
+  // The file's tetrahedra are all positive already: nothing is flipped, as an independent count says.
+  EXPECT_EQ(countNegativeMedit(path), 0u);
+  EXPECT_EQ(r->report.flipped, 0u);
+  EXPECT_EQ(r->report.zero_volume, 0u);
+  ASSERT_EQ(m.point_fields.size(), 1u);
+  EXPECT_EQ(m.point_fields[0].name, "ref");
+  EXPECT_EQ(m.point_fields[0].type, ScalarType::kInt32);
+  ASSERT_EQ(m.cell_fields.size(), 1u);
+  EXPECT_EQ(m.cell_fields[0].name, "ref");
+  ASSERT_NE(m.findMetadata("source.format"), nullptr);
+  EXPECT_EQ(*m.findMetadata("source.format"), "medit");
+  // The dispatcher picks Medit from the extension.
+  auto d = importMesh({path}, ImportOptions{});
+  ASSERT_TRUE(d.isOk());
+  EXPECT_EQ(d->mesh.numTets(), 34055u);
+}
+
+TEST(MeditImport, BunnyReversedIsFlippedBack) {
+  // The bunny with vertices 3 and 4 of every tetrahedron swapped: all negative, all flipped back.
+  std::istringstream in(test::readFile(dataPath("medit/bunny.mesh")));
+  std::ostringstream out;
+  std::string line;
+  size_t remaining = 0;
+  bool in_tets = false;
+  while (std::getline(in, line)) {
+    if (in_tets && remaining > 0) {
+      std::istringstream row(line);
+      std::string a, b, c, d, ref;
+      row >> a >> b >> c >> d >> ref;
+      out << a << ' ' << b << ' ' << d << ' ' << c << ' ' << ref << '\n';
+      --remaining;
+      continue;
+    }
+    out << line << '\n';
+    if (line == "Tetrahedra") {
+      std::getline(in, line);
+      out << line << '\n';
+      remaining = std::stoul(line);
+      in_tets = true;
+    }
+  }
+  const std::string dir = tempDir("medit-reversed");
+  writeFile(dir + "/r.mesh", out.str());
+  EXPECT_EQ(countNegativeMedit(dir + "/r.mesh"), 34055u);
+  auto r = importMedit(dir + "/r.mesh", ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->report.flipped, 34055u);
+  EXPECT_EQ(computeMeshStats(r->mesh).inverted, 0u);
+  auto original = importMedit(dataPath("medit/bunny.mesh"), ImportOptions{});
+  ASSERT_TRUE(original.isOk());
+  EXPECT_TRUE(r->mesh.tets == original->mesh.tets);
+}
+
+const char* kMedit = R"(# a cube corner and a tip
+MeshVersionFormatted 2
+Dimension
+3
+Vertices
+5
+0 0 0 10
+1 0 0 11
+0 1 0 12
+0 0 1 13
+1 1 1 14
+Edges 2
+1 2 0
+2 3 0
+Triangles
+2
+1 2 3 5
+2 3 4 6
+Corners 1 1
+Ridges
+1
+1
+# the second tet is negatively oriented
+Tetrahedra
+2
+1 2 3 4 7
+2 4 3 5 8
+Normals 1
+0 0 1
+NormalAtVertices 1
+1 1
+End
+)";
+
+TEST(MeditImport, SkipsOtherSectionsAndKeepsRefs) {
+  const std::string dir = tempDir("medit-sections");
+  writeFile(dir + "/a.mesh", kMedit);
+  auto r = importMedit(dir + "/a.mesh", ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const TetMesh& m = r->mesh;
+  ASSERT_EQ(m.numPoints(), 5u);
+  ASSERT_EQ(m.numTets(), 2u);
+  EXPECT_EQ(r->report.flipped, 1u);
+  EXPECT_TRUE(m.tets[0] == (Tet{0, 1, 2, 3}));
+  EXPECT_TRUE(m.tets[1] == (Tet{1, 3, 4, 2}));
+  EXPECT_EQ(m.point_fields[0].get(4, 0), 14);
+  EXPECT_EQ(m.cell_fields[0].get(0, 0), 7);
+  EXPECT_EQ(m.cell_fields[0].get(1, 0), 8);
+}
+
+void expectError(StatusOr<ImportResult> r, const std::string& where) {
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().code(), StatusCode::kOk);
+  EXPECT_NE(r.status().message().find(where), std::string::npos) << r.status().message();
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+TEST(MeditErrors, BadInputs) {
+  const std::string dir = tempDir("medit-errors");
+  const std::string p = dir + "/b.mesh";
+  writeFile(p, replaced(kMedit, "Dimension\n3", "Dimension 2"));
+  expectError(importMedit(p, ImportOptions{}), p + ":3:");
+  writeFile(p, replaced(kMedit, "2 4 3 5 8", "2 4 3 6 8"));
+  expectError(importMedit(p, ImportOptions{}), p + ":27:");
+  writeFile(p, replaced(kMedit, "1 0 0 11", "1 zero 0 11"));
+  expectError(importMedit(p, ImportOptions{}), p + ":8:");
+  writeFile(p, replaced(kMedit, "Corners 1 1", "Wonders 1 1"));
+  expectError(importMedit(p, ImportOptions{}), p + ":19:");
+  writeFile(p, replaced(kMedit, "Tetrahedra\n2\n", "Tetrahedra\n3\n"));
+  expectError(importMedit(p, ImportOptions{}), "b.mesh:");
+  writeFile(p, std::string(kMedit).substr(0, std::string(kMedit).find("2 4 3 5 8")));
+  expectError(importMedit(p, ImportOptions{}), p + ":");
+  writeFile(p, "");
+  expectError(importMedit(p, ImportOptions{}), p);
+  writeFile(p, "MeshVersionFormatted 1\nDimension 3\nVertices\n100000000\n0 0 0 0\n");
+  expectError(importMedit(p, ImportOptions{}), p + ":4:");
+}
+
+// --- Tetrahedral OFF ------------------------------------------------------------------------------
+
+std::string shortest(double v) {
+  char buf[32];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, end);
+}
+
+// OFF text of a mesh: scalars s0 = x + 2y (and s1 = -z when two), tetrahedra with vertices 2 and 3
+// swapped when `reverse` (the negative orientation of the files that circulated).
+std::string toOff(const TetMesh& m, bool keyword, bool one_line_counts, int scalars, bool prefix, bool reverse) {
+  std::ostringstream out;
+  if (keyword) out << "OFF\n";
+  out << "# written by the test\n";
+  if (one_line_counts) {
+    out << m.numPoints() << " " << m.numTets() << "\n";
+  } else {
+    out << m.numPoints() << "\n" << m.numTets() << "\n";
+  }
+  for (size_t i = 0; i < m.numPoints(); ++i) {
+    const double* p = m.point(i);
+    out << shortest(p[0]) << " " << shortest(p[1]) << "\t" << shortest(p[2]);
+    if (scalars >= 1) out << " " << shortest(p[0] + 2 * p[1]);
+    if (scalars >= 2) out << " " << shortest(-p[2]);
+    out << "\n";
+  }
+  for (const Tet& t : m.tets) {
+    if (prefix) out << "4 ";
+    out << t[0] << " " << t[1] << " " << (reverse ? t[3] : t[2]) << " " << (reverse ? t[2] : t[3]) << "\n";
+  }
+  return out.str();
+}
+
+TEST(OffImport, FromTetgenMesh) {
+  auto src = importTetgen(dataPath("tetgen/cornellbox_orig.1"), ImportOptions{});
+  ASSERT_TRUE(src.isOk()) << src.status().message();
+  const TetMesh& ref = src->mesh;
+  const std::string dir = tempDir("off-import");
+  struct Variant {
+    bool keyword, one_line, prefix, reverse;
+    int scalars;
+  };
+  for (const Variant v : {Variant{true, true, true, true, 2}, Variant{false, false, false, false, 1},
+                          Variant{true, false, false, true, 0}}) {
+    SCOPED_TRACE(testing::Message() << v.keyword << v.one_line << v.prefix << v.reverse << v.scalars);
+    const std::string path = dir + "/m.off";
+    writeFile(path, toOff(ref, v.keyword, v.one_line, v.scalars, v.prefix, v.reverse));
+    auto r = importMesh({path}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const TetMesh& m = r->mesh;
+    ASSERT_EQ(m.numPoints(), 331u);
+    ASSERT_EQ(m.numTets(), 1631u);
+    EXPECT_EQ(r->report.flipped, v.reverse ? 1631u : 0u);
+    EXPECT_EQ(computeMeshStats(m).inverted, 0u);
+    EXPECT_TRUE(m.tets == ref.tets);  // flipping the reversed rows restores the source order
+    EXPECT_EQ(0, std::memcmp(m.coords.data(), ref.coords.data(), ref.coords.size() * sizeof(double)));
+    if (v.scalars == 0) {
+      EXPECT_TRUE(m.point_fields.empty());
+      continue;
+    }
+    ASSERT_EQ(m.point_fields.size(), 1u);
+    const Field& s = m.point_fields[0];
+    EXPECT_EQ(s.name, "scalar");
+    EXPECT_EQ(s.type, ScalarType::kFloat64);
+    ASSERT_EQ(s.components, static_cast<uint32_t>(v.scalars));
+    for (size_t i = 0; i < m.numPoints(); ++i) {
+      EXPECT_EQ(s.get(i, 0), ref.point(i)[0] + 2 * ref.point(i)[1]);
+      if (v.scalars == 2) {
+        EXPECT_EQ(s.get(i, 1), -ref.point(i)[2]);
+      }
+    }
+    EXPECT_EQ(*m.findMetadata("source.format"), "off");
+  }
+}
+
+const char* kOff = "TOFF\n5 2\n0 0 0 1\n1 0 0 2\n0 1 0 3\n0 0 1 4\n1 1 1 5\n4 0 1 2 3\n4 1 3 2 4\n";
+
+TEST(OffErrors, BadInputs) {
+  const std::string dir = tempDir("off-errors");
+  const std::string p = dir + "/b.off";
+  writeFile(p, kOff);
+  auto good = importOff(p, ImportOptions{});
+  ASSERT_TRUE(good.isOk()) << good.status().message();
+  EXPECT_EQ(good->report.flipped, 1u);
+  writeFile(p, replaced(kOff, "1 0 0 2\n", "1 0 0\n"));
+  expectError(importOff(p, ImportOptions{}), p + ":4:");
+  writeFile(p, replaced(kOff, "4 1 3 2 4", "4 1 3 2 5"));
+  expectError(importOff(p, ImportOptions{}), p + ":9:");
+  writeFile(p, replaced(kOff, "4 1 3 2 4", "3 1 3 2 4"));
+  expectError(importOff(p, ImportOptions{}), p + ":9:");
+  writeFile(p, replaced(kOff, "0 1 0 3", "0 one 0 3"));
+  expectError(importOff(p, ImportOptions{}), p + ":5:");
+  writeFile(p, replaced(kOff, "4 1 3 2 4\n", ""));
+  expectError(importOff(p, ImportOptions{}), p + ":8:");
+  writeFile(p, replaced(kOff, "5 2", "5000000000000 2"));
+  expectError(importOff(p, ImportOptions{}), p + ":2:");
+  writeFile(p, replaced(kOff, "5 2", "500000 2"));
+  expectError(importOff(p, ImportOptions{}), p + ":2:");
+  writeFile(p, "");
+  expectError(importOff(p, ImportOptions{}), p + ":1:");
+  writeFile(p, "hello\n");
+  expectError(importOff(p, ImportOptions{}), p + ":1:");
+}
+
+}  // namespace
+}  // namespace gtn
