@@ -1,0 +1,940 @@
+// The level codec: boundary surface first, then surface peeling (codec/level_codec.h).
+//
+// One template, LevelCoder<kEncode>, runs the whole algorithm for both directions: the encoder knows
+// the source mesh and passes the true symbol to each coding call, the decoder reads it back. Both
+// therefore keep exactly the same front state, candidate lists and predictions.
+//
+// Stream overview (all binary adaptive range coding, codec/range_coder.h):
+//  boundary:     for each popped open half-edge (p, q): bit "a triangle (q, p, x) follows", then x as
+//                new vertex / rank among the loop neighbours next(q), prev(p), ... / escape + slot;
+//                when the half-edge queue empties: bit "another component", then a seed triangle
+//                (per vertex: bit existing, then a slot index, else a new vertex).
+//  connectivity: for each popped open face (a, b, c): x as new / rank among the front vertices that
+//                share front edges with a, b or c (ordered by how many of them, then by distance to
+//                the predicted position) / escape + slot; a bit for reversed orientation; after the
+//                tetrahedron, for each of its vertices left on no open face, a bit "retired". When the
+//                face queue empties: bit "seed tetrahedron follows", then the seed's four vertices.
+//  geometry:     coordinates of each vertex when it is introduced, predicted from decoded neighbours.
+//  fields:       one stream per field, values predicted in the same order.
+// Vertices are identified while live by a "slot" in a pool that only holds the front, so the
+// decoder's memory follows the front and not the mesh.
+#include "codec/level_codec.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <deque>
+#include <memory>
+#include <string>
+
+#include "codec/flat_maps.h"
+#include "codec/range_coder.h"
+#include "codec/value_coder.h"
+#include "mesh/faces.h"
+
+namespace gtn {
+
+namespace {
+
+constexpr uint32_t kNoSlot = 0xFFFFFFFFu;
+constexpr uint32_t kNone32 = 0xFFFFFFFFu;
+constexpr uint32_t kSymNew = 0;
+constexpr uint32_t kSymEscape = 15;
+constexpr int kMaxCandidates = 14;  // symbols 1..14
+constexpr int kMaxGather = 48;
+constexpr int kFanSteps = 10;
+constexpr int kTetContexts = 2 * 10;
+constexpr int kBoundaryContexts = 2 * 4;
+constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d), CODEC-NOTES.md
+
+enum SlotState : uint8_t { kFree = 0, kLive = 1, kRetired = 2 };
+
+inline uint64_t edgeKey(uint32_t a, uint32_t b) { return (uint64_t{a} << 32) | b; }
+inline int bitLength(uint64_t v) { return v ? 64 - __builtin_clzll(v) : 0; }
+
+// How the field values of a new vertex are predicted.
+struct FieldPrediction {
+  enum Kind { kLast, kParallelogram, kInterpolate, kAverage } kind = kLast;
+  uint32_t s[4] = {kNoSlot, kNoSlot, kNoSlot, kNoSlot};
+};
+
+// What the encoder knows and the decoder does not.
+struct EncoderSide {
+  const TetMesh* mesh = nullptr;
+  const std::vector<uint32_t>* neighbor = nullptr;
+  std::vector<uint32_t> src_slot;  // source vertex -> live slot
+  std::vector<uint32_t> slot_src;  // slot -> source vertex
+  std::vector<uint32_t> remaining;  // tetrahedra of each source vertex not yet coded
+  std::vector<uint8_t> tet_done;
+  struct BoundaryTri {
+    uint32_t v[3];
+    uint32_t tet;
+  };
+  std::vector<BoundaryTri> btris;
+  std::vector<uint8_t> btri_done;
+  struct DirectedEdge {
+    uint32_t a, b, tri;
+    bool operator<(const DirectedEdge& o) const { return a != o.a ? a < o.a : (b != o.b ? b < o.b : tri < o.tri); }
+  };
+  std::vector<DirectedEdge> bedges;  // every directed edge of every boundary triangle, sorted
+  size_t next_seed_tet = 0, next_seed_tri = 0;
+  std::vector<uint32_t> vertex_order;
+  std::vector<uint64_t> tet_order;
+};
+
+template <bool kEncode>
+class LevelCoder {
+ public:
+  using Coder = EntropyCoder<kEncode>;
+
+  LevelCoder(const LevelHeader& header, std::unique_ptr<Coder> boundary, std::unique_ptr<Coder> connectivity,
+             std::unique_ptr<Coder> geometry, std::vector<std::unique_ptr<Coder>> point_fields,
+             std::vector<std::unique_ptr<Coder>> cell_fields)
+      : header_(header),
+        bnd_(std::move(boundary)),
+        con_(std::move(connectivity)),
+        geo_(std::move(geometry)),
+        pf_(std::move(point_fields)),
+        cf_(std::move(cell_fields)),
+        coord_vc_(header.coord_type, 3) {
+    for (const FieldDesc& d : header.point_fields) {
+      pf_vc_.emplace_back(d.type, d.components);
+      pf_offset_.push_back(item_bytes_);
+      item_bytes_ += d.itemBytes();
+    }
+    for (const FieldDesc& d : header.cell_fields) {
+      cf_vc_.emplace_back(d.type, d.components);
+      cf_offset_.push_back(cell_bytes_);
+      cell_bytes_ += d.itemBytes();
+    }
+    last_vals_.assign(item_bytes_, 0);
+    cell_buf_.assign(cell_bytes_, 0);
+    last_cell_keys_.resize(header.cell_fields.size());
+    for (size_t f = 0; f < header.cell_fields.size(); ++f) {
+      // The first prediction is the key of zero.
+      const FieldDesc& d = header.cell_fields[f];
+      last_cell_keys_[f].assign(d.components, keyFromPrediction(d.type, 0.0));
+    }
+    pred_vals_.resize(std::max<size_t>(1, item_bytes_));
+  }
+
+  void setEncoder(EncoderSide* enc) { enc_ = enc; }
+  void setDecoder(MeshSink* sink, const std::string* what) {
+    sink_ = sink;
+    what_ = what;
+  }
+
+  Status run() {
+    GTN_RETURN_IF_ERROR(boundaryPhase());
+    if constexpr (!kEncode) GTN_RETURN_IF_ERROR(sink_->endBoundary());
+    GTN_RETURN_IF_ERROR(peelingPhase());
+    GTN_RETURN_IF_ERROR(unusedPoints());
+    if constexpr (kEncode) {
+      bnd_->finish();
+      con_->finish();
+      geo_->finish();
+      for (auto& c : pf_) c->finish();
+      for (auto& c : cf_) c->finish();
+    } else {
+      if (tets_done_ != header_.tets) return bad("fewer tetrahedra than the header announces");
+      if (btris_done_ != header_.boundary_triangles) return bad("boundary triangle count differs from the header");
+      if (next_id_ != header_.points) return bad("point count differs from the header");
+      if (live_ != 0) return bad("vertices left unretired at the end of the level");
+      if (!bnd_->finishedCleanly()) return bad("boundary stream is corrupt, truncated or has trailing bytes");
+      if (!con_->finishedCleanly()) return bad("connectivity stream is corrupt, truncated or has trailing bytes");
+      if (!geo_->finishedCleanly()) return bad("geometry stream is corrupt, truncated or has trailing bytes");
+      for (size_t f = 0; f < pf_.size(); ++f)
+        if (!pf_[f]->finishedCleanly())
+          return bad("point field stream '" + header_.point_fields[f].name + "' is corrupt, truncated or has trailing bytes");
+      for (size_t f = 0; f < cf_.size(); ++f)
+        if (!cf_[f]->finishedCleanly())
+          return bad("cell field stream '" + header_.cell_fields[f].name + "' is corrupt, truncated or has trailing bytes");
+      GTN_RETURN_IF_ERROR(sink_->endLevel());
+    }
+    return Status::ok();
+  }
+
+  uint64_t peakLive() const { return peak_live_; }
+
+ private:
+  Status bad(const std::string& reason) const {
+    std::string where = " (after " + std::to_string(tets_done_) + " tetrahedra, " + std::to_string(next_id_) +
+                        " vertices, " + std::to_string(btris_done_) + " boundary triangles)";
+    return invalidData((what_ ? *what_ : std::string("level")) + ": " + reason + where);
+  }
+  Status internal(const std::string& reason) const {
+    return invalidData("encodeLevel: inconsistent mesh: " + reason);
+  }
+
+  // ---- slot pool -------------------------------------------------------------------------------
+  uint32_t allocSlot() {
+    uint32_t s;
+    if (!free_.empty()) {
+      s = free_.back();
+      free_.pop_back();
+    } else {
+      s = static_cast<uint32_t>(state_.size());
+      state_.push_back(kFree);
+      pos_.resize(pos_.size() + 3);
+      vals_.resize(vals_.size() + item_bytes_);
+      open_.push_back(0);
+      pins_.push_back(0);
+      ids_.push_back(0);
+      nxt_.push_back(kNoSlot);
+      prv_.push_back(kNoSlot);
+      if constexpr (kEncode) enc_->slot_src.push_back(kNone32);
+    }
+    state_[s] = kLive;
+    open_[s] = 0;
+    pins_[s] = 0;
+    nxt_[s] = kNoSlot;
+    prv_[s] = kNoSlot;
+    return s;
+  }
+  void freeSlot(uint32_t s) {
+    state_[s] = kFree;
+    free_.push_back(s);
+  }
+  bool isLive(uint32_t s) const { return s < state_.size() && state_[s] == kLive; }
+  const double* P(uint32_t s) const { return &pos_[3 * size_t{s}]; }
+
+  Status retire(uint32_t s) {
+    state_[s] = kRetired;
+    --live_;
+    if constexpr (kEncode) {
+      enc_->src_slot[enc_->slot_src[s]] = kNoSlot;
+    } else {
+      GTN_RETURN_IF_ERROR(sink_->retireVertex(ids_[s]));
+    }
+    if (pins_[s] == 0) freeSlot(s);
+    return Status::ok();
+  }
+  void unpin(uint32_t s) {
+    if (--pins_[s] == 0 && state_[s] == kRetired) freeSlot(s);
+  }
+
+  // Slot index coded uniformly over the pool size.
+  uint32_t codeSlot(Coder& c, uint32_t s) {
+    const int n = bitLength(state_.size() > 1 ? state_.size() - 1 : 0);
+    return c.direct(kEncode ? s : 0, n);
+  }
+
+  // ---- values ----------------------------------------------------------------------------------
+  void computeFieldPrediction(const FieldPrediction& fp, const double* x) {
+    size_t k = 0;
+    double lambda[4] = {1, 0, 0, 0};
+    int n = 1;
+    FieldPrediction::Kind kind = fp.kind;
+    if (kind == FieldPrediction::kInterpolate) {
+      const double *a = P(fp.s[0]), *b = P(fp.s[1]), *c = P(fp.s[2]), *d = P(fp.s[3]);
+      double e1[3], e2[3], e3[3], r[3];
+      for (int i = 0; i < 3; ++i) {
+        e1[i] = b[i] - a[i];
+        e2[i] = c[i] - a[i];
+        e3[i] = d[i] - a[i];
+        r[i] = x[i] - a[i];
+      }
+      auto det = [](const double* u, const double* v, const double* w) {
+        return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+               u[2] * (v[0] * w[1] - v[1] * w[0]);
+      };
+      const double vol = det(e1, e2, e3);
+      bool ok = vol != 0.0 && std::isfinite(vol);
+      if (ok) {
+        lambda[1] = det(r, e2, e3) / vol;
+        lambda[2] = det(e1, r, e3) / vol;
+        lambda[3] = det(e1, e2, r) / vol;
+        lambda[0] = 1.0 - lambda[1] - lambda[2] - lambda[3];
+        for (double l : lambda)
+          if (!(std::fabs(l) <= 8.0)) ok = false;
+      }
+      if (ok) {
+        n = 4;
+      } else {
+        kind = FieldPrediction::kAverage;
+      }
+    }
+    if (kind == FieldPrediction::kAverage) {
+      lambda[0] = lambda[1] = lambda[2] = 1.0 / 3.0;
+      n = 3;
+    } else if (kind == FieldPrediction::kParallelogram) {
+      lambda[0] = 1;
+      lambda[1] = 1;
+      lambda[2] = -1;
+      n = 3;
+    }
+    for (size_t f = 0; f < header_.point_fields.size(); ++f) {
+      const FieldDesc& d = header_.point_fields[f];
+      const size_t vs = scalarSize(d.type);
+      for (uint32_t c = 0; c < d.components; ++c, ++k) {
+        const size_t off = pf_offset_[f] + c * vs;
+        if (kind == FieldPrediction::kLast) {
+          pred_vals_[k] = doubleFromRaw(d.type, &last_vals_[off]);
+          continue;
+        }
+        double v = 0;
+        for (int i = 0; i < n; ++i) v += lambda[i] * doubleFromRaw(d.type, &vals_[fp.s[i] * item_bytes_ + off]);
+        pred_vals_[k] = v;
+      }
+    }
+  }
+
+  // Introduces a vertex: codes its coordinates and field values and emits it.
+  Status introduceVertex(uint32_t src, const double pred[3], const FieldPrediction& fp, uint32_t* slot_out) {
+    if constexpr (!kEncode) {
+      if (next_id_ >= header_.points) return bad("more vertices than the header announces");
+    }
+    const uint32_t s = allocSlot();
+    double* x = &pos_[3 * size_t{s}];
+    const ScalarType ct = header_.coord_type;
+    for (uint32_t i = 0; i < 3; ++i) {
+      uint64_t actual = 0;
+      if constexpr (kEncode) {
+        uint8_t raw[8];
+        const double v = enc_->mesh->coords[3 * size_t{src} + i];
+        if (ct == ScalarType::kFloat32) {
+          const float f = static_cast<float>(v);
+          std::memcpy(raw, &f, 4);
+        } else {
+          std::memcpy(raw, &v, 8);
+        }
+        actual = keyFromRaw(ct, raw);
+      }
+      const uint64_t key = coord_vc_.code(*geo_, i, keyFromPrediction(ct, pred[i]), actual);
+      uint8_t raw[8];
+      rawFromKey(ct, key, raw);
+      x[i] = doubleFromRaw(ct, raw);
+      if constexpr (!kEncode) {
+        if (!std::isfinite(x[i])) return bad("decoded a non-finite coordinate");
+      }
+    }
+    if (item_bytes_ > 0) {
+      computeFieldPrediction(fp, x);
+      uint8_t* out = &vals_[s * item_bytes_];
+      size_t k = 0;
+      for (size_t f = 0; f < header_.point_fields.size(); ++f) {
+        const FieldDesc& d = header_.point_fields[f];
+        const size_t vs = scalarSize(d.type);
+        for (uint32_t c = 0; c < d.components; ++c, ++k) {
+          const size_t off = pf_offset_[f] + c * vs;
+          uint64_t actual = 0;
+          if constexpr (kEncode) {
+            const Field& field = enc_->mesh->point_fields[f];
+            actual = keyFromRaw(d.type, field.bytes.data() + size_t{src} * d.itemBytes() + c * vs);
+          }
+          const uint64_t key = pf_vc_[f].code(*pf_[f], c, keyFromPrediction(d.type, pred_vals_[k]), actual);
+          rawFromKey(d.type, key, out + off);
+        }
+      }
+      std::memcpy(last_vals_.data(), out, item_bytes_);
+    }
+    const uint32_t id = static_cast<uint32_t>(next_id_++);
+    ids_[s] = id;
+    if constexpr (kEncode) {
+      enc_->vertex_order[src] = id;
+      enc_->src_slot[src] = s;
+      enc_->slot_src[s] = src;
+    } else {
+      GTN_RETURN_IF_ERROR(sink_->vertex(id, x, item_bytes_ ? &vals_[s * item_bytes_] : nullptr));
+    }
+    std::memcpy(last_pos_, x, sizeof(last_pos_));
+    ++live_;
+    peak_live_ = std::max<uint64_t>(peak_live_, live_);
+    *slot_out = s;
+    return Status::ok();
+  }
+
+  Status introduceFromLast(uint32_t src, uint32_t* slot) {
+    FieldPrediction fp;
+    fp.kind = FieldPrediction::kLast;
+    return introduceVertex(src, last_pos_, fp, slot);
+  }
+
+  // ---- front faces -----------------------------------------------------------------------------
+  void openFace(const uint32_t v[3], uint32_t d, uint32_t tet) {
+    FrontFace f;
+    FaceMap::sortedKey(v, f.key);
+    for (int i = 0; i < 3; ++i) f.v[i] = v[i];
+    f.d = d;
+    f.tet = tet;
+    faces_.insert(f);
+    for (int i = 0; i < 3; ++i) {
+      ++open_[v[i]];
+      edges_.put(edgeKey(v[i], v[(i + 1) % 3]), v[(i + 2) % 3]);
+    }
+    if (d != kNoSlot) ++pins_[d];
+    queue_.push_back({v[0], v[1], v[2]});
+  }
+  void closeFace(long index) {
+    const FrontFace f = faces_.at(index);
+    faces_.eraseAt(index);
+    for (int i = 0; i < 3; ++i) {
+      --open_[f.v[i]];
+      edges_.eraseIf(edgeKey(f.v[i], f.v[(i + 1) % 3]), f.v[(i + 2) % 3]);
+    }
+    if (f.d != kNoSlot) unpin(f.d);
+  }
+
+  // ---- boundary surface ------------------------------------------------------------------------
+  void openHalf(uint32_t s, uint32_t t, uint32_t r) {
+    half_.put(edgeKey(s, t), r);
+    nxt_[s] = t;
+    prv_[t] = s;
+    hqueue_.push_back(edgeKey(s, t));
+  }
+  void closeHalf(uint32_t s, uint32_t t, uint32_t r) {
+    half_.eraseIf(edgeKey(s, t), r);
+    if (nxt_[s] == t) nxt_[s] = kNoSlot;
+    if (prv_[t] == s) prv_[t] = kNoSlot;
+  }
+
+  Status addTriangle(const uint32_t v[3], uint32_t tri) {
+    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) return bad("boundary triangle with a repeated vertex");
+    if constexpr (kEncode) {
+      enc_->btri_done[tri] = 1;
+    } else {
+      if (btris_done_ >= header_.boundary_triangles) return bad("more boundary triangles than the header announces");
+      const uint32_t ids[3] = {ids_[v[0]], ids_[v[1]], ids_[v[2]]};
+      GTN_RETURN_IF_ERROR(sink_->boundaryTriangle(ids));
+    }
+    ++btris_done_;
+    for (int i = 0; i < 3; ++i) {
+      const uint32_t s = v[i], t = v[(i + 1) % 3], r = v[(i + 2) % 3];
+      const uint32_t w = half_.find(edgeKey(t, s), kNone32);
+      if (w != kNone32) {
+        closeHalf(t, s, w);
+      } else {
+        openHalf(s, t, r);
+      }
+    }
+    const uint32_t inward[3] = {v[0], v[2], v[1]};
+    uint32_t key[3];
+    FaceMap::sortedKey(inward, key);
+    if (faces_.find(key) >= 0) return bad("boundary triangle repeated");
+    openFace(inward, kNoSlot, kEncode ? enc_->btris[tri].tet : 0);
+    return Status::ok();
+  }
+
+  // Vertex of a seed (triangle or tetrahedron): an existing live slot or a new vertex.
+  Status codeSeedVertex(Coder& c, uint32_t src, uint32_t* slot) {
+    uint32_t existing = 0;
+    if constexpr (kEncode) existing = enc_->src_slot[src] != kNoSlot;
+    existing = c.bit(seed_existing_, existing);
+    if (existing) {
+      const uint32_t s = codeSlot(c, kEncode ? enc_->src_slot[src] : 0);
+      if (!isLive(s)) return bad("seed refers to a vertex that is not live");
+      *slot = s;
+      return Status::ok();
+    }
+    return introduceFromLast(src, slot);
+  }
+
+  Status boundaryPhase() {
+    uint32_t prev_sym = 0;
+    while (true) {
+      if (hqueue_.empty()) {
+        uint32_t more = 0;
+        uint32_t tri = 0;
+        if constexpr (kEncode) {
+          while (enc_->next_seed_tri < enc_->btris.size() && enc_->btri_done[enc_->next_seed_tri]) ++enc_->next_seed_tri;
+          more = enc_->next_seed_tri < enc_->btris.size();
+          tri = static_cast<uint32_t>(enc_->next_seed_tri);
+        }
+        more = bnd_->bit(bseed_more_, more);
+        if (!more) break;
+        uint32_t v[3];
+        for (int i = 0; i < 3; ++i) GTN_RETURN_IF_ERROR(codeSeedVertex(*bnd_, kEncode ? enc_->btris[tri].v[i] : 0, &v[i]));
+        GTN_RETURN_IF_ERROR(addTriangle(v, tri));
+        continue;
+      }
+      if constexpr (!kEncode) {
+        if (!bnd_->ok()) return bad("boundary stream is truncated or corrupt");
+      }
+      const uint64_t hk = hqueue_.front();
+      hqueue_.pop_front();
+      const uint32_t p = static_cast<uint32_t>(hk >> 32), q = static_cast<uint32_t>(hk);
+      const uint32_t w = half_.find(hk, kNone32);
+      if (w == kNone32) continue;
+      uint32_t has = 0, tri = 0, x_src = 0;
+      if constexpr (kEncode) {
+        const uint32_t sp = enc_->slot_src[p], sq = enc_->slot_src[q];
+        EncoderSide::DirectedEdge probe{sq, sp, 0};
+        auto it = std::lower_bound(enc_->bedges.begin(), enc_->bedges.end(), probe);
+        for (; it != enc_->bedges.end() && it->a == sq && it->b == sp; ++it) {
+          if (!enc_->btri_done[it->tri]) {
+            has = 1;
+            tri = it->tri;
+            break;
+          }
+        }
+        if (has) {
+          const auto& bt = enc_->btris[tri];
+          for (int i = 0; i < 3; ++i)
+            if (bt.v[i] != sp && bt.v[i] != sq) x_src = bt.v[i];
+        }
+      }
+      has = bnd_->bit(bpartner_, has);
+      if (!has) continue;
+      // Candidates: walk the open loop forward from q and backward from p.
+      uint32_t cands[8];
+      int nc = 0;
+      auto add = [&](uint32_t s) {
+        if (s == kNoSlot || s == p || s == q || !isLive(s)) return;
+        for (int i = 0; i < nc; ++i)
+          if (cands[i] == s) return;
+        cands[nc++] = s;
+      };
+      uint32_t fwd = nxt_[q], bwd = prv_[p];
+      const uint32_t closes = (fwd != kNoSlot && fwd == bwd) ? 1 : 0;
+      for (int step = 0; step < 4; ++step) {
+        add(fwd);
+        add(bwd);
+        if (fwd != kNoSlot) fwd = nxt_[fwd];
+        if (bwd != kNoSlot) bwd = prv_[bwd];
+      }
+      uint32_t sym = 0;
+      if constexpr (kEncode) {
+        const uint32_t xs = enc_->src_slot[x_src];
+        if (xs == kNoSlot) {
+          sym = kSymNew;
+        } else {
+          sym = kSymEscape;
+          for (int i = 0; i < nc; ++i)
+            if (cands[i] == xs) sym = static_cast<uint32_t>(i + 1);
+        }
+      }
+      const uint32_t ctx = std::min<uint32_t>(prev_sym, 3) * 2 + closes;
+      sym = bsym_[ctx].code(*bnd_, sym);
+      prev_sym = sym == kSymEscape ? 3 : std::min<uint32_t>(sym, 2);
+      uint32_t x;
+      if (sym == kSymNew) {
+        double pred[3];
+        for (int i = 0; i < 3; ++i) pred[i] = P(p)[i] + P(q)[i] - P(w)[i];
+        FieldPrediction fp;
+        fp.kind = FieldPrediction::kParallelogram;
+        fp.s[0] = p;
+        fp.s[1] = q;
+        fp.s[2] = w;
+        GTN_RETURN_IF_ERROR(introduceVertex(x_src, pred, fp, &x));
+      } else if (sym == kSymEscape) {
+        x = codeSlot(*bnd_, kEncode ? enc_->src_slot[x_src] : 0);
+        if (!isLive(x)) return bad("boundary triangle refers to a vertex that is not live");
+      } else {
+        if (sym > static_cast<uint32_t>(nc)) return bad("boundary candidate rank out of range");
+        x = cands[sym - 1];
+      }
+      const uint32_t v[3] = {q, p, x};
+      GTN_RETURN_IF_ERROR(addTriangle(v, tri));
+    }
+    half_.clear();
+    hqueue_.clear();
+    return Status::ok();
+  }
+
+  // ---- peeling ---------------------------------------------------------------------------------
+  void predictApex(const FrontFace& g, double p[3]) const {
+    const double *a = P(g.v[0]), *b = P(g.v[1]), *c = P(g.v[2]);
+    double gc[3];
+    for (int i = 0; i < 3; ++i) gc[i] = (a[i] + b[i] + c[i]) / 3.0;
+    if (g.d != kNoSlot) {
+      const double* d = P(g.d);
+      for (int i = 0; i < 3; ++i) p[i] = gc[i] + kPredictK * (gc[i] - d[i]);
+      return;
+    }
+    double e1[3], e2[3];
+    for (int i = 0; i < 3; ++i) {
+      e1[i] = b[i] - a[i];
+      e2[i] = c[i] - a[i];
+    }
+    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    auto len = [](const double* u, const double* v) {
+      return std::sqrt((u[0] - v[0]) * (u[0] - v[0]) + (u[1] - v[1]) * (u[1] - v[1]) + (u[2] - v[2]) * (u[2] - v[2]));
+    };
+    const double edge = (len(a, b) + len(b, c) + len(c, a)) / 3.0;
+    const double scale = nl > 0 && std::isfinite(nl) ? 0.8 * edge / nl : 0.0;
+    for (int i = 0; i < 3; ++i) p[i] = gc[i] + n[i] * scale;
+  }
+
+  struct Candidate {
+    uint32_t s;
+    uint32_t w;
+    double dist;
+  };
+
+  // Front vertices around the gate face, best first; returns the count and the coding context.
+  int gatherCandidates(const FrontFace& g, const double p[3], uint32_t* out, uint32_t* ctx) const {
+    Candidate c[kMaxGather];
+    int n = 0;
+    auto add = [&](uint32_t s) {
+      if (s == g.v[0] || s == g.v[1] || s == g.v[2]) return;
+      for (int i = 0; i < n; ++i)
+        if (c[i].s == s) {
+          ++c[i].w;
+          return;
+        }
+      if (n < kMaxGather) c[n++] = {s, 1, 0.0};
+    };
+    for (int j = 0; j < 3; ++j) {
+      const uint32_t a = g.v[j], b = g.v[(j + 1) % 3], cc = g.v[(j + 2) % 3];
+      // Forward around a: across edge (c, a), then on.
+      uint32_t v = cc;
+      bool closed = false;
+      for (int step = 0; step < kFanSteps; ++step) {
+        const uint32_t w = edges_.find(edgeKey(a, v), kNone32);
+        if (w == kNone32) break;
+        if (w == b) {
+          closed = true;
+          break;
+        }
+        add(w);
+        v = w;
+      }
+      if (closed) continue;
+      v = b;
+      for (int step = 0; step < kFanSteps; ++step) {
+        const uint32_t w = edges_.find(edgeKey(v, a), kNone32);
+        if (w == kNone32 || w == cc) break;
+        add(w);
+        v = w;
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      const double* q = P(c[i].s);
+      const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+      c[i].dist = dx * dx + dy * dy + dz * dz;
+    }
+    std::sort(c, c + n, [](const Candidate& x, const Candidate& y) {
+      if (x.w != y.w) return x.w > y.w;
+      if (x.dist != y.dist) return x.dist < y.dist;
+      return x.s < y.s;
+    });
+    const int m = std::min(n, kMaxCandidates);
+    for (int i = 0; i < m; ++i) out[i] = c[i].s;
+    uint32_t k = 0;
+    if (n > 0) {
+      uint32_t top = 0;
+      while (static_cast<int>(top) < n && c[top].w == c[0].w) ++top;
+      k = 1 + (std::min<uint32_t>(c[0].w, 3) - 1) * 3 + std::min<uint32_t>(top, 3) - 1;
+    }
+    *ctx = k * 2 + (g.d == kNoSlot ? 1 : 0);
+    return m;
+  }
+
+  Status emitTet(const uint32_t e[4], uint32_t src_tet) {
+    if (e[0] == e[1] || e[0] == e[2] || e[0] == e[3] || e[1] == e[2] || e[1] == e[3] || e[2] == e[3])
+      return bad("tetrahedron with a repeated vertex");
+    if constexpr (!kEncode) {
+      if (tets_done_ >= header_.tets) return bad("more tetrahedra than the header announces");
+    }
+    // Cell values, predicted by the previous tetrahedron's.
+    for (size_t f = 0; f < header_.cell_fields.size(); ++f) {
+      const FieldDesc& d = header_.cell_fields[f];
+      const size_t vs = scalarSize(d.type);
+      for (uint32_t c = 0; c < d.components; ++c) {
+        uint64_t actual = 0;
+        if constexpr (kEncode) {
+          actual = keyFromRaw(d.type, enc_->mesh->cell_fields[f].bytes.data() + size_t{src_tet} * d.itemBytes() + c * vs);
+        }
+        const uint64_t key = cf_vc_[f].code(*cf_[f], c, last_cell_keys_[f][c], actual);
+        last_cell_keys_[f][c] = key;
+        rawFromKey(d.type, key, &cell_buf_[cf_offset_[f] + c * vs]);
+      }
+    }
+    if constexpr (kEncode) {
+      enc_->tet_order[src_tet] = tets_done_;
+      enc_->tet_done[src_tet] = 1;
+      for (uint32_t v : enc_->mesh->tets[src_tet]) --enc_->remaining[v];
+    } else {
+      const uint32_t ids[4] = {ids_[e[0]], ids_[e[1]], ids_[e[2]], ids_[e[3]]};
+      GTN_RETURN_IF_ERROR(sink_->tet(ids, cell_bytes_ ? cell_buf_.data() : nullptr));
+    }
+    ++tets_done_;
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t f[3] = {e[kTetFace[k][0]], e[kTetFace[k][1]], e[kTetFace[k][2]]};
+      uint32_t key[3];
+      FaceMap::sortedKey(f, key);
+      const long idx = faces_.find(key);
+      if (idx >= 0) {
+        closeFace(idx);
+        continue;
+      }
+      uint32_t nb = 0;
+      if constexpr (kEncode) {
+        const uint32_t sv = enc_->slot_src[e[k]];
+        const Tet& t = enc_->mesh->tets[src_tet];
+        int j = 0;
+        while (j < 4 && t[j] != sv) ++j;
+        if (j == 4) return internal("tetrahedron vertex lost");
+        nb = (*enc_->neighbor)[4 * size_t{src_tet} + j];
+        if (nb == kNoNeighbor || nb == kNonManifold || enc_->tet_done[nb]) return internal("front face without a tetrahedron behind it");
+      }
+      openFace(f, e[k], nb);
+    }
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t s = e[k];
+      if (open_[s] != 0 || state_[s] != kLive) continue;
+      uint32_t done = 0;
+      if constexpr (kEncode) done = enc_->remaining[enc_->slot_src[s]] == 0;
+      done = con_->bit(retire_, done);
+      if (done) GTN_RETURN_IF_ERROR(retire(s));
+    }
+    return Status::ok();
+  }
+
+  Status seedTet() {
+    uint32_t src_tet = 0;
+    Tet src{};
+    if constexpr (kEncode) {
+      src_tet = static_cast<uint32_t>(enc_->next_seed_tet);
+      src = enc_->mesh->tets[src_tet];
+    }
+    uint32_t e[4];
+    for (int i = 0; i < 4; ++i) GTN_RETURN_IF_ERROR(codeSeedVertex(*con_, src[i], &e[i]));
+    return emitTet(e, src_tet);
+  }
+
+  Status peelingPhase() {
+    while (true) {
+      long idx = -1;
+      while (!queue_.empty()) {
+        const std::array<uint32_t, 3> f = queue_.front();
+        queue_.pop_front();
+        uint32_t key[3];
+        FaceMap::sortedKey(f.data(), key);
+        idx = faces_.find(key);
+        if (idx >= 0) break;
+      }
+      if constexpr (!kEncode) {
+        if (!con_->ok()) return bad("connectivity stream is truncated or corrupt");
+        if (!geo_->ok()) return bad("geometry stream is truncated or corrupt");
+      }
+      if (idx < 0) {
+        uint32_t more = 0;
+        if constexpr (kEncode) {
+          while (enc_->next_seed_tet < enc_->tet_done.size() && enc_->tet_done[enc_->next_seed_tet]) ++enc_->next_seed_tet;
+          more = enc_->next_seed_tet < enc_->tet_done.size();
+        }
+        more = con_->bit(seed_more_, more);
+        if (!more) break;
+        GTN_RETURN_IF_ERROR(seedTet());
+        continue;
+      }
+      const FrontFace g = faces_.at(idx);
+      double p[3];
+      predictApex(g, p);
+      uint32_t cands[kMaxCandidates];
+      uint32_t ctx = 0;
+      const int nc = gatherCandidates(g, p, cands, &ctx);
+      uint32_t sym = 0, x_src = 0, flip = 0;
+      if constexpr (kEncode) {
+        const Tet& t = enc_->mesh->tets[g.tet];
+        const uint32_t ga = enc_->slot_src[g.v[0]], gb = enc_->slot_src[g.v[1]], gcv = enc_->slot_src[g.v[2]];
+        int xi = -1;
+        for (int i = 0; i < 4; ++i)
+          if (t[i] != ga && t[i] != gb && t[i] != gcv) xi = i;
+        if (xi < 0) return internal("gate face does not belong to its tetrahedron");
+        x_src = t[xi];
+        // Parity of (a, b, c, x) as a permutation of the stored order.
+        const uint32_t want[4] = {ga, gb, gcv, x_src};
+        int perm[4];
+        for (int i = 0; i < 4; ++i)
+          for (int j = 0; j < 4; ++j)
+            if (t[j] == want[i]) perm[i] = j;
+        int inversions = 0;
+        for (int i = 0; i < 4; ++i)
+          for (int j = i + 1; j < 4; ++j) inversions += perm[i] > perm[j];
+        flip = inversions & 1;
+        const uint32_t xs = enc_->src_slot[x_src];
+        if (xs == kNoSlot) {
+          sym = kSymNew;
+        } else {
+          sym = kSymEscape;
+          for (int i = 0; i < nc; ++i)
+            if (cands[i] == xs) sym = static_cast<uint32_t>(i + 1);
+        }
+      }
+      sym = tsym_[ctx].code(*con_, sym);
+      uint32_t x;
+      if (sym == kSymNew) {
+        FieldPrediction fp;
+        fp.kind = g.d != kNoSlot ? FieldPrediction::kInterpolate : FieldPrediction::kAverage;
+        fp.s[0] = g.v[0];
+        fp.s[1] = g.v[1];
+        fp.s[2] = g.v[2];
+        fp.s[3] = g.d;
+        GTN_RETURN_IF_ERROR(introduceVertex(x_src, p, fp, &x));
+      } else if (sym == kSymEscape) {
+        x = codeSlot(*con_, kEncode ? enc_->src_slot[x_src] : 0);
+        if (!isLive(x)) return bad("tetrahedron refers to a vertex that is not live");
+      } else {
+        if (sym > static_cast<uint32_t>(nc)) return bad("candidate rank out of range");
+        x = cands[sym - 1];
+      }
+      flip = con_->bit(flip_, flip);
+      const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
+      GTN_RETURN_IF_ERROR(emitTet(e, g.tet));
+    }
+    return Status::ok();
+  }
+
+  Status unusedPoints() {
+    if constexpr (kEncode) {
+      const size_t n = enc_->mesh->numPoints();
+      for (size_t v = 0; v < n; ++v) {
+        if (enc_->vertex_order[v] != kNone32) continue;
+        uint32_t s;
+        GTN_RETURN_IF_ERROR(introduceFromLast(static_cast<uint32_t>(v), &s));
+        GTN_RETURN_IF_ERROR(retire(s));
+      }
+    } else {
+      while (next_id_ < header_.points) {
+        if (!geo_->ok()) return bad("geometry stream is truncated or corrupt");
+        uint32_t s;
+        GTN_RETURN_IF_ERROR(introduceFromLast(0, &s));
+        GTN_RETURN_IF_ERROR(retire(s));
+      }
+    }
+    return Status::ok();
+  }
+
+  const LevelHeader& header_;
+  std::unique_ptr<Coder> bnd_, con_, geo_;
+  std::vector<std::unique_ptr<Coder>> pf_, cf_;
+  ValueCoder coord_vc_;
+  std::vector<ValueCoder> pf_vc_, cf_vc_;
+  std::vector<size_t> pf_offset_, cf_offset_;
+  size_t item_bytes_ = 0, cell_bytes_ = 0;
+
+  EncoderSide* enc_ = nullptr;
+  MeshSink* sink_ = nullptr;
+  const std::string* what_ = nullptr;
+
+  // Slot pool.
+  std::vector<uint8_t> state_;
+  std::vector<double> pos_;
+  std::vector<uint8_t> vals_;
+  std::vector<uint32_t> open_, pins_, ids_, nxt_, prv_, free_;
+
+  FaceMap faces_;
+  EdgeMap edges_;  // directed edge of an open face -> its third vertex
+  EdgeMap half_;   // open boundary half-edge -> third vertex of its triangle
+  std::deque<std::array<uint32_t, 3>> queue_;
+  std::deque<uint64_t> hqueue_;
+
+  BitTree<4> tsym_[kTetContexts];
+  BitTree<4> bsym_[kBoundaryContexts];
+  BitModel flip_, retire_, seed_more_, bseed_more_, bpartner_, seed_existing_;
+
+  uint64_t next_id_ = 0, tets_done_ = 0, btris_done_ = 0, live_ = 0, peak_live_ = 0;
+  double last_pos_[3] = {0, 0, 0};
+  std::vector<uint8_t> last_vals_, cell_buf_;
+  std::vector<std::vector<uint64_t>> last_cell_keys_;
+  std::vector<double> pred_vals_;
+};
+
+}  // namespace
+
+StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& options) {
+  if (options.keep_order) return unsupported("encodeLevel: keeping the source order is not implemented");
+  GTN_RETURN_IF_ERROR(mesh.checkConsistency("encodeLevel"));
+  if (mesh.coord_type != ScalarType::kFloat32 && mesh.coord_type != ScalarType::kFloat64)
+    return unsupported("encodeLevel: coordinates must be float32 or float64");
+  const size_t np = mesh.numPoints(), nt = mesh.numTets();
+  if (np >= kNone32 || nt >= kNone32) return unsupported("encodeLevel: more than 2^32-2 points or tetrahedra");
+  for (size_t t = 0; t < nt; ++t) {
+    const Tet& v = mesh.tets[t];
+    if (v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] || v[2] == v[3])
+      return invalidData("encodeLevel: tetrahedron " + std::to_string(t) + " repeats a vertex");
+  }
+  const FaceAdjacency adj = computeFaceAdjacency(mesh);
+  if (adj.non_manifold_faces > 0)
+    return invalidData("encodeLevel: " + std::to_string(adj.non_manifold_faces) +
+                       " faces are shared by three or more tetrahedra (non-manifold)");
+
+  EncodedLevel out;
+  LevelHeader& h = out.header;
+  h.points = np;
+  h.tets = nt;
+  h.coord_type = mesh.coord_type;
+  for (const Field& f : mesh.point_fields) h.point_fields.push_back({f.name, f.components, f.type});
+  for (const Field& f : mesh.cell_fields) h.cell_fields.push_back({f.name, f.components, f.type});
+  h.metadata = mesh.metadata;
+  if (np > 0) {
+    for (int i = 0; i < 3; ++i) h.bbox_min[i] = h.bbox_max[i] = mesh.coords[i];
+    for (size_t v = 0; v < np; ++v)
+      for (int i = 0; i < 3; ++i) {
+        h.bbox_min[i] = std::min(h.bbox_min[i], mesh.coords[3 * v + i]);
+        h.bbox_max[i] = std::max(h.bbox_max[i], mesh.coords[3 * v + i]);
+      }
+  }
+
+  EncoderSide enc;
+  enc.mesh = &mesh;
+  enc.neighbor = &adj.neighbor;
+  enc.src_slot.assign(np, kNoSlot);
+  enc.remaining.assign(np, 0);
+  for (const Tet& t : mesh.tets)
+    for (uint32_t v : t) ++enc.remaining[v];
+  enc.tet_done.assign(nt, 0);
+  enc.btris.reserve(adj.boundary_faces);
+  for (size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) {
+      if (adj.neighbor[4 * t + k] != kNoNeighbor) continue;
+      const Tet& v = mesh.tets[t];
+      enc.btris.push_back({{v[kTetFace[k][0]], v[kTetFace[k][1]], v[kTetFace[k][2]]}, static_cast<uint32_t>(t)});
+    }
+  h.boundary_triangles = enc.btris.size();
+  enc.btri_done.assign(enc.btris.size(), 0);
+  enc.bedges.reserve(3 * enc.btris.size());
+  for (size_t i = 0; i < enc.btris.size(); ++i)
+    for (int j = 0; j < 3; ++j)
+      enc.bedges.push_back({enc.btris[i].v[j], enc.btris[i].v[(j + 1) % 3], static_cast<uint32_t>(i)});
+  std::sort(enc.bedges.begin(), enc.bedges.end());
+  enc.vertex_order.assign(np, kNone32);
+  enc.tet_order.assign(nt, 0);
+
+  out.point_fields.resize(h.point_fields.size());
+  out.cell_fields.resize(h.cell_fields.size());
+  using Enc = EntropyCoder<true>;
+  std::vector<std::unique_ptr<Enc>> pf, cf;
+  for (auto& s : out.point_fields) pf.push_back(std::make_unique<Enc>(&s));
+  for (auto& s : out.cell_fields) cf.push_back(std::make_unique<Enc>(&s));
+  LevelCoder<true> coder(h, std::make_unique<Enc>(&out.boundary), std::make_unique<Enc>(&out.connectivity),
+                         std::make_unique<Enc>(&out.geometry), std::move(pf), std::move(cf));
+  coder.setEncoder(&enc);
+  GTN_RETURN_IF_ERROR(coder.run());
+  out.vertex_order = std::move(enc.vertex_order);
+  out.tet_order = std::move(enc.tet_order);
+  return out;
+}
+
+Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink, DecodeStats* stats,
+                   const std::string& what) {
+  if (header.coord_type != ScalarType::kFloat32 && header.coord_type != ScalarType::kFloat64)
+    return invalidData(what + ": coordinates must be float32 or float64");
+  if (header.points >= kNone32) return invalidData(what + ": too many points for one level");
+  if (header.tets >= kNone32) return invalidData(what + ": too many tetrahedra for one level");
+  if (payload.point_fields.size() != header.point_fields.size() ||
+      payload.cell_fields.size() != header.cell_fields.size())
+    return invalidData(what + ": field streams do not match the header's field list");
+  for (const auto* list : {&header.point_fields, &header.cell_fields})
+    for (const FieldDesc& d : *list) {
+      if (static_cast<int>(d.type) >= kNumScalarTypes) return invalidData(what + ": field '" + d.name + "' has an unknown type");
+      if (d.components == 0 || d.components > 4096)
+        return invalidData(what + ": field '" + d.name + "' has an invalid component count");
+    }
+  using Dec = EntropyCoder<false>;
+  std::vector<std::unique_ptr<Dec>> pf, cf;
+  for (auto s : payload.point_fields) pf.push_back(std::make_unique<Dec>(s));
+  for (auto s : payload.cell_fields) cf.push_back(std::make_unique<Dec>(s));
+  GTN_RETURN_IF_ERROR(sink.beginLevel(header));
+  LevelCoder<false> coder(header, std::make_unique<Dec>(payload.boundary), std::make_unique<Dec>(payload.connectivity),
+                          std::make_unique<Dec>(payload.geometry), std::move(pf), std::move(cf));
+  coder.setDecoder(&sink, &what);
+  const Status st = coder.run();
+  if (stats) stats->peak_live_vertices = coder.peakLive();
+  return st;
+}
+
+}  // namespace gtn

@@ -1,0 +1,207 @@
+// Binary adaptive range coder used by the level codec (LZMA's carry-propagating range coder with
+// 16-bit probabilities that mix a fast and a slow adaptation rate), plus uniform "direct" bits.
+//
+// Byte accounting: the encoder's flush writes exactly the bytes the decoder reads, so a decoder that
+// has read past the end of its buffer, or that stops before the end, is looking at a corrupt stream
+// (RangeDecoder::finishedCleanly()).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace gtn {
+
+// Probability that the next bit is 0, as two 16-bit estimates adapting at rates 1/16 and 1/128.
+struct BitModel {
+  uint16_t fast = 32768, slow = 32768;
+  uint32_t p0() const { return (uint32_t{fast} + slow) >> 1; }  // in [15, 65521]: never 0 or 65536
+  void update(uint32_t bit) {
+    if (bit) {
+      fast -= fast >> 4;
+      slow -= slow >> 7;
+    } else {
+      fast += (65536 - fast) >> 4;
+      slow += (65536 - slow) >> 7;
+    }
+  }
+};
+
+class RangeEncoder {
+ public:
+  explicit RangeEncoder(std::vector<uint8_t>* out) : out_(out) {}
+
+  void encodeBit(BitModel& m, uint32_t bit) {
+    const uint32_t bound = (range_ >> 16) * m.p0();
+    if (bit) {
+      low_ += bound;
+      range_ -= bound;
+    } else {
+      range_ = bound;
+    }
+    m.update(bit);
+    normalize();
+  }
+  // `n` (1..16) raw bits of `value`, each equally likely.
+  void encodeDirect(uint32_t value, int n) {
+    range_ >>= n;
+    low_ += uint64_t{value} * range_;
+    normalize();
+  }
+  void flush() {
+    for (int i = 0; i < 5; ++i) shiftLow();
+  }
+
+ private:
+  void normalize() {
+    while (range_ < (1u << 24)) {
+      range_ <<= 8;
+      shiftLow();
+    }
+  }
+  void shiftLow() {
+    if (static_cast<uint32_t>(low_) < 0xFF000000u || (low_ >> 32) != 0) {
+      const uint8_t carry = static_cast<uint8_t>(low_ >> 32);
+      uint8_t temp = cache_;
+      do {
+        out_->push_back(static_cast<uint8_t>(temp + carry));
+        temp = 0xFF;
+      } while (--cache_size_ != 0);
+      cache_ = static_cast<uint8_t>(static_cast<uint32_t>(low_) >> 24);
+    }
+    ++cache_size_;
+    low_ = static_cast<uint32_t>(low_) << 8;
+  }
+
+  std::vector<uint8_t>* out_;
+  uint64_t low_ = 0;
+  uint32_t range_ = 0xFFFFFFFFu;
+  uint8_t cache_ = 0;
+  uint64_t cache_size_ = 1;
+};
+
+class RangeDecoder {
+ public:
+  explicit RangeDecoder(std::span<const uint8_t> in) : in_(in) {
+    // The encoder's first byte is always 0; anything else is not our stream.
+    if (in_.empty() || in_[0] != 0) bad_ = true;
+    for (int i = 0; i < 5; ++i) code_ = (code_ << 8) | nextByte();
+  }
+
+  uint32_t decodeBit(BitModel& m) {
+    const uint32_t bound = (range_ >> 16) * m.p0();
+    uint32_t bit;
+    if (code_ < bound) {
+      range_ = bound;
+      bit = 0;
+    } else {
+      code_ -= bound;
+      range_ -= bound;
+      bit = 1;
+    }
+    m.update(bit);
+    normalize();
+    return bit;
+  }
+  uint32_t decodeDirect(int n) {
+    range_ >>= n;
+    uint32_t v = code_ / range_;
+    if (v >> n) {  // only a corrupt stream gets here
+      v = (1u << n) - 1;
+      bad_ = true;
+    }
+    code_ -= v * range_;
+    normalize();
+    return v;
+  }
+  // True while no byte past the end was requested and the stream started correctly.
+  bool ok() const { return !bad_ && overrun_ == 0; }
+  // After the last symbol: every byte consumed, none past the end.
+  bool finishedCleanly() const { return ok() && pos_ == in_.size(); }
+  size_t position() const { return pos_; }
+
+ private:
+  uint8_t nextByte() {
+    if (pos_ < in_.size()) return in_[pos_++];
+    ++overrun_;
+    return 0;
+  }
+  void normalize() {
+    while (range_ < (1u << 24)) {
+      range_ <<= 8;
+      code_ = (code_ << 8) | nextByte();
+    }
+  }
+
+  std::span<const uint8_t> in_;
+  size_t pos_ = 0;
+  uint64_t overrun_ = 0;
+  uint32_t range_ = 0xFFFFFFFFu;
+  uint32_t code_ = 0;
+  bool bad_ = false;
+};
+
+// One interface over both directions so that the encoder and the decoder run the same code: the
+// encoder passes the value to write and gets it back, the decoder ignores the argument and gets the
+// decoded value.
+template <bool kEncode>
+class EntropyCoder;
+
+template <>
+class EntropyCoder<true> {
+ public:
+  explicit EntropyCoder(std::vector<uint8_t>* out) : enc_(out) {}
+  uint32_t bit(BitModel& m, uint32_t b) {
+    enc_.encodeBit(m, b);
+    return b;
+  }
+  // `n` (0..32) raw bits.
+  uint32_t direct(uint32_t v, int n) {
+    if (n > 16) {
+      enc_.encodeDirect(v >> 16, n - 16);
+      enc_.encodeDirect(v & 0xFFFF, 16);
+    } else if (n > 0) {
+      enc_.encodeDirect(v, n);
+    }
+    return v;
+  }
+  void finish() { enc_.flush(); }
+  bool ok() const { return true; }
+
+ private:
+  RangeEncoder enc_;
+};
+
+template <>
+class EntropyCoder<false> {
+ public:
+  explicit EntropyCoder(std::span<const uint8_t> in) : dec_(in) {}
+  uint32_t bit(BitModel& m, uint32_t) { return dec_.decodeBit(m); }
+  uint32_t direct(uint32_t, int n) {
+    if (n > 16) {
+      const uint32_t hi = dec_.decodeDirect(n - 16);
+      return (hi << 16) | dec_.decodeDirect(16);
+    }
+    return n > 0 ? dec_.decodeDirect(n) : 0;
+  }
+  void finish() {}
+  bool ok() const { return dec_.ok(); }
+  bool finishedCleanly() const { return dec_.finishedCleanly(); }
+
+ private:
+  RangeDecoder dec_;
+};
+
+// Symbols of `kBits` bits coded most significant bit first through a binary tree of models.
+template <int kBits>
+struct BitTree {
+  BitModel m[1 << kBits];
+  template <class C>
+  uint32_t code(C& c, uint32_t symbol) {
+    uint32_t node = 1;
+    for (int i = kBits - 1; i >= 0; --i) node = (node << 1) | c.bit(m[node], (symbol >> i) & 1);
+    return node - (1u << kBits);
+  }
+};
+
+}  // namespace gtn

@@ -1,0 +1,229 @@
+// Lossless round trips of the level codec on synthetic meshes that exercise every structural case,
+// and the decoder's behaviour on corrupt payloads.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "codec/level_codec.h"
+#include "codec/value_coder.h"
+#include "codec_test_util.h"
+
+namespace gtn {
+namespace {
+
+using test::gridMesh;
+using test::roundTrip;
+
+double bitsPerTet(const std::vector<uint8_t>& s, const TetMesh& m) { return 8.0 * s.size() / m.numTets(); }
+
+TEST(LevelCodec, StructuredGridSixSplitWithFields) {
+  TetMesh m = gridMesh(12, 10, 9, 6);
+  test::addFields(m);
+  const EncodedLevel e = roundTrip(m);
+  EXPECT_EQ(e.header.points, m.numPoints());
+  EXPECT_EQ(e.header.tets, m.numTets());
+  // Connectivity of a regular grid must be far below the 2.5 bits per tetrahedron target.
+  EXPECT_LT(bitsPerTet(e.connectivity, m) + bitsPerTet(e.boundary, m), 2.5);
+}
+
+TEST(LevelCodec, StructuredGridFiveSplitFloat32) {
+  TetMesh m = gridMesh(11, 9, 8, 5);
+  m.coord_type = ScalarType::kFloat32;
+  for (double& c : m.coords) c = static_cast<float>(c);
+  test::addFields(m);
+  const EncodedLevel e = roundTrip(m);
+  EXPECT_LT(bitsPerTet(e.connectivity, m) + bitsPerTet(e.boundary, m), 2.5);
+}
+
+TEST(LevelCodec, CoincidentPointsAndZeroVolumeTets) {
+  // A grid whose j = 0 row collapses onto one line: unwelded coincident points, flat tetrahedra.
+  TetMesh m = gridMesh(6, 5, 5, 5);
+  for (size_t v = 0; v < m.numPoints(); ++v) {
+    const size_t j = (v / 6) % 5;
+    if (j == 0) m.coords[3 * v] = m.coords[3 * v + 1] = 0.0;
+  }
+  size_t zero = 0;
+  normalizeOrientation(m, &zero);
+  EXPECT_GT(zero, 0u);
+  test::addFields(m);
+  roundTrip(m);
+}
+
+TEST(LevelCodec, InternalCavity) {
+  TetMesh m = gridMesh(8, 8, 8, 6, [](int i, int j, int k) {
+    return !(i >= 3 && i <= 4 && j >= 3 && j <= 4 && k >= 3 && k <= 4);
+  });
+  roundTrip(m);
+}
+
+TEST(LevelCodec, DisconnectedPiecesAndUnusedPoints) {
+  TetMesh a = gridMesh(5, 4, 4, 6);
+  TetMesh b = gridMesh(4, 5, 3, 5, nullptr, 20.0);
+  const uint32_t off = static_cast<uint32_t>(a.numPoints());
+  a.coords.insert(a.coords.end(), b.coords.begin(), b.coords.end());
+  for (Tet t : b.tets) {
+    for (uint32_t& v : t) v += off;
+    a.tets.push_back(t);
+  }
+  // Points that no tetrahedron uses, one of them coincident with a used point.
+  a.coords.insert(a.coords.end(), {100.0, 1.0, 2.0, 0.0, 0.0, 0.0, -5.5, 3.25, 1e-300});
+  test::addFields(a);
+  roundTrip(a);
+}
+
+TEST(LevelCodec, NonManifoldBoundaryVerticesAndEdges) {
+  // Cells in a checkerboard touch each other only along edges and at vertices.
+  TetMesh m = gridMesh(5, 5, 5, 6, [](int i, int j, int k) { return (i + j + k) % 2 == 0; });
+  test::addFields(m);
+  roundTrip(m);
+}
+
+TEST(LevelCodec, ClosedPairWithoutBoundaryNeedsASeed) {
+  // Two copies of one tetrahedron glued along all four faces: no boundary at all.
+  TetMesh m;
+  m.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  m.tets = {{0, 1, 2, 3}, {0, 2, 1, 3}};
+  const EncodedLevel e = roundTrip(m);
+  EXPECT_EQ(e.header.boundary_triangles, 0u);
+}
+
+TEST(LevelCodec, SingleTetAndPointsOnly) {
+  TetMesh one;
+  one.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  one.tets = {{0, 1, 2, 3}};
+  roundTrip(one);
+  TetMesh pts;
+  pts.coords = {1, 2, 3, -4, 5, 6.5};
+  roundTrip(pts);
+  TetMesh empty;
+  roundTrip(empty);
+}
+
+TEST(LevelCodec, SpecialFloatValuesSurvive) {
+  TetMesh m = gridMesh(4, 4, 4, 6);
+  Field f("weird", 1, ScalarType::kFloat32, m.numPoints());
+  const uint32_t patterns[] = {0x7FC00001u, 0xFF800000u, 0x7F800000u, 0x80000000u, 0x00000001u, 0xFFFFFFFFu};
+  for (size_t v = 0; v < m.numPoints(); ++v) {
+    uint32_t bits = patterns[v % 6];
+    std::memcpy(f.bytes.data() + 4 * v, &bits, 4);
+  }
+  m.point_fields.push_back(f);
+  roundTrip(m);
+}
+
+TEST(LevelCodec, RejectsNonManifoldFaces) {
+  TetMesh m;
+  m.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 1, 1, 1};
+  m.tets = {{0, 1, 2, 3}, {0, 2, 1, 4}, {0, 1, 2, 5}};
+  EXPECT_FALSE(encodeLevel(m, EncodeOptions{}).isOk());
+}
+
+TEST(LevelCodec, ValueKeysRoundTripEveryType) {
+  for (int t = 0; t < kNumScalarTypes; ++t) {
+    const ScalarType type = static_cast<ScalarType>(t);
+    uint8_t raw[8] = {0x12, 0x9A, 0xFF, 0x01, 0x80, 0x7F, 0x00, 0xC3}, back[8] = {};
+    rawFromKey(type, keyFromRaw(type, raw), back);
+    EXPECT_EQ(std::memcmp(raw, back, scalarSize(type)), 0) << scalarTypeName(type);
+  }
+  // Key order is numeric order for floats.
+  const float a = -2.0f, b = -1.0f, c = 0.5f;
+  uint8_t ra[4], rb[4], rc[4];
+  std::memcpy(ra, &a, 4);
+  std::memcpy(rb, &b, 4);
+  std::memcpy(rc, &c, 4);
+  EXPECT_LT(keyFromRaw(ScalarType::kFloat32, ra), keyFromRaw(ScalarType::kFloat32, rb));
+  EXPECT_LT(keyFromRaw(ScalarType::kFloat32, rb), keyFromRaw(ScalarType::kFloat32, rc));
+}
+
+// ---- corrupt payloads -----------------------------------------------------------------------------
+
+class NullSink : public MeshSink {
+ public:
+  Status beginLevel(const LevelHeader&) override { return Status::ok(); }
+  Status vertex(uint32_t, const double*, const uint8_t*) override { return Status::ok(); }
+  Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
+  Status endBoundary() override { return Status::ok(); }
+  Status tet(const uint32_t*, const uint8_t*) override { return Status::ok(); }
+  Status retireVertex(uint32_t) override { return Status::ok(); }
+  Status endLevel() override { return Status::ok(); }
+};
+
+EncodedLevel smallEncoded() {
+  TetMesh m = gridMesh(4, 4, 3, 5);
+  test::addFields(m);
+  auto e = encodeLevel(m, EncodeOptions{});
+  EXPECT_TRUE(e.isOk());
+  return std::move(e).value();
+}
+
+std::vector<std::vector<uint8_t>*> streamsOf(EncodedLevel& e) {
+  std::vector<std::vector<uint8_t>*> s = {&e.boundary, &e.connectivity, &e.geometry};
+  for (auto& f : e.point_fields) s.push_back(&f);
+  for (auto& f : e.cell_fields) s.push_back(&f);
+  return s;
+}
+
+TEST(LevelCodecCorrupt, EveryTruncatedStreamFailsCleanly) {
+  EncodedLevel e = smallEncoded();
+  const size_t n_streams = streamsOf(e).size();
+  for (size_t k = 0; k < n_streams; ++k) {
+    const std::vector<uint8_t> full = *streamsOf(e)[k];
+    for (size_t len = 0; len < full.size(); ++len) {
+      EncodedLevel c = e;
+      streamsOf(c)[k]->resize(len);
+      NullSink sink;
+      const Status st = decodeLevel(c.header, test::payloadOf(c), sink, nullptr, "level 0 of t.gtn");
+      ASSERT_FALSE(st.isOk()) << "stream " << k << " cut to " << len << " bytes decoded";
+      EXPECT_EQ(st.code(), StatusCode::kInvalidData);
+      EXPECT_NE(st.message().find("level 0 of t.gtn"), std::string::npos) << st.message();
+    }
+    // Trailing bytes are rejected too.
+    EncodedLevel c = e;
+    streamsOf(c)[k]->push_back(0);
+    NullSink sink;
+    EXPECT_FALSE(decodeLevel(c.header, test::payloadOf(c), sink, nullptr, "x").isOk());
+  }
+}
+
+TEST(LevelCodecCorrupt, RandomByteFlipsNeverCrash) {
+  const EncodedLevel e = smallEncoded();
+  std::mt19937 rng(12345);
+  int failures = 0;
+  for (int iter = 0; iter < 3000; ++iter) {
+    EncodedLevel c = e;
+    auto streams = streamsOf(c);
+    const int flips = 1 + static_cast<int>(rng() % 3);
+    for (int f = 0; f < flips; ++f) {
+      auto* s = streams[rng() % streams.size()];
+      if (s->empty()) continue;
+      (*s)[rng() % s->size()] ^= static_cast<uint8_t>(1 + rng() % 255);
+    }
+    NullSink sink;
+    const Status st = decodeLevel(c.header, test::payloadOf(c), sink, nullptr, "flip");
+    if (!st.isOk()) {
+      ++failures;
+      EXPECT_EQ(st.code(), StatusCode::kInvalidData);
+    }
+  }
+  EXPECT_GT(failures, 2000);
+}
+
+TEST(LevelCodecCorrupt, HeaderCountsMustMatch) {
+  EncodedLevel e = smallEncoded();
+  for (int which = 0; which < 4; ++which) {
+    LevelHeader h = e.header;
+    if (which == 0) h.tets += 1;
+    if (which == 1) h.points = h.points * 1000000;
+    if (which == 2) h.boundary_triangles -= 1;
+    if (which == 3) h.tets = uint64_t{1} << 40;
+    NullSink sink;
+    EXPECT_FALSE(decodeLevel(h, test::payloadOf(e), sink, nullptr, "x").isOk()) << which;
+  }
+  LevelHeader h = e.header;
+  h.point_fields.pop_back();
+  NullSink sink;
+  EXPECT_FALSE(decodeLevel(h, test::payloadOf(e), sink, nullptr, "x").isOk());
+}
+
+}  // namespace
+}  // namespace gtn
