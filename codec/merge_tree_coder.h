@@ -1,0 +1,87 @@
+// The merge tree (paper section 4.1) and the coding of a level's merge-tree chunk payload.
+//
+// A merge tree is a forest over the vertices of one level: every merged vertex v has a parent p (the
+// vertex it is merged into, Vv -> Vp) and a rank in 1..M (the order in which the static ranking chose
+// the merge); roots are the vertices that are never merged. Along every path ranks strictly increase
+// (a vertex can only be merged into a vertex that is still alive), which makes the tree acyclic and
+// lets a top-down traversal compute ancestors in one pass.
+//
+// Payload layout (version 1; little-endian; varint = unsigned LEB128, at most 10 bytes):
+//   u8      version                  = 1
+//   varint  points P                 vertices of the level (must equal the level header's count)
+//   varint  merges M                 M <= P
+//   varint  boundary_merges          merges whose child is a boundary vertex
+//   varint  tets_removed             sum over merges of the tetrahedra each merge removes
+//   f64     w_density, w_geometry    weights the ranking used (provenance)
+//   varint  n, then n bytes          name of the density field ("" = volume only)
+//   u8      q                        number of error quantiles (0 or 9)
+//   f64 x q                          error at the quantiles 0, .01, .1, .25, .5, .75, .9, .99, 1 of the
+//                                    merges (error when chosen, normalised as in simplify/ranking.h)
+//   varint  body_bytes, then the body: one stream of codec/range_coder.h (adaptive BitModel bits,
+//           BitTree symbols, direct bits; the encoder's flush ends it) holding, for each vertex v of
+//           the level's vertex numbering 0..P-1 (decoding order):
+//     bit   is_root                  one model
+//     if not root:
+//       bit   sign                   one model; 1 = parent id < v
+//       BitTree<5>  len - 1          tree per sign; len = bit length of |parent - v| (1..32)
+//       len-1 direct bits            |parent - v| below its leading one
+//       uniform x in [0, R)          R = ranks not yet taken (M minus the merged vertices before v);
+//                                    the rank is the (x+1)-th smallest rank not yet taken (a Lehmer
+//                                    code of the rank permutation). Truncated binary in direct bits:
+//                                    b = bitlen(R-1), u = 2^b - R; b-1 bits y; if y >= u one more bit,
+//                                    x = 2y + bit - u. Nothing is coded when R = 1.
+//       bit   boundary               one model; 1 = v is a boundary vertex
+//       BitTree<4>  k                tree per boundary bit; k = tetrahedra the merge removes, 15 =
+//                                    escape followed by 32 direct bits holding k
+// The decoder rejects: an unknown version, P different from the expected count, M > P, a parent
+// out of range or equal to v, a rank not in 1..R, a child whose (non-root) parent has a smaller rank,
+// counts that disagree with the header fields, a body read past its end, and trailing bytes.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "mesh/status.h"
+
+namespace gtn {
+
+struct MergeTree {
+  static constexpr uint32_t kRoot = 0xFFFFFFFFu;
+  std::vector<uint32_t> parent;   // per vertex: the vertex it merges into, or kRoot
+  std::vector<uint32_t> rank;     // per vertex: 1..M for merged vertices, 0 for roots
+  std::vector<uint32_t> removed;  // per vertex: tetrahedra its merge removes (0 for roots)
+  std::vector<uint8_t> boundary;  // per vertex: 1 if v is a boundary vertex (its merge is a boundary merge)
+  std::vector<float> error;       // per vertex: error of its merge when chosen (not coded; may be empty)
+  uint64_t merges = 0;
+
+  // Provenance and summary, coded in the payload header.
+  std::string field;  // density field, "" = volume only
+  double w_density = 0, w_geometry = 0;
+  std::vector<double> error_quantiles;  // 0 or 9 values, see the payload layout
+
+  size_t points() const { return parent.size(); }
+  // Number of boundary merges and tetrahedra removed among the merges of rank <= n.
+  uint64_t boundaryMergesUpTo(uint64_t n) const;
+  uint64_t tetsRemovedUpTo(uint64_t n) const;
+  // Structural checks of the definition above (sizes, ranks a permutation, parent ranks larger).
+  Status check(const std::string& what) const;
+};
+
+// The quantile positions of MergeTree::error_quantiles.
+extern const double kMergeErrorQuantiles[9];
+
+// Fills error_quantiles from `error` (empty when there are no merges or no errors).
+void computeErrorQuantiles(MergeTree& tree);
+
+// Encodes `tree` (vertex numbering of the source mesh) with vertex v stored at vertex_order[v], the
+// id the level decoder gives it. vertex_order must be a permutation of 0..P-1.
+StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order);
+
+// Decodes a payload; `expected_points` is the level's vertex count (it bounds every allocation).
+// `what` names the source in messages (file and level).
+StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points,
+                                    const std::string& what);
+
+}  // namespace gtn

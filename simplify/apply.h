@@ -1,0 +1,29 @@
+// Applying a prefix of the merge tree in memory: the reference result that the on-the-fly stream
+// filter (stream_simplifier.h) and the stored mip levels (levels.h) must reproduce exactly.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "codec/merge_tree_coder.h"
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+// ancestor[v] after the merges of rank <= n (paper section 4.2: a top-down traversal of the merge
+// tree, parents before children because ranks increase towards the roots). The tree must satisfy
+// MergeTree::check; n is clamped to tree.merges.
+std::vector<uint32_t> computeAncestors(const MergeTree& tree, uint64_t n);
+
+// The mesh after the first n merges (rank order): every vertex replaced by its ancestor,
+// tetrahedra with two equal vertices dropped, surviving vertices compacted in their original order,
+// tetrahedra and cell fields kept in their original order. new_index (optional) receives, per source
+// vertex, its index in the result or MergeTree::kRoot when it was merged away.
+StatusOr<TetMesh> applyMerges(const TetMesh& mesh, const MergeTree& tree, uint64_t n,
+                              std::vector<uint32_t>* new_index = nullptr);
+
+// The rest of the tree after the first n merges, in the numbering new_index gives (applyMerges):
+// ranks shifted down by n, merged-away vertices dropped.
+MergeTree remainingTree(const MergeTree& tree, uint64_t n, const std::vector<uint32_t>& new_index);
+
+}  // namespace gtn

@@ -1,0 +1,64 @@
+#include "simplify/levels.h"
+
+#include <cmath>
+
+#include "simplify/apply.h"
+
+namespace gtn {
+
+uint64_t levelMerges(int level, uint64_t points, uint64_t merges) {
+  if (level <= 0) return 0;
+  const double n = std::round((1.0 - std::ldexp(1.0, -level)) * static_cast<double>(points));
+  return std::min<uint64_t>(static_cast<uint64_t>(n), merges);
+}
+
+StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree, const LevelOptions& options) {
+  if (tree.points() != source.numPoints()) return invalidData("mip levels: merge tree does not match the mesh");
+  GTN_RETURN_IF_ERROR(tree.check("mip levels: merge tree"));
+  MipLevels out;
+  out.meshes.emplace_back();
+  out.trees.push_back(options.merge_tree ? std::make_shared<const MergeTree>(tree) : nullptr);
+  out.merges.push_back(0);
+  out.ratios.push_back(0.0);
+  const uint64_t points = source.numPoints();
+  const int max_levels = options.levels < 0 ? 62 : options.levels;
+  for (int i = 1; i <= max_levels; ++i) {
+    const uint64_t n = levelMerges(i, points, tree.merges);
+    if (n <= out.merges.back()) break;  // the tree is exhausted
+    if (options.levels < 0 && points - n < options.min_points) break;
+    std::vector<uint32_t> index;
+    GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(source, tree, n, &index));
+    if (options.merge_tree) out.trees.push_back(std::make_shared<const MergeTree>(remainingTree(tree, n, index)));
+    else out.trees.push_back(nullptr);
+    out.meshes.push_back(std::move(mesh));
+    out.merges.push_back(n);
+    out.ratios.push_back(points ? static_cast<double>(n) / static_cast<double>(points) : 0.0);
+  }
+  return out;
+}
+
+std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source) const {
+  std::vector<GtnLevelInput> result;
+  for (size_t i = 0; i < merges.size(); ++i) {
+    GtnLevelInput in;
+    in.mesh = i == 0 ? &source : &meshes[i];
+    in.merges = merges[i];
+    in.ratio = ratios[i];
+    if (trees[i]) {
+      std::shared_ptr<const MergeTree> t = trees[i];
+      in.merge_tree = [t](const std::vector<uint32_t>& vertex_order) { return encodeMergeTree(*t, vertex_order); };
+    }
+    result.push_back(std::move(in));
+  }
+  return result;
+}
+
+size_t chooseLevel(const std::vector<uint64_t>& level_merges, uint64_t target_merges) {
+  size_t best = 0;
+  for (size_t i = 0; i < level_merges.size(); ++i) {
+    if (level_merges[i] <= target_merges) best = i;
+  }
+  return best;
+}
+
+}  // namespace gtn

@@ -1,0 +1,44 @@
+// Mip levels (paper section 5): level i is the mesh after the first N_i merges of the merge tree,
+// N_i = round((1 - 1/2^i) * points) capped at the tree's merge count, compacted, and stored with the
+// rest of the merge tree (ranks shifted down by N_i) in that level's own numbering, so that any level
+// can be read without the others and refined further on the fly.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "codec/merge_tree_coder.h"
+#include "format/gtn_file.h"
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+struct LevelOptions {
+  int levels = -1;                  // mip levels beyond level 0; -1 = down to a small mesh
+  uint64_t min_points = 64;         // automatic levels stop before a level would have fewer points
+  bool merge_tree = true;           // store each level's merge tree
+};
+
+// N_i for level i of a mesh with `points` vertices and a tree of `merges` merges.
+uint64_t levelMerges(int level, uint64_t points, uint64_t merges);
+
+struct MipLevels {
+  // meshes[0] is empty: level 0 is the source mesh, which the caller keeps.
+  std::vector<TetMesh> meshes;
+  std::vector<std::shared_ptr<const MergeTree>> trees;  // per level, in the level's numbering
+  std::vector<uint64_t> merges;                         // N_i
+  std::vector<double> ratios;                           // N_i / points of level 0
+
+  // The inputs for writeGtnFile; `source` is level 0 and must outlive the result, as must *this.
+  std::vector<GtnLevelInput> inputs(const TetMesh& source) const;
+};
+
+// Builds the levels of `source` from its merge tree (level 0 included, with the whole tree).
+StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree, const LevelOptions& options);
+
+// The finest stored level to start from for a target of `target_merges` merges: the index of the
+// largest level_merges[i] <= target_merges (level_merges ascending, level_merges[0] = 0).
+size_t chooseLevel(const std::vector<uint64_t>& level_merges, uint64_t target_merges);
+
+}  // namespace gtn

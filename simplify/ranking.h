@@ -1,0 +1,74 @@
+// Static ranking of edge collapses (paper section 4.1, after Van Gelder, Verma and Wilhelms, GVW99):
+// greedy selection of vertex merges Vi -> Vj along mesh edges by smallest error, producing the merge
+// tree (codec/merge_tree_coder.h). Rank = the order the merges were chosen, so every prefix of the
+// ranked list applied to the source gives a valid mesh.
+//
+// Error of a candidate merge v -> w (w keeps its position and values):
+//   E = w_density * Error_density / total_mass + w_geometry * Error_geometry / boundary_area
+// where, over the tetrahedra t incident to v (the affected tetrahedra),
+//   mass(t) = (mean of the density at t's four vertices) * volume(t)   (volume in floating point),
+//   change(t) = mass_after(t) - mass_before(t), with mass_after = 0 for the tetrahedra that contain w
+//               and collapse (so their whole mass counts),
+//   Error_density = | sum_t change(t) | + (1/16) * sum_t | change(t) |
+//                   (the net change of the mass of the affected tetrahedra, as in GVW99, plus a small
+//                   share of the local redistribution so that merges with no net change are still
+//                   ordered by how much they move mass around; the net term alone keeps the shape:
+//                   a merge that cuts off volume changes the net mass, an interior one does not),
+//   total_mass = sum over all tetrahedra of |mass| (total volume if that is 0, then 1);
+// and, only for a boundary v, over the boundary triangles incident to v (the affected old faces, of
+// total area A): every new triangle f' (an old triangle (v, x, y) not containing w, with v replaced by
+// w) is paired with each old triangle g that shares an edge with f' (its own old triangle and the
+// collapsing triangles (v, w, x) / (v, w, y)); Error_geometry = sum over pairs |area(f') - area(g)|
+// * area(g) / A; boundary_area = total boundary area of the source (1 if 0).
+// The density is the chosen point field's first component (non-finite values count as 0); with no
+// point field (or field "none") the density is 1 and the mass is the volume.
+//
+// Constraints (a candidate violating one is never chosen):
+//  - a boundary vertex merges only into a boundary vertex along a boundary edge; interior vertices
+//    merge into any neighbour;
+//  - every tetrahedron that changes (contains v, not w) keeps a positive orientation by the exact
+//    predicate orient3d: no tetrahedron is inverted or newly flattened. Exception: when w has exactly
+//    v's coordinates the geometry of every changed tetrahedron is unchanged, so tetrahedra that were
+//    already flat in the source (coincident PLOT3D points) may stay flat; flat ones collapse;
+//  - no boundary triangle flips: the old and new normals of every changed boundary triangle satisfy
+//    n_old . n_new > 1e-3 |n_old| |n_new| (a conservative margin against rounding);
+//  - the link condition of Dey, Edelsbrunner, Guha and Nekhayev for the complex with the boundary
+//    coned to a virtual vertex: Lk(v) ∩ Lk(w) = Lk(vw). It keeps every intermediate mesh a
+//    manifold tetrahedral mesh of the same topology (no duplicate tetrahedron, no face in three);
+//  - vertices on faces shared by three or more tetrahedra (non-manifold input) are never merged.
+//
+// Candidates are kept per vertex (its best target) in a priority queue with lazy deletion (version
+// stamps); after a merge v -> w the candidates of w and of v's former neighbours are recomputed, and
+// each popped candidate is checked exactly before it is applied.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "codec/merge_tree_coder.h"
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+struct RankingOptions {
+  // Point field that gives the density: "" = the first point field, "none" = volume only.
+  std::string field;
+  double w_density = 1.0;
+  double w_geometry = 1.0;
+  uint64_t max_merges = UINT64_MAX;  // stop after this many merges
+};
+
+struct RankingStats {
+  double seconds = 0;
+  uint64_t merges = 0, boundary_merges = 0;
+  uint64_t popped = 0;             // queue entries examined
+  uint64_t rejected = 0;           // popped candidates that failed the exact checks
+  uint64_t evaluations = 0;        // candidate errors computed
+  std::string field;               // density field used ("" = volume)
+};
+
+// Ranks the merges of `mesh` (tetrahedra positively oriented, zero-volume ones allowed). The tree's
+// error vector and quantiles are filled. Fails with kUsage if `options.field` names no point field.
+StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats);
+
+}  // namespace gtn

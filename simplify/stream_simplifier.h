@@ -1,0 +1,68 @@
+// On-the-fly simplification of the mesh stream (paper section 4.2): a MeshSink filter between the
+// decoder and any consumer. Given the level's merge tree (in the stream's vertex numbering, i.e.
+// decoding order) and a threshold n, it computes every vertex's ancestor once, then forwards
+//  - the vertices that survive (ancestor = itself), renumbered in their emission order;
+//  - each tetrahedron and boundary triangle with its vertices replaced by their ancestors, dropped
+//    when two of them coincide, held back only until all its ancestors have been emitted;
+//  - the retirement of a surviving vertex once every vertex merged into it has been retired
+//    upstream and no held-back element refers to it.
+// The output is exactly applyMerges(level, tree, n) (simplify/apply.h) up to vertex and tetrahedron
+// order. The output header's counts are exact (the tree records what each merge removes); a stream
+// that disagrees with them (a corrupt tree) fails with kInvalidData. The bounding box is the input's.
+// Memory: 12 bytes per input vertex plus the held-back elements.
+#pragma once
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "codec/merge_tree_coder.h"
+#include "mesh/mesh_stream.h"
+
+namespace gtn {
+
+class StreamSimplifier : public MeshSink {
+ public:
+  // `tree` must outlive the filter; n is clamped to tree.merges.
+  StreamSimplifier(const MergeTree& tree, uint64_t n, MeshSink& out);
+
+  Status beginLevel(const LevelHeader& header) override;
+  Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) override;
+  Status boundaryTriangle(const uint32_t v[3]) override;
+  Status endBoundary() override;
+  Status tet(const uint32_t v[4], const uint8_t* cell_values) override;
+  Status retireVertex(uint32_t id) override;
+  Status endLevel() override;
+
+  uint64_t droppedTets() const { return dropped_tets_; }
+  uint64_t peakHeld() const { return peak_held_; }
+
+ private:
+  struct Held {
+    uint32_t v[4];     // ancestors (input ids); v[3] unused for triangles
+    uint32_t missing;  // ancestors not yet emitted
+    bool triangle;
+  };
+  Status emitHeld(uint32_t slot);
+  Status release(uint32_t ancestor);  // drops one reference, retires when none is left
+  Status hold(const uint32_t* anc, int count, bool triangle, const uint8_t* cell_values);
+
+  const MergeTree& tree_;
+  uint64_t n_;
+  MeshSink& out_;
+  LevelHeader in_header_, out_header_;
+  size_t cell_bytes_ = 0;
+  std::vector<uint32_t> ancestor_;
+  std::vector<uint32_t> out_id_;  // per surviving input vertex: output id once emitted
+  std::vector<uint32_t> refs_;    // per surviving vertex: unretired cluster members + held elements
+  uint32_t received_ = 0, emitted_ = 0;
+  uint64_t out_tets_ = 0, out_triangles_ = 0, dropped_tets_ = 0;
+  std::vector<Held> held_;
+  std::vector<uint8_t> held_values_;
+  std::vector<uint32_t> free_slots_;
+  std::unordered_map<uint32_t, std::vector<uint32_t>> waiting_;  // ancestor -> held slots
+  uint64_t held_count_ = 0, peak_held_ = 0;
+  bool in_boundary_ = true;
+};
+
+}  // namespace gtn

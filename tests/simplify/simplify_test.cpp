@@ -1,0 +1,213 @@
+// Ranking, in-memory application, on-the-fly simplification and mip levels on synthetic meshes.
+#include <gtest/gtest.h>
+
+#include "simplify/levels.h"
+#include "simplify/ranking.h"
+#include "simplify_test_util.h"
+
+namespace gtn::test {
+namespace {
+
+struct Ranked {
+  TetMesh mesh;
+  MergeTree tree;
+  RankingStats stats;
+};
+
+const Ranked& grid() {
+  static const Ranked r = [] {
+    Ranked x;
+    x.mesh = makeGrid(9, 8, 7);
+    auto t = rankMerges(x.mesh, RankingOptions{}, &x.stats);
+    EXPECT_TRUE(t.isOk()) << t.status().message();
+    x.tree = std::move(t.value());
+    return x;
+  }();
+  return r;
+}
+
+std::vector<uint64_t> sampleMerges(const MergeTree& tree, uint64_t points) {
+  std::vector<uint64_t> ns = {0, 1, 2, 5, 17, tree.merges / 3, tree.merges - 1, tree.merges};
+  for (int i = 1; i <= 8; ++i) ns.push_back(levelMerges(i, points, tree.merges));
+  std::sort(ns.begin(), ns.end());
+  ns.erase(std::unique(ns.begin(), ns.end()), ns.end());
+  return ns;
+}
+
+TEST(Ranking, SimplifiesMostOfAGrid) {
+  const Ranked& g = grid();
+  ASSERT_TRUE(g.tree.check("grid").isOk());
+  EXPECT_EQ(g.tree.field, "rho");
+  EXPECT_EQ(g.stats.merges, g.tree.merges);
+  // A box keeps its 8 corners at least; most of the rest must go.
+  EXPECT_GT(g.tree.merges, g.mesh.numPoints() * 9 / 10);
+  EXPECT_GT(g.tree.boundaryMergesUpTo(g.tree.merges), 100u);
+  EXPECT_EQ(g.tree.error_quantiles.size(), 9u);
+  EXPECT_LE(g.tree.error_quantiles.front(), g.tree.error_quantiles.back());
+  // Ranks strictly increase towards the roots and every merge follows a mesh edge of its time: the
+  // child's parent is never merged before it.
+  for (size_t v = 0; v < g.tree.points(); ++v) {
+    if (g.tree.parent[v] == MergeTree::kRoot) continue;
+    const uint32_t p = g.tree.parent[v];
+    if (g.tree.parent[p] != MergeTree::kRoot) {
+      EXPECT_GT(g.tree.rank[p], g.tree.rank[v]);
+    }
+  }
+  // Moving a corner of the box changes its volume: corners go late, and the first half of the
+  // merges keeps the volume of the box closely.
+  for (uint32_t corner : {0u, 9u}) {
+    if (g.tree.parent[corner] != MergeTree::kRoot) {
+      EXPECT_GT(g.tree.rank[corner], g.tree.merges / 2);
+    }
+  }
+  auto half = applyMerges(g.mesh, g.tree, levelMerges(1, g.mesh.numPoints(), g.tree.merges));
+  ASSERT_TRUE(half.isOk());
+  const double v0 = computeMeshStats(g.mesh).total_volume, v1 = computeMeshStats(*half).total_volume;
+  EXPECT_NEAR(v1, v0, 0.01 * v0);
+}
+
+TEST(Ranking, IsDeterministic) {
+  TetMesh m = makeGrid(4, 4, 4, 3);
+  auto a = rankMerges(m, RankingOptions{}, nullptr);
+  auto b = rankMerges(m, RankingOptions{}, nullptr);
+  ASSERT_TRUE(a.isOk() && b.isOk());
+  EXPECT_EQ(a->parent, b->parent);
+  EXPECT_EQ(a->rank, b->rank);
+}
+
+TEST(Ranking, OptionsSelectFieldAndWeights) {
+  TetMesh m = makeGrid(4, 4, 4, 5);
+  auto missing = rankMerges(m, RankingOptions{"nope", 1, 1, UINT64_MAX}, nullptr);
+  ASSERT_FALSE(missing.isOk());
+  EXPECT_EQ(missing.status().code(), StatusCode::kUsage);
+  EXPECT_NE(missing.status().message().find("rho"), std::string::npos);
+  auto volume = rankMerges(m, RankingOptions{"none", 1, 1, UINT64_MAX}, nullptr);
+  ASSERT_TRUE(volume.isOk());
+  EXPECT_EQ(volume->field, "");
+  auto capped = rankMerges(m, RankingOptions{"", 1, 0, 10}, nullptr);
+  ASSERT_TRUE(capped.isOk());
+  EXPECT_EQ(capped->merges, 10u);
+  auto bad = rankMerges(m, RankingOptions{"", -1, 1, UINT64_MAX}, nullptr);
+  EXPECT_FALSE(bad.isOk());
+}
+
+TEST(Apply, EveryPrefixIsAValidMesh) {
+  const Ranked& g = grid();
+  const MeshChecks src = checkMesh(g.mesh);
+  for (uint64_t n : sampleMerges(g.tree, g.mesh.numPoints())) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    auto m = applyMerges(g.mesh, g.tree, n);
+    ASSERT_TRUE(m.isOk());
+    EXPECT_EQ(m->numPoints(), g.mesh.numPoints() - n);
+    EXPECT_EQ(m->numTets(), g.mesh.numTets() - g.tree.tetsRemovedUpTo(n));
+    const MeshChecks c = checkMesh(*m);
+    EXPECT_EQ(c.inverted, 0u);
+    EXPECT_LE(c.zero_volume, src.zero_volume);
+    EXPECT_EQ(c.non_manifold, 0u);
+    EXPECT_EQ(c.duplicates, 0u);
+    EXPECT_EQ(c.boundary_euler, src.boundary_euler);
+    EXPECT_EQ(c.boundary_triangles, src.boundary_triangles - 2 * g.tree.boundaryMergesUpTo(n));
+    ASSERT_EQ(m->cell_fields.size(), 1u);
+    EXPECT_EQ(m->cell_fields[0].itemCount(), m->numTets());
+  }
+}
+
+TEST(Apply, EveryMergeKeepsTheMeshValid) {
+  // Exhaustive on a small grid: after every single merge.
+  TetMesh m = makeGrid(3, 3, 2, 11);
+  auto tree = rankMerges(m, RankingOptions{}, nullptr);
+  ASSERT_TRUE(tree.isOk());
+  const MeshChecks src = checkMesh(m);
+  for (uint64_t n = 0; n <= tree->merges; ++n) {
+    auto s = applyMerges(m, *tree, n);
+    ASSERT_TRUE(s.isOk());
+    const MeshChecks c = checkMesh(*s);
+    ASSERT_EQ(c.inverted + c.zero_volume + c.non_manifold + c.duplicates, 0u) << "after merge " << n;
+    ASSERT_EQ(c.boundary_euler, src.boundary_euler) << "after merge " << n;
+  }
+}
+
+TEST(Apply, AncestorsFollowThePaperExample) {
+  // Figure 2-like forest: 0 <- 1 (rank 1), 0 <- 2 (rank 3), 2 <- 3 (rank 2); 4 alone.
+  MergeTree t;
+  t.parent = {MergeTree::kRoot, 0, 0, 2, MergeTree::kRoot};
+  t.rank = {0, 1, 3, 2, 0};
+  t.removed = {0, 1, 1, 1, 0};
+  t.boundary = {0, 0, 0, 0, 0};
+  t.merges = 3;
+  ASSERT_TRUE(t.check("t").isOk());
+  EXPECT_EQ(computeAncestors(t, 0), (std::vector<uint32_t>{0, 1, 2, 3, 4}));
+  EXPECT_EQ(computeAncestors(t, 2), (std::vector<uint32_t>{0, 0, 2, 2, 4}));
+  EXPECT_EQ(computeAncestors(t, 3), (std::vector<uint32_t>{0, 0, 0, 0, 4}));
+  t.rank = {0, 1, 2, 3, 0};  // 3 merges into 2 after 2 was merged: invalid
+  EXPECT_FALSE(t.check("t").isOk());
+}
+
+TEST(StreamSimplifier, MatchesApplyWithAShuffledEmitter) {
+  const Ranked& g = grid();
+  for (uint64_t n : sampleMerges(g.tree, g.mesh.numPoints())) expectStreamMatchesApply(g.mesh, g.tree, n, false);
+}
+
+TEST(StreamSimplifier, MatchesApplyThroughTheLevelCodec) {
+  const Ranked& g = grid();
+  for (uint64_t n : sampleMerges(g.tree, g.mesh.numPoints())) expectStreamMatchesApply(g.mesh, g.tree, n, true);
+}
+
+TEST(StreamSimplifier, RejectsATreeOfAnotherLevel) {
+  const Ranked& g = grid();
+  TetMesh small = makeGrid(2, 2, 2);
+  RecordingSink rec;
+  StreamSimplifier simp(g.tree, 5, rec);
+  std::vector<uint32_t> perm(small.numPoints());
+  for (size_t i = 0; i < perm.size(); ++i) perm[i] = static_cast<uint32_t>(i);
+  const Status st = emitMesh(small, perm, simp);
+  EXPECT_EQ(st.code(), StatusCode::kInvalidData);
+}
+
+TEST(Levels, EachLevelIsThePrefixAndRefinesFurther) {
+  const Ranked& g = grid();
+  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{});
+  ASSERT_TRUE(levels.isOk()) << levels.status().message();
+  ASSERT_GE(levels->merges.size(), 4u);
+  const uint64_t points = g.mesh.numPoints();
+  for (size_t i = 1; i < levels->merges.size(); ++i) {
+    SCOPED_TRACE("level " + std::to_string(i));
+    EXPECT_EQ(levels->merges[i], levelMerges(int(i), points, g.tree.merges));
+    EXPECT_GE(points - levels->merges[i], LevelOptions{}.min_points);
+    const TetMesh& lm = levels->meshes[i];
+    const MergeTree& lt = *levels->trees[i];
+    ASSERT_TRUE(lt.check("level").isOk());
+    EXPECT_EQ(lt.merges, g.tree.merges - levels->merges[i]);
+    auto want = applyMerges(g.mesh, g.tree, levels->merges[i]);
+    ASSERT_TRUE(want.isOk());
+    EXPECT_EQ(lm.coords, want->coords);
+    EXPECT_EQ(lm.tets, want->tets);
+    // Applying m more merges of the level's own tree equals applying N_i + m to the source.
+    for (uint64_t m : {uint64_t{1}, lt.merges / 2, lt.merges}) {
+      auto a = applyMerges(lm, lt, m);
+      auto b = applyMerges(g.mesh, g.tree, levels->merges[i] + m);
+      ASSERT_TRUE(a.isOk() && b.isOk());
+      EXPECT_EQ(tetsById(*a, vertexIds(*a)), tetsById(*b, vertexIds(*b)));
+    }
+    // The on-the-fly filter on the level's own stream.
+    expectStreamMatchesApply(lm, lt, lt.merges / 3, true);
+  }
+  EXPECT_EQ(chooseLevel(levels->merges, 0), 0u);
+  EXPECT_EQ(chooseLevel(levels->merges, levels->merges[2]), 2u);
+  EXPECT_EQ(chooseLevel(levels->merges, levels->merges[2] - 1), 1u);
+  auto none = buildMipLevels(g.mesh, g.tree, LevelOptions{0, 64, true});
+  ASSERT_TRUE(none.isOk());
+  EXPECT_EQ(none->merges.size(), 1u);
+  auto two = buildMipLevels(g.mesh, g.tree, LevelOptions{2, 64, false});
+  ASSERT_TRUE(two.isOk());
+  EXPECT_EQ(two->merges.size(), 3u);
+  EXPECT_FALSE(two->trees[1]);
+  const auto inputs = two->inputs(g.mesh);
+  ASSERT_EQ(inputs.size(), 3u);
+  EXPECT_EQ(inputs[0].mesh, &g.mesh);
+  EXPECT_DOUBLE_EQ(inputs[1].ratio, 0.5 * 0 + double(two->merges[1]) / double(points));
+  EXPECT_FALSE(inputs[1].merge_tree);
+}
+
+}  // namespace
+}  // namespace gtn::test
