@@ -478,6 +478,17 @@ Status noFitError(const std::string& path, std::string_view bytes, Kind kind, co
   return invalidData(msg + "; " + triedText(d, kind));
 }
 
+// Why no interpretation of a Q or function file goes with the grid: its dimensions disagree with
+// the grid's, or nothing fits at all.
+Status noMatchError(const std::string& path, std::string_view bytes, Kind kind, const Detection& d,
+                    const std::vector<BlockDims>& grid_blocks, const std::string& grid_path) {
+  const std::vector<Fit>& fits = d.exact.empty() ? d.zero_tail : d.exact;
+  if (fits.empty()) return noFitError(path, bytes, kind, d);
+  return invalidData(path + ": PLOT3D " + kindName(kind) + " file dimensions " + blocksText(fits[0].blocks) + " (" +
+                     describeLayout(fits[0].layout, kind) + ") disagree with the grid's " + blocksText(grid_blocks) +
+                     " (" + grid_path + ")");
+}
+
 // ---------------------------------------------------------------------------------------------
 // The .p3d meta-file.
 
@@ -844,61 +855,42 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
   auto matches_grid = [&](const Fit& f) { return sameDims(f.blocks, blocks); };
 
   // The second input: a Q file when it fits the Q layout for this grid, else a function file.
-  std::string function_bytes;
+  auto for_grid = [&](const std::string& path, std::string_view bytes, Kind kind, Detection* d) {
+    *d = detect(bytes, kind, constraints);
+    return selectFit(path, bytes, kind, *d, matches_grid, &grid.fit.layout, &warnings);
+  };
+  auto no_match = [&](const std::string& path, std::string_view bytes, Kind kind, const Detection& d) {
+    return noMatchError(path, bytes, kind, d, blocks, grid_path);
+  };
   if (!second_path.empty()) {
     GTN_ASSIGN_OR_RETURN(std::string bytes, readInput(second_path, Kind::kQ));
-    const Detection dq = detect(bytes, Kind::kQ, constraints);
-    GTN_ASSIGN_OR_RETURN(Selected q, selectFit(second_path, bytes, Kind::kQ, dq, matches_grid, &grid.fit.layout, &warnings));
+    Detection dq, df;
+    GTN_ASSIGN_OR_RETURN(Selected q, for_grid(second_path, bytes, Kind::kQ, &dq));
     if (q.found) {
       addQ(bytes, q.fit, mesh, &warnings, second_path);
-    } else if (meta) {
-      // The meta-file said it is a Q file.
-      const std::vector<Fit>& any = dq.exact.empty() ? dq.zero_tail : dq.exact;
-      if (!any.empty())
-        return invalidData(second_path + ": Q file dimensions " + blocksText(any[0].blocks) +
-                           " disagree with the grid's " + blocksText(blocks) + " (" + grid_path + ")");
-      return noFitError(second_path, bytes, Kind::kQ, dq);
+    } else if (meta || !function_path.empty()) {
+      // Named as the Q file, or followed by the function file: it must be a Q file.
+      return no_match(second_path, bytes, Kind::kQ, dq);
     } else {
-      if (!function_path.empty())
-        return invalidData(second_path + ": the second PLOT3D input must be a Q file for " + grid_path +
-                           " when a function file follows, and it is not");
-      function_path = second_path;
-      function_bytes = std::move(bytes);
-      const Detection df = detect(function_bytes, Kind::kFunction, constraints);
-      GTN_ASSIGN_OR_RETURN(Selected f, selectFit(second_path, function_bytes, Kind::kFunction, df, matches_grid,
-                                              &grid.fit.layout, &warnings));
+      GTN_ASSIGN_OR_RETURN(Selected f, for_grid(second_path, bytes, Kind::kFunction, &df));
       if (!f.found) {
-        const std::vector<Fit>& qs = dq.exact.empty() ? dq.zero_tail : dq.exact;
-        const std::vector<Fit>& fs = df.exact.empty() ? df.zero_tail : df.exact;
-        if (!qs.empty())
-          return invalidData(second_path + ": Q file dimensions " + blocksText(qs[0].blocks) +
-                             " disagree with the grid's " + blocksText(blocks) + " (" + grid_path + ")");
-        if (!fs.empty())
-          return invalidData(second_path + ": function file dimensions " + blocksText(fs[0].blocks) +
-                             " disagree with the grid's " + blocksText(blocks) + " (" + grid_path + ")");
-        std::string msg = second_path + ": neither a PLOT3D Q file nor a function file for the grid " + grid_path +
-                          " (" + blocksText(blocks) + "); as a Q file: " + triedText(dq, Kind::kQ) +
-                          "; as a function file: " + triedText(df, Kind::kFunction);
-        if (looksLikeText(function_bytes)) msg += " (it looks like text: ASCII PLOT3D is not supported)";
-        return invalidData(msg);
+        if (!dq.exact.empty() || !dq.zero_tail.empty()) return no_match(second_path, bytes, Kind::kQ, dq);
+        if (!df.exact.empty() || !df.zero_tail.empty()) return no_match(second_path, bytes, Kind::kFunction, df);
+        return invalidData(second_path + ": neither a PLOT3D Q file nor a function file for the grid " + grid_path +
+                           " (" + blocksText(blocks) + ")" +
+                           (looksLikeText(bytes) ? "; it looks like text, and ASCII PLOT3D is not supported" : "") +
+                           "; as a Q file: " + triedText(dq, Kind::kQ) +
+                           "; as a function file: " + triedText(df, Kind::kFunction));
       }
-      GTN_RETURN_IF_ERROR(addFunction(second_path, function_bytes, f.fit, mesh));
-      function_path.clear();
+      GTN_RETURN_IF_ERROR(addFunction(second_path, bytes, f.fit, mesh));
     }
   }
   if (!function_path.empty()) {
-    GTN_ASSIGN_OR_RETURN(function_bytes, readInput(function_path, Kind::kFunction));
-    const Detection df = detect(function_bytes, Kind::kFunction, constraints);
-    GTN_ASSIGN_OR_RETURN(Selected f, selectFit(function_path, function_bytes, Kind::kFunction, df, matches_grid,
-                                            &grid.fit.layout, &warnings));
-    if (!f.found) {
-      const std::vector<Fit>& fs = df.exact.empty() ? df.zero_tail : df.exact;
-      if (!fs.empty())
-        return invalidData(function_path + ": function file dimensions " + blocksText(fs[0].blocks) +
-                           " disagree with the grid's " + blocksText(blocks) + " (" + grid_path + ")");
-      return noFitError(function_path, function_bytes, Kind::kFunction, df);
-    }
-    GTN_RETURN_IF_ERROR(addFunction(function_path, function_bytes, f.fit, mesh));
+    GTN_ASSIGN_OR_RETURN(std::string bytes, readInput(function_path, Kind::kFunction));
+    Detection df;
+    GTN_ASSIGN_OR_RETURN(Selected f, for_grid(function_path, bytes, Kind::kFunction, &df));
+    if (!f.found) return no_match(function_path, bytes, Kind::kFunction, df);
+    GTN_RETURN_IF_ERROR(addFunction(function_path, bytes, f.fit, mesh));
   }
 
   if (!iblank.empty()) {
