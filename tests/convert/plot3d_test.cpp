@@ -110,6 +110,7 @@ TEST(Plot3dImport, BluntFinSplitFiveMatchesTableOne) {
   EXPECT_NE(r->report.warnings[0].find("484 trailing zero bytes"), std::string::npos) << r->report.warnings[0];
   EXPECT_NE(r->report.warnings[0].find("bluntfinq.bin"), std::string::npos);
   expectBitExact(*r, xyz, q);
+  EXPECT_TRUE(r->mesh.checkConsistency("blunt fin").isOk());
   EXPECT_EQ(*r->mesh.findMetadata("plot3d.fsmach"), "2.95000005");
   EXPECT_EQ(*r->mesh.findMetadata("plot3d.re"), "2100000");
 }
@@ -398,6 +399,20 @@ TEST_F(Plot3dSynthetic, MultiGridFloat64WithEightByteMarkers) {
   EXPECT_EQ(s.non_manifold_faces, 0u);
   // Each block is a closed box of its own: 2 triangles per boundary quad.
   EXPECT_EQ(s.boundary_faces, 2u * 2u * (3 * 2 + 3 * 2 + 2 * 2) + 2u * 2u * (2 * 2 * 3));
+  EXPECT_TRUE(r->mesh.checkConsistency("multi-grid").isOk());
+
+  // --weld joins the blocks at their 9 shared points (the split 6 diagonals agree there) and
+  // collapses nothing.
+  auto welded = importFiles({xyz, q}, 6, true);
+  ASSERT_TRUE(welded.isOk()) << welded.status().message();
+  EXPECT_EQ(welded->report.welded_points, 9u);
+  EXPECT_EQ(welded->report.collapsed_tets, 0u);
+  const MeshStats ws = computeMeshStats(welded->mesh);
+  EXPECT_EQ(ws.points, 36u + 27u - 9u);
+  EXPECT_EQ(ws.coincident_points, 0u);
+  EXPECT_EQ(ws.non_manifold_faces, 0u);
+  EXPECT_EQ(ws.boundary_faces, 2u * (2 * (5 * 2 + 5 * 2 + 2 * 2)));
+  EXPECT_EQ(welded->mesh.findPointField("density")->itemCount(), ws.points);
 }
 
 TEST_F(Plot3dSynthetic, SubrecordsWithNegativeMarkers) {
@@ -434,6 +449,7 @@ TEST_F(Plot3dSynthetic, IblankHolesDropCellsAndKeepTheField) {
   EXPECT_EQ(ib->components, 1u);
   ASSERT_EQ(ib->itemCount(), 64u);
   for (size_t p = 0; p < 64; ++p) EXPECT_EQ(ib->get(p, 0), blocks[0].iblank[p]) << p;
+  EXPECT_TRUE(r->mesh.checkConsistency("iblank").isOk());
   // Independently: the points of the cells that have no hole vertex are the referenced ones.
   std::vector<int> used(64, 0);
   for (int k = 0; k < 3; ++k)
