@@ -1,12 +1,190 @@
-// PLACEHOLDER: replaced by the real 'gtn render' command.
+// gtn render INPUT -o IMAGE.png [options]: the streaming renderer (integrated decompression,
+// simplification and ray casting), or the generic in-memory baseline.
+#include <chrono>
+#include <cstdio>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
 #include "cli/commands.h"
+#include "format/file_io.h"
+#include "render/generic_renderer.h"
+#include "render/render_input.h"
+#include "render/stream_renderer.h"
+#include "render/time_budget.h"
 
 namespace gtn::cli {
 
+namespace {
+struct RenderArgs {
+  std::string input, output;
+  std::string size = "256x256";
+  std::string projection = "ortho";
+  double azimuth = 30, elevation = 20, zoom = 1;
+  std::string field;
+  std::string transfer = "cool-warm";
+  std::vector<double> range;
+  double unit_distance = 0;
+  std::string sampling = "volume";
+  double step = 0;
+  std::string pipeline = "integrated";
+  int level = -1;
+  double ratio = -1;
+  int64_t merges = -1;
+  double budget_ms = -1;
+  bool verbose = false, json = false;
+};
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+Status buildOptions(const RenderArgs& a, RenderOptions* o) {
+  int w = 0, h = 0;
+  char extra = 0;
+  if (std::sscanf(a.size.c_str(), "%dx%d%c", &w, &h, &extra) != 2 || w <= 0 || h <= 0 || w > 16384 || h > 16384)
+    return usageError("--size must be WxH with 1 <= W, H <= 16384, not '" + a.size + "'");
+  o->camera.width = w;
+  o->camera.height = h;
+  if (a.projection == "ortho") o->camera.projection = Projection::kOrthographic;
+  else if (a.projection == "persp") o->camera.projection = Projection::kPerspective;
+  else return usageError("--projection must be ortho or persp");
+  o->camera.azimuth = a.azimuth;
+  o->camera.elevation = a.elevation;
+  if (!(a.zoom > 0)) return usageError("--zoom must be positive");
+  o->camera.zoom = a.zoom;
+  if (a.sampling == "volume") o->sampling = Sampling::kVolume;
+  else if (a.sampling == "face") o->sampling = Sampling::kFace;
+  else return usageError("--sampling must be volume or face");
+  if (a.step < 0 || a.unit_distance < 0) return usageError("--step and --opacity-unit-distance must be positive");
+  o->step = a.step;
+  o->opacity_unit_distance = a.unit_distance;
+  GTN_ASSIGN_OR_RETURN(o->field, parseFieldSelector(a.field));
+  if (isRegularFile(a.transfer)) {
+    GTN_ASSIGN_OR_RETURN(std::string text, readWholeFile(a.transfer, 1 << 20));
+    GTN_ASSIGN_OR_RETURN(o->transfer, parseTransferFunction(text, a.transfer));
+  } else {
+    GTN_ASSIGN_OR_RETURN(o->transfer, transferPreset(a.transfer));
+  }
+  if (!a.range.empty()) {
+    if (a.range.size() != 2 || !(a.range[0] < a.range[1])) return usageError("--range needs LO HI with LO < HI");
+    o->transfer.has_range = true;
+    o->transfer.lo = a.range[0];
+    o->transfer.hi = a.range[1];
+  }
+  return Status::ok();
+}
+
+// One render of the resolved level; fills `report` with what happened.
+StatusOr<Image> renderOnce(RenderInput& input, const ResolvedLevel& level, const RenderOptions& options,
+                           bool generic, nlohmann::json& report) {
+  if (generic) {
+    TetMeshBuilder builder;
+    const Clock::time_point t0 = Clock::now();
+    GTN_RETURN_IF_ERROR(input.stream(level, builder));
+    report["decode_ms"] = msSince(t0);
+    GenericRenderStats stats;
+    const Clock::time_point t1 = Clock::now();
+    GTN_ASSIGN_OR_RETURN(Image image, renderGeneric(builder.header(), builder.mesh(), builder.boundary(), options, &stats));
+    report["render_ms"] = msSince(t1);
+    report["tets_rendered"] = stats.tets;
+    report["segments"] = stats.segments;
+    report["lost_cursors"] = stats.lost_cursors;
+    return image;
+  }
+  StreamRenderer renderer(options);
+  GTN_RETURN_IF_ERROR(input.stream(level, renderer));
+  const StreamRenderStats& s = renderer.stats();
+  report["tets_rendered"] = s.tets;
+  report["tets_held"] = s.tets_held;
+  report["peak_tets_held"] = s.peak_tets_held;
+  report["peak_vertices"] = s.peak_vertices;
+  report["peak_face_entries"] = s.peak_face_entries;
+  report["segments"] = s.segments;
+  report["lost_cursors"] = s.lost_cursors;
+  return renderer.image();
+}
+
+int runRender(const RenderArgs& a) {
+  const Clock::time_point start = Clock::now();
+  RenderOptions options;
+  if (Status st = buildOptions(a, &options); !st.isOk()) return reportError(st);
+  const int chosen = (a.level >= 0) + (a.ratio >= 0) + (a.merges >= 0) + (a.budget_ms >= 0);
+  if (chosen > 1) return reportError(usageError("use at most one of --level, --ratio, --merges and --budget-ms"));
+  auto input = RenderInput::open(a.input);
+  if (!input.isOk()) return reportError(input.status());
+  const bool generic = a.pipeline == "generic";
+  nlohmann::json report;
+  LevelChoice choice;
+  choice.level = a.level;
+  choice.ratio = a.ratio;
+  choice.merges = a.merges;
+  if (a.budget_ms >= 0) {
+    std::string explanation;
+    auto budget = chooseForBudget(**input, a.input, a.budget_ms, options, generic, &explanation);
+    if (!budget.isOk()) return reportError(budget.status());
+    choice = budget.value();
+    report["budget_ms"] = a.budget_ms;
+    report["budget_choice"] = explanation;
+    if (a.verbose) std::fprintf(stderr, "gtn: render: %s\n", explanation.c_str());
+  }
+  auto level = (*input)->resolve(choice);
+  if (!level.isOk()) return reportError(level.status());
+  auto image = renderOnce(**input, level.value(), options, generic, report);
+  if (!image.isOk()) return reportError(image.status());
+  if (Status st = writePng(a.output, image.value()); !st.isOk()) return reportError(st);
+  const double total_ms = msSince(start);
+  report["input"] = a.input;
+  report["output"] = a.output;
+  report["pipeline"] = generic ? "generic" : "integrated";
+  report["level"] = level->level;
+  report["stored_merges"] = level->stored_merges;
+  report["extra_merges"] = level->extra_merges;
+  report["ratio"] = (*input)->levelZeroPoints()
+                        ? static_cast<double>(level->total_merges()) / static_cast<double>((*input)->levelZeroPoints())
+                        : 0.0;
+  report["tets_decoded"] = level->tets;
+  report["total_ms"] = total_ms;
+  if (a.json) {
+    std::printf("%s\n", report.dump(2).c_str());
+  } else if (a.verbose || a.budget_ms >= 0) {
+    std::fprintf(stderr, "gtn: render: level %zu + %llu merges (ratio %.4f), %llu tetrahedra decoded, %.1f ms\n",
+                 level->level, static_cast<unsigned long long>(level->extra_merges), report["ratio"].get<double>(),
+                 static_cast<unsigned long long>(level->tets), total_ms);
+  }
+  return 0;
+}
+}  // namespace
+
 Command addRenderCommand(CLI::App& app) {
-  CLI::App* sub = app.add_subcommand("render", "(not implemented yet)");
-  sub->allow_extras();
-  return {sub, [] { return reportError(unsupported("'gtn render' is not implemented yet")); }};
+  auto a = std::make_shared<RenderArgs>();
+  CLI::App* sub = app.add_subcommand("render", "Render a volume mesh to a PNG image (streaming ray casting)");
+  sub->add_option("input", a->input, "a .gtn file, or any mesh the importers read")->required();
+  sub->add_option("-o,--output", a->output, "output PNG image")->required();
+  sub->add_option("--size", a->size, "image size WxH (default 256x256)");
+  sub->add_option("--projection", a->projection, "ortho (default) or persp");
+  sub->add_option("--azimuth", a->azimuth, "camera azimuth in degrees about +y (default 30)");
+  sub->add_option("--elevation", a->elevation, "camera elevation in degrees (default 20)");
+  sub->add_option("--zoom", a->zoom, "magnification; 1 frames the bounding box (default 1)");
+  sub->add_option("--field", a->field, "point field to render: NAME, NAME:COMPONENT or NAME:mag (default: the first)");
+  sub->add_option("--transfer", a->transfer,
+                  "transfer function: a preset (cool-warm, grey, hot) or a file (see render/transfer_function.h)");
+  sub->add_option("--range", a->range, "scalar range LO HI of the transfer function (default: the boundary's)")
+      ->expected(2);
+  sub->add_option("--opacity-unit-distance", a->unit_distance,
+                  "distance over which a transfer-function opacity applies, as VTK (default: diagonal / 40)");
+  sub->add_option("--sampling", a->sampling, "volume (uniform steps, default) or face (at tetrahedron faces)");
+  sub->add_option("--step", a->step, "volume sampling step (default: diagonal / 400)");
+  sub->add_option("--pipeline", a->pipeline, "integrated (streaming, default) or generic (whole mesh in memory)")
+      ->check(CLI::IsMember({"integrated", "generic"}));
+  sub->add_option("--level", a->level, "render stored level I as is");
+  sub->add_option("--ratio", a->ratio, "simplification ratio in [0, 1]: merged vertices / vertices");
+  sub->add_option("--merges", a->merges, "number of merges of the merge tree to apply");
+  sub->add_option("--budget-ms", a->budget_ms, "choose level and merges to render within T milliseconds");
+  sub->add_flag("-v,--verbose", a->verbose, "say what was chosen and how long it took");
+  sub->add_flag("--json", a->json, "write a JSON report to standard output");
+  return {sub, [a] { return runRender(*a); }};
 }
 
 }  // namespace gtn::cli

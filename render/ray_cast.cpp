@@ -1,0 +1,450 @@
+#include "render/ray_cast.h"
+
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "mesh/faces.h"
+
+namespace gtn {
+
+// ---------------------------------------------------------------------------------------------
+// Field selection
+
+StatusOr<FieldSelector> parseFieldSelector(const std::string& text) {
+  FieldSelector sel;
+  const size_t colon = text.rfind(':');
+  if (colon == std::string::npos) {
+    sel.name = text;
+    return sel;
+  }
+  sel.name = text.substr(0, colon);
+  const std::string suffix = text.substr(colon + 1);
+  if (sel.name.empty()) return usageError("field selection '" + text + "' has no field name");
+  if (suffix == "mag") {
+    sel.magnitude = true;
+    return sel;
+  }
+  if (suffix.empty() || suffix.size() > 9 || suffix.find_first_not_of("0123456789") != std::string::npos)
+    return usageError("field selection '" + text + "': expected NAME, NAME:COMPONENT or NAME:mag");
+  sel.component = static_cast<uint32_t>(std::stoul(suffix));
+  return sel;
+}
+
+namespace {
+double loadScalar(const uint8_t* p, ScalarType type) {
+  auto load = [p](auto v) {
+    std::memcpy(&v, p, sizeof(v));
+    return static_cast<double>(v);
+  };
+  switch (type) {
+    case ScalarType::kInt8: return load(int8_t{});
+    case ScalarType::kUInt8: return load(uint8_t{});
+    case ScalarType::kInt16: return load(int16_t{});
+    case ScalarType::kUInt16: return load(uint16_t{});
+    case ScalarType::kInt32: return load(int32_t{});
+    case ScalarType::kUInt32: return load(uint32_t{});
+    case ScalarType::kInt64: return load(int64_t{});
+    case ScalarType::kUInt64: return load(uint64_t{});
+    case ScalarType::kFloat32: return load(float{});
+    case ScalarType::kFloat64: return load(double{});
+  }
+  return 0.0;
+}
+}  // namespace
+
+StatusOr<ScalarReader> ScalarReader::create(const std::vector<FieldDesc>& fields, const FieldSelector& selector) {
+  ScalarReader r;
+  if (fields.empty()) {
+    // A mesh without point fields renders its geometry: a constant scalar.
+    r.components_ = 0;
+    r.description_ = "(no point field: constant 0)";
+    return r;
+  }
+  size_t offset = 0;
+  const FieldDesc* found = nullptr;
+  for (const FieldDesc& f : fields) {
+    if (selector.name.empty() || f.name == selector.name) {
+      found = &f;
+      break;
+    }
+    offset += f.itemBytes();
+  }
+  if (!found) {
+    std::string known;
+    for (const FieldDesc& f : fields) known += (known.empty() ? "" : ", ") + f.name;
+    return usageError("no point field named '" + selector.name + "' (fields: " + known + ")");
+  }
+  if (!selector.magnitude && selector.component >= found->components)
+    return usageError("field '" + found->name + "' has " + std::to_string(found->components) +
+                      " components; component " + std::to_string(selector.component) + " does not exist");
+  r.offset_ = offset;
+  r.type_ = found->type;
+  r.components_ = found->components;
+  r.magnitude_ = selector.magnitude;
+  r.component_ = selector.component;
+  r.description_ = found->name + (selector.magnitude ? ":mag"
+                                  : found->components > 1 ? ":" + std::to_string(selector.component)
+                                                          : std::string());
+  return r;
+}
+
+double ScalarReader::read(const uint8_t* values) const {
+  if (components_ == 0 || values == nullptr) return 0.0;
+  const size_t size = scalarSize(type_);
+  const uint8_t* p = values + offset_;
+  if (!magnitude_) return loadScalar(p + component_ * size, type_);
+  double sum = 0;
+  for (uint32_t c = 0; c < components_; ++c) {
+    const double v = loadScalar(p + c * size, type_);
+    sum += v * v;
+  }
+  return std::sqrt(sum);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Setup
+
+RenderSetup resolveSetup(const RenderOptions& options, const double bbox_min[3], const double bbox_max[3]) {
+  RenderSetup s;
+  s.camera = Camera(bbox_min, bbox_max, options.camera);
+  const double diagonal = 2.0 * s.camera.radius();
+  s.sampling = options.sampling;
+  s.step = options.step > 0 ? options.step : diagonal / 400.0;
+  const double unit = options.opacity_unit_distance > 0 ? options.opacity_unit_distance : diagonal / 40.0;
+  s.inv_unit_distance = 1.0 / unit;
+  s.transfer = options.transfer;
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Watertight crossings
+
+PreparedRay prepareRay(const Ray& ray) {
+  PreparedRay r;
+  r.ray = ray;
+  const double ad[3] = {std::fabs(ray.d[0]), std::fabs(ray.d[1]), std::fabs(ray.d[2])};
+  r.kz = ad[0] > ad[1] ? (ad[0] > ad[2] ? 0 : 2) : (ad[1] > ad[2] ? 1 : 2);
+  r.kx = (r.kz + 1) % 3;
+  r.ky = (r.kx + 1) % 3;
+  if (ray.d[r.kz] < 0) std::swap(r.kx, r.ky);
+  r.sx = ray.d[r.kx] / ray.d[r.kz];
+  r.sy = ray.d[r.ky] / ray.d[r.kz];
+  r.sz = 1.0 / ray.d[r.kz];
+  return r;
+}
+
+namespace {
+bool lexLess(const double* a, const double* b) {
+  if (a[0] != b[0]) return a[0] < b[0];
+  if (a[1] != b[1]) return a[1] < b[1];
+  return a[2] < b[2];
+}
+
+// Position of a vertex in the ray's sheared frame (ray along +z from the origin).
+void shear(const PreparedRay& r, const double* p, double out[3]) {
+  const double ax = p[r.kx] - r.ray.o[r.kx], ay = p[r.ky] - r.ray.o[r.ky], az = p[r.kz] - r.ray.o[r.kz];
+  out[0] = ax - r.sx * az;
+  out[1] = ay - r.sy * az;
+  out[2] = r.sz * az;
+}
+}  // namespace
+
+Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, const double* c, double sa, double sb,
+                       double sc) {
+  // Canonical order, so that every tetrahedron sharing this face computes the same crossing.
+  if (lexLess(b, a)) {
+    std::swap(a, b);
+    std::swap(sa, sb);
+  }
+  if (lexLess(c, b)) {
+    std::swap(b, c);
+    std::swap(sb, sc);
+  }
+  if (lexLess(b, a)) {
+    std::swap(a, b);
+    std::swap(sa, sb);
+  }
+  double A[3], B[3], C[3];
+  shear(r, a, A);
+  shear(r, b, B);
+  shear(r, c, C);
+  const double u = C[0] * B[1] - C[1] * B[0];
+  const double v = A[0] * C[1] - A[1] * C[0];
+  const double w = B[0] * A[1] - B[1] * A[0];
+  Crossing x;
+  if ((u < 0 || v < 0 || w < 0) && (u > 0 || v > 0 || w > 0)) return x;
+  const double det = u + v + w;
+  if (det == 0) return x;  // the ray lies in the triangle's plane
+  x.hit = true;
+  x.t = (u * A[2] + v * B[2] + w * C[2]) / det;
+  x.s = (u * sa + v * sb + w * sc) / det;
+  return x;
+}
+
+int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Crossing* out) {
+  int best = -1;
+  for (int k = 0; k < 4; ++k) {
+    if (k == entry) continue;
+    const int* f = kTetFace[k];
+    const Crossing x = crossTriangle(r, g.p[f[0]], g.p[f[1]], g.p[f[2]], g.s[f[0]], g.s[f[1]], g.s[f[2]]);
+    if (!x.hit) continue;
+    // Where the ray passes through an edge or vertex of the entry face, faces sharing it are crossed
+    // at the entry point too: the exit is the farthest crossing.
+    if (best < 0 || (forward ? x.t > out->t : x.t < out->t)) {
+      best = k;
+      *out = x;
+    }
+  }
+  return best;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shading
+
+Rgba over(const Rgba& f, const Rgba& b) {
+  const double k = 1.0 - f.a;
+  return {f.r + k * b.r, f.g + k * b.g, f.b + k * b.b, f.a + k * b.a};
+}
+
+namespace {
+inline void addSample(double alpha, const double rgb[3], bool front_to_back, Rgba* acc) {
+  if (front_to_back) {
+    const double k = (1.0 - acc->a) * alpha;
+    acc->r += k * rgb[0];
+    acc->g += k * rgb[1];
+    acc->b += k * rgb[2];
+    acc->a += k;
+  } else {
+    const double k = 1.0 - alpha;
+    acc->r = alpha * rgb[0] + k * acc->r;
+    acc->g = alpha * rgb[1] + k * acc->g;
+    acc->b = alpha * rgb[2] + k * acc->b;
+    acc->a = alpha + k * acc->a;
+  }
+}
+
+// First sample index k with k * step >= t (exactly, in floating point).
+int64_t firstSampleAtOrAfter(double t, double step) {
+  int64_t k = static_cast<int64_t>(std::ceil(t / step));
+  while (static_cast<double>(k) * step < t) ++k;
+  while (static_cast<double>(k - 1) * step >= t) --k;
+  return k;
+}
+}  // namespace
+
+void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, double lo,
+                   double hi, bool front_to_back, Rgba* acc) {
+  if (!(hi > lo)) return;
+  if (setup.sampling == Sampling::kFace) {
+    double rgb_in[3], rgb_out[3], e_in, e_out;
+    setup.transfer.evaluate(s_in, rgb_in, &e_in);
+    setup.transfer.evaluate(s_out, rgb_out, &e_out);
+    const double e = 0.5 * (e_in + e_out);
+    double rgb[3];
+    for (int c = 0; c < 3; ++c)
+      rgb[c] = e_in + e_out > 0 ? (e_in * rgb_in[c] + e_out * rgb_out[c]) / (e_in + e_out)
+                                : 0.5 * (rgb_in[c] + rgb_out[c]);
+    const double alpha = -std::expm1(-e * setup.inv_unit_distance * (hi - lo));
+    addSample(alpha, rgb, front_to_back, acc);
+    return;
+  }
+  const double step = setup.step;
+  const int64_t k0 = firstSampleAtOrAfter(lo, step), k1 = firstSampleAtOrAfter(hi, step);  // [k0, k1)
+  if (k1 <= k0) return;
+  const double span = t_out - t_in;
+  const double slope = span > 0 ? (s_out - s_in) / span : 0.0;
+  for (int64_t i = 0; i < k1 - k0; ++i) {
+    const int64_t k = front_to_back ? k0 + i : k1 - 1 - i;
+    const double t = static_cast<double>(k) * step;
+    const double s = s_in + slope * (t - t_in);
+    double rgb[3], e;
+    setup.transfer.evaluate(s, rgb, &e);
+    const double alpha = -std::expm1(-e * setup.inv_unit_distance * step);
+    addSample(alpha, rgb, front_to_back, acc);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Boundary crossings and segments
+
+namespace {
+struct Hit {
+  double t, s;
+  uint32_t tri;
+  bool leaving;
+};
+constexpr int kTile = 16;
+}  // namespace
+
+RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
+  const int w = camera.width(), h = camera.height();
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  // Bin the triangles by the tiles their projections overlap (one pixel of margin).
+  std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(tiles_x) * tiles_y);
+  for (uint32_t i = 0; i < surface.triangles.size(); ++i) {
+    double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+    bool ok = true;
+    for (int k = 0; k < 3; ++k) {
+      double x, y;
+      if (!camera.project(surface.points[surface.triangles[i][k]].data(), &x, &y)) ok = false;
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+    if (!ok) continue;
+    const int px0 = std::max(0, static_cast<int>(std::floor(x0)) - 1);
+    const int py0 = std::max(0, static_cast<int>(std::floor(y0)) - 1);
+    const int px1 = std::min(w - 1, static_cast<int>(std::floor(x1)) + 1);
+    const int py1 = std::min(h - 1, static_cast<int>(std::floor(y1)) + 1);
+    if (px0 > px1 || py0 > py1) continue;
+    for (int ty = py0 / kTile; ty <= py1 / kTile; ++ty)
+      for (int tx = px0 / kTile; tx <= px1 / kTile; ++tx) bins[static_cast<size_t>(ty) * tiles_x + tx].push_back(i);
+  }
+
+  const double eps = 1e-9 * camera.radius();
+  std::vector<std::vector<RaySegment>> per_pixel(static_cast<size_t>(w) * h);
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& range) {
+    std::vector<Hit> hits;
+    for (int ty = range.rows().begin(); ty < range.rows().end(); ++ty) {
+      for (int tx = range.cols().begin(); tx < range.cols().end(); ++tx) {
+        const std::vector<uint32_t>& bin = bins[static_cast<size_t>(ty) * tiles_x + tx];
+        if (bin.empty()) continue;
+        for (int py = ty * kTile; py < std::min(h, (ty + 1) * kTile); ++py) {
+          for (int px = tx * kTile; px < std::min(w, (tx + 1) * kTile); ++px) {
+            const PreparedRay ray = prepareRay(camera.ray(px, py));
+            hits.clear();
+            for (uint32_t i : bin) {
+              const auto& tri = surface.triangles[i];
+              const double* a = surface.points[tri[0]].data();
+              const double* b = surface.points[tri[1]].data();
+              const double* c = surface.points[tri[2]].data();
+              const Crossing x = crossTriangle(ray, a, b, c, surface.scalars[tri[0]], surface.scalars[tri[1]],
+                                               surface.scalars[tri[2]]);
+              if (!x.hit) continue;
+              // Facing from the outward normal of the triangle as given.
+              const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+              const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+              const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                   e1[0] * e2[1] - e1[1] * e2[0]};
+              const double dn = n[0] * ray.ray.d[0] + n[1] * ray.ray.d[1] + n[2] * ray.ray.d[2];
+              if (dn == 0) continue;
+              hits.push_back({x.t, x.s, i, dn > 0});
+            }
+            if (hits.empty()) continue;
+            std::sort(hits.begin(), hits.end(), [](const Hit& p, const Hit& q) {
+              if (p.t != q.t) return p.t < q.t;
+              if (p.leaving != q.leaving) return p.leaving;
+              return p.tri < q.tri;
+            });
+            std::vector<RaySegment>& out = per_pixel[static_cast<size_t>(py) * w + px];
+            const uint32_t pixel = static_cast<uint32_t>(py) * w + px;
+            int depth = 0;
+            size_t i = 0;
+            while (i < hits.size()) {
+              // A group of crossings at the same depth: at most one step in and one step out.
+              size_t j = i;
+              const Hit* enter = nullptr;
+              const Hit* leave = nullptr;
+              while (j < hits.size() && hits[j].t - hits[i].t <= eps) {
+                if (hits[j].leaving) {
+                  if (!leave) leave = &hits[j];
+                } else if (!enter) {
+                  enter = &hits[j];
+                }
+                ++j;
+              }
+              const int delta = (enter ? 1 : 0) - (leave ? 1 : 0);
+              if (delta > 0) {
+                if (depth == 0) {
+                  RaySegment seg;
+                  seg.pixel = pixel;
+                  seg.entry_tri = enter->tri;
+                  seg.t_near = enter->t;
+                  seg.s_near = enter->s;
+                  out.push_back(seg);
+                }
+                ++depth;
+              } else if (delta < 0 && depth > 0) {
+                if (--depth == 0) {
+                  out.back().exit_tri = leave->tri;
+                  out.back().t_far = leave->t;
+                  out.back().s_far = leave->s;
+                }
+              }
+              i = j;
+            }
+          }
+        }
+      }
+    }
+  });
+  RaySegments result;
+  result.pixel_start.resize(static_cast<size_t>(w) * h + 1);
+  size_t total = 0;
+  for (size_t p = 0; p < per_pixel.size(); ++p) {
+    result.pixel_start[p] = static_cast<uint32_t>(total);
+    total += per_pixel[p].size();
+  }
+  result.pixel_start.back() = static_cast<uint32_t>(total);
+  result.segments.reserve(total);
+  for (auto& v : per_pixel) result.segments.insert(result.segments.end(), v.begin(), v.end());
+  return result;
+}
+
+std::pair<double, double> boundaryRange(const BoundarySurface& surface) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto& tri : surface.triangles) {
+    for (uint32_t v : tri) {
+      const double s = surface.scalars[v];
+      if (!std::isfinite(s)) continue;
+      lo = std::min(lo, s);
+      hi = std::max(hi, s);
+    }
+  }
+  if (!(lo <= hi)) return {0.0, 1.0};
+  if (lo == hi) return {lo - 0.5, hi + 0.5};
+  return {lo, hi};
+}
+
+void sceneBox(const LevelHeader& header, const BoundarySurface& surface, double bbox_min[3], double bbox_max[3]) {
+  bool usable = true;
+  for (int i = 0; i < 3; ++i) {
+    bbox_min[i] = header.bbox_min[i];
+    bbox_max[i] = header.bbox_max[i];
+    if (!std::isfinite(bbox_min[i]) || !std::isfinite(bbox_max[i]) || bbox_min[i] > bbox_max[i]) usable = false;
+  }
+  if (usable && (bbox_min[0] < bbox_max[0] || bbox_min[1] < bbox_max[1] || bbox_min[2] < bbox_max[2])) return;
+  for (int i = 0; i < 3; ++i) {
+    bbox_min[i] = std::numeric_limits<double>::infinity();
+    bbox_max[i] = -bbox_min[i];
+  }
+  for (const auto& tri : surface.triangles) {
+    for (uint32_t v : tri) {
+      for (int i = 0; i < 3; ++i) {
+        bbox_min[i] = std::min(bbox_min[i], surface.points[v][i]);
+        bbox_max[i] = std::max(bbox_max[i], surface.points[v][i]);
+      }
+    }
+  }
+  if (surface.triangles.empty()) {
+    for (int i = 0; i < 3; ++i) bbox_min[i] = 0, bbox_max[i] = 1;
+  }
+}
+
+Image toImage(int width, int height, const std::vector<Rgba>& pixels) {
+  Image image(width, height);
+  auto to8 = [](double v) {
+    const double c = std::clamp(v, 0.0, 1.0) * 255.0;
+    return static_cast<uint8_t>(std::lround(c));
+  };
+  for (size_t i = 0; i < pixels.size() && i < static_cast<size_t>(width) * height; ++i) {
+    image.rgb[3 * i] = to8(pixels[i].r);
+    image.rgb[3 * i + 1] = to8(pixels[i].g);
+    image.rgb[3 * i + 2] = to8(pixels[i].b);
+  }
+  return image;
+}
+
+}  // namespace gtn

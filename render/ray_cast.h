@@ -1,0 +1,167 @@
+// The ray-casting core shared by the streaming (integrated) and the generic (in-memory) renderers, so
+// that both compute bit-identical crossings and samples and differ only in the order of compositing.
+//
+// * Ray / face crossings use the watertight ray-triangle test of Woop, Benthin and Wald (JCGT 2013) in
+//   double precision, with each triangle's vertices put in a canonical order (lexicographic by
+//   position) first. The crossing of a face therefore has the same parameter t and the same
+//   interpolated scalar whichever tetrahedron (or boundary triangle) it is computed from, so a ray
+//   leaves one tetrahedron exactly where it enters the next, and a ray never slips between faces.
+// * A ray is cut into segments where it lies inside the volume, from its crossings with the boundary
+//   triangles (see castBoundary()).
+// * Inside a tetrahedron the scalar is linear, so along the ray it is linear between the entry and exit
+//   crossings. Volume sampling takes samples at t = k * step (a grid fixed per ray, independent of the
+//   mesh), each belonging to the half-open interval [t_in, t_out) of exactly one tetrahedron; face
+//   sampling integrates each tetrahedron's interval with the transfer function averaged over its two
+//   face crossings (Bunyk et al.). Zero-volume tetrahedra have empty intervals and contribute nothing.
+// * Compositing is front to back from a segment's near end and back to front from its far end; the two
+//   partial results combine exactly (over operator), which is what lets the streaming renderer take a
+//   tetrahedron's contribution as soon as it arrives.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "mesh/mesh_stream.h"
+#include "render/camera.h"
+#include "render/image.h"
+#include "render/transfer_function.h"
+
+namespace gtn {
+
+enum class Sampling { kVolume, kFace };
+
+// Which scalar to render: a component of a point field, or the magnitude of a vector field.
+struct FieldSelector {
+  std::string name;  // empty: the first point field
+  bool magnitude = false;
+  uint32_t component = 0;
+};
+// "NAME", "NAME:2" (component), "NAME:mag" (magnitude); "" selects the first point field.
+StatusOr<FieldSelector> parseFieldSelector(const std::string& text);
+
+// Reads the selected scalar from a vertex event's concatenated field values.
+class ScalarReader {
+ public:
+  ScalarReader() = default;
+  // Fails with kUsage naming the available fields when the selection does not exist.
+  static StatusOr<ScalarReader> create(const std::vector<FieldDesc>& fields, const FieldSelector& selector);
+  double read(const uint8_t* values) const;
+  const std::string& description() const { return description_; }
+
+ private:
+  size_t offset_ = 0;
+  ScalarType type_ = ScalarType::kFloat32;
+  uint32_t components_ = 1, component_ = 0;
+  bool magnitude_ = false;
+  std::string description_;
+};
+
+// Everything a renderer needs besides the mesh. Zero `step` / `opacity_unit_distance` mean automatic:
+// the bounding box diagonal / 400 and / 40.
+struct RenderOptions {
+  CameraOptions camera;
+  Sampling sampling = Sampling::kVolume;
+  double step = 0;
+  double opacity_unit_distance = 0;
+  FieldSelector field;
+  TransferFunction transfer;  // points required; its range used when has_range, else automatic
+};
+
+// The options resolved against a level: camera framed on the bounding box, range fixed.
+struct RenderSetup {
+  Camera camera;
+  Sampling sampling = Sampling::kVolume;
+  double step = 0;
+  double inv_unit_distance = 1;
+  TransferFunction transfer;
+};
+RenderSetup resolveSetup(const RenderOptions& options, const double bbox_min[3], const double bbox_max[3]);
+
+// A ray prepared for the watertight test.
+struct PreparedRay {
+  Ray ray;
+  int kx = 0, ky = 1, kz = 2;
+  double sx = 0, sy = 0, sz = 1;
+};
+PreparedRay prepareRay(const Ray& ray);
+
+struct Crossing {
+  bool hit = false;
+  double t = 0;  // ray parameter (distance) of the crossing with the face's plane
+  double s = 0;  // scalar interpolated at the crossing
+};
+// The crossing of the ray with triangle (a, b, c) carrying scalars (sa, sb, sc); `hit` includes the
+// triangle's edges and vertices. The result does not depend on the order of the three vertices.
+Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, const double* c, double sa, double sb,
+                       double sc);
+
+// One tetrahedron's geometry and scalars, copied out of whatever holds the mesh.
+struct TetGeom {
+  double p[4][3];
+  double s[4];
+};
+
+// Where a ray inside tetrahedron `g`, having come in through local face `entry` (kTetFace numbering),
+// leaves it: forward (increasing t) or backward. Returns the local face, or -1 when no other face is
+// crossed (the ray only grazed the tetrahedron, numerically). `out->t` is not clamped.
+int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Crossing* out);
+
+// Premultiplied colour and opacity of a part of a ray.
+struct Rgba {
+  double r = 0, g = 0, b = 0, a = 0;
+};
+// `front` composited over `back`.
+Rgba over(const Rgba& front, const Rgba& back);
+
+// Adds the part [lo, hi) of a tetrahedron's interval [t_in, t_out] (scalars s_in, s_out at its ends)
+// to `acc`: behind what `acc` holds when `front_to_back`, in front of it otherwise.
+void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, double lo,
+                   double hi, bool front_to_back, Rgba* acc);
+
+// The boundary surface as the renderers see it: positions and scalars of its vertices and the
+// outward-oriented triangles over them.
+struct BoundarySurface {
+  std::vector<std::array<double, 3>> points;
+  std::vector<double> scalars;
+  std::vector<std::array<uint32_t, 3>> triangles;  // indices into points
+};
+
+constexpr uint32_t kNoTriangle = 0xFFFFFFFFu;
+
+// A part of a pixel's ray inside the volume: from the near crossing (entering through triangle
+// `entry_tri`) to the far crossing (leaving through `exit_tri`, kNoTriangle when the ray's crossings
+// do not pair up: then the segment runs until the traversal reaches the boundary).
+struct RaySegment {
+  uint32_t pixel = 0;
+  uint32_t entry_tri = kNoTriangle, exit_tri = kNoTriangle;
+  double t_near = 0, s_near = 0;
+  double t_far = std::numeric_limits<double>::infinity(), s_far = 0;
+};
+
+// Segments of every pixel's ray, grouped by pixel in image order and sorted by depth within a pixel;
+// `pixel_start` has width*height+1 offsets into `segments`. Crossings are paired by inside/outside
+// depth counting over groups of crossings at equal depth (within a tolerance relative to the scene's
+// size), so that duplicated crossings on shared edges, silhouette grazes and coincident boundary
+// sheets of unwelded seams neither split nor drop parts of the volume. Parallel (TBB) over tiles.
+struct RaySegments {
+  std::vector<RaySegment> segments;
+  std::vector<uint32_t> pixel_start;
+};
+RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface);
+
+// The scalar range over the boundary vertices (what the automatic transfer-function range uses when
+// the stream carries no field ranges: the boundary arrives first). A unit range centred on the value
+// when constant, {0, 1} when empty.
+std::pair<double, double> boundaryRange(const BoundarySurface& surface);
+
+// The box the camera frames: the level header's bounding box, or the boundary vertices' box when the
+// header's is empty or not finite.
+void sceneBox(const LevelHeader& header, const BoundarySurface& surface, double bbox_min[3], double bbox_max[3]);
+
+// Converts per-pixel colours (premultiplied, over black) to 8-bit RGB.
+Image toImage(int width, int height, const std::vector<Rgba>& pixels);
+
+}  // namespace gtn

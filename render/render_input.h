@@ -1,0 +1,57 @@
+// What the renderer reads: a .gtn file (any stored level, simplified further on the fly by its merge
+// tree), or any mesh the importers read (encoded in memory with the level codec, so that it still
+// arrives as a real decode stream). Choosing the level for --ratio / --merges follows the paper's
+// section 5: start from the most simplified stored level that is not coarser than the target, then
+// apply the remaining merges on the fly (simplify/stream_simplifier.h).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "codec/level_codec.h"
+#include "format/gtn_reader.h"
+#include "mesh/mesh_stream.h"
+
+namespace gtn {
+
+// At most one of level / ratio / merges is set (>= 0).
+struct LevelChoice {
+  int level = -1;       // a stored level as is
+  double ratio = -1;    // vertices merged away / vertices of level 0, in [0, 1]
+  int64_t merges = -1;  // merges of the level-0 merge tree
+};
+
+struct ResolvedLevel {
+  size_t level = 0;            // stored level decoded
+  uint64_t stored_merges = 0;  // merges already applied in that level
+  uint64_t extra_merges = 0;   // merges applied on the fly
+  uint64_t points = 0, tets = 0;  // of the stored level (what is decoded)
+  uint64_t total_merges() const { return stored_merges + extra_merges; }
+};
+
+class RenderInput {
+ public:
+  static StatusOr<std::unique_ptr<RenderInput>> open(const std::string& path);
+  ~RenderInput();
+
+  size_t levels() const;
+  const LevelHeader& levelHeader(size_t i) const;
+  bool hasMergeTree(size_t i) const;
+  uint64_t levelZeroPoints() const { return levelHeader(0).points; }
+
+  // Fails with kUsage for a level that does not exist, a ratio outside [0, 1], or simplification of
+  // an input without a merge tree.
+  StatusOr<ResolvedLevel> resolve(const LevelChoice& choice) const;
+  // Decodes the chosen level into `sink`, through the on-the-fly simplifier when extra merges apply.
+  Status stream(const ResolvedLevel& level, MeshSink& sink);
+
+ private:
+  RenderInput() = default;
+  std::string path_;
+  std::unique_ptr<GtnReader> reader_;    // .gtn input
+  std::unique_ptr<EncodedLevel> encoded_;  // any other input, encoded in memory
+};
+
+}  // namespace gtn

@@ -1,0 +1,454 @@
+#include "render/stream_renderer.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "mesh/faces.h"
+#include "render/traversal.h"
+
+namespace gtn {
+
+using render_internal::advanceCursor;
+using render_internal::CursorEnd;
+using render_internal::Link;
+using render_internal::SegmentState;
+
+namespace {
+
+constexpr uint32_t kNone = 0xFFFFFFFFu;
+constexpr uint32_t kOpenFace = 0xFFFFFFFFu;      // neighbour not arrived (or never will)
+constexpr uint32_t kReleasedFace = 0xFFFFFFFEu;  // neighbour arrived and was released
+// Tetrahedra are processed in batches of this size range: large enough to feed the threads, small
+// relative to the mesh so that holding a batch does not dominate the memory.
+constexpr size_t kMinBatch = 256, kMaxBatch = 8192;
+
+struct FaceKey {
+  uint32_t v[3];
+  bool operator==(const FaceKey& o) const { return v[0] == o.v[0] && v[1] == o.v[1] && v[2] == o.v[2]; }
+};
+struct FaceKeyHash {
+  size_t operator()(const FaceKey& k) const {
+    uint64_t h = k.v[0] * 0x9E3779B97F4A7C15ull;
+    h ^= (h >> 29) + k.v[1] * 0xC2B2AE3D27D4EB4Full;
+    h ^= (h >> 31) + k.v[2] * 0x165667B19E3779F9ull;
+    return static_cast<size_t>(h ^ (h >> 32));
+  }
+};
+FaceKey makeKey(uint32_t a, uint32_t b, uint32_t c) {
+  if (a > b) std::swap(a, b);
+  if (b > c) std::swap(b, c);
+  if (a > b) std::swap(a, b);
+  return {{a, b, c}};
+}
+
+// A face where cursors wait: the one held tetrahedron that has it (kNone if none is held) and the
+// cursors (2 * segment + 0 front / 1 back) waiting for the tetrahedron on its other side.
+struct FaceEntry {
+  uint32_t tet = kNone;
+  int8_t face = -1;
+  std::vector<uint32_t> waiters;
+};
+
+struct HeldTet {
+  TetGeom g;
+  uint32_t v[4];
+  uint32_t nbr[4];
+  uint8_t nbr_face[4];
+  std::atomic<int32_t> pending{0};
+  bool alive = false;
+  FaceKey key(int k) const { return makeKey(v[kTetFace[k][0]], v[kTetFace[k][1]], v[kTetFace[k][2]]); }
+};
+
+struct VertexRec {
+  double p[3];
+  double s;
+};
+
+struct ArrivedTet {
+  uint32_t v[4];
+  TetGeom g;
+  int32_t rays = 0;
+};
+
+struct Trigger {
+  uint32_t cursor;
+  uint32_t tet;
+  int face;
+};
+
+}  // namespace
+
+struct StreamRenderer::State {
+  enum class Phase { kIdle, kBoundary, kTets, kDone };
+  Phase phase = Phase::kIdle;
+  LevelHeader header;
+  ScalarReader reader;
+  std::unordered_map<uint32_t, VertexRec> vertices;
+  std::vector<std::array<uint32_t, 3>> boundary;
+  RaySegments rays;
+  std::vector<SegmentState> segs;
+  std::unordered_map<FaceKey, FaceEntry, FaceKeyHash> faces;
+  std::deque<HeldTet> tets;
+  std::vector<uint32_t> free_slots;
+  uint64_t held = 0;
+  std::vector<ArrivedTet> batch;
+  size_t batch_size = kMinBatch;
+  std::atomic<uint64_t> lost{0};
+
+  void release(uint32_t slot);
+};
+
+namespace {
+// The held tetrahedra as advanceCursor sees them.
+struct HeldMesh {
+  StreamRenderer::State& st;
+  tbb::enumerable_thread_specific<std::vector<uint32_t>>& zeroed;
+
+  const TetGeom& geom(uint32_t t) { return st.tets[t].g; }
+  Link next(uint32_t t, int face, uint32_t* nt, int* nf) {
+    const uint32_t n = st.tets[t].nbr[face];
+    if (n == kOpenFace) return Link::kOpen;
+    if (n == kReleasedFace) return Link::kReleased;
+    *nt = n;
+    *nf = st.tets[t].nbr_face[face];
+    return Link::kLinked;
+  }
+  void visited(uint32_t t) {
+    if (st.tets[t].pending.fetch_sub(1, std::memory_order_relaxed) <= 1) zeroed.local().push_back(t);
+  }
+};
+}  // namespace
+
+void StreamRenderer::State::release(uint32_t slot) {
+  HeldTet& t = tets[slot];
+  if (!t.alive) return;
+  for (int k = 0; k < 4; ++k) {
+    const uint32_t n = t.nbr[k];
+    if (n == kOpenFace) {
+      auto it = faces.find(t.key(k));
+      if (it != faces.end() && it->second.tet == slot) {
+        if (it->second.waiters.empty()) {
+          faces.erase(it);
+        } else {
+          it->second.tet = kNone;
+        }
+      }
+    } else if (n != kReleasedFace) {
+      tets[n].nbr[t.nbr_face[k]] = kReleasedFace;
+    }
+  }
+  t.alive = false;
+  free_slots.push_back(slot);
+  --held;
+}
+
+StreamRenderer::StreamRenderer(const RenderOptions& options) : options_(options), state_(std::make_unique<State>()) {}
+StreamRenderer::~StreamRenderer() = default;
+
+Status StreamRenderer::beginLevel(const LevelHeader& header) {
+  state_ = std::make_unique<State>();
+  stats_ = StreamRenderStats();
+  image_ = Image();
+  GTN_ASSIGN_OR_RETURN(state_->reader, ScalarReader::create(header.point_fields, options_.field));
+  state_->header = header;
+  state_->batch_size = static_cast<size_t>(std::clamp<uint64_t>(header.tets / 64, kMinBatch, kMaxBatch));
+  state_->phase = State::Phase::kBoundary;
+  return Status::ok();
+}
+
+Status StreamRenderer::vertex(uint32_t id, const double xyz[3], const uint8_t* values) {
+  State& st = *state_;
+  if (st.phase != State::Phase::kBoundary && st.phase != State::Phase::kTets)
+    return invalidData("renderer: vertex event outside a level");
+  VertexRec rec;
+  for (int i = 0; i < 3; ++i) rec.p[i] = xyz[i];
+  rec.s = st.reader.read(values);
+  if (!st.vertices.emplace(id, rec).second)
+    return invalidData("renderer: vertex " + std::to_string(id) + " emitted twice");
+  stats_.peak_vertices = std::max<uint64_t>(stats_.peak_vertices, st.vertices.size());
+  return Status::ok();
+}
+
+Status StreamRenderer::boundaryTriangle(const uint32_t v[3]) {
+  State& st = *state_;
+  if (st.phase != State::Phase::kBoundary) return invalidData("renderer: boundary triangle after the boundary ended");
+  for (int i = 0; i < 3; ++i)
+    if (!st.vertices.count(v[i]))
+      return invalidData("renderer: boundary triangle " + std::to_string(st.boundary.size()) +
+                         " refers to vertex " + std::to_string(v[i]) + " not yet emitted");
+  st.boundary.push_back({v[0], v[1], v[2]});
+  return Status::ok();
+}
+
+Status StreamRenderer::endBoundary() {
+  State& st = *state_;
+  if (st.phase != State::Phase::kBoundary) return invalidData("renderer: endBoundary out of order");
+  // The boundary surface over its own vertices, in local numbering.
+  BoundarySurface surface;
+  std::unordered_map<uint32_t, uint32_t> local;
+  local.reserve(st.boundary.size());
+  for (const auto& tri : st.boundary) {
+    std::array<uint32_t, 3> t;
+    for (int i = 0; i < 3; ++i) {
+      auto [it, inserted] = local.emplace(tri[i], static_cast<uint32_t>(surface.points.size()));
+      if (inserted) {
+        const VertexRec& v = st.vertices.at(tri[i]);
+        surface.points.push_back({v.p[0], v.p[1], v.p[2]});
+        surface.scalars.push_back(v.s);
+      }
+      t[i] = it->second;
+    }
+    surface.triangles.push_back(t);
+  }
+  double bmin[3], bmax[3];
+  sceneBox(st.header, surface, bmin, bmax);
+  setup_ = resolveSetup(options_, bmin, bmax);
+  if (!setup_.transfer.has_range) {
+    const auto [lo, hi] = boundaryRange(surface);
+    setup_.transfer.lo = lo;
+    setup_.transfer.hi = hi;
+  }
+  st.rays = castBoundary(setup_.camera, surface);
+  st.segs.resize(st.rays.segments.size());
+  for (size_t i = 0; i < st.segs.size(); ++i) {
+    const RaySegment& rs = st.rays.segments[i];
+    SegmentState& seg = st.segs[i];
+    seg.tf = rs.t_near, seg.sf = rs.s_near, seg.tb = rs.t_far, seg.sb = rs.s_far;
+    if (!(seg.tf < seg.tb)) {
+      seg.done = true;
+      continue;
+    }
+    const auto& in = st.boundary[rs.entry_tri];
+    st.faces[makeKey(in[0], in[1], in[2])].waiters.push_back(static_cast<uint32_t>(2 * i));
+    if (rs.exit_tri != kNoTriangle) {
+      const auto& out = st.boundary[rs.exit_tri];
+      st.faces[makeKey(out[0], out[1], out[2])].waiters.push_back(static_cast<uint32_t>(2 * i + 1));
+    } else {
+      seg.back_active = false;
+    }
+  }
+  stats_.segments = st.segs.size();
+  st.boundary.clear();
+  st.boundary.shrink_to_fit();
+  st.phase = State::Phase::kTets;
+  return Status::ok();
+}
+
+Status StreamRenderer::tet(const uint32_t v[4], const uint8_t*) {
+  State& st = *state_;
+  if (st.phase != State::Phase::kTets) return invalidData("renderer: tetrahedron before the end of the boundary");
+  ArrivedTet a;
+  for (int i = 0; i < 4; ++i) {
+    auto it = st.vertices.find(v[i]);
+    if (it == st.vertices.end())
+      return invalidData("renderer: tetrahedron " + std::to_string(stats_.tets) + " refers to vertex " +
+                         std::to_string(v[i]) + ", not emitted or already retired");
+    a.v[i] = v[i];
+    for (int c = 0; c < 3; ++c) a.g.p[i][c] = it->second.p[c];
+    a.g.s[i] = it->second.s;
+  }
+  ++stats_.tets;
+  st.batch.push_back(a);
+  if (st.batch.size() >= st.batch_size) return flushBatch();
+  return Status::ok();
+}
+
+Status StreamRenderer::retireVertex(uint32_t id) {
+  state_->vertices.erase(id);
+  return Status::ok();
+}
+
+Status StreamRenderer::flushBatch() {
+  State& st = *state_;
+  if (st.batch.empty()) return Status::ok();
+  const Camera& cam = setup_.camera;
+  const int w = cam.width(), h = cam.height();
+
+  // 1. How many rays still need each arrived tetrahedron (parallel; segments are read only).
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, st.batch.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      ArrivedTet& a = st.batch[i];
+      double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+      bool ok = true;
+      for (int k = 0; k < 4; ++k) {
+        double x, y;
+        if (!cam.project(a.g.p[k], &x, &y)) ok = false;
+        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+      }
+      int px0 = 0, py0 = 0, px1 = w - 1, py1 = h - 1;
+      if (ok) {
+        px0 = std::max(0, static_cast<int>(std::floor(x0)) - 1);
+        py0 = std::max(0, static_cast<int>(std::floor(y0)) - 1);
+        px1 = std::min(w - 1, static_cast<int>(std::floor(x1)) + 1);
+        py1 = std::min(h - 1, static_cast<int>(std::floor(y1)) + 1);
+      }
+      int32_t count = 0;
+      for (int py = py0; py <= py1; ++py) {
+        for (int px = px0; px <= px1; ++px) {
+          const size_t p = static_cast<size_t>(py) * w + px;
+          const uint32_t s0 = st.rays.pixel_start[p], s1 = st.rays.pixel_start[p + 1];
+          if (s0 == s1) continue;
+          const PreparedRay ray = prepareRay(cam.ray(px, py));
+          double tmin = 1e300, tmax = -1e300;
+          for (int k = 0; k < 4; ++k) {
+            const int* f = kTetFace[k];
+            const Crossing x = crossTriangle(ray, a.g.p[f[0]], a.g.p[f[1]], a.g.p[f[2]], 0, 0, 0);
+            if (!x.hit) continue;
+            tmin = std::min(tmin, x.t);
+            tmax = std::max(tmax, x.t);
+          }
+          if (tmin > tmax) continue;
+          for (uint32_t s = s0; s < s1; ++s) {
+            const SegmentState& seg = st.segs[s];
+            if (!seg.done && seg.tf <= tmax && tmin <= seg.tb) ++count;
+          }
+        }
+      }
+      a.rays = count;
+    }
+  });
+
+  // 2. Hold the tetrahedra some ray needs, link them to held neighbours, collect the cursors waiting
+  //    at their faces (sequential: the face map).
+  std::vector<Trigger> triggers;
+  std::vector<uint32_t> arrived_slots;
+  for (ArrivedTet& a : st.batch) {
+    FaceKey keys[4];
+    bool needed = a.rays > 0;
+    for (int k = 0; k < 4; ++k) {
+      keys[k] = makeKey(a.v[kTetFace[k][0]], a.v[kTetFace[k][1]], a.v[kTetFace[k][2]]);
+      if (!needed) {
+        auto it = st.faces.find(keys[k]);
+        if (it != st.faces.end() && !it->second.waiters.empty()) needed = true;
+      }
+    }
+    if (!needed) continue;
+    uint32_t slot;
+    if (!st.free_slots.empty()) {
+      slot = st.free_slots.back();
+      st.free_slots.pop_back();
+    } else {
+      slot = static_cast<uint32_t>(st.tets.size());
+      st.tets.emplace_back();
+    }
+    HeldTet& t = st.tets[slot];
+    t.g = a.g;
+    for (int k = 0; k < 4; ++k) {
+      t.v[k] = a.v[k];
+      t.nbr[k] = kOpenFace;
+      t.nbr_face[k] = 0;
+    }
+    t.pending.store(a.rays, std::memory_order_relaxed);
+    t.alive = true;
+    ++st.held;
+    ++stats_.tets_held;
+    arrived_slots.push_back(slot);
+    for (int k = 0; k < 4; ++k) {
+      auto it = st.faces.find(keys[k]);
+      if (it == st.faces.end()) {
+        FaceEntry e;
+        e.tet = slot;
+        e.face = static_cast<int8_t>(k);
+        st.faces.emplace(keys[k], std::move(e));
+        continue;
+      }
+      FaceEntry& e = it->second;
+      for (uint32_t c : e.waiters) triggers.push_back({c, slot, k});
+      e.waiters.clear();
+      if (e.tet != kNone && e.tet != slot) {
+        HeldTet& other = st.tets[e.tet];
+        t.nbr[k] = e.tet;
+        t.nbr_face[k] = static_cast<uint8_t>(e.face);
+        other.nbr[e.face] = slot;
+        other.nbr_face[e.face] = static_cast<uint8_t>(k);
+        st.faces.erase(it);
+      } else {
+        e.tet = slot;
+        e.face = static_cast<int8_t>(k);
+      }
+    }
+  }
+  st.batch.clear();
+  stats_.peak_tets_held = std::max(stats_.peak_tets_held, st.held);
+
+  // 3. Advance the triggered cursors (parallel over segments; a segment's two cursors in one task).
+  std::sort(triggers.begin(), triggers.end(), [](const Trigger& a, const Trigger& b) { return a.cursor < b.cursor; });
+  std::vector<size_t> groups;
+  for (size_t i = 0; i < triggers.size(); ++i)
+    if (i == 0 || triggers[i].cursor / 2 != triggers[i - 1].cursor / 2) groups.push_back(i);
+  groups.push_back(triggers.size());
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> zeroed;
+  tbb::enumerable_thread_specific<std::vector<Trigger>> waits;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, groups.size() - 1, 8), [&](const tbb::blocked_range<size_t>& r) {
+    HeldMesh mesh{st, zeroed};
+    std::vector<Trigger>& my_waits = waits.local();
+    for (size_t g = r.begin(); g < r.end(); ++g) {
+      const uint32_t si = triggers[groups[g]].cursor / 2;
+      SegmentState& seg = st.segs[si];
+      const uint32_t pixel = st.rays.segments[si].pixel;
+      const PreparedRay ray = prepareRay(cam.ray(static_cast<int>(pixel % w), static_cast<int>(pixel / w)));
+      for (size_t i = groups[g]; i < groups[g + 1]; ++i) {
+        if (seg.done) break;
+        const Trigger& tr = triggers[i];
+        const bool front = tr.cursor % 2 == 0;
+        if (!(front ? seg.front_active : seg.back_active)) continue;
+        uint32_t wait_tet = 0;
+        int wait_face = 0;
+        const CursorEnd end = advanceCursor(setup_, ray, seg, front, tr.tet, tr.face, mesh, &wait_tet, &wait_face);
+        if (end == CursorEnd::kWait) {
+          my_waits.push_back({tr.cursor, wait_tet, wait_face});
+        } else if (end != CursorEnd::kMet) {
+          (front ? seg.front_active : seg.back_active) = false;
+          if (end == CursorEnd::kLost) st.lost.fetch_add(1, std::memory_order_relaxed);
+        }
+      }
+    }
+  });
+
+  // 4. Cursors now waiting at open faces of held tetrahedra.
+  for (const std::vector<Trigger>& list : waits) {
+    for (const Trigger& wt : list) {
+      auto [it, inserted] = st.faces.try_emplace(st.tets[wt.tet].key(wt.face));
+      if (inserted) {
+        it->second.tet = wt.tet;
+        it->second.face = static_cast<int8_t>(wt.face);
+      }
+      it->second.waiters.push_back(wt.cursor);
+    }
+  }
+  stats_.peak_face_entries = std::max<uint64_t>(stats_.peak_face_entries, st.faces.size());
+
+  // 5. Release what no ray needs any more.
+  for (const std::vector<uint32_t>& list : zeroed)
+    for (uint32_t slot : list)
+      if (st.tets[slot].pending.load(std::memory_order_relaxed) <= 0) st.release(slot);
+  for (uint32_t slot : arrived_slots)
+    if (st.tets[slot].alive && st.tets[slot].pending.load(std::memory_order_relaxed) <= 0) st.release(slot);
+  return Status::ok();
+}
+
+Status StreamRenderer::endLevel() {
+  State& st = *state_;
+  if (st.phase == State::Phase::kBoundary) GTN_RETURN_IF_ERROR(endBoundary());
+  if (st.phase != State::Phase::kTets) return invalidData("renderer: endLevel out of order");
+  GTN_RETURN_IF_ERROR(flushBatch());
+  const int w = setup_.camera.width(), h = setup_.camera.height();
+  std::vector<Rgba> pixels(static_cast<size_t>(w) * h);
+  for (size_t p = 0; p < pixels.size(); ++p) {
+    Rgba acc;
+    for (uint32_t s = st.rays.pixel_start[p]; s < st.rays.pixel_start[p + 1]; ++s)
+      acc = over(acc, over(st.segs[s].front, st.segs[s].back));
+    pixels[p] = acc;
+  }
+  image_ = toImage(w, h, pixels);
+  stats_.lost_cursors = st.lost.load();
+  state_ = std::make_unique<State>();
+  state_->phase = State::Phase::kDone;
+  return Status::ok();
+}
+
+}  // namespace gtn

@@ -1,0 +1,103 @@
+#include "render/transfer_function.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+
+namespace gtn {
+
+namespace {
+// Opacity 1 would mean infinite extinction; clamp so that exp() stays finite.
+constexpr double kMaxOpacity = 1.0 - 1e-6;
+
+TransferFunction fromTable(const std::vector<std::array<double, 5>>& rows) {
+  TransferFunction tf;
+  for (const auto& r : rows) {
+    TransferPoint p;
+    p.x = r[0];
+    p.rgb[0] = r[1];
+    p.rgb[1] = r[2];
+    p.rgb[2] = r[3];
+    p.opacity = r[4];
+    tf.points.push_back(p);
+  }
+  return tf;
+}
+}  // namespace
+
+void TransferFunction::evaluate(double scalar, double rgb[3], double* extinction) const {
+  const double span = hi - lo;
+  double x = span > 0 ? (scalar - lo) / span : 0.5;
+  if (!(x >= 0)) x = 0;  // also catches NaN
+  if (x > 1) x = 1;
+  size_t i = 1;
+  while (i + 1 < points.size() && points[i].x < x) ++i;
+  const TransferPoint& a = points[i - 1];
+  const TransferPoint& b = points[i];
+  double w = b.x > a.x ? (x - a.x) / (b.x - a.x) : 1.0;
+  w = std::clamp(w, 0.0, 1.0);
+  for (int c = 0; c < 3; ++c) rgb[c] = a.rgb[c] + w * (b.rgb[c] - a.rgb[c]);
+  const double o = std::min(kMaxOpacity, a.opacity + w * (b.opacity - a.opacity));
+  *extinction = -std::log1p(-o);
+}
+
+const std::vector<std::string>& transferPresetNames() {
+  static const std::vector<std::string> names = {"cool-warm", "grey", "hot"};
+  return names;
+}
+
+StatusOr<TransferFunction> transferPreset(const std::string& name) {
+  if (name == "cool-warm") {
+    return fromTable({{0.0, 0.230, 0.299, 0.754, 0.0},
+                      {0.25, 0.552, 0.690, 0.996, 0.15},
+                      {0.5, 0.865, 0.865, 0.865, 0.3},
+                      {0.75, 0.958, 0.604, 0.482, 0.45},
+                      {1.0, 0.706, 0.016, 0.150, 0.6}});
+  }
+  if (name == "grey") return fromTable({{0.0, 0, 0, 0, 0.0}, {1.0, 1, 1, 1, 0.6}});
+  if (name == "hot") {
+    return fromTable({{0.0, 0, 0, 0, 0.0}, {0.4, 0.9, 0, 0, 0.24}, {0.8, 1, 0.9, 0, 0.48}, {1.0, 1, 1, 1, 0.6}});
+  }
+  std::string known;
+  for (const std::string& n : transferPresetNames()) known += (known.empty() ? "" : ", ") + n;
+  return usageError("unknown transfer function preset '" + name + "' (known: " + known + ")");
+}
+
+StatusOr<TransferFunction> parseTransferFunction(const std::string& text, const std::string& what) {
+  TransferFunction tf;
+  std::istringstream lines(text);
+  std::string line;
+  int line_no = 0;
+  while (std::getline(lines, line)) {
+    ++line_no;
+    const size_t hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream in(line);
+    std::string word;
+    if (!(in >> word)) continue;
+    const std::string where = what + ":" + std::to_string(line_no) + ": ";
+    if (word == "range") {
+      if (!(in >> tf.lo >> tf.hi) || !std::isfinite(tf.lo) || !std::isfinite(tf.hi) || !(tf.lo < tf.hi))
+        return invalidData(where + "expected 'range LO HI' with finite LO < HI");
+      tf.has_range = true;
+    } else if (word == "point") {
+      TransferPoint p;
+      if (!(in >> p.x >> p.rgb[0] >> p.rgb[1] >> p.rgb[2] >> p.opacity))
+        return invalidData(where + "expected 'point X R G B O'");
+      for (double v : {p.x, p.rgb[0], p.rgb[1], p.rgb[2], p.opacity})
+        if (!(v >= 0 && v <= 1)) return invalidData(where + "point values must lie in [0, 1]");
+      if (!tf.points.empty() && p.x < tf.points.back().x)
+        return invalidData(where + "point positions must not decrease");
+      tf.points.push_back(p);
+    } else {
+      return invalidData(where + "unknown directive '" + word + "' (expected 'range' or 'point')");
+    }
+    std::string extra;
+    if (in >> extra) return invalidData(where + "unexpected '" + extra + "' at the end of the line");
+  }
+  if (tf.points.size() < 2) return invalidData(what + ": a transfer function needs at least two points");
+  return tf;
+}
+
+}  // namespace gtn

@@ -1,0 +1,90 @@
+// Walking one ray segment's cursors through tetrahedra, shared by the streaming and the generic
+// renderer (internal to render/).
+//
+// A segment has a front cursor, composited front to back from the near end, and a back cursor,
+// composited back to front from the far end. Each sits on a face crossing (t, s): the front has
+// covered [t_near, tf), the back [tb, t_far). A cursor stops when it meets the other one (tf >= tb),
+// when it must wait for a tetrahedron that has not arrived yet, when it reaches the boundary (a face
+// with no neighbour: an unwelded seam, or the end of the volume), or when it is lost (numerically no
+// exit face, or a neighbour already released); the other cursor then covers the rest.
+#pragma once
+
+#include <cstdint>
+
+#include "render/ray_cast.h"
+
+namespace gtn::render_internal {
+
+struct SegmentState {
+  double tf = 0, sf = 0;  // front cursor: position and scalar at its crossing
+  double tb = 0, sb = 0;  // back cursor
+  Rgba front, back;
+  bool front_active = true, back_active = true;  // may still move
+  bool done = false;                              // the cursors met
+};
+
+enum class Link { kLinked, kOpen, kBoundary, kReleased };
+enum class CursorEnd { kWait, kBoundary, kLost, kMet };
+
+// Guard against cycling around an edge with zero-length steps.
+constexpr int kMaxZeroSteps = 64;
+
+// `Mesh` provides: `const TetGeom& geom(uint32_t tet)`, `Link next(uint32_t tet, int face, uint32_t*
+// next_tet, int* next_face)` and `void visited(uint32_t tet)`. The cursor enters `tet` through local
+// face `face`. On kWait, *wait_tet/*wait_face say at which face of which tetrahedron it waits.
+template <class Mesh>
+CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, SegmentState& seg, bool front, uint32_t tet,
+                        int face, Mesh& mesh, uint32_t* wait_tet, int* wait_face) {
+  int zero_steps = 0;
+  for (;;) {
+    const TetGeom& g = mesh.geom(tet);
+    Crossing x;
+    const int exit = exitFace(ray, g, face, front, &x);
+    mesh.visited(tet);
+    if (exit < 0) return CursorEnd::kLost;
+    if (front) {
+      const double t_out = x.t > seg.tf ? x.t : seg.tf;
+      const double limit = seg.tb;
+      shadeInterval(setup, seg.tf, seg.sf, t_out, x.s, seg.tf, t_out < limit ? t_out : limit, true, &seg.front);
+      zero_steps = t_out == seg.tf ? zero_steps + 1 : 0;
+      if (t_out >= limit) {
+        seg.tf = limit;
+        seg.done = true;
+        return CursorEnd::kMet;
+      }
+      seg.tf = t_out;
+      seg.sf = x.s;
+    } else {
+      const double t_out = x.t < seg.tb ? x.t : seg.tb;
+      const double limit = seg.tf;
+      shadeInterval(setup, t_out, x.s, seg.tb, seg.sb, t_out > limit ? t_out : limit, seg.tb, false, &seg.back);
+      zero_steps = t_out == seg.tb ? zero_steps + 1 : 0;
+      if (t_out <= limit) {
+        seg.tb = limit;
+        seg.done = true;
+        return CursorEnd::kMet;
+      }
+      seg.tb = t_out;
+      seg.sb = x.s;
+    }
+    if (zero_steps > kMaxZeroSteps) return CursorEnd::kLost;
+    uint32_t next_tet;
+    int next_face;
+    switch (mesh.next(tet, exit, &next_tet, &next_face)) {
+      case Link::kLinked:
+        tet = next_tet;
+        face = next_face;
+        break;
+      case Link::kOpen:
+        *wait_tet = tet;
+        *wait_face = exit;
+        return CursorEnd::kWait;
+      case Link::kBoundary:
+        return CursorEnd::kBoundary;
+      case Link::kReleased:
+        return CursorEnd::kLost;
+    }
+  }
+}
+
+}  // namespace gtn::render_internal
