@@ -4,10 +4,13 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "codec/level_codec.h"
+#include "format/gtn_records.h"
 #include "mesh/mesh_stream.h"
 #include "mesh/tet_mesh.h"
 
@@ -30,5 +33,55 @@ struct GtnWriteOptions {
   bool directory = true;     // write the directory and trailer for random access
 };
 
+// Encodes every level (encodeLevel), then writes the file atomically (format/file_io.h): prefix,
+// GHDR, per level LHDR BNDY CONN GEOM PFLD... CFLD... [MTRE], then [DIRC] and GEND. All levels must
+// share level 0's coordinate type and field descriptions. Deterministic: the same meshes and options
+// give the same bytes. Fails with kUsage for an empty level list or a null mesh.
 Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels,
                     const GtnWriteOptions& options);
+
+// Zstd level the writer uses for chunks (fixed: part of what makes the output deterministic).
+inline constexpr int kGtnZstdLevel = 9;
+
+// Writes the container chunk by chunk to `out` (spec/gtn-format.md). The low-level half of
+// writeGtnFile, public so that tools and tests can build files from already encoded levels and add
+// chunks of their own (e.g. unknown ones, to test readers).
+class GtnStreamWriter {
+ public:
+  using Output = std::function<Status(std::span<const uint8_t>)>;
+  GtnStreamWriter(Output out, GtnWriteOptions options);
+
+  // Writes the prefix and the GHDR. `level0` gives counts, coordinate type, fields, bounding box and
+  // metadata; `level_count` how many levels will follow.
+  Status begin(const LevelHeader& level0, uint64_t level_count);
+  // Writes one level's chunks. `encoded.header.level` must be the next index, its fields those of
+  // level 0, and its stream counts match its field counts. `merge_tree`, when given, becomes MTRE.
+  Status addLevel(const EncodedLevel& encoded, double ratio, const std::optional<std::vector<uint8_t>>& merge_tree);
+  // Writes an arbitrary chunk here (part of the current level in the directory, if one has begun).
+  Status addChunk(ChunkTag tag, std::span<const uint8_t> payload, bool ancillary);
+  // Writes the directory (if enabled) and the end chunk. Fails if fewer levels than declared were added.
+  Status finish();
+
+  uint64_t offset() const { return offset_; }
+
+ private:
+  Status emit(ChunkTag tag, std::span<const uint8_t> payload, bool ancillary, bool try_zstd);
+
+  Output out_;
+  GtnWriteOptions options_;
+  LevelHeader level0_;
+  uint64_t level_count_ = 0;
+  uint64_t levels_written_ = 0;
+  uint64_t offset_ = 0;
+  bool begun_ = false, finished_ = false;
+  std::vector<std::vector<GtnDirectoryEntry>> directory_;
+  std::vector<uint8_t> scratch_;
+};
+
+// Assembles a whole file in memory from encoded levels (tests, tools). `merge_trees` is empty or has
+// one optional payload per level; `ratios` likewise (missing entries: 0).
+StatusOr<std::vector<uint8_t>> assembleGtn(const std::vector<const EncodedLevel*>& levels,
+                                           const GtnWriteOptions& options, const std::vector<double>& ratios = {},
+                                           const std::vector<std::optional<std::vector<uint8_t>>>& merge_trees = {});
+
+}  // namespace gtn

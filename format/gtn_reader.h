@@ -1,0 +1,117 @@
+// Reading .gtn files (spec/gtn-format.md): validation of the prefix, framing, checksums, sizes and
+// chunk order; per-level information; decoding a level to a MeshSink; random access to a level through
+// the directory when the file is seekable.
+//
+// Every failure is a Status whose message names the file, the byte offset and the reason: kNotOurFile
+// (bad magic), kVersionTooNew (newer major version), kInvalidData (truncation, trailing bytes, checksum
+// mismatch, unknown critical chunk, bad sizes, chunks out of order, corrupt codec streams), kIo (cannot
+// open or read). Allocations are bounded by the file's size: no length is trusted beyond the bytes that
+// remain.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "codec/level_codec.h"
+#include "format/gtn_records.h"
+#include "mesh/mesh_stream.h"
+
+namespace gtn {
+
+struct GtnChunkInfo {
+  ChunkTag tag;
+  std::string section;        // "boundary", "point_field:density", "unknown:abcd", ... (see sections())
+  uint64_t offset = 0;        // of the chunk's first byte
+  uint64_t bytes = 0;         // the whole chunk: framing, stored payload, checksum
+  uint64_t stored_bytes = 0;  // payload as stored (0 when only known from the directory)
+  uint64_t raw_bytes = 0;     // payload after decompression (0 when only known from the directory)
+  bool zstd = false;
+};
+
+struct GtnLevelInfo {
+  LevelHeader header;  // counts, bounding box of this level; fields and metadata from the file header
+  double ratio = 0.0;  // vertices merged away / vertices of level 0
+  bool has_merge_tree = false;
+  std::vector<GtnChunkInfo> chunks;  // LHDR first, in file order
+  uint64_t bytes = 0;                // all chunks of the level
+};
+
+struct GtnFileInfo {
+  std::string path;
+  uint16_t major = 0, minor = 0;
+  uint64_t bytes = 0;  // file size
+  GtnFileHeader header;
+  bool has_directory = false;
+  std::vector<GtnChunkInfo> chunks;  // file-level chunks: GHDR, ancillary chunks outside levels, DIRC, GEND
+};
+
+struct GtnSection {
+  std::string name;
+  uint64_t bytes = 0;
+};
+
+// The coded streams of one level as stored (decompressed), with the header to decode them.
+struct GtnLevelStreams {
+  LevelHeader header;
+  std::vector<uint8_t> boundary, connectivity, geometry;
+  std::vector<std::vector<uint8_t>> point_fields, cell_fields;
+  LevelPayload payload() const;  // views of the buffers above
+};
+
+struct GtnOpenOptions {
+  // true: read every chunk front to back at open, checking framing, order and checksums, and reject
+  // truncation and trailing bytes. false: with a seekable file that has a valid trailer and directory,
+  // read only the prefix, GHDR, trailer, directory and level headers (each chunk still checksummed
+  // when read); without them, fall back to the full scan.
+  bool verify = true;
+};
+
+class GtnReader {
+ public:
+  // `path` "-" reads standard input (buffered whole, since a pipe cannot seek; the scan itself never
+  // seeks backwards). Non-regular files (pipes, devices) are buffered too.
+  static StatusOr<std::unique_ptr<GtnReader>> open(const std::string& path, const GtnOpenOptions& options = {});
+  // Reads a file already in memory (`name` names it in messages); scans it front to back.
+  static StatusOr<std::unique_ptr<GtnReader>> openMemory(std::string bytes, const std::string& name,
+                                                         const GtnOpenOptions& options = {});
+  ~GtnReader();
+
+  const GtnFileInfo& file() const { return file_; }
+  size_t levels() const { return levels_.size(); }
+  const GtnLevelInfo& level(size_t i) const { return levels_.at(i); }
+  // Whether open() used the directory instead of scanning every chunk.
+  bool openedByDirectory() const { return by_directory_; }
+
+  // Decodes level `i` with the codec and streams it to `sink`; checks the stream's counts against the
+  // level header. `stats` (optional) receives the decoder's statistics.
+  Status decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats = nullptr);
+  // Reads (and checksums) level `i`'s coded streams without decoding them.
+  StatusOr<GtnLevelStreams> readLevelStreams(size_t i);
+  // The raw merge-tree payload of level `i` (MTRE), or nullopt when the level has none.
+  StatusOr<std::optional<std::vector<uint8_t>>> mergeTreePayload(size_t i);
+
+  // Bytes per kind of content, summed over the file; the sizes add up to the file size. Names:
+  // prefix, header, level_header, boundary, connectivity, geometry, point_field:<name>,
+  // cell_field:<name>, merge_tree, directory, trailer, unknown:<type>.
+  std::vector<GtnSection> sections() const;
+
+  class Source;
+
+ private:
+  GtnReader() = default;
+  static StatusOr<std::unique_ptr<GtnReader>> finishOpen(std::unique_ptr<GtnReader> r, bool try_directory);
+  Status scan();
+  Status openByDirectory();
+  StatusOr<std::vector<uint8_t>> readChunk(const GtnChunkInfo& c, ChunkHeader* header = nullptr);
+  std::string sectionName(const ChunkTag& tag, size_t index_in_level) const;
+
+  std::unique_ptr<Source> source_;
+  GtnFileInfo file_;
+  std::vector<GtnLevelInfo> levels_;
+  bool by_directory_ = false;
+};
+
+}  // namespace gtn

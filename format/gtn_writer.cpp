@@ -1,0 +1,177 @@
+#include <cstdio>
+
+#include "format/file_io.h"
+#include "format/gtn_file.h"
+
+namespace gtn {
+
+namespace {
+bool sameFields(const std::vector<FieldDesc>& a, const std::vector<FieldDesc>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (a[i].name != b[i].name || a[i].components != b[i].components || a[i].type != b[i].type) return false;
+  return true;
+}
+}  // namespace
+
+GtnStreamWriter::GtnStreamWriter(Output out, GtnWriteOptions options)
+    : out_(std::move(out)), options_(std::move(options)) {}
+
+Status GtnStreamWriter::emit(ChunkTag tag, std::span<const uint8_t> payload, bool ancillary, bool try_zstd) {
+  scratch_.clear();
+  appendGtnChunk(scratch_, tag, payload, ancillary, try_zstd && options_.zstd, kGtnZstdLevel);
+  if (begun_ && levels_written_ > 0 && !directory_.empty() && tag != kTagDirectory && tag != kTagEnd)
+    directory_.back().push_back({tag, offset_, scratch_.size()});
+  GTN_RETURN_IF_ERROR(out_(scratch_));
+  offset_ += scratch_.size();
+  return Status::ok();
+}
+
+Status GtnStreamWriter::begin(const LevelHeader& level0, uint64_t level_count) {
+  if (begun_) return usageError("GtnStreamWriter::begin called twice");
+  if (level_count == 0 || level_count > kGtnMaxLevels)
+    return usageError("a .gtn file holds 1 to " + std::to_string(kGtnMaxLevels) + " levels, not " +
+                      std::to_string(level_count));
+  if (!isFloatType(level0.coord_type)) return usageError("coordinates must be float32 or float64");
+  level0_ = level0;
+  level_count_ = level_count;
+  const auto prefix = encodeGtnPrefix();
+  GTN_RETURN_IF_ERROR(out_(prefix));
+  offset_ = prefix.size();
+  GtnFileHeader h;
+  h.writer_flags = options_.directory ? kGhdrHasDirectory : 0;
+  h.level_count = level_count;
+  h.points = level0.points;
+  h.tets = level0.tets;
+  h.coord_type = level0.coord_type;
+  h.point_fields = level0.point_fields;
+  h.cell_fields = level0.cell_fields;
+  for (int i = 0; i < 3; ++i) {
+    h.bbox_min[i] = level0.bbox_min[i];
+    h.bbox_max[i] = level0.bbox_max[i];
+  }
+  h.tool_version = options_.tool_version;
+  h.command_line = options_.command_line;
+  h.metadata = level0.metadata;
+  begun_ = true;
+  return emit(kTagFileHeader, encodeFileHeader(h), false, true);
+}
+
+Status GtnStreamWriter::addLevel(const EncodedLevel& e, double ratio,
+                                 const std::optional<std::vector<uint8_t>>& merge_tree) {
+  if (!begun_ || finished_) return usageError("GtnStreamWriter::addLevel outside begin/finish");
+  const LevelHeader& h = e.header;
+  if (levels_written_ >= level_count_)
+    return usageError("more levels than the " + std::to_string(level_count_) + " declared");
+  if (h.level != levels_written_)
+    return usageError("level " + std::to_string(h.level) + " given where level " + std::to_string(levels_written_) +
+                      " comes next");
+  if (h.coord_type != level0_.coord_type || !sameFields(h.point_fields, level0_.point_fields) ||
+      !sameFields(h.cell_fields, level0_.cell_fields))
+    return usageError("level " + std::to_string(h.level) +
+                      " has a different coordinate type or field list than level 0; all levels must share them");
+  if (h.level == 0 && (h.points != level0_.points || h.tets != level0_.tets))
+    return usageError("level 0's counts differ from those given to begin()");
+  if (e.point_fields.size() != h.point_fields.size() || e.cell_fields.size() != h.cell_fields.size())
+    return usageError("level " + std::to_string(h.level) + ": the number of field streams does not match the header");
+  if (!(ratio >= 0.0 && ratio <= 1.0)) return usageError("level ratio must be in [0, 1]");
+  if (h.level == 0 && h.merges != 0) return usageError("level 0 must have 0 merges");
+
+  ++levels_written_;
+  if (options_.directory) directory_.emplace_back();
+  GtnLevelRecord r;
+  r.level = h.level;
+  r.merges = h.merges;
+  r.ratio = ratio;
+  r.points = h.points;
+  r.tets = h.tets;
+  r.boundary_triangles = h.boundary_triangles;
+  for (int i = 0; i < 3; ++i) {
+    r.bbox_min[i] = h.bbox_min[i];
+    r.bbox_max[i] = h.bbox_max[i];
+  }
+  GTN_RETURN_IF_ERROR(emit(kTagLevelHeader, encodeLevelRecord(r), false, false));
+  GTN_RETURN_IF_ERROR(emit(kTagBoundary, e.boundary, false, true));
+  GTN_RETURN_IF_ERROR(emit(kTagConnectivity, e.connectivity, false, true));
+  GTN_RETURN_IF_ERROR(emit(kTagGeometry, e.geometry, false, true));
+  for (const auto& s : e.point_fields) GTN_RETURN_IF_ERROR(emit(kTagPointField, s, false, true));
+  for (const auto& s : e.cell_fields) GTN_RETURN_IF_ERROR(emit(kTagCellField, s, false, true));
+  if (merge_tree) GTN_RETURN_IF_ERROR(emit(kTagMergeTree, *merge_tree, true, true));
+  return Status::ok();
+}
+
+Status GtnStreamWriter::addChunk(ChunkTag tag, std::span<const uint8_t> payload, bool ancillary) {
+  if (!begun_ || finished_) return usageError("GtnStreamWriter::addChunk outside begin/finish");
+  return emit(tag, payload, ancillary, true);
+}
+
+Status GtnStreamWriter::finish() {
+  if (!begun_ || finished_) return usageError("GtnStreamWriter::finish called twice or before begin");
+  if (levels_written_ != level_count_)
+    return usageError(std::to_string(levels_written_) + " levels written, " + std::to_string(level_count_) +
+                      " declared");
+  GtnTrailer t;
+  if (options_.directory) {
+    t.directory_offset = offset_;
+    const uint64_t before = offset_;
+    GTN_RETURN_IF_ERROR(emit(kTagDirectory, encodeDirectory(directory_), true, true));
+    t.directory_size = offset_ - before;
+  }
+  GTN_RETURN_IF_ERROR(emit(kTagEnd, encodeTrailer(t), false, false));
+  finished_ = true;
+  return Status::ok();
+}
+
+StatusOr<std::vector<uint8_t>> assembleGtn(const std::vector<const EncodedLevel*>& levels,
+                                           const GtnWriteOptions& options, const std::vector<double>& ratios,
+                                           const std::vector<std::optional<std::vector<uint8_t>>>& merge_trees) {
+  if (levels.empty()) return usageError("no level to write");
+  std::vector<uint8_t> bytes;
+  GtnStreamWriter w(
+      [&](std::span<const uint8_t> b) {
+        bytes.insert(bytes.end(), b.begin(), b.end());
+        return Status::ok();
+      },
+      options);
+  GTN_RETURN_IF_ERROR(w.begin(levels[0]->header, levels.size()));
+  for (size_t i = 0; i < levels.size(); ++i) {
+    GTN_RETURN_IF_ERROR(w.addLevel(*levels[i], i < ratios.size() ? ratios[i] : 0.0,
+                                   i < merge_trees.size() ? merge_trees[i] : std::nullopt));
+  }
+  GTN_RETURN_IF_ERROR(w.finish());
+  return bytes;
+}
+
+Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels,
+                    const GtnWriteOptions& options) {
+  if (levels.empty()) return usageError(path + ": no level to write");
+  for (size_t i = 0; i < levels.size(); ++i)
+    if (!levels[i].mesh) return usageError(path + ": level " + std::to_string(i) + " has no mesh");
+  return writeFileAtomically(path, [&](std::FILE* f) -> Status {
+    GtnStreamWriter w(
+        [&](std::span<const uint8_t> b) -> Status {
+          if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size())
+            return ioError(path + ": write failed");
+          return Status::ok();
+        },
+        options);
+    // One level encoded at a time: the encoder's memory is released before the next level.
+    for (size_t i = 0; i < levels.size(); ++i) {
+      GTN_ASSIGN_OR_RETURN(EncodedLevel e, encodeLevel(*levels[i].mesh, EncodeOptions{}));
+      e.header.level = static_cast<uint32_t>(i);
+      e.header.merges = levels[i].merges;
+      if (i == 0) GTN_RETURN_IF_ERROR(w.begin(e.header, levels.size()));
+      std::optional<std::vector<uint8_t>> tree;
+      if (levels[i].merge_tree) {
+        auto t = levels[i].merge_tree(e.vertex_order);
+        if (!t.isOk()) return t.status();
+        tree = std::move(t).value();
+      }
+      Status st = w.addLevel(e, levels[i].ratio, tree);
+      if (!st.isOk()) return Status(st.code(), path + ": " + st.message());
+    }
+    return w.finish();
+  });
+}
+
+}  // namespace gtn

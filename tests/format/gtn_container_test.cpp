@@ -1,0 +1,407 @@
+// The .gtn container on hand-made codec streams (independent of the codec): framing, checksums,
+// order, truncation, trailing bytes, unknown chunks, versions, directory, determinism.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "format/gtn_bytes.h"
+#include "format/gtn_chunk.h"
+#include "format/gtn_file.h"
+#include "format/gtn_reader.h"
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+std::vector<uint8_t> pattern(size_t n, uint32_t seed, bool compressible) {
+  std::vector<uint8_t> v(n);
+  std::mt19937 rng(seed);
+  for (size_t i = 0; i < n; ++i) v[i] = compressible ? static_cast<uint8_t>((i / 7) % 5) : static_cast<uint8_t>(rng());
+  return v;
+}
+
+// A level with streams of recognisable bytes: two point fields, one cell field.
+EncodedLevel handMadeLevel(uint32_t level, uint64_t points, uint64_t tets) {
+  EncodedLevel e;
+  LevelHeader& h = e.header;
+  h.level = level;
+  h.merges = level * 10;
+  h.points = points;
+  h.tets = tets;
+  h.boundary_triangles = 12;
+  h.coord_type = ScalarType::kFloat32;
+  h.point_fields = {{"density", 1, ScalarType::kFloat32}, {"velocity", 3, ScalarType::kFloat64}};
+  h.cell_fields = {{"region", 1, ScalarType::kInt32}};
+  h.bbox_min[0] = -1.5;
+  h.bbox_max[2] = 2.25;
+  h.metadata = {{"source", "hand made"}, {"units", "m"}};
+  e.boundary = pattern(40, 1 + level, false);
+  e.connectivity = pattern(300, 2 + level, true);  // zstd shrinks this one
+  e.geometry = pattern(120, 3 + level, false);     // and not this one
+  e.point_fields = {pattern(30, 4 + level, false), pattern(0, 5, false)};
+  e.cell_fields = {pattern(9, 6 + level, false)};
+  return e;
+}
+
+GtnWriteOptions opts(bool directory = true, bool zstd = true) {
+  GtnWriteOptions o;
+  o.tool_version = "test 1.0";
+  o.command_line = "gtn convert in.vtk -o out.gtn";
+  o.directory = directory;
+  o.zstd = zstd;
+  return o;
+}
+
+std::vector<uint8_t> twoLevelFile(bool directory = true) {
+  const EncodedLevel l0 = handMadeLevel(0, 100, 400), l1 = handMadeLevel(1, 60, 200);
+  std::vector<std::optional<std::vector<uint8_t>>> trees = {std::nullopt, pattern(50, 9, false)};
+  auto bytes = assembleGtn({&l0, &l1}, opts(directory), {0.0, 0.4}, trees);
+  EXPECT_TRUE(bytes.isOk()) << bytes.status().message();
+  return bytes.value();
+}
+
+std::string writeTemp(const std::string& dir, const std::string& name, const std::vector<uint8_t>& b) {
+  const std::string path = dir + "/" + name;
+  test::writeFile(path, std::string(b.begin(), b.end()));
+  return path;
+}
+
+Status memoryStatus(const std::vector<uint8_t>& b, bool verify = true) {
+  GtnOpenOptions o;
+  o.verify = verify;
+  auto r = GtnReader::openMemory(std::string(b.begin(), b.end()), "mem.gtn", o);
+  return r.isOk() ? Status::ok() : r.status();
+}
+
+Status openStatus(const std::string& path, bool verify = true) {
+  GtnOpenOptions o;
+  o.verify = verify;
+  auto r = GtnReader::open(path, o);
+  return r.isOk() ? Status::ok() : r.status();
+}
+
+TEST(GtnContainer, RoundTripStreamsHeadersAndSections) {
+  const std::string dir = test::tempDir("container-roundtrip");
+  const std::vector<uint8_t> bytes = twoLevelFile();
+  const std::string path = writeTemp(dir, "two.gtn", bytes);
+  for (bool verify : {true, false}) {
+    GtnOpenOptions o;
+    o.verify = verify;
+    auto opened = GtnReader::open(path, o);
+    ASSERT_TRUE(opened.isOk()) << opened.status().message();
+    GtnReader& r = **opened;
+    EXPECT_EQ(r.openedByDirectory(), !verify);
+    EXPECT_EQ(r.file().major, 1);
+    EXPECT_EQ(r.file().minor, 0);
+    EXPECT_TRUE(r.file().has_directory);
+    EXPECT_EQ(r.file().header.tool_version, "test 1.0");
+    EXPECT_EQ(r.file().header.command_line, "gtn convert in.vtk -o out.gtn");
+    ASSERT_EQ(r.levels(), 2u);
+    for (uint32_t i = 0; i < 2; ++i) {
+      const EncodedLevel want = handMadeLevel(i, i ? 60 : 100, i ? 200 : 400);
+      const GtnLevelInfo& li = r.level(i);
+      EXPECT_EQ(li.header.points, want.header.points);
+      EXPECT_EQ(li.header.tets, want.header.tets);
+      EXPECT_EQ(li.header.merges, want.header.merges);
+      EXPECT_EQ(li.header.boundary_triangles, 12u);
+      EXPECT_EQ(li.header.coord_type, ScalarType::kFloat32);
+      ASSERT_EQ(li.header.point_fields.size(), 2u);
+      EXPECT_EQ(li.header.point_fields[1].name, "velocity");
+      EXPECT_EQ(li.header.point_fields[1].components, 3u);
+      EXPECT_EQ(li.header.point_fields[1].type, ScalarType::kFloat64);
+      EXPECT_EQ(li.header.cell_fields[0].type, ScalarType::kInt32);
+      EXPECT_EQ(li.header.bbox_min[0], -1.5);
+      EXPECT_EQ(li.header.bbox_max[2], 2.25);
+      EXPECT_EQ(li.header.metadata, want.header.metadata);
+      EXPECT_DOUBLE_EQ(li.ratio, i ? 0.4 : 0.0);
+      EXPECT_EQ(li.has_merge_tree, i == 1);
+      auto s = r.readLevelStreams(i);
+      ASSERT_TRUE(s.isOk()) << s.status().message();
+      EXPECT_EQ(s->boundary, want.boundary);
+      EXPECT_EQ(s->connectivity, want.connectivity);
+      EXPECT_EQ(s->geometry, want.geometry);
+      EXPECT_EQ(s->point_fields, want.point_fields);
+      EXPECT_EQ(s->cell_fields, want.cell_fields);
+      auto mt = r.mergeTreePayload(i);
+      ASSERT_TRUE(mt.isOk());
+      EXPECT_EQ(mt->has_value(), i == 1);
+      if (i == 1) {
+        EXPECT_EQ(**mt, pattern(50, 9, false));
+      }
+    }
+    uint64_t total = 0;
+    bool saw_velocity = false;
+    for (const GtnSection& s : r.sections()) {
+      total += s.bytes;
+      saw_velocity |= s.name == "point_field:velocity";
+    }
+    EXPECT_EQ(total, bytes.size());
+    EXPECT_TRUE(saw_velocity);
+    EXPECT_FALSE(r.readLevelStreams(2).isOk());
+  }
+}
+
+TEST(GtnContainer, ZstdOnlyWhereItHelps) {
+  const std::string dir = test::tempDir("container-zstd");
+  auto r = GtnReader::open(writeTemp(dir, "z.gtn", twoLevelFile()));
+  ASSERT_TRUE(r.isOk());
+  bool conn_zstd = false, geom_zstd = true;
+  for (const GtnChunkInfo& c : (*r)->level(0).chunks) {
+    if (c.tag == kTagConnectivity) conn_zstd = c.zstd && c.stored_bytes < c.raw_bytes;
+    if (c.tag == kTagGeometry) geom_zstd = c.zstd;
+  }
+  EXPECT_TRUE(conn_zstd);
+  EXPECT_FALSE(geom_zstd);
+  // Without zstd the file is bigger and reads back the same streams.
+  const EncodedLevel l0 = handMadeLevel(0, 100, 400);
+  auto raw = assembleGtn({&l0}, opts(true, false));
+  auto packed = assembleGtn({&l0}, opts(true, true));
+  ASSERT_TRUE(raw.isOk() && packed.isOk());
+  EXPECT_GT(raw->size(), packed->size());
+  auto rr = GtnReader::open(writeTemp(dir, "raw.gtn", raw.value()));
+  ASSERT_TRUE(rr.isOk());
+  EXPECT_EQ((*rr)->readLevelStreams(0)->connectivity, l0.connectivity);
+}
+
+TEST(GtnContainer, DeterministicOutput) {
+  EXPECT_EQ(twoLevelFile(), twoLevelFile());
+  EXPECT_EQ(twoLevelFile(false), twoLevelFile(false));
+}
+
+TEST(GtnContainer, WithoutDirectoryReadsTheSameAndRandomAccessFallsBack) {
+  const std::string dir = test::tempDir("container-nodir");
+  const std::vector<uint8_t> with = twoLevelFile(true), without = twoLevelFile(false);
+  EXPECT_LT(without.size(), with.size());
+  GtnOpenOptions fast;
+  fast.verify = false;
+  auto r = GtnReader::open(writeTemp(dir, "nodir.gtn", without), fast);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_FALSE((*r)->openedByDirectory());
+  EXPECT_FALSE((*r)->file().has_directory);
+  EXPECT_EQ((*r)->levels(), 2u);
+  EXPECT_EQ((*r)->readLevelStreams(1)->geometry, handMadeLevel(1, 60, 200).geometry);
+}
+
+TEST(GtnContainer, EveryTruncatedPrefixFails) {
+  const std::string dir = test::tempDir("container-trunc");
+  const std::vector<uint8_t> bytes = twoLevelFile();
+  const std::string path = "mem.gtn";
+  for (size_t n = 0; n < bytes.size(); ++n) {
+    for (bool verify : {true, false}) {
+      const Status st = memoryStatus(std::vector<uint8_t>(bytes.begin(), bytes.begin() + n), verify);
+      ASSERT_FALSE(st.isOk()) << "prefix of " << n << " bytes was accepted";
+      EXPECT_NE(st.code(), StatusCode::kIo);
+      if (n >= 8) {
+        EXPECT_NE(st.message().find("byte offset"), std::string::npos) << st.message();
+        EXPECT_NE(st.message().find(path), std::string::npos) << st.message();
+      }
+    }
+  }
+  // A cut at a chunk boundary names the missing end chunk; a cut inside one says truncated.
+  const Status st = openStatus(writeTemp(dir, "t2.gtn", std::vector<uint8_t>(bytes.begin(), bytes.end() - 1)));
+  EXPECT_NE(st.message().find("truncated"), std::string::npos) << st.message();
+}
+
+TEST(GtnContainer, TrailingBytesRejected) {
+  const std::string dir = test::tempDir("container-trailing");
+  std::vector<uint8_t> bytes = twoLevelFile();
+  const size_t n = bytes.size();
+  bytes.push_back(0);
+  for (bool verify : {true, false}) {
+    const Status st = openStatus(writeTemp(dir, "tr.gtn", bytes), verify);
+    ASSERT_FALSE(st.isOk());
+    EXPECT_EQ(st.code(), StatusCode::kInvalidData);
+    EXPECT_NE(st.message().find("1 trailing bytes"), std::string::npos) << st.message();
+    EXPECT_NE(st.message().find("byte offset " + std::to_string(n)), std::string::npos) << st.message();
+  }
+}
+
+TEST(GtnContainer, EveryFlippedBitRejected) {
+  const EncodedLevel l0 = handMadeLevel(0, 10, 20);
+  auto made = assembleGtn({&l0}, opts(true));
+  ASSERT_TRUE(made.isOk());
+  const std::vector<uint8_t> bytes = made.value();
+  ASSERT_LT(bytes.size(), 1200u);
+  for (size_t bit = 0; bit < 8 * bytes.size(); ++bit) {
+    std::vector<uint8_t> b = bytes;
+    b[bit / 8] ^= static_cast<uint8_t>(1u << (bit % 8));
+    const Status st = memoryStatus(b);
+    ASSERT_FALSE(st.isOk()) << "flipped bit " << bit << " (byte " << bit / 8 << ") was accepted";
+  }
+}
+
+TEST(GtnContainer, ChecksumMismatchNamesChunkAndOffset) {
+  const std::string dir = test::tempDir("container-checksum");
+  std::vector<uint8_t> bytes = twoLevelFile();
+  auto r = GtnReader::open(writeTemp(dir, "ok.gtn", bytes));
+  ASSERT_TRUE(r.isOk());
+  const GtnChunkInfo geom = (*r)->level(1).chunks[3];
+  ASSERT_EQ(geom.tag, kTagGeometry);
+  bytes[geom.offset + 20] ^= 0x10;
+  const std::string path = writeTemp(dir, "bad.gtn", bytes);
+  const Status st = openStatus(path);
+  EXPECT_EQ(st.code(), StatusCode::kInvalidData);
+  EXPECT_NE(st.message().find("checksum mismatch in chunk 'GEOM'"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("byte offset " + std::to_string(geom.offset)), std::string::npos) << st.message();
+  // Opened through the directory, the damage shows when the level is read.
+  GtnOpenOptions fast;
+  fast.verify = false;
+  auto lazy = GtnReader::open(path, fast);
+  ASSERT_TRUE(lazy.isOk()) << lazy.status().message();
+  EXPECT_TRUE((*lazy)->readLevelStreams(0).isOk());
+  EXPECT_FALSE((*lazy)->readLevelStreams(1).isOk());
+}
+
+// Builds a one-level file without a directory and with an extra chunk after the GHDR and one inside
+// the level.
+std::vector<uint8_t> fileWithExtraChunk(ChunkTag tag, bool ancillary, bool directory) {
+  const EncodedLevel l0 = handMadeLevel(0, 10, 20);
+  std::vector<uint8_t> bytes;
+  GtnStreamWriter w(
+      [&](std::span<const uint8_t> b) {
+        bytes.insert(bytes.end(), b.begin(), b.end());
+        return Status::ok();
+      },
+      opts(directory));
+  EXPECT_TRUE(w.begin(l0.header, 1).isOk());
+  const std::vector<uint8_t> payload = pattern(33, 7, false);
+  EXPECT_TRUE(w.addChunk(tag, payload, ancillary).isOk());
+  EXPECT_TRUE(w.addLevel(l0, 0.0, std::nullopt).isOk());
+  EXPECT_TRUE(w.addChunk(tag, payload, ancillary).isOk());
+  EXPECT_TRUE(w.finish().isOk());
+  return bytes;
+}
+
+TEST(GtnContainer, UnknownAncillaryChunkSkipped) {
+  const std::string dir = test::tempDir("container-unknown");
+  for (bool directory : {false, true}) {
+    for (bool verify : {true, false}) {
+      GtnOpenOptions o;
+      o.verify = verify;
+      auto r = GtnReader::open(writeTemp(dir, "u.gtn", fileWithExtraChunk(ChunkTag("zzXY"), true, directory)), o);
+      ASSERT_TRUE(r.isOk()) << r.status().message();
+      EXPECT_EQ((*r)->readLevelStreams(0)->geometry, handMadeLevel(0, 10, 20).geometry);
+      uint64_t unknown = 0;
+      for (const GtnSection& s : (*r)->sections())
+        if (s.name == "unknown:zzXY") unknown = s.bytes;
+      // Through the directory only the in-level one is listed.
+      EXPECT_EQ((*r)->openedByDirectory(), directory && !verify);
+      EXPECT_EQ(unknown, ((*r)->openedByDirectory() ? 1u : 2u) * (13 + 33 + 8)) << directory << verify;
+    }
+  }
+}
+
+TEST(GtnContainer, UnknownCriticalChunkRejected) {
+  const std::string dir = test::tempDir("container-critical");
+  const Status st = openStatus(writeTemp(dir, "c.gtn", fileWithExtraChunk(ChunkTag("ZZXY"), false, false)));
+  EXPECT_EQ(st.code(), StatusCode::kInvalidData);
+  EXPECT_NE(st.message().find("unknown critical chunk 'ZZXY'"), std::string::npos) << st.message();
+}
+
+TEST(GtnContainer, VersionsMajorRejectedMinorAccepted) {
+  const std::string dir = test::tempDir("container-version");
+  std::vector<uint8_t> bytes = twoLevelFile();
+  const auto newer_major = encodeGtnPrefix(2, 0);
+  std::copy(newer_major.begin(), newer_major.end(), bytes.begin());
+  const Status st = openStatus(writeTemp(dir, "v2.gtn", bytes));
+  EXPECT_EQ(st.code(), StatusCode::kVersionTooNew);
+  EXPECT_NE(st.message().find("format version 2.0 is newer"), std::string::npos) << st.message();
+  const auto newer_minor = encodeGtnPrefix(1, 7);
+  std::copy(newer_minor.begin(), newer_minor.end(), bytes.begin());
+  auto r = GtnReader::open(writeTemp(dir, "v17.gtn", bytes));
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ((*r)->file().minor, 7);
+}
+
+TEST(GtnContainer, MagicDiagnoses) {
+  const std::string dir = test::tempDir("container-magic");
+  std::vector<uint8_t> bytes = twoLevelFile();
+  bytes[0] = 0x0E;
+  Status st = openStatus(writeTemp(dir, "m1.gtn", bytes));
+  EXPECT_EQ(st.code(), StatusCode::kNotOurFile);
+  EXPECT_NE(st.message().find("high bit"), std::string::npos) << st.message();
+  bytes[0] = 0x8E;
+  bytes[4] = 0x0A;  // CR LF -> LF LF, as a text-mode conversion would do
+  st = openStatus(writeTemp(dir, "m2.gtn", bytes));
+  EXPECT_NE(st.message().find("text mode"), std::string::npos) << st.message();
+  st = openStatus(writeTemp(dir, "m3.gtn", {'s', 'o', 'l', 'i', 'd', ' ', 'x', '\n'}));
+  EXPECT_EQ(st.code(), StatusCode::kNotOurFile);
+  EXPECT_NE(st.message().find("not a .gtn file"), std::string::npos) << st.message();
+}
+
+TEST(GtnContainer, ReservedFlagBitsRejected) {
+  std::vector<uint8_t> chunk;
+  appendGtnChunk(chunk, kTagGeometry, pattern(20, 1, false), false, false, 1);
+  chunk[4] |= 0x40;
+  ChunkHeader h;
+  size_t needed;
+  const Status st = parseGtnChunkHeader(chunk, 16, chunk.size(), "x.gtn", &h, &needed);
+  EXPECT_NE(st.message().find("reserved flag bits"), std::string::npos) << st.message();
+}
+
+TEST(GtnContainer, HugeDeclaredSizesFailBeforeAllocating) {
+  // A GHDR claiming 2^60 payload bytes, and a zstd chunk claiming an absurd decompressed size.
+  std::vector<uint8_t> chunk;
+  appendGtnChunk(chunk, kTagFileHeader, pattern(20, 1, false), false, false, 1);
+  for (int i = 0; i < 8; ++i) chunk[5 + i] = i == 7 ? 0x10 : 0;
+  ChunkHeader h;
+  size_t needed;
+  Status st = parseGtnChunkHeader(chunk, 16, chunk.size(), "x.gtn", &h, &needed);
+  EXPECT_NE(st.message().find("truncated"), std::string::npos) << st.message();
+  std::vector<uint8_t> z;
+  appendGtnChunk(z, kTagConnectivity, pattern(3000, 1, true), false, true, 3);
+  ASSERT_EQ(z[4] & kChunkZstd, kChunkZstd);
+  z[13 + 7] = 0x7F;  // raw_size high byte
+  st = parseGtnChunkHeader(z, 16, z.size(), "x.gtn", &h, &needed);
+  EXPECT_NE(st.message().find("beyond the format's bound"), std::string::npos) << st.message();
+}
+
+TEST(GtnContainer, VarintsAreStrict) {
+  const uint8_t non_shortest[] = {0x81, 0x00};
+  const uint8_t too_long[] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x02};
+  const uint8_t max[] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x01};
+  uint64_t v;
+  EXPECT_FALSE(ByteReader(non_shortest, 0, "x").varint(&v, "n").isOk());
+  EXPECT_FALSE(ByteReader(too_long, 0, "x").varint(&v, "n").isOk());
+  ASSERT_TRUE(ByteReader(max, 0, "x").varint(&v, "n").isOk());
+  EXPECT_EQ(v, UINT64_MAX);
+  ByteWriter w;
+  w.varint(UINT64_MAX);
+  EXPECT_EQ(w.bytes(), std::vector<uint8_t>(std::begin(max), std::end(max)));
+}
+
+TEST(GtnContainer, ChunksOutOfOrderRejected) {
+  // A level whose CONN precedes its BNDY: built by swapping the two chunks of a directory-less file.
+  const std::string dir = test::tempDir("container-order");
+  const EncodedLevel l0 = handMadeLevel(0, 10, 20);
+  auto made = assembleGtn({&l0}, opts(false));
+  ASSERT_TRUE(made.isOk());
+  auto r = GtnReader::open(writeTemp(dir, "ok.gtn", made.value()));
+  ASSERT_TRUE(r.isOk());
+  const GtnChunkInfo bndy = (*r)->level(0).chunks[1], conn = (*r)->level(0).chunks[2];
+  ASSERT_EQ(bndy.tag, kTagBoundary);
+  const std::vector<uint8_t>& b = made.value();
+  std::vector<uint8_t> swapped(b.begin(), b.begin() + bndy.offset);
+  swapped.insert(swapped.end(), b.begin() + conn.offset, b.begin() + conn.offset + conn.bytes);
+  swapped.insert(swapped.end(), b.begin() + bndy.offset, b.begin() + bndy.offset + bndy.bytes);
+  swapped.insert(swapped.end(), b.begin() + conn.offset + conn.bytes, b.end());
+  const Status st = openStatus(writeTemp(dir, "swapped.gtn", swapped));
+  EXPECT_NE(st.message().find("out of order"), std::string::npos) << st.message();
+}
+
+TEST(GtnContainer, ReadsFromAPipe) {
+  const std::string dir = test::tempDir("container-pipe");
+  const std::string path = writeTemp(dir, "p.gtn", twoLevelFile());
+  // A FIFO is not a regular file: the reader buffers it and scans front to back.
+  const std::string fifo = dir + "/fifo";
+  ASSERT_EQ(test::runShell("mkfifo " + fifo).exit_code, 0);
+  const test::RunResult bg = test::runShell("(cat " + path + " > " + fifo + " &) ");
+  ASSERT_EQ(bg.exit_code, 0);
+  auto r = GtnReader::open(fifo);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ((*r)->levels(), 2u);
+  EXPECT_EQ((*r)->readLevelStreams(1)->geometry, handMadeLevel(1, 60, 200).geometry);
+}
+
+}  // namespace
+}  // namespace gtn
