@@ -225,8 +225,12 @@ StatusOr<Nodes> readNodes(const std::string& path, std::string_view text, TetMes
   return nodes;
 }
 
-// The .ele; returns the index of the cell field to be filled from the .face markers (-1: none asked).
-StatusOr<int> readTets(const std::string& path, std::string_view text, int64_t base, ImportResult& result) {
+struct Tets {
+  int face_field = -1;  // the cell field to be filled from the .face markers (-1: none asked for)
+  bool quadratic = false;
+};
+
+StatusOr<Tets> readTets(const std::string& path, std::string_view text, int64_t base, ImportResult& result) {
   TetMesh& mesh = result.mesh;
   GTN_ASSIGN_OR_RETURN(const Layout layout, readLayout(path, text, tetgen::kCellFieldsKey, tetgen::kFaceTag));
   TextReader reader(path, text);
@@ -288,7 +292,7 @@ StatusOr<int> readTets(const std::string& path, std::string_view text, int64_t b
   if (readRow(reader, &row))
     return reader.error("more rows than the " + std::to_string(nt) + " tetrahedra the header announces");
   mesh.cell_fields = std::move(map.fields);
-  return map.tagged;
+  return Tets{map.tagged, per_tet == 10};
 }
 
 struct FaceEntry {
@@ -298,8 +302,10 @@ struct FaceEntry {
 };
 
 // The .face, sorted by vertex triple, duplicates removed. `has_markers`: the header's marker flag.
+// `quadratic`: the mesh has 10-node tetrahedra, so each face row lists 3 edge nodes after its corners
+// (TetGen -o2).
 StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_view text, int64_t base, int64_t np,
-                                           bool* has_markers) {
+                                           bool quadratic, bool* has_markers) {
   TextReader reader(path, text);
   std::vector<std::string_view> row;
   GTN_RETURN_IF_ERROR(readHeader(reader, &row, 2, "the .face header (face count)"));
@@ -307,7 +313,8 @@ StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_
   int64_t markers = 0;
   if (row.size() > 1) { GTN_ASSIGN_OR_RETURN(markers, parseIntToken(reader, row[1], 0, 1, "boundary marker flag")); }
   *has_markers = markers == 1;
-  const int64_t width = 4 + markers;
+  const int64_t edge_nodes = quadratic ? 3 : 0;
+  const int64_t width = 4 + edge_nodes + markers;
   GTN_RETURN_IF_ERROR(checkCountFits(reader, count, width, "faces"));
   std::vector<FaceEntry> faces(static_cast<size_t>(count));
   size_t last_line = reader.line();
@@ -318,8 +325,8 @@ StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_
     // TetGen's -nn switch appends the two adjacent tetrahedra to each row; they are recomputed here.
     if (row.size() != static_cast<size_t>(width) && row.size() != static_cast<size_t>(width + 2)) {
       return wrongWidth(reader, row.size(), width,
-                        markers ? "number, 3 node numbers, marker [, 2 adjacent tetrahedra]"
-                                : "number, 3 node numbers [, 2 adjacent tetrahedra]");
+                        std::string("number, 3 node numbers") + (quadratic ? ", 3 edge nodes" : "") +
+                            (markers ? ", marker" : "") + " [, 2 adjacent tetrahedra]");
     }
     GTN_RETURN_IF_ERROR(parseIntToken(reader, row[0], INT64_MIN, INT64_MAX, "face number").status());
     uint32_t v[3];
@@ -336,7 +343,8 @@ StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_
     face.v = tetgen::sortedTriangle(v[0], v[1], v[2]);
     face.line = reader.line();
     if (markers) {
-      GTN_ASSIGN_OR_RETURN(const int64_t m, parseIntToken(reader, row[4], INT32_MIN, INT32_MAX, "face marker"));
+      GTN_ASSIGN_OR_RETURN(const int64_t m,
+                           parseIntToken(reader, row[4 + edge_nodes], INT32_MIN, INT32_MAX, "face marker"));
       face.marker = static_cast<int32_t>(m);
     }
   }
@@ -403,12 +411,13 @@ StatusOr<ImportResult> importTetgen(const std::string& path, const ImportOptions
   ImportResult result;
   TetMesh& mesh = result.mesh;
   GTN_ASSIGN_OR_RETURN(const Nodes nodes, readNodes(node_path, node_text, mesh));
-  GTN_ASSIGN_OR_RETURN(const int face_field, readTets(ele_path, ele_text, nodes.base, result));
+  GTN_ASSIGN_OR_RETURN(const Tets tets, readTets(ele_path, ele_text, nodes.base, result));
+  const int face_field = tets.face_field;
   std::vector<FaceEntry> faces;
   bool face_markers = false;
   if (has_face_file) {
-    GTN_ASSIGN_OR_RETURN(faces, readFaces(face_path, face_text, nodes.base,
-                                          static_cast<int64_t>(mesh.numPoints()), &face_markers));
+    GTN_ASSIGN_OR_RETURN(faces, readFaces(face_path, face_text, nodes.base, static_cast<int64_t>(mesh.numPoints()),
+                                          tets.quadratic, &face_markers));
   }
   if (face_field >= 0 && !face_markers) {
     return invalidData(ele_path + ": its gtn-cell-fields comment puts field '" + mesh.cell_fields[face_field].name +

@@ -299,5 +299,25 @@ TEST(OffErrors, BadInputs) {
   expectError(importOff(p, ImportOptions{}), p + ":1:");
 }
 
+// Every prefix of a valid file imports cleanly or fails with a message naming the file.
+TEST(MeditOffRobustness, Prefixes) {
+  const std::string dir = tempDir("medit-off-prefixes");
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"p.mesh", kMedit}, {"p.off", kOff}}) {
+    const std::string path = dir + "/" + name;
+    size_t failures = 0;
+    for (size_t n = 0; n < text.size(); ++n) {
+      writeFile(path, text.substr(0, n));
+      auto r = importMesh({path}, ImportOptions{});
+      if (r.isOk()) {
+        EXPECT_TRUE(r->mesh.checkConsistency(path).isOk());
+      } else {
+        ++failures;
+        EXPECT_EQ(r.status().message().rfind(path, 0), 0u) << r.status().message();
+      }
+    }
+    EXPECT_GT(failures, text.size() * 3 / 4) << name;
+  }
+}
+
 }  // namespace
 }  // namespace gtn

@@ -9,6 +9,7 @@
 #include <map>
 #include <regex>
 #include <set>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -233,6 +234,43 @@ TEST(TetgenRoundTrip, ExportRejectsInconsistentMeshAndLeavesNoFiles) {
   EXPECT_TRUE(std::filesystem::is_empty(dir));
 }
 
+// Every prefix of every file of an export, and single-byte corruptions of it, must import cleanly or
+// fail with a message naming the file; never crash (the suite also runs under ASan).
+TEST(TetgenRobustness, PrefixesAndCorruptions) {
+  const std::string dir = tempDir("tetgen-prefixes");
+  ASSERT_TRUE(exportTetgen(synthetic(), dir + "/s.node").isOk());
+  size_t failures = 0, runs = 0;
+  uint64_t rng = 0x9E3779B97F4A7C15ull;
+  auto next = [&rng] {
+    rng ^= rng << 13;
+    rng ^= rng >> 7;
+    rng ^= rng << 17;
+    return rng;
+  };
+  for (const char* ext : {".node", ".ele", ".face"}) {
+    const std::string original = readFile(dir + "/s" + ext);
+    auto check = [&](const std::string& text) {
+      writeFile(dir + "/s" + ext, text);
+      auto r = importTetgen(dir + "/s", ImportOptions{});
+      ++runs;
+      if (r.isOk()) {
+        EXPECT_TRUE(r->mesh.checkConsistency("prefix").isOk());
+      } else {
+        ++failures;
+        EXPECT_EQ(r.status().message().rfind(dir + "/s.", 0), 0u) << r.status().message();
+      }
+    };
+    for (size_t n = 0; n < original.size(); ++n) check(original.substr(0, n));
+    for (int i = 0; i < 150; ++i) {
+      std::string text = original;
+      text[next() % text.size()] = " \n#-.0159aex%:"[next() % 15];
+      check(text);
+    }
+    writeFile(dir + "/s" + ext, original);
+  }
+  EXPECT_GT(failures, runs / 2);  // most damaged files are detected
+}
+
 // --- The real tetgen program --------------------------------------------------------------------
 
 const char* kTwoBoxesPoly = R"(# two unit cubes side by side, facets marked 1 and 2, regions 10 and 20
@@ -330,6 +368,27 @@ TEST(TetgenProgram, MeshesTwoBoxesAndImports) {
   const test::RunResult again = test::runShell("cd " + dir + " && /usr/bin/tetgen -rzQ ours");
   EXPECT_EQ(again.exit_code, 0) << again.out << again.err;
   EXPECT_EQ(std::stoul(readFile(dir + "/ours.1.ele")), tets);
+}
+
+TEST(TetgenProgram, QuadraticTetsAndFaces) {
+  if (!fileExists("/usr/bin/tetgen")) GTEST_SKIP() << "/usr/bin/tetgen is not installed";
+  const std::string dir = tempDir("tetgen-program-o2");
+  writeFile(dir + "/boxes.poly", kTwoBoxesPoly);
+  const test::RunResult run = test::runShell("cd " + dir + " && /usr/bin/tetgen -pq1.4a0.05Azo2 boxes.poly");
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  std::istringstream header(readFile(dir + "/boxes.1.ele"));
+  size_t count = 0, per_tet = 0;
+  header >> count >> per_tet;
+  ASSERT_EQ(per_tet, 10u);
+  const ImportResult r = mustImport(dir + "/boxes.1.ele");
+  EXPECT_EQ(r.mesh.numTets(), std::stoul(readFile(dir + "/boxes.1.ele")));
+  EXPECT_EQ(r.mesh.numPoints(), std::stoul(readFile(dir + "/boxes.1.node")));
+  ASSERT_EQ(r.report.warnings.size(), 1u);
+  const MeshStats s = computeMeshStats(r.mesh);
+  EXPECT_EQ(s.inverted, 0u);
+  EXPECT_EQ(s.boundary_faces, std::stoul(readFile(dir + "/boxes.1.face")));
+  EXPECT_GT(s.unreferenced_points, 0u);  // the edge nodes
+  EXPECT_NEAR(s.total_volume, 2.0, 1e-12);
 }
 
 // --- Hand-written files: syntax variants and malformed inputs -------------------------------------
