@@ -4,6 +4,7 @@
 #include "cli/commands.h"
 #include "convert/export.h"
 #include "convert/import.h"
+#include "format/gtn_file.h"
 
 namespace gtn::cli {
 
@@ -39,7 +40,15 @@ int runConvert(const ConvertArgs& a) {
       break;
     }
     case OutputFormat::kTetgen: st = exportTetgen(mesh, a.output); break;
-    case OutputFormat::kGtn: st = unsupported(".gtn output is not implemented yet"); break;
+    case OutputFormat::kGtn: {
+      GtnLevelInput level0;
+      level0.mesh = &mesh;
+      GtnWriteOptions wo;
+      wo.tool_version = GTN_VERSION_STRING;
+      wo.command_line = commandLine();
+      st = writeGtnFile(a.output, {level0}, wo);
+      break;
+    }
     default: st = usageError("unknown output format");
   }
   if (!st.isOk()) return reportError(st);

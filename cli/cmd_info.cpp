@@ -6,6 +6,7 @@
 
 #include "cli/commands.h"
 #include "convert/import.h"
+#include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
 
 namespace gtn::cli {
@@ -84,7 +85,100 @@ void printText(const std::string& name, const MeshStats& s, const ImportReport& 
   if (r.steiner_points) std::printf("  Steiner points      %zu\n", r.steiner_points);
 }
 
+// What a .gtn file holds: the container (version, provenance, levels, bytes per section, bits per
+// tetrahedron of level 0) and the statistics of level 0 as decoded by the streaming decoder.
+int runGtnInfo(const InfoArgs& a) {
+  if (a.inputs.size() != 1) return reportError(usageError("gtn info reads one .gtn file at a time"));
+  const std::string& input = a.inputs[0];
+  auto reader = GtnReader::open(input);  // full validation: every chunk, checksum, order, trailer
+  if (!reader.isOk()) return reportError(reader.status());
+  GtnReader& r = **reader;
+  TetMeshBuilder builder;
+  DecodeStats decode_stats;
+  Status st = r.decodeLevel(0, builder, &decode_stats);
+  if (!st.isOk()) return reportError(st);
+  const TetMesh& mesh = builder.mesh();
+  const MeshStats stats = computeMeshStats(mesh);
+  const GtnFileInfo& f = r.file();
+
+  // Level 0's share of the file: its chunks plus everything that is not another level's.
+  uint64_t connectivity = 0, geometry = 0, fields = 0, total = f.bytes;
+  for (size_t i = 1; i < r.levels(); ++i) total -= r.level(i).bytes;
+  for (const GtnChunkInfo& c : r.level(0).chunks) {
+    if (c.tag == kTagBoundary || c.tag == kTagConnectivity) connectivity += c.bytes;
+    else if (c.tag == kTagGeometry) geometry += c.bytes;
+    else if (c.tag == kTagPointField || c.tag == kTagCellField) fields += c.bytes;
+  }
+  const double tets = static_cast<double>(r.level(0).header.tets);
+  auto bpt = [&](uint64_t bytes) -> nlohmann::json {
+    if (tets == 0) return nullptr;
+    return 8.0 * static_cast<double>(bytes) / tets;
+  };
+  const std::string version = std::to_string(f.major) + "." + std::to_string(f.minor);
+
+  if (a.json) {
+    nlohmann::json j = statsToJson(stats, ImportReport{}, mesh);
+    j.erase("import");
+    j["input"] = a.inputs;
+    j["format"] = "gtn";
+    j["format_version"] = version;
+    j["bytes"] = f.bytes;
+    j["provenance"] = {{"tool_version", f.header.tool_version}, {"command_line", f.header.command_line}};
+    j["has_directory"] = f.has_directory;
+    nlohmann::json sections = nlohmann::json::array();
+    for (const GtnSection& s : r.sections()) sections.push_back({{"name", s.name}, {"bytes", s.bytes}});
+    j["sections"] = sections;
+    j["bits_per_tet"] = {{"connectivity", bpt(connectivity)},
+                         {"geometry", bpt(geometry)},
+                         {"fields", bpt(fields)},
+                         {"total", bpt(total)}};
+    j["peak_live_vertices"] = decode_stats.peak_live_vertices;
+    nlohmann::json levels = nlohmann::json::array();
+    for (size_t i = 0; i < r.levels(); ++i) {
+      const GtnLevelInfo& l = r.level(i);
+      nlohmann::json chunks = nlohmann::json::array();
+      for (const GtnChunkInfo& c : l.chunks)
+        chunks.push_back({{"type", c.tag.str()}, {"section", c.section}, {"bytes", c.bytes},
+                          {"raw_bytes", c.raw_bytes}, {"zstd", c.zstd}});
+      levels.push_back({{"level", i},
+                        {"points", l.header.points},
+                        {"tets", l.header.tets},
+                        {"boundary_triangles", l.header.boundary_triangles},
+                        {"merges", l.header.merges},
+                        {"ratio", l.ratio},
+                        {"merge_tree", l.has_merge_tree},
+                        {"bytes", l.bytes},
+                        {"chunks", chunks}});
+    }
+    j["levels"] = levels;
+    std::printf("%s\n", j.dump(2).c_str());
+    return 0;
+  }
+  std::printf("%s: .gtn format %s, %llu bytes, %zu level(s)%s\n", input.c_str(), version.c_str(),
+              static_cast<unsigned long long>(f.bytes), r.levels(), f.has_directory ? ", with directory" : "");
+  std::printf("  written by          %s\n", f.header.tool_version.c_str());
+  std::printf("  command line        %s\n", f.header.command_line.c_str());
+  for (size_t i = 0; i < r.levels(); ++i) {
+    const GtnLevelInfo& l = r.level(i);
+    std::printf("  level %-3zu           %llu points, %llu tetrahedra, %llu merges (ratio %.4g), %llu bytes%s\n", i,
+                static_cast<unsigned long long>(l.header.points), static_cast<unsigned long long>(l.header.tets),
+                static_cast<unsigned long long>(l.header.merges), l.ratio, static_cast<unsigned long long>(l.bytes),
+                l.has_merge_tree ? ", merge tree" : "");
+  }
+  for (const GtnSection& s : r.sections())
+    std::printf("  section %-22s %llu bytes\n", s.name.c_str(), static_cast<unsigned long long>(s.bytes));
+  if (tets > 0)
+    std::printf("  bits per tetrahedron connectivity %.3f, geometry %.3f, fields %.3f, total %.3f\n",
+                8.0 * connectivity / tets, 8.0 * geometry / tets, 8.0 * fields / tets, 8.0 * total / tets);
+  std::printf("  peak live vertices  %llu\n", static_cast<unsigned long long>(decode_stats.peak_live_vertices));
+  printText(input + " (level 0, decoded)", stats, ImportReport{}, mesh);
+  return 0;
+}
+
 int runInfo(const InfoArgs& a) {
+  for (const std::string& in : a.inputs)
+    // Standard input cannot be sniffed without consuming it: only a .gtn file is read from a pipe.
+    if (in == "-" || detectInputFormat(in) == InputFormat::kGtn) return runGtnInfo(a);
   ImportOptions options;
   options.split = a.split;
   options.weld = a.weld;
@@ -106,7 +200,8 @@ int runInfo(const InfoArgs& a) {
 Command addInfoCommand(CLI::App& app) {
   auto args = std::make_shared<InfoArgs>();
   CLI::App* sub = app.add_subcommand("info", "Print what a mesh holds: counts, orientation, bounding box, fields");
-  sub->add_option("inputs", args->inputs, "Input files (as for convert)")->required();
+  sub->add_option("inputs", args->inputs, "Input files (as for convert), or one .gtn file ('-': standard input)")
+      ->required();
   sub->add_option("--split", args->split, "Hexahedra into 5 or 6 tetrahedra")->check(CLI::IsMember({5, 6}));
   sub->add_flag("--weld", args->weld, "PLOT3D: merge bit-identical points");
   sub->add_flag("--json", args->json, "Print one JSON object on standard output");
