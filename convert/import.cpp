@@ -54,7 +54,9 @@ InputFormat detectInputFormat(const std::string& path) {
   if (ext == "mesh" || h.find("MeshVersionFormatted") != std::string::npos) return InputFormat::kMedit;
   if (ext == "off" || ext == "toff") return InputFormat::kOff;
   if (ext == "node" || ext == "ele" || ext == "face") return InputFormat::kTetgen;
-  if (ext.empty() && (isRegularFile(path + ".node") || isRegularFile(path + ".ele"))) return InputFormat::kTetgen;
+  // A TetGen basename such as "foo.1" has an extension of its own but names no file.
+  if ((ext.empty() || !isRegularFile(path)) && (isRegularFile(path + ".node") || isRegularFile(path + ".ele")))
+    return InputFormat::kTetgen;
   if (ext == "p3d" || ext == "xyz" || ext == "x" || ext == "g" || ext == "grd" || ext == "q" || ext == "f" ||
       ext == "fun" || ext == "bin" || ext == "p3d.json" || ext == "fmt")
     return InputFormat::kPlot3d;
