@@ -552,5 +552,15 @@ TEST(TetgenCli, ConvertToTetgenAndInfo) {
   EXPECT_EQ(j["metadata"]["source.format"], "tetgen");
 }
 
+TEST(TetgenCli, InfoOnBasename) {
+  // "cornell_spheres.1" names no file; its .node and .ele make it a TetGen basename.
+  const test::RunResult i = test::runGtn("info " + dataPath("tetgen/cornell_spheres.1") + " --json");
+  ASSERT_EQ(i.exit_code, 0) << i.err;
+  const nlohmann::json j = nlohmann::json::parse(i.out);
+  EXPECT_EQ(j["points"], 4089);
+  EXPECT_EQ(j["tets"], 24207);
+  EXPECT_EQ(j["inverted"], 0);
+}
+
 }  // namespace
 }  // namespace gtn
