@@ -1,0 +1,317 @@
+// The conformance files in samples/conformance/: valid files that must decode to known meshes and
+// malformed files that must fail with a known reason. The files are committed; this test generates
+// them procedurally and rewrites them only when GTN_UPDATE_GOLDEN=1 is set. Without it, it decodes the
+// committed files (they are decode-compatibility vectors: a later codec must still read them).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <set>
+
+#include "format/gtn_file.h"
+#include "format/gtn_reader.h"
+#include "mesh/mesh_stats.h"
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+const std::string kDir = std::string(GTN_SOURCE_DIR) + "/samples/conformance/";
+
+// An n x n x n grid of cubes, each split into 6 tetrahedra around its main diagonal (conforming),
+// offset by `origin` along x. Fields are filled with values derived from the position.
+void addCubeGrid(TetMesh& m, int n, double origin, double scale) {
+  const uint32_t base = static_cast<uint32_t>(m.numPoints());
+  auto id = [&](int i, int j, int k) { return base + static_cast<uint32_t>((k * (n + 1) + j) * (n + 1) + i); };
+  for (int k = 0; k <= n; ++k)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        // Slightly irregular positions so predictions have something to do; exact in float32.
+        const double jitter = ((i * 7 + j * 3 + k * 5) % 4) * 0.0625;
+        m.coords.push_back(origin + scale * (i + 0.25 * jitter));
+        m.coords.push_back(scale * j);
+        m.coords.push_back(scale * (k + 0.125 * jitter));
+      }
+  static const int kKuhn[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        uint32_t c[8];
+        for (int b = 0; b < 8; ++b) c[b] = id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+        for (const auto& t : kKuhn) m.tets.push_back({c[t[0]], c[t[1]], c[t[2]], c[t[3]]});
+      }
+}
+
+template <class T>
+void fillField(Field& f, size_t items, uint64_t seed) {
+  f.bytes.assign(items * f.components * sizeof(T), 0);
+  for (size_t i = 0; i < items; ++i)
+    for (uint32_t c = 0; c < f.components; ++c) {
+      const uint64_t x = (i * 2654435761u + c * 40503u + seed) % 1000;
+      f.set<T>(i, c, static_cast<T>(x) / static_cast<T>(T(1) + (std::is_floating_point_v<T> ? 7 : 0)));
+    }
+}
+
+TetMesh finish(TetMesh m) {
+  size_t zero = 0;
+  normalizeOrientation(m, &zero);
+  return m;
+}
+
+TetMesh cubeF32() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat32;
+  addCubeGrid(m, 3, 0.0, 1.0);
+  Field f("density", 1, ScalarType::kFloat32, 0);
+  fillField<float>(f, m.numPoints(), 1);
+  m.point_fields.push_back(f);
+  m.setMetadata("source", "gtn conformance generator");
+  return finish(m);
+}
+
+TetMesh cubeF64Fields() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat64;
+  addCubeGrid(m, 3, 0.0, 0.1);
+  const size_t np = m.numPoints(), nt = m.numTets();
+  Field a("pressure", 1, ScalarType::kFloat64, 0), b("velocity", 3, ScalarType::kFloat32, 0),
+      c("label", 1, ScalarType::kInt32, 0), d("flags", 2, ScalarType::kUInt8, 0);
+  fillField<double>(a, np, 2);
+  fillField<float>(b, np, 3);
+  fillField<int32_t>(c, np, 4);
+  fillField<uint8_t>(d, np, 5);
+  m.point_fields = {a, b, c, d};
+  Field r("region", 1, ScalarType::kInt32, 0), s("stress", 2, ScalarType::kFloat64, 0);
+  fillField<int32_t>(r, nt, 6);
+  fillField<double>(s, nt, 7);
+  m.cell_fields = {r, s};
+  return finish(m);
+}
+
+TetMesh unusedPoints() {
+  TetMesh m = cubeF32();
+  // Two points no tetrahedron uses (as in raptorTetra_19409.vtu), with field values of their own.
+  for (double v : {9.0, 9.0, 9.0, -4.0, 0.5, 0.25}) m.coords.push_back(v);
+  Field& f = m.point_fields[0];
+  f.bytes.resize(f.bytes.size() + 8);
+  f.set<float>(m.numPoints() - 2, 0, 42.0f);
+  f.set<float>(m.numPoints() - 1, 0, -1.0f);
+  return m;
+}
+
+TetMesh twoComponents() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat32;
+  addCubeGrid(m, 2, 0.0, 1.0);
+  addCubeGrid(m, 2, 10.0, 1.0);
+  Field f("temperature", 1, ScalarType::kFloat32, 0);
+  fillField<float>(f, m.numPoints(), 8);
+  m.point_fields.push_back(f);
+  return finish(m);
+}
+
+GtnWriteOptions options(bool directory = true) {
+  GtnWriteOptions o;
+  o.tool_version = "conformance";
+  o.command_line = "GTN_UPDATE_GOLDEN=1 gtn_conformance_test";
+  o.directory = directory;
+  return o;
+}
+
+std::vector<uint8_t> encodeFile(const TetMesh& mesh, const GtnWriteOptions& o,
+                                const std::function<void(GtnStreamWriter&)>& extra = nullptr) {
+  auto e = encodeLevel(mesh, EncodeOptions{});
+  EXPECT_TRUE(e.isOk()) << e.status().message();
+  std::vector<uint8_t> bytes;
+  GtnStreamWriter w(
+      [&](std::span<const uint8_t> b) {
+        bytes.insert(bytes.end(), b.begin(), b.end());
+        return Status::ok();
+      },
+      o);
+  EXPECT_TRUE(w.begin(e->header, 1).isOk());
+  if (extra) extra(w);
+  EXPECT_TRUE(w.addLevel(e.value(), 0.0, std::nullopt).isOk());
+  EXPECT_TRUE(w.finish().isOk());
+  return bytes;
+}
+
+// Offset of the first chunk with `tag` in a valid file.
+uint64_t chunkOffset(const std::vector<uint8_t>& bytes, ChunkTag tag) {
+  auto r = GtnReader::openMemory(std::string(bytes.begin(), bytes.end()), "gen");
+  EXPECT_TRUE(r.isOk());
+  for (const GtnChunkInfo& c : (*r)->level(0).chunks)
+    if (c.tag == tag) return c.offset;
+  return 0;
+}
+
+struct Sample {
+  std::string name;
+  std::function<TetMesh()> mesh;        // valid samples: the mesh it holds
+  std::function<std::vector<uint8_t>()> make;
+  StatusCode code = StatusCode::kOk;    // must-fail samples: the expected code and reason
+  std::string reason;
+};
+
+Sample valid(std::string name, std::function<TetMesh()> mesh, std::function<std::vector<uint8_t>()> make) {
+  Sample s;
+  s.name = std::move(name);
+  s.mesh = std::move(mesh);
+  s.make = std::move(make);
+  return s;
+}
+
+std::vector<Sample> samples() {
+  std::vector<Sample> s;
+  s.push_back(valid("cube.f32.dir.v1.0.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
+  s.push_back(valid("cube.f64.fields.dir.v1.0.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
+  s.push_back(valid("cube.f64.fields.nodir.v1.0.gtn", cubeF64Fields,
+               [] { return encodeFile(cubeF64Fields(), options(false)); }));
+  s.push_back(valid("unused-points.f32.dir.v1.0.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
+  s.push_back(valid("two-components.f32.dir.v1.0.gtn", twoComponents, [] { return encodeFile(twoComponents(), options()); }));
+  s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
+                 const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
+                 return encodeFile(cubeF32(), options(false),
+                                   [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("xNOT"), note, true).isOk()); });
+               }));
+  s.push_back(valid("newer-minor.f32.dir.v1.9.gtn", cubeF32, [] {
+                 std::vector<uint8_t> b = encodeFile(cubeF32(), options());
+                 const auto p = encodeGtnPrefix(1, 9);
+                 std::copy(p.begin(), p.end(), b.begin());
+                 return b;
+               }));
+  // Must fail.
+  s.push_back({"fail.bad-magic-text-mode.gtn", nullptr,
+               [] {
+                 std::vector<uint8_t> b = encodeFile(cubeF32(), options());
+                 b.erase(b.begin() + 4);  // CR LF -> LF, as a text-mode transfer does
+                 return b;
+               },
+               StatusCode::kInvalidData, "bad magic"});
+  s.push_back({"fail.bad-checksum.gtn", nullptr,
+               [] {
+                 std::vector<uint8_t> b = encodeFile(cubeF32(), options());
+                 b[chunkOffset(b, kTagGeometry) + 40] ^= 0x04;  // past the header, in the payload
+                 return b;
+               },
+               StatusCode::kInvalidData, "checksum mismatch in chunk 'GEOM'"});
+  s.push_back({"fail.truncated.gtn", nullptr,
+               [] {
+                 std::vector<uint8_t> b = encodeFile(cubeF32(), options());
+                 b.resize(chunkOffset(b, kTagConnectivity) + 20);
+                 return b;
+               },
+               StatusCode::kInvalidData, "truncated"});
+  s.push_back({"fail.unknown-critical-chunk.gtn", nullptr,
+               [] {
+                 const std::vector<uint8_t> payload = {1, 2, 3};
+                 return encodeFile(cubeF32(), options(false),
+                                   [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("XTRA"), payload, false).isOk()); });
+               },
+               StatusCode::kInvalidData, "unknown critical chunk 'XTRA'"});
+  s.push_back({"fail.newer-major.v2.0.gtn", nullptr,
+               [] {
+                 std::vector<uint8_t> b = encodeFile(cubeF32(), options());
+                 const auto p = encodeGtnPrefix(2, 0);
+                 std::copy(p.begin(), p.end(), b.begin());
+                 return b;
+               },
+               StatusCode::kVersionTooNew, "newer than this reader supports"});
+  s.push_back({"fail.trailing-bytes.gtn", nullptr,
+               [] {
+                 std::vector<uint8_t> b = encodeFile(cubeF32(), options());
+                 b.push_back('\n');
+                 return b;
+               },
+               StatusCode::kInvalidData, "1 trailing bytes"});
+  return s;
+}
+
+// The mesh as a renumbering-independent multiset: points as (coordinates, field bytes), tetrahedra as
+// the sorted keys of their corners with their cell values.
+std::multiset<std::string> canonical(const TetMesh& m) {
+  std::vector<std::string> key(m.numPoints());
+  for (size_t i = 0; i < m.numPoints(); ++i) {
+    key[i].assign(reinterpret_cast<const char*>(m.point(i)), 24);
+    for (const Field& f : m.point_fields) {
+      const size_t n = f.components * f.valueSize();
+      key[i].append(reinterpret_cast<const char*>(f.bytes.data() + i * n), n);
+    }
+  }
+  std::multiset<std::string> out;
+  for (const std::string& k : key) out.insert("p" + k);
+  for (size_t t = 0; t < m.numTets(); ++t) {
+    std::vector<std::string> c;
+    for (uint32_t v : m.tets[t]) c.push_back(key[v]);
+    std::sort(c.begin(), c.end());
+    std::string k = "t";
+    for (const std::string& s : c) k += s;
+    for (const Field& f : m.cell_fields) {
+      const size_t n = f.components * f.valueSize();
+      k.append(reinterpret_cast<const char*>(f.bytes.data() + t * n), n);
+    }
+    out.insert(k);
+  }
+  return out;
+}
+
+TEST(GtnConformance, CommittedFilesDecodeOrFailAsListed) {
+  const char* update = std::getenv("GTN_UPDATE_GOLDEN");
+  const bool regenerate = update && std::string(update) == "1";
+  const std::string readme = test::readFile(kDir + "README.md");
+  for (const Sample& s : samples()) {
+    SCOPED_TRACE(s.name);
+    const std::string path = kDir + s.name;
+    if (regenerate) {
+      const std::vector<uint8_t> b = s.make();
+      test::writeFile(path, std::string(b.begin(), b.end()));
+    }
+    ASSERT_TRUE(test::fileExists(path)) << "missing; regenerate with GTN_UPDATE_GOLDEN=1";
+    EXPECT_NE(readme.find(s.name), std::string::npos) << "not listed in samples/conformance/README.md";
+    auto r = GtnReader::open(path);
+    if (!s.mesh) {
+      ASSERT_FALSE(r.isOk());
+      EXPECT_EQ(r.status().code(), s.code) << r.status().message();
+      EXPECT_NE(r.status().message().find(s.reason), std::string::npos) << r.status().message();
+      EXPECT_NE(r.status().message().find(path), std::string::npos) << r.status().message();
+      continue;
+    }
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const TetMesh want = s.mesh();
+    TetMeshBuilder b;
+    DecodeStats stats;
+    const Status st = (*r)->decodeLevel(0, b, &stats);
+    ASSERT_TRUE(st.isOk()) << st.message();
+    const TetMesh& got = b.mesh();
+    EXPECT_EQ(got.numPoints(), want.numPoints());
+    EXPECT_EQ(got.numTets(), want.numTets());
+    EXPECT_EQ(got.coord_type, want.coord_type);
+    ASSERT_EQ(got.point_fields.size(), want.point_fields.size());
+    ASSERT_EQ(got.cell_fields.size(), want.cell_fields.size());
+    for (size_t i = 0; i < want.point_fields.size(); ++i) {
+      EXPECT_EQ(got.point_fields[i].name, want.point_fields[i].name);
+      EXPECT_EQ(got.point_fields[i].type, want.point_fields[i].type);
+      EXPECT_EQ(got.point_fields[i].components, want.point_fields[i].components);
+    }
+    EXPECT_TRUE(canonical(got) == canonical(want)) << "decoded mesh differs from the generated one";
+    EXPECT_GT(stats.peak_live_vertices, 0u);
+    // Opened through the directory (when there is one), the same level decodes the same.
+    GtnOpenOptions fast;
+    fast.verify = false;
+    auto lazy = GtnReader::open(path, fast);
+    ASSERT_TRUE(lazy.isOk());
+    EXPECT_EQ((*lazy)->openedByDirectory(), s.name.find(".dir.") != std::string::npos);
+    TetMeshBuilder b2;
+    ASSERT_TRUE((*lazy)->decodeLevel(0, b2).isOk());
+    EXPECT_EQ(b2.mesh().tets, got.tets);
+  }
+}
+
+TEST(GtnConformance, GeneratorIsDeterministic) {
+  for (const Sample& s : samples()) EXPECT_EQ(s.make(), s.make()) << s.name;
+}
+
+}  // namespace
+}  // namespace gtn
