@@ -17,7 +17,8 @@ namespace gtn::cli {
 
 namespace {
 struct RenderArgs {
-  std::string input, output;
+  std::vector<std::string> inputs;
+  std::string output;
   std::string size = "256x256";
   std::string projection = "ortho";
   double azimuth = 30, elevation = 20, zoom = 1;
@@ -112,7 +113,7 @@ int runRender(const RenderArgs& a) {
   if (Status st = buildOptions(a, &options); !st.isOk()) return reportError(st);
   const int chosen = (a.level >= 0) + (a.ratio >= 0) + (a.merges >= 0) + (a.budget_ms >= 0);
   if (chosen > 1) return reportError(usageError("use at most one of --level, --ratio, --merges and --budget-ms"));
-  auto input = RenderInput::open(a.input);
+  auto input = RenderInput::open(a.inputs);
   if (!input.isOk()) return reportError(input.status());
   const bool generic = a.pipeline == "generic";
   nlohmann::json report;
@@ -122,7 +123,7 @@ int runRender(const RenderArgs& a) {
   choice.merges = a.merges;
   if (a.budget_ms >= 0) {
     std::string explanation;
-    auto budget = chooseForBudget(**input, a.input, a.budget_ms, options, generic, &explanation);
+    auto budget = chooseForBudget(**input, a.inputs[0], a.budget_ms, options, generic, &explanation);
     if (!budget.isOk()) return reportError(budget.status());
     choice = budget.value();
     report["budget_ms"] = a.budget_ms;
@@ -135,7 +136,7 @@ int runRender(const RenderArgs& a) {
   if (!image.isOk()) return reportError(image.status());
   if (Status st = writePng(a.output, image.value()); !st.isOk()) return reportError(st);
   const double total_ms = msSince(start);
-  report["input"] = a.input;
+  report["input"] = a.inputs;
   report["output"] = a.output;
   report["pipeline"] = generic ? "generic" : "integrated";
   report["level"] = level->level;
@@ -160,7 +161,7 @@ int runRender(const RenderArgs& a) {
 Command addRenderCommand(CLI::App& app) {
   auto a = std::make_shared<RenderArgs>();
   CLI::App* sub = app.add_subcommand("render", "Render a volume mesh to a PNG image (streaming ray casting)");
-  sub->add_option("input", a->input, "a .gtn file, or any mesh the importers read")->required();
+  sub->add_option("inputs", a->inputs, "a .gtn file, or the input(s) of any mesh the importers read")->required();
   sub->add_option("-o,--output", a->output, "output PNG image")->required();
   sub->add_option("--size", a->size, "image size WxH (default 256x256)");
   sub->add_option("--projection", a->projection, "ortho (default) or persp");

@@ -10,17 +10,19 @@ namespace gtn {
 
 RenderInput::~RenderInput() = default;
 
-StatusOr<std::unique_ptr<RenderInput>> RenderInput::open(const std::string& path) {
+StatusOr<std::unique_ptr<RenderInput>> RenderInput::open(const std::vector<std::string>& inputs) {
+  if (inputs.empty()) return usageError("no input to render");
   std::unique_ptr<RenderInput> in(new RenderInput());
+  const std::string& path = inputs[0];
   in->path_ = path;
-  if (detectInputFormat(path) == InputFormat::kGtn) {
+  if (inputs.size() == 1 && detectInputFormat(path) == InputFormat::kGtn) {
     GtnOpenOptions options;
     options.verify = false;  // chunks are still checksummed as they are read
     GTN_ASSIGN_OR_RETURN(in->reader_, GtnReader::open(path, options));
     if (in->reader_->levels() == 0) return invalidData(path + ": the file holds no level");
     return in;
   }
-  GTN_ASSIGN_OR_RETURN(ImportResult imported, importMesh({path}, ImportOptions()));
+  GTN_ASSIGN_OR_RETURN(ImportResult imported, importMesh(inputs, ImportOptions()));
   GTN_ASSIGN_OR_RETURN(EncodedLevel encoded, encodeLevel(imported.mesh, EncodeOptions()));
   in->encoded_ = std::make_unique<EncodedLevel>(std::move(encoded));
   return in;

@@ -33,7 +33,8 @@ struct ResolvedLevel {
 
 class RenderInput {
  public:
-  static StatusOr<std::unique_ptr<RenderInput>> open(const std::string& path);
+  // One .gtn file, or the inputs of one mesh as `gtn convert` takes them (PLOT3D grid + Q, ...).
+  static StatusOr<std::unique_ptr<RenderInput>> open(const std::vector<std::string>& inputs);
   ~RenderInput();
 
   size_t levels() const;

@@ -8,6 +8,7 @@
 #include <functional>
 #include <unordered_map>
 
+#include "codec/level_codec.h"
 #include "convert/import.h"
 #include "mesh/faces.h"
 #include "mesh/hex_split.h"
@@ -297,6 +298,61 @@ TEST(StreamRenderer, HoldsFarLessThanTheMesh) {
   EXPECT_EQ(r.stream_stats.tets, mesh.numTets());
   EXPECT_LT(r.stream_stats.peak_tets_held * 4, mesh.numTets()) << r.stream_stats.peak_tets_held;
   EXPECT_LT(r.stream_stats.peak_vertices, mesh.numPoints());
+}
+
+// Streams an encoded mesh through the real level decoder into a sink.
+Status decodeInto(const EncodedLevel& enc, MeshSink& sink, DecodeStats* stats) {
+  LevelPayload payload;
+  payload.boundary = enc.boundary;
+  payload.connectivity = enc.connectivity;
+  payload.geometry = enc.geometry;
+  for (const auto& f : enc.point_fields) payload.point_fields.emplace_back(f);
+  for (const auto& f : enc.cell_fields) payload.cell_fields.emplace_back(f);
+  return decodeLevel(enc.header, payload, sink, stats, "test");
+}
+
+void checkDecodedRender(const TetMesh& mesh, RenderOptions o, double held_fraction) {
+  auto enc = encodeLevel(mesh, EncodeOptions());
+  ASSERT_TRUE(enc.isOk()) << enc.status().message();
+  TetMeshBuilder builder;
+  Status st = decodeInto(enc.value(), builder, nullptr);
+  ASSERT_TRUE(st.isOk()) << st.message();
+  for (Sampling sampling : {Sampling::kVolume, Sampling::kFace}) {
+    o.sampling = sampling;
+    StreamRenderer renderer(o);
+    DecodeStats stats;
+    st = decodeInto(enc.value(), renderer, &stats);
+    ASSERT_TRUE(st.isOk()) << st.message();
+    GenericRenderStats gstats;
+    auto generic = renderGeneric(builder.header(), builder.mesh(), builder.boundary(), o, &gstats);
+    ASSERT_TRUE(generic.isOk()) << generic.status().message();
+    EXPECT_GT(litPixels(renderer.image()), 500u);
+    expectSameImage(renderer.image(), generic.value(), 1);
+    const StreamRenderStats& s = renderer.stats();
+    EXPECT_EQ(s.tets, mesh.numTets());
+    EXPECT_LT(static_cast<double>(s.peak_tets_held), held_fraction * mesh.numTets())
+        << s.peak_tets_held << " of " << mesh.numTets();
+    EXPECT_LE(s.peak_vertices, stats.peak_live_vertices);
+    EXPECT_LE(s.lost_cursors, 2u);
+  }
+}
+
+TEST(StreamRenderer, RealDecodeStreamOfSpx) {
+  auto imported = importMesh({test::dataPath("vtk/spx.vtk")}, ImportOptions());
+  ASSERT_TRUE(imported.isOk()) << imported.status().message();
+  RenderOptions o = smallOptions(Sampling::kVolume);
+  o.camera.width = o.camera.height = 64;
+  checkDecodedRender(imported->mesh, o, 0.3);
+}
+
+TEST(StreamRenderer, RealDecodeStreamOfBluntFin) {
+  auto imported = importMesh({test::dataPath("plot3d/bluntfinxyz.bin"), test::dataPath("plot3d/bluntfinq.bin")},
+                             ImportOptions());
+  ASSERT_TRUE(imported.isOk()) << imported.status().message();
+  RenderOptions o = smallOptions(Sampling::kVolume);
+  o.camera.width = o.camera.height = 64;
+  o.field = parseFieldSelector("density").value();
+  checkDecodedRender(imported->mesh, o, 0.15);
 }
 
 TEST(TransferFunction, ParsesAndRejects) {
