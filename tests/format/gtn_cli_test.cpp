@@ -1,0 +1,196 @@
+// gtn convert / info / export on .gtn files, through the built binary, on real data.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <set>
+
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+using nlohmann::json;
+
+json infoJson(const std::string& args) {
+  const test::RunResult r = test::runGtn("info " + args + " --json");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return r.exit_code == 0 ? json::parse(r.out) : json();
+}
+
+// The data-dependent part of `gtn info --json` (what a lossless round trip must keep). Volumes are
+// sums of floating-point determinants whose last bits depend on vertex and tetrahedron order (a
+// renumbering), so they are rounded to 9 significant digits.
+json meshSummary(const json& j) {
+  json s;
+  for (const char* k : {"points", "tets", "faces", "boundary_faces", "inverted", "zero_volume", "unreferenced_points",
+                        "coordinate_type", "bbox", "fields"})
+    s[k] = j.at(k);
+  for (const char* k : {"min", "max", "total"}) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", j.at("volume").at(k).get<double>());
+    s["volume"][k] = buf;
+  }
+  return s;
+}
+
+class GtnCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    spx_ = test::dataPath("vtk/spx.vtk");
+    ASSERT_TRUE(test::fileExists(spx_)) << "dataset missing: " << spx_;
+    dir_ = test::tempDir("gtn-cli-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+  }
+  std::string spx_, dir_;
+};
+
+TEST_F(GtnCli, ConvertInfoAndPipeOnSpx) {
+  const std::string out = dir_ + "/spx.gtn";
+  test::RunResult r = test::runGtn("convert " + spx_ + " -o " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string bytes = test::readFile(out);
+  ASSERT_GT(bytes.size(), 16u);
+  EXPECT_EQ(static_cast<unsigned char>(bytes[0]), 0x8E);
+  // Far below the source's 12936 x 4 x 4 index bytes + float coordinates and scalars.
+  EXPECT_LT(bytes.size(), 60000u);
+
+  const json j = infoJson(out);
+  EXPECT_EQ(j["format"], "gtn");
+  EXPECT_EQ(j["format_version"], "1.0");
+  EXPECT_EQ(j["points"], 2896);
+  EXPECT_EQ(j["tets"], 12936);
+  EXPECT_EQ(j["faces"], 27252);
+  EXPECT_EQ(j["boundary_faces"], 2760);
+  EXPECT_EQ(j["inverted"], 0);
+  EXPECT_EQ(j["bytes"], bytes.size());
+  uint64_t sum = 0;
+  std::set<std::string> names;
+  for (const json& s : j["sections"]) {
+    sum += s["bytes"].get<uint64_t>();
+    names.insert(s["name"]);
+  }
+  EXPECT_EQ(sum, bytes.size());
+  for (const char* n : {"prefix", "header", "level_header", "boundary", "connectivity", "geometry",
+                        "point_field:scalars", "directory", "trailer"})
+    EXPECT_TRUE(names.count(n)) << n;
+  const json& b = j["bits_per_tet"];
+  EXPECT_GT(b["connectivity"].get<double>(), 0.5);
+  EXPECT_LT(b["connectivity"].get<double>(), 8.0);
+  EXPECT_NEAR(b["total"].get<double>(), 8.0 * bytes.size() / 12936.0, 1e-9);
+  EXPECT_LT(b["connectivity"].get<double>() + b["geometry"].get<double>() + b["fields"].get<double>(),
+            b["total"].get<double>());
+  EXPECT_GT(j["peak_live_vertices"].get<uint64_t>(), 0u);
+  EXPECT_LE(j["peak_live_vertices"].get<uint64_t>(), 2896u);
+  EXPECT_EQ(j["provenance"]["tool_version"], GTN_VERSION_STRING);
+  EXPECT_NE(j["provenance"]["command_line"].get<std::string>().find("convert " + spx_ + " -o " + out),
+            std::string::npos);
+  ASSERT_EQ(j["levels"].size(), 1u);
+  EXPECT_EQ(j["levels"][0]["tets"], 12936);
+
+  // The decoded level holds what the source holds.
+  EXPECT_EQ(meshSummary(j), meshSummary(infoJson(spx_)));
+
+  // From a pipe: the same document but for the input name.
+  r = test::runShell("cat " + out + " | " + GTN_BINARY + " info - --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  json piped = json::parse(r.out);
+  json by_path = j;
+  piped.erase("input");
+  by_path.erase("input");
+  EXPECT_EQ(piped, by_path);
+
+  // Text output names the container and the decoded mesh.
+  r = test::runGtn("info " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(".gtn format 1.0"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("tetrahedra          12936"), std::string::npos) << r.out;
+}
+
+TEST_F(GtnCli, ConvertIsDeterministic) {
+  const std::string out = dir_ + "/d.gtn";
+  ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + out).exit_code, 0);
+  const std::string first = test::readFile(out);
+  ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + out).exit_code, 0);
+  EXPECT_EQ(first, test::readFile(out));
+}
+
+TEST_F(GtnCli, ExportRoundTripsToVtuAndTetgen) {
+  const std::string gtn = dir_ + "/spx.gtn";
+  ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + gtn).exit_code, 0);
+  test::RunResult r = test::runGtn("export " + gtn + " -o " + dir_ + "/spx.vtu");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(meshSummary(infoJson(dir_ + "/spx.vtu")), meshSummary(infoJson(spx_)));
+  r = test::runGtn("export " + gtn + " -o " + dir_ + "/spx.node --level 0");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::fileExists(dir_ + "/spx.ele"));
+  const json t = infoJson(dir_ + "/spx.node");
+  EXPECT_EQ(t["points"], 2896);
+  EXPECT_EQ(t["tets"], 12936);
+  EXPECT_EQ(t["boundary_faces"], 2760);
+  // A .gtn through a pipe exports too.
+  r = test::runShell("cat " + gtn + " | " + GTN_BINARY + " export - -o " + dir_ + "/piped.vtu");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(test::readFile(dir_ + "/piped.vtu"), test::readFile(dir_ + "/spx.vtu"));
+}
+
+TEST_F(GtnCli, RealDatasetWithCellField) {
+  // TetGen output with a region attribute: a cell field through .gtn and back.
+  const std::string src = test::dataPath("tetgen/cornellbox_orig.1.node");
+  const std::string gtn = dir_ + "/box.gtn";
+  test::RunResult r = test::runGtn("convert " + src + " -o " + gtn);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = infoJson(gtn);
+  EXPECT_EQ(j["points"], 331);
+  EXPECT_EQ(j["tets"], 1631);
+  EXPECT_EQ(meshSummary(j), meshSummary(infoJson(src)));
+  r = test::runGtn("export " + gtn + " -o " + dir_ + "/box.vtu");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(meshSummary(infoJson(dir_ + "/box.vtu")), meshSummary(j));
+}
+
+TEST_F(GtnCli, ExitCodes) {
+  const std::string gtn = dir_ + "/spx.gtn";
+  ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + gtn).exit_code, 0);
+  test::RunResult r = test::runGtn("export " + gtn + " -o " + dir_ + "/x.vtu --level 3");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("holds 1 level"), std::string::npos) << r.err;
+  EXPECT_EQ(test::runGtn("export " + gtn + " -o " + dir_ + "/x.png").exit_code, 2);
+  EXPECT_EQ(test::runGtn("export " + gtn).exit_code, 2);
+  r = test::runGtn("info " + dir_ + "/missing.gtn");
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  // Corrupt data: exit 1 with file, offset and reason; a failed export leaves no output behind.
+  std::string bytes = test::readFile(gtn);
+  bytes[bytes.size() / 2] ^= 0x20;
+  test::writeFile(dir_ + "/bad.gtn", bytes);
+  r = test::runGtn("export " + dir_ + "/bad.gtn -o " + dir_ + "/bad.vtu");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("bad.gtn: byte offset"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::fileExists(dir_ + "/bad.vtu"));
+  r = test::runGtn("info " + dir_ + "/bad.gtn");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  // Not a .gtn file from a pipe.
+  r = test::runShell("cat " + spx_ + " | " + GTN_BINARY + " info -");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("not a .gtn file"), std::string::npos) << r.err;
+  // A .gtn input to convert is a usage error and writes nothing.
+  r = test::runGtn("convert " + gtn + " -o " + dir_ + "/again.vtu");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_FALSE(test::fileExists(dir_ + "/again.vtu"));
+}
+
+TEST_F(GtnCli, ConformanceFilesThroughInfo) {
+  const std::string dir = std::string(GTN_SOURCE_DIR) + "/samples/conformance/";
+  for (const char* f : {"cube.f32.dir.v1.0.gtn", "cube.f64.fields.nodir.v1.0.gtn", "newer-minor.f32.dir.v1.9.gtn",
+                        "ancillary-chunk.f32.nodir.v1.0.gtn"})
+    EXPECT_EQ(test::runGtn("info " + dir + f).exit_code, 0) << f;
+  for (const char* f : {"fail.bad-magic-text-mode.gtn", "fail.bad-checksum.gtn", "fail.truncated.gtn",
+                        "fail.unknown-critical-chunk.gtn", "fail.newer-major.v2.0.gtn", "fail.trailing-bytes.gtn"}) {
+    const test::RunResult r = test::runGtn("info " + dir + f);
+    EXPECT_EQ(r.exit_code, 1) << f;
+    EXPECT_NE(r.err.find(f), std::string::npos) << r.err;
+  }
+}
+
+}  // namespace
+}  // namespace gtn
