@@ -17,7 +17,7 @@ namespace gtn {
 // Bounds a reader enforces on header fields (spec: "Limits").
 inline constexpr uint64_t kGtnMaxLevels = 65535;
 inline constexpr uint64_t kGtnMaxFields = 65535;
-inline constexpr uint64_t kGtnMaxComponents = 65535;
+inline constexpr uint64_t kGtnMaxComponents = 4096;  // as the level codec
 
 // GHDR writer flag bits: informational; readers ignore them (and any other "unused" bit).
 inline constexpr uint8_t kGhdrHasDirectory = 0x01;
