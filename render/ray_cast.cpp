@@ -294,6 +294,8 @@ RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
       x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
     }
     if (!ok) continue;
+    x0 = std::clamp(x0, -2.0, w + 2.0), x1 = std::clamp(x1, -2.0, w + 2.0);
+    y0 = std::clamp(y0, -2.0, h + 2.0), y1 = std::clamp(y1, -2.0, h + 2.0);
     const int px0 = std::max(0, static_cast<int>(std::floor(x0)) - 1);
     const int py0 = std::max(0, static_cast<int>(std::floor(y0)) - 1);
     const int px1 = std::min(w - 1, static_cast<int>(std::floor(x1)) + 1);

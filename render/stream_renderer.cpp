@@ -281,10 +281,14 @@ Status StreamRenderer::flushBatch() {
       }
       int px0 = 0, py0 = 0, px1 = w - 1, py1 = h - 1;
       if (ok) {
-        px0 = std::max(0, static_cast<int>(std::floor(x0)) - 1);
-        py0 = std::max(0, static_cast<int>(std::floor(y0)) - 1);
-        px1 = std::min(w - 1, static_cast<int>(std::floor(x1)) + 1);
-        py1 = std::min(h - 1, static_cast<int>(std::floor(y1)) + 1);
+        // Pixels whose centre (px + 0.5) lies in the projected box, with a small margin for rounding.
+        constexpr double kMargin = 1e-3;
+        x0 = std::clamp(x0, -2.0, w + 2.0), x1 = std::clamp(x1, -2.0, w + 2.0);
+        y0 = std::clamp(y0, -2.0, h + 2.0), y1 = std::clamp(y1, -2.0, h + 2.0);
+        px0 = std::max(0, static_cast<int>(std::ceil(x0 - 0.5 - kMargin)));
+        py0 = std::max(0, static_cast<int>(std::ceil(y0 - 0.5 - kMargin)));
+        px1 = std::min(w - 1, static_cast<int>(std::floor(x1 - 0.5 + kMargin)));
+        py1 = std::min(h - 1, static_cast<int>(std::floor(y1 - 0.5 + kMargin)));
       }
       int32_t count = 0;
       for (int py = py0; py <= py1; ++py) {

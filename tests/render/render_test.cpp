@@ -372,8 +372,6 @@ TEST(TransferFunction, ParsesAndRejects) {
 
 TEST(FieldSelector, ComponentsAndMagnitude) {
   std::vector<FieldDesc> fields = {{"a", 1, ScalarType::kFloat64}, {"v", 3, ScalarType::kFloat32}};
-  const uint8_t* none = nullptr;
-  (void)none;
   std::vector<uint8_t> values(8 + 12);
   const double a = 1.5;
   const float v[3] = {3, 4, 12};
