@@ -53,7 +53,12 @@ class EdgeMap {
     uint64_t key;
     uint32_t value;
   };
-  size_t slotOf(uint64_t key) const { return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_; }
+  // Fibonacci hashing: the top bits of the product depend on every key bit.
+  size_t slotOf(uint64_t key) const {
+    uint64_t h = key * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 31;
+    return static_cast<size_t>((h * 0xC2B2AE3D27D4EB4Full) >> shift_);
+  }
   void eraseAt(size_t i) {
     size_t j = i;
     while (true) {
@@ -75,6 +80,7 @@ class EdgeMap {
     old.swap(table_);
     table_.assign(n, Entry{kEmpty, 0});
     mask_ = n - 1;
+    shift_ = 64 - __builtin_ctzll(n);
     size_ = 0;
     for (const Entry& e : old)
       if (e.key != kEmpty) put(e.key, e.value);
@@ -82,6 +88,7 @@ class EdgeMap {
 
   std::vector<Entry> table_;
   size_t mask_ = 0;
+  int shift_ = 64;
   size_t size_ = 0;
 };
 
@@ -93,6 +100,7 @@ struct FrontFace {
   uint32_t v[3];
   uint32_t d;
   uint32_t tet;
+  uint32_t cell;  // record of the near tetrahedron's cell values (level codec), or ~0
 };
 
 class FaceMap {
@@ -151,7 +159,7 @@ class FaceMap {
     uint64_t h = (uint64_t{k[0]} * 0x9E3779B97F4A7C15ull) ^ (uint64_t{k[1]} * 0xC2B2AE3D27D4EB4Full) ^
                  (uint64_t{k[2]} * 0x165667B19E3779F9ull);
     h ^= h >> 29;
-    return static_cast<size_t>(h * 0x9E3779B97F4A7C15ull >> 20) & mask_;
+    return static_cast<size_t>((h * 0x9E3779B97F4A7C15ull) >> shift_);
   }
   void resize(size_t n) {
     std::vector<FrontFace> old;
@@ -160,6 +168,7 @@ class FaceMap {
     empty.key[0] = kEmptyFace;
     table_.assign(n, empty);
     mask_ = n - 1;
+    shift_ = 64 - __builtin_ctzll(n);
     size_ = 0;
     for (const FrontFace& e : old)
       if (e.key[0] != kEmptyFace) insert(e);
@@ -167,6 +176,7 @@ class FaceMap {
 
   std::vector<FrontFace> table_;
   size_t mask_ = 0;
+  int shift_ = 64;
   size_t size_ = 0;
 };
 

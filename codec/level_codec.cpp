@@ -46,6 +46,15 @@ constexpr int kFanSteps = 10;
 constexpr int kTetContexts = 2 * 10;
 constexpr int kBoundaryContexts = 2 * 4;
 constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d), CODEC-NOTES.md
+// Prediction rules for a vertex x behind the front face (a, b, c) whose decoded tetrahedron has
+// fourth vertex d: weights of (a, b, c, d). Rule 0 is the default (coordinates: g + k (g - d);
+// fields: the interpolant of (a, b, c, d) at x). The others are the parallelograms a structured
+// grid makes exact, and two reflections.
+constexpr uint32_t kRules = 9;
+constexpr double kRuleWeights[kRules][4] = {
+    {0, 0, 0, 0},   {1, 1, 0, -1},  {0, 1, 1, -1},  {1, 0, 1, -1},         {1, 1, -1, 0},
+    {-1, 1, 1, 0},  {1, -1, 1, 0},  {1, 1, 1, -2},  {2.0 / 3, 2.0 / 3, 2.0 / 3, -1},
+};
 
 enum SlotState : uint8_t { kFree = 0, kLive = 1, kRetired = 2 };
 
@@ -114,8 +123,12 @@ class LevelCoder {
       // The first prediction is the key of zero.
       const FieldDesc& d = header.cell_fields[f];
       last_cell_keys_[f].assign(d.components, keyFromPrediction(d.type, 0.0));
+      cell_comps_ += d.components;
     }
+    cell_keys_.assign(cell_comps_, 0);
     pred_vals_.resize(std::max<size_t>(1, item_bytes_));
+    pf_rule_.resize(header.point_fields.size());
+    pf_last_rule_.assign(header.point_fields.size(), 0);
   }
 
   void setEncoder(EncoderSide* enc) { enc_ = enc; }
@@ -220,6 +233,21 @@ class LevelCoder {
   }
 
   // ---- values ----------------------------------------------------------------------------------
+  // Key of coordinate i predicted by rule r (rule 0: `rule0`).
+  uint64_t ruleKey(uint32_t r, const FieldPrediction& fp, int i, uint64_t rule0, ScalarType ct) const {
+    if (r == 0) return rule0;
+    double v = 0;
+    for (int j = 0; j < 4; ++j)
+      if (kRuleWeights[r][j] != 0.0) v += kRuleWeights[r][j] * P(fp.s[j])[i];
+    return keyFromPrediction(ct, v);
+  }
+  double fieldRule(uint32_t r, const FieldPrediction& fp, ScalarType type, size_t off) const {
+    double v = 0;
+    for (int j = 0; j < 4; ++j)
+      if (kRuleWeights[r][j] != 0.0) v += kRuleWeights[r][j] * doubleFromRaw(type, &vals_[fp.s[j] * item_bytes_ + off]);
+    return v;
+  }
+
   void computeFieldPrediction(const FieldPrediction& fp, const double* x) {
     size_t k = 0;
     double lambda[4] = {1, 0, 0, 0};
@@ -280,6 +308,18 @@ class LevelCoder {
   }
 
   // Introduces a vertex: codes its coordinates and field values and emits it.
+  // Magnitude class of the residual between two keys of a `bits`-wide type (the encoder's cost).
+  static int residualBits(uint64_t actual, uint64_t pred, int bits) {
+    const uint64_t mask = bits == 64 ? ~uint64_t{0} : ((uint64_t{1} << bits) - 1);
+    const uint64_t r = (actual - pred) & mask, n = (~r + 1) & mask;
+    return bitLength(r < n ? r : n);
+  }
+  bool ruleAllowed(uint32_t rule, bool has_d) const { return rule < kRules && (has_d || kRuleWeights[rule][3] == 0.0); }
+
+  // Introduces a vertex: codes its coordinates and field values and emits it. For a vertex behind a
+  // front face the encoder picks, separately for the coordinates and for each field, the rule that
+  // predicts best among rule 0 (`pred` for coordinates, the interpolant for fields) and the
+  // parallelogram-like rules of kRuleWeights, and codes its index.
   Status introduceVertex(uint32_t src, const double pred[3], const FieldPrediction& fp, uint32_t* slot_out) {
     if constexpr (!kEncode) {
       if (next_id_ >= header_.points) return bad("more vertices than the header announces");
@@ -287,9 +327,12 @@ class LevelCoder {
     const uint32_t s = allocSlot();
     double* x = &pos_[3 * size_t{s}];
     const ScalarType ct = header_.coord_type;
-    for (uint32_t i = 0; i < 3; ++i) {
-      uint64_t actual = 0;
-      if constexpr (kEncode) {
+    const int cbits = scalarBits(ct);
+    const bool choose = fp.kind == FieldPrediction::kInterpolate || fp.kind == FieldPrediction::kAverage;
+    const bool has_d = fp.kind == FieldPrediction::kInterpolate;
+    uint64_t actual[3] = {0, 0, 0};
+    if constexpr (kEncode) {
+      for (uint32_t i = 0; i < 3; ++i) {
         uint8_t raw[8];
         const double v = enc_->mesh->coords[3 * size_t{src} + i];
         if (ct == ScalarType::kFloat32) {
@@ -298,9 +341,33 @@ class LevelCoder {
         } else {
           std::memcpy(raw, &v, 8);
         }
-        actual = keyFromRaw(ct, raw);
+        actual[i] = keyFromRaw(ct, raw);
       }
-      const uint64_t key = coord_vc_.code(*geo_, i, keyFromPrediction(ct, pred[i]), actual);
+    }
+    uint64_t pk[3];
+    for (int i = 0; i < 3; ++i) pk[i] = keyFromPrediction(ct, pred[i]);
+    if (choose) {
+      uint32_t rule = 0;
+      if constexpr (kEncode) {
+        int best = 1 << 30;
+        for (uint32_t r = 0; r < kRules; ++r) {
+          if (!ruleAllowed(r, has_d)) continue;
+          int cost = 0;
+          for (int i = 0; i < 3; ++i) cost += residualBits(actual[i], ruleKey(r, fp, i, pk[i], ct), cbits);
+          if (cost < best) {
+            best = cost;
+            rule = r;
+          }
+        }
+      }
+      rule = geo_rule_[geo_last_rule_].code(*geo_, rule);
+      if (!ruleAllowed(rule, has_d)) return bad("invalid coordinate prediction rule");
+      geo_last_rule_ = rule;
+      if (rule != 0)
+        for (int i = 0; i < 3; ++i) pk[i] = ruleKey(rule, fp, i, pk[i], ct);
+    }
+    for (uint32_t i = 0; i < 3; ++i) {
+      const uint64_t key = coord_vc_.code(*geo_, i, pk[i], actual[i]);
       uint8_t raw[8];
       rawFromKey(ct, key, raw);
       x[i] = doubleFromRaw(ct, raw);
@@ -315,14 +382,36 @@ class LevelCoder {
       for (size_t f = 0; f < header_.point_fields.size(); ++f) {
         const FieldDesc& d = header_.point_fields[f];
         const size_t vs = scalarSize(d.type);
+        const int fbits = scalarBits(d.type);
+        const uint8_t* src_item = nullptr;
+        if constexpr (kEncode) src_item = enc_->mesh->point_fields[f].bytes.data() + size_t{src} * d.itemBytes();
+        uint32_t rule = 0;
+        if (choose) {
+          if constexpr (kEncode) {
+            int best = 1 << 30;
+            for (uint32_t r = 0; r < kRules; ++r) {
+              if (!ruleAllowed(r, has_d)) continue;
+              int cost = 0;
+              for (uint32_t c = 0; c < d.components && cost < best; ++c) {
+                const double pv = r == 0 ? pred_vals_[k + c] : fieldRule(r, fp, d.type, pf_offset_[f] + c * vs);
+                cost += residualBits(keyFromRaw(d.type, src_item + c * vs), keyFromPrediction(d.type, pv), fbits);
+              }
+              if (cost < best) {
+                best = cost;
+                rule = r;
+              }
+            }
+          }
+          rule = pf_rule_[f][pf_last_rule_[f]].code(*pf_[f], rule);
+          if (!ruleAllowed(rule, has_d)) return bad("invalid field prediction rule");
+          pf_last_rule_[f] = rule;
+        }
         for (uint32_t c = 0; c < d.components; ++c, ++k) {
           const size_t off = pf_offset_[f] + c * vs;
-          uint64_t actual = 0;
-          if constexpr (kEncode) {
-            const Field& field = enc_->mesh->point_fields[f];
-            actual = keyFromRaw(d.type, field.bytes.data() + size_t{src} * d.itemBytes() + c * vs);
-          }
-          const uint64_t key = pf_vc_[f].code(*pf_[f], c, keyFromPrediction(d.type, pred_vals_[k]), actual);
+          uint64_t act = 0;
+          if constexpr (kEncode) act = keyFromRaw(d.type, src_item + c * vs);
+          const double pv = rule == 0 ? pred_vals_[k] : fieldRule(rule, fp, d.type, off);
+          const uint64_t key = pf_vc_[f].code(*pf_[f], c, keyFromPrediction(d.type, pv), act);
           rawFromKey(d.type, key, out + off);
         }
       }
@@ -351,12 +440,14 @@ class LevelCoder {
   }
 
   // ---- front faces -----------------------------------------------------------------------------
-  void openFace(const uint32_t v[3], uint32_t d, uint32_t tet) {
+  void openFace(const uint32_t v[3], uint32_t d, uint32_t tet, uint32_t cell = kNone32) {
     FrontFace f;
     FaceMap::sortedKey(v, f.key);
     for (int i = 0; i < 3; ++i) f.v[i] = v[i];
     f.d = d;
     f.tet = tet;
+    f.cell = cell;
+    if (cell != kNone32) ++cell_ref_[cell];
     faces_.insert(f);
     for (int i = 0; i < 3; ++i) {
       ++open_[v[i]];
@@ -373,6 +464,10 @@ class LevelCoder {
       edges_.eraseIf(edgeKey(f.v[i], f.v[(i + 1) % 3]), f.v[(i + 2) % 3]);
     }
     if (f.d != kNoSlot) unpin(f.d);
+    if (f.cell != kNone32) releaseCell(f.cell);
+  }
+  void releaseCell(uint32_t r) {
+    if (--cell_ref_[r] == 0) cell_free_.push_back(r);
   }
 
   // ---- boundary surface ------------------------------------------------------------------------
@@ -621,23 +716,27 @@ class LevelCoder {
     return m;
   }
 
-  Status emitTet(const uint32_t e[4], uint32_t src_tet) {
+  // `pred_cell`: the cell-value record of the decoded neighbour behind the gate face, or kNone32.
+  Status emitTet(const uint32_t e[4], uint32_t src_tet, uint32_t pred_cell) {
     if (e[0] == e[1] || e[0] == e[2] || e[0] == e[3] || e[1] == e[2] || e[1] == e[3] || e[2] == e[3])
       return bad("tetrahedron with a repeated vertex");
     if constexpr (!kEncode) {
       if (tets_done_ >= header_.tets) return bad("more tetrahedra than the header announces");
     }
-    // Cell values, predicted by the previous tetrahedron's.
+    // Cell values, predicted by the neighbour's behind the gate face, else the previous tetrahedron's.
+    size_t j = 0;
     for (size_t f = 0; f < header_.cell_fields.size(); ++f) {
       const FieldDesc& d = header_.cell_fields[f];
       const size_t vs = scalarSize(d.type);
-      for (uint32_t c = 0; c < d.components; ++c) {
+      for (uint32_t c = 0; c < d.components; ++c, ++j) {
         uint64_t actual = 0;
         if constexpr (kEncode) {
           actual = keyFromRaw(d.type, enc_->mesh->cell_fields[f].bytes.data() + size_t{src_tet} * d.itemBytes() + c * vs);
         }
-        const uint64_t key = cf_vc_[f].code(*cf_[f], c, last_cell_keys_[f][c], actual);
+        const uint64_t pred = pred_cell != kNone32 ? cell_rec_[pred_cell * cell_comps_ + j] : last_cell_keys_[f][c];
+        const uint64_t key = cf_vc_[f].code(*cf_[f], c, pred, actual);
         last_cell_keys_[f][c] = key;
+        cell_keys_[j] = key;
         rawFromKey(d.type, key, &cell_buf_[cf_offset_[f] + c * vs]);
       }
     }
@@ -650,6 +749,19 @@ class LevelCoder {
       GTN_RETURN_IF_ERROR(sink_->tet(ids, cell_bytes_ ? cell_buf_.data() : nullptr));
     }
     ++tets_done_;
+    uint32_t rec = kNone32;
+    if (cell_comps_ > 0) {
+      if (!cell_free_.empty()) {
+        rec = cell_free_.back();
+        cell_free_.pop_back();
+      } else {
+        rec = static_cast<uint32_t>(cell_ref_.size());
+        cell_ref_.push_back(0);
+        cell_rec_.resize(cell_rec_.size() + cell_comps_);
+      }
+      cell_ref_[rec] = 1;  // held until the faces are opened
+      std::copy(cell_keys_.begin(), cell_keys_.end(), cell_rec_.begin() + size_t{rec} * cell_comps_);
+    }
     for (int k = 0; k < 4; ++k) {
       const uint32_t f[3] = {e[kTetFace[k][0]], e[kTetFace[k][1]], e[kTetFace[k][2]]};
       uint32_t key[3];
@@ -669,8 +781,9 @@ class LevelCoder {
         nb = (*enc_->neighbor)[4 * size_t{src_tet} + j];
         if (nb == kNoNeighbor || nb == kNonManifold || enc_->tet_done[nb]) return internal("front face without a tetrahedron behind it");
       }
-      openFace(f, e[k], nb);
+      openFace(f, e[k], nb, rec);
     }
+    if (rec != kNone32) releaseCell(rec);
     for (int k = 0; k < 4; ++k) {
       const uint32_t s = e[k];
       if (open_[s] != 0 || state_[s] != kLive) continue;
@@ -691,7 +804,7 @@ class LevelCoder {
     }
     uint32_t e[4];
     for (int i = 0; i < 4; ++i) GTN_RETURN_IF_ERROR(codeSeedVertex(*con_, src[i], &e[i]));
-    return emitTet(e, src_tet);
+    return emitTet(e, src_tet, kNone32);
   }
 
   Status peelingPhase() {
@@ -773,7 +886,7 @@ class LevelCoder {
       }
       flip = con_->bit(flip_, flip);
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
-      GTN_RETURN_IF_ERROR(emitTet(e, g.tet));
+      GTN_RETURN_IF_ERROR(emitTet(e, g.tet, g.cell));
     }
     return Status::ok();
   }
@@ -824,12 +937,20 @@ class LevelCoder {
 
   BitTree<4> tsym_[kTetContexts];
   BitTree<4> bsym_[kBoundaryContexts];
+  BitTree<4> geo_rule_[16];
+  uint32_t geo_last_rule_ = 0;
+  std::vector<std::array<BitTree<4>, 16>> pf_rule_;
+  std::vector<uint32_t> pf_last_rule_;
   BitModel flip_, retire_, seed_more_, bseed_more_, bpartner_, seed_existing_;
 
   uint64_t next_id_ = 0, tets_done_ = 0, btris_done_ = 0, live_ = 0, peak_live_ = 0;
   double last_pos_[3] = {0, 0, 0};
   std::vector<uint8_t> last_vals_, cell_buf_;
   std::vector<std::vector<uint64_t>> last_cell_keys_;
+  // Cell values of decoded tetrahedra that still have open faces, as prediction sources.
+  size_t cell_comps_ = 0;
+  std::vector<uint64_t> cell_rec_, cell_keys_;
+  std::vector<uint32_t> cell_ref_, cell_free_;
   std::vector<double> pred_vals_;
 };
 
