@@ -458,8 +458,8 @@ StatusOr<Selected> selectFit(const std::string& path, std::string_view bytes, Ki
   if (padded) {
     s.fit = std::move(*padded);
     s.found = true;
-    warnings->push_back(path + ": ignored " + std::to_string(bytes.size() - s.fit.end) +
-                        " trailing zero bytes after the PLOT3D " + kindName(kind) + " data (from byte " +
+    warnings->push_back(std::string("PLOT3D ") + kindName(kind) + " file " + path + ": ignored " +
+                        std::to_string(bytes.size() - s.fit.end) + " trailing zero bytes after its data (from byte " +
                         std::to_string(s.fit.end) + ")");
   }
   return s;
