@@ -33,6 +33,13 @@ Status GtnStreamWriter::begin(const LevelHeader& level0, uint64_t level_count) {
     return usageError("a .gtn file holds 1 to " + std::to_string(kGtnMaxLevels) + " levels, not " +
                       std::to_string(level_count));
   if (!isFloatType(level0.coord_type)) return usageError("coordinates must be float32 or float64");
+  for (const auto* fields : {&level0.point_fields, &level0.cell_fields}) {
+    if (fields->size() > kGtnMaxFields) return usageError("more than " + std::to_string(kGtnMaxFields) + " fields");
+    for (const FieldDesc& f : *fields)
+      if (f.components == 0 || f.components > kGtnMaxComponents)
+        return usageError("field '" + f.name + "' has " + std::to_string(f.components) + " components (1 to " +
+                          std::to_string(kGtnMaxComponents) + " allowed)");
+  }
   level0_ = level0;
   level_count_ = level_count;
   const auto prefix = encodeGtnPrefix();

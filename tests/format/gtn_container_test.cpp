@@ -2,11 +2,14 @@
 // order, truncation, trailing bytes, unknown chunks, versions, directory, determinism.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <functional>
 #include <random>
 
 #include "format/gtn_bytes.h"
 #include "format/gtn_chunk.h"
 #include "format/gtn_file.h"
+#include "format/gtn_records.h"
 #include "format/gtn_reader.h"
 #include "test_util.h"
 
@@ -401,6 +404,134 @@ TEST(GtnContainer, ReadsFromAPipe) {
   ASSERT_TRUE(r.isOk()) << r.status().message();
   EXPECT_EQ((*r)->levels(), 2u);
   EXPECT_EQ((*r)->readLevelStreams(1)->geometry, handMadeLevel(1, 60, 200).geometry);
+}
+
+// Re-frames the chunk at `offset` of `file` (a valid file) with a new payload and a valid checksum.
+std::vector<uint8_t> reframe(const std::vector<uint8_t>& file, const GtnChunkInfo& c, const std::vector<uint8_t>& payload) {
+  std::vector<uint8_t> out(file.begin(), file.begin() + c.offset);
+  appendGtnChunk(out, c.tag, payload, false, false, 1);
+  out.insert(out.end(), file.begin() + c.offset + c.bytes, file.end());
+  return out;
+}
+
+TEST(GtnContainer, MalformedPayloadsWithValidChecksumsFailCleanly) {
+  // Checksums stop random damage early; this reaches the payload parsers behind them.
+  const EncodedLevel l0 = handMadeLevel(0, 10, 20);
+  auto made = assembleGtn({&l0}, opts(false, false));
+  ASSERT_TRUE(made.isOk());
+  const std::vector<uint8_t> file = made.value();
+  auto r = GtnReader::openMemory(std::string(file.begin(), file.end()), "m.gtn");
+  ASSERT_TRUE(r.isOk());
+  std::vector<GtnChunkInfo> targets = {(*r)->file().chunks[0], (*r)->level(0).chunks[0]};
+  ASSERT_EQ(targets[0].tag, kTagFileHeader);
+  ASSERT_EQ(targets[1].tag, kTagLevelHeader);
+  size_t rejected = 0, tried = 0;
+  for (const GtnChunkInfo& c : targets) {
+    const size_t hs = 13;
+    const std::vector<uint8_t> payload(file.begin() + c.offset + hs, file.begin() + c.offset + hs + c.stored_bytes);
+    // Every shorter payload must fail (each field is needed), and so must one extra byte.
+    for (size_t n = 0; n <= payload.size(); ++n) {
+      std::vector<uint8_t> p(payload.begin(), payload.begin() + std::min(n, payload.size()));
+      if (n == payload.size()) p.push_back(0);
+      const Status st = memoryStatus(reframe(file, c, p));
+      EXPECT_FALSE(st.isOk()) << c.tag.str() << " payload of " << p.size() << " bytes accepted";
+      EXPECT_NE(st.message().find("byte offset"), std::string::npos) << st.message();
+    }
+    // Byte changes: never a crash; when rejected, a located message.
+    for (size_t i = 0; i < payload.size(); ++i)
+      for (uint8_t x : {0x01, 0x80, 0xFF}) {
+        std::vector<uint8_t> p = payload;
+        p[i] ^= x;
+        const Status st = memoryStatus(reframe(file, c, p));
+        ++tried;
+        if (!st.isOk()) {
+          ++rejected;
+          EXPECT_NE(st.message().find("m"), std::string::npos);
+        }
+      }
+  }
+  EXPECT_GT(rejected, 0u);
+  EXPECT_LT(rejected, tried);  // names, bounding boxes and metadata text may hold any bytes
+
+  // Values a reader must reject even with valid framing.
+  auto fh = [&](const std::function<void(GtnFileHeader&)>& edit, const std::string& want) {
+    GtnFileHeader h;
+    const size_t hs = 13;
+    ASSERT_TRUE(decodeFileHeader({file.data() + targets[0].offset + hs, targets[0].stored_bytes}, 0, "x", &h).isOk());
+    edit(h);
+    const Status st = memoryStatus(reframe(file, targets[0], encodeFileHeader(h)));
+    EXPECT_NE(st.message().find(want), std::string::npos) << st.message();
+  };
+  fh([](GtnFileHeader& h) { h.coord_type = ScalarType::kInt32; }, "coordinate type must be float32");
+  fh([](GtnFileHeader& h) { h.level_count = 0; }, "level count is 0");
+  fh([](GtnFileHeader& h) { h.level_count = 2; }, "the file holds 1 levels, the header declares 2");
+  fh([](GtnFileHeader& h) { h.points = 11; }, "level 0's counts disagree with the file header");
+  fh([](GtnFileHeader& h) { h.point_fields[0].components = 0; }, "has 0 components");
+  fh([](GtnFileHeader& h) { h.cell_fields.push_back({"extra", 1, ScalarType::kInt8}); }, "without its 'CFLD' chunk");
+  auto lh = [&](const std::function<void(GtnLevelRecord&)>& edit, const std::string& want) {
+    GtnLevelRecord l;
+    const size_t hs = 13;
+    ASSERT_TRUE(decodeLevelRecord({file.data() + targets[1].offset + hs, targets[1].stored_bytes}, 0, "x", &l).isOk());
+    edit(l);
+    const Status st = memoryStatus(reframe(file, targets[1], encodeLevelRecord(l)));
+    EXPECT_NE(st.message().find(want), std::string::npos) << st.message();
+  };
+  lh([](GtnLevelRecord& l) { l.level = 1; }, "level header says level 1");
+  lh([](GtnLevelRecord& l) { l.ratio = std::nan(""); }, "ratio is not in [0, 1]");
+  lh([](GtnLevelRecord& l) { l.merges = 3; }, "level 0's counts disagree");
+}
+
+TEST(GtnContainer, CorruptZstdFrameWithValidChecksumRejected) {
+  std::vector<uint8_t> chunk;
+  const std::vector<uint8_t> payload = pattern(5000, 3, true);
+  appendGtnChunk(chunk, kTagConnectivity, payload, false, true, 3);
+  ASSERT_TRUE(chunk[4] & kChunkZstd);
+  auto check = [&](std::vector<uint8_t> c, const std::string& want) {
+    const size_t body = c.size() - 8;
+    const uint64_t sum = gtnChecksum({c.data(), body});
+    for (int i = 0; i < 8; ++i) c[body + i] = static_cast<uint8_t>(sum >> (8 * i));
+    ChunkHeader h;
+    size_t needed;
+    ASSERT_TRUE(parseGtnChunkHeader(c, 16, c.size(), "z.gtn", &h, &needed).isOk());
+    auto opened = openGtnChunk(h, c, "z.gtn");
+    ASSERT_FALSE(opened.isOk()) << want;
+    EXPECT_NE(opened.status().message().find(want), std::string::npos) << opened.status().message();
+  };
+  std::vector<uint8_t> c = chunk;
+  c[13] = static_cast<uint8_t>(c[13] + 1);  // raw_size one more than the frame holds
+  check(c, "decompresses to 5000 bytes, not the declared 5001");
+  c = chunk;
+  c[13] = static_cast<uint8_t>(c[13] - 1);  // one less
+  check(c, "more than the declared 4999");
+  c = chunk;
+  for (size_t i = 21; i < 29; ++i) c[i] ^= 0x5A;  // the frame header
+  check(c, "zstd payload of chunk 'CONN' is corrupt");
+  // A valid chunk opens to its payload.
+  ChunkHeader h;
+  size_t needed;
+  ASSERT_TRUE(parseGtnChunkHeader(chunk, 16, chunk.size(), "z.gtn", &h, &needed).isOk());
+  auto ok = openGtnChunk(h, chunk, "z.gtn");
+  ASSERT_TRUE(ok.isOk());
+  EXPECT_EQ(ok.value(), payload);
+}
+
+TEST(GtnContainer, WriterRejectsBadInput) {
+  EncodedLevel l0 = handMadeLevel(0, 10, 20);
+  EXPECT_EQ(assembleGtn({}, opts()).status().code(), StatusCode::kUsage);
+  EncodedLevel wrong_level = handMadeLevel(0, 10, 20);
+  wrong_level.header.level = 1;
+  EXPECT_FALSE(assembleGtn({&wrong_level}, opts()).isOk());
+  EncodedLevel l1 = handMadeLevel(1, 5, 5);
+  l1.header.point_fields.pop_back();
+  EXPECT_NE(assembleGtn({&l0, &l1}, opts()).status().message().find("field list"), std::string::npos);
+  EncodedLevel missing_stream = handMadeLevel(0, 10, 20);
+  missing_stream.cell_fields.clear();
+  EXPECT_FALSE(assembleGtn({&missing_stream}, opts()).isOk());
+  EncodedLevel many = handMadeLevel(0, 10, 20);
+  many.header.point_fields[0].components = 5000;
+  EXPECT_NE(assembleGtn({&many}, opts()).status().message().find("components"), std::string::npos);
+  EXPECT_FALSE(assembleGtn({&l0}, opts(), {1.5}).isOk());
+  EXPECT_EQ(writeGtnFile(test::tempDir("writer-bad") + "/x.gtn", {}, opts()).code(), StatusCode::kUsage);
 }
 
 }  // namespace
