@@ -153,25 +153,18 @@ void shear(const PreparedRay& r, const double* p, double out[3]) {
 }
 }  // namespace
 
-Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, const double* c, double sa, double sb,
-                       double sc) {
-  // Canonical order, so that every tetrahedron sharing this face computes the same crossing.
-  if (lexLess(b, a)) {
-    std::swap(a, b);
-    std::swap(sa, sb);
-  }
-  if (lexLess(c, b)) {
-    std::swap(b, c);
-    std::swap(sb, sc);
-  }
-  if (lexLess(b, a)) {
-    std::swap(a, b);
-    std::swap(sa, sb);
-  }
-  double A[3], B[3], C[3];
-  shear(r, a, A);
-  shear(r, b, B);
-  shear(r, c, C);
+namespace {
+// The three vertices of a triangle in canonical order: a fixed sorting network on the positions, so
+// that the same face gives the same order (and so the same crossing) whoever computes it.
+inline void canonicalOrder(const double* const p[3], int order[3]) {
+  order[0] = 0, order[1] = 1, order[2] = 2;
+  if (lexLess(p[order[1]], p[order[0]])) std::swap(order[0], order[1]);
+  if (lexLess(p[order[2]], p[order[1]])) std::swap(order[1], order[2]);
+  if (lexLess(p[order[1]], p[order[0]])) std::swap(order[0], order[1]);
+}
+
+// The crossing of the ray with the triangle of sheared vertices A, B, C (canonical order).
+inline Crossing crossSheared(const double* A, const double* B, const double* C, double sa, double sb, double sc) {
   const double u = C[0] * B[1] - C[1] * B[0];
   const double v = A[0] * C[1] - A[1] * C[0];
   const double w = B[0] * A[1] - B[1] * A[0];
@@ -184,19 +177,46 @@ Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, c
   x.s = (u * sa + v * sb + w * sc) / det;
   return x;
 }
+}  // namespace
+
+Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, const double* c, double sa, double sb,
+                       double sc) {
+  const double* p[3] = {a, b, c};
+  const double s[3] = {sa, sb, sc};
+  int o[3];
+  canonicalOrder(p, o);
+  double S[3][3];
+  for (int i = 0; i < 3; ++i) shear(r, p[o[i]], S[i]);
+  return crossSheared(S[0], S[1], S[2], s[o[0]], s[o[1]], s[o[2]]);
+}
+
+void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]) {
+  double S[4][3];
+  for (int i = 0; i < 4; ++i) shear(r, g.p[i], S[i]);
+  for (int k = 0; k < 4; ++k) {
+    if (k == skip) {
+      out[k] = Crossing();
+      continue;
+    }
+    const int* f = kTetFace[k];
+    const double* p[3] = {g.p[f[0]], g.p[f[1]], g.p[f[2]]};
+    int o[3];
+    canonicalOrder(p, o);
+    out[k] = crossSheared(S[f[o[0]]], S[f[o[1]]], S[f[o[2]]], g.s[f[o[0]]], g.s[f[o[1]]], g.s[f[o[2]]]);
+  }
+}
 
 int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Crossing* out) {
+  Crossing x[4];
+  crossTetFaces(r, g, entry, x);
   int best = -1;
   for (int k = 0; k < 4; ++k) {
-    if (k == entry) continue;
-    const int* f = kTetFace[k];
-    const Crossing x = crossTriangle(r, g.p[f[0]], g.p[f[1]], g.p[f[2]], g.s[f[0]], g.s[f[1]], g.s[f[2]]);
-    if (!x.hit) continue;
+    if (k == entry || !x[k].hit) continue;
     // Where the ray passes through an edge or vertex of the entry face, faces sharing it are crossed
     // at the entry point too: the exit is the farthest crossing.
-    if (best < 0 || (forward ? x.t > out->t : x.t < out->t)) {
+    if (best < 0 || (forward ? x[k].t > out->t : x[k].t < out->t)) {
       best = k;
-      *out = x;
+      *out = x[k];
     }
   }
   return best;

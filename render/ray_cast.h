@@ -104,6 +104,10 @@ struct TetGeom {
   double s[4];
 };
 
+// The crossings of the ray with the four faces of `g` (face `skip` left out: not hit), each exactly as
+// crossTriangle computes it, sharing the vertices' transformation.
+void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]);
+
 // Where a ray inside tetrahedron `g`, having come in through local face `entry` (kTetFace numbering),
 // leaves it: forward (increasing t) or backward. Returns the local face, or -1 when no other face is
 // crossed (the ray only grazed the tetrahedron, numerically). `out->t` is not clamped.

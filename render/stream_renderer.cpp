@@ -298,12 +298,12 @@ Status StreamRenderer::flushBatch() {
           if (s0 == s1) continue;
           const PreparedRay ray = prepareRay(cam.ray(px, py));
           double tmin = 1e300, tmax = -1e300;
+          Crossing x[4];
+          crossTetFaces(ray, a.g, -1, x);
           for (int k = 0; k < 4; ++k) {
-            const int* f = kTetFace[k];
-            const Crossing x = crossTriangle(ray, a.g.p[f[0]], a.g.p[f[1]], a.g.p[f[2]], 0, 0, 0);
-            if (!x.hit) continue;
-            tmin = std::min(tmin, x.t);
-            tmax = std::max(tmax, x.t);
+            if (!x[k].hit) continue;
+            tmin = std::min(tmin, x[k].t);
+            tmax = std::max(tmax, x[k].t);
           }
           if (tmin > tmax) continue;
           for (uint32_t s = s0; s < s1; ++s) {
