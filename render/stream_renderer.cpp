@@ -90,6 +90,7 @@ struct StreamRenderer::State {
   std::unordered_map<uint32_t, VertexRec> vertices;
   std::vector<std::array<uint32_t, 3>> boundary;
   RaySegments rays;
+  std::vector<PreparedRay> pixel_rays;  // per pixel with segments (indexed by pixel), else unset
   std::vector<SegmentState> segs;
   std::unordered_map<FaceKey, FaceEntry, FaceKeyHash> faces;
   std::deque<HeldTet> tets;
@@ -213,6 +214,11 @@ Status StreamRenderer::endBoundary() {
     setup_.transfer.hi = hi;
   }
   st.rays = castBoundary(setup_.camera, surface);
+  st.pixel_rays.resize(st.rays.pixel_start.size() - 1);
+  for (size_t p = 0; p + 1 < st.rays.pixel_start.size(); ++p)
+    if (st.rays.pixel_start[p] != st.rays.pixel_start[p + 1])
+      st.pixel_rays[p] = prepareRay(setup_.camera.ray(static_cast<int>(p % setup_.camera.width()),
+                                                      static_cast<int>(p / setup_.camera.width())));
   st.segs.resize(st.rays.segments.size());
   for (size_t i = 0; i < st.segs.size(); ++i) {
     const RaySegment& rs = st.rays.segments[i];
@@ -296,7 +302,7 @@ Status StreamRenderer::flushBatch() {
           const size_t p = static_cast<size_t>(py) * w + px;
           const uint32_t s0 = st.rays.pixel_start[p], s1 = st.rays.pixel_start[p + 1];
           if (s0 == s1) continue;
-          const PreparedRay ray = prepareRay(cam.ray(px, py));
+          const PreparedRay& ray = st.pixel_rays[p];
           double tmin = 1e300, tmax = -1e300;
           Crossing x[4];
           crossTetFaces(ray, a.g, -1, x);
@@ -394,7 +400,7 @@ Status StreamRenderer::flushBatch() {
       const uint32_t si = triggers[groups[g]].cursor / 2;
       SegmentState& seg = st.segs[si];
       const uint32_t pixel = st.rays.segments[si].pixel;
-      const PreparedRay ray = prepareRay(cam.ray(static_cast<int>(pixel % w), static_cast<int>(pixel / w)));
+      const PreparedRay& ray = st.pixel_rays[pixel];
       for (size_t i = groups[g]; i < groups[g + 1]; ++i) {
         if (seg.done) break;
         const Trigger& tr = triggers[i];
