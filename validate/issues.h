@@ -57,6 +57,8 @@ const char* severityName(Severity severity);  // "error", "warning", "info"
   X(kUnreferencedPoint, "UNREFERENCED_POINT", kInfo, "mesh", "points no tetrahedron uses")                       \
   X(kFieldSizeMismatch, "FIELD_SIZE_MISMATCH", kError, "mesh", "fields whose item count differs from the mesh")  \
   /* merge tree: the ranked edge collapses of level 0 */                                                          \
+  X(kMergeTreeUndecodable, "MERGE_TREE_UNDECODABLE", kError, "merge-tree",                                   \
+    "merge-tree chunks that do not decode (the coder rejects the payload)")                                     \
   X(kMergeTreeSize, "MERGE_TREE_SIZE", kError, "merge-tree", "merge trees whose size differs from level 0's point count") \
   X(kMergeTreeNotForest, "MERGE_TREE_NOT_FOREST", kError, "merge-tree",                                          \
     "merge-tree parents out of range or on a cycle (the tree is not a forest)")                                  \
@@ -72,6 +74,8 @@ const char* severityName(Severity severity);  // "error", "warning", "info"
     "merges that turn a boundary triangle's normal by more than 90 degrees")                                     \
   X(kMergeBreaksManifold, "MERGE_BREAKS_MANIFOLD", kError, "merge-tree",                                         \
     "merges after which a face is shared by three or more tetrahedra")                                           \
+  X(kMergeAnnotationMismatch, "MERGE_ANNOTATION_MISMATCH", kError, "merge-tree",                             \
+    "merges whose stored boundary flag or removed-tetrahedra count disagrees with the replay")                  \
   X(kNoMergeTree, "NO_MERGE_TREE", kInfo, "merge-tree", "files without a merge tree (no simplification data)")   \
   /* levels: stored mip levels agree with level 0 and the merge tree */                                           \
   X(kLevelMergesOutOfRange, "LEVEL_MERGES_OUT_OF_RANGE", kError, "levels",                                       \

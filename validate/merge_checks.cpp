@@ -142,8 +142,8 @@ bool checkForest(const MergeForest& forest, size_t np, ValidationReport& report,
 
 class Replay {
  public:
-  Replay(const TetMesh& mesh, ValidationReport& report, MergeReplayStats& st)
-      : mesh_(mesh), report_(report), st_(st), np_(mesh.numPoints()) {
+  Replay(const TetMesh& mesh, const MergeForest& forest, ValidationReport& report, MergeReplayStats& st)
+      : mesh_(mesh), forest_(forest), report_(report), st_(st), np_(mesh.numPoints()) {
     tets_ = mesh.tets;
     alive_.assign(tets_.size(), 1);
     flat_.assign(tets_.size(), 0);
@@ -192,17 +192,31 @@ class Replay {
     list.erase(std::remove_if(list.begin(), list.end(), [&](uint32_t x) { return !alive_[x]; }), list.end());
     moved_.clear();
     bool adjacent = false;
+    uint64_t removed = 0;
     for (uint32_t x : list) {
       if (contains(tets_[x], t)) {
         adjacent = true;
+        ++removed;
         alive_[x] = 0;
       } else {
         moved_.push_back(x);
       }
     }
+    // A merge across no edge is reported once; its other effects follow from it and are not.
+    const bool check = adjacent;
     if (!adjacent) report_.add(IssueCode::kMergeNotAdjacent, kScope, vertexPath(c), what + ": no edge joins them");
-    if (is_boundary_[c]) {
-      ++st_.boundary_merges;
+    if (check && c < forest_.removed.size() && forest_.removed[c] != removed) {
+      report_.add(IssueCode::kMergeAnnotationMismatch, kScope, vertexPath(c),
+                  what + " removes " + std::to_string(removed) + " tetrahedra; the tree says " +
+                      std::to_string(forest_.removed[c]));
+    }
+    if (check && c < forest_.boundary.size() && (forest_.boundary[c] != 0) != (is_boundary_[c] != 0)) {
+      report_.add(IssueCode::kMergeAnnotationMismatch, kScope, vertexPath(c),
+                  what + ": the tree's boundary flag is " + std::to_string(forest_.boundary[c]) + ", the vertex is " +
+                      (is_boundary_[c] ? "on the boundary" : "interior"));
+    }
+    if (is_boundary_[c]) ++st_.boundary_merges;
+    if (check && is_boundary_[c]) {
       bool boundary_edge = false;
       for (uint32_t b : binc_[c]) boundary_edge |= balive_[b] && contains(btris_[b], t);
       if (!is_boundary_[t] || !boundary_edge) {
@@ -216,7 +230,10 @@ class Replay {
         if (v == c) v = t;
       }
       inc_[t].push_back(x);
-      if (!geometry_ok_) continue;
+      if (!geometry_ok_ || !check) {
+        if (geometry_ok_) flat_[x] = orientation(tet) <= 0;
+        continue;
+      }
       ++st_.tets_checked;
       const int s = orientation(tet);
       if (s < 0) {
@@ -228,7 +245,7 @@ class Replay {
       }
       flat_[x] = s <= 0;
     }
-    if (!moved_.empty()) checkManifoldAround(t, c, what);
+    if (check && !moved_.empty()) checkManifoldAround(t, c, what);
     // Boundary triangles around c.
     if (is_boundary_[c]) {
       for (uint32_t b : binc_[c]) {
@@ -243,7 +260,7 @@ class Replay {
           if (v == c) v = t;
         }
         binc_[t].push_back(b);
-        if (geometry_ok_ &&
+        if (check && geometry_ok_ &&
             normalDotSign(mesh_.point(before[0]), mesh_.point(before[1]), mesh_.point(before[2]), mesh_.point(tri[0]),
                           mesh_.point(tri[1]), mesh_.point(tri[2])) < 0) {
           report_.add(IssueCode::kMergeFlipsBoundary, kScope, vertexPath(c),
@@ -333,6 +350,7 @@ class Replay {
   }
 
   const TetMesh& mesh_;
+  const MergeForest& forest_;
   ValidationReport& report_;
   MergeReplayStats& st_;
   size_t np_;
@@ -378,7 +396,7 @@ void checkMergeTree(const TetMesh& level0, const MergeForest& forest, const std:
   std::stable_sort(sorted.begin(), sorted.end(),
                    [](const StoredLevel& a, const StoredLevel& b) { return a.merges < b.merges; });
 
-  Replay replay(level0, report, st);
+  Replay replay(level0, forest, report, st);
   const std::vector<uint64_t> keys0 = sorted.empty() ? std::vector<uint64_t>() : pointKeys(level0);
   size_t next = 0;
   for (uint64_t r = 0;; ++r) {

@@ -21,6 +21,10 @@ constexpr uint32_t kMergeRoot = 0xFFFFFFFFu;
 struct MergeForest {
   std::vector<uint32_t> parent;
   std::vector<uint64_t> rank;
+  // Optional annotations a file stores per vertex (empty when absent): 1 when v's merge is a boundary
+  // merge, and the number of tetrahedra v's merge removes. Checked against the replay.
+  std::vector<uint8_t> boundary;
+  std::vector<uint32_t> removed;
 };
 
 // A stored mip level to compare with the replay.

@@ -90,7 +90,8 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
   }
   report.setTotal(IssueCode::kIndexOutOfRange, scope, nt);
   report.setTotal(IssueCode::kRepeatedVertex, scope, nt);
-  if (!indices_ok) return false;
+  // A tetrahedron with a repeated vertex has no faces or orientation to speak of: stop here too.
+  if (!indices_ok || std::find(bad_tet.begin(), bad_tet.end(), 1) != bad_tet.end()) return false;
 
   // Coordinates and values.
   std::vector<uint8_t> finite(np, 1);
@@ -184,6 +185,12 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
   }
   report.setTotal(IssueCode::kNonManifoldFace, scope, adj.faces);
 
+  // The boundary edge checks assume manifold faces (a non-manifold face makes its edges non-manifold
+  // too): on a mesh with NON_MANIFOLD_FACE they are skipped, so that each defect has one code.
+  if (adj.non_manifold_faces > 0) return true;
+  // An inverted tetrahedron turns its faces inside out: the orientation of the boundary edges is
+  // then checked only when no tetrahedron is inverted (INVERTED_TET says it all).
+  const bool check_orientation = st.inverted == 0;
   const std::vector<Triangle> boundary = boundaryTriangles(mesh, adj);
   // Directed boundary edges keyed by their undirected edge.
   struct DirEdge {
@@ -212,7 +219,7 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
       report.add(IssueCode::kBoundaryNotClosed, scope, path,
                  "boundary edge " + path.substr(path.rfind('/') + 1) + " is in " + std::to_string(j - i) +
                      " boundary triangles");
-    } else if (dir_edges[i].forward == dir_edges[i + 1].forward) {
+    } else if (check_orientation && dir_edges[i].forward == dir_edges[i + 1].forward) {
       report.add(IssueCode::kBoundaryOrientation, scope, path);
     }
     i = j;

@@ -1,0 +1,454 @@
+// One malformed input per error code of the registry, each with its expected report: exactly that
+// error code and no other. Files come from the project's writer, mutated byte-wise or rebuilt chunk by
+// chunk (validate_fixtures.h); defects the writer and coders cannot represent at all (a face in three
+// tetrahedra, a merge-tree cycle the coder rejects by construction, ...) are fed to the layer that
+// checks them as decoded content. A last test asserts that every error code has its case here.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+
+#include "mesh/mesh_stats.h"
+#include "simplify/apply.h"
+#include "validate/mesh_checks.h"
+#include "validate/validate_fixtures.h"
+
+namespace gtn::test {
+namespace {
+
+// A small valid file (grid with two mip levels and merge trees), raw chunks, written once.
+struct Base {
+  std::string dir, path;
+  TetMesh mesh;
+  MergeTree tree;
+  Bytes bytes;
+};
+
+const Base& base() {
+  static Base b = [] {
+    Base s;
+    s.dir = tempDir("validate-must-fail");
+    s.path = s.dir + "/base.gtn";
+    s.mesh = makeGrid(4, 3, 3);
+    StatusOr<MergeTree> tree = rankMerges(s.mesh, RankingOptions{}, nullptr);
+    EXPECT_TRUE(tree.isOk());
+    s.tree = *tree;
+    writeValidGtn(s.path, s.mesh, 2, /*zstd=*/false);
+    s.bytes = readBytes(s.path);
+    return s;
+  }();
+  return b;
+}
+
+uint64_t loadU64(const Bytes& b, size_t at) {
+  uint64_t v = 0;
+  for (int i = 7; i >= 0; --i) v = v << 8 | b[at + i];
+  return v;
+}
+
+// The offset of level `level`'s first chunk with `tag` in the base file.
+uint64_t chunkOffset(int level, ChunkTag tag) {
+  auto r = GtnReader::open(base().path);
+  EXPECT_TRUE(r.isOk());
+  for (const GtnChunkInfo& c : r.value()->level(level).chunks)
+    if (c.tag == tag) return c.offset;
+  ADD_FAILURE() << "no chunk " << tag.str();
+  return 0;
+}
+
+Bytes rewrite(const std::function<void(std::vector<RewriteChunk>&)>& f) { return rewriteGtn(base().path, f); }
+
+RewriteChunk& find(std::vector<RewriteChunk>& chunks, int level, ChunkTag tag) {
+  for (RewriteChunk& c : chunks)
+    if (c.level == level && c.tag == tag) return c;
+  ADD_FAILURE() << "no chunk " << tag.str() << " in level " << level;
+  return chunks.front();
+}
+
+// Writes a file from explicit level inputs (raw chunks).
+Bytes writeLevels(const std::vector<GtnLevelInput>& levels) {
+  const std::string path = base().dir + "/levels.gtn";
+  GtnWriteOptions wo;
+  wo.zstd = false;
+  const Status st = writeGtnFile(path, levels, wo);
+  EXPECT_TRUE(st.isOk()) << st.message();
+  return readBytes(path);
+}
+
+decltype(GtnLevelInput::merge_tree) treeCoder(const MergeTree& tree) {
+  return [tree](const std::vector<uint32_t>& order) { return encodeMergeTree(tree, order); };
+}
+
+// Level 0 + level 1 after n merges of `tree` (declared `declared` merges and ratio).
+Bytes twoLevels(const MergeTree& tree, const TetMesh& level1, uint64_t declared, double ratio, bool with_tree) {
+  GtnLevelInput l0;
+  l0.mesh = &base().mesh;
+  if (with_tree) l0.merge_tree = treeCoder(tree);
+  GtnLevelInput l1;
+  l1.mesh = &level1;
+  l1.merges = declared;
+  l1.ratio = ratio;
+  return writeLevels({l0, l1});
+}
+
+TetMesh applied(const MergeTree& tree, uint64_t n) {
+  StatusOr<TetMesh> m = applyMerges(base().mesh, tree, n);
+  EXPECT_TRUE(m.isOk());
+  return *m;
+}
+
+// The regular octahedron around an interior vertex 0 (vertices 1..6 = +x, -x, +y, -y, +z, -z): eight
+// positive tetrahedra. `plus_x` moves vertex 1.
+TetMesh octahedron(const double plus_x[3]) {
+  TetMesh m;
+  m.coords = {0, 0, 0, plus_x[0], plus_x[1], plus_x[2], -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
+  for (uint32_t x : {1u, 2u})
+    for (uint32_t y : {3u, 4u})
+      for (uint32_t z : {5u, 6u}) m.tets.push_back({0, x, y, z});
+  size_t zero = 0;
+  normalizeOrientation(m, &zero);
+  return m;
+}
+
+DecodedFile decodedOf(const TetMesh& mesh) {
+  DecodedFile f;
+  DecodedLevel l;
+  l.mesh = mesh;
+  l.header.points = mesh.numPoints();
+  l.header.tets = mesh.numTets();
+  const FaceAdjacency adj = computeFaceAdjacency(mesh);
+  l.boundary = boundaryTriangles(mesh, adj);
+  l.header.boundary_triangles = l.boundary.size();
+  f.levels.push_back(std::move(l));
+  return f;
+}
+
+MergeForest forestOf(const MergeTree& t) {
+  MergeForest f;
+  f.parent = t.parent;
+  f.rank.assign(t.rank.begin(), t.rank.end());
+  return f;
+}
+
+// Level 0 with a one-merge forest: vertex c into p.
+DecodedFile withMerge(const TetMesh& mesh, uint32_t c, uint32_t p) {
+  DecodedFile f = decodedOf(mesh);
+  MergeForest forest;
+  forest.parent.assign(mesh.numPoints(), kMergeRoot);
+  forest.rank.assign(mesh.numPoints(), 0);
+  forest.parent[c] = p;
+  forest.rank[c] = 1;
+  f.forest = forest;
+  return f;
+}
+
+ValidationReport reportOf(const DecodedFile& f) {
+  ValidationReport r(100);
+  validateDecoded(f, {}, r);
+  return r;
+}
+
+struct Case {
+  std::function<Bytes()> file;              // a malformed file, or
+  std::function<ValidationReport()> decoded;  // a report from decoded content
+};
+
+std::map<std::string, Case> cases() {
+  std::map<std::string, Case> c;
+  // Container.
+  c["FILE_TOO_SMALL"].file = [] { return Bytes(base().bytes.begin(), base().bytes.begin() + 10); };
+  c["BAD_MAGIC"].file = [] { Bytes b = base().bytes; b[1] = 'X'; return b; };
+  c["UNSUPPORTED_VERSION"].file = [] {
+    Bytes b = base().bytes;
+    const auto p = encodeGtnPrefix(kGtnMajorVersion + 1, 0);
+    std::copy(p.begin(), p.end(), b.begin());
+    return b;
+  };
+  c["CHECKSUM_MISMATCH"].file = [] {
+    Bytes b = base().bytes;
+    b[chunkOffset(0, kTagConnectivity) + kChunkFixedHeaderSize + 2] ^= 0x04;
+    return b;
+  };
+  c["RESERVED_BITS_SET"].file = [] { Bytes b = base().bytes; b[kGtnPrefixSize + 4] |= 0x80; return b; };
+  c["TRAILING_BYTES"].file = [] { Bytes b = base().bytes; b.push_back(0); return b; };
+  c["CHUNK_FRAMING"].file = [] { Bytes b = base().bytes; b.resize(b.size() - 20); return b; };
+  c["DIRECTORY_MISMATCH"].file = [] {
+    Bytes b = base().bytes;
+    const size_t end = b.size() - kGtnTrailerSize;
+    GtnTrailer t;
+    t.directory_offset = loadU64(b, end + kChunkFixedHeaderSize) + 1;
+    t.directory_size = loadU64(b, end + kChunkFixedHeaderSize + 8);
+    b.resize(end);
+    appendGtnChunk(b, kTagEnd, encodeTrailer(t), false, false, 0);
+    return b;
+  };
+  c["SIZE_OUT_OF_BOUNDS"].file = [] {
+    return rewrite([](std::vector<RewriteChunk>& chunks) {
+      GtnFileHeader h;
+      ASSERT_TRUE(decodeFileHeader(chunks[0].payload, 0, "x", &h).isOk());
+      h.level_count = kGtnMaxLevels + 1;
+      chunks[0].payload = encodeFileHeader(h);
+    });
+  };
+  c["MALFORMED_CONTAINER"].file = [] {
+    return rewrite([](std::vector<RewriteChunk>& chunks) { std::swap(chunks[0], chunks[1]); });
+  };
+  // Decoding.
+  c["NO_LEVELS"].decoded = [] { return reportOf(DecodedFile{}); };
+  c["LEVEL_DECODE_FAILED"].file = [] {
+    return rewrite([](std::vector<RewriteChunk>& chunks) {
+      Bytes& p = find(chunks, 1, kTagConnectivity).payload;
+      p.resize(p.size() / 2);
+    });
+  };
+  c["LEVEL_COUNT_MISMATCH"].decoded = [] {
+    DecodedFile f = decodedOf(base().mesh);
+    f.levels[0].header.tets += 1;
+    return reportOf(f);
+  };
+  c["BOUNDARY_MISMATCH"].decoded = [] {
+    DecodedFile f = decodedOf(base().mesh);
+    std::swap(f.levels[0].boundary[0][0], f.levels[0].boundary[0][1]);  // one triangle turned inwards
+    return reportOf(f);
+  };
+  // Mesh.
+  const double unit_x[3] = {1, 0, 0};
+  const TetMesh octa = octahedron(unit_x);
+  c["INVERTED_TET"].file = [octa] {
+    static TetMesh m;
+    m = octa;
+    std::swap(m.tets[3][2], m.tets[3][3]);
+    GtnLevelInput l0;
+    l0.mesh = &m;
+    return writeLevels({l0});
+  };
+  c["INDEX_OUT_OF_RANGE"].decoded = [octa] {
+    DecodedFile f = decodedOf(octa);
+    f.levels[0].mesh.tets[2][1] = 99;
+    return reportOf(f);
+  };
+  c["REPEATED_VERTEX"].decoded = [octa] {
+    DecodedFile f = decodedOf(octa);
+    f.levels[0].mesh.tets[2][1] = f.levels[0].mesh.tets[2][0];
+    return reportOf(f);
+  };
+  c["DUPLICATE_TET"].decoded = [octa] {
+    TetMesh m = octa;
+    m.tets = {octa.tets[0], octa.tets[0]};
+    return reportOf(decodedOf(m));
+  };
+  c["NON_MANIFOLD_FACE"].decoded = [] {
+    // Three positive tetrahedra on one triangle (two above it, one below).
+    TetMesh m;
+    m.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2, 0.2, 1, 0.3, 0.2, 2, 0.2, 0.3, -1};
+    m.tets = {{0, 1, 2, 3}, {0, 1, 2, 4}, {0, 2, 1, 5}};
+    return reportOf(decodedOf(m));
+  };
+  c["BOUNDARY_NOT_CLOSED"].decoded = [] {
+    // Two tetrahedra sharing only the edge (0, 1).
+    TetMesh m;
+    m.coords = {0, 0, 0, 1, 0, 0, 0.5, 1, 0, 0.5, 0.5, 1, 0.5, -1, 0, 0.5, -0.5, -1};
+    m.tets = {{0, 1, 2, 3}, {0, 1, 4, 5}};
+    size_t zero = 0;
+    normalizeOrientation(m, &zero);
+    return reportOf(decodedOf(m));
+  };
+  c["BOUNDARY_ORIENTATION"].decoded = [] {
+    // Two positive tetrahedra on the same side of one shared triangle.
+    TetMesh m;
+    m.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2, 0.2, 1, 0.3, 0.2, 2};
+    m.tets = {{0, 1, 2, 3}, {0, 1, 2, 4}};
+    return reportOf(decodedOf(m));
+  };
+  c["NON_FINITE_COORDINATE"].decoded = [octa] {
+    DecodedFile f = decodedOf(octa);
+    f.levels[0].mesh.coords[4] = std::numeric_limits<double>::quiet_NaN();
+    return reportOf(f);
+  };
+  c["FIELD_SIZE_MISMATCH"].decoded = [octa] {
+    TetMesh m = octa;
+    m.point_fields.emplace_back("rho", 1, ScalarType::kFloat32, m.numPoints() - 1);
+    return reportOf(decodedOf(m));
+  };
+  // Merge tree.
+  c["MERGE_TREE_UNDECODABLE"].file = [] {
+    return rewrite([](std::vector<RewriteChunk>& chunks) { find(chunks, 0, kTagMergeTree).payload = {1, 200}; });
+  };
+  c["MERGE_TREE_SIZE"].decoded = [] {
+    DecodedFile f = decodedOf(base().mesh);
+    f.forest = forestOf(base().tree);
+    f.forest->parent.pop_back();
+    return reportOf(f);
+  };
+  c["MERGE_TREE_NOT_FOREST"].decoded = [] {
+    DecodedFile f = decodedOf(base().mesh);
+    f.forest = forestOf(base().tree);
+    for (size_t v = 0; v < f.forest->parent.size(); ++v) {
+      const uint32_t p = f.forest->parent[v];
+      if (p != kMergeRoot && f.forest->parent[p] != kMergeRoot) {
+        f.forest->parent[p] = static_cast<uint32_t>(v);  // v -> p -> v
+        break;
+      }
+    }
+    return reportOf(f);
+  };
+  c["MERGE_RANKS_NOT_PERMUTATION"].decoded = [] {
+    DecodedFile f = decodedOf(base().mesh);
+    f.forest = forestOf(base().tree);
+    for (size_t v = 0; v < f.forest->parent.size(); ++v)
+      if (f.forest->rank[v] == 2) f.forest->rank[v] = 1;
+    return reportOf(f);
+  };
+  c["MERGE_NOT_ADJACENT"].decoded = [octa] { return reportOf(withMerge(octa, 1, 2)); };  // +x into -x
+  c["MERGE_BOUNDARY_INTO_INTERIOR"].decoded = [octa] { return reportOf(withMerge(octa, 3, 0)); };
+  c["MERGE_INVERTS_TET"].decoded = [] {
+    const double w[3] = {1, 3, 0.5};
+    return reportOf(withMerge(octahedron(w), 0, 1));
+  };
+  c["MERGE_FLATTENS_TET"].decoded = [] {
+    const double w[3] = {1, 1, 1};  // on the plane of (-x, +y, +z)
+    return reportOf(withMerge(octahedron(w), 0, 1));
+  };
+  c["MERGE_FLIPS_BOUNDARY"].decoded = [] {
+    // Tetrahedra (c, t, b, d) and (c, b, e, d); merging c = 0 into t = 1 keeps (t, b, e, d) positive
+    // but turns the boundary triangle (c, b, e), facing +z, to face -y.
+    TetMesh m;
+    m.coords = {0.5, 1, 0, -2, -0.5, 2, 0, 0, 0, 1, 0, 0, 0.5, 0.3, -1};
+    m.tets = {{0, 1, 2, 4}, {0, 2, 3, 4}};
+    size_t zero = 0;
+    normalizeOrientation(m, &zero);
+    return reportOf(withMerge(m, 0, 1));
+  };
+  c["MERGE_BREAKS_MANIFOLD"].decoded = [] {
+    // (c, a, b, p) beside (t, a, b, q) and (t, a, b, r) on both sides of the triangle (t, a, b); c is
+    // next to t through (c, t, x, y). Merging c = 0 into t = 1 puts (t, a, b) in three tetrahedra.
+    // Level 0 itself touches along the edge (a, b), so only the merge-tree layer is run.
+    TetMesh m;
+    m.coords = {0, 0, 0.05, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.3, 0.3, 0.5, 0.3, 0.3, 1, 0.3, 0.3, -1,
+                -1, 0, 0.1, 0, -1, 0.1};
+    m.tets = {{0, 1, 7, 8}, {0, 2, 3, 4}, {1, 2, 3, 5}, {1, 2, 3, 6}};
+    size_t zero = 0;
+    normalizeOrientation(m, &zero);
+    ValidationReport r(100);
+    checkMergeTree(m, *withMerge(m, 0, 1).forest, {}, r);
+    return r;
+  };
+  c["MERGE_ANNOTATION_MISMATCH"].decoded = [] {
+    DecodedFile f = decodedOf(base().mesh);
+    f.forest = forestOf(base().tree);
+    f.forest->removed = base().tree.removed;
+    for (size_t v = 0; v < f.forest->parent.size(); ++v)
+      if (f.forest->rank[v] == 1) f.forest->removed[v] += 1;
+    return reportOf(f);
+  };
+  // Levels.
+  c["LEVEL_MERGES_OUT_OF_RANGE"].file = [] {
+    static TetMesh l1;
+    l1 = applied(base().tree, base().tree.merges);
+    return twoLevels(base().tree, l1, base().tree.merges + 1, 1.0, true);
+  };
+  c["LEVEL_MISMATCH"].file = [] {
+    static TetMesh l1;
+    const uint64_t n = base().tree.merges / 2;
+    l1 = applied(base().tree, n + 1);
+    return twoLevels(base().tree, l1, n, double(n) / base().mesh.numPoints(), true);
+  };
+  c["LEVEL_RATIO_MISMATCH"].file = [] {
+    static TetMesh l1;
+    const uint64_t n = base().tree.merges / 2;
+    l1 = applied(base().tree, n);
+    return twoLevels(base().tree, l1, n, 0.99, true);
+  };
+  c["LEVEL_WITHOUT_MERGE_TREE"].file = [] {
+    static TetMesh l1;
+    const uint64_t n = base().tree.merges / 2;
+    l1 = applied(base().tree, n);
+    return twoLevels(base().tree, l1, n, double(n) / base().mesh.numPoints(), false);
+  };
+  // --against.
+  c["SOURCE_UNREADABLE"].decoded = [] {
+    ValidationReport r(100);
+    ValidateOptions o;
+    o.against = {base().dir + "/no-such-source.vtk"};
+    validateDecoded(decodedOf(base().mesh), o, r);
+    return r;
+  };
+  c["SOURCE_COUNT_MISMATCH"].decoded = [] {
+    ValidationReport r(100);
+    TetMesh other = base().mesh;
+    other.tets.pop_back();
+    for (Field& f : other.cell_fields) f.bytes.resize(f.bytes.size() - f.components * f.valueSize());
+    compareWithSource(base().mesh, other, r);
+    return r;
+  };
+  c["SOURCE_FIELD_MISMATCH"].decoded = [] {
+    ValidationReport r(100);
+    TetMesh other = base().mesh;
+    other.point_fields[0].name += "_renamed";
+    compareWithSource(base().mesh, other, r);
+    return r;
+  };
+  c["SOURCE_MESH_MISMATCH"].decoded = [] {
+    ValidationReport r(100);
+    TetMesh other = base().mesh;
+    other.coords[3] = std::nextafter(other.coords[3], 1e300);
+    compareWithSource(base().mesh, other, r);
+    return r;
+  };
+  return c;
+}
+
+TEST(MustFail, BaseFileIsClean) {
+  const ValidationReport r = validateBytesForTest(base().bytes);
+  EXPECT_FALSE(r.hasErrors()) << r.toText("base.gtn");
+}
+
+TEST(MustFail, EachCaseGetsExactlyItsCode) {
+  for (const auto& [code, c] : cases()) {
+    SCOPED_TRACE(code);
+    ValidationReport r = c.file ? validateBytesForTest(c.file()) : c.decoded();
+    EXPECT_EQ(errorCodeSet(r), std::set<std::string>{code}) << r.toText(code);
+  }
+}
+
+TEST(MustFail, EveryErrorCodeHasACase) {
+  const auto all = cases();
+  for (const IssueInfo& info : allIssues()) {
+    if (info.severity != Severity::kError) continue;
+    EXPECT_TRUE(all.count(info.code)) << "no must-fail case for " << info.code;
+  }
+}
+
+TEST(MustFail, WarningsAndInfosKeepTheFileValid) {
+  const double unit_x[3] = {1, 0, 0};
+  TetMesh m = octahedron(unit_x);
+  m.coords.insert(m.coords.end(), {5, 5, 5});  // an unreferenced point
+  m.point_fields.emplace_back("rho", 1, ScalarType::kFloat32, m.numPoints());
+  m.point_fields[0].set<float>(2, 0, std::numeric_limits<float>::infinity());
+  ValidationReport r = reportOf(decodedOf(m));
+  EXPECT_FALSE(r.hasErrors()) << r.toText("x");
+  EXPECT_EQ(r.count(IssueCode::kUnreferencedPoint), 1u);
+  EXPECT_EQ(r.count(IssueCode::kNonFiniteValue), 1u);
+  EXPECT_EQ(r.count(IssueCode::kNoMergeTree), 1u);
+
+  // A flat tetrahedron is a warning.
+  TetMesh flat;
+  flat.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+  flat.tets = {{0, 1, 2, 3}};
+  ValidationReport f = reportOf(decodedOf(flat));
+  EXPECT_FALSE(f.hasErrors()) << f.toText("flat");
+  EXPECT_EQ(f.count(IssueCode::kZeroVolumeTet), 1u);
+
+  // An ancillary chunk the validator does not know is an info.
+  const Bytes b = rewrite([](std::vector<RewriteChunk>& chunks) {
+    chunks.insert(chunks.begin() + 2, RewriteChunk{ChunkTag("ZZZZ"), 0, {1, 2, 3}, true});
+  });
+  ValidationReport u = validateBytesForTest(b);
+  EXPECT_FALSE(u.hasErrors()) << u.toText("unknown");
+  EXPECT_EQ(u.count(IssueCode::kUnknownChunk), 1u) << u.toText("unknown");
+}
+
+}  // namespace
+}  // namespace gtn::test

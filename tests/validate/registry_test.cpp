@@ -1,0 +1,81 @@
+// The issue registry and the report: stable codes, the generated documentation, aggregation, limits
+// and the JSON schema.
+#include <gtest/gtest.h>
+
+#include <cctype>
+#include <set>
+
+#include <nlohmann/json.hpp>
+
+#include "test_util.h"
+#include "validate/issues.h"
+#include "validate/report.h"
+
+namespace gtn::test {
+namespace {
+
+TEST(IssueRegistry, CodesAreUniqueScreamingCaseAndIndexed) {
+  std::set<std::string> seen;
+  size_t i = 0;
+  for (const IssueInfo& info : allIssues()) {
+    EXPECT_EQ(static_cast<size_t>(info.id), i++);
+    const std::string code = info.code;
+    EXPECT_TRUE(seen.insert(code).second) << code;
+    for (char ch : code) EXPECT_TRUE(std::isupper(static_cast<unsigned char>(ch)) || ch == '_') << code;
+    EXPECT_FALSE(std::string(info.description).empty());
+    EXPECT_EQ(issueFromName(code), info.id);
+  }
+  EXPECT_GE(seen.size(), 40u);
+  EXPECT_FALSE(issueFromName("NO_SUCH_CODE").has_value());
+}
+
+TEST(IssueRegistry, DocsPageEqualsGeneratedText) {
+  const std::string doc = readFile(std::string(GTN_SOURCE_DIR) + "/docs/validation-issues.md");
+  EXPECT_EQ(doc, issueListText(true)) << "regenerate with: gtn validate --list-issues --markdown > docs/validation-issues.md";
+  const RunResult r = runGtn("validate --list-issues --markdown");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.out, doc);
+  for (const IssueInfo& info : allIssues()) EXPECT_NE(doc.find(std::string("`") + info.code + "`"), std::string::npos);
+}
+
+TEST(Report, AggregatesCountsTruncatesAndSerialises) {
+  ValidationReport r(2);
+  for (int t = 0; t < 412; ++t) r.add(IssueCode::kInvertedTet, "/levels/0", "/levels/0/tets/" + std::to_string(t));
+  r.setTotal(IssueCode::kInvertedTet, "/levels/0", 187395);
+  r.add(IssueCode::kZeroVolumeTet, "/levels/0", "/levels/0/tets/9");
+  r.add(IssueCode::kUnreferencedPoint, "/levels/0", "/levels/0/points/3");  // beyond max_issues
+  ASSERT_EQ(r.issues().size(), 2u);
+  EXPECT_TRUE(r.truncated());
+  EXPECT_EQ(r.count(Severity::kError), 412u);
+  EXPECT_EQ(r.count(Severity::kWarning), 1u);
+  EXPECT_EQ(r.count(Severity::kInfo), 1u);
+  EXPECT_EQ(r.issues()[0].message(),
+            "412 inverted tetrahedra (negative volume, exact predicate) out of 187395 in /levels/0");
+  EXPECT_EQ(r.issues()[0].paths.size(), ValidationReport::kMaxPaths);
+
+  const nlohmann::json j = r.toJson("f.gtn");
+  EXPECT_FALSE(j["valid"].get<bool>());
+  EXPECT_TRUE(j["truncated"].get<bool>());
+  EXPECT_EQ(j["counts"]["error"].get<int>(), 412);
+  EXPECT_EQ(j["messages"][0]["code"], "INVERTED_TET");
+  EXPECT_EQ(j["messages"][0]["severity"], "error");
+  EXPECT_EQ(j["messages"][0]["count"].get<int>(), 412);
+  EXPECT_EQ(j["messages"][0]["total"].get<int>(), 187395);
+  EXPECT_EQ(j["messages"][0]["path"], "/levels/0/tets/0");
+  EXPECT_EQ(j["messages"][1]["severity"], "warning");
+  EXPECT_TRUE(j["info"].is_object());
+  const std::string text = r.toText("f.gtn");
+  EXPECT_NE(text.find("error: INVERTED_TET: 412 inverted"), std::string::npos) << text;
+  EXPECT_NE(text.find("f.gtn: INVALID (412 errors, 1 warnings, 1 infos)"), std::string::npos) << text;
+  EXPECT_EQ(r.errorCodes(), std::vector<std::string>{"INVERTED_TET"});
+
+  ValidationReport single(10);
+  single.add(IssueCode::kChecksumMismatch, "/container", "/container", "chunk 'GEOM' checksum mismatch", 1234);
+  const nlohmann::json s = single.toJson("g.gtn");
+  EXPECT_EQ(s["messages"][0]["message"], "chunk 'GEOM' checksum mismatch");
+  EXPECT_EQ(s["messages"][0]["offset"].get<int>(), 1234);
+  EXPECT_FALSE(s["truncated"].get<bool>());
+}
+
+}  // namespace
+}  // namespace gtn::test

@@ -1,0 +1,334 @@
+#include "validate/validator.h"
+
+#include <algorithm>
+
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+
+#include "codec/merge_tree_coder.h"
+#include "format/file_io.h"
+#include "format/gtn_reader.h"
+#include "validate/mesh_checks.h"
+
+namespace gtn {
+
+namespace {
+
+std::string levelScope(uint32_t level) { return "/levels/" + std::to_string(level); }
+
+bool sameFields(const std::vector<Field>& a, const std::vector<Field>& b, std::string* why) {
+  if (a.size() != b.size()) {
+    *why = std::to_string(a.size()) + " fields, the source has " + std::to_string(b.size());
+    return false;
+  }
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (a[i].name != b[i].name || a[i].type != b[i].type || a[i].components != b[i].components) {
+      *why = "field " + std::to_string(i) + " is '" + a[i].name + "' " + std::to_string(a[i].components) + " x " +
+             scalarTypeName(a[i].type) + ", the source has '" + b[i].name + "' " + std::to_string(b[i].components) +
+             " x " + scalarTypeName(b[i].type);
+      return false;
+    }
+  }
+  return true;
+}
+
+nlohmann::json statsJson(const MeshCheckStats& s) {
+  return {{"points", s.points},
+          {"tets", s.tets},
+          {"faces", s.faces},
+          {"boundary_faces", s.boundary_faces},
+          {"inverted", s.inverted},
+          {"zero_volume", s.zero_volume},
+          {"unreferenced_points", s.unreferenced_points}};
+}
+
+}  // namespace
+
+void compareWithSource(const TetMesh& level0, const TetMesh& source, ValidationReport& report) {
+  const std::string scope = "/levels/0";
+  bool comparable = true;
+  if (level0.numPoints() != source.numPoints() || level0.numTets() != source.numTets()) {
+    report.add(IssueCode::kSourceCountMismatch, scope, scope,
+               "level 0 has " + std::to_string(level0.numPoints()) + " points and " +
+                   std::to_string(level0.numTets()) + " tetrahedra, the source " + std::to_string(source.numPoints()) +
+                   " and " + std::to_string(source.numTets()));
+  }
+  std::string why;
+  if (level0.coord_type != source.coord_type) {
+    report.add(IssueCode::kSourceFieldMismatch, scope, scope + "/coordinates",
+               std::string("coordinates are ") + scalarTypeName(level0.coord_type) + ", the source's " +
+                   scalarTypeName(source.coord_type));
+  }
+  if (!sameFields(level0.point_fields, source.point_fields, &why)) {
+    report.add(IssueCode::kSourceFieldMismatch, scope, scope + "/point_fields", "point fields: " + why);
+    comparable = false;
+  }
+  if (!sameFields(level0.cell_fields, source.cell_fields, &why)) {
+    report.add(IssueCode::kSourceFieldMismatch, scope, scope + "/cell_fields", "cell fields: " + why);
+    comparable = false;
+  }
+  if (!comparable || level0.numPoints() != source.numPoints() || level0.numTets() != source.numTets()) return;
+  std::vector<uint64_t> pa = pointKeys(level0), pb = pointKeys(source);
+  const auto ta = sortedTetKeys(level0, pa), tb = sortedTetKeys(source, pb);
+  std::sort(pa.begin(), pa.end());
+  std::sort(pb.begin(), pb.end());
+  const auto [extra_p, missing_p] = multisetDifference(pa, pb);
+  const auto [extra_t, missing_t] = multisetDifference(ta, tb);
+  if (extra_p || missing_p || extra_t || missing_t) {
+    report.add(IssueCode::kSourceMeshMismatch, scope, scope,
+               std::to_string(extra_t) + " tetrahedra and " + std::to_string(extra_p) +
+                   " points of level 0 are not in the source; " + std::to_string(missing_t) + " tetrahedra and " +
+                   std::to_string(missing_p) + " points of the source are missing (positions and values compared "
+                   "bit for bit, up to renumbering)");
+  }
+}
+
+void validateDecoded(const DecodedFile& file, const ValidateOptions& options, ValidationReport& report) {
+  if (file.levels.empty() || file.levels.front().level != 0) {
+    report.add(IssueCode::kNoLevels, "/levels", "/levels", "the file holds no level 0");
+    return;
+  }
+  nlohmann::json levels_info = nlohmann::json::array();
+  bool level0_ok = false;
+  for (const DecodedLevel& level : file.levels) {
+    const std::string scope = levelScope(level.level);
+    const LevelHeader& h = level.header;
+    if (h.points != level.mesh.numPoints() || h.tets != level.mesh.numTets() ||
+        h.boundary_triangles != level.boundary.size()) {
+      report.add(IssueCode::kLevelCountMismatch, scope, scope,
+                 "the header declares " + std::to_string(h.points) + " points, " + std::to_string(h.tets) +
+                     " tetrahedra and " + std::to_string(h.boundary_triangles) + " boundary triangles; decoding gave " +
+                     std::to_string(level.mesh.numPoints()) + ", " + std::to_string(level.mesh.numTets()) + " and " +
+                     std::to_string(level.boundary.size()));
+    }
+    MeshCheckStats stats;
+    const bool ok = checkMesh(level.mesh, scope, report, &stats);
+    if (ok) checkStoredBoundary(level.mesh, level.boundary, scope, report);
+    if (level.level == 0) level0_ok = ok;
+    nlohmann::json li = statsJson(stats);
+    li["level"] = level.level;
+    li["merges"] = h.merges;
+    if (level.ratio >= 0) li["ratio"] = level.ratio;
+    levels_info.push_back(std::move(li));
+  }
+  report.info()["levels"] = std::move(levels_info);
+
+  const TetMesh& level0 = file.levels.front().mesh;
+  if (!file.forest) {
+    if (file.forest_undecodable) {
+      // Already reported (MERGE_TREE_UNDECODABLE); the levels cannot be checked without it.
+    } else if (file.levels.size() > 1) {
+      report.add(IssueCode::kLevelWithoutMergeTree, "/levels", "/levels",
+                 std::to_string(file.levels.size() - 1) + " mip levels but no merge tree");
+    } else {
+      report.add(IssueCode::kNoMergeTree, "/merge_tree", "/merge_tree");
+    }
+  } else if (level0_ok) {
+    std::vector<StoredLevel> stored;
+    for (size_t i = 1; i < file.levels.size(); ++i) {
+      const DecodedLevel& l = file.levels[i];
+      stored.push_back({l.level, l.header.merges, l.ratio, &l.mesh});
+    }
+    MergeReplayStats ms;
+    checkMergeTree(level0, *file.forest, stored, report, &ms);
+    report.info()["merge_tree"] = {{"merges", ms.merges},
+                                   {"roots", ms.roots},
+                                   {"boundary_merges", ms.boundary_merges},
+                                   {"max_depth", ms.max_depth},
+                                   {"tets_checked", ms.tets_checked}};
+  }
+
+  if (!options.against.empty()) {
+    StatusOr<ImportResult> source = importMesh(options.against, options.import_options);
+    if (!source.isOk()) {
+      report.add(IssueCode::kSourceUnreadable, "/against", "/against", source.status().message());
+    } else {
+      compareWithSource(level0, source->mesh, report);
+    }
+  }
+}
+
+namespace {
+
+bool containsText(const std::string& haystack, const char* needle) {
+  auto lower = [](std::string x) {
+    for (char& ch : x) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return x;
+  };
+  return lower(haystack).find(needle) != std::string::npos;
+}
+
+// The byte offset a reader message names ("...: byte offset N: ..."), if any.
+std::optional<uint64_t> messageOffset(const std::string& message) {
+  const std::string key = "byte offset ";
+  const size_t at = message.find(key);
+  if (at == std::string::npos) return std::nullopt;
+  size_t i = at + key.size();
+  if (i >= message.size() || !std::isdigit(static_cast<unsigned char>(message[i]))) return std::nullopt;
+  uint64_t v = 0;
+  for (; i < message.size() && std::isdigit(static_cast<unsigned char>(message[i])); ++i) {
+    if (v > (UINT64_MAX - 9) / 10) return std::nullopt;
+    v = v * 10 + static_cast<uint64_t>(message[i] - '0');
+  }
+  return v;
+}
+
+// The reader stops at the first defect of the container and says what it is in its status; this maps
+// that status to the registry's code. The reader's wording is the contract here: the must-fail tests
+// (tests/validate) pin every mapping.
+IssueCode classifyContainerFailure(const Status& status) {
+  const std::string& m = status.message();
+  if (status.code() == StatusCode::kNotOurFile) return IssueCode::kBadMagic;
+  if (status.code() == StatusCode::kVersionTooNew || containsText(m, "major version")) {
+    return IssueCode::kUnsupportedVersion;
+  }
+  if (containsText(m, "inside the 16-byte")) return IssueCode::kFileTooSmall;
+  if (containsText(m, "checksum mismatch")) return IssueCode::kChecksumMismatch;
+  if (containsText(m, "reserved")) return IssueCode::kReservedBitsSet;
+  if (containsText(m, "trailing bytes")) return IssueCode::kTrailingBytes;
+  if (containsText(m, "directory") || containsText(m, "end chunk")) return IssueCode::kDirectoryMismatch;
+  if (containsText(m, "truncated") || containsText(m, "chunk type") || containsText(m, "zstd") ||
+      containsText(m, "decompresses")) {
+    return IssueCode::kChunkFraming;
+  }
+  if (containsText(m, "at most") || containsText(m, "exceeds") || containsText(m, "too large") ||
+      containsText(m, "more levels than")) {
+    return IssueCode::kSizeOutOfBounds;
+  }
+  return IssueCode::kMalformedContainer;
+}
+
+MergeForest forestFromTree(const MergeTree& tree) {
+  MergeForest f;
+  f.parent = tree.parent;
+  f.rank.assign(tree.rank.begin(), tree.rank.end());
+  f.boundary = tree.boundary;
+  f.removed = tree.removed;
+  return f;
+}
+
+}  // namespace
+
+StatusOr<ValidationReport> validateGtnFile(const std::string& path, const ValidateOptions& options) {
+  ValidationReport report(options.max_issues);
+  StatusOr<std::unique_ptr<GtnReader>> opened = GtnReader::open(path, GtnOpenOptions{true});
+  if (!opened.isOk()) {
+    const Status& st = opened.status();
+    if (st.code() == StatusCode::kIo) return st;
+    const std::optional<uint64_t> offset = messageOffset(st.message());
+    report.add(classifyContainerFailure(st), "/container", "/container", st.message(), offset);
+    return report;
+  }
+  GtnReader& reader = *opened.value();
+  const GtnFileInfo& fi = reader.file();
+  nlohmann::json& info = report.info();
+  info["file_bytes"] = fi.bytes;
+  info["version"] = std::to_string(fi.major) + "." + std::to_string(fi.minor);
+  info["level_count"] = reader.levels();
+  info["has_directory"] = fi.has_directory;
+  info["tool_version"] = fi.header.tool_version;
+  nlohmann::json sections = nlohmann::json::object();
+  for (const GtnSection& s : reader.sections()) sections[s.name] = s.bytes;
+  info["sections"] = std::move(sections);
+  for (size_t i = 0; i < reader.levels(); ++i) {
+    for (const GtnChunkInfo& c : reader.level(i).chunks) {
+      if (c.section.rfind("unknown:", 0) == 0) {
+        report.add(IssueCode::kUnknownChunk, "/container", "/levels/" + std::to_string(i) + "/" + c.section,
+                   "level " + std::to_string(i) + " holds an ancillary chunk '" + c.tag.str() + "' (skipped)", c.offset);
+      }
+    }
+  }
+  for (const GtnChunkInfo& c : fi.chunks) {
+    if (c.section.rfind("unknown:", 0) == 0) {
+      report.add(IssueCode::kUnknownChunk, "/container", "/" + c.section,
+                 "ancillary chunk '" + c.tag.str() + "' (skipped)", c.offset);
+    }
+  }
+  if (options.quick) return report;
+
+  // Decoding: every level into memory, then the mesh, merge-tree and levels layers.
+  DecodedFile decoded;
+  for (size_t i = 0; i < reader.levels(); ++i) {
+    const std::string scope = "/levels/" + std::to_string(i);
+    TetMeshBuilder builder;
+    DecodeStats dstats;
+    const Status st = reader.decodeLevel(i, builder, &dstats);
+    if (!st.isOk()) {
+      const std::optional<uint64_t> offset = messageOffset(st.message());
+      const IssueCode code = (containsText(st.message(), "declares") || containsText(st.message(), "count"))
+                                 ? IssueCode::kLevelCountMismatch
+                                 : IssueCode::kLevelDecodeFailed;
+      report.add(code, scope, scope, st.message(), offset);
+      if (i == 0) break;
+      continue;
+    }
+    DecodedLevel level;
+    level.level = static_cast<uint32_t>(i);
+    level.header = reader.level(i).header;
+    level.ratio = i == 0 ? -1.0 : reader.level(i).ratio;
+    level.mesh = std::move(builder.mesh());
+    level.boundary.assign(builder.boundary().begin(), builder.boundary().end());
+    decoded.levels.push_back(std::move(level));
+    info["peak_live_vertices"][i] = dstats.peak_live_vertices;
+  }
+  if (decoded.levels.empty()) return report;  // level 0 did not decode: nothing else can be checked
+  for (size_t i = 0; i < reader.levels(); ++i) {
+    StatusOr<std::optional<std::vector<uint8_t>>> payload = reader.mergeTreePayload(i);
+    if (!payload.isOk()) {
+      report.add(IssueCode::kMergeTreeUndecodable, "/merge_tree", "/levels/" + std::to_string(i) + "/merge_tree",
+                 payload.status().message(), messageOffset(payload.status().message()));
+      if (i == 0) decoded.forest_undecodable = true;
+      continue;
+    }
+    if (!payload->has_value()) continue;
+    const uint64_t points = reader.level(i).header.points;
+    StatusOr<MergeTree> tree =
+        decodeMergeTree(**payload, points, fi.path + ": level " + std::to_string(i) + " merge tree");
+    if (!tree.isOk()) {
+      report.add(IssueCode::kMergeTreeUndecodable, "/merge_tree", "/levels/" + std::to_string(i) + "/merge_tree",
+                 tree.status().message());
+      if (i == 0) decoded.forest_undecodable = true;
+      continue;
+    }
+    // Level 0's tree is the one every level derives from; the trees of mip levels (what remains of
+    // it) are only checked to decode.
+    if (i == 0) decoded.forest = forestFromTree(*tree);
+  }
+  validateDecoded(decoded, options, report);
+  return report;
+}
+
+}  // namespace gtn
+
+namespace gtn {
+
+ValidationReport validateGtnBytes(std::span<const uint8_t> bytes, const std::string& name,
+                                  const ValidateOptions& options) {
+  // The reader opens paths; an anonymous in-memory file gives it one without touching the disk.
+  const int fd = memfd_create("gtn-validate", MFD_CLOEXEC);
+  ValidationReport failed(options.max_issues);
+  if (fd < 0) {
+    failed.add(IssueCode::kMalformedContainer, "/container", "/container",
+               name + ": cannot create an in-memory file: " + std::strerror(errno));
+    return failed;
+  }
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t w = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (w <= 0) break;
+    done += static_cast<size_t>(w);
+  }
+  StatusOr<ValidationReport> report = validateGtnFile("/proc/self/fd/" + std::to_string(fd), options);
+  ::close(fd);
+  if (!report.isOk()) {
+    failed.add(IssueCode::kMalformedContainer, "/container", "/container", name + ": " + report.status().message());
+    return failed;
+  }
+  return std::move(report).value();
+}
+
+}  // namespace gtn
