@@ -4,6 +4,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 
 #include "convert/cell_split.h"
@@ -55,6 +56,7 @@ class VtuReader {
   VtkCells cells_;
   std::vector<Field> cell_fields_;
   bool coords_float64_ = false;
+  uint64_t expected_bytes_ = 0;  // of the array being decoded
 };
 
 uint64_t VtuReader::headerValue(const uint8_t* p) const {
@@ -84,12 +86,16 @@ Status VtuReader::inflateBlocks(const uint8_t* header, const uint8_t* blocks, si
     if (c > available || compressed_total > available - c)
       return fail(where, "compressed block " + std::to_string(b) + " runs past the end of the data (" +
                              std::to_string(available) + " bytes)");
-    if (u > kMaxZlibRatio * (c + 16))
+    if (u > kMaxZlibRatio * c + 64)
       return fail(where, "compressed block " + std::to_string(b) + " claims " + std::to_string(u) +
                              " bytes from " + std::to_string(c));
     compressed_total += c;
     total += u;
   }
+  // Checked before allocating: a header cannot make us reserve more than the array needs.
+  if (total != expected_bytes_)
+    return fail(where, "compressed blocks hold " + std::to_string(total) + " bytes, expected " +
+                           std::to_string(expected_bytes_));
   out->resize(total);
   uint64_t in_pos = 0, out_pos = 0;
   for (uint64_t b = 0; b < num_blocks; ++b) {
@@ -196,6 +202,7 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
   const std::string format = node.attribute("format").as_string("ascii");
   if (tuples > UINT64_MAX / comps / size) return fail(where, "too many values");
   const uint64_t count = tuples * comps;
+  expected_bytes_ = count * size;
   if (format == "ascii") {
     const std::string_view body = node.text().get();
     if (count > body.size() / 2 + 1)

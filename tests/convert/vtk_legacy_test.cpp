@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <random>
 #include <sstream>
 
 #include "convert/import.h"
@@ -272,6 +273,25 @@ TEST(VtkLegacy, TruncatedBinaryDataFailsCleanlyAtEveryCut) {
       continue;
     }
     EXPECT_EQ(r.status().message().rfind(path, 0), 0u) << r.status().message();
+  }
+}
+
+TEST(VtkLegacy, RandomlyCorruptedFilesNeverCrash) {
+  const std::string dir = tempDir("vtk_legacy_corrupt");
+  const std::string path = dir + "/corrupt.vtk";
+  std::mt19937 rng(777);
+  for (bool binary : {true, false}) {
+    const std::string source = makeDataset(binary, !binary).text;
+    for (int it = 0; it < 150; ++it) {
+      std::string text = source;
+      const int changes = 1 + static_cast<int>(rng() % 4);
+      for (int c = 0; c < changes; ++c) text[rng() % text.size()] = static_cast<char>(rng() % 256);
+      writeFile(path, text);
+      auto r = importVtkLegacy(path, ImportOptions{});
+      if (!r.isOk()) {
+        EXPECT_EQ(r.status().message().rfind(path, 0), 0u) << r.status().message();
+      }
+    }
   }
 }
 
