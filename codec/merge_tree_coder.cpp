@@ -74,8 +74,10 @@ int bitLength(uint64_t x) { return x == 0 ? 0 : 64 - __builtin_clzll(x); }
 
 // Adaptive models of the body (one instance per encoder or decoder).
 struct Models {
-  BitModel is_root, sign, boundary;
-  BitTree<5> len[2];
+  BitModel is_root, boundary;
+  BitTree<4> choice;     // which recent parent delta predicts this one (0 = none)
+  BitModel sign[2];      // per context (choice == 0 or not)
+  BitTree<6> len[2];
   BitTree<4> removed[2];
 };
 
@@ -91,20 +93,38 @@ uint32_t codeUniform(C& c, uint32_t x, uint32_t total) {
   return y - u;
 }
 
+// The parent deltas (parent id - child id) of the last merged vertices, most recent first: nearby
+// vertices in decoding order tend to merge in the same direction.
+struct DeltaHistory {
+  static constexpr int kSize = 8;
+  int64_t d[kSize] = {};
+  int count = 0;
+  void push(int64_t delta) {
+    for (int k = kSize - 1; k > 0; --k) d[k] = d[k - 1];
+    d[0] = delta;
+    count = std::min(count + 1, kSize);
+  }
+};
+
 // The per-vertex body of the payload, shared by the encoder (values in, returned unchanged) and the
 // decoder (values out).
 struct VertexCode {
   bool root;
-  uint32_t sign, len_minus_1, low_bits, rank_index, boundary, removed;
+  uint32_t choice, sign, len, low_bits, rank_index, boundary, removed;
 };
 
 template <class C>
 void codeVertex(C& c, Models& m, VertexCode& v, uint32_t remaining) {
   v.root = c.bit(m.is_root, v.root ? 1 : 0) != 0;
   if (v.root) return;
-  v.sign = c.bit(m.sign, v.sign);
-  v.len_minus_1 = m.len[v.sign].code(c, v.len_minus_1);
-  v.low_bits = c.direct(v.low_bits, static_cast<int>(v.len_minus_1));
+  v.choice = m.choice.code(c, v.choice);
+  const int ctx = v.choice ? 1 : 0;
+  v.len = m.len[ctx].code(c, v.len);
+  if (v.len > 33) return;  // only a corrupt stream gets here; the decoder rejects it
+  if (v.len > 0) {
+    v.sign = c.bit(m.sign[ctx], v.sign);
+    v.low_bits = c.direct(v.low_bits, static_cast<int>(v.len) - 1);
+  }
   v.rank_index = codeUniform(c, v.rank_index, remaining);
   v.boundary = c.bit(m.boundary, v.boundary);
   const uint32_t k = m.removed[v.boundary].code(c, std::min<uint32_t>(v.removed, 15));
@@ -246,16 +266,27 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   Models m;
   FreeRanks free_ranks(static_cast<uint32_t>(tree.merges));
   uint32_t remaining = static_cast<uint32_t>(tree.merges);
+  DeltaHistory history;
   for (uint32_t id = 0; id < n; ++id) {
     const uint32_t v = inverse[id];
     VertexCode code{};
     code.root = tree.parent[v] == MergeTree::kRoot;
     if (!code.root) {
-      const uint32_t pid = vertex_order[tree.parent[v]];
-      code.sign = pid < id ? 1 : 0;
-      const uint32_t mag = code.sign ? id - pid : pid - id;
-      code.len_minus_1 = static_cast<uint32_t>(bitLength(mag) - 1);
-      code.low_bits = mag & ((1u << code.len_minus_1) - 1);
+      const int64_t delta = int64_t{vertex_order[tree.parent[v]]} - int64_t{id};
+      int64_t residual = delta;
+      code.choice = 0;
+      for (int k = 0; k < history.count; ++k) {
+        const int64_t r = delta - history.d[k];
+        if (std::llabs(r) < std::llabs(residual)) {
+          residual = r;
+          code.choice = static_cast<uint32_t>(k + 1);
+        }
+      }
+      history.push(delta);
+      const uint64_t mag = static_cast<uint64_t>(std::llabs(residual));
+      code.len = static_cast<uint32_t>(bitLength(mag));
+      code.sign = residual < 0 ? 1 : 0;
+      code.low_bits = code.len > 1 ? static_cast<uint32_t>(mag & ((uint64_t{1} << (code.len - 1)) - 1)) : 0;
       code.rank_index = free_ranks.countBelow(tree.rank[v]);
       code.boundary = tree.boundary[v] ? 1 : 0;
       code.removed = tree.removed[v];
@@ -321,6 +352,7 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
   FreeRanks free_ranks(static_cast<uint32_t>(merges));
   uint32_t remaining = static_cast<uint32_t>(merges);
   uint64_t got_boundary = 0, got_removed = 0;
+  DeltaHistory history;
   auto bodyError = [&](uint32_t id, const std::string& why) {
     return invalidData(what + ": merge tree payload body, vertex " + std::to_string(id) + ": " + why);
   };
@@ -330,15 +362,14 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     codeVertex(rc, m, code, remaining);
     if (code.root) continue;
     if (remaining == 0) return bodyError(id, "more merged vertices than merges");
-    const uint64_t mag = (uint64_t{1} << code.len_minus_1) | code.low_bits;
-    uint64_t pid;
-    if (code.sign) {
-      if (mag > id) return bodyError(id, "parent id out of range");
-      pid = id - mag;
-    } else {
-      pid = id + mag;
-      if (pid >= n) return bodyError(id, "parent id out of range");
-    }
+    if (code.choice > static_cast<uint32_t>(history.count)) return bodyError(id, "parent predictor out of range");
+    if (code.len > 33) return bodyError(id, "parent delta too long");
+    const int64_t mag = code.len == 0 ? 0 : static_cast<int64_t>((uint64_t{1} << (code.len - 1)) | code.low_bits);
+    const int64_t delta = (code.choice ? history.d[code.choice - 1] : 0) + (code.sign ? -mag : mag);
+    const int64_t pid64 = int64_t{id} + delta;
+    if (delta == 0 || pid64 < 0 || pid64 >= static_cast<int64_t>(n)) return bodyError(id, "parent id out of range");
+    history.push(delta);
+    const uint64_t pid = static_cast<uint64_t>(pid64);
     if (code.rank_index >= remaining) return bodyError(id, "rank out of range");
     const uint32_t rank = free_ranks.kth(code.rank_index);
     free_ranks.take(rank);

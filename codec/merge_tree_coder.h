@@ -22,9 +22,17 @@
 //           the level's vertex numbering 0..P-1 (decoding order):
 //     bit   is_root                  one model
 //     if not root:
-//       bit   sign                   one model; 1 = parent id < v
-//       BitTree<5>  len - 1          tree per sign; len = bit length of |parent - v| (1..32)
-//       len-1 direct bits            |parent - v| below its leading one
+//       delta = parent id - v, predicted from H, the deltas of the last (up to 8) merged vertices
+//       before v, most recent first:
+//       BitTree<4>  c                c = 0: no prediction; c = k (1 <= k <= |H|): predicted by H[k-1]
+//                                    (the encoder picks the smallest |residual|, ties to lower c);
+//                                    residual = delta - (c ? H[c-1] : 0)
+//       BitTree<6>  len              tree per context (c == 0, c > 0); len = bit length of |residual|
+//                                    (0..33; 0 means residual 0)
+//       if len > 0:
+//         bit   sign                 model per context; 1 = residual < 0
+//         len-1 direct bits          |residual| below its leading one
+//       then delta is pushed in front of H (at most 8 kept)
 //       uniform x in [0, R)          R = ranks not yet taken (M minus the merged vertices before v);
 //                                    the rank is the (x+1)-th smallest rank not yet taken (a Lehmer
 //                                    code of the rank permutation). Truncated binary in direct bits:
@@ -33,8 +41,8 @@
 //       bit   boundary               one model; 1 = v is a boundary vertex
 //       BitTree<4>  k                tree per boundary bit; k = tetrahedra the merge removes, 15 =
 //                                    escape followed by 32 direct bits holding k
-// The decoder rejects: an unknown version, P different from the expected count, M > P, a parent
-// out of range or equal to v, a rank not in 1..R, a child whose (non-root) parent has a smaller rank,
+// The decoder rejects: an unknown version, P different from the expected count, M > P, c > |H|,
+// len > 33, a parent out of range or equal to v, a rank not in 1..R, a child whose (non-root) parent has a smaller rank,
 // counts that disagree with the header fields, a body read past its end, and trailing bytes.
 #pragma once
 

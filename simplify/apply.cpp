@@ -92,3 +92,40 @@ MergeTree remainingTree(const MergeTree& tree, uint64_t n, const std::vector<uin
 }
 
 }  // namespace gtn
+
+namespace gtn {
+
+MergeTreeStats computeMergeTreeStats(const MergeTree& tree) {
+  MergeTreeStats s;
+  const size_t np = tree.points();
+  s.points = np;
+  s.merges = tree.merges;
+  s.roots = np - tree.merges;
+  s.boundary_merges = tree.boundaryMergesUpTo(tree.merges);
+  s.tets_removed = tree.tetsRemovedUpTo(tree.merges);
+  std::vector<uint32_t> order(tree.merges, MergeTree::kRoot), depth(np, 0), children(np, 0);
+  for (size_t v = 0; v < np; ++v) {
+    if (tree.parent[v] == MergeTree::kRoot) continue;
+    order[tree.rank[v] - 1] = static_cast<uint32_t>(v);
+    ++children[tree.parent[v]];
+  }
+  double depth_sum = 0;
+  for (uint64_t r = tree.merges; r-- > 0;) {
+    const uint32_t v = order[r];
+    depth[v] = depth[tree.parent[v]] + 1;
+    s.depth_max = std::max<uint64_t>(s.depth_max, depth[v]);
+    depth_sum += depth[v];
+  }
+  s.depth_mean = np ? depth_sum / double(np) : 0;
+  uint64_t parents = 0, child_sum = 0;
+  for (uint32_t c : children) {
+    if (!c) continue;
+    ++parents;
+    child_sum += c;
+    s.fanout_max = std::max<uint64_t>(s.fanout_max, c);
+  }
+  s.fanout_mean = parents ? double(child_sum) / double(parents) : 0;
+  return s;
+}
+
+}  // namespace gtn

@@ -27,3 +27,17 @@ StatusOr<TetMesh> applyMerges(const TetMesh& mesh, const MergeTree& tree, uint64
 MergeTree remainingTree(const MergeTree& tree, uint64_t n, const std::vector<uint32_t>& new_index);
 
 }  // namespace gtn
+
+namespace gtn {
+
+// Shape of a merge tree, as `gtn info --merge-tree` reports it.
+struct MergeTreeStats {
+  uint64_t points = 0, merges = 0, roots = 0, boundary_merges = 0, tets_removed = 0;
+  uint64_t depth_max = 0;   // merges on the longest path from a vertex to its root
+  double depth_mean = 0;    // over all vertices (roots have depth 0)
+  uint64_t fanout_max = 0;  // children of one vertex
+  double fanout_mean = 0;   // over the vertices that have children
+};
+MergeTreeStats computeMergeTreeStats(const MergeTree& tree);
+
+}  // namespace gtn

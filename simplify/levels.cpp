@@ -1,8 +1,12 @@
 #include "simplify/levels.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 
+#include "format/gtn_reader.h"
 #include "simplify/apply.h"
+#include "simplify/stream_simplifier.h"
 
 namespace gtn {
 
@@ -59,6 +63,47 @@ size_t chooseLevel(const std::vector<uint64_t>& level_merges, uint64_t target_me
     if (level_merges[i] <= target_merges) best = i;
   }
   return best;
+}
+
+}  // namespace gtn
+
+namespace gtn {
+
+StatusOr<SimplifyPlan> planSimplification(const GtnReader& reader, uint64_t target_merges) {
+  if (reader.levels() == 0) return invalidData(reader.file().path + ": the file has no levels");
+  std::vector<uint64_t> merges;
+  for (size_t i = 0; i < reader.levels(); ++i) merges.push_back(reader.level(i).header.merges);
+  // Levels are stored coarser and coarser; choose among those not beyond the target.
+  SimplifyPlan plan;
+  plan.level = 0;
+  for (size_t i = 0; i < merges.size(); ++i) {
+    if (merges[i] <= target_merges && merges[i] >= merges[plan.level]) plan.level = i;
+  }
+  plan.extra_merges = target_merges - merges[plan.level];
+  return plan;
+}
+
+uint64_t mergesForRatio(const GtnReader& reader, double ratio) {
+  if (reader.levels() == 0 || !(ratio > 0)) return 0;
+  const double points = static_cast<double>(reader.level(0).header.points);
+  return static_cast<uint64_t>(std::llround(std::min(1.0, ratio) * points));
+}
+
+Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out) {
+  GTN_ASSIGN_OR_RETURN(SimplifyPlan plan, planSimplification(reader, target_merges));
+  if (plan_out) *plan_out = plan;
+  if (plan.extra_merges == 0) return reader.decodeLevel(plan.level, sink);
+  auto payload_or = reader.mergeTreePayload(plan.level);
+  if (!payload_or.isOk()) return payload_or.status();
+  const std::optional<std::vector<uint8_t>>& payload = payload_or.value();
+  const std::string what = reader.file().path + ", level " + std::to_string(plan.level);
+  if (!payload.has_value()) return usageError(what + " stores no merge tree: cannot simplify beyond the stored levels");
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, reader.level(plan.level).header.points, what));
+  if (plan.extra_merges > tree.merges)
+    return usageError(what + ": " + std::to_string(target_merges) + " merges requested, the merge tree has " +
+                      std::to_string(reader.level(plan.level).header.merges + tree.merges));
+  StreamSimplifier filter(tree, plan.extra_merges, sink);
+  return reader.decodeLevel(plan.level, filter);
 }
 
 }  // namespace gtn

@@ -16,7 +16,7 @@ namespace gtn {
 
 struct LevelOptions {
   int levels = -1;                  // mip levels beyond level 0; -1 = down to a small mesh
-  uint64_t min_points = 64;         // automatic levels stop before a level would have fewer points
+  uint64_t min_points = 256;        // automatic levels stop before a level would have fewer points
   bool merge_tree = true;           // store each level's merge tree
 };
 
@@ -40,5 +40,27 @@ StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree,
 // The finest stored level to start from for a target of `target_merges` merges: the index of the
 // largest level_merges[i] <= target_merges (level_merges ascending, level_merges[0] = 0).
 size_t chooseLevel(const std::vector<uint64_t>& level_merges, uint64_t target_merges);
+
+}  // namespace gtn
+
+namespace gtn {
+
+class GtnReader;
+
+// Where a reader starts for a target of `target_merges` merges (counted on level 0's tree): the
+// finest stored level with no more merges than the target, and the merges still to apply on the fly.
+struct SimplifyPlan {
+  size_t level = 0;
+  uint64_t extra_merges = 0;
+};
+StatusOr<SimplifyPlan> planSimplification(const GtnReader& reader, uint64_t target_merges);
+
+// Merges for a target simplification ratio (vertices merged away / vertices of level 0), rounded.
+uint64_t mergesForRatio(const GtnReader& reader, double ratio);
+
+// Streams the mesh after `target_merges` merges to `sink`: decodes the planned level and, when merges
+// remain, filters it through a StreamSimplifier with that level's merge tree. Fails with kUsage when
+// merges remain and the level stores no merge tree, or the target exceeds the stored merges.
+Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out = nullptr);
 
 }  // namespace gtn

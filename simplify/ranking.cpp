@@ -420,6 +420,41 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
     }
   }
   if (boundary_[v] && edge_faces == 0) return false;  // not a boundary edge
+  // A collapsing tetrahedron T = (v, w, x, y) glues its faces (v, x, y) and (w, x, y). When one of them
+  // is on the boundary, the tetrahedron across the other one inherits the boundary triangle: the
+  // streamed triangle keeps T's orientation, the mesh's takes the neighbour's. They agree when both
+  // are positively oriented (a flat tetrahedron's orientation is arbitrary), so require that.
+  for (uint32_t c : corners_) {
+    const uint32_t t = c >> 2;
+    const Tet& q = tets_[t];
+    if (q[0] != w && q[1] != w && q[2] != w && q[3] != w) continue;
+    uint32_t xy[2], m = 0;
+    for (uint32_t z : q) {
+      if (z != v && z != w) xy[m++] = z;
+    }
+    auto across = [&](const std::vector<uint32_t>& star) -> uint32_t {
+      for (uint32_t cc : star) {
+        const uint32_t r = cc >> 2;
+        if (r == t) continue;
+        const Tet& p = tets_[r];
+        bool has_x = false, has_y = false;
+        for (uint32_t z : p) {
+          has_x |= z == xy[0];
+          has_y |= z == xy[1];
+        }
+        if (has_x && has_y) return r;
+      }
+      return kNil;
+    };
+    const uint32_t nv = across(corners_), nw = across(corners_w_);
+    if (nv != kNil && nw != kNil) continue;
+    if (orient3d(pos(q[0]), pos(q[1]), pos(q[2]), pos(q[3])) <= 0) return false;
+    const uint32_t n = nv != kNil ? nv : nw;
+    if (n != kNil) {
+      const Tet& p = tets_[n];
+      if (orient3d(pos(p[0]), pos(p[1]), pos(p[2]), pos(p[3])) <= 0) return false;
+    }
+  }
   // Link condition: Lk(v) ∩ Lk(w) = Lk(vw), counted per dimension (Lk(vw) is always contained).
   sortUnique(lk_verts_);
   const size_t lk_v = lk_verts_.size() + (edge_faces > 0 ? 1 : 0);

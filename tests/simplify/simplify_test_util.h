@@ -279,14 +279,17 @@ class RecordingSink : public TetMeshBuilder {
 // Streams `mesh` through a StreamSimplifier with the first n merges of `tree` (source numbering),
 // through the level codec when `use_codec`, else through emitMesh with a shuffled order, and checks
 // that the result equals applyMerges(mesh, tree, n). `mesh` must carry the "id" field.
-inline void expectStreamMatchesApply(const TetMesh& mesh, const MergeTree& tree, uint64_t n, bool use_codec) {
+// `encoded` (optional) is encodeLevel(mesh), to encode a big mesh once for many n.
+inline void expectStreamMatchesApply(const TetMesh& mesh, const MergeTree& tree, uint64_t n, bool use_codec,
+                                     const EncodedLevel* encoded = nullptr) {
   SCOPED_TRACE("n = " + std::to_string(n) + (use_codec ? " (codec)" : " (emitter)"));
   auto applied = applyMerges(mesh, tree, n);
   ASSERT_TRUE(applied.isOk()) << applied.status().message();
   RecordingSink rec;
   if (use_codec) {
-    auto enc = encodeLevel(mesh, EncodeOptions{});
-    ASSERT_TRUE(enc.isOk()) << enc.status().message();
+    StatusOr<EncodedLevel> own = encoded ? StatusOr<EncodedLevel>(Status::ok()) : encodeLevel(mesh, EncodeOptions{});
+    ASSERT_TRUE(encoded || own.isOk()) << own.status().message();
+    const EncodedLevel* enc = encoded ? encoded : &own.value();
     auto payload = encodeMergeTree(tree, enc->vertex_order);
     ASSERT_TRUE(payload.isOk()) << payload.status().message();
     auto stream_tree = decodeMergeTree(*payload, mesh.numPoints(), "test");

@@ -1,0 +1,200 @@
+// bench-simplify: per dataset, the static ranking's time and throughput, the cost of on-the-fly
+// simplification relative to plain decoding, and what each mip level keeps (points, tetrahedra,
+// total volume and total mass change relative to level 0, stored bytes of level and merge tree).
+//
+// Usage: bench-simplify [--data DIR] [--repeat R] [DATASET...]   (datasets: spx, cornell, bluntfin,
+// combustion, bluntfin5, combustion5; default all)
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "codec/level_codec.h"
+#include "codec/merge_tree_coder.h"
+#include "convert/import.h"
+#include "mesh/mesh_stats.h"
+#include "mesh/predicates.h"
+#include "simplify/levels.h"
+#include "simplify/ranking.h"
+#include "simplify/stream_simplifier.h"
+
+namespace {
+
+using namespace gtn;
+using Clock = std::chrono::steady_clock;
+
+struct Dataset {
+  std::string name;
+  std::vector<std::string> files;
+  int split;
+};
+
+class NullSink : public MeshSink {
+ public:
+  Status beginLevel(const LevelHeader&) override { return Status::ok(); }
+  Status vertex(uint32_t, const double*, const uint8_t*) override { return Status::ok(); }
+  Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
+  Status endBoundary() override { return Status::ok(); }
+  Status tet(const uint32_t*, const uint8_t*) override {
+    ++tets;
+    return Status::ok();
+  }
+  Status retireVertex(uint32_t) override { return Status::ok(); }
+  Status endLevel() override { return Status::ok(); }
+  uint64_t tets = 0;
+};
+
+double seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
+
+// Total volume and total mass (density = the ranking's field, 1 without one).
+void volumeMass(const TetMesh& m, const std::string& field, double* volume, double* mass) {
+  const Field* f = field.empty() ? nullptr : m.findPointField(field);
+  *volume = *mass = 0;
+  for (const Tet& t : m.tets) {
+    const double v = signedVolume(m.point(t[0]), m.point(t[1]), m.point(t[2]), m.point(t[3]));
+    double rho = 1;
+    if (f) rho = 0.25 * (f->get(t[0], 0) + f->get(t[1], 0) + f->get(t[2], 0) + f->get(t[3], 0));
+    *volume += v;
+    *mass += rho * v;
+  }
+}
+
+uint64_t levelBytes(const EncodedLevel& e) {
+  uint64_t b = e.boundary.size() + e.connectivity.size() + e.geometry.size();
+  for (const auto& s : e.point_fields) b += s.size();
+  for (const auto& s : e.cell_fields) b += s.size();
+  return b;
+}
+
+LevelPayload payloadOf(const EncodedLevel& e) {
+  LevelPayload p;
+  p.boundary = e.boundary;
+  p.connectivity = e.connectivity;
+  p.geometry = e.geometry;
+  for (const auto& s : e.point_fields) p.point_fields.push_back(s);
+  for (const auto& s : e.cell_fields) p.cell_fields.push_back(s);
+  return p;
+}
+
+int run(const Dataset& d, int repeat) {
+  ImportOptions io;
+  io.split = d.split;
+  auto imported = importMesh(d.files, io);
+  if (!imported.isOk()) {
+    std::fprintf(stderr, "%s: %s\n", d.name.c_str(), imported.status().message().c_str());
+    return 1;
+  }
+  const TetMesh& mesh = imported->mesh;
+  RankingStats stats;
+  auto tree = rankMerges(mesh, RankingOptions{}, &stats);
+  if (!tree.isOk()) {
+    std::fprintf(stderr, "%s: %s\n", d.name.c_str(), tree.status().message().c_str());
+    return 1;
+  }
+  std::printf("\n== %s (split %d): %zu points, %zu tets, field '%s'\n", d.name.c_str(), d.split, mesh.numPoints(),
+              mesh.numTets(), stats.field.c_str());
+  std::printf("ranking: %.3f s, %.0f tets/s, %llu merges (%llu boundary), %llu popped, %llu rejected, %llu evaluations\n",
+              stats.seconds, mesh.numTets() / stats.seconds, (unsigned long long)stats.merges,
+              (unsigned long long)stats.boundary_merges, (unsigned long long)stats.popped,
+              (unsigned long long)stats.rejected, (unsigned long long)stats.evaluations);
+
+  // On-the-fly cost: decode level 0 to a null sink, then through the filter at several ratios.
+  auto enc = encodeLevel(mesh, EncodeOptions{});
+  if (!enc.isOk()) {
+    std::fprintf(stderr, "%s: %s\n", d.name.c_str(), enc.status().message().c_str());
+    return 1;
+  }
+  auto payload = encodeMergeTree(*tree, enc->vertex_order);
+  auto stream_tree = decodeMergeTree(*payload, mesh.numPoints(), d.name);
+  if (!payload.isOk() || !stream_tree.isOk()) return 1;
+  const LevelPayload lp = payloadOf(*enc);
+  auto best = [&](auto&& fn) {
+    double b = 1e30;
+    for (int r = 0; r < repeat; ++r) {
+      const auto t0 = Clock::now();
+      fn();
+      b = std::min(b, seconds(t0));
+    }
+    return b;
+  };
+  const double plain = best([&] {
+    NullSink s;
+    (void)decodeLevel(enc->header, lp, s, nullptr, d.name);
+  });
+  std::printf("decode level 0: %.4f s; merge tree: %zu bytes (%.2f bits/vertex), level streams %llu bytes\n", plain,
+              payload->size(), 8.0 * payload->size() / mesh.numPoints(), (unsigned long long)levelBytes(*enc));
+  std::printf("%8s %10s %10s %10s %9s\n", "ratio", "tets out", "decode s", "+simplify", "overhead");
+  for (double ratio : {0.0, 0.5, 0.9, 0.99}) {
+    const uint64_t n = std::min<uint64_t>(tree->merges, std::llround(ratio * mesh.numPoints()));
+    uint64_t out = 0;
+    const double t = best([&] {
+      NullSink s;
+      StreamSimplifier simp(*stream_tree, n, s);
+      (void)decodeLevel(enc->header, lp, simp, nullptr, d.name);
+      out = s.tets;
+    });
+    std::printf("%8.2f %10llu %10.4f %10.4f %8.1f%%\n", ratio, (unsigned long long)out, plain, t,
+                100.0 * (t - plain) / plain);
+  }
+
+  auto levels = buildMipLevels(mesh, *tree, LevelOptions{});
+  if (!levels.isOk()) return 1;
+  double v0, m0;
+  volumeMass(mesh, stats.field, &v0, &m0);
+  std::printf("%5s %7s %9s %9s %10s %10s %10s %10s\n", "level", "ratio", "points", "tets", "dVolume%", "dMass%",
+              "bytes", "tree bytes");
+  uint64_t total = 0, level0 = 0;
+  for (size_t i = 0; i < levels->merges.size(); ++i) {
+    const TetMesh& lm = i == 0 ? mesh : levels->meshes[i];
+    double v, m;
+    volumeMass(lm, stats.field, &v, &m);
+    auto e = encodeLevel(lm, EncodeOptions{});
+    if (!e.isOk()) return 1;
+    auto tp = encodeMergeTree(*levels->trees[i], e->vertex_order);
+    if (!tp.isOk()) return 1;
+    const uint64_t bytes = levelBytes(*e) + tp->size();
+    total += bytes;
+    if (i == 0) level0 = bytes;
+    std::printf("%5zu %7.4f %9zu %9zu %10.4f %10.4f %10llu %10zu\n", i, levels->ratios[i], lm.numPoints(), lm.numTets(),
+                100.0 * (v - v0) / v0, m0 != 0 ? 100.0 * (m - m0) / std::fabs(m0) : 0.0, (unsigned long long)bytes,
+                tp->size());
+  }
+  std::printf("all levels: %llu bytes = %.2f x level 0\n", (unsigned long long)total, double(total) / level0);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string data = GTN_DEFAULT_DATA_DIR;
+  if (const char* env = std::getenv("GTN_DATA_DIR")) data = env;
+  int repeat = 3;
+  std::vector<std::string> names;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--data" && i + 1 < argc) {
+      data = argv[++i];
+    } else if (a == "--repeat" && i + 1 < argc) {
+      repeat = std::max(1, std::atoi(argv[++i]));
+    } else {
+      names.push_back(a);
+    }
+  }
+  const std::vector<Dataset> all = {
+      {"spx", {data + "/vtk/spx.vtk"}, 6},
+      {"cornell", {data + "/tetgen/cornell_spheres.1.ele"}, 6},
+      {"bluntfin", {data + "/plot3d/bluntfinxyz.bin", data + "/plot3d/bluntfinq.bin"}, 6},
+      {"combustion", {data + "/plot3d/combxyz.bin", data + "/plot3d/combq.bin"}, 6},
+      {"bluntfin5", {data + "/plot3d/bluntfinxyz.bin", data + "/plot3d/bluntfinq.bin"}, 5},
+      {"combustion5", {data + "/plot3d/combxyz.bin", data + "/plot3d/combq.bin"}, 5},
+  };
+  int rc = 0;
+  for (const Dataset& d : all) {
+    if (!names.empty() && std::find(names.begin(), names.end(), d.name) == names.end()) continue;
+    rc |= run(d, repeat);
+  }
+  return rc;
+}

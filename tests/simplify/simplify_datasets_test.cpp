@@ -1,0 +1,161 @@
+// Simplification on the real datasets: every prefix checked at a dozen merge counts (level boundaries
+// included), the on-the-fly filter on the decoded stream against applyMerges, and the stored mip
+// levels of a .gtn file against the in-memory results. Each dataset is ranked once per test binary.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+#include <optional>
+
+#include "convert/import.h"
+#include "format/gtn_file.h"
+#include "format/gtn_reader.h"
+#include "simplify/levels.h"
+#include "simplify/ranking.h"
+#include "simplify_test_util.h"
+#include "test_util.h"
+
+namespace gtn::test {
+namespace {
+
+struct Ranked {
+  TetMesh mesh;     // as imported
+  TetMesh with_id;  // plus the "id" point field, for identity through the stream
+  MergeTree tree;
+  RankingStats stats;
+  std::optional<EncodedLevel> encoded;  // of with_id
+  uint64_t source_zero = 0;
+};
+
+const Ranked& dataset(const std::string& name) {
+  static std::map<std::string, Ranked> cache;
+  auto it = cache.find(name);
+  if (it != cache.end()) return it->second;
+  std::vector<std::string> files;
+  ImportOptions io;
+  if (name == "spx") files = {dataPath("vtk/spx.vtk")};
+  if (name == "cornell") files = {dataPath("tetgen/cornell_spheres.1.ele")};
+  if (name == "bluntfin") files = {dataPath("plot3d/bluntfinxyz.bin"), dataPath("plot3d/bluntfinq.bin")};
+  if (name == "combustion") files = {dataPath("plot3d/combxyz.bin"), dataPath("plot3d/combq.bin")};
+  if (name == "bluntfin" || name == "combustion") io.split = 5;  // the paper's split, with coincident points
+  Ranked r;
+  auto imported = importMesh(files, io);
+  EXPECT_TRUE(imported.isOk()) << imported.status().message();
+  if (imported.isOk()) {
+    r.mesh = std::move(imported->mesh);
+    auto tree = rankMerges(r.mesh, RankingOptions{}, &r.stats);
+    EXPECT_TRUE(tree.isOk()) << tree.status().message();
+    if (tree.isOk()) r.tree = std::move(tree.value());
+    r.with_id = r.mesh;
+    addIdField(r.with_id);
+    r.source_zero = checkMesh(r.mesh).zero_volume;
+    auto enc = encodeLevel(r.with_id, EncodeOptions{});
+    EXPECT_TRUE(enc.isOk()) << enc.status().message();
+    if (enc.isOk()) r.encoded = std::move(enc.value());
+  }
+  return cache.emplace(name, std::move(r)).first->second;
+}
+
+std::vector<uint64_t> sampleMerges(const MergeTree& tree, uint64_t points) {
+  std::vector<uint64_t> ns = {0, 1, 3, tree.merges / 5, tree.merges / 2 + 1, tree.merges};
+  for (int i = 1; i <= 12; ++i) ns.push_back(levelMerges(i, points, tree.merges));
+  std::sort(ns.begin(), ns.end());
+  ns.erase(std::unique(ns.begin(), ns.end()), ns.end());
+  return ns;
+}
+
+// Geometric identity of a tetrahedron: its four points, sorted.
+using GeoTet = std::array<std::array<double, 3>, 4>;
+std::vector<GeoTet> geoTets(const TetMesh& m) {
+  std::vector<GeoTet> out;
+  out.reserve(m.numTets());
+  for (const Tet& t : m.tets) {
+    GeoTet g;
+    for (int i = 0; i < 4; ++i) g[i] = {m.point(t[i])[0], m.point(t[i])[1], m.point(t[i])[2]};
+    std::sort(g.begin(), g.end());
+    out.push_back(g);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+class Datasets : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Datasets, RankingSimplifiesAndEveryPrefixIsValid) {
+  const Ranked& d = dataset(GetParam());
+  ASSERT_GT(d.mesh.numTets(), 0u);
+  ASSERT_TRUE(d.tree.check(GetParam()).isOk());
+  const uint64_t points = d.mesh.numPoints();
+  EXPECT_GT(d.tree.merges, points * 3 / 4) << "merges " << d.tree.merges << " of " << points << " points";
+  RecordProperty("ranking_seconds", std::to_string(d.stats.seconds));
+  const MeshChecks src = checkMesh(d.mesh);
+  for (uint64_t n : sampleMerges(d.tree, points)) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    auto m = applyMerges(d.mesh, d.tree, n);
+    ASSERT_TRUE(m.isOk());
+    const MeshChecks c = checkMesh(*m);
+    EXPECT_EQ(c.inverted, 0u);
+    EXPECT_LE(c.zero_volume, src.zero_volume);
+    EXPECT_EQ(c.non_manifold, 0u);
+    EXPECT_EQ(c.duplicates, 0u);
+    EXPECT_EQ(c.boundary_euler, src.boundary_euler);
+    EXPECT_EQ(m->numTets(), d.mesh.numTets() - d.tree.tetsRemovedUpTo(n));
+  }
+}
+
+TEST_P(Datasets, OnTheFlyEqualsApplyOnTheDecodedStream) {
+  const Ranked& d = dataset(GetParam());
+  const uint64_t points = d.mesh.numPoints();
+  std::vector<uint64_t> ns = sampleMerges(d.tree, points);
+  ASSERT_TRUE(d.encoded.has_value());
+  for (uint64_t n : ns) expectStreamMatchesApply(d.with_id, d.tree, n, true, &*d.encoded);
+  expectStreamMatchesApply(d.with_id, d.tree, ns[ns.size() / 2], false);
+}
+
+TEST_P(Datasets, StoredLevelsDecodeToTheInMemoryResult) {
+  const Ranked& d = dataset(GetParam());
+  auto levels = buildMipLevels(d.mesh, d.tree, LevelOptions{});
+  ASSERT_TRUE(levels.isOk()) << levels.status().message();
+  ASSERT_GE(levels->merges.size(), 5u);
+  const std::string path = tempDir("simplify-" + GetParam()) + "/levels.gtn";
+  GtnWriteOptions wo;
+  wo.tool_version = "test";
+  ASSERT_TRUE(writeGtnFile(path, levels->inputs(d.mesh), wo).isOk());
+  auto reader = GtnReader::open(path);
+  ASSERT_TRUE(reader.isOk()) << reader.status().message();
+  GtnReader& r = **reader;
+  ASSERT_EQ(r.levels(), levels->merges.size());
+  for (size_t i = 0; i < r.levels(); ++i) {
+    SCOPED_TRACE("level " + std::to_string(i));
+    EXPECT_EQ(r.level(i).header.merges, levels->merges[i]);
+    EXPECT_TRUE(r.level(i).has_merge_tree);
+    TetMeshBuilder b;
+    ASSERT_TRUE(r.decodeLevel(i, b).isOk());
+    const TetMesh& want = i == 0 ? d.mesh : levels->meshes[i];
+    EXPECT_EQ(geoTets(b.mesh()), geoTets(want));
+  }
+  // Storage of every level with its merge tree against level 0 alone (with its tree).
+  uint64_t level0 = r.level(0).bytes, total = 0;
+  for (size_t i = 0; i < r.levels(); ++i) total += r.level(i).bytes;
+  RecordProperty("levels_over_level0", std::to_string(double(total) / level0));
+  // The paper's "storage doubled". Measured 2.07-2.09x: coarse levels cost slightly more than half
+  // the level above (vertices farther apart predict worse), so the series exceeds 2 by a few percent.
+  EXPECT_LE(double(total), 2.15 * double(level0)) << "all levels " << total << " bytes, level 0 " << level0;
+  EXPECT_GE(double(total), 1.5 * double(level0));
+  // Reading at a target between two levels starts from the coarser-than-target stored level.
+  const uint64_t target = (levels->merges[2] + levels->merges[3]) / 2;
+  TetMeshBuilder b;
+  SimplifyPlan plan;
+  ASSERT_TRUE(streamSimplified(r, target, b, &plan).isOk());
+  EXPECT_EQ(plan.level, 2u);
+  EXPECT_EQ(plan.extra_merges, target - levels->merges[2]);
+  auto want = applyMerges(d.mesh, d.tree, target);
+  ASSERT_TRUE(want.isOk());
+  EXPECT_EQ(geoTets(b.mesh()), geoTets(*want));
+  std::filesystem::remove(path);
+}
+
+INSTANTIATE_TEST_SUITE_P(Simplify, Datasets, ::testing::Values("spx", "cornell", "bluntfin", "combustion"));
+
+}  // namespace
+}  // namespace gtn::test
