@@ -44,8 +44,9 @@ double msSince(Clock::time_point t0) {
 Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   int w = 0, h = 0;
   char extra = 0;
-  if (std::sscanf(a.size.c_str(), "%dx%d%c", &w, &h, &extra) != 2 || w <= 0 || h <= 0 || w > 16384 || h > 16384)
-    return usageError("--size must be WxH with 1 <= W, H <= 16384, not '" + a.size + "'");
+  // The renderers keep about 100 bytes per pixel (rays, segments): bound the image.
+  if (std::sscanf(a.size.c_str(), "%dx%d%c", &w, &h, &extra) != 2 || w <= 0 || h <= 0 || w > 4096 || h > 4096)
+    return usageError("--size must be WxH with 1 <= W, H <= 4096, not '" + a.size + "'");
   o->camera.width = w;
   o->camera.height = h;
   if (a.projection == "ortho") o->camera.projection = Projection::kOrthographic;
