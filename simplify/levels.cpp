@@ -89,7 +89,8 @@ uint64_t mergesForRatio(const GtnReader& reader, double ratio) {
   return static_cast<uint64_t>(std::llround(std::min(1.0, ratio) * points));
 }
 
-Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out) {
+Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out,
+                        bool clamp) {
   GTN_ASSIGN_OR_RETURN(SimplifyPlan plan, planSimplification(reader, target_merges));
   if (plan_out) *plan_out = plan;
   if (plan.extra_merges == 0) return reader.decodeLevel(plan.level, sink);
@@ -99,6 +100,10 @@ Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sin
   const std::string what = reader.file().path + ", level " + std::to_string(plan.level);
   if (!payload.has_value()) return usageError(what + " stores no merge tree: cannot simplify beyond the stored levels");
   GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, reader.level(plan.level).header.points, what));
+  if (plan.extra_merges > tree.merges && clamp) {
+    plan.extra_merges = tree.merges;
+    if (plan_out) *plan_out = plan;
+  }
   if (plan.extra_merges > tree.merges)
     return usageError(what + ": " + std::to_string(target_merges) + " merges requested, the merge tree has " +
                       std::to_string(reader.level(plan.level).header.merges + tree.merges));

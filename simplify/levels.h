@@ -60,7 +60,9 @@ uint64_t mergesForRatio(const GtnReader& reader, double ratio);
 
 // Streams the mesh after `target_merges` merges to `sink`: decodes the planned level and, when merges
 // remain, filters it through a StreamSimplifier with that level's merge tree. Fails with kUsage when
-// merges remain and the level stores no merge tree, or the target exceeds the stored merges.
-Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out = nullptr);
+// merges remain and the level stores no merge tree, or the target exceeds the stored merges (unless
+// `clamp`, which then applies them all: a ratio beyond what the tree allows gets the coarsest mesh).
+Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out = nullptr,
+                        bool clamp = false);
 
 }  // namespace gtn
