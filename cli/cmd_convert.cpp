@@ -1,10 +1,13 @@
-// gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--compress]
+// gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--compress] [--levels K] [--no-merge-tree]
+//   [--simplify-field NAME] [--w-density W] [--w-geometry W]
 #include <memory>
 
 #include "cli/commands.h"
 #include "convert/export.h"
 #include "convert/import.h"
 #include "format/gtn_file.h"
+#include "simplify/levels.h"
+#include "simplify/ranking.h"
 
 namespace gtn::cli {
 
@@ -15,7 +18,25 @@ struct ConvertArgs {
   int split = 6;
   bool weld = false;
   bool compress = false;
+  int levels = -1;  // mip levels beyond level 0, -1 = automatic
+  bool no_merge_tree = false;
+  RankingOptions ranking;
 };
+
+// Level 0, its mip levels and merge trees as the options ask (simplify/levels.h).
+Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWriteOptions& wo) {
+  if (a.levels == 0 && a.no_merge_tree) {
+    GtnLevelInput level0;
+    level0.mesh = &mesh;
+    return writeGtnFile(a.output, {level0}, wo);
+  }
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, nullptr));
+  LevelOptions lo;
+  lo.levels = a.levels;
+  lo.merge_tree = !a.no_merge_tree;
+  GTN_ASSIGN_OR_RETURN(MipLevels levels, buildMipLevels(mesh, tree, lo));
+  return writeGtnFile(a.output, levels.inputs(mesh), wo);
+}
 
 int runConvert(const ConvertArgs& a) {
   const OutputFormat out_format = detectOutputFormat(a.output);
@@ -41,12 +62,10 @@ int runConvert(const ConvertArgs& a) {
     }
     case OutputFormat::kTetgen: st = exportTetgen(mesh, a.output); break;
     case OutputFormat::kGtn: {
-      GtnLevelInput level0;
-      level0.mesh = &mesh;
       GtnWriteOptions wo;
       wo.tool_version = GTN_VERSION_STRING;
       wo.command_line = commandLine();
-      st = writeGtnFile(a.output, {level0}, wo);
+      st = writeGtnWithLevels(a, mesh, wo);
       break;
     }
     default: st = usageError("unknown output format");
@@ -66,6 +85,16 @@ Command addConvertCommand(CLI::App& app) {
       ->check(CLI::IsMember({5, 6}));
   sub->add_flag("--weld", args->weld, "PLOT3D: merge bit-identical points and drop collapsed tetrahedra");
   sub->add_flag("--compress", args->compress, ".vtu: zlib-compress the data arrays");
+  sub->add_option("--levels", args->levels, ".gtn: mip levels beyond level 0 (default: down to a small mesh; 0 = none)")
+      ->check(CLI::Range(0, 62));
+  sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
+  sub->add_option("--simplify-field", args->ranking.field,
+                  ".gtn: point field whose first component is the density of the simplification error "
+                  "(default: the first point field; 'none' = volume only)");
+  sub->add_option("--w-density", args->ranking.w_density, ".gtn: weight of the density (mass) error")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--w-geometry", args->ranking.w_geometry, ".gtn: weight of the boundary geometry error")
+      ->check(CLI::NonNegativeNumber);
   return {sub, [args] { return runConvert(*args); }};
 }
 
