@@ -1,9 +1,13 @@
-// gtn export FILE.gtn -o OUTPUT [--level I]: decode a stored level and write it as .vtu or TetGen.
+// gtn export FILE.gtn -o OUTPUT [--level I | --ratio R | --merges N]: decode a stored level, or the mesh
+// simplified to a ratio or merge count (from the finest stored level not beyond it, the remaining merges
+// applied on the fly), and write it as .vtu or TetGen.
+#include <cstdint>
 #include <memory>
 
 #include "cli/commands.h"
 #include "convert/export.h"
 #include "format/gtn_reader.h"
+#include "simplify/levels.h"
 
 namespace gtn::cli {
 
@@ -13,6 +17,8 @@ struct ExportArgs {
   std::string output;
   size_t level = 0;
   bool compress = false;
+  double ratio = -1;    // < 0: not given
+  int64_t merges = -1;  // < 0: not given
 };
 
 int runExport(const ExportArgs& a) {
@@ -29,7 +35,13 @@ int runExport(const ExportArgs& a) {
     return reportError(usageError(a.input + ": --level " + std::to_string(a.level) + ": the file holds " +
                                   std::to_string(r.levels()) + " level(s), 0 to " + std::to_string(r.levels() - 1)));
   TetMeshBuilder builder;
-  Status st = r.decodeLevel(a.level, builder);
+  Status st;
+  if (a.ratio >= 0 || a.merges >= 0) {
+    const uint64_t target = a.merges >= 0 ? static_cast<uint64_t>(a.merges) : mergesForRatio(r, a.ratio);
+    st = streamSimplified(r, target, builder, nullptr, /*clamp=*/a.merges < 0);
+  } else {
+    st = r.decodeLevel(a.level, builder);
+  }
   if (!st.isOk()) return reportError(st);
   if (out_format == OutputFormat::kVtu) {
     ExportOptions eo;
@@ -48,7 +60,14 @@ Command addExportCommand(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("export", "Decode a level of a .gtn file and write it as .vtu or TetGen .node/.ele");
   sub->add_option("input", args->input, "Input .gtn file ('-' for standard input)")->required();
   sub->add_option("-o,--output", args->output, "Output file: .vtu, or .node/.ele (TetGen)")->required();
-  sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)");
+  CLI::Option* level = sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)");
+  CLI::Option* ratio = sub->add_option("--ratio", args->ratio,
+                                       "Simplification ratio: vertices merged away / vertices of level 0 (0 to 1)")
+                           ->check(CLI::Range(0.0, 1.0));
+  CLI::Option* merges = sub->add_option("--merges", args->merges, "Number of merges of the merge tree to apply")
+                            ->check(CLI::NonNegativeNumber);
+  level->excludes(ratio)->excludes(merges);
+  ratio->excludes(merges);
   sub->add_flag("--compress", args->compress, ".vtu: zlib-compress the data arrays");
   return {sub, [args] { return runExport(*args); }};
 }
