@@ -8,6 +8,7 @@
 #include "convert/import.h"
 #include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
+#include "simplify/apply.h"
 
 namespace gtn::cli {
 
@@ -17,7 +18,31 @@ struct InfoArgs {
   int split = 6;
   bool weld = false;
   bool json = false;
+  bool merge_tree = false;
 };
+
+// Level 0's merge tree statistics (`--merge-tree`), null when the file stores none.
+StatusOr<nlohmann::json> mergeTreeJson(GtnReader& r) {
+  auto payload = r.mergeTreePayload(0);
+  if (!payload.isOk()) return payload.status();
+  if (!payload.value().has_value()) return nlohmann::json(nullptr);
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload.value(), r.level(0).header.points,
+                                                       r.file().path + ", level 0"));
+  const MergeTreeStats s = computeMergeTreeStats(tree);
+  nlohmann::json q = nlohmann::json::object();
+  const char* names[9] = {"min", "p01", "p10", "p25", "p50", "p75", "p90", "p99", "max"};
+  for (size_t i = 0; i < tree.error_quantiles.size() && i < 9; ++i) q[names[i]] = tree.error_quantiles[i];
+  return nlohmann::json{{"merges", s.merges},
+                        {"roots", s.roots},
+                        {"boundary_merges", s.boundary_merges},
+                        {"tets_removed", s.tets_removed},
+                        {"depth", {{"max", s.depth_max}, {"mean", s.depth_mean}}},
+                        {"fanout", {{"max", s.fanout_max}, {"mean", s.fanout_mean}}},
+                        {"error_quantiles", q},
+                        {"field", tree.field},
+                        {"w_density", tree.w_density},
+                        {"w_geometry", tree.w_geometry}};
+}
 
 nlohmann::json statsToJson(const MeshStats& s, const ImportReport& r, const TetMesh& mesh) {
   nlohmann::json j;
@@ -151,6 +176,11 @@ int runGtnInfo(const InfoArgs& a) {
                         {"chunks", chunks}});
     }
     j["levels"] = levels;
+    if (a.merge_tree) {
+      auto mt = mergeTreeJson(r);
+      if (!mt.isOk()) return reportError(mt.status());
+      j["merge_tree"] = mt.value();
+    }
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
@@ -171,6 +201,12 @@ int runGtnInfo(const InfoArgs& a) {
     std::printf("  bits per tetrahedron connectivity %.3f, geometry %.3f, fields %.3f, total %.3f\n",
                 8.0 * connectivity / tets, 8.0 * geometry / tets, 8.0 * fields / tets, 8.0 * total / tets);
   std::printf("  peak live vertices  %llu\n", static_cast<unsigned long long>(decode_stats.peak_live_vertices));
+  if (a.merge_tree) {
+    auto mt = mergeTreeJson(r);
+    if (!mt.isOk()) return reportError(mt.status());
+    if (mt.value().is_null()) std::printf("  merge tree          none\n");
+    else std::printf("  merge tree          %s\n", mt.value().dump().c_str());
+  }
   printText(input + " (level 0, decoded)", stats, ImportReport{}, mesh);
   return 0;
 }
@@ -205,6 +241,8 @@ Command addInfoCommand(CLI::App& app) {
   sub->add_option("--split", args->split, "Hexahedra into 5 or 6 tetrahedra")->check(CLI::IsMember({5, 6}));
   sub->add_flag("--weld", args->weld, "PLOT3D: merge bit-identical points");
   sub->add_flag("--json", args->json, "Print one JSON object on standard output");
+  sub->add_flag("--merge-tree", args->merge_tree,
+                ".gtn: statistics of level 0's merge tree (merges, roots, depth, fan-out, error quantiles)");
   return {sub, [args] { return runInfo(*args); }};
 }
 
