@@ -126,6 +126,13 @@ class LevelCoder {
       cell_comps_ += d.components;
     }
     cell_keys_.assign(cell_comps_, 0);
+    uint32_t max_comps = 1;
+    for (const FieldDesc& d : header.cell_fields) max_comps = std::max(max_comps, d.components);
+    cell_pred_.assign(max_comps, 0);
+    cell_act_.assign(max_comps, 0);
+    cell_mtf_.resize(header.cell_fields.size());
+    cell_sym_.resize(header.cell_fields.size());
+    cell_last_sym_.assign(header.cell_fields.size(), 0);
     pred_vals_.resize(std::max<size_t>(1, item_bytes_));
     pf_rule_.resize(header.point_fields.size());
     pf_last_rule_.assign(header.point_fields.size(), 0);
@@ -366,8 +373,32 @@ class LevelCoder {
       if (rule != 0)
         for (int i = 0; i < 3; ++i) pk[i] = ruleKey(rule, fp, i, pk[i], ct);
     }
+    uint32_t copy_src[4];
+    uint32_t ncopy = 0;
+    if (fp.kind != FieldPrediction::kLast)
+      for (int m = 0; m < 4; ++m)
+        if (fp.s[m] != kNoSlot && (m < 3 || has_d)) copy_src[ncopy++] = fp.s[m];
     for (uint32_t i = 0; i < 3; ++i) {
-      const uint64_t key = coord_vc_.code(*geo_, i, pk[i], actual[i]);
+      uint64_t key = 0;
+      uint32_t hit = 0;
+      if (ncopy > 0) {
+        uint32_t which = 0;
+        if constexpr (kEncode) {
+          for (uint32_t m = 0; m < ncopy && !hit; ++m)
+            if (keyFromPrediction(ct, P(copy_src[m])[i]) == actual[i]) {
+              hit = 1;
+              which = m;
+            }
+        }
+        hit = geo_->bit(copy_flag_[i][copy_last_[i]], hit);
+        copy_last_[i] = hit;
+        if (hit) {
+          which = copy_which_[i].code(*geo_, which);
+          if (which >= ncopy) return bad("coordinate copied from an unknown vertex");
+          key = keyFromPrediction(ct, P(copy_src[which])[i]);
+        }
+      }
+      if (!hit) key = coord_vc_.code(*geo_, i, pk[i], actual[i]);
       uint8_t raw[8];
       rawFromKey(ct, key, raw);
       x[i] = doubleFromRaw(ct, raw);
@@ -723,22 +754,61 @@ class LevelCoder {
     if constexpr (!kEncode) {
       if (tets_done_ >= header_.tets) return bad("more tetrahedra than the header announces");
     }
-    // Cell values, predicted by the neighbour's behind the gate face, else the previous tetrahedron's.
+    // Cell values: per field, a symbol says "as the neighbour behind the gate face" (else the
+    // previous tetrahedron), "as the i-th most recent distinct value", or "coded as a residual".
     size_t j = 0;
     for (size_t f = 0; f < header_.cell_fields.size(); ++f) {
       const FieldDesc& d = header_.cell_fields[f];
       const size_t vs = scalarSize(d.type);
-      for (uint32_t c = 0; c < d.components; ++c, ++j) {
-        uint64_t actual = 0;
-        if constexpr (kEncode) {
-          actual = keyFromRaw(d.type, enc_->mesh->cell_fields[f].bytes.data() + size_t{src_tet} * d.itemBytes() + c * vs);
-        }
-        const uint64_t pred = pred_cell != kNone32 ? cell_rec_[pred_cell * cell_comps_ + j] : last_cell_keys_[f][c];
-        const uint64_t key = cf_vc_[f].code(*cf_[f], c, pred, actual);
-        last_cell_keys_[f][c] = key;
-        cell_keys_[j] = key;
-        rawFromKey(d.type, key, &cell_buf_[cf_offset_[f] + c * vs]);
+      const uint32_t nc = d.components;
+      uint64_t* pred = &cell_pred_[0];
+      uint64_t* act = &cell_act_[0];
+      for (uint32_t c = 0; c < nc; ++c) {
+        pred[c] = pred_cell != kNone32 ? cell_rec_[pred_cell * cell_comps_ + j + c] : last_cell_keys_[f][c];
+        if constexpr (kEncode)
+          act[c] = keyFromRaw(d.type, enc_->mesh->cell_fields[f].bytes.data() + size_t{src_tet} * d.itemBytes() + c * vs);
       }
+      std::vector<std::vector<uint64_t>>& mtf = cell_mtf_[f];
+      uint32_t sym = kSymEscape;
+      if constexpr (kEncode) {
+        if (std::equal(act, act + nc, pred)) {
+          sym = 0;
+        } else {
+          for (size_t i = 0; i < mtf.size(); ++i)
+            if (std::equal(act, act + nc, mtf[i].begin())) {
+              sym = static_cast<uint32_t>(i + 1);
+              break;
+            }
+        }
+      }
+      sym = cell_sym_[f][cell_last_sym_[f]].code(*cf_[f], sym);
+      cell_last_sym_[f] = std::min<uint32_t>(sym, 2);
+      uint64_t* keys = &cell_keys_[j];
+      if (sym == 0) {
+        std::copy(pred, pred + nc, keys);
+      } else if (sym == kSymEscape) {
+        for (uint32_t c = 0; c < nc; ++c) keys[c] = cf_vc_[f].code(*cf_[f], c, pred[c], act[c]);
+      } else {
+        if (sym > mtf.size()) return bad("cell value refers to an unknown recent value");
+        std::copy(mtf[sym - 1].begin(), mtf[sym - 1].end(), keys);
+      }
+      // Move to front.
+      size_t at = mtf.size();
+      for (size_t i = 0; i < mtf.size(); ++i)
+        if (std::equal(keys, keys + nc, mtf[i].begin())) at = i;
+      if (at == mtf.size()) {
+        if (mtf.size() < kRecentCellValues) {
+          mtf.emplace_back(nc);
+        }
+        at = mtf.size() - 1;
+      }
+      for (size_t i = at; i > 0; --i) mtf[i].swap(mtf[i - 1]);
+      std::copy(keys, keys + nc, mtf[0].begin());
+      for (uint32_t c = 0; c < nc; ++c) {
+        last_cell_keys_[f][c] = keys[c];
+        rawFromKey(d.type, keys[c], &cell_buf_[cf_offset_[f] + c * vs]);
+      }
+      j += nc;
     }
     if constexpr (kEncode) {
       enc_->tet_order[src_tet] = tets_done_;
@@ -951,6 +1021,15 @@ class LevelCoder {
   size_t cell_comps_ = 0;
   std::vector<uint64_t> cell_rec_, cell_keys_;
   std::vector<uint32_t> cell_ref_, cell_free_;
+  static constexpr size_t kRecentCellValues = 8;
+  std::vector<uint64_t> cell_pred_, cell_act_;
+  std::vector<std::vector<std::vector<uint64_t>>> cell_mtf_;  // [field][recency][component]
+  std::vector<std::array<BitTree<4>, 3>> cell_sym_;
+  std::vector<uint32_t> cell_last_sym_;
+  // Coordinates equal to a component of a stencil vertex (axis-aligned geometry).
+  BitModel copy_flag_[3][2];
+  BitTree<2> copy_which_[3];
+  uint32_t copy_last_[3] = {0, 0, 0};
   std::vector<double> pred_vals_;
 };
 

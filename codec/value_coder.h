@@ -39,7 +39,7 @@ class ValueCoder {
 
  private:
   static constexpr int kTreeBits = 7;      // bucket 0..64
-  static constexpr int kContexts = 34;     // (previous bucket + 1) / 2
+  static constexpr int kContexts = 17;     // previous bucket / 4
 
   struct Component {
     std::vector<BitTree<kTreeBits>> bucket;  // [context]
@@ -65,7 +65,7 @@ uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actua
   if (negative && mag == 0) mag = half;  // unreachable for widths < 64; keeps -2^63 exact
   uint32_t k = 0;
   if (mag) k = 64 - static_cast<uint32_t>(__builtin_clzll(mag));
-  k = m.bucket[(m.last_bucket + 1) >> 1].code(c, k);
+  k = m.bucket[m.last_bucket >> 2].code(c, k);
   if (k > static_cast<uint32_t>(bits_)) k = bits_;  // corrupt stream; the decoder fails later
   m.last_bucket = k;
   if (k == 0) return pred_key;

@@ -8,7 +8,6 @@
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <map>
 #include <set>
 
 #include "codec/level_codec.h"
@@ -100,7 +99,6 @@ class CheckingSink : public MeshSink {
   Status tet(const uint32_t v[4], const uint8_t* cell_values) override {
     EXPECT_TRUE(ended_boundary);
     for (int i = 0; i < 4; ++i) EXPECT_TRUE(v[i] < state.size() && state[v[i]] == 1) << "tet uses a retired vertex";
-    for (int i = 0; i < 4; ++i) ++uses[v[i]];
     return builder.tet(v, cell_values);
   }
   Status retireVertex(uint32_t id) override {
@@ -117,7 +115,6 @@ class CheckingSink : public MeshSink {
 
   TetMeshBuilder builder;
   std::vector<uint8_t> state;
-  std::map<uint32_t, uint32_t> uses;
   uint64_t live = 0, peak = 0;
   bool ended_boundary = false, ended = false;
 
