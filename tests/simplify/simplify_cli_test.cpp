@@ -1,0 +1,89 @@
+// gtn convert --levels / --no-merge-tree, gtn export --level / --ratio / --merges and
+// gtn info --merge-tree, through the built binary on spx.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "test_util.h"
+
+namespace gtn::test {
+namespace {
+
+class SimplifyCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = tempDir("simplify-cli");
+    const RunResult r = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/spx.gtn");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const RunResult l0 = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/l0.gtn --levels 0 --no-merge-tree");
+    ASSERT_EQ(l0.exit_code, 0) << l0.err;
+  }
+  static nlohmann::json info(const std::string& args) {
+    const RunResult r = runGtn("info " + args + " --json");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return nlohmann::json::parse(r.out, nullptr, false);
+  }
+  static std::string dir_;
+};
+std::string SimplifyCli::dir_;
+
+TEST_F(SimplifyCli, ConvertStoresLevelsAndTrees) {
+  const nlohmann::json j = info(dir_ + "/spx.gtn --merge-tree");
+  ASSERT_TRUE(j.contains("merge_tree") && j["merge_tree"].is_object());
+  const nlohmann::json& mt = j["merge_tree"];
+  EXPECT_GT(mt["merges"].get<uint64_t>(), 2800u);
+  EXPECT_EQ(mt["merges"].get<uint64_t>() + mt["roots"].get<uint64_t>(), 2896u);
+  EXPECT_GT(mt["boundary_merges"].get<uint64_t>(), 0u);
+  EXPECT_GE(mt["depth"]["max"].get<double>(), mt["depth"]["mean"].get<double>());
+  EXPECT_GE(mt["fanout"]["max"].get<double>(), mt["fanout"]["mean"].get<double>());
+  EXPECT_LE(mt["error_quantiles"]["p50"].get<double>(), mt["error_quantiles"]["max"].get<double>());
+  EXPECT_EQ(mt["field"], "scalars");
+  ASSERT_GE(j["levels"].size(), 3u);
+  EXPECT_EQ(j["levels"][1]["points"], 1448);
+  EXPECT_DOUBLE_EQ(j["levels"][1]["ratio"].get<double>(), 0.5);
+  EXPECT_EQ(j["levels"][2]["points"], 724);
+  for (const auto& l : j["levels"]) EXPECT_TRUE(l["merge_tree"].get<bool>());
+}
+
+TEST_F(SimplifyCli, ConvertOptionsTurnLevelsOff) {
+  nlohmann::json j = info(dir_ + "/l0.gtn --merge-tree");
+  EXPECT_EQ(j["levels"].size(), 1u);
+  EXPECT_TRUE(j["merge_tree"].is_null());
+  ASSERT_EQ(runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/l2.gtn --levels 2 --simplify-field none "
+                   "--w-density 2 --w-geometry 0.5").exit_code, 0);
+  j = info(dir_ + "/l2.gtn --merge-tree");
+  EXPECT_EQ(j["levels"].size(), 3u);
+  EXPECT_EQ(j["merge_tree"]["field"], "");
+  EXPECT_EQ(j["merge_tree"]["w_density"], 2.0);
+  const RunResult bad = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/bad.gtn --simplify-field nope");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("scalars"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fileExists(dir_ + "/bad.gtn"));
+}
+
+TEST_F(SimplifyCli, ExportSimplifiesOnTheFly) {
+  const std::string in = dir_ + "/spx.gtn";
+  struct Case {
+    std::string args;
+    uint64_t points;
+  } cases[] = {{"--level 1", 1448}, {"--ratio 0.8", 2896 - 2317}, {"--merges 100", 2796}, {"--ratio 0.75", 724}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args);
+    const std::string out = dir_ + "/out.vtu";
+    const RunResult r = runGtn("export " + in + " -o " + out + " " + c.args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json j = info(out);
+    EXPECT_EQ(j["points"].get<uint64_t>(), c.points);
+    EXPECT_EQ(j["inverted"], 0);
+    EXPECT_EQ(j["zero_volume"], 0);
+    EXPECT_EQ(j["non_manifold_faces"], 0);
+  }
+  EXPECT_EQ(runGtn("export " + in + " -o " + dir_ + "/x.vtu --level 1 --ratio 0.5").exit_code, 2);
+  EXPECT_EQ(runGtn("export " + in + " -o " + dir_ + "/x.vtu --merges 999999").exit_code, 2);
+  const RunResult no_tree = runGtn("export " + dir_ + "/l0.gtn -o " + dir_ + "/x.vtu --ratio 0.5");
+  EXPECT_EQ(no_tree.exit_code, 2);
+  EXPECT_NE(no_tree.err.find("no merge tree"), std::string::npos) << no_tree.err;
+}
+
+}  // namespace
+}  // namespace gtn::test
