@@ -131,6 +131,23 @@ class Ranker {
   MergeTree tree_;
   uint64_t evaluations_ = 0;
 
+  // Deduplicates small vertex lists without sorting: mark_[x] == stamp_ means x is already listed.
+  void uniqueByMark(std::vector<uint32_t>& list) {
+    if (++stamp_ == 0) {
+      std::fill(mark_.begin(), mark_.end(), 0);
+      stamp_ = 1;
+    }
+    size_t n = 0;
+    for (uint32_t x : list) {
+      if (mark_[x] == stamp_) continue;
+      mark_[x] = stamp_;
+      list[n++] = x;
+    }
+    list.resize(n);
+  }
+  std::vector<uint32_t> mark_;
+  uint32_t stamp_ = 0;
+
   // Scratch buffers reused across calls.
   std::vector<uint32_t> corners_, corners_w_, targets_, recompute_;
   std::vector<StarTet> star_;
@@ -160,6 +177,7 @@ void Ranker::init() {
   frozen_.assign(np, 0);
   alive_.assign(np, 1);
   version_.assign(np, 0);
+  mark_.assign(np, 0);
   {
     const FaceAdjacency adj = computeFaceAdjacency(mesh_);
     double area = 0;
@@ -295,7 +313,7 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out) {
       face_area += f.area;
     }
   }
-  sortUnique(targets_);
+  uniqueByMark(targets_);
   for (uint32_t w : targets_) {
     if (frozen_[w]) continue;
     ++evaluations_;
@@ -496,7 +514,7 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
   tree_.removed[v] = removed;
   tree_.boundary[v] = boundary_[v];
   tree_.error[v] = error;
-  sortUnique(recompute_);
+  uniqueByMark(recompute_);
   for (uint32_t x : recompute_) recompute(x);
 }
 

@@ -166,14 +166,14 @@ TEST(StreamSimplifier, RejectsATreeOfAnotherLevel) {
 
 TEST(Levels, EachLevelIsThePrefixAndRefinesFurther) {
   const Ranked& g = grid();
-  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{});
+  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{-1, 32, true});
   ASSERT_TRUE(levels.isOk()) << levels.status().message();
   ASSERT_GE(levels->merges.size(), 4u);
   const uint64_t points = g.mesh.numPoints();
   for (size_t i = 1; i < levels->merges.size(); ++i) {
     SCOPED_TRACE("level " + std::to_string(i));
     EXPECT_EQ(levels->merges[i], levelMerges(int(i), points, g.tree.merges));
-    EXPECT_GE(points - levels->merges[i], LevelOptions{}.min_points);
+    EXPECT_GE(points - levels->merges[i], 32u);
     const TetMesh& lm = levels->meshes[i];
     const MergeTree& lt = *levels->trees[i];
     ASSERT_TRUE(lt.check("level").isOk());
