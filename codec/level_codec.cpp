@@ -43,7 +43,7 @@ constexpr uint32_t kSymEscape = 15;
 constexpr int kMaxCandidates = 14;  // symbols 1..14
 constexpr int kMaxGather = 48;
 constexpr int kFanSteps = 10;
-constexpr int kTetContexts = 2 * 10;
+constexpr int kTetContexts = 2 * 10 * 3;
 constexpr int kBoundaryContexts = 2 * 4;
 constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d), CODEC-NOTES.md
 // Prediction rules for a vertex x behind the front face (a, b, c) whose decoded tetrahedron has
@@ -743,7 +743,17 @@ class LevelCoder {
       while (static_cast<int>(top) < n && c[top].w == c[0].w) ++top;
       k = 1 + (std::min<uint32_t>(c[0].w, 3) - 1) * 3 + std::min<uint32_t>(top, 3) - 1;
     }
-    *ctx = k * 2 + (g.d == kNoSlot ? 1 : 0);
+    // How close the best candidate lies to the predicted apex, relative to the gate's size.
+    uint32_t near = 2;
+    if (n > 0) {
+      const double *a = P(g.v[0]), *b = P(g.v[1]), *cc = P(g.v[2]);
+      double e2 = 0;
+      for (int i = 0; i < 3; ++i)
+        e2 += (a[i] - b[i]) * (a[i] - b[i]) + (b[i] - cc[i]) * (b[i] - cc[i]) + (cc[i] - a[i]) * (cc[i] - a[i]);
+      e2 /= 3.0;
+      near = c[0].dist < 0.25 * e2 ? 0 : (c[0].dist < e2 ? 1 : 2);
+    }
+    *ctx = (k * 2 + (g.d == kNoSlot ? 1 : 0)) * 3 + near;
     return m;
   }
 
