@@ -44,7 +44,7 @@ constexpr int kMaxCandidates = 14;  // symbols 1..14
 constexpr int kMaxGather = 48;
 constexpr int kFanSteps = 10;
 constexpr int kTetContexts = 2 * 10 * 3;
-constexpr int kBoundaryContexts = 2 * 4;
+constexpr int kBoundaryContexts = 2 * 4 * 3;
 constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d), CODEC-NOTES.md
 // Prediction rules for a vertex x behind the front face (a, b, c) whose decoded tetrahedron has
 // fourth vertex d: weights of (a, b, c, d). Rule 0 is the default (coordinates: g + k (g - d);
@@ -629,7 +629,18 @@ class LevelCoder {
             if (cands[i] == xs) sym = static_cast<uint32_t>(i + 1);
         }
       }
-      const uint32_t ctx = std::min<uint32_t>(prev_sym, 3) * 2 + closes;
+      // How close the first candidate lies to the parallelogram prediction, relative to the edge.
+      uint32_t near = 2;
+      if (nc > 0) {
+        double e2 = 0, d2 = 0;
+        for (int i = 0; i < 3; ++i) {
+          const double pr = P(p)[i] + P(q)[i] - P(w)[i];
+          e2 += (P(p)[i] - P(q)[i]) * (P(p)[i] - P(q)[i]);
+          d2 += (P(cands[0])[i] - pr) * (P(cands[0])[i] - pr);
+        }
+        near = d2 < 0.25 * e2 ? 0 : (d2 < e2 ? 1 : 2);
+      }
+      const uint32_t ctx = (std::min<uint32_t>(prev_sym, 3) * 2 + closes) * 3 + near;
       sym = bsym_[ctx].code(*bnd_, sym);
       prev_sym = sym == kSymEscape ? 3 : std::min<uint32_t>(sym, 2);
       uint32_t x;
