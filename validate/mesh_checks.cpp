@@ -137,6 +137,7 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
 
   // Orientation by exact predicates (only where all four points are finite: the filtered predicate
   // must not see a NaN).
+  std::vector<uint8_t> flat(nt, 0);
   for (size_t t = 0; t < nt; ++t) {
     if (bad_tet[t]) continue;
     const Tet& tet = mesh.tets[t];
@@ -147,6 +148,7 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
       report.add(IssueCode::kInvertedTet, scope, tetPath(scope, t));
     } else if (s == 0) {
       ++st.zero_volume;
+      flat[t] = 1;
       report.add(IssueCode::kZeroVolumeTet, scope, tetPath(scope, t));
     }
   }
@@ -191,20 +193,35 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
   // An inverted tetrahedron turns its faces inside out: the orientation of the boundary edges is
   // then checked only when no tetrahedron is inverted (INVERTED_TET says it all).
   const bool check_orientation = st.inverted == 0;
-  const std::vector<Triangle> boundary = boundaryTriangles(mesh, adj);
-  // Directed boundary edges keyed by their undirected edge.
+  // A zero-volume tetrahedron has no orientation to normalise, so the faces around one may disagree
+  // with their neighbours: edges of boundary triangles of a flat tetrahedron or of a face-neighbour of
+  // one are not checked for orientation (ZERO_VOLUME_TET already reports the cause).
+  auto nearFlat = [&](size_t t) {
+    if (flat[t]) return true;
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t n = adj.neighbor[4 * t + k];
+      if (n < nt && flat[n]) return true;
+    }
+    return false;
+  };
   struct DirEdge {
     uint64_t key;
     bool forward;
+    bool exempt;
     bool operator<(const DirEdge& o) const { return key != o.key ? key < o.key : forward < o.forward; }
   };
   std::vector<DirEdge> dir_edges;
-  dir_edges.reserve(3 * boundary.size());
-  for (const Triangle& tri : boundary) {
-    for (int e = 0; e < 3; ++e) {
-      const uint32_t a = tri[e], b = tri[(e + 1) % 3];
-      const uint64_t lo = std::min(a, b), hi = std::max(a, b);
-      dir_edges.push_back({(lo << 32) | hi, a < b});
+  dir_edges.reserve(3 * adj.boundary_faces);
+  for (size_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 4; ++k) {
+      if (adj.neighbor[4 * t + k] != kNoNeighbor) continue;
+      const bool exempt = st.zero_volume > 0 && nearFlat(t);
+      const Triangle tri = {mesh.tets[t][kTetFace[k][0]], mesh.tets[t][kTetFace[k][1]], mesh.tets[t][kTetFace[k][2]]};
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t a = tri[e], b = tri[(e + 1) % 3];
+        const uint64_t lo = std::min(a, b), hi = std::max(a, b);
+        dir_edges.push_back({(lo << 32) | hi, a < b, exempt});
+      }
     }
   }
   std::sort(dir_edges.begin(), dir_edges.end());
@@ -219,7 +236,8 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
       report.add(IssueCode::kBoundaryNotClosed, scope, path,
                  "boundary edge " + path.substr(path.rfind('/') + 1) + " is in " + std::to_string(j - i) +
                      " boundary triangles");
-    } else if (check_orientation && dir_edges[i].forward == dir_edges[i + 1].forward) {
+    } else if (check_orientation && dir_edges[i].forward == dir_edges[i + 1].forward && !dir_edges[i].exempt &&
+               !dir_edges[i + 1].exempt) {
       report.add(IssueCode::kBoundaryOrientation, scope, path);
     }
     i = j;

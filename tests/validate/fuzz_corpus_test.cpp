@@ -1,0 +1,51 @@
+// Replays the fuzz corpora as ordinary tests (no clang needed): every seed and every regression file
+// found by the fuzzers goes through the validator (reader, decoders, checks). Seeds named fail.* are
+// must-fail conformance files (container defects): they must be reported invalid. The valid seeds
+// were written by the codec of their day; the codec's own conformance tests pin its bitstream, so
+// here they only have to come back with a report.
+// Regression files must simply come back with a report (no crash, hang or sanitizer finding).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "validate/validate_fixtures.h"
+
+namespace gtn::test {
+namespace {
+
+std::vector<std::filesystem::path> filesIn(const std::string& dir) {
+  std::vector<std::filesystem::path> out;
+  if (!std::filesystem::is_directory(dir)) return out;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.is_regular_file() && e.path().filename().string()[0] != '.' && e.path().extension() != ".md")
+      out.push_back(e.path());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(FuzzCorpus, SeedsValidateAsExpected) {
+  const auto files = filesIn(std::string(GTN_SOURCE_DIR) + "/tests/fuzz/corpus");
+  ASSERT_GE(files.size(), 8u);
+  for (const auto& f : files) {
+    SCOPED_TRACE(f.string());
+    const ValidationReport r = validateBytesForTest(readBytes(f.string()));
+    const bool must_fail = f.filename().string().rfind("fail.", 0) == 0;
+    if (must_fail) EXPECT_TRUE(r.hasErrors()) << r.toText(f.string());
+  }
+}
+
+TEST(FuzzCorpus, RegressionsComeBackWithAReport) {
+  for (const std::string dir : {"/tests/fuzz/regressions", "/tests/fuzz/corpus"}) {
+    for (const auto& f : filesIn(std::string(GTN_SOURCE_DIR) + dir)) {
+      SCOPED_TRACE(f.string());
+      ValidateOptions options;
+      options.max_issues = 16;
+      const ValidationReport r = validateBytesForTest(readBytes(f.string()), options);
+      EXPECT_LE(r.issues().size(), 16u);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace gtn::test
