@@ -127,12 +127,13 @@ int runGtnInfo(const InfoArgs& a) {
   const GtnFileInfo& f = r.file();
 
   // Level 0's share of the file: its chunks plus everything that is not another level's.
-  uint64_t connectivity = 0, geometry = 0, fields = 0, total = f.bytes;
+  uint64_t connectivity = 0, geometry = 0, fields = 0, merge_tree = 0, total = f.bytes;
   for (size_t i = 1; i < r.levels(); ++i) total -= r.level(i).bytes;
   for (const GtnChunkInfo& c : r.level(0).chunks) {
     if (c.tag == kTagBoundary || c.tag == kTagConnectivity) connectivity += c.bytes;
     else if (c.tag == kTagGeometry) geometry += c.bytes;
     else if (c.tag == kTagPointField || c.tag == kTagCellField) fields += c.bytes;
+    else if (c.tag == kTagMergeTree) merge_tree += c.bytes;
   }
   const double tets = static_cast<double>(r.level(0).header.tets);
   auto bpt = [&](uint64_t bytes) -> nlohmann::json {
@@ -156,6 +157,7 @@ int runGtnInfo(const InfoArgs& a) {
     j["bits_per_tet"] = {{"connectivity", bpt(connectivity)},
                          {"geometry", bpt(geometry)},
                          {"fields", bpt(fields)},
+                         {"merge_tree", bpt(merge_tree)},
                          {"total", bpt(total)}};
     j["peak_live_vertices"] = decode_stats.peak_live_vertices;
     nlohmann::json levels = nlohmann::json::array();
@@ -198,8 +200,9 @@ int runGtnInfo(const InfoArgs& a) {
   for (const GtnSection& s : r.sections())
     std::printf("  section %-22s %llu bytes\n", s.name.c_str(), static_cast<unsigned long long>(s.bytes));
   if (tets > 0)
-    std::printf("  bits per tetrahedron connectivity %.3f, geometry %.3f, fields %.3f, total %.3f\n",
-                8.0 * connectivity / tets, 8.0 * geometry / tets, 8.0 * fields / tets, 8.0 * total / tets);
+    std::printf("  bits per tetrahedron connectivity %.3f, geometry %.3f, fields %.3f, merge tree %.3f, total %.3f\n",
+                8.0 * connectivity / tets, 8.0 * geometry / tets, 8.0 * fields / tets, 8.0 * merge_tree / tets,
+                8.0 * total / tets);
   std::printf("  peak live vertices  %llu\n", static_cast<unsigned long long>(decode_stats.peak_live_vertices));
   if (a.merge_tree) {
     auto mt = mergeTreeJson(r);
