@@ -28,6 +28,9 @@ cmake --build build -j"$(nproc)"
 if [[ "${1:-}" != "--no-sample" ]]; then
   mkdir -p out
   ./build/gtn-make-sample out
-  ./build/gtn convert out/sample.xyz out/sample.q -o out/sample.vtu
-  ./build/gtn info out/sample.xyz out/sample.q
+  ./build/gtn convert out/sample.xyz out/sample.q -o out/sample.gtn
+  ./build/gtn info out/sample.gtn
+  ./build/gtn validate out/sample.gtn --against out/sample.xyz out/sample.q
+  ./build/gtn render out/sample.gtn -o out/sample.png --size 256x256
+  echo "setup: wrote out/sample.gtn and rendered it to out/sample.png"
 fi
