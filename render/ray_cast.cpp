@@ -86,9 +86,13 @@ StatusOr<ScalarReader> ScalarReader::create(const std::vector<FieldDesc>& fields
   r.components_ = found->components;
   r.magnitude_ = selector.magnitude;
   r.component_ = selector.component;
-  r.description_ = found->name + (selector.magnitude ? ":mag"
-                                  : found->components > 1 ? ":" + std::to_string(selector.component)
-                                                          : std::string());
+  r.description_ = found->name;
+  if (selector.magnitude) {
+    r.description_ += ":mag";
+  } else if (found->components > 1) {
+    r.description_ += ':';
+    r.description_ += std::to_string(selector.component);
+  }
   return r;
 }
 

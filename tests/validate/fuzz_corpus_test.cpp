@@ -31,7 +31,9 @@ TEST(FuzzCorpus, SeedsValidateAsExpected) {
     SCOPED_TRACE(f.string());
     const ValidationReport r = validateBytesForTest(readBytes(f.string()));
     const bool must_fail = f.filename().string().rfind("fail.", 0) == 0;
-    if (must_fail) EXPECT_TRUE(r.hasErrors()) << r.toText(f.string());
+    if (must_fail) {
+      EXPECT_TRUE(r.hasErrors()) << r.toText(f.string());
+    }
   }
 }
 
