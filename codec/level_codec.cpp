@@ -1158,4 +1158,14 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
   return st;
 }
 
+LevelPayload payloadOf(const EncodedLevel& encoded) {
+  LevelPayload p;
+  p.boundary = encoded.boundary;
+  p.connectivity = encoded.connectivity;
+  p.geometry = encoded.geometry;
+  for (const auto& s : encoded.point_fields) p.point_fields.emplace_back(s);
+  for (const auto& s : encoded.cell_fields) p.cell_fields.emplace_back(s);
+  return p;
+}
+
 }  // namespace gtn

@@ -47,6 +47,9 @@ struct DecodeStats {
   uint64_t peak_live_vertices = 0;  // largest number of vertices emitted and not yet retired
 };
 
+// Views of the streams of an encoding held in memory (to decode it without a container).
+LevelPayload payloadOf(const EncodedLevel& encoded);
+
 // Decodes one level and emits its events (mesh_stream.h order) to `sink`. Fails with kInvalidData,
 // never crashes, on any corrupt payload; `what` names the source in messages (file and level).
 Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink,

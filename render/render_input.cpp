@@ -71,13 +71,7 @@ StatusOr<ResolvedLevel> RenderInput::resolve(const LevelChoice& choice) const {
 
 Status RenderInput::stream(const ResolvedLevel& level, MeshSink& sink) {
   if (!reader_) {
-    LevelPayload payload;
-    payload.boundary = encoded_->boundary;
-    payload.connectivity = encoded_->connectivity;
-    payload.geometry = encoded_->geometry;
-    for (const auto& s : encoded_->point_fields) payload.point_fields.emplace_back(s);
-    for (const auto& s : encoded_->cell_fields) payload.cell_fields.emplace_back(s);
-    return decodeLevel(encoded_->header, payload, sink, nullptr, path_);
+    return decodeLevel(encoded_->header, payloadOf(*encoded_), sink, nullptr, path_);
   }
   if (level.extra_merges == 0) return reader_->decodeLevel(level.level, sink);
   GTN_ASSIGN_OR_RETURN(auto payload, reader_->mergeTreePayload(level.level));

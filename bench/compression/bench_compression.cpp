@@ -178,12 +178,7 @@ int main(int argc, char** argv) {
     }
     enc_s /= reps;
     const gtn::EncodedLevel& e = *enc;
-    gtn::LevelPayload pl;
-    pl.boundary = e.boundary;
-    pl.connectivity = e.connectivity;
-    pl.geometry = e.geometry;
-    for (const auto& s : e.point_fields) pl.point_fields.push_back(s);
-    for (const auto& s : e.cell_fields) pl.cell_fields.push_back(s);
+    const gtn::LevelPayload pl = gtn::payloadOf(e);
     reps = 0;
     double dec_s = 0;
     gtn::DecodeStats stats;

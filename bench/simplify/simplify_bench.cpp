@@ -70,15 +70,6 @@ uint64_t levelBytes(const EncodedLevel& e) {
   return b;
 }
 
-LevelPayload payloadOf(const EncodedLevel& e) {
-  LevelPayload p;
-  p.boundary = e.boundary;
-  p.connectivity = e.connectivity;
-  p.geometry = e.geometry;
-  for (const auto& s : e.point_fields) p.point_fields.push_back(s);
-  for (const auto& s : e.cell_fields) p.cell_fields.push_back(s);
-  return p;
-}
 
 int run(const Dataset& d, int repeat) {
   ImportOptions io;

@@ -122,15 +122,6 @@ class CheckingSink : public MeshSink {
   LevelHeader header_;
 };
 
-inline LevelPayload payloadOf(const EncodedLevel& e) {
-  LevelPayload p;
-  p.boundary = e.boundary;
-  p.connectivity = e.connectivity;
-  p.geometry = e.geometry;
-  for (const auto& s : e.point_fields) p.point_fields.push_back(s);
-  for (const auto& s : e.cell_fields) p.cell_fields.push_back(s);
-  return p;
-}
 
 inline std::array<uint32_t, 3> canonicalTriangle(std::array<uint32_t, 3> t) {
   while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};

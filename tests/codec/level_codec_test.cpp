@@ -172,7 +172,7 @@ TEST(LevelCodecCorrupt, EveryTruncatedStreamFailsCleanly) {
       EncodedLevel c = e;
       streamsOf(c)[k]->resize(len);
       NullSink sink;
-      const Status st = decodeLevel(c.header, test::payloadOf(c), sink, nullptr, "level 0 of t.gtn");
+      const Status st = decodeLevel(c.header, payloadOf(c), sink, nullptr, "level 0 of t.gtn");
       ASSERT_FALSE(st.isOk()) << "stream " << k << " cut to " << len << " bytes decoded";
       EXPECT_EQ(st.code(), StatusCode::kInvalidData);
       EXPECT_NE(st.message().find("level 0 of t.gtn"), std::string::npos) << st.message();
@@ -181,7 +181,7 @@ TEST(LevelCodecCorrupt, EveryTruncatedStreamFailsCleanly) {
     EncodedLevel c = e;
     streamsOf(c)[k]->push_back(0);
     NullSink sink;
-    EXPECT_FALSE(decodeLevel(c.header, test::payloadOf(c), sink, nullptr, "x").isOk());
+    EXPECT_FALSE(decodeLevel(c.header, payloadOf(c), sink, nullptr, "x").isOk());
   }
 }
 
@@ -199,7 +199,7 @@ TEST(LevelCodecCorrupt, RandomByteFlipsNeverCrash) {
       (*s)[rng() % s->size()] ^= static_cast<uint8_t>(1 + rng() % 255);
     }
     NullSink sink;
-    const Status st = decodeLevel(c.header, test::payloadOf(c), sink, nullptr, "flip");
+    const Status st = decodeLevel(c.header, payloadOf(c), sink, nullptr, "flip");
     if (!st.isOk()) {
       ++failures;
       EXPECT_EQ(st.code(), StatusCode::kInvalidData);
@@ -217,12 +217,12 @@ TEST(LevelCodecCorrupt, HeaderCountsMustMatch) {
     if (which == 2) h.boundary_triangles -= 1;
     if (which == 3) h.tets = uint64_t{1} << 40;
     NullSink sink;
-    EXPECT_FALSE(decodeLevel(h, test::payloadOf(e), sink, nullptr, "x").isOk()) << which;
+    EXPECT_FALSE(decodeLevel(h, payloadOf(e), sink, nullptr, "x").isOk()) << which;
   }
   LevelHeader h = e.header;
   h.point_fields.pop_back();
   NullSink sink;
-  EXPECT_FALSE(decodeLevel(h, test::payloadOf(e), sink, nullptr, "x").isOk());
+  EXPECT_FALSE(decodeLevel(h, payloadOf(e), sink, nullptr, "x").isOk());
 }
 
 }  // namespace

@@ -302,13 +302,7 @@ TEST(StreamRenderer, HoldsFarLessThanTheMesh) {
 
 // Streams an encoded mesh through the real level decoder into a sink.
 Status decodeInto(const EncodedLevel& enc, MeshSink& sink, DecodeStats* stats) {
-  LevelPayload payload;
-  payload.boundary = enc.boundary;
-  payload.connectivity = enc.connectivity;
-  payload.geometry = enc.geometry;
-  for (const auto& f : enc.point_fields) payload.point_fields.emplace_back(f);
-  for (const auto& f : enc.cell_fields) payload.cell_fields.emplace_back(f);
-  return decodeLevel(enc.header, payload, sink, stats, "test");
+  return decodeLevel(enc.header, payloadOf(enc), sink, stats, "test");
 }
 
 void checkDecodedRender(const TetMesh& mesh, RenderOptions o, double held_fraction) {

@@ -295,13 +295,7 @@ inline void expectStreamMatchesApply(const TetMesh& mesh, const MergeTree& tree,
     auto stream_tree = decodeMergeTree(*payload, mesh.numPoints(), "test");
     ASSERT_TRUE(stream_tree.isOk()) << stream_tree.status().message();
     StreamSimplifier simp(*stream_tree, n, rec);
-    LevelPayload lp;
-    lp.boundary = enc->boundary;
-    lp.connectivity = enc->connectivity;
-    lp.geometry = enc->geometry;
-    for (auto& f : enc->point_fields) lp.point_fields.push_back(f);
-    for (auto& f : enc->cell_fields) lp.cell_fields.push_back(f);
-    Status st = decodeLevel(enc->header, lp, simp, nullptr, "test");
+    Status st = decodeLevel(enc->header, payloadOf(*enc), simp, nullptr, "test");
     ASSERT_TRUE(st.isOk()) << st.message();
   } else {
     std::vector<uint32_t> perm(mesh.numPoints());
