@@ -40,6 +40,16 @@ constexpr uint32_t kNoSlot = 0xFFFFFFFFu;
 constexpr uint32_t kNone32 = 0xFFFFFFFFu;
 constexpr uint32_t kSymNew = 0;
 constexpr uint32_t kSymEscape = 15;
+
+// The symbol that codes a vertex: new (not yet decoded), its 1-based place among the candidates, or
+// escape (decoded but not a candidate).
+inline uint32_t candidateSymbol(uint32_t slot, const uint32_t* cands, int nc) {
+  if (slot == kNoSlot) return kSymNew;
+  uint32_t sym = kSymEscape;
+  for (int i = 0; i < nc; ++i)
+    if (cands[i] == slot) sym = static_cast<uint32_t>(i + 1);
+  return sym;
+}
 constexpr int kMaxCandidates = 14;  // symbols 1..14
 constexpr int kMaxGather = 48;
 constexpr int kFanSteps = 10;
@@ -620,14 +630,7 @@ class LevelCoder {
       }
       uint32_t sym = 0;
       if constexpr (kEncode) {
-        const uint32_t xs = enc_->src_slot[x_src];
-        if (xs == kNoSlot) {
-          sym = kSymNew;
-        } else {
-          sym = kSymEscape;
-          for (int i = 0; i < nc; ++i)
-            if (cands[i] == xs) sym = static_cast<uint32_t>(i + 1);
-        }
+        sym = candidateSymbol(enc_->src_slot[x_src], cands, nc);
       }
       // How close the first candidate lies to the parallelogram prediction, relative to the edge.
       uint32_t near = 2;
@@ -949,14 +952,7 @@ class LevelCoder {
         for (int i = 0; i < 4; ++i)
           for (int j = i + 1; j < 4; ++j) inversions += perm[i] > perm[j];
         flip = inversions & 1;
-        const uint32_t xs = enc_->src_slot[x_src];
-        if (xs == kNoSlot) {
-          sym = kSymNew;
-        } else {
-          sym = kSymEscape;
-          for (int i = 0; i < nc; ++i)
-            if (cands[i] == xs) sym = static_cast<uint32_t>(i + 1);
-        }
+        sym = candidateSymbol(enc_->src_slot[x_src], cands, nc);
       }
       sym = tsym_[ctx].code(*con_, sym);
       uint32_t x;
