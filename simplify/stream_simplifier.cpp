@@ -32,7 +32,10 @@ Status StreamSimplifier::beginLevel(const LevelHeader& header) {
   held_.clear();
   held_values_.clear();
   free_slots_.clear();
-  waiting_.clear();
+  wait_head_.assign(np, kUnset);
+  wait_tail_.assign(np, kUnset);
+  wait_nodes_.clear();
+  free_nodes_.clear();
   held_count_ = peak_held_ = 0;
   in_boundary_ = true;
   out_header_ = header;
@@ -54,12 +57,13 @@ Status StreamSimplifier::vertex(uint32_t id, const double xyz[3], const uint8_t*
   if (ancestor_[id] != id) return Status::ok();
   out_id_[id] = emitted_;
   GTN_RETURN_IF_ERROR(out_.vertex(emitted_++, xyz, values));
-  auto it = waiting_.find(id);
-  if (it == waiting_.end()) return Status::ok();
-  std::vector<uint32_t> slots = std::move(it->second);
-  waiting_.erase(it);
-  for (uint32_t s : slots) {
-    if (--held_[s].missing == 0) GTN_RETURN_IF_ERROR(emitHeld(s));
+  uint32_t node = wait_head_[id];
+  wait_head_[id] = wait_tail_[id] = kUnset;
+  while (node != kUnset) {
+    const WaitNode w = wait_nodes_[node];
+    free_nodes_.push_back(node);
+    if (--held_[w.slot].missing == 0) GTN_RETURN_IF_ERROR(emitHeld(w.slot));
+    node = w.next;
   }
   return Status::ok();
 }
@@ -83,7 +87,21 @@ Status StreamSimplifier::hold(const uint32_t* anc, int count, bool triangle, con
     ++refs_[anc[i]];
     if (out_id_[anc[i]] == kUnset) {
       ++h.missing;
-      waiting_[anc[i]].push_back(slot);
+      uint32_t node;
+      if (!free_nodes_.empty()) {
+        node = free_nodes_.back();
+        free_nodes_.pop_back();
+      } else {
+        node = static_cast<uint32_t>(wait_nodes_.size());
+        wait_nodes_.push_back({});
+      }
+      wait_nodes_[node] = {slot, kUnset};
+      if (wait_tail_[anc[i]] == kUnset) {
+        wait_head_[anc[i]] = node;
+      } else {
+        wait_nodes_[wait_tail_[anc[i]]].next = node;
+      }
+      wait_tail_[anc[i]] = node;
     }
   }
   if (!triangle && cell_bytes_) std::memcpy(held_values_.data() + size_t{slot} * cell_bytes_, cell_values, cell_bytes_);

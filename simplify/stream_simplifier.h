@@ -9,11 +9,10 @@
 // The output is exactly applyMerges(level, tree, n) (simplify/apply.h) up to vertex and tetrahedron
 // order. The output header's counts are exact (the tree records what each merge removes); a stream
 // that disagrees with them (a corrupt tree) fails with kInvalidData. The bounding box is the input's.
-// Memory: 12 bytes per input vertex plus the held-back elements.
+// Memory: 20 bytes per input vertex plus the held-back elements.
 #pragma once
 
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include "codec/merge_tree_coder.h"
@@ -60,7 +59,13 @@ class StreamSimplifier : public MeshSink {
   std::vector<Held> held_;
   std::vector<uint8_t> held_values_;
   std::vector<uint32_t> free_slots_;
-  std::unordered_map<uint32_t, std::vector<uint32_t>> waiting_;  // ancestor -> held slots
+  // Held elements waiting for an ancestor, as intrusive lists: wait_head_[ancestor] -> node -> next.
+  struct WaitNode {
+    uint32_t slot, next;
+  };
+  std::vector<uint32_t> wait_head_, wait_tail_;  // first-in first-out, as the elements arrived
+  std::vector<WaitNode> wait_nodes_;
+  std::vector<uint32_t> free_nodes_;
   uint64_t held_count_ = 0, peak_held_ = 0;
   bool in_boundary_ = true;
 };
