@@ -28,11 +28,24 @@ std::string tempDir(const std::string& name) {
   return p.string();
 }
 
+#if defined(__SANITIZE_ADDRESS__)
+// Sanitizer builds (GTN_SANITIZE=ON): a finding must fail the test, and a finding in a `gtn` run as a
+// subprocess must not pass for exit code 1 (invalid data), which many CLI tests expect: findings exit
+// with 86, here and (see runShell) in every command a test runs. UBSan stops at its first finding.
+extern "C" const char* __asan_default_options() { return "detect_leaks=1:exitcode=86"; }
+extern "C" const char* __ubsan_default_options() { return "print_stacktrace=1:halt_on_error=1:exitcode=86"; }
+constexpr const char* kSanitizerEnv =
+    "export ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}exitcode=86\" "
+    "UBSAN_OPTIONS=\"${UBSAN_OPTIONS:+$UBSAN_OPTIONS:}halt_on_error=1:exitcode=86\"; ";
+#else
+constexpr const char* kSanitizerEnv = "";
+#endif
+
 RunResult runShell(const std::string& command) {
   static int counter = 0;
   const std::string base = std::filesystem::temp_directory_path() /
                            ("gtn-run-" + std::to_string(getpid()) + "-" + std::to_string(counter++));
-  const std::string full = "(" + command + ") >" + base + ".out 2>" + base + ".err </dev/null";
+  const std::string full = std::string(kSanitizerEnv) + "(" + command + ") >" + base + ".out 2>" + base + ".err </dev/null";
   const int status = std::system(full.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
