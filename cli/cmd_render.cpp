@@ -33,6 +33,7 @@ struct RenderArgs {
   double ratio = -1;
   int64_t merges = -1;
   double budget_ms = -1;
+  std::string dump_view;
   bool verbose = false, json = false;
 };
 
@@ -78,7 +79,39 @@ Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   return Status::ok();
 }
 
-// One render of the resolved level; fills `report` with what happened.
+// The camera and transfer function a render used, in vtkCamera / vtkVolumeProperty terms, so that
+// another renderer (bench/render/vtk_compare.py) reproduces the view instead of re-deriving defaults.
+nlohmann::json describeSetup(const RenderSetup& s) {
+  const Camera& c = s.camera;
+  auto vec = [](const double* v) { return nlohmann::json::array({v[0], v[1], v[2]}); };
+  nlohmann::json cam = {{"width", c.width()},
+                        {"height", c.height()},
+                        {"projection", c.options().projection == Projection::kOrthographic ? "ortho" : "persp"},
+                        {"position", vec(c.position())},
+                        {"focal_point", vec(c.focalPoint())},
+                        {"view_up", vec(c.viewUp())},
+                        {"parallel_scale", c.parallelScale()},
+                        {"view_angle", c.viewAngleDeg()},
+                        {"pixel_centres", true}};
+  nlohmann::json points = nlohmann::json::array();
+  const TransferFunction& tf = s.transfer;
+  for (const TransferPoint& p : tf.points) {
+    points.push_back({{"x", p.x},
+                      {"value", tf.lo + p.x * (tf.hi - tf.lo)},
+                      {"rgb", {p.rgb[0], p.rgb[1], p.rgb[2]}},
+                      {"opacity", p.opacity}});
+  }
+  return {{"camera", cam},
+          {"transfer",
+           {{"field", s.field}, {"range", {tf.lo, tf.hi}}, {"points", points},
+            {"opacity_unit_distance", 1.0 / s.inv_unit_distance}}},
+          {"sampling", s.sampling == Sampling::kFace ? "face" : "volume"},
+          {"step", s.step},
+          {"background", {0, 0, 0}}};
+}
+
+// One render of the resolved level; fills `report` with what happened (and `report["view"]` with the
+// resolved camera and transfer function).
 StatusOr<Image> renderOnce(RenderInput& input, const ResolvedLevel& level, const RenderOptions& options,
                            bool generic, nlohmann::json& report) {
   if (generic) {
@@ -93,6 +126,7 @@ StatusOr<Image> renderOnce(RenderInput& input, const ResolvedLevel& level, const
     report["tets_rendered"] = stats.tets;
     report["segments"] = stats.segments;
     report["lost_cursors"] = stats.lost_cursors;
+    report["view"] = describeSetup(stats.setup);
     return image;
   }
   StreamRenderer renderer(options);
@@ -105,6 +139,7 @@ StatusOr<Image> renderOnce(RenderInput& input, const ResolvedLevel& level, const
   report["peak_face_entries"] = s.peak_face_entries;
   report["segments"] = s.segments;
   report["lost_cursors"] = s.lost_cursors;
+  report["view"] = describeSetup(renderer.setup());
   return renderer.image();
 }
 
@@ -136,6 +171,10 @@ int runRender(const RenderArgs& a) {
   auto image = renderOnce(**input, level.value(), options, generic, report);
   if (!image.isOk()) return reportError(image.status());
   if (Status st = writePng(a.output, image.value()); !st.isOk()) return reportError(st);
+  if (!a.dump_view.empty()) {
+    const std::string text = report["view"].dump(2) + "\n";
+    if (Status st = writeBytesAtomically(a.dump_view, text.data(), text.size()); !st.isOk()) return reportError(st);
+  }
   const double total_ms = msSince(start);
   report["input"] = a.inputs;
   report["output"] = a.output;
@@ -184,6 +223,8 @@ Command addRenderCommand(CLI::App& app) {
   sub->add_option("--ratio", a->ratio, "simplification ratio in [0, 1]: merged vertices / vertices");
   sub->add_option("--merges", a->merges, "number of merges of the merge tree to apply");
   sub->add_option("--budget-ms", a->budget_ms, "choose level and merges to render within T milliseconds");
+  sub->add_option("--dump-view", a->dump_view,
+                  "write the camera and transfer function used (vtkCamera / vtkVolumeProperty terms) as JSON");
   sub->add_flag("-v,--verbose", a->verbose, "say what was chosen and how long it took");
   sub->add_flag("--json", a->json, "write a JSON report to standard output");
   return {sub, [a] { return runRender(*a); }};

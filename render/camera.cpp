@@ -77,6 +77,11 @@ Ray Camera::ray(int px, int py) const {
   return r;
 }
 
+double Camera::viewAngleDeg() const {
+  if (options_.projection == Projection::kOrthographic) return kPerspectiveFovDeg;
+  return 2.0 * std::atan(half_h_) * 180.0 / kPi;
+}
+
 bool Camera::project(const double p[3], double* x, double* y) const {
   const double v[3] = {p[0] - eye_[0], p[1] - eye_[1], p[2] - eye_[2]};
   double sx = dot(v, right_), sy = dot(v, up_);

@@ -40,6 +40,15 @@ class Camera {
   // Radius of the framed bounding sphere.
   double radius() const { return radius_; }
 
+  // The view in vtkCamera's terms, so that another renderer can reproduce it exactly: position,
+  // focal point (the box centre) and view up; the orthographic parallel scale (half the image height
+  // in world units) or the perspective view angle (vertical, degrees).
+  const double* position() const { return eye_; }
+  const double* focalPoint() const { return centre_; }
+  const double* viewUp() const { return up_; }
+  double parallelScale() const { return half_h_; }
+  double viewAngleDeg() const;
+
  private:
   CameraOptions options_;
   double centre_[3] = {0, 0, 0};

@@ -101,6 +101,7 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
   double bmin[3], bmax[3];
   sceneBox(header, surface, bmin, bmax);
   RenderSetup setup = resolveSetup(options, bmin, bmax);
+  setup.field = reader.description();
   if (!setup.transfer.has_range) {
     const auto [lo, hi] = boundaryRange(surface);
     setup.transfer.lo = lo;
@@ -167,6 +168,7 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
     stats->tets = mesh.tets.size();
     stats->segments = rays.segments.size();
     stats->lost_cursors = lost.load();
+    stats->setup = setup;
   }
   return toImage(w, h, pixels);
 }

@@ -16,6 +16,7 @@ struct GenericRenderStats {
   uint64_t tets = 0;
   uint64_t segments = 0;
   uint64_t lost_cursors = 0;  // cursors that lost their way (numerical degeneracies)
+  RenderSetup setup;          // the resolved camera and transfer function (range fixed)
 };
 
 // Renders `mesh` (vertex ids as in the stream that built it), whose boundary surface is `boundary`

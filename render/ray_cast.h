@@ -77,6 +77,7 @@ struct RenderSetup {
   double step = 0;
   double inv_unit_distance = 1;
   TransferFunction transfer;
+  std::string field;  // the rendered scalar, as ScalarReader::description() names it
 };
 RenderSetup resolveSetup(const RenderOptions& options, const double bbox_min[3], const double bbox_max[3]);
 

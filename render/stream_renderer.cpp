@@ -208,6 +208,7 @@ Status StreamRenderer::endBoundary() {
   double bmin[3], bmax[3];
   sceneBox(st.header, surface, bmin, bmax);
   setup_ = resolveSetup(options_, bmin, bmax);
+  setup_.field = st.reader.description();
   if (!setup_.transfer.has_range) {
     const auto [lo, hi] = boundaryRange(surface);
     setup_.transfer.lo = lo;

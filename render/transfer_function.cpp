@@ -8,9 +8,6 @@
 namespace gtn {
 
 namespace {
-// Opacity 1 would mean infinite extinction; clamp so that exp() stays finite.
-constexpr double kMaxOpacity = 1.0 - 1e-6;
-
 TransferFunction fromTable(const std::vector<std::array<double, 5>>& rows) {
   TransferFunction tf;
   for (const auto& r : rows) {
@@ -38,8 +35,7 @@ void TransferFunction::evaluate(double scalar, double rgb[3], double* extinction
   double w = b.x > a.x ? (x - a.x) / (b.x - a.x) : 1.0;
   w = std::clamp(w, 0.0, 1.0);
   for (int c = 0; c < 3; ++c) rgb[c] = a.rgb[c] + w * (b.rgb[c] - a.rgb[c]);
-  const double o = std::min(kMaxOpacity, a.opacity + w * (b.opacity - a.opacity));
-  *extinction = -std::log1p(-o);
+  *extinction = a.opacity + w * (b.opacity - a.opacity);
 }
 
 const std::vector<std::string>& transferPresetNames() {

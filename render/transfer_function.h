@@ -1,14 +1,18 @@
 // Transfer function: a piecewise-linear map from a scalar to colour and opacity, over a scalar range.
 //
-// Opacity follows VTK's scalar-opacity convention: a control point's opacity `o` in [0, 1] is the
-// opacity of a slab one "opacity unit distance" D thick, so the extinction coefficient is
-// sigma = -ln(1 - o) / D and a ray step of length dt has alpha = 1 - exp(-sigma * dt). Images then do
-// not depend on the sampling step or on the mesh density, and match VTK given the same D.
+// Opacity follows VTK's unstructured-grid ray integrators (vtkUnstructuredGridVolumeRayCastMapper and
+// its linear / pre-integration integrators): a control point's opacity `o` divided by the "opacity
+// unit distance" D is the extinction (attenuation) coefficient sigma = o / D, linear in the scalar
+// between control points, and a ray step of length dt has alpha = 1 - exp(-sigma * dt). Images then
+// do not depend on the sampling step or on the mesh density, and match VTK's given the same points
+// and the same D. (VTK's regular-grid mappers instead take o as the opacity of a slab D thick,
+// sigma = -ln(1 - o) / D; the two agree for small o. We follow the unstructured-grid mapper, the one
+// a tetrahedral renderer is compared with: bench/render/vtk_compare.py.)
 //
 // Text file format (one directive per line, '#' starts a comment, blank lines ignored):
 //   range LO HI          optional; the scalar range the positions refer to (default: auto)
 //   point X R G B O      a control point: X in [0, 1] is the position within the range, R G B the
-//                        colour in [0, 1], O the opacity per unit distance in [0, 1]
+//                        colour in [0, 1], O the opacity per unit distance in [0, 1] (see above)
 // At least two points, positions non-decreasing. Outside the range the end points apply.
 #pragma once
 
@@ -30,7 +34,7 @@ struct TransferFunction {
   bool has_range = false;  // set by a file's `range` line or by the caller
   double lo = 0, hi = 1;
 
-  // Colour and extinction (per unit length, before division by the unit distance: -ln(1 - o)).
+  // Colour and extinction per unit distance (the interpolated opacity o; divide by D for sigma).
   void evaluate(double scalar, double rgb[3], double* extinction) const;
 };
 

@@ -72,6 +72,80 @@ TEST(RenderCommand, IntegratedMatchesGenericOnSpx) {
   }
 }
 
+TEST(RenderCommand, DumpViewDescribesTheCameraAndTransferFunction) {
+  const std::string dir = test::tempDir("render-view");
+  const std::string spx = test::dataPath("vtk/spx.vtk");
+  nlohmann::json views[2];
+  for (int generic = 0; generic < 2; ++generic) {
+    const test::RunResult r = runGtn("render " + spx + " -o " + dir + "/v.png --size 96x64 --dump-view " + dir +
+                                     "/view.json" + (generic ? " --pipeline generic" : ""));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    views[generic] = nlohmann::json::parse(test::readFile(dir + "/view.json"));
+  }
+  EXPECT_EQ(views[0], views[1]);  // both pipelines resolve the same view
+  const nlohmann::json& v = views[0];
+  const nlohmann::json& cam = v["camera"];
+  EXPECT_EQ(cam["width"], 96);
+  EXPECT_EQ(cam["height"], 64);
+  EXPECT_EQ(cam["projection"], "ortho");
+  // Default azimuth 30, elevation 20 (VTK's conventions): the camera sits in that direction from the
+  // focal point, twice the framed radius (the parallel scale at zoom 1) away, with a unit view up
+  // perpendicular to the view direction.
+  double dir_v[3], up[3], dist2 = 0, dot = 0, up2 = 0;
+  for (int i = 0; i < 3; ++i) {
+    dir_v[i] = cam["position"][i].get<double>() - cam["focal_point"][i].get<double>();
+    up[i] = cam["view_up"][i].get<double>();
+    dist2 += dir_v[i] * dir_v[i];
+    dot += dir_v[i] * up[i];
+    up2 += up[i] * up[i];
+  }
+  const double scale = cam["parallel_scale"].get<double>(), dist = std::sqrt(dist2);
+  EXPECT_NEAR(dist, 2 * scale, 1e-9 * scale);
+  const double kPi = 3.14159265358979323846, az = 30 * kPi / 180, el = 20 * kPi / 180;
+  EXPECT_NEAR(dir_v[0] / dist, std::cos(el) * std::sin(az), 1e-9);
+  EXPECT_NEAR(dir_v[1] / dist, std::sin(el), 1e-9);
+  EXPECT_NEAR(dir_v[2] / dist, std::cos(el) * std::cos(az), 1e-9);
+  EXPECT_NEAR(dot, 0, 1e-9 * dist);
+  EXPECT_NEAR(up2, 1, 1e-12);
+  // The cool-warm preset over the boundary's range of spx's scalars (0..2.254), D = diagonal / 40.
+  const nlohmann::json& tf = v["transfer"];
+  EXPECT_EQ(tf["field"], "scalars");
+  ASSERT_EQ(tf["points"].size(), 5u);
+  const double lo = tf["range"][0].get<double>(), hi = tf["range"][1].get<double>();
+  EXPECT_LT(lo, hi);
+  EXPECT_DOUBLE_EQ(tf["points"][0]["value"].get<double>(), lo);
+  EXPECT_DOUBLE_EQ(tf["points"][4]["value"].get<double>(), hi);
+  EXPECT_DOUBLE_EQ(tf["points"][4]["opacity"].get<double>(), 0.6);
+  EXPECT_NEAR(tf["opacity_unit_distance"].get<double>(), 2 * scale / 40, 1e-9 * scale);
+  // A perspective view reports its vertical view angle (30 degrees at zoom 1, narrower zoomed in).
+  ASSERT_EQ(runGtn("render " + spx + " -o " + dir + "/p.png --size 32x32 --projection persp --zoom 2 --dump-view " +
+                   dir + "/p.json").exit_code, 0);
+  const nlohmann::json p = nlohmann::json::parse(test::readFile(dir + "/p.json"));
+  EXPECT_NEAR(p["camera"]["view_angle"].get<double>(), 2 * std::atan(std::tan(15 * kPi / 180) / 2) * 180 / kPi, 1e-9);
+}
+
+// VTK's vtkUnstructuredGridVolumeRayCastMapper on the same mesh, camera and transfer function
+// (bench/render/vtk_compare.py): the images differ by an RMSE under 3. Skipped where Debian's
+// python3-vtk9 or xvfb-run is missing.
+TEST(RenderCommand, AgreesWithVtkOnSpx) {
+  if (test::runShell("/usr/bin/python3 -c 'import vtk' 2>/dev/null && command -v xvfb-run >/dev/null").exit_code != 0)
+    GTEST_SKIP() << "python3-vtk9 or xvfb-run not installed";
+  const std::string dir = test::tempDir("render-vtk");
+  const std::string spx = test::dataPath("vtk/spx.vtk");
+  ASSERT_EQ(runGtn("convert " + spx + " -o " + dir + "/spx.gtn").exit_code, 0);
+  ASSERT_EQ(runGtn("export " + dir + "/spx.gtn -o " + dir + "/spx.vtu").exit_code, 0);
+  ASSERT_EQ(runGtn("render " + dir + "/spx.gtn -o " + dir + "/ours.png --size 256x256 --dump-view " + dir +
+                   "/view.json").exit_code, 0);
+  const test::RunResult r = test::runShell(
+      "xvfb-run -a /usr/bin/python3 " GTN_SOURCE_DIR "/bench/render/vtk_compare.py " + dir + "/spx.vtu " + dir +
+      "/view.json " + dir + "/vtk.png --frames 1 --json --ours " + dir + "/ours.png --gtn " GTN_BINARY);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  EXPECT_GT(j["pixels_compared"].get<int>(), 8000);
+  EXPECT_LT(j["rmse"].get<double>(), 3.0);
+  EXPECT_GT(j["mean_frame_s"].get<double>(), 0.0);
+}
+
 TEST(RenderCommand, RejectsBadArguments) {
   const std::string dir = test::tempDir("render-bad");
   const std::string spx = test::dataPath("vtk/spx.vtk");
