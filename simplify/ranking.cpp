@@ -153,7 +153,16 @@ class Ranker {
   std::vector<StarTet> star_;
   std::vector<BoundaryFace> faces_, faces_w_;
   std::vector<Candidate> cands_;
-  std::vector<std::array<uint32_t, 5>> face_keys_;
+  // A face (v, x, y) of the star of v: key (min(x, y) << 32 | max(x, y)), then its tetrahedron and
+  // local face. Every face holds v, so ordering by the other two orders the sorted triples alike.
+  struct StarFace {
+    uint64_t key;
+    uint32_t t, j;
+    bool operator<(const StarFace& o) const {
+      return key != o.key ? key < o.key : (t != o.t ? t < o.t : j < o.j);
+    }
+  };
+  std::vector<StarFace> face_keys_;
   std::vector<Tri> tris_a_, tris_b_;
   std::vector<Edge> edges_a_, edges_b_;
   std::vector<uint32_t> verts_a_, verts_b_, lk_verts_;
@@ -244,23 +253,23 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
     const int k = c & 3;
     for (int j = 0; j < 4; ++j) {
       if (j == k) continue;
-      uint32_t a = tets_[t][kTetFace[j][0]], b = tets_[t][kTetFace[j][1]], d = tets_[t][kTetFace[j][2]];
-      uint32_t s0 = a, s1 = b, s2 = d;
-      if (s0 > s1) std::swap(s0, s1);
-      if (s1 > s2) std::swap(s1, s2);
-      if (s0 > s1) std::swap(s0, s1);
-      face_keys_.push_back({s0, s1, s2, t, static_cast<uint32_t>(j)});
+      uint32_t other[2];
+      int n = 0;
+      for (int m = 0; m < 3; ++m) {
+        const uint32_t u = tets_[t][kTetFace[j][m]];
+        if (u != v && n < 2) other[n++] = u;
+      }
+      const uint32_t x = std::min(other[0], other[1]), y = std::max(other[0], other[1]);
+      face_keys_.push_back({(uint64_t{x} << 32) | y, t, static_cast<uint32_t>(j)});
     }
   }
   std::sort(face_keys_.begin(), face_keys_.end());
   for (size_t i = 0; i < face_keys_.size();) {
     size_t j = i + 1;
-    while (j < face_keys_.size() && face_keys_[j][0] == face_keys_[i][0] && face_keys_[j][1] == face_keys_[i][1] &&
-           face_keys_[j][2] == face_keys_[i][2])
-      ++j;
+    while (j < face_keys_.size() && face_keys_[j].key == face_keys_[i].key) ++j;
     if (j - i == 1) {
-      const uint32_t t = face_keys_[i][3];
-      const int f = static_cast<int>(face_keys_[i][4]);
+      const uint32_t t = face_keys_[i].t;
+      const int f = static_cast<int>(face_keys_[i].j);
       uint32_t tri[3] = {tets_[t][kTetFace[f][0]], tets_[t][kTetFace[f][1]], tets_[t][kTetFace[f][2]]};
       while (tri[0] != v) std::rotate(tri, tri + 1, tri + 3);
       BoundaryFace bf;
