@@ -23,7 +23,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <deque>
 #include <memory>
 #include <string>
 
@@ -489,13 +488,13 @@ class LevelCoder {
     f.tet = tet;
     f.cell = cell;
     if (cell != kNone32) ++cell_ref_[cell];
-    faces_.insert(f);
+    const uint32_t face = static_cast<uint32_t>(faces_.insert(f));
     for (int i = 0; i < 3; ++i) {
       ++open_[v[i]];
       edges_.put(edgeKey(v[i], v[(i + 1) % 3]), v[(i + 2) % 3]);
     }
     if (d != kNoSlot) ++pins_[d];
-    queue_.push_back({v[0], v[1], v[2]});
+    queue_.push_back({{f.key[0], f.key[1], f.key[2]}, face});
   }
   void closeFace(long index) {
     const FrontFace f = faces_.at(index);
@@ -905,11 +904,10 @@ class LevelCoder {
     while (true) {
       long idx = -1;
       while (!queue_.empty()) {
-        const std::array<uint32_t, 3> f = queue_.front();
+        const QueuedFace q = queue_.front();
         queue_.pop_front();
-        uint32_t key[3];
-        FaceMap::sortedKey(f.data(), key);
-        idx = faces_.find(key);
+        // The face opened with this entry, or else one opened later on the same vertices.
+        idx = faces_.holds(q.face, q.key) ? q.face : faces_.find(q.key);
         if (idx >= 0) break;
       }
       if constexpr (!kEncode) {
@@ -1019,8 +1017,12 @@ class LevelCoder {
   FaceMap faces_;
   EdgeMap edges_;  // directed edge of an open face -> its third vertex
   EdgeMap half_;   // open boundary half-edge -> third vertex of its triangle
-  std::deque<std::array<uint32_t, 3>> queue_;
-  std::deque<uint64_t> hqueue_;
+  struct QueuedFace {
+    uint32_t key[3];  // sorted
+    uint32_t face;    // its index when queued
+  };
+  RingQueue<QueuedFace> queue_;
+  RingQueue<uint64_t> hqueue_;
 
   BitTree<4> tsym_[kTetContexts];
   BitTree<4> bsym_[kBoundaryContexts];
