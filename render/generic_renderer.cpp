@@ -38,6 +38,7 @@ struct InMemoryMesh {
       for (int c = 0; c < 3; ++c) scratch.p[i][c] = mesh.coords[3 * v + c];
       scratch.s[i] = scalars[v];
     }
+    finishTetGeom(scratch);
     return scratch;
   }
   Link next(uint32_t t, int face, uint32_t* nt, int* nf) {

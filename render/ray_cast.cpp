@@ -1,6 +1,7 @@
 #include "render/ray_cast.h"
 
-#include <tbb/blocked_range2d.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -130,15 +131,23 @@ RenderSetup resolveSetup(const RenderOptions& options, const double bbox_min[3],
 PreparedRay prepareRay(const Ray& ray) {
   PreparedRay r;
   r.ray = ray;
+  ShearFrame& f = r.frame;
   const double ad[3] = {std::fabs(ray.d[0]), std::fabs(ray.d[1]), std::fabs(ray.d[2])};
-  r.kz = ad[0] > ad[1] ? (ad[0] > ad[2] ? 0 : 2) : (ad[1] > ad[2] ? 1 : 2);
-  r.kx = (r.kz + 1) % 3;
-  r.ky = (r.kx + 1) % 3;
-  if (ray.d[r.kz] < 0) std::swap(r.kx, r.ky);
-  r.sx = ray.d[r.kx] / ray.d[r.kz];
-  r.sy = ray.d[r.ky] / ray.d[r.kz];
-  r.sz = 1.0 / ray.d[r.kz];
+  f.kz = ad[0] > ad[1] ? (ad[0] > ad[2] ? 0 : 2) : (ad[1] > ad[2] ? 1 : 2);
+  f.kx = (f.kz + 1) % 3;
+  f.ky = (f.kx + 1) % 3;
+  if (ray.d[f.kz] < 0) std::swap(f.kx, f.ky);
+  f.sx = ray.d[f.kx] / ray.d[f.kz];
+  f.sy = ray.d[f.ky] / ray.d[f.kz];
+  f.sz = 1.0 / ray.d[f.kz];
+  shearPoint(f, ray.o, r.origin);
   return r;
+}
+
+void shearPoint(const ShearFrame& f, const double p[3], double out[3]) {
+  out[0] = p[f.kx] - f.sx * p[f.kz];
+  out[1] = p[f.ky] - f.sy * p[f.kz];
+  out[2] = f.sz * p[f.kz];
 }
 
 namespace {
@@ -148,12 +157,11 @@ bool lexLess(const double* a, const double* b) {
   return a[2] < b[2];
 }
 
-// Position of a vertex in the ray's sheared frame (ray along +z from the origin).
-void shear(const PreparedRay& r, const double* p, double out[3]) {
-  const double ax = p[r.kx] - r.ray.o[r.kx], ay = p[r.ky] - r.ray.o[r.ky], az = p[r.kz] - r.ray.o[r.kz];
-  out[0] = ax - r.sx * az;
-  out[1] = ay - r.sy * az;
-  out[2] = r.sz * az;
+// Position of a vertex relative to the ray, in the ray's sheared frame (ray along +z from the origin).
+inline void shear(const PreparedRay& r, const double* p, double out[3]) {
+  double q[3];
+  shearPoint(r.frame, p, q);
+  for (int i = 0; i < 3; ++i) out[i] = q[i] - r.origin[i];
 }
 }  // namespace
 
@@ -194,19 +202,37 @@ Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, c
   return crossSheared(S[0], S[1], S[2], s[o[0]], s[o[1]], s[o[2]]);
 }
 
+void finishTetGeom(TetGeom& g) {
+  for (int k = 0; k < 4; ++k) {
+    const int* f = kTetFace[k];
+    const double* p[3] = {g.p[f[0]], g.p[f[1]], g.p[f[2]]};
+    int o[3];
+    canonicalOrder(p, o);
+    for (int i = 0; i < 3; ++i) g.order[k][i] = static_cast<uint8_t>(f[o[i]]);
+  }
+  g.sheared = false;
+}
+
+void shearTetGeom(TetGeom& g, const ShearFrame& frame) {
+  for (int i = 0; i < 4; ++i) shearPoint(frame, g.p[i], g.q[i]);
+  g.sheared = true;
+}
+
 void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]) {
   double S[4][3];
-  for (int i = 0; i < 4; ++i) shear(r, g.p[i], S[i]);
+  if (g.sheared) {
+    for (int i = 0; i < 4; ++i)
+      for (int c = 0; c < 3; ++c) S[i][c] = g.q[i][c] - r.origin[c];
+  } else {
+    for (int i = 0; i < 4; ++i) shear(r, g.p[i], S[i]);
+  }
   for (int k = 0; k < 4; ++k) {
     if (k == skip) {
       out[k] = Crossing();
       continue;
     }
-    const int* f = kTetFace[k];
-    const double* p[3] = {g.p[f[0]], g.p[f[1]], g.p[f[2]]};
-    int o[3];
-    canonicalOrder(p, o);
-    out[k] = crossSheared(S[f[o[0]]], S[f[o[1]]], S[f[o[2]]], g.s[f[o[0]]], g.s[f[o[1]]], g.s[f[o[2]]]);
+    const uint8_t* o = g.order[k];
+    out[k] = crossSheared(S[o[0]], S[o[1]], S[o[2]], g.s[o[0]], g.s[o[1]], g.s[o[2]]);
   }
 }
 
@@ -295,127 +321,159 @@ void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_
 // ---------------------------------------------------------------------------------------------
 // Boundary crossings and segments
 
+bool pixelFootprint(const Camera& camera, const double* const* points, int n, int box[4]) {
+  const int w = camera.width(), h = camera.height();
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  bool ok = true;
+  for (int k = 0; k < n; ++k) {
+    double x, y;
+    if (!camera.project(points[k], &x, &y)) {
+      ok = false;
+      break;
+    }
+    x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+  }
+  if (!ok) {
+    box[0] = 0, box[1] = 0, box[2] = w - 1, box[3] = h - 1;
+    return true;
+  }
+  // Pixels whose centre (px + 0.5) lies in the projected box, with a margin for rounding (the
+  // projection and the crossing test are computed differently).
+  constexpr double kMargin = 1e-3;
+  x0 = std::clamp(x0, -2.0, w + 2.0), x1 = std::clamp(x1, -2.0, w + 2.0);
+  y0 = std::clamp(y0, -2.0, h + 2.0), y1 = std::clamp(y1, -2.0, h + 2.0);
+  box[0] = std::max(0, static_cast<int>(std::ceil(x0 - 0.5 - kMargin)));
+  box[1] = std::max(0, static_cast<int>(std::ceil(y0 - 0.5 - kMargin)));
+  box[2] = std::min(w - 1, static_cast<int>(std::floor(x1 - 0.5 + kMargin)));
+  box[3] = std::min(h - 1, static_cast<int>(std::floor(y1 - 0.5 + kMargin)));
+  return box[0] <= box[2] && box[1] <= box[3];
+}
+
 namespace {
 struct Hit {
-  double t, s;
+  uint32_t pixel;
   uint32_t tri;
+  double t, s;
   bool leaving;
 };
-constexpr int kTile = 16;
 }  // namespace
 
 RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
   const int w = camera.width(), h = camera.height();
-  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
-  // Bin the triangles by the tiles their projections overlap (one pixel of margin).
-  std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(tiles_x) * tiles_y);
-  for (uint32_t i = 0; i < surface.triangles.size(); ++i) {
-    double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-    bool ok = true;
-    for (int k = 0; k < 3; ++k) {
-      double x, y;
-      if (!camera.project(surface.points[surface.triangles[i][k]].data(), &x, &y)) ok = false;
-      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
-    }
-    if (!ok) continue;
-    x0 = std::clamp(x0, -2.0, w + 2.0), x1 = std::clamp(x1, -2.0, w + 2.0);
-    y0 = std::clamp(y0, -2.0, h + 2.0), y1 = std::clamp(y1, -2.0, h + 2.0);
-    const int px0 = std::max(0, static_cast<int>(std::floor(x0)) - 1);
-    const int py0 = std::max(0, static_cast<int>(std::floor(y0)) - 1);
-    const int px1 = std::min(w - 1, static_cast<int>(std::floor(x1)) + 1);
-    const int py1 = std::min(h - 1, static_cast<int>(std::floor(y1)) + 1);
-    if (px0 > px1 || py0 > py1) continue;
-    for (int ty = py0 / kTile; ty <= py1 / kTile; ++ty)
-      for (int tx = px0 / kTile; tx <= px1 / kTile; ++tx) bins[static_cast<size_t>(ty) * tiles_x + tx].push_back(i);
-  }
-
-  const double eps = 1e-9 * camera.radius();
-  std::vector<std::vector<RaySegment>> per_pixel(static_cast<size_t>(w) * h);
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& range) {
-    std::vector<Hit> hits;
-    for (int ty = range.rows().begin(); ty < range.rows().end(); ++ty) {
-      for (int tx = range.cols().begin(); tx < range.cols().end(); ++tx) {
-        const std::vector<uint32_t>& bin = bins[static_cast<size_t>(ty) * tiles_x + tx];
-        if (bin.empty()) continue;
-        for (int py = ty * kTile; py < std::min(h, (ty + 1) * kTile); ++py) {
-          for (int px = tx * kTile; px < std::min(w, (tx + 1) * kTile); ++px) {
-            const PreparedRay ray = prepareRay(camera.ray(px, py));
-            hits.clear();
-            for (uint32_t i : bin) {
-              const auto& tri = surface.triangles[i];
-              const double* a = surface.points[tri[0]].data();
-              const double* b = surface.points[tri[1]].data();
-              const double* c = surface.points[tri[2]].data();
-              const Crossing x = crossTriangle(ray, a, b, c, surface.scalars[tri[0]], surface.scalars[tri[1]],
-                                               surface.scalars[tri[2]]);
-              if (!x.hit) continue;
-              // Facing from the outward normal of the triangle as given.
-              const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-              const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-              const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                   e1[0] * e2[1] - e1[1] * e2[0]};
-              const double dn = n[0] * ray.ray.d[0] + n[1] * ray.ray.d[1] + n[2] * ray.ray.d[2];
-              if (dn == 0) continue;
-              hits.push_back({x.t, x.s, i, dn > 0});
-            }
-            if (hits.empty()) continue;
-            std::sort(hits.begin(), hits.end(), [](const Hit& p, const Hit& q) {
-              if (p.t != q.t) return p.t < q.t;
-              if (p.leaving != q.leaving) return p.leaving;
-              return p.tri < q.tri;
-            });
-            std::vector<RaySegment>& out = per_pixel[static_cast<size_t>(py) * w + px];
-            const uint32_t pixel = static_cast<uint32_t>(py) * w + px;
-            int depth = 0;
-            size_t i = 0;
-            while (i < hits.size()) {
-              // A group of crossings at the same depth: at most one step in and one step out.
-              size_t j = i;
-              const Hit* enter = nullptr;
-              const Hit* leave = nullptr;
-              while (j < hits.size() && hits[j].t - hits[i].t <= eps) {
-                if (hits[j].leaving) {
-                  if (!leave) leave = &hits[j];
-                } else if (!enter) {
-                  enter = &hits[j];
-                }
-                ++j;
-              }
-              const int delta = (enter ? 1 : 0) - (leave ? 1 : 0);
-              if (delta > 0) {
-                if (depth == 0) {
-                  RaySegment seg;
-                  seg.pixel = pixel;
-                  seg.entry_tri = enter->tri;
-                  seg.t_near = enter->t;
-                  seg.s_near = enter->s;
-                  out.push_back(seg);
-                }
-                ++depth;
-              } else if (delta < 0 && depth > 0) {
-                if (--depth == 0) {
-                  out.back().exit_tri = leave->tri;
-                  out.back().t_far = leave->t;
-                  out.back().s_far = leave->s;
-                }
-              }
-              i = j;
-            }
-          }
+  const size_t num_pixels = static_cast<size_t>(w) * h;
+  // 1. Each triangle against the pixels of its screen footprint (parallel over triangles): a
+  //    triangle covers a few pixels, so this tests far fewer pairs than pixels against bins.
+  tbb::enumerable_thread_specific<std::vector<Hit>> local_hits;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.triangles.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<Hit>& hits = local_hits.local();
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const auto& tri = surface.triangles[i];
+      const double* a = surface.points[tri[0]].data();
+      const double* b = surface.points[tri[1]].data();
+      const double* c = surface.points[tri[2]].data();
+      const double* corners[3] = {a, b, c};
+      int box[4];
+      if (!pixelFootprint(camera, corners, 3, box)) continue;
+      const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+      const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      for (int py = box[1]; py <= box[3]; ++py) {
+        for (int px = box[0]; px <= box[2]; ++px) {
+          const PreparedRay ray = prepareRay(camera.ray(px, py));
+          const Crossing x = crossTriangle(ray, a, b, c, surface.scalars[tri[0]], surface.scalars[tri[1]],
+                                           surface.scalars[tri[2]]);
+          if (!x.hit) continue;
+          // Facing from the outward normal of the triangle as given.
+          const double dn = n[0] * ray.ray.d[0] + n[1] * ray.ray.d[1] + n[2] * ray.ray.d[2];
+          if (dn == 0) continue;
+          hits.push_back({static_cast<uint32_t>(py) * static_cast<uint32_t>(w) + static_cast<uint32_t>(px),
+                          static_cast<uint32_t>(i), x.t, x.s, dn > 0});
         }
       }
     }
   });
-  RaySegments result;
-  result.pixel_start.resize(static_cast<size_t>(w) * h + 1);
-  size_t total = 0;
-  for (size_t p = 0; p < per_pixel.size(); ++p) {
-    result.pixel_start[p] = static_cast<uint32_t>(total);
-    total += per_pixel[p].size();
+  // 2. Group the hits by pixel (counting sort).
+  std::vector<uint32_t> hit_start(num_pixels + 1, 0);
+  size_t total_hits = 0;
+  for (const std::vector<Hit>& list : local_hits) {
+    total_hits += list.size();
+    for (const Hit& x : list) ++hit_start[x.pixel + 1];
   }
-  result.pixel_start.back() = static_cast<uint32_t>(total);
-  result.segments.reserve(total);
-  for (auto& v : per_pixel) result.segments.insert(result.segments.end(), v.begin(), v.end());
+  for (size_t p = 0; p < num_pixels; ++p) hit_start[p + 1] += hit_start[p];
+  std::vector<Hit> hits(total_hits);
+  {
+    std::vector<uint32_t> fill(hit_start.begin(), hit_start.end() - 1);
+    for (const std::vector<Hit>& list : local_hits)
+      for (const Hit& x : list) hits[fill[x.pixel]++] = x;
+  }
+  local_hits.clear();
+
+  // 3. Pair each pixel's crossings into segments (parallel over pixels; deterministic order).
+  const double eps = 1e-9 * camera.radius();
+  std::vector<uint32_t> seg_count(num_pixels + 1, 0);
+  std::vector<RaySegment> scratch_segments;  // per pixel, written at the pixel's first hit slot
+  scratch_segments.resize(total_hits);       // a pixel has at most as many segments as crossings
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 512), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t p = r.begin(); p < r.end(); ++p) {
+      const uint32_t h0 = hit_start[p], h1 = hit_start[p + 1];
+      if (h0 == h1) continue;
+      Hit* first = hits.data() + h0;
+      Hit* last = hits.data() + h1;
+      std::sort(first, last, [](const Hit& x, const Hit& y) {
+        if (x.t != y.t) return x.t < y.t;
+        if (x.leaving != y.leaving) return x.leaving;
+        return x.tri < y.tri;
+      });
+      RaySegment* out = scratch_segments.data() + h0;
+      uint32_t made = 0;
+      int depth = 0;
+      for (const Hit* i = first; i < last;) {
+        // A group of crossings at the same depth: at most one step in and one step out.
+        const Hit* j = i;
+        const Hit* enter = nullptr;
+        const Hit* leave = nullptr;
+        while (j < last && j->t - i->t <= eps) {
+          if (j->leaving) {
+            if (!leave) leave = j;
+          } else if (!enter) {
+            enter = j;
+          }
+          ++j;
+        }
+        const int delta = (enter ? 1 : 0) - (leave ? 1 : 0);
+        if (delta > 0) {
+          if (depth == 0) {
+            RaySegment& seg = out[made++];
+            seg = RaySegment();
+            seg.pixel = static_cast<uint32_t>(p);
+            seg.entry_tri = enter->tri;
+            seg.t_near = enter->t;
+            seg.s_near = enter->s;
+          }
+          ++depth;
+        } else if (delta < 0 && depth > 0) {
+          if (--depth == 0) {
+            RaySegment& seg = out[made - 1];
+            seg.exit_tri = leave->tri;
+            seg.t_far = leave->t;
+            seg.s_far = leave->s;
+          }
+        }
+        i = j;
+      }
+      seg_count[p + 1] = made;
+    }
+  });
+  RaySegments result;
+  result.pixel_start.resize(num_pixels + 1);
+  result.pixel_start[0] = 0;
+  for (size_t p = 0; p < num_pixels; ++p) result.pixel_start[p + 1] = result.pixel_start[p] + seg_count[p + 1];
+  result.segments.resize(result.pixel_start.back());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t p = r.begin(); p < r.end(); ++p)
+      std::copy_n(scratch_segments.data() + hit_start[p], seg_count[p + 1],
+                  result.segments.data() + result.pixel_start[p]);
+  });
   return result;
 }
 

@@ -81,11 +81,26 @@ struct RenderSetup {
 };
 RenderSetup resolveSetup(const RenderOptions& options, const double bbox_min[3], const double bbox_max[3]);
 
-// A ray prepared for the watertight test.
-struct PreparedRay {
-  Ray ray;
+// The direction-dependent part of the watertight test's shear: the axis permutation and shear
+// factors. Orthographic rays all share one, so a vertex's sheared position (shearPoint) can be
+// computed once and reused for every ray.
+struct ShearFrame {
   int kx = 0, ky = 1, kz = 2;
   double sx = 0, sy = 0, sz = 1;
+  bool operator==(const ShearFrame& o) const {
+    return kx == o.kx && ky == o.ky && kz == o.kz && sx == o.sx && sy == o.sy && sz == o.sz;
+  }
+};
+// (p[kx] - sx p[kz], p[ky] - sy p[kz], sz p[kz]): a point in the sheared frame, before the ray's
+// origin is subtracted. A point's position relative to a ray is shearPoint(p) - ray.origin, the same
+// computation whoever asks, which is what keeps crossings consistent between tetrahedra.
+void shearPoint(const ShearFrame& f, const double p[3], double out[3]);
+
+// A ray prepared for the watertight test: its frame and its origin, sheared.
+struct PreparedRay {
+  Ray ray;
+  ShearFrame frame;
+  double origin[3] = {0, 0, 0};
 };
 PreparedRay prepareRay(const Ray& ray);
 
@@ -99,14 +114,23 @@ struct Crossing {
 Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, const double* c, double sa, double sb,
                        double sc);
 
-// One tetrahedron's geometry and scalars, copied out of whatever holds the mesh.
+// One tetrahedron's geometry and scalars, copied out of whatever holds the mesh. finishTetGeom()
+// must be called once the corners are set (it fixes each face's canonical vertex order, so that it
+// is not recomputed per ray); shearTetGeom() optionally caches the corners' sheared positions for the
+// one frame all rays share (orthographic cameras), and then `frame` must be the rays' frame.
 struct TetGeom {
   double p[4][3];
   double s[4];
+  uint8_t order[4][3];  // face k: local corners of kTetFace[k] in canonical (lexicographic) order
+  bool sheared = false;
+  double q[4][3];       // shearPoint of each corner, valid when `sheared`
 };
+void finishTetGeom(TetGeom& g);
+void shearTetGeom(TetGeom& g, const ShearFrame& frame);
 
 // The crossings of the ray with the four faces of `g` (face `skip` left out: not hit), each exactly as
-// crossTriangle computes it, sharing the vertices' transformation.
+// crossTriangle computes it, sharing the vertices' transformation. When `g.sheared`, the ray's frame
+// must be the one shearTetGeom used.
 void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]);
 
 // Where a ray inside tetrahedron `g`, having come in through local face `entry` (kTetFace numbering),
@@ -150,12 +174,18 @@ struct RaySegment {
 // `pixel_start` has width*height+1 offsets into `segments`. Crossings are paired by inside/outside
 // depth counting over groups of crossings at equal depth (within a tolerance relative to the scene's
 // size), so that duplicated crossings on shared edges, silhouette grazes and coincident boundary
-// sheets of unwelded seams neither split nor drop parts of the volume. Parallel (TBB) over tiles.
+// sheets of unwelded seams neither split nor drop parts of the volume. Parallel (TBB) over triangles,
+// then over pixels.
 struct RaySegments {
   std::vector<RaySegment> segments;
   std::vector<uint32_t> pixel_start;
 };
 RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface);
+
+// The pixels whose centres may lie in the projection of the n points: box = {x0, y0, x1, y1}
+// (inclusive), from their screen bounding box with a small margin for rounding; the whole image when
+// a point is behind a perspective eye. False when no pixel qualifies.
+bool pixelFootprint(const Camera& camera, const double* const* points, int n, int box[4]);
 
 // The scalar range over the boundary vertices (what the automatic transfer-function range uses when
 // the stream carries no field ranges: the boundary arrives first). A unit range centred on the value

@@ -91,6 +91,11 @@ struct StreamRenderer::State {
   std::vector<std::array<uint32_t, 3>> boundary;
   RaySegments rays;
   std::vector<PreparedRay> pixel_rays;  // per pixel with segments (indexed by pixel), else unset
+  bool shared_frame = false;            // orthographic: every ray has `frame`
+  ShearFrame frame;
+  double ortho_dir[3] = {0, 0, 0};  // orthographic: the rays' direction, and the depth of their
+  double ortho_t0 = 0;              // origins' plane: ray parameter t of p = dir . p - t0
+  double depth_slack = 0;
   std::vector<SegmentState> segs;
   std::unordered_map<FaceKey, FaceEntry, FaceKeyHash> faces;
   std::deque<HeldTet> tets;
@@ -220,6 +225,14 @@ Status StreamRenderer::endBoundary() {
     if (st.rays.pixel_start[p] != st.rays.pixel_start[p + 1])
       st.pixel_rays[p] = prepareRay(setup_.camera.ray(static_cast<int>(p % setup_.camera.width()),
                                                       static_cast<int>(p / setup_.camera.width())));
+  st.shared_frame = setup_.camera.options().projection == Projection::kOrthographic;
+  {
+    const Ray r0 = setup_.camera.ray(0, 0);
+    st.frame = prepareRay(r0).frame;
+    for (int i = 0; i < 3; ++i) st.ortho_dir[i] = r0.d[i];
+    st.ortho_t0 = r0.o[0] * r0.d[0] + r0.o[1] * r0.d[1] + r0.o[2] * r0.d[2];
+    st.depth_slack = 1e-9 * setup_.camera.radius();
+  }
   st.segs.resize(st.rays.segments.size());
   for (size_t i = 0; i < st.segs.size(); ++i) {
     const RaySegment& rs = st.rays.segments[i];
@@ -273,50 +286,90 @@ Status StreamRenderer::flushBatch() {
   State& st = *state_;
   if (st.batch.empty()) return Status::ok();
   const Camera& cam = setup_.camera;
-  const int w = cam.width(), h = cam.height();
+  const int w = cam.width();
 
   // 1. How many rays still need each arrived tetrahedron (parallel; segments are read only).
   tbb::parallel_for(tbb::blocked_range<size_t>(0, st.batch.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ArrivedTet& a = st.batch[i];
-      double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-      bool ok = true;
-      for (int k = 0; k < 4; ++k) {
-        double x, y;
-        if (!cam.project(a.g.p[k], &x, &y)) ok = false;
-        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
-      }
-      int px0 = 0, py0 = 0, px1 = w - 1, py1 = h - 1;
-      if (ok) {
-        // Pixels whose centre (px + 0.5) lies in the projected box, with a small margin for rounding.
-        constexpr double kMargin = 1e-3;
-        x0 = std::clamp(x0, -2.0, w + 2.0), x1 = std::clamp(x1, -2.0, w + 2.0);
-        y0 = std::clamp(y0, -2.0, h + 2.0), y1 = std::clamp(y1, -2.0, h + 2.0);
-        px0 = std::max(0, static_cast<int>(std::ceil(x0 - 0.5 - kMargin)));
-        py0 = std::max(0, static_cast<int>(std::ceil(y0 - 0.5 - kMargin)));
-        px1 = std::min(w - 1, static_cast<int>(std::floor(x1 - 0.5 + kMargin)));
-        py1 = std::min(h - 1, static_cast<int>(std::floor(y1 - 0.5 + kMargin)));
-      }
+      finishTetGeom(a.g);
+      if (st.shared_frame) shearTetGeom(a.g, st.frame);
+      const double* corners[4] = {a.g.p[0], a.g.p[1], a.g.p[2], a.g.p[3]};
+      int box[4];
+      a.rays = 0;
+      if (!pixelFootprint(cam, corners, 4, box)) continue;
+      // The rays of pixel p whose uncovered part overlaps the tetrahedron, by the exact crossings.
+      auto exactCount = [&](size_t p, uint32_t s0, uint32_t s1) {
+        const PreparedRay& ray = st.pixel_rays[p];
+        double tmin = 1e300, tmax = -1e300;
+        Crossing x[4];
+        crossTetFaces(ray, a.g, -1, x);
+        for (int k = 0; k < 4; ++k) {
+          if (!x[k].hit) continue;
+          tmin = std::min(tmin, x[k].t);
+          tmax = std::max(tmax, x[k].t);
+        }
+        int32_t n = 0;
+        if (tmin > tmax) return n;
+        for (uint32_t s = s0; s < s1; ++s) {
+          const SegmentState& seg = st.segs[s];
+          if (!seg.done && seg.tf <= tmax && tmin <= seg.tb) ++n;
+        }
+        return n;
+      };
       int32_t count = 0;
-      for (int py = py0; py <= py1; ++py) {
-        for (int px = px0; px <= px1; ++px) {
+      if (!st.shared_frame) {
+        for (int py = box[1]; py <= box[3]; ++py) {
+          for (int px = box[0]; px <= box[2]; ++px) {
+            const size_t p = static_cast<size_t>(py) * w + px;
+            const uint32_t s0 = st.rays.pixel_start[p], s1 = st.rays.pixel_start[p + 1];
+            if (s0 != s1) count += exactCount(p, s0, s1);
+          }
+        }
+        a.rays = count;
+        continue;
+      }
+      // Orthographic: rasterize the projected tetrahedron row by row. Pixels whose centre lies in
+      // its projection by a clear margin are hit (the crossing test is watertight), pixels clearly
+      // outside are not; only those near its outline need the exact crossings. A hit pixel with one
+      // segment needs the tetrahedron unless the segment is done: its cursors cannot have passed a
+      // tetrahedron that has not arrived (the depth test below only guards against invalid meshes).
+      double sx[4], sy[4], dmin = 1e300, dmax = -1e300;
+      for (int k = 0; k < 4; ++k) {
+        cam.project(a.g.p[k], &sx[k], &sy[k]);
+        const double d = (a.g.p[k][0] * st.ortho_dir[0] + a.g.p[k][1] * st.ortho_dir[1] +
+                          a.g.p[k][2] * st.ortho_dir[2]) - st.ortho_t0;
+        dmin = std::min(dmin, d), dmax = std::max(dmax, d);
+      }
+      dmin -= st.depth_slack, dmax += st.depth_slack;
+      const double ymin = std::min({sy[0], sy[1], sy[2], sy[3]}), ymax = std::max({sy[0], sy[1], sy[2], sy[3]});
+      constexpr double kSure = 1e-3;  // pixels; rounding differences are about 1e-10
+      for (int py = box[1]; py <= box[3]; ++py) {
+        const double yc = py + 0.5;
+        // The projection's span on this row: the extremes over the six corner pairs' segments.
+        double xl = 1e300, xr = -1e300;
+        for (int i = 0; i < 4; ++i) {
+          for (int j = i + 1; j < 4; ++j) {
+            const double lo = std::min(sy[i], sy[j]), hi = std::max(sy[i], sy[j]);
+            if (yc < lo || yc > hi) continue;
+            const double x = hi > lo ? sx[i] + (yc - sy[i]) * (sx[j] - sx[i]) / (sy[j] - sy[i]) : sx[i];
+            xl = std::min({xl, x, hi > lo ? x : sx[j]});
+            xr = std::max({xr, x, hi > lo ? x : sx[j]});
+          }
+        }
+        const bool row_inside = yc > ymin + kSure && yc < ymax - kSure;
+        for (int px = box[0]; px <= box[2]; ++px) {
+          const double xc = px + 0.5;
           const size_t p = static_cast<size_t>(py) * w + px;
           const uint32_t s0 = st.rays.pixel_start[p], s1 = st.rays.pixel_start[p + 1];
           if (s0 == s1) continue;
-          const PreparedRay& ray = st.pixel_rays[p];
-          double tmin = 1e300, tmax = -1e300;
-          Crossing x[4];
-          crossTetFaces(ray, a.g, -1, x);
-          for (int k = 0; k < 4; ++k) {
-            if (!x[k].hit) continue;
-            tmin = std::min(tmin, x[k].t);
-            tmax = std::max(tmax, x[k].t);
+          if (row_inside && xr >= xl && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
+          if (row_inside && xc > xl + kSure && xc < xr - kSure && s1 == s0 + 1) {        // clearly inside
+            const SegmentState& seg = st.segs[s0];
+            if (!seg.done && seg.tf <= dmax && dmin <= seg.tb) ++count;
+            continue;
           }
-          if (tmin > tmax) continue;
-          for (uint32_t s = s0; s < s1; ++s) {
-            const SegmentState& seg = st.segs[s];
-            if (!seg.done && seg.tf <= tmax && tmin <= seg.tb) ++count;
-          }
+          count += exactCount(p, s0, s1);
         }
       }
       a.rays = count;
