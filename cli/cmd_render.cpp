@@ -168,6 +168,7 @@ int runRender(const RenderArgs& a) {
   }
   auto level = (*input)->resolve(choice);
   if (!level.isOk()) return reportError(level.status());
+  if (Status st = (*input)->fixView(level.value(), &options); !st.isOk()) return reportError(st);
   auto image = renderOnce(**input, level.value(), options, generic, report);
   if (!image.isOk()) return reportError(image.status());
   if (Status st = writePng(a.output, image.value()); !st.isOk()) return reportError(st);

@@ -100,7 +100,7 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
   surface.triangles = boundary;
 
   double bmin[3], bmax[3];
-  sceneBox(header, surface, bmin, bmax);
+  sceneBox(options, header, surface, bmin, bmax);
   RenderSetup setup = resolveSetup(options, bmin, bmax);
   setup.field = reader.description();
   if (!setup.transfer.has_range) {

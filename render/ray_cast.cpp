@@ -492,7 +492,12 @@ std::pair<double, double> boundaryRange(const BoundarySurface& surface) {
   return {lo, hi};
 }
 
-void sceneBox(const LevelHeader& header, const BoundarySurface& surface, double bbox_min[3], double bbox_max[3]) {
+void sceneBox(const RenderOptions& options, const LevelHeader& header, const BoundarySurface& surface,
+              double bbox_min[3], double bbox_max[3]) {
+  if (options.has_scene_box) {
+    for (int i = 0; i < 3; ++i) bbox_min[i] = options.scene_min[i], bbox_max[i] = options.scene_max[i];
+    return;
+  }
   bool usable = true;
   for (int i = 0; i < 3; ++i) {
     bbox_min[i] = header.bbox_min[i];

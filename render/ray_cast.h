@@ -68,6 +68,10 @@ struct RenderOptions {
   double opacity_unit_distance = 0;
   FieldSelector field;
   TransferFunction transfer;  // points required; its range used when has_range, else automatic
+  // The box the camera frames, when set; else the level header's. RenderInput::fixView() sets level
+  // 0's, so that every level and ratio of a file is seen from the same camera.
+  bool has_scene_box = false;
+  double scene_min[3] = {0, 0, 0}, scene_max[3] = {0, 0, 0};
 };
 
 // The options resolved against a level: camera framed on the bounding box, range fixed.
@@ -192,9 +196,10 @@ bool pixelFootprint(const Camera& camera, const double* const* points, int n, in
 // when constant, {0, 1} when empty.
 std::pair<double, double> boundaryRange(const BoundarySurface& surface);
 
-// The box the camera frames: the level header's bounding box, or the boundary vertices' box when the
-// header's is empty or not finite.
-void sceneBox(const LevelHeader& header, const BoundarySurface& surface, double bbox_min[3], double bbox_max[3]);
+// The box the camera frames: the options' scene box when set, else the level header's bounding box,
+// or the boundary vertices' box when the header's is empty or not finite.
+void sceneBox(const RenderOptions& options, const LevelHeader& header, const BoundarySurface& surface,
+              double bbox_min[3], double bbox_max[3]);
 
 // Converts per-pixel colours (premultiplied, over black) to 8-bit RGB.
 Image toImage(int width, int height, const std::vector<Rgba>& pixels);

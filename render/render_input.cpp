@@ -1,6 +1,8 @@
 #include "render/render_input.h"
 
+#include <array>
 #include <cmath>
+#include <unordered_map>
 
 #include "convert/import.h"
 #include "simplify/levels.h"
@@ -80,6 +82,88 @@ Status RenderInput::stream(const ResolvedLevel& level, MeshSink& sink) {
                        decodeMergeTree(*payload, level.points, path_ + ": level " + std::to_string(level.level)));
   StreamSimplifier simplifier(tree, level.extra_merges, sink);
   return reader_->decodeLevel(level.level, simplifier);
+}
+
+}  // namespace gtn
+
+namespace gtn {
+
+namespace {
+// Reads a level's boundary and stops the decode at its end: the scalar range over the boundary
+// vertices, as the renderers compute it (boundaryRange).
+class BoundaryRangeSink : public MeshSink {
+ public:
+  explicit BoundaryRangeSink(const FieldSelector& field) : field_(field) {}
+  Status beginLevel(const LevelHeader& header) override {
+    GTN_ASSIGN_OR_RETURN(reader_, ScalarReader::create(header.point_fields, field_));
+    return Status::ok();
+  }
+  Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) override {
+    scalars_.emplace(id, reader_.read(values));
+    (void)xyz;
+    return Status::ok();
+  }
+  Status boundaryTriangle(const uint32_t v[3]) override {
+    std::array<uint32_t, 3> t;
+    for (int i = 0; i < 3; ++i) {
+      auto [it, inserted] = local_.emplace(v[i], static_cast<uint32_t>(surface_.scalars.size()));
+      if (inserted) {
+        auto s = scalars_.find(v[i]);
+        if (s == scalars_.end()) return invalidData("boundary triangle refers to a vertex not yet emitted");
+        surface_.scalars.push_back(s->second);
+      }
+      t[i] = it->second;
+    }
+    surface_.triangles.push_back(t);
+    return Status::ok();
+  }
+  Status endBoundary() override {
+    stopped_ = true;
+    return Status(StatusCode::kUnsupported, "boundary read");  // stops the decode; not an error
+  }
+  Status tet(const uint32_t*, const uint8_t*) override { return Status::ok(); }
+  Status retireVertex(uint32_t) override { return Status::ok(); }
+  Status endLevel() override { return Status::ok(); }
+
+  bool stopped() const { return stopped_; }
+  std::pair<double, double> range() const { return boundaryRange(surface_); }
+
+ private:
+  FieldSelector field_;
+  ScalarReader reader_;
+  std::unordered_map<uint32_t, double> scalars_;
+  std::unordered_map<uint32_t, uint32_t> local_;
+  BoundarySurface surface_;
+  bool stopped_ = false;
+};
+}  // namespace
+
+Status RenderInput::fixView(const ResolvedLevel& level, RenderOptions* options) {
+  const LevelHeader& h0 = levelHeader(0);
+  bool box_ok = false;
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(h0.bbox_min[i]) || !std::isfinite(h0.bbox_max[i]) || h0.bbox_min[i] > h0.bbox_max[i]) {
+      box_ok = false;
+      break;
+    }
+    if (h0.bbox_min[i] < h0.bbox_max[i]) box_ok = true;
+  }
+  if (box_ok && !options->has_scene_box) {
+    options->has_scene_box = true;
+    for (int i = 0; i < 3; ++i) options->scene_min[i] = h0.bbox_min[i], options->scene_max[i] = h0.bbox_max[i];
+  }
+  if (options->transfer.has_range || !reader_ || (level.level == 0 && level.extra_merges == 0)) return Status::ok();
+  BoundaryRangeSink sink(options->field);
+  const Status st = reader_->decodeLevel(0, sink);
+  if (!sink.stopped()) {
+    GTN_RETURN_IF_ERROR(st);
+    return Status::ok();  // a level without boundary: the renderer's own default applies
+  }
+  const auto [lo, hi] = sink.range();
+  options->transfer.has_range = true;
+  options->transfer.lo = lo;
+  options->transfer.hi = hi;
+  return Status::ok();
 }
 
 }  // namespace gtn

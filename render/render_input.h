@@ -13,6 +13,7 @@
 #include "codec/level_codec.h"
 #include "format/gtn_reader.h"
 #include "mesh/mesh_stream.h"
+#include "render/ray_cast.h"
 
 namespace gtn {
 
@@ -47,6 +48,13 @@ class RenderInput {
   StatusOr<ResolvedLevel> resolve(const LevelChoice& choice) const;
   // Decodes the chosen level into `sink`, through the on-the-fly simplifier when extra merges apply.
   Status stream(const ResolvedLevel& level, MeshSink& sink);
+
+  // Fixes what must not change between levels of one file: the camera frames level 0's bounding box,
+  // and, unless the caller gave a range, the transfer function spans the selected scalar over level
+  // 0's boundary vertices (read by decoding level 0 up to the end of its boundary; for level 0 itself
+  // the renderer computes the same range). Simplification moves and merges boundary vertices, so
+  // without this a simplified view would shift its colours and its framing against the full one.
+  Status fixView(const ResolvedLevel& level, RenderOptions* options);
 
  private:
   RenderInput() = default;

@@ -211,7 +211,7 @@ Status StreamRenderer::endBoundary() {
     surface.triangles.push_back(t);
   }
   double bmin[3], bmax[3];
-  sceneBox(st.header, surface, bmin, bmax);
+  sceneBox(options_, st.header, surface, bmin, bmax);
   setup_ = resolveSetup(options_, bmin, bmax);
   setup_.field = st.reader.description();
   if (!setup_.transfer.has_range) {
