@@ -108,6 +108,7 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
     setup.transfer.lo = lo;
     setup.transfer.hi = hi;
   }
+  buildSampleTable(setup);
   const RaySegments rays = castBoundary(setup.camera, surface);
 
   const FaceAdjacency adj = computeFaceAdjacency(mesh);

@@ -125,6 +125,21 @@ RenderSetup resolveSetup(const RenderOptions& options, const double bbox_min[3],
   return s;
 }
 
+void buildSampleTable(RenderSetup& s) {
+  s.sample_table.clear();
+  if (s.sampling != Sampling::kVolume) return;
+  const int n = RenderSetup::kSampleTableSize;
+  s.sample_table.resize(n);
+  const double lo = s.transfer.lo, hi = s.transfer.hi;
+  for (int i = 0; i < n; ++i) {
+    const double scalar = hi > lo ? lo + (hi - lo) * i / (n - 1) : lo;
+    double rgb[3], e;
+    s.transfer.evaluate(scalar, rgb, &e);
+    s.sample_table[i] = {rgb[0], rgb[1], rgb[2], -std::expm1(-e * s.inv_unit_distance * s.step)};
+  }
+  s.table_scale = hi > lo ? (n - 1) / (hi - lo) : 0.0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Watertight crossings
 
@@ -307,13 +322,29 @@ void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_
   if (k1 <= k0) return;
   const double span = t_out - t_in;
   const double slope = span > 0 ? (s_out - s_in) / span : 0.0;
+  const bool table = !setup.sample_table.empty();
+  const double lo_s = setup.transfer.lo, scale = setup.table_scale;
+  constexpr double kLast = RenderSetup::kSampleTableSize - 1;
   for (int64_t i = 0; i < k1 - k0; ++i) {
     const int64_t k = front_to_back ? k0 + i : k1 - 1 - i;
     const double t = static_cast<double>(k) * step;
     const double s = s_in + slope * (t - t_in);
-    double rgb[3], e;
-    setup.transfer.evaluate(s, rgb, &e);
-    const double alpha = -std::expm1(-e * setup.inv_unit_distance * step);
+    double rgb[3], alpha;
+    if (table) {
+      double x = (s - lo_s) * scale;
+      if (!(x >= 0)) x = 0;  // also catches NaN
+      if (x > kLast) x = kLast;
+      const int j = std::min(static_cast<int>(x), RenderSetup::kSampleTableSize - 2);
+      const double f = x - j;
+      const auto& a = setup.sample_table[j];
+      const auto& b = setup.sample_table[j + 1];
+      for (int c = 0; c < 3; ++c) rgb[c] = a[c] + f * (b[c] - a[c]);
+      alpha = a[3] + f * (b[3] - a[3]);
+    } else {
+      double e;
+      setup.transfer.evaluate(s, rgb, &e);
+      alpha = -std::expm1(-e * setup.inv_unit_distance * step);
+    }
     addSample(alpha, rgb, front_to_back, acc);
   }
 }

@@ -82,8 +82,18 @@ struct RenderSetup {
   double inv_unit_distance = 1;
   TransferFunction transfer;
   std::string field;  // the rendered scalar, as ScalarReader::description() names it
+
+  // Volume sampling's per-sample colour and opacity tabulated over the range (buildSampleTable(),
+  // once the range is final): the transfer function and exp() cost far more than a table lookup,
+  // and the step is fixed. Linear interpolation between kSampleTableSize entries differs from the
+  // exact evaluation by far less than one grey level.
+  static constexpr int kSampleTableSize = 4096;
+  std::vector<std::array<double, 4>> sample_table;  // rgb, alpha per step
+  double table_scale = 0;                          // (kSampleTableSize - 1) / (hi - lo)
 };
 RenderSetup resolveSetup(const RenderOptions& options, const double bbox_min[3], const double bbox_max[3]);
+// Fills setup.sample_table for the transfer function's final range (volume sampling only).
+void buildSampleTable(RenderSetup& setup);
 
 // The direction-dependent part of the watertight test's shear: the axis permutation and shear
 // factors. Orthographic rays all share one, so a vertex's sheared position (shearPoint) can be

@@ -219,6 +219,7 @@ Status StreamRenderer::endBoundary() {
     setup_.transfer.lo = lo;
     setup_.transfer.hi = hi;
   }
+  buildSampleTable(setup_);
   st.rays = castBoundary(setup_.camera, surface);
   st.pixel_rays.resize(st.rays.pixel_start.size() - 1);
   for (size_t p = 0; p + 1 < st.rays.pixel_start.size(); ++p)
