@@ -159,7 +159,7 @@ int runRender(const RenderArgs& a) {
   choice.merges = a.merges;
   if (a.budget_ms >= 0) {
     std::string explanation;
-    auto budget = chooseForBudget(**input, a.inputs[0], a.budget_ms, options, generic, &explanation);
+    auto budget = chooseForBudget(**input, a.inputs[0], a.budget_ms, options, generic, msSince(start), &explanation);
     if (!budget.isOk()) return reportError(budget.status());
     choice = budget.value();
     report["budget_ms"] = a.budget_ms;

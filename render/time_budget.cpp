@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -59,70 +60,107 @@ StatusOr<double> timeLevel(RenderInput& input, size_t level, const RenderOptions
 }  // namespace
 
 StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& path, double budget_ms,
-                                      const RenderOptions& options, bool generic, std::string* explanation) {
+                                      const RenderOptions& options, bool generic, double elapsed_ms,
+                                      std::string* explanation) {
   if (!(budget_ms > 0)) return usageError("--budget-ms must be positive");
-  const std::string key = cacheKey(path, options, generic);
+  const std::string key = "v2|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
   nlohmann::json cache = nlohmann::json::object();
   if (auto text = readWholeFile(cache_file, 1 << 24); text.isOk()) {
     cache = nlohmann::json::parse(text.value(), nullptr, false);
     if (!cache.is_object()) cache = nlohmann::json::object();
   }
-  double fixed_ms = 0, per_tet_ms = 0;
+  // Measured (tetrahedra, ms) points, sorted by tetrahedra.
+  std::vector<std::pair<double, double>> points;
   std::string source;
-  if (cache.contains(key) && cache[key].is_object() && cache[key].contains("fixed_ms") &&
-      cache[key].contains("per_tet_ms")) {
-    fixed_ms = cache[key]["fixed_ms"].get<double>();
-    per_tet_ms = cache[key]["per_tet_ms"].get<double>();
-    source = "calibration read from " + cache_file;
-  } else {
-    const size_t coarsest = input.levels() - 1;
-    // The second point: the finest level with at most a sixteenth of level 0's tetrahedra.
-    size_t mid = 0;
-    const uint64_t t0 = input.levelHeader(0).tets;
-    for (size_t i = 0; i < input.levels(); ++i)
-      if (input.levelHeader(i).tets * 16 <= t0) {
-        mid = i;
+  const nlohmann::json* entry = cache.contains(key) ? &cache[key] : nullptr;
+  if (entry && entry->is_object() && entry->contains("tets") && entry->contains("ms") && (*entry)["tets"].is_array() &&
+      (*entry)["ms"].is_array() && (*entry)["tets"].size() == (*entry)["ms"].size() && !(*entry)["tets"].empty()) {
+    for (size_t i = 0; i < (*entry)["tets"].size(); ++i) {
+      const nlohmann::json& t = (*entry)["tets"][i];
+      const nlohmann::json& m = (*entry)["ms"][i];
+      if (!t.is_number() || !m.is_number()) {
+        points.clear();
         break;
       }
-    if (mid == 0 && input.levels() > 1) mid = coarsest;
-    GTN_ASSIGN_OR_RETURN(double t_mid, timeLevel(input, mid, options, generic));
-    const double n_mid = static_cast<double>(input.levelHeader(mid).tets);
-    if (coarsest != mid) {
-      GTN_ASSIGN_OR_RETURN(double t_low, timeLevel(input, coarsest, options, generic));
-      const double n_low = static_cast<double>(input.levelHeader(coarsest).tets);
-      per_tet_ms = n_mid > n_low ? std::max(0.0, (t_mid - t_low) / (n_mid - n_low)) : 0.0;
-      fixed_ms = std::max(0.0, t_low - per_tet_ms * n_low);
-    } else {
-      per_tet_ms = n_mid > 0 ? t_mid / n_mid : 0.0;
+      points.emplace_back(t.get<double>(), m.get<double>());
     }
-    if (per_tet_ms <= 0) per_tet_ms = 1e-6;
-    cache[key] = {{"fixed_ms", fixed_ms}, {"per_tet_ms", per_tet_ms}};
+    source = "calibration read from " + cache_file;
+  }
+  if (points.empty()) {
+    // Levels timed: the coarsest, the finest with at most a sixteenth and a quarter of level 0's
+    // tetrahedra, and level 0, so that every level's time is interpolated, not extrapolated. A first
+    // run of the coarsest level (not kept) warms the file and the thread pool.
+    const size_t coarsest = input.levels() - 1;
+    const uint64_t t0 = input.levelHeader(0).tets;
+    std::vector<size_t> timed = {coarsest, 0};
+    for (uint64_t divisor : {16, 4}) {
+      for (size_t i = 0; i < input.levels(); ++i) {
+        if (input.levelHeader(i).tets * divisor <= t0) {
+          timed.push_back(i);
+          break;
+        }
+      }
+    }
+    std::sort(timed.begin(), timed.end());
+    timed.erase(std::unique(timed.begin(), timed.end()), timed.end());
+    GTN_RETURN_IF_ERROR(timeLevel(input, coarsest, options, generic).status());
+    nlohmann::json tets = nlohmann::json::array(), ms = nlohmann::json::array();
+    std::string names;
+    for (size_t level : timed) {
+      GTN_ASSIGN_OR_RETURN(double t, timeLevel(input, level, options, generic));
+      const double n = static_cast<double>(input.levelHeader(level).tets);
+      points.emplace_back(n, t);
+      tets.push_back(n);
+      ms.push_back(t);
+      names += (names.empty() ? "" : ", ") + std::to_string(level);
+    }
+    cache[key] = {{"tets", tets}, {"ms", ms}};
     std::error_code ec;
     std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
     const std::string text = cache.dump(1);
     // A cache that cannot be written only costs a calibration next time.
     (void)writeBytesAtomically(cache_file, text.data(), text.size());
-    source = "calibrated on levels " + std::to_string(mid) + " and " + std::to_string(coarsest) + ", cached in " +
-             cache_file;
+    source = "calibrated on levels " + names + ", cached in " + cache_file;
   }
+  std::sort(points.begin(), points.end());
+  // Piecewise linear in the tetrahedra decoded between measured levels; beyond them, the nearest
+  // segment's slope (never decreasing).
+  auto predict = [&](double n) {
+    if (points.size() == 1) return points[0].first > 0 ? points[0].second * n / points[0].first : points[0].second;
+    size_t i = 1;
+    while (i + 1 < points.size() && points[i].first < n) ++i;
+    const auto& [n0, m0] = points[i - 1];
+    const auto& [n1, m1] = points[i];
+    const double slope = n1 > n0 ? std::max(0.0, (m1 - m0) / (n1 - n0)) : 0.0;
+    return std::max(0.0, m0 + slope * (n - n0));
+  };
+  // What the run has spent before rendering (opening the input, this choice) counts against the
+  // budget too.
+  const double available = budget_ms - elapsed_ms;
   LevelChoice choice;
   choice.level = static_cast<int>(input.levels() - 1);
   for (size_t i = 0; i < input.levels(); ++i) {
-    if (fixed_ms + per_tet_ms * static_cast<double>(input.levelHeader(i).tets) <= budget_ms) {
+    if (predict(static_cast<double>(input.levelHeader(i).tets)) <= available) {
       choice.level = static_cast<int>(i);
       break;
     }
   }
-  const double predicted = fixed_ms + per_tet_ms * static_cast<double>(input.levelHeader(choice.level).tets);
-  char buf[512];
+  const double predicted = predict(static_cast<double>(input.levelHeader(choice.level).tets));
+  std::string model;
+  for (const auto& [n, m] : points) {
+    char p[64];
+    std::snprintf(p, sizeof p, "%s%.0f tets %.1f ms", model.empty() ? "" : ", ", n, m);
+    model += p;
+  }
+  char buf[1024];
   std::snprintf(buf, sizeof buf,
-                "%s; model %.2f ms + %.3g ms per tetrahedron decoded; level %d (%llu tetrahedra, %llu merges) "
-                "predicted %.1f ms for a budget of %.1f ms%s",
-                source.c_str(), fixed_ms, per_tet_ms, choice.level,
+                "%s; measured %s; level %d (%llu tetrahedra, %llu merges) predicted %.1f ms + %.1f ms already spent "
+                "for a budget of %.1f ms%s",
+                source.c_str(), model.c_str(), choice.level,
                 static_cast<unsigned long long>(input.levelHeader(choice.level).tets),
-                static_cast<unsigned long long>(input.levelHeader(choice.level).merges), predicted, budget_ms,
-                predicted > budget_ms ? " (the coarsest level; the budget cannot be met)" : "");
+                static_cast<unsigned long long>(input.levelHeader(choice.level).merges), predicted, elapsed_ms,
+                budget_ms, predicted > available ? " (the coarsest level; the budget cannot be met)" : "");
   *explanation = buf;
   return choice;
 }
