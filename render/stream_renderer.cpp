@@ -90,7 +90,11 @@ struct StreamRenderer::State {
   std::unordered_map<uint32_t, VertexRec> vertices;
   std::vector<std::array<uint32_t, 3>> boundary;
   RaySegments rays;
-  std::vector<PreparedRay> pixel_rays;  // per pixel with segments (indexed by pixel), else unset
+  // Rays are not stored per pixel (that would be the largest structure at 256x256): prepareRay is
+  // cheap and deterministic, so recomputing a pixel's ray gives the very same crossings.
+  PreparedRay pixelRay(size_t p, const Camera& camera) const {
+    return prepareRay(camera.ray(static_cast<int>(p % camera.width()), static_cast<int>(p / camera.width())));
+  }
   bool shared_frame = false;            // orthographic: every ray has `frame`
   ShearFrame frame;
   double ortho_dir[3] = {0, 0, 0};  // orthographic: the rays' direction, and the depth of their
@@ -221,11 +225,6 @@ Status StreamRenderer::endBoundary() {
   }
   buildSampleTable(setup_);
   st.rays = castBoundary(setup_.camera, surface);
-  st.pixel_rays.resize(st.rays.pixel_start.size() - 1);
-  for (size_t p = 0; p + 1 < st.rays.pixel_start.size(); ++p)
-    if (st.rays.pixel_start[p] != st.rays.pixel_start[p + 1])
-      st.pixel_rays[p] = prepareRay(setup_.camera.ray(static_cast<int>(p % setup_.camera.width()),
-                                                      static_cast<int>(p / setup_.camera.width())));
   st.shared_frame = setup_.camera.options().projection == Projection::kOrthographic;
   {
     const Ray r0 = setup_.camera.ray(0, 0);
@@ -301,7 +300,7 @@ Status StreamRenderer::flushBatch() {
       if (!pixelFootprint(cam, corners, 4, box)) continue;
       // The rays of pixel p whose uncovered part overlaps the tetrahedron, by the exact crossings.
       auto exactCount = [&](size_t p, uint32_t s0, uint32_t s1) {
-        const PreparedRay& ray = st.pixel_rays[p];
+        const PreparedRay ray = st.pixelRay(p, cam);
         double tmin = 1e300, tmax = -1e300;
         Crossing x[4];
         crossTetFaces(ray, a.g, -1, x);
@@ -455,7 +454,7 @@ Status StreamRenderer::flushBatch() {
       const uint32_t si = triggers[groups[g]].cursor / 2;
       SegmentState& seg = st.segs[si];
       const uint32_t pixel = st.rays.segments[si].pixel;
-      const PreparedRay& ray = st.pixel_rays[pixel];
+      const PreparedRay ray = st.pixelRay(pixel, setup_.camera);
       for (size_t i = groups[g]; i < groups[g + 1]; ++i) {
         if (seg.done) break;
         const Trigger& tr = triggers[i];
