@@ -1,6 +1,7 @@
 #include "codec/merge_tree_coder.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 
@@ -131,44 +132,54 @@ void codeVertex(C& c, Models& m, VertexCode& v, uint32_t remaining) {
   v.removed = k == 15 ? c.direct(v.removed, 32) : k;
 }
 
-// Fenwick tree over ranks 1..M marking which are still free.
+// The ranks 1..M still free: one bit per rank, and a Fenwick tree over the free counts of 64-rank
+// blocks, small enough to stay in cache while the Lehmer code is decoded.
 class FreeRanks {
  public:
-  explicit FreeRanks(uint32_t m) : n_(m), tree_(m + 1, 0) {
-    for (uint32_t i = 1; i <= m; ++i) {
-      tree_[i] += 1;
-      const uint32_t j = i + (i & (0u - i));
-      if (j <= m) tree_[j] += tree_[i];
+  explicit FreeRanks(uint32_t m) : bits_((size_t{m} + 63) / 64, ~uint64_t{0}), blocks_(bits_.size()) {
+    if (m % 64) bits_.back() = (uint64_t{1} << (m % 64)) - 1;
+    tree_.assign(blocks_ + 1, 0);
+    for (size_t b = 1; b <= blocks_; ++b) {
+      tree_[b] += static_cast<uint32_t>(std::popcount(bits_[b - 1]));
+      const size_t j = b + (b & (0 - b));
+      if (j <= blocks_) tree_[j] += tree_[b];
     }
     top_ = 1;
-    while (top_ * 2 <= n_) top_ *= 2;
+    while (top_ * 2 <= blocks_) top_ *= 2;
   }
   // Free ranks smaller than r.
   uint32_t countBelow(uint32_t r) const {
+    const uint32_t i = r - 1;
     uint32_t s = 0;
-    for (uint32_t i = r - 1; i > 0; i -= i & (0u - i)) s += tree_[i];
-    return s;
+    for (size_t b = i >> 6; b > 0; b -= b & (0 - b)) s += tree_[b];
+    return s + static_cast<uint32_t>(std::popcount(bits_[i >> 6] & ((uint64_t{1} << (i & 63)) - 1)));
   }
   void take(uint32_t r) {
-    for (uint32_t i = r; i <= n_; i += i & (0u - i)) tree_[i] -= 1;
+    const uint32_t i = r - 1;
+    bits_[i >> 6] &= ~(uint64_t{1} << (i & 63));
+    for (size_t b = (i >> 6) + 1; b <= blocks_; b += b & (0 - b)) tree_[b] -= 1;
   }
   // The (k+1)-th smallest free rank (k < free count).
   uint32_t kth(uint32_t k) const {
-    uint32_t pos = 0;
-    uint32_t rem = k + 1;
-    for (uint32_t step = top_; step > 0; step >>= 1) {
-      if (pos + step <= n_ && tree_[pos + step] < rem) {
+    size_t pos = 0;
+    uint32_t rem = k;  // free ranks still to skip
+    for (size_t step = top_; step > 0; step >>= 1) {
+      if (pos + step <= blocks_ && tree_[pos + step] <= rem) {
         pos += step;
         rem -= tree_[pos];
       }
     }
-    return pos + 1;
+    // Block `pos` holds it: skip `rem` set bits.
+    uint64_t w = bits_[pos];
+    for (uint32_t j = 0; j < rem; ++j) w &= w - 1;
+    return static_cast<uint32_t>(pos * 64 + std::countr_zero(w)) + 1;
   }
 
  private:
-  uint32_t n_;
+  std::vector<uint64_t> bits_;
+  size_t blocks_;
   std::vector<uint32_t> tree_;
-  uint32_t top_ = 1;
+  size_t top_ = 1;
 };
 
 void putVarint(std::vector<uint8_t>& out, uint64_t v) {
