@@ -1,5 +1,5 @@
 // Containers for the peeling front. Everything is stored with the vertex slot it hangs from: each
-// slot owns one cache-line bucket of entries, chained to overflow buckets when it holds more. A walk
+// slot owns a bucket of entries, chained to overflow buckets when it holds more. A walk
 // around a vertex, or the lookup of a face, then touches one or two lines instead of missing all
 // over a hash table of the whole front. Sizes follow the front (the slot pool), not the mesh.
 #pragma once
@@ -9,34 +9,93 @@
 #include <utility>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace gtn {
 
-// Unordered small lists of `Entry`, one per slot (a non-negative 32-bit index). Removing an entry
-// moves the slot's last entry into its place, so entries must not rely on their position.
-template <class Entry, uint32_t kInline>
-class SlotLists {
+// Bit i set when a[i] == v, for i < kLanes rounded up to a multiple of 4; lanes past the caller's
+// count must be masked off by the caller (they may be read from the memory that follows).
+template <uint32_t kLanes>
+inline uint64_t equalLanes(const uint32_t* a, uint32_t v) {
+  static_assert(kLanes <= 64);
+  uint64_t m = 0;
+#if defined(__SSE2__)
+  const __m128i key = _mm_set1_epi32(static_cast<int>(v));
+  for (uint32_t g = 0; g < (kLanes + 3) / 4; ++g) {
+    const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(a + 4 * g));
+    m |= static_cast<uint64_t>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(x, key)))) << (4 * g);
+  }
+#else
+  for (uint32_t i = 0; i < kLanes; ++i) m |= static_cast<uint64_t>(a[i] == v) << i;
+#endif
+  return m;
+}
+
+// Index of the first of a[0..n) equal to v, or -1, for n <= kMax; `a` must have room for kMax
+// rounded up to 4 (a fixed number of compares: no branch that depends on where v is).
+template <uint32_t kMax>
+inline int indexOf(const uint32_t* a, int n, uint32_t v) {
+  static_assert(kMax < 64);
+  const uint64_t m = equalLanes<kMax>(a, v) & ((uint64_t{1} << n) - 1);
+  return m ? __builtin_ctzll(m) : -1;
+}
+
+// Unordered small maps, one per slot (a non-negative 32-bit index), from a key of kKeys 32-bit words
+// to a 32-bit value. A slot's entries sit in its bucket, key words and values in separate arrays so
+// that a lookup compares every entry of a bucket at once, without a data-dependent branch per entry.
+// Removing an entry moves the slot's last entry into its place.
+template <int kKeys, uint32_t kCap>
+class SlotTable {
+  static constexpr uint32_t kNil = 0xFFFFFFFFu;
+  // equalLanes reads whole groups of 4: the lanes past kCap must lie inside the bucket.
+  static_assert((kCap + 3) / 4 * 4 - kCap <= kCap);
+  struct alignas(64) Bucket {
+    uint32_t n = 0;
+    uint32_t next = kNil;
+    uint32_t key[kKeys][kCap];
+    uint32_t value[kCap];
+  };
+
  public:
-  // First entry of slot `a` for which `match(entry)` holds, or null.
-  template <class Match>
-  Entry* find(uint32_t a, Match match) {
-    if (a >= head_.size()) return nullptr;
-    Bucket* k = &head_[a];
+  // Where an entry lives; valid until the next append or erase.
+  struct Ref {
+    Bucket* bucket;
+    uint32_t i;
+    explicit operator bool() const { return bucket != nullptr; }
+    uint32_t& value() const { return bucket->value[i]; }
+  };
+
+  // The entry of slot `a` with key `k`, or a null Ref.
+  Ref find(uint32_t a, const uint32_t k[kKeys]) const {
+    if (a >= head_.size()) return {nullptr, 0};
+    Bucket* b = const_cast<Bucket*>(&head_[a]);
     while (true) {
-      for (uint32_t i = 0; i < k->n; ++i)
-        if (match(k->e[i])) return &k->e[i];
-      if (k->next == kNil) return nullptr;
-      k = &extra_[k->next];
+      uint64_t m = equalLanes<kCap>(b->key[0], k[0]);
+      for (int j = 1; j < kKeys; ++j) m &= equalLanes<kCap>(b->key[j], k[j]);
+      m &= (uint64_t{1} << b->n) - 1;
+      if (m) return {b, static_cast<uint32_t>(__builtin_ctzll(m))};
+      if (b->next == kNil) return {nullptr, 0};
+      b = const_cast<Bucket*>(&extra_[b->next]);
     }
   }
-  template <class Match>
-  const Entry* find(uint32_t a, Match match) const {
-    return const_cast<SlotLists*>(this)->find(a, match);
+  // The entry of slot `a` whose value is `v`, or a null Ref.
+  Ref findValue(uint32_t a, uint32_t v) const {
+    if (a >= head_.size()) return {nullptr, 0};
+    Bucket* b = const_cast<Bucket*>(&head_[a]);
+    while (true) {
+      for (uint32_t i = 0; i < b->n; ++i)
+        if (b->value[i] == v) return {b, i};
+      if (b->next == kNil) return {nullptr, 0};
+      b = const_cast<Bucket*>(&extra_[b->next]);
+    }
   }
-  void append(uint32_t a, const Entry& entry) {
+  void append(uint32_t a, const uint32_t k[kKeys], uint32_t v) {
     if (a >= head_.size()) head_.resize(size_t{a} + 1);
     uint32_t ref = kNil;  // kNil: the head bucket
     while (bucket(a, ref).next != kNil) ref = bucket(a, ref).next;
-    if (bucket(a, ref).n == kInline) {
+    if (bucket(a, ref).n == kCap) {
       uint32_t fresh;
       if (!free_.empty()) {
         fresh = free_.back();
@@ -50,11 +109,12 @@ class SlotLists {
       bucket(a, ref).next = fresh;
       ref = fresh;
     }
-    Bucket& k = bucket(a, ref);
-    k.e[k.n++] = entry;
+    Bucket& b = bucket(a, ref);
+    for (int j = 0; j < kKeys; ++j) b.key[j][b.n] = k[j];
+    b.value[b.n++] = v;
   }
-  // Removes `*entry`, which find(a, ...) returned.
-  void erase(uint32_t a, Entry* entry) {
+  // Removes the entry `r` of slot `a` (a Ref that find(a, ...) returned).
+  void erase(uint32_t a, Ref r) {
     Bucket* prev = nullptr;
     Bucket* last = &head_[a];
     uint32_t last_ref = kNil;
@@ -63,7 +123,9 @@ class SlotLists {
       last_ref = last->next;
       last = &extra_[last_ref];
     }
-    *entry = last->e[--last->n];
+    const uint32_t l = --last->n;
+    for (int j = 0; j < kKeys; ++j) r.bucket->key[j][r.i] = last->key[j][l];
+    r.bucket->value[r.i] = last->value[l];
     if (last->n == 0 && prev) {
       prev->next = kNil;
       free_.push_back(last_ref);
@@ -74,14 +136,12 @@ class SlotLists {
     extra_.clear();
     free_.clear();
   }
+  // Starts loading slot `a`'s bucket into the cache.
+  void prefetch(uint32_t a) const {
+    if (a < head_.size()) __builtin_prefetch(&head_[a]);
+  }
 
  private:
-  static constexpr uint32_t kNil = 0xFFFFFFFFu;
-  struct alignas(64) Bucket {
-    uint32_t n = 0;
-    uint32_t next = kNil;
-    Entry e[kInline];
-  };
   Bucket& bucket(uint32_t a, uint32_t ref) { return ref == kNil ? head_[a] : extra_[ref]; }
 
   std::vector<Bucket> head_;   // [slot]
@@ -94,43 +154,41 @@ class EdgeMap {
  public:
   // Value for (a, b), or `none`.
   uint32_t find(uint32_t a, uint32_t b, uint32_t none) const {
-    const Entry* e = lists_.find(a, [b](const Entry& x) { return x.b == b; });
-    return e ? e->value : none;
+    const auto r = table_.find(a, &b);
+    return r ? r.value() : none;
   }
   // The same with the edge packed as (a << 32) | b.
   uint32_t find(uint64_t key, uint32_t none) const { return find(hi(key), lo(key), none); }
   // Sets the value of (a, b), replacing an existing one.
   void put(uint32_t a, uint32_t b, uint32_t value) {
-    if (Entry* e = lists_.find(a, [b](const Entry& x) { return x.b == b; })) {
-      e->value = value;
+    if (const auto r = table_.find(a, &b)) {
+      r.value() = value;
       return;
     }
-    lists_.append(a, {b, value});
+    table_.append(a, &b, value);
     ++size_;
   }
   void put(uint64_t key, uint32_t value) { put(hi(key), lo(key), value); }
   // Removes (a, b) if it maps to `value`.
   void eraseIf(uint32_t a, uint32_t b, uint32_t value) {
-    Entry* e = lists_.find(a, [b](const Entry& x) { return x.b == b; });
-    if (!e || e->value != value) return;
-    lists_.erase(a, e);
+    const auto r = table_.find(a, &b);
+    if (!r || r.value() != value) return;
+    table_.erase(a, r);
     --size_;
   }
   void eraseIf(uint64_t key, uint32_t value) { eraseIf(hi(key), lo(key), value); }
+  void prefetch(uint32_t a) const { table_.prefetch(a); }
   void clear() {
-    lists_.clear();
+    table_.clear();
     size_ = 0;
   }
   size_t size() const { return size_; }
 
  private:
-  struct Entry {
-    uint32_t b, value;
-  };
   static uint32_t hi(uint64_t key) { return static_cast<uint32_t>(key >> 32); }
   static uint32_t lo(uint64_t key) { return static_cast<uint32_t>(key); }
 
-  SlotLists<Entry, 7> lists_;  // 8 + 7 * 8 bytes: one cache line per slot
+  SlotTable<1, 7> table_;  // 8 + 7 * 8 bytes: one cache line per slot
   size_t size_ = 0;
 };
 
@@ -162,8 +220,8 @@ class FaceMap {
   }
   // Index of the face with sorted key `k`, or -1.
   long find(const uint32_t k[3]) const {
-    const Entry* e = lists_.find(k[0], [k](const Entry& x) { return x.k1 == k[1] && x.k2 == k[2]; });
-    return e ? static_cast<long>(e->face) : -1;
+    const auto r = table_.find(k[0], k + 1);
+    return r ? static_cast<long>(r.value()) : -1;
   }
   // True if `index` is the face with sorted key `k` (a cheap find() when the index is a guess).
   bool holds(long index, const uint32_t k[3]) const {
@@ -183,26 +241,27 @@ class FaceMap {
       i = static_cast<uint32_t>(pool_.size());
       pool_.push_back(f);
     }
-    lists_.append(f.key[0], {f.key[1], f.key[2], i});
+    table_.append(f.key[0], f.key + 1, i);
     ++size_;
     return i;
   }
   void eraseAt(long index) {
     const uint32_t i = static_cast<uint32_t>(index);
     FrontFace& f = pool_[i];
-    Entry* e = lists_.find(f.key[0], [i](const Entry& x) { return x.face == i; });
-    lists_.erase(f.key[0], e);
+    table_.erase(f.key[0], table_.findValue(f.key[0], i));
     f.key[0] = kEmptyFace;
     free_.push_back(i);
     --size_;
   }
   size_t size() const { return size_; }
+  // Starts loading what find(k) and at(index) will read.
+  void prefetch(const uint32_t k[3], long index) const {
+    table_.prefetch(k[0]);
+    if (index >= 0 && static_cast<size_t>(index) < pool_.size()) __builtin_prefetch(&pool_[static_cast<size_t>(index)]);
+  }
 
  private:
-  struct Entry {
-    uint32_t k1, k2, face;
-  };
-  SlotLists<Entry, 4> lists_;  // 8 + 4 * 12 bytes: one cache line per slot
+  SlotTable<2, 10> table_;  // sorted key[1], key[2] -> pool index; 8 + 10 * 12 bytes: two cache lines
   std::vector<FrontFace> pool_;
   std::vector<uint32_t> free_;
   size_t size_ = 0;

@@ -705,14 +705,18 @@ class LevelCoder {
   int gatherCandidates(const FrontFace& g, const double p[3], uint32_t* out, uint32_t* ctx) const {
     Candidate c[kMaxGather];
     int n = 0;
+    uint32_t seen[kMaxGather + 3] = {};  // c[i].s, for a vectorised membership test
     auto add = [&](uint32_t s) {
       if (s == g.v[0] || s == g.v[1] || s == g.v[2]) return;
-      for (int i = 0; i < n; ++i)
-        if (c[i].s == s) {
-          ++c[i].w;
-          return;
-        }
-      if (n < kMaxGather) c[n++] = {s, 1, 0.0};
+      const int i = indexOf<kMaxGather>(seen, n, s);
+      if (i >= 0) {
+        ++c[i].w;
+        return;
+      }
+      if (n < kMaxGather) {
+        seen[n] = s;
+        c[n++] = {s, 1, 0.0};
+      }
     };
     for (int j = 0; j < 3; ++j) {
       const uint32_t a = g.v[j], b = g.v[(j + 1) % 3], cc = g.v[(j + 2) % 3];
@@ -900,6 +904,15 @@ class LevelCoder {
     return emitTet(e, src_tet, kNone32);
   }
 
+  // Starts loading the front data of the likely next gate face while this one is coded.
+  void prefetchGate(const uint32_t key[3], uint32_t face) const {
+    faces_.prefetch(key, face);
+    for (int i = 0; i < 3; ++i) {
+      edges_.prefetch(key[i]);
+      if (key[i] < state_.size()) __builtin_prefetch(P(key[i]));
+    }
+  }
+
   Status peelingPhase() {
     while (true) {
       long idx = -1;
@@ -910,6 +923,7 @@ class LevelCoder {
         idx = faces_.holds(q.face, q.key) ? q.face : faces_.find(q.key);
         if (idx >= 0) break;
       }
+      if (!queue_.empty()) prefetchGate(queue_.front().key, queue_.front().face);
       if constexpr (!kEncode) {
         if (!con_->ok()) return bad("connectivity stream is truncated or corrupt");
         if (!geo_->ok()) return bad("geometry stream is truncated or corrupt");
