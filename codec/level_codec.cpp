@@ -784,11 +784,12 @@ class LevelCoder {
   struct Candidate {
     uint32_t s;
     uint32_t w;
-    double dist;
+    double dist;  // squared distance to the predicted apex
+    double key;   // sort key: Delaunay sweep parameter, else dist
   };
 
   // Front vertices around the gate face, best first; returns the count and the coding context.
-  int gatherCandidates(const FrontFace& g, const double p[3], uint32_t* out, uint32_t* ctx) const {
+  int gatherCandidates(const FrontFace& g, const double p[3], uint32_t* out, uint32_t* ctx) {
     Candidate c[kMaxGather];
     int n = 0;
     auto add = [&](uint32_t s) {
@@ -798,7 +799,7 @@ class LevelCoder {
           ++c[i].w;
           return;
         }
-      if (n < kMaxGather) c[n++] = {s, 1, 0.0};
+      if (n < kMaxGather) c[n++] = {s, 1, 0.0, 0.0};
     };
     for (int j = 0; j < 3; ++j) {
       const uint32_t a = g.v[j], b = g.v[(j + 1) % 3], cc = g.v[(j + 2) % 3];
@@ -830,22 +831,73 @@ class LevelCoder {
     // reaches them). Exact signs, so that every decoder agrees.
     const int wrong = g.d != kNoSlot ? orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(g.d))
                                      : (apex_votes_ > 0 ? -1 : (apex_votes_ < 0 ? 1 : 0));
+    // Delaunay order: the spheres through a, b and c, swept into the undecoded side, meet the
+    // apex of a Delaunay tetrahedron first. key = the sweep parameter at which a candidate is met.
+    double cc0[3] = {0, 0, 0}, nn[3] = {0, 0, 0}, r2 = 0, key_scale = 0;
+    const bool delaunay = wrong != 0;
+    if (delaunay) {
+      const double *a = P(g.v[0]), *b = P(g.v[1]), *c3 = P(g.v[2]);
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c3[0] - a[0], c3[1] - a[1], c3[2] - a[2]};
+      const double N[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+      const double NN = N[0] * N[0] + N[1] * N[1] + N[2] * N[2];
+      const double w[3] = {uu * v[0] - vv * u[0], uu * v[1] - vv * u[1], uu * v[2] - vv * u[2]};
+      const double wx[3] = {w[1] * N[2] - w[2] * N[1], w[2] * N[0] - w[0] * N[2], w[0] * N[1] - w[1] * N[0]};
+      for (int i = 0; i < 3; ++i) {
+        cc0[i] = NN > 0 ? a[i] + wx[i] / (2 * NN) : a[i];
+        nn[i] = -wrong * N[i];
+        r2 += (cc0[i] - a[i]) * (cc0[i] - a[i]);
+      }
+      const double nl = std::sqrt(NN);
+      key_scale = r2 > 0 && nl > 0 ? 64.0 * nl / std::sqrt(r2) : 0.0;
+    }
     int kept = 0;
     for (int i = 0; i < n; ++i) {
       const double* q = P(c[i].s);
       if (wrong != 0 && orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), q) == wrong) continue;
       const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
       c[kept] = c[i];
-      c[kept++].dist = dx * dx + dy * dy + dz * dz;
+      c[kept].dist = dx * dx + dy * dy + dz * dz;
+      c[kept].key = c[kept].dist;
+      if (delaunay) {
+        const double e[3] = {q[0] - cc0[0], q[1] - cc0[1], q[2] - cc0[2]};
+        const double h = nn[0] * e[0] + nn[1] * e[1] + nn[2] * e[2];
+        // In units of 1/64 of the face's circumradius, so that nearly cospherical candidates (every
+        // cell of a structured grid) tie and fall back to the distance order.
+        const double t = h > 0 ? (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - r2) / (2 * h) : 1e300;
+        c[kept].key = std::min(std::floor(t * key_scale), 1e18);
+      }
+      ++kept;
     }
     n = kept;
+    // Two orders compete: by distance to the predicted apex (right on structured grids) and by the
+    // Delaunay sweep (right on Delaunay meshes). The one that has ranked the true apexes better so
+    // far is used; both sides keep the same score.
+    const int m = std::min(n, kMaxCandidates);
+    by_dist_n_ = by_key_n_ = 0;
+    if (delaunay && n > 1) {
+      Candidate alt[kMaxGather];
+      std::copy(c, c + n, alt);
+      std::sort(alt, alt + n, [](const Candidate& x, const Candidate& y) {
+        if (x.w != y.w) return x.w > y.w;
+        if (x.key != y.key) return x.key < y.key;
+        if (x.dist != y.dist) return x.dist < y.dist;
+        return x.s < y.s;
+      });
+      for (int i = 0; i < m; ++i) by_key_[i] = alt[i].s;
+      by_key_n_ = m;
+    }
     std::sort(c, c + n, [](const Candidate& x, const Candidate& y) {
       if (x.w != y.w) return x.w > y.w;
       if (x.dist != y.dist) return x.dist < y.dist;
       return x.s < y.s;
     });
-    const int m = std::min(n, kMaxCandidates);
     for (int i = 0; i < m; ++i) out[i] = c[i].s;
+    if (by_key_n_ > 0) {
+      std::copy(out, out + m, by_dist_);
+      by_dist_n_ = m;
+      if (order_score_ > 0) std::copy(by_key_, by_key_ + m, out);
+    }
     uint32_t k = 0;
     if (n > 0) {
       uint32_t top = 0;
@@ -1070,6 +1122,12 @@ class LevelCoder {
         x = cands[sym - 1];
       }
       apex_votes_ += orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(x));
+      if (by_key_n_ > 0) {
+        const int rk = static_cast<int>(std::find(by_key_, by_key_ + by_key_n_, x) - by_key_);
+        const int rd = static_cast<int>(std::find(by_dist_, by_dist_ + by_dist_n_, x) - by_dist_);
+        if (rk < rd && order_score_ < kOrderScoreLimit) ++order_score_;
+        if (rd < rk && order_score_ > -kOrderScoreLimit) --order_score_;
+      }
       flip = con_->bit(flip_, flip);
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
       GTN_RETURN_IF_ERROR(emitTet(e, g.tet, g.cell));
@@ -1129,7 +1187,12 @@ class LevelCoder {
   std::vector<uint32_t> pf_last_rule_;
   BitModel flip_, retire_, seed_more_, bseed_more_, bpartner_, seed_existing_;
 
-  int64_t apex_votes_ = 0;  // sum of orient3d(a, b, c, apex) over the tetrahedra decoded so far
+  int64_t apex_votes_ = 0;
+  // Apex candidates in both orders (section 10.4 of the spec) and which order has ranked better.
+  static constexpr int kOrderScoreLimit = 32;
+  uint32_t by_dist_[kMaxCandidates], by_key_[kMaxCandidates];
+  int by_dist_n_ = 0, by_key_n_ = 0;
+  int order_score_ = 0;  // sum of orient3d(a, b, c, apex) over the tetrahedra decoded so far
   uint64_t next_id_ = 0, tets_done_ = 0, btris_done_ = 0, live_ = 0, peak_live_ = 0;
   double last_pos_[3] = {0, 0, 0};
   std::vector<uint8_t> last_vals_, cell_buf_;
