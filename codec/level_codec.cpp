@@ -21,6 +21,7 @@
 #include "codec/level_codec.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -30,6 +31,7 @@
 #include "codec/range_coder.h"
 #include "codec/value_coder.h"
 #include "mesh/faces.h"
+#include "mesh/predicates.h"
 
 namespace gtn {
 
@@ -70,6 +72,26 @@ enum SlotState : uint8_t { kFree = 0, kLive = 1, kRetired = 2 };
 inline uint64_t edgeKey(uint32_t a, uint32_t b) { return (uint64_t{a} << 32) | b; }
 inline int bitLength(uint64_t v) { return v ? 64 - __builtin_clzll(v) : 0; }
 
+// What coding `symbol` through `tree` costs now, in 1/16 bits (the encoder weighs a prediction
+// rule's signalling against the residual bits it saves).
+template <int kBits>
+int symbolCost(const BitTree<kBits>& tree, uint32_t symbol) {
+  static const std::array<uint16_t, 4096> kCost = [] {
+    std::array<uint16_t, 4096> t{};
+    for (size_t i = 0; i < t.size(); ++i) t[i] = static_cast<uint16_t>(std::lround(-16.0 * std::log2((i + 0.5) / 4096.0)));
+    return t;
+  }();
+  int cost = 0;
+  uint32_t node = 1;
+  for (int i = kBits - 1; i >= 0; --i) {
+    const uint32_t bit = (symbol >> i) & 1;
+    const uint32_t p0 = tree.m[node].p0();
+    cost += kCost[(bit ? 65536 - p0 : p0) >> 4];
+    node = (node << 1) | bit;
+  }
+  return cost;
+}
+
 // How the field values of a new vertex are predicted.
 struct FieldPrediction {
   enum Kind { kLast, kParallelogram, kInterpolate, kAverage } kind = kLast;
@@ -98,6 +120,7 @@ struct EncoderSide {
   size_t next_seed_tet = 0, next_seed_tri = 0;
   std::vector<uint32_t> vertex_order;
   std::vector<uint64_t> tet_order;
+  std::vector<uint32_t> alias;  // per point-field component (flattened): earlier identical component, or ~0
 };
 
 template <bool kEncode>
@@ -143,6 +166,14 @@ class LevelCoder {
     cell_sym_.resize(header.cell_fields.size());
     cell_last_sym_.assign(header.cell_fields.size(), 0);
     pred_vals_.resize(std::max<size_t>(1, item_bytes_));
+    for (size_t f = 0; f < header.point_fields.size(); ++f)
+      for (uint32_t c = 0; c < header.point_fields[f].components; ++c) {
+        comp_off_.push_back(pf_offset_[f] + c * scalarSize(header.point_fields[f].type));
+        comp_type_.push_back(header.point_fields[f].type);
+      }
+    alias_.assign(comp_off_.size(), kNone32);
+    field_coded_comps_.resize(header.point_fields.size());
+    for (size_t f = 0; f < header.point_fields.size(); ++f) field_coded_comps_[f] = header.point_fields[f].components;
     pf_rule_.resize(header.point_fields.size());
     pf_last_rule_.assign(header.point_fields.size(), 0);
   }
@@ -154,6 +185,7 @@ class LevelCoder {
   }
 
   Status run() {
+    GTN_RETURN_IF_ERROR(codeAliases());
     GTN_RETURN_IF_ERROR(boundaryPhase());
     if constexpr (!kEncode) GTN_RETURN_IF_ERROR(sink_->endBoundary());
     GTN_RETURN_IF_ERROR(peelingPhase());
@@ -184,6 +216,35 @@ class LevelCoder {
   }
 
   uint64_t peakLive() const { return peak_live_; }
+
+ private:
+  // Point-field components that repeat an earlier component bit for bit at every vertex (a vector
+  // field stored again as scalars, say) are declared at the start of their field's stream and cost
+  // nothing more.
+  Status codeAliases() {
+    size_t k = 0;
+    for (size_t f = 0; f < header_.point_fields.size(); ++f) {
+      for (uint32_t c = 0; c < header_.point_fields[f].components; ++c, ++k) {
+        uint32_t is_alias = 0, source = 0;
+        if constexpr (kEncode) {
+          is_alias = enc_->alias[k] != kNone32;
+          source = is_alias ? enc_->alias[k] : 0;
+        }
+        is_alias = pf_[f]->bit(alias_flag_, is_alias);
+        if (!is_alias) continue;
+        source = pf_[f]->direct(source, bitLength(k > 0 ? k - 1 : 0));
+        if constexpr (!kEncode) {
+          if (source >= k || comp_type_[source] != comp_type_[k])
+            return bad("point field '" + header_.point_fields[f].name + "' repeats an invalid component");
+        }
+        alias_[k] = source;
+        --field_coded_comps_[f];
+      }
+    }
+    return Status::ok();
+  }
+
+ public:
 
  private:
   Status bad(const std::string& reason) const {
@@ -368,8 +429,8 @@ class LevelCoder {
         int best = 1 << 30;
         for (uint32_t r = 0; r < kRules; ++r) {
           if (!ruleAllowed(r, has_d)) continue;
-          int cost = 0;
-          for (int i = 0; i < 3; ++i) cost += residualBits(actual[i], ruleKey(r, fp, i, pk[i], ct), cbits);
+          int cost = symbolCost(geo_rule_[geo_last_rule_], r);
+          for (int i = 0; i < 3; ++i) cost += 16 * residualBits(actual[i], ruleKey(r, fp, i, pk[i], ct), cbits);
           if (cost < best) {
             best = cost;
             rule = r;
@@ -382,29 +443,48 @@ class LevelCoder {
       if (rule != 0)
         for (int i = 0; i < 3; ++i) pk[i] = ruleKey(rule, fp, i, pk[i], ct);
     }
-    uint32_t copy_src[4];
+    // Copy sources: the stencil, then the apex candidates (front vertices around the gate), which
+    // on extruded and sheared grids hold the vertex's neighbours along a grid line.
+    uint32_t copy_src[4 + kMaxCandidates];
     uint32_t ncopy = 0;
-    if (fp.kind != FieldPrediction::kLast)
+    if (fp.kind != FieldPrediction::kLast) {
       for (int m = 0; m < 4; ++m)
         if (fp.s[m] != kNoSlot && (m < 3 || has_d)) copy_src[ncopy++] = fp.s[m];
+      for (int m = 0; m < n_near_; ++m) copy_src[ncopy++] = near_[m];
+    }
+    uint32_t prev_which = kNone32;  // copy source of the previous coordinate of this vertex
     for (uint32_t i = 0; i < 3; ++i) {
       uint64_t key = 0;
       uint32_t hit = 0;
       if (ncopy > 0) {
         uint32_t which = 0;
         if constexpr (kEncode) {
+          // Prefer the source the previous coordinate was copied from: one bit says so.
+          if (prev_which != kNone32 && keyFromPrediction(ct, P(copy_src[prev_which])[i]) == actual[i]) {
+            hit = 1;
+            which = prev_which;
+          }
           for (uint32_t m = 0; m < ncopy && !hit; ++m)
             if (keyFromPrediction(ct, P(copy_src[m])[i]) == actual[i]) {
               hit = 1;
               which = m;
             }
         }
-        hit = geo_->bit(copy_flag_[i][copy_last_[i]], hit);
+        hit = geo_->bit(copy_flag_[i][copy_last_[i] + 2 * (prev_which != kNone32)], hit);
         copy_last_[i] = hit;
         if (hit) {
-          which = copy_which_[i].code(*geo_, which);
+          uint32_t same = prev_which != kNone32 && which == prev_which;
+          if (prev_which != kNone32) same = geo_->bit(copy_same_[i], same);
+          if (same) {
+            which = prev_which;
+          } else {
+            which = copy_which_[i].code(*geo_, which);
+          }
           if (which >= ncopy) return bad("coordinate copied from an unknown vertex");
           key = keyFromPrediction(ct, P(copy_src[which])[i]);
+          prev_which = which;
+        } else {
+          prev_which = kNone32;
         }
       }
       if (!hit) key = coord_vc_.code(*geo_, i, pk[i], actual[i]);
@@ -426,15 +506,16 @@ class LevelCoder {
         const uint8_t* src_item = nullptr;
         if constexpr (kEncode) src_item = enc_->mesh->point_fields[f].bytes.data() + size_t{src} * d.itemBytes();
         uint32_t rule = 0;
-        if (choose) {
+        if (choose && field_coded_comps_[f] > 0) {
           if constexpr (kEncode) {
             int best = 1 << 30;
             for (uint32_t r = 0; r < kRules; ++r) {
               if (!ruleAllowed(r, has_d)) continue;
-              int cost = 0;
+              int cost = symbolCost(pf_rule_[f][pf_last_rule_[f]], r);
               for (uint32_t c = 0; c < d.components && cost < best; ++c) {
+                if (alias_[k + c] != kNone32) continue;
                 const double pv = r == 0 ? pred_vals_[k + c] : fieldRule(r, fp, d.type, pf_offset_[f] + c * vs);
-                cost += residualBits(keyFromRaw(d.type, src_item + c * vs), keyFromPrediction(d.type, pv), fbits);
+                cost += 16 * residualBits(keyFromRaw(d.type, src_item + c * vs), keyFromPrediction(d.type, pv), fbits);
               }
               if (cost < best) {
                 best = cost;
@@ -448,6 +529,10 @@ class LevelCoder {
         }
         for (uint32_t c = 0; c < d.components; ++c, ++k) {
           const size_t off = pf_offset_[f] + c * vs;
+          if (alias_[k] != kNone32) {
+            std::memcpy(out + off, out + comp_off_[alias_[k]], vs);
+            continue;
+          }
           uint64_t act = 0;
           if constexpr (kEncode) act = keyFromRaw(d.type, src_item + c * vs);
           const double pv = rule == 0 ? pred_vals_[k] : fieldRule(rule, fp, d.type, off);
@@ -698,11 +783,12 @@ class LevelCoder {
   struct Candidate {
     uint32_t s;
     uint32_t w;
-    double dist;
+    double dist;  // squared distance to the predicted apex
+    double key;   // sort key: Delaunay sweep parameter, else dist
   };
 
   // Front vertices around the gate face, best first; returns the count and the coding context.
-  int gatherCandidates(const FrontFace& g, const double p[3], uint32_t* out, uint32_t* ctx) const {
+  int gatherCandidates(const FrontFace& g, const double p[3], uint32_t* out, uint32_t* ctx) {
     Candidate c[kMaxGather];
     int n = 0;
     uint32_t seen[kMaxGather + 3] = {};  // c[i].s, for a vectorised membership test
@@ -715,7 +801,7 @@ class LevelCoder {
       }
       if (n < kMaxGather) {
         seen[n] = s;
-        c[n++] = {s, 1, 0.0};
+        c[n++] = {s, 1, 0.0, 0.0};
       }
     };
     for (int j = 0; j < 3; ++j) {
@@ -742,18 +828,79 @@ class LevelCoder {
         v = w;
       }
     }
+    // The apex lies on the far side of the gate face from the decoded tetrahedron (a, b, c, d),
+    // whatever the mesh's orientation convention; behind a boundary face, on the side where the
+    // apexes decoded so far mostly lay. Candidates on the other side are dropped (the escape still
+    // reaches them). Exact signs, so that every decoder agrees.
+    const int wrong = g.d != kNoSlot ? orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(g.d))
+                                     : (apex_votes_ > 0 ? -1 : (apex_votes_ < 0 ? 1 : 0));
+    // Delaunay order: the spheres through a, b and c, swept into the undecoded side, meet the
+    // apex of a Delaunay tetrahedron first. key = the sweep parameter at which a candidate is met.
+    double cc0[3] = {0, 0, 0}, nn[3] = {0, 0, 0}, r2 = 0, key_scale = 0;
+    const bool delaunay = wrong != 0;
+    if (delaunay) {
+      const double *a = P(g.v[0]), *b = P(g.v[1]), *c3 = P(g.v[2]);
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c3[0] - a[0], c3[1] - a[1], c3[2] - a[2]};
+      const double N[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+      const double NN = N[0] * N[0] + N[1] * N[1] + N[2] * N[2];
+      const double w[3] = {uu * v[0] - vv * u[0], uu * v[1] - vv * u[1], uu * v[2] - vv * u[2]};
+      const double wx[3] = {w[1] * N[2] - w[2] * N[1], w[2] * N[0] - w[0] * N[2], w[0] * N[1] - w[1] * N[0]};
+      for (int i = 0; i < 3; ++i) {
+        cc0[i] = NN > 0 ? a[i] + wx[i] / (2 * NN) : a[i];
+        nn[i] = -wrong * N[i];
+        r2 += (cc0[i] - a[i]) * (cc0[i] - a[i]);
+      }
+      const double nl = std::sqrt(NN);
+      key_scale = r2 > 0 && nl > 0 ? 64.0 * nl / std::sqrt(r2) : 0.0;
+    }
+    int kept = 0;
     for (int i = 0; i < n; ++i) {
       const double* q = P(c[i].s);
+      if (wrong != 0 && orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), q) == wrong) continue;
       const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
-      c[i].dist = dx * dx + dy * dy + dz * dz;
+      c[kept] = c[i];
+      c[kept].dist = dx * dx + dy * dy + dz * dz;
+      c[kept].key = c[kept].dist;
+      if (delaunay) {
+        const double e[3] = {q[0] - cc0[0], q[1] - cc0[1], q[2] - cc0[2]};
+        const double h = nn[0] * e[0] + nn[1] * e[1] + nn[2] * e[2];
+        // In units of 1/64 of the face's circumradius, so that nearly cospherical candidates (every
+        // cell of a structured grid) tie and fall back to the distance order.
+        const double t = h > 0 ? (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - r2) / (2 * h) : 1e300;
+        c[kept].key = std::min(std::floor(t * key_scale), 1e18);
+      }
+      ++kept;
+    }
+    n = kept;
+    // Two orders compete: by distance to the predicted apex (right on structured grids) and by the
+    // Delaunay sweep (right on Delaunay meshes). The one that has ranked the true apexes better so
+    // far is used; both sides keep the same score.
+    const int m = std::min(n, kMaxCandidates);
+    by_dist_n_ = by_key_n_ = 0;
+    if (delaunay && n > 1) {
+      Candidate alt[kMaxGather];
+      std::copy(c, c + n, alt);
+      std::sort(alt, alt + n, [](const Candidate& x, const Candidate& y) {
+        if (x.w != y.w) return x.w > y.w;
+        if (x.key != y.key) return x.key < y.key;
+        if (x.dist != y.dist) return x.dist < y.dist;
+        return x.s < y.s;
+      });
+      for (int i = 0; i < m; ++i) by_key_[i] = alt[i].s;
+      by_key_n_ = m;
     }
     std::sort(c, c + n, [](const Candidate& x, const Candidate& y) {
       if (x.w != y.w) return x.w > y.w;
       if (x.dist != y.dist) return x.dist < y.dist;
       return x.s < y.s;
     });
-    const int m = std::min(n, kMaxCandidates);
     for (int i = 0; i < m; ++i) out[i] = c[i].s;
+    if (by_key_n_ > 0) {
+      std::copy(out, out + m, by_dist_);
+      by_dist_n_ = m;
+      if (order_score_ > 0) std::copy(by_key_, by_key_ + m, out);
+    }
     uint32_t k = 0;
     if (n > 0) {
       uint32_t top = 0;
@@ -975,13 +1122,23 @@ class LevelCoder {
         fp.s[1] = g.v[1];
         fp.s[2] = g.v[2];
         fp.s[3] = g.d;
+        near_ = cands;
+        n_near_ = nc;
         GTN_RETURN_IF_ERROR(introduceVertex(x_src, p, fp, &x));
+        n_near_ = 0;
       } else if (sym == kSymEscape) {
         x = codeSlot(*con_, kEncode ? enc_->src_slot[x_src] : 0);
         if (!isLive(x)) return bad("tetrahedron refers to a vertex that is not live");
       } else {
         if (sym > static_cast<uint32_t>(nc)) return bad("candidate rank out of range");
         x = cands[sym - 1];
+      }
+      apex_votes_ += orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(x));
+      if (by_key_n_ > 0) {
+        const int rk = static_cast<int>(std::find(by_key_, by_key_ + by_key_n_, x) - by_key_);
+        const int rd = static_cast<int>(std::find(by_dist_, by_dist_ + by_dist_n_, x) - by_dist_);
+        if (rk < rd && order_score_ < kOrderScoreLimit) ++order_score_;
+        if (rd < rk && order_score_ > -kOrderScoreLimit) --order_score_;
       }
       flip = con_->bit(flip_, flip);
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
@@ -1046,6 +1203,12 @@ class LevelCoder {
   std::vector<uint32_t> pf_last_rule_;
   BitModel flip_, retire_, seed_more_, bseed_more_, bpartner_, seed_existing_;
 
+  int64_t apex_votes_ = 0;
+  // Apex candidates in both orders (section 10.4 of the spec) and which order has ranked better.
+  static constexpr int kOrderScoreLimit = 32;
+  uint32_t by_dist_[kMaxCandidates], by_key_[kMaxCandidates];
+  int by_dist_n_ = 0, by_key_n_ = 0;
+  int order_score_ = 0;  // sum of orient3d(a, b, c, apex) over the tetrahedra decoded so far
   uint64_t next_id_ = 0, tets_done_ = 0, btris_done_ = 0, live_ = 0, peak_live_ = 0;
   double last_pos_[3] = {0, 0, 0};
   std::vector<uint8_t> last_vals_, cell_buf_;
@@ -1060,8 +1223,17 @@ class LevelCoder {
   std::vector<std::array<BitTree<4>, 3>> cell_sym_;
   std::vector<uint32_t> cell_last_sym_;
   // Coordinates equal to a component of a stencil vertex (axis-aligned geometry).
-  BitModel copy_flag_[3][2];
-  BitTree<2> copy_which_[3];
+  BitModel copy_flag_[3][4];  // [axis][hit of the previous vertex's axis + 2 * previous axis hit]
+  BitModel copy_same_[3];
+  // Point-field components: byte offset in a vertex's values, type, earlier identical component.
+  std::vector<size_t> comp_off_;
+  std::vector<ScalarType> comp_type_;
+  std::vector<uint32_t> alias_;
+  std::vector<uint32_t> field_coded_comps_;  // per field: components not aliased
+  BitModel alias_flag_;     // copied from the same source as the previous axis
+  BitTree<5> copy_which_[3];
+  const uint32_t* near_ = nullptr;  // apex candidates of the gate being decoded (copy sources)
+  int n_near_ = 0;
   uint32_t copy_last_[3] = {0, 0, 0};
   std::vector<double> pred_vals_;
 };
@@ -1126,6 +1298,30 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   std::sort(enc.bedges.begin(), enc.bedges.end());
   enc.vertex_order.assign(np, kNone32);
   enc.tet_order.assign(nt, 0);
+  {
+    struct Comp {
+      const uint8_t* base;
+      size_t stride, size;
+      ScalarType type;
+    };
+    std::vector<Comp> comps;
+    for (const Field& f : mesh.point_fields)
+      for (uint32_t c = 0; c < f.components; ++c)
+        comps.push_back({f.bytes.data() + c * scalarSize(f.type), f.components * scalarSize(f.type), scalarSize(f.type), f.type});
+    enc.alias.assign(comps.size(), kNone32);
+    constexpr size_t kMaxAliasScan = 64;  // components compared pairwise (quadratic)
+    for (size_t k = 1; k < comps.size() && k < kMaxAliasScan; ++k)
+      for (size_t j = 0; j < k; ++j) {
+        if (enc.alias[j] != kNone32 || comps[j].type != comps[k].type) continue;
+        bool same = true;
+        for (size_t v = 0; v < np && same; ++v)
+          same = std::memcmp(comps[j].base + v * comps[j].stride, comps[k].base + v * comps[k].stride, comps[k].size) == 0;
+        if (same && np > 0) {
+          enc.alias[k] = static_cast<uint32_t>(j);
+          break;
+        }
+      }
+  }
 
   out.point_fields.resize(h.point_fields.size());
   out.cell_fields.resize(h.cell_fields.size());

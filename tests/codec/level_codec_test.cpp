@@ -26,6 +26,32 @@ TEST(LevelCodec, StructuredGridSixSplitWithFields) {
   EXPECT_LT(bitsPerTet(e.connectivity, m) + bitsPerTet(e.boundary, m), 2.5);
 }
 
+TEST(LevelCodec, ComponentsRepeatedAsOtherFieldsCostAlmostNothing) {
+  TetMesh m = gridMesh(12, 10, 9, 6);
+  test::addFields(m);
+  // "velocity" (float64 x 3) stored again as its y component, and "pressure" once more: the copies
+  // are declared as repeats of the earlier components and decode bit for bit.
+  const Field& velocity = *m.findPointField("velocity");
+  const Field& pressure = *m.findPointField("pressure");
+  Field vy("vy", 1, ScalarType::kFloat64, m.numPoints()), p2("pressure_again", 1, ScalarType::kFloat32, m.numPoints());
+  // Same as velocity.y except at one vertex: must not be treated as a repeat.
+  Field almost("almost_vy", 1, ScalarType::kFloat64, m.numPoints());
+  for (size_t v = 0; v < m.numPoints(); ++v) {
+    vy.set<double>(v, 0, velocity.get(v, 1));
+    p2.set<float>(v, 0, static_cast<float>(pressure.get(v, 0)));
+    almost.set<double>(v, 0, v == 17 ? velocity.get(v, 1) + 1.0 : velocity.get(v, 1));
+  }
+  m.point_fields.push_back(vy);
+  m.point_fields.push_back(p2);
+  m.point_fields.push_back(almost);
+  const EncodedLevel e = roundTrip(m);
+  const size_t n = m.point_fields.size();
+  ASSERT_EQ(e.point_fields.size(), n);
+  EXPECT_LT(e.point_fields[n - 3].size(), 16u) << "vy repeats velocity's y component";
+  EXPECT_LT(e.point_fields[n - 2].size(), 16u) << "pressure_again repeats pressure";
+  EXPECT_GT(e.point_fields[n - 1].size(), e.point_fields[0].size()) << "almost_vy differs at one vertex";
+}
+
 TEST(LevelCodec, StructuredGridFiveSplitFloat32) {
   TetMesh m = gridMesh(11, 9, 8, 5);
   m.coord_type = ScalarType::kFloat32;

@@ -112,6 +112,21 @@ TetMesh twoComponents() {
   return finish(m);
 }
 
+TetMesh repeatedComponents() {
+  // A vector field stored once more as separate scalars (as fire_ug.vtu does): the copies are coded as
+  // repeats of the vector's components (spec section 10.6).
+  TetMesh m = cubeF64Fields();
+  const Field& velocity = m.point_fields[1];
+  Field vx("velocity_x", 1, ScalarType::kFloat32, m.numPoints()), vz("velocity_z", 1, ScalarType::kFloat32, m.numPoints());
+  for (size_t v = 0; v < m.numPoints(); ++v) {
+    vx.set<float>(v, 0, static_cast<float>(velocity.get(v, 0)));
+    vz.set<float>(v, 0, static_cast<float>(velocity.get(v, 2)));
+  }
+  m.point_fields.push_back(vx);
+  m.point_fields.push_back(vz);
+  return m;
+}
+
 GtnWriteOptions options(bool directory = true) {
   GtnWriteOptions o;
   o.tool_version = "conformance";
@@ -171,6 +186,8 @@ std::vector<Sample> samples() {
                [] { return encodeFile(cubeF64Fields(), options(false)); }));
   s.push_back(valid("unused-points.f32.dir.v1.0.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
   s.push_back(valid("two-components.f32.dir.v1.0.gtn", twoComponents, [] { return encodeFile(twoComponents(), options()); }));
+  s.push_back(valid("repeated-components.f64.dir.v1.0.gtn", repeatedComponents,
+                    [] { return encodeFile(repeatedComponents(), options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
                  const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
                  return encodeFile(cubeF32(), options(false),
