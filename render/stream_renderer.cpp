@@ -2,6 +2,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <atomic>
@@ -105,8 +106,17 @@ struct StreamRenderer::State {
   std::deque<HeldTet> tets;
   std::vector<uint32_t> free_slots;
   uint64_t held = 0;
-  std::vector<ArrivedTet> batch;
+  std::vector<ArrivedTet> batch;     // filled by the decoder
+  std::vector<ArrivedTet> flushing;  // rendered (flushBatch) meanwhile, on another thread
+  tbb::task_group flush_task;
+  bool flush_running = false;
   size_t batch_size = kMinBatch;
+
+  ~State() { waitFlush(); }
+  void waitFlush() {
+    if (flush_running) flush_task.wait();
+    flush_running = false;
+  }
   std::atomic<uint64_t> lost{0};
 
   void release(uint32_t slot);
@@ -157,9 +167,12 @@ void StreamRenderer::State::release(uint32_t slot) {
 }
 
 StreamRenderer::StreamRenderer(const RenderOptions& options) : options_(options), state_(std::make_unique<State>()) {}
-StreamRenderer::~StreamRenderer() = default;
+StreamRenderer::~StreamRenderer() {
+  if (state_) state_->waitFlush();
+}
 
 Status StreamRenderer::beginLevel(const LevelHeader& header) {
+  if (state_) state_->waitFlush();  // a flush still running uses the old state
   state_ = std::make_unique<State>();
   stats_ = StreamRenderStats();
   image_ = Image();
@@ -273,7 +286,15 @@ Status StreamRenderer::tet(const uint32_t v[4], const uint8_t*) {
   }
   ++stats_.tets;
   st.batch.push_back(a);
-  if (st.batch.size() >= st.batch_size) return flushBatch();
+  if (st.batch.size() >= st.batch_size) {
+    // Render the full batch on another thread while the decoder fills the next one: the decoder only
+    // touches the vertex map and `batch`, the flush everything else.
+    st.waitFlush();
+    std::swap(st.batch, st.flushing);
+    st.batch.clear();
+    st.flush_running = true;
+    st.flush_task.run([this] { (void)flushBatch(); });
+  }
   return Status::ok();
 }
 
@@ -284,14 +305,14 @@ Status StreamRenderer::retireVertex(uint32_t id) {
 
 Status StreamRenderer::flushBatch() {
   State& st = *state_;
-  if (st.batch.empty()) return Status::ok();
+  if (st.flushing.empty()) return Status::ok();
   const Camera& cam = setup_.camera;
   const int w = cam.width();
 
   // 1. How many rays still need each arrived tetrahedron (parallel; segments are read only).
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, st.batch.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, st.flushing.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
-      ArrivedTet& a = st.batch[i];
+      ArrivedTet& a = st.flushing[i];
       finishTetGeom(a.g);
       if (st.shared_frame) shearTetGeom(a.g, st.frame);
       const double* corners[4] = {a.g.p[0], a.g.p[1], a.g.p[2], a.g.p[3]};
@@ -380,7 +401,7 @@ Status StreamRenderer::flushBatch() {
   //    at their faces (sequential: the face map).
   std::vector<Trigger> triggers;
   std::vector<uint32_t> arrived_slots;
-  for (ArrivedTet& a : st.batch) {
+  for (ArrivedTet& a : st.flushing) {
     FaceKey keys[4];
     bool needed = a.rays > 0;
     for (int k = 0; k < 4; ++k) {
@@ -436,7 +457,7 @@ Status StreamRenderer::flushBatch() {
       }
     }
   }
-  st.batch.clear();
+  st.flushing.clear();
   stats_.peak_tets_held = std::max(stats_.peak_tets_held, st.held);
 
   // 3. Advance the triggered cursors (parallel over segments; a segment's two cursors in one task).
@@ -499,6 +520,9 @@ Status StreamRenderer::endLevel() {
   State& st = *state_;
   if (st.phase == State::Phase::kBoundary) GTN_RETURN_IF_ERROR(endBoundary());
   if (st.phase != State::Phase::kTets) return invalidData("renderer: endLevel out of order");
+  st.waitFlush();
+  std::swap(st.batch, st.flushing);
+  st.batch.clear();
   GTN_RETURN_IF_ERROR(flushBatch());
   const int w = setup_.camera.width(), h = setup_.camera.height();
   std::vector<Rgba> pixels(static_cast<size_t>(w) * h);

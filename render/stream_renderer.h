@@ -16,7 +16,8 @@
 //   Vertices are released when the stream retires them (tetrahedra keep copies of their four corners).
 //   Memory is therefore the peeling front plus the tetrahedra waiting for rays, plus the image.
 // * Tetrahedra are processed in batches so that the work on a batch runs in parallel (TBB): counting
-//   over the batch's tetrahedra, advancing over the triggered segments. The decode stays one pass.
+//   over the batch's tetrahedra, advancing over the triggered segments. A full batch is rendered on
+//   another thread while the decoder fills the next one. The decode stays one pass.
 #pragma once
 
 #include <array>
