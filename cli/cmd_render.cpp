@@ -154,16 +154,22 @@ int runRender(const RenderArgs& a) {
   const bool generic = a.pipeline == "generic";
   nlohmann::json report;
   LevelChoice choice;
+  double predicted_ms = 0, budget_start_ms = 0;
+  bool calibrated_now = false;
   choice.level = a.level;
   choice.ratio = a.ratio;
   choice.merges = a.merges;
   if (a.budget_ms >= 0) {
     std::string explanation;
-    auto budget = chooseForBudget(**input, a.inputs[0], a.budget_ms, options, generic, msSince(start), &explanation);
+    budget_start_ms = msSince(start);
+    auto budget =
+        chooseForBudget(**input, a.inputs[0], a.budget_ms, options, generic, budget_start_ms, &explanation, &predicted_ms);
     if (!budget.isOk()) return reportError(budget.status());
     choice = budget.value();
     report["budget_ms"] = a.budget_ms;
     report["budget_choice"] = explanation;
+    calibrated_now = explanation.rfind("calibrated", 0) == 0;
+    budget_start_ms = msSince(start);  // the rest of the run is what was predicted
     if (a.verbose) std::fprintf(stderr, "gtn: render: %s\n", explanation.c_str());
   }
   auto level = (*input)->resolve(choice);
@@ -177,6 +183,8 @@ int runRender(const RenderArgs& a) {
     if (Status st = writeBytesAtomically(a.dump_view, text.data(), text.size()); !st.isOk()) return reportError(st);
   }
   const double total_ms = msSince(start);
+  if (a.budget_ms >= 0 && !calibrated_now)
+    recordBudgetRun(a.inputs[0], options, generic, predicted_ms, total_ms - budget_start_ms);
   report["input"] = a.inputs;
   report["output"] = a.output;
   report["pipeline"] = generic ? "generic" : "integrated";

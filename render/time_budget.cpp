@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -17,6 +18,9 @@
 namespace gtn {
 
 namespace {
+// Bounds of the learnt speed factor: beyond them the calibration is stale, not the machine busy.
+constexpr double kMinScale = 0.2, kMaxScale = 5.0;
+
 std::string cachePath() {
   const char* xdg = std::getenv("XDG_CACHE_HOME");
   std::string base;
@@ -61,7 +65,7 @@ StatusOr<double> timeLevel(RenderInput& input, size_t level, const RenderOptions
 
 StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& path, double budget_ms,
                                       const RenderOptions& options, bool generic, double elapsed_ms,
-                                      std::string* explanation) {
+                                      std::string* explanation, double* predicted_ms) {
   if (!(budget_ms > 0)) return usageError("--budget-ms must be positive");
   const std::string key = "v2|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
@@ -86,6 +90,12 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       points.emplace_back(t.get<double>(), m.get<double>());
     }
     source = "calibration read from " + cache_file;
+  }
+  // The machine's speed now against the calibration's, learnt from the budgeted runs since.
+  double scale = 1;
+  if (!points.empty() && entry->contains("scale") && (*entry)["scale"].is_number()) {
+    const double v = (*entry)["scale"].get<double>();
+    if (v >= kMinScale && v <= kMaxScale) scale = v;
   }
   if (points.empty()) {
     // Levels timed: the coarsest, the finest with at most a sixteenth and a quarter of level 0's
@@ -127,13 +137,14 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
   // Piecewise linear in the tetrahedra decoded between measured levels; beyond them, the nearest
   // segment's slope (never decreasing).
   auto predict = [&](double n) {
-    if (points.size() == 1) return points[0].first > 0 ? points[0].second * n / points[0].first : points[0].second;
+    if (points.size() == 1)
+      return scale * (points[0].first > 0 ? points[0].second * n / points[0].first : points[0].second);
     size_t i = 1;
     while (i + 1 < points.size() && points[i].first < n) ++i;
     const auto& [n0, m0] = points[i - 1];
     const auto& [n1, m1] = points[i];
     const double slope = n1 > n0 ? std::max(0.0, (m1 - m0) / (n1 - n0)) : 0.0;
-    return std::max(0.0, m0 + slope * (n - n0));
+    return scale * std::max(0.0, m0 + slope * (n - n0));
   };
   // What the run has spent before rendering (opening the input, this choice) counts against the
   // budget too.
@@ -155,14 +166,34 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
   }
   char buf[1024];
   std::snprintf(buf, sizeof buf,
-                "%s; measured %s; level %d (%llu tetrahedra, %llu merges) predicted %.1f ms + %.1f ms already spent "
+                "%s; measured %s, speed factor %.2f; level %d (%llu tetrahedra, %llu merges) predicted %.1f ms + %.1f ms already spent "
                 "for a budget of %.1f ms%s",
-                source.c_str(), model.c_str(), choice.level,
+                source.c_str(), model.c_str(), scale, choice.level,
                 static_cast<unsigned long long>(input.levelHeader(choice.level).tets),
                 static_cast<unsigned long long>(input.levelHeader(choice.level).merges), predicted, elapsed_ms,
                 budget_ms, predicted > available ? " (the coarsest level; the budget cannot be met)" : "");
   *explanation = buf;
+  if (predicted_ms) *predicted_ms = predicted;
   return choice;
+}
+
+void recordBudgetRun(const std::string& path, const RenderOptions& options, bool generic, double predicted_ms,
+                     double actual_ms) {
+  if (!(predicted_ms > 0) || !(actual_ms > 0)) return;
+  const std::string key = "v2|" + cacheKey(path, options, generic);
+  const std::string cache_file = cachePath();
+  auto text = readWholeFile(cache_file, 1 << 24);
+  if (!text.isOk()) return;
+  nlohmann::json cache = nlohmann::json::parse(text.value(), nullptr, false);
+  if (!cache.is_object() || !cache.contains(key) || !cache[key].is_object()) return;
+  nlohmann::json& entry = cache[key];
+  double scale = entry.contains("scale") && entry["scale"].is_number() ? entry["scale"].get<double>() : 1.0;
+  if (!(scale >= kMinScale && scale <= kMaxScale)) scale = 1;
+  // Half way (geometrically) towards what this run says, so that one outlier does not swing it.
+  scale = std::clamp(scale * std::sqrt(actual_ms / predicted_ms), kMinScale, kMaxScale);
+  entry["scale"] = scale;
+  const std::string out = cache.dump(1);
+  (void)writeBytesAtomically(cache_file, out.data(), out.size());
 }
 
 }  // namespace gtn

@@ -19,9 +19,16 @@
 namespace gtn {
 
 // Chooses the level for `budget_ms` of which `elapsed_ms` are already spent; `explanation` receives a
-// sentence saying what was measured or read from the cache, the model and the choice.
+// sentence saying what was measured or read from the cache, the model and the choice, and
+// `predicted_ms` (optional) the predicted time of the rest of the run.
 StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& path, double budget_ms,
                                       const RenderOptions& options, bool generic, double elapsed_ms,
-                                      std::string* explanation);
+                                      std::string* explanation, double* predicted_ms = nullptr);
+
+// After a budgeted run that used a cached calibration: moves the cached speed factor (which scales
+// every prediction) half way, geometrically, towards actual / predicted, so that the model follows
+// how fast the machine is now (a shared machine's speed varies with its load).
+void recordBudgetRun(const std::string& path, const RenderOptions& options, bool generic, double predicted_ms,
+                     double actual_ms);
 
 }  // namespace gtn

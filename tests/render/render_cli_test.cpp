@@ -226,6 +226,17 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   ASSERT_EQ(b2.exit_code, 0) << b2.err;
   EXPECT_NE(b2.err.find("read from"), std::string::npos) << b2.err;
   EXPECT_EQ(nlohmann::json::parse(b2.out)["level"], 3);  // an impossible budget: the coarsest level
+  // The run that read the calibration folded its measured time into the cached speed factor.
+  const nlohmann::json cache = nlohmann::json::parse(test::readFile(dir + "/cache/gatun/render-calibration.json"));
+  bool has_scale = false;
+  for (const auto& [key, entry] : cache.items()) {
+    if (entry.contains("scale")) {
+      has_scale = true;
+      EXPECT_GT(entry["scale"].get<double>(), 0.0);
+      EXPECT_EQ(entry["tets"].size(), entry["ms"].size());
+    }
+  }
+  EXPECT_TRUE(has_scale);
 }
 
 }  // namespace
