@@ -146,6 +146,22 @@ TEST(RenderCommand, AgreesWithVtkOnSpx) {
   EXPECT_GT(j["mean_frame_s"].get<double>(), 0.0);
 }
 
+// The paper's figure: blunt fin (5-split) at ratio 0.9 differs from the full image by an RMSE of at
+// most 1.32 (volume sampling, default transfer function). Colours and framing must not move between
+// levels for this to hold (RenderInput::fixView).
+TEST(RenderCommand, BluntFinAtRatioNineTenthsStaysClose) {
+  const std::string dir = test::tempDir("render-blunt");
+  const std::string gtn = dir + "/blunt.gtn";
+  ASSERT_EQ(runGtn("convert " + test::dataPath("plot3d/bluntfinxyz.bin") + " " +
+                   test::dataPath("plot3d/bluntfinq.bin") + " --split 5 -o " + gtn).exit_code, 0);
+  ASSERT_EQ(runGtn("render " + gtn + " -o " + dir + "/full.png --field density").exit_code, 0);
+  ASSERT_EQ(runGtn("render " + gtn + " -o " + dir + "/r.png --field density --ratio 0.9").exit_code, 0);
+  const nlohmann::json d = compareJson(dir + "/full.png", dir + "/r.png");
+  EXPECT_GT(d["pixels_compared"].get<int>(), 15000);
+  EXPECT_GT(d["rmse"].get<double>(), 0.0);
+  EXPECT_LE(d["rmse"].get<double>(), 1.32);
+}
+
 TEST(RenderCommand, RejectsBadArguments) {
   const std::string dir = test::tempDir("render-bad");
   const std::string spx = test::dataPath("vtk/spx.vtk");
