@@ -56,6 +56,7 @@ constexpr int kMaxGather = 48;
 constexpr int kFanSteps = 10;
 constexpr int kTetContexts = 2 * 10 * 3;
 constexpr int kBoundaryContexts = 2 * 4 * 3;
+constexpr double kMaxKey = 1.7976931348623157e308;  // candidate distances beyond this (inf, NaN) tie here
 constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d), CODEC-NOTES.md
 // Prediction rules for a vertex x behind the front face (a, b, c) whose decoded tetrahedron has
 // fourth vertex d: weights of (a, b, c, d). Rule 0 is the default (coordinates: g + k (g - d);
@@ -860,7 +861,10 @@ class LevelCoder {
       if (wrong != 0 && orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), q) == wrong) continue;
       const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
       c[kept] = c[i];
+      // Sort keys must be ordered values: overflowing coordinates (NaN or infinite distances) sort
+      // last, so that the comparison stays a strict weak order.
       c[kept].dist = dx * dx + dy * dy + dz * dz;
+      if (!(c[kept].dist <= kMaxKey)) c[kept].dist = kMaxKey;
       c[kept].key = c[kept].dist;
       if (delaunay) {
         const double e[3] = {q[0] - cc0[0], q[1] - cc0[1], q[2] - cc0[2]};
@@ -868,7 +872,8 @@ class LevelCoder {
         // In units of 1/64 of the face's circumradius, so that nearly cospherical candidates (every
         // cell of a structured grid) tie and fall back to the distance order.
         const double t = h > 0 ? (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - r2) / (2 * h) : 1e300;
-        c[kept].key = std::min(std::floor(t * key_scale), 1e18);
+        c[kept].key = std::floor(t * key_scale);
+        if (!(c[kept].key < 1e18)) c[kept].key = 1e18;
       }
       ++kept;
     }
