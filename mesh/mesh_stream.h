@@ -51,6 +51,29 @@ class MeshSink {
   virtual Status endLevel() = 0;
 };
 
+// A sink that only counts what arrives: for decoding to check a stream, and for timing a decoder.
+class CountingSink : public MeshSink {
+ public:
+  Status beginLevel(const LevelHeader&) override { return Status::ok(); }
+  Status vertex(uint32_t, const double*, const uint8_t*) override {
+    ++vertices;
+    return Status::ok();
+  }
+  Status boundaryTriangle(const uint32_t*) override {
+    ++boundary_triangles;
+    return Status::ok();
+  }
+  Status endBoundary() override { return Status::ok(); }
+  Status tet(const uint32_t*, const uint8_t*) override {
+    ++tets;
+    return Status::ok();
+  }
+  Status retireVertex(uint32_t) override { return Status::ok(); }
+  Status endLevel() override { return Status::ok(); }
+
+  uint64_t vertices = 0, boundary_triangles = 0, tets = 0;
+};
+
 // A sink that assembles the stream into a TetMesh (the generic, whole-mesh consumer).
 class TetMeshBuilder : public MeshSink {
  public:

@@ -46,21 +46,6 @@ struct Dataset {
   int split = 6;
 };
 
-class NullSink : public gtn::MeshSink {
- public:
-  gtn::Status beginLevel(const gtn::LevelHeader&) override { return gtn::Status::ok(); }
-  gtn::Status vertex(uint32_t, const double*, const uint8_t*) override { return gtn::Status::ok(); }
-  gtn::Status boundaryTriangle(const uint32_t*) override { return gtn::Status::ok(); }
-  gtn::Status endBoundary() override { return gtn::Status::ok(); }
-  gtn::Status tet(const uint32_t*, const uint8_t*) override {
-    ++tets;
-    return gtn::Status::ok();
-  }
-  gtn::Status retireVertex(uint32_t) override { return gtn::Status::ok(); }
-  gtn::Status endLevel() override { return gtn::Status::ok(); }
-  uint64_t tets = 0;
-};
-
 // Size of `data` compressed by a command reading stdin (e.g. "xz -9 -c").
 size_t externalSize(const std::vector<uint8_t>& data, const std::string& command) {
   if (data.empty()) return 0;
@@ -184,7 +169,7 @@ int main(int argc, char** argv) {
     gtn::DecodeStats stats;
     t0 = Clock::now();
     do {
-      NullSink sink;
+      gtn::CountingSink sink;
       const gtn::Status st = gtn::decodeLevel(e.header, pl, sink, &stats, d.name);
       if (!st.isOk()) {
         std::printf("%-16s decode failed: %s\n", d.name.c_str(), st.message().c_str());

@@ -32,21 +32,6 @@ struct Dataset {
   int split;
 };
 
-class NullSink : public MeshSink {
- public:
-  Status beginLevel(const LevelHeader&) override { return Status::ok(); }
-  Status vertex(uint32_t, const double*, const uint8_t*) override { return Status::ok(); }
-  Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
-  Status endBoundary() override { return Status::ok(); }
-  Status tet(const uint32_t*, const uint8_t*) override {
-    ++tets;
-    return Status::ok();
-  }
-  Status retireVertex(uint32_t) override { return Status::ok(); }
-  Status endLevel() override { return Status::ok(); }
-  uint64_t tets = 0;
-};
-
 // The decoder's event stream, recorded once and replayed, so that the filter's own cost can be timed
 // in short runs apart from the decoding.
 class RecordingSink : public MeshSink {
@@ -149,7 +134,6 @@ uint64_t levelBytes(const EncodedLevel& e) {
   return b;
 }
 
-
 int run(const Dataset& d, int repeat) {
   ImportOptions io;
   io.split = d.split;
@@ -197,17 +181,17 @@ int run(const Dataset& d, int repeat) {
     double null_replay = 1e30, simp_replay = 1e30;
     for (int r = 0; r < repeat; ++r) {
       double t0 = threadSeconds();
-      NullSink a;
+      CountingSink a;
       (void)decodeLevel(header, payload, a, nullptr, d.name);
       *plain = std::min(*plain, threadSeconds() - t0);
     }
     for (int r = 0; r < 4 * repeat; ++r) {
       double t0 = threadSeconds();
-      NullSink a;
+      CountingSink a;
       rec.replay(a);
       null_replay = std::min(null_replay, threadSeconds() - t0);
       t0 = threadSeconds();
-      NullSink b;
+      CountingSink b;
       StreamSimplifier simp(st, n, b);
       rec.replay(simp);
       simp_replay = std::min(simp_replay, threadSeconds() - t0);

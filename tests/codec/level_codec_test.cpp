@@ -176,17 +176,6 @@ TEST(LevelCodec, ValueKeysRoundTripEveryType) {
 
 // ---- corrupt payloads -----------------------------------------------------------------------------
 
-class NullSink : public MeshSink {
- public:
-  Status beginLevel(const LevelHeader&) override { return Status::ok(); }
-  Status vertex(uint32_t, const double*, const uint8_t*) override { return Status::ok(); }
-  Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
-  Status endBoundary() override { return Status::ok(); }
-  Status tet(const uint32_t*, const uint8_t*) override { return Status::ok(); }
-  Status retireVertex(uint32_t) override { return Status::ok(); }
-  Status endLevel() override { return Status::ok(); }
-};
-
 EncodedLevel smallEncoded() {
   TetMesh m = gridMesh(4, 4, 3, 5);
   test::addFields(m);
@@ -210,7 +199,7 @@ TEST(LevelCodecCorrupt, EveryTruncatedStreamFailsCleanly) {
     for (size_t len = 0; len < full.size(); ++len) {
       EncodedLevel c = e;
       streamsOf(c)[k]->resize(len);
-      NullSink sink;
+      CountingSink sink;
       const Status st = decodeLevel(c.header, payloadOf(c), sink, nullptr, "level 0 of t.gtn");
       ASSERT_FALSE(st.isOk()) << "stream " << k << " cut to " << len << " bytes decoded";
       EXPECT_EQ(st.code(), StatusCode::kInvalidData);
@@ -219,7 +208,7 @@ TEST(LevelCodecCorrupt, EveryTruncatedStreamFailsCleanly) {
     // Trailing bytes are rejected too.
     EncodedLevel c = e;
     streamsOf(c)[k]->push_back(0);
-    NullSink sink;
+    CountingSink sink;
     EXPECT_FALSE(decodeLevel(c.header, payloadOf(c), sink, nullptr, "x").isOk());
   }
 }
@@ -237,7 +226,7 @@ TEST(LevelCodecCorrupt, RandomByteFlipsNeverCrash) {
       if (s->empty()) continue;
       (*s)[rng() % s->size()] ^= static_cast<uint8_t>(1 + rng() % 255);
     }
-    NullSink sink;
+    CountingSink sink;
     const Status st = decodeLevel(c.header, payloadOf(c), sink, nullptr, "flip");
     if (!st.isOk()) {
       ++failures;
@@ -255,12 +244,12 @@ TEST(LevelCodecCorrupt, HeaderCountsMustMatch) {
     if (which == 1) h.points = h.points * 1000000;
     if (which == 2) h.boundary_triangles -= 1;
     if (which == 3) h.tets = uint64_t{1} << 40;
-    NullSink sink;
+    CountingSink sink;
     EXPECT_FALSE(decodeLevel(h, payloadOf(e), sink, nullptr, "x").isOk()) << which;
   }
   LevelHeader h = e.header;
   h.point_fields.pop_back();
-  NullSink sink;
+  CountingSink sink;
   EXPECT_FALSE(decodeLevel(h, payloadOf(e), sink, nullptr, "x").isOk());
 }
 
