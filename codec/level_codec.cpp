@@ -832,8 +832,9 @@ class LevelCoder {
     // The apex lies on the far side of the gate face from the decoded tetrahedron (a, b, c, d),
     // whatever the mesh's orientation convention; behind a boundary face, on the side where the
     // apexes decoded so far mostly lay. Candidates on the other side are dropped (the escape still
-    // reaches them). Exact signs, so that every decoder agrees.
-    const int wrong = g.d != kNoSlot ? orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(g.d))
+    // reaches them). Only signs a floating-point filter proves count (near-flat cases drop nothing):
+    // exact arithmetic would cost more than it saves, and the filter is reproducible everywhere.
+    const int wrong = g.d != kNoSlot ? orient3dCertain(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(g.d))
                                      : (apex_votes_ > 0 ? -1 : (apex_votes_ < 0 ? 1 : 0));
     // Delaunay order: the spheres through a, b and c, swept into the undecoded side, meet the
     // apex of a Delaunay tetrahedron first. key = the sweep parameter at which a candidate is met.
@@ -858,7 +859,7 @@ class LevelCoder {
     int kept = 0;
     for (int i = 0; i < n; ++i) {
       const double* q = P(c[i].s);
-      if (wrong != 0 && orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), q) == wrong) continue;
+      if (wrong != 0 && orient3dCertain(P(g.v[0]), P(g.v[1]), P(g.v[2]), q) == wrong) continue;
       const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
       c[kept] = c[i];
       // Sort keys must be ordered values: overflowing coordinates (NaN or infinite distances) sort
@@ -886,7 +887,7 @@ class LevelCoder {
     if (delaunay && n > 1) {
       Candidate alt[kMaxGather];
       std::copy(c, c + n, alt);
-      std::sort(alt, alt + n, [](const Candidate& x, const Candidate& y) {
+      std::partial_sort(alt, alt + m, alt + n, [](const Candidate& x, const Candidate& y) {
         if (x.w != y.w) return x.w > y.w;
         if (x.key != y.key) return x.key < y.key;
         if (x.dist != y.dist) return x.dist < y.dist;
@@ -895,7 +896,9 @@ class LevelCoder {
       for (int i = 0; i < m; ++i) by_key_[i] = alt[i].s;
       by_key_n_ = m;
     }
-    std::sort(c, c + n, [](const Candidate& x, const Candidate& y) {
+    // Only the first m are used: the comparisons are total (slots differ), so a partial sort gives
+    // exactly the prefix of a full one.
+    std::partial_sort(c, c + m, c + n, [](const Candidate& x, const Candidate& y) {
       if (x.w != y.w) return x.w > y.w;
       if (x.dist != y.dist) return x.dist < y.dist;
       return x.s < y.s;
@@ -908,8 +911,8 @@ class LevelCoder {
     }
     uint32_t k = 0;
     if (n > 0) {
-      uint32_t top = 0;
-      while (static_cast<int>(top) < n && c[top].w == c[0].w) ++top;
+      uint32_t top = 0;  // candidates sharing the best multiplicity (only up to 3 matter)
+      for (int i = 0; i < n && top < 3; ++i) top += c[i].w == c[0].w;
       k = 1 + (std::min<uint32_t>(c[0].w, 3) - 1) * 3 + std::min<uint32_t>(top, 3) - 1;
     }
     // How close the best candidate lies to the predicted apex, relative to the gate's size.
@@ -1138,7 +1141,7 @@ class LevelCoder {
         if (sym > static_cast<uint32_t>(nc)) return bad("candidate rank out of range");
         x = cands[sym - 1];
       }
-      apex_votes_ += orient3d(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(x));
+      apex_votes_ += orient3dCertain(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(x));
       if (by_key_n_ > 0) {
         const int rk = static_cast<int>(std::find(by_key_, by_key_ + by_key_n_, x) - by_key_);
         const int rd = static_cast<int>(std::find(by_dist_, by_dist_ + by_dist_n_, x) - by_dist_);
@@ -1208,12 +1211,12 @@ class LevelCoder {
   std::vector<uint32_t> pf_last_rule_;
   BitModel flip_, retire_, seed_more_, bseed_more_, bpartner_, seed_existing_;
 
-  int64_t apex_votes_ = 0;
+  int64_t apex_votes_ = 0;  // sum of orient3dCertain(a, b, c, apex) over the tetrahedra decoded so far
   // Apex candidates in both orders (section 10.4 of the spec) and which order has ranked better.
   static constexpr int kOrderScoreLimit = 32;
   uint32_t by_dist_[kMaxCandidates], by_key_[kMaxCandidates];
   int by_dist_n_ = 0, by_key_n_ = 0;
-  int order_score_ = 0;  // sum of orient3d(a, b, c, apex) over the tetrahedra decoded so far
+  int order_score_ = 0;
   uint64_t next_id_ = 0, tets_done_ = 0, btris_done_ = 0, live_ = 0, peak_live_ = 0;
   double last_pos_[3] = {0, 0, 0};
   std::vector<uint8_t> last_vals_, cell_buf_;

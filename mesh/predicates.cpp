@@ -14,25 +14,28 @@ using Point2 = Kernel::Point_2;
 int toInt(CGAL::Orientation o) { return o == CGAL::POSITIVE ? 1 : (o == CGAL::NEGATIVE ? -1 : 0); }
 }  // namespace
 
+int orient3dCertain(const double* a, const double* b, const double* c, const double* d) {
+  // Shewchuk's orient3d stage A bound, for the determinant of the three difference vectors expanded
+  // as below: when |det| exceeds it, its sign is the exact one.
+  const double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2];
+  const double vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
+  const double wx = d[0] - a[0], wy = d[1] - a[1], wz = d[2] - a[2];
+  const double vxwy = vx * wy, vywx = vy * wx, wxuy = wx * uy, wyux = wy * ux, uxvy = ux * vy, uyvx = uy * vx;
+  const double det = uz * (vxwy - vywx) + vz * (wxuy - wyux) + wz * (uxvy - uyvx);
+  const double permanent = (std::fabs(vxwy) + std::fabs(vywx)) * std::fabs(uz) +
+                           (std::fabs(wxuy) + std::fabs(wyux)) * std::fabs(vz) +
+                           (std::fabs(uxvy) + std::fabs(uyvx)) * std::fabs(wz);
+  constexpr double kEps = 0x1p-53;
+  constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
+  const double err = kBound * permanent;
+  if (det > err) return 1;
+  if (-det > err) return -1;
+  return 0;
+}
+
 int orient3d(const double* a, const double* b, const double* c, const double* d) {
-  // Forward error filter first (Shewchuk's orient3d stage A bound, for the determinant of the three
-  // difference vectors expanded as below): when |det| exceeds it, its sign is exact. The codec calls
-  // this for every apex candidate, so the common case must not leave the function.
-  {
-    const double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2];
-    const double vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
-    const double wx = d[0] - a[0], wy = d[1] - a[1], wz = d[2] - a[2];
-    const double vxwy = vx * wy, vywx = vy * wx, wxuy = wx * uy, wyux = wy * ux, uxvy = ux * vy, uyvx = uy * vx;
-    const double det = uz * (vxwy - vywx) + vz * (wxuy - wyux) + wz * (uxvy - uyvx);
-    const double permanent = (std::fabs(vxwy) + std::fabs(vywx)) * std::fabs(uz) +
-                             (std::fabs(wxuy) + std::fabs(wyux)) * std::fabs(vz) +
-                             (std::fabs(uxvy) + std::fabs(uyvx)) * std::fabs(wz);
-    constexpr double kEps = 0x1p-53;
-    constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
-    const double err = kBound * permanent;
-    if (det > err) return 1;
-    if (-det > err) return -1;
-  }
+  // The filter decides the common case without leaving the function.
+  if (const int sign = orient3dCertain(a, b, c, d)) return sign;
   // CGAL::orientation(p, q, r, s) is POSITIVE when s lies on the positive side of (p, q, r), that is
   // when det[q - p, r - p, s - p] > 0, the convention of ARCHITECTURE.md.
   return toInt(CGAL::orientation(Point3(a[0], a[1], a[2]), Point3(b[0], b[1], b[2]), Point3(c[0], c[1], c[2]),
