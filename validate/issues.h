@@ -47,9 +47,9 @@ const char* severityName(Severity severity);  // "error", "warning", "info"
   X(kDuplicateTet, "DUPLICATE_TET", kError, "mesh", "tetrahedra with the same four vertices as another")         \
   X(kNonManifoldFace, "NON_MANIFOLD_FACE", kError, "mesh", "triangular faces shared by three or more tetrahedra") \
   X(kBoundaryNotClosed, "BOUNDARY_NOT_CLOSED", kError, "mesh",                                                   \
-    "boundary edges not in exactly two boundary triangles")                                                      \
+    "boundary edges in an odd number of boundary triangles (the surface has a hole)")                          \
   X(kBoundaryOrientation, "BOUNDARY_ORIENTATION", kError, "mesh",                                                \
-    "boundary edges whose two triangles run the same direction (inconsistent orientation)")                      \
+    "boundary edges used more often in one direction than the other (inconsistent orientation)")               \
   X(kInvertedTet, "INVERTED_TET", kError, "mesh", "inverted tetrahedra (negative volume, exact predicate)")      \
   X(kZeroVolumeTet, "ZERO_VOLUME_TET", kWarning, "mesh", "zero-volume tetrahedra (exact predicate)")             \
   X(kNonFiniteCoordinate, "NON_FINITE_COORDINATE", kError, "mesh", "points with a NaN or infinite coordinate")  \

@@ -29,8 +29,10 @@ struct MeshCheckStats {
 bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& report,
                MeshCheckStats* stats = nullptr);
 
-// Checks that a boundary surface stored in the file (outward triangles) equals the boundary faces of
-// the level's tetrahedra, orientation included (BOUNDARY_MISMATCH).
+// Checks that a boundary surface stored in the file (outward triangles) is closed (BOUNDARY_NOT_CLOSED)
+// and then that it equals the boundary faces of the level's tetrahedra, orientation included
+// (BOUNDARY_MISMATCH). The boundary of tetrahedra whose faces are manifold is always closed; an
+// edge in four or more boundary triangles (two parts touching along it) is allowed.
 void checkStoredBoundary(const TetMesh& mesh, const std::vector<Triangle>& stored, const std::string& scope,
                          ValidationReport& report);
 

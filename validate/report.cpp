@@ -19,7 +19,7 @@ ReportedIssue* ValidationReport::find(IssueCode code, const std::string& scope, 
   auto it = index_.find(key);
   if (it != index_.end()) return &issues_[it->second];
   if (!create) return nullptr;
-  if (issues_.size() >= max_issues_) {
+  if (issues_.size() >= kMaxKept) {
     truncated_ = true;
     return nullptr;
   }
@@ -81,9 +81,18 @@ std::vector<std::string> ValidationReport::errorCodes() const {
   return out;
 }
 
+std::vector<ReportedIssue> ValidationReport::issues() const {
+  std::vector<ReportedIssue> shown = issues_;
+  std::stable_sort(shown.begin(), shown.end(), [](const ReportedIssue& a, const ReportedIssue& b) {
+    return issueInfo(a.code).severity < issueInfo(b.code).severity;
+  });
+  if (shown.size() > max_issues_) shown.resize(max_issues_);
+  return shown;
+}
+
 std::string ValidationReport::toText(const std::string& file) const {
   std::string out;
-  for (const ReportedIssue& issue : issues_) {
+  for (const ReportedIssue& issue : issues()) {
     const IssueInfo& info = issueInfo(issue.code);
     out += std::string(severityName(info.severity)) + ": " + info.code + ": " + issue.message();
     if (!issue.paths.empty()) {
@@ -95,7 +104,7 @@ std::string ValidationReport::toText(const std::string& file) const {
     if (issue.offset) out += " (byte " + std::to_string(*issue.offset) + ")";
     out += "\n";
   }
-  if (truncated_) out += "(more messages left out: --max-issues)\n";
+  if (truncated()) out += "(more messages left out: --max-issues)\n";
   out += file + ": " + (hasErrors() ? "INVALID" : "valid") + " (" + std::to_string(count(Severity::kError)) +
          " errors, " + std::to_string(count(Severity::kWarning)) + " warnings, " +
          std::to_string(count(Severity::kInfo)) + " infos)\n";
@@ -109,9 +118,9 @@ nlohmann::json ValidationReport::toJson(const std::string& file) const {
   j["counts"] = {{"error", count(Severity::kError)},
                  {"warning", count(Severity::kWarning)},
                  {"info", count(Severity::kInfo)}};
-  j["truncated"] = truncated_;
+  j["truncated"] = truncated();
   nlohmann::json messages = nlohmann::json::array();
-  for (const ReportedIssue& issue : issues_) {
+  for (const ReportedIssue& issue : issues()) {
     const IssueInfo& info = issueInfo(issue.code);
     nlohmann::json m;
     m["code"] = info.code;

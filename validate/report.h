@@ -50,12 +50,14 @@ class ValidationReport {
   // aggregated message whether it is recorded before or after.
   void setTotal(IssueCode code, const std::string& scope, uint64_t total);
 
-  const std::vector<ReportedIssue>& issues() const { return issues_; }
+  // The messages shown: errors first, then warnings, then infos, each in order of first appearance, at
+  // most max_issues of them (an info found early never displaces an error found later).
+  std::vector<ReportedIssue> issues() const;
   uint64_t count(Severity severity) const { return counts_[static_cast<int>(severity)]; }
   uint64_t count(IssueCode code) const;
   bool hasErrors() const { return count(Severity::kError) > 0; }
   // True when some messages were dropped because of max_issues (the counts still include them).
-  bool truncated() const { return truncated_; }
+  bool truncated() const { return truncated_ || issues_.size() > max_issues_; }
   // Codes of the messages with severity error, in order of first appearance, without repeats.
   std::vector<std::string> errorCodes() const;
 
@@ -68,6 +70,10 @@ class ValidationReport {
 
  private:
   ReportedIssue* find(IssueCode code, const std::string& scope, bool create);
+
+  // Aggregated messages kept before sorting and truncation: one per code and scope, so a real file has
+  // a few dozen; the cap bounds what a hostile file with many scopes can make the report hold.
+  static constexpr size_t kMaxKept = 4096;
 
   size_t max_issues_;
   std::vector<ReportedIssue> issues_;

@@ -3,12 +3,14 @@
 // must-fail conformance files (container defects): they must be reported invalid. The valid seeds
 // were written by the codec of their day; the codec's own conformance tests pin its bitstream, so
 // here they only have to come back with a report.
-// Regression files must simply come back with a report (no crash, hang or sanitizer finding).
+// Regression files must simply come back with a report (no crash, hang or sanitizer finding). The
+// decoder target's corpus (tests/fuzz/corpus-decoder) goes through the decoders directly.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <filesystem>
 
+#include "fuzz/fuzz_decoder_input.h"
 #include "validate/validate_fixtures.h"
 
 namespace gtn::test {
@@ -47,6 +49,20 @@ TEST(FuzzCorpus, RegressionsComeBackWithAReport) {
       EXPECT_LE(r.issues().size(), 16u);
     }
   }
+}
+
+// The decoder target's corpus (inputs laid out as in fuzz_decoder_input.h) through the level and
+// merge-tree decoders: each comes back with a Status. Most are rejected; some decode.
+TEST(FuzzCorpus, DecoderCorpusDecodesOrIsRejected) {
+  const auto files = filesIn(std::string(GTN_SOURCE_DIR) + "/tests/fuzz/corpus-decoder");
+  ASSERT_GE(files.size(), 100u);
+  size_t accepted = 0;
+  for (const auto& f : files) {
+    SCOPED_TRACE(f.string());
+    const Bytes b = readBytes(f.string());
+    accepted += fuzz::decodeFuzzInput(b.data(), b.size());
+  }
+  EXPECT_LT(accepted, files.size());
 }
 
 }  // namespace

@@ -5,11 +5,13 @@
 // checks them as decoded content. A last test asserts that every error code has its case here.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <map>
 
+#include "convert/export.h"
 #include "mesh/mesh_stats.h"
 #include "simplify/apply.h"
 #include "validate/mesh_checks.h"
@@ -246,14 +248,13 @@ std::map<std::string, Case> cases() {
     m.tets = {{0, 1, 2, 3}, {0, 1, 2, 4}, {0, 2, 1, 5}};
     return reportOf(decodedOf(m));
   };
-  c["BOUNDARY_NOT_CLOSED"].decoded = [] {
-    // Two tetrahedra sharing only the edge (0, 1).
-    TetMesh m;
-    m.coords = {0, 0, 0, 1, 0, 0, 0.5, 1, 0, 0.5, 0.5, 1, 0.5, -1, 0, 0.5, -0.5, -1};
-    m.tets = {{0, 1, 2, 3}, {0, 1, 4, 5}};
-    size_t zero = 0;
-    normalizeOrientation(m, &zero);
-    return reportOf(decodedOf(m));
+  c["BOUNDARY_NOT_CLOSED"].decoded = [octa] {
+    // The stored boundary surface with a hole: one of the octahedron's eight triangles left out.
+    DecodedFile f = decodedOf(octa);
+    EXPECT_EQ(f.levels[0].boundary.size(), 8u);
+    f.levels[0].boundary.pop_back();
+    f.levels[0].header.boundary_triangles = f.levels[0].boundary.size();
+    return reportOf(f);
   };
   c["BOUNDARY_ORIENTATION"].decoded = [] {
     // Two positive tetrahedra on the same side of one shared triangle.
@@ -413,6 +414,98 @@ TEST(MustFail, EachCaseGetsExactlyItsCode) {
   }
 }
 
+// Level 0 and a merge tree of one merge, vertex c into p, as a real file: the normal writer and coders,
+// with the tree's annotations (boundary flag, tetrahedra removed) as the replay finds them, so that
+// only the defect under test is reported. `extra_removed` falsifies the annotation.
+Bytes oneMergeFile(const TetMesh& mesh, uint32_t c, uint32_t p, uint32_t extra_removed = 0) {
+  MergeTree t;
+  const size_t n = mesh.numPoints();
+  t.parent.assign(n, MergeTree::kRoot);
+  t.rank.assign(n, 0);
+  t.removed.assign(n, 0);
+  t.boundary.assign(n, 0);
+  t.parent[c] = p;
+  t.rank[c] = 1;
+  t.merges = 1;
+  for (const Triangle& tri : boundaryTriangles(mesh, computeFaceAdjacency(mesh)))
+    for (uint32_t v : tri) t.boundary[v] = t.boundary[v] || v == c;
+  for (const Tet& tet : mesh.tets)
+    if (std::count(tet.begin(), tet.end(), c) && std::count(tet.begin(), tet.end(), p)) ++t.removed[c];
+  t.removed[c] += extra_removed;
+  EXPECT_TRUE(t.check("one merge").isOk());
+  GtnLevelInput l0;
+  l0.mesh = &mesh;
+  l0.merge_tree = treeCoder(t);
+  return writeLevels({l0});
+}
+
+// The merge-layer defects the merge-tree coder can represent (all but a tree that is not a forest, ranks
+// that are not a permutation and a size that differs, which its decoder rejects by construction), as
+// .gtn files through the whole validator: each gets exactly its code.
+TEST(MustFail, MergeDefectsAsFiles) {
+  const double unit_x[3] = {1, 0, 0};
+  const TetMesh octa = octahedron(unit_x);
+  std::map<std::string, Bytes> files;
+  files["MERGE_NOT_ADJACENT"] = oneMergeFile(octa, 1, 2);
+  files["MERGE_BOUNDARY_INTO_INTERIOR"] = oneMergeFile(octa, 3, 0);
+  const double w_invert[3] = {1, 3, 0.5}, w_flat[3] = {1, 1, 1};
+  files["MERGE_INVERTS_TET"] = oneMergeFile(octahedron(w_invert), 0, 1);
+  files["MERGE_FLATTENS_TET"] = oneMergeFile(octahedron(w_flat), 0, 1);
+  {
+    TetMesh m;  // as in cases(): the merge turns boundary triangle (c, b, e) from +z to -y
+    m.coords = {0.5, 1, 0, -2, -0.5, 2, 0, 0, 0, 1, 0, 0, 0.5, 0.3, -1};
+    m.tets = {{0, 1, 2, 4}, {0, 2, 3, 4}};
+    size_t zero = 0;
+    normalizeOrientation(m, &zero);
+    files["MERGE_FLIPS_BOUNDARY"] = oneMergeFile(m, 0, 1);
+  }
+  {
+    TetMesh m;  // as in cases(): level 0 touches along an edge, the merge puts a face in three tetrahedra
+    m.coords = {0, 0, 0.05, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.3, 0.3, 0.5, 0.3, 0.3, 1, 0.3, 0.3, -1,
+                -1, 0, 0.1, 0, -1, 0.1};
+    m.tets = {{0, 1, 7, 8}, {0, 2, 3, 4}, {1, 2, 3, 5}, {1, 2, 3, 6}};
+    size_t zero = 0;
+    normalizeOrientation(m, &zero);
+    files["MERGE_BREAKS_MANIFOLD"] = oneMergeFile(m, 0, 1);
+  }
+  files["MERGE_ANNOTATION_MISMATCH"] = oneMergeFile(octa, 0, 1, /*extra_removed=*/1);
+  // The same merge with true annotations is clean: the defects above are the merges', not the files'.
+  const ValidationReport clean = validateBytesForTest(oneMergeFile(octa, 0, 1));
+  EXPECT_FALSE(clean.hasErrors()) << clean.toText("octahedron, one merge");
+  for (const auto& [code, bytes] : files) {
+    SCOPED_TRACE(code);
+    ASSERT_FALSE(bytes.empty());
+    const ValidationReport r = validateBytesForTest(bytes);
+    EXPECT_EQ(errorCodeSet(r), std::set<std::string>{code}) << r.toText(code);
+  }
+}
+
+// The --against codes on the real path: the base file against sources written as .vtu files.
+TEST(MustFail, SourceDefectsAgainstFiles) {
+  const auto against = [](const TetMesh& source, const std::string& name) {
+    const std::string path = base().dir + "/" + name + ".vtu";
+    EXPECT_TRUE(exportVtu(source, path, {}).isOk());
+    ValidateOptions o;
+    o.against = {path};
+    return validateBytesForTest(base().bytes, o);
+  };
+  const ValidationReport same = against(base().mesh, "same");
+  EXPECT_FALSE(same.hasErrors()) << same.toText("same");
+  TetMesh moved = base().mesh;
+  moved.coords[3] = std::nextafter(moved.coords[3], 1e300);
+  EXPECT_EQ(errorCodeSet(against(moved, "moved")), std::set<std::string>{"SOURCE_MESH_MISMATCH"});
+  TetMesh renamed = base().mesh;
+  renamed.point_fields[0].name += "_renamed";
+  EXPECT_EQ(errorCodeSet(against(renamed, "renamed")), std::set<std::string>{"SOURCE_FIELD_MISMATCH"});
+  TetMesh fewer = base().mesh;
+  fewer.tets.pop_back();
+  for (Field& f : fewer.cell_fields) f.bytes.resize(f.bytes.size() - f.components * f.valueSize());
+  EXPECT_EQ(errorCodeSet(against(fewer, "fewer")), std::set<std::string>{"SOURCE_COUNT_MISMATCH"});
+  ValidateOptions missing;
+  missing.against = {base().dir + "/no-such-source.vtu"};
+  EXPECT_EQ(errorCodeSet(validateBytesForTest(base().bytes, missing)), std::set<std::string>{"SOURCE_UNREADABLE"});
+}
+
 TEST(MustFail, EveryErrorCodeHasACase) {
   const auto all = cases();
   for (const IssueInfo& info : allIssues()) {
@@ -432,6 +525,16 @@ TEST(MustFail, WarningsAndInfosKeepTheFileValid) {
   EXPECT_EQ(r.count(IssueCode::kUnreferencedPoint), 1u);
   EXPECT_EQ(r.count(IssueCode::kNonFiniteValue), 1u);
   EXPECT_EQ(r.count(IssueCode::kNoMergeTree), 1u);
+
+  // Two tetrahedra sharing only an edge (as parts of Ossicles.vtu do): that edge is in four boundary
+  // triangles, two each way; the surface is closed and consistently oriented.
+  TetMesh pinched;
+  pinched.coords = {0, 0, 0, 1, 0, 0, 0.5, 1, 0, 0.5, 0.5, 1, 0.5, -1, 0, 0.5, -0.5, -1};
+  pinched.tets = {{0, 1, 2, 3}, {0, 1, 4, 5}};
+  size_t pinched_zero = 0;
+  normalizeOrientation(pinched, &pinched_zero);
+  ValidationReport p = reportOf(decodedOf(pinched));
+  EXPECT_FALSE(p.hasErrors()) << p.toText("pinched");
 
   // A flat tetrahedron is a warning.
   TetMesh flat;

@@ -77,5 +77,25 @@ TEST(Report, AggregatesCountsTruncatesAndSerialises) {
   EXPECT_FALSE(s["truncated"].get<bool>());
 }
 
+TEST(Report, ErrorsComeFirstAndAreNeverDisplacedByEarlierInfos) {
+  ValidationReport r(1);
+  r.add(IssueCode::kUnreferencedPoint, "/levels/0", "/levels/0/points/3");
+  r.add(IssueCode::kZeroVolumeTet, "/levels/0", "/levels/0/tets/9");
+  r.add(IssueCode::kInvertedTet, "/levels/0", "/levels/0/tets/4");
+  ASSERT_EQ(r.issues().size(), 1u);
+  EXPECT_EQ(r.issues()[0].code, IssueCode::kInvertedTet);
+  EXPECT_TRUE(r.truncated());
+  ValidationReport all(10);
+  all.add(IssueCode::kUnreferencedPoint, "/levels/0", "/levels/0/points/3");
+  all.add(IssueCode::kZeroVolumeTet, "/levels/0", "/levels/0/tets/9");
+  all.add(IssueCode::kInvertedTet, "/levels/0", "/levels/0/tets/4");
+  const std::vector<ReportedIssue> shown = all.issues();
+  ASSERT_EQ(shown.size(), 3u);
+  EXPECT_EQ(shown[0].code, IssueCode::kInvertedTet);
+  EXPECT_EQ(shown[1].code, IssueCode::kZeroVolumeTet);
+  EXPECT_EQ(shown[2].code, IssueCode::kUnreferencedPoint);
+  EXPECT_FALSE(all.truncated());
+}
+
 }  // namespace
 }  // namespace gtn::test

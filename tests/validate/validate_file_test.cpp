@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "convert/import.h"
+#include "mesh/mesh_stats.h"
 #include "validate/validate_fixtures.h"
 
 namespace gtn::test {
@@ -103,6 +104,74 @@ TEST(ValidateFile, CliExitCodesAndJson) {
   EXPECT_EQ(runGtn("validate " + f.dir + "/missing.gtn").exit_code, 3);
   EXPECT_EQ(runGtn("validate").exit_code, 2);
   EXPECT_EQ(runGtn("validate --max-issues 0 " + f.gtn).exit_code, 2);
+}
+
+// The JSON report through the binary on a file with defects of several kinds: logical paths of the
+// occurrences, aggregation with a count, --max-issues truncating the messages but not the counts, and
+// --quick checking the container only (which is intact here).
+TEST(ValidateFile, CliJsonPathsAggregationMaxIssuesAndQuick) {
+  const std::string dir = tempDir("validate-json");
+  TetMesh m;  // the octahedron around vertex 0, two tetrahedra turned inside out, one point unused
+  m.coords = {0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 5, 5, 5};
+  for (uint32_t x : {1u, 2u})
+    for (uint32_t y : {3u, 4u})
+      for (uint32_t z : {5u, 6u}) m.tets.push_back({0, x, y, z});
+  size_t zero = 0;
+  normalizeOrientation(m, &zero);
+  std::swap(m.tets[2][2], m.tets[2][3]);
+  std::swap(m.tets[5][2], m.tets[5][3]);
+  GtnLevelInput l0;
+  l0.mesh = &m;
+  const std::string path = dir + "/inverted.gtn";
+  ASSERT_TRUE(writeGtnFile(path, {l0}, GtnWriteOptions{}).isOk());
+
+  const RunResult full = runGtn("validate --json " + path);
+  EXPECT_EQ(full.exit_code, 1) << full.err;
+  const nlohmann::json j = nlohmann::json::parse(full.out);
+  EXPECT_EQ(j["file"], path);
+  EXPECT_FALSE(j["valid"].get<bool>());
+  EXPECT_FALSE(j["truncated"].get<bool>());
+  EXPECT_EQ(j["counts"]["error"].get<int>(), 2);
+  EXPECT_EQ(j["counts"]["warning"].get<int>(), 0);
+  EXPECT_EQ(j["counts"]["info"].get<int>(), 2);  // the unused point, no merge tree
+  ASSERT_GE(j["messages"].size(), 3u);
+  const nlohmann::json& inv = j["messages"][0];
+  EXPECT_EQ(inv["code"], "INVERTED_TET");
+  EXPECT_EQ(inv["severity"], "error");
+  EXPECT_EQ(inv["count"].get<int>(), 2);
+  EXPECT_EQ(inv["total"].get<int>(), 8);
+  EXPECT_EQ(inv["paths"].size(), 2u);
+  EXPECT_EQ(inv["path"].get<std::string>().rfind("/levels/0/tets/", 0), 0u) << inv.dump();
+  EXPECT_NE(inv["message"].get<std::string>().find("2 inverted tetrahedra"), std::string::npos) << inv.dump();
+  bool unreferenced = false;
+  for (const auto& msg : j["messages"]) {
+    if (msg["code"] != "UNREFERENCED_POINT") continue;
+    unreferenced = true;
+    EXPECT_EQ(msg["severity"], "info");
+    EXPECT_EQ(msg["path"].get<std::string>().rfind("/levels/0/points/", 0), 0u) << msg.dump();
+  }
+  EXPECT_TRUE(unreferenced) << full.out;
+  EXPECT_EQ(j["info"]["levels"][0]["inverted"].get<int>(), 2);
+  EXPECT_EQ(j["info"]["levels"][0]["unreferenced_points"].get<int>(), 1);
+  EXPECT_TRUE(j["info"].contains("file_bytes"));
+  EXPECT_TRUE(j["info"].contains("sections"));
+
+  const RunResult one = runGtn("validate --json --max-issues 1 " + path);
+  EXPECT_EQ(one.exit_code, 1);
+  const nlohmann::json t = nlohmann::json::parse(one.out);
+  EXPECT_TRUE(t["truncated"].get<bool>());
+  EXPECT_EQ(t["messages"].size(), 1u);
+  EXPECT_EQ(t["counts"], j["counts"]);
+  const RunResult text = runGtn("validate --max-issues 1 " + path);
+  EXPECT_NE(text.out.find("--max-issues"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("INVALID (2 errors, 0 warnings, 2 infos)"), std::string::npos) << text.out;
+
+  const RunResult quick = runGtn("validate --quick --json " + path);
+  EXPECT_EQ(quick.exit_code, 0) << quick.out;
+  const nlohmann::json q = nlohmann::json::parse(quick.out);
+  EXPECT_TRUE(q["valid"].get<bool>());
+  EXPECT_FALSE(q["info"].contains("levels"));
+  EXPECT_EQ(runGtn("validate --quick --against " + path + " " + path).exit_code, 2);
 }
 
 // Single-bit flips at random positions and truncations at random lengths: every one is an error,

@@ -1,0 +1,121 @@
+// Every .gtn file the project writes from the real datasets validates clean, and --against its source
+// passes: `gtn convert` then `gtn validate --json --against`, both through the binary, as a user runs
+// them. Warnings are allowed only for what the source itself has (zero-volume tetrahedra of the
+// PLOT3D grids); infos (unreferenced points of the source) are allowed.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include <nlohmann/json.hpp>
+
+#include "simplify/levels.h"
+#include "validate/validate_fixtures.h"
+
+namespace gtn::test {
+namespace {
+
+struct DatasetCase {
+  const char* name;
+  std::vector<std::string> files;  // relative to the data directory
+  std::string convert_options;     // also passed to validate where they concern the import
+  std::string import_options;
+};
+
+std::string joined(const std::vector<std::string>& files) {
+  std::string s;
+  for (const std::string& f : files) s += " " + dataPath(f);
+  return s;
+}
+
+class ValidateDatasets : public ::testing::TestWithParam<DatasetCase> {};
+
+TEST_P(ValidateDatasets, ConvertedFileIsCleanAndEqualsItsSource) {
+  const DatasetCase& c = GetParam();
+  const std::string dir = tempDir(std::string("validate-datasets-") + c.name);
+  const std::string gtn = dir + "/" + c.name + ".gtn";
+  const RunResult conv =
+      runGtn("convert" + joined(c.files) + " -o " + gtn + " " + c.convert_options + " " + c.import_options);
+  ASSERT_EQ(conv.exit_code, 0) << conv.err;
+
+  const RunResult val = runGtn("validate --json " + gtn + " --against" + joined(c.files) + " " + c.import_options);
+  ASSERT_EQ(val.exit_code, 0) << val.out << val.err;
+  const nlohmann::json j = nlohmann::json::parse(val.out);
+  EXPECT_TRUE(j["valid"].get<bool>());
+  EXPECT_EQ(j["counts"]["error"].get<int>(), 0) << val.out;
+  for (const auto& m : j["messages"]) {
+    if (m["severity"] == "warning") {
+      EXPECT_EQ(m["code"], "ZERO_VOLUME_TET") << m.dump();
+    }
+  }
+  // The file has what convert was asked for: a merge tree unless told otherwise, and mip levels
+  // down to a small mesh (none for a mesh that is already small, such as cornellbox's 331 points).
+  const size_t levels = j["info"]["levels"].size();
+  if (c.convert_options.find("--levels 0") != std::string::npos) {
+    EXPECT_EQ(levels, 1u);
+  } else {
+    const uint64_t points = j["info"]["levels"][0]["points"].get<uint64_t>();
+    if (points - points / 2 >= LevelOptions{}.min_points) {
+      EXPECT_GE(levels, 2u);
+    } else {
+      EXPECT_EQ(levels, 1u);
+    }
+    EXPECT_GT(j["info"]["merge_tree"]["merges"].get<uint64_t>(), 0u);
+  }
+  const bool zero_volume_source = std::string(c.name).rfind("bluntfin", 0) == 0;
+  EXPECT_EQ(j["counts"]["warning"].get<int>() > 0, zero_volume_source) << val.out;
+
+  // --quick agrees, and so does the text report.
+  EXPECT_EQ(runGtn("validate --quick " + gtn).exit_code, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    RealData, ValidateDatasets,
+    ::testing::Values(DatasetCase{"spx", {"vtk/spx.vtk"}, "", ""},
+                      DatasetCase{"spx_compressed", {"vtk/spx.vtk"}, "--compress", ""},
+                      DatasetCase{"spx_level0_only", {"vtk/spx.vtk"}, "--levels 0 --no-merge-tree", ""},
+                      DatasetCase{"cornell_spheres", {"tetgen/cornell_spheres.1.ele"}, "", ""},
+                      DatasetCase{"cornellbox", {"tetgen/cornellbox_orig.1.ele"}, "", ""},
+                      DatasetCase{"bunny", {"medit/bunny.mesh"}, "", ""},
+                      DatasetCase{"lv_guccione", {"vtu/lv_guccione.vtu"}, "", ""},
+                      DatasetCase{"raptor", {"vtu/raptorTetra_19409.vtu"}, "", ""},
+                      DatasetCase{"ossicles", {"vtu/Ossicles.vtu"}, "", ""},
+                      DatasetCase{"fire_hexahedra", {"vtu/fire_ug.vtu"}, "", "--split 5"},
+                      DatasetCase{"bluntfin", {"plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, "", ""},
+                      DatasetCase{"bluntfin_split5", {"plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, "",
+                                  "--split 5"},
+                      DatasetCase{"combustion", {"plot3d/combxyz.bin", "plot3d/combq.bin"}, "", ""}),
+    [](const ::testing::TestParamInfo<DatasetCase>& info) { return std::string(info.param.name); });
+
+// The CLI contract on damaged real files: a bit flip or a truncation is exit code 1 (invalid data),
+// never a crash (a signal or a sanitizer's exit code) nor a hang. The in-process test in
+// validate_file_test.cpp does a thousand flips; this checks the same through the binary.
+TEST(ValidateDatasetsCli, DamagedFilesExitWithOne) {
+  const std::string dir = tempDir("validate-datasets-damaged");
+  const std::string gtn = dir + "/cornellbox.gtn";
+  ASSERT_EQ(runGtn("convert " + dataPath("tetgen/cornellbox_orig.1.ele") + " -o " + gtn).exit_code, 0);
+  const Bytes bytes = readBytes(gtn);
+  ASSERT_GT(bytes.size(), 1000u);
+  std::mt19937_64 rng(6);
+  for (int i = 0; i < 24; ++i) {
+    Bytes b = bytes;
+    size_t at = 0;
+    if (i % 3 == 2) {
+      b.resize(rng() % b.size());
+    } else {
+      at = rng() % b.size();
+      b[at] ^= static_cast<uint8_t>(1u << (rng() % 8));
+    }
+    const std::string path = dir + "/damaged-" + std::to_string(i) + ".gtn";
+    writeBytes(path, b);
+    const RunResult r = runGtn("validate --json --max-issues 5 " + path);
+    EXPECT_EQ(r.exit_code, 1) << "case " << i << " (byte " << at << ", size " << b.size() << "): " << r.err;
+    if (r.exit_code == 1) {
+      const nlohmann::json j = nlohmann::json::parse(r.out);
+      EXPECT_GE(j["counts"]["error"].get<int>(), 1);
+      EXPECT_LE(j["messages"].size(), 5u);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace gtn::test
