@@ -43,10 +43,13 @@ std::string issueListText(bool markdown) {
         "Every check of `gtn validate` reports one of these stable codes. Severity `error` makes the file\n"
         "invalid (exit code 1); `warning` and `info` are reported but keep the file valid.\n\n"
         "Zero-volume tetrahedra: a level may contain zero-volume tetrahedra only when the source had them\n"
-        "(PLOT3D grids with collapsed cells do); they are reported as `ZERO_VOLUME_TET` warnings. A merge\n"
-        "that turns a tetrahedron of positive volume into a flat one is the error `MERGE_FLATTENS_TET`; since\n"
-        "every stored level must equal level 0 after its merges (`LEVEL_MISMATCH`), a mip level holds no\n"
-        "zero-volume tetrahedra beyond those inherited from level 0.\n";
+        "(PLOT3D grids with collapsed cells do). A merge that turns a tetrahedron of positive volume into a\n"
+        "flat one is the error `MERGE_FLATTENS_TET`, and every stored level must equal level 0 after its\n"
+        "merges (`LEVEL_MISMATCH`), so a mip level holds no zero-volume tetrahedra beyond those inherited\n"
+        "from level 0. Zero-volume tetrahedra are `ZERO_VOLUME_TET` warnings, except where the validator\n"
+        "can tell that the source had them: in a mip level whose merge-tree replay found no error, and in\n"
+        "level 0 when `--against` finds it equal to the source. There they are the info\n"
+        "`ZERO_VOLUME_TET_FROM_SOURCE`.\n";
     const char* layer = "";
     for (const IssueInfo& info : kIssues) {
       if (std::string(layer) != info.layer) {

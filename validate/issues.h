@@ -52,6 +52,9 @@ const char* severityName(Severity severity);  // "error", "warning", "info"
     "boundary edges used more often in one direction than the other (inconsistent orientation)")               \
   X(kInvertedTet, "INVERTED_TET", kError, "mesh", "inverted tetrahedra (negative volume, exact predicate)")      \
   X(kZeroVolumeTet, "ZERO_VOLUME_TET", kWarning, "mesh", "zero-volume tetrahedra (exact predicate)")             \
+  X(kZeroVolumeTetFromSource, "ZERO_VOLUME_TET_FROM_SOURCE", kInfo, "mesh",                                      \
+    "zero-volume tetrahedra the source already had (level 0 equal to --against, or a mip level descending "    \
+    "from level 0 by a replayed merge tree)")                                                                    \
   X(kNonFiniteCoordinate, "NON_FINITE_COORDINATE", kError, "mesh", "points with a NaN or infinite coordinate")  \
   X(kNonFiniteValue, "NON_FINITE_VALUE", kWarning, "mesh", "field values that are NaN or infinite")             \
   X(kUnreferencedPoint, "UNREFERENCED_POINT", kInfo, "mesh", "points no tetrahedron uses")                       \

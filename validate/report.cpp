@@ -68,6 +68,23 @@ void ValidationReport::setTotal(IssueCode code, const std::string& scope, uint64
   if (ReportedIssue* issue = find(code, scope, false)) issue->total = total;
 }
 
+void ValidationReport::reclassify(IssueCode from, IssueCode to, const std::string& scope) {
+  const auto from_key = std::make_pair(static_cast<uint16_t>(from), scope);
+  const auto to_key = std::make_pair(static_cast<uint16_t>(to), scope);
+  auto it = index_.find(from_key);
+  if (it == index_.end() || index_.count(to_key)) return;
+  ReportedIssue& issue = issues_[it->second];
+  counts_[static_cast<int>(issueInfo(from).severity)] -= issue.count;
+  counts_[static_cast<int>(issueInfo(to).severity)] += issue.count;
+  per_code_[from] -= issue.count;
+  per_code_[to] += issue.count;
+  issue.code = to;
+  index_.emplace(to_key, it->second);
+  index_.erase(it);
+  auto total = pending_totals_.find(from_key);
+  if (total != pending_totals_.end()) pending_totals_[to_key] = total->second;
+}
+
 uint64_t ValidationReport::count(IssueCode code) const {
   auto it = per_code_.find(code);
   return it == per_code_.end() ? 0 : it->second;

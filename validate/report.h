@@ -46,6 +46,9 @@ class ValidationReport {
   // Records `count` occurrences at once (first paths given) for checks that count before they locate.
   void addMany(IssueCode code, const std::string& scope, uint64_t count, const std::vector<std::string>& paths,
                const std::string& detail = "");
+  // Moves the occurrences of `from` within `scope` to code `to` (counts, paths and totals follow), for a
+  // finding that a later check explains; nothing happens when there are none.
+  void reclassify(IssueCode from, IssueCode to, const std::string& scope);
   // Sets the number of items the check of `code` examined within `scope` ("out of N"); applies to an
   // aggregated message whether it is recorded before or after.
   void setTotal(IssueCode code, const std::string& scope, uint64_t total);

@@ -134,7 +134,16 @@ void validateDecoded(const DecodedFile& file, const ValidateOptions& options, Va
       stored.push_back({l.level, l.header.merges, l.ratio, &l.mesh});
     }
     MergeReplayStats ms;
+    const uint64_t errors_before = report.count(Severity::kError);
     checkMergeTree(level0, *file.forest, stored, report, &ms);
+    // A replay without error shows that each stored level is level 0 after its merges and that no merge
+    // flattened a tetrahedron: the levels' flat tetrahedra are level 0's.
+    if (report.count(Severity::kError) == errors_before) {
+      for (size_t i = 1; i < file.levels.size(); ++i) {
+        report.reclassify(IssueCode::kZeroVolumeTet, IssueCode::kZeroVolumeTetFromSource,
+                          levelScope(file.levels[i].level));
+      }
+    }
     report.info()["merge_tree"] = {{"merges", ms.merges},
                                    {"roots", ms.roots},
                                    {"boundary_merges", ms.boundary_merges},
@@ -147,7 +156,11 @@ void validateDecoded(const DecodedFile& file, const ValidateOptions& options, Va
     if (!source.isOk()) {
       report.add(IssueCode::kSourceUnreadable, "/against", "/against", source.status().message());
     } else {
+      const uint64_t errors_before = report.count(Severity::kError);
       compareWithSource(level0, source->mesh, report);
+      if (report.count(Severity::kError) == errors_before) {
+        report.reclassify(IssueCode::kZeroVolumeTet, IssueCode::kZeroVolumeTetFromSource, levelScope(0));
+      }
     }
   }
 }

@@ -77,6 +77,30 @@ TEST(Report, AggregatesCountsTruncatesAndSerialises) {
   EXPECT_FALSE(s["truncated"].get<bool>());
 }
 
+TEST(Report, ReclassifyMovesOccurrencesCountsAndTotals) {
+  ValidationReport r;
+  for (int t = 0; t < 3; ++t) r.add(IssueCode::kZeroVolumeTet, "/levels/1", "/levels/1/tets/" + std::to_string(t));
+  r.setTotal(IssueCode::kZeroVolumeTet, "/levels/1", 100);
+  r.add(IssueCode::kZeroVolumeTet, "/levels/2", "/levels/2/tets/7");
+  r.reclassify(IssueCode::kZeroVolumeTet, IssueCode::kZeroVolumeTetFromSource, "/levels/1");
+  r.reclassify(IssueCode::kZeroVolumeTet, IssueCode::kZeroVolumeTetFromSource, "/levels/5");  // none there
+  EXPECT_EQ(r.count(Severity::kWarning), 1u);
+  EXPECT_EQ(r.count(Severity::kInfo), 3u);
+  EXPECT_EQ(r.count(IssueCode::kZeroVolumeTetFromSource), 3u);
+  EXPECT_EQ(r.count(IssueCode::kZeroVolumeTet), 1u);
+  const std::vector<ReportedIssue> shown = r.issues();
+  ASSERT_EQ(shown.size(), 2u);
+  EXPECT_EQ(shown[0].code, IssueCode::kZeroVolumeTet);
+  EXPECT_EQ(shown[0].scope, "/levels/2");
+  EXPECT_EQ(shown[1].code, IssueCode::kZeroVolumeTetFromSource);
+  EXPECT_EQ(shown[1].count, 3u);
+  EXPECT_EQ(shown[1].total, 100u);
+  EXPECT_EQ(shown[1].paths.size(), 3u);
+  // Later occurrences of the old code in that scope start a new message under the old code.
+  r.add(IssueCode::kZeroVolumeTet, "/levels/1", "/levels/1/tets/50");
+  EXPECT_EQ(r.count(IssueCode::kZeroVolumeTet), 2u);
+}
+
 TEST(Report, ErrorsComeFirstAndAreNeverDisplacedByEarlierInfos) {
   ValidationReport r(1);
   r.add(IssueCode::kUnreferencedPoint, "/levels/0", "/levels/0/points/3");
