@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <queue>
 
 #include "mesh/faces.h"
@@ -108,10 +107,7 @@ class Ranker {
   void init();
   void gatherStar(uint32_t v, std::vector<uint32_t>& corners);
   void gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces);
-  // Every valid target of v with its error; with best_only, targets that provably cannot be the best
-  // one (the lowest error, then the lowest id) may be left out, which recompute() uses to stop
-  // summing a target's error once it exceeds the best so far.
-  void candidates(uint32_t v, std::vector<Candidate>& out, bool best_only = false);
+  void candidates(uint32_t v, std::vector<Candidate>& out);
   bool validate(uint32_t v, uint32_t w);
   void linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces,
               std::vector<Tri>& tris, std::vector<Edge>& edges, std::vector<uint32_t>& verts);
@@ -287,14 +283,8 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
   }
 }
 
-void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, bool best_only) {
+void Ranker::candidates(uint32_t v, std::vector<Candidate>& out) {
   out.clear();
-  // A lower bound of a target's error from its partial sum: error >= w_density * kLocalWeight * local /
-  // mass_scale (the other terms are non-negative). It is evaluated in another order than the error
-  // itself, so a target is dropped only when the bound exceeds the best error by a relative margin far
-  // above the rounding differences: the best target is the one the full evaluation picks.
-  const double bound_per_local = options_.w_density * kLocalWeight / mass_scale_;
-  double best_error = std::numeric_limits<double>::infinity();
   if (!alive_[v] || frozen_[v]) return;
   gatherStar(v, corners_);
   if (corners_.empty()) return;
@@ -360,10 +350,6 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, bool best_only)
       const double change = 0.25 * (rho_w + s.other_density) * vol - s.mass;
       net += change;
       local += std::fabs(change);
-      if (best_only && local * bound_per_local > best_error * (1 + 1e-9)) {
-        ok = false;
-        break;
-      }
     }
     if (!ok) continue;
     const double ed = std::fabs(net) + kLocalWeight * local;
@@ -391,7 +377,6 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, bool best_only)
     if (!ok) continue;
     const double e = options_.w_density * ed / mass_scale_ + options_.w_geometry * eg / area_scale_;
     out.push_back({std::isfinite(e) ? e : 1e30, w});
-    if (out.back().error < 1e30) best_error = std::min(best_error, out.back().error);  // not the stand-in
   }
 }
 
@@ -544,7 +529,7 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
 
 void Ranker::recompute(uint32_t v) {
   ++version_[v];
-  candidates(v, cands_, /*best_only=*/true);
+  candidates(v, cands_);
   if (cands_.empty()) return;
   const Candidate* best = &cands_[0];
   for (const Candidate& c : cands_) {
