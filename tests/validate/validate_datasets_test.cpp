@@ -21,6 +21,9 @@ struct DatasetCase {
   std::string import_options;
 };
 
+// Test names and failure messages show the case's name, not its bytes.
+void PrintTo(const DatasetCase& c, std::ostream* os) { *os << c.name; }
+
 std::string joined(const std::vector<std::string>& files) {
   std::string s;
   for (const std::string& f : files) s += " " + dataPath(f);
