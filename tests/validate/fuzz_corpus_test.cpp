@@ -9,8 +9,10 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <random>
 
 #include "fuzz/fuzz_decoder_input.h"
+#include "fuzz/reseal.h"
 #include "validate/validate_fixtures.h"
 
 namespace gtn::test {
@@ -63,6 +65,37 @@ TEST(FuzzCorpus, DecoderCorpusDecodesOrIsRejected) {
     accepted += fuzz::decodeFuzzInput(b.data(), b.size());
   }
   EXPECT_LT(accepted, files.size());
+}
+
+// The sealed target's mutator: resealing an intact file changes nothing; after a bit flip in a chunk
+// it makes the checksums agree again, so that the damage reaches the layers behind them.
+TEST(FuzzReseal, ResealedFlipsGetPastTheChecksums) {
+  const Bytes intact = readBytes(std::string(GTN_SOURCE_DIR) + "/samples/conformance/cube.f64.fields.dir.v1.0.gtn");
+  ASSERT_GT(intact.size(), 200u);
+  Bytes same = intact;
+  EXPECT_GE(fuzz::resealGtn(same.data(), same.size()), 6u);  // GHDR, LHDR, BNDY, CONN, GEOM, ..., GEND
+  EXPECT_EQ(same, intact);
+
+  std::mt19937_64 rng(7);
+  int unsealed = 0, deeper = 0;
+  const int kFlips = 300;
+  for (int i = 0; i < kFlips; ++i) {
+    Bytes b = intact;
+    const size_t at = kGtnPrefixSize + rng() % (b.size() - kGtnPrefixSize);
+    b[at] ^= static_cast<uint8_t>(1u << (rng() % 8));
+    fuzz::resealGtn(b.data(), b.size());
+    const ValidationReport r = validateBytesForTest(b);
+    for (const std::string& code : errorCodeSet(r)) {
+      if (code == "CHECKSUM_MISMATCH") ++unsealed;
+      if (issueInfo(*issueFromName(code)).layer != std::string("container")) {
+        ++deeper;
+        break;
+      }
+    }
+  }
+  // A flip in a size field shifts the walk, so a few stay unsealed; most get through.
+  EXPECT_LT(unsealed, kFlips / 20) << unsealed << " of " << kFlips;
+  EXPECT_GT(deeper, kFlips / 2) << deeper << " of " << kFlips;
 }
 
 }  // namespace
