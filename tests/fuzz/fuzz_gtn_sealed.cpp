@@ -3,10 +3,9 @@
 // parsers, zstd and the decoders. fuzz_gtn_reader keeps fuzzing the framing and checksum paths.
 #include <cstddef>
 #include <cstdint>
-#include <span>
 
+#include "fuzz_validate.h"
 #include "reseal.h"
-#include "validate/validator.h"
 
 extern "C" size_t LLVMFuzzerMutate(uint8_t* data, size_t size, size_t max_size);
 
@@ -17,9 +16,6 @@ extern "C" size_t LLVMFuzzerCustomMutator(uint8_t* data, size_t size, size_t max
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  gtn::ValidateOptions options;
-  options.max_issues = 16;
-  const gtn::ValidationReport report = gtn::validateGtnBytes(std::span<const uint8_t>(data, size), "fuzz", options);
-  (void)report.hasErrors();
+  gtn::fuzz::validateFuzzInput(data, size);
   return 0;
 }
