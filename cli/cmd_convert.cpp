@@ -1,5 +1,5 @@
 // gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--compress] [--levels K] [--no-merge-tree]
-//   [--simplify-field NAME] [--w-density W] [--w-geometry W]
+//   [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W]
 #include <memory>
 
 #include "cli/commands.h"
@@ -20,6 +20,7 @@ struct ConvertArgs {
   bool compress = false;
   int levels = -1;  // mip levels beyond level 0, -1 = automatic
   bool no_merge_tree = false;
+  double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes
   RankingOptions ranking;
 };
 
@@ -35,7 +36,9 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
   lo.levels = a.levels;
   lo.merge_tree = !a.no_merge_tree;
   GTN_ASSIGN_OR_RETURN(MipLevels levels, buildMipLevels(mesh, tree, lo));
-  return writeGtnFile(a.output, levels.inputs(mesh), wo);
+  GtnWriteOptions bounded = wo;
+  if (a.levels < 0) bounded.level_storage_limit = a.level_storage;
+  return writeGtnFile(a.output, levels.inputs(mesh), bounded);
 }
 
 int runConvert(const ConvertArgs& a) {
@@ -87,6 +90,10 @@ Command addConvertCommand(CLI::App& app) {
   sub->add_flag("--compress", args->compress, ".vtu: zlib-compress the data arrays");
   sub->add_option("--levels", args->levels, ".gtn: mip levels beyond level 0 (default: down to a small mesh; 0 = none)")
       ->check(CLI::Range(0, 62));
+  sub->add_option("--level-storage", args->level_storage,
+                  ".gtn: automatic levels stop before all levels together would take more than this multiple "
+                  "of level 0's bytes (default 2, the paper's bound; 0 = no bound)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
   sub->add_option("--simplify-field", args->ranking.field,
                   ".gtn: point field whose first component is the density of the simplification error "

@@ -31,12 +31,19 @@ struct GtnWriteOptions {
   std::string command_line;  // provenance
   bool zstd = true;          // zstd-compress chunks where it helps
   bool directory = true;     // write the directory and trailer for random access
+  // > 0: the storage bound of the mip levels. Levels beyond level 0 are kept, finest first, while all
+  // kept levels together take at most this multiple of level 0's bytes (every chunk of a level,
+  // framing included); the first level that would pass the bound and all coarser ones are left out.
+  // Every kept level still stores the rest of the merge tree, so nothing is lost but the shortcut.
+  double level_storage_limit = 0.0;
 };
 
 // Encodes every level (encodeLevel), then writes the file atomically (format/file_io.h): prefix,
 // GHDR, per level LHDR BNDY CONN GEOM PFLD... CFLD... [MTRE], then [DIRC] and GEND. All levels must
 // share level 0's coordinate type and field descriptions. Deterministic: the same meshes and options
-// give the same bytes. Fails with kUsage for an empty level list or a null mesh.
+// give the same bytes. Fails with kUsage for an empty level list or a null mesh. With
+// options.level_storage_limit set, every level is encoded before the first byte is written, so that
+// the bound can be applied to the exact bytes.
 Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels,
                     const GtnWriteOptions& options);
 

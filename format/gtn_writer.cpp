@@ -149,11 +149,66 @@ StatusOr<std::vector<uint8_t>> assembleGtn(const std::vector<const EncodedLevel*
   return bytes;
 }
 
+namespace {
+
+struct EncodedInput {
+  EncodedLevel level;
+  std::optional<std::vector<uint8_t>> tree;
+};
+
+StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, size_t i) {
+  EncodedInput out;
+  GTN_ASSIGN_OR_RETURN(out.level, encodeLevel(*levels[i].mesh, EncodeOptions{}));
+  out.level.header.level = static_cast<uint32_t>(i);
+  out.level.header.merges = levels[i].merges;
+  if (levels[i].merge_tree) {
+    auto t = levels[i].merge_tree(out.level.vertex_order);
+    if (!t.isOk()) return t.status();
+    out.tree = std::move(t).value();
+  }
+  return out;
+}
+
+// How many of `encoded` (level 0 first) fit the storage bound: the bytes each level takes in the
+// file, measured by writing them to a counter with the same options.
+StatusOr<size_t> levelsWithinBound(const std::vector<EncodedInput>& encoded, const std::vector<GtnLevelInput>& levels,
+                                   const GtnWriteOptions& options) {
+  GtnStreamWriter counter([](std::span<const uint8_t>) { return Status::ok(); }, options);
+  GTN_RETURN_IF_ERROR(counter.begin(encoded[0].level.header, encoded.size()));
+  uint64_t level0 = 0, total = 0;
+  for (size_t i = 0; i < encoded.size(); ++i) {
+    const uint64_t before = counter.offset();
+    GTN_RETURN_IF_ERROR(counter.addLevel(encoded[i].level, levels[i].ratio, encoded[i].tree));
+    const uint64_t bytes = counter.offset() - before;
+    if (i == 0) level0 = bytes;
+    total += bytes;
+    if (i > 0 && static_cast<double>(total) > options.level_storage_limit * static_cast<double>(level0)) return i;
+  }
+  return encoded.size();
+}
+
+}  // namespace
+
 Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels,
                     const GtnWriteOptions& options) {
   if (levels.empty()) return usageError(path + ": no level to write");
   for (size_t i = 0; i < levels.size(); ++i)
     if (!levels[i].mesh) return usageError(path + ": level " + std::to_string(i) + " has no mesh");
+  // With a storage bound every level is encoded first (the encoded streams are small); without one,
+  // one level is encoded at a time, so the encoder's memory is released before the next level.
+  const bool bounded = options.level_storage_limit > 0.0 && levels.size() > 1;
+  std::vector<EncodedInput> encoded;
+  size_t count = levels.size();
+  if (bounded) {
+    for (size_t i = 0; i < levels.size(); ++i) {
+      auto e = encodeInput(levels, i);
+      if (!e.isOk()) return e.status();
+      encoded.push_back(std::move(e).value());
+    }
+    auto n = levelsWithinBound(encoded, levels, options);
+    if (!n.isOk()) return Status(n.status().code(), path + ": " + n.status().message());
+    count = *n;
+  }
   return writeFileAtomically(path, [&](std::FILE* f) -> Status {
     GtnStreamWriter w(
         [&](std::span<const uint8_t> b) -> Status {
@@ -162,19 +217,16 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
           return Status::ok();
         },
         options);
-    // One level encoded at a time: the encoder's memory is released before the next level.
-    for (size_t i = 0; i < levels.size(); ++i) {
-      GTN_ASSIGN_OR_RETURN(EncodedLevel e, encodeLevel(*levels[i].mesh, EncodeOptions{}));
-      e.header.level = static_cast<uint32_t>(i);
-      e.header.merges = levels[i].merges;
-      if (i == 0) GTN_RETURN_IF_ERROR(w.begin(e.header, levels.size()));
-      std::optional<std::vector<uint8_t>> tree;
-      if (levels[i].merge_tree) {
-        auto t = levels[i].merge_tree(e.vertex_order);
-        if (!t.isOk()) return t.status();
-        tree = std::move(t).value();
+    for (size_t i = 0; i < count; ++i) {
+      EncodedInput one;
+      if (!bounded) {
+        auto e = encodeInput(levels, i);
+        if (!e.isOk()) return e.status();
+        one = std::move(e).value();
       }
-      Status st = w.addLevel(e, levels[i].ratio, tree);
+      const EncodedInput& e = bounded ? encoded[i] : one;
+      if (i == 0) GTN_RETURN_IF_ERROR(w.begin(e.level.header, count));
+      Status st = w.addLevel(e.level, levels[i].ratio, e.tree);
       if (!st.isOk()) return Status(st.code(), path + ": " + st.message());
     }
     return w.finish();

@@ -16,6 +16,8 @@
 #include "codec/level_codec.h"
 #include "codec/merge_tree_coder.h"
 #include "convert/import.h"
+#include "format/gtn_file.h"
+#include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
 #include "simplify/levels.h"
@@ -260,6 +262,19 @@ int run(const Dataset& d, int repeat) {
                 tp->size());
   }
   std::printf("all levels: %llu bytes = %.2f x level 0\n", (unsigned long long)total, double(total) / level0);
+  // What `gtn convert` stores by default: the levels within the storage bound, counted in the file.
+  GtnWriteOptions wo;
+  wo.level_storage_limit = 2.0;
+  const std::string path = "/tmp/gtn-bench-simplify-" + d.name + ".gtn";
+  if (!writeGtnFile(path, levels->inputs(mesh), wo).isOk()) return 1;
+  auto reader = GtnReader::open(path);
+  if (!reader.isOk()) return 1;
+  uint64_t file_total = 0;
+  for (size_t i = 0; i < (*reader)->levels(); ++i) file_total += (*reader)->level(i).bytes;
+  std::printf("stored by default (bound 2 x level 0): levels 0..%zu, %llu bytes = %.3f x level 0 (file: %llu bytes)\n",
+              (*reader)->levels() - 1, (unsigned long long)file_total,
+              double(file_total) / (*reader)->level(0).bytes, (unsigned long long)(*reader)->file().bytes);
+  std::remove(path.c_str());
   return 0;
 }
 

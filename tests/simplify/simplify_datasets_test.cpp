@@ -138,10 +138,39 @@ TEST_P(Datasets, StoredLevelsDecodeToTheInMemoryResult) {
   uint64_t level0 = r.level(0).bytes, total = 0;
   for (size_t i = 0; i < r.levels(); ++i) total += r.level(i).bytes;
   RecordProperty("levels_over_level0", std::to_string(double(total) / level0));
-  // The paper's "storage doubled". Measured 2.07-2.09x: coarse levels cost slightly more than half
-  // the level above (vertices farther apart predict worse), so the series exceeds 2 by a few percent.
-  EXPECT_LE(double(total), 2.15 * double(level0)) << "all levels " << total << " bytes, level 0 " << level0;
+  // Every level of the pyramid costs more than half the level above (vertices farther apart predict
+  // worse), so the whole series passes 2x level 0 by a few percent on the grids; it is still most of it.
   EXPECT_GE(double(total), 1.5 * double(level0));
+  EXPECT_LE(double(total), 2.3 * double(level0));
+  {
+    // With the paper's bound ("storage doubled"), as `gtn convert` writes by default: the finest levels
+    // that fit, the same ones as above, within 2x level 0 in the file's own bytes.
+    GtnWriteOptions bounded = wo;
+    bounded.level_storage_limit = 2.0;
+    const std::string bounded_path = path + ".bounded.gtn";
+    ASSERT_TRUE(writeGtnFile(bounded_path, levels->inputs(d.mesh), bounded).isOk());
+    auto br = GtnReader::open(bounded_path);
+    ASSERT_TRUE(br.isOk()) << br.status().message();
+    uint64_t btotal = 0;
+    for (size_t i = 0; i < (*br)->levels(); ++i) {
+      btotal += (*br)->level(i).bytes;
+      EXPECT_EQ((*br)->level(i).bytes, r.level(i).bytes);
+      EXPECT_EQ((*br)->level(i).header.merges, levels->merges[i]);
+    }
+    RecordProperty("bounded_levels", std::to_string((*br)->levels()));
+    EXPECT_LE(btotal, 2 * (*br)->level(0).bytes);
+    EXPECT_GE((*br)->levels(), 4u);
+    if (total <= 2 * level0) EXPECT_EQ((*br)->levels(), r.levels());
+    else EXPECT_LT((*br)->levels(), r.levels());
+    // A bound below the first level's cost keeps level 0 alone, with the whole merge tree.
+    bounded.level_storage_limit = 1.01;
+    ASSERT_TRUE(writeGtnFile(bounded_path, levels->inputs(d.mesh), bounded).isOk());
+    auto only0 = GtnReader::open(bounded_path);
+    ASSERT_TRUE(only0.isOk());
+    EXPECT_EQ((*only0)->levels(), 1u);
+    EXPECT_TRUE((*only0)->level(0).has_merge_tree);
+    std::filesystem::remove(bounded_path);
+  }
   // Reading at a target between two levels starts from the coarser-than-target stored level.
   const uint64_t target = (levels->merges[2] + levels->merges[3]) / 2;
   TetMeshBuilder b;

@@ -67,6 +67,17 @@ TEST_P(ValidateDatasets, ConvertedFileIsCleanAndEqualsItsSource) {
       EXPECT_EQ(levels, 1u);
     }
     EXPECT_GT(j["info"]["merge_tree"]["merges"].get<uint64_t>(), 0u);
+    // All levels together take at most twice level 0's bytes (the paper's bound, which the automatic
+    // levels keep), and the large grids still get several levels within it.
+    const RunResult info = runGtn("info --json " + gtn);
+    ASSERT_EQ(info.exit_code, 0) << info.err;
+    const nlohmann::json ij = nlohmann::json::parse(info.out);
+    ASSERT_EQ(ij["levels"].size(), levels);
+    uint64_t total = 0;
+    for (const auto& l : ij["levels"]) total += l["bytes"].get<uint64_t>();
+    const uint64_t level0 = ij["levels"][0]["bytes"].get<uint64_t>();
+    EXPECT_LE(total, 2 * level0) << info.out;
+    if (points >= 40000) EXPECT_GE(levels, 4u) << info.out;
   }
   // Without --against only level 0's flat tetrahedra stay warnings: the validator cannot tell that the
   // source had them. The levels' are still known to descend from level 0's.
