@@ -60,12 +60,19 @@ constexpr double kMaxKey = 1.7976931348623157e308;  // candidate distances beyon
 constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d), CODEC-NOTES.md
 // Prediction rules for a vertex x behind the front face (a, b, c) whose decoded tetrahedron has
 // fourth vertex d: weights of (a, b, c, d). Rule 0 is the default (coordinates: g + k (g - d);
-// fields: the interpolant of (a, b, c, d) at x). The others are the parallelograms a structured
-// grid makes exact, and two reflections.
-constexpr uint32_t kRules = 9;
+// fields: the interpolant of (a, b, c, d) at x). Rules 1-8 are the parallelograms a structured
+// grid makes exact, and two reflections; rules 9-12 repeat one stencil vertex, which is exact where a
+// grid copies its boundary values to the next layer (blunt fin repeats two planes this way) and for
+// coincident points.
+constexpr uint32_t kRules = 13;
+constexpr uint32_t kCoordRules = 9;  // coordinates have their own per-axis copies (spec section 10.5)
+// Field rules 13-15 repeat the first three apex candidates (spec section 10.4's order).
+constexpr uint32_t kFieldRules = 16;
+constexpr uint32_t kCandidateRules = 3;
 constexpr double kRuleWeights[kRules][4] = {
-    {0, 0, 0, 0},   {1, 1, 0, -1},  {0, 1, 1, -1},  {1, 0, 1, -1},         {1, 1, -1, 0},
-    {-1, 1, 1, 0},  {1, -1, 1, 0},  {1, 1, 1, -2},  {2.0 / 3, 2.0 / 3, 2.0 / 3, -1},
+    {0, 0, 0, 0},  {1, 1, 0, -1}, {0, 1, 1, -1}, {1, 0, 1, -1}, {1, 1, -1, 0},
+    {-1, 1, 1, 0}, {1, -1, 1, 0}, {1, 1, 1, -2}, {2.0 / 3, 2.0 / 3, 2.0 / 3, -1},
+    {1, 0, 0, 0},  {0, 1, 0, 0},  {0, 0, 1, 0},  {0, 0, 0, 1},
 };
 
 enum SlotState : uint8_t { kFree = 0, kLive = 1, kRetired = 2 };
@@ -320,6 +327,7 @@ class LevelCoder {
     return keyFromPrediction(ct, v);
   }
   double fieldRule(uint32_t r, const FieldPrediction& fp, ScalarType type, size_t off) const {
+    if (r >= kRules) return doubleFromRaw(type, &vals_[near_[r - kRules] * item_bytes_ + off]);
     double v = 0;
     for (int j = 0; j < 4; ++j)
       if (kRuleWeights[r][j] != 0.0) v += kRuleWeights[r][j] * doubleFromRaw(type, &vals_[fp.s[j] * item_bytes_ + off]);
@@ -392,7 +400,13 @@ class LevelCoder {
     const uint64_t r = (actual - pred) & mask, n = (~r + 1) & mask;
     return bitLength(r < n ? r : n);
   }
-  bool ruleAllowed(uint32_t rule, bool has_d) const { return rule < kRules && (has_d || kRuleWeights[rule][3] == 0.0); }
+  static bool ruleAllowed(uint32_t rule, bool has_d, uint32_t rules) {
+    return rule < rules && (has_d || kRuleWeights[rule][3] == 0.0);
+  }
+  bool fieldRuleAllowed(uint32_t rule, bool has_d) const {
+    if (rule >= kRules) return rule < kRules + std::min<uint32_t>(kCandidateRules, n_near_);
+    return ruleAllowed(rule, has_d, kRules);
+  }
 
   // Introduces a vertex: codes its coordinates and field values and emits it. For a vertex behind a
   // front face the encoder picks, separately for the coordinates and for each field, the rule that
@@ -407,6 +421,8 @@ class LevelCoder {
     const ScalarType ct = header_.coord_type;
     const int cbits = scalarBits(ct);
     const bool choose = fp.kind == FieldPrediction::kInterpolate || fp.kind == FieldPrediction::kAverage;
+    // Fields also choose behind a boundary edge (rule 0 is then the parallelogram).
+    const bool choose_fields = choose || fp.kind == FieldPrediction::kParallelogram;
     const bool has_d = fp.kind == FieldPrediction::kInterpolate;
     uint64_t actual[3] = {0, 0, 0};
     if constexpr (kEncode) {
@@ -429,7 +445,7 @@ class LevelCoder {
       if constexpr (kEncode) {
         int best = 1 << 30;
         for (uint32_t r = 0; r < kRules; ++r) {
-          if (!ruleAllowed(r, has_d)) continue;
+          if (!ruleAllowed(r, has_d, kCoordRules)) continue;
           int cost = symbolCost(geo_rule_[geo_last_rule_], r);
           for (int i = 0; i < 3; ++i) cost += 16 * residualBits(actual[i], ruleKey(r, fp, i, pk[i], ct), cbits);
           if (cost < best) {
@@ -439,7 +455,7 @@ class LevelCoder {
         }
       }
       rule = geo_rule_[geo_last_rule_].code(*geo_, rule);
-      if (!ruleAllowed(rule, has_d)) return bad("invalid coordinate prediction rule");
+      if (!ruleAllowed(rule, has_d, kCoordRules)) return bad("invalid coordinate prediction rule");
       geo_last_rule_ = rule;
       if (rule != 0)
         for (int i = 0; i < 3; ++i) pk[i] = ruleKey(rule, fp, i, pk[i], ct);
@@ -507,11 +523,11 @@ class LevelCoder {
         const uint8_t* src_item = nullptr;
         if constexpr (kEncode) src_item = enc_->mesh->point_fields[f].bytes.data() + size_t{src} * d.itemBytes();
         uint32_t rule = 0;
-        if (choose && field_coded_comps_[f] > 0) {
+        if (choose_fields && field_coded_comps_[f] > 0) {
           if constexpr (kEncode) {
             int best = 1 << 30;
-            for (uint32_t r = 0; r < kRules; ++r) {
-              if (!ruleAllowed(r, has_d)) continue;
+            for (uint32_t r = 0; r < kFieldRules; ++r) {
+              if (!fieldRuleAllowed(r, has_d)) continue;
               int cost = symbolCost(pf_rule_[f][pf_last_rule_[f]], r);
               for (uint32_t c = 0; c < d.components && cost < best; ++c) {
                 if (alias_[k + c] != kNone32) continue;
@@ -525,7 +541,7 @@ class LevelCoder {
             }
           }
           rule = pf_rule_[f][pf_last_rule_[f]].code(*pf_[f], rule);
-          if (!ruleAllowed(rule, has_d)) return bad("invalid field prediction rule");
+          if (!fieldRuleAllowed(rule, has_d)) return bad("invalid field prediction rule");
           pf_last_rule_[f] = rule;
         }
         for (uint32_t c = 0; c < d.components; ++c, ++k) {
