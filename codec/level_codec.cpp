@@ -805,8 +805,8 @@ class LevelCoder {
   };
 
   // Front vertices around the gate face, best first; returns the count and the coding context.
-  int gatherCandidates(const FrontFace& g, const double p[3], uint32_t* out, uint32_t* ctx) {
-    Candidate c[kMaxGather];
+  int gatherCandidates(const FrontFace& g, const double p[3], uint32_t* ctx) {
+    Candidate* c = cand_;
     int n = 0;
     uint32_t seen[kMaxGather + 3] = {};  // c[i].s, for a vectorised membership test
     auto add = [&](uint32_t s) {
@@ -897,52 +897,99 @@ class LevelCoder {
     n = kept;
     // Two orders compete: by distance to the predicted apex (right on structured grids) and by the
     // Delaunay sweep (right on Delaunay meshes). The one that has ranked the true apexes better so
-    // far is used; both sides keep the same score.
-    const int m = std::min(n, kMaxCandidates);
-    by_dist_n_ = by_key_n_ = 0;
-    if (delaunay && n > 1) {
-      Candidate alt[kMaxGather];
-      std::copy(c, c + n, alt);
-      std::partial_sort(alt, alt + m, alt + n, [](const Candidate& x, const Candidate& y) {
-        if (x.w != y.w) return x.w > y.w;
-        if (x.key != y.key) return x.key < y.key;
-        if (x.dist != y.dist) return x.dist < y.dist;
-        return x.s < y.s;
-      });
-      for (int i = 0; i < m; ++i) by_key_[i] = alt[i].s;
-      by_key_n_ = m;
-    }
-    // Only the first m are used: the comparisons are total (slots differ), so a partial sort gives
-    // exactly the prefix of a full one.
-    std::partial_sort(c, c + m, c + n, [](const Candidate& x, const Candidate& y) {
-      if (x.w != y.w) return x.w > y.w;
-      if (x.dist != y.dist) return x.dist < y.dist;
-      return x.s < y.s;
-    });
-    for (int i = 0; i < m; ++i) out[i] = c[i].s;
-    if (by_key_n_ > 0) {
-      std::copy(out, out + m, by_dist_);
-      by_dist_n_ = m;
-      if (order_score_ > 0) std::copy(by_key_, by_key_ + m, out);
-    }
+    // far is used; both sides keep the same score. Both orders are total (slots differ), so a
+    // candidate's place is the number of candidates before it: nothing is sorted unless the whole
+    // list is needed (a new vertex's copy sources), and the list's prefix is the same either way.
+    cand_n_ = n;
+    cand_m_ = std::min(n, kMaxCandidates);
+    two_orders_ = delaunay && n > 1;
+    by_key_chosen_ = two_orders_ && order_score_ > 0;
+    // The context: the best multiplicity, how many share it (up to 3), and how close the nearest of
+    // those lies to the predicted apex (the first candidate of the distance order).
     uint32_t k = 0;
-    if (n > 0) {
-      uint32_t top = 0;  // candidates sharing the best multiplicity (only up to 3 matter)
-      for (int i = 0; i < n && top < 3; ++i) top += c[i].w == c[0].w;
-      k = 1 + (std::min<uint32_t>(c[0].w, 3) - 1) * 3 + std::min<uint32_t>(top, 3) - 1;
-    }
-    // How close the best candidate lies to the predicted apex, relative to the gate's size.
     uint32_t near = 2;
     if (n > 0) {
+      uint32_t best_w = 0, top = 0;
+      double best_dist = 0;
+      for (int i = 0; i < n; ++i) {
+        if (c[i].w > best_w) {
+          best_w = c[i].w;
+          top = 0;
+          best_dist = c[i].dist;
+        }
+        if (c[i].w == best_w) {
+          ++top;
+          best_dist = std::min(best_dist, c[i].dist);
+        }
+      }
+      k = 1 + (std::min<uint32_t>(best_w, 3) - 1) * 3 + std::min<uint32_t>(top, 3) - 1;
       const double *a = P(g.v[0]), *b = P(g.v[1]), *cc = P(g.v[2]);
       double e2 = 0;
       for (int i = 0; i < 3; ++i)
         e2 += (a[i] - b[i]) * (a[i] - b[i]) + (b[i] - cc[i]) * (b[i] - cc[i]) + (cc[i] - a[i]) * (cc[i] - a[i]);
       e2 /= 3.0;
-      near = c[0].dist < 0.25 * e2 ? 0 : (c[0].dist < e2 ? 1 : 2);
+      near = best_dist < 0.25 * e2 ? 0 : (best_dist < e2 ? 1 : 2);
     }
     *ctx = (k * 2 + (g.d == kNoSlot ? 1 : 0)) * 3 + near;
-    return m;
+    return cand_m_;
+  }
+
+  static bool beforeByDistance(const Candidate& x, const Candidate& y) {
+    if (x.w != y.w) return x.w > y.w;
+    if (x.dist != y.dist) return x.dist < y.dist;
+    return x.s < y.s;
+  }
+  static bool beforeByKey(const Candidate& x, const Candidate& y) {
+    if (x.w != y.w) return x.w > y.w;
+    if (x.key != y.key) return x.key < y.key;
+    if (x.dist != y.dist) return x.dist < y.dist;
+    return x.s < y.s;
+  }
+  // Place of the candidate at index i in one order (0 = first).
+  int placeOf(int i, bool by_key) const {
+    int place = 0;
+    const Candidate& x = cand_[i];
+    for (int j = 0; j < cand_n_; ++j)
+      place += by_key ? beforeByKey(cand_[j], x) : beforeByDistance(cand_[j], x);
+    return place;
+  }
+  int candidateIndex(uint32_t slot) const {
+    for (int i = 0; i < cand_n_; ++i)
+      if (cand_[i].s == slot) return i;
+    return -1;
+  }
+  // The coded symbol of `slot` (kNoSlot: a new vertex): new, 1 + its place in the chosen order among
+  // the first kMaxCandidates, or escape.
+  uint32_t candidateSymbolOf(uint32_t slot) const {
+    if (slot == kNoSlot) return kSymNew;
+    const int i = candidateIndex(slot);
+    if (i < 0) return kSymEscape;
+    const int place = placeOf(i, by_key_chosen_);
+    return place < cand_m_ ? static_cast<uint32_t>(place + 1) : kSymEscape;
+  }
+  // The slot at `place` of the chosen order (place < cand_m_).
+  uint32_t candidateAt(int place) const {
+    Candidate tmp[kMaxGather];
+    std::copy(cand_, cand_ + cand_n_, tmp);
+    std::nth_element(tmp, tmp + place, tmp + cand_n_, by_key_chosen_ ? beforeByKey : beforeByDistance);
+    return tmp[place].s;
+  }
+  // The first cand_m_ candidates in the chosen order.
+  void orderedCandidates(uint32_t* out) const {
+    Candidate tmp[kMaxGather];
+    std::copy(cand_, cand_ + cand_n_, tmp);
+    std::partial_sort(tmp, tmp + cand_m_, tmp + cand_n_, by_key_chosen_ ? beforeByKey : beforeByDistance);
+    for (int i = 0; i < cand_m_; ++i) out[i] = tmp[i].s;
+  }
+  // After a tetrahedron's apex x is known: the order that placed it earlier (among the first
+  // kMaxCandidates; later or absent counts as kMaxCandidates) scores a point.
+  void scoreOrders(uint32_t x) {
+    if (!two_orders_) return;
+    const int i = candidateIndex(x);
+    if (i < 0) return;
+    const int rk = std::min(placeOf(i, true), cand_m_), rd = std::min(placeOf(i, false), cand_m_);
+    if (rk < rd && order_score_ < kOrderScoreLimit) ++order_score_;
+    if (rd < rk && order_score_ > -kOrderScoreLimit) --order_score_;
   }
 
   // `pred_cell`: the cell-value record of the decoded neighbour behind the gate face, or kNone32.
@@ -1113,9 +1160,8 @@ class LevelCoder {
       const FrontFace g = faces_.at(idx);
       double p[3];
       predictApex(g, p);
-      uint32_t cands[kMaxCandidates];
       uint32_t ctx = 0;
-      const int nc = gatherCandidates(g, p, cands, &ctx);
+      const int nc = gatherCandidates(g, p, &ctx);
       uint32_t sym = 0, x_src = 0, flip = 0;
       if constexpr (kEncode) {
         const Tet& t = enc_->mesh->tets[g.tet];
@@ -1135,7 +1181,7 @@ class LevelCoder {
         for (int i = 0; i < 4; ++i)
           for (int j = i + 1; j < 4; ++j) inversions += perm[i] > perm[j];
         flip = inversions & 1;
-        sym = candidateSymbol(enc_->src_slot[x_src], cands, nc);
+        sym = candidateSymbolOf(enc_->src_slot[x_src]);
       }
       sym = tsym_[ctx].code(*con_, sym);
       uint32_t x;
@@ -1146,6 +1192,8 @@ class LevelCoder {
         fp.s[1] = g.v[1];
         fp.s[2] = g.v[2];
         fp.s[3] = g.d;
+        uint32_t cands[kMaxCandidates];
+        orderedCandidates(cands);
         near_ = cands;
         n_near_ = nc;
         GTN_RETURN_IF_ERROR(introduceVertex(x_src, p, fp, &x));
@@ -1155,15 +1203,10 @@ class LevelCoder {
         if (!isLive(x)) return bad("tetrahedron refers to a vertex that is not live");
       } else {
         if (sym > static_cast<uint32_t>(nc)) return bad("candidate rank out of range");
-        x = cands[sym - 1];
+        x = candidateAt(static_cast<int>(sym) - 1);
       }
       apex_votes_ += orient3dCertain(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(x));
-      if (by_key_n_ > 0) {
-        const int rk = static_cast<int>(std::find(by_key_, by_key_ + by_key_n_, x) - by_key_);
-        const int rd = static_cast<int>(std::find(by_dist_, by_dist_ + by_dist_n_, x) - by_dist_);
-        if (rk < rd && order_score_ < kOrderScoreLimit) ++order_score_;
-        if (rd < rk && order_score_ > -kOrderScoreLimit) --order_score_;
-      }
+      scoreOrders(x);
       flip = con_->bit(flip_, flip);
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
       GTN_RETURN_IF_ERROR(emitTet(e, g.tet, g.cell));
@@ -1230,8 +1273,9 @@ class LevelCoder {
   int64_t apex_votes_ = 0;  // sum of orient3dCertain(a, b, c, apex) over the tetrahedra decoded so far
   // Apex candidates in both orders (section 10.4 of the spec) and which order has ranked better.
   static constexpr int kOrderScoreLimit = 32;
-  uint32_t by_dist_[kMaxCandidates], by_key_[kMaxCandidates];
-  int by_dist_n_ = 0, by_key_n_ = 0;
+  Candidate cand_[kMaxGather];  // the gate's candidates, unordered
+  int cand_n_ = 0, cand_m_ = 0;
+  bool two_orders_ = false, by_key_chosen_ = false;
   int order_score_ = 0;
   uint64_t next_id_ = 0, tets_done_ = 0, btris_done_ = 0, live_ = 0, peak_live_ = 0;
   double last_pos_[3] = {0, 0, 0};
