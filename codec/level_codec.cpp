@@ -393,6 +393,63 @@ class LevelCoder {
     }
   }
 
+  // The encoder's choice of field rule for field f (its first component flattened at k): the
+  // cheapest by signalling plus residual magnitudes, the lowest rule among equals. The previous rule
+  // and rule 0 are tried first, so that most rules stop after a component or two.
+  uint32_t chooseFieldRule(size_t f, size_t k, const FieldPrediction& fp, bool has_d, const uint8_t* src_item) {
+    const FieldDesc& d = header_.point_fields[f];
+    const size_t vs = scalarSize(d.type);
+    const int fbits = scalarBits(d.type);
+    constexpr uint32_t kMaxComps = 16;
+    double stencil[4][kMaxComps];
+    double cand[kCandidateRules][kMaxComps];
+    uint64_t actual[kMaxComps];
+    const bool cached = d.components <= kMaxComps;
+    if (cached) {
+      for (uint32_t c = 0; c < d.components; ++c) {
+        const size_t off = pf_offset_[f] + c * vs;
+        actual[c] = keyFromRaw(d.type, src_item + c * vs);
+        for (int j = 0; j < 4; ++j)
+          stencil[j][c] = fp.s[j] != kNoSlot ? doubleFromRaw(d.type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
+        for (int j = 0; j < std::min<int>(n_near_, kCandidateRules); ++j)
+          cand[j][c] = doubleFromRaw(d.type, &vals_[near_[j] * item_bytes_ + off]);
+      }
+    }
+    // The prediction of rule r for component c, exactly as fieldRule computes it.
+    auto predict = [&](uint32_t r, uint32_t c) {
+      if (r == 0) return pred_vals_[k + c];
+      if (!cached) return fieldRule(r, fp, d.type, pf_offset_[f] + c * vs);
+      if (r >= kRules) return cand[r - kRules][c];
+      double v = 0;
+      for (int j = 0; j < 4; ++j)
+        if (kRuleWeights[r][j] != 0.0) v += kRuleWeights[r][j] * stencil[j][c];
+      return v;
+    };
+    const BitTree<4>& tree = pf_rule_[f][pf_last_rule_[f]];
+    int best = 1 << 30;
+    uint32_t rule = 0;
+    auto consider = [&](uint32_t r) {
+      if (!fieldRuleAllowed(r, has_d)) return;
+      int cost = symbolCost(tree, r);
+      for (uint32_t c = 0; c < d.components; ++c) {
+        if (cost > best || (cost == best && r > rule)) return;
+        if (alias_[k + c] != kNone32) continue;
+        const uint64_t act = cached ? actual[c] : keyFromRaw(d.type, src_item + c * vs);
+        cost += 16 * residualBits(act, keyFromPrediction(d.type, predict(r, c)), fbits);
+      }
+      if (cost < best || (cost == best && r < rule)) {
+        best = cost;
+        rule = r;
+      }
+    };
+    const uint32_t last = pf_last_rule_[f];
+    consider(last);
+    if (last != 0) consider(0);
+    for (uint32_t r = 0; r < kFieldRules; ++r)
+      if (r != last && r != 0) consider(r);
+    return rule;
+  }
+
   // Introduces a vertex: codes its coordinates and field values and emits it.
   // Magnitude class of the residual between two keys of a `bits`-wide type (the encoder's cost).
   static int residualBits(uint64_t actual, uint64_t pred, int bits) {
@@ -443,16 +500,24 @@ class LevelCoder {
     if (choose) {
       uint32_t rule = 0;
       if constexpr (kEncode) {
+        // The cheapest rule, the lowest among equals; the previous rule first, so that most others
+        // stop early.
         int best = 1 << 30;
-        for (uint32_t r = 0; r < kRules; ++r) {
-          if (!ruleAllowed(r, has_d, kCoordRules)) continue;
+        auto consider = [&](uint32_t r) {
+          if (!ruleAllowed(r, has_d, kCoordRules)) return;
           int cost = symbolCost(geo_rule_[geo_last_rule_], r);
-          for (int i = 0; i < 3; ++i) cost += 16 * residualBits(actual[i], ruleKey(r, fp, i, pk[i], ct), cbits);
-          if (cost < best) {
+          for (int i = 0; i < 3; ++i) {
+            if (cost > best || (cost == best && r > rule)) return;
+            cost += 16 * residualBits(actual[i], ruleKey(r, fp, i, pk[i], ct), cbits);
+          }
+          if (cost < best || (cost == best && r < rule)) {
             best = cost;
             rule = r;
           }
-        }
+        };
+        consider(geo_last_rule_);
+        for (uint32_t r = 0; r < kCoordRules; ++r)
+          if (r != geo_last_rule_) consider(r);
       }
       rule = geo_rule_[geo_last_rule_].code(*geo_, rule);
       if (!ruleAllowed(rule, has_d, kCoordRules)) return bad("invalid coordinate prediction rule");
@@ -519,27 +584,11 @@ class LevelCoder {
       for (size_t f = 0; f < header_.point_fields.size(); ++f) {
         const FieldDesc& d = header_.point_fields[f];
         const size_t vs = scalarSize(d.type);
-        const int fbits = scalarBits(d.type);
         const uint8_t* src_item = nullptr;
         if constexpr (kEncode) src_item = enc_->mesh->point_fields[f].bytes.data() + size_t{src} * d.itemBytes();
         uint32_t rule = 0;
         if (choose_fields && field_coded_comps_[f] > 0) {
-          if constexpr (kEncode) {
-            int best = 1 << 30;
-            for (uint32_t r = 0; r < kFieldRules; ++r) {
-              if (!fieldRuleAllowed(r, has_d)) continue;
-              int cost = symbolCost(pf_rule_[f][pf_last_rule_[f]], r);
-              for (uint32_t c = 0; c < d.components && cost < best; ++c) {
-                if (alias_[k + c] != kNone32) continue;
-                const double pv = r == 0 ? pred_vals_[k + c] : fieldRule(r, fp, d.type, pf_offset_[f] + c * vs);
-                cost += 16 * residualBits(keyFromRaw(d.type, src_item + c * vs), keyFromPrediction(d.type, pv), fbits);
-              }
-              if (cost < best) {
-                best = cost;
-                rule = r;
-              }
-            }
-          }
+          if constexpr (kEncode) rule = chooseFieldRule(f, k, fp, has_d, src_item);
           rule = pf_rule_[f][pf_last_rule_[f]].code(*pf_[f], rule);
           if (!fieldRuleAllowed(rule, has_d)) return bad("invalid field prediction rule");
           pf_last_rule_[f] = rule;
