@@ -46,7 +46,7 @@ inline double clampRound(double v, double lo, double hi) {
 
 inline int scalarBits(ScalarType type) { return static_cast<int>(8 * scalarSize(type)); }
 
-inline uint64_t keyFromRaw(ScalarType type, const uint8_t* p) {
+[[gnu::always_inline]] inline uint64_t keyFromRaw(ScalarType type, const uint8_t* p) {
   using value_detail::loadRaw;
   switch (type) {
     case ScalarType::kInt8: return loadRaw<uint8_t>(p) ^ 0x80u;
@@ -70,7 +70,7 @@ inline uint64_t keyFromRaw(ScalarType type, const uint8_t* p) {
   return 0;
 }
 
-inline void rawFromKey(ScalarType type, uint64_t key, uint8_t* p) {
+[[gnu::always_inline]] inline void rawFromKey(ScalarType type, uint64_t key, uint8_t* p) {
   using value_detail::storeRaw;
   switch (type) {
     case ScalarType::kInt8: storeRaw<uint8_t>(p, static_cast<uint8_t>(key ^ 0x80u)); return;
@@ -95,7 +95,7 @@ inline void rawFromKey(ScalarType type, uint64_t key, uint8_t* p) {
 }
 
 // The prediction `v` rounded to `type` (integers clamped to their range), as a key.
-inline uint64_t keyFromPrediction(ScalarType type, double v) {
+[[gnu::always_inline]] inline uint64_t keyFromPrediction(ScalarType type, double v) {
   using value_detail::clampRound;
   using value_detail::storeRaw;
   uint8_t raw[8];
@@ -125,7 +125,7 @@ inline uint64_t keyFromPrediction(ScalarType type, double v) {
   return keyFromRaw(type, raw);
 }
 
-inline double doubleFromRaw(ScalarType type, const uint8_t* p) {
+[[gnu::always_inline]] inline double doubleFromRaw(ScalarType type, const uint8_t* p) {
   using value_detail::loadRaw;
   switch (type) {
     case ScalarType::kInt8: return loadRaw<int8_t>(p);
