@@ -18,8 +18,8 @@
 namespace gtn {
 
 namespace {
-// Bounds of the learnt speed factor: beyond them the calibration is stale, not the machine busy.
-constexpr double kMinScale = 0.2, kMaxScale = 5.0;
+// Bound of the learnt offset: beyond it the calibration is stale, not the run slower.
+constexpr double kMaxOffsetMs = 2000.0;
 
 std::string cachePath() {
   const char* xdg = std::getenv("XDG_CACHE_HOME");
@@ -30,20 +30,26 @@ std::string cachePath() {
   return base + "/gatun/render-calibration.json";
 }
 
-std::string cacheKey(const std::string& path, const RenderOptions& o, bool generic) {
+// The file's identity: absolute path, size and modification time.
+std::string fileKey(const std::string& path) {
   struct stat st {};
   std::string abs = path;
   std::error_code ec;
   const auto p = std::filesystem::absolute(path, ec);
   if (!ec) abs = p.string();
   if (::stat(path.c_str(), &st) != 0) st = {};
-  return abs + "|" + std::to_string(st.st_size) + "|" + std::to_string(st.st_mtime) + "|" +
-         std::to_string(o.camera.width) + "x" + std::to_string(o.camera.height) + "|" +
+  return abs + "|" + std::to_string(st.st_size) + "|" + std::to_string(st.st_mtime);
+}
+
+std::string cacheKey(const std::string& path, const RenderOptions& o, bool generic) {
+  return fileKey(path) + "|" + std::to_string(o.camera.width) + "x" + std::to_string(o.camera.height) + "|" +
          (o.sampling == Sampling::kFace ? "face" : "volume") + "|" + (generic ? "generic" : "integrated");
 }
 
-// Time of one end-to-end render of stored level `level` (decode + render, image discarded).
-StatusOr<double> timeLevel(RenderInput& input, size_t level, const RenderOptions& options, bool generic) {
+// Time of one end-to-end render of stored level `level` (decode + render; the image is kept in
+// `image` when given).
+StatusOr<double> timeLevel(RenderInput& input, size_t level, const RenderOptions& options, bool generic,
+                           Image* image_out = nullptr) {
   LevelChoice choice;
   choice.level = static_cast<int>(level);
   GTN_ASSIGN_OR_RETURN(ResolvedLevel resolved, input.resolve(choice));
@@ -54,12 +60,38 @@ StatusOr<double> timeLevel(RenderInput& input, size_t level, const RenderOptions
     TetMeshBuilder builder;
     GTN_RETURN_IF_ERROR(input.stream(resolved, builder));
     GTN_ASSIGN_OR_RETURN(Image image, renderGeneric(builder.header(), builder.mesh(), builder.boundary(), fixed));
-    (void)image;
+    if (image_out) *image_out = std::move(image);
   } else {
     StreamRenderer renderer(fixed);
     GTN_RETURN_IF_ERROR(input.stream(resolved, renderer));
+    if (image_out) *image_out = renderer.image();
   }
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+// Time of decoding stored level `level` alone, into a sink that keeps nothing: the part of a run that
+// simplifying on the fly cannot save.
+StatusOr<double> timeDecode(RenderInput& input, size_t level) {
+  LevelChoice choice;
+  choice.level = static_cast<int>(level);
+  GTN_ASSIGN_OR_RETURN(ResolvedLevel resolved, input.resolve(choice));
+  const auto t0 = std::chrono::steady_clock::now();
+  CountingSink sink;
+  GTN_RETURN_IF_ERROR(input.stream(resolved, sink));
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Interpolation through (x, y) points sorted by x, linear in x or in log x; beyond them, the nearest
+// segment's slope (never decreasing).
+double interpolate(const std::vector<std::pair<double, double>>& points, double n, bool logarithmic) {
+  if (points.empty()) return 0;
+  if (points.size() == 1) return points[0].first > 0 ? points[0].second * n / points[0].first : points[0].second;
+  size_t i = 1;
+  while (i + 1 < points.size() && points[i].first < n) ++i;
+  const auto& [n0, m0] = points[i - 1];
+  const auto& [n1, m1] = points[i];
+  auto x = [&](double v) { return logarithmic ? std::log(std::max(v, 1.0)) : v; };
+  const double slope = x(n1) > x(n0) ? std::max(0.0, (m1 - m0) / (x(n1) - x(n0))) : 0.0;
+  return std::max(0.0, m0 + slope * (x(n) - x(n0)));
 }
 }  // namespace
 
@@ -67,15 +99,15 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
                                       const RenderOptions& options, bool generic, double elapsed_ms,
                                       std::string* explanation, double* predicted_ms) {
   if (!(budget_ms > 0)) return usageError("--budget-ms must be positive");
-  const std::string key = "v2|" + cacheKey(path, options, generic);
+  const std::string key = "v3|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
   nlohmann::json cache = nlohmann::json::object();
   if (auto text = readWholeFile(cache_file, 1 << 24); text.isOk()) {
     cache = nlohmann::json::parse(text.value(), nullptr, false);
     if (!cache.is_object()) cache = nlohmann::json::object();
   }
-  // Measured (tetrahedra, ms) points, sorted by tetrahedra.
-  std::vector<std::pair<double, double>> points;
+  // Measured (tetrahedra, ms) points, sorted by tetrahedra: whole runs, and decoding alone.
+  std::vector<std::pair<double, double>> points, decode_points;
   std::string source;
   const nlohmann::json* entry = cache.contains(key) ? &cache[key] : nullptr;
   if (entry && entry->is_object() && entry->contains("tets") && entry->contains("ms") && (*entry)["tets"].is_array() &&
@@ -89,13 +121,34 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       }
       points.emplace_back(t.get<double>(), m.get<double>());
     }
+    if (entry->contains("decode_ms") && (*entry)["decode_ms"].is_array() &&
+        (*entry)["decode_ms"].size() == points.size()) {
+      for (size_t i = 0; i < points.size(); ++i) {
+        const nlohmann::json& d = (*entry)["decode_ms"][i];
+        if (!d.is_number()) {
+          decode_points.clear();
+          break;
+        }
+        decode_points.emplace_back(points[i].first, d.get<double>());
+      }
+    }
+    if (decode_points.size() != points.size()) points.clear();  // an older entry: calibrate again
     source = "calibration read from " + cache_file;
   }
-  // The machine's speed now against the calibration's, learnt from the budgeted runs since.
-  double scale = 1;
-  if (!points.empty() && entry->contains("scale") && (*entry)["scale"].is_number()) {
-    const double v = (*entry)["scale"].get<double>();
-    if (v >= kMinScale && v <= kMaxScale) scale = v;
+  // What a real run costs beyond the calibration's timings, learnt from the budgeted runs since: a
+  // run is a fresh process (cold memory, a new thread pool) that also writes the image, which the
+  // calibration, timed in one warm process, does not see. At the coarse end this is most of the
+  // error, and it adds rather than scales (blunt fin at 256x256: about 20 ms on runs of 30-60 ms).
+  // And how far runs have scattered around the predictions (a moving mean of |actual - predicted|):
+  // the plan keeps that much more room.
+  double offset = 0, spread = 0;
+  if (!points.empty() && entry->contains("offset_ms") && (*entry)["offset_ms"].is_number()) {
+    const double v = (*entry)["offset_ms"].get<double>();
+    if (std::fabs(v) <= kMaxOffsetMs) offset = v;
+  }
+  if (!points.empty() && entry->contains("spread_ms") && (*entry)["spread_ms"].is_number()) {
+    const double v = (*entry)["spread_ms"].get<double>();
+    if (v >= 0 && v <= kMaxOffsetMs) spread = v;
   }
   if (points.empty()) {
     // Levels timed: the coarsest, the finest with at most a sixteenth and a quarter of level 0's
@@ -114,18 +167,37 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
     }
     std::sort(timed.begin(), timed.end());
     timed.erase(std::unique(timed.begin(), timed.end()), timed.end());
-    GTN_RETURN_IF_ERROR(timeLevel(input, coarsest, options, generic).status());
-    nlohmann::json tets = nlohmann::json::array(), ms = nlohmann::json::array();
+    // The warm-up run is timed too: what it takes beyond the warm run of the same level, plus writing
+    // the image, is the first estimate of what a real run costs beyond the calibration (see offset).
+    GTN_ASSIGN_OR_RETURN(const double cold_ms, timeLevel(input, coarsest, options, generic));
+    double extra_ms = 0;
+    {
+      Image image;
+      GTN_ASSIGN_OR_RETURN(const double warm_ms, timeLevel(input, coarsest, options, generic, &image));
+      const std::string probe = cache_file + ".probe.png";
+      std::error_code ec;
+      std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
+      const auto t0 = std::chrono::steady_clock::now();
+      const Status written = writePng(probe, image);
+      const double png_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      std::filesystem::remove(probe, ec);
+      extra_ms = std::max(0.0, cold_ms - warm_ms) + (written.isOk() ? png_ms : 0.0);
+    }
+    offset = extra_ms;
+    nlohmann::json tets = nlohmann::json::array(), ms = nlohmann::json::array(), dms = nlohmann::json::array();
     std::string names;
     for (size_t level : timed) {
       GTN_ASSIGN_OR_RETURN(double t, timeLevel(input, level, options, generic));
+      GTN_ASSIGN_OR_RETURN(double d, timeDecode(input, level));
       const double n = static_cast<double>(input.levelHeader(level).tets);
       points.emplace_back(n, t);
+      decode_points.emplace_back(n, std::min(d, t));
       tets.push_back(n);
       ms.push_back(t);
+      dms.push_back(std::min(d, t));
       names += (names.empty() ? "" : ", ") + std::to_string(level);
     }
-    cache[key] = {{"tets", tets}, {"ms", ms}};
+    cache[key] = {{"tets", tets}, {"ms", ms}, {"decode_ms", dms}, {"offset_ms", offset}};
     std::error_code ec;
     std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
     const std::string text = cache.dump(1);
@@ -134,44 +206,81 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
     source = "calibrated on levels " + names + ", cached in " + cache_file;
   }
   std::sort(points.begin(), points.end());
-  // Piecewise linear in the tetrahedra decoded between measured levels; beyond them, the nearest
-  // segment's slope (never decreasing).
-  auto predict = [&](double n) {
-    if (points.size() == 1)
-      return scale * (points[0].first > 0 ? points[0].second * n / points[0].first : points[0].second);
-    size_t i = 1;
-    while (i + 1 < points.size() && points[i].first < n) ++i;
-    const auto& [n0, m0] = points[i - 1];
-    const auto& [n1, m1] = points[i];
-    const double slope = n1 > n0 ? std::max(0.0, (m1 - m0) / (n1 - n0)) : 0.0;
-    return scale * std::max(0.0, m0 + slope * (n - n0));
+  std::sort(decode_points.begin(), decode_points.end());
+  // A whole run is interpolated in the logarithm of the tetrahedra: rendering has a large part that
+  // depends on the pixels and the samples, not on the mesh, so halving a coarse level saves a
+  // roughly constant time (blunt fin at 256x256: 25, 45, 72, 95 ms for 332, 468, 1189, 2499
+  // tetrahedra), which a line through the calibrated levels misses by a factor of two. Decoding is
+  // linear in the tetrahedra.
+  auto whole = [&](double n) { return interpolate(points, n, true); };
+  auto decoding = [&](double n) { return std::min(whole(n), interpolate(decode_points, n, false)); };
+  auto predict = [&](double n) { return std::max(0.0, offset + whole(n)); };
+  // Level i with more merges: decoding level i is paid in full (plus the filter, a few percent); the
+  // rest is that of a run of the tetrahedra left, interpolated between level i's and the next stored
+  // level's counts by the merges.
+  constexpr double kFilterCost = 1.05;
+  auto predictMerged = [&](size_t i, double fraction) {
+    const double n = static_cast<double>(input.levelHeader(i).tets);
+    const double n_next = static_cast<double>(input.levelHeader(i + 1).tets);
+    const double out = n + fraction * (n_next - n);
+    return std::max(0.0, offset + kFilterCost * decoding(n) + whole(out) - decoding(out));
   };
   // What the run has spent before rendering (opening the input, this choice) counts against the
   // budget too.
   const double available = budget_ms - elapsed_ms;
+  // The finest plan that fits: a stored level as is, else that level with on the fly merges towards
+  // the next level, else the next level. Plans aim at 80% of what remains: the same run on this
+  // 2-core machine scatters by +-15% from one minute to the next (blunt fin level 8: 40-53 ms, then
+  // 57-82 ms), and the budget allows 10% more.
+  constexpr double kMargin = 0.8;
+  const double aim = std::min(kMargin * available, available - 1.5 * spread);
   LevelChoice choice;
   choice.level = static_cast<int>(input.levels() - 1);
+  size_t chosen_level = input.levels() - 1;
+  uint64_t extra = 0;
+  double predicted = predict(static_cast<double>(input.levelHeader(chosen_level).tets));
   for (size_t i = 0; i < input.levels(); ++i) {
-    if (predict(static_cast<double>(input.levelHeader(i).tets)) <= available) {
+    const double stored = predict(static_cast<double>(input.levelHeader(i).tets));
+    if (stored <= aim) {
       choice.level = static_cast<int>(i);
+      chosen_level = i;
+      predicted = stored;
       break;
     }
+    if (i + 1 >= input.levels() || !input.hasMergeTree(i)) continue;
+    const uint64_t span = input.levelHeader(i + 1).merges - input.levelHeader(i).merges;
+    const double target = aim;
+    if (span == 0 || predictMerged(i, 1.0) > target) continue;
+    // The fewest merges that fit (the prediction falls with the merges).
+    double lo = 0, hi = 1;
+    for (int it = 0; it < 40; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (predictMerged(i, mid) <= target ? hi : lo) = mid;
+    }
+    extra = std::min<uint64_t>(span, static_cast<uint64_t>(std::ceil(hi * static_cast<double>(span))));
+    if (extra == 0) extra = 1;
+    choice.level = -1;
+    choice.merges = static_cast<int64_t>(input.levelHeader(i).merges + extra);
+    chosen_level = i;
+    predicted = predictMerged(i, static_cast<double>(extra) / static_cast<double>(span));
+    break;
   }
-  const double predicted = predict(static_cast<double>(input.levelHeader(choice.level).tets));
   std::string model;
-  for (const auto& [n, m] : points) {
-    char p[64];
-    std::snprintf(p, sizeof p, "%s%.0f tets %.1f ms", model.empty() ? "" : ", ", n, m);
+  for (size_t i = 0; i < points.size(); ++i) {
+    char p[96];
+    std::snprintf(p, sizeof p, "%s%.0f tets %.1f ms (decoding %.1f)", model.empty() ? "" : ", ", points[i].first,
+                  points[i].second, decode_points[i].second);
     model += p;
   }
   char buf[1024];
   std::snprintf(buf, sizeof buf,
-                "%s; measured %s, speed factor %.2f; level %d (%llu tetrahedra, %llu merges) predicted %.1f ms + %.1f ms already spent "
-                "for a budget of %.1f ms%s",
-                source.c_str(), model.c_str(), scale, choice.level,
-                static_cast<unsigned long long>(input.levelHeader(choice.level).tets),
-                static_cast<unsigned long long>(input.levelHeader(choice.level).merges), predicted, elapsed_ms,
-                budget_ms, predicted > available ? " (the coarsest level; the budget cannot be met)" : "");
+                "%s; measured %s, learnt offset %+.1f ms, spread %.1f ms; level %zu (%llu tetrahedra, %llu merges) + %llu merges on the fly "
+                "predicted %.1f ms + %.1f ms already spent for a budget of %.1f ms%s",
+                source.c_str(), model.c_str(), offset, spread, chosen_level,
+                static_cast<unsigned long long>(input.levelHeader(chosen_level).tets),
+                static_cast<unsigned long long>(input.levelHeader(chosen_level).merges),
+                static_cast<unsigned long long>(extra), predicted, elapsed_ms, budget_ms,
+                predicted > available ? " (the coarsest level; the budget cannot be met)" : "");
   *explanation = buf;
   if (predicted_ms) *predicted_ms = predicted;
   return choice;
@@ -180,20 +289,60 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
 void recordBudgetRun(const std::string& path, const RenderOptions& options, bool generic, double predicted_ms,
                      double actual_ms) {
   if (!(predicted_ms > 0) || !(actual_ms > 0)) return;
-  const std::string key = "v2|" + cacheKey(path, options, generic);
+  const std::string key = "v3|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
   auto text = readWholeFile(cache_file, 1 << 24);
   if (!text.isOk()) return;
   nlohmann::json cache = nlohmann::json::parse(text.value(), nullptr, false);
   if (!cache.is_object() || !cache.contains(key) || !cache[key].is_object()) return;
   nlohmann::json& entry = cache[key];
-  double scale = entry.contains("scale") && entry["scale"].is_number() ? entry["scale"].get<double>() : 1.0;
-  if (!(scale >= kMinScale && scale <= kMaxScale)) scale = 1;
-  // Half way (geometrically) towards what this run says, so that one outlier does not swing it.
-  scale = std::clamp(scale * std::sqrt(actual_ms / predicted_ms), kMinScale, kMaxScale);
-  entry["scale"] = scale;
+  double offset = entry.contains("offset_ms") && entry["offset_ms"].is_number() ? entry["offset_ms"].get<double>() : 0.0;
+  if (!(std::fabs(offset) <= kMaxOffsetMs)) offset = 0;
+  double spread = entry.contains("spread_ms") && entry["spread_ms"].is_number() ? entry["spread_ms"].get<double>() : 0.0;
+  if (!(spread >= 0 && spread <= kMaxOffsetMs)) spread = 0;
+  // Half way towards what this run says, so that one outlier does not swing it; the spread follows
+  // the misses more slowly.
+  spread = std::min(kMaxOffsetMs, 0.7 * spread + 0.3 * std::fabs(actual_ms - predicted_ms));
+  offset = std::clamp(offset + 0.5 * (actual_ms - predicted_ms), -kMaxOffsetMs, kMaxOffsetMs);
+  entry["offset_ms"] = offset;
+  entry["spread_ms"] = spread;
   const std::string out = cache.dump(1);
   (void)writeBytesAtomically(cache_file, out.data(), out.size());
+}
+
+namespace {
+std::string rangeKey(const std::string& path, const FieldSelector& field) {
+  return "range|" + fileKey(path) + "|" + field.name + ":" +
+         (field.magnitude ? std::string("mag") : std::to_string(field.component));
+}
+}  // namespace
+
+std::optional<std::pair<double, double>> cachedBoundaryRange(const std::string& path, const FieldSelector& field) {
+  auto text = readWholeFile(cachePath(), 1 << 24);
+  if (!text.isOk()) return std::nullopt;
+  const nlohmann::json cache = nlohmann::json::parse(text.value(), nullptr, false);
+  const std::string key = rangeKey(path, field);
+  if (!cache.is_object() || !cache.contains(key)) return std::nullopt;
+  const nlohmann::json& r = cache[key];
+  if (!r.is_array() || r.size() != 2 || !r[0].is_number() || !r[1].is_number()) return std::nullopt;
+  const double lo = r[0].get<double>(), hi = r[1].get<double>();
+  if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi) return std::nullopt;
+  return std::make_pair(lo, hi);
+}
+
+void storeBoundaryRange(const std::string& path, const FieldSelector& field, std::pair<double, double> range) {
+  if (!std::isfinite(range.first) || !std::isfinite(range.second)) return;
+  const std::string cache_file = cachePath();
+  nlohmann::json cache = nlohmann::json::object();
+  if (auto text = readWholeFile(cache_file, 1 << 24); text.isOk()) {
+    cache = nlohmann::json::parse(text.value(), nullptr, false);
+    if (!cache.is_object()) cache = nlohmann::json::object();
+  }
+  cache[rangeKey(path, field)] = {range.first, range.second};
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
+  const std::string out = cache.dump(1);
+  (void)writeBytesAtomically(cache_file, out.data(), out.size());  // a lost write costs a decode later
 }
 
 }  // namespace gtn

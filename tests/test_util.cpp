@@ -56,7 +56,12 @@ RunResult runShell(const std::string& command) {
   return r;
 }
 
-RunResult runGtn(const std::string& args) { return runShell(std::string(GTN_BINARY) + " " + args); }
+// The binary's caches (gtn render keeps calibrations and colour ranges under XDG_CACHE_HOME) go to a
+// directory of this test process, never to the user's ~/.cache.
+RunResult runGtn(const std::string& args) {
+  static const std::string cache = std::filesystem::temp_directory_path() / ("gtn-test-cache-" + std::to_string(getpid()));
+  return runShell("XDG_CACHE_HOME=" + cache + " " + std::string(GTN_BINARY) + " " + args);
+}
 
 std::string readFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -242,17 +244,79 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   ASSERT_EQ(b2.exit_code, 0) << b2.err;
   EXPECT_NE(b2.err.find("read from"), std::string::npos) << b2.err;
   EXPECT_EQ(nlohmann::json::parse(b2.out)["level"], 3);  // an impossible budget: the coarsest level
-  // The run that read the calibration folded its measured time into the cached speed factor.
+  // The run that read the calibration folded its measured time into the cached offset; the
+  // calibration holds whole runs and decoding alone for the same levels.
   const nlohmann::json cache = nlohmann::json::parse(test::readFile(dir + "/cache/gatun/render-calibration.json"));
-  bool has_scale = false;
+  size_t calibrations = 0, ranges = 0;
   for (const auto& [key, entry] : cache.items()) {
-    if (entry.contains("scale")) {
-      has_scale = true;
-      EXPECT_GT(entry["scale"].get<double>(), 0.0);
-      EXPECT_EQ(entry["tets"].size(), entry["ms"].size());
+    if (key.rfind("range|", 0) == 0) {
+      // Level 0's boundary range, kept so that coarse levels need not decode level 0's boundary.
+      ++ranges;
+      ASSERT_EQ(entry.size(), 2u);
+      EXPECT_LT(entry[0].get<double>(), entry[1].get<double>());
+      continue;
+    }
+    ++calibrations;
+    ASSERT_TRUE(entry.contains("offset_ms")) << entry.dump();
+    EXPECT_EQ(entry["tets"].size(), entry["ms"].size());
+    ASSERT_EQ(entry["decode_ms"].size(), entry["ms"].size());
+    for (size_t i = 0; i < entry["ms"].size(); ++i) {
+      EXPECT_GT(entry["decode_ms"][i].get<double>(), 0.0);
+      EXPECT_LE(entry["decode_ms"][i].get<double>(), entry["ms"][i].get<double>());
     }
   }
-  EXPECT_TRUE(has_scale);
+  EXPECT_EQ(calibrations, 1u);
+  EXPECT_EQ(ranges, 1u);
+  // The cached range gives the same image as decoding level 0's boundary again.
+  ASSERT_EQ(test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir + "/cached.png --size 64x64 --level 3").exit_code,
+            0);
+  ASSERT_EQ(test::runShell("XDG_CACHE_HOME=" + dir + "/fresh-cache " GTN_BINARY " render " + gtn + " -o " + dir +
+                           "/fresh.png --size 64x64 --level 3")
+                .exit_code,
+            0);
+  EXPECT_TRUE(test::fileExists(dir + "/fresh-cache/gatun/render-calibration.json"));
+  EXPECT_EQ(compareJson(dir + "/cached.png", dir + "/fresh.png")["max_difference"].get<int>(), 0);
+
+  // The plans for a range of budgets, from a calibration written here (so that the choice does not
+  // depend on this machine's speed): a larger budget never gives a coarser plan, the finest plan
+  // is level 0, and between stored levels the choice uses merges on the fly.
+  const nlohmann::json info = nlohmann::json::parse(runGtn("info --json " + gtn).out);
+  const auto& levels = info["levels"];
+  ASSERT_EQ(levels.size(), 4u);
+  const double n0 = levels[0]["tets"].get<double>(), n3 = levels[3]["tets"].get<double>();
+  nlohmann::json synthetic = cache;
+  for (auto& [key, entry] : synthetic.items()) {
+    if (key.rfind("range|", 0) == 0) continue;
+    entry = {{"tets", {n3, n0}}, {"ms", {100.0, 1000.0}}, {"decode_ms", {10.0, 400.0}}, {"offset_ms", 0.0}};
+  }
+  int64_t previous = -1;
+  bool merged_plan = false;
+  std::set<int> levels_seen;
+  for (double budget : {20.0, 150.0, 250.0, 400.0, 500.0, 600.0, 700.0, 800.0, 950.0, 1100.0, 1300.0, 5000.0}) {
+    {
+      std::ofstream out(dir + "/cache/gatun/render-calibration.json", std::ios::trunc);
+      out << synthetic.dump();
+    }
+    const test::RunResult b = test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir +
+                                             "/b.png --size 64x64 --json --budget-ms " + std::to_string(budget));
+    ASSERT_EQ(b.exit_code, 0) << b.err;
+    const nlohmann::json j = nlohmann::json::parse(b.out);
+    SCOPED_TRACE("budget " + std::to_string(budget) + ": " + j["budget_choice"].get<std::string>());
+    const int64_t merges = j["stored_merges"].get<int64_t>() + j["extra_merges"].get<int64_t>();
+    if (previous >= 0) {
+      EXPECT_LE(merges, previous);
+    }
+    previous = merges;
+    levels_seen.insert(j["level"].get<int>());
+    if (j["extra_merges"].get<int64_t>() > 0) {
+      merged_plan = true;
+      EXPECT_LT(j["level"].get<int>(), 3);  // on the fly from a level towards the next one
+      EXPECT_LT(merges, levels[j["level"].get<int>() + 1]["merges"].get<int64_t>());
+    }
+  }
+  EXPECT_TRUE(merged_plan);
+  EXPECT_EQ(previous, 0);  // the largest budget: level 0 as is
+  EXPECT_GE(levels_seen.size(), 3u);
 }
 
 }  // namespace
