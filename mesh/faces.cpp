@@ -19,9 +19,11 @@ struct FaceKey {
 };
 
 // Groups equal faces together (the order within a group, and of the groups, does not matter to the
-// callers). A counting sort on the smallest vertex, then a sort of each small bucket: several times
-// faster than sorting all the keys, which dominated the encoder's set-up. Keys with a vertex beyond
-// `points` (a damaged mesh) fall back to a plain sort rather than sizing buckets by them.
+// callers). An in-place bucket sort on the smallest vertex (American flag sort: no second copy of
+// the keys, which would double the largest allocation of the generic pipeline), then a sort of each
+// small bucket: several times faster than sorting all the keys, which dominated the encoder's
+// set-up. Keys with a vertex beyond `points` (a damaged mesh) fall back to a plain sort rather than
+// sizing buckets by them.
 void sortFaceKeys(std::vector<FaceKey>& keys, size_t points) {
   uint32_t max_v = 0;
   for (const FaceKey& k : keys) max_v = std::max(max_v, k.v[0]);
@@ -29,18 +31,24 @@ void sortFaceKeys(std::vector<FaceKey>& keys, size_t points) {
     std::sort(keys.begin(), keys.end());
     return;
   }
-  std::vector<uint32_t> start(size_t{max_v} + 2, 0);
+  const size_t buckets = size_t{max_v} + 1;
+  std::vector<uint32_t> start(buckets + 1, 0);
   for (const FaceKey& k : keys) ++start[k.v[0] + 1];
-  for (size_t v = 1; v < start.size(); ++v) start[v] += start[v - 1];
-  std::vector<FaceKey> sorted(keys.size());
-  {
-    std::vector<uint32_t> next(start.begin(), start.end() - 1);
-    for (const FaceKey& k : keys) sorted[next[k.v[0]]++] = k;
+  for (size_t v = 1; v <= buckets; ++v) start[v] += start[v - 1];
+  std::vector<uint32_t> next(start.begin(), start.end() - 1);
+  for (size_t b = 0; b < buckets; ++b) {
+    while (next[b] < start[b + 1]) {
+      const uint32_t target = keys[next[b]].v[0];
+      if (target == b) {
+        ++next[b];
+      } else {
+        std::swap(keys[next[b]], keys[next[target]++]);
+      }
+    }
   }
-  for (size_t v = 0; v + 1 < start.size(); ++v) {
-    if (start[v + 1] - start[v] > 1) std::sort(sorted.begin() + start[v], sorted.begin() + start[v + 1]);
+  for (size_t b = 0; b < buckets; ++b) {
+    if (start[b + 1] - start[b] > 1) std::sort(keys.begin() + start[b], keys.begin() + start[b + 1]);
   }
-  keys.swap(sorted);
 }
 }  // namespace
 
