@@ -25,7 +25,7 @@ constexpr uint32_t kOpenFace = 0xFFFFFFFFu;      // neighbour not arrived (or ne
 constexpr uint32_t kReleasedFace = 0xFFFFFFFEu;  // neighbour arrived and was released
 // Tetrahedra are processed in batches of this size range: large enough to feed the threads, small
 // relative to the mesh so that holding a batch does not dominate the memory.
-constexpr size_t kMinBatch = 256, kMaxBatch = 8192;
+constexpr size_t kMinBatch = 256, kMaxBatch = 2048;
 
 struct FaceKey {
   uint32_t v[3];
