@@ -248,10 +248,12 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       break;
     }
     if (i + 1 >= input.levels() || !input.hasMergeTree(i)) continue;
+    if (input.levelHeader(i + 1).merges <= input.levelHeader(i).merges) continue;  // not coarser: nothing between
     const uint64_t span = input.levelHeader(i + 1).merges - input.levelHeader(i).merges;
     const double target = aim;
     if (span == 0 || predictMerged(i, 1.0) > target) continue;
-    // The fewest merges that fit (the prediction falls with the merges).
+    // The fewest merges that fit, by bisection (hi always fits; the prediction falls with the
+    // merges, up to the interpolation's kinks).
     double lo = 0, hi = 1;
     for (int it = 0; it < 40; ++it) {
       const double mid = 0.5 * (lo + hi);
