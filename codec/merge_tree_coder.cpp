@@ -75,8 +75,10 @@ int bitLength(uint64_t x) { return x == 0 ? 0 : 64 - __builtin_clzll(x); }
 
 // Adaptive models of the body (one instance per encoder or decoder).
 struct Models {
-  BitModel is_root, boundary;
-  BitTree<4> choice;     // which recent parent delta predicts this one (0 = none)
+  BitModel boundary;
+  BitModel exact[2];     // per boundary bit: the parent delta equals one of its predictions
+  BitTree<3> hit;        // which one
+  BitTree<3> choice;     // otherwise: which prediction the residual is taken from (0 = none)
   BitModel sign[2];      // per context (choice == 0 or not)
   BitTree<6> len[2];
   BitTree<4> removed[2];
@@ -94,30 +96,59 @@ uint32_t codeUniform(C& c, uint32_t x, uint32_t total) {
   return y - u;
 }
 
-// The parent deltas (parent id - child id) of the last merged vertices, most recent first: nearby
-// vertices in decoding order tend to merge in the same direction.
-struct DeltaHistory {
-  static constexpr int kSize = 8;
-  int64_t d[kSize] = {};
+// Predictions of a merge's parent delta (parent id - child id): the distinct deltas of the nearest
+// merges already coded, nearest first, where "near" is in decoding order: ids c-1, c+1, c-2, c+2, ...,
+// at most kWindow away, until kSize merged ids are seen. Vertices decoded close together lie close
+// together in the mesh and tend to merge in the same direction (on a grid, along the same grid line).
+struct DeltaPredictions {
+  static constexpr int kSize = 7;
+  static constexpr uint32_t kWindow = 16;
+  int64_t d[kSize];
   int count = 0;
-  void push(int64_t delta) {
-    for (int k = kSize - 1; k > 0; --k) d[k] = d[k - 1];
-    d[0] = delta;
-    count = std::min(count + 1, kSize);
+  // parent[id] = parent of the merges coded so far, MergeTree::kRoot elsewhere.
+  DeltaPredictions(const std::vector<uint32_t>& parent, uint32_t c) {
+    const uint32_t n = static_cast<uint32_t>(parent.size());
+    int seen = 0;
+    for (uint32_t k = 1; k <= kWindow && seen < kSize; ++k) {
+      if (k <= c) add(parent[c - k], c - k, &seen);
+      if (seen < kSize && c + k < n) add(parent[c + k], c + k, &seen);
+    }
+  }
+
+ private:
+  void add(uint32_t p, uint32_t id, int* seen) {
+    if (p == MergeTree::kRoot) return;
+    ++*seen;
+    d[count++] = int64_t{p} - int64_t{id};
   }
 };
 
-// The per-vertex body of the payload, shared by the encoder (values in, returned unchanged) and the
-// decoder (values out).
-struct VertexCode {
-  bool root;
-  uint32_t choice, sign, len, low_bits, rank_index, boundary, removed;
+// The per-merge body of the payload (rank order), shared by the encoder (values in, returned
+// unchanged) and the decoder (values out).
+struct MergeCode {
+  uint32_t child_index, boundary, exact, hit, choice, sign, len, low_bits, removed;
 };
 
 template <class C>
-void codeVertex(C& c, Models& m, VertexCode& v, uint32_t remaining) {
-  v.root = c.bit(m.is_root, v.root ? 1 : 0) != 0;
-  if (v.root) return;
+void codeDelta(C& c, Models& m, MergeCode& v);
+
+// What follows the child's index (codeUniform over the vertices not merged yet), once the child and
+// so its parent-delta predictions are known.
+template <class C>
+void codeMerge(C& c, Models& m, MergeCode& v, int predictions) {
+  v.boundary = c.bit(m.boundary, v.boundary);
+  if (predictions > 0) v.exact = c.bit(m.exact[v.boundary], v.exact);
+  if (v.exact) {
+    v.hit = m.hit.code(c, v.hit);
+  } else {
+    codeDelta(c, m, v);
+  }
+  const uint32_t k = m.removed[v.boundary].code(c, std::min<uint32_t>(v.removed, 15));
+  v.removed = k == 15 ? c.direct(v.removed, 32) : k;
+}
+
+template <class C>
+void codeDelta(C& c, Models& m, MergeCode& v) {
   v.choice = m.choice.code(c, v.choice);
   const int ctx = v.choice ? 1 : 0;
   v.len = m.len[ctx].code(c, v.len);
@@ -126,14 +157,10 @@ void codeVertex(C& c, Models& m, VertexCode& v, uint32_t remaining) {
     v.sign = c.bit(m.sign[ctx], v.sign);
     v.low_bits = c.direct(v.low_bits, static_cast<int>(v.len) - 1);
   }
-  v.rank_index = codeUniform(c, v.rank_index, remaining);
-  v.boundary = c.bit(m.boundary, v.boundary);
-  const uint32_t k = m.removed[v.boundary].code(c, std::min<uint32_t>(v.removed, 15));
-  v.removed = k == 15 ? c.direct(v.removed, 32) : k;
 }
 
-// The ranks 1..M still free: one bit per rank, and a Fenwick tree over the free counts of 64-rank
-// blocks, small enough to stay in cache while the Lehmer code is decoded.
+// The numbers 1..M still free (here: decoding ids + 1 of the vertices not merged yet): one bit per
+// number, and a Fenwick tree over the free counts of 64-number blocks, small enough to stay in cache.
 class FreeRanks {
  public:
   explicit FreeRanks(uint32_t m) : bits_((size_t{m} + 63) / 64, ~uint64_t{0}), blocks_(bits_.size()) {
@@ -242,7 +269,7 @@ class Reader {
   const std::string& what_;
 };
 
-constexpr uint8_t kVersion = 1;
+constexpr uint8_t kVersion = 2;
 
 }  // namespace
 
@@ -272,41 +299,46 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   out.push_back(static_cast<uint8_t>(q));
   for (size_t i = 0; i < q; ++i) putF64(out, tree.error_quantiles[i]);
 
+  // by_rank[r - 1] = decoding id of the vertex merged at rank r.
+  std::vector<uint32_t> by_rank(tree.merges);
+  for (size_t v = 0; v < n; ++v) {
+    if (tree.parent[v] != MergeTree::kRoot) by_rank[tree.rank[v] - 1] = vertex_order[v];
+  }
   std::vector<uint8_t> body;
   EntropyCoder<true> rc(&body);
   Models m;
-  FreeRanks free_ranks(static_cast<uint32_t>(tree.merges));
-  uint32_t remaining = static_cast<uint32_t>(tree.merges);
-  DeltaHistory history;
-  for (uint32_t id = 0; id < n; ++id) {
+  FreeRanks unmerged(static_cast<uint32_t>(n));  // decoding ids + 1 of the vertices not merged yet
+  std::vector<uint32_t> coded_parent(n, MergeTree::kRoot);  // decoding ids, merges coded so far
+  for (uint64_t r = 0; r < tree.merges; ++r) {
+    const uint32_t id = by_rank[r];
     const uint32_t v = inverse[id];
-    VertexCode code{};
-    code.root = tree.parent[v] == MergeTree::kRoot;
-    if (!code.root) {
-      const int64_t delta = int64_t{vertex_order[tree.parent[v]]} - int64_t{id};
-      int64_t residual = delta;
-      code.choice = 0;
-      for (int k = 0; k < history.count; ++k) {
-        const int64_t r = delta - history.d[k];
-        if (std::llabs(r) < std::llabs(residual)) {
-          residual = r;
-          code.choice = static_cast<uint32_t>(k + 1);
-        }
+    MergeCode code{};
+    code.child_index = unmerged.countBelow(id + 1);
+    const uint32_t pid = vertex_order[tree.parent[v]];
+    const int64_t delta = int64_t{pid} - int64_t{id};
+    int64_t residual = delta;
+    const DeltaPredictions pred(coded_parent, id);
+    for (int k = 0; k < pred.count; ++k) {
+      const int64_t d = delta - pred.d[k];
+      if (d == 0 && !code.exact) {
+        code.exact = 1;
+        code.hit = static_cast<uint32_t>(k);
       }
-      history.push(delta);
-      const uint64_t mag = static_cast<uint64_t>(std::llabs(residual));
-      code.len = static_cast<uint32_t>(bitLength(mag));
-      code.sign = residual < 0 ? 1 : 0;
-      code.low_bits = code.len > 1 ? static_cast<uint32_t>(mag & ((uint64_t{1} << (code.len - 1)) - 1)) : 0;
-      code.rank_index = free_ranks.countBelow(tree.rank[v]);
-      code.boundary = tree.boundary[v] ? 1 : 0;
-      code.removed = tree.removed[v];
+      if (std::llabs(d) < std::llabs(residual)) {
+        residual = d;
+        code.choice = static_cast<uint32_t>(k + 1);
+      }
     }
-    codeVertex(rc, m, code, remaining);
-    if (!code.root) {
-      free_ranks.take(tree.rank[v]);
-      --remaining;
-    }
+    coded_parent[id] = pid;
+    const uint64_t mag = static_cast<uint64_t>(std::llabs(residual));
+    code.len = static_cast<uint32_t>(bitLength(mag));
+    code.sign = residual < 0 ? 1 : 0;
+    code.low_bits = code.len > 1 ? static_cast<uint32_t>(mag & ((uint64_t{1} << (code.len - 1)) - 1)) : 0;
+    code.boundary = tree.boundary[v] ? 1 : 0;
+    code.removed = tree.removed[v];
+    codeUniform(rc, code.child_index, static_cast<uint32_t>(n - r));
+    codeMerge(rc, m, code, pred.count);
+    unmerged.take(id + 1);
   }
   rc.finish();
   putVarint(out, body.size());
@@ -315,7 +347,7 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
 }
 
 StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points,
-                                    const std::string& what) {
+                                    const std::string& what, uint64_t max_merges) {
   Reader r(payload, what);
   uint8_t version = 0;
   GTN_RETURN_IF_ERROR(r.u8(&version, "version"));
@@ -353,55 +385,54 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
   if (r.pos() != r.size()) return r.error("end", "trailing bytes after the body");
 
   const size_t n = points;
-  tree.merges = merges;
+  const uint64_t decode = std::min(merges, max_merges);
+  tree.merges = decode;
   tree.parent.assign(n, MergeTree::kRoot);
   tree.rank.assign(n, 0);
   tree.removed.assign(n, 0);
   tree.boundary.assign(n, 0);
   EntropyCoder<false> rc(body);
   Models m;
-  FreeRanks free_ranks(static_cast<uint32_t>(merges));
-  uint32_t remaining = static_cast<uint32_t>(merges);
+  FreeRanks unmerged(static_cast<uint32_t>(n));
   uint64_t got_boundary = 0, got_removed = 0;
-  DeltaHistory history;
-  auto bodyError = [&](uint32_t id, const std::string& why) {
-    return invalidData(what + ": merge tree payload body, vertex " + std::to_string(id) + ": " + why);
+  auto bodyError = [&](uint64_t r, const std::string& why) {
+    return invalidData(what + ": merge tree payload body, merge " + std::to_string(r + 1) + ": " + why);
   };
-  for (uint32_t id = 0; id < n; ++id) {
-    if (!rc.ok()) return bodyError(id, "body truncated or corrupt");
-    VertexCode code{};
-    codeVertex(rc, m, code, remaining);
-    if (code.root) continue;
-    if (remaining == 0) return bodyError(id, "more merged vertices than merges");
-    if (code.choice > static_cast<uint32_t>(history.count)) return bodyError(id, "parent predictor out of range");
-    if (code.len > 33) return bodyError(id, "parent delta too long");
-    const int64_t mag = code.len == 0 ? 0 : static_cast<int64_t>((uint64_t{1} << (code.len - 1)) | code.low_bits);
-    const int64_t delta = (code.choice ? history.d[code.choice - 1] : 0) + (code.sign ? -mag : mag);
+  for (uint64_t r = 0; r < decode; ++r) {
+    MergeCode code{};
+    code.child_index = codeUniform(rc, 0, static_cast<uint32_t>(n - r));
+    if (code.child_index >= n - r) return bodyError(r, "child out of range");
+    const uint32_t id = unmerged.kth(code.child_index) - 1;
+    const DeltaPredictions pred(tree.parent, id);
+    codeMerge(rc, m, code, pred.count);
+    if (!rc.ok()) return bodyError(r, "body truncated or corrupt");
+    int64_t delta;
+    if (code.exact) {
+      if (code.hit >= static_cast<uint32_t>(pred.count)) return bodyError(r, "parent prediction out of range");
+      delta = pred.d[code.hit];
+    } else {
+      if (code.len > 33) return bodyError(r, "parent delta too long");
+      if (code.choice > static_cast<uint32_t>(pred.count)) return bodyError(r, "parent predictor out of range");
+      const int64_t mag = code.len == 0 ? 0 : static_cast<int64_t>((uint64_t{1} << (code.len - 1)) | code.low_bits);
+      delta = (code.choice ? pred.d[code.choice - 1] : 0) + (code.sign ? -mag : mag);
+    }
     const int64_t pid64 = int64_t{id} + delta;
-    if (delta == 0 || pid64 < 0 || pid64 >= static_cast<int64_t>(n)) return bodyError(id, "parent id out of range");
-    history.push(delta);
-    const uint64_t pid = static_cast<uint64_t>(pid64);
-    if (code.rank_index >= remaining) return bodyError(id, "rank out of range");
-    const uint32_t rank = free_ranks.kth(code.rank_index);
-    free_ranks.take(rank);
-    --remaining;
-    tree.parent[id] = static_cast<uint32_t>(pid);
-    tree.rank[id] = rank;
+    if (delta == 0 || pid64 < 0 || pid64 >= static_cast<int64_t>(n)) return bodyError(r, "parent id out of range");
+    const uint32_t pid = static_cast<uint32_t>(pid64);
+    // The parent must still be alive: merged later (a larger rank) or never.
+    if (tree.parent[pid] != MergeTree::kRoot) return bodyError(r, "merges into a vertex merged earlier");
+    unmerged.take(id + 1);
+    tree.parent[id] = pid;
+    tree.rank[id] = static_cast<uint32_t>(r + 1);
     tree.boundary[id] = static_cast<uint8_t>(code.boundary);
     tree.removed[id] = code.removed;
     got_boundary += code.boundary;
     got_removed += code.removed;
   }
+  if (decode < merges) return tree;  // a prefix: the rest of the body is not read
   if (!rc.finishedCleanly()) return invalidData(what + ": merge tree payload body truncated, corrupt or followed by trailing bytes");
-  if (remaining != 0) return invalidData(what + ": merge tree payload has fewer merged vertices than merges");
   if (got_boundary != boundary_merges || got_removed != tets_removed)
     return invalidData(what + ": merge tree payload counts disagree with its header");
-  for (size_t v = 0; v < n; ++v) {
-    const uint32_t p = tree.parent[v];
-    if (p != MergeTree::kRoot && tree.parent[p] != MergeTree::kRoot && tree.rank[p] <= tree.rank[v])
-      return invalidData(what + ": merge tree payload: vertex " + std::to_string(v) +
-                         " merges into a vertex merged earlier");
-  }
   return tree;
 }
 

@@ -6,8 +6,8 @@
 // (a vertex can only be merged into a vertex that is still alive), which makes the tree acyclic and
 // lets a top-down traversal compute ancestors in one pass.
 //
-// Payload layout (version 1; little-endian; varint = unsigned LEB128, at most 10 bytes):
-//   u8      version                  = 1
+// Payload layout (version 2; little-endian; varint = unsigned LEB128, at most 10 bytes):
+//   u8      version                  = 2
 //   varint  points P                 vertices of the level (must equal the level header's count)
 //   varint  merges M                 M <= P
 //   varint  boundary_merges          merges whose child is a boundary vertex
@@ -18,32 +18,35 @@
 //   f64 x q                          error at the quantiles 0, .01, .1, .25, .5, .75, .9, .99, 1 of the
 //                                    merges (error when chosen, normalised as in simplify/ranking.h)
 //   varint  body_bytes, then the body: one stream of codec/range_coder.h (adaptive BitModel bits,
-//           BitTree symbols, direct bits; the encoder's flush ends it) holding, for each vertex v of
-//           the level's vertex numbering 0..P-1 (decoding order):
-//     bit   is_root                  one model
-//     if not root:
-//       delta = parent id - v, predicted from H, the deltas of the last (up to 8) merged vertices
-//       before v, most recent first:
-//       BitTree<4>  c                c = 0: no prediction; c = k (1 <= k <= |H|): predicted by H[k-1]
-//                                    (the encoder picks the smallest |residual|, ties to lower c);
-//                                    residual = delta - (c ? H[c-1] : 0)
-//       BitTree<6>  len              tree per context (c == 0, c > 0); len = bit length of |residual|
-//                                    (0..33; 0 means residual 0)
-//       if len > 0:
-//         bit   sign                 model per context; 1 = residual < 0
-//         len-1 direct bits          |residual| below its leading one
-//       then delta is pushed in front of H (at most 8 kept)
-//       uniform x in [0, R)          R = ranks not yet taken (M minus the merged vertices before v);
-//                                    the rank is the (x+1)-th smallest rank not yet taken (a Lehmer
-//                                    code of the rank permutation). Truncated binary in direct bits:
-//                                    b = bitlen(R-1), u = 2^b - R; b-1 bits y; if y >= u one more bit,
-//                                    x = 2y + bit - u. Nothing is coded when R = 1.
-//       bit   boundary               one model; 1 = v is a boundary vertex
-//       BitTree<4>  k                tree per boundary bit; k = tetrahedra the merge removes, 15 =
-//                                    escape followed by 32 direct bits holding k
-// The decoder rejects: an unknown version, P different from the expected count, M > P, c > |H|,
-// len > 33, a parent out of range or equal to v, a rank not in 1..R, a child whose (non-root) parent has a smaller rank,
-// counts that disagree with the header fields, a body read past its end, and trailing bytes.
+//           BitTree symbols, direct bits; the encoder's flush ends it) holding the merges in rank
+//           order r = 1..M, so that a reader that applies only the first N merges decodes only the
+//           first N records. Merge r, child c (the vertex merged away) into parent p, ids in the
+//           level's vertex numbering 0..P-1 (decoding order):
+//       uniform x in [0, U)          U = P - (r - 1), the vertices not merged yet; c is the (x+1)-th
+//                                    smallest of them. Truncated binary in direct bits: b =
+//                                    bitlen(U-1), u = 2^b - U; b-1 bits y; if y >= u one more bit,
+//                                    x = 2y + bit - u. Nothing is coded when U = 1.
+//       bit   boundary               one model; 1 = c is a boundary vertex
+//       delta = p - c, predicted by D: the distinct deltas of the merges already coded whose children
+//       are nearest c in decoding order (ids c-1, c+1, c-2, c+2, ..., at most 16 away, until 7 merged
+//       ids are seen), nearest first (DeltaPredictions in the .cpp):
+//       if |D| > 0: bit exact          model per boundary bit; 1 = delta == D[h]
+//       if exact:   BitTree<3>  h      the first such h
+//       else:
+//         BitTree<3>  k                k = 0: no prediction; k = j (1 <= j <= |D|): residual from D[j-1]
+//                                      (the encoder picks the smallest |residual|, ties to lower k);
+//                                      residual = delta - (k ? D[k-1] : 0)
+//         BitTree<6>  len              tree per context (k == 0, k > 0); len = bit length of |residual|
+//                                      (0..33; 0 means residual 0)
+//         if len > 0:
+//           bit   sign                 model per context; 1 = residual < 0
+//           len-1 direct bits          |residual| below its leading one
+//       BitTree<4>  t                  tree per boundary bit; t = tetrahedra the merge removes, 15 =
+//                                      escape followed by 32 direct bits holding t
+// The decoder rejects: an unknown version, P different from the expected count, M > P, h >= |D|,
+// k > |D|, len > 33, a parent out of range, equal to c or already merged (its rank must be larger), a body
+// read past its end, and, when it decodes all M merges, counts that disagree with the header fields
+// and trailing bytes.
 #pragma once
 
 #include <cstdint>
@@ -62,7 +65,7 @@ struct MergeTree {
   std::vector<uint32_t> removed;  // per vertex: tetrahedra its merge removes (0 for roots)
   std::vector<uint8_t> boundary;  // per vertex: 1 if v is a boundary vertex (its merge is a boundary merge)
   std::vector<float> error;       // per vertex: error of its merge when chosen (not coded; may be empty)
-  uint64_t merges = 0;
+  uint64_t merges = 0;  // ranks 1..merges
 
   // Provenance and summary, coded in the payload header.
   std::string field;  // density field, "" = volume only
@@ -88,8 +91,11 @@ void computeErrorQuantiles(MergeTree& tree);
 StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order);
 
 // Decodes a payload; `expected_points` is the level's vertex count (it bounds every allocation).
-// `what` names the source in messages (file and level).
+// `what` names the source in messages (file and level). Only the first `max_merges` merges are
+// decoded (the tree of a prefix of the ranking is itself a merge tree, with the later merges' children
+// as roots); the checks that need the whole body (header counts, trailing bytes) run only when the
+// whole body is read.
 StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points,
-                                    const std::string& what);
+                                    const std::string& what, uint64_t max_merges = UINT64_MAX);
 
 }  // namespace gtn

@@ -80,7 +80,8 @@ Status RenderInput::stream(const ResolvedLevel& level, MeshSink& sink) {
   GTN_ASSIGN_OR_RETURN(auto payload, reader_->mergeTreePayload(level.level));
   if (!payload) return usageError(path_ + ": level " + std::to_string(level.level) + " has no merge tree");
   GTN_ASSIGN_OR_RETURN(MergeTree tree,
-                       decodeMergeTree(*payload, level.points, path_ + ": level " + std::to_string(level.level)));
+                       decodeMergeTree(*payload, level.points, path_ + ": level " + std::to_string(level.level),
+                                       level.extra_merges));
   StreamSimplifier simplifier(tree, level.extra_merges, sink);
   return reader_->decodeLevel(level.level, simplifier);
 }

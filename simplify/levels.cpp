@@ -99,7 +99,8 @@ Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sin
   const std::optional<std::vector<uint8_t>>& payload = payload_or.value();
   const std::string what = reader.file().path + ", level " + std::to_string(plan.level);
   if (!payload.has_value()) return usageError(what + " stores no merge tree: cannot simplify beyond the stored levels");
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, reader.level(plan.level).header.points, what));
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, reader.level(plan.level).header.points, what,
+                                                          plan.extra_merges));
   if (plan.extra_merges > tree.merges && clamp) {
     plan.extra_merges = tree.merges;
     if (plan_out) *plan_out = plan;

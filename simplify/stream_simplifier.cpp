@@ -22,18 +22,32 @@ Status StreamSimplifier::beginLevel(const LevelHeader& header) {
   in_header_ = header;
   cell_bytes_ = 0;
   for (const FieldDesc& d : header.cell_fields) cell_bytes_ += d.itemBytes();
-  ancestor_ = computeAncestors(tree_, n_);
   const size_t np = tree_.points();
-  out_id_.assign(np, kUnset);
-  refs_.assign(np, 0);
-  for (size_t v = 0; v < np; ++v) ++refs_[ancestor_[v]];
+  const size_t survivors = np - n_;
+  // out_of_ starts as the ancestors; a survivor's entry becomes its output id, then every other
+  // entry the output id of its ancestor (a survivor, whose entry is final by then).
+  out_of_ = computeAncestors(tree_, n_);
+  survives_.assign(np, 0);
+  uint32_t next = 0;
+  for (size_t v = 0; v < np; ++v) {
+    if (out_of_[v] == v) {
+      survives_[v] = 1;
+      out_of_[v] = next++;
+    }
+  }
+  if (next != survivors) return invalidData("simplification: the merge tree's merge count disagrees with its vertices");
+  refs_.assign(survivors, 0);
+  for (size_t v = 0; v < np; ++v) {
+    if (!survives_[v]) out_of_[v] = out_of_[out_of_[v]];
+    ++refs_[out_of_[v]];
+  }
   received_ = emitted_ = 0;
   out_tets_ = out_triangles_ = dropped_tets_ = 0;
   held_.clear();
   held_values_.clear();
   free_slots_.clear();
-  wait_head_.assign(np, kUnset);
-  wait_tail_.assign(np, kUnset);
+  wait_head_.assign(survivors, kUnset);
+  wait_tail_.assign(survivors, kUnset);
   wait_nodes_.clear();
   free_nodes_.clear();
   held_count_ = peak_held_ = 0;
@@ -51,14 +65,14 @@ Status StreamSimplifier::beginLevel(const LevelHeader& header) {
 }
 
 Status StreamSimplifier::vertex(uint32_t id, const double xyz[3], const uint8_t* values) {
-  if (id != received_ || id >= ancestor_.size())
+  if (id != received_ || id >= out_of_.size())
     return invalidData("simplification: vertex " + std::to_string(id) + " out of order or beyond the level");
   ++received_;
-  if (ancestor_[id] != id) return Status::ok();
-  out_id_[id] = emitted_;
-  GTN_RETURN_IF_ERROR(out_.vertex(emitted_++, xyz, values));
-  uint32_t node = wait_head_[id];
-  wait_head_[id] = wait_tail_[id] = kUnset;
+  if (!survives_[id]) return Status::ok();
+  const uint32_t o = emitted_++;
+  GTN_RETURN_IF_ERROR(out_.vertex(o, xyz, values));
+  uint32_t node = wait_head_[o];
+  wait_head_[o] = wait_tail_[o] = kUnset;
   while (node != kUnset) {
     const WaitNode w = wait_nodes_[node];
     free_nodes_.push_back(node);
@@ -68,7 +82,7 @@ Status StreamSimplifier::vertex(uint32_t id, const double xyz[3], const uint8_t*
   return Status::ok();
 }
 
-Status StreamSimplifier::hold(const uint32_t* anc, int count, bool triangle, const uint8_t* cell_values) {
+Status StreamSimplifier::hold(const uint32_t* o, int count, bool triangle, const uint8_t* cell_values) {
   uint32_t slot;
   if (!free_slots_.empty()) {
     slot = free_slots_.back();
@@ -81,11 +95,11 @@ Status StreamSimplifier::hold(const uint32_t* anc, int count, bool triangle, con
   Held& h = held_[slot];
   h.triangle = triangle;
   h.missing = 0;
-  h.v[3] = kUnset;
+  h.o[3] = kUnset;
   for (int i = 0; i < count; ++i) {
-    h.v[i] = anc[i];
-    ++refs_[anc[i]];
-    if (out_id_[anc[i]] == kUnset) {
+    h.o[i] = o[i];
+    ++refs_[o[i]];
+    if (o[i] >= emitted_) {
       ++h.missing;
       uint32_t node;
       if (!free_nodes_.empty()) {
@@ -96,12 +110,12 @@ Status StreamSimplifier::hold(const uint32_t* anc, int count, bool triangle, con
         wait_nodes_.push_back({});
       }
       wait_nodes_[node] = {slot, kUnset};
-      if (wait_tail_[anc[i]] == kUnset) {
-        wait_head_[anc[i]] = node;
+      if (wait_tail_[o[i]] == kUnset) {
+        wait_head_[o[i]] = node;
       } else {
-        wait_nodes_[wait_tail_[anc[i]]].next = node;
+        wait_nodes_[wait_tail_[o[i]]].next = node;
       }
-      wait_tail_[anc[i]] = node;
+      wait_tail_[o[i]] = node;
     }
   }
   if (!triangle && cell_bytes_) std::memcpy(held_values_.data() + size_t{slot} * cell_bytes_, cell_values, cell_bytes_);
@@ -110,42 +124,37 @@ Status StreamSimplifier::hold(const uint32_t* anc, int count, bool triangle, con
 }
 
 Status StreamSimplifier::emitHeld(uint32_t slot) {
-  Held h = held_[slot];
+  const Held h = held_[slot];
   free_slots_.push_back(slot);
   --held_count_;
   if (h.triangle) {
-    const uint32_t o[3] = {out_id_[h.v[0]], out_id_[h.v[1]], out_id_[h.v[2]]};
-    GTN_RETURN_IF_ERROR(out_.boundaryTriangle(o));
+    GTN_RETURN_IF_ERROR(out_.boundaryTriangle(h.o));
     ++out_triangles_;
   } else {
-    const uint32_t o[4] = {out_id_[h.v[0]], out_id_[h.v[1]], out_id_[h.v[2]], out_id_[h.v[3]]};
-    GTN_RETURN_IF_ERROR(out_.tet(o, cell_bytes_ ? held_values_.data() + size_t{slot} * cell_bytes_ : nullptr));
+    GTN_RETURN_IF_ERROR(out_.tet(h.o, cell_bytes_ ? held_values_.data() + size_t{slot} * cell_bytes_ : nullptr));
     ++out_tets_;
   }
-  for (int i = 0; i < (h.triangle ? 3 : 4); ++i) GTN_RETURN_IF_ERROR(release(h.v[i]));
+  for (int i = 0; i < (h.triangle ? 3 : 4); ++i) GTN_RETURN_IF_ERROR(release(h.o[i]));
   return Status::ok();
 }
 
-Status StreamSimplifier::release(uint32_t a) {
-  if (refs_[a] == 0) return invalidData("simplification: vertex " + std::to_string(a) + " retired twice");
-  if (--refs_[a] == 0 && out_id_[a] != kUnset) return out_.retireVertex(out_id_[a]);
+Status StreamSimplifier::release(uint32_t o) {
+  if (refs_[o] == 0) return invalidData("simplification: output vertex " + std::to_string(o) + " retired twice");
+  if (--refs_[o] == 0 && o < emitted_) return out_.retireVertex(o);
   return Status::ok();
 }
 
 Status StreamSimplifier::boundaryTriangle(const uint32_t v[3]) {
   if (!in_boundary_) return invalidData("simplification: boundary triangle after the end of the boundary");
-  uint32_t a[3];
-  for (int i = 0; i < 3; ++i) {
-    if (v[i] >= received_) return invalidData("simplification: boundary triangle refers to a vertex not yet emitted");
-    a[i] = ancestor_[v[i]];
-  }
-  if (a[0] == a[1] || a[0] == a[2] || a[1] == a[2]) return Status::ok();
-  if (out_id_[a[0]] != kUnset && out_id_[a[1]] != kUnset && out_id_[a[2]] != kUnset) {
-    const uint32_t o[3] = {out_id_[a[0]], out_id_[a[1]], out_id_[a[2]]};
+  if (std::max({v[0], v[1], v[2]}) >= received_)
+    return invalidData("simplification: boundary triangle refers to a vertex not yet emitted");
+  const uint32_t o[3] = {out_of_[v[0]], out_of_[v[1]], out_of_[v[2]]};
+  if (o[0] == o[1] || o[0] == o[2] || o[1] == o[2]) return Status::ok();
+  if (std::max({o[0], o[1], o[2]}) < emitted_) {
     ++out_triangles_;
     return out_.boundaryTriangle(o);
   }
-  return hold(a, 3, true, nullptr);
+  return hold(o, 3, true, nullptr);
 }
 
 Status StreamSimplifier::endBoundary() {
@@ -159,26 +168,23 @@ Status StreamSimplifier::endBoundary() {
 }
 
 Status StreamSimplifier::tet(const uint32_t v[4], const uint8_t* cell_values) {
-  uint32_t a[4];
-  for (int i = 0; i < 4; ++i) {
-    if (v[i] >= received_) return invalidData("simplification: tetrahedron refers to a vertex not yet emitted");
-    a[i] = ancestor_[v[i]];
-  }
-  if (a[0] == a[1] || a[0] == a[2] || a[0] == a[3] || a[1] == a[2] || a[1] == a[3] || a[2] == a[3]) {
+  if (std::max({v[0], v[1], v[2], v[3]}) >= received_)
+    return invalidData("simplification: tetrahedron refers to a vertex not yet emitted");
+  const uint32_t o[4] = {out_of_[v[0]], out_of_[v[1]], out_of_[v[2]], out_of_[v[3]]};
+  if (o[0] == o[1] || o[0] == o[2] || o[0] == o[3] || o[1] == o[2] || o[1] == o[3] || o[2] == o[3]) {
     ++dropped_tets_;
     return Status::ok();
   }
-  if (out_id_[a[0]] != kUnset && out_id_[a[1]] != kUnset && out_id_[a[2]] != kUnset && out_id_[a[3]] != kUnset) {
-    const uint32_t o[4] = {out_id_[a[0]], out_id_[a[1]], out_id_[a[2]], out_id_[a[3]]};
+  if (std::max({o[0], o[1], o[2], o[3]}) < emitted_) {
     ++out_tets_;
     return out_.tet(o, cell_values);
   }
-  return hold(a, 4, false, cell_values);
+  return hold(o, 4, false, cell_values);
 }
 
 Status StreamSimplifier::retireVertex(uint32_t id) {
   if (id >= received_) return invalidData("simplification: retirement of a vertex not yet emitted");
-  return release(ancestor_[id]);
+  return release(out_of_[id]);
 }
 
 Status StreamSimplifier::endLevel() {

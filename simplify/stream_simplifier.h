@@ -9,7 +9,7 @@
 // The output is exactly applyMerges(level, tree, n) (simplify/apply.h) up to vertex and tetrahedron
 // order. The output header's counts are exact (the tree records what each merge removes); a stream
 // that disagrees with them (a corrupt tree) fails with kInvalidData. The bounding box is the input's.
-// Memory: 20 bytes per input vertex plus the held-back elements.
+// Memory: 5 bytes per input vertex, 12 per surviving vertex, plus the held-back elements.
 #pragma once
 
 #include <cstdint>
@@ -37,29 +37,31 @@ class StreamSimplifier : public MeshSink {
   uint64_t peakHeld() const { return peak_held_; }
 
  private:
+  // Output ids: surviving vertices are numbered in their input order, so the ancestor of a vertex
+  // has been emitted exactly when its output id is below emitted_.
   struct Held {
-    uint32_t v[4];     // ancestors (input ids); v[3] unused for triangles
+    uint32_t o[4];     // output ids of the ancestors; o[3] unused for triangles
     uint32_t missing;  // ancestors not yet emitted
     bool triangle;
   };
   Status emitHeld(uint32_t slot);
-  Status release(uint32_t ancestor);  // drops one reference, retires when none is left
-  Status hold(const uint32_t* anc, int count, bool triangle, const uint8_t* cell_values);
+  Status release(uint32_t o);  // drops one reference, retires when none is left
+  Status hold(const uint32_t* o, int count, bool triangle, const uint8_t* cell_values);
 
   const MergeTree& tree_;
   uint64_t n_;
   MeshSink& out_;
   LevelHeader in_header_, out_header_;
   size_t cell_bytes_ = 0;
-  std::vector<uint32_t> ancestor_;
-  std::vector<uint32_t> out_id_;  // per surviving input vertex: output id once emitted
-  std::vector<uint32_t> refs_;    // per surviving vertex: unretired cluster members + held elements
+  std::vector<uint32_t> out_of_;  // per input vertex: output id of its ancestor
+  std::vector<uint8_t> survives_;  // per input vertex: 1 if it is its own ancestor
+  std::vector<uint32_t> refs_;    // per output vertex: unretired cluster members + held elements
   uint32_t received_ = 0, emitted_ = 0;
   uint64_t out_tets_ = 0, out_triangles_ = 0, dropped_tets_ = 0;
   std::vector<Held> held_;
   std::vector<uint8_t> held_values_;
   std::vector<uint32_t> free_slots_;
-  // Held elements waiting for an ancestor, as intrusive lists: wait_head_[ancestor] -> node -> next.
+  // Held elements waiting for an output vertex, as intrusive lists: wait_head_[o] -> node -> next.
   struct WaitNode {
     uint32_t slot, next;
   };

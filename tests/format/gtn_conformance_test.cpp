@@ -13,6 +13,9 @@
 #include "format/gtn_file.h"
 #include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
+#include "simplify/apply.h"
+#include "simplify/levels.h"
+#include "simplify/ranking.h"
 #include "test_util.h"
 
 namespace gtn {
@@ -127,6 +130,17 @@ TetMesh repeatedComponents() {
   return m;
 }
 
+// A 5 x 5 x 5 grid of cubes with a density field: big enough for a merge tree and two mip levels.
+TetMesh levelsMesh() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat32;
+  addCubeGrid(m, 5, 0.0, 1.0);
+  Field f("density", 1, ScalarType::kFloat32, 0);
+  fillField<float>(f, m.numPoints(), 9);
+  m.point_fields.push_back(f);
+  return finish(m);
+}
+
 GtnWriteOptions options(bool directory = true) {
   GtnWriteOptions o;
   o.tool_version = "conformance";
@@ -151,6 +165,22 @@ std::vector<uint8_t> encodeFile(const TetMesh& mesh, const GtnWriteOptions& o,
   EXPECT_TRUE(w.addLevel(e.value(), 0.0, std::nullopt).isOk());
   EXPECT_TRUE(w.finish().isOk());
   return bytes;
+}
+
+// levelsMesh() with its merge tree (MTRE, section 11) and mip levels 1 and 2, as `gtn convert --levels 2`
+// writes it.
+std::vector<uint8_t> encodeWithLevels(const GtnWriteOptions& o) {
+  const TetMesh mesh = levelsMesh();
+  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
+  EXPECT_TRUE(tree.isOk());
+  LevelOptions lo;
+  lo.levels = 2;
+  auto levels = buildMipLevels(mesh, *tree, lo);
+  EXPECT_TRUE(levels.isOk());
+  const std::string path = test::tempDir("conformance-levels") + "/levels.gtn";
+  EXPECT_TRUE(writeGtnFile(path, levels->inputs(mesh), o).isOk());
+  const std::string bytes = test::readFile(path);
+  return std::vector<uint8_t>(bytes.begin(), bytes.end());
 }
 
 // Offset of the first chunk with `tag` in a valid file.
@@ -188,6 +218,7 @@ std::vector<Sample> samples() {
   s.push_back(valid("two-components.f32.dir.v1.0.gtn", twoComponents, [] { return encodeFile(twoComponents(), options()); }));
   s.push_back(valid("repeated-components.f64.dir.v1.0.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
+  s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithLevels(options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
                  const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
                  return encodeFile(cubeF32(), options(false),
@@ -323,6 +354,42 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsListed) {
     TetMeshBuilder b2;
     ASSERT_TRUE((*lazy)->decodeLevel(0, b2).isOk());
     EXPECT_EQ(b2.mesh().tets, got.tets);
+  }
+}
+
+// The file with levels: every stored level is what its merges make of level 0, with level 0's merge
+// tree as the file stores it, and on-the-fly simplification from the finest stored level gives the
+// same mesh as applying the merges to level 0, at every merge count.
+TEST(GtnConformance, LevelsAndMergeTreesAgree) {
+  auto r = GtnReader::open(kDir + "levels.f32.dir.v1.0.gtn");
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ((*r)->levels(), 3u);
+  TetMeshBuilder b0;
+  ASSERT_TRUE((*r)->decodeLevel(0, b0).isOk());
+  const TetMesh level0 = b0.mesh();
+  auto payload = (*r)->mergeTreePayload(0);
+  ASSERT_TRUE(payload.isOk());
+  ASSERT_TRUE(payload->has_value());
+  auto tree = decodeMergeTree(**payload, level0.numPoints(), "level 0");
+  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  EXPECT_GT(tree->merges, 162u) << "enough merges for both levels";
+  EXPECT_EQ(tree->field, "density");
+  for (size_t i = 0; i < 3; ++i) {
+    const uint64_t n = (*r)->level(i).header.merges;
+    EXPECT_EQ(n, levelMerges(static_cast<int>(i), level0.numPoints(), tree->merges));
+    TetMeshBuilder bi;
+    ASSERT_TRUE((*r)->decodeLevel(i, bi).isOk());
+    auto want = applyMerges(level0, *tree, n);
+    ASSERT_TRUE(want.isOk());
+    EXPECT_TRUE(canonical(bi.mesh()) == canonical(*want)) << "level " << i;
+  }
+  for (uint64_t n = 0; n <= tree->merges; n += 7) {
+    TetMeshBuilder bn;
+    SimplifyPlan plan;
+    ASSERT_TRUE(streamSimplified(**r, n, bn, &plan).isOk()) << n;
+    auto want = applyMerges(level0, *tree, n);
+    ASSERT_TRUE(want.isOk());
+    EXPECT_TRUE(canonical(bn.mesh()) == canonical(*want)) << n << " merges, from level " << plan.level;
   }
 }
 
