@@ -429,6 +429,7 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     got_boundary += code.boundary;
     got_removed += code.removed;
   }
+  tree.checked = true;  // every record was checked as it was decoded
   if (decode < merges) return tree;  // a prefix: the rest of the body is not read
   if (!rc.finishedCleanly()) return invalidData(what + ": merge tree payload body truncated, corrupt or followed by trailing bytes");
   if (got_boundary != boundary_merges || got_removed != tets_removed)

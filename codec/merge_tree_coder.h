@@ -66,6 +66,9 @@ struct MergeTree {
   std::vector<uint8_t> boundary;  // per vertex: 1 if v is a boundary vertex (its merge is a boundary merge)
   std::vector<float> error;       // per vertex: error of its merge when chosen (not coded; may be empty)
   uint64_t merges = 0;  // ranks 1..merges
+  // Set by decodeMergeTree, whose trees satisfy check() by construction, so that the stream filter
+  // need not check them again; whoever changes such a tree must clear it.
+  bool checked = false;
 
   // Provenance and summary, coded in the payload header.
   std::string field;  // density field, "" = volume only

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cstring>
 
-#include "simplify/apply.h"
 
 namespace gtn {
 
@@ -18,15 +17,28 @@ Status StreamSimplifier::beginLevel(const LevelHeader& header) {
   if (header.points != tree_.points())
     return invalidData("simplification: the level has " + std::to_string(header.points) +
                        " vertices, its merge tree " + std::to_string(tree_.points()));
-  GTN_RETURN_IF_ERROR(tree_.check("simplification: merge tree"));
+  if (!tree_.checked) GTN_RETURN_IF_ERROR(tree_.check("simplification: merge tree"));
   in_header_ = header;
   cell_bytes_ = 0;
   for (const FieldDesc& d : header.cell_fields) cell_bytes_ += d.itemBytes();
   const size_t np = tree_.points();
   const size_t survivors = np - n_;
-  // out_of_ starts as the ancestors; a survivor's entry becomes its output id, then every other
-  // entry the output id of its ancestor (a survivor, whose entry is final by then).
-  out_of_ = computeAncestors(tree_, n_);
+  // Ancestors after the first n_ merges (computeAncestors, fused with the counts the merges remove):
+  // order[r - 1] = the vertex of rank r <= n_, order[n_] collects the others.
+  std::vector<uint32_t> order(n_ + 1);
+  out_of_.resize(np);
+  uint64_t removed = 0, boundary_removed = 0;
+  for (size_t v = 0; v < np; ++v) {
+    out_of_[v] = static_cast<uint32_t>(v);
+    const uint32_t r = tree_.rank[v] - 1;  // roots (rank 0) wrap around to the largest value
+    const bool applied = r < n_;
+    order[applied ? r : n_] = static_cast<uint32_t>(v);
+    removed += applied ? tree_.removed[v] : 0;
+    boundary_removed += applied ? 2 * tree_.boundary[v] : 0;
+  }
+  for (uint64_t r = n_; r-- > 0;) out_of_[order[r]] = out_of_[tree_.parent[order[r]]];
+  // A survivor's entry becomes its output id, then every other entry the output id of its ancestor
+  // (a survivor, whose entry is final by then).
   survives_.assign(np, 0);
   uint32_t next = 0;
   for (size_t v = 0; v < np; ++v) {
@@ -48,15 +60,11 @@ Status StreamSimplifier::beginLevel(const LevelHeader& header) {
   free_slots_.clear();
   wait_head_.assign(survivors, kUnset);
   wait_tail_.assign(survivors, kUnset);
-  wait_nodes_.clear();
-  free_nodes_.clear();
   held_count_ = peak_held_ = 0;
   in_boundary_ = true;
   out_header_ = header;
   out_header_.merges = header.merges + n_;
   out_header_.points = header.points - n_;
-  const uint64_t removed = tree_.tetsRemovedUpTo(n_);
-  const uint64_t boundary_removed = 2 * tree_.boundaryMergesUpTo(n_);
   if (removed > header.tets || boundary_removed > header.boundary_triangles)
     return invalidData("simplification: the merge tree removes more elements than the level has");
   out_header_.tets = header.tets - removed;
@@ -71,13 +79,12 @@ Status StreamSimplifier::vertex(uint32_t id, const double xyz[3], const uint8_t*
   if (!survives_[id]) return Status::ok();
   const uint32_t o = emitted_++;
   GTN_RETURN_IF_ERROR(out_.vertex(o, xyz, values));
-  uint32_t node = wait_head_[o];
+  uint32_t slot = wait_head_[o];
   wait_head_[o] = wait_tail_[o] = kUnset;
-  while (node != kUnset) {
-    const WaitNode w = wait_nodes_[node];
-    free_nodes_.push_back(node);
-    if (--held_[w.slot].missing == 0) GTN_RETURN_IF_ERROR(emitHeld(w.slot));
-    node = w.next;
+  while (slot != kUnset) {
+    const uint32_t next = held_[slot].next;
+    GTN_RETURN_IF_ERROR(emitHeld(slot));
+    slot = next;
   }
   return Status::ok();
 }
@@ -94,30 +101,20 @@ Status StreamSimplifier::hold(const uint32_t* o, int count, bool triangle, const
   }
   Held& h = held_[slot];
   h.triangle = triangle;
-  h.missing = 0;
+  h.next = kUnset;
   h.o[3] = kUnset;
+  uint32_t last = 0;
   for (int i = 0; i < count; ++i) {
     h.o[i] = o[i];
     ++refs_[o[i]];
-    if (o[i] >= emitted_) {
-      ++h.missing;
-      uint32_t node;
-      if (!free_nodes_.empty()) {
-        node = free_nodes_.back();
-        free_nodes_.pop_back();
-      } else {
-        node = static_cast<uint32_t>(wait_nodes_.size());
-        wait_nodes_.push_back({});
-      }
-      wait_nodes_[node] = {slot, kUnset};
-      if (wait_tail_[o[i]] == kUnset) {
-        wait_head_[o[i]] = node;
-      } else {
-        wait_nodes_[wait_tail_[o[i]]].next = node;
-      }
-      wait_tail_[o[i]] = node;
-    }
+    last = std::max(last, o[i]);
   }
+  if (wait_tail_[last] == kUnset) {
+    wait_head_[last] = slot;
+  } else {
+    held_[wait_tail_[last]].next = slot;
+  }
+  wait_tail_[last] = slot;
   if (!triangle && cell_bytes_) std::memcpy(held_values_.data() + size_t{slot} * cell_bytes_, cell_values, cell_bytes_);
   peak_held_ = std::max(peak_held_, ++held_count_);
   return Status::ok();

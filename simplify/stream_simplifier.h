@@ -38,10 +38,11 @@ class StreamSimplifier : public MeshSink {
 
  private:
   // Output ids: surviving vertices are numbered in their input order, so the ancestor of a vertex
-  // has been emitted exactly when its output id is below emitted_.
+  // has been emitted exactly when its output id is below emitted_, and a held element waits only for
+  // its largest output id: the others are emitted before it.
   struct Held {
-    uint32_t o[4];     // output ids of the ancestors; o[3] unused for triangles
-    uint32_t missing;  // ancestors not yet emitted
+    uint32_t o[4];  // output ids of the ancestors; o[3] unused for triangles
+    uint32_t next;  // the next element waiting for the same vertex, or kNone
     bool triangle;
   };
   Status emitHeld(uint32_t slot);
@@ -61,13 +62,9 @@ class StreamSimplifier : public MeshSink {
   std::vector<Held> held_;
   std::vector<uint8_t> held_values_;
   std::vector<uint32_t> free_slots_;
-  // Held elements waiting for an output vertex, as intrusive lists: wait_head_[o] -> node -> next.
-  struct WaitNode {
-    uint32_t slot, next;
-  };
-  std::vector<uint32_t> wait_head_, wait_tail_;  // first-in first-out, as the elements arrived
-  std::vector<WaitNode> wait_nodes_;
-  std::vector<uint32_t> free_nodes_;
+  // Held elements waiting for an output vertex, as intrusive first-in first-out lists through
+  // Held::next: wait_head_[o] is the first, wait_tail_[o] the last.
+  std::vector<uint32_t> wait_head_, wait_tail_;
   uint64_t held_count_ = 0, peak_held_ = 0;
   bool in_boundary_ = true;
 };
