@@ -78,7 +78,7 @@ struct Models {
   BitModel boundary;
   BitModel exact[2];     // per boundary bit: the parent delta equals one of its predictions
   BitTree<3> hit;        // which one
-  BitTree<3> choice;     // otherwise: which prediction the residual is taken from (0 = none)
+  BitTree<4> choice;     // otherwise: which prediction the residual is taken from (0 = none)
   BitModel sign[2];      // per context (choice == 0 or not)
   BitTree<6> len[2];
   BitTree<4> removed[2];
@@ -96,30 +96,38 @@ uint32_t codeUniform(C& c, uint32_t x, uint32_t total) {
   return y - u;
 }
 
-// Predictions of a merge's parent delta (parent id - child id): the distinct deltas of the nearest
-// merges already coded, nearest first, where "near" is in decoding order: ids c-1, c+1, c-2, c+2, ...,
-// at most kWindow away, until kSize merged ids are seen. Vertices decoded close together lie close
-// together in the mesh and tend to merge in the same direction (on a grid, along the same grid line).
+// Predictions of a merge's parent delta (parent id - child id): the deltas of the merges already
+// coded whose children are the kReach nearest ids on either side of the child in decoding order
+// (c-1, c+1, c-2, c+2, ...), nearest first, skipping ids not merged yet and ids outside the level.
+// Vertices decoded close together lie close together in the mesh and tend to merge in the same
+// direction (on a grid, along the same grid line). Branch-free: whether a neighbour is merged yet is
+// as good as random.
 struct DeltaPredictions {
-  static constexpr int kSize = 7;
-  static constexpr uint32_t kWindow = 16;
+  static constexpr int kReach = 4;
+  static constexpr int kSize = 2 * kReach;
   int64_t d[kSize];
   int count = 0;
   // parent[id] = parent of the merges coded so far, MergeTree::kRoot elsewhere.
   DeltaPredictions(const std::vector<uint32_t>& parent, uint32_t c) {
     const uint32_t n = static_cast<uint32_t>(parent.size());
-    int seen = 0;
-    for (uint32_t k = 1; k <= kWindow && seen < kSize; ++k) {
-      if (k <= c) add(parent[c - k], c - k, &seen);
-      if (seen < kSize && c + k < n) add(parent[c + k], c + k, &seen);
+    if (c >= static_cast<uint32_t>(kReach) && c + kReach < n) {
+      const uint32_t* p = parent.data() + c;
+      for (int k = 1; k <= kReach; ++k) {
+        add(p[-k], int64_t{c} - k);
+        add(p[k], int64_t{c} + k);
+      }
+    } else {
+      for (int k = 1; k <= kReach; ++k) {
+        if (static_cast<uint32_t>(k) <= c) add(parent[c - k], int64_t{c} - k);
+        if (c + k < n) add(parent[c + k], int64_t{c} + k);
+      }
     }
   }
 
  private:
-  void add(uint32_t p, uint32_t id, int* seen) {
-    if (p == MergeTree::kRoot) return;
-    ++*seen;
-    d[count++] = int64_t{p} - int64_t{id};
+  void add(uint32_t p, int64_t id) {
+    d[count] = int64_t{p} - id;
+    count += p != MergeTree::kRoot;
   }
 };
 
@@ -165,14 +173,16 @@ class FreeRanks {
  public:
   explicit FreeRanks(uint32_t m) : bits_((size_t{m} + 63) / 64, ~uint64_t{0}), blocks_(bits_.size()) {
     if (m % 64) bits_.back() = (uint64_t{1} << (m % 64)) - 1;
-    tree_.assign(blocks_ + 1, 0);
+    top_ = 1;
+    while (top_ * 2 <= blocks_) top_ *= 2;
+    // Padded to 2 * top_ with counts no search ever goes past, so that kth needs no bounds test.
+    tree_.assign(2 * top_, UINT32_MAX);
+    for (size_t b = 1; b <= blocks_; ++b) tree_[b] = 0;
     for (size_t b = 1; b <= blocks_; ++b) {
       tree_[b] += static_cast<uint32_t>(std::popcount(bits_[b - 1]));
       const size_t j = b + (b & (0 - b));
       if (j <= blocks_) tree_[j] += tree_[b];
     }
-    top_ = 1;
-    while (top_ * 2 <= blocks_) top_ *= 2;
   }
   // Free ranks smaller than r.
   uint32_t countBelow(uint32_t r) const {
@@ -186,20 +196,31 @@ class FreeRanks {
     bits_[i >> 6] &= ~(uint64_t{1} << (i & 63));
     for (size_t b = (i >> 6) + 1; b <= blocks_; b += b & (0 - b)) tree_[b] -= 1;
   }
-  // The (k+1)-th smallest free rank (k < free count).
+  // The (k+1)-th smallest free rank (k < free count). Without branches on the counts, which are
+  // as good as random.
   uint32_t kth(uint32_t k) const {
     size_t pos = 0;
     uint32_t rem = k;  // free ranks still to skip
     for (size_t step = top_; step > 0; step >>= 1) {
-      if (pos + step <= blocks_ && tree_[pos + step] <= rem) {
-        pos += step;
-        rem -= tree_[pos];
-      }
+      const uint32_t t = tree_[pos + step];
+      const bool right = t <= rem;
+      pos = right ? pos + step : pos;
+      rem = right ? rem - t : rem;
     }
-    // Block `pos` holds it: skip `rem` set bits.
-    uint64_t w = bits_[pos];
-    for (uint32_t j = 0; j < rem; ++j) w &= w - 1;
-    return static_cast<uint32_t>(pos * 64 + std::countr_zero(w)) + 1;
+    // Block `pos` holds it: the rem-th set bit (from 0) of its word. Byte counts, their running
+    // sums (each below 128), and the number of bytes whose running sum is at most rem.
+    const uint64_t w = bits_[pos];
+    constexpr uint64_t kOnes = 0x0101010101010101ull, kHigh = 0x8080808080808080ull;
+    uint64_t c = w - ((w >> 1) & 0x5555555555555555ull);
+    c = (c & 0x3333333333333333ull) + ((c >> 2) & 0x3333333333333333ull);
+    c = (c + (c >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+    const uint64_t sums = c * kOnes;
+    const uint64_t le = (((rem * kOnes) | kHigh) - sums) & kHigh;
+    const uint32_t byte = static_cast<uint32_t>(((le >> 7) * kOnes) >> 56);
+    const uint32_t before = byte ? static_cast<uint32_t>(sums >> (8 * byte - 8)) & 0xFF : 0;
+    uint32_t b = static_cast<uint32_t>(w >> (8 * byte)) & 0xFF;
+    for (uint32_t j = before; j < rem; ++j) b &= b - 1;
+    return static_cast<uint32_t>(pos * 64 + 8 * byte + std::countr_zero(b)) + 1;
   }
 
  private:

@@ -27,13 +27,13 @@
 //                                    bitlen(U-1), u = 2^b - U; b-1 bits y; if y >= u one more bit,
 //                                    x = 2y + bit - u. Nothing is coded when U = 1.
 //       bit   boundary               one model; 1 = c is a boundary vertex
-//       delta = p - c, predicted by D: the distinct deltas of the merges already coded whose children
-//       are nearest c in decoding order (ids c-1, c+1, c-2, c+2, ..., at most 16 away, until 7 merged
-//       ids are seen), nearest first (DeltaPredictions in the .cpp):
+//       delta = p - c, predicted by D: the deltas of the merges already coded whose children are
+//       ids c-1, c+1, c-2, c+2, c-3, c+3, c-4, c+4 (those in range and merged, in that order; values
+//       may repeat; DeltaPredictions in the .cpp):
 //       if |D| > 0: bit exact          model per boundary bit; 1 = delta == D[h]
 //       if exact:   BitTree<3>  h      the first such h
 //       else:
-//         BitTree<3>  k                k = 0: no prediction; k = j (1 <= j <= |D|): residual from D[j-1]
+//         BitTree<4>  k                k = 0: no prediction; k = j (1 <= j <= |D|): residual from D[j-1]
 //                                      (the encoder picks the smallest |residual|, ties to lower k);
 //                                      residual = delta - (k ? D[k-1] : 0)
 //         BitTree<6>  len              tree per context (k == 0, k > 0); len = bit length of |residual|
