@@ -59,6 +59,34 @@ TEST(MergeTreeCoder, RoundTripsInDecodingOrder) {
   EXPECT_EQ(encodeMergeTree(f.tree, f.order).value(), f.payload);
 }
 
+// Merges are stored in rank order: decoding only the first n gives the tree of the first n merges
+// (the later children as roots), as the full decode restricted to ranks <= n.
+TEST(MergeTreeCoder, DecodesAPrefixOfTheRanking) {
+  const Fixture& f = fixture();
+  auto full = decodeMergeTree(f.payload, f.mesh.numPoints(), "t");
+  ASSERT_TRUE(full.isOk());
+  for (uint64_t n : {uint64_t{0}, uint64_t{1}, f.tree.merges / 3, f.tree.merges - 1, f.tree.merges, f.tree.merges + 5}) {
+    SCOPED_TRACE(n);
+    auto part = decodeMergeTree(f.payload, f.mesh.numPoints(), "t", n);
+    ASSERT_TRUE(part.isOk()) << part.status().message();
+    EXPECT_EQ(part->merges, std::min(n, f.tree.merges));
+    EXPECT_TRUE(part->checked);
+    EXPECT_TRUE(part->check("t").isOk());
+    for (size_t v = 0; v < full->points(); ++v) {
+      const bool kept = full->rank[v] != 0 && full->rank[v] <= n;
+      EXPECT_EQ(part->parent[v], kept ? full->parent[v] : MergeTree::kRoot);
+      EXPECT_EQ(part->rank[v], kept ? full->rank[v] : 0u);
+      EXPECT_EQ(part->removed[v], kept ? full->removed[v] : 0u);
+      EXPECT_EQ(part->boundary[v], kept ? full->boundary[v] : 0u);
+    }
+    EXPECT_EQ(computeAncestors(*part, n), computeAncestors(*full, n));
+  }
+  // A prefix cut short by truncation is still an error, not a shorter tree.
+  auto cut = decodeMergeTree(std::span<const uint8_t>(f.payload.data(), f.payload.size() / 2), f.mesh.numPoints(), "t",
+                             f.tree.merges - 1);
+  EXPECT_FALSE(cut.isOk());
+}
+
 TEST(MergeTreeCoder, IsCompact) {
   const Fixture& f = fixture();
   // log2(M!) bits of ranks alone are about log2(M) - 1.44 per merge; the whole payload must stay
