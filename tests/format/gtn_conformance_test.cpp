@@ -63,13 +63,19 @@ TetMesh finish(TetMesh m) {
   return m;
 }
 
-TetMesh cubeF32() {
+// An n x n x n grid of unit cubes, float32, with a float32 point field `density`.
+TetMesh densityGrid(int n, uint64_t seed) {
   TetMesh m;
   m.coord_type = ScalarType::kFloat32;
-  addCubeGrid(m, 3, 0.0, 1.0);
+  addCubeGrid(m, n, 0.0, 1.0);
   Field f("density", 1, ScalarType::kFloat32, 0);
-  fillField<float>(f, m.numPoints(), 1);
+  fillField<float>(f, m.numPoints(), seed);
   m.point_fields.push_back(f);
+  return m;
+}
+
+TetMesh cubeF32() {
+  TetMesh m = densityGrid(3, 1);
   m.setMetadata("source", "gtn conformance generator");
   return finish(m);
 }
@@ -131,15 +137,7 @@ TetMesh repeatedComponents() {
 }
 
 // A 5 x 5 x 5 grid of cubes with a density field: big enough for a merge tree and two mip levels.
-TetMesh levelsMesh() {
-  TetMesh m;
-  m.coord_type = ScalarType::kFloat32;
-  addCubeGrid(m, 5, 0.0, 1.0);
-  Field f("density", 1, ScalarType::kFloat32, 0);
-  fillField<float>(f, m.numPoints(), 9);
-  m.point_fields.push_back(f);
-  return finish(m);
-}
+TetMesh levelsMesh() { return finish(densityGrid(5, 9)); }
 
 GtnWriteOptions options(bool directory = true) {
   GtnWriteOptions o;
