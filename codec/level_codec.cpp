@@ -854,7 +854,8 @@ class LevelCoder {
   };
 
   // Front vertices around the gate face, best first; returns the count and the coding context.
-  int gatherCandidates(const FrontFace& g, const double p[3], uint32_t* ctx) {
+  // `side`: the orientation filter of the gate face (a, b, c).
+  int gatherCandidates(const FrontFace& g, const Orient3dFilter& side, const double p[3], uint32_t* ctx) {
     Candidate* c = cand_;
     int n = 0;
     uint32_t seen[kMaxGather + 3] = {};  // c[i].s, for a vectorised membership test
@@ -899,7 +900,7 @@ class LevelCoder {
     // apexes decoded so far mostly lay. Candidates on the other side are dropped (the escape still
     // reaches them). Only signs a floating-point filter proves count (near-flat cases drop nothing):
     // exact arithmetic would cost more than it saves, and the filter is reproducible everywhere.
-    const int wrong = g.d != kNoSlot ? orient3dCertain(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(g.d))
+    const int wrong = g.d != kNoSlot ? side.sign(P(g.d))
                                      : (apex_votes_ > 0 ? -1 : (apex_votes_ < 0 ? 1 : 0));
     // Delaunay order: the spheres through a, b and c, swept into the undecoded side, meet the
     // apex of a Delaunay tetrahedron first. key = the sweep parameter at which a candidate is met.
@@ -924,7 +925,7 @@ class LevelCoder {
     int kept = 0;
     for (int i = 0; i < n; ++i) {
       const double* q = P(c[i].s);
-      if (wrong != 0 && orient3dCertain(P(g.v[0]), P(g.v[1]), P(g.v[2]), q) == wrong) continue;
+      if (wrong != 0 && side.sign(q) == wrong) continue;
       const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
       c[kept] = c[i];
       // Sort keys must be ordered values: overflowing coordinates (NaN or infinite distances) sort
@@ -994,12 +995,22 @@ class LevelCoder {
     if (x.dist != y.dist) return x.dist < y.dist;
     return x.s < y.s;
   }
+  // The two orders as function objects, so that the sorts inline them.
+  struct ByDistance {
+    bool operator()(const Candidate& x, const Candidate& y) const { return beforeByDistance(x, y); }
+  };
+  struct ByKey {
+    bool operator()(const Candidate& x, const Candidate& y) const { return beforeByKey(x, y); }
+  };
   // Place of the candidate at index i in one order (0 = first).
   int placeOf(int i, bool by_key) const {
     int place = 0;
     const Candidate& x = cand_[i];
-    for (int j = 0; j < cand_n_; ++j)
-      place += by_key ? beforeByKey(cand_[j], x) : beforeByDistance(cand_[j], x);
+    if (by_key) {
+      for (int j = 0; j < cand_n_; ++j) place += beforeByKey(cand_[j], x);
+    } else {
+      for (int j = 0; j < cand_n_; ++j) place += beforeByDistance(cand_[j], x);
+    }
     return place;
   }
   int candidateIndex(uint32_t slot) const {
@@ -1018,16 +1029,34 @@ class LevelCoder {
   }
   // The slot at `place` of the chosen order (place < cand_m_).
   uint32_t candidateAt(int place) const {
+    return by_key_chosen_ ? candidateAt(place, ByKey()) : candidateAt(place, ByDistance());
+  }
+  template <class Before>
+  uint32_t candidateAt(int place, Before before) const {
+    if (place == 0) {  // the usual case: the first, in one pass
+      int best = 0;
+      for (int i = 1; i < cand_n_; ++i)
+        if (before(cand_[i], cand_[best])) best = i;
+      return cand_[best].s;
+    }
     Candidate tmp[kMaxGather];
     std::copy(cand_, cand_ + cand_n_, tmp);
-    std::nth_element(tmp, tmp + place, tmp + cand_n_, by_key_chosen_ ? beforeByKey : beforeByDistance);
+    std::nth_element(tmp, tmp + place, tmp + cand_n_, before);
     return tmp[place].s;
   }
   // The first cand_m_ candidates in the chosen order.
   void orderedCandidates(uint32_t* out) const {
+    if (by_key_chosen_) {
+      orderedCandidates(out, ByKey());
+    } else {
+      orderedCandidates(out, ByDistance());
+    }
+  }
+  template <class Before>
+  void orderedCandidates(uint32_t* out, Before before) const {
     Candidate tmp[kMaxGather];
     std::copy(cand_, cand_ + cand_n_, tmp);
-    std::partial_sort(tmp, tmp + cand_m_, tmp + cand_n_, by_key_chosen_ ? beforeByKey : beforeByDistance);
+    std::sort(tmp, tmp + cand_n_, before);
     for (int i = 0; i < cand_m_; ++i) out[i] = tmp[i].s;
   }
   // After a tetrahedron's apex x is known: the order that placed it earlier (among the first
@@ -1210,7 +1239,8 @@ class LevelCoder {
       double p[3];
       predictApex(g, p);
       uint32_t ctx = 0;
-      const int nc = gatherCandidates(g, p, &ctx);
+      const Orient3dFilter side(P(g.v[0]), P(g.v[1]), P(g.v[2]));
+      const int nc = gatherCandidates(g, side, p, &ctx);
       uint32_t sym = 0, x_src = 0, flip = 0;
       if constexpr (kEncode) {
         const Tet& t = enc_->mesh->tets[g.tet];
@@ -1254,7 +1284,7 @@ class LevelCoder {
         if (sym > static_cast<uint32_t>(nc)) return bad("candidate rank out of range");
         x = candidateAt(static_cast<int>(sym) - 1);
       }
-      apex_votes_ += orient3dCertain(P(g.v[0]), P(g.v[1]), P(g.v[2]), P(x));
+      apex_votes_ += side.sign(P(x));
       scoreOrders(x);
       flip = con_->bit(flip_, flip);
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};

@@ -15,22 +15,9 @@ int toInt(CGAL::Orientation o) { return o == CGAL::POSITIVE ? 1 : (o == CGAL::NE
 }  // namespace
 
 int orient3dCertain(const double* a, const double* b, const double* c, const double* d) {
-  // Shewchuk's orient3d stage A bound, for the determinant of the three difference vectors expanded
-  // as below: when |det| exceeds it, its sign is the exact one.
-  const double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2];
-  const double vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
-  const double wx = d[0] - a[0], wy = d[1] - a[1], wz = d[2] - a[2];
-  const double vxwy = vx * wy, vywx = vy * wx, wxuy = wx * uy, wyux = wy * ux, uxvy = ux * vy, uyvx = uy * vx;
-  const double det = uz * (vxwy - vywx) + vz * (wxuy - wyux) + wz * (uxvy - uyvx);
-  const double permanent = (std::fabs(vxwy) + std::fabs(vywx)) * std::fabs(uz) +
-                           (std::fabs(wxuy) + std::fabs(wyux)) * std::fabs(vz) +
-                           (std::fabs(uxvy) + std::fabs(uyvx)) * std::fabs(wz);
-  constexpr double kEps = 0x1p-53;
-  constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
-  const double err = kBound * permanent;
-  if (det > err) return 1;
-  if (-det > err) return -1;
-  return 0;
+  // Shewchuk's orient3d stage A bound, for the determinant of the three difference vectors: when
+  // |det| exceeds it, its sign is the exact one. The expansion is Orient3dFilter's.
+  return Orient3dFilter(a, b, c).sign(d);
 }
 
 int orient3d(const double* a, const double* b, const double* c, const double* d) {

@@ -77,7 +77,9 @@ TEST_P(ValidateDatasets, ConvertedFileIsCleanAndEqualsItsSource) {
     for (const auto& l : ij["levels"]) total += l["bytes"].get<uint64_t>();
     const uint64_t level0 = ij["levels"][0]["bytes"].get<uint64_t>();
     EXPECT_LE(total, 2 * level0) << info.out;
-    if (points >= 40000) EXPECT_GE(levels, 4u) << info.out;
+    if (points >= 40000) {
+      EXPECT_GE(levels, 4u) << info.out;
+    }
   }
   // Without --against only level 0's flat tetrahedra stay warnings: the validator cannot tell that the
   // source had them. The levels' are still known to descend from level 0's.
