@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "mesh/faces.h"
+#include "render/flat_hash.h"
 #include "render/traversal.h"
 
 namespace gtn {
@@ -46,12 +47,22 @@ FaceKey makeKey(uint32_t a, uint32_t b, uint32_t c) {
   return {{a, b, c}};
 }
 
+struct IdHash {
+  size_t operator()(uint32_t id) const { return static_cast<size_t>((id * 0x9E3779B97F4A7C15ull) >> 20); }
+};
+
 // A face where cursors wait: the one held tetrahedron that has it (kNone if none is held) and the
-// cursors (2 * segment + 0 front / 1 back) waiting for the tetrahedron on its other side.
+// cursors (2 * segment + 0 front / 1 back) waiting for the tetrahedron on its other side, as a list
+// in State::wait_nodes.
 struct FaceEntry {
   uint32_t tet = kNone;
   int8_t face = -1;
-  std::vector<uint32_t> waiters;
+  uint32_t waiters = kNone;
+};
+
+struct WaitNode {
+  uint32_t cursor;
+  uint32_t next;
 };
 
 struct HeldTet {
@@ -88,7 +99,7 @@ struct StreamRenderer::State {
   Phase phase = Phase::kIdle;
   LevelHeader header;
   ScalarReader reader;
-  std::unordered_map<uint32_t, VertexRec> vertices;
+  FlatHashMap<uint32_t, VertexRec, IdHash> vertices;
   std::vector<std::array<uint32_t, 3>> boundary;
   RaySegments rays;
   // Rays are not stored per pixel (that would be the largest structure at 256x256): prepareRay is
@@ -102,7 +113,32 @@ struct StreamRenderer::State {
   double ortho_t0 = 0;              // origins' plane: ray parameter t of p = dir . p - t0
   double depth_slack = 0;
   std::vector<SegmentState> segs;
-  std::unordered_map<FaceKey, FaceEntry, FaceKeyHash> faces;
+  FlatHashMap<FaceKey, FaceEntry, FaceKeyHash> faces;
+  std::vector<WaitNode> wait_nodes;  // waiter lists of `faces`, with a free list
+  uint32_t wait_free = kNone;
+  void addWaiter(FaceEntry& e, uint32_t cursor) {
+    uint32_t n = wait_free;
+    if (n != kNone) {
+      wait_free = wait_nodes[n].next;
+    } else {
+      n = static_cast<uint32_t>(wait_nodes.size());
+      wait_nodes.push_back({});
+    }
+    wait_nodes[n] = {cursor, e.waiters};
+    e.waiters = n;
+  }
+  // Calls f(cursor) for each waiter of e and empties its list.
+  template <class F>
+  void takeWaiters(FaceEntry& e, F&& f) {
+    for (uint32_t n = e.waiters; n != kNone;) {
+      const uint32_t next = wait_nodes[n].next;
+      f(wait_nodes[n].cursor);
+      wait_nodes[n].next = wait_free;
+      wait_free = n;
+      n = next;
+    }
+    e.waiters = kNone;
+  }
   std::deque<HeldTet> tets;
   std::vector<uint32_t> free_slots;
   uint64_t held = 0;
@@ -149,12 +185,13 @@ void StreamRenderer::State::release(uint32_t slot) {
   for (int k = 0; k < 4; ++k) {
     const uint32_t n = t.nbr[k];
     if (n == kOpenFace) {
-      auto it = faces.find(t.key(k));
-      if (it != faces.end() && it->second.tet == slot) {
-        if (it->second.waiters.empty()) {
-          faces.erase(it);
+      const FaceKey key = t.key(k);
+      FaceEntry* e = faces.find(key);
+      if (e && e->tet == slot) {
+        if (e->waiters == kNone) {
+          faces.erase(key);
         } else {
-          it->second.tet = kNone;
+          e->tet = kNone;
         }
       }
     } else if (n != kReleasedFace) {
@@ -190,8 +227,9 @@ Status StreamRenderer::vertex(uint32_t id, const double xyz[3], const uint8_t* v
   VertexRec rec;
   for (int i = 0; i < 3; ++i) rec.p[i] = xyz[i];
   rec.s = st.reader.read(values);
-  if (!st.vertices.emplace(id, rec).second)
-    return invalidData("renderer: vertex " + std::to_string(id) + " emitted twice");
+  const auto [slot, inserted] = st.vertices.tryEmplace(id);
+  if (!inserted) return invalidData("renderer: vertex " + std::to_string(id) + " emitted twice");
+  *slot = rec;
   stats_.peak_vertices = std::max<uint64_t>(stats_.peak_vertices, st.vertices.size());
   return Status::ok();
 }
@@ -200,7 +238,7 @@ Status StreamRenderer::boundaryTriangle(const uint32_t v[3]) {
   State& st = *state_;
   if (st.phase != State::Phase::kBoundary) return invalidData("renderer: boundary triangle after the boundary ended");
   for (int i = 0; i < 3; ++i)
-    if (!st.vertices.count(v[i]))
+    if (!st.vertices.find(v[i]))
       return invalidData("renderer: boundary triangle " + std::to_string(st.boundary.size()) +
                          " refers to vertex " + std::to_string(v[i]) + " not yet emitted");
   st.boundary.push_back({v[0], v[1], v[2]});
@@ -219,7 +257,7 @@ Status StreamRenderer::endBoundary() {
     for (int i = 0; i < 3; ++i) {
       auto [it, inserted] = local.emplace(tri[i], static_cast<uint32_t>(surface.points.size()));
       if (inserted) {
-        const VertexRec& v = st.vertices.at(tri[i]);
+        const VertexRec& v = *st.vertices.find(tri[i]);
         surface.points.push_back({v.p[0], v.p[1], v.p[2]});
         surface.scalars.push_back(v.s);
       }
@@ -256,10 +294,10 @@ Status StreamRenderer::endBoundary() {
       continue;
     }
     const auto& in = st.boundary[rs.entry_tri];
-    st.faces[makeKey(in[0], in[1], in[2])].waiters.push_back(static_cast<uint32_t>(2 * i));
+    st.addWaiter(*st.faces.tryEmplace(makeKey(in[0], in[1], in[2])).first, static_cast<uint32_t>(2 * i));
     if (rs.exit_tri != kNoTriangle) {
       const auto& out = st.boundary[rs.exit_tri];
-      st.faces[makeKey(out[0], out[1], out[2])].waiters.push_back(static_cast<uint32_t>(2 * i + 1));
+      st.addWaiter(*st.faces.tryEmplace(makeKey(out[0], out[1], out[2])).first, static_cast<uint32_t>(2 * i + 1));
     } else {
       seg.back_active = false;
     }
@@ -276,13 +314,13 @@ Status StreamRenderer::tet(const uint32_t v[4], const uint8_t*) {
   if (st.phase != State::Phase::kTets) return invalidData("renderer: tetrahedron before the end of the boundary");
   ArrivedTet a;
   for (int i = 0; i < 4; ++i) {
-    auto it = st.vertices.find(v[i]);
-    if (it == st.vertices.end())
+    const VertexRec* rec = st.vertices.find(v[i]);
+    if (!rec)
       return invalidData("renderer: tetrahedron " + std::to_string(stats_.tets) + " refers to vertex " +
                          std::to_string(v[i]) + ", not emitted or already retired");
     a.v[i] = v[i];
-    for (int c = 0; c < 3; ++c) a.g.p[i][c] = it->second.p[c];
-    a.g.s[i] = it->second.s;
+    for (int c = 0; c < 3; ++c) a.g.p[i][c] = rec->p[c];
+    a.g.s[i] = rec->s;
   }
   ++stats_.tets;
   st.batch.push_back(a);
@@ -407,8 +445,8 @@ Status StreamRenderer::flushBatch() {
     for (int k = 0; k < 4; ++k) {
       keys[k] = makeKey(a.v[kTetFace[k][0]], a.v[kTetFace[k][1]], a.v[kTetFace[k][2]]);
       if (!needed) {
-        auto it = st.faces.find(keys[k]);
-        if (it != st.faces.end() && !it->second.waiters.empty()) needed = true;
+        const FaceEntry* e = st.faces.find(keys[k]);
+        if (e && e->waiters != kNone) needed = true;
       }
     }
     if (!needed) continue;
@@ -433,24 +471,21 @@ Status StreamRenderer::flushBatch() {
     ++stats_.tets_held;
     arrived_slots.push_back(slot);
     for (int k = 0; k < 4; ++k) {
-      auto it = st.faces.find(keys[k]);
-      if (it == st.faces.end()) {
-        FaceEntry e;
+      const auto [entry, inserted] = st.faces.tryEmplace(keys[k]);
+      FaceEntry& e = *entry;
+      if (inserted) {
         e.tet = slot;
         e.face = static_cast<int8_t>(k);
-        st.faces.emplace(keys[k], std::move(e));
         continue;
       }
-      FaceEntry& e = it->second;
-      for (uint32_t c : e.waiters) triggers.push_back({c, slot, k});
-      e.waiters.clear();
+      st.takeWaiters(e, [&](uint32_t c) { triggers.push_back({c, slot, k}); });
       if (e.tet != kNone && e.tet != slot) {
         HeldTet& other = st.tets[e.tet];
         t.nbr[k] = e.tet;
         t.nbr_face[k] = static_cast<uint8_t>(e.face);
         other.nbr[e.face] = slot;
         other.nbr_face[e.face] = static_cast<uint8_t>(k);
-        st.faces.erase(it);
+        st.faces.erase(keys[k]);
       } else {
         e.tet = slot;
         e.face = static_cast<int8_t>(k);
@@ -497,12 +532,12 @@ Status StreamRenderer::flushBatch() {
   // 4. Cursors now waiting at open faces of held tetrahedra.
   for (const std::vector<Trigger>& list : waits) {
     for (const Trigger& wt : list) {
-      auto [it, inserted] = st.faces.try_emplace(st.tets[wt.tet].key(wt.face));
+      const auto [e, inserted] = st.faces.tryEmplace(st.tets[wt.tet].key(wt.face));
       if (inserted) {
-        it->second.tet = wt.tet;
-        it->second.face = static_cast<int8_t>(wt.face);
+        e->tet = wt.tet;
+        e->face = static_cast<int8_t>(wt.face);
       }
-      it->second.waiters.push_back(wt.cursor);
+      st.addWaiter(*e, wt.cursor);
     }
   }
   stats_.peak_face_entries = std::max<uint64_t>(stats_.peak_face_entries, st.faces.size());
