@@ -26,6 +26,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "codec/flat_maps.h"
 #include "codec/range_coder.h"
@@ -74,6 +75,24 @@ constexpr double kRuleWeights[kRules][4] = {
     {-1, 1, 1, 0}, {1, -1, 1, 0}, {1, 1, 1, -2}, {2.0 / 3, 2.0 / 3, 2.0 / 3, -1},
     {1, 0, 0, 0},  {0, 1, 0, 0},  {0, 0, 1, 0},  {0, 0, 0, 1},
 };
+
+// sum_j kRuleWeights[r][j] * x[j] over the non-zero weights, in order, starting from +0: exactly the
+// loop of ruleKey and fieldRule, with the weights known at compile time (the encoder tries every rule
+// at every vertex).
+template <uint32_t r>
+inline double weightedRule(const double x[4]) {
+  double v = 0;
+  if constexpr (kRuleWeights[r][0] != 0.0) v += kRuleWeights[r][0] * x[0];
+  if constexpr (kRuleWeights[r][1] != 0.0) v += kRuleWeights[r][1] * x[1];
+  if constexpr (kRuleWeights[r][2] != 0.0) v += kRuleWeights[r][2] * x[2];
+  if constexpr (kRuleWeights[r][3] != 0.0) v += kRuleWeights[r][3] * x[3];
+  return v;
+}
+template <uint32_t... r>
+constexpr std::array<double (*)(const double*), sizeof...(r)> weightedRuleTable(std::integer_sequence<uint32_t, r...>) {
+  return {&weightedRule<r>...};
+}
+constexpr auto kWeightedRule = weightedRuleTable(std::make_integer_sequence<uint32_t, kRules>());
 
 enum SlotState : uint8_t { kFree = 0, kLive = 1, kRetired = 2 };
 
@@ -401,7 +420,7 @@ class LevelCoder {
     const size_t vs = scalarSize(d.type);
     const int fbits = scalarBits(d.type);
     constexpr uint32_t kMaxComps = 16;
-    double stencil[4][kMaxComps];
+    double stencil[kMaxComps][4];
     double cand[kCandidateRules][kMaxComps];
     uint64_t actual[kMaxComps];
     const bool cached = d.components <= kMaxComps;
@@ -410,7 +429,7 @@ class LevelCoder {
         const size_t off = pf_offset_[f] + c * vs;
         actual[c] = keyFromRaw(d.type, src_item + c * vs);
         for (int j = 0; j < 4; ++j)
-          stencil[j][c] = fp.s[j] != kNoSlot ? doubleFromRaw(d.type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
+          stencil[c][j] = fp.s[j] != kNoSlot ? doubleFromRaw(d.type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
         for (int j = 0; j < std::min<int>(n_near_, kCandidateRules); ++j)
           cand[j][c] = doubleFromRaw(d.type, &vals_[near_[j] * item_bytes_ + off]);
       }
@@ -420,10 +439,7 @@ class LevelCoder {
       if (r == 0) return pred_vals_[k + c];
       if (!cached) return fieldRule(r, fp, d.type, pf_offset_[f] + c * vs);
       if (r >= kRules) return cand[r - kRules][c];
-      double v = 0;
-      for (int j = 0; j < 4; ++j)
-        if (kRuleWeights[r][j] != 0.0) v += kRuleWeights[r][j] * stencil[j][c];
-      return v;
+      return kWeightedRule[r](stencil[c]);
     };
     const BitTree<4>& tree = pf_rule_[f][pf_last_rule_[f]];
     int best = 1 << 30;
