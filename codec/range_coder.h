@@ -16,11 +16,14 @@ namespace gtn {
 struct BitModel {
   uint16_t fast = 32768, slow = 32768;
   uint32_t p0() const { return (uint32_t{fast} + slow) >> 1; }  // in [15, 65521]: never 0 or 65536
-  // Without branches: a coded bit is as good as random to a branch predictor.
   void update(uint32_t bit) {
-    const uint32_t f = fast, s = slow;
-    fast = static_cast<uint16_t>(bit ? f - (f >> 4) : f + ((65536 - f) >> 4));
-    slow = static_cast<uint16_t>(bit ? s - (s >> 7) : s + ((65536 - s) >> 7));
+    if (bit) {
+      fast -= fast >> 4;
+      slow -= slow >> 7;
+    } else {
+      fast += (65536 - fast) >> 4;
+      slow += (65536 - slow) >> 7;
+    }
   }
 };
 
@@ -85,12 +88,17 @@ class RangeDecoder {
     for (int i = 0; i < 5; ++i) code_ = (code_ << 8) | nextByte();
   }
 
-  [[gnu::always_inline]] uint32_t decodeBit(BitModel& m) {
+  uint32_t decodeBit(BitModel& m) {
     const uint32_t bound = (range_ >> 16) * m.p0();
-    const uint32_t bit = code_ >= bound;
-    const uint32_t mask = 0u - bit;  // all ones for a 1
-    code_ -= bound & mask;
-    range_ = ((range_ - bound) & mask) | (bound & ~mask);
+    uint32_t bit;
+    if (code_ < bound) {
+      range_ = bound;
+      bit = 0;
+    } else {
+      code_ -= bound;
+      range_ -= bound;
+      bit = 1;
+    }
     m.update(bit);
     normalize();
     return bit;
