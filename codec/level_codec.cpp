@@ -76,9 +76,10 @@ constexpr double kRuleWeights[kRules][4] = {
     {1, 0, 0, 0},  {0, 1, 0, 0},  {0, 0, 1, 0},  {0, 0, 0, 1},
 };
 
-// sum_j kRuleWeights[r][j] * x[j] over the non-zero weights, in order, starting from +0: exactly the
-// loop of ruleKey and fieldRule, with the weights known at compile time (the encoder tries every rule
-// at every vertex).
+// The prediction of rule r (r < kRules) from the stencil values x = (a, b, c, d): the sum of
+// kRuleWeights[r][j] * x[j] over the non-zero weights, in order, starting from +0 (spec section 10.5).
+// The weights are compile-time constants, as the encoder tries every rule at every vertex; a stencil
+// value whose weight is zero is never read.
 template <uint32_t r>
 inline double weightedRule(const double x[4]) {
   double v = 0;
@@ -340,17 +341,15 @@ class LevelCoder {
   // Key of coordinate i predicted by rule r (rule 0: `rule0`).
   uint64_t ruleKey(uint32_t r, const FieldPrediction& fp, int i, uint64_t rule0, ScalarType ct) const {
     if (r == 0) return rule0;
-    double v = 0;
-    for (int j = 0; j < 4; ++j)
-      if (kRuleWeights[r][j] != 0.0) v += kRuleWeights[r][j] * P(fp.s[j])[i];
-    return keyFromPrediction(ct, v);
+    double x[4];
+    for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? P(fp.s[j])[i] : 0.0;
+    return keyFromPrediction(ct, kWeightedRule[r](x));
   }
   double fieldRule(uint32_t r, const FieldPrediction& fp, ScalarType type, size_t off) const {
     if (r >= kRules) return doubleFromRaw(type, &vals_[near_[r - kRules] * item_bytes_ + off]);
-    double v = 0;
-    for (int j = 0; j < 4; ++j)
-      if (kRuleWeights[r][j] != 0.0) v += kRuleWeights[r][j] * doubleFromRaw(type, &vals_[fp.s[j] * item_bytes_ + off]);
-    return v;
+    double x[4];
+    for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
+    return kWeightedRule[r](x);
   }
 
   void computeFieldPrediction(const FieldPrediction& fp, const double* x) {

@@ -8,7 +8,8 @@
 // coordinates and fields in their source types): zstd -19 and xz -9 of the connectivity array and of
 // the coordinate + field arrays (the `zstd` and `xz` programs), and fpzip (when built with it) of each
 // float array, in grid order (i, j, k) for PLOT3D and in source order otherwise; non-float fields are
-// added to the fpzip column at their xz -9 size. Speeds are single-threaded rates in thread CPU time, of the fastest of several runs.
+// added to the fpzip column at their xz -9 size. Speeds are single-threaded rates in thread CPU time,
+// of the fastest of several runs.
 #include <algorithm>
 #include <ctime>
 #include <cstdio>
