@@ -6,23 +6,46 @@
 // (RangeDecoder::finishedCleanly()).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
 
 namespace gtn {
 
-// Probability that the next bit is 0, as two 16-bit estimates adapting at rates 1/16 and 1/128.
+// Adaptation rate, as a multiple of 2^-16, of a model's estimates at its n-th update (n = 0, 1, ...):
+// 1/(n + 2) while that exceeds the estimate's final rate, then the final rate (1/16 fast, 1/128 slow).
+// The first updates thus average what was seen so far instead of creeping from 1/2, which is what
+// small meshes and rarely used contexts pay for.
+inline constexpr int kModelWarmup = 126;  // updates after which both rates are final
+constexpr uint32_t modelRate(int n, int final_div) { return n + 2 < final_div ? 65536u / (n + 2) : 65536u / final_div; }
+inline constexpr auto kFastRate = [] {
+  std::array<uint16_t, kModelWarmup + 1> r{};
+  for (int n = 0; n <= kModelWarmup; ++n) r[n] = static_cast<uint16_t>(modelRate(n, 16));
+  return r;
+}();
+inline constexpr auto kSlowRate = [] {
+  std::array<uint16_t, kModelWarmup + 1> r{};
+  for (int n = 0; n <= kModelWarmup; ++n) r[n] = static_cast<uint16_t>(modelRate(n, 128));
+  return r;
+}();
+
+// Probability that the next bit is 0, as two 16-bit estimates: one adapting fast (final rate 1/16),
+// one slowly (final rate 1/128), both warming up as kFastRate and kSlowRate say.
 struct BitModel {
   uint16_t fast = 32768, slow = 32768;
-  uint32_t p0() const { return (uint32_t{fast} + slow) >> 1; }  // in [15, 65521]: never 0 or 65536
+  uint8_t seen = 0;  // updates so far, saturating at kModelWarmup
+  uint32_t p0() const { return (uint32_t{fast} + slow) >> 1; }  // in [1, 65535]: never 0 or 65536
   void update(uint32_t bit) {
+    const uint32_t rf = kFastRate[seen], rs = kSlowRate[seen];
+    seen += seen < kModelWarmup;
+    // Rounding down the step keeps each estimate inside (0, 65536).
     if (bit) {
-      fast -= fast >> 4;
-      slow -= slow >> 7;
+      fast -= static_cast<uint16_t>((fast * rf) >> 16);
+      slow -= static_cast<uint16_t>((slow * rs) >> 16);
     } else {
-      fast += (65536 - fast) >> 4;
-      slow += (65536 - slow) >> 7;
+      fast += static_cast<uint16_t>(((65536 - fast) * rf) >> 16);
+      slow += static_cast<uint16_t>(((65536 - slow) * rs) >> 16);
     }
   }
 };

@@ -78,15 +78,20 @@ TEST(LevelCodecReal, TetgenCornellSpheres) { checkCase({{"tetgen/cornell_spheres
 // Known gap: 331 points printed with 8 decimals; xz -9 finds the repeated decimal patterns in the
 // raw float64 values that our models, still learning, do not.
 TEST(LevelCodecReal, TetgenCornellBoxWithRegionAttribute) {
-  checkCase({{"tetgen/cornellbox_orig.1.ele"}, 6, 3.0, false});
+  checkCase({{"tetgen/cornellbox_orig.1.ele"}, 6, 2.5, false});
 }
 
 TEST(LevelCodecReal, VtuWithManyFieldsAndUnusedPoints) {
   checkCase({{"vtu/lv_guccione.vtu"}, 6, 2.5});
-  checkCase({{"vtu/raptorTetra_19409.vtu"}, 6, 3.6});
+  checkCase({{"vtu/raptorTetra_19409.vtu"}, 6, 2.5});
+  checkCase({{"vtu/fire_ug.vtu"}, 6, 2.5});
 }
 
-TEST(LevelCodecReal, MeditBunny) { checkCase({{"medit/bunny.mesh"}, 6, 3.0}); }
+// Known gap: Ossicles is a thin shell (3412 boundary triangles for 5058 tetrahedra, nearly every
+// point on the boundary), so most apexes lie across the shell, outside the front fans.
+TEST(LevelCodecReal, VtuThinShellOssicles) { checkCase({{"vtu/Ossicles.vtu"}, 6, 3.6}); }
+
+TEST(LevelCodecReal, MeditBunny) { checkCase({{"medit/bunny.mesh"}, 6, 2.5}); }
 
 }  // namespace
 }  // namespace gtn
