@@ -29,6 +29,7 @@
 #include <utility>
 
 #include "codec/flat_maps.h"
+#include "codec/nearest_grid.h"
 #include "codec/range_coder.h"
 #include "codec/value_coder.h"
 #include "mesh/faces.h"
@@ -55,6 +56,8 @@ inline uint32_t candidateSymbol(uint32_t slot, const uint32_t* cands, int nc) {
 constexpr int kMaxCandidates = 14;  // symbols 1..14
 constexpr int kMaxGather = 48;
 constexpr int kFanSteps = 10;
+constexpr uint64_t kEscapeScanBudget = 256;  // live vertices scanned per tetrahedron, at most, for ranked escapes
+constexpr uint32_t kEscapeRankBits = 12;     // ranks below 2^12
 constexpr int kTetContexts = 2 * 10 * 3;
 constexpr int kBoundaryContexts = 2 * 4 * 3;
 constexpr double kMaxKey = 1.7976931348623157e308;  // candidate distances beyond this (inf, NaN) tie here
@@ -319,6 +322,7 @@ class LevelCoder {
   Status retire(uint32_t s) {
     state_[s] = kRetired;
     --live_;
+    if (grid_.built()) grid_.erase(s);
     if constexpr (kEncode) {
       enc_->src_slot[enc_->slot_src[s]] = kNoSlot;
     } else {
@@ -634,6 +638,7 @@ class LevelCoder {
     }
     std::memcpy(last_pos_, x, sizeof(last_pos_));
     ++live_;
+    if (grid_.built()) grid_.insert(s, P(s));
     peak_live_ = std::max<uint64_t>(peak_live_, live_);
     *slot_out = s;
     return Status::ok();
@@ -917,6 +922,7 @@ class LevelCoder {
     // exact arithmetic would cost more than it saves, and the filter is reproducible everywhere.
     const int wrong = g.d != kNoSlot ? side.sign(P(g.d))
                                      : (apex_votes_ > 0 ? -1 : (apex_votes_ < 0 ? 1 : 0));
+    wrong_ = wrong;
     // Delaunay order: the spheres through a, b and c, swept into the undecoded side, meet the
     // apex of a Delaunay tetrahedron first. key = the sweep parameter at which a candidate is met.
     double cc0[3] = {0, 0, 0}, nn[3] = {0, 0, 0}, r2 = 0, key_scale = 0;
@@ -1224,6 +1230,79 @@ class LevelCoder {
     }
   }
 
+  // Squared distance from q to the predicted apex p, a NaN or overflow counting as the largest
+  // finite double (as the candidates' distance, section 10.4).
+  static double apexDistance(const double* q, const double p[3]) {
+    const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+    const double d = dx * dx + dy * dy + dz * dz;
+    return d <= kMaxKey ? d : kMaxKey;
+  }
+
+  // An apex outside the candidate list: its rank by distance to the predicted apex among the live
+  // vertices not on the wrong side of the gate face, or its slot. Ranking scans every live vertex,
+  // so it is allowed only while the live counts of the ranked escapes so far stay within
+  // kEscapeScanBudget per tetrahedron of the level: the decoder's work stays linear whatever the
+  // stream says. In a thin shell the apex lies across the shell, near the prediction but far from
+  // the gate along the front.
+  Status codeEscape(const FrontFace& g, const Orient3dFilter& side, const double p[3], uint32_t xs, uint32_t* x) {
+    const bool allowed = escape_scan_ + live_ <= kEscapeScanBudget * header_.tets;
+    uint32_t by_rank = 0;
+    uint64_t rank = 0;
+    auto eligible = [&](uint32_t t) {
+      return state_[t] == kLive && t != g.v[0] && t != g.v[1] && t != g.v[2] && !(wrong_ != 0 && side.sign(P(t)) == wrong_);
+    };
+    auto dist = [&](uint32_t t) { return apexDistance(P(t), p); };
+    auto all = [&](auto fn) {
+      for (uint32_t t = 0; t < state_.size(); ++t)
+        if (state_[t] == kLive) fn(t);
+    };
+    if (allowed && !grid_.built()) buildGrid();
+    if constexpr (kEncode) {
+      if (allowed && isLive(xs) && eligible(xs)) {
+        rank = grid_.rankOf(p, dist(xs), xs, dist, eligible, all);
+        by_rank = rank < (uint64_t{1} << kEscapeRankBits);
+      }
+    }
+    if (allowed) by_rank = con_->bit(esc_by_rank_, by_rank);
+    if (!by_rank) {
+      *x = codeSlot(*con_, xs);
+      if (!isLive(*x)) return bad("tetrahedron refers to a vertex that is not live");
+      return Status::ok();
+    }
+    escape_scan_ += live_;
+    // Rank: its bit length b (BitTree<4>), then the b - 1 bits below the leading one.
+    const uint32_t b = esc_bits_.code(*con_, kEncode ? static_cast<uint32_t>(bitLength(rank)) : 0);
+    if (b > kEscapeRankBits) return bad("escape rank out of range");
+    if (b > 1) rank = (uint64_t{1} << (b - 1)) | con_->direct(kEncode ? static_cast<uint32_t>(rank) & ((1u << (b - 1)) - 1) : 0, static_cast<int>(b) - 1);
+    else rank = b;
+    if constexpr (kEncode) {
+      *x = xs;
+      return Status::ok();
+    }
+    // The rank-th eligible live vertex in (distance, slot) order.
+    *x = grid_.kth(p, rank, dist, eligible, all);
+    if (*x == NearestGrid::kNone) return bad("escape rank beyond the live vertices");
+    return Status::ok();
+  }
+
+  // The rank queries' grid over the live vertices, built at the first ranked escape and kept up
+  // to date from then on (it changes no answer, only how soon it is found).
+  void buildGrid() {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t t = 0; t < state_.size(); ++t) {
+      if (state_[t] != kLive) continue;
+      for (int i = 0; i < 3; ++i) {
+        const double v = P(t)[i];
+        if (!std::isfinite(v)) continue;
+        lo[i] = std::min(lo[i], v);
+        hi[i] = std::max(hi[i], v);
+      }
+    }
+    grid_.build(lo, hi, live_);
+    for (uint32_t t = 0; t < state_.size(); ++t)
+      if (state_[t] == kLive) grid_.insert(t, P(t));
+  }
+
   Status peelingPhase() {
     while (true) {
       long idx = -1;
@@ -1293,8 +1372,7 @@ class LevelCoder {
         GTN_RETURN_IF_ERROR(introduceVertex(x_src, p, fp, &x));
         n_near_ = 0;
       } else if (sym == kSymEscape) {
-        x = codeSlot(*con_, kEncode ? enc_->src_slot[x_src] : 0);
-        if (!isLive(x)) return bad("tetrahedron refers to a vertex that is not live");
+        GTN_RETURN_IF_ERROR(codeEscape(g, side, p, kEncode ? enc_->src_slot[x_src] : 0, &x));
       } else {
         if (sym > static_cast<uint32_t>(nc)) return bad("candidate rank out of range");
         x = candidateAt(static_cast<int>(sym) - 1);
@@ -1357,6 +1435,11 @@ class LevelCoder {
   RingQueue<uint64_t> hqueue_;
 
   BitTree<4> tsym_[kTetContexts];
+  BitModel esc_by_rank_;
+  BitTree<4> esc_bits_;
+  int wrong_ = 0;                  // the gate's wrong side (gatherCandidates)
+  uint64_t escape_scan_ = 0;       // live counts of the ranked escapes so far
+  NearestGrid grid_;
   BitTree<4> bsym_[kBoundaryContexts];
   BitTree<4> geo_rule_[16];
   uint32_t geo_last_rule_ = 0;

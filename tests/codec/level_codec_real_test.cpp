@@ -88,8 +88,9 @@ TEST(LevelCodecReal, VtuWithManyFieldsAndUnusedPoints) {
 }
 
 // Known gap: Ossicles is a thin shell (3412 boundary triangles for 5058 tetrahedra, nearly every
-// point on the boundary), so most apexes lie across the shell, outside the front fans.
-TEST(LevelCodecReal, VtuThinShellOssicles) { checkCase({{"vtu/Ossicles.vtu"}, 6, 3.6}); }
+// point on the boundary): the boundary surface alone costs about 1 bit per tetrahedron, and many
+// apexes lie across the shell, outside the front fans (ranked escapes, spec 10.4, reach them).
+TEST(LevelCodecReal, VtuThinShellOssicles) { checkCase({{"vtu/Ossicles.vtu"}, 6, 3.0}); }
 
 TEST(LevelCodecReal, MeditBunny) { checkCase({{"medit/bunny.mesh"}, 6, 2.5}); }
 

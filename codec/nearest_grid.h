@@ -1,0 +1,176 @@
+// Rank queries by distance over a changing set of points (the live vertices of the level codec):
+// "the r-th point in (distance, slot) order" and "how many points come before this one". The
+// answers are defined by that order alone, so they equal a scan of every point; the grid only
+// finds them sooner. Points are chained per cell in arrays indexed by slot (no allocation per
+// point); a query looks at rings of cells around the query point until every point that can still
+// come before the answer lies inside the rings, and falls back to a scan of every point when the
+// rings would visit more cells than there are points.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace gtn {
+
+class NearestGrid {
+ public:
+  static constexpr uint32_t kNone = 0xFFFFFFFFu;
+  using Ranked = std::pair<double, uint32_t>;  // (distance, slot)
+
+  bool built() const { return n_ > 0; }
+
+  // A grid of about `cells_per_point` cells per point over the box [lo, hi] (points outside the box
+  // go to its border cells, points with a non-finite coordinate to a separate list).
+  void build(const double lo[3], const double hi[3], size_t points, double cells_per_point = 2.0) {
+    double ext = 0;
+    for (int i = 0; i < 3; ++i) ext = std::max(ext, hi[i] - lo[i]);
+    const double want = std::cbrt(std::max(1.0, static_cast<double>(points) * cells_per_point));
+    n_ = static_cast<int>(std::clamp(want, 1.0, 256.0));
+    if (!(ext > 0) || !std::isfinite(ext)) n_ = 1;
+    for (int i = 0; i < 3; ++i) {
+      origin_[i] = std::isfinite(lo[i]) ? lo[i] : 0.0;
+      const double e = hi[i] - lo[i];
+      h_[i] = e > 0 && std::isfinite(e) ? e / n_ : 1.0;
+    }
+    head_.assign(static_cast<size_t>(n_) * n_ * n_ + 1, kNone);  // the last: non-finite points
+  }
+
+  void insert(uint32_t s, const double* q) {
+    if (s >= cell_.size()) {
+      cell_.resize(s + 1, kNone);
+      next_.resize(s + 1, kNone);
+      prev_.resize(s + 1, kNone);
+    }
+    const uint32_t c = cellOf(q);
+    cell_[s] = c;
+    prev_[s] = kNone;
+    next_[s] = head_[c];
+    if (head_[c] != kNone) prev_[head_[c]] = s;
+    head_[c] = s;
+    ++count_;
+  }
+
+  void erase(uint32_t s) {
+    if (s >= cell_.size() || cell_[s] == kNone) return;
+    if (prev_[s] != kNone) next_[prev_[s]] = next_[s];
+    else head_[cell_[s]] = next_[s];
+    if (next_[s] != kNone) prev_[next_[s]] = prev_[s];
+    cell_[s] = kNone;
+    --count_;
+  }
+
+  // The point of rank r (0 = first) in (dist(s), s) order among those with ok(s), or kNone when
+  // fewer qualify. `all(fn)` calls fn(s) for every point (the fallback scan).
+  template <class Dist, class Ok, class All>
+  uint32_t kth(const double p[3], uint64_t r, Dist dist, Ok ok, All all) {
+    buf_.clear();
+    const bool done = visit(p, [&](uint32_t s) {
+      if (ok(s)) buf_.push_back({dist(s), s});
+    }, [&](double safe2) {
+      // Points closer than the safe radius are final: every point before them has been seen.
+      const auto mid = std::partition(buf_.begin(), buf_.end(), [&](const Ranked& x) { return x.first < safe2; });
+      return static_cast<uint64_t>(mid - buf_.begin()) > r;
+    });
+    if (!done) {  // the fallback: every point
+      buf_.clear();
+      all([&](uint32_t s) {
+        if (ok(s)) buf_.push_back({dist(s), s});
+      });
+    }
+    if (r >= buf_.size()) return kNone;
+    // After a successful ring test the final points are at the front, in no order.
+    auto end = buf_.end();
+    if (done && last_safe2_ >= 0) end = std::partition(buf_.begin(), buf_.end(), [&](const Ranked& x) { return x.first < last_safe2_; });
+    std::nth_element(buf_.begin(), buf_.begin() + static_cast<long>(r), end);
+    return buf_[r].second;
+  }
+
+  // How many points with ok(s) come before (d, x) in (dist(s), s) order (x itself not counted).
+  template <class Dist, class Ok, class All>
+  uint64_t rankOf(const double p[3], double d, uint32_t x, Dist dist, Ok ok, All all) {
+    uint64_t rank = 0;
+    auto before = [&](uint32_t s) {
+      if (s == x) return;
+      const double e = dist(s);
+      if ((e < d || (e == d && s < x)) && ok(s)) ++rank;
+    };
+    // Done once the rings hold every point at distance d or less.
+    const bool done = visit(p, before, [&](double safe2) { return safe2 > d; });
+    if (!done) {
+      rank = 0;
+      all(before);
+    }
+    return rank;
+  }
+
+ private:
+  uint32_t cellIndex(int i, double v) const {
+    const double f = std::floor((v - origin_[i]) / h_[i]);
+    return static_cast<uint32_t>(f < 0 ? 0 : (f >= n_ - 1 ? n_ - 1 : static_cast<int>(f)));
+  }
+  uint32_t cellOf(const double* q) const {
+    if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) return static_cast<uint32_t>(head_.size() - 1);
+    return (cellIndex(2, q[2]) * n_ + cellIndex(1, q[1])) * n_ + cellIndex(0, q[0]);
+  }
+
+  // Calls each(s) for the points of growing rings of cells around p, and stop(safe2) after each
+  // ring, safe2 being a squared radius within which every point has been visited (infinite once
+  // the rings cover the grid). Returns true when stop said so or every point was visited; false
+  // when the rings grew too costly (the caller then scans every point itself).
+  template <class Each, class Stop>
+  bool visit(const double p[3], Each each, Stop stop) {
+    last_safe2_ = -1;
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return false;
+    for (uint32_t s = head_.back(); s != kNone; s = next_[s]) each(s);
+    int c[3];
+    for (int i = 0; i < 3; ++i) c[i] = static_cast<int>(cellIndex(i, p[i]));
+    const uint64_t max_cells = 4 * count_ + 64;
+    uint64_t cells = 0;
+    for (int k = 0;; ++k) {
+      int lo[3], hi[3];
+      for (int i = 0; i < 3; ++i) lo[i] = std::max(0, c[i] - k), hi[i] = std::min(n_ - 1, c[i] + k);
+      for (int z = lo[2]; z <= hi[2]; ++z) {
+        for (int y = lo[1]; y <= hi[1]; ++y) {
+          const bool inner_zy = std::abs(z - c[2]) < k && std::abs(y - c[1]) < k;
+          for (int x = lo[0]; x <= hi[0]; ++x) {
+            if (inner_zy && std::abs(x - c[0]) < k) {  // visited in an earlier ring: jump across
+              x = c[0] + k - 1;
+              continue;
+            }
+            ++cells;
+            for (uint32_t s = head_[(static_cast<uint32_t>(z) * n_ + y) * n_ + x]; s != kNone; s = next_[s]) each(s);
+          }
+        }
+      }
+      // The distance from p to the nearest face of the visited box that has cells beyond it, less
+      // a margin for the rounding of the cell boundaries.
+      double safe = INFINITY;
+      for (int i = 0; i < 3; ++i) {
+        if (lo[i] > 0) {
+          const double edge = origin_[i] + lo[i] * h_[i];
+          safe = std::min(safe, p[i] - edge - 1e-9 * (std::fabs(p[i]) + std::fabs(edge)));
+        }
+        if (hi[i] < n_ - 1) {
+          const double edge = origin_[i] + (hi[i] + 1) * h_[i];
+          safe = std::min(safe, edge - p[i] - 1e-9 * (std::fabs(p[i]) + std::fabs(edge)));
+        }
+      }
+      const double safe2 = safe == INFINITY ? INFINITY : (safe > 0 ? safe * safe : 0.0);
+      last_safe2_ = safe2;
+      if (stop(safe2) || safe2 == INFINITY) return true;
+      if (cells > max_cells) return false;
+    }
+  }
+
+  int n_ = 0;
+  double origin_[3] = {0, 0, 0}, h_[3] = {1, 1, 1};
+  double last_safe2_ = -1;
+  uint64_t count_ = 0;
+  std::vector<uint32_t> head_, cell_, next_, prev_;
+  std::vector<Ranked> buf_;
+};
+
+}  // namespace gtn

@@ -1,0 +1,128 @@
+// NearestGrid's answers are defined by the (distance, slot) order alone: they must equal a scan of
+// every point, whatever the grid's cells, for points inside and outside the box it was built for,
+// coincident points, non-finite coordinates, and points inserted and erased as the front moves.
+#include "codec/nearest_grid.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace gtn {
+namespace {
+
+constexpr double kMaxKey = 1.7976931348623157e308;
+
+struct Model {
+  std::vector<double> pos;  // 3 per slot
+  std::vector<uint8_t> live;
+  const double* P(uint32_t s) const { return &pos[3 * size_t{s}]; }
+};
+
+double dist(const Model& m, uint32_t s, const double p[3]) {
+  const double* q = m.P(s);
+  const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+  const double d = dx * dx + dy * dy + dz * dz;
+  return d <= kMaxKey ? d : kMaxKey;
+}
+
+void runScenario(uint32_t seed, bool clustered) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Model m;
+  const uint32_t slots = 600;
+  m.pos.resize(3 * slots);
+  m.live.assign(slots, 0);
+  auto place = [&](uint32_t s) {
+    const uint32_t kind = rng() % 40;
+    for (int i = 0; i < 3; ++i) m.pos[3 * s + i] = clustered ? 0.01 * std::round(u(rng) * 20) : u(rng);
+    if (kind == 0) m.pos[3 * s] = std::numeric_limits<double>::quiet_NaN();
+    if (kind == 1) m.pos[3 * s + 1] = std::numeric_limits<double>::infinity();
+    if (kind == 2) m.pos[3 * s + 2] = 1e200;   // far outside the box, squared distance overflows
+    if (kind == 3) m.pos[3 * s] = 5.0;         // outside the box the grid was built for
+    if (kind == 4 && s > 0) std::copy_n(&m.pos[3 * (s - 1)], 3, &m.pos[3 * s]);  // coincident
+  };
+  for (uint32_t s = 0; s < slots / 2; ++s) {
+    place(s);
+    m.live[s] = 1;
+  }
+  NearestGrid grid;
+  const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+  grid.build(lo, hi, slots / 2);
+  for (uint32_t s = 0; s < slots; ++s)
+    if (m.live[s]) grid.insert(s, m.P(s));
+  for (int step = 0; step < 3000; ++step) {
+    // Move the set: erase one live slot, revive one dead slot at a new place.
+    const uint32_t a = rng() % slots, b = rng() % slots;
+    if (m.live[a]) {
+      grid.erase(a);
+      m.live[a] = 0;
+    }
+    if (!m.live[b]) {
+      place(b);
+      m.live[b] = 1;
+      grid.insert(b, m.P(b));
+    }
+    double p[3];
+    for (int i = 0; i < 3; ++i) p[i] = u(rng) * (step % 5 == 0 ? 3.0 : 1.0);
+    if (step % 97 == 0) p[1] = std::numeric_limits<double>::quiet_NaN();
+    const uint32_t parity = rng() % 3;
+    auto ok = [&](uint32_t s) { return parity == 0 || s % 3 != parity; };
+    auto d = [&](uint32_t s) { return dist(m, s, p); };
+    auto all = [&](auto fn) {
+      for (uint32_t s = 0; s < slots; ++s)
+        if (m.live[s]) fn(s);
+    };
+    std::vector<std::pair<double, uint32_t>> order;
+    for (uint32_t s = 0; s < slots; ++s)
+      if (m.live[s] && ok(s)) order.push_back({d(s), s});
+    std::sort(order.begin(), order.end());
+    const uint64_t r = rng() % (order.size() + 3);
+    const uint32_t got = grid.kth(p, r, d, ok, all);
+    ASSERT_EQ(got, r < order.size() ? order[r].second : NearestGrid::kNone) << "seed " << seed << " step " << step << " rank " << r;
+    if (!order.empty()) {
+      const size_t i = rng() % order.size();
+      ASSERT_EQ(grid.rankOf(p, order[i].first, order[i].second, d, ok, all), i) << "seed " << seed << " step " << step;
+    }
+  }
+}
+
+TEST(NearestGrid, RanksEqualAScanOfEveryPoint) {
+  for (uint32_t seed = 1; seed <= 4; ++seed) runScenario(seed, false);
+}
+
+TEST(NearestGrid, RanksEqualAScanWithManyTies) {
+  // Coordinates on a coarse lattice: many equal distances, decided by the slot.
+  for (uint32_t seed = 5; seed <= 8; ++seed) runScenario(seed, true);
+}
+
+TEST(NearestGrid, FlatAndSinglePointBoxes) {
+  NearestGrid grid;
+  const double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  grid.build(lo, hi, 10);
+  std::vector<double> pos;
+  for (uint32_t s = 0; s < 10; ++s) {
+    pos.insert(pos.end(), {0.0, 0.0, static_cast<double>(s % 2)});
+    grid.insert(s, &pos[3 * s]);
+  }
+  const double p[3] = {0, 0, 0.9};
+  auto d = [&](uint32_t s) {
+    const double dz = pos[3 * s + 2] - p[2];
+    return dz * dz + p[0] * p[0] + p[1] * p[1];
+  };
+  auto ok = [](uint32_t) { return true; };
+  auto all = [&](auto fn) {
+    for (uint32_t s = 0; s < 10; ++s) fn(s);
+  };
+  EXPECT_EQ(grid.kth(p, 0, d, ok, all), 1u);  // odd slots at z = 1 are nearer, then by slot
+  EXPECT_EQ(grid.kth(p, 4, d, ok, all), 9u);
+  EXPECT_EQ(grid.kth(p, 5, d, ok, all), 0u);
+  EXPECT_EQ(grid.rankOf(p, d(2), 2, d, ok, all), 6u);
+}
+
+}  // namespace
+}  // namespace gtn
