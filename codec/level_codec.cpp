@@ -11,7 +11,9 @@
 //                (per vertex: bit existing, then a slot index, else a new vertex).
 //  connectivity: for each popped open face (a, b, c): x as new / rank among the front vertices that
 //                share front edges with a, b or c (ordered by how many of them, then by distance to
-//                the predicted position) / escape + slot; a bit for reversed orientation; after the
+//                the predicted position) / escape + either the rank by distance to the predicted
+//                position among the live vertices (codec/nearest_grid.h finds it) or the slot; a bit
+//                for reversed orientation; after the
 //                tetrahedron, for each of its vertices left on no open face, a bit "retired". When the
 //                face queue empties: bit "seed tetrahedron follows", then the seed's four vertices.
 //  geometry:     coordinates of each vertex when it is introduced, predicted from decoded neighbours.
