@@ -800,20 +800,33 @@ class LevelCoder {
         if (fwd != kNoSlot) fwd = nxt_[fwd];
         if (bwd != kNoSlot) bwd = prv_[bwd];
       }
+      // The first two candidates (usually the two ears, next(q) and prev(p)) in order of distance to
+      // the parallelogram prediction; then how close the first lies to it, relative to the edge.
+      uint32_t near = 2;
+      if (nc > 0) {
+        double pr[3], e2 = 0;
+        for (int i = 0; i < 3; ++i) {
+          pr[i] = P(p)[i] + P(q)[i] - P(w)[i];
+          e2 += (P(p)[i] - P(q)[i]) * (P(p)[i] - P(q)[i]);
+        }
+        auto dist2 = [&](uint32_t s) {
+          double d2 = 0;
+          for (int i = 0; i < 3; ++i) d2 += (P(s)[i] - pr[i]) * (P(s)[i] - pr[i]);
+          return d2 <= kMaxKey ? d2 : kMaxKey;
+        };
+        double d2 = dist2(cands[0]);
+        if (nc > 1) {
+          const double d2b = dist2(cands[1]);
+          if (d2b < d2) {
+            std::swap(cands[0], cands[1]);
+            d2 = d2b;
+          }
+        }
+        near = d2 < 0.25 * e2 ? 0 : (d2 < e2 ? 1 : 2);
+      }
       uint32_t sym = 0;
       if constexpr (kEncode) {
         sym = candidateSymbol(enc_->src_slot[x_src], cands, nc);
-      }
-      // How close the first candidate lies to the parallelogram prediction, relative to the edge.
-      uint32_t near = 2;
-      if (nc > 0) {
-        double e2 = 0, d2 = 0;
-        for (int i = 0; i < 3; ++i) {
-          const double pr = P(p)[i] + P(q)[i] - P(w)[i];
-          e2 += (P(p)[i] - P(q)[i]) * (P(p)[i] - P(q)[i]);
-          d2 += (P(cands[0])[i] - pr) * (P(cands[0])[i] - pr);
-        }
-        near = d2 < 0.25 * e2 ? 0 : (d2 < e2 ? 1 : 2);
       }
       const uint32_t ctx = (std::min<uint32_t>(prev_sym, 3) * 2 + closes) * 3 + near;
       sym = bsym_[ctx].code(*bnd_, sym);

@@ -34,6 +34,7 @@ class NearestGrid {
       origin_[i] = std::isfinite(lo[i]) ? lo[i] : 0.0;
       const double e = hi[i] - lo[i];
       h_[i] = e > 0 && std::isfinite(e) ? e / n_ : 1.0;
+      if (!(h_[i] > 0)) h_[i] = 1.0;  // an extent so small that its cells underflow
     }
     head_.assign(static_cast<size_t>(n_) * n_ * n_ + 1, kNone);  // the last: non-finite points
   }
@@ -109,7 +110,8 @@ class NearestGrid {
  private:
   uint32_t cellIndex(int i, double v) const {
     const double f = std::floor((v - origin_[i]) / h_[i]);
-    return static_cast<uint32_t>(f < 0 ? 0 : (f >= n_ - 1 ? n_ - 1 : static_cast<int>(f)));
+    if (!(f > 0)) return 0;  // also NaN (0 / 0 when the cell size underflowed)
+    return f >= n_ - 1 ? static_cast<uint32_t>(n_ - 1) : static_cast<uint32_t>(f);
   }
   uint32_t cellOf(const double* q) const {
     if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) return static_cast<uint32_t>(head_.size() - 1);

@@ -124,5 +124,25 @@ TEST(NearestGrid, FlatAndSinglePointBoxes) {
   EXPECT_EQ(grid.rankOf(p, d(2), 2, d, ok, all), 6u);
 }
 
+TEST(NearestGrid, BoxTooSmallForItsCells) {
+  // An extent of one denormal split into cells underflows to cells of size 0 (0 / 0 = NaN indices).
+  NearestGrid grid;
+  const double lo[3] = {0, 0, 0}, hi[3] = {std::numeric_limits<double>::denorm_min(), 0, 0};
+  grid.build(lo, hi, 100);
+  std::vector<double> pos;
+  for (uint32_t s = 0; s < 6; ++s) {
+    pos.insert(pos.end(), {s % 2 ? std::numeric_limits<double>::denorm_min() : 0.0, 0.0, 0.0});
+    grid.insert(s, &pos[3 * s]);
+  }
+  const double p[3] = {0, 0, 1};
+  auto d = [&](uint32_t s) { return pos[3 * s] * pos[3 * s] + 1.0; };
+  auto ok = [](uint32_t) { return true; };
+  auto all = [&](auto fn) {
+    for (uint32_t s = 0; s < 6; ++s) fn(s);
+  };
+  for (uint32_t r = 0; r < 6; ++r) EXPECT_EQ(grid.kth(p, r, d, ok, all), r);  // equal distances: by slot
+  EXPECT_EQ(grid.kth(p, 6, d, ok, all), NearestGrid::kNone);
+}
+
 }  // namespace
 }  // namespace gtn
