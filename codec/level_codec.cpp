@@ -58,7 +58,7 @@ inline uint32_t candidateSymbol(uint32_t slot, const uint32_t* cands, int nc) {
 constexpr int kMaxCandidates = 14;  // symbols 1..14
 constexpr int kMaxGather = 48;
 constexpr int kFanSteps = 10;
-constexpr uint64_t kEscapeScanBudget = 256;  // live vertices scanned per tetrahedron, at most, for ranked escapes
+constexpr uint64_t kEscapeScanBudget = 256;  // live vertices scanned per decoded element, at most, for ranked escapes
 constexpr uint32_t kEscapeRankBits = 12;     // ranks below 2^12
 constexpr int kTetContexts = 2 * 10 * 3;
 constexpr int kBoundaryContexts = 2 * 4 * 3;
@@ -1254,13 +1254,13 @@ class LevelCoder {
   }
 
   // An apex outside the candidate list: its rank by distance to the predicted apex among the live
-  // vertices not on the wrong side of the gate face, or its slot. Ranking scans every live vertex,
-  // so it is allowed only while the live counts of the ranked escapes so far stay within
-  // kEscapeScanBudget per tetrahedron of the level: the decoder's work stays linear whatever the
-  // stream says. In a thin shell the apex lies across the shell, near the prediction but far from
-  // the gate along the front.
+  // vertices not on the wrong side of the gate face, or its slot. A rank may cost a scan of every
+  // live vertex, so it is allowed only while the live counts of the ranked escapes so far stay
+  // within kEscapeScanBudget per tetrahedron and boundary triangle decoded so far: the decoder's
+  // work stays linear in what it outputs, whatever the stream (or the header's counts) says. In a
+  // thin shell the apex lies across the shell, near the prediction but far along the front.
   Status codeEscape(const FrontFace& g, const Orient3dFilter& side, const double p[3], uint32_t xs, uint32_t* x) {
-    const bool allowed = escape_scan_ + live_ <= kEscapeScanBudget * header_.tets;
+    const bool allowed = escape_scan_ + live_ <= kEscapeScanBudget * (tets_done_ + btris_done_ + 1);
     uint32_t by_rank = 0;
     uint64_t rank = 0;
     auto eligible = [&](uint32_t t) {
