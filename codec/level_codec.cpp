@@ -809,14 +809,9 @@ class LevelCoder {
           pr[i] = P(p)[i] + P(q)[i] - P(w)[i];
           e2 += (P(p)[i] - P(q)[i]) * (P(p)[i] - P(q)[i]);
         }
-        auto dist2 = [&](uint32_t s) {
-          double d2 = 0;
-          for (int i = 0; i < 3; ++i) d2 += (P(s)[i] - pr[i]) * (P(s)[i] - pr[i]);
-          return d2 <= kMaxKey ? d2 : kMaxKey;
-        };
-        double d2 = dist2(cands[0]);
+        double d2 = apexDistance(P(cands[0]), pr);
         if (nc > 1) {
-          const double d2b = dist2(cands[1]);
+          const double d2b = apexDistance(P(cands[1]), pr);
           if (d2b < d2) {
             std::swap(cands[0], cands[1]);
             d2 = d2b;
@@ -962,12 +957,10 @@ class LevelCoder {
     for (int i = 0; i < n; ++i) {
       const double* q = P(c[i].s);
       if (wrong != 0 && side.sign(q) == wrong) continue;
-      const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
       c[kept] = c[i];
       // Sort keys must be ordered values: overflowing coordinates (NaN or infinite distances) sort
       // last, so that the comparison stays a strict weak order.
-      c[kept].dist = dx * dx + dy * dy + dz * dz;
-      if (!(c[kept].dist <= kMaxKey)) c[kept].dist = kMaxKey;
+      c[kept].dist = apexDistance(q, p);
       c[kept].key = c[kept].dist;
       if (delaunay) {
         const double e[3] = {q[0] - cc0[0], q[1] - cc0[1], q[2] - cc0[2]};
@@ -1245,8 +1238,8 @@ class LevelCoder {
     }
   }
 
-  // Squared distance from q to the predicted apex p, a NaN or overflow counting as the largest
-  // finite double (as the candidates' distance, section 10.4).
+  // Squared distance from q to a predicted position p (apex or parallelogram), a NaN or overflow
+  // counting as the largest finite double (sections 10.3 and 10.4).
   static double apexDistance(const double* q, const double p[3]) {
     const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
     const double d = dx * dx + dy * dy + dz * dz;

@@ -18,17 +18,13 @@ namespace gtn {
 // The first updates thus average what was seen so far instead of creeping from 1/2, which is what
 // small meshes and rarely used contexts pay for.
 inline constexpr int kModelWarmup = 126;  // updates after which both rates are final
-constexpr uint32_t modelRate(int n, int final_div) { return n + 2 < final_div ? 65536u / (n + 2) : 65536u / final_div; }
-inline constexpr auto kFastRate = [] {
+constexpr std::array<uint16_t, kModelWarmup + 1> modelRates(uint32_t final_div) {
   std::array<uint16_t, kModelWarmup + 1> r{};
-  for (int n = 0; n <= kModelWarmup; ++n) r[n] = static_cast<uint16_t>(modelRate(n, 16));
+  for (uint32_t n = 0; n <= kModelWarmup; ++n) r[n] = static_cast<uint16_t>(65536u / (n + 2 < final_div ? n + 2 : final_div));
   return r;
-}();
-inline constexpr auto kSlowRate = [] {
-  std::array<uint16_t, kModelWarmup + 1> r{};
-  for (int n = 0; n <= kModelWarmup; ++n) r[n] = static_cast<uint16_t>(modelRate(n, 128));
-  return r;
-}();
+}
+inline constexpr auto kFastRate = modelRates(16);
+inline constexpr auto kSlowRate = modelRates(128);
 
 // Probability that the next bit is 0, as two 16-bit estimates: one adapting fast (final rate 1/16),
 // one slowly (final rate 1/128), both warming up as kFastRate and kSlowRate say.
