@@ -61,7 +61,7 @@ constexpr int kFanSteps = 10;
 constexpr uint64_t kEscapeScanBudget = 256;  // live vertices scanned per decoded element, at most, for ranked escapes
 constexpr uint32_t kEscapeRankBits = 12;     // ranks below 2^12
 constexpr int kTetContexts = 2 * 10 * 3;
-constexpr int kBoundaryContexts = 2 * 4 * 3;
+constexpr int kBoundaryContexts = 2 * 4 * 4 * 2;
 constexpr double kMaxKey = 1.7976931348623157e308;  // candidate distances beyond this (inf, NaN) tie here
 constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d), CODEC-NOTES.md
 // Prediction rules for a vertex x behind the front face (a, b, c) whose decoded tetrahedron has
@@ -305,6 +305,8 @@ class LevelCoder {
       ids_.push_back(0);
       nxt_.push_back(kNoSlot);
       prv_.push_back(kNoSlot);
+      corner_sum_.push_back(0.0);
+      corner_count_.push_back(0);
       if constexpr (kEncode) enc_->slot_src.push_back(kNone32);
     }
     state_[s] = kLive;
@@ -312,6 +314,8 @@ class LevelCoder {
     pins_[s] = 0;
     nxt_[s] = kNoSlot;
     prv_[s] = kNoSlot;
+    corner_sum_[s] = 0.0;
+    corner_count_[s] = 0;
     return s;
   }
   void freeSlot(uint32_t s) {
@@ -707,6 +711,10 @@ class LevelCoder {
     }
     ++btris_done_;
     for (int i = 0; i < 3; ++i) {
+      corner_sum_[v[i]] += cornerAngle(P(v[i]), P(v[(i + 1) % 3]), P(v[(i + 2) % 3]));
+      ++corner_count_[v[i]];
+    }
+    for (int i = 0; i < 3; ++i) {
       const uint32_t s = v[i], t = v[(i + 1) % 3], r = v[(i + 2) % 3];
       const uint32_t w = half_.find(edgeKey(t, s), kNone32);
       if (w != kNone32) {
@@ -738,7 +746,6 @@ class LevelCoder {
   }
 
   Status boundaryPhase() {
-    uint32_t prev_sym = 0;
     while (true) {
       if (hqueue_.empty()) {
         uint32_t more = 0;
@@ -800,32 +807,34 @@ class LevelCoder {
         if (fwd != kNoSlot) fwd = nxt_[fwd];
         if (bwd != kNoSlot) bwd = prv_[bwd];
       }
-      // The first two candidates (usually the two ears, next(q) and prev(p)) in order of distance to
-      // the parallelogram prediction; then how close the first lies to it, relative to the edge.
-      uint32_t near = 2;
+      // The first two candidates (usually the two ears, prev(p) and next(q)): the ear at the vertex
+      // whose triangles so far leave the smaller angle open comes first (it is the likelier to
+      // close), then the one nearer the parallelogram prediction. The context: the angle that
+      // candidate's triangle would open at its vertex, the angle left open there and whether the
+      // vertex has four triangles already.
+      uint32_t ear_ctx = (3 * 4 + 3) * 2;  // no ear first
       if (nc > 0) {
-        double pr[3], e2 = 0;
-        for (int i = 0; i < 3; ++i) {
-          pr[i] = P(p)[i] + P(q)[i] - P(w)[i];
-          e2 += (P(p)[i] - P(q)[i]) * (P(p)[i] - P(q)[i]);
-        }
-        double d2 = apexDistance(P(cands[0]), pr);
+        double pr[3];
+        for (int i = 0; i < 3; ++i) pr[i] = P(p)[i] + P(q)[i] - P(w)[i];
+        auto earOf = [&](uint32_t c) { return c == prv_[p] ? p : (c == nxt_[q] ? q : kNoSlot); };
         if (nc > 1) {
-          const double d2b = apexDistance(P(cands[1]), pr);
-          if (d2b < d2) {
+          const uint32_t e0 = earOf(cands[0]), e1 = earOf(cands[1]);
+          const double s0 = e0 != kNoSlot ? corner_sum_[e0] : -1.0, s1 = e1 != kNoSlot ? corner_sum_[e1] : -1.0;
+          if (s1 > s0 || (!(s1 < s0) && apexDistance(P(cands[1]), pr) < apexDistance(P(cands[0]), pr)))
             std::swap(cands[0], cands[1]);
-            d2 = d2b;
-          }
         }
-        near = d2 < 0.25 * e2 ? 0 : (d2 < e2 ? 1 : 2);
+        const uint32_t e = earOf(cands[0]);
+        if (e != kNoSlot) {
+          const uint32_t other = e == p ? q : p;
+          ear_ctx = (openingClass(P(e), P(other), P(cands[0])) * 4 + roomClass(corner_sum_[e])) * 2 +
+                    (corner_count_[e] >= 4 ? 1 : 0);
+        }
       }
       uint32_t sym = 0;
       if constexpr (kEncode) {
         sym = candidateSymbol(enc_->src_slot[x_src], cands, nc);
       }
-      const uint32_t ctx = (std::min<uint32_t>(prev_sym, 3) * 2 + closes) * 3 + near;
-      sym = bsym_[ctx].code(*bnd_, sym);
-      prev_sym = sym == kSymEscape ? 3 : std::min<uint32_t>(sym, 2);
+      sym = bsym_[closes * 32 + ear_ctx].code(*bnd_, sym);
       uint32_t x;
       if (sym == kSymNew) {
         double pred[3];
@@ -1238,6 +1247,38 @@ class LevelCoder {
     }
   }
 
+  // The angle at o of the triangle (o, a, b) in radians, from the polynomial arccosine of
+  // Abramowitz and Stegun 4.4.45 (error below 1e-4): basic operations only, so that every platform
+  // gets the same bits. 0 for a degenerate or non-finite corner (section 10.3).
+  static double cornerAngle(const double* o, const double* a, const double* b) {
+    const double u[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]}, v[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
+    const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    const double uv = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    const double n = std::sqrt(uu * vv);
+    if (!(n > 0 && n <= kMaxKey)) return 0.0;
+    double x = uv / n;
+    const bool obtuse = x < 0;
+    if (obtuse) x = -x;
+    if (x > 1) x = 1;
+    const double acute = std::sqrt(1 - x) * (1.5707288 + x * (-0.2121144 + x * (0.0742610 + x * -0.0187293)));
+    return obtuse ? 3.141592653589793 - acute : acute;
+  }
+  // The angle at o between a and b: 0 below 60 degrees, 1 below 90, 2 otherwise, 3 degenerate.
+  static uint32_t openingClass(const double* o, const double* a, const double* b) {
+    const double u[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]}, v[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
+    const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    const double uv = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    if (!(uu > 0 && vv > 0)) return 3;
+    if (!(uv > 0)) return 2;
+    return 4 * uv * uv > uu * vv ? 0 : 1;
+  }
+  // The angle left open around a vertex whose corner angles sum to `sum`: 0 below 70 degrees
+  // (1.2217304763960306 radians), 1 below 130 (2.2689280275926285), 2 otherwise.
+  static uint32_t roomClass(double sum) {
+    const double room = 6.283185307179586 - sum;
+    return room < 1.2217304763960306 ? 0 : (room < 2.2689280275926285 ? 1 : 2);
+  }
+
   // Squared distance from q to a predicted position p (apex or parallelogram), a NaN or overflow
   // counting as the largest finite double (sections 10.3 and 10.4).
   static double apexDistance(const double* q, const double p[3]) {
@@ -1431,6 +1472,10 @@ class LevelCoder {
   std::vector<double> pos_;
   std::vector<uint8_t> vals_;
   std::vector<uint32_t> open_, pins_, ids_, nxt_, prv_, free_;
+  // Per slot, over the boundary triangles added so far: the sum of their corner angles at the
+  // vertex (cornerAngle) and their count (section 10.3).
+  std::vector<double> corner_sum_;
+  std::vector<uint32_t> corner_count_;
 
   FaceMap faces_;
   EdgeMap edges_;  // directed edge of an open face -> its third vertex
