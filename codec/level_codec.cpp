@@ -60,7 +60,7 @@ constexpr int kMaxGather = 48;
 constexpr int kFanSteps = 10;
 constexpr uint64_t kEscapeScanBudget = 256;  // live vertices scanned per decoded element, at most, for ranked escapes
 constexpr uint32_t kEscapeRankBits = 12;     // ranks below 2^12
-constexpr int kTetContexts = 2 * 10 * 3;
+constexpr int kTetContexts = 10 * 3 * 3;
 constexpr int kBoundaryContexts = 2 * 4 * 4 * 2;
 constexpr double kMaxKey = 1.7976931348623157e308;  // candidate distances beyond this (inf, NaN) tie here
 constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d), CODEC-NOTES.md
@@ -897,6 +897,7 @@ class LevelCoder {
   int gatherCandidates(const FrontFace& g, const Orient3dFilter& side, const double p[3], uint32_t* ctx) {
     Candidate* c = cand_;
     int n = 0;
+    uint32_t across[3] = {kNone32, kNone32, kNone32};  // the apex of the front face across each gate edge (c, a), (a, b), (b, c)
     uint32_t seen[kMaxGather + 3] = {};  // c[i].s, for a vectorised membership test
     auto add = [&](uint32_t s) {
       if (s == g.v[0] || s == g.v[1] || s == g.v[2]) return;
@@ -917,6 +918,7 @@ class LevelCoder {
       bool closed = false;
       for (int step = 0; step < kFanSteps; ++step) {
         const uint32_t w = edges_.find(edgeKey(a, v), kNone32);
+        if (step == 0) across[j] = w;
         if (w == kNone32) break;
         if (w == b) {
           closed = true;
@@ -992,10 +994,12 @@ class LevelCoder {
     cand_m_ = std::min(n, kMaxCandidates);
     two_orders_ = delaunay && n > 1;
     by_key_chosen_ = two_orders_ && order_score_ > 0;
-    // The context: the best multiplicity, how many share it (up to 3), and how close the nearest of
-    // those lies to the predicted apex (the first candidate of the distance order).
+    // The context: the best multiplicity, how many share it (up to 3), how close the nearest of
+    // those lies to the predicted apex, and across how many gate edges (up to 2) the front face's
+    // apex is the first candidate (then the tetrahedron closes that face).
     uint32_t k = 0;
     uint32_t near = 2;
+    uint32_t adjacent = 0;
     if (n > 0) {
       uint32_t best_w = 0, top = 0;
       double best_dist = 0;
@@ -1017,8 +1021,10 @@ class LevelCoder {
         e2 += (a[i] - b[i]) * (a[i] - b[i]) + (b[i] - cc[i]) * (b[i] - cc[i]) + (cc[i] - a[i]) * (cc[i] - a[i]);
       e2 /= 3.0;
       near = best_dist < 0.25 * e2 ? 0 : (best_dist < e2 ? 1 : 2);
+      const uint32_t first = candidateAt(0);
+      for (int j = 0; j < 3; ++j) adjacent += across[j] == first ? 1 : 0;
     }
-    *ctx = (k * 2 + (g.d == kNoSlot ? 1 : 0)) * 3 + near;
+    *ctx = (k * 3 + near) * 3 + std::min<uint32_t>(adjacent, 2);
     return cand_m_;
   }
 
