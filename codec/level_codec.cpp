@@ -6,12 +6,15 @@
 //
 // Stream overview (all binary adaptive range coding, codec/range_coder.h):
 //  boundary:     for each popped open half-edge (p, q): bit "a triangle (q, p, x) follows", then x as
-//                new vertex / rank among the loop neighbours next(q), prev(p), ... / escape + slot;
+//                new vertex / rank among the loop neighbours next(q), prev(p), ... / escape + slot,
+//                in contexts of the angles around the ear vertex (the one the first candidate would
+//                close a fan at: the angle it would open, and how much its triangles leave open);
 //                when the half-edge queue empties: bit "another component", then a seed triangle
 //                (per vertex: bit existing, then a slot index, else a new vertex).
 //  connectivity: for each popped open face (a, b, c): x as new / rank among the front vertices that
 //                share front edges with a, b or c (ordered by how many of them, then by distance to
-//                the predicted position) / escape + either the rank by distance to the predicted
+//                the predicted position; the context counts the front faces the first candidate
+//                would close) / escape + either the rank by distance to the predicted
 //                position among the live vertices (codec/nearest_grid.h finds it) or the slot; a bit
 //                for reversed orientation; after the
 //                tetrahedron, for each of its vertices left on no open face, a bit "retired". When the
