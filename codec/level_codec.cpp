@@ -895,10 +895,13 @@ class LevelCoder {
     double key;   // sort key: Delaunay sweep parameter, else dist
   };
 
-  // Front vertices around the gate face, best first; returns the count and the coding context.
-  // `side`: the orientation filter of the gate face (a, b, c).
-  int gatherCandidates(const FrontFace& g, const Orient3dFilter& side, const double p[3], uint32_t* ctx) {
-    Candidate* c = cand_;
+  // Front vertices around the gate face, with the coding context. `side`: the orientation filter of
+  // the gate face (a, b, c). The candidates are only gathered here, with their multiplicities; both
+  // orders rank by multiplicity first, so a group of equal multiplicity is filtered and keyed only
+  // when a rank, the context or a new vertex's list reaches it (evaluateGroups): usually only the
+  // first group is. The result is the same as keying every candidate.
+  void gatherCandidates(const FrontFace& g, const Orient3dFilter& side, const double p[3], uint32_t* ctx) {
+    RawCandidate* c = raw_;
     int n = 0;
     uint32_t across[3] = {kNone32, kNone32, kNone32};  // the apex of the front face across each gate edge (c, a), (a, b), (b, c)
     uint32_t seen[kMaxGather + 3] = {};  // c[i].s, for a vectorised membership test
@@ -911,7 +914,7 @@ class LevelCoder {
       }
       if (n < kMaxGather) {
         seen[n] = s;
-        c[n++] = {s, 1, 0.0, 0.0};
+        c[n++] = {s, 1};
       }
     };
     for (int j = 0; j < 3; ++j) {
@@ -939,83 +942,44 @@ class LevelCoder {
         v = w;
       }
     }
+    raw_n_ = n;
+    cand_n_ = 0;
+    gate_ = &g;
+    side_ = &side;
+    pred_ = p;
     // The apex lies on the far side of the gate face from the decoded tetrahedron (a, b, c, d),
     // whatever the mesh's orientation convention; behind a boundary face, on the side where the
     // apexes decoded so far mostly lay. Candidates on the other side are dropped (the escape still
     // reaches them). Only signs a floating-point filter proves count (near-flat cases drop nothing):
     // exact arithmetic would cost more than it saves, and the filter is reproducible everywhere.
-    const int wrong = g.d != kNoSlot ? side.sign(P(g.d))
-                                     : (apex_votes_ > 0 ? -1 : (apex_votes_ < 0 ? 1 : 0));
-    wrong_ = wrong;
+    wrong_ = g.d != kNoSlot ? side.sign(P(g.d)) : (apex_votes_ > 0 ? -1 : (apex_votes_ < 0 ? 1 : 0));
     // Delaunay order: the spheres through a, b and c, swept into the undecoded side, meet the
     // apex of a Delaunay tetrahedron first. key = the sweep parameter at which a candidate is met.
-    double cc0[3] = {0, 0, 0}, nn[3] = {0, 0, 0}, r2 = 0, key_scale = 0;
-    const bool delaunay = wrong != 0;
-    if (delaunay) {
-      const double *a = P(g.v[0]), *b = P(g.v[1]), *c3 = P(g.v[2]);
-      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c3[0] - a[0], c3[1] - a[1], c3[2] - a[2]};
-      const double N[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-      const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-      const double NN = N[0] * N[0] + N[1] * N[1] + N[2] * N[2];
-      const double w[3] = {uu * v[0] - vv * u[0], uu * v[1] - vv * u[1], uu * v[2] - vv * u[2]};
-      const double wx[3] = {w[1] * N[2] - w[2] * N[1], w[2] * N[0] - w[0] * N[2], w[0] * N[1] - w[1] * N[0]};
-      for (int i = 0; i < 3; ++i) {
-        cc0[i] = NN > 0 ? a[i] + wx[i] / (2 * NN) : a[i];
-        nn[i] = -wrong * N[i];
-        r2 += (cc0[i] - a[i]) * (cc0[i] - a[i]);
-      }
-      const double nl = std::sqrt(NN);
-      key_scale = r2 > 0 && nl > 0 ? 64.0 * nl / std::sqrt(r2) : 0.0;
-    }
-    int kept = 0;
-    for (int i = 0; i < n; ++i) {
-      const double* q = P(c[i].s);
-      if (wrong != 0 && side.sign(q) == wrong) continue;
-      c[kept] = c[i];
-      // Sort keys must be ordered values: overflowing coordinates (NaN or infinite distances) sort
-      // last, so that the comparison stays a strict weak order.
-      c[kept].dist = apexDistance(q, p);
-      c[kept].key = c[kept].dist;
-      if (delaunay) {
-        const double e[3] = {q[0] - cc0[0], q[1] - cc0[1], q[2] - cc0[2]};
-        const double h = nn[0] * e[0] + nn[1] * e[1] + nn[2] * e[2];
-        // In units of 1/64 of the face's circumradius, so that nearly cospherical candidates (every
-        // cell of a structured grid) tie and fall back to the distance order.
-        const double t = h > 0 ? (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - r2) / (2 * h) : 1e300;
-        c[kept].key = std::floor(t * key_scale);
-        if (!(c[kept].key < 1e18)) c[kept].key = 1e18;
-      }
-      ++kept;
-    }
-    n = kept;
+    delaunay_ = wrong_ != 0;
+    swept_ready_ = false;
     // Two orders compete: by distance to the predicted apex (right on structured grids) and by the
     // Delaunay sweep (right on Delaunay meshes). The one that has ranked the true apexes better so
     // far is used; both sides keep the same score. Both orders are total (slots differ), so a
     // candidate's place is the number of candidates before it: nothing is sorted unless the whole
     // list is needed (a new vertex's copy sources), and the list's prefix is the same either way.
-    cand_n_ = n;
-    cand_m_ = std::min(n, kMaxCandidates);
-    two_orders_ = delaunay && n > 1;
-    by_key_chosen_ = two_orders_ && order_score_ > 0;
+    by_key_chosen_ = delaunay_ && order_score_ > 0;
     // The context: the best multiplicity, how many share it (up to 3), how close the nearest of
     // those lies to the predicted apex, and across how many gate edges (up to 2) the front face's
     // apex is the first candidate (then the tetrahedron closes that face).
+    evaluateGroups(1);
     uint32_t k = 0;
     uint32_t near = 2;
     uint32_t adjacent = 0;
-    if (n > 0) {
-      uint32_t best_w = 0, top = 0;
-      double best_dist = 0;
-      for (int i = 0; i < n; ++i) {
-        if (c[i].w > best_w) {
-          best_w = c[i].w;
-          top = 0;
-          best_dist = c[i].dist;
-        }
-        if (c[i].w == best_w) {
-          ++top;
-          best_dist = std::min(best_dist, c[i].dist);
-        }
+    if (cand_n_ > 0) {
+      // The first group evaluated with a candidate left holds the best multiplicity (evaluateGroups
+      // stops after it).
+      const Candidate* cd = cand_;
+      const uint32_t best_w = cd[0].w;
+      uint32_t top = 0;
+      double best_dist = cd[0].dist;
+      for (int i = 0; i < cand_n_; ++i) {
+        ++top;
+        best_dist = std::min(best_dist, cd[i].dist);
       }
       k = 1 + (std::min<uint32_t>(best_w, 3) - 1) * 3 + std::min<uint32_t>(top, 3) - 1;
       const double *a = P(g.v[0]), *b = P(g.v[1]), *cc = P(g.v[2]);
@@ -1028,7 +992,63 @@ class LevelCoder {
       for (int j = 0; j < 3; ++j) adjacent += across[j] == first ? 1 : 0;
     }
     *ctx = (k * 3 + near) * 3 + std::min<uint32_t>(adjacent, 2);
-    return cand_m_;
+  }
+
+  // Moves whole groups of equal multiplicity, best first, from raw_ to cand_ (dropping those on the
+  // wrong side, keying the rest) until cand_ holds at least `want` candidates or raw_ is empty.
+  void evaluateGroups(int want) {
+    while (cand_n_ < want && raw_n_ > 0) {
+      uint32_t w = 0;
+      for (int i = 0; i < raw_n_; ++i) w = std::max(w, raw_[i].w);
+      for (int i = 0; i < raw_n_;) {
+        if (raw_[i].w != w) {
+          ++i;
+          continue;
+        }
+        const uint32_t s = raw_[i].s;
+        raw_[i] = raw_[--raw_n_];
+        const double* q = P(s);
+        if (wrong_ != 0 && side_->sign(q) == wrong_) continue;
+        Candidate& x = cand_[cand_n_++];
+        x.s = s;
+        x.w = w;
+        // Sort keys must be ordered values: overflowing coordinates (NaN or infinite distances) sort
+        // last, so that the comparison stays a strict weak order.
+        x.dist = apexDistance(q, pred_);
+        x.key = x.dist;
+        if (delaunay_) {
+          if (!swept_ready_) prepareSweep();
+          const double e[3] = {q[0] - cc0_[0], q[1] - cc0_[1], q[2] - cc0_[2]};
+          const double h = nn_[0] * e[0] + nn_[1] * e[1] + nn_[2] * e[2];
+          // In units of 1/64 of the face's circumradius, so that nearly cospherical candidates (every
+          // cell of a structured grid) tie and fall back to the distance order.
+          const double t = h > 0 ? (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - r2_) / (2 * h) : 1e300;
+          x.key = std::floor(t * key_scale_);
+          if (!(x.key < 1e18)) x.key = 1e18;
+        }
+      }
+    }
+  }
+  void evaluateAllGroups() { evaluateGroups(kMaxGather + 1); }
+  // The circumcentre and radius of the gate face and its normal into the undecoded side.
+  void prepareSweep() {
+    const FrontFace& g = *gate_;
+    const double *a = P(g.v[0]), *b = P(g.v[1]), *c3 = P(g.v[2]);
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c3[0] - a[0], c3[1] - a[1], c3[2] - a[2]};
+    const double N[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    const double NN = N[0] * N[0] + N[1] * N[1] + N[2] * N[2];
+    const double w[3] = {uu * v[0] - vv * u[0], uu * v[1] - vv * u[1], uu * v[2] - vv * u[2]};
+    const double wx[3] = {w[1] * N[2] - w[2] * N[1], w[2] * N[0] - w[0] * N[2], w[0] * N[1] - w[1] * N[0]};
+    r2_ = 0;
+    for (int i = 0; i < 3; ++i) {
+      cc0_[i] = NN > 0 ? a[i] + wx[i] / (2 * NN) : a[i];
+      nn_[i] = -wrong_ * N[i];
+      r2_ += (cc0_[i] - a[i]) * (cc0_[i] - a[i]);
+    }
+    const double nl = std::sqrt(NN);
+    key_scale_ = r2_ > 0 && nl > 0 ? 64.0 * nl / std::sqrt(r2_) : 0.0;
+    swept_ready_ = true;
   }
 
   static bool beforeByDistance(const Candidate& x, const Candidate& y) {
@@ -1060,22 +1080,31 @@ class LevelCoder {
     }
     return place;
   }
-  int candidateIndex(uint32_t slot) const {
-    for (int i = 0; i < cand_n_; ++i)
-      if (cand_[i].s == slot) return i;
-    return -1;
+  // Index of `slot` in cand_, evaluating groups until it is there; -1 if it is no candidate (or was
+  // dropped).
+  int candidateIndex(uint32_t slot) {
+    for (;;) {
+      for (int i = 0; i < cand_n_; ++i)
+        if (cand_[i].s == slot) return i;
+      bool pending = false;
+      for (int i = 0; i < raw_n_; ++i) pending |= raw_[i].s == slot;
+      if (!pending) return -1;
+      evaluateGroups(cand_n_ + 1);
+    }
   }
   // The coded symbol of `slot` (kNoSlot: a new vertex): new, 1 + its place in the chosen order among
   // the first kMaxCandidates, or escape.
-  uint32_t candidateSymbolOf(uint32_t slot) const {
+  uint32_t candidateSymbolOf(uint32_t slot) {
     if (slot == kNoSlot) return kSymNew;
     const int i = candidateIndex(slot);
     if (i < 0) return kSymEscape;
     const int place = placeOf(i, by_key_chosen_);
-    return place < cand_m_ ? static_cast<uint32_t>(place + 1) : kSymEscape;
+    return place < kMaxCandidates ? static_cast<uint32_t>(place + 1) : kSymEscape;
   }
-  // The slot at `place` of the chosen order (place < cand_m_).
-  uint32_t candidateAt(int place) const {
+  // The slot at `place` of the chosen order, kNoSlot if there are not that many candidates.
+  uint32_t candidateAt(int place) {
+    evaluateGroups(place + 1);
+    if (place >= cand_n_) return kNoSlot;
     return by_key_chosen_ ? candidateAt(place, ByKey()) : candidateAt(place, ByDistance());
   }
   template <class Before>
@@ -1091,28 +1120,29 @@ class LevelCoder {
     std::nth_element(tmp, tmp + place, tmp + cand_n_, before);
     return tmp[place].s;
   }
-  // The first cand_m_ candidates in the chosen order.
-  void orderedCandidates(uint32_t* out) const {
-    if (by_key_chosen_) {
-      orderedCandidates(out, ByKey());
-    } else {
-      orderedCandidates(out, ByDistance());
-    }
+  // The first kMaxCandidates candidates in the chosen order; returns their count.
+  int orderedCandidates(uint32_t* out) {
+    evaluateAllGroups();
+    if (by_key_chosen_) return orderedCandidates(out, ByKey());
+    return orderedCandidates(out, ByDistance());
   }
   template <class Before>
-  void orderedCandidates(uint32_t* out, Before before) const {
+  int orderedCandidates(uint32_t* out, Before before) const {
     Candidate tmp[kMaxGather];
     std::copy(cand_, cand_ + cand_n_, tmp);
     std::sort(tmp, tmp + cand_n_, before);
-    for (int i = 0; i < cand_m_; ++i) out[i] = tmp[i].s;
+    const int m = std::min(cand_n_, kMaxCandidates);
+    for (int i = 0; i < m; ++i) out[i] = tmp[i].s;
+    return m;
   }
   // After a tetrahedron's apex x is known: the order that placed it earlier (among the first
-  // kMaxCandidates; later or absent counts as kMaxCandidates) scores a point.
+  // kMaxCandidates; later or absent counts as kMaxCandidates) scores a point. Without the Delaunay
+  // order (no side to sweep into) both orders are the same.
   void scoreOrders(uint32_t x) {
-    if (!two_orders_) return;
+    if (!delaunay_) return;
     const int i = candidateIndex(x);
     if (i < 0) return;
-    const int rk = std::min(placeOf(i, true), cand_m_), rd = std::min(placeOf(i, false), cand_m_);
+    const int rk = std::min(placeOf(i, true), kMaxCandidates), rd = std::min(placeOf(i, false), kMaxCandidates);
     if (rk < rd && order_score_ < kOrderScoreLimit) ++order_score_;
     if (rd < rk && order_score_ > -kOrderScoreLimit) --order_score_;
   }
@@ -1392,7 +1422,7 @@ class LevelCoder {
       predictApex(g, p);
       uint32_t ctx = 0;
       const Orient3dFilter side(P(g.v[0]), P(g.v[1]), P(g.v[2]));
-      const int nc = gatherCandidates(g, side, p, &ctx);
+      gatherCandidates(g, side, p, &ctx);
       uint32_t sym = 0, x_src = 0, flip = 0;
       if constexpr (kEncode) {
         const Tet& t = enc_->mesh->tets[g.tet];
@@ -1424,16 +1454,15 @@ class LevelCoder {
         fp.s[2] = g.v[2];
         fp.s[3] = g.d;
         uint32_t cands[kMaxCandidates];
-        orderedCandidates(cands);
         near_ = cands;
-        n_near_ = nc;
+        n_near_ = orderedCandidates(cands);
         GTN_RETURN_IF_ERROR(introduceVertex(x_src, p, fp, &x));
         n_near_ = 0;
       } else if (sym == kSymEscape) {
         GTN_RETURN_IF_ERROR(codeEscape(g, side, p, kEncode ? enc_->src_slot[x_src] : 0, &x));
       } else {
-        if (sym > static_cast<uint32_t>(nc)) return bad("candidate rank out of range");
         x = candidateAt(static_cast<int>(sym) - 1);
+        if (x == kNoSlot) return bad("candidate rank out of range");
       }
       apex_votes_ += side.sign(P(x));
       scoreOrders(x);
@@ -1512,9 +1541,19 @@ class LevelCoder {
   int64_t apex_votes_ = 0;  // sum of orient3dCertain(a, b, c, apex) over the tetrahedra decoded so far
   // Apex candidates in both orders (section 10.4 of the spec) and which order has ranked better.
   static constexpr int kOrderScoreLimit = 32;
-  Candidate cand_[kMaxGather];  // the gate's candidates, unordered
-  int cand_n_ = 0, cand_m_ = 0;
-  bool two_orders_ = false, by_key_chosen_ = false;
+  struct RawCandidate {
+    uint32_t s;
+    uint32_t w;  // how many fan walks reached it
+  };
+  RawCandidate raw_[kMaxGather];  // the gate's candidates not evaluated yet, unordered
+  int raw_n_ = 0;
+  Candidate cand_[kMaxGather];  // the evaluated ones (whole groups, best multiplicities), unordered
+  int cand_n_ = 0;
+  const FrontFace* gate_ = nullptr;  // the gate face, its side filter and predicted apex, while
+  const Orient3dFilter* side_ = nullptr;  // its candidates are evaluated
+  const double* pred_ = nullptr;
+  bool delaunay_ = false, swept_ready_ = false, by_key_chosen_ = false;
+  double cc0_[3] = {0, 0, 0}, nn_[3] = {0, 0, 0}, r2_ = 0, key_scale_ = 0;  // prepareSweep
   int order_score_ = 0;
   uint64_t next_id_ = 0, tets_done_ = 0, btris_done_ = 0, live_ = 0, peak_live_ = 0;
   double last_pos_[3] = {0, 0, 0};
