@@ -229,7 +229,10 @@ void finishTetGeom(TetGeom& g) {
 }
 
 void shearTetGeom(TetGeom& g, const ShearFrame& frame) {
-  for (int i = 0; i < 4; ++i) shearPoint(frame, g.p[i], g.q[i]);
+  for (int i = 0; i < 4; ++i) {
+    const double p[3] = {g.p[i][0], g.p[i][1], g.p[i][2]};
+    shearPoint(frame, p, g.p[i]);
+  }
   g.sheared = true;
 }
 
@@ -237,7 +240,7 @@ void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing ou
   double S[4][3];
   if (g.sheared) {
     for (int i = 0; i < 4; ++i)
-      for (int c = 0; c < 3; ++c) S[i][c] = g.q[i][c] - r.origin[c];
+      for (int c = 0; c < 3; ++c) S[i][c] = g.p[i][c] - r.origin[c];
   } else {
     for (int i = 0; i < 4; ++i) shear(r, g.p[i], S[i]);
   }

@@ -130,14 +130,14 @@ Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, c
 
 // One tetrahedron's geometry and scalars, copied out of whatever holds the mesh. finishTetGeom()
 // must be called once the corners are set (it fixes each face's canonical vertex order, so that it
-// is not recomputed per ray); shearTetGeom() optionally caches the corners' sheared positions for the
-// one frame all rays share (orthographic cameras), and then `frame` must be the rays' frame.
+// is not recomputed per ray); shearTetGeom() then optionally replaces the corners by their sheared
+// positions in the one frame all rays share (orthographic cameras), and then `frame` must be the
+// rays' frame. Held tetrahedra are most of the streaming renderer's memory: one copy of the corners.
 struct TetGeom {
-  double p[4][3];
+  double p[4][3];       // corners; after shearTetGeom, their shearPoint positions
   double s[4];
   uint8_t order[4][3];  // face k: local corners of kTetFace[k] in canonical (lexicographic) order
   bool sheared = false;
-  double q[4][3];       // shearPoint of each corner, valid when `sheared`
 };
 void finishTetGeom(TetGeom& g);
 void shearTetGeom(TetGeom& g, const ShearFrame& frame);

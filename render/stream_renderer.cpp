@@ -290,6 +290,7 @@ Status StreamRenderer::endBoundary() {
     const RaySegment& rs = st.rays.segments[i];
     SegmentState& seg = st.segs[i];
     seg.tf = rs.t_near, seg.sf = rs.s_near, seg.tb = rs.t_far, seg.sb = rs.s_far;
+    seg.pixel = rs.pixel;
     if (!(seg.tf < seg.tb)) {
       seg.done = true;
       continue;
@@ -304,6 +305,9 @@ Status StreamRenderer::endBoundary() {
     }
   }
   stats_.segments = st.segs.size();
+  // The segments' states hold what is left of them; the pixels keep their ranges (pixel_start).
+  st.rays.segments.clear();
+  st.rays.segments.shrink_to_fit();
   st.boundary.clear();
   st.boundary.shrink_to_fit();
   st.phase = State::Phase::kTets;
@@ -353,11 +357,25 @@ Status StreamRenderer::flushBatch() {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ArrivedTet& a = st.flushing[i];
       finishTetGeom(a.g);
-      if (st.shared_frame) shearTetGeom(a.g, st.frame);
       const double* corners[4] = {a.g.p[0], a.g.p[1], a.g.p[2], a.g.p[3]};
       int box[4];
       a.rays = 0;
-      if (!pixelFootprint(cam, corners, 4, box)) continue;
+      const bool seen = pixelFootprint(cam, corners, 4, box);
+      // Orthographic: the corners' screen positions and depths, before they are replaced by their
+      // sheared positions (every held tetrahedron is sheared: cursors may enter one no ray counts).
+      double sx[4], sy[4], dmin = 1e300, dmax = -1e300;
+      if (st.shared_frame) {
+        if (seen) {
+          for (int k = 0; k < 4; ++k) {
+            cam.project(a.g.p[k], &sx[k], &sy[k]);
+            const double d = (a.g.p[k][0] * st.ortho_dir[0] + a.g.p[k][1] * st.ortho_dir[1] +
+                              a.g.p[k][2] * st.ortho_dir[2]) - st.ortho_t0;
+            dmin = std::min(dmin, d), dmax = std::max(dmax, d);
+          }
+        }
+        shearTetGeom(a.g, st.frame);
+      }
+      if (!seen) continue;
       // The rays of pixel p whose uncovered part overlaps the tetrahedron, by the exact crossings.
       auto exactCount = [&](size_t p, uint32_t s0, uint32_t s1) {
         const PreparedRay ray = st.pixelRay(p, cam);
@@ -394,13 +412,6 @@ Status StreamRenderer::flushBatch() {
       // outside are not; only those near its outline need the exact crossings. A hit pixel with one
       // segment needs the tetrahedron unless the segment is done: its cursors cannot have passed a
       // tetrahedron that has not arrived (the depth test below only guards against invalid meshes).
-      double sx[4], sy[4], dmin = 1e300, dmax = -1e300;
-      for (int k = 0; k < 4; ++k) {
-        cam.project(a.g.p[k], &sx[k], &sy[k]);
-        const double d = (a.g.p[k][0] * st.ortho_dir[0] + a.g.p[k][1] * st.ortho_dir[1] +
-                          a.g.p[k][2] * st.ortho_dir[2]) - st.ortho_t0;
-        dmin = std::min(dmin, d), dmax = std::max(dmax, d);
-      }
       dmin -= st.depth_slack, dmax += st.depth_slack;
       const double ymin = std::min({sy[0], sy[1], sy[2], sy[3]}), ymax = std::max({sy[0], sy[1], sy[2], sy[3]});
       constexpr double kSure = 1e-3;  // pixels; rounding differences are about 1e-10
@@ -510,7 +521,7 @@ Status StreamRenderer::flushBatch() {
     for (size_t g = r.begin(); g < r.end(); ++g) {
       const uint32_t si = triggers[groups[g]].cursor / 2;
       SegmentState& seg = st.segs[si];
-      const uint32_t pixel = st.rays.segments[si].pixel;
+      const uint32_t pixel = seg.pixel;
       const PreparedRay ray = st.pixelRay(pixel, setup_.camera);
       for (size_t i = groups[g]; i < groups[g + 1]; ++i) {
         if (seg.done) break;

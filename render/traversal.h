@@ -21,6 +21,7 @@ struct SegmentState {
   Rgba front, back;
   bool front_active = true, back_active = true;  // may still move
   bool done = false;                              // the cursors met
+  uint32_t pixel = 0;                             // whose ray (the streaming renderer's)
 };
 
 enum class Link { kLinked, kOpen, kBoundary, kReleased };
