@@ -556,17 +556,20 @@ void sceneBox(const RenderOptions& options, const LevelHeader& header, const Bou
   }
 }
 
+void toRgb8(const Rgba& c, uint8_t out[3]) {
+  auto to8 = [](double v) {
+    const double x = std::clamp(v, 0.0, 1.0) * 255.0;
+    return static_cast<uint8_t>(std::lround(x));
+  };
+  out[0] = to8(c.r);
+  out[1] = to8(c.g);
+  out[2] = to8(c.b);
+}
+
 Image toImage(int width, int height, const std::vector<Rgba>& pixels) {
   Image image(width, height);
-  auto to8 = [](double v) {
-    const double c = std::clamp(v, 0.0, 1.0) * 255.0;
-    return static_cast<uint8_t>(std::lround(c));
-  };
-  for (size_t i = 0; i < pixels.size() && i < static_cast<size_t>(width) * height; ++i) {
-    image.rgb[3 * i] = to8(pixels[i].r);
-    image.rgb[3 * i + 1] = to8(pixels[i].g);
-    image.rgb[3 * i + 2] = to8(pixels[i].b);
-  }
+  for (size_t i = 0; i < pixels.size() && i < static_cast<size_t>(width) * height; ++i)
+    toRgb8(pixels[i], &image.rgb[3 * i]);
   return image;
 }
 

@@ -212,6 +212,7 @@ void sceneBox(const RenderOptions& options, const LevelHeader& header, const Bou
               double bbox_min[3], double bbox_max[3]);
 
 // Converts per-pixel colours (premultiplied, over black) to 8-bit RGB.
+void toRgb8(const Rgba& c, uint8_t out[3]);
 Image toImage(int width, int height, const std::vector<Rgba>& pixels);
 
 }  // namespace gtn

@@ -572,14 +572,13 @@ Status StreamRenderer::endLevel() {
   st.batch.clear();
   GTN_RETURN_IF_ERROR(flushBatch());
   const int w = setup_.camera.width(), h = setup_.camera.height();
-  std::vector<Rgba> pixels(static_cast<size_t>(w) * h);
-  for (size_t p = 0; p < pixels.size(); ++p) {
+  image_ = Image(w, h);
+  for (size_t p = 0; p < static_cast<size_t>(w) * h; ++p) {
     Rgba acc;
     for (uint32_t s = st.rays.pixel_start[p]; s < st.rays.pixel_start[p + 1]; ++s)
       acc = over(acc, over(st.segs[s].front, st.segs[s].back));
-    pixels[p] = acc;
+    toRgb8(acc, &image_.rgb[3 * p]);
   }
-  image_ = toImage(w, h, pixels);
   stats_.lost_cursors = st.lost.load();
   state_ = std::make_unique<State>();
   state_->phase = State::Phase::kDone;
