@@ -39,6 +39,15 @@ const LevelHeader& RenderInput::levelHeader(size_t i) const {
 
 bool RenderInput::hasMergeTree(size_t i) const { return reader_ && reader_->level(i).has_merge_tree; }
 
+StatusOr<uint64_t> RenderInput::mergeTreeMerges(size_t i) {
+  if (!hasMergeTree(i)) return uint64_t{0};
+  GTN_ASSIGN_OR_RETURN(auto payload, reader_->mergeTreePayload(i));
+  if (!payload) return uint64_t{0};
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, levelHeader(i).points,
+                                                       path_ + ": level " + std::to_string(i)));
+  return tree.merges;
+}
+
 StatusOr<ResolvedLevel> RenderInput::resolve(const LevelChoice& choice) const {
   ResolvedLevel r;
   auto fill = [&](size_t level) {

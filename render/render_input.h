@@ -41,6 +41,8 @@ class RenderInput {
   size_t levels() const;
   const LevelHeader& levelHeader(size_t i) const;
   bool hasMergeTree(size_t i) const;
+  // The merges level i's merge tree holds (what can be applied on the fly on top of it); 0 without.
+  StatusOr<uint64_t> mergeTreeMerges(size_t i);
   uint64_t levelZeroPoints() const { return levelHeader(0).points; }
 
   // Fails with kUsage for a level that does not exist, a ratio outside [0, 1], or simplification of

@@ -46,12 +46,10 @@ std::string cacheKey(const std::string& path, const RenderOptions& o, bool gener
          (o.sampling == Sampling::kFace ? "face" : "volume") + "|" + (generic ? "generic" : "integrated");
 }
 
-// Time of one end-to-end render of stored level `level` (decode + render; the image is kept in
-// `image` when given).
-StatusOr<double> timeLevel(RenderInput& input, size_t level, const RenderOptions& options, bool generic,
-                           Image* image_out = nullptr) {
-  LevelChoice choice;
-  choice.level = static_cast<int>(level);
+// Time of one end-to-end render of `choice` (decode + render; the image is kept in `image` when
+// given, and the tetrahedra rendered, after the merges on the fly, in `tets_out`).
+StatusOr<double> timeChoice(RenderInput& input, const LevelChoice& choice, const RenderOptions& options, bool generic,
+                            Image* image_out = nullptr, uint64_t* tets_out = nullptr) {
   GTN_ASSIGN_OR_RETURN(ResolvedLevel resolved, input.resolve(choice));
   const auto t0 = std::chrono::steady_clock::now();
   RenderOptions fixed = options;  // as the real run will: its view fixing is part of the time
@@ -61,12 +59,20 @@ StatusOr<double> timeLevel(RenderInput& input, size_t level, const RenderOptions
     GTN_RETURN_IF_ERROR(input.stream(resolved, builder));
     GTN_ASSIGN_OR_RETURN(Image image, renderGeneric(builder.header(), builder.mesh(), builder.boundary(), fixed));
     if (image_out) *image_out = std::move(image);
+    if (tets_out) *tets_out = builder.mesh().numTets();
   } else {
     StreamRenderer renderer(fixed);
     GTN_RETURN_IF_ERROR(input.stream(resolved, renderer));
     if (image_out) *image_out = renderer.image();
+    if (tets_out) *tets_out = renderer.stats().tets;
   }
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+StatusOr<double> timeLevel(RenderInput& input, size_t level, const RenderOptions& options, bool generic,
+                           Image* image_out = nullptr) {
+  LevelChoice choice;
+  choice.level = static_cast<int>(level);
+  return timeChoice(input, choice, options, generic, image_out);
 }
 // Time of decoding stored level `level` alone, into a sink that keeps nothing: the part of a run that
 // simplifying on the fly cannot save.
@@ -141,6 +147,18 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
   // error, and it adds rather than scales (blunt fin at 256x256: about 20 ms on runs of 30-60 ms).
   // And how far runs have scattered around the predictions (a moving mean of |actual - predicted|):
   // the plan keeps that much more room.
+  // The floor: the coarsest level with every merge of its tree applied on the fly (merges, the
+  // tetrahedra then rendered, and the time of the run), the cheapest plan there is.
+  double floor_merges = 0, floor_tets = 0, floor_ms = 0;
+  if (!points.empty() && entry->contains("floor") && (*entry)["floor"].is_object()) {
+    const nlohmann::json& f = (*entry)["floor"];
+    if (f.contains("merges") && f["merges"].is_number() && f.contains("tets") && f["tets"].is_number() &&
+        f.contains("ms") && f["ms"].is_number()) {
+      floor_merges = f["merges"].get<double>();
+      floor_tets = f["tets"].get<double>();
+      floor_ms = f["ms"].get<double>();
+    }
+  }
   double offset = 0, spread = 0;
   if (!points.empty() && entry->contains("offset_ms") && (*entry)["offset_ms"].is_number()) {
     const double v = (*entry)["offset_ms"].get<double>();
@@ -197,7 +215,19 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       dms.push_back(std::min(d, t));
       names += (names.empty() ? "" : ", ") + std::to_string(level);
     }
-    cache[key] = {{"tets", tets}, {"ms", ms}, {"decode_ms", dms}, {"offset_ms", offset}};
+    nlohmann::json floor = nullptr;
+    GTN_ASSIGN_OR_RETURN(const uint64_t tree_merges, input.mergeTreeMerges(coarsest));
+    if (tree_merges > 0) {
+      LevelChoice all;
+      all.merges = static_cast<int64_t>(input.levelHeader(coarsest).merges + tree_merges);
+      uint64_t rendered = 0;
+      GTN_ASSIGN_OR_RETURN(floor_ms, timeChoice(input, all, options, generic, nullptr, &rendered));
+      floor_merges = static_cast<double>(tree_merges);
+      floor_tets = static_cast<double>(rendered);
+      floor = {{"merges", floor_merges}, {"tets", floor_tets}, {"ms", floor_ms}};
+      names += " and " + std::to_string(coarsest) + " with all " + std::to_string(tree_merges) + " merges of its tree";
+    }
+    cache[key] = {{"tets", tets}, {"ms", ms}, {"decode_ms", dms}, {"offset_ms", offset}, {"floor", floor}};
     std::error_code ec;
     std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
     const std::string text = cache.dump(1);
@@ -234,17 +264,48 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
   // 57-82 ms), and the budget allows 10% more.
   constexpr double kMargin = 0.8;
   const double aim = std::min(kMargin * available, available - 1.5 * spread);
+  // Beyond the coarsest level c: its tree's merges on the fly, the time interpolated (in the
+  // logarithm of the tetrahedra left) between the stored level's and the floor's.
+  const size_t coarsest = input.levels() - 1;
+  const double n_c = static_cast<double>(input.levelHeader(coarsest).tets);
+  const bool has_floor = floor_merges >= 1 && floor_tets >= 0 && floor_tets < n_c && floor_ms > 0 &&
+                         floor_ms <= kMaxOffsetMs && input.hasMergeTree(coarsest);
+  auto predictFloor = [&](double fraction) {
+    const std::vector<std::pair<double, double>> ends = {{floor_tets, floor_ms}, {n_c, whole(n_c)}};
+    return std::max(0.0, offset + interpolate(ends, n_c + fraction * (floor_tets - n_c), true));
+  };
   LevelChoice choice;
-  choice.level = static_cast<int>(input.levels() - 1);
-  size_t chosen_level = input.levels() - 1;
+  choice.level = static_cast<int>(coarsest);
+  size_t chosen_level = coarsest;
   uint64_t extra = 0;
-  double predicted = predict(static_cast<double>(input.levelHeader(chosen_level).tets));
+  double predicted = predict(n_c);
+  if (has_floor) {  // until a plan fits: the cheapest there is
+    choice.level = -1;
+    extra = static_cast<uint64_t>(floor_merges);
+    choice.merges = static_cast<int64_t>(input.levelHeader(coarsest).merges + extra);
+    predicted = predictFloor(1.0);
+  }
   for (size_t i = 0; i < input.levels(); ++i) {
     const double stored = predict(static_cast<double>(input.levelHeader(i).tets));
     if (stored <= aim) {
       choice.level = static_cast<int>(i);
       chosen_level = i;
       predicted = stored;
+      break;
+    }
+    if (i + 1 >= input.levels() && has_floor && predictFloor(1.0) <= aim) {
+      // The fewest merges of the coarsest level's tree that fit, by bisection.
+      double lo = 0, hi = 1;
+      for (int it = 0; it < 40; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (predictFloor(mid) <= aim ? hi : lo) = mid;
+      }
+      extra = std::min<uint64_t>(static_cast<uint64_t>(floor_merges),
+                                 std::max<uint64_t>(1, static_cast<uint64_t>(std::ceil(hi * floor_merges))));
+      choice.level = -1;
+      choice.merges = static_cast<int64_t>(input.levelHeader(i).merges + extra);
+      chosen_level = i;
+      predicted = predictFloor(static_cast<double>(extra) / floor_merges);
       break;
     }
     if (i + 1 >= input.levels() || !input.hasMergeTree(i)) continue;
@@ -274,6 +335,12 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
                   points[i].second, decode_points[i].second);
     model += p;
   }
+  if (has_floor) {
+    char p[128];
+    std::snprintf(p, sizeof p, ", level %zu with all %.0f merges of its tree %.0f tets %.1f ms", coarsest, floor_merges,
+                  floor_tets, floor_ms);
+    model += p;
+  }
   char buf[1024];
   std::snprintf(buf, sizeof buf,
                 "%s; measured %s, learnt offset %+.1f ms, spread %.1f ms; level %zu (%llu tetrahedra, %llu merges) + %llu merges on the fly "
@@ -282,7 +349,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
                 static_cast<unsigned long long>(input.levelHeader(chosen_level).tets),
                 static_cast<unsigned long long>(input.levelHeader(chosen_level).merges),
                 static_cast<unsigned long long>(extra), predicted, elapsed_ms, budget_ms,
-                predicted > available ? " (the coarsest level; the budget cannot be met)" : "");
+                predicted > available ? " (the cheapest plan; the budget cannot be met)" : "");
   *explanation = buf;
   if (predicted_ms) *predicted_ms = predicted;
   return choice;

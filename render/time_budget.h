@@ -2,15 +2,17 @@
 // a time budget, from a throughput model measured once per machine, file and render settings.
 //
 // Model: the time of a stored level (view fixing, decode and render) is piecewise linear in the
-// tetrahedra decoded, between measured levels; so is the time of decoding it alone. Simplifying on
-// the fly still pays for decoding the whole level (the paper's section 6.1) but renders fewer
-// tetrahedra: level i with m more merges is predicted as its decoding (plus 5% for the filter) and
-// the rest of its time scaled by the tetrahedra left, interpolated between level i's and level i+1's
-// counts. The choice is the finest plan that fits the budget less what the run already spent: a
-// stored level as is, else level i with the fewest merges that bring it under 90% of that (an
-// interpolated plan is less certain than a measured level), else the next level. Calibration times
-// the coarsest level, the finest levels with at most a sixteenth and a quarter of level 0's
-// tetrahedra, and level 0 (after one warm-up run), whole and decoding alone, and is cached in
+// logarithm of the tetrahedra decoded, between measured levels; the time of decoding it alone is
+// piecewise linear in them. Simplifying on the fly still pays for decoding the whole level (the
+// paper's section 6.1) but renders fewer tetrahedra: level i with m more merges is predicted as its
+// decoding (plus 5% for the filter) and the rest of a run of the tetrahedra left, interpolated
+// between level i's and level i+1's counts. The choice is the finest plan that fits 80% of the
+// budget less what the run already spent (and less 1.5 times the learnt spread): a stored level as
+// is, else level i with the fewest merges that fit, else the next level; below the coarsest
+// level, its own tree's merges on the fly, down to the floor (all of them), which is also what a
+// budget nothing meets gets. Calibration times the coarsest level, the finest levels with at most a
+// sixteenth and a quarter of level 0's tetrahedra, and level 0 (after one warm-up run), whole and
+// decoding alone, and the floor, and is cached in
 // $XDG_CACHE_HOME/gatun/render-calibration.json (default ~/.cache/gatun/...) keyed by the file's path,
 // size and modification time and the settings that change the cost (size, sampling, pipeline).
 #pragma once

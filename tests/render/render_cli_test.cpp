@@ -317,6 +317,42 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   EXPECT_TRUE(merged_plan);
   EXPECT_EQ(previous, 0);  // the largest budget: level 0 as is
   EXPECT_GE(levels_seen.size(), 3u);
+
+  // Below the coarsest level's time, its own tree's merges apply on the fly, down to the floor (all
+  // of them) that the calibration timed; a budget even the floor misses gets the floor.
+  uint64_t floor_merges = 0;
+  for (const auto& [key, entry] : cache.items()) {
+    if (key.rfind("range|", 0) == 0) continue;
+    ASSERT_TRUE(entry.contains("floor") && entry["floor"].is_object()) << entry.dump();
+    floor_merges = entry["floor"]["merges"].get<uint64_t>();
+    EXPECT_LT(entry["floor"]["tets"].get<double>(), n3);
+    EXPECT_GT(entry["floor"]["ms"].get<double>(), 0.0);
+  }
+  ASSERT_GT(floor_merges, 0u);
+  const int64_t merges3 = levels[3]["merges"].get<int64_t>();
+  auto floorPlan = [&](double budget) {
+    nlohmann::json with_floor = synthetic;
+    for (auto& [key, entry] : with_floor.items())
+      if (key.rfind("range|", 0) != 0) entry["floor"] = {{"merges", floor_merges}, {"tets", n3 / 10}, {"ms", 30.0}};
+    {
+      std::ofstream out(dir + "/cache/gatun/render-calibration.json", std::ios::trunc);
+      out << with_floor.dump();
+    }
+    const test::RunResult b = test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir +
+                                             "/b.png --size 64x64 --json --budget-ms " + std::to_string(budget));
+    EXPECT_EQ(b.exit_code, 0) << b.err;
+    return nlohmann::json::parse(b.out);
+  };
+  const nlohmann::json between = floorPlan(80);  // aims at 64 ms: between the floor (30) and level 3 (100)
+  EXPECT_EQ(between["level"], 3) << between.dump();
+  EXPECT_GT(between["extra_merges"].get<int64_t>(), 0);
+  EXPECT_LT(between["extra_merges"].get<uint64_t>(), floor_merges);
+  EXPECT_EQ(between["stored_merges"].get<int64_t>(), merges3);
+  const nlohmann::json cheapest = floorPlan(1);
+  EXPECT_EQ(cheapest["level"], 3);
+  EXPECT_EQ(cheapest["extra_merges"].get<uint64_t>(), floor_merges);
+  EXPECT_NE(cheapest["budget_choice"].get<std::string>().find("cannot be met"), std::string::npos);
+  EXPECT_EQ(floorPlan(150)["extra_merges"], 0);  // level 3 as is fits
 }
 
 }  // namespace
