@@ -971,16 +971,10 @@ class LevelCoder {
     uint32_t near = 2;
     uint32_t adjacent = 0;
     if (cand_n_ > 0) {
-      // The first group evaluated with a candidate left holds the best multiplicity (evaluateGroups
-      // stops after it).
-      const Candidate* cd = cand_;
-      const uint32_t best_w = cd[0].w;
-      uint32_t top = 0;
-      double best_dist = cd[0].dist;
-      for (int i = 0; i < cand_n_; ++i) {
-        ++top;
-        best_dist = std::min(best_dist, cd[i].dist);
-      }
+      // cand_ holds one group: the best multiplicity's (evaluateGroups stops after it).
+      const uint32_t best_w = cand_[0].w, top = static_cast<uint32_t>(cand_n_);
+      double best_dist = cand_[0].dist;
+      for (int i = 1; i < cand_n_; ++i) best_dist = std::min(best_dist, cand_[i].dist);
       k = 1 + (std::min<uint32_t>(best_w, 3) - 1) * 3 + std::min<uint32_t>(top, 3) - 1;
       const double *a = P(g.v[0]), *b = P(g.v[1]), *cc = P(g.v[2]);
       double e2 = 0;
