@@ -1280,16 +1280,23 @@ class LevelCoder {
     }
   }
 
+  // The dot products of u = a - o and v = b - o (sums over the axes in order): u.u, v.v, u.v.
+  struct CornerDots {
+    double uu, vv, uv;
+  };
+  static CornerDots cornerDots(const double* o, const double* a, const double* b) {
+    const double u[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]}, v[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
+    return {u[0] * u[0] + u[1] * u[1] + u[2] * u[2], v[0] * v[0] + v[1] * v[1] + v[2] * v[2],
+            u[0] * v[0] + u[1] * v[1] + u[2] * v[2]};
+  }
   // The angle at o of the triangle (o, a, b) in radians, from the polynomial arccosine of
   // Abramowitz and Stegun 4.4.45 (error below 1e-4): basic operations only, so that every platform
   // gets the same bits. 0 for a degenerate or non-finite corner (section 10.3).
   static double cornerAngle(const double* o, const double* a, const double* b) {
-    const double u[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]}, v[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
-    const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    const double uv = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-    const double n = std::sqrt(uu * vv);
+    const CornerDots c = cornerDots(o, a, b);
+    const double n = std::sqrt(c.uu * c.vv);
     if (!(n > 0 && n <= kMaxKey)) return 0.0;
-    double x = uv / n;
+    double x = c.uv / n;
     const bool obtuse = x < 0;
     if (obtuse) x = -x;
     if (x > 1) x = 1;
@@ -1298,12 +1305,10 @@ class LevelCoder {
   }
   // The angle at o between a and b: 0 below 60 degrees, 1 below 90, 2 otherwise, 3 degenerate.
   static uint32_t openingClass(const double* o, const double* a, const double* b) {
-    const double u[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]}, v[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
-    const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    const double uv = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-    if (!(uu > 0 && vv > 0)) return 3;
-    if (!(uv > 0)) return 2;
-    return 4 * uv * uv > uu * vv ? 0 : 1;
+    const CornerDots c = cornerDots(o, a, b);
+    if (!(c.uu > 0 && c.vv > 0)) return 3;
+    if (!(c.uv > 0)) return 2;
+    return 4 * c.uv * c.uv > c.uu * c.vv ? 0 : 1;
   }
   // The angle left open around a vertex whose corner angles sum to `sum`: 0 below 70 degrees
   // (1.2217304763960306 radians), 1 below 130 (2.2689280275926285), 2 otherwise.
