@@ -279,54 +279,47 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
   size_t chosen_level = coarsest;
   uint64_t extra = 0;
   double predicted = predict(n_c);
-  if (has_floor) {  // until a plan fits: the cheapest there is
+  // Level i with e of `span` merges on the fly, predicted by at(e / span).
+  auto takeMerged = [&](size_t i, uint64_t span, uint64_t e, auto&& at) {
+    extra = e;
     choice.level = -1;
-    extra = static_cast<uint64_t>(floor_merges);
-    choice.merges = static_cast<int64_t>(input.levelHeader(coarsest).merges + extra);
-    predicted = predictFloor(1.0);
-  }
-  for (size_t i = 0; i < input.levels(); ++i) {
-    const double stored = predict(static_cast<double>(input.levelHeader(i).tets));
-    if (stored <= aim) {
-      choice.level = static_cast<int>(i);
-      chosen_level = i;
-      predicted = stored;
-      break;
-    }
-    if (i + 1 >= input.levels() && has_floor && predictFloor(1.0) <= aim) {
-      // The fewest merges of the coarsest level's tree that fit, by bisection.
-      double lo = 0, hi = 1;
-      for (int it = 0; it < 40; ++it) {
-        const double mid = 0.5 * (lo + hi);
-        (predictFloor(mid) <= aim ? hi : lo) = mid;
-      }
-      extra = std::min<uint64_t>(static_cast<uint64_t>(floor_merges),
-                                 std::max<uint64_t>(1, static_cast<uint64_t>(std::ceil(hi * floor_merges))));
-      choice.level = -1;
-      choice.merges = static_cast<int64_t>(input.levelHeader(i).merges + extra);
-      chosen_level = i;
-      predicted = predictFloor(static_cast<double>(extra) / floor_merges);
-      break;
-    }
-    if (i + 1 >= input.levels() || !input.hasMergeTree(i)) continue;
-    if (input.levelHeader(i + 1).merges <= input.levelHeader(i).merges) continue;  // not coarser: nothing between
-    const uint64_t span = input.levelHeader(i + 1).merges - input.levelHeader(i).merges;
-    const double target = aim;
-    if (span == 0 || predictMerged(i, 1.0) > target) continue;
-    // The fewest merges that fit, by bisection (hi always fits; the prediction falls with the
-    // merges, up to the interpolation's kinks).
+    choice.merges = static_cast<int64_t>(input.levelHeader(i).merges + e);
+    chosen_level = i;
+    predicted = at(static_cast<double>(e) / static_cast<double>(span));
+  };
+  // The fewest of `span` merges on top of level i that fit, by bisection (the prediction falls with
+  // the merges, up to the interpolation's kinks); false when even all of them do not fit.
+  auto fewestFitting = [&](size_t i, uint64_t span, auto&& at) {
+    if (span == 0 || at(1.0) > aim) return false;
     double lo = 0, hi = 1;
     for (int it = 0; it < 40; ++it) {
       const double mid = 0.5 * (lo + hi);
-      (predictMerged(i, mid) <= target ? hi : lo) = mid;
+      (at(mid) <= aim ? hi : lo) = mid;
     }
-    extra = std::min<uint64_t>(span, static_cast<uint64_t>(std::ceil(hi * static_cast<double>(span))));
-    if (extra == 0) extra = 1;
-    choice.level = -1;
-    choice.merges = static_cast<int64_t>(input.levelHeader(i).merges + extra);
-    chosen_level = i;
-    predicted = predictMerged(i, static_cast<double>(extra) / static_cast<double>(span));
-    break;
+    const uint64_t e = static_cast<uint64_t>(std::ceil(hi * static_cast<double>(span)));
+    takeMerged(i, span, std::clamp<uint64_t>(e, 1, span), at);
+    return true;
+  };
+  const uint64_t floor_span = has_floor ? static_cast<uint64_t>(floor_merges) : 0;
+  if (has_floor) takeMerged(coarsest, floor_span, floor_span, predictFloor);  // until a plan fits: the cheapest
+  for (size_t i = 0; i < input.levels(); ++i) {
+    const double stored = predict(static_cast<double>(input.levelHeader(i).tets));
+    if (stored <= aim) {
+      choice = LevelChoice();
+      choice.level = static_cast<int>(i);
+      chosen_level = i;
+      extra = 0;
+      predicted = stored;
+      break;
+    }
+    if (i + 1 >= input.levels()) {  // below the coarsest level: its own tree, down to the floor
+      if (has_floor && fewestFitting(i, floor_span, predictFloor)) break;
+      continue;
+    }
+    if (!input.hasMergeTree(i)) continue;
+    if (input.levelHeader(i + 1).merges <= input.levelHeader(i).merges) continue;  // not coarser: nothing between
+    const uint64_t span = input.levelHeader(i + 1).merges - input.levelHeader(i).merges;
+    if (fewestFitting(i, span, [&](double fraction) { return predictMerged(i, fraction); })) break;
   }
   std::string model;
   for (size_t i = 0; i < points.size(); ++i) {
