@@ -141,12 +141,6 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
     if (decode_points.size() != points.size()) points.clear();  // an older entry: calibrate again
     source = "calibration read from " + cache_file;
   }
-  // What a real run costs beyond the calibration's timings, learnt from the budgeted runs since: a
-  // run is a fresh process (cold memory, a new thread pool) that also writes the image, which the
-  // calibration, timed in one warm process, does not see. At the coarse end this is most of the
-  // error, and it adds rather than scales (blunt fin at 256x256: about 20 ms on runs of 30-60 ms).
-  // And how far runs have scattered around the predictions (a moving mean of |actual - predicted|):
-  // the plan keeps that much more room.
   // The floor: the coarsest level with every merge of its tree applied on the fly (merges, the
   // tetrahedra then rendered, and the time of the run), the cheapest plan there is.
   double floor_merges = 0, floor_tets = 0, floor_ms = 0;
@@ -159,6 +153,12 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       floor_ms = f["ms"].get<double>();
     }
   }
+  // What a real run costs beyond the calibration's timings, learnt from the budgeted runs since: a
+  // run is a fresh process (cold memory, a new thread pool) that also writes the image, which the
+  // calibration, timed in one warm process, does not see. At the coarse end this is most of the
+  // error, and it adds rather than scales (blunt fin at 256x256: about 20 ms on runs of 30-60 ms).
+  // And how far runs have scattered around the predictions (a moving mean of |actual - predicted|):
+  // the plan keeps that much more room.
   double offset = 0, spread = 0;
   if (!points.empty() && entry->contains("offset_ms") && (*entry)["offset_ms"].is_number()) {
     const double v = (*entry)["offset_ms"].get<double>();
