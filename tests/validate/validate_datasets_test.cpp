@@ -26,7 +26,10 @@ void PrintTo(const DatasetCase& c, std::ostream* os) { *os << c.name; }
 
 std::string joined(const std::vector<std::string>& files) {
   std::string s;
-  for (const std::string& f : files) s += " " + dataPath(f);
+  for (const std::string& f : files) {
+    s += ' ';
+    s += dataPath(f);
+  }
   return s;
 }
 
