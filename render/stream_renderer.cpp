@@ -429,7 +429,14 @@ Status StreamRenderer::flushBatch() {
           }
         }
         const bool row_inside = yc > ymin + kSure && yc < ymax - kSure;
-        for (int px = box[0]; px <= box[2]; ++px) {
+        // Only the pixels from floor(xl - kSure - 0.5) to ceil(xr + kSure - 0.5) can fail the
+        // "clearly outside" test below: two thirds of a footprint's box are skipped unread.
+        int px0 = box[0], px1 = box[2];
+        if (row_inside && xr >= xl) {
+          px0 = static_cast<int>(std::max<double>(box[0], std::floor(xl - kSure - 0.5)));
+          px1 = static_cast<int>(std::min<double>(box[2], std::ceil(xr + kSure - 0.5)));
+        }
+        for (int px = px0; px <= px1; ++px) {
           const double xc = px + 0.5;
           const size_t p = static_cast<size_t>(py) * w + px;
           const uint32_t s0 = st.rays.pixel_start[p], s1 = st.rays.pixel_start[p + 1];
