@@ -355,17 +355,18 @@ void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_
 // ---------------------------------------------------------------------------------------------
 // Boundary crossings and segments
 
-bool pixelFootprint(const Camera& camera, const double* const* points, int n, int box[4]) {
+bool pixelFootprint(const Camera& camera, const double* const* points, int n, int box[4], double* xs, double* ys) {
   const int w = camera.width(), h = camera.height();
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
   bool ok = true;
   for (int k = 0; k < n; ++k) {
-    double x, y;
-    if (!camera.project(points[k], &x, &y)) {
+    double x = 0, y = 0;
+    if (camera.project(points[k], &x, &y)) {
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    } else {
       ok = false;
-      break;
     }
-    x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    if (xs) xs[k] = x, ys[k] = y;
   }
   if (!ok) {
     box[0] = 0, box[1] = 0, box[2] = w - 1, box[3] = h - 1;

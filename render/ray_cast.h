@@ -198,8 +198,10 @@ RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface);
 
 // The pixels whose centres may lie in the projection of the n points: box = {x0, y0, x1, y1}
 // (inclusive), from their screen bounding box with a small margin for rounding; the whole image when
-// a point is behind a perspective eye. False when no pixel qualifies.
-bool pixelFootprint(const Camera& camera, const double* const* points, int n, int box[4]);
+// a point is behind a perspective eye. False when no pixel qualifies. When `xs` and `ys` are given,
+// they receive the points' screen positions (Camera::project's; meaningless for a point behind the eye).
+bool pixelFootprint(const Camera& camera, const double* const* points, int n, int box[4], double* xs = nullptr,
+                    double* ys = nullptr);
 
 // The scalar range over the boundary vertices (what the automatic transfer-function range uses when
 // the stream carries no field ranges: the boundary arrives first). A unit range centred on the value

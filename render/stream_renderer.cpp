@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <memory>
 #include <unordered_map>
+#include <vector>
 
 #include "mesh/faces.h"
 #include "render/flat_hash.h"
@@ -76,6 +78,26 @@ struct HeldTet {
   FaceKey key(int k) const { return makeKey(v[kTetFace[k][0]], v[kTetFace[k][1]], v[kTetFace[k][2]]); }
 };
 
+// The held tetrahedra, in chunks of fixed size: addresses stay put as the pool grows (HeldTet holds an
+// atomic), and an index finds its chunk by a shift. (std::deque fits two HeldTets in a block: a
+// quarter of each block wasted, and an index costs a division.)
+class HeldPool {
+ public:
+  HeldTet& operator[](uint32_t i) { return chunks_[i >> kShift][i & kMask]; }
+  const HeldTet& operator[](uint32_t i) const { return chunks_[i >> kShift][i & kMask]; }
+  uint32_t size() const { return size_; }
+  // Index of a new, default-constructed entry at the end.
+  uint32_t grow() {
+    if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<HeldTet[]>(kChunk));
+    return size_++;
+  }
+
+ private:
+  static constexpr uint32_t kShift = 9, kChunk = 1u << kShift, kMask = kChunk - 1;
+  std::vector<std::unique_ptr<HeldTet[]>> chunks_;
+  uint32_t size_ = 0;
+};
+
 struct VertexRec {
   double p[3];
   double s;
@@ -140,7 +162,7 @@ struct StreamRenderer::State {
     }
     e.waiters = kNone;
   }
-  std::deque<HeldTet> tets;
+  HeldPool tets;
   std::vector<uint32_t> free_slots;
   uint64_t held = 0;
   std::vector<ArrivedTet> batch;     // filled by the decoder
@@ -360,14 +382,13 @@ Status StreamRenderer::flushBatch() {
       const double* corners[4] = {a.g.p[0], a.g.p[1], a.g.p[2], a.g.p[3]};
       int box[4];
       a.rays = 0;
-      const bool seen = pixelFootprint(cam, corners, 4, box);
       // Orthographic: the corners' screen positions and depths, before they are replaced by their
       // sheared positions (every held tetrahedron is sheared: cursors may enter one no ray counts).
       double sx[4], sy[4], dmin = 1e300, dmax = -1e300;
+      const bool seen = pixelFootprint(cam, corners, 4, box, sx, sy);
       if (st.shared_frame) {
         if (seen) {
           for (int k = 0; k < 4; ++k) {
-            cam.project(a.g.p[k], &sx[k], &sy[k]);
             const double d = (a.g.p[k][0] * st.ortho_dir[0] + a.g.p[k][1] * st.ortho_dir[1] +
                               a.g.p[k][2] * st.ortho_dir[2]) - st.ortho_t0;
             dmin = std::min(dmin, d), dmax = std::max(dmax, d);
@@ -415,18 +436,28 @@ Status StreamRenderer::flushBatch() {
       dmin -= st.depth_slack, dmax += st.depth_slack;
       const double ymin = std::min({sy[0], sy[1], sy[2], sy[3]}), ymax = std::max({sy[0], sy[1], sy[2], sy[3]});
       constexpr double kSure = 1e-3;  // pixels; rounding differences are about 1e-10
+      // The six corner pairs' projected segments, their slopes taken once (a rounding difference
+      // in a span's ends is far below kSure).
+      struct Edge2 {
+        double x0, y0, x1, lo, hi, slope;
+      } edges[6];
+      {
+        int n = 0;
+        for (int i = 0; i < 4; ++i)
+          for (int j = i + 1; j < 4; ++j) {
+            const double lo = std::min(sy[i], sy[j]), hi = std::max(sy[i], sy[j]);
+            edges[n++] = {sx[i], sy[i], sx[j], lo, hi, hi > lo ? (sx[j] - sx[i]) / (sy[j] - sy[i]) : 0.0};
+          }
+      }
       for (int py = box[1]; py <= box[3]; ++py) {
         const double yc = py + 0.5;
         // The projection's span on this row: the extremes over the six corner pairs' segments.
         double xl = 1e300, xr = -1e300;
-        for (int i = 0; i < 4; ++i) {
-          for (int j = i + 1; j < 4; ++j) {
-            const double lo = std::min(sy[i], sy[j]), hi = std::max(sy[i], sy[j]);
-            if (yc < lo || yc > hi) continue;
-            const double x = hi > lo ? sx[i] + (yc - sy[i]) * (sx[j] - sx[i]) / (sy[j] - sy[i]) : sx[i];
-            xl = std::min({xl, x, hi > lo ? x : sx[j]});
-            xr = std::max({xr, x, hi > lo ? x : sx[j]});
-          }
+        for (const Edge2& e : edges) {
+          if (yc < e.lo || yc > e.hi) continue;
+          const double x = e.hi > e.lo ? e.x0 + (yc - e.y0) * e.slope : e.x0;
+          xl = std::min({xl, x, e.hi > e.lo ? x : e.x1});
+          xr = std::max({xr, x, e.hi > e.lo ? x : e.x1});
         }
         const bool row_inside = yc > ymin + kSure && yc < ymax - kSure;
         // Only the pixels from floor(xl - kSure - 0.5) to ceil(xr + kSure - 0.5) can fail the
@@ -474,8 +505,7 @@ Status StreamRenderer::flushBatch() {
       slot = st.free_slots.back();
       st.free_slots.pop_back();
     } else {
-      slot = static_cast<uint32_t>(st.tets.size());
-      st.tets.emplace_back();
+      slot = st.tets.grow();
     }
     HeldTet& t = st.tets[slot];
     t.g = a.g;
