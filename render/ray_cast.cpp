@@ -296,8 +296,14 @@ inline void addSample(double alpha, const double rgb[3], bool front_to_back, Rgb
 }
 
 // First sample index k with k * step >= t (exactly, in floating point).
-int64_t firstSampleAtOrAfter(double t, double step) {
-  int64_t k = static_cast<int64_t>(std::ceil(t / step));
+// `inv_step` is 1 / step: the estimate only starts the exact search below.
+int64_t firstSampleAtOrAfter(double t, double step, double inv_step) {
+  const double e = t * inv_step;
+  int64_t k = 0;
+  if (std::fabs(e) < 4e18) {  // also false for NaN; truncation then one up is ceil without a libm call
+    k = static_cast<int64_t>(e);
+    if (static_cast<double>(k) < e) ++k;
+  }
   while (static_cast<double>(k) * step < t) ++k;
   while (static_cast<double>(k - 1) * step >= t) --k;
   return k;
@@ -321,7 +327,9 @@ void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_
     return;
   }
   const double step = setup.step;
-  const int64_t k0 = firstSampleAtOrAfter(lo, step), k1 = firstSampleAtOrAfter(hi, step);  // [k0, k1)
+  const double inv_step = 1.0 / step;
+  const int64_t k0 = firstSampleAtOrAfter(lo, step, inv_step);  // samples [k0, k1)
+  const int64_t k1 = firstSampleAtOrAfter(hi, step, inv_step);
   if (k1 <= k0) return;
   const double span = t_out - t_in;
   const double slope = span > 0 ? (s_out - s_in) / span : 0.0;
