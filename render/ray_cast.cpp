@@ -407,6 +407,11 @@ RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
   // 1. Each triangle against the pixels of its screen footprint (parallel over triangles): a
   //    triangle covers a few pixels, so this tests far fewer pairs than pixels against bins.
   tbb::enumerable_thread_specific<std::vector<Hit>> local_hits;
+  // Orthographic rays share one direction, hence one shear frame: a triangle's canonical order and
+  // sheared corners are then computed once, and each pixel only shears its ray's origin. The
+  // arithmetic is crossTriangle's, step for step, so the crossings are the same bits.
+  const bool ortho = camera.options().projection == Projection::kOrthographic;
+  const ShearFrame frame = prepareRay(camera.ray(0, 0)).frame;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.triangles.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
     std::vector<Hit>& hits = local_hits.local();
     for (size_t i = r.begin(); i < r.end(); ++i) {
@@ -420,11 +425,28 @@ RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
       const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
       const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
       const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      const double sc[3] = {surface.scalars[tri[0]], surface.scalars[tri[1]], surface.scalars[tri[2]]};
+      int o[3];
+      canonicalOrder(corners, o);
+      double q[3][3];  // orthographic: the sheared corners in canonical order
+      if (ortho)
+        for (int k = 0; k < 3; ++k) shearPoint(frame, corners[o[k]], q[k]);
       for (int py = box[1]; py <= box[3]; ++py) {
         for (int px = box[0]; px <= box[2]; ++px) {
-          const PreparedRay ray = prepareRay(camera.ray(px, py));
-          const Crossing x = crossTriangle(ray, a, b, c, surface.scalars[tri[0]], surface.scalars[tri[1]],
-                                           surface.scalars[tri[2]]);
+          Crossing x;
+          PreparedRay ray;
+          if (ortho) {
+            ray.ray = camera.ray(px, py);
+            ray.frame = frame;
+            shearPoint(frame, ray.ray.o, ray.origin);
+            double S[3][3];
+            for (int k = 0; k < 3; ++k)
+              for (int j = 0; j < 3; ++j) S[k][j] = q[k][j] - ray.origin[j];
+            x = crossSheared(S[0], S[1], S[2], sc[o[0]], sc[o[1]], sc[o[2]]);
+          } else {
+            ray = prepareRay(camera.ray(px, py));
+            x = crossTriangle(ray, a, b, c, sc[0], sc[1], sc[2]);
+          }
           if (!x.hit) continue;
           // Facing from the outward normal of the triangle as given.
           const double dn = n[0] * ray.ray.d[0] + n[1] * ray.ray.d[1] + n[2] * ray.ray.d[2];
