@@ -191,10 +191,10 @@ inline void canonicalOrder(const double* const p[3], int order[3]) {
 }
 
 // The crossing of the ray with the triangle of sheared vertices A, B, C (canonical order).
+// The 2D cross product of the sheared points P and Q (their x and y).
+inline double cross2(const double* P, const double* Q) { return P[0] * Q[1] - P[1] * Q[0]; }
 inline Crossing crossSheared(const double* A, const double* B, const double* C, double sa, double sb, double sc) {
-  const double u = C[0] * B[1] - C[1] * B[0];
-  const double v = A[0] * C[1] - A[1] * C[0];
-  const double w = B[0] * A[1] - B[1] * A[0];
+  const double u = cross2(C, B), v = cross2(A, C), w = cross2(B, A);
   Crossing x;
   if ((u < 0 || v < 0 || w < 0) && (u > 0 || v > 0 || w > 0)) return x;
   const double det = u + v + w;
@@ -236,14 +236,21 @@ void shearTetGeom(TetGeom& g, const ShearFrame& frame) {
   g.sheared = true;
 }
 
-void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]) {
-  double S[4][3];
+namespace {
+// The corners of g relative to the ray, in its sheared frame.
+inline void shearedCorners(const PreparedRay& r, const TetGeom& g, double S[4][3]) {
   if (g.sheared) {
     for (int i = 0; i < 4; ++i)
       for (int c = 0; c < 3; ++c) S[i][c] = g.p[i][c] - r.origin[c];
   } else {
     for (int i = 0; i < 4; ++i) shear(r, g.p[i], S[i]);
   }
+}
+}  // namespace
+
+void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]) {
+  double S[4][3];
+  shearedCorners(r, g, S);
   for (int k = 0; k < 4; ++k) {
     if (k == skip) {
       out[k] = Crossing();
@@ -255,17 +262,33 @@ void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing ou
 }
 
 int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Crossing* out) {
-  Crossing x[4];
-  crossTetFaces(r, g, entry, x);
+  // crossTetFaces' crossings, inlined: the scalar is interpolated for the chosen face only.
+  double S[4][3];
+  shearedCorners(r, g, S);
   int best = -1;
+  double best_terms[3] = {0, 0, 0}, best_det = 1;
   for (int k = 0; k < 4; ++k) {
-    if (k == entry || !x[k].hit) continue;
+    if (k == entry) continue;
+    const uint8_t* o = g.order[k];
+    const double *A = S[o[0]], *B = S[o[1]], *C = S[o[2]];
+    const double u = cross2(C, B), v = cross2(A, C), w = cross2(B, A);
+    if ((u < 0 || v < 0 || w < 0) && (u > 0 || v > 0 || w > 0)) continue;
+    const double det = u + v + w;
+    if (det == 0) continue;
+    const double t = (u * A[2] + v * B[2] + w * C[2]) / det;
     // Where the ray passes through an edge or vertex of the entry face, faces sharing it are crossed
     // at the entry point too: the exit is the farthest crossing.
-    if (best < 0 || (forward ? x[k].t > out->t : x[k].t < out->t)) {
+    if (best < 0 || (forward ? t > out->t : t < out->t)) {
       best = k;
-      *out = x[k];
+      out->t = t;
+      best_terms[0] = u, best_terms[1] = v, best_terms[2] = w;
+      best_det = det;
     }
+  }
+  if (best >= 0) {
+    const uint8_t* o = g.order[best];
+    out->hit = true;
+    out->s = (best_terms[0] * g.s[o[0]] + best_terms[1] * g.s[o[1]] + best_terms[2] * g.s[o[2]]) / best_det;
   }
   return best;
 }
