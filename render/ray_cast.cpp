@@ -408,10 +408,10 @@ bool pixelFootprint(const Camera& camera, const double* const* points, int n, in
   constexpr double kMargin = 1e-3;
   x0 = std::clamp(x0, -2.0, w + 2.0), x1 = std::clamp(x1, -2.0, w + 2.0);
   y0 = std::clamp(y0, -2.0, h + 2.0), y1 = std::clamp(y1, -2.0, h + 2.0);
-  box[0] = std::max(0, static_cast<int>(std::ceil(x0 - 0.5 - kMargin)));
-  box[1] = std::max(0, static_cast<int>(std::ceil(y0 - 0.5 - kMargin)));
-  box[2] = std::min(w - 1, static_cast<int>(std::floor(x1 - 0.5 + kMargin)));
-  box[3] = std::min(h - 1, static_cast<int>(std::floor(y1 - 0.5 + kMargin)));
+  box[0] = std::max(0, ceilToInt(x0 - 0.5 - kMargin));
+  box[1] = std::max(0, ceilToInt(y0 - 0.5 - kMargin));
+  box[2] = std::min(w - 1, floorToInt(x1 - 0.5 + kMargin));
+  box[3] = std::min(h - 1, floorToInt(y1 - 0.5 + kMargin));
   return box[0] <= box[2] && box[1] <= box[3];
 }
 

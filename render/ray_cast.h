@@ -196,6 +196,17 @@ struct RaySegments {
 };
 RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface);
 
+// floor and ceil of v as an int, for |v| < 2^31 (callers clamp first): truncation then one step,
+// which costs a few instructions where std::floor and std::ceil are library calls on baseline x86-64.
+inline int floorToInt(double v) {
+  const int t = static_cast<int>(v);
+  return t > v ? t - 1 : t;
+}
+inline int ceilToInt(double v) {
+  const int t = static_cast<int>(v);
+  return t < v ? t + 1 : t;
+}
+
 // The pixels whose centres may lie in the projection of the n points: box = {x0, y0, x1, y1}
 // (inclusive), from their screen bounding box with a small margin for rounding; the whole image when
 // a point is behind a perspective eye. False when no pixel qualifies. When `xs` and `ys` are given,

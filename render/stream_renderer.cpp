@@ -464,8 +464,9 @@ Status StreamRenderer::flushBatch() {
         // "clearly outside" test below: two thirds of a footprint's box are skipped unread.
         int px0 = box[0], px1 = box[2];
         if (row_inside && xr >= xl) {
-          px0 = static_cast<int>(std::max<double>(box[0], std::floor(xl - kSure - 0.5)));
-          px1 = static_cast<int>(std::min<double>(box[2], std::ceil(xr + kSure - 0.5)));
+          const double lo = box[0] - 1, hi = box[2] + 1;  // clamped first: the ends may lie far off
+          px0 = std::max(box[0], floorToInt(std::clamp(xl - kSure - 0.5, lo, hi)));
+          px1 = std::min(box[2], ceilToInt(std::clamp(xr + kSure - 0.5, lo, hi)));
         }
         for (int px = px0; px <= px1; ++px) {
           const double xc = px + 0.5;
