@@ -858,8 +858,9 @@ class LevelCoder {
       const uint32_t v[3] = {q, p, x};
       GTN_RETURN_IF_ERROR(addTriangle(v, tri));
     }
-    half_.clear();
-    hqueue_.clear();
+    // Freed, not just emptied: the decoder's memory should follow the peeling front from here on.
+    half_ = EdgeMap();
+    hqueue_ = RingQueue<uint64_t>();
     return Status::ok();
   }
 
