@@ -1143,7 +1143,9 @@ class LevelCoder {
   }
 
   // `pred_cell`: the cell-value record of the decoded neighbour behind the gate face, or kNone32.
-  Status emitTet(const uint32_t e[4], uint32_t src_tet, uint32_t pred_cell) {
+  // `gate`: the index in faces_ of the open face (e[0], e[2], e[1]) (face 3), or -1 to look it up;
+  // `fresh_apex`: e[3] was just introduced, so no open face holds it.
+  Status emitTet(const uint32_t e[4], uint32_t src_tet, uint32_t pred_cell, long gate = -1, bool fresh_apex = false) {
     if (e[0] == e[1] || e[0] == e[2] || e[0] == e[3] || e[1] == e[2] || e[1] == e[3] || e[2] == e[3])
       return bad("tetrahedron with a repeated vertex");
     if constexpr (!kEncode) {
@@ -1229,9 +1231,15 @@ class LevelCoder {
     }
     for (int k = 0; k < 4; ++k) {
       const uint32_t f[3] = {e[kTetFace[k][0]], e[kTetFace[k][1]], e[kTetFace[k][2]]};
-      uint32_t key[3];
-      FaceMap::sortedKey(f, key);
-      const long idx = faces_.find(key);
+      // The same answers faces_.find would give, where the caller already knows them.
+      long idx = -1;
+      if (k == 3 && gate >= 0) {
+        idx = gate;
+      } else if (k == 3 || !fresh_apex) {
+        uint32_t key[3];
+        FaceMap::sortedKey(f, key);
+        idx = faces_.find(key);
+      }
       if (idx >= 0) {
         closeFace(idx);
         continue;
@@ -1468,7 +1476,7 @@ class LevelCoder {
       scoreOrders(x);
       flip = con_->bit(flip_, flip);
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
-      GTN_RETURN_IF_ERROR(emitTet(e, g.tet, g.cell));
+      GTN_RETURN_IF_ERROR(emitTet(e, g.tet, g.cell, idx, sym == kSymNew));
     }
     return Status::ok();
   }
