@@ -2,6 +2,7 @@
 
 #include <array>
 #include <map>
+#include <string>
 
 #include "convert/vtk_common.h"
 #include "mesh/hex_split.h"
@@ -26,12 +27,53 @@ constexpr Face kPyramidFaces[] = {{4, {0, 1, 2, 3}}, {3, {0, 1, 4, 0}}, {3, {1, 
 int expectedPoints(int type) {
   switch (type) {
     case kVtkTetra: return 4;
+    case kVtkVoxel: return 8;
     case kVtkHexahedron: return 8;
     case kVtkWedge: return 6;
     case kVtkPyramid: return 5;
     case kVtkQuadraticTetra: return 10;
+    case kVtkQuadraticHexahedron: return 20;
+    case kVtkQuadraticWedge: return 15;
+    case kVtkQuadraticPyramid: return 13;
+    case kVtkTriquadraticHexahedron: return 27;
     default: return -1;
   }
+}
+
+// Cells of dimension 0 to 2 (vertices, lines, faces, linear or not). Files of volume meshes often
+// carry them beside the volume cells, as boundary faces and feature edges (Gmsh, MMG and meshio
+// write them so); they bound no volume and are skipped.
+bool isLowerDimensional(int type) {
+  switch (type) {
+    case 0: case 1: case 2: case 3: case 4: case 5: case 6: case 7: case 8: case 9:  // linear
+    case 21: case 22: case 23: case 28: case 30: case 34: case 35: case 36:          // quadratic, cubic
+    case 51:                                                                        // parametric curve
+    case 68: case 69: case 70: case 75: case 76: case 77:                            // Lagrange, Bezier
+      return true;
+    default: return false;
+  }
+}
+
+// The corners of a quadratic cell come first, in the order of its linear cell.
+int linearType(int type) {
+  switch (type) {
+    case kVtkQuadraticTetra: return kVtkTetra;
+    case kVtkQuadraticHexahedron:
+    case kVtkTriquadraticHexahedron: return kVtkHexahedron;
+    case kVtkQuadraticWedge: return kVtkWedge;
+    case kVtkQuadraticPyramid: return kVtkPyramid;
+    default: return type;
+  }
+}
+
+std::string typeCounts(const std::map<int, size_t>& counts) {
+  std::string list;
+  for (const auto& [type, count] : counts) {
+    if (!list.empty()) list += ", ";
+    list += std::to_string(count) + " cell" + (count == 1 ? "" : "s") + " of type " + std::to_string(type) + " (" +
+            vtkCellTypeName(type) + ")";
+  }
+  return list;
 }
 
 // Position in the face's cycle of its vertex with the smallest global index.
@@ -124,10 +166,14 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
 
   // First pass: check everything and count, so that an unsupported type is reported with the number
   // of cells that have it, before any work.
-  std::map<int, size_t> rejected;
-  size_t out_tets = 0, quadratic = 0, hexes = 0;
+  std::map<int, size_t> rejected, skipped;
+  size_t out_tets = 0, quadratic = 0, higher_order = 0, hexes = 0;
   for (size_t c = 0; c < num_cells; ++c) {
     const int type = cells.types[c];
+    if (isLowerDimensional(type)) {
+      ++skipped[type];
+      continue;
+    }
     const int want = expectedPoints(type);
     if (want < 0) {
       ++rejected[type];
@@ -143,43 +189,55 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
         return invalidData(path + ": cell " + std::to_string(c) + " refers to point " + std::to_string(v) +
                            " but there are " + std::to_string(num_points) + " points");
     }
-    switch (type) {
+    if (type == kVtkQuadraticTetra) ++quadratic;
+    else if (linearType(type) != type) ++higher_order;
+    switch (linearType(type)) {
       case kVtkTetra: out_tets += 1; break;
-      case kVtkQuadraticTetra: out_tets += 1; ++quadratic; break;
+      case kVtkVoxel:
       case kVtkHexahedron: out_tets += 6; ++hexes; break;
       case kVtkWedge: out_tets += 3; break;
       case kVtkPyramid: out_tets += 2; break;
     }
   }
   if (!rejected.empty()) {
-    std::string list;
-    for (const auto& [type, count] : rejected) {
-      if (!list.empty()) list += ", ";
-      list += std::to_string(count) + " cell" + (count == 1 ? "" : "s") + " of type " + std::to_string(type) + " (" +
-              vtkCellTypeName(type) + ")";
-    }
-    return unsupported(path + ": unsupported cell types: " + list +
-                       "; only tetrahedra (10, 24), hexahedra (12), wedges (13) and pyramids (14) become tetrahedra");
+    return unsupported(path + ": unsupported cell types: " + typeCounts(rejected) +
+                       "; only tetrahedra (10, 24), hexahedra (11, 12, 25, 29), wedges (13, 26) and pyramids "
+                       "(14, 27) become tetrahedra");
+  }
+  if (!skipped.empty()) {
+    size_t total = 0;
+    for (const auto& entry : skipped) total += entry.second;
+    if (total == num_cells)
+      return unsupported(path + ": no volume cells, only " + typeCounts(skipped) +
+                         ": a surface, line or point set is not a volume mesh");
+    report->warnings.push_back("skipped " + std::to_string(total) + " cells of lower dimension (" +
+                               typeCounts(skipped) + "): only volume cells become tetrahedra");
   }
 
   tets->reserve(tets->size() + out_tets);
   tet_cell->reserve(tet_cell->size() + out_tets);
   Splitter splitter(tets, tet_cell);
-  uint32_t g[10];
+  uint32_t g[27];
   for (size_t c = 0; c < num_cells; ++c) {
     const int type = cells.types[c];
+    if (isLowerDimensional(type)) continue;
     const int64_t begin = cells.offsets[c];
     const int n = static_cast<int>(cells.offsets[c + 1] - begin);
     for (int k = 0; k < n; ++k) g[k] = static_cast<uint32_t>(cells.connectivity[begin + k]);
     const uint32_t cell = static_cast<uint32_t>(c);
-    switch (type) {
+    switch (linearType(type)) {
       case kVtkTetra:
-      case kVtkQuadraticTetra:
         // A flat input tetrahedron is kept as it is (finishImport reports it); only the pieces of
         // split cells are dropped when a repeated index flattens them.
         tets->push_back({g[0], g[1], g[2], g[3]});
         tet_cell->push_back(cell);
         break;
+      case kVtkVoxel: {
+        // A voxel numbers its corners x fastest, then y, then z; a hexahedron goes round each face.
+        const uint32_t h[8] = {g[0], g[1], g[3], g[2], g[4], g[5], g[7], g[6]};
+        splitter.hex(h, split, cell);
+        break;
+      }
       case kVtkHexahedron: splitter.hex(g, split, cell); break;
       case kVtkWedge: splitter.cone(kWedgeFaces, g, 6, cell); break;
       case kVtkPyramid: splitter.cone(kPyramidFaces, g, 5, cell); break;
@@ -189,6 +247,10 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
     report->warnings.push_back(std::to_string(quadratic) +
                                " quadratic tetrahedra (VTK_QUADRATIC_TETRA) reduced to their 4 corners; their "
                                "mid-edge points are kept as unreferenced points");
+  if (higher_order)
+    report->warnings.push_back(std::to_string(higher_order) +
+                               " quadratic hexahedra, wedges or pyramids reduced to their corners and split as "
+                               "linear cells; their other points are kept as unreferenced points");
   if (hexes && split == 5 && splitter.hex_five_ < hexes)
     report->warnings.push_back(std::to_string(hexes - splitter.hex_five_) + " of " + std::to_string(hexes) +
                                " hexahedra split into 6 tetrahedra: their face diagonals do not allow 5");

@@ -9,6 +9,10 @@
 // that needs a Steiner point can arise: hexahedra give 6 tetrahedra, wedges 3, pyramids 2, and
 // ImportReport::steiner_points stays 0. With split == 5 a hexahedron whose six face diagonals form
 // one of the two inscribed tetrahedra ({0,2,5,7} or {1,3,4,6}) is cut into 5 instead.
+// Voxels are hexahedra numbered x fastest; quadratic tetrahedra, hexahedra, wedges and pyramids keep
+// only their corners (listed first). Cells of lower dimension (vertices, lines, triangles, quads,
+// polygons, linear or not), which volume-mesh files carry as boundary faces and feature edges, are
+// skipped with a warning.
 #pragma once
 
 #include <cstdint>
@@ -30,9 +34,10 @@ struct VtkCells {
 
 // Splits every cell into tetrahedra: appends them to *tets and, for each, its source cell to
 // *tet_cell. Tetrahedra that a degenerate cell (a repeated point index) makes flat by repetition are
-// dropped and counted in report->collapsed_tets. Fails, naming `path`, when a cell type is not
-// supported (with the type's number, name and how many cells have it), when a cell has the wrong
-// number of points, or when an index is out of range.
+// dropped and counted in report->collapsed_tets. Cells of lower dimension are skipped (a warning
+// counts them by type). Fails, naming `path`, when a volume cell type is not supported or no cell is
+// a volume cell (with each type's number, name and how many cells have it), when a cell has the
+// wrong number of points, or when an index is out of range.
 Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, int split,
                      std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report);
 

@@ -15,10 +15,15 @@ namespace gtn {
 
 // VTK cell type numbers this project reads (others are rejected by name).
 constexpr uint8_t kVtkTetra = 10;
+constexpr uint8_t kVtkVoxel = 11;
 constexpr uint8_t kVtkHexahedron = 12;
 constexpr uint8_t kVtkWedge = 13;
 constexpr uint8_t kVtkPyramid = 14;
 constexpr uint8_t kVtkQuadraticTetra = 24;
+constexpr uint8_t kVtkQuadraticHexahedron = 25;
+constexpr uint8_t kVtkQuadraticWedge = 26;
+constexpr uint8_t kVtkQuadraticPyramid = 27;
+constexpr uint8_t kVtkTriquadraticHexahedron = 29;
 
 // "VTK_TETRA", "VTK_QUADRATIC_HEXAHEDRON", ... or "unknown" for numbers VTK does not define.
 const char* vtkCellTypeName(int type);

@@ -209,17 +209,122 @@ TEST(CellSplit, RejectsUnsupportedTypesWithNameAndCount) {
     for (int i = 0; i < n; ++i) cells.connectivity.push_back(i);
     cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
   };
-  add(5, 3), add(5, 3), add(9, 4), add(10, 4), add(25, 20), add(1, 1), add(3, 2);
+  add(15, 10), add(15, 10), add(16, 12), add(10, 4), add(42, 9), add(5, 3);
   std::vector<Tet> tets;
   std::vector<uint32_t> tet_cell;
   ImportReport report;
   const Status st = splitVtkCells("in.vtu", cells, 20, 6, &tets, &tet_cell, &report);
   ASSERT_FALSE(st.isOk());
   EXPECT_EQ(st.code(), StatusCode::kUnsupported);
-  for (const char* part : {"in.vtu", "2 cells of type 5 (VTK_TRIANGLE)", "1 cell of type 9 (VTK_QUAD)",
-                           "1 cell of type 25 (VTK_QUADRATIC_HEXAHEDRON)", "1 cell of type 1 (VTK_VERTEX)",
-                           "1 cell of type 3 (VTK_LINE)"})
+  for (const char* part : {"in.vtu", "2 cells of type 15 (VTK_PENTAGONAL_PRISM)",
+                           "1 cell of type 16 (VTK_HEXAGONAL_PRISM)", "1 cell of type 42 (VTK_POLYHEDRON)"})
     EXPECT_NE(st.message().find(part), std::string::npos) << st.message() << " lacks " << part;
+  // The triangle is not a reason to reject: cells of lower dimension are skipped.
+  EXPECT_EQ(st.message().find("VTK_TRIANGLE"), std::string::npos) << st.message();
+}
+
+// Volume meshes written by Gmsh, MMG or meshio list their boundary triangles and feature edges
+// beside the tetrahedra: those are skipped (with a warning) and the cell fields still line up.
+TEST(CellSplit, SkipsCellsOfLowerDimensionWithAWarning) {
+  TetMesh mesh;
+  mesh.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+  VtkCells cells;
+  auto add = [&](int type, std::vector<int64_t> ids) {
+    cells.types.push_back(type);
+    cells.connectivity.insert(cells.connectivity.end(), ids.begin(), ids.end());
+    cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+  };
+  add(1, {4}), add(3, {0, 1}), add(5, {0, 1, 2}), add(kVtkTetra, {0, 1, 2, 3}), add(9, {0, 1, 4, 3}),
+      add(7, {0, 1, 2, 3, 4}), add(kVtkTetra, {1, 2, 3, 4}), add(22, {0, 1, 2, 3, 4, 0});
+  Field id("id", 1, ScalarType::kInt32, cells.types.size());
+  for (size_t c = 0; c < cells.types.size(); ++c) id.set<int32_t>(c, 0, static_cast<int32_t>(10 * c));
+  ImportResult r;
+  r.mesh = mesh;
+  const Status st = finishVtkImport("mixed.vtk", cells, {id}, ImportOptions{}, &r);
+  ASSERT_TRUE(st.isOk()) << st.message();
+  ASSERT_EQ(r.mesh.numTets(), 2u);
+  ASSERT_EQ(r.mesh.cell_fields.size(), 1u);
+  EXPECT_EQ(r.mesh.cell_fields[0].data<int32_t>()[0], 30);
+  EXPECT_EQ(r.mesh.cell_fields[0].data<int32_t>()[1], 60);
+  ASSERT_EQ(r.report.warnings.size(), 1u);
+  for (const char* part : {"skipped 6 cells", "1 cell of type 1 (VTK_VERTEX)", "1 cell of type 3 (VTK_LINE)",
+                           "1 cell of type 5 (VTK_TRIANGLE)", "1 cell of type 7 (VTK_POLYGON)",
+                           "1 cell of type 9 (VTK_QUAD)", "1 cell of type 22 (VTK_QUADRATIC_TRIANGLE)"})
+    EXPECT_NE(r.report.warnings[0].find(part), std::string::npos) << r.report.warnings[0] << " lacks " << part;
+
+  // Nothing but surface cells: not a volume mesh.
+  VtkCells surface;
+  surface.types = {5, 5};
+  surface.connectivity = {0, 1, 2, 0, 2, 3};
+  surface.offsets = {0, 3, 6};
+  ImportResult s;
+  s.mesh = mesh;
+  const Status none = finishVtkImport("surface.vtk", surface, {}, ImportOptions{}, &s);
+  ASSERT_FALSE(none.isOk());
+  EXPECT_NE(none.message().find("surface.vtk: no volume cells, only 2 cells of type 5 (VTK_TRIANGLE)"),
+            std::string::npos)
+      << none.message();
+}
+
+TEST(CellSplit, VoxelSplitsLikeItsHexahedron) {
+  // A unit voxel, corners numbered x fastest, then y, then z.
+  TetMesh mesh;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) mesh.coords.insert(mesh.coords.end(), {double(i), double(j), double(k)});
+  VtkCells cells;
+  cells.types = {kVtkVoxel};
+  cells.connectivity = {0, 1, 2, 3, 4, 5, 6, 7};
+  cells.offsets.push_back(8);
+  for (int split : {5, 6}) {
+    ImportResult r = splitInto(mesh, cells, split);
+    const MeshStats s = computeMeshStats(r.mesh);
+    EXPECT_NEAR(s.total_volume, 1.0, 1e-12) << "split " << split;
+    EXPECT_EQ(s.zero_volume, 0u);
+    EXPECT_EQ(s.boundary_faces, 12u);
+    EXPECT_EQ(s.non_manifold_faces, 0u);
+  }
+}
+
+TEST(CellSplit, QuadraticHexWedgePyramidKeepTheirCorners) {
+  // A unit cube as a 20-point quadratic hexahedron, and a wedge and a pyramid beside it; the extra
+  // points sit anywhere (they are dropped): only the corners (listed first) shape the tetrahedra.
+  TetMesh mesh;
+  const double corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  for (const auto& c : corner) mesh.coords.insert(mesh.coords.end(), {c[0], c[1], c[2]});
+  for (int i = 0; i < 19; ++i) mesh.coords.insert(mesh.coords.end(), {0.5, 0.5, 0.5});  // points 8..26
+  VtkCells cells;
+  auto add = [&](int type, std::vector<int64_t> ids, int extra) {
+    cells.types.push_back(type);
+    cells.connectivity.insert(cells.connectivity.end(), ids.begin(), ids.end());
+    for (int i = 0; i < extra; ++i) cells.connectivity.push_back(8 + i);
+    cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+  };
+  add(kVtkQuadraticHexahedron, {0, 1, 2, 3, 4, 5, 6, 7}, 12);
+  add(kVtkTriquadraticHexahedron, {0, 1, 2, 3, 4, 5, 6, 7}, 19);
+  add(kVtkQuadraticWedge, {0, 1, 2, 4, 5, 6}, 9);
+  add(kVtkQuadraticPyramid, {0, 1, 2, 3, 6}, 8);
+  ImportResult r = splitInto(mesh, cells, 6);
+  EXPECT_EQ(r.mesh.numTets(), 6u + 6u + 3u + 2u);
+  const MeshStats s = computeMeshStats(r.mesh);
+  EXPECT_NEAR(s.total_volume, 1.0 + 1.0 + 0.5 + 1.0 / 3.0, 1e-12);
+  EXPECT_EQ(s.zero_volume, 0u);
+  ASSERT_EQ(r.report.warnings.size(), 1u);
+  EXPECT_NE(r.report.warnings[0].find("4 quadratic hexahedra, wedges or pyramids reduced to their corners"),
+            std::string::npos)
+      << r.report.warnings[0];
+  // A quadratic hexahedron with the point count of a linear one is malformed.
+  VtkCells bad;
+  bad.types = {kVtkQuadraticHexahedron};
+  bad.connectivity = {0, 1, 2, 3, 4, 5, 6, 7};
+  bad.offsets.push_back(8);
+  std::vector<Tet> tets;
+  std::vector<uint32_t> tet_cell;
+  ImportReport report;
+  const Status st = splitVtkCells("q.vtu", bad, 27, 6, &tets, &tet_cell, &report);
+  ASSERT_FALSE(st.isOk());
+  EXPECT_NE(st.message().find("q.vtu: cell 0 (VTK_QUADRATIC_HEXAHEDRON) has 8 points, expected 20"), std::string::npos)
+      << st.message();
 }
 
 TEST(CellSplit, RejectsBadIndicesAndPointCounts) {

@@ -302,8 +302,10 @@ TEST(VtkLegacy, RejectsOtherDatasetsCellTypesAndBadIndices) {
               "DATASET STRUCTURED_POINTS is not supported");
   const std::string head = "# vtk DataFile Version 3.0\ntri\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
                            "0 0 0 1 0 0 0 1 0 0 0 1\n";
-  expectError(dir + "/tri.vtk", head + "CELLS 2 9\n3 0 1 2\n4 0 1 2 3\nCELL_TYPES 2\n5 10\n",
-              "1 cell of type 5 (VTK_TRIANGLE)");
+  expectError(dir + "/prism.vtk", head + "CELLS 2 16\n10 0 1 2 3 0 1 2 3 0 1\n4 0 1 2 3\nCELL_TYPES 2\n15 10\n",
+              "1 cell of type 15 (VTK_PENTAGONAL_PRISM)");
+  expectError(dir + "/tri.vtk", head + "CELLS 2 8\n3 0 1 2\n3 0 2 3\nCELL_TYPES 2\n5 5\n",
+              "no volume cells, only 2 cells of type 5 (VTK_TRIANGLE)");
   expectError(dir + "/range.vtk", head + "CELLS 1 5\n4 0 1 2 4\nCELL_TYPES 1\n10\n",
               "cell 0 refers to point 4 but there are 4 points");
   expectError(dir + "/short.vtk", head + "CELLS 1 5\n4 0 1 2\n", "file ends");
@@ -325,6 +327,40 @@ TEST(VtkLegacy, QuadraticTetraKeepsCornersAndCountsMidEdgePoints) {
   ASSERT_EQ(r->report.warnings.size(), 1u);
   EXPECT_NE(r->report.warnings[0].find("1 quadratic tetrahedra"), std::string::npos);
   EXPECT_EQ(computeMeshStats(r->mesh).unreferenced_points, 6u);
+}
+
+// The shape of what MMG (and Gmsh, through meshio) writes: BINARY, a METADATA block after POINTS,
+// feature edges and boundary triangles listed with the tetrahedra, and a cell attribute over all of
+// them. The lower-dimensional cells are skipped; the attribute follows the tetrahedra.
+TEST(VtkLegacy, BinaryMixedCellsWithMetadataKeepTheTetrahedra) {
+  const std::string dir = tempDir("vtk_legacy_mixed");
+  std::string s = "# vtk DataFile Version 4.2\nvtk output\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 float\n";
+  const double xyz[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+  for (double v : xyz) putBigEndian(s, ScalarType::kFloat32, v);
+  s += "\nMETADATA\nINFORMATION 2\nNAME L2_NORM_RANGE LOCATION vtkDataArray\nDATA 2 0 1.73205 \n"
+       "NAME L2_NORM_FINITE_RANGE LOCATION vtkDataArray\nDATA 2 0 1.73205 \n\n";
+  // An edge, a triangle, a tetrahedron, a triangle, a tetrahedron.
+  s += "CELLS 5 21\n";
+  for (int v : {2, 0, 1, 3, 0, 1, 2, 4, 0, 1, 2, 3, 3, 1, 2, 3, 4, 1, 2, 3, 4}) putBigEndian(s, ScalarType::kInt32, v);
+  s += "\nCELL_TYPES 5\n";
+  for (int t : {3, 5, 10, 5, 10}) putBigEndian(s, ScalarType::kInt32, t);
+  s += "\nCELL_DATA 5\nSCALARS medit:ref int 1\nLOOKUP_TABLE default\n";
+  for (int r : {7, 8, 1, 9, 2}) putBigEndian(s, ScalarType::kInt32, r);
+  s += "\n";
+  writeFile(dir + "/mmg.vtk", s);
+  auto r = importMesh({dir + "/mmg.vtk"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numPoints(), 5u);
+  ASSERT_EQ(r->mesh.numTets(), 2u);
+  ASSERT_EQ(r->mesh.cell_fields.size(), 1u);
+  EXPECT_EQ(r->mesh.cell_fields[0].name, "medit:ref");
+  EXPECT_EQ(r->mesh.cell_fields[0].data<int32_t>()[0], 1);
+  EXPECT_EQ(r->mesh.cell_fields[0].data<int32_t>()[1], 2);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("skipped 3 cells of lower dimension (1 cell of type 3 (VTK_LINE), 2 cells of "
+                                       "type 5 (VTK_TRIANGLE))"),
+            std::string::npos)
+      << r->report.warnings[0];
 }
 
 }  // namespace

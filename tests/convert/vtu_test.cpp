@@ -572,8 +572,8 @@ void expectError(const std::string& path, const std::string& part) {
 
 TEST(Vtu, MalformedFilesFailWithTheFileNamed) {
   const std::string dir = tempDir("vtu_bad");
-  writeFile(dir + "/type.vtu", twoPieces("0 1 2 3", "5"));
-  expectError(dir + "/type.vtu", "1 cell of type 5 (VTK_TRIANGLE)");
+  writeFile(dir + "/type.vtu", twoPieces("0 1 2 3", "42"));
+  expectError(dir + "/type.vtu", "1 cell of type 42 (VTK_POLYHEDRON)");
   writeFile(dir + "/range.vtu", twoPieces("0 1 2 4", "10"));
   expectError(dir + "/range.vtu", "refers to point 4 but the piece has 4 points");
 
