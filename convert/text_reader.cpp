@@ -21,7 +21,24 @@ bool parseFloating(std::string_view token, T* out) {
   if (token.front() == '+') token.remove_prefix(1);  // from_chars rejects a leading plus
   const char* end = token.data() + token.size();
   auto [ptr, ec] = std::from_chars(token.data(), end, *out);
-  if (ec == std::errc::result_out_of_range) return false;
+  if (ec == std::errc::result_out_of_range && ptr == end) {
+    // Underflow reads as strtod reads it: a float below FLT_MIN as its float subnormal, anything
+    // below the smallest subnormal as a signed zero (TetGen writes values such as 1.6e-322, and
+    // files declare as float values that only a double holds). Overflow stays an error.
+    double d;
+    auto [dptr, dec] = std::from_chars(token.data(), end, d);
+    if (dec == std::errc() && dptr == end && std::fabs(d) < 1) {
+      *out = static_cast<T>(d);
+      return true;
+    }
+    const size_t e = token.find_last_of("eE");
+    if (dec == std::errc::result_out_of_range && e != std::string_view::npos && e + 1 < token.size() &&
+        token[e + 1] == '-') {
+      *out = token.front() == '-' ? -T(0) : T(0);
+      return true;
+    }
+    return false;
+  }
   return ec == std::errc() && ptr == end;
 }
 }  // namespace
