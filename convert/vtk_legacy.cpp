@@ -1,7 +1,7 @@
 // Legacy VTK (.vtk) import: DATASET UNSTRUCTURED_GRID in ASCII or BINARY (big-endian), the classic
 // CELLS layout and the OFFSETS/CONNECTIVITY layout of version 5.1, point and cell attributes
-// (SCALARS, COLOR_SCALARS, VECTORS, NORMALS, TEXTURE_COORDINATES, TENSORS, TENSORS6, FIELD) kept in
-// their source types.
+// (SCALARS, COLOR_SCALARS, VECTORS, NORMALS, TEXTURE_COORDINATES, TENSORS, TENSORS6, GLOBAL_IDS,
+// PEDIGREE_IDS, FIELD) kept in their source types. String arrays (ASCII only) are skipped.
 #include <cctype>
 #include <cstring>
 
@@ -55,6 +55,9 @@ class LegacyReader {
   Status readCellTypes();
   Status readAttribute(const std::string& keyword);
   Status readFieldData(std::vector<Field>* into);
+  static bool isStringType(std::string_view name);
+  // Reads past the strings of a string array whose type keyword was just read.
+  Status skipStrings(uint64_t comps, uint64_t tuples, const std::string& what);
   void skipMetadata();
 
   const std::string& path_;
@@ -242,6 +245,17 @@ Status LegacyReader::readFieldData(std::vector<Field>* into) {
     }
     GTN_ASSIGN_OR_RETURN(uint64_t comps, count("component count"));
     GTN_ASSIGN_OR_RETURN(uint64_t tuples, count("tuple count"));
+    TextReader peek = tr_;
+    std::string_view type_name;
+    if (peek.next(&type_name) && isStringType(type_name)) {
+      tr_.next(&type_name);
+      GTN_RETURN_IF_ERROR(skipStrings(comps, tuples, "FIELD array " + name));
+      if (into)
+        result_.report.warnings.push_back("line " + std::to_string(tr_.line()) + ": skipped FIELD array " +
+                                          decodeName(name) + " (" + std::string(type_name) +
+                                          "): text is not mesh data");
+      continue;
+    }
     GTN_ASSIGN_OR_RETURN(ScalarType type, dataType("FIELD array " + name));
     if (comps == 0 || comps > 4096) return tr_.error("FIELD array " + name + ": bad component count");
     if (tuples > UINT64_MAX / comps) return tr_.error("FIELD array " + name + ": too many values");
@@ -253,6 +267,27 @@ Status LegacyReader::readFieldData(std::vector<Field>* into) {
                          std::to_string(section_items_));
       into->push_back(std::move(f));
     }
+  }
+  return Status::ok();
+}
+
+bool LegacyReader::isStringType(std::string_view name) {
+  const std::string u = upper(name);
+  return u == "STRING" || u == "UTF8_STRING";
+}
+
+Status LegacyReader::skipStrings(uint64_t comps, uint64_t tuples, const std::string& what) {
+  // VTK writes one string per line, %-encoded (so an empty string is an empty line).
+  if (binary_)
+    return Status(StatusCode::kUnsupported, path_ + ":" + std::to_string(tr_.line()) + ": " + what +
+                                                ": string arrays in BINARY legacy files are not supported");
+  if (comps != 0 && tuples > UINT64_MAX / comps) return tr_.error(what + ": too many values");
+  const uint64_t n = comps * tuples;
+  tr_.skipLine();  // the rest of the array's header line
+  for (uint64_t i = 0; i < n; ++i) {
+    if (tr_.offset() >= text_.size())
+      return tr_.error("file ends after " + std::to_string(i) + " of the " + std::to_string(n) + " strings of " + what);
+    tr_.skipLine();
   }
   return Status::ok();
 }
@@ -288,6 +323,19 @@ Status LegacyReader::readAttribute(const std::string& kw) {
     std::vector<uint8_t> skipped;
     return readValues(binary_ ? ScalarType::kUInt8 : ScalarType::kFloat32, 4 * entries, "LOOKUP_TABLE " + name,
                       &skipped);
+  } else if (kw == "GLOBAL_IDS" || kw == "PEDIGREE_IDS") {
+    // One id per item; pedigree ids may be strings, which are not mesh data.
+    TextReader peek = tr_;
+    std::string_view type_name;
+    if (kw == "PEDIGREE_IDS" && peek.next(&type_name) && isStringType(type_name)) {
+      tr_.next(&type_name);
+      GTN_RETURN_IF_ERROR(skipStrings(1, section_items_, kw + " " + name));
+      result_.report.warnings.push_back("line " + std::to_string(tr_.line()) + ": skipped " + kw + " " +
+                                        decodeName(name) + " (" + std::string(type_name) + ")");
+      return Status::ok();
+    }
+    GTN_ASSIGN_OR_RETURN(type, dataType(kw + " " + name));
+    comps = 1;
   } else if (kw == "VECTORS" || kw == "NORMALS") {
     GTN_ASSIGN_OR_RETURN(type, dataType(kw + " " + name));
     comps = 3;

@@ -363,5 +363,50 @@ TEST(VtkLegacy, BinaryMixedCellsWithMetadataKeepTheTetrahedra) {
       << r->report.warnings[0];
 }
 
+// What VTK writes for data that came from Exodus: dataset FIELD data with char and string arrays,
+// GLOBAL_IDS and PEDIGREE_IDS attributes, and a FIELD array of strings among the point data.
+TEST(VtkLegacy, IdsAndStringArraysAsVtkWritesThem) {
+  const std::string dir = tempDir("vtk_legacy_ids");
+  const std::string text =
+      "# vtk DataFile Version 3.0\nvtk output\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+      "FIELD FieldData 2\nQA_Records 2 1 char\n65 66\nInfo%20Records 1 3 string\nfirst%20line\n\nthird\n"
+      "POINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1e-50\n"
+      "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n"
+      "CELL_DATA 1\nPEDIGREE_IDS PedigreeElementId int\n271\nGLOBAL_IDS GlobalElementId vtkIdType\n5\n"
+      "POINT_DATA 4\nGLOBAL_IDS GlobalNodeId int\n11 12 13 14\n"
+      "FIELD FieldData 2\nNames 1 4 string\na\nb\n\nd\nTemp 1 4 double\n0.5 1.5 2.5 3.5\n"
+      "PEDIGREE_IDS NodeNames string\nw\nx\ny\nz\n";
+  writeFile(dir + "/ids.vtk", text);
+  auto r = importMesh({dir + "/ids.vtk"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const TetMesh& m = r->mesh;
+  ASSERT_EQ(m.numTets(), 1u);
+  // A float too small for a float32 reads as strtof reads it: zero, not an error.
+  EXPECT_EQ(m.coords[11], 0.0);
+  ASSERT_EQ(m.point_fields.size(), 2u);
+  EXPECT_EQ(m.point_fields[0].name, "GlobalNodeId");
+  EXPECT_EQ(m.point_fields[0].type, ScalarType::kInt32);
+  EXPECT_EQ(m.point_fields[0].data<int32_t>()[3], 14);
+  EXPECT_EQ(m.point_fields[1].name, "Temp");
+  EXPECT_EQ(m.point_fields[1].data<double>()[2], 2.5);
+  ASSERT_EQ(m.cell_fields.size(), 2u);
+  EXPECT_EQ(m.cell_fields[0].name, "PedigreeElementId");
+  EXPECT_EQ(m.cell_fields[0].data<int32_t>()[0], 271);
+  EXPECT_EQ(m.cell_fields[1].name, "GlobalElementId");
+  EXPECT_EQ(m.cell_fields[1].type, ScalarType::kInt64);
+  ASSERT_EQ(r->report.warnings.size(), 2u);
+  EXPECT_NE(r->report.warnings[0].find("skipped FIELD array Names (string)"), std::string::npos)
+      << r->report.warnings[0];
+  EXPECT_NE(r->report.warnings[1].find("skipped PEDIGREE_IDS NodeNames (string)"), std::string::npos)
+      << r->report.warnings[1];
+
+  // A string array cut short names the file, the line and the array.
+  writeFile(dir + "/cut.vtk", text.substr(0, text.find("\nd\nTemp")));
+  auto cut = importMesh({dir + "/cut.vtk"}, ImportOptions{});
+  ASSERT_FALSE(cut.isOk());
+  EXPECT_NE(cut.status().message().find("cut.vtk:"), std::string::npos) << cut.status().message();
+  EXPECT_NE(cut.status().message().find("strings of FIELD array Names"), std::string::npos) << cut.status().message();
+}
+
 }  // namespace
 }  // namespace gtn
