@@ -36,7 +36,8 @@ constexpr SkippedSection kSkipped[] = {
     {"RequiredEdges", 1},   {"RequiredTriangles", 1},  {"RequiredQuadrilaterals", 1},
     {"RequiredTetrahedra", 1}, {"RequiredHexahedra", 1}, {"Normals", -1},
     {"Tangents", -1},       {"NormalAtVertices", 2},   {"NormalAtTriangleVertices", 3},
-    {"NormalAtQuadrilateralVertices", 3}, {"TangentAtEdgeVertices", 3}, {"Crack", 2},
+    {"NormalAtQuadrilateralVertices", 3}, {"TangentAtEdgeVertices", 3}, {"TangentAtVertices", 2},
+    {"Crack", 2},
 };
 
 StatusOr<int64_t> readCount(TextReader& reader, int64_t values_per_entry, const std::string& what) {
@@ -73,6 +74,18 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
       if (dimension != 3) {
         return reader.error("dimension " + std::to_string(dimension) +
                             ": only 3-dimensional (tetrahedral) Medit meshes are supported");
+      }
+    } else if (sameKeyword(tok, "Geometry") || sameKeyword(tok, "Identifier")) {
+      // A quoted string (a file name, a title), possibly with spaces.
+      std::string_view value;
+      if (!reader.next(&value)) return reader.errorAtEnd("a quoted string");
+      const size_t line = reader.line();
+      bool open = value.front() == '"' && (value.size() < 2 || value.back() != '"');
+      while (open) {
+        if (!reader.next(&value) || reader.line() != line)
+          return invalidData(reader.path() + ":" + std::to_string(line) + ": " + std::string(tok) +
+                             ": the quoted string is not closed on its line");
+        open = value.back() != '"';
       }
     } else if (sameKeyword(tok, "Vertices")) {
       if (dimension != 3) return reader.error("Vertices before a 'Dimension 3' line");

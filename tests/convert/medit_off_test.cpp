@@ -174,6 +174,29 @@ std::string replaced(std::string text, const std::string& from, const std::strin
   return text.replace(at, from.size(), to);
 }
 
+// The sections MMG writes after a remeshing (mmg3d's own examples carry them all): tangents at
+// vertices, required entities, a Geometry file name with a space, comments between sections.
+TEST(MeditImport, SkipsTheSectionsMmgWrites) {
+  const std::string dir = tempDir("medit-mmg");
+  const std::string text = replaced(kMedit, "Tetrahedra\n",
+                                    "Geometry\n\"the cube.mesh\"\nIdentifier \"cube\"\n"
+                                    "RequiredVertices\n2\n1\n2\nTangents\n1\n1 0 0\n"
+                                    "TangentAtVertices\n1\n3 1\n# tetrahedra follow\nTetrahedra\n");
+  writeFile(dir + "/mmg.mesh", text);
+  auto r = importMedit(dir + "/mmg.mesh", ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numPoints(), 5u);
+  ASSERT_EQ(r->mesh.numTets(), 2u);
+  EXPECT_EQ(r->mesh.cell_fields[0].get(1, 0), 8);
+  // A string left open is an error on its line.
+  writeFile(dir + "/open.mesh", replaced(kMedit, "Tetrahedra\n", "Geometry \"the cube\n3\nTetrahedra\n"));
+  auto bad = importMedit(dir + "/open.mesh", ImportOptions{});
+  ASSERT_FALSE(bad.isOk());
+  EXPECT_NE(bad.status().message().find(dir + "/open.mesh:24: Geometry: the quoted string is not closed"),
+            std::string::npos)
+      << bad.status().message();
+}
+
 TEST(MeditErrors, BadInputs) {
   const std::string dir = tempDir("medit-errors");
   const std::string p = dir + "/b.mesh";
