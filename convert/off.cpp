@@ -1,8 +1,11 @@
 // Tetrahedral OFF importer, the format of the ZSweep and HAVS renderers: an optional keyword line
 // ("OFF", "TOFF", ...), the point and tetrahedron counts (on one line or two), `x y z s...` rows with
 // as many scalars per row as the first row has beyond x y z, then 0-based index rows, optionally
-// prefixed by 4. The format is line-oriented; '#' starts a comment.
+// prefixed by 4. The format is line-oriented; '#' starts a comment. A surface OFF (triangle or
+// quadrilateral faces) is recognised and refused rather than read as meaningless tetrahedra.
 #include <cctype>
+#include <string>
+#include <vector>
 
 #include "convert/ascii_rows.h"
 #include "convert/import.h"
@@ -20,6 +23,12 @@ bool isOffKeyword(std::string_view token) {
     if (std::toupper(static_cast<unsigned char>(tail[i])) != "OFF"[i]) return false;
   }
   return true;
+}
+// Mixed rows of 4 and 5 values are what a surface OFF of triangles and quadrilaterals looks like.
+std::string surfaceHint(const std::vector<std::string_view>& row) {
+  if (!row.empty() && (row[0] == "3" || row[0] == "4") && row.size() == static_cast<size_t>(row[0][0] - '0') + 1)
+    return " (rows of 4 and 5 values mixed are the faces of a surface OFF, which has no volume)";
+  return "";
 }
 }  // namespace
 
@@ -84,11 +93,14 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
   }
   if (width > 3) mesh.point_fields.push_back(std::move(scalars));
 
-  size_t tet_width = 0;
+  size_t tet_width = 0, first_tet_line = 0;
+  bool all_start_with_3 = true;
   for (int64_t t = 0; t < nt; ++t) {
     if (!readRow(reader, &row)) return truncatedError(reader, last_line, t, nt, "tetrahedra");
     last_line = reader.line();
+    all_start_with_3 &= row[0] == "3";
     if (t == 0) {
+      first_tet_line = reader.line();
       tet_width = row.size();
       if (tet_width != 4 && tet_width != 5) {
         return reader.error("a tetrahedron row has 4 indices, optionally after a leading 4; found " +
@@ -98,7 +110,7 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
       mesh.tets.resize(static_cast<size_t>(nt));
     } else if (row.size() != tet_width) {
       return reader.error("tetrahedron row has " + std::to_string(row.size()) + " values; the first one has " +
-                          std::to_string(tet_width));
+                          std::to_string(tet_width) + surfaceHint(row));
     }
     if (tet_width == 5) {
       GTN_RETURN_IF_ERROR(parseIntToken(reader, row[0], 4, 4, "vertex count of a tetrahedron").status());
@@ -117,7 +129,25 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
     return reader.error("more rows than the " + std::to_string(np) + " points and " + std::to_string(nt) +
                         " tetrahedra the header announces");
   }
+  // The surface OFF of Geomview and the shape benchmarks shares the header and the point rows: its
+  // triangles ("3 a b c") read as tetrahedra starting at point 3, its quadrilaterals ("4 a b c d")
+  // as prefixed tetrahedra that are all flat. Either way the result would be meaningless.
+  const std::string where = path + ":" + std::to_string(first_tet_line) + ": ";
+  if (tet_width == 4 && nt >= 2 && all_start_with_3) {
+    return Status(StatusCode::kUnsupported,
+                  where + "every one of the " + std::to_string(nt) +
+                      " element rows starts with 3: this is a surface OFF of triangles ('3 a b c'), not "
+                      "tetrahedral OFF; it has no volume to import");
+  }
   finishImport(result);
+  if (nt > 0 && result.report.zero_volume == static_cast<size_t>(nt)) {
+    return Status(StatusCode::kUnsupported,
+                  where + "all " + std::to_string(nt) + " tetrahedra are flat (their 4 points are coplanar)" +
+                      (tet_width == 5 ? ": this looks like a surface OFF of quadrilaterals ('4 a b c d'), not "
+                                        "tetrahedral OFF"
+                                      : "") +
+                      "; it has no volume to import");
+  }
   mesh.setMetadata("source.format", "off");
   GTN_RETURN_IF_ERROR(mesh.checkConsistency(path));
   return result;

@@ -322,6 +322,45 @@ TEST(OffErrors, BadInputs) {
   expectError(importOff(p, ImportOptions{}), p + ":1:");
 }
 
+// The surface OFF of Geomview and the shape benchmarks has the same header and point rows; its faces
+// must not be read as tetrahedra ("3 a b c" would start every one at point 3, "4 a b c d" would give
+// flat ones).
+TEST(OffErrors, SurfaceOffIsNotReadAsTetrahedra) {
+  const std::string dir = tempDir("off-surface");
+  const std::string tris = dir + "/tris.off";
+  writeFile(tris, "OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  auto r = importOff(tris, ImportOptions{});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().code(), StatusCode::kUnsupported);
+  EXPECT_NE(r.status().message().find(tris + ":7: every one of the 4 element rows starts with 3: this is a surface "
+                                             "OFF of triangles"),
+            std::string::npos)
+      << r.status().message();
+  const std::string quads = dir + "/quads.off";
+  writeFile(quads, "OFF\n8 6 12\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+                   "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n");
+  r = importOff(quads, ImportOptions{});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find(quads + ":11: all 6 tetrahedra are flat (their 4 points are coplanar): this "
+                                              "looks like a surface OFF of quadrilaterals"),
+            std::string::npos)
+      << r.status().message();
+  const std::string mixed = dir + "/mixed.off";
+  writeFile(mixed, "OFF\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n4 0 3 2 1\n3 0 1 4\n");
+  r = importOff(mixed, ImportOptions{});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find(mixed + ":9: tetrahedron row has 4 values; the first one has 5 (rows of 4 and 5 "
+                                              "values mixed are the faces of a surface OFF"),
+            std::string::npos)
+      << r.status().message();
+  // A tetrahedral OFF whose rows happen to start with 3 is still read when its tetrahedra are not all so.
+  const std::string tets = dir + "/tets.off";
+  writeFile(tets, "5\n2\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n3 0 1 2\n1 3 2 4\n");
+  r = importOff(tets, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 2u);
+}
+
 // Every prefix of a valid file imports cleanly or fails with a message naming the file.
 TEST(MeditOffRobustness, Prefixes) {
   const std::string dir = tempDir("medit-off-prefixes");
