@@ -1,4 +1,4 @@
-// PLOT3D importer: binary curvilinear grids (with an optional Q file and function file, or a
+// PLOT3D importer: binary or ASCII curvilinear grids (with an optional Q file and function file, or a
 // ParaView-style .p3d JSON meta-file naming them) into a tetrahedral mesh.
 //
 // PLOT3D files do not describe themselves, so every file is read by trying each interpretation
@@ -7,7 +7,8 @@
 // file exactly. Only the whole layout is read (all X, then all Y, then all Z per grid, i fastest).
 // When no interpretation fits exactly, one that fits with trailing zero bytes is accepted with a
 // warning; trailing data that is not zero is an error. When several fit, the import fails and lists
-// them: guessing would silently produce a wrong mesh.
+// them: guessing would silently produce a wrong mesh. A text file that no binary interpretation fits
+// is read as ASCII PLOT3D, its layout decided the same way by its value count.
 //
 // Policies (ARCHITECTURE.md / FORMATS.md):
 // - Points keep grid order (i fastest, then j, then k), blocks concatenated, in source precision.
@@ -30,6 +31,7 @@
 #include <nlohmann/json.hpp>
 
 #include "convert/import.h"
+#include "convert/text_reader.h"
 #include "format/file_io.h"
 #include "mesh/hex_split.h"
 
@@ -58,14 +60,20 @@ struct Layout {
   int ndim = 3;
   int precision = 4;  // bytes per real
   bool iblank = false;
+  bool ascii = false;  // read from text (transcoded; the binary members then describe the transcoding)
 };
 
 std::string describeLayout(const Layout& l, Kind kind) {
-  std::string s = l.big_endian ? "big-endian" : "little-endian";
-  s += l.marker ? ", " + std::to_string(l.marker) + "-byte record markers" : ", no record markers";
+  std::string s;
+  if (l.ascii) {
+    s = "ASCII";
+  } else {
+    s = l.big_endian ? "big-endian" : "little-endian";
+    s += l.marker ? ", " + std::to_string(l.marker) + "-byte record markers" : ", no record markers";
+  }
   s += l.multi_grid ? ", multi-grid" : ", single grid";
   if (kind == Kind::kGrid) s += l.ndim == 3 ? ", 3D" : ", 2D";
-  s += l.precision == 4 ? ", float32" : ", float64";
+  if (!l.ascii) s += l.precision == 4 ? ", float32" : ", float64";
   if (kind == Kind::kGrid) s += l.iblank ? ", IBLANK" : ", no IBLANK";
   return s;
 }
@@ -386,7 +394,7 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
 std::string triedText(const Detection& d, Kind kind) {
   std::string s = "tried big- and little-endian, no/4-byte/8-byte record markers, single and multi-grid, ";
   s += kind == Kind::kGrid ? "2D and 3D, float32 and float64, with and without IBLANK" : "float32 and float64";
-  s += " (binary only: ASCII PLOT3D is not read)";
+  s += " (binary; text files are read as ASCII PLOT3D)";
   const size_t shown = std::min<size_t>(d.plausible.size(), 8);
   for (size_t i = 0; i < shown; ++i)
     s += "; [" + std::to_string(i + 1) + "] " + describeLayout(d.plausible[i].layout, kind) + ": " + d.plausible[i].why;
@@ -474,7 +482,7 @@ StatusOr<std::string> readInput(const std::string& path, Kind kind) {
 Status noFitError(const std::string& path, std::string_view bytes, Kind kind, const Detection& d) {
   std::string msg = path + ": not a PLOT3D " + kindName(kind) + " file this reader understands (" +
                     std::to_string(bytes.size()) + " bytes): no interpretation fits its size exactly";
-  if (looksLikeText(bytes)) msg += "; it looks like text, and ASCII PLOT3D is not supported";
+  if (looksLikeText(bytes)) msg += "; it looks like text, but not like ASCII PLOT3D either";
   return invalidData(msg + "; " + triedText(d, kind));
 }
 
@@ -487,6 +495,218 @@ Status noMatchError(const std::string& path, std::string_view bytes, Kind kind, 
   return invalidData(path + ": PLOT3D " + kindName(kind) + " file dimensions " + blocksText(fits[0].blocks) + " (" +
                      describeLayout(fits[0].layout, kind) + ") disagree with the grid's " + blocksText(grid_blocks) +
                      " (" + grid_path + ")");
+}
+
+// ---------------------------------------------------------------------------------------------
+// ASCII PLOT3D: the same records as text (Fortran list-directed or C printf output; commas may
+// separate values, exponents may be written with D). Which layout the text holds is decided by its
+// value count, as the size decides it for binary files; the chosen layout is then transcoded into a
+// binary file (little-endian, no record markers, int32 integers, float64 reals) that the binary
+// reader reads with that layout imposed.
+
+struct AsciiValues {
+  std::vector<double> v;
+  std::vector<uint64_t> line;  // 1-based line of each value
+};
+
+StatusOr<AsciiValues> readAsciiValues(const std::string& path, std::string_view text) {
+  AsciiValues out;
+  uint64_t line = 1;
+  size_t i = 0;
+  std::string token;
+  while (i < text.size()) {
+    const char c = text[i];
+    if (c == '\n') ++line;
+    if (c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == ',') {
+      ++i;
+      continue;
+    }
+    size_t e = i;
+    while (e < text.size() && !std::strchr(" \t\r\n,", text[e])) ++e;
+    token.assign(text.substr(i, e - i));
+    for (char& ch : token)
+      if (ch == 'D' || ch == 'd') ch = 'E';
+    if (token.find('*') != std::string::npos)
+      return unsupported(path + ":" + std::to_string(line) + ": Fortran repeat counts ('" + token.substr(0, 40) +
+                         "') are not supported in ASCII PLOT3D");
+    double v;
+    if (!parseDouble(token, &v))
+      return invalidData(path + ":" + std::to_string(line) + ": ASCII PLOT3D: '" + token.substr(0, 40) +
+                         "' is not a number");
+    out.v.push_back(v);
+    out.line.push_back(line);
+    i = e;
+  }
+  return out;
+}
+
+bool asciiInt(double v, int64_t* out) {
+  if (!(v >= -2147483648.0 && v <= 2147483647.0) || v != std::floor(v)) return false;
+  *out = static_cast<int64_t>(v);
+  return true;
+}
+
+void putInt32(std::string* out, int64_t v) {
+  const uint32_t u = static_cast<uint32_t>(static_cast<int32_t>(v));
+  for (int b = 0; b < 4; ++b) out->push_back(static_cast<char>(u >> (8 * b)));
+}
+
+void putFloat64(std::string* out, double v) {
+  const uint64_t u = std::bit_cast<uint64_t>(v);
+  for (int b = 0; b < 8; ++b) out->push_back(static_cast<char>(u >> (8 * b)));
+}
+
+// Transcodes the values as `l` lays them out, or says why they do not fit it.
+bool transcodeAscii(const AsciiValues& a, const Layout& l, Kind kind, std::string* bin, std::string* why) {
+  const std::vector<double>& v = a.v;
+  const uint64_t n = v.size();
+  uint64_t pos = 0;
+  bin->clear();
+  auto take_int = [&](const char* what, int64_t* out) {
+    if (pos >= n) {
+      *why = std::string("the text ends before the ") + what;
+      return false;
+    }
+    if (!asciiInt(v[pos], out)) {
+      *why = std::string("the ") + what + " on line " + std::to_string(a.line[pos]) + " is not an integer";
+      return false;
+    }
+    ++pos;
+    return true;
+  };
+  int64_t ngrid = 1;
+  if (l.multi_grid) {
+    if (!take_int("grid count", &ngrid)) return false;
+    if (ngrid < 1 || static_cast<uint64_t>(ngrid) > n) {
+      *why = "grid count " + std::to_string(ngrid) + " is impossible";
+      return false;
+    }
+    putInt32(bin, ngrid);
+  }
+  const int ints = kind == Kind::kFunction ? 4 : (kind == Kind::kGrid ? l.ndim : 3);
+  std::vector<uint64_t> points(static_cast<size_t>(ngrid), 1), nvar(static_cast<size_t>(ngrid), 0);
+  for (int64_t g = 0; g < ngrid; ++g) {
+    for (int k = 0; k < ints; ++k) {
+      int64_t d;
+      if (!take_int("grid dimensions", &d)) return false;
+      if (d < 1 || static_cast<uint64_t>(d) > n) {
+        *why = "dimension " + std::to_string(k + 1) + " of grid " + std::to_string(g + 1) + " is " + std::to_string(d);
+        return false;
+      }
+      if (k < 3) {
+        points[g] *= static_cast<uint64_t>(d);
+        if (points[g] > n) {
+          *why = "grid " + std::to_string(g + 1) + " has more points than the text has values";
+          return false;
+        }
+      } else {
+        nvar[g] = static_cast<uint64_t>(d);
+      }
+      putInt32(bin, d);
+    }
+  }
+  // The value count must match exactly (checked before transcoding the bulk of the file).
+  uint64_t need = pos;
+  for (int64_t g = 0; g < ngrid; ++g) {
+    uint64_t per_point = kind == Kind::kGrid ? static_cast<uint64_t>(l.ndim + (l.iblank ? 1 : 0))
+                                             : (kind == Kind::kQ ? 5 : nvar[g]);
+    if (per_point != 0 && points[g] > (n + 4) / per_point) {
+      *why = "grid " + std::to_string(g + 1) + " needs more values than the text has";
+      return false;
+    }
+    need += points[g] * per_point + (kind == Kind::kQ ? 4 : 0);
+  }
+  if (need != n) {
+    *why = "the header announces " + std::to_string(need) + " values, the text has " + std::to_string(n);
+    return false;
+  }
+  for (int64_t g = 0; g < ngrid; ++g) {
+    if (kind == Kind::kQ)
+      for (int k = 0; k < 4; ++k) putFloat64(bin, v[pos++]);
+    const uint64_t reals = kind == Kind::kGrid ? points[g] * l.ndim : points[g] * (kind == Kind::kQ ? 5 : nvar[g]);
+    for (uint64_t k = 0; k < reals; ++k) putFloat64(bin, v[pos++]);
+    if (kind == Kind::kGrid && l.iblank) {
+      for (uint64_t k = 0; k < points[g]; ++k) {
+        int64_t b;
+        if (!take_int("IBLANK value", &b)) return false;
+        putInt32(bin, b);
+      }
+    }
+  }
+  return true;
+}
+
+// An ASCII file as the binary file of its one fitting layout; `*layout` receives that layout (the
+// binary reader must be held to it). Fails when none or several layouts fit.
+StatusOr<std::string> asciiAsBinary(const std::string& path, std::string_view text, Kind kind,
+                                    const Constraints& constraints, Layout* layout) {
+  GTN_ASSIGN_OR_RETURN(const AsciiValues values, readAsciiValues(path, text));
+  if (values.v.empty()) return invalidData(path + ": ASCII PLOT3D " + std::string(kindName(kind)) + " file holds no values");
+  std::vector<std::pair<Layout, std::string>> fits;
+  std::string tried;
+  for (int multi = 0; multi < 2; ++multi) {
+    for (int ndim : {3, 2}) {
+      if (ndim == 2 && kind != Kind::kGrid) continue;
+      for (int iblank = 0; iblank < 2; ++iblank) {
+        if (iblank && kind != Kind::kGrid) continue;
+        Layout l;
+        l.big_endian = false;
+        l.marker = 0;
+        l.multi_grid = multi != 0;
+        l.ndim = ndim;
+        l.precision = 8;
+        l.iblank = iblank != 0;
+        l.ascii = true;
+        if (constraints.multi_grid && *constraints.multi_grid != l.multi_grid) continue;
+        if (kind == Kind::kGrid && constraints.iblank && *constraints.iblank != l.iblank) continue;
+        if (kind == Kind::kGrid && constraints.ndim && *constraints.ndim != l.ndim) continue;
+        std::string bin, why;
+        if (transcodeAscii(values, l, kind, &bin, &why)) {
+          fits.emplace_back(l, std::move(bin));
+        } else {
+          tried += "; " + describeLayout(l, kind) + ": " + why;
+        }
+      }
+    }
+  }
+  if (fits.empty())
+    return invalidData(path + ": not a PLOT3D " + std::string(kindName(kind)) + " file this reader understands: it is text (" +
+                       std::to_string(values.v.size()) + " values) and no ASCII PLOT3D layout fits its value count" +
+                       tried);
+  if (fits.size() > 1) {
+    std::string msg = path + ": ambiguous ASCII PLOT3D " + std::string(kindName(kind)) + " file: " +
+                      std::to_string(fits.size()) + " layouts fit its " + std::to_string(values.v.size()) +
+                      " values; name the layout in a .p3d meta-file:";
+    for (size_t i = 0; i < fits.size(); ++i) msg += " [" + std::to_string(i + 1) + "] " + describeLayout(fits[i].first, kind);
+    return invalidData(msg);
+  }
+  *layout = fits[0].first;
+  return std::move(fits[0].second);
+}
+
+// The constraints that hold the binary reader to a transcoded layout.
+Constraints imposed(const Layout& l) {
+  Constraints c;
+  c.big_endian = l.big_endian;
+  c.fortran = l.marker != 0;
+  c.multi_grid = l.multi_grid;
+  c.precision = l.precision;
+  c.iblank = l.iblank;
+  c.ndim = l.ndim;
+  return c;
+}
+
+// Text is read as ASCII PLOT3D when no binary interpretation fits it exactly: *bytes becomes the
+// transcoded binary and *d its detection under the layout the text fits.
+Status asciiFallback(const std::string& path, Kind kind, const Constraints& constraints, std::string* bytes,
+                     Detection* d) {
+  if (!d->exact.empty() || !looksLikeText(*bytes)) return Status::ok();
+  Layout l;
+  GTN_ASSIGN_OR_RETURN(std::string bin, asciiAsBinary(path, *bytes, kind, constraints, &l));
+  *d = detect(bin, kind, imposed(l));
+  for (Fit& f : d->exact) f.layout.ascii = true;
+  *bytes = std::move(bin);
+  return Status::ok();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -545,8 +765,7 @@ StatusOr<P3dFiles> readP3dMeta(const std::string& path) {
     }
     if (key == "format") {
       if (!v.is_string() || (v != "binary" && v != "ascii")) return bad(key, "\"binary\" or \"ascii\"");
-      if (v == "ascii") return unsupported(path + ": ASCII PLOT3D (\"format\": \"ascii\") is not supported; only binary");
-      continue;
+      continue;  // text is recognised by its content
     }
     // ParaView ignores the layout keys when auto-detection is on; so do we.
     if (key == "byte-order") {
@@ -833,7 +1052,8 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
 
   // The grid.
   GTN_ASSIGN_OR_RETURN(std::string grid_bytes, readInput(grid_path, Kind::kGrid));
-  const Detection grid_detection = detect(grid_bytes, Kind::kGrid, constraints);
+  Detection grid_detection = detect(grid_bytes, Kind::kGrid, constraints);
+  GTN_RETURN_IF_ERROR(asciiFallback(grid_path, Kind::kGrid, constraints, &grid_bytes, &grid_detection));
   GTN_ASSIGN_OR_RETURN(Selected grid, selectFit(grid_path, grid_bytes, Kind::kGrid, grid_detection,
                                              [](const Fit&) { return true; }, nullptr, &warnings));
   if (!grid.found) return noFitError(grid_path, grid_bytes, Kind::kGrid, grid_detection);
@@ -854,41 +1074,54 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
   const std::vector<BlockDims>& blocks = grid.fit.blocks;
   auto matches_grid = [&](const Fit& f) { return sameDims(f.blocks, blocks); };
 
-  // The second input: a Q file when it fits the Q layout for this grid, else a function file.
-  auto for_grid = [&](const std::string& path, std::string_view bytes, Kind kind, Detection* d) {
-    *d = detect(bytes, kind, constraints);
-    return selectFit(path, bytes, kind, *d, matches_grid, &grid.fit.layout, &warnings);
+  // Detects `*bytes` as `kind` (text transcoded from ASCII: then *text_status says whether that
+  // worked) and picks the interpretation that goes with the grid.
+  auto for_grid = [&](const std::string& path, std::string* bytes, Kind kind, Detection* d,
+                      Status* text_status) -> StatusOr<Selected> {
+    *d = detect(*bytes, kind, constraints);
+    *text_status = asciiFallback(path, kind, constraints, bytes, d);
+    if (!text_status->isOk()) return Selected();
+    return selectFit(path, *bytes, kind, *d, matches_grid, &grid.fit.layout, &warnings);
   };
   auto no_match = [&](const std::string& path, std::string_view bytes, Kind kind, const Detection& d) {
     return noMatchError(path, bytes, kind, d, blocks, grid_path);
   };
   if (!second_path.empty()) {
-    GTN_ASSIGN_OR_RETURN(std::string bytes, readInput(second_path, Kind::kQ));
+    GTN_ASSIGN_OR_RETURN(const std::string raw, readInput(second_path, Kind::kQ));
+    std::string bytes = raw, fbytes = raw;
     Detection dq, df;
-    GTN_ASSIGN_OR_RETURN(Selected q, for_grid(second_path, bytes, Kind::kQ, &dq));
+    Status q_text, f_text;
+    GTN_ASSIGN_OR_RETURN(Selected q, for_grid(second_path, &bytes, Kind::kQ, &dq, &q_text));
     if (q.found) {
       addQ(bytes, q.fit, mesh, &warnings, second_path);
     } else if (meta || !function_path.empty()) {
       // Named as the Q file, or followed by the function file: it must be a Q file.
+      if (!q_text.isOk()) return q_text;
       return no_match(second_path, bytes, Kind::kQ, dq);
     } else {
-      GTN_ASSIGN_OR_RETURN(Selected f, for_grid(second_path, bytes, Kind::kFunction, &df));
+      GTN_ASSIGN_OR_RETURN(Selected f, for_grid(second_path, &fbytes, Kind::kFunction, &df, &f_text));
       if (!f.found) {
+        if (!q_text.isOk() && !f_text.isOk())
+          return invalidData(second_path + ": neither an ASCII PLOT3D Q file nor a function file for the grid " +
+                             grid_path + " (" + blocksText(blocks) + "); as a Q file: " + q_text.message() +
+                             "; as a function file: " + f_text.message());
         if (!dq.exact.empty() || !dq.zero_tail.empty()) return no_match(second_path, bytes, Kind::kQ, dq);
-        if (!df.exact.empty() || !df.zero_tail.empty()) return no_match(second_path, bytes, Kind::kFunction, df);
+        if (!df.exact.empty() || !df.zero_tail.empty()) return no_match(second_path, fbytes, Kind::kFunction, df);
         return invalidData(second_path + ": neither a PLOT3D Q file nor a function file for the grid " + grid_path +
                            " (" + blocksText(blocks) + ")" +
-                           (looksLikeText(bytes) ? "; it looks like text, and ASCII PLOT3D is not supported" : "") +
+                           (looksLikeText(raw) ? "; it looks like text, but not like ASCII PLOT3D either" : "") +
                            "; as a Q file: " + triedText(dq, Kind::kQ) +
                            "; as a function file: " + triedText(df, Kind::kFunction));
       }
-      GTN_RETURN_IF_ERROR(addFunction(second_path, bytes, f.fit, mesh));
+      GTN_RETURN_IF_ERROR(addFunction(second_path, fbytes, f.fit, mesh));
     }
   }
   if (!function_path.empty()) {
     GTN_ASSIGN_OR_RETURN(std::string bytes, readInput(function_path, Kind::kFunction));
     Detection df;
-    GTN_ASSIGN_OR_RETURN(Selected f, for_grid(function_path, bytes, Kind::kFunction, &df));
+    Status f_text;
+    GTN_ASSIGN_OR_RETURN(Selected f, for_grid(function_path, &bytes, Kind::kFunction, &df, &f_text));
+    if (!f_text.isOk()) return f_text;
     if (!f.found) return no_match(function_path, bytes, Kind::kFunction, df);
     GTN_RETURN_IF_ERROR(addFunction(function_path, bytes, f.fit, mesh));
   }

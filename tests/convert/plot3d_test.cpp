@@ -555,7 +555,7 @@ TEST_F(Plot3dSynthetic, TruncatedGridNamesFileOffsetAndReason) {
                    "needs 491520 bytes at byte 12, the file has 399988 left"),
             std::string::npos)
       << m;
-  EXPECT_NE(m.find("ASCII PLOT3D is not read"), std::string::npos) << m;
+  EXPECT_NE(m.find("text files are read as ASCII PLOT3D"), std::string::npos) << m;
 
   // Every shorter prefix fails cleanly too (a sample of them, to keep the test fast).
   for (size_t len : {1u, 4u, 11u, 12u, 13u, 491531u}) {
@@ -799,6 +799,83 @@ TEST(Plot3dCli, TruncatedInputFailsWithoutOutput) {
   EXPECT_FALSE(test::fileExists(out));
   for (const auto& entry : std::filesystem::directory_iterator(dir))
     EXPECT_EQ(entry.path().filename(), "cut.xyz") << "left behind: " << entry.path();
+}
+
+// ASCII PLOT3D as Fortran list-directed output and C printf write it: a multi-grid grid with IBLANK
+// (values spread over lines, some comma-separated, D exponents) and its Q file.
+std::string asciiGrid(const std::vector<Block>& blocks, bool multi, bool iblank) {
+  std::string s;
+  char buf[64];
+  if (multi) s += std::to_string(blocks.size()) + "\n";
+  for (const Block& b : blocks) s += std::to_string(b.n[0]) + " " + std::to_string(b.n[1]) + " " + std::to_string(b.n[2]) + "\n";
+  for (const Block& b : blocks) {
+    size_t col = 0;
+    for (const std::vector<double>* axis : {&b.x, &b.y, &b.z})
+      for (double v : *axis) {
+        std::snprintf(buf, sizeof buf, "%.17E", v);
+        std::string t = buf;
+        if (col % 3 == 1) t[t.find('E')] = 'D';
+        s += t + (++col % 4 == 0 ? "\n" : (col % 2 ? ", " : "  "));
+      }
+    s += "\n";
+    if (iblank)
+      for (size_t i = 0; i < b.points(); ++i) s += std::to_string(b.iblank.empty() ? 1 : b.iblank[i]) + (i % 10 == 9 ? "\n" : " ");
+    s += "\n";
+  }
+  return s;
+}
+
+TEST_F(Plot3dSynthetic, AsciiMultiGridWithIblankAndQ) {
+  Block a = boxBlock(3, 2, 2), b = boxBlock(2, 2, 3, 10.0);
+  a.iblank.assign(a.points(), 1);
+  a.iblank[0] = 0;  // one hole: the cell that has point 0 is dropped
+  b.iblank.assign(b.points(), -1);
+  const std::string xyz = write("grid.x", asciiGrid({a, b}, true, true));
+  std::string q = "2\n3 2 2\n2 2 3\n";
+  for (const Block* blk : {&a, &b}) {
+    q += "0.5 2.0 1.0D+06 3.25\n";
+    for (int var = 0; var < 5; ++var)
+      for (size_t i = 0; i < blk->points(); ++i) q += std::to_string(var * 100 + static_cast<int>(i)) + " ";
+    q += "\n";
+  }
+  const std::string qpath = write("grid.q", q);
+  auto r = importFiles({xyz, qpath});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const TetMesh& m = r->mesh;
+  ASSERT_EQ(m.numPoints(), 24u);
+  EXPECT_EQ(m.coords[3 * 1 + 0], a.x[1]);  // bit-exact from 17 significant digits
+  EXPECT_EQ(m.coords[3 * 13 + 1], b.y[1]);
+  EXPECT_EQ(m.coords[3 * 23 + 2], b.z[11]);
+  EXPECT_EQ(r->report.dropped_cells, 1u);
+  EXPECT_EQ(m.numTets(), 6u * (2 - 1) + 6u * 2);
+  EXPECT_EQ(*m.findMetadata("plot3d.layout"), "ASCII, multi-grid, 3D, IBLANK");
+  EXPECT_EQ(*m.findMetadata("plot3d.re"), "1000000");
+  const Field* density = nullptr;
+  const Field* blank = nullptr;
+  for (const Field& f : m.point_fields) {
+    if (f.name == "density") density = &f;
+    if (f.name == "iblank") blank = &f;
+  }
+  ASSERT_NE(density, nullptr);
+  ASSERT_NE(blank, nullptr);
+  EXPECT_EQ(density->get(13, 0), 1.0);   // grid 2, point 1
+  EXPECT_EQ(blank->get(0, 0), 0.0);
+  EXPECT_EQ(blank->get(12, 0), -1.0);
+
+  // A grid with a value too few, or a word among the numbers, fails naming the file and the reason.
+  std::string cut = asciiGrid({a}, false, false);
+  cut.erase(cut.find_last_of(" ,\n", cut.find_last_of("0123456789")));  // the last value
+  cut += "\n";
+  auto c = importFiles({write("cut.x", cut)});
+  ASSERT_FALSE(c.isOk());
+  EXPECT_NE(c.status().message().find("cut.x: not a PLOT3D grid file this reader understands: it is text (38 values) "
+                                      "and no ASCII PLOT3D layout fits its value count"),
+            std::string::npos)
+      << c.status().message();
+  auto w = importFiles({write("word.x", "2 2 2\n0 1 0 1 0 1 0 1\n0 0 1 1 0 0 1 1\n0 0 0 0 1 1 one 1\n")});
+  ASSERT_FALSE(w.isOk());
+  EXPECT_NE(w.status().message().find("word.x:4: ASCII PLOT3D: 'one' is not a number"), std::string::npos)
+      << w.status().message();
 }
 
 }  // namespace
