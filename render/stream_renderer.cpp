@@ -107,6 +107,7 @@ struct ArrivedTet {
   uint32_t v[4];
   TetGeom g;
   int32_t rays = 0;
+  FaceKey keys[4];  // of its faces, made while counting (in parallel) for the face map's sequential pass
 };
 
 struct Trigger {
@@ -378,6 +379,7 @@ Status StreamRenderer::flushBatch() {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, st.flushing.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ArrivedTet& a = st.flushing[i];
+      for (int k = 0; k < 4; ++k) a.keys[k] = makeKey(a.v[kTetFace[k][0]], a.v[kTetFace[k][1]], a.v[kTetFace[k][2]]);
       finishTetGeom(a.g);
       const double* corners[4] = {a.g.p[0], a.g.p[1], a.g.p[2], a.g.p[3]};
       int box[4];
@@ -490,11 +492,16 @@ Status StreamRenderer::flushBatch() {
   //    at their faces (sequential: the face map).
   std::vector<Trigger> triggers;
   std::vector<uint32_t> arrived_slots;
-  for (ArrivedTet& a : st.flushing) {
-    FaceKey keys[4];
+  // The face map is far larger than the cache and its probes land anywhere: the slots of the
+  // tetrahedra a few places ahead are requested while this one is handled.
+  constexpr size_t kAhead = 8;
+  for (size_t i = 0; i < st.flushing.size(); ++i) {
+    if (i + kAhead < st.flushing.size())
+      for (const FaceKey& key : st.flushing[i + kAhead].keys) st.faces.prefetch(key);
+    ArrivedTet& a = st.flushing[i];
+    const FaceKey* keys = a.keys;
     bool needed = a.rays > 0;
     for (int k = 0; k < 4; ++k) {
-      keys[k] = makeKey(a.v[kTetFace[k][0]], a.v[kTetFace[k][1]], a.v[kTetFace[k][2]]);
       if (!needed) {
         const FaceEntry* e = st.faces.find(keys[k]);
         if (e && e->waiters != kNone) needed = true;
