@@ -107,6 +107,14 @@ enum SlotState : uint8_t { kFree = 0, kLive = 1, kRetired = 2 };
 
 inline uint64_t edgeKey(uint32_t a, uint32_t b) { return (uint64_t{a} << 32) | b; }
 inline int bitLength(uint64_t v) { return v ? 64 - __builtin_clzll(v) : 0; }
+// std::floor(y) for y < 1e18 without a library call (baseline x86-64 has no rounding instruction):
+// from -2^52 up every value converts to int64 exactly or truncates toward zero; below, every double
+// is an integer already. floor(-0.0) comes out +0.0, which compares equal: the order is the same.
+inline double floorKey(double y) {
+  if (!(y > -4503599627370496.0)) return y;
+  const double d = static_cast<double>(static_cast<int64_t>(y));
+  return d > y ? d - 1 : d;
+}
 
 // What coding `symbol` through `tree` costs now, in 1/16 bits (the encoder weighs a prediction
 // rule's signalling against the residual bits it saves).
@@ -1018,8 +1026,8 @@ class LevelCoder {
           // In units of 1/64 of the face's circumradius, so that nearly cospherical candidates (every
           // cell of a structured grid) tie and fall back to the distance order.
           const double t = h > 0 ? (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - r2_) / (2 * h) : 1e300;
-          x.key = std::floor(t * key_scale_);
-          if (!(x.key < 1e18)) x.key = 1e18;
+          const double y = t * key_scale_;
+          x.key = y < 1e18 ? floorKey(y) : 1e18;  // NaN too
         }
       }
     }
