@@ -1,12 +1,15 @@
 // Medit .mesh (ASCII) importer: keyword sections, each a count followed by that many entries of a
-// fixed number of values. Vertices and Tetrahedra are read (1-based, a reference number after each);
-// every other known section is skipped by its count, and an unknown keyword is an error (its entries
-// could not be skipped safely).
+// fixed number of values. Vertices and the volume elements (Tetrahedra, Hexahedra, Prisms, Pyramids)
+// are read (1-based, a reference number after each); hexahedra, prisms and pyramids are split into
+// tetrahedra as the VTK importers split theirs (medit_cells.h gives the corner numbering). Every other
+// known section is skipped by its count, and an unknown keyword is an error (its entries could not be
+// skipped safely).
 #include <cctype>
 #include <cstring>
 
 #include "convert/ascii_rows.h"
 #include "convert/import.h"
+#include "convert/medit_cells.h"
 #include "format/file_io.h"
 
 namespace gtn {
@@ -29,8 +32,7 @@ struct SkippedSection {
 };
 constexpr SkippedSection kSkipped[] = {
     {"Edges", 3},           {"Triangles", 4},          {"Quadrilaterals", 5},
-    {"Prisms", 7},          {"Pentahedra", 7},         {"Pyramids", 6},
-    {"Hexahedra", 9},       {"EdgesP2", 4},            {"TrianglesP2", 7},
+    {"Pentahedra", 7},      {"EdgesP2", 4},            {"TrianglesP2", 7},
     {"QuadrilateralsQ2", 10}, {"TetrahedraP2", 11},    {"HexahedraQ2", 28},
     {"Corners", 1},         {"Ridges", 1},             {"RequiredVertices", 1},
     {"RequiredEdges", 1},   {"RequiredTriangles", 1},  {"RequiredQuadrilaterals", 1},
@@ -53,15 +55,26 @@ StatusOr<int32_t> readRef(TextReader& reader) {
   GTN_ASSIGN_OR_RETURN(const int64_t v, parseIntToken(reader, tok, INT32_MIN, INT32_MAX, "reference number"));
   return static_cast<int32_t>(v);
 }
+
+// The volume keyword `tok` names (Hexaedra is an old spelling of Hexahedra), or null.
+const MeditVolumeKeyword* volumeKeyword(std::string_view tok) {
+  if (sameKeyword(tok, "Hexaedra")) return &kMeditVolumeKeywords[1];
+  for (const MeditVolumeKeyword& k : kMeditVolumeKeywords) {
+    if (sameKeyword(tok, k.name)) return &k;
+  }
+  return nullptr;
+}
 }  // namespace
 
-StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&) {
+StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions& options) {
   GTN_ASSIGN_OR_RETURN(const std::string text, readWholeFile(path));
   TextReader reader(path, text);
   ImportResult result;
   TetMesh& mesh = result.mesh;
   int64_t dimension = 0;
-  bool have_vertices = false, have_tets = false, seen_keyword = false;
+  MeditCells cells;
+  bool have_vertices = false, seen_keyword = false;
+  bool seen_volume[4] = {false, false, false, false};
   std::string_view tok;
   while (true) {
     if (!reader.next(&tok)) break;
@@ -103,28 +116,44 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
       }
       mesh.point_fields.push_back(std::move(ref));
       have_vertices = true;
-    } else if (sameKeyword(tok, "Tetrahedra")) {
-      if (!have_vertices) return reader.error("Tetrahedra before Vertices is not supported");
-      if (have_tets) return reader.error("a second Tetrahedra section");
-      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, 5, "tetrahedra"));
-      const size_t nt = static_cast<size_t>(count);
+    } else if (const MeditVolumeKeyword* kw = volumeKeyword(tok)) {
+      if (!have_vertices) return reader.error(std::string(kw->name) + " before Vertices is not supported");
+      const size_t index = static_cast<size_t>(kw - kMeditVolumeKeywords);
+      if (seen_volume[index]) return reader.error(std::string("a second ") + kw->name + " section");
+      seen_volume[index] = true;
+      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, kw->corners + 1, kw->name));
+      const size_t n = static_cast<size_t>(count);
       const int64_t np = static_cast<int64_t>(mesh.numPoints());
-      mesh.tets.resize(nt);
-      Field ref("ref", 1, ScalarType::kInt32, nt);
-      for (size_t t = 0; t < nt; ++t) {
-        for (int k = 0; k < 4; ++k) {
+      const bool is_tet = kw->vtk_type == kMeditVolumeKeywords[0].vtk_type;
+      std::vector<int32_t>& refs = is_tet ? cells.tet_refs : cells.other_refs;
+      if (is_tet) {
+        mesh.tets.resize(n);
+      } else {
+        cells.others.types.reserve(cells.others.types.size() + n);
+        cells.others.offsets.reserve(cells.others.offsets.size() + n);
+        cells.others.connectivity.reserve(cells.others.connectivity.size() + n * kw->corners);
+      }
+      refs.reserve(refs.size() + n);
+      for (size_t e = 0; e < n; ++e) {
+        for (int k = 0; k < kw->corners; ++k) {
           GTN_ASSIGN_OR_RETURN(const int64_t v, reader.readInt("a vertex number"));
           if (v < 1 || v > np) {
-            return reader.error("tetrahedron " + std::to_string(t + 1) + " refers to vertex " + std::to_string(v) +
-                                "; vertices are numbered 1 to " + std::to_string(np));
+            return reader.error(std::string(kw->singular) + " " + std::to_string(e + 1) + " refers to vertex " +
+                                std::to_string(v) + "; vertices are numbered 1 to " + std::to_string(np));
           }
-          mesh.tets[t][k] = static_cast<uint32_t>(v - 1);
+          if (is_tet) {
+            mesh.tets[e][k] = static_cast<uint32_t>(v - 1);
+          } else {
+            cells.others.connectivity.push_back(v - 1);
+          }
+        }
+        if (!is_tet) {
+          cells.others.types.push_back(kw->vtk_type);
+          cells.others.offsets.push_back(static_cast<int64_t>(cells.others.connectivity.size()));
         }
         GTN_ASSIGN_OR_RETURN(const int32_t r, readRef(reader));
-        ref.set<int32_t>(t, 0, r);
+        refs.push_back(r);
       }
-      mesh.cell_fields.push_back(std::move(ref));
-      have_tets = true;
     } else {
       const SkippedSection* section = nullptr;
       for (const SkippedSection& s : kSkipped) {
@@ -146,10 +175,9 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
     seen_keyword = true;
   }
   if (!have_vertices) return reader.error("no Vertices section");
-  if (!have_tets) return reader.error("no Tetrahedra section: a surface mesh is not a volume mesh");
-  finishImport(result);
-  mesh.setMetadata("source.format", "medit");
-  GTN_RETURN_IF_ERROR(mesh.checkConsistency(path));
+  if (cells.empty())
+    return reader.error("no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids): a surface mesh is not a volume mesh");
+  GTN_RETURN_IF_ERROR(finishMeditImport(path, "medit", &cells, options, &result));
   return result;
 }
 

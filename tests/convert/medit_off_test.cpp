@@ -218,6 +218,147 @@ TEST(MeditErrors, BadInputs) {
   expectError(importMedit(p, ImportOptions{}), p + ":4:");
 }
 
+// Two unit cubes side by side as Medit hexahedra (corners 1-4 round the bottom face, 5-8 above them),
+// references 3 and 4, with a boundary quadrilateral and no Tetrahedra section.
+const char* kMeditHexes = R"(MeshVersionFormatted 2
+Dimension 3
+Vertices
+12
+0 0 0 0
+1 0 0 0
+2 0 0 0
+0 1 0 0
+1 1 0 0
+2 1 0 0
+0 0 1 0
+1 0 1 0
+2 0 1 0
+0 1 1 0
+1 1 1 0
+2 1 1 0
+Quadrilaterals
+1
+1 2 5 4 1
+Hexahedra
+2
+1 2 5 4 7 8 11 10 3
+2 3 6 5 8 9 12 11 4
+End
+)";
+
+TEST(MeditImport, HexahedraAreSplitLikeVtkCells) {
+  const std::string dir = tempDir("medit-hexes");
+  writeFile(dir + "/h.mesh", kMeditHexes);
+  for (int split : {6, 5}) {
+    ImportOptions options;
+    options.split = split;
+    auto r = importMesh({dir + "/h.mesh"}, options);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const TetMesh& m = r->mesh;
+    // Numbered in order, the cubes' face diagonals do not allow 5 tetrahedra: 6 each, with the VTK
+    // importers' warning under --split 5.
+    ASSERT_EQ(m.numTets(), 12u) << split;
+    const MeshStats s = computeMeshStats(m);
+    // Read with any other corner order the cubes would not fill the box [0,2]x[0,1]x[0,1].
+    EXPECT_NEAR(s.total_volume, 2.0, 1e-12);
+    EXPECT_EQ(s.inverted, 0u);
+    EXPECT_EQ(s.zero_volume, 0u);
+    // Conforming: the shared face is cut the same way from both sides (2 triangles per cube face).
+    EXPECT_EQ(s.boundary_faces, 20u);
+    EXPECT_EQ(s.non_manifold_faces, 0u);
+    // Each tetrahedron carries its hexahedron's reference.
+    ASSERT_EQ(m.cell_fields.size(), 1u);
+    EXPECT_EQ(m.cell_fields[0].name, "ref");
+    for (size_t t = 0; t < m.numTets(); ++t) EXPECT_EQ(m.cell_fields[0].get(t, 0), t < 6 ? 3 : 4) << t;
+    if (split == 6) {
+      EXPECT_TRUE(r->report.warnings.empty());
+    } else {
+      ASSERT_EQ(r->report.warnings.size(), 1u);
+      EXPECT_NE(r->report.warnings[0].find("2 of 2 hexahedra split into 6"), std::string::npos)
+          << r->report.warnings[0];
+    }
+    ASSERT_NE(m.findMetadata("source.format"), nullptr);
+    EXPECT_EQ(*m.findMetadata("source.format"), "medit");
+  }
+  // One unit cube whose corners 1, 3, 6, 8 have the smallest numbers: --split 5 gives 5 tetrahedra.
+  writeFile(dir + "/five.mesh", "MeshVersionFormatted 2\nDimension 3\nVertices\n8\n"
+                                "0 0 0 1\n1 1 0 1\n1 0 1 1\n0 1 1 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n1 1 1 1\n"
+                                "Hexahedra\n1\n1 5 2 6 7 3 8 4 9\nEnd\n");
+  ImportOptions five;
+  five.split = 5;
+  auto r = importMesh({dir + "/five.mesh"}, five);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 5u);
+  EXPECT_TRUE(r->report.warnings.empty());
+  EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 1.0, 1e-12);
+}
+
+TEST(MeditImport, MixedElementsKeepTheirReferences) {
+  // A tetrahedron, a prism (half of a unit cube) and a pyramid (a unit square base, apex at height 1),
+  // each on points of its own; the old spelling Hexaedra with no elements is accepted.
+  const std::string text = R"(MeshVersionFormatted 1
+Dimension 3
+Vertices
+15
+0 0 0 0
+1 0 0 0
+0 1 0 0
+0 0 1 0
+10 0 0 0
+11 0 0 0
+10 1 0 0
+10 0 1 0
+11 0 1 0
+10 1 1 0
+20 0 0 0
+21 0 0 0
+21 1 0 0
+20 1 0 0
+20.5 0.5 1 0
+Pyramids
+1
+11 12 13 14 15 30
+Prisms
+1
+5 6 7 8 9 10 20
+Hexaedra
+0
+Tetrahedra
+1
+1 2 3 4 10
+End
+)";
+  const std::string dir = tempDir("medit-mixed");
+  writeFile(dir + "/m.mesh", text);
+  auto r = importMedit(dir + "/m.mesh", ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const TetMesh& m = r->mesh;
+  ASSERT_EQ(m.numTets(), 1u + 2u + 3u);
+  const MeshStats s = computeMeshStats(m);
+  EXPECT_NEAR(s.total_volume, 1.0 / 6 + 1.0 / 3 + 0.5, 1e-12);
+  EXPECT_EQ(s.zero_volume, 0u);
+  // Tetrahedra first, then the other elements in file order: the pyramid's 2, the prism's 3.
+  const int32_t want[] = {10, 30, 30, 20, 20, 20};
+  for (size_t t = 0; t < 6; ++t) EXPECT_EQ(m.cell_fields[0].get(t, 0), want[t]) << t;
+  EXPECT_TRUE(m.tets[0] == (Tet{0, 1, 2, 3}));
+}
+
+TEST(MeditErrors, BadHexahedra) {
+  const std::string dir = tempDir("medit-hex-errors");
+  const std::string p = dir + "/h.mesh";
+  writeFile(p, replaced(kMeditHexes, "2 3 6 5 8 9 12 11 4", "2 3 6 5 8 9 13 11 4"));
+  expectError(importMedit(p, ImportOptions{}), p + ":23: hexahedron 2 refers to vertex 13; vertices are numbered 1 to 12");
+  writeFile(p, replaced(kMeditHexes, "2 3 6 5 8 9 12 11 4\n", ""));
+  expectError(importMedit(p, ImportOptions{}), p + ":");
+  writeFile(p, replaced(kMeditHexes, "Hexahedra\n2\n", "Hexahedra\n3000000000\n"));
+  expectError(importMedit(p, ImportOptions{}), p + ":21:");
+  // Only boundary quadrilaterals: not a volume mesh.
+  std::string surface = kMeditHexes;
+  surface = surface.substr(0, surface.find("Hexahedra")) + "End\n";
+  writeFile(p, surface);
+  expectError(importMedit(p, ImportOptions{}), "no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids)");
+}
+
 // --- Tetrahedral OFF ------------------------------------------------------------------------------
 
 std::string shortest(double v) {

@@ -1,0 +1,54 @@
+#include "convert/medit_cells.h"
+
+#include "convert/vtk_common.h"
+
+namespace gtn {
+
+const MeditVolumeKeyword kMeditVolumeKeywords[4] = {
+    {"Tetrahedra", "tetrahedron", 4, kVtkTetra},
+    {"Hexahedra", "hexahedron", 8, kVtkHexahedron},
+    {"Prisms", "prism", 6, kVtkWedge},
+    {"Pyramids", "pyramid", 5, kVtkPyramid},
+};
+
+Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells,
+                         const ImportOptions& options, ImportResult* result) {
+  TetMesh& mesh = result->mesh;
+  if (cells->other_refs.empty()) {
+    // Tetrahedra only: they stay as they are, one reference each.
+    Field ref("ref", 1, ScalarType::kInt32, cells->tet_refs.size());
+    for (size_t t = 0; t < cells->tet_refs.size(); ++t) ref.set<int32_t>(t, 0, cells->tet_refs[t]);
+    mesh.cell_fields.push_back(std::move(ref));
+    finishImport(*result);
+  } else {
+    // The tetrahedra join the other elements as VTK cells of their own, first, so that the split
+    // (which keeps them unchanged) and the spreading of references treat every element alike.
+    VtkCells all;
+    const size_t num_tets = mesh.tets.size(), num_others = cells->other_refs.size();
+    all.types.reserve(num_tets + num_others);
+    all.offsets.reserve(num_tets + num_others + 1);
+    all.connectivity.reserve(4 * num_tets + cells->others.connectivity.size());
+    for (const Tet& t : mesh.tets) {
+      all.types.push_back(kVtkTetra);
+      for (int k = 0; k < 4; ++k) all.connectivity.push_back(t[k]);
+      all.offsets.push_back(static_cast<int64_t>(all.connectivity.size()));
+    }
+    for (size_t c = 0; c < num_others; ++c) {
+      all.types.push_back(cells->others.types[c]);
+      for (int64_t k = cells->others.offsets[c]; k < cells->others.offsets[c + 1]; ++k)
+        all.connectivity.push_back(cells->others.connectivity[k]);
+      all.offsets.push_back(static_cast<int64_t>(all.connectivity.size()));
+    }
+    mesh.tets.clear();
+    mesh.tets.shrink_to_fit();
+    cells->others = VtkCells{};
+    Field ref("ref", 1, ScalarType::kInt32, num_tets + num_others);
+    for (size_t t = 0; t < num_tets; ++t) ref.set<int32_t>(t, 0, cells->tet_refs[t]);
+    for (size_t c = 0; c < num_others; ++c) ref.set<int32_t>(num_tets + c, 0, cells->other_refs[c]);
+    GTN_RETURN_IF_ERROR(finishVtkImport(path, all, {ref}, options, result));
+  }
+  mesh.setMetadata("source.format", format);
+  return mesh.checkConsistency(path);
+}
+
+}  // namespace gtn

@@ -1,0 +1,51 @@
+// The volume elements of a Medit mesh, shared by the ASCII (.mesh) and binary (.meshb) readers: which
+// keywords hold them, and how hexahedra, prisms and pyramids become tetrahedra.
+//
+// Corner numbering. Medit (and libMeshb, which writes the same keywords in binary) numbers a
+// hexahedron's corners 1-4 round one quadrilateral face and 5-8 round the opposite face, corner 4+i
+// joined to corner i by an edge; a prism's corners 1-3 and 4-6 are its two triangles, 3+i joined to i;
+// a pyramid's corners 1-4 go round its base and 5 is its apex. That is VTK's order for
+// VTK_HEXAHEDRON, VTK_WEDGE and VTK_PYRAMID once made 0-based (Gmsh's Medit reader builds its
+// hexahedra from the eight indices as they stand, and meshio maps Medit's Hexahedra to VTK's
+// hexahedron without a permutation), so Medit corner k is VTK corner k - 1 for all three. Which way a
+// face turns does not matter: the tetrahedra are oriented afterwards.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "convert/cell_split.h"
+#include "convert/import.h"
+
+namespace gtn {
+
+// A Medit keyword that holds volume elements: its name, corners per element (a reference number
+// follows them) and the VTK cell type with the same corner order.
+struct MeditVolumeKeyword {
+  const char* name;
+  const char* singular;
+  int corners;
+  int vtk_type;
+};
+// Tetrahedra, Hexahedra, Prisms, Pyramids.
+extern const MeditVolumeKeyword kMeditVolumeKeywords[4];
+
+// The volume elements read so far. Tetrahedra go straight to mesh.tets (their references to
+// tet_refs); the other elements wait in `others`, 0-based, until finishMeditImport splits them.
+struct MeditCells {
+  std::vector<int32_t> tet_refs;
+  VtkCells others;
+  std::vector<int32_t> other_refs;
+  bool empty() const { return tet_refs.empty() && other_refs.empty(); }
+};
+
+// Ends a Medit import once result->mesh has its points, point fields and tetrahedra: splits the
+// other elements into tetrahedra (options.split, the VTK importers' warnings), adds the cell field
+// "ref" (each tetrahedron carries the reference of its element: tetrahedra first, then the other
+// elements in file order), normalises orientation and checks the mesh. `format` names the source
+// ("medit", "meshb") in the metadata.
+Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells,
+                         const ImportOptions& options, ImportResult* result);
+
+}  // namespace gtn
