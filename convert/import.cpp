@@ -37,6 +37,7 @@ const char* inputFormatName(InputFormat f) {
     case InputFormat::kVtkLegacy: return "legacy VTK";
     case InputFormat::kVtu: return "VTK XML (.vtu)";
     case InputFormat::kMedit: return "Medit";
+    case InputFormat::kMeshb: return "Medit binary (.meshb)";
     case InputFormat::kOff: return "tetrahedral OFF";
     case InputFormat::kGtn: return ".gtn";
     default: return "unknown";
@@ -51,6 +52,7 @@ InputFormat detectInputFormat(const std::string& path) {
   if (ext == "gtn") return InputFormat::kGtn;
   if (h.rfind("# vtk DataFile", 0) == 0 || ext == "vtk") return InputFormat::kVtkLegacy;
   if (ext == "vtu" || h.find("<VTKFile") != std::string::npos) return InputFormat::kVtu;
+  if (ext == "meshb") return InputFormat::kMeshb;
   if (ext == "mesh" || h.find("MeshVersionFormatted") != std::string::npos) return InputFormat::kMedit;
   if (ext == "off" || ext == "toff") return InputFormat::kOff;
   if (ext == "node" || ext == "ele" || ext == "face") return InputFormat::kTetgen;
@@ -101,13 +103,14 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
     case InputFormat::kVtkLegacy: return importVtkLegacy(path, options);
     case InputFormat::kVtu: return importVtu(path, options);
     case InputFormat::kMedit: return importMedit(path, options);
+    case InputFormat::kMeshb: return importMeshb(path, options);
     case InputFormat::kOff: return importOff(path, options);
     case InputFormat::kGtn:
       return usageError(path + ": is a .gtn file; use 'gtn export' or 'gtn info' to read it");
     default:
       return Status(StatusCode::kNotOurFile,
                     path + ": cannot tell its format from the extension or content (known: PLOT3D .xyz/.q/.bin/.p3d, "
-                           "TetGen .node/.ele, VTK .vtk/.vtu, Medit .mesh, tetrahedral .off)");
+                           "TetGen .node/.ele, VTK .vtk/.vtu, Medit .mesh/.meshb, tetrahedral .off)");
   }
 }
 

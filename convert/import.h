@@ -15,7 +15,7 @@ struct ImportOptions {
   bool weld = false;  // PLOT3D: merge bit-identical points, drop tetrahedra that collapse
 };
 
-enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kOff, kGtn };
+enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kMeshb, kOff, kGtn };
 const char* inputFormatName(InputFormat f);
 
 // Format of one input path from its extension and first bytes.
@@ -31,6 +31,7 @@ StatusOr<ImportResult> importTetgen(const std::string& path, const ImportOptions
 StatusOr<ImportResult> importVtkLegacy(const std::string& path, const ImportOptions& options);
 StatusOr<ImportResult> importVtu(const std::string& path, const ImportOptions& options);
 StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions& options);
+StatusOr<ImportResult> importMeshb(const std::string& path, const ImportOptions& options);
 StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions& options);
 
 // Normalises orientation after an importer built `result.mesh`: flips negative tetrahedra, counts

@@ -1,0 +1,203 @@
+// Medit binary (.meshb) import: files of every version (1-4) in both byte orders, built here by a
+// small writer that follows libMeshb's layout; keywords skipped by their next-keyword position;
+// truncated, oversized and inconsistent files.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "convert/import.h"
+#include "mesh/mesh_stats.h"
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+using test::tempDir;
+using test::writeFile;
+
+// Writes GMF binary: 32-bit words, 64-bit reals from version 2, 64-bit positions from version 3,
+// 64-bit integers (counts, indices, references) in version 4; big-endian when `swap`.
+class MeshbWriter {
+ public:
+  MeshbWriter(int version, bool swap) : version_(version), swap_(swap) {
+    word(1, 4);
+    word(static_cast<uint64_t>(version), 4);
+  }
+  // Opens a keyword record; its next-keyword position is filled in by the next begin() or end().
+  void begin(uint32_t code) {
+    close();
+    word(code, 4);
+    next_at_ = bytes_.size();
+    word(0, version_ >= 3 ? 8 : 4);
+  }
+  void integer(int64_t v) { word(static_cast<uint64_t>(v), version_ == 4 ? 8 : 4); }
+  void int32(int32_t v) { word(static_cast<uint32_t>(v), 4); }
+  void real(double v) {
+    if (version_ == 1) {
+      const float f = static_cast<float>(v);
+      uint32_t u;
+      std::memcpy(&u, &f, 4);
+      word(u, 4);
+    } else {
+      uint64_t u;
+      std::memcpy(&u, &v, 8);
+      word(u, 8);
+    }
+  }
+  std::string end() {
+    begin(54);  // End, the last keyword: its next position stays 0
+    next_at_ = 0;
+    return bytes_;
+  }
+  size_t size() const { return bytes_.size(); }
+
+ private:
+  void close() {
+    if (next_at_ == 0) return;
+    const size_t size = version_ >= 3 ? 8 : 4;
+    const std::string pos = encode(bytes_.size(), size);
+    bytes_.replace(next_at_, size, pos);
+  }
+  std::string encode(uint64_t v, size_t size) const {
+    std::string s(size, '\0');
+    for (size_t i = 0; i < size; ++i) s[swap_ ? size - 1 - i : i] = static_cast<char>((v >> (8 * i)) & 0xFF);
+    return s;
+  }
+  void word(uint64_t v, size_t size) { bytes_ += encode(v, size); }
+
+  int version_;
+  bool swap_;
+  size_t next_at_ = 0;
+  std::string bytes_;
+};
+
+// Two unit cubes side by side as hexahedra (references 3, 4), a tetrahedron below them (reference
+// -5), a boundary triangle and a keyword the reader does not know, to be skipped.
+std::string twoCubesAndATet(int version, bool swap) {
+  MeshbWriter w(version, swap);
+  w.begin(3);
+  w.int32(3);
+  w.begin(4);
+  const double c[13][3] = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 1, 0},     {0, 0, 1},
+                           {1, 0, 1}, {2, 0, 1}, {0, 1, 1}, {1, 1, 1}, {2, 1, 1}, {0.5, 0.25, -1}};
+  w.integer(13);
+  for (int i = 0; i < 13; ++i) {
+    for (int d = 0; d < 3; ++d) w.real(c[i][d]);
+    w.integer(100 + i);
+  }
+  w.begin(6);  // Triangles
+  w.integer(1);
+  for (int v : {1, 2, 4, 7}) w.integer(v);
+  w.begin(200);  // unknown to the reader (and to libMeshb 7): skipped by position
+  w.int32(12345);
+  w.begin(10);  // Hexahedra
+  w.integer(2);
+  for (int v : {1, 2, 5, 4, 7, 8, 11, 10, 3, 2, 3, 6, 5, 8, 9, 12, 11, 4}) w.integer(v);
+  w.begin(8);  // Tetrahedra
+  w.integer(1);
+  for (int v : {1, 2, 4, 13, -5}) w.integer(v);
+  return w.end();
+}
+
+TEST(MeshbImport, EveryVersionInBothByteOrders) {
+  const std::string dir = tempDir("meshb-versions");
+  for (int version = 1; version <= 4; ++version) {
+    for (bool swap : {false, true}) {
+      const std::string path = dir + "/v" + std::to_string(version) + (swap ? "be" : "le") + ".meshb";
+      writeFile(path, twoCubesAndATet(version, swap));
+      auto r = importMesh({path}, ImportOptions{});
+      ASSERT_TRUE(r.isOk()) << path << ": " << r.status().message();
+      const TetMesh& m = r->mesh;
+      ASSERT_EQ(m.numPoints(), 13u) << path;
+      EXPECT_EQ(m.coord_type, version == 1 ? ScalarType::kFloat32 : ScalarType::kFloat64);
+      EXPECT_EQ(m.point(12)[0], 0.5);
+      EXPECT_EQ(m.point(12)[1], 0.25);
+      EXPECT_EQ(m.point(12)[2], -1.0);
+      EXPECT_EQ(m.point(5)[0], 2.0);
+      ASSERT_EQ(m.point_fields.size(), 1u);
+      EXPECT_EQ(m.point_fields[0].get(12, 0), 112);
+      // The tetrahedron first, then 6 per cube.
+      ASSERT_EQ(m.numTets(), 13u) << path;
+      EXPECT_TRUE(m.tets[0] == (Tet{0, 1, 3, 12}) || m.tets[0] == (Tet{0, 1, 12, 3})) << path;
+      ASSERT_EQ(m.cell_fields.size(), 1u);
+      EXPECT_EQ(m.cell_fields[0].get(0, 0), -5);
+      EXPECT_EQ(m.cell_fields[0].get(1, 0), 3);
+      EXPECT_EQ(m.cell_fields[0].get(12, 0), 4);
+      const MeshStats s = computeMeshStats(m);
+      EXPECT_NEAR(s.total_volume, 2.0 + 0.5 / 3, 1e-12) << path;
+      EXPECT_EQ(s.inverted, 0u);
+      EXPECT_EQ(s.non_manifold_faces, 0u);
+      ASSERT_NE(m.findMetadata("source.format"), nullptr);
+      EXPECT_EQ(*m.findMetadata("source.format"), "meshb");
+    }
+  }
+}
+
+void expectError(const std::string& path, const std::string& bytes, const std::string& what) {
+  writeFile(path, bytes);
+  auto r = importMesh({path}, ImportOptions{});
+  ASSERT_FALSE(r.isOk()) << what;
+  EXPECT_NE(r.status().message().find(what), std::string::npos) << r.status().message();
+  EXPECT_EQ(r.status().message().rfind(path, 0), 0u) << r.status().message();
+}
+
+std::string withWord32(std::string bytes, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) bytes[at + i] = static_cast<char>((v >> (8 * i)) & 0xFF);
+  return bytes;
+}
+
+TEST(MeshbErrors, BadInputs) {
+  const std::string dir = tempDir("meshb-errors");
+  const std::string p = dir + "/bad.meshb";
+  const std::string good = twoCubesAndATet(2, false);
+  // Version 2: header 8 bytes, Dimension record 12, Vertices record: code, position, count at 28.
+  expectError(p, withWord32(good, 0, 2), "byte offset 0: not a .meshb file: its first word is 2");
+  expectError(p, withWord32(good, 4, 5), "byte offset 4: .meshb version 5 is not supported");
+  expectError(p, withWord32(good, 16, 2), "byte offset 8: dimension 2: only 3-dimensional");
+  // A vertex count that the bytes before the next keyword cannot hold fails before any allocation.
+  expectError(p, withWord32(good, 28, 0x7FFFFFFF), "byte offset 28: Vertices count 2147483647 needs");
+  expectError(p, withWord32(good, 28, 0xFFFFFFFF), "byte offset 28: Vertices count -1 is negative");
+  // A next-keyword position that points backwards or past the end.
+  expectError(p, withWord32(good, 24, 8), "byte offset 20: keyword 4 says the next keyword is at byte offset 8");
+  expectError(p, withWord32(good, 24, 1u << 30), "is at byte offset 1073741824, outside");
+  // A hexahedron corner out of range, located at its own bytes.
+  const size_t hexes = good.find(std::string("\x0A\0\0\0", 4), 200);
+  ASSERT_NE(hexes, std::string::npos);
+  expectError(p, withWord32(good, hexes + 12, 14), "byte offset " + std::to_string(hexes + 12) +
+                                                        ": hexahedron 1 refers to vertex 14; vertices are numbered 1 to 13");
+  // No volume elements.
+  MeshbWriter surface(3, false);
+  surface.begin(3);
+  surface.int32(3);
+  surface.begin(4);
+  surface.integer(1);
+  for (int d = 0; d < 3; ++d) surface.real(d);
+  surface.integer(0);
+  expectError(p, surface.end(), "no volume elements");
+}
+
+// Every prefix of a valid file fails with a message that names the file, none crashes, except the
+// one that ends where the Tetrahedra record starts: a file may end after any whole record (End is
+// needed only to stop early), and that one holds the two cubes.
+TEST(MeshbErrors, EveryPrefixFailsCleanly) {
+  const std::string dir = tempDir("meshb-prefixes");
+  const std::string p = dir + "/prefix.meshb";
+  for (int version : {1, 4}) {
+    const std::string good = twoCubesAndATet(version, version == 4);
+    size_t successes = 0;
+    for (size_t n = 0; n < good.size() - (4 + (version >= 3 ? 8 : 4)); ++n) {
+      writeFile(p, good.substr(0, n));
+      auto r = importMesh({p}, ImportOptions{});
+      if (r.isOk()) {
+        ++successes;
+        EXPECT_EQ(r->mesh.numTets(), 12u) << "version " << version << " prefix " << n;
+      } else {
+        EXPECT_EQ(r.status().message().rfind(p, 0), 0u) << r.status().message();
+      }
+    }
+    EXPECT_EQ(successes, 1u) << "version " << version;
+  }
+}
+
+}  // namespace
+}  // namespace gtn
