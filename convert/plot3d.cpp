@@ -16,6 +16,13 @@
 //   (2) points are ordinary points. All points are kept and IBLANK becomes the int32 field "iblank".
 // - Blocks are never joined; --weld merges bit-identical points (across blocks too), keeps the first
 //   point's field values, and drops the tetrahedra that collapse.
+// - Q files come in the classic layout (dimensions, then per grid four freestream reals and the five
+//   conserved variables) and NASA OVERFLOW's (OVERFLOW's q-file description, and VTK's reader of it):
+//   the dimension record ends with NQ and NQC, the number of variables and of species, and each grid's
+//   freestream record holds FSMACH ALPHA REY TIME GAMINF BETA TINF, the integer IGAM, HTINF HT1 HT2,
+//   RGAS(1:max(2,NQC)), FSMFR TVREF DTVREF, before its NQ variables. The first five variables are the
+//   classic ones (density, momentum, stagnation energy); the others (species densities, turbulence
+//   quantities) become the fields q6 .. qNQ.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -60,6 +67,7 @@ struct Layout {
   int ndim = 3;
   int precision = 4;  // bytes per real
   bool iblank = false;
+  bool overflow = false;  // Q files: OVERFLOW's layout (NQ variables, a longer freestream record)
   bool ascii = false;  // read from text (transcoded; the binary members then describe the transcoding)
 };
 
@@ -75,6 +83,7 @@ std::string describeLayout(const Layout& l, Kind kind) {
   if (kind == Kind::kGrid) s += l.ndim == 3 ? ", 3D" : ", 2D";
   if (!l.ascii) s += l.precision == 4 ? ", float32" : ", float64";
   if (kind == Kind::kGrid) s += l.iblank ? ", IBLANK" : ", no IBLANK";
+  if (kind == Kind::kQ && l.overflow) s += ", OVERFLOW";
   return s;
 }
 
@@ -86,8 +95,10 @@ struct Constraints {
   std::optional<int> precision;
   std::optional<bool> iblank;
   std::optional<int> ndim;
+  std::optional<bool> overflow;
 
   bool allows(const Layout& l, Kind kind) const {
+    if (kind == Kind::kQ && overflow && *overflow != l.overflow) return false;
     if (big_endian && *big_endian != l.big_endian) return false;
     if (fortran && *fortran != (l.marker != 0)) return false;
     if (multi_grid && *multi_grid != l.multi_grid) return false;
@@ -130,8 +141,9 @@ std::string blocksText(const std::vector<BlockDims>& blocks) {
 struct Fit {
   Layout layout;
   std::vector<BlockDims> blocks;
-  std::vector<Record> headers;  // Q files: the four freestream reals of each block
+  std::vector<Record> headers;  // Q files: the freestream record of each block
   std::vector<Record> data;     // one record per block
+  int64_t nq = 5, nqc = 0;      // Q files: variables per point and species (OVERFLOW's NQ, NQC)
   uint64_t end = 0;             // first byte after the data
 };
 
@@ -262,11 +274,25 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
       return false;
     }
   }
-  const uint64_t dims_bytes = static_cast<uint64_t>(ngrid) * ints * 4;
+  const bool overflow = kind == Kind::kQ && l.overflow;
+  const uint64_t dims_bytes = static_cast<uint64_t>(ngrid) * ints * 4 + (overflow ? 8 : 0);
   if (!cursor.next(dims_bytes, "dimensions", &rec, why)) return false;
   const std::string_view dv = recordBytes(bytes, rec, &scratch);
   fit->blocks.assign(static_cast<size_t>(ngrid), BlockDims());
   const uint64_t value_bytes = static_cast<uint64_t>(l.precision);
+  fit->nq = 5;
+  fit->nqc = 0;
+  if (overflow) {
+    // NQ and NQC follow the dimensions of all grids.
+    const char* tail = dv.data() + 4 * ngrid * ints;
+    fit->nq = loadSigned(tail, 4, l.big_endian);
+    fit->nqc = loadSigned(tail + 4, 4, l.big_endian);
+    if (fit->nq < 1 || static_cast<uint64_t>(fit->nq) > size / value_bytes || fit->nqc < 0 ||
+        static_cast<uint64_t>(fit->nqc) > size / value_bytes) {
+      *why = "NQ " + std::to_string(fit->nq) + " and NQC " + std::to_string(fit->nqc) + " are impossible";
+      return false;
+    }
+  }
   for (int64_t g = 0; g < ngrid; ++g) {
     BlockDims& b = fit->blocks[static_cast<size_t>(g)];
     uint64_t points = 1;
@@ -298,7 +324,14 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     const uint64_t n = b.points();
     uint64_t per_point = 0;
     if (kind == Kind::kGrid) per_point = l.ndim * value_bytes + (l.iblank ? 4 : 0);
-    if (kind == Kind::kQ) per_point = 5 * value_bytes;
+    if (kind == Kind::kQ) {
+      if (static_cast<uint64_t>(fit->nq) > size / value_bytes / n) {
+        *why = "grid " + std::to_string(g + 1) + " (" + dimsText(b) + ", " + std::to_string(fit->nq) +
+               " variables) needs more bytes than the file has";
+        return false;
+      }
+      per_point = static_cast<uint64_t>(fit->nq) * value_bytes;
+    }
     if (kind == Kind::kFunction) {
       if (static_cast<uint64_t>(b.nvar) > size / value_bytes / n) {
         *why = "grid " + std::to_string(g + 1) + " (" + dimsText(b) + ", " + std::to_string(b.nvar) +
@@ -311,8 +344,11 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     const std::string block_name = "grid " + std::to_string(g + 1) + " (" +
                                    dimsText(b, kind == Kind::kGrid ? l.ndim : 3) + ") data";
     if (kind == Kind::kQ) {
+      // OVERFLOW: 13 + max(2, NQC) reals and the 4-byte integer IGAM (see the top of the file).
+      const uint64_t header_bytes =
+          overflow ? 4 + (13 + static_cast<uint64_t>(std::max<int64_t>(2, fit->nqc))) * value_bytes : 4 * value_bytes;
       Record header;
-      if (!cursor.next(4 * value_bytes, ("grid " + std::to_string(g + 1) + " freestream header").c_str(), &header, why))
+      if (!cursor.next(header_bytes, ("grid " + std::to_string(g + 1) + " freestream header").c_str(), &header, why))
         return false;
       fit->headers.push_back(std::move(header));
     }
@@ -347,15 +383,17 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
         for (int ndim : {3, 2}) {
           if (ndim == 2 && kind != Kind::kGrid) continue;
           for (int precision : {4, 8}) {
-            for (int iblank = 0; iblank < 2; ++iblank) {
-              if (iblank && kind != Kind::kGrid) continue;
+            for (int variant = 0; variant < 2; ++variant) {
+              // The second variant: with IBLANK for grids, OVERFLOW's layout for Q files.
+              if (variant && kind == Kind::kFunction) continue;
               Layout l;
               l.big_endian = be != 0;
               l.marker = marker;
               l.multi_grid = multi != 0;
               l.ndim = ndim;
               l.precision = precision;
-              l.iblank = iblank != 0;
+              l.iblank = variant != 0 && kind == Kind::kGrid;
+              l.overflow = variant != 0 && kind == Kind::kQ;
               if (!constraints.allows(l, kind)) continue;
               Fit fit;
               std::string why;
@@ -393,7 +431,8 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
 
 std::string triedText(const Detection& d, Kind kind) {
   std::string s = "tried big- and little-endian, no/4-byte/8-byte record markers, single and multi-grid, ";
-  s += kind == Kind::kGrid ? "2D and 3D, float32 and float64, with and without IBLANK" : "float32 and float64";
+  s += kind == Kind::kGrid ? "2D and 3D, float32 and float64, with and without IBLANK"
+                           : (kind == Kind::kQ ? "float32 and float64, classic and OVERFLOW layouts" : "float32 and float64");
   s += " (binary; text files are read as ASCII PLOT3D)";
   const size_t shown = std::min<size_t>(d.plausible.size(), 8);
   for (size_t i = 0; i < shown; ++i)
@@ -693,6 +732,7 @@ Constraints imposed(const Layout& l) {
   c.precision = l.precision;
   c.iblank = l.iblank;
   c.ndim = l.ndim;
+  c.overflow = l.overflow;
   return c;
 }
 
@@ -885,35 +925,57 @@ void addQ(std::string_view bytes, const Fit& fit, TetMesh& mesh, std::vector<std
   const Layout& l = fit.layout;
   const size_t total = mesh.numPoints();
   const ScalarType type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
-  Field density("density", 1, type, total), momentum("momentum", 3, type, total),
-      energy("stagnation_energy", 1, type, total);
+  // The classic five variables under their names; an OVERFLOW file's further ones (or all of them
+  // when it has fewer than five) as q1 .. qNQ.
+  const size_t nq = static_cast<size_t>(fit.nq);
+  const bool classic = nq >= 5;
+  std::vector<Field> fields;
+  if (classic) {
+    fields.emplace_back("density", 1, type, total);
+    fields.emplace_back("momentum", 3, type, total);
+    fields.emplace_back("stagnation_energy", 1, type, total);
+  }
+  for (size_t k = classic ? 5 : 0; k < nq; ++k) fields.emplace_back("q" + std::to_string(k + 1), 1, type, total);
+  // The freestream reals before OVERFLOW's IGAM: FSMACH ALPHA REY TIME, then GAMINF BETA TINF.
+  const int header_reals = l.overflow ? 7 : 4;
   std::string scratch;
   size_t base = 0;
-  double first_header[4] = {0, 0, 0, 0};
+  double first_header[7] = {0, 0, 0, 0, 0, 0, 0};
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
     const size_t n = fit.blocks[g].points();
     const std::string_view h = recordBytes(bytes, fit.headers[g], &scratch);
-    double header[4];
-    for (int k = 0; k < 4; ++k) header[k] = loadReal(h.data() + k * l.precision, l.precision, l.big_endian);
+    double header[7];
+    for (int k = 0; k < header_reals; ++k) header[k] = loadReal(h.data() + k * l.precision, l.precision, l.big_endian);
     if (g == 0) {
-      std::copy(header, header + 4, first_header);
-    } else if (!std::equal(header, header + 4, first_header) && warnings->size() < 100) {
+      std::copy(header, header + header_reals, first_header);
+    } else if (!std::equal(header, header + header_reals, first_header) && warnings->size() < 100) {
       warnings->push_back(path + ": grid " + std::to_string(g + 1) +
                           " has other freestream values than grid 1; metadata keeps grid 1's");
     }
     const std::string_view v = recordBytes(bytes, fit.data[g], &scratch);
     const size_t p = static_cast<size_t>(l.precision);
-    copyValues(v.data(), n, l.precision, l.big_endian, &density, base, 1);
-    for (size_t c = 0; c < 3; ++c)
-      copyValues(v.data() + (1 + c) * n * p, n, l.precision, l.big_endian, &momentum, 3 * base + c, 3);
-    copyValues(v.data() + 4 * n * p, n, l.precision, l.big_endian, &energy, base, 1);
+    for (size_t q = 0; q < nq; ++q) {
+      const char* src = v.data() + q * n * p;
+      if (!classic || q >= 5) {
+        copyValues(src, n, l.precision, l.big_endian, &fields[classic ? q - 2 : q], base, 1);
+      } else if (q == 0) {
+        copyValues(src, n, l.precision, l.big_endian, &fields[0], base, 1);
+      } else if (q <= 3) {
+        copyValues(src, n, l.precision, l.big_endian, &fields[1], 3 * base + (q - 1), 3);
+      } else {
+        copyValues(src, n, l.precision, l.big_endian, &fields[2], base, 1);
+      }
+    }
     base += n;
   }
-  mesh.point_fields.push_back(std::move(density));
-  mesh.point_fields.push_back(std::move(momentum));
-  mesh.point_fields.push_back(std::move(energy));
-  static const char* kKeys[4] = {"plot3d.fsmach", "plot3d.alpha", "plot3d.re", "plot3d.time"};
-  for (int k = 0; k < 4; ++k) mesh.setMetadata(kKeys[k], realText(first_header[k], l.precision));
+  for (Field& f : fields) mesh.point_fields.push_back(std::move(f));
+  static const char* kKeys[7] = {"plot3d.fsmach", "plot3d.alpha", "plot3d.re",  "plot3d.time",
+                                 "plot3d.gaminf", "plot3d.beta",  "plot3d.tinf"};
+  for (int k = 0; k < header_reals; ++k) mesh.setMetadata(kKeys[k], realText(first_header[k], l.precision));
+  if (l.overflow) {
+    mesh.setMetadata("plot3d.nq", std::to_string(fit.nq));
+    mesh.setMetadata("plot3d.nqc", std::to_string(fit.nqc));
+  }
 }
 
 Status addFunction(const std::string& path, std::string_view bytes, const Fit& fit, TetMesh& mesh) {

@@ -284,6 +284,44 @@ std::string qFile(const std::vector<Block>& blocks, const GridOptions& o) {
   return w.out;
 }
 
+// OVERFLOW Q file: NQ and NQC after the dimensions of all grids; per grid a freestream record of
+// FSMACH ALPHA REY TIME GAMINF BETA TINF, IGAM (int32), HTINF HT1 HT2, RGAS(1:max(2,NQC)), FSMFR TVREF
+// DTVREF, then NQ variables: q1 .. q5 as in qFile, q(6+k) = 10 * (k + 1) + p.
+std::string overflowQFile(const std::vector<Block>& blocks, const GridOptions& o, int nq, int nqc) {
+  RecordWriter w{o.big_endian, o.marker, ""};
+  Bytes b{o.big_endian, ""};
+  if (o.multi) {
+    b.i32(static_cast<int32_t>(blocks.size()));
+    w.record(b.s);
+  }
+  b.s.clear();
+  for (const Block& g : blocks)
+    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+  b.i32(nq);
+  b.i32(nqc);
+  w.record(b.s);
+  for (size_t gi = 0; gi < blocks.size(); ++gi) {
+    const Block& g = blocks[gi];
+    b.s.clear();
+    for (double v : {0.75, 2.5, 1.0e6, 0.125, 1.375, 0.5, 518.5}) b.real(v, o.precision);
+    b.i32(1);  // IGAM
+    for (double v : {0.0, 0.0, 0.0}) b.real(v, o.precision);
+    for (int k = 0; k < std::max(2, nqc); ++k) b.real(1716.0 + k, o.precision);
+    for (double v : {0.0, 1.0, 0.0}) b.real(v, o.precision);
+    w.record(b.s);
+    b.s.clear();
+    const size_t n = g.points();
+    for (int var = 0; var < nq; ++var)
+      for (size_t p = 0; p < n; ++p) {
+        const double d = static_cast<double>(p);
+        const double values[5] = {1 + d / 1000, d, -d, 2 * d, 3 + d};
+        b.real(var < 5 ? values[var] : 10.0 * (var - 4) + d, o.precision);
+      }
+    w.record(b.s);
+  }
+  return w.out;
+}
+
 // Function file with `nvar` variables: value v * 100 + p.
 std::string functionFile(const std::vector<Block>& blocks, const GridOptions& o, int nvar) {
   RecordWriter w{o.big_endian, o.marker, ""};
@@ -413,6 +451,72 @@ TEST_F(Plot3dSynthetic, MultiGridFloat64WithEightByteMarkers) {
   EXPECT_EQ(ws.non_manifold_faces, 0u);
   EXPECT_EQ(ws.boundary_faces, 2u * (2 * (5 * 2 + 5 * 2 + 2 * 2)));
   EXPECT_EQ(welded->mesh.findPointField("density")->itemCount(), ws.points);
+}
+
+std::string qName(int k) {
+  std::string name = std::to_string(k);
+  name.insert(name.begin(), 'q');
+  return name;
+}
+
+// OVERFLOW's Q layout (VTK's multi-bin-oflow.q is one): classic names for the first five variables,
+// q6 .. qNQ for the rest, GAMINF BETA TINF in the metadata; with and without record markers, where
+// only the exact size of the longer freestream record tells the layout.
+TEST_F(Plot3dSynthetic, OverflowQFile) {
+  const std::vector<Block> blocks = {boxBlock(4, 3, 3), boxBlock(3, 3, 3, 3.0)};
+  for (int marker : {4, 0}) {
+    for (int nqc : {0, 3}) {
+      GridOptions o;
+      o.big_endian = false;
+      o.marker = marker;
+      o.multi = true;
+      o.precision = 8;
+      const std::string tag = std::to_string(marker) + "-" + std::to_string(nqc);
+      const std::string xyz = write("of" + tag + ".xyz", gridFile(blocks, o));
+      const std::string q = write("of" + tag + ".q", overflowQFile(blocks, o, 7 + nqc, nqc));
+      auto r = importFiles({xyz, q}, 6);
+      ASSERT_TRUE(r.isOk()) << tag << ": " << r.status().message();
+      const TetMesh& m = r->mesh;
+      EXPECT_EQ(m.numPoints(), 36u + 27u);
+      const Field* density = m.findPointField("density");
+      const Field* momentum = m.findPointField("momentum");
+      const Field* energy = m.findPointField("stagnation_energy");
+      ASSERT_TRUE(density && momentum && energy) << tag;
+      EXPECT_EQ(density->get(35, 0), 1 + 35.0 / 1000);
+      EXPECT_EQ(density->get(36, 0), 1.0);  // point 0 of the second grid
+      EXPECT_EQ(momentum->get(7, 2), 14.0);
+      EXPECT_EQ(energy->get(40, 0), 7.0);
+      for (int k = 6; k <= 7 + nqc; ++k) {
+        const Field* f = m.findPointField(qName(k));
+        ASSERT_TRUE(f) << tag << " q" << k;
+        EXPECT_EQ(f->type, ScalarType::kFloat64);
+        EXPECT_EQ(f->get(5, 0), 10.0 * (k - 5) + 5) << tag << " q" << k;
+        EXPECT_EQ(f->get(36 + 2, 0), 10.0 * (k - 5) + 2) << tag << " q" << k;
+      }
+      EXPECT_EQ(m.findPointField(qName(8 + nqc)), nullptr);
+      EXPECT_EQ(m.findPointField("q5"), nullptr);
+      EXPECT_EQ(*m.findMetadata("plot3d.fsmach"), "0.75");
+      EXPECT_EQ(*m.findMetadata("plot3d.time"), "0.125");
+      EXPECT_EQ(*m.findMetadata("plot3d.gaminf"), "1.375");
+      EXPECT_EQ(*m.findMetadata("plot3d.tinf"), "518.5");
+      EXPECT_EQ(*m.findMetadata("plot3d.nq"), std::to_string(7 + nqc));
+      EXPECT_EQ(*m.findMetadata("plot3d.nqc"), std::to_string(nqc));
+      EXPECT_TRUE(r->report.warnings.empty()) << r->report.warnings[0];
+    }
+  }
+  // A truncated OVERFLOW file fails naming the file (its bytes fit no layout).
+  GridOptions o;
+  o.big_endian = false;
+  o.marker = 4;
+  o.multi = true;
+  o.precision = 8;
+  const std::string xyz = write("cut.xyz", gridFile(blocks, o));
+  const std::string full = overflowQFile(blocks, o, 6, 0);
+  const std::string q = write("cut.q", full.substr(0, full.size() - 12));
+  auto r = importFiles({xyz, q}, 6);
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().message().rfind(q + ": ", 0), 0u) << r.status().message();
+  EXPECT_NE(r.status().message().find("OVERFLOW"), std::string::npos) << r.status().message();
 }
 
 TEST_F(Plot3dSynthetic, SubrecordsWithNegativeMarkers) {
