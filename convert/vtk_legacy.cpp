@@ -1,7 +1,8 @@
 // Legacy VTK (.vtk) import: DATASET UNSTRUCTURED_GRID in ASCII or BINARY (big-endian), the classic
 // CELLS layout and the OFFSETS/CONNECTIVITY layout of version 5.1, point and cell attributes
 // (SCALARS, COLOR_SCALARS, VECTORS, NORMALS, TEXTURE_COORDINATES, TENSORS, TENSORS6, GLOBAL_IDS,
-// PEDIGREE_IDS, FIELD) kept in their source types. String arrays (ASCII only) are skipped.
+// PEDIGREE_IDS, FIELD) kept in their source types. String arrays (ASCII or BINARY) are skipped.
+#include <algorithm>
 #include <cctype>
 #include <cstring>
 
@@ -277,13 +278,39 @@ bool LegacyReader::isStringType(std::string_view name) {
 }
 
 Status LegacyReader::skipStrings(uint64_t comps, uint64_t tuples, const std::string& what) {
-  // VTK writes one string per line, %-encoded (so an empty string is an empty line).
-  if (binary_)
-    return Status(StatusCode::kUnsupported, path_ + ":" + std::to_string(tr_.line()) + ": " + what +
-                                                ": string arrays in BINARY legacy files are not supported");
   if (comps != 0 && tuples > UINT64_MAX / comps) return tr_.error(what + ": too many values");
   const uint64_t n = comps * tuples;
   tr_.skipLine();  // the rest of the array's header line
+  if (binary_) {
+    // vtkDataWriter writes each string as a big-endian length header and its bytes: the first byte's
+    // two high bits give the header's size (3: one byte, 2: two, 1: four, 0: eight bytes) and the
+    // rest of the header, without those two bits (all 64 bits for the eight-byte one), the length.
+    uint64_t at = tr_.offset();
+    const uint64_t size = text_.size();
+    if (n > size - std::min(at, size))
+      return invalidData(path_ + ": byte offset " + std::to_string(at) + ": " + what + ": " + std::to_string(n) +
+                         " strings cannot fit in the " + std::to_string(size - std::min(at, size)) + " bytes left");
+    for (uint64_t i = 0; i < n; ++i) {
+      if (at >= size)
+        return invalidData(path_ + ": byte offset " + std::to_string(at) + ": file ends after " + std::to_string(i) +
+                           " of the " + std::to_string(n) + " strings of " + what);
+      const unsigned kind = static_cast<unsigned char>(text_[at]) >> 6;
+      const uint64_t header = kind == 3 ? 1 : kind == 2 ? 2 : kind == 1 ? 4 : 8;
+      if (header > size - at)
+        return invalidData(path_ + ": byte offset " + std::to_string(at) + ": file ends inside the length of string " +
+                           std::to_string(i + 1) + " of " + what);
+      uint64_t length = 0;
+      for (uint64_t b = 0; b < header; ++b) length = length << 8 | static_cast<unsigned char>(text_[at + b]);
+      if (header < 8) length &= (uint64_t{1} << (8 * header - 2)) - 1;
+      if (length > size - at - header)
+        return invalidData(path_ + ": byte offset " + std::to_string(at) + ": string " + std::to_string(i + 1) +
+                           " of " + what + " is " + std::to_string(length) + " bytes long, past the end of the file");
+      at += header + length;
+    }
+    tr_.seek(at);
+    return Status::ok();
+  }
+  // VTK writes one string per line, %-encoded (so an empty string is an empty line).
   for (uint64_t i = 0; i < n; ++i) {
     if (tr_.offset() >= text_.size())
       return tr_.error("file ends after " + std::to_string(i) + " of the " + std::to_string(n) + " strings of " + what);

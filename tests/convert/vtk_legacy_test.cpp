@@ -408,5 +408,84 @@ TEST(VtkLegacy, IdsAndStringArraysAsVtkWritesThem) {
   EXPECT_NE(cut.status().message().find("strings of FIELD array Names"), std::string::npos) << cut.status().message();
 }
 
+// The same in BINARY, as vtkDataWriter writes strings there: each a big-endian length header whose
+// first byte's two high bits give its size (3: 1 byte, 2: 2, 1: 4, 0: 8) and then the bytes, which
+// may hold anything, newlines included.
+std::string binaryString(const std::string& text, int header_bytes) {
+  std::string out;
+  const uint64_t n = text.size();
+  const unsigned tag = header_bytes == 1 ? 3 : header_bytes == 2 ? 2 : header_bytes == 4 ? 1 : 0;
+  for (int b = header_bytes - 1; b >= 0; --b) {
+    unsigned char c = static_cast<unsigned char>(n >> (8 * b));
+    if (b == header_bytes - 1 && header_bytes < 8) c = static_cast<unsigned char>(c | tag << 6);
+    out.push_back(static_cast<char>(c));
+  }
+  return out + text;
+}
+
+std::string bigEndianFloats(std::initializer_list<float> values) {
+  std::string out;
+  for (float v : values) putBigEndian(out, ScalarType::kFloat32, v);
+  return out;
+}
+
+std::string bigEndianInts(std::initializer_list<int32_t> values) {
+  std::string out;
+  for (int32_t v : values) putBigEndian(out, ScalarType::kInt32, v);
+  return out;
+}
+
+TEST(VtkLegacy, BinaryStringArraysAreSkippedByTheirLengths) {
+  const std::string dir = tempDir("vtk_legacy_binary_strings");
+  const std::string names = binaryString("a", 1) + binaryString("two\nlines", 2) + binaryString("", 4) +
+                            binaryString(std::string(70, 'x'), 8);
+  const std::string pedigree = binaryString("w", 1) + binaryString("x y", 1) + binaryString("\xC0\xFF", 2) +
+                               binaryString(std::string(300, 'z'), 2);
+  const std::string text =
+      "# vtk DataFile Version 3.0\nvtk output\nBINARY\nDATASET UNSTRUCTURED_GRID\n"
+      "FIELD FieldData 1\nInfo%20Records 1 2 string\n" + binaryString("first", 1) + binaryString("second", 1) + "\n" +
+      "POINTS 4 float\n" + bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) + "\n" +
+      "CELLS 1 5\n" + bigEndianInts({4, 0, 1, 2, 3}) + "\nCELL_TYPES 1\n" + bigEndianInts({10}) + "\n" +
+      "POINT_DATA 4\nFIELD FieldData 2\nNames 1 4 string\n" + names + "\nTemp 1 4 float\n" +
+      bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\nPEDIGREE_IDS NodeNames string\n" + pedigree + "\n" +
+      "SCALARS after float 1\nLOOKUP_TABLE default\n" + bigEndianFloats({-1, -2, -3, -4}) + "\n";
+  writeFile(dir + "/strings.vtk", text);
+  auto r = importMesh({dir + "/strings.vtk"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const TetMesh& m = r->mesh;
+  ASSERT_EQ(m.numTets(), 1u);
+  // The arrays after each string array are read from the right bytes.
+  ASSERT_EQ(m.point_fields.size(), 2u);
+  EXPECT_EQ(m.point_fields[0].name, "Temp");
+  EXPECT_EQ(m.point_fields[0].data<float>()[3], 3.5f);
+  EXPECT_EQ(m.point_fields[1].name, "after");
+  EXPECT_EQ(m.point_fields[1].data<float>()[0], -1.0f);
+  EXPECT_EQ(m.point_fields[1].data<float>()[3], -4.0f);
+  ASSERT_EQ(r->report.warnings.size(), 2u);
+  EXPECT_NE(r->report.warnings[0].find("skipped FIELD array Names (string)"), std::string::npos);
+  EXPECT_NE(r->report.warnings[1].find("skipped PEDIGREE_IDS NodeNames (string)"), std::string::npos);
+
+  // A length that runs past the end, and a file cut inside a length header, name the byte offset.
+  const size_t names_at = text.find(names);
+  std::string bad = text;
+  bad[names_at] = static_cast<char>(0xC0 | 63);  // "a" claims 63 bytes
+  bad.resize(names_at + 40);
+  writeFile(dir + "/long.vtk", bad);
+  auto l = importMesh({dir + "/long.vtk"}, ImportOptions{});
+  ASSERT_FALSE(l.isOk());
+  EXPECT_NE(l.status().message().find("long.vtk: byte offset " + std::to_string(names_at) +
+                                      ": string 1 of FIELD array Names is 63 bytes long, past the end of the file"),
+            std::string::npos)
+      << l.status().message();
+  const size_t long_at = names_at + names.size() - 70 - 8;
+  writeFile(dir + "/cut.vtk", text.substr(0, long_at + 3));
+  auto c = importMesh({dir + "/cut.vtk"}, ImportOptions{});
+  ASSERT_FALSE(c.isOk());
+  EXPECT_NE(c.status().message().find("cut.vtk: byte offset " + std::to_string(long_at) +
+                                      ": file ends inside the length of string 4 of FIELD array Names"),
+            std::string::npos)
+      << c.status().message();
+}
+
 }  // namespace
 }  // namespace gtn
