@@ -29,11 +29,12 @@ bool sameKeyword(std::string_view a, const char* b) {
 struct SkippedSection {
   const char* keyword;
   int values;
+  bool volume = false;  // higher-order volume elements: skipping them loses volume, so a warning says so
 };
 constexpr SkippedSection kSkipped[] = {
     {"Edges", 3},           {"Triangles", 4},          {"Quadrilaterals", 5},
-    {"Pentahedra", 7},      {"EdgesP2", 4},            {"TrianglesP2", 7},
-    {"QuadrilateralsQ2", 10}, {"TetrahedraP2", 11},    {"HexahedraQ2", 28},
+    {"EdgesP2", 4},         {"TrianglesP2", 7},        {"QuadrilateralsQ2", 10},
+    {"TetrahedraP2", 11, true}, {"HexahedraQ2", 28, true},
     {"Corners", 1},         {"Ridges", 1},             {"RequiredVertices", 1},
     {"RequiredEdges", 1},   {"RequiredTriangles", 1},  {"RequiredQuadrilaterals", 1},
     {"RequiredTetrahedra", 1}, {"RequiredHexahedra", 1}, {"Normals", -1},
@@ -56,9 +57,11 @@ StatusOr<int32_t> readRef(TextReader& reader) {
   return static_cast<int32_t>(v);
 }
 
-// The volume keyword `tok` names (Hexaedra is an old spelling of Hexahedra), or null.
+// The volume keyword `tok` names (Hexaedra is an old spelling of Hexahedra, Pentahedra an old name
+// of Prisms), or null.
 const MeditVolumeKeyword* volumeKeyword(std::string_view tok) {
   if (sameKeyword(tok, "Hexaedra")) return &kMeditVolumeKeywords[1];
+  if (sameKeyword(tok, "Pentahedra")) return &kMeditVolumeKeywords[2];
   for (const MeditVolumeKeyword& k : kMeditVolumeKeywords) {
     if (sameKeyword(tok, k.name)) return &k;
   }
@@ -75,6 +78,7 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
   MeditCells cells;
   bool have_vertices = false, seen_keyword = false;
   bool seen_volume[4] = {false, false, false, false};
+  std::string skipped_volume;  // higher-order volume sections skipped, for the error when nothing else is left
   std::string_view tok;
   while (true) {
     if (!reader.next(&tok)) break;
@@ -167,16 +171,28 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
       }
       if (dimension != 3) return reader.error(std::string(section->keyword) + " before a 'Dimension 3' line");
       const int64_t values = section->values < 0 ? dimension : section->values;
+      const size_t line = reader.line();
       GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, values, section->keyword));
       for (int64_t i = 0; i < count * values; ++i) {
         if (!reader.next(&tok)) return reader.errorAtEnd((std::string(section->keyword) + " entries").c_str());
+      }
+      if (section->volume && count > 0) {
+        const std::string what = std::to_string(count) + " " + section->keyword + " elements (line " +
+                                 std::to_string(line) + ")";
+        skipped_volume += (skipped_volume.empty() ? "" : ", ") + what;
+        result.report.warnings.push_back("skipped " + what +
+                                         ": higher-order elements are not read, so their volume is missing");
       }
     }
     seen_keyword = true;
   }
   if (!have_vertices) return reader.error("no Vertices section");
   if (cells.empty())
-    return reader.error("no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids): a surface mesh is not a volume mesh");
+    return reader.error(skipped_volume.empty()
+                            ? "no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids): a surface mesh is not a "
+                              "volume mesh"
+                            : "no linear volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids), only " +
+                                  skipped_volume + ", which are not read");
   GTN_RETURN_IF_ERROR(finishMeditImport(path, "medit", &cells, options, &result));
   return result;
 }

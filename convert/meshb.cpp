@@ -27,6 +27,18 @@ namespace {
 constexpr uint32_t kDimension = 3, kVertices = 4, kTetrahedra = 8, kPrisms = 9, kHexahedra = 10,
                    kPyramids = 49, kEnd = 54;
 
+// Volume elements the reader skips (higher-order and polyhedral ones): skipping them loses volume,
+// so a warning names them.
+struct SkippedVolume {
+  uint32_t code;
+  const char* name;
+};
+constexpr SkippedVolume kSkippedVolumes[] = {
+    {30, "TetrahedraP2"}, {33, "HexahedraQ2"},  {46, "Polyhedra"},    {86, "PrismsP2"},    {87, "PyramidsP2"},
+    {96, "TetrahedraP3"}, {97, "TetrahedraP4"}, {98, "HexahedraQ3"},  {99, "HexahedraQ4"}, {100, "PyramidsP3"},
+    {101, "PyramidsP4"},  {102, "PrismsP3"},    {103, "PrismsP4"},
+};
+
 // The volume keyword for a GMF keyword code, or null.
 const MeditVolumeKeyword* volumeKeyword(uint32_t code) {
   switch (code) {
@@ -94,6 +106,7 @@ class MeshbReader {
   size_t int_size_ = 4, real_size_ = 4, pos_size_ = 4;
   int64_t dimension_ = 0;
   bool have_vertices_ = false;
+  std::string skipped_volume_;
   bool seen_volume_[4] = {false, false, false, false};
   ImportResult result_;
   MeditCells cells_;
@@ -225,14 +238,26 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
       GTN_RETURN_IF_ERROR(readVertices(next));
     } else if (const MeditVolumeKeyword* kw = volumeKeyword(keyword)) {
       GTN_RETURN_IF_ERROR(readElements(*kw, next));
+    } else {
+      for (const SkippedVolume& v : kSkippedVolumes) {
+        if (v.code != keyword) continue;
+        skipped_volume_ += (skipped_volume_.empty() ? "" : ", ") + std::string(v.name) + " (byte offset " +
+                           std::to_string(at) + ")";
+        result_.report.warnings.push_back("skipped " + std::string(v.name) + " at byte offset " + std::to_string(at) +
+                                          ": higher-order and polyhedral elements are not read, so their volume is "
+                                          "missing");
+      }
     }
     if (next == 0) break;  // the last keyword
     pos_ = next;
   }
   if (!have_vertices_) return invalidData(path_ + ": no Vertices keyword");
   if (cells_.empty())
-    return invalidData(path_ + ": no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids): a surface mesh "
-                               "is not a volume mesh");
+    return invalidData(path_ + (skipped_volume_.empty()
+                                    ? ": no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids): a surface "
+                                      "mesh is not a volume mesh"
+                                    : ": no linear volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids), only " +
+                                          skipped_volume_ + ", which are not read"));
   GTN_RETURN_IF_ERROR(finishMeditImport(path_, "meshb", &cells_, options, &result_));
   return std::move(result_);
 }

@@ -343,6 +343,29 @@ End
   EXPECT_TRUE(m.tets[0] == (Tet{0, 1, 2, 3}));
 }
 
+// Pentahedra is an old name of Prisms; quadratic volume elements are not read, and a warning says
+// their volume is missing (an error when nothing else is left).
+TEST(MeditImport, PentahedraAndQuadraticVolumeElements) {
+  const std::string dir = tempDir("medit-pentahedra");
+  const std::string prism = "MeshVersionFormatted 2\nDimension 3\nVertices\n10\n"
+                            "0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n1 0 1 0\n0 1 1 0\n"
+                            "5 0 0 0\n6 0 0 0\n5 1 0 0\n5 0 1 0\n";
+  const std::string p2 = "TetrahedraP2\n1\n7 8 9 10 7 8 9 10 7 8 1\n";
+  writeFile(dir + "/p.mesh", prism + "Pentahedra\n1\n1 2 3 4 5 6 2\n" + p2 + "End\n");
+  auto r = importMedit(dir + "/p.mesh", ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 3u);
+  EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 0.5, 1e-12);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("skipped 1 TetrahedraP2 elements (line 18): higher-order elements are not read"),
+            std::string::npos)
+      << r->report.warnings[0];
+  writeFile(dir + "/only_p2.mesh", prism + p2 + "End\n");
+  expectError(importMedit(dir + "/only_p2.mesh", ImportOptions{}),
+              "no linear volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids), only 1 TetrahedraP2 elements "
+              "(line 15), which are not read");
+}
+
 TEST(MeditErrors, BadHexahedra) {
   const std::string dir = tempDir("medit-hex-errors");
   const std::string p = dir + "/h.mesh";

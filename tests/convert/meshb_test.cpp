@@ -176,6 +176,46 @@ TEST(MeshbErrors, BadInputs) {
   expectError(p, surface.end(), "no volume elements");
 }
 
+// Higher-order volume elements are skipped by position with a warning; the rest still reads.
+TEST(MeshbImport, QuadraticElementsAreSkippedWithAWarning) {
+  const std::string dir = tempDir("meshb-p2");
+  MeshbWriter w(2, false);
+  w.begin(3);
+  w.int32(3);
+  w.begin(4);
+  w.integer(4);
+  const double c[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const auto& p : c) {
+    for (double v : p) w.real(v);
+    w.integer(0);
+  }
+  const size_t p2_at = w.size();
+  w.begin(30);  // TetrahedraP2
+  w.integer(1);
+  for (int k = 0; k < 11; ++k) w.integer(1);
+  const size_t before_tets = w.size();
+  w.begin(8);
+  w.integer(1);
+  for (int v : {1, 2, 3, 4, 6}) w.integer(v);
+  const std::string bytes = w.end();
+  writeFile(dir + "/p2.meshb", bytes);
+  auto r = importMesh({dir + "/p2.meshb"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 1u);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("skipped TetrahedraP2 at byte offset " + std::to_string(p2_at)),
+            std::string::npos)
+      << r->report.warnings[0];
+  // Without the tetrahedron (the P2 record then ends the file): an error that names what was skipped.
+  std::string only = bytes.substr(0, before_tets);
+  writeFile(dir + "/only.meshb", only);
+  auto e = importMesh({dir + "/only.meshb"}, ImportOptions{});
+  ASSERT_FALSE(e.isOk());
+  EXPECT_NE(e.status().message().find("only TetrahedraP2 (byte offset " + std::to_string(p2_at) + "), which are not read"),
+            std::string::npos)
+      << e.status().message();
+}
+
 // Every prefix of a valid file fails with a message that names the file, none crashes, except the
 // one that ends where the Tetrahedra record starts: a file may end after any whole record (End is
 // needed only to stop early), and that one holds the two cubes.
