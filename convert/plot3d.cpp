@@ -16,6 +16,9 @@
 //   (2) points are ordinary points. All points are kept and IBLANK becomes the int32 field "iblank".
 // - Blocks are never joined; --weld merges bit-identical points (across blocks too), keeps the first
 //   point's field values, and drops the tetrahedra that collapse.
+// - Files written plane by plane (PLOT3D's /PLANES: per grid one record per k-plane, holding all
+//   components of that plane) are told from whole files by their record markers; without markers the
+//   two cannot be told apart and the whole layout is assumed.
 // - Q files come in the classic layout (dimensions, then per grid four freestream reals and the five
 //   conserved variables) and NASA OVERFLOW's (OVERFLOW's q-file description, and VTK's reader of it):
 //   the dimension record ends with NQ and NQC, the number of variables and of species, and each grid's
@@ -68,6 +71,7 @@ struct Layout {
   int precision = 4;  // bytes per real
   bool iblank = false;
   bool overflow = false;  // Q files: OVERFLOW's layout (NQ variables, a longer freestream record)
+  bool planes = false;    // one record per k-plane (all components of the plane) instead of one per grid
   bool ascii = false;  // read from text (transcoded; the binary members then describe the transcoding)
 };
 
@@ -84,6 +88,7 @@ std::string describeLayout(const Layout& l, Kind kind) {
   if (!l.ascii) s += l.precision == 4 ? ", float32" : ", float64";
   if (kind == Kind::kGrid) s += l.iblank ? ", IBLANK" : ", no IBLANK";
   if (kind == Kind::kQ && l.overflow) s += ", OVERFLOW";
+  if (l.planes) s += ", planes";
   return s;
 }
 
@@ -96,8 +101,10 @@ struct Constraints {
   std::optional<bool> iblank;
   std::optional<int> ndim;
   std::optional<bool> overflow;
+  std::optional<bool> planes;
 
   bool allows(const Layout& l, Kind kind) const {
+    if (planes && *planes != l.planes) return false;
     if (kind == Kind::kQ && overflow && *overflow != l.overflow) return false;
     if (big_endian && *big_endian != l.big_endian) return false;
     if (fortran && *fortran != (l.marker != 0)) return false;
@@ -248,6 +255,28 @@ std::string_view recordBytes(std::string_view bytes, const Record& rec, std::str
   return *scratch;
 }
 
+// The bytes of block `g` in the whole layout: each component for all points (i fastest, then j, then
+// k), component after component. A planes file holds all components of k-plane 0, then of plane 1,
+// ...; they are reordered into `*reordered`. `component_bytes` gives each component's value size.
+std::string_view blockBytes(std::string_view bytes, const Fit& fit, size_t g, const std::vector<size_t>& component_bytes,
+                            std::string* scratch, std::string* reordered) {
+  const std::string_view v = recordBytes(bytes, fit.data[g], scratch);
+  if (!fit.layout.planes) return v;
+  const BlockDims& b = fit.blocks[g];
+  const size_t plane = static_cast<size_t>(b.n[0] * b.n[1]), nk = static_cast<size_t>(b.n[2]), n = plane * nk;
+  reordered->resize(v.size());
+  size_t src = 0;
+  for (size_t k = 0; k < nk; ++k) {
+    size_t whole_offset = 0;  // where the component starts in the whole layout
+    for (size_t cb : component_bytes) {
+      std::memcpy(reordered->data() + whole_offset + k * plane * cb, v.data() + src, plane * cb);
+      src += plane * cb;
+      whole_offset += n * cb;
+    }
+  }
+  return *reordered;
+}
+
 // Tries one interpretation. On failure `*why` says what did not fit, `*header_ok` whether the grid
 // count and dimensions at least made sense and `*progress` how far the records checked out (both
 // for ranking the explanations).
@@ -315,6 +344,10 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
       }
     }
   }
+  if (l.planes && std::all_of(fit->blocks.begin(), fit->blocks.end(), [](const BlockDims& b) { return b.n[2] == 1; })) {
+    *why = "every grid has a single k-plane, so the planes layout is the whole layout";
+    return false;
+  }
   *header_ok = true;
   fit->layout = l;
   fit->headers.clear();
@@ -352,7 +385,18 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
         return false;
       fit->headers.push_back(std::move(header));
     }
-    if (!cursor.next(n * per_point, block_name.c_str(), &fit->data[static_cast<size_t>(g)], why)) return false;
+    if (l.planes) {
+      // One record per k-plane; the block's record is their pieces in order (blockBytes reorders).
+      Record& all = fit->data[static_cast<size_t>(g)];
+      const uint64_t plane_bytes = static_cast<uint64_t>(b.n[0] * b.n[1]) * per_point;
+      for (int64_t k = 0; k < b.n[2]; ++k) {
+        const std::string plane_name = block_name + ", plane " + std::to_string(k + 1);
+        if (!cursor.next(plane_bytes, plane_name.c_str(), &rec, why)) return false;
+        all.insert(all.end(), rec.begin(), rec.end());
+      }
+    } else if (!cursor.next(n * per_point, block_name.c_str(), &fit->data[static_cast<size_t>(g)], why)) {
+      return false;
+    }
   }
   fit->end = cursor.pos();
   return true;
@@ -383,17 +427,20 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
         for (int ndim : {3, 2}) {
           if (ndim == 2 && kind != Kind::kGrid) continue;
           for (int precision : {4, 8}) {
-            for (int variant = 0; variant < 2; ++variant) {
-              // The second variant: with IBLANK for grids, OVERFLOW's layout for Q files.
-              if (variant && kind == Kind::kFunction) continue;
+            for (int variant = 0; variant < 4; ++variant) {
+              // Bit 0: with IBLANK for grids, OVERFLOW's layout for Q files; bit 1: written plane
+              // by plane (told apart by record markers only, 3D only).
+              if ((variant & 1) && kind == Kind::kFunction) continue;
+              if ((variant & 2) && (marker == 0 || ndim != 3)) continue;
               Layout l;
               l.big_endian = be != 0;
               l.marker = marker;
               l.multi_grid = multi != 0;
               l.ndim = ndim;
               l.precision = precision;
-              l.iblank = variant != 0 && kind == Kind::kGrid;
-              l.overflow = variant != 0 && kind == Kind::kQ;
+              l.iblank = (variant & 1) != 0 && kind == Kind::kGrid;
+              l.overflow = (variant & 1) != 0 && kind == Kind::kQ;
+              l.planes = (variant & 2) != 0;
               if (!constraints.allows(l, kind)) continue;
               Fit fit;
               std::string why;
@@ -430,7 +477,7 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
 }
 
 std::string triedText(const Detection& d, Kind kind) {
-  std::string s = "tried big- and little-endian, no/4-byte/8-byte record markers, single and multi-grid, ";
+  std::string s = "tried big- and little-endian, no/4-byte/8-byte record markers, whole and planes, single and multi-grid, ";
   s += kind == Kind::kGrid ? "2D and 3D, float32 and float64, with and without IBLANK"
                            : (kind == Kind::kQ ? "float32 and float64, classic and OVERFLOW layouts" : "float32 and float64");
   s += " (binary; text files are read as ASCII PLOT3D)";
@@ -733,6 +780,7 @@ Constraints imposed(const Layout& l) {
   c.iblank = l.iblank;
   c.ndim = l.ndim;
   c.overflow = l.overflow;
+  c.planes = l.planes;
   return c;
 }
 
@@ -892,11 +940,13 @@ Status addGrid(const std::string& path, std::string_view bytes, const Fit& fit, 
   mesh.coord_type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
   mesh.coords.resize(3 * total);
   if (l.iblank) iblank->resize(total);
-  std::string scratch;
+  std::string scratch, reordered;
+  std::vector<size_t> components(3, static_cast<size_t>(l.precision));
+  if (l.iblank) components.push_back(4);
   size_t base = 0;
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
     const size_t n = fit.blocks[g].points();
-    const std::string_view v = recordBytes(bytes, fit.data[g], &scratch);
+    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
     for (int a = 0; a < 3; ++a) {
       const char* src = v.data() + a * n * l.precision;
       for (size_t i = 0; i < n; ++i) {
@@ -938,7 +988,8 @@ void addQ(std::string_view bytes, const Fit& fit, TetMesh& mesh, std::vector<std
   for (size_t k = classic ? 5 : 0; k < nq; ++k) fields.emplace_back("q" + std::to_string(k + 1), 1, type, total);
   // The freestream reals before OVERFLOW's IGAM: FSMACH ALPHA REY TIME, then GAMINF BETA TINF.
   const int header_reals = l.overflow ? 7 : 4;
-  std::string scratch;
+  std::string scratch, reordered;
+  const std::vector<size_t> components(nq, static_cast<size_t>(l.precision));
   size_t base = 0;
   double first_header[7] = {0, 0, 0, 0, 0, 0, 0};
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
@@ -952,7 +1003,7 @@ void addQ(std::string_view bytes, const Fit& fit, TetMesh& mesh, std::vector<std
       warnings->push_back(path + ": grid " + std::to_string(g + 1) +
                           " has other freestream values than grid 1; metadata keeps grid 1's");
     }
-    const std::string_view v = recordBytes(bytes, fit.data[g], &scratch);
+    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
     const size_t p = static_cast<size_t>(l.precision);
     for (size_t q = 0; q < nq; ++q) {
       const char* src = v.data() + q * n * p;
@@ -990,11 +1041,12 @@ Status addFunction(const std::string& path, std::string_view bytes, const Fit& f
   const ScalarType type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
   const size_t first = mesh.point_fields.size();
   for (int64_t k = 0; k < nvar; ++k) mesh.point_fields.emplace_back("function_" + std::to_string(k), 1, type, total);
-  std::string scratch;
+  std::string scratch, reordered;
+  const std::vector<size_t> components(static_cast<size_t>(nvar), static_cast<size_t>(l.precision));
   size_t base = 0;
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
     const size_t n = fit.blocks[g].points();
-    const std::string_view v = recordBytes(bytes, fit.data[g], &scratch);
+    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
     for (int64_t k = 0; k < nvar; ++k)
       copyValues(v.data() + k * n * l.precision, n, l.precision, l.big_endian, &mesh.point_fields[first + k], base, 1);
     base += n;

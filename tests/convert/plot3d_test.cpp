@@ -322,6 +322,64 @@ std::string overflowQFile(const std::vector<Block>& blocks, const GridOptions& o
   return w.out;
 }
 
+// The same files written plane by plane (PLOT3D's /PLANES): per grid one record per k-plane holding
+// that plane's X, Y, Z (and IBLANK) values, resp. its five Q variables or its function variables.
+std::string planesGridFile(const std::vector<Block>& blocks, const GridOptions& o) {
+  RecordWriter w{o.big_endian, o.marker, ""};
+  Bytes b{o.big_endian, ""};
+  if (o.multi) {
+    b.i32(static_cast<int32_t>(blocks.size()));
+    w.record(b.s);
+  }
+  b.s.clear();
+  for (const Block& g : blocks)
+    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+  w.record(b.s);
+  for (const Block& g : blocks) {
+    const size_t plane = static_cast<size_t>(g.n[0]) * g.n[1];
+    for (int k = 0; k < g.n[2]; ++k) {
+      b.s.clear();
+      for (const auto* v : {&g.x, &g.y, &g.z})
+        for (size_t p = 0; p < plane; ++p) b.real((*v)[k * plane + p], o.precision);
+      if (o.iblank)
+        for (size_t p = 0; p < plane; ++p) b.i32(g.iblank[k * plane + p]);
+      w.record(b.s);
+    }
+  }
+  return w.out;
+}
+
+std::string planesQFile(const std::vector<Block>& blocks, const GridOptions& o) {
+  RecordWriter w{o.big_endian, o.marker, ""};
+  Bytes b{o.big_endian, ""};
+  if (o.multi) {
+    b.i32(static_cast<int32_t>(blocks.size()));
+    w.record(b.s);
+  }
+  b.s.clear();
+  for (const Block& g : blocks)
+    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+  w.record(b.s);
+  for (size_t gi = 0; gi < blocks.size(); ++gi) {
+    const Block& g = blocks[gi];
+    b.s.clear();
+    for (double v : {0.75, 2.5, 1.0e6, 0.125 + static_cast<double>(gi)}) b.real(v, o.precision);
+    w.record(b.s);
+    const size_t plane = static_cast<size_t>(g.n[0]) * g.n[1];
+    for (int k = 0; k < g.n[2]; ++k) {
+      b.s.clear();
+      for (int var = 0; var < 5; ++var)
+        for (size_t q = 0; q < plane; ++q) {
+          const double d = static_cast<double>(k * plane + q);
+          const double values[5] = {1 + d / 1000, d, -d, 2 * d, 3 + d};
+          b.real(values[var], o.precision);
+        }
+      w.record(b.s);
+    }
+  }
+  return w.out;
+}
+
 // Function file with `nvar` variables: value v * 100 + p.
 std::string functionFile(const std::vector<Block>& blocks, const GridOptions& o, int nvar) {
   RecordWriter w{o.big_endian, o.marker, ""};
@@ -517,6 +575,59 @@ TEST_F(Plot3dSynthetic, OverflowQFile) {
   ASSERT_FALSE(r.isOk());
   EXPECT_EQ(r.status().message().rfind(q + ": ", 0), 0u) << r.status().message();
   EXPECT_NE(r.status().message().find("OVERFLOW"), std::string::npos) << r.status().message();
+}
+
+// Files written plane by plane are told from whole files by their record markers and read with the
+// same values; a grid of one k-plane is the same either way and is not reported as ambiguous.
+TEST_F(Plot3dSynthetic, PlanesLayoutWithRecordMarkers) {
+  std::vector<Block> blocks = {boxBlock(4, 3, 5), boxBlock(3, 3, 2, 3.0)};
+  for (Block& g : blocks) g.iblank.assign(g.points(), 1);
+  blocks[0].iblank[0] = 0;  // one hole: the cell at the origin goes
+  for (int marker : {4, 8}) {
+    GridOptions o;
+    o.big_endian = marker == 4;
+    o.marker = marker;
+    o.multi = true;
+    o.precision = marker == 4 ? 4 : 8;
+    o.iblank = true;
+    const std::string tag = std::to_string(marker);
+    const std::string xyz = write("planes" + tag + ".xyz", planesGridFile(blocks, o));
+    const std::string q = write("planes" + tag + ".q", planesQFile(blocks, o));
+    auto r = importFiles({xyz, q}, 6);
+    ASSERT_TRUE(r.isOk()) << tag << ": " << r.status().message();
+    const TetMesh& m = r->mesh;
+    expectCoords(m, blocks, o.precision);
+    EXPECT_EQ(m.numTets(), (3u * 2u * 4u - 1u + 2u * 2u * 1u) * 6u);
+    EXPECT_NE(m.findMetadata("plot3d.layout")->find(", planes"), std::string::npos) << *m.findMetadata("plot3d.layout");
+    const Field* density = m.findPointField("density");
+    const Field* momentum = m.findPointField("momentum");
+    const Field* iblank = m.findPointField("iblank");
+    ASSERT_TRUE(density && momentum && iblank);
+    // Point 37 of the first grid lies in its fourth k-plane (12 points a plane).
+    EXPECT_EQ(density->get(37, 0), static_cast<double>(o.precision == 4 ? static_cast<float>(1 + 37.0 / 1000)
+                                                                         : 1 + 37.0 / 1000));
+    EXPECT_EQ(momentum->get(37, 2), 74.0);
+    EXPECT_EQ(m.findPointField("stagnation_energy")->get(60 + 10, 0), 13.0);  // point 10 of the second grid
+    EXPECT_EQ(iblank->get(0, 0), 0);
+    EXPECT_EQ(iblank->get(1, 0), 1);
+    // The same mesh as the whole layout gives.
+    const std::string wxyz = write("whole" + tag + ".xyz", gridFile(blocks, o));
+    const std::string wq = write("whole" + tag + ".q", qFile(blocks, o));
+    auto w = importFiles({wxyz, wq}, 6);
+    ASSERT_TRUE(w.isOk()) << w.status().message();
+    EXPECT_EQ(w->mesh.coords, m.coords);
+    EXPECT_EQ(w->mesh.tets, m.tets);
+    EXPECT_EQ(w->mesh.findPointField("momentum")->bytes, momentum->bytes);
+    EXPECT_EQ(w->mesh.findMetadata("plot3d.layout")->find(", planes"), std::string::npos);
+  }
+  // Single k-plane grids: whole and planes are one layout, read without an ambiguity error.
+  const std::vector<Block> flat = {boxBlock(3, 3, 1)};
+  GridOptions o;
+  o.marker = 4;
+  auto r = importFiles({write("flat.xyz", planesGridFile(flat, o))}, 6);
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().message().find("ambiguous"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("a dimension below 2"), std::string::npos) << r.status().message();
 }
 
 TEST_F(Plot3dSynthetic, SubrecordsWithNegativeMarkers) {
