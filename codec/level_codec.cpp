@@ -116,23 +116,25 @@ inline double floorKey(double y) {
   return d > y ? d - 1 : d;
 }
 
-// What coding `symbol` through `tree` costs now, in 1/16 bits (the encoder weighs a prediction
-// rule's signalling against the residual bits it saves).
+// What coding each symbol through `tree` costs now, in 1/16 bits (the encoder weighs a prediction
+// rule's signalling against the residual bits it saves). One walk over the nodes prices every
+// symbol, as the encoder tries them all: a symbol's cost is the sum along its path from the root.
 template <int kBits>
-int symbolCost(const BitTree<kBits>& tree, uint32_t symbol) {
+std::array<int, 1 << kBits> symbolCosts(const BitTree<kBits>& tree) {
   static const std::array<uint16_t, 4096> kCost = [] {
     std::array<uint16_t, 4096> t{};
     for (size_t i = 0; i < t.size(); ++i) t[i] = static_cast<uint16_t>(std::lround(-16.0 * std::log2((i + 0.5) / 4096.0)));
     return t;
   }();
-  int cost = 0;
-  uint32_t node = 1;
-  for (int i = kBits - 1; i >= 0; --i) {
-    const uint32_t bit = (symbol >> i) & 1;
+  int path[2 << kBits];  // cost of reaching each node
+  path[1] = 0;
+  for (uint32_t node = 1; node < (1u << kBits); ++node) {
     const uint32_t p0 = tree.m[node].p0();
-    cost += kCost[(bit ? 65536 - p0 : p0) >> 4];
-    node = (node << 1) | bit;
+    path[2 * node] = path[node] + kCost[p0 >> 4];
+    path[2 * node + 1] = path[node] + kCost[(65536 - p0) >> 4];
   }
+  std::array<int, 1 << kBits> cost;
+  std::copy(path + (1 << kBits), path + (2 << kBits), cost.begin());
   return cost;
 }
 
@@ -359,11 +361,13 @@ class LevelCoder {
   }
 
   // ---- values ----------------------------------------------------------------------------------
-  // Key of coordinate i predicted by rule r (rule 0: `rule0`).
-  uint64_t ruleKey(uint32_t r, const FieldPrediction& fp, int i, uint64_t rule0, ScalarType ct) const {
-    if (r == 0) return rule0;
-    double x[4];
+  // Coordinate i of the stencil vertices (0 where there is none): the values rules weigh.
+  void coordStencil(const FieldPrediction& fp, int i, double x[4]) const {
     for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? P(fp.s[j])[i] : 0.0;
+  }
+  // Key of a coordinate predicted by rule r from its stencil values x (rule 0: `rule0`).
+  static uint64_t ruleKey(uint32_t r, const double x[4], uint64_t rule0, ScalarType ct) {
+    if (r == 0) return rule0;
     return keyFromPrediction(ct, kWeightedRule[r](x));
   }
   double fieldRule(uint32_t r, const FieldPrediction& fp, ScalarType type, size_t off) const {
@@ -461,12 +465,12 @@ class LevelCoder {
       if (r >= kRules) return cand[r - kRules][c];
       return kWeightedRule[r](stencil[c]);
     };
-    const BitTree<4>& tree = pf_rule_[f][pf_last_rule_[f]];
+    const std::array<int, 16> signal = symbolCosts(pf_rule_[f][pf_last_rule_[f]]);
     int best = 1 << 30;
     uint32_t rule = 0;
     auto consider = [&](uint32_t r) {
       if (!fieldRuleAllowed(r, has_d)) return;
-      int cost = symbolCost(tree, r);
+      int cost = signal[r];
       for (uint32_t c = 0; c < d.components; ++c) {
         if (cost > best || (cost == best && r > rule)) return;
         if (alias_[k + c] != kNone32) continue;
@@ -538,13 +542,16 @@ class LevelCoder {
       if constexpr (kEncode) {
         // The cheapest rule, the lowest among equals; the previous rule first, so that most others
         // stop early.
+        const std::array<int, 16> signal = symbolCosts(geo_rule_[geo_last_rule_]);
+        double stencil[3][4];  // gathered once for all the rules
+        for (int i = 0; i < 3; ++i) coordStencil(fp, i, stencil[i]);
         int best = 1 << 30;
         auto consider = [&](uint32_t r) {
           if (!ruleAllowed(r, has_d, kCoordRules)) return;
-          int cost = symbolCost(geo_rule_[geo_last_rule_], r);
+          int cost = signal[r];
           for (int i = 0; i < 3; ++i) {
             if (cost > best || (cost == best && r > rule)) return;
-            cost += 16 * residualBits(actual[i], ruleKey(r, fp, i, pk[i], ct), cbits);
+            cost += 16 * residualBits(actual[i], ruleKey(r, stencil[i], pk[i], ct), cbits);
           }
           if (cost < best || (cost == best && r < rule)) {
             best = cost;
@@ -559,7 +566,11 @@ class LevelCoder {
       if (!ruleAllowed(rule, has_d, kCoordRules)) return bad("invalid coordinate prediction rule");
       geo_last_rule_ = rule;
       if (rule != 0)
-        for (int i = 0; i < 3; ++i) pk[i] = ruleKey(rule, fp, i, pk[i], ct);
+        for (int i = 0; i < 3; ++i) {
+          double stencil[4];
+          coordStencil(fp, i, stencil);
+          pk[i] = ruleKey(rule, stencil, pk[i], ct);
+        }
     }
     // Copy sources: the stencil, then the apex candidates (front vertices around the gate), which
     // on extruded and sheared grids hold the vertex's neighbours along a grid line.
