@@ -158,11 +158,13 @@ struct EncoderSide {
   };
   std::vector<BoundaryTri> btris;
   std::vector<uint8_t> btri_done;
+  // Every directed edge (a, b) of every boundary triangle, grouped by a (bedges[edge_start[a]] up to
+  // bedges[edge_start[a + 1]]) and in triangle order within a group: a counting sort, not a sort.
   struct DirectedEdge {
-    uint32_t a, b, tri;
-    bool operator<(const DirectedEdge& o) const { return a != o.a ? a < o.a : (b != o.b ? b < o.b : tri < o.tri); }
+    uint32_t b, tri;
   };
-  std::vector<DirectedEdge> bedges;  // every directed edge of every boundary triangle, sorted
+  std::vector<size_t> edge_start;
+  std::vector<DirectedEdge> bedges;
   size_t next_seed_tet = 0, next_seed_tri = 0;
   std::vector<uint32_t> vertex_order;
   std::vector<uint64_t> tet_order;
@@ -795,12 +797,11 @@ class LevelCoder {
       uint32_t has = 0, tri = 0, x_src = 0;
       if constexpr (kEncode) {
         const uint32_t sp = enc_->slot_src[p], sq = enc_->slot_src[q];
-        EncoderSide::DirectedEdge probe{sq, sp, 0};
-        auto it = std::lower_bound(enc_->bedges.begin(), enc_->bedges.end(), probe);
-        for (; it != enc_->bedges.end() && it->a == sq && it->b == sp; ++it) {
-          if (!enc_->btri_done[it->tri]) {
+        for (size_t i = enc_->edge_start[sq]; i < enc_->edge_start[sq + 1]; ++i) {
+          const EncoderSide::DirectedEdge& e = enc_->bedges[i];
+          if (e.b == sp && !enc_->btri_done[e.tri]) {
             has = 1;
-            tri = it->tri;
+            tri = e.tri;
             break;
           }
         }
@@ -1664,11 +1665,17 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
     }
   h.boundary_triangles = enc.btris.size();
   enc.btri_done.assign(enc.btris.size(), 0);
-  enc.bedges.reserve(3 * enc.btris.size());
-  for (size_t i = 0; i < enc.btris.size(); ++i)
-    for (int j = 0; j < 3; ++j)
-      enc.bedges.push_back({enc.btris[i].v[j], enc.btris[i].v[(j + 1) % 3], static_cast<uint32_t>(i)});
-  std::sort(enc.bedges.begin(), enc.bedges.end());
+  enc.edge_start.assign(np + 1, 0);
+  for (const EncoderSide::BoundaryTri& t : enc.btris)
+    for (uint32_t v : t.v) ++enc.edge_start[v + 1];
+  for (size_t v = 0; v < np; ++v) enc.edge_start[v + 1] += enc.edge_start[v];
+  enc.bedges.resize(3 * enc.btris.size());
+  {
+    std::vector<size_t> next(enc.edge_start.begin(), enc.edge_start.end() - 1);
+    for (size_t i = 0; i < enc.btris.size(); ++i)
+      for (int j = 0; j < 3; ++j)
+        enc.bedges[next[enc.btris[i].v[j]]++] = {enc.btris[i].v[(j + 1) % 3], static_cast<uint32_t>(i)};
+  }
   enc.vertex_order.assign(np, kNone32);
   enc.tet_order.assign(nt, 0);
   {
