@@ -8,14 +8,11 @@ const int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 namespace {
 struct FaceKey {
-  uint32_t v[3];
+  uint32_t a;     // the smallest vertex
   uint32_t slot;  // 4 * tet + local face
-  bool operator<(const FaceKey& o) const {
-    if (v[0] != o.v[0]) return v[0] < o.v[0];
-    if (v[1] != o.v[1]) return v[1] < o.v[1];
-    return v[2] < o.v[2];
-  }
-  bool sameFace(const FaceKey& o) const { return v[0] == o.v[0] && v[1] == o.v[1] && v[2] == o.v[2]; }
+  uint64_t bc;    // the other two, b << 32 | c with b < c: one comparison orders and matches them
+  bool operator<(const FaceKey& o) const { return a != o.a ? a < o.a : bc < o.bc; }
+  bool sameFace(const FaceKey& o) const { return a == o.a && bc == o.bc; }
 };
 
 // Groups equal faces together (the order within a group, and of the groups, does not matter to the
@@ -26,19 +23,19 @@ struct FaceKey {
 // sizing buckets by them.
 void sortFaceKeys(std::vector<FaceKey>& keys, size_t points) {
   uint32_t max_v = 0;
-  for (const FaceKey& k : keys) max_v = std::max(max_v, k.v[0]);
+  for (const FaceKey& k : keys) max_v = std::max(max_v, k.a);
   if (keys.empty() || max_v >= points) {
     std::sort(keys.begin(), keys.end());
     return;
   }
   const size_t buckets = size_t{max_v} + 1;
   std::vector<uint32_t> start(buckets + 1, 0);
-  for (const FaceKey& k : keys) ++start[k.v[0] + 1];
+  for (const FaceKey& k : keys) ++start[k.a + 1];
   for (size_t v = 1; v <= buckets; ++v) start[v] += start[v - 1];
   std::vector<uint32_t> next(start.begin(), start.end() - 1);
   for (size_t b = 0; b < buckets; ++b) {
     while (next[b] < start[b + 1]) {
-      const uint32_t target = keys[next[b]].v[0];
+      const uint32_t target = keys[next[b]].a;
       if (target == b) {
         ++next[b];
       } else {
@@ -47,7 +44,9 @@ void sortFaceKeys(std::vector<FaceKey>& keys, size_t points) {
     }
   }
   for (size_t b = 0; b < buckets; ++b) {
-    if (start[b + 1] - start[b] > 1) std::sort(keys.begin() + start[b], keys.begin() + start[b + 1]);
+    if (start[b + 1] - start[b] > 1)
+      std::sort(keys.begin() + start[b], keys.begin() + start[b + 1],
+                [](const FaceKey& x, const FaceKey& y) { return x.bc < y.bc; });
   }
 }
 }  // namespace
@@ -64,9 +63,8 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
       if (a > b) std::swap(a, b);
       if (b > c) std::swap(b, c);
       if (a > b) std::swap(a, b);
-      key.v[0] = a;
-      key.v[1] = b;
-      key.v[2] = c;
+      key.a = a;
+      key.bc = (uint64_t{b} << 32) | c;
       key.slot = static_cast<uint32_t>(4 * t + k);
     }
   }
