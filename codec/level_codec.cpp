@@ -31,6 +31,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "codec/flat_maps.h"
@@ -102,6 +103,12 @@ constexpr std::array<double (*)(const double*), sizeof...(r)> weightedRuleTable(
   return {&weightedRule<r>...};
 }
 constexpr auto kWeightedRule = weightedRuleTable(std::make_integer_sequence<uint32_t, kRules>());
+// Every rule's prediction at once, out[r] = weightedRule<r>(x) (out[0] = 0): straight-line code for
+// the encoder, which tries them all.
+template <uint32_t... r>
+inline void weightedRules(const double x[4], double* out, std::integer_sequence<uint32_t, r...>) {
+  ((out[r] = weightedRule<r>(x)), ...);
+}
 
 enum SlotState : uint8_t { kFree = 0, kLive = 1, kRetired = 2 };
 
@@ -444,58 +451,72 @@ class LevelCoder {
   uint32_t chooseFieldRule(size_t f, size_t k, const FieldPrediction& fp, bool has_d, const uint8_t* src_item) {
     const FieldDesc& d = header_.point_fields[f];
     const size_t vs = scalarSize(d.type);
-    const int fbits = scalarBits(d.type);
+    const uint64_t mask = keyMask(scalarBits(d.type));
     constexpr uint32_t kMaxComps = 16;
-    double stencil[kMaxComps][4];
-    double cand[kCandidateRules][kMaxComps];
+    // The coded (not aliased) components, with their actual keys and every rule's prediction.
     uint64_t actual[kMaxComps];
+    double predicted[kMaxComps][kFieldRules];
+    uint32_t n = 0;
     const bool cached = d.components <= kMaxComps;
     if (cached) {
+      const uint32_t n_cand = std::min<uint32_t>(n_near_, kCandidateRules);
       for (uint32_t c = 0; c < d.components; ++c) {
+        if (alias_[k + c] != kNone32) continue;
         const size_t off = pf_offset_[f] + c * vs;
-        actual[c] = keyFromRaw(d.type, src_item + c * vs);
-        for (int j = 0; j < 4; ++j)
-          stencil[c][j] = fp.s[j] != kNoSlot ? doubleFromRaw(d.type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
-        for (int j = 0; j < std::min<int>(n_near_, kCandidateRules); ++j)
-          cand[j][c] = doubleFromRaw(d.type, &vals_[near_[j] * item_bytes_ + off]);
+        actual[n] = keyFromRaw(d.type, src_item + c * vs);
+        double x[4];
+        for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(d.type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
+        double* v = predicted[n];
+        weightedRules(x, v, std::make_integer_sequence<uint32_t, kRules>());
+        v[0] = pred_vals_[k + c];
+        for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(d.type, &vals_[near_[j] * item_bytes_ + off]);
+        ++n;
       }
     }
-    // The prediction of rule r for component c, exactly as fieldRule computes it.
-    auto predict = [&](uint32_t r, uint32_t c) {
-      if (r == 0) return pred_vals_[k + c];
-      if (!cached) return fieldRule(r, fp, d.type, pf_offset_[f] + c * vs);
-      if (r >= kRules) return cand[r - kRules][c];
-      return kWeightedRule[r](stencil[c]);
-    };
     const std::array<int, 16> signal = symbolCosts(pf_rule_[f][pf_last_rule_[f]]);
-    int best = 1 << 30;
-    uint32_t rule = 0;
-    auto consider = [&](uint32_t r) {
-      if (!fieldRuleAllowed(r, has_d)) return;
-      int cost = signal[r];
-      for (uint32_t c = 0; c < d.components; ++c) {
-        if (cost > best || (cost == best && r > rule)) return;
-        if (alias_[k + c] != kNone32) continue;
-        const uint64_t act = cached ? actual[c] : keyFromRaw(d.type, src_item + c * vs);
-        cost += 16 * residualBits(act, keyFromPrediction(d.type, predict(r, c)), fbits);
-      }
-      if (cost < best || (cost == best && r < rule)) {
-        best = cost;
-        rule = r;
-      }
+    // `type` is d.type, as a compile-time constant for the usual float types (the key conversion in
+    // the innermost loop then has no switch).
+    auto search = [&](auto type) {
+      int best = 1 << 30;
+      uint32_t rule = 0;
+      auto consider = [&](uint32_t r) {
+        if (!fieldRuleAllowed(r, has_d)) return;
+        int cost = signal[r];
+        if (cached) {
+          for (uint32_t i = 0; i < n; ++i) {
+            if (cost > best || (cost == best && r > rule)) return;
+            cost += 16 * residualBits(actual[i], keyFromPrediction(type, predicted[i][r]), mask);
+          }
+        } else {
+          for (uint32_t c = 0; c < d.components; ++c) {
+            if (cost > best || (cost == best && r > rule)) return;
+            if (alias_[k + c] != kNone32) continue;
+            const size_t off = pf_offset_[f] + c * vs;
+            const double pv = r == 0 ? pred_vals_[k + c] : fieldRule(r, fp, type, off);
+            cost += 16 * residualBits(keyFromRaw(type, src_item + c * vs), keyFromPrediction(type, pv), mask);
+          }
+        }
+        if (cost < best || (cost == best && r < rule)) {
+          best = cost;
+          rule = r;
+        }
+      };
+      const uint32_t last = pf_last_rule_[f];
+      consider(last);
+      if (last != 0) consider(0);
+      for (uint32_t r = 0; r < kFieldRules; ++r)
+        if (r != last && r != 0) consider(r);
+      return rule;
     };
-    const uint32_t last = pf_last_rule_[f];
-    consider(last);
-    if (last != 0) consider(0);
-    for (uint32_t r = 0; r < kFieldRules; ++r)
-      if (r != last && r != 0) consider(r);
-    return rule;
+    if (d.type == ScalarType::kFloat32) return search(std::integral_constant<ScalarType, ScalarType::kFloat32>());
+    if (d.type == ScalarType::kFloat64) return search(std::integral_constant<ScalarType, ScalarType::kFloat64>());
+    return search(d.type);
   }
 
-  // Introduces a vertex: codes its coordinates and field values and emits it.
-  // Magnitude class of the residual between two keys of a `bits`-wide type (the encoder's cost).
-  static int residualBits(uint64_t actual, uint64_t pred, int bits) {
-    const uint64_t mask = bits == 64 ? ~uint64_t{0} : ((uint64_t{1} << bits) - 1);
+  // The keys of a `bits`-wide type are its low `bits` bits.
+  static uint64_t keyMask(int bits) { return bits == 64 ? ~uint64_t{0} : ((uint64_t{1} << bits) - 1); }
+  // Magnitude class of the residual between two keys (`mask`: their type's keyMask), the encoder's cost.
+  static int residualBits(uint64_t actual, uint64_t pred, uint64_t mask) {
     const uint64_t r = (actual - pred) & mask, n = (~r + 1) & mask;
     return bitLength(r < n ? r : n);
   }
@@ -518,7 +539,7 @@ class LevelCoder {
     const uint32_t s = allocSlot();
     double* x = &pos_[3 * size_t{s}];
     const ScalarType ct = header_.coord_type;
-    const int cbits = scalarBits(ct);
+    const uint64_t cmask = keyMask(scalarBits(ct));
     const bool choose = fp.kind == FieldPrediction::kInterpolate || fp.kind == FieldPrediction::kAverage;
     // Fields also choose behind a boundary edge (rule 0 is then the parallelogram).
     const bool choose_fields = choose || fp.kind == FieldPrediction::kParallelogram;
@@ -553,7 +574,7 @@ class LevelCoder {
           int cost = signal[r];
           for (int i = 0; i < 3; ++i) {
             if (cost > best || (cost == best && r > rule)) return;
-            cost += 16 * residualBits(actual[i], ruleKey(r, stencil[i], pk[i], ct), cbits);
+            cost += 16 * residualBits(actual[i], ruleKey(r, stencil[i], pk[i], ct), cmask);
           }
           if (cost < best || (cost == best && r < rule)) {
             best = cost;
