@@ -474,13 +474,20 @@ class LevelCoder {
       }
     }
     const std::array<int, 16> signal = symbolCosts(pf_rule_[f][pf_last_rule_[f]]);
+    uint32_t order[kFieldRules];  // the allowed rules, in the order tried: the last, 0, the others
+    uint32_t n_order = 0;
+    const uint32_t last = pf_last_rule_[f];
+    for (uint32_t i = 0; i < kFieldRules; ++i) {
+      const uint32_t r = i == 0 ? last : (i <= last ? i - 1 : i);
+      if (fieldRuleAllowed(r, has_d)) order[n_order++] = r;
+    }
     // `type` is d.type, as a compile-time constant for the usual float types (the key conversion in
     // the innermost loop then has no switch).
     auto search = [&](auto type) {
       int best = 1 << 30;
       uint32_t rule = 0;
-      auto consider = [&](uint32_t r) {
-        if (!fieldRuleAllowed(r, has_d)) return;
+      // Inlined into its one call: the call would cost as much as a short rule's evaluation.
+      auto consider = [&](uint32_t r) __attribute__((always_inline)) {
         int cost = signal[r];
         if (cached) {
           for (uint32_t i = 0; i < n; ++i) {
@@ -501,11 +508,7 @@ class LevelCoder {
           rule = r;
         }
       };
-      const uint32_t last = pf_last_rule_[f];
-      consider(last);
-      if (last != 0) consider(0);
-      for (uint32_t r = 0; r < kFieldRules; ++r)
-        if (r != last && r != 0) consider(r);
+      for (uint32_t i = 0; i < n_order; ++i) consider(order[i]);
       return rule;
     };
     if (d.type == ScalarType::kFloat32) return search(std::integral_constant<ScalarType, ScalarType::kFloat32>());
@@ -566,24 +569,37 @@ class LevelCoder {
         // The cheapest rule, the lowest among equals; the previous rule first, so that most others
         // stop early.
         const std::array<int, 16> signal = symbolCosts(geo_rule_[geo_last_rule_]);
-        double stencil[3][4];  // gathered once for all the rules
-        for (int i = 0; i < 3; ++i) coordStencil(fp, i, stencil[i]);
-        int best = 1 << 30;
-        auto consider = [&](uint32_t r) {
-          if (!ruleAllowed(r, has_d, kCoordRules)) return;
-          int cost = signal[r];
-          for (int i = 0; i < 3; ++i) {
-            if (cost > best || (cost == best && r > rule)) return;
-            cost += 16 * residualBits(actual[i], ruleKey(r, stencil[i], pk[i], ct), cmask);
-          }
-          if (cost < best || (cost == best && r < rule)) {
-            best = cost;
-            rule = r;
-          }
+        double predicted[3][kRules];  // every rule's prediction of each axis
+        for (int i = 0; i < 3; ++i) {
+          double stencil[4];
+          coordStencil(fp, i, stencil);
+          weightedRules(stencil, predicted[i], std::make_integer_sequence<uint32_t, kRules>());
+        }
+        // `type` is ct as a compile-time constant (coordinates are float32 or float64).
+        auto search = [&](auto type) {
+          int best = 1 << 30;
+          auto consider = [&](uint32_t r) {
+            if (!ruleAllowed(r, has_d, kCoordRules)) return;
+            int cost = signal[r];
+            for (int i = 0; i < 3; ++i) {
+              if (cost > best || (cost == best && r > rule)) return;
+              const uint64_t key = r == 0 ? pk[i] : keyFromPrediction(type, predicted[i][r]);
+              cost += 16 * residualBits(actual[i], key, cmask);
+            }
+            if (cost < best || (cost == best && r < rule)) {
+              best = cost;
+              rule = r;
+            }
+          };
+          // The previous rule, then the others.
+          for (uint32_t i = 0; i < kCoordRules; ++i)
+            consider(i == 0 ? geo_last_rule_ : (i <= geo_last_rule_ ? i - 1 : i));
         };
-        consider(geo_last_rule_);
-        for (uint32_t r = 0; r < kCoordRules; ++r)
-          if (r != geo_last_rule_) consider(r);
+        if (ct == ScalarType::kFloat32) {
+          search(std::integral_constant<ScalarType, ScalarType::kFloat32>());
+        } else {
+          search(std::integral_constant<ScalarType, ScalarType::kFloat64>());
+        }
       }
       rule = geo_rule_[geo_last_rule_].code(*geo_, rule);
       if (!ruleAllowed(rule, has_d, kCoordRules)) return bad("invalid coordinate prediction rule");
