@@ -1497,16 +1497,11 @@ class LevelCoder {
           if (t[i] != ga && t[i] != gb && t[i] != gcv) xi = i;
         if (xi < 0) return internal("gate face does not belong to its tetrahedron");
         x_src = t[xi];
-        // Parity of (a, b, c, x) as a permutation of the stored order.
-        const uint32_t want[4] = {ga, gb, gcv, x_src};
-        int perm[4];
-        for (int i = 0; i < 4; ++i)
-          for (int j = 0; j < 4; ++j)
-            if (t[j] == want[i]) perm[i] = j;
-        int inversions = 0;
-        for (int i = 0; i < 4; ++i)
-          for (int j = i + 1; j < 4; ++j) inversions += perm[i] > perm[j];
-        flip = inversions & 1;
+        // Parity of (a, b, c, x) as a permutation of the stored order: its inversions are the 3 - xi
+        // stored vertices after x's place and those among the places of a, b and c.
+        auto place = [&](uint32_t v) { return int{t[1] == v} + 2 * int{t[2] == v} + 3 * int{t[3] == v}; };
+        const int pa = place(ga), pb = place(gb), pc = place(gcv);
+        flip = (3 - xi + (pa > pb) + (pa > pc) + (pb > pc)) & 1;
         sym = candidateSymbolOf(enc_->src_slot[x_src]);
       }
       sym = tsym_[ctx].code(*con_, sym);
