@@ -127,22 +127,25 @@ inline double floorKey(double y) {
 // rule's signalling against the residual bits it saves). One walk over the nodes prices every
 // symbol, as the encoder tries them all: a symbol's cost is the sum along its path from the root.
 template <int kBits>
-std::array<int, 1 << kBits> symbolCosts(const BitTree<kBits>& tree) {
+struct SymbolCosts {
+  int path[2 << kBits];  // cost of reaching each node; the leaves are the symbols
+  int operator[](uint32_t symbol) const { return path[(1 << kBits) + symbol]; }
+};
+template <int kBits>
+SymbolCosts<kBits> symbolCosts(const BitTree<kBits>& tree) {
   static const std::array<uint16_t, 4096> kCost = [] {
     std::array<uint16_t, 4096> t{};
     for (size_t i = 0; i < t.size(); ++i) t[i] = static_cast<uint16_t>(std::lround(-16.0 * std::log2((i + 0.5) / 4096.0)));
     return t;
   }();
-  int path[2 << kBits];  // cost of reaching each node
-  path[1] = 0;
+  SymbolCosts<kBits> c;
+  c.path[1] = 0;
   for (uint32_t node = 1; node < (1u << kBits); ++node) {
     const uint32_t p0 = tree.m[node].p0();
-    path[2 * node] = path[node] + kCost[p0 >> 4];
-    path[2 * node + 1] = path[node] + kCost[(65536 - p0) >> 4];
+    c.path[2 * node] = c.path[node] + kCost[p0 >> 4];
+    c.path[2 * node + 1] = c.path[node] + kCost[(65536 - p0) >> 4];
   }
-  std::array<int, 1 << kBits> cost;
-  std::copy(path + (1 << kBits), path + (2 << kBits), cost.begin());
-  return cost;
+  return c;
 }
 
 // How the field values of a new vertex are predicted.
@@ -473,7 +476,7 @@ class LevelCoder {
         ++n;
       }
     }
-    const std::array<int, 16> signal = symbolCosts(pf_rule_[f][pf_last_rule_[f]]);
+    const SymbolCosts<4> signal = symbolCosts(pf_rule_[f][pf_last_rule_[f]]);
     uint32_t order[kFieldRules];  // the allowed rules, in the order tried: the last, 0, the others
     uint32_t n_order = 0;
     const uint32_t last = pf_last_rule_[f];
@@ -568,7 +571,7 @@ class LevelCoder {
       if constexpr (kEncode) {
         // The cheapest rule, the lowest among equals; the previous rule first, so that most others
         // stop early.
-        const std::array<int, 16> signal = symbolCosts(geo_rule_[geo_last_rule_]);
+        const SymbolCosts<4> signal = symbolCosts(geo_rule_[geo_last_rule_]);
         double predicted[3][kRules];  // every rule's prediction of each axis
         for (int i = 0; i < 3; ++i) {
           double stencil[4];
