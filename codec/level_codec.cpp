@@ -113,6 +113,13 @@ inline void weightedRules(const double x[4], double* out, std::integer_sequence<
 enum SlotState : uint8_t { kFree = 0, kLive = 1, kRetired = 2 };
 
 inline uint64_t edgeKey(uint32_t a, uint32_t b) { return (uint64_t{a} << 32) | b; }
+// Whether two cell values' keys agree, compared in line: std::equal calls memcmp, which costs more
+// than comparing the few components a cell value has.
+inline bool sameKeys(const uint64_t* a, const uint64_t* b, uint32_t n) {
+  for (uint32_t i = 0; i < n; ++i)
+    if (a[i] != b[i]) return false;
+  return true;
+}
 inline int bitLength(uint64_t v) { return v ? 64 - __builtin_clzll(v) : 0; }
 // std::floor(y) for y < 1e18 without a library call (baseline x86-64 has no rounding instruction):
 // from -2^52 up every value converts to int64 exactly or truncates toward zero; below, every double
@@ -1228,11 +1235,11 @@ class LevelCoder {
       std::vector<std::vector<uint64_t>>& mtf = cell_mtf_[f];
       uint32_t sym = kSymEscape;
       if constexpr (kEncode) {
-        if (std::equal(act, act + nc, pred)) {
+        if (sameKeys(act, pred, nc)) {
           sym = 0;
         } else {
           for (size_t i = 0; i < mtf.size(); ++i)
-            if (std::equal(act, act + nc, mtf[i].begin())) {
+            if (sameKeys(act, mtf[i].data(), nc)) {
               sym = static_cast<uint32_t>(i + 1);
               break;
             }
@@ -1252,7 +1259,7 @@ class LevelCoder {
       // Move to front.
       size_t at = mtf.size();
       for (size_t i = 0; i < mtf.size(); ++i)
-        if (std::equal(keys, keys + nc, mtf[i].begin())) at = i;
+        if (sameKeys(keys, mtf[i].data(), nc)) at = i;
       if (at == mtf.size()) {
         if (mtf.size() < kRecentCellValues) {
           mtf.emplace_back(nc);
