@@ -28,11 +28,6 @@ class FlatHashMap {
   }
   const Value* find(const Key& k) const { return const_cast<FlatHashMap*>(this)->find(k); }
 
-  // Starts loading the slot where a lookup of k begins (a hint: nothing changes).
-  void prefetch(const Key& k) const {
-    if (!used_.empty()) __builtin_prefetch(&slots_[hash_(k) & mask_]);
-  }
-
   // The value of k, inserted value-initialised if absent; second: whether it was inserted.
   std::pair<Value*, bool> tryEmplace(const Key& k) {
     if (2 * (size_ + 1) > used_.size()) rehash(used_.empty() ? 16 : 2 * used_.size());

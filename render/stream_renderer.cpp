@@ -107,7 +107,6 @@ struct ArrivedTet {
   uint32_t v[4];
   TetGeom g;
   int32_t rays = 0;
-  FaceKey keys[4];  // of its faces, made while counting (in parallel) for the face map's sequential pass
 };
 
 struct Trigger {
@@ -170,7 +169,6 @@ struct StreamRenderer::State {
   std::vector<ArrivedTet> flushing;  // rendered (flushBatch) meanwhile, on another thread
   tbb::task_group flush_task;
   bool flush_running = false;
-  std::atomic<bool> flush_busy{false};  // the running flush has not finished its work yet
   size_t batch_size = kMinBatch;
 
   ~State() { waitFlush(); }
@@ -353,21 +351,14 @@ Status StreamRenderer::tet(const uint32_t v[4], const uint8_t*) {
   }
   ++stats_.tets;
   st.batch.push_back(a);
-  // Render the full batch on another thread while the decoder fills the next one: the decoder only
-  // touches the vertex map and `batch`, the flush everything else. While the previous flush is still
-  // busy the batch grows, up to twice its size, instead of the decoder waiting: in the flush's
-  // sequential stages the decoder would otherwise leave a core idle.
-  if (st.batch.size() >= st.batch_size &&
-      (!st.flush_busy.load(std::memory_order_acquire) || st.batch.size() >= 2 * st.batch_size)) {
+  if (st.batch.size() >= st.batch_size) {
+    // Render the full batch on another thread while the decoder fills the next one: the decoder only
+    // touches the vertex map and `batch`, the flush everything else.
     st.waitFlush();
     std::swap(st.batch, st.flushing);
     st.batch.clear();
     st.flush_running = true;
-    st.flush_busy.store(true, std::memory_order_relaxed);
-    st.flush_task.run([this] {
-      (void)flushBatch();
-      state_->flush_busy.store(false, std::memory_order_release);
-    });
+    st.flush_task.run([this] { (void)flushBatch(); });
   }
   return Status::ok();
 }
@@ -387,7 +378,6 @@ Status StreamRenderer::flushBatch() {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, st.flushing.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ArrivedTet& a = st.flushing[i];
-      for (int k = 0; k < 4; ++k) a.keys[k] = makeKey(a.v[kTetFace[k][0]], a.v[kTetFace[k][1]], a.v[kTetFace[k][2]]);
       finishTetGeom(a.g);
       const double* corners[4] = {a.g.p[0], a.g.p[1], a.g.p[2], a.g.p[3]};
       int box[4];
@@ -500,16 +490,11 @@ Status StreamRenderer::flushBatch() {
   //    at their faces (sequential: the face map).
   std::vector<Trigger> triggers;
   std::vector<uint32_t> arrived_slots;
-  // The face map is far larger than the cache and its probes land anywhere: the slots of the
-  // tetrahedra a few places ahead are requested while this one is handled.
-  constexpr size_t kAhead = 8;
-  for (size_t i = 0; i < st.flushing.size(); ++i) {
-    if (i + kAhead < st.flushing.size())
-      for (const FaceKey& key : st.flushing[i + kAhead].keys) st.faces.prefetch(key);
-    ArrivedTet& a = st.flushing[i];
-    const FaceKey* keys = a.keys;
+  for (ArrivedTet& a : st.flushing) {
+    FaceKey keys[4];
     bool needed = a.rays > 0;
     for (int k = 0; k < 4; ++k) {
+      keys[k] = makeKey(a.v[kTetFace[k][0]], a.v[kTetFace[k][1]], a.v[kTetFace[k][2]]);
       if (!needed) {
         const FaceEntry* e = st.faces.find(keys[k]);
         if (e && e->waiters != kNone) needed = true;
