@@ -228,16 +228,26 @@ struct GridOptions {
   size_t subrecord_chunk = 0;  // > 0: write data records as subrecords of this size
 };
 
-std::string gridFile(const std::vector<Block>& blocks, const GridOptions& o) {
-  RecordWriter w{o.big_endian, o.marker, ""};
-  Bytes b{o.big_endian, ""};
+// Writes the grid count record (multi-grid files) and leaves in b the dimensions of every grid, each
+// followed by `per_grid` when it is given (function files: the variable count); the caller may add
+// more and ends the record.
+void beginDims(RecordWriter& w, Bytes& b, const std::vector<Block>& blocks, const GridOptions& o, int per_grid = -1) {
+  b.s.clear();
   if (o.multi) {
     b.i32(static_cast<int32_t>(blocks.size()));
     w.record(b.s);
   }
   b.s.clear();
-  for (const Block& g : blocks)
+  for (const Block& g : blocks) {
     for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+    if (per_grid >= 0) b.i32(per_grid);
+  }
+}
+
+std::string gridFile(const std::vector<Block>& blocks, const GridOptions& o) {
+  RecordWriter w{o.big_endian, o.marker, ""};
+  Bytes b{o.big_endian, ""};
+  beginDims(w, b, blocks, o);
   w.record(b.s);
   for (const Block& g : blocks) {
     b.s.clear();
@@ -258,13 +268,7 @@ std::string gridFile(const std::vector<Block>& blocks, const GridOptions& o) {
 std::string qFile(const std::vector<Block>& blocks, const GridOptions& o) {
   RecordWriter w{o.big_endian, o.marker, ""};
   Bytes b{o.big_endian, ""};
-  if (o.multi) {
-    b.i32(static_cast<int32_t>(blocks.size()));
-    w.record(b.s);
-  }
-  b.s.clear();
-  for (const Block& g : blocks)
-    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+  beginDims(w, b, blocks, o);
   w.record(b.s);
   for (size_t gi = 0; gi < blocks.size(); ++gi) {
     const Block& g = blocks[gi];
@@ -290,13 +294,7 @@ std::string qFile(const std::vector<Block>& blocks, const GridOptions& o) {
 std::string overflowQFile(const std::vector<Block>& blocks, const GridOptions& o, int nq, int nqc) {
   RecordWriter w{o.big_endian, o.marker, ""};
   Bytes b{o.big_endian, ""};
-  if (o.multi) {
-    b.i32(static_cast<int32_t>(blocks.size()));
-    w.record(b.s);
-  }
-  b.s.clear();
-  for (const Block& g : blocks)
-    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+  beginDims(w, b, blocks, o);
   b.i32(nq);
   b.i32(nqc);
   w.record(b.s);
@@ -327,13 +325,7 @@ std::string overflowQFile(const std::vector<Block>& blocks, const GridOptions& o
 std::string planesGridFile(const std::vector<Block>& blocks, const GridOptions& o) {
   RecordWriter w{o.big_endian, o.marker, ""};
   Bytes b{o.big_endian, ""};
-  if (o.multi) {
-    b.i32(static_cast<int32_t>(blocks.size()));
-    w.record(b.s);
-  }
-  b.s.clear();
-  for (const Block& g : blocks)
-    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+  beginDims(w, b, blocks, o);
   w.record(b.s);
   for (const Block& g : blocks) {
     const size_t plane = static_cast<size_t>(g.n[0]) * g.n[1];
@@ -352,13 +344,7 @@ std::string planesGridFile(const std::vector<Block>& blocks, const GridOptions& 
 std::string planesQFile(const std::vector<Block>& blocks, const GridOptions& o) {
   RecordWriter w{o.big_endian, o.marker, ""};
   Bytes b{o.big_endian, ""};
-  if (o.multi) {
-    b.i32(static_cast<int32_t>(blocks.size()));
-    w.record(b.s);
-  }
-  b.s.clear();
-  for (const Block& g : blocks)
-    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+  beginDims(w, b, blocks, o);
   w.record(b.s);
   for (size_t gi = 0; gi < blocks.size(); ++gi) {
     const Block& g = blocks[gi];
@@ -384,15 +370,7 @@ std::string planesQFile(const std::vector<Block>& blocks, const GridOptions& o) 
 std::string functionFile(const std::vector<Block>& blocks, const GridOptions& o, int nvar) {
   RecordWriter w{o.big_endian, o.marker, ""};
   Bytes b{o.big_endian, ""};
-  if (o.multi) {
-    b.i32(static_cast<int32_t>(blocks.size()));
-    w.record(b.s);
-  }
-  b.s.clear();
-  for (const Block& g : blocks) {
-    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
-    b.i32(nvar);
-  }
+  beginDims(w, b, blocks, o, nvar);
   w.record(b.s);
   for (const Block& g : blocks) {
     b.s.clear();
