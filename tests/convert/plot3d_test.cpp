@@ -226,6 +226,7 @@ struct GridOptions {
   int precision = 4;
   bool iblank = false;
   size_t subrecord_chunk = 0;  // > 0: write data records as subrecords of this size
+  bool planes = false;         // grid and Q files plane by plane (PLOT3D's /PLANES): a record per k-plane
 };
 
 // Writes the grid count record (multi-grid files) and leaves in b the dimensions of every grid, each
@@ -250,15 +251,19 @@ std::string gridFile(const std::vector<Block>& blocks, const GridOptions& o) {
   beginDims(w, b, blocks, o);
   w.record(b.s);
   for (const Block& g : blocks) {
-    b.s.clear();
-    for (const auto* v : {&g.x, &g.y, &g.z})
-      for (double c : *v) b.real(c, o.precision);
-    if (o.iblank)
-      for (int32_t v : g.iblank) b.i32(v);
-    if (o.subrecord_chunk) {
-      w.subrecords(b.s, o.subrecord_chunk);
-    } else {
-      w.record(b.s);
+    // One record for the grid, or one per k-plane holding that plane's X, Y, Z (and IBLANK) values.
+    const size_t n = g.points(), span = o.planes ? static_cast<size_t>(g.n[0]) * g.n[1] : n;
+    for (size_t first = 0; first < n; first += span) {
+      b.s.clear();
+      for (const auto* v : {&g.x, &g.y, &g.z})
+        for (size_t p = first; p < first + span; ++p) b.real((*v)[p], o.precision);
+      if (o.iblank)
+        for (size_t p = first; p < first + span; ++p) b.i32(g.iblank[p]);
+      if (o.subrecord_chunk) {
+        w.subrecords(b.s, o.subrecord_chunk);
+      } else {
+        w.record(b.s);
+      }
     }
   }
   return w.out;
@@ -275,15 +280,18 @@ std::string qFile(const std::vector<Block>& blocks, const GridOptions& o) {
     b.s.clear();
     for (double v : {0.75, 2.5, 1.0e6, 0.125 + static_cast<double>(gi)}) b.real(v, o.precision);
     w.record(b.s);
-    b.s.clear();
-    const size_t n = g.points();
-    for (int var = 0; var < 5; ++var)
-      for (size_t p = 0; p < n; ++p) {
-        const double d = static_cast<double>(p);
-        const double values[5] = {1 + d / 1000, d, -d, 2 * d, 3 + d};
-        b.real(values[var], o.precision);
-      }
-    w.record(b.s);
+    // The five variables in one record, or in one record per k-plane.
+    const size_t n = g.points(), span = o.planes ? static_cast<size_t>(g.n[0]) * g.n[1] : n;
+    for (size_t first = 0; first < n; first += span) {
+      b.s.clear();
+      for (int var = 0; var < 5; ++var)
+        for (size_t p = first; p < first + span; ++p) {
+          const double d = static_cast<double>(p);
+          const double values[5] = {1 + d / 1000, d, -d, 2 * d, 3 + d};
+          b.real(values[var], o.precision);
+        }
+      w.record(b.s);
+    }
   }
   return w.out;
 }
@@ -316,52 +324,6 @@ std::string overflowQFile(const std::vector<Block>& blocks, const GridOptions& o
         b.real(var < 5 ? values[var] : 10.0 * (var - 4) + d, o.precision);
       }
     w.record(b.s);
-  }
-  return w.out;
-}
-
-// The same files written plane by plane (PLOT3D's /PLANES): per grid one record per k-plane holding
-// that plane's X, Y, Z (and IBLANK) values, resp. its five Q variables or its function variables.
-std::string planesGridFile(const std::vector<Block>& blocks, const GridOptions& o) {
-  RecordWriter w{o.big_endian, o.marker, ""};
-  Bytes b{o.big_endian, ""};
-  beginDims(w, b, blocks, o);
-  w.record(b.s);
-  for (const Block& g : blocks) {
-    const size_t plane = static_cast<size_t>(g.n[0]) * g.n[1];
-    for (int k = 0; k < g.n[2]; ++k) {
-      b.s.clear();
-      for (const auto* v : {&g.x, &g.y, &g.z})
-        for (size_t p = 0; p < plane; ++p) b.real((*v)[k * plane + p], o.precision);
-      if (o.iblank)
-        for (size_t p = 0; p < plane; ++p) b.i32(g.iblank[k * plane + p]);
-      w.record(b.s);
-    }
-  }
-  return w.out;
-}
-
-std::string planesQFile(const std::vector<Block>& blocks, const GridOptions& o) {
-  RecordWriter w{o.big_endian, o.marker, ""};
-  Bytes b{o.big_endian, ""};
-  beginDims(w, b, blocks, o);
-  w.record(b.s);
-  for (size_t gi = 0; gi < blocks.size(); ++gi) {
-    const Block& g = blocks[gi];
-    b.s.clear();
-    for (double v : {0.75, 2.5, 1.0e6, 0.125 + static_cast<double>(gi)}) b.real(v, o.precision);
-    w.record(b.s);
-    const size_t plane = static_cast<size_t>(g.n[0]) * g.n[1];
-    for (int k = 0; k < g.n[2]; ++k) {
-      b.s.clear();
-      for (int var = 0; var < 5; ++var)
-        for (size_t q = 0; q < plane; ++q) {
-          const double d = static_cast<double>(k * plane + q);
-          const double values[5] = {1 + d / 1000, d, -d, 2 * d, 3 + d};
-          b.real(values[var], o.precision);
-        }
-      w.record(b.s);
-    }
   }
   return w.out;
 }
@@ -569,8 +531,10 @@ TEST_F(Plot3dSynthetic, PlanesLayoutWithRecordMarkers) {
     o.precision = marker == 4 ? 4 : 8;
     o.iblank = true;
     const std::string tag = std::to_string(marker);
-    const std::string xyz = write("planes" + tag + ".xyz", planesGridFile(blocks, o));
-    const std::string q = write("planes" + tag + ".q", planesQFile(blocks, o));
+    GridOptions po = o;
+    po.planes = true;
+    const std::string xyz = write("planes" + tag + ".xyz", gridFile(blocks, po));
+    const std::string q = write("planes" + tag + ".q", qFile(blocks, po));
     auto r = importFiles({xyz, q}, 6);
     ASSERT_TRUE(r.isOk()) << tag << ": " << r.status().message();
     const TetMesh& m = r->mesh;
@@ -602,7 +566,8 @@ TEST_F(Plot3dSynthetic, PlanesLayoutWithRecordMarkers) {
   const std::vector<Block> flat = {boxBlock(3, 3, 1)};
   GridOptions o;
   o.marker = 4;
-  auto r = importFiles({write("flat.xyz", planesGridFile(flat, o))}, 6);
+  o.planes = true;
+  auto r = importFiles({write("flat.xyz", gridFile(flat, o))}, 6);
   ASSERT_FALSE(r.isOk());
   EXPECT_EQ(r.status().message().find("ambiguous"), std::string::npos) << r.status().message();
   EXPECT_NE(r.status().message().find("a dimension below 2"), std::string::npos) << r.status().message();
