@@ -434,47 +434,23 @@ Status StreamRenderer::flushBatch() {
       // segment needs the tetrahedron unless the segment is done: its cursors cannot have passed a
       // tetrahedron that has not arrived (the depth test below only guards against invalid meshes).
       dmin -= st.depth_slack, dmax += st.depth_slack;
-      const double ymin = std::min({sy[0], sy[1], sy[2], sy[3]}), ymax = std::max({sy[0], sy[1], sy[2], sy[3]});
       constexpr double kSure = 1e-3;  // pixels; rounding differences are about 1e-10
-      // The six corner pairs' projected segments, their slopes taken once (a rounding difference
-      // in a span's ends is far below kSure).
-      struct Edge2 {
-        double x0, y0, x1, lo, hi, slope;
-      } edges[6];
-      {
-        int n = 0;
-        for (int i = 0; i < 4; ++i)
-          for (int j = i + 1; j < 4; ++j) {
-            const double lo = std::min(sy[i], sy[j]), hi = std::max(sy[i], sy[j]);
-            edges[n++] = {sx[i], sy[i], sx[j], lo, hi, hi > lo ? (sx[j] - sx[i]) / (sy[j] - sy[i]) : 0.0};
-          }
-      }
+      const ScreenHull hull(sx, sy, 4);
       for (int py = box[1]; py <= box[3]; ++py) {
         const double yc = py + 0.5;
-        // The projection's span on this row: the extremes over the six corner pairs' segments.
-        double xl = 1e300, xr = -1e300;
-        for (const Edge2& e : edges) {
-          if (yc < e.lo || yc > e.hi) continue;
-          const double x = e.hi > e.lo ? e.x0 + (yc - e.y0) * e.slope : e.x0;
-          xl = std::min({xl, x, e.hi > e.lo ? x : e.x1});
-          xr = std::max({xr, x, e.hi > e.lo ? x : e.x1});
-        }
-        const bool row_inside = yc > ymin + kSure && yc < ymax - kSure;
-        // Only the pixels from floor(xl - kSure - 0.5) to ceil(xr + kSure - 0.5) can fail the
+        // The projection's span on this row. Only the pixels within kSure of it can fail the
         // "clearly outside" test below: two thirds of a footprint's box are skipped unread.
+        double xl, xr;
+        const bool row_inside = hull.span(yc, kSure, &xl, &xr);
         int px0 = box[0], px1 = box[2];
-        if (row_inside && xr >= xl) {
-          const double lo = box[0] - 1, hi = box[2] + 1;  // clamped first: the ends may lie far off
-          px0 = std::max(box[0], floorToInt(std::clamp(xl - kSure - 0.5, lo, hi)));
-          px1 = std::min(box[2], ceilToInt(std::clamp(xr + kSure - 0.5, lo, hi)));
-        }
+        if (row_inside) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
         for (int px = px0; px <= px1; ++px) {
           const double xc = px + 0.5;
           const size_t p = static_cast<size_t>(py) * w + px;
           const uint32_t s0 = st.rays.pixel_start[p], s1 = st.rays.pixel_start[p + 1];
           if (s0 == s1) continue;
-          if (row_inside && xr >= xl && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
-          if (row_inside && xc > xl + kSure && xc < xr - kSure && s1 == s0 + 1) {        // clearly inside
+          if (row_inside && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
+          if (row_inside && xc > xl + kSure && xc < xr - kSure && s1 == s0 + 1) {  // clearly inside
             const SegmentState& seg = st.segs[s0];
             if (!seg.done && seg.tf <= dmax && dmin <= seg.tb) ++count;
             continue;
