@@ -33,11 +33,11 @@ Status openTemporary(const std::string& path, std::string* tmp_name, std::FILE**
 }
 
 Status writeTemporary(const std::string& path, const std::function<Status(std::FILE*)>& write,
-                      std::string* tmp_name) {
+                      std::string* tmp_name, bool sync = true) {
   std::FILE* f = nullptr;
   GTN_RETURN_IF_ERROR(openTemporary(path, tmp_name, &f));
   Status st = write(f);
-  if (st.isOk() && (std::fflush(f) != 0 || fsync(fileno(f)) != 0 || std::ferror(f)))
+  if (st.isOk() && (std::fflush(f) != 0 || (sync && fsync(fileno(f)) != 0) || std::ferror(f)))
     st = ioError(path + ": write failed: " + errnoText());
   if (std::fclose(f) != 0 && st.isOk()) st = ioError(path + ": write failed: " + errnoText());
   if (!st.isOk()) unlink(tmp_name->c_str());
@@ -77,14 +77,14 @@ StatusOr<std::string> readWholeFile(const std::string& path, uint64_t max_bytes)
   return data;
 }
 
-Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write) {
+Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write, bool sync) {
   if (path == "-") {
     GTN_RETURN_IF_ERROR(write(stdout));
     if (std::fflush(stdout) != 0) return ioError("standard output: write failed: " + errnoText());
     return Status::ok();
   }
   std::string tmp;
-  GTN_RETURN_IF_ERROR(writeTemporary(path, write, &tmp));
+  GTN_RETURN_IF_ERROR(writeTemporary(path, write, &tmp, sync));
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string why = errnoText();
     unlink(tmp.c_str());
@@ -93,11 +93,14 @@ Status writeFileAtomically(const std::string& path, const std::function<Status(s
   return Status::ok();
 }
 
-Status writeBytesAtomically(const std::string& path, const void* data, size_t size) {
-  return writeFileAtomically(path, [&](std::FILE* f) -> Status {
-    if (size > 0 && std::fwrite(data, 1, size, f) != size) return ioError(path + ": write failed: " + errnoText());
-    return Status::ok();
-  });
+Status writeBytesAtomically(const std::string& path, const void* data, size_t size, bool sync) {
+  return writeFileAtomically(
+      path,
+      [&](std::FILE* f) -> Status {
+        if (size > 0 && std::fwrite(data, 1, size, f) != size) return ioError(path + ": write failed: " + errnoText());
+        return Status::ok();
+      },
+      sync);
 }
 
 AtomicFileGroup::~AtomicFileGroup() {

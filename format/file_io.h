@@ -19,12 +19,14 @@ StatusOr<std::string> readWholeFile(const std::string& path, uint64_t max_bytes 
 bool isRegularFile(const std::string& path);
 
 // Writes `path` atomically: `write` receives a FILE* to a temporary file beside `path`; when it
-// returns ok, the file is flushed, synced and renamed to `path`; otherwise the temporary is removed.
+// returns ok, the file is flushed, synced (unless `sync` is false: a cache, which a crash may lose
+// but never leaves half written) and renamed to `path`; otherwise the temporary is removed.
 // "-" writes to standard output directly.
-Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write);
+Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write,
+                           bool sync = true);
 
 // Convenience for writing one buffer atomically.
-Status writeBytesAtomically(const std::string& path, const void* data, size_t size);
+Status writeBytesAtomically(const std::string& path, const void* data, size_t size, bool sync = true);
 
 // Several outputs that must all appear or none (TetGen's .node/.ele/.face): each is written to a
 // temporary; commit() renames all; the destructor removes the temporaries of an uncommitted group.
