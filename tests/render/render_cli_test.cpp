@@ -353,6 +353,32 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   EXPECT_EQ(cheapest["extra_merges"].get<uint64_t>(), floor_merges);
   EXPECT_NE(cheapest["budget_choice"].get<std::string>().find("cannot be met"), std::string::npos);
   EXPECT_EQ(floorPlan(150)["extra_merges"], 0);  // level 3 as is fits
+
+  // Between two timed levels the coarser one is the plan, not merges on the fly from the finer one:
+  // at the coarse end time falls in steps with the merges. The same budget with level 2 untimed
+  // takes merges on the fly from level 2.
+  auto planWith = [&](const nlohmann::json& calibration, double budget) {
+    {
+      std::ofstream out(dir + "/cache/gatun/render-calibration.json", std::ios::trunc);
+      out << calibration.dump();
+    }
+    const test::RunResult b = test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir +
+                                             "/b.png --size 64x64 --json --budget-ms " + std::to_string(budget));
+    EXPECT_EQ(b.exit_code, 0) << b.err;
+    return nlohmann::json::parse(b.out);
+  };
+  nlohmann::json dense = synthetic;
+  const double n2 = levels[2]["tets"].get<double>();
+  for (auto& [key, entry] : dense.items())
+    if (key.rfind("range|", 0) != 0)
+      entry = {{"tets", {n3, n2, n0}}, {"ms", {100.0, 300.0, 1000.0}}, {"decode_ms", {10.0, 100.0, 400.0}},
+               {"offset_ms", 0.0}};
+  const nlohmann::json stepped = planWith(dense, 300);  // aims at 240 ms: level 2 (300) misses, level 3 fits
+  EXPECT_EQ(stepped["level"], 3) << stepped.dump();
+  EXPECT_EQ(stepped["extra_merges"], 0) << stepped.dump();
+  const nlohmann::json interpolated = planWith(synthetic, 300);
+  EXPECT_EQ(interpolated["level"], 2) << interpolated.dump();
+  EXPECT_GT(interpolated["extra_merges"].get<int64_t>(), 0) << interpolated.dump();
 }
 
 }  // namespace
