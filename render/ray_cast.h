@@ -209,7 +209,7 @@ inline int ceilToInt(double v) {
 }
 
 // The projection of a convex polygon or polyhedron (a triangle, a tetrahedron) row by row, from its
-// corners' screen positions: the segments between every pair of corners, their slopes taken once.
+// n <= 4 corners' screen positions: the segments between every pair of corners, slopes taken once.
 // `span` gives a row's extent [xl, xr] at height yc, and says whether yc lies inside the projection's
 // height by more than `margin` (else the row is better left whole). Rounding differences between
 // this and the crossing test are about 1e-10 pixels: callers skip pixels clearly outside by a margin.
