@@ -58,6 +58,8 @@ StatusOr<std::string> readWholeFile(const std::string& path, uint64_t max_bytes)
     struct stat sb;
     if (::stat(path.c_str(), &sb) != 0) return ioError(path + ": cannot open: " + errnoText());
     if (S_ISDIR(sb.st_mode)) return ioError(path + ": is a directory, not a file");
+    // A device has no end to read to (/dev/zero, /dev/urandom; a .p3d meta-file may name one).
+    if (S_ISCHR(sb.st_mode) || S_ISBLK(sb.st_mode)) return ioError(path + ": is a device, not a file");
     f = std::fopen(path.c_str(), "rb");
     if (!f) return ioError(path + ": cannot open: " + errnoText());
   }

@@ -11,8 +11,8 @@
 
 namespace gtn {
 
-// Reads a regular file (or "-" for standard input) whole. Errors name the file: missing, a directory,
-// unreadable. `max_bytes` bounds what is read from a pipe.
+// Reads a regular file or a pipe (or "-" for standard input) whole. Errors name the file: missing, a
+// directory, a device (which has no end), unreadable. `max_bytes` bounds what is read from a pipe.
 StatusOr<std::string> readWholeFile(const std::string& path, uint64_t max_bytes = UINT64_MAX);
 
 // True when `path` names an existing regular file.

@@ -24,6 +24,9 @@ TEST(FileIo, ReadErrorsNameTheFile) {
   EXPECT_FALSE(readWholeFile(dir + "/big", 10).isOk());
   ASSERT_TRUE(readWholeFile(dir + "/big").isOk());
   EXPECT_EQ(readWholeFile(dir + "/big").value().size(), 100u);
+  r = readWholeFile("/dev/zero");  // endless: refused, not read until memory runs out
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("/dev/zero: is a device"), std::string::npos) << r.status().message();
 }
 
 TEST(FileIo, FailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
