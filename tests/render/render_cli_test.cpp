@@ -330,18 +330,22 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   }
   ASSERT_GT(floor_merges, 0u);
   const int64_t merges3 = levels[3]["merges"].get<int64_t>();
-  auto floorPlan = [&](double budget) {
-    nlohmann::json with_floor = synthetic;
-    for (auto& [key, entry] : with_floor.items())
-      if (key.rfind("range|", 0) != 0) entry["floor"] = {{"merges", floor_merges}, {"tets", n3 / 10}, {"ms", 30.0}};
+  // The plan for a budget from a calibration written here.
+  auto planWith = [&](const nlohmann::json& calibration, double budget) {
     {
       std::ofstream out(dir + "/cache/gatun/render-calibration.json", std::ios::trunc);
-      out << with_floor.dump();
+      out << calibration.dump();
     }
     const test::RunResult b = test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir +
                                              "/b.png --size 64x64 --json --budget-ms " + std::to_string(budget));
     EXPECT_EQ(b.exit_code, 0) << b.err;
     return nlohmann::json::parse(b.out);
+  };
+  auto floorPlan = [&](double budget) {
+    nlohmann::json with_floor = synthetic;
+    for (auto& [key, entry] : with_floor.items())
+      if (key.rfind("range|", 0) != 0) entry["floor"] = {{"merges", floor_merges}, {"tets", n3 / 10}, {"ms", 30.0}};
+    return planWith(with_floor, budget);
   };
   const nlohmann::json between = floorPlan(80);  // aims at 64 ms: between the floor (30) and level 3 (100)
   EXPECT_EQ(between["level"], 3) << between.dump();
@@ -357,16 +361,6 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   // Between two timed levels the coarser one is the plan, not merges on the fly from the finer one:
   // at the coarse end time falls in steps with the merges. The same budget with level 2 untimed
   // takes merges on the fly from level 2.
-  auto planWith = [&](const nlohmann::json& calibration, double budget) {
-    {
-      std::ofstream out(dir + "/cache/gatun/render-calibration.json", std::ios::trunc);
-      out << calibration.dump();
-    }
-    const test::RunResult b = test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir +
-                                             "/b.png --size 64x64 --json --budget-ms " + std::to_string(budget));
-    EXPECT_EQ(b.exit_code, 0) << b.err;
-    return nlohmann::json::parse(b.out);
-  };
   nlohmann::json dense = synthetic;
   const double n2 = levels[2]["tets"].get<double>();
   for (auto& [key, entry] : dense.items())
