@@ -77,7 +77,6 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
   int64_t dimension = 0;
   MeditCells cells;
   bool have_vertices = false, seen_keyword = false;
-  bool seen_volume[4] = {false, false, false, false};
   std::string skipped_volume;  // higher-order volume sections skipped, for the error when nothing else is left
   std::string_view tok;
   while (true) {
@@ -122,41 +121,23 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
       have_vertices = true;
     } else if (const MeditVolumeKeyword* kw = volumeKeyword(tok)) {
       if (!have_vertices) return reader.error(std::string(kw->name) + " before Vertices is not supported");
-      const size_t index = static_cast<size_t>(kw - kMeditVolumeKeywords);
-      if (seen_volume[index]) return reader.error(std::string("a second ") + kw->name + " section");
-      seen_volume[index] = true;
+      if (!cells.firstSection(*kw)) return reader.error(std::string("a second ") + kw->name + " section");
       GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, kw->corners + 1, kw->name));
       const size_t n = static_cast<size_t>(count);
       const int64_t np = static_cast<int64_t>(mesh.numPoints());
-      const bool is_tet = kw->vtk_type == kMeditVolumeKeywords[0].vtk_type;
-      std::vector<int32_t>& refs = is_tet ? cells.tet_refs : cells.other_refs;
-      if (is_tet) {
-        mesh.tets.resize(n);
-      } else {
-        cells.others.types.reserve(cells.others.types.size() + n);
-        cells.others.offsets.reserve(cells.others.offsets.size() + n);
-        cells.others.connectivity.reserve(cells.others.connectivity.size() + n * kw->corners);
-      }
-      refs.reserve(refs.size() + n);
+      cells.reserve(*kw, n, &mesh);
       for (size_t e = 0; e < n; ++e) {
+        uint32_t corners[8];
         for (int k = 0; k < kw->corners; ++k) {
           GTN_ASSIGN_OR_RETURN(const int64_t v, reader.readInt("a vertex number"));
           if (v < 1 || v > np) {
             return reader.error(std::string(kw->singular) + " " + std::to_string(e + 1) + " refers to vertex " +
                                 std::to_string(v) + "; vertices are numbered 1 to " + std::to_string(np));
           }
-          if (is_tet) {
-            mesh.tets[e][k] = static_cast<uint32_t>(v - 1);
-          } else {
-            cells.others.connectivity.push_back(v - 1);
-          }
-        }
-        if (!is_tet) {
-          cells.others.types.push_back(kw->vtk_type);
-          cells.others.offsets.push_back(static_cast<int64_t>(cells.others.connectivity.size()));
+          corners[k] = static_cast<uint32_t>(v - 1);
         }
         GTN_ASSIGN_OR_RETURN(const int32_t r, readRef(reader));
-        refs.push_back(r);
+        cells.add(*kw, corners, r, &mesh);
       }
     } else {
       const SkippedSection* section = nullptr;
@@ -187,12 +168,7 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
     seen_keyword = true;
   }
   if (!have_vertices) return reader.error("no Vertices section");
-  if (cells.empty())
-    return reader.error(skipped_volume.empty()
-                            ? "no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids): a surface mesh is not a "
-                              "volume mesh"
-                            : "no linear volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids), only " +
-                                  skipped_volume + ", which are not read");
+  if (cells.empty()) return reader.error(noVolumeElements(skipped_volume));
   GTN_RETURN_IF_ERROR(finishMeditImport(path, "medit", &cells, options, &result));
   return result;
 }

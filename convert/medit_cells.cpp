@@ -11,6 +11,44 @@ const MeditVolumeKeyword kMeditVolumeKeywords[4] = {
     {"Pyramids", "pyramid", 5, kVtkPyramid},
 };
 
+bool MeditCells::firstSection(const MeditVolumeKeyword& kw) {
+  const size_t index = static_cast<size_t>(&kw - kMeditVolumeKeywords);
+  if (seen[index]) return false;
+  seen[index] = true;
+  return true;
+}
+
+void MeditCells::reserve(const MeditVolumeKeyword& kw, size_t n, TetMesh* mesh) {
+  if (&kw == &kMeditVolumeKeywords[0]) {
+    mesh->tets.reserve(mesh->tets.size() + n);
+    tet_refs.reserve(tet_refs.size() + n);
+  } else {
+    others.types.reserve(others.types.size() + n);
+    others.offsets.reserve(others.offsets.size() + n);
+    others.connectivity.reserve(others.connectivity.size() + n * kw.corners);
+    other_refs.reserve(other_refs.size() + n);
+  }
+}
+
+void MeditCells::add(const MeditVolumeKeyword& kw, const uint32_t* corners, int32_t ref, TetMesh* mesh) {
+  if (&kw == &kMeditVolumeKeywords[0]) {
+    mesh->tets.push_back({corners[0], corners[1], corners[2], corners[3]});
+    tet_refs.push_back(ref);
+    return;
+  }
+  for (int k = 0; k < kw.corners; ++k) others.connectivity.push_back(corners[k]);
+  others.types.push_back(kw.vtk_type);
+  others.offsets.push_back(static_cast<int64_t>(others.connectivity.size()));
+  other_refs.push_back(ref);
+}
+
+std::string noVolumeElements(const std::string& skipped) {
+  return skipped.empty() ? "no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids): a surface mesh is not a "
+                           "volume mesh"
+                         : "no linear volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids), only " + skipped +
+                               ", which are not read";
+}
+
 Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells,
                          const ImportOptions& options, ImportResult* result) {
   TetMesh& mesh = result->mesh;

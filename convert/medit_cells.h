@@ -37,8 +37,19 @@ struct MeditCells {
   std::vector<int32_t> tet_refs;
   VtkCells others;
   std::vector<int32_t> other_refs;
+  bool seen[4] = {false, false, false, false};  // which of kMeditVolumeKeywords had its section
   bool empty() const { return tet_refs.empty() && other_refs.empty(); }
+  // Notes a section of `kw`: false when the keyword already had one.
+  bool firstSection(const MeditVolumeKeyword& kw);
+  // Makes room for n elements of `kw`.
+  void reserve(const MeditVolumeKeyword& kw, size_t n, TetMesh* mesh);
+  // One element of `kw`: its corners (0-based) and its reference.
+  void add(const MeditVolumeKeyword& kw, const uint32_t* corners, int32_t ref, TetMesh* mesh);
 };
+
+// Why a Medit mesh without volume elements is refused; `skipped` lists the higher-order sections
+// that were skipped (empty if none).
+std::string noVolumeElements(const std::string& skipped);
 
 // Ends a Medit import once result->mesh has its points, point fields and tetrahedra: splits the
 // other elements into tetrahedra (options.split, the VTK importers' warnings), adds the cell field

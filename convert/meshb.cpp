@@ -107,7 +107,6 @@ class MeshbReader {
   int64_t dimension_ = 0;
   bool have_vertices_ = false;
   std::string skipped_volume_;
-  bool seen_volume_[4] = {false, false, false, false};
   ImportResult result_;
   MeditCells cells_;
 };
@@ -155,46 +154,27 @@ Status MeshbReader::readVertices(uint64_t limit) {
 Status MeshbReader::readElements(const MeditVolumeKeyword& kw, uint64_t limit) {
   const uint64_t at = pos_;
   if (!have_vertices_) return fail(at, std::string(kw.name) + " before Vertices is not supported");
-  const size_t index = static_cast<size_t>(&kw - kMeditVolumeKeywords);
-  if (seen_volume_[index]) return fail(at, std::string("a second ") + kw.name + " keyword");
-  seen_volume_[index] = true;
+  if (!cells_.firstSection(kw)) return fail(at, std::string("a second ") + kw.name + " keyword");
   GTN_ASSIGN_OR_RETURN(const uint64_t n, count(kw.name, (kw.corners + 1) * int_size_, limit));
   TetMesh& mesh = result_.mesh;
   const int64_t np = static_cast<int64_t>(mesh.numPoints());
-  const bool is_tet = &kw == &kMeditVolumeKeywords[0];
-  std::vector<int32_t>& refs = is_tet ? cells_.tet_refs : cells_.other_refs;
-  VtkCells& others = cells_.others;
-  if (is_tet) {
-    mesh.tets.resize(n);
-  } else {
-    others.types.reserve(others.types.size() + n);
-    others.offsets.reserve(others.offsets.size() + n);
-    others.connectivity.reserve(others.connectivity.size() + n * kw.corners);
-  }
-  refs.reserve(refs.size() + n);
+  cells_.reserve(kw, n, &mesh);
   for (uint64_t e = 0; e < n; ++e) {
+    uint32_t corners[8];
     for (int k = 0; k < kw.corners; ++k) {
       const uint64_t v_at = pos_;
       const int64_t v = integer();
       if (v < 1 || v > np)
         return fail(v_at, std::string(kw.singular) + " " + std::to_string(e + 1) + " refers to vertex " +
                               std::to_string(v) + "; vertices are numbered 1 to " + std::to_string(np));
-      if (is_tet) {
-        mesh.tets[e][k] = static_cast<uint32_t>(v - 1);
-      } else {
-        others.connectivity.push_back(v - 1);
-      }
-    }
-    if (!is_tet) {
-      others.types.push_back(kw.vtk_type);
-      others.offsets.push_back(static_cast<int64_t>(others.connectivity.size()));
+      corners[k] = static_cast<uint32_t>(v - 1);
     }
     const uint64_t ref_at = pos_;
     const int64_t r = integer();
     if (r < INT32_MIN || r > INT32_MAX)
       return fail(ref_at, std::string(kw.singular) + " " + std::to_string(e + 1) + " has reference " +
                               std::to_string(r) + ", outside the 32-bit range");
-    refs.push_back(static_cast<int32_t>(r));
+    cells_.add(kw, corners, static_cast<int32_t>(r), &mesh);
   }
   return Status::ok();
 }
@@ -252,12 +232,7 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
     pos_ = next;
   }
   if (!have_vertices_) return invalidData(path_ + ": no Vertices keyword");
-  if (cells_.empty())
-    return invalidData(path_ + (skipped_volume_.empty()
-                                    ? ": no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids): a surface "
-                                      "mesh is not a volume mesh"
-                                    : ": no linear volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids), only " +
-                                          skipped_volume_ + ", which are not read"));
+  if (cells_.empty()) return invalidData(path_ + ": " + noVolumeElements(skipped_volume_));
   GTN_RETURN_IF_ERROR(finishMeditImport(path_, "meshb", &cells_, options, &result_));
   return std::move(result_);
 }
