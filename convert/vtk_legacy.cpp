@@ -57,6 +57,11 @@ class LegacyReader {
   Status readAttribute(const std::string& keyword);
   Status readFieldData(std::vector<Field>* into);
   static bool isStringType(std::string_view name);
+  // When the data type ahead names strings (STRING, UTF8_STRING): reads past the `kind` array `name`
+  // of comps x tuples strings, warns when `warn` (text is not mesh data) and returns true; else reads
+  // nothing and returns false.
+  StatusOr<bool> skipStringArray(const std::string& kind, const std::string& name, uint64_t comps, uint64_t tuples,
+                                 bool warn);
   // Reads past the strings of a string array whose type keyword was just read.
   Status skipStrings(uint64_t comps, uint64_t tuples, const std::string& what);
   void skipMetadata();
@@ -246,17 +251,8 @@ Status LegacyReader::readFieldData(std::vector<Field>* into) {
     }
     GTN_ASSIGN_OR_RETURN(uint64_t comps, count("component count"));
     GTN_ASSIGN_OR_RETURN(uint64_t tuples, count("tuple count"));
-    TextReader peek = tr_;
-    std::string_view type_name;
-    if (peek.next(&type_name) && isStringType(type_name)) {
-      tr_.next(&type_name);
-      GTN_RETURN_IF_ERROR(skipStrings(comps, tuples, "FIELD array " + name));
-      if (into)
-        result_.report.warnings.push_back("line " + std::to_string(tr_.line()) + ": skipped FIELD array " +
-                                          decodeName(name) + " (" + std::string(type_name) +
-                                          "): text is not mesh data");
-      continue;
-    }
+    GTN_ASSIGN_OR_RETURN(const bool strings, skipStringArray("FIELD array", name, comps, tuples, into != nullptr));
+    if (strings) continue;
     GTN_ASSIGN_OR_RETURN(ScalarType type, dataType("FIELD array " + name));
     if (comps == 0 || comps > 4096) return tr_.error("FIELD array " + name + ": bad component count");
     if (tuples > UINT64_MAX / comps) return tr_.error("FIELD array " + name + ": too many values");
@@ -275,6 +271,19 @@ Status LegacyReader::readFieldData(std::vector<Field>* into) {
 bool LegacyReader::isStringType(std::string_view name) {
   const std::string u = upper(name);
   return u == "STRING" || u == "UTF8_STRING";
+}
+
+StatusOr<bool> LegacyReader::skipStringArray(const std::string& kind, const std::string& name, uint64_t comps,
+                                             uint64_t tuples, bool warn) {
+  TextReader peek = tr_;
+  std::string_view type_name;
+  if (!peek.next(&type_name) || !isStringType(type_name)) return false;
+  tr_.next(&type_name);
+  GTN_RETURN_IF_ERROR(skipStrings(comps, tuples, kind + " " + name));
+  if (warn)
+    result_.report.warnings.push_back("line " + std::to_string(tr_.line()) + ": skipped " + kind + " " +
+                                      decodeName(name) + " (" + std::string(type_name) + "): text is not mesh data");
+  return true;
 }
 
 Status LegacyReader::skipStrings(uint64_t comps, uint64_t tuples, const std::string& what) {
@@ -352,14 +361,9 @@ Status LegacyReader::readAttribute(const std::string& kw) {
                       &skipped);
   } else if (kw == "GLOBAL_IDS" || kw == "PEDIGREE_IDS") {
     // One id per item; pedigree ids may be strings, which are not mesh data.
-    TextReader peek = tr_;
-    std::string_view type_name;
-    if (kw == "PEDIGREE_IDS" && peek.next(&type_name) && isStringType(type_name)) {
-      tr_.next(&type_name);
-      GTN_RETURN_IF_ERROR(skipStrings(1, section_items_, kw + " " + name));
-      result_.report.warnings.push_back("line " + std::to_string(tr_.line()) + ": skipped " + kw + " " +
-                                        decodeName(name) + " (" + std::string(type_name) + ")");
-      return Status::ok();
+    if (kw == "PEDIGREE_IDS") {
+      GTN_ASSIGN_OR_RETURN(const bool strings, skipStringArray(kw, name, 1, section_items_, true));
+      if (strings) return Status::ok();
     }
     GTN_ASSIGN_OR_RETURN(type, dataType(kw + " " + name));
     comps = 1;
