@@ -43,6 +43,7 @@
 #include "convert/import.h"
 #include "convert/text_reader.h"
 #include "format/file_io.h"
+#include "format/gtn_bytes.h"
 #include "mesh/hex_split.h"
 
 static_assert(std::endian::native == std::endian::little,
@@ -632,22 +633,11 @@ bool asciiInt(double v, int64_t* out) {
   return true;
 }
 
-void putInt32(std::string* out, int64_t v) {
-  const uint32_t u = static_cast<uint32_t>(static_cast<int32_t>(v));
-  for (int b = 0; b < 4; ++b) out->push_back(static_cast<char>(u >> (8 * b)));
-}
-
-void putFloat64(std::string* out, double v) {
-  const uint64_t u = std::bit_cast<uint64_t>(v);
-  for (int b = 0; b < 8; ++b) out->push_back(static_cast<char>(u >> (8 * b)));
-}
-
 // Transcodes the values as `l` lays them out, or says why they do not fit it.
-bool transcodeAscii(const AsciiValues& a, const Layout& l, Kind kind, std::string* bin, std::string* why) {
+bool transcodeAscii(const AsciiValues& a, const Layout& l, Kind kind, ByteWriter* bin, std::string* why) {
   const std::vector<double>& v = a.v;
   const uint64_t n = v.size();
   uint64_t pos = 0;
-  bin->clear();
   auto take_int = [&](const char* what, int64_t* out) {
     if (pos >= n) {
       *why = std::string("the text ends before the ") + what;
@@ -667,7 +657,7 @@ bool transcodeAscii(const AsciiValues& a, const Layout& l, Kind kind, std::strin
       *why = "grid count " + std::to_string(ngrid) + " is impossible";
       return false;
     }
-    putInt32(bin, ngrid);
+    bin->u32(static_cast<uint32_t>(ngrid));
   }
   const int ints = kind == Kind::kFunction ? 4 : (kind == Kind::kGrid ? l.ndim : 3);
   std::vector<uint64_t> points(static_cast<size_t>(ngrid), 1), nvar(static_cast<size_t>(ngrid), 0);
@@ -688,7 +678,7 @@ bool transcodeAscii(const AsciiValues& a, const Layout& l, Kind kind, std::strin
       } else {
         nvar[g] = static_cast<uint64_t>(d);
       }
-      putInt32(bin, d);
+      bin->u32(static_cast<uint32_t>(d));
     }
   }
   // The value count must match exactly (checked before transcoding the bulk of the file).
@@ -708,14 +698,14 @@ bool transcodeAscii(const AsciiValues& a, const Layout& l, Kind kind, std::strin
   }
   for (int64_t g = 0; g < ngrid; ++g) {
     if (kind == Kind::kQ)
-      for (int k = 0; k < 4; ++k) putFloat64(bin, v[pos++]);
+      for (int k = 0; k < 4; ++k) bin->f64(v[pos++]);
     const uint64_t reals = kind == Kind::kGrid ? points[g] * l.ndim : points[g] * (kind == Kind::kQ ? 5 : nvar[g]);
-    for (uint64_t k = 0; k < reals; ++k) putFloat64(bin, v[pos++]);
+    for (uint64_t k = 0; k < reals; ++k) bin->f64(v[pos++]);
     if (kind == Kind::kGrid && l.iblank) {
       for (uint64_t k = 0; k < points[g]; ++k) {
         int64_t b;
         if (!take_int("IBLANK value", &b)) return false;
-        putInt32(bin, b);
+        bin->u32(static_cast<uint32_t>(static_cast<int32_t>(b)));
       }
     }
   }
@@ -746,9 +736,10 @@ StatusOr<std::string> asciiAsBinary(const std::string& path, std::string_view te
         if (constraints.multi_grid && *constraints.multi_grid != l.multi_grid) continue;
         if (kind == Kind::kGrid && constraints.iblank && *constraints.iblank != l.iblank) continue;
         if (kind == Kind::kGrid && constraints.ndim && *constraints.ndim != l.ndim) continue;
-        std::string bin, why;
+        ByteWriter bin;
+        std::string why;
         if (transcodeAscii(values, l, kind, &bin, &why)) {
-          fits.emplace_back(l, std::move(bin));
+          fits.emplace_back(l, std::string(bin.bytes().begin(), bin.bytes().end()));
         } else {
           tried += "; " + describeLayout(l, kind) + ": " + why;
         }
