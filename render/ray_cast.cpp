@@ -458,8 +458,8 @@ RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
         for (int k = 0; k < 3; ++k) shearPoint(frame, corners[o[k]], q[k]);
       for (int py = box[1]; py <= box[3]; ++py) {
         // Orthographic: the pixels clearly outside the projected triangle are not tested (the
-        // crossing test agrees with the projection to about 1e-10 pixels; the margin is 1e-3).
-        constexpr double kSure = 1e-3;
+        // crossing test agrees with the projection to about 1e-10 pixels).
+        constexpr double kSure = ScreenHull::kSure;
         int px0 = box[0], px1 = box[2];
         double xl, xr;
         if (ortho && hull.span(py + 0.5, kSure, &xl, &xr)) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);

@@ -215,6 +215,9 @@ inline int ceilToInt(double v) {
 // this and the crossing test are about 1e-10 pixels: callers skip pixels clearly outside by a margin.
 class ScreenHull {
  public:
+  // The margin, in pixels, by which a pixel centre counts as clearly inside or outside.
+  static constexpr double kSure = 1e-3;
+
   ScreenHull(const double* xs, const double* ys, int n) {
     ymin_ = 1e300, ymax_ = -1e300;
     for (int i = 0; i < n; ++i) {

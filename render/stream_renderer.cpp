@@ -84,8 +84,6 @@ struct HeldTet {
 class HeldPool {
  public:
   HeldTet& operator[](uint32_t i) { return chunks_[i >> kShift][i & kMask]; }
-  const HeldTet& operator[](uint32_t i) const { return chunks_[i >> kShift][i & kMask]; }
-  uint32_t size() const { return size_; }
   // Index of a new, default-constructed entry at the end.
   uint32_t grow() {
     if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<HeldTet[]>(kChunk));
@@ -434,7 +432,7 @@ Status StreamRenderer::flushBatch() {
       // segment needs the tetrahedron unless the segment is done: its cursors cannot have passed a
       // tetrahedron that has not arrived (the depth test below only guards against invalid meshes).
       dmin -= st.depth_slack, dmax += st.depth_slack;
-      constexpr double kSure = 1e-3;  // pixels; rounding differences are about 1e-10
+      constexpr double kSure = ScreenHull::kSure;  // rounding differences are about 1e-10 pixels
       const ScreenHull hull(sx, sy, 4);
       for (int py = box[1]; py <= box[3]; ++py) {
         const double yc = py + 0.5;
