@@ -121,6 +121,9 @@ inline bool sameKeys(const uint64_t* a, const uint64_t* b, uint32_t n) {
   return true;
 }
 inline int bitLength(uint64_t v) { return v ? 64 - __builtin_clzll(v) : 0; }
+// The i-th prediction rule the encoder tries when `last` was chosen before: `last` first (most
+// others then stop early), then the rest in order.
+inline uint32_t triedRule(uint32_t i, uint32_t last) { return i == 0 ? last : (i <= last ? i - 1 : i); }
 // std::floor(y) for y < 1e18 without a library call (baseline x86-64 has no rounding instruction):
 // from -2^52 up every value converts to int64 exactly or truncates toward zero; below, every double
 // is an integer already. floor(-0.0) comes out +0.0, which compares equal: the order is the same.
@@ -488,7 +491,7 @@ class LevelCoder {
     uint32_t n_order = 0;
     const uint32_t last = pf_last_rule_[f];
     for (uint32_t i = 0; i < kFieldRules; ++i) {
-      const uint32_t r = i == 0 ? last : (i <= last ? i - 1 : i);
+      const uint32_t r = triedRule(i, last);
       if (fieldRuleAllowed(r, has_d)) order[n_order++] = r;
     }
     // `type` is d.type, as a compile-time constant for the usual float types (the key conversion in
@@ -601,9 +604,8 @@ class LevelCoder {
               rule = r;
             }
           };
-          // The previous rule, then the others.
           for (uint32_t i = 0; i < kCoordRules; ++i)
-            consider(i == 0 ? geo_last_rule_ : (i <= geo_last_rule_ ? i - 1 : i));
+            consider(triedRule(i, geo_last_rule_));
         };
         if (ct == ScalarType::kFloat32) {
           search(std::integral_constant<ScalarType, ScalarType::kFloat32>());
