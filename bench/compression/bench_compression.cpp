@@ -1,20 +1,35 @@
-// bench-compression: the level codec on every dataset of ../shared/data (or GTN_DATA_DIR), in bits
-// per tetrahedron, beside generic compressors of the raw binary arrays.
+// bench-compression: the level codec in bits per tetrahedron, beside generic compressors of the raw
+// binary arrays, on every dataset of ../shared/data (or GTN_DATA_DIR) or on files the user names.
 //
 //   build/bench-compression [DATA_DIR [DATASET_SUBSTRING [--no-baselines]]]
+//   build/bench-compression --files DATASET... [--split 5|6] [--no-baselines]
+//
+// With --files each argument is one dataset: a mesh file (.vtk, .vtu, .mesh, .meshb, .off), TetGen
+// `x.ele` or `x.node`, a .p3d meta-file, or PLOT3D files joined by '+' (`grid.xyz+grid.q`, an
+// argument that names an existing file is never split); --split picks how their hexahedra, wedges and
+// pyramids become tetrahedra (default 6).
 //
 // Columns: conn = boundary + peeling connectivity; geom = coordinates; fields = point and cell
-// fields; total. Baselines on the raw arrays as the source stores them (uint32 tetrahedron indices,
-// coordinates and fields in their source types): zstd -19 and xz -9 of the connectivity array and of
-// the coordinate + field arrays (the `zstd` and `xz` programs), and fpzip (when built with it) of each
-// float array, in grid order (i, j, k) for PLOT3D and in source order otherwise; non-float fields are
-// added to the fpzip column at their xz -9 size. Speeds are single-threaded rates in thread CPU time,
-// of the fastest of several runs.
+// fields; total. Baselines on the raw arrays in their source types (uint32 tetrahedron indices;
+// coordinates one axis after another, every x, then every y, then every z, which xz packs a little
+// tighter than x y z per point on most meshes; then the fields as the source stores them): zstd -19
+// and xz -9 of the connectivity array and of the coordinate + field arrays (the `zstd` and `xz`
+// programs), and fpzip (when built with it) of each float array, in grid order (i, j, k) for PLOT3D
+// and in source order otherwise; non-float fields are added to the fpzip column at their xz -9 size.
+// Speeds are single-threaded rates in thread CPU time, of the fastest of several runs. Every encoding
+// is decoded once more into a mesh and compared with the source up to renumbering (coordinates and
+// field values bit for bit, orientation kept).
+//
+// The last column judges the codec's targets: conn at most 2.5 b/t, and geom + fields smaller than
+// xz -9 of the coordinate + field arrays (xz.gf; not judged with --no-baselines). A final summary
+// names the datasets that miss one. Exit status 1 when a dataset fails to import, encode or decode
+// losslessly (the other datasets are still measured), 2 on a usage error, else 0.
 #include <algorithm>
 #include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -103,28 +118,136 @@ size_t fpzipSize(const void* data, bool is_double, size_t n, const int dims[3]) 
 }
 #endif
 
+// The codec's connectivity target (boundary + peeling), from the Gatun paper.
+constexpr double kMaxConnectivityBits = 2.5;
+
+// One --files argument as a dataset: the file itself, or PLOT3D files joined by '+'.
+Dataset namedDataset(const std::string& arg, int split) {
+  Dataset d{"", {}, split};
+  if (std::filesystem::exists(arg)) {
+    d.inputs = {arg};
+  } else {
+    for (size_t begin = 0, plus;; begin = plus + 1) {
+      plus = arg.find('+', begin);
+      d.inputs.push_back(arg.substr(begin, plus == std::string::npos ? std::string::npos : plus - begin));
+      if (plus == std::string::npos) break;
+    }
+  }
+  for (const std::string& in : d.inputs) {
+    if (!d.name.empty()) d.name += '+';
+    d.name += std::filesystem::path(in).filename().string();
+  }
+  return d;
+}
+
+// Why `decoded` differs from `src` beyond the renumbering the encoder reported, or "" when it
+// equals it: same points with bit-identical coordinates and values, same tetrahedra with an even
+// permutation of their vertices and bit-identical cell values.
+std::string losslessMismatch(const gtn::TetMesh& src, const gtn::EncodedLevel& e, const gtn::TetMesh& decoded) {
+  if (decoded.numPoints() != src.numPoints() || decoded.numTets() != src.numTets())
+    return std::to_string(decoded.numPoints()) + " points and " + std::to_string(decoded.numTets()) +
+           " tetrahedra decoded, the source has " + std::to_string(src.numPoints()) + " and " +
+           std::to_string(src.numTets());
+  if (decoded.coord_type != src.coord_type) return "coordinate type changed";
+  const auto sameLayout = [](const std::vector<gtn::Field>& a, const std::vector<gtn::Field>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t f = 0; f < a.size(); ++f)
+      if (a[f].name != b[f].name || a[f].type != b[f].type || a[f].components != b[f].components) return false;
+    return true;
+  };
+  if (!sameLayout(src.point_fields, decoded.point_fields) || !sameLayout(src.cell_fields, decoded.cell_fields))
+    return "field names, types or components changed";
+  const auto sameItem = [](const std::vector<gtn::Field>& a, size_t i, const std::vector<gtn::Field>& b, size_t j) {
+    for (size_t f = 0; f < a.size(); ++f) {
+      const size_t n = a[f].components * a[f].valueSize();
+      if (std::memcmp(&a[f].bytes[i * n], &b[f].bytes[j * n], n) != 0) return false;
+    }
+    return true;
+  };
+  const std::vector<uint32_t>& vo = e.vertex_order;
+  std::vector<uint8_t> seen(src.numPoints(), 0), seen_tet(src.numTets(), 0);
+  for (size_t v = 0; v < src.numPoints(); ++v) {
+    const std::string which = "source point " + std::to_string(v) + " (decoded " + std::to_string(vo[v]) + ")";
+    if (vo[v] >= decoded.numPoints() || seen[vo[v]]++) return which + " is missing";
+    if (std::memcmp(src.point(v), decoded.point(vo[v]), 3 * sizeof(double)) != 0) return which + " moved";
+    if (!sameItem(src.point_fields, v, decoded.point_fields, vo[v])) return which + " has other field values";
+  }
+  for (size_t t = 0; t < src.numTets(); ++t) {
+    const uint64_t d = e.tet_order[t];
+    const std::string which = "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(d) + ")";
+    if (d >= decoded.numTets() || seen_tet[d]++) return which + " is missing";
+    int perm[4], inversions = 0;
+    for (int i = 0; i < 4; ++i) {
+      perm[i] = -1;
+      for (int j = 0; j < 4; ++j)
+        if (decoded.tets[d][j] == vo[src.tets[t][i]]) perm[i] = j;
+      if (perm[i] < 0) return which + " has other vertices";
+      for (int j = 0; j < i; ++j) inversions += perm[j] > perm[i];
+    }
+    if (inversions % 2) return which + " is reversed";
+    if (!sameItem(src.cell_fields, t, decoded.cell_fields, d)) return which + " has other field values";
+  }
+  return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  const char* usage = "usage: %s [DATA_DIR [DATASET_SUBSTRING [--no-baselines]]]\n"
+                      "       %s --files DATASET... [--split 5|6] [--no-baselines]\n"
+                      "  DATASET: a mesh file, TetGen x.ele, or PLOT3D files joined by '+' (grid.xyz+grid.q)\n";
   if (argc > 1 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0)) {
-    std::printf("usage: %s [DATA_DIR [DATASET_SUBSTRING [--no-baselines]]]\n", argv[0]);
+    std::printf(usage, argv[0], argv[0]);
     return 0;
   }
-  std::string dir = argc > 1 ? argv[1] : (std::getenv("GTN_DATA_DIR") ? std::getenv("GTN_DATA_DIR") : GTN_DEFAULT_DATA_DIR);
-  const std::vector<Dataset> sets = {
-      {"bluntfin/5", {dir + "/plot3d/bluntfinxyz.bin", dir + "/plot3d/bluntfinq.bin"}, 5},
-      {"bluntfin/6", {dir + "/plot3d/bluntfinxyz.bin", dir + "/plot3d/bluntfinq.bin"}, 6},
-      {"combustion/5", {dir + "/plot3d/combxyz.bin", dir + "/plot3d/combq.bin"}, 5},
-      {"combustion/6", {dir + "/plot3d/combxyz.bin", dir + "/plot3d/combq.bin"}, 6},
-      {"spx", {dir + "/vtk/spx.vtk"}, 6},
-      {"cornell_spheres", {dir + "/tetgen/cornell_spheres.1.ele"}, 6},
-      {"cornellbox_orig", {dir + "/tetgen/cornellbox_orig.1.ele"}, 6},
-      {"bunny", {dir + "/medit/bunny.mesh"}, 6},
-      {"lv_guccione", {dir + "/vtu/lv_guccione.vtu"}, 6},
-      {"raptorTetra", {dir + "/vtu/raptorTetra_19409.vtu"}, 6},
-      {"Ossicles", {dir + "/vtu/Ossicles.vtu"}, 6},
-      {"fire_ug/6", {dir + "/vtu/fire_ug.vtu"}, 6},
-  };
+  std::vector<Dataset> sets;
+  std::string filter;
+  bool skip_baselines = false;
+  if (argc > 1 && std::strcmp(argv[1], "--files") == 0) {
+    int split = 6;
+    std::vector<std::string> args;
+    for (int i = 2; i < argc; ++i) {
+      if (std::strcmp(argv[i], "--no-baselines") == 0) {
+        skip_baselines = true;
+      } else if (std::strcmp(argv[i], "--split") == 0 && i + 1 < argc &&
+                 (std::strcmp(argv[i + 1], "5") == 0 || std::strcmp(argv[i + 1], "6") == 0)) {
+        split = std::atoi(argv[++i]);
+      } else if (argv[i][0] == '-') {
+        std::fprintf(stderr, "bench-compression: unknown or incomplete option '%s'\n", argv[i]);
+        std::fprintf(stderr, usage, argv[0], argv[0]);
+        return 2;
+      } else {
+        args.push_back(argv[i]);
+      }
+    }
+    if (args.empty()) {
+      std::fprintf(stderr, "bench-compression: --files needs at least one dataset\n");
+      std::fprintf(stderr, usage, argv[0], argv[0]);
+      return 2;
+    }
+    for (const std::string& arg : args) sets.push_back(namedDataset(arg, split));
+  } else {
+    const std::string dir =
+        argc > 1 ? argv[1] : (std::getenv("GTN_DATA_DIR") ? std::getenv("GTN_DATA_DIR") : GTN_DEFAULT_DATA_DIR);
+    sets = {
+        {"bluntfin/5", {dir + "/plot3d/bluntfinxyz.bin", dir + "/plot3d/bluntfinq.bin"}, 5},
+        {"bluntfin/6", {dir + "/plot3d/bluntfinxyz.bin", dir + "/plot3d/bluntfinq.bin"}, 6},
+        {"combustion/5", {dir + "/plot3d/combxyz.bin", dir + "/plot3d/combq.bin"}, 5},
+        {"combustion/6", {dir + "/plot3d/combxyz.bin", dir + "/plot3d/combq.bin"}, 6},
+        {"spx", {dir + "/vtk/spx.vtk"}, 6},
+        {"cornell_spheres", {dir + "/tetgen/cornell_spheres.1.ele"}, 6},
+        {"cornellbox_orig", {dir + "/tetgen/cornellbox_orig.1.ele"}, 6},
+        {"bunny", {dir + "/medit/bunny.mesh"}, 6},
+        {"lv_guccione", {dir + "/vtu/lv_guccione.vtu"}, 6},
+        {"raptorTetra", {dir + "/vtu/raptorTetra_19409.vtu"}, 6},
+        {"Ossicles", {dir + "/vtu/Ossicles.vtu"}, 6},
+        {"fire_ug/6", {dir + "/vtu/fire_ug.vtu"}, 6},
+    };
+    if (argc > 2) filter = argv[2];
+    skip_baselines = argc > 3 && std::string(argv[3]) == "--no-baselines";
+  }
+  int w = 16;  // width of the dataset column
+  for (const Dataset& d : sets) w = std::max(w, static_cast<int>(d.name.size()));
   std::printf("bits per tetrahedron; conn = boundary + peeling. Raw-array baselines: zstd -19, xz -9%s\n",
 #ifdef GTN_HAVE_FPZIP
               ", fpzip (float arrays)"
@@ -132,21 +255,24 @@ int main(int argc, char** argv) {
               " (built without fpzip)"
 #endif
   );
-  std::printf("%-16s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s\n", "dataset", "points", "tets",
-              "conn", "geom", "fields", "total", "zstd.c", "xz.c", "zstd.gf", "xz.gf", "fpzip", "enc", "dec",
-              "peak");
-  std::printf("%-16s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s\n", "", "", "", "b/t", "b/t",
-              "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "Mt/s", "Mt/s", "live");
-  int failures = 0;
-  const bool skip_baselines = argc > 3 && std::string(argv[3]) == "--no-baselines";
+  std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s | %s\n", w, "dataset", "points",
+              "tets", "conn", "geom", "fields", "total", "zstd.c", "xz.c", "zstd.gf", "xz.gf", "fpzip", "enc", "dec",
+              "peak", "targets");
+  std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s | %s\n", w, "", "", "", "b/t",
+              "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "Mt/s", "Mt/s", "live", "conn, gf<xz");
+  std::vector<std::string> failed, missed;  // datasets that failed to run; datasets that miss a target
   for (const Dataset& d : sets) {
-    if (argc > 2 && d.name.find(argv[2]) == std::string::npos) continue;
+    if (!filter.empty() && d.name.find(filter) == std::string::npos) continue;
+    const auto fail = [&](const char* what, const std::string& why) {
+      std::printf("%-*s %s failed: %s\n", w, d.name.c_str(), what, why.c_str());
+      std::fflush(stdout);
+      failed.push_back(d.name + " (" + what + ")");
+    };
     gtn::ImportOptions io;
     io.split = d.split;
     auto imported = gtn::importMesh(d.inputs, io);
-    if (!imported.isOk()) {
-      std::printf("%-16s import failed: %s\n", d.name.c_str(), imported.status().message().c_str());
-      ++failures;
+    if (!imported.isOk() || imported->mesh.numTets() == 0) {
+      fail("import", imported.isOk() ? "no tetrahedra" : imported.status().message());
       continue;
     }
     const gtn::TetMesh& m = imported->mesh;
@@ -166,8 +292,7 @@ int main(int argc, char** argv) {
       ++reps;
     }
     if (!enc.isOk()) {
-      std::printf("%-16s encode failed: %s\n", d.name.c_str(), enc.status().message().c_str());
-      ++failures;
+      fail("encode", enc.status().message());
       continue;
     }
     const gtn::EncodedLevel& e = *enc;
@@ -182,8 +307,7 @@ int main(int argc, char** argv) {
       const gtn::Status st = gtn::decodeLevel(e.header, pl, sink, &stats, d.name);
       const double s = seconds(t0, Clock::now());
       if (!st.isOk()) {
-        std::printf("%-16s decode failed: %s\n", d.name.c_str(), st.message().c_str());
-        ++failures;
+        fail("decode", st.message());
         reps = 0;
         break;
       }
@@ -192,6 +316,15 @@ int main(int argc, char** argv) {
       ++reps;
     } while ((spent < 0.6 || reps < 5) && reps < 100);
     if (reps == 0) continue;
+    gtn::TetMeshBuilder decoded;
+    if (const gtn::Status st = gtn::decodeLevel(e.header, pl, decoded, nullptr, d.name); !st.isOk()) {
+      fail("decode", st.message());
+      continue;
+    }
+    if (const std::string why = losslessMismatch(m, e, decoded.mesh()); !why.empty()) {
+      fail("lossless decode", why);
+      continue;
+    }
 
     size_t field_bytes = 0;
     for (const auto& s : e.point_fields) field_bytes += s.size();
@@ -262,10 +395,35 @@ int main(int argc, char** argv) {
     if (std::getenv("GTN_BENCH_SPLIT"))
       std::printf("  boundary %.3f b/t (%llu triangles), peeling %.3f b/t\n", 8.0 * e.boundary.size() / nt,
                   static_cast<unsigned long long>(e.header.boundary_triangles), 8.0 * e.connectivity.size() / nt);
-    std::printf("%-16s %8zu %8zu | %6.3f %6.2f %6.2f %7.2f | %7.2f %7.2f | %7.2f %7.2f %7.2f | %6.2f %6.2f %7llu\n",
-                d.name.c_str(), m.numPoints(), m.numTets(), conn, geom, fields, conn + geom + fields, zc, xc, zgf,
-                xgf, fp, nt / enc_s / 1e6, nt / dec_s / 1e6, static_cast<unsigned long long>(stats.peak_live_vertices));
+    // xz.gf is 0 when the xz program failed: nothing to judge against then.
+    const bool judge_gf = !skip_baselines && xgf > 0;
+    const bool conn_ok = conn <= kMaxConnectivityBits, gf_ok = !judge_gf || geom + fields < xgf;
+    std::printf(
+        "%-*s %8zu %8zu | %6.3f %6.2f %6.2f %7.2f | %7.2f %7.2f | %7.2f %7.2f %7.2f | %6.2f %6.2f %7llu | %s %s\n", w,
+        d.name.c_str(), m.numPoints(), m.numTets(), conn, geom, fields, conn + geom + fields, zc, xc, zgf, xgf, fp,
+        nt / enc_s / 1e6, nt / dec_s / 1e6, static_cast<unsigned long long>(stats.peak_live_vertices),
+        conn_ok ? "ok" : "MISS", !judge_gf ? "-" : gf_ok ? "ok" : "MISS");
     std::fflush(stdout);
+    char why[160];
+    std::string misses;
+    if (!conn_ok) {
+      std::snprintf(why, sizeof why, "conn %.3f b/t > %.1f", conn, kMaxConnectivityBits);
+      misses = why;
+    }
+    if (!gf_ok) {
+      std::snprintf(why, sizeof why, "geom + fields %.2f b/t >= xz -9 %.2f b/t", geom + fields, xgf);
+      misses += (misses.empty() ? "" : "; ") + std::string(why);
+    }
+    if (!misses.empty()) missed.push_back(d.name + " (" + misses + ")");
   }
-  return failures == 0 ? 0 : 1;
+  std::printf("\ntargets: conn <= %.1f b/t%s; %zu missed%s\n", kMaxConnectivityBits,
+              skip_baselines ? " (geom + fields against xz -9 not judged: --no-baselines)"
+                             : ", geom + fields < xz -9 of the raw coordinate + field arrays",
+              missed.size(), missed.empty() ? "" : ":");
+  for (const std::string& m : missed) std::printf("  %s\n", m.c_str());
+  if (!failed.empty()) {
+    std::printf("%zu failed:\n", failed.size());
+    for (const std::string& f : failed) std::printf("  %s\n", f.c_str());
+  }
+  return failed.empty() ? 0 : 1;
 }
