@@ -75,6 +75,12 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
   if (inputs.empty()) return usageError("no input given");
   if (options.split != 5 && options.split != 6)
     return usageError("--split must be 5 or 6, not " + std::to_string(options.split));
+  // A repository cloned without Git LFS holds a short text pointer in place of each large file; every
+  // importer would misread one as a malformed file of its own format.
+  for (const std::string& p : inputs)
+    if (head(p, 64).rfind("version https://git-lfs.github.com/spec/", 0) == 0)
+      return Status(StatusCode::kNotOurFile, p + ": a Git LFS pointer (the placeholder a clone without Git LFS "
+                                                 "holds), not the file itself: fetch it, e.g. with 'git lfs pull'");
   const InputFormat first = detectInputFormat(inputs[0]);
   if (first == InputFormat::kPlot3d) return importPlot3d(inputs, options);
   if (inputs.size() != 1) {

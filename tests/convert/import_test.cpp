@@ -1,0 +1,33 @@
+// The import dispatcher: what it tells the user before any one importer reads the file.
+#include <gtest/gtest.h>
+
+#include "convert/import.h"
+#include "test_util.h"
+
+namespace gtn {
+namespace {
+
+// Every file of meshio's test corpus, cloned without Git LFS, is such a pointer; each importer used to
+// call it a malformed file of its own format ("not well-formed XML", "its first word is 1936876918").
+TEST(ImportDispatch, GitLfsPointerIsNamedAsSuch) {
+  const std::string dir = test::tempDir("import-lfs-pointer");
+  const std::string pointer =
+      "version https://git-lfs.github.com/spec/v1\n"
+      "oid sha256:3ecbf7b48edc448fcbe2d28aba387c5d77ec535c6ebbd2977325101afd7834e8\nsize 3331\n";
+  for (const char* name : {"a.vtu", "a.vtk", "a.mesh", "a.meshb", "a.off", "a.1.ele", "a.xyz"}) {
+    const std::string path = dir + "/" + name;
+    test::writeFile(path, pointer);
+    auto r = importMesh({path}, ImportOptions{});
+    ASSERT_FALSE(r.isOk()) << name;
+    EXPECT_EQ(r.status().code(), StatusCode::kNotOurFile) << name;
+    EXPECT_EQ(r.status().message().rfind(path + ": a Git LFS pointer", 0), 0u) << r.status().message();
+  }
+  // The second file of a PLOT3D pair too.
+  test::writeFile(dir + "/g.xyz", "2 2 2\n0 1 0 1 0 1 0 1\n0 0 1 1 0 0 1 1\n0 0 0 0 1 1 1 1\n");
+  auto r = importMesh({dir + "/g.xyz", dir + "/a.xyz"}, ImportOptions{});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find(dir + "/a.xyz: a Git LFS pointer"), std::string::npos) << r.status().message();
+}
+
+}  // namespace
+}  // namespace gtn
