@@ -254,6 +254,7 @@ class LevelCoder {
 
   Status run() {
     GTN_RETURN_IF_ERROR(codeAliases());
+    GTN_RETURN_IF_ERROR(codeShifts());
     GTN_RETURN_IF_ERROR(boundaryPhase());
     if constexpr (!kEncode) GTN_RETURN_IF_ERROR(sink_->endBoundary());
     GTN_RETURN_IF_ERROR(peelingPhase());
@@ -312,7 +313,72 @@ class LevelCoder {
     return Status::ok();
   }
 
- public:
+  // Each value-coded component's shift (section 10.2), at the start of its stream: a bit (one model
+  // for the level), then the shift in 6 direct bits. The encoder takes the fewest trailing zero bits
+  // of the component's stored values.
+  Status codeShifts() {
+    auto declare = [&](Coder& c, ValueCoder& vc, uint32_t comp, uint32_t shift, const std::string& what) -> Status {
+      uint32_t has = shift > 0;
+      has = c.bit(shift_flag_, has);
+      if (has) shift = c.direct(shift, 6);
+      if constexpr (!kEncode) {
+        if (has && (shift == 0 || shift >= static_cast<uint32_t>(vc.bits())))
+          return bad(what + " declares an invalid shift of " + std::to_string(shift) + " bits");
+      }
+      vc.setShift(comp, has ? static_cast<int>(shift) : 0);
+      return Status::ok();
+    };
+    // The fewest trailing zero bits among `n` values `stride` bytes apart, below the type's width.
+    auto fewestZeros = [](ScalarType type, const uint8_t* p, size_t n, size_t stride) -> uint32_t {
+      int z = scalarBits(type) - 1;
+      for (size_t i = 0; i < n && z > 0; ++i) z = std::min(z, ValueCoder::trailingZeros(type, p + i * stride));
+      return static_cast<uint32_t>(z);
+    };
+    const ScalarType ct = header_.coord_type;
+    for (uint32_t i = 0; i < 3; ++i) {
+      uint32_t shift = 0;
+      if constexpr (kEncode) {
+        const std::vector<double>& xyz = enc_->mesh->coords;
+        const size_t n = xyz.size() / 3;
+        std::vector<uint8_t> raw(n * scalarSize(ct));
+        for (size_t v = 0; v < n; ++v) {
+          if (ct == ScalarType::kFloat32) {
+            const float f = static_cast<float>(xyz[3 * v + i]);
+            std::memcpy(&raw[4 * v], &f, 4);
+          } else {
+            std::memcpy(&raw[8 * v], &xyz[3 * v + i], 8);
+          }
+        }
+        shift = fewestZeros(ct, raw.data(), n, scalarSize(ct));
+      }
+      GTN_RETURN_IF_ERROR(declare(*geo_, coord_vc_, i, shift, "the geometry stream"));
+    }
+    size_t k = 0;
+    for (size_t f = 0; f < header_.point_fields.size(); ++f) {
+      const FieldDesc& d = header_.point_fields[f];
+      for (uint32_t c = 0; c < d.components; ++c, ++k) {
+        if (alias_[k] != kNone32) continue;
+        uint32_t shift = 0;
+        if constexpr (kEncode) {
+          const Field& src = enc_->mesh->point_fields[f];
+          shift = fewestZeros(d.type, src.bytes.data() + c * scalarSize(d.type), src.itemCount(), d.itemBytes());
+        }
+        GTN_RETURN_IF_ERROR(declare(*pf_[f], pf_vc_[f], c, shift, "point field '" + d.name + "'"));
+      }
+    }
+    for (size_t f = 0; f < header_.cell_fields.size(); ++f) {
+      const FieldDesc& d = header_.cell_fields[f];
+      for (uint32_t c = 0; c < d.components; ++c) {
+        uint32_t shift = 0;
+        if constexpr (kEncode) {
+          const Field& src = enc_->mesh->cell_fields[f];
+          shift = fewestZeros(d.type, src.bytes.data() + c * scalarSize(d.type), src.itemCount(), d.itemBytes());
+        }
+        GTN_RETURN_IF_ERROR(declare(*cf_[f], cf_vc_[f], c, shift, "cell field '" + d.name + "'"));
+      }
+    }
+    return Status::ok();
+  }
 
  private:
   Status bad(const std::string& reason) const {
@@ -1648,7 +1714,8 @@ class LevelCoder {
   std::vector<ScalarType> comp_type_;
   std::vector<uint32_t> alias_;
   std::vector<uint32_t> field_coded_comps_;  // per field: components not aliased
-  BitModel alias_flag_;     // copied from the same source as the previous axis
+  BitModel alias_flag_;     // a point-field component repeats an earlier one (codeAliases)
+  BitModel shift_flag_;     // a component declares a shift (codeShifts)
   BitTree<5> copy_which_[3];
   const uint32_t* near_ = nullptr;  // apex candidates of the gate being decoded (copy sources)
   int n_near_ = 0;

@@ -11,4 +11,11 @@ ValueCoder::ValueCoder(ScalarType type, uint32_t components)
   for (Component& c : comp_) c.bucket.resize(kContexts);
 }
 
+int ValueCoder::trailingZeros(ScalarType type, const uint8_t* p) {
+  uint64_t raw = 0;
+  const size_t n = scalarSize(type);
+  std::memcpy(&raw, p, n);  // the project assumes a little-endian host
+  return raw == 0 ? static_cast<int>(8 * n) : __builtin_ctzll(raw);
+}
+
 }  // namespace gtn

@@ -9,6 +9,10 @@
 // length of the previous residual of the same component; then the sign, the two bits below the
 // leading one (adaptive) and the remaining bits raw. All of it is integer arithmetic on bit patterns,
 // so every platform reproduces the same bits (NaN payloads included).
+//
+// A component whose values all end in s zero bits (a float64 array that holds float32 values ends in
+// 29 or more, small integers stored as floats in many more) is coded with s as its shift: keys and
+// predictions lose their s low bits, which the decoder restores (spec section 10.2).
 #pragma once
 
 #include <cmath>
@@ -154,6 +158,14 @@ class ValueCoder {
   template <class C>
   uint64_t code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actual_key);
 
+  // The shift of component `comp`: the number of low bits that every value's stored bit pattern has
+  // zero, at most the width - 1. 0 until set.
+  void setShift(uint32_t comp, int shift) { comp_[comp].shift = shift; }
+  int shift(uint32_t comp) const { return comp_[comp].shift; }
+  int bits() const { return bits_; }
+  // The number of trailing zero bits of a value's stored bit pattern (the value's type width for 0).
+  static int trailingZeros(ScalarType type, const uint8_t* p);
+
  private:
   static constexpr int kTreeBits = 7;      // bucket 0..64
   static constexpr int kContexts = 17;     // previous bucket / 4
@@ -163,7 +175,11 @@ class ValueCoder {
     BitModel sign[65];
     BitModel high[65][4];  // the two bits below the leading one, as a 2-bit tree per bucket
     uint32_t last_bucket = 0;
+    int shift = 0;
   };
+  // Codes the residual of keys `w` bits wide (`mask` = 2^w - 1).
+  template <class C>
+  static uint64_t codeKey(C& c, Component& m, int w, uint64_t mask, uint64_t pred_key, uint64_t actual_key);
 
   ScalarType type_;
   uint32_t components_;
@@ -175,15 +191,27 @@ class ValueCoder {
 template <class C>
 uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actual_key) {
   Component& m = comp_[comp];
-  const uint64_t r = (actual_key - pred_key) & mask_;
-  const uint64_t half = uint64_t{1} << (bits_ - 1);
+  const int z = m.shift;
+  if (z == 0) return codeKey(c, m, bits_, mask_, pred_key, actual_key);
+  // The low z bits of every value's pattern are zero: those of a positive float's key and of an
+  // integer's too, those of a negative float's key one (its key inverts the pattern).
+  const int w = bits_ - z;
+  const uint64_t key = codeKey(c, m, w, (uint64_t{1} << w) - 1, pred_key >> z, actual_key >> z);
+  const bool ones = isFloatType(type_) && ((key >> (w - 1)) & 1) == 0;
+  return (key << z) | (ones ? (uint64_t{1} << z) - 1 : 0);
+}
+
+template <class C>
+uint64_t ValueCoder::codeKey(C& c, Component& m, int w, uint64_t mask, uint64_t pred_key, uint64_t actual_key) {
+  const uint64_t r = (actual_key - pred_key) & mask;
+  const uint64_t half = uint64_t{1} << (w - 1);
   const bool negative = r >= half && r != 0;
-  uint64_t mag = negative ? ((~r + 1) & mask_) : r;
+  uint64_t mag = negative ? ((~r + 1) & mask) : r;
   if (negative && mag == 0) mag = half;  // unreachable for widths < 64; keeps -2^63 exact
   uint32_t k = 0;
   if (mag) k = 64 - static_cast<uint32_t>(__builtin_clzll(mag));
   k = m.bucket[m.last_bucket >> 2].code(c, k);
-  if (k > static_cast<uint32_t>(bits_)) k = bits_;  // corrupt stream; the decoder fails later
+  if (k > static_cast<uint32_t>(w)) k = w;  // corrupt stream; the decoder fails later
   m.last_bucket = k;
   if (k == 0) return pred_key;
   const uint32_t s = c.bit(m.sign[k], negative ? 1 : 0);
@@ -203,8 +231,8 @@ uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actua
     const uint32_t v = c.direct(static_cast<uint32_t>((mag >> rest) & ((1u << n) - 1)), n);
     out = (out << n) | v;
   }
-  const uint64_t res = s ? ((~out + 1) & mask_) : out;
-  return (pred_key + res) & mask_;
+  const uint64_t res = s ? ((~out + 1) & mask) : out;
+  return (pred_key + res) & mask;
 }
 
 }  // namespace gtn

@@ -84,6 +84,47 @@ TEST(LevelCodec, ValuesRepeatedFromTheNextLayerAreCopied) {
   EXPECT_GT(saved, 0.6 * per_value * double(repeated)) << repeated << " repeated values";
 }
 
+// Values whose stored patterns all end in zero bits (float32 data kept in a float64 array, small
+// integers in floats and integers, negative values and signed zeros among them) are coded without
+// those bits (spec 10.2, shifts): a float64 array of float32 values costs what the float32 array costs.
+TEST(LevelCodec, TrailingZeroBitsOfEveryValueAreNotCoded) {
+  TetMesh m = gridMesh(12, 10, 9, 6);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-3.0f, 3.0f);
+  Field as32("as32", 1, ScalarType::kFloat32, m.numPoints()), as64("as64", 1, ScalarType::kFloat64, m.numPoints());
+  Field wide("wide", 1, ScalarType::kFloat64, m.numPoints()), counts("counts", 2, ScalarType::kInt32, m.numPoints());
+  Field small("small", 1, ScalarType::kFloat64, m.numPoints());
+  for (size_t v = 0; v < m.numPoints(); ++v) {
+    const float x = v % 97 == 0 ? -0.0f : u(rng);
+    as32.set<float>(v, 0, x);
+    as64.set<double>(v, 0, x);
+    wide.set<double>(v, 0, static_cast<double>(x) + 1e-12 * static_cast<double>(v % 7));  // low bits in use
+    counts.set<int32_t>(v, 0, -1024 * static_cast<int32_t>(v % 13));
+    counts.set<int32_t>(v, 1, 4096 * static_cast<int32_t>(v % 5));
+    small.set<double>(v, 0, static_cast<double>(static_cast<int>(v % 11) - 5));
+  }
+  m.point_fields = {as32, as64, wide, counts, small};
+  const EncodedLevel e = roundTrip(m);
+  ASSERT_EQ(e.point_fields.size(), 5u);
+  const double n = static_cast<double>(m.numPoints());
+  const double b32 = 8.0 * e.point_fields[0].size() / n, b64 = 8.0 * e.point_fields[1].size() / n;
+  const double bwide = 8.0 * e.point_fields[2].size() / n;
+  // The float64 copy costs about what the float32 original does, far less than a float64 whose low
+  // bits vary (29 mantissa bits more).
+  EXPECT_LT(b64, b32 + 1.0) << "float32 values in a float64 array";
+  EXPECT_GT(bwide, b64 + 20.0) << "a float64 array that uses its low bits";
+  // Multiples of 1024 and 4096 and small integers in doubles: a few bits per value.
+  EXPECT_LT(8.0 * e.point_fields[3].size() / n, 2 * 8.0);
+  EXPECT_LT(8.0 * e.point_fields[4].size() / n, 8.0);
+  // Float64 coordinates holding float32 values, likewise.
+  TetMesh g = gridMesh(12, 10, 9, 6);
+  for (double& x : g.coords) x = static_cast<float>(x * 1.37 + 0.001 * std::sin(x));
+  const double f32_like = 8.0 * roundTrip(g).geometry.size() / n;
+  for (double& x : g.coords) x += 1e-13 * std::cos(3 * x);
+  const double f64_used = 8.0 * roundTrip(g).geometry.size() / n;
+  EXPECT_GT(f64_used, f32_like + 30.0) << "coordinates of float32 precision in float64";
+}
+
 TEST(LevelCodec, StructuredGridFiveSplitFloat32) {
   TetMesh m = gridMesh(11, 9, 8, 5);
   m.coord_type = ScalarType::kFloat32;
