@@ -16,7 +16,10 @@
 // and xz -9 of the connectivity array and of the coordinate + field arrays (the `zstd` and `xz`
 // programs), and fpzip (when built with it) of each float array, in grid order (i, j, k) for PLOT3D
 // and in source order otherwise; non-float fields are added to the fpzip column at their xz -9 size.
-// Speeds are single-threaded rates in thread CPU time, of the fastest of several runs. Every encoding
+// Speeds are single-threaded rates in thread CPU time, of the fastest of several runs; "live" is the
+// decoder's peak number of live vertices and "heap" its peak heap memory above what was allocated
+// before it started (the payload it reads, which a streaming reader holds a chunk at a time, not
+// counted), in MiB, counted by this program's operator new. Every encoding
 // is decoded once more into a mesh and compared with the source up to renumbering (coordinates and
 // field values bit for bit, orientation kept).
 //
@@ -25,6 +28,9 @@
 // names the datasets that miss one. Exit status 1 when a dataset fails to import, encode or decode
 // losslessly (the other datasets are still measured), 2 on a usage error, else 0.
 #include <algorithm>
+#include <atomic>
+#include <malloc.h>
+#include <new>
 #include <ctime>
 #include <cstdio>
 #include <cstdlib>
@@ -41,6 +47,49 @@
 #ifdef GTN_HAVE_FPZIP
 #include <fpzip.h>
 #endif
+
+// Heap accounting for the decoder's peak memory: every operator new and delete of this program goes
+// through these, which keep the bytes in use (as malloc_usable_size reports them) and their peak.
+namespace heap {
+std::atomic<size_t> in_use{0}, peak{0};
+void* counted(void* p) {
+  if (!p) throw std::bad_alloc();
+  const size_t now = in_use.fetch_add(malloc_usable_size(p)) + malloc_usable_size(p);
+  size_t old = peak.load();
+  while (now > old && !peak.compare_exchange_weak(old, now)) {
+  }
+  return p;
+}
+void release(void* p) {
+  if (!p) return;
+  in_use.fetch_sub(malloc_usable_size(p));
+  std::free(p);
+}
+void* aligned(size_t n, std::align_val_t a) {
+  void* p = nullptr;
+  if (posix_memalign(&p, std::max(sizeof(void*), static_cast<size_t>(a)), n ? n : 1) != 0) p = nullptr;
+  return counted(p);
+}
+// Starts a new peak from what is in use now; returns that baseline.
+size_t resetPeak() {
+  const size_t now = in_use.load();
+  peak.store(now);
+  return now;
+}
+}  // namespace heap
+
+void* operator new(size_t n) { return heap::counted(std::malloc(n ? n : 1)); }
+void* operator new[](size_t n) { return heap::counted(std::malloc(n ? n : 1)); }
+void* operator new(size_t n, std::align_val_t a) { return heap::aligned(n, a); }
+void* operator new[](size_t n, std::align_val_t a) { return heap::aligned(n, a); }
+void operator delete(void* p) noexcept { heap::release(p); }
+void operator delete[](void* p) noexcept { heap::release(p); }
+void operator delete(void* p, size_t) noexcept { heap::release(p); }
+void operator delete[](void* p, size_t) noexcept { heap::release(p); }
+void operator delete(void* p, std::align_val_t) noexcept { heap::release(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { heap::release(p); }
+void operator delete(void* p, size_t, std::align_val_t) noexcept { heap::release(p); }
+void operator delete[](void* p, size_t, std::align_val_t) noexcept { heap::release(p); }
 
 namespace {
 
@@ -255,11 +304,11 @@ int main(int argc, char** argv) {
               " (built without fpzip)"
 #endif
   );
-  std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s | %s\n", w, "dataset", "points",
-              "tets", "conn", "geom", "fields", "total", "zstd.c", "xz.c", "zstd.gf", "xz.gf", "fpzip", "enc", "dec",
-              "peak", "targets");
-  std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s | %s\n", w, "", "", "", "b/t",
-              "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "Mt/s", "Mt/s", "live", "conn, gf<xz");
+  std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s %6s | %s\n", w, "dataset",
+              "points", "tets", "conn", "geom", "fields", "total", "zstd.c", "xz.c", "zstd.gf", "xz.gf", "fpzip", "enc",
+              "dec", "peak", "peak", "targets");
+  std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s %6s | %s\n", w, "", "", "", "b/t",
+              "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "Mt/s", "Mt/s", "live", "heap", "conn, gf<xz");
   std::vector<std::string> failed, missed;  // datasets that failed to run; datasets that miss a target
   for (const Dataset& d : sets) {
     if (!filter.empty() && d.name.find(filter) == std::string::npos) continue;
@@ -301,11 +350,14 @@ int main(int argc, char** argv) {
     double dec_s = 1e300;
     spent = 0;
     gtn::DecodeStats stats;
+    size_t heap_peak = 0;  // bytes, the largest over the runs (they should all agree)
     do {
       gtn::CountingSink sink;
+      const size_t heap_base = heap::resetPeak();
       t0 = Clock::now();
       const gtn::Status st = gtn::decodeLevel(e.header, pl, sink, &stats, d.name);
       const double s = seconds(t0, Clock::now());
+      heap_peak = std::max(heap_peak, heap::peak.load() - heap_base);
       if (!st.isOk()) {
         fail("decode", st.message());
         reps = 0;
@@ -399,9 +451,10 @@ int main(int argc, char** argv) {
     const bool judge_gf = !skip_baselines && xgf > 0;
     const bool conn_ok = conn <= kMaxConnectivityBits, gf_ok = !judge_gf || geom + fields < xgf;
     std::printf(
-        "%-*s %8zu %8zu | %6.3f %6.2f %6.2f %7.2f | %7.2f %7.2f | %7.2f %7.2f %7.2f | %6.2f %6.2f %7llu | %s %s\n", w,
-        d.name.c_str(), m.numPoints(), m.numTets(), conn, geom, fields, conn + geom + fields, zc, xc, zgf, xgf, fp,
+        "%-*s %8zu %8zu | %6.3f %6.2f %6.2f %7.2f | %7.2f %7.2f | %7.2f %7.2f %7.2f | %6.2f %6.2f %7llu %6.2f | %s %s\n",
+        w, d.name.c_str(), m.numPoints(), m.numTets(), conn, geom, fields, conn + geom + fields, zc, xc, zgf, xgf, fp,
         nt / enc_s / 1e6, nt / dec_s / 1e6, static_cast<unsigned long long>(stats.peak_live_vertices),
+        heap_peak / 1048576.0,
         conn_ok ? "ok" : "MISS", !judge_gf ? "-" : gf_ok ? "ok" : "MISS");
     std::fflush(stdout);
     char why[160];
