@@ -308,7 +308,7 @@ int main(int argc, char** argv) {
               "points", "tets", "conn", "geom", "fields", "total", "zstd.c", "xz.c", "zstd.gf", "xz.gf", "fpzip", "enc",
               "dec", "peak", "peak", "targets");
   std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s %6s | %s\n", w, "", "", "", "b/t",
-              "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "Mt/s", "Mt/s", "live", "heap", "conn, gf<xz");
+              "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "Mt/s", "Mt/s", "live", "MiB", "conn, gf<xz");
   std::vector<std::string> failed, missed;  // datasets that failed to run; datasets that miss a target
   for (const Dataset& d : sets) {
     if (!filter.empty() && d.name.find(filter) == std::string::npos) continue;
