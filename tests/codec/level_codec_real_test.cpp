@@ -14,7 +14,6 @@ struct RealCase {
   std::vector<std::string> files;
   int split;
   double max_connectivity_bits;  // boundary + peeling, per tetrahedron
-  bool beat_xz = true;           // coordinates + fields smaller than xz -9 of the raw arrays
 };
 
 // xz -9 size of the raw coordinate and field arrays as the source stores them.
@@ -53,33 +52,29 @@ void checkCase(const RealCase& c, uint64_t* peak = nullptr) {
   const EncodedLevel e = test::roundTrip(m, peak);
   const double conn = 8.0 * (e.boundary.size() + e.connectivity.size()) / m.numTets();
   EXPECT_LT(conn, c.max_connectivity_bits) << c.files[0];
-  if (c.beat_xz) {
-    size_t ours = e.geometry.size();
-    for (const auto& s : e.point_fields) ours += s.size();
-    for (const auto& s : e.cell_fields) ours += s.size();
-    std::string name = c.files[0];
-    for (char& ch : name)
-      if (ch == '/' || ch == '.') ch = '_';
-    EXPECT_LT(ours, xzOfRawArrays(m, name)) << c.files[0];
-  }
+  // Coordinates + fields smaller than xz -9 of the raw arrays.
+  size_t ours = e.geometry.size();
+  for (const auto& s : e.point_fields) ours += s.size();
+  for (const auto& s : e.cell_fields) ours += s.size();
+  std::string name = c.files[0];
+  for (char& ch : name)
+    if (ch == '/' || ch == '.') ch = '_';
+  EXPECT_LT(ours, xzOfRawArrays(m, name)) << c.files[0];
 }
 
 TEST(LevelCodecReal, SpxVtk) { checkCase({{"vtk/spx.vtk"}, 6, 2.5}); }
 
 TEST(LevelCodecReal, BluntFinFiveSplitKeepsTheFrontSmall) {
   uint64_t peak = 0;
-  // Known gap: in grid order xz beats our coordinates + Q fields on PLOT3D data (see the bench).
-  checkCase({{"plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, 5, 1.0, false}, &peak);
+  checkCase({{"plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, 5, 1.0}, &peak);
   EXPECT_LE(peak, 40960u / 2) << "peak live vertices must stay at most half of the points";
 }
 
 TEST(LevelCodecReal, TetgenCornellSpheres) { checkCase({{"tetgen/cornell_spheres.1.ele"}, 6, 2.5}); }
 
-// Known gap: 331 points printed with 8 decimals; xz -9 finds the repeated decimal patterns in the
-// raw float64 values that our models, still learning, do not.
-TEST(LevelCodecReal, TetgenCornellBoxWithRegionAttribute) {
-  checkCase({{"tetgen/cornellbox_orig.1.ele"}, 6, 2.5, false});
-}
+// 331 points printed with 8 decimals, whose repeated decimal patterns xz -9 finds in the raw float64
+// values: the closest of the shared datasets to xz.
+TEST(LevelCodecReal, TetgenCornellBoxWithRegionAttribute) { checkCase({{"tetgen/cornellbox_orig.1.ele"}, 6, 2.5}); }
 
 TEST(LevelCodecReal, VtuWithManyFieldsAndUnusedPoints) {
   checkCase({{"vtu/lv_guccione.vtu"}, 6, 2.5});
