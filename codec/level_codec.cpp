@@ -254,7 +254,7 @@ class LevelCoder {
 
   Status run() {
     GTN_RETURN_IF_ERROR(codeAliases());
-    GTN_RETURN_IF_ERROR(codeShifts());
+    GTN_RETURN_IF_ERROR(codeValueForms());
     GTN_RETURN_IF_ERROR(boundaryPhase());
     if constexpr (!kEncode) GTN_RETURN_IF_ERROR(sink_->endBoundary());
     GTN_RETURN_IF_ERROR(peelingPhase());
@@ -313,30 +313,89 @@ class LevelCoder {
     return Status::ok();
   }
 
-  // Each value-coded component's shift (section 10.2), at the start of its stream: a bit (one model
-  // for the level), then the shift in 6 direct bits. The encoder takes the fewest trailing zero bits
-  // of the component's stored values.
-  Status codeShifts() {
-    auto declare = [&](Coder& c, ValueCoder& vc, uint32_t comp, uint32_t shift, const std::string& what) -> Status {
-      uint32_t has = shift > 0;
+  // Each value-coded component's form (section 10.2), at the start of its stream. For a float type a
+  // bit (one model for the level) says whether it is coded in decimal form, then its decimal places
+  // in 5 direct bits; otherwise a bit (another model) says whether it has a shift, then the shift in
+  // 6 direct bits. The encoder takes the fewest places and the fewest trailing zero bits of the
+  // component's values, and the decimal form when its integers are narrower than the shifted
+  // significands.
+  Status codeValueForms() {
+    struct Form {
+      int decimals = -1;
+      uint32_t shift = 0;
+    };
+    auto declare = [&](Coder& c, ValueCoder& vc, ScalarType type, uint32_t comp, Form form, const std::string& what) -> Status {
+      if (isFloatType(type)) {
+        uint32_t decimal = form.decimals >= 0;
+        decimal = c.bit(decimal_flag_, decimal);
+        if (decimal) {
+          const uint32_t e = c.direct(static_cast<uint32_t>(std::max(form.decimals, 0)), 5);
+          if constexpr (!kEncode) {
+            if (e > ValueCoder::kMaxDecimals)
+              return bad(what + " declares " + std::to_string(e) + " decimal places (at most 22)");
+          }
+          vc.setDecimals(comp, static_cast<int>(e));
+          return Status::ok();
+        }
+      }
+      uint32_t has = form.shift > 0;
       has = c.bit(shift_flag_, has);
-      if (has) shift = c.direct(shift, 6);
+      uint32_t shift = has ? c.direct(form.shift, 6) : 0;
       if constexpr (!kEncode) {
         if (has && (shift == 0 || shift >= static_cast<uint32_t>(vc.bits())))
           return bad(what + " declares an invalid shift of " + std::to_string(shift) + " bits");
       }
-      vc.setShift(comp, has ? static_cast<int>(shift) : 0);
+      vc.setShift(comp, static_cast<int>(shift));
       return Status::ok();
     };
-    // The fewest trailing zero bits among `n` values `stride` bytes apart, below the type's width.
-    auto fewestZeros = [](ScalarType type, const uint8_t* p, size_t n, size_t stride) -> uint32_t {
+    // The encoder's choice for `n` values `stride` bytes apart: the shift, or the decimal places that
+    // cost least by an estimate in bits per value (an integer's bit length, a float's significand
+    // bits) when that saves a twentieth.
+    auto choose = [](ScalarType type, const uint8_t* p, size_t n, size_t stride) {
+      Form form;
       int z = scalarBits(type) - 1;
       for (size_t i = 0; i < n && z > 0; ++i) z = std::min(z, ValueCoder::trailingZeros(type, p + i * stride));
-      return static_cast<uint32_t>(z);
+      form.shift = static_cast<uint32_t>(z);
+      if (!isFloatType(type) || n == 0) return form;
+      const float significand = static_cast<float>((type == ScalarType::kFloat32 ? 23 : 52) - z);
+      // The best decimal places over every value or a sample of 256 (pseudo-random: a regular stride
+      // can alias with a grid's layout), or -1 when none beats the float form.
+      auto bestPlaces = [&](bool sample) {
+        std::vector<int8_t> places;
+        std::vector<float> bits;  // log2 |n| of each value at its own places, -1 for n = 0
+        int lo = ValueCoder::kMaxDecimals + 1, hi = -1;
+        uint64_t state = 0x9E3779B97F4A7C15u;
+        for (size_t k = 0; k < (sample ? 256 : n); ++k) {
+          state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+          const size_t i = sample ? state % n : k;
+          int64_t v = 0;
+          places.push_back(static_cast<int8_t>(ValueCoder::decimalPlaces(type, keyFromRaw(type, p + i * stride), &v)));
+          bits.push_back(v == 0 ? -1.0f : static_cast<float>(std::log2(std::fabs(static_cast<double>(v)))));
+          if (places.back() >= 0) lo = std::min<int>(lo, places.back()), hi = std::max<int>(hi, places.back());
+        }
+        int chosen = -1;
+        double best = 0.95 * significand * static_cast<double>(places.size());
+        for (int e = lo; e <= hi; ++e) {
+          double cost = 0;
+          for (size_t i = 0; i < places.size(); ++i) {
+            // A place more costs log2(10) bits (0 stays 0); |n| must stay below 2^53.
+            float at_e = 99.0f;
+            if (places[i] >= 0 && places[i] <= e) at_e = bits[i] < 0 ? 0.0f : bits[i] + 3.321928f * static_cast<float>(e - places[i]);
+            cost += at_e < 53.0f ? at_e + 1 : significand + 4;
+          }
+          if (cost < best) best = cost, chosen = e;
+        }
+        return chosen;
+      };
+      // A sample first: most components of computed values are settled by it.
+      if (n > 1024 && bestPlaces(true) < 0) return form;
+      const int e = bestPlaces(false);
+      if (e >= 0) form = {e, 0};
+      return form;
     };
     const ScalarType ct = header_.coord_type;
     for (uint32_t i = 0; i < 3; ++i) {
-      uint32_t shift = 0;
+      Form form;
       if constexpr (kEncode) {
         const std::vector<double>& xyz = enc_->mesh->coords;
         const size_t n = xyz.size() / 3;
@@ -349,32 +408,32 @@ class LevelCoder {
             std::memcpy(&raw[8 * v], &xyz[3 * v + i], 8);
           }
         }
-        shift = fewestZeros(ct, raw.data(), n, scalarSize(ct));
+        form = choose(ct, raw.data(), n, scalarSize(ct));
       }
-      GTN_RETURN_IF_ERROR(declare(*geo_, coord_vc_, i, shift, "the geometry stream"));
+      GTN_RETURN_IF_ERROR(declare(*geo_, coord_vc_, ct, i, form, "the geometry stream"));
     }
     size_t k = 0;
     for (size_t f = 0; f < header_.point_fields.size(); ++f) {
       const FieldDesc& d = header_.point_fields[f];
       for (uint32_t c = 0; c < d.components; ++c, ++k) {
         if (alias_[k] != kNone32) continue;
-        uint32_t shift = 0;
+        Form form;
         if constexpr (kEncode) {
           const Field& src = enc_->mesh->point_fields[f];
-          shift = fewestZeros(d.type, src.bytes.data() + c * scalarSize(d.type), src.itemCount(), d.itemBytes());
+          form = choose(d.type, src.bytes.data() + c * scalarSize(d.type), src.itemCount(), d.itemBytes());
         }
-        GTN_RETURN_IF_ERROR(declare(*pf_[f], pf_vc_[f], c, shift, "point field '" + d.name + "'"));
+        GTN_RETURN_IF_ERROR(declare(*pf_[f], pf_vc_[f], d.type, c, form, "point field '" + d.name + "'"));
       }
     }
     for (size_t f = 0; f < header_.cell_fields.size(); ++f) {
       const FieldDesc& d = header_.cell_fields[f];
       for (uint32_t c = 0; c < d.components; ++c) {
-        uint32_t shift = 0;
+        Form form;
         if constexpr (kEncode) {
           const Field& src = enc_->mesh->cell_fields[f];
-          shift = fewestZeros(d.type, src.bytes.data() + c * scalarSize(d.type), src.itemCount(), d.itemBytes());
+          form = choose(d.type, src.bytes.data() + c * scalarSize(d.type), src.itemCount(), d.itemBytes());
         }
-        GTN_RETURN_IF_ERROR(declare(*cf_[f], cf_vc_[f], c, shift, "cell field '" + d.name + "'"));
+        GTN_RETURN_IF_ERROR(declare(*cf_[f], cf_vc_[f], d.type, c, form, "cell field '" + d.name + "'"));
       }
     }
     return Status::ok();
@@ -1715,7 +1774,8 @@ class LevelCoder {
   std::vector<uint32_t> alias_;
   std::vector<uint32_t> field_coded_comps_;  // per field: components not aliased
   BitModel alias_flag_;     // a point-field component repeats an earlier one (codeAliases)
-  BitModel shift_flag_;     // a component declares a shift (codeShifts)
+  BitModel shift_flag_;     // a component declares a shift (codeValueForms)
+  BitModel decimal_flag_;   // a float component is coded in decimal form (codeValueForms)
   BitTree<5> copy_which_[3];
   const uint32_t* near_ = nullptr;  // apex candidates of the gate being decoded (copy sources)
   int n_near_ = 0;

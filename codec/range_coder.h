@@ -183,6 +183,7 @@ class EntropyCoder;
 template <>
 class EntropyCoder<true> {
  public:
+  static constexpr bool kEncoding = true;
   explicit EntropyCoder(std::vector<uint8_t>* out) : enc_(out) {}
   uint32_t bit(BitModel& m, uint32_t b) {
     enc_.encodeBit(m, b);
@@ -208,6 +209,7 @@ class EntropyCoder<true> {
 template <>
 class EntropyCoder<false> {
  public:
+  static constexpr bool kEncoding = false;
   explicit EntropyCoder(std::span<const uint8_t> in) : dec_(in) {}
   uint32_t bit(BitModel& m, uint32_t) { return dec_.decodeBit(m); }
   uint32_t direct(uint32_t, int n) {

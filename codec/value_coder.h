@@ -12,7 +12,12 @@
 //
 // A component whose values all end in s zero bits (a float64 array that holds float32 values ends in
 // 29 or more, small integers stored as floats in many more) is coded with s as its shift: keys and
-// predictions lose their s low bits, which the decoder restores (spec section 10.2).
+// predictions lose their s low bits, which the decoder restores. A float component whose values are
+// mostly decimals of at most e places (what text formats hold: 0.0260146, or 5.67709 printed as
+// 5.6770899999999997) is coded in decimal form: a bit per value says whether it is one, and such a
+// value is coded as the integer n = v * 10^e, from which IEEE division restores v = n / 10^e bit for
+// bit; the others (a mesh generator's own points among the input's, say) as floats, with their own
+// models (spec section 10.2).
 #pragma once
 
 #include <cmath>
@@ -161,10 +166,16 @@ class ValueCoder {
   // The shift of component `comp`: the number of low bits that every value's stored bit pattern has
   // zero, at most the width - 1. 0 until set.
   void setShift(uint32_t comp, int shift) { comp_[comp].shift = shift; }
-  int shift(uint32_t comp) const { return comp_[comp].shift; }
   int bits() const { return bits_; }
   // The number of trailing zero bits of a value's stored bit pattern (the value's type width for 0).
   static int trailingZeros(ScalarType type, const uint8_t* p);
+
+  // The decimal places e (0..kMaxDecimals) of a float component coded in decimal form, -1 for none.
+  void setDecimals(uint32_t comp, int e);
+  static constexpr int kMaxDecimals = 22;  // 10^22 is the largest power of ten a double holds exactly
+  // The fewest decimal places of a float value (it is n / 10^e for an integer |n| < 2^53), with that
+  // n; -1 when it has none (NaN, infinity, -0.0, more places or digits than that).
+  static int decimalPlaces(ScalarType type, uint64_t key, int64_t* n);
 
  private:
   static constexpr int kTreeBits = 7;      // bucket 0..64
@@ -176,6 +187,9 @@ class ValueCoder {
     BitModel high[65][4];  // the two bits below the leading one, as a 2-bit tree per bucket
     uint32_t last_bucket = 0;
     int shift = 0;
+    int decimals = -1;
+    BitModel not_decimal[2];  // context: the previous value's bit
+    uint32_t last_not_decimal = 0;
   };
   // Codes the residual of keys `w` bits wide (`mask` = 2^w - 1).
   template <class C>
@@ -185,12 +199,64 @@ class ValueCoder {
   uint32_t components_;
   int bits_;
   uint64_t mask_;
-  std::vector<Component> comp_;
+  std::vector<Component> comp_;  // then, once a component is decimal, the float models of each one
 };
+
+// 10^e for e = 0..22, each exactly a double.
+inline constexpr double kPowersOfTen[ValueCoder::kMaxDecimals + 1] = {
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19,
+    1e20, 1e21, 1e22};
+
+// The value n / 10^e of a decimal-form component, in `type` (float32 or float64), as raw bytes.
+inline void decimalValue(ScalarType type, int64_t n, int e, uint8_t* raw) {
+  const double v = static_cast<double>(n) / kPowersOfTen[e];
+  if (type == ScalarType::kFloat32) {
+    value_detail::storeRaw<float>(raw, static_cast<float>(v));
+  } else {
+    value_detail::storeRaw<double>(raw, v);
+  }
+}
+
+// The integer n whose decimal value n / 10^e is the value with key `key`, or false.
+inline bool decimalInteger(ScalarType type, uint64_t key, int e, int64_t* out) {
+  uint8_t raw[8], back[8];
+  rawFromKey(type, key, raw);
+  const double v = doubleFromRaw(type, raw);
+  const double scaled = v * kPowersOfTen[e];
+  if (!(std::fabs(scaled) < 9007199254740992.0)) return false;  // 2^53; also NaN
+  const int64_t n0 = static_cast<int64_t>(std::nearbyint(scaled));
+  const size_t size = scalarSize(type);
+  for (const int64_t n : {n0, n0 - 1, n0 + 1}) {  // the product may have rounded across a half
+    decimalValue(type, n, e, back);
+    if (std::memcmp(raw, back, size) == 0) {
+      *out = n;
+      return true;
+    }
+  }
+  return false;
+}
 
 template <class C>
 uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actual_key) {
   Component& m = comp_[comp];
+  if (m.decimals >= 0) {
+    int64_t n = 0;
+    uint32_t other = 0;
+    if constexpr (C::kEncoding) other = !decimalInteger(type_, actual_key, m.decimals, &n);
+    other = c.bit(m.not_decimal[m.last_not_decimal], other);
+    m.last_not_decimal = other;
+    if (other) return codeKey(c, comp_[components_ + comp], bits_, mask_, pred_key, actual_key);
+    // The integers as int64 keys: the prediction's decimal form rounded, the value's exact.
+    const uint64_t sign = uint64_t{1} << 63;
+    uint8_t raw[8];
+    rawFromKey(type_, pred_key, raw);
+    const double np = value_detail::clampRound(doubleFromRaw(type_, raw) * kPowersOfTen[m.decimals],
+                                               -9007199254740992.0, 9007199254740992.0);
+    const uint64_t k = codeKey(c, m, 64, ~uint64_t{0}, static_cast<uint64_t>(static_cast<int64_t>(np)) ^ sign,
+                               static_cast<uint64_t>(n) ^ sign);
+    decimalValue(type_, static_cast<int64_t>(k ^ sign), m.decimals, raw);
+    return keyFromRaw(type_, raw);
+  }
   const int z = m.shift;
   if (z == 0) return codeKey(c, m, bits_, mask_, pred_key, actual_key);
   // The low z bits of every value's pattern are zero: those of a positive float's key and of an

@@ -125,6 +125,40 @@ TEST(LevelCodec, TrailingZeroBitsOfEveryValueAreNotCoded) {
   EXPECT_GT(f64_used, f32_like + 30.0) << "coordinates of float32 precision in float64";
 }
 
+// Values that text formats printed with a few decimals (TetGen's 5.6770899999999997 is 5.67709) are
+// coded as the integers they are in units of 10^-e (spec 10.2, decimal form); values without such a
+// form among them (a mesh generator's own points, -0.0, NaN) are coded as floats and survive too.
+TEST(LevelCodec, DecimalValuesAreCodedAsIntegers) {
+  TetMesh m = gridMesh(12, 10, 9, 6);
+  const size_t n = m.numPoints();
+  auto decimal = [](double x, int places) { return std::nearbyint(x * std::pow(10.0, places)) / std::pow(10.0, places); };
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-50.0, 50.0);
+  Field printed("printed", 1, ScalarType::kFloat64, n), full("full", 1, ScalarType::kFloat64, n);
+  Field mixed("mixed", 1, ScalarType::kFloat64, n), f32("f32", 1, ScalarType::kFloat32, n);
+  for (size_t v = 0; v < n; ++v) {
+    const double* p = m.point(v);
+    const double smooth = 10.0 * std::sin(0.3 * p[0]) + p[1] * p[2] / 7.0;
+    printed.set<double>(v, 0, decimal(smooth, 6));
+    full.set<double>(v, 0, smooth);
+    // One value in ten is not a short decimal; a -0.0 and a NaN among them.
+    const double x = v % 10 == 3 ? smooth : decimal(smooth, 4);
+    mixed.set<double>(v, 0, v == 17 ? -0.0 : v == 29 ? std::nan("") : x);
+    f32.set<float>(v, 0, static_cast<float>(decimal(u(rng), 3)));
+  }
+  m.point_fields = {printed, full, mixed, f32};
+  for (size_t i = 0; i < m.coords.size(); ++i) m.coords[i] = decimal(m.coords[i] * 3.1, 5);
+  const EncodedLevel e = roundTrip(m);
+  const double nv = static_cast<double>(n);
+  const double b_printed = 8.0 * e.point_fields[0].size() / nv, b_full = 8.0 * e.point_fields[1].size() / nv;
+  // Six decimals of a smooth field: far fewer bits than the double's 52-bit significand needs.
+  EXPECT_LT(b_printed, b_full - 15.0);
+  EXPECT_LT(8.0 * e.point_fields[2].size() / nv, b_full - 10.0) << "mostly four decimals";
+  // Random values of 3 decimals in [-50, 50]: 17 bits of integer, not a float32's 24 bits of noise.
+  EXPECT_LT(8.0 * e.point_fields[3].size() / nv, 20.0);
+  EXPECT_LT(8.0 * e.geometry.size() / nv, 3 * 24.0) << "coordinates of 5 decimals";
+}
+
 TEST(LevelCodec, StructuredGridFiveSplitFloat32) {
   TetMesh m = gridMesh(11, 9, 8, 5);
   m.coord_type = ScalarType::kFloat32;
