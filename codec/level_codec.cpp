@@ -349,49 +349,57 @@ class LevelCoder {
       vc.setShift(comp, static_cast<int>(shift));
       return Status::ok();
     };
-    // The encoder's choice for `n` values `stride` bytes apart: the shift, or the decimal places that
-    // cost least by an estimate in bits per value (an integer's bit length, a float's significand
-    // bits) when that saves a twentieth.
+    // The encoder's choice for `n` values `stride` bytes apart: the shift, or the decimal places whose
+    // integers cost least when that saves a twentieth. Costs are estimated on the differences of
+    // consecutive values in the source's order (neighbours there are mostly neighbours in space), as
+    // bit lengths: of the integers' differences, of the shifted keys' differences for floats and for
+    // values without a decimal form; over every value, or a sample of 256 pairs (pseudo-random: a
+    // regular stride can alias with a grid's layout) for more than 1024.
     auto choose = [](ScalarType type, const uint8_t* p, size_t n, size_t stride) {
       Form form;
       int z = scalarBits(type) - 1;
       for (size_t i = 0; i < n && z > 0; ++i) z = std::min(z, ValueCoder::trailingZeros(type, p + i * stride));
       form.shift = static_cast<uint32_t>(z);
-      if (!isFloatType(type) || n == 0) return form;
-      const float significand = static_cast<float>((type == ScalarType::kFloat32 ? 23 : 52) - z);
-      // The best decimal places over every value or a sample of 256 (pseudo-random: a regular stride
-      // can alias with a grid's layout), or -1 when none beats the float form.
-      auto bestPlaces = [&](bool sample) {
-        std::vector<int8_t> places;
-        std::vector<float> bits;  // log2 |n| of each value at its own places, -1 for n = 0
-        int lo = ValueCoder::kMaxDecimals + 1, hi = -1;
-        uint64_t state = 0x9E3779B97F4A7C15u;
-        for (size_t k = 0; k < (sample ? 256 : n); ++k) {
-          state ^= state << 13, state ^= state >> 7, state ^= state << 17;
-          const size_t i = sample ? state % n : k;
-          int64_t v = 0;
-          places.push_back(static_cast<int8_t>(ValueCoder::decimalPlaces(type, keyFromRaw(type, p + i * stride), &v)));
-          bits.push_back(v == 0 ? -1.0f : static_cast<float>(std::log2(std::fabs(static_cast<double>(v)))));
-          if (places.back() >= 0) lo = std::min<int>(lo, places.back()), hi = std::max<int>(hi, places.back());
-        }
-        int chosen = -1;
-        double best = 0.95 * significand * static_cast<double>(places.size());
-        for (int e = lo; e <= hi; ++e) {
-          double cost = 0;
-          for (size_t i = 0; i < places.size(); ++i) {
-            // A place more costs log2(10) bits (0 stays 0); |n| must stay below 2^53.
-            float at_e = 99.0f;
-            if (places[i] >= 0 && places[i] <= e) at_e = bits[i] < 0 ? 0.0f : bits[i] + 3.321928f * static_cast<float>(e - places[i]);
-            cost += at_e < 53.0f ? at_e + 1 : significand + 4;
-          }
-          if (cost < best) best = cost, chosen = e;
-        }
-        return chosen;
+      if (!isFloatType(type) || n < 2) return form;
+      struct Pair {
+        int places[2];
+        double integer[2];
+        float float_bits;  // bit length of the difference of the shifted keys
       };
-      // A sample first: most components of computed values are settled by it.
-      if (n > 1024 && bestPlaces(true) < 0) return form;
-      const int e = bestPlaces(false);
-      if (e >= 0) form = {e, 0};
+      std::vector<Pair> pairs;
+      const bool sample = n > 1024;
+      uint64_t state = 0x9E3779B97F4A7C15u;
+      int lo = ValueCoder::kMaxDecimals + 1, hi = -1;
+      for (size_t k = 0; k < (sample ? 256 : n - 1); ++k) {
+        state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+        const size_t i = sample ? state % (n - 1) : k;
+        Pair pair;
+        uint64_t keys[2];
+        for (int j = 0; j < 2; ++j) {
+          keys[j] = keyFromRaw(type, p + (i + j) * stride);
+          int64_t v = 0;
+          pair.places[j] = ValueCoder::decimalPlaces(type, keys[j], &v);
+          pair.integer[j] = static_cast<double>(v);
+          if (pair.places[j] >= 0) lo = std::min(lo, pair.places[j]), hi = std::max(hi, pair.places[j]);
+        }
+        const uint64_t d = (keys[1] > keys[0] ? keys[1] - keys[0] : keys[0] - keys[1]) >> z;
+        pair.float_bits = static_cast<float>(bitLength(d));
+        pairs.push_back(pair);
+      }
+      double floats = 0;
+      for (const Pair& pair : pairs) floats += pair.float_bits + 1;
+      double best = 0.95 * floats;
+      for (int e = lo; e <= hi; ++e) {
+        double cost = 0;
+        for (const Pair& pair : pairs) {
+          double at_e[2];
+          for (int j = 0; j < 2; ++j)
+            at_e[j] = pair.places[j] >= 0 && pair.places[j] <= e ? pair.integer[j] * kPowersOfTen[e - pair.places[j]] : 1e300;
+          const bool both = std::fabs(at_e[0]) < 9007199254740992.0 && std::fabs(at_e[1]) < 9007199254740992.0;
+          cost += both ? std::log2(std::fabs(at_e[1] - at_e[0]) + 1) + 1 : pair.float_bits + 4;
+        }
+        if (cost < best) best = cost, form = {e, 0};
+      }
       return form;
     };
     const ScalarType ct = header_.coord_type;
