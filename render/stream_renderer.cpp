@@ -54,19 +54,20 @@ struct IdHash {
   size_t operator()(uint32_t id) const { return static_cast<size_t>((id * 0x9E3779B97F4A7C15ull) >> 20); }
 };
 
-// A face where cursors wait: the one held tetrahedron that has it (kNone if none is held) and the
-// cursors (2 * segment + 0 front / 1 back) waiting for the tetrahedron on its other side, as a list
-// in State::wait_nodes.
+// A face where cursors wait: the one held tetrahedron that has it (if any is held) and the cursors
+// (2 * segment + 0 front / 1 back) waiting for the tetrahedron on its other side, as a list linked
+// through State::wait_next. The tetrahedron's slot and local face share one word (20-byte map
+// entries).
 struct FaceEntry {
-  uint32_t tet = kNone;
-  int8_t face = -1;
-  uint32_t waiters = kNone;
+  uint32_t held = kNone;     // (slot << 2) | local face, or kNone
+  uint32_t waiters = kNone;  // the first waiting cursor, or kNone
+  bool hasTet() const { return held != kNone; }
+  uint32_t tet() const { return held >> 2; }
+  int face() const { return static_cast<int>(held & 3); }
+  void setTet(uint32_t slot, int face) { held = slot << 2 | static_cast<uint32_t>(face); }
 };
-
-struct WaitNode {
-  uint32_t cursor;
-  uint32_t next;
-};
+// Held tetrahedra have slots below this, so that (slot << 2) | face fits FaceEntry::held.
+constexpr uint32_t kMaxHeldSlots = 0x3FFFFFFFu;
 
 struct HeldTet {
   TetGeom g;
@@ -84,6 +85,7 @@ struct HeldTet {
 class HeldPool {
  public:
   HeldTet& operator[](uint32_t i) { return chunks_[i >> kShift][i & kMask]; }
+  uint32_t size() const { return size_; }
   // Index of a new, default-constructed entry at the end.
   uint32_t grow() {
     if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<HeldTet[]>(kChunk));
@@ -135,28 +137,21 @@ struct StreamRenderer::State {
   double depth_slack = 0;
   std::vector<SegmentState> segs;
   FlatHashMap<FaceKey, FaceEntry, FaceKeyHash> faces;
-  std::vector<WaitNode> wait_nodes;  // waiter lists of `faces`, with a free list
-  uint32_t wait_free = kNone;
+  // The waiter lists of `faces`: the cursor after each cursor. A cursor waits at one face at a time
+  // (it leaves the list when the face's tetrahedron arrives), so one link per cursor is all the lists
+  // need, allocated once at endBoundary.
+  std::vector<uint32_t> wait_next;
   void addWaiter(FaceEntry& e, uint32_t cursor) {
-    uint32_t n = wait_free;
-    if (n != kNone) {
-      wait_free = wait_nodes[n].next;
-    } else {
-      n = static_cast<uint32_t>(wait_nodes.size());
-      wait_nodes.push_back({});
-    }
-    wait_nodes[n] = {cursor, e.waiters};
-    e.waiters = n;
+    wait_next[cursor] = e.waiters;
+    e.waiters = cursor;
   }
   // Calls f(cursor) for each waiter of e and empties its list.
   template <class F>
   void takeWaiters(FaceEntry& e, F&& f) {
-    for (uint32_t n = e.waiters; n != kNone;) {
-      const uint32_t next = wait_nodes[n].next;
-      f(wait_nodes[n].cursor);
-      wait_nodes[n].next = wait_free;
-      wait_free = n;
-      n = next;
+    for (uint32_t c = e.waiters; c != kNone;) {
+      const uint32_t next = wait_next[c];
+      f(c);
+      c = next;
     }
     e.waiters = kNone;
   }
@@ -174,6 +169,7 @@ struct StreamRenderer::State {
     if (flush_running) flush_task.wait();
     flush_running = false;
   }
+  Status flush_status;  // what the last flushBatch returned (it runs on another thread)
   std::atomic<uint64_t> lost{0};
 
   void release(uint32_t slot);
@@ -208,11 +204,11 @@ void StreamRenderer::State::release(uint32_t slot) {
     if (n == kOpenFace) {
       const FaceKey key = t.key(k);
       FaceEntry* e = faces.find(key);
-      if (e && e->tet == slot) {
+      if (e && e->hasTet() && e->tet() == slot) {
         if (e->waiters == kNone) {
           faces.erase(key);
         } else {
-          e->tet = kNone;
+          e->held = kNone;
         }
       }
     } else if (n != kReleasedFace) {
@@ -306,6 +302,7 @@ Status StreamRenderer::endBoundary() {
     st.depth_slack = 1e-9 * setup_.camera.radius();
   }
   st.segs.resize(st.rays.segments.size());
+  st.wait_next.assign(2 * st.segs.size(), kNone);
   for (size_t i = 0; i < st.segs.size(); ++i) {
     const RaySegment& rs = st.rays.segments[i];
     SegmentState& seg = st.segs[i];
@@ -353,10 +350,11 @@ Status StreamRenderer::tet(const uint32_t v[4], const uint8_t*) {
     // Render the full batch on another thread while the decoder fills the next one: the decoder only
     // touches the vertex map and `batch`, the flush everything else.
     st.waitFlush();
+    GTN_RETURN_IF_ERROR(st.flush_status);
     std::swap(st.batch, st.flushing);
     st.batch.clear();
     st.flush_running = true;
-    st.flush_task.run([this] { (void)flushBatch(); });
+    st.flush_task.run([this] { state_->flush_status = flushBatch(); });
   }
   return Status::ok();
 }
@@ -480,6 +478,8 @@ Status StreamRenderer::flushBatch() {
       slot = st.free_slots.back();
       st.free_slots.pop_back();
     } else {
+      if (st.tets.size() >= kMaxHeldSlots)
+        return invalidData("renderer: more than " + std::to_string(kMaxHeldSlots) + " tetrahedra held at once");
       slot = st.tets.grow();
     }
     HeldTet& t = st.tets[slot];
@@ -498,21 +498,19 @@ Status StreamRenderer::flushBatch() {
       const auto [entry, inserted] = st.faces.tryEmplace(keys[k]);
       FaceEntry& e = *entry;
       if (inserted) {
-        e.tet = slot;
-        e.face = static_cast<int8_t>(k);
+        e.setTet(slot, k);
         continue;
       }
       st.takeWaiters(e, [&](uint32_t c) { triggers.push_back({c, slot, k}); });
-      if (e.tet != kNone && e.tet != slot) {
-        HeldTet& other = st.tets[e.tet];
-        t.nbr[k] = e.tet;
-        t.nbr_face[k] = static_cast<uint8_t>(e.face);
-        other.nbr[e.face] = slot;
-        other.nbr_face[e.face] = static_cast<uint8_t>(k);
+      if (e.hasTet() && e.tet() != slot) {
+        HeldTet& other = st.tets[e.tet()];
+        t.nbr[k] = e.tet();
+        t.nbr_face[k] = static_cast<uint8_t>(e.face());
+        other.nbr[e.face()] = slot;
+        other.nbr_face[e.face()] = static_cast<uint8_t>(k);
         st.faces.erase(keys[k]);
       } else {
-        e.tet = slot;
-        e.face = static_cast<int8_t>(k);
+        e.setTet(slot, k);
       }
     }
   }
@@ -557,10 +555,7 @@ Status StreamRenderer::flushBatch() {
   for (const std::vector<Trigger>& list : waits) {
     for (const Trigger& wt : list) {
       const auto [e, inserted] = st.faces.tryEmplace(st.tets[wt.tet].key(wt.face));
-      if (inserted) {
-        e->tet = wt.tet;
-        e->face = static_cast<int8_t>(wt.face);
-      }
+      if (inserted) e->setTet(wt.tet, wt.face);
       st.addWaiter(*e, wt.cursor);
     }
   }
@@ -580,6 +575,7 @@ Status StreamRenderer::endLevel() {
   if (st.phase == State::Phase::kBoundary) GTN_RETURN_IF_ERROR(endBoundary());
   if (st.phase != State::Phase::kTets) return invalidData("renderer: endLevel out of order");
   st.waitFlush();
+  GTN_RETURN_IF_ERROR(st.flush_status);
   std::swap(st.batch, st.flushing);
   st.batch.clear();
   GTN_RETURN_IF_ERROR(flushBatch());
