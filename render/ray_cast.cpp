@@ -237,13 +237,23 @@ void shearTetGeom(TetGeom& g, const ShearFrame& frame) {
 }
 
 namespace {
+// The two ways of holding a tetrahedron, seen alike by shearedCorners and exitFaceOf: corner i's
+// position, as sheared by shearTetGeom (when g.sheared) or as given, and its scalar.
+inline const double* shearedOf(const TetGeom& g, int i) { return g.p[i]; }
+inline const double* positionOf(const TetGeom& g, int i) { return g.p[i]; }
+inline double scalarOf(const TetGeom& g, int i) { return g.s[i]; }
+inline const double* shearedOf(const TetCorners& g, int i) { return g.corner[i]->q; }
+inline const double* positionOf(const TetCorners& g, int i) { return g.corner[i]->p; }
+inline double scalarOf(const TetCorners& g, int i) { return g.corner[i]->s; }
+
 // The corners of g relative to the ray, in its sheared frame.
-inline void shearedCorners(const PreparedRay& r, const TetGeom& g, double S[4][3]) {
+template <class Tet>
+inline void shearedCorners(const PreparedRay& r, const Tet& g, double S[4][3]) {
   if (g.sheared) {
     for (int i = 0; i < 4; ++i)
-      for (int c = 0; c < 3; ++c) S[i][c] = g.p[i][c] - r.origin[c];
+      for (int c = 0; c < 3; ++c) S[i][c] = shearedOf(g, i)[c] - r.origin[c];
   } else {
-    for (int i = 0; i < 4; ++i) shear(r, g.p[i], S[i]);
+    for (int i = 0; i < 4; ++i) shear(r, positionOf(g, i), S[i]);
   }
 }
 }  // namespace
@@ -261,12 +271,14 @@ void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing ou
   }
 }
 
-int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Crossing* out) {
+namespace {
+template <class Tet>
+int exitFaceOf(const PreparedRay& r, const Tet& g, int entry, bool forward, Crossing* out) {
   // crossTetFaces' crossings, inlined: the scalar is interpolated for the chosen face only.
   double S[4][3];
   shearedCorners(r, g, S);
   int best = -1;
-  double best_terms[3] = {0, 0, 0}, best_det = 1;
+  double best_t = 0, best_terms[3] = {0, 0, 0}, best_det = 1;
   for (int k = 0; k < 4; ++k) {
     if (k == entry) continue;
     const uint8_t* o = g.order[k];
@@ -278,9 +290,9 @@ int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Cr
     const double t = (u * A[2] + v * B[2] + w * C[2]) / det;
     // Where the ray passes through an edge or vertex of the entry face, faces sharing it are crossed
     // at the entry point too: the exit is the farthest crossing.
-    if (best < 0 || (forward ? t > out->t : t < out->t)) {
+    if (best < 0 || (forward ? t > best_t : t < best_t)) {
       best = k;
-      out->t = t;
+      best_t = t;
       best_terms[0] = u, best_terms[1] = v, best_terms[2] = w;
       best_det = det;
     }
@@ -288,9 +300,20 @@ int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Cr
   if (best >= 0) {
     const uint8_t* o = g.order[best];
     out->hit = true;
-    out->s = (best_terms[0] * g.s[o[0]] + best_terms[1] * g.s[o[1]] + best_terms[2] * g.s[o[2]]) / best_det;
+    out->t = best_t;
+    out->s = (best_terms[0] * scalarOf(g, o[0]) + best_terms[1] * scalarOf(g, o[1]) +
+              best_terms[2] * scalarOf(g, o[2])) /
+             best_det;
   }
   return best;
+}
+}  // namespace
+
+int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Crossing* out) {
+  return exitFaceOf(r, g, entry, forward, out);
+}
+int exitFace(const PreparedRay& r, const TetCorners& g, int entry, bool forward, Crossing* out) {
+  return exitFaceOf(r, g, entry, forward, out);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -148,10 +148,26 @@ void shearTetGeom(TetGeom& g, const ShearFrame& frame);
 // must be the one shearTetGeom used.
 void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]);
 
+// A tetrahedron whose corners are records shared with its neighbours (the streaming renderer's
+// vertices: held tetrahedra need no copies of their corners). `order` as TetGeom's; when `sheared`,
+// the corners' q (shearPoint positions, as shearTetGeom computes them) are used, else their p.
+struct CornerRecord {
+  double p[3];
+  double q[3];
+  double s;
+};
+struct TetCorners {
+  const CornerRecord* const* corner;  // four
+  const uint8_t (*order)[3];
+  bool sheared;
+};
+
 // Where a ray inside tetrahedron `g`, having come in through local face `entry` (kTetFace numbering),
 // leaves it: forward (increasing t) or backward. Returns the local face, or -1 when no other face is
-// crossed (the ray only grazed the tetrahedron, numerically). `out->t` is not clamped.
+// crossed (the ray only grazed the tetrahedron, numerically). `out->t` is not clamped. The two forms
+// compute the same crossings, bit for bit.
 int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Crossing* out);
+int exitFace(const PreparedRay& r, const TetCorners& g, int entry, bool forward, Crossing* out);
 
 // Premultiplied colour and opacity of a part of a ray.
 struct Rgba {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <unordered_map>
 #include <vector>
@@ -69,14 +70,56 @@ struct FaceEntry {
 // Held tetrahedra have slots below this, so that (slot << 2) | face fits FaceEntry::held.
 constexpr uint32_t kMaxHeldSlots = 0x3FFFFFFFu;
 
-struct HeldTet {
-  TetGeom g;
-  uint32_t v[4];
-  uint32_t nbr[4];
-  uint8_t nbr_face[4];
+// A vertex as the renderer keeps it, shared by the live-vertex map and by every arrived or held
+// tetrahedron that has it as a corner: held tetrahedra point to their corners instead of copying
+// them (a held tetrahedron took 192 bytes, now 64, and neighbours share corners). One cache line.
+//
+// `refs` counts 1 while the vertex is live plus one per held tetrahedron. The two threads never
+// change it at once: the rendering thread counts the held tetrahedra while it renders a batch, and
+// the decoder's thread drops the live count between batches (State::settle), once the batch that was
+// filling when the vertex retired has been rendered (it is the last that can have the vertex as a
+// corner). A vertex whose count reaches zero is freed between batches too.
+struct alignas(64) PooledVertex : CornerRecord {  // q: orthographic, set once the frame is known
+  uint32_t id;
+  int32_t refs;
+};
+
+// The vertices, in chunks of fixed size (addresses stay put as the pool grows), with a free list.
+// Used by the decoder's thread only.
+class VertexPool {
+ public:
+  PooledVertex* allocate() {
+    if (!free_.empty()) {
+      PooledVertex* v = free_.back();
+      free_.pop_back();
+      return v;
+    }
+    if (chunks_.empty() || used_ == kChunk) {
+      chunks_.push_back(std::unique_ptr<PooledVertex[]>(new PooledVertex[kChunk]));
+      used_ = 0;
+    }
+    return &chunks_.back()[used_++];
+  }
+  void free(PooledVertex* v) { free_.push_back(v); }
+
+ private:
+  static constexpr size_t kChunk = 1024;  // 64 KiB
+  std::vector<std::unique_ptr<PooledVertex[]>> chunks_;
+  size_t used_ = 0;  // entries of the last chunk handed out
+  std::vector<PooledVertex*> free_;
+};
+
+// One cache line each.
+struct alignas(64) HeldTet {
+  CornerRecord* corner[4];  // PooledVertex; corner[0] is null while the slot is free
+  uint32_t nbr[4];          // (neighbour's slot << 2) | its local face, or kOpenFace / kReleasedFace
+  uint8_t order[4][3];      // TetGeom::order
   std::atomic<int32_t> pending{0};
-  bool alive = false;
-  FaceKey key(int k) const { return makeKey(v[kTetFace[k][0]], v[kTetFace[k][1]], v[kTetFace[k][2]]); }
+  bool alive() const { return corner[0] != nullptr; }
+  PooledVertex* vertex(int i) const { return static_cast<PooledVertex*>(corner[i]); }
+  FaceKey key(int k) const {
+    return makeKey(vertex(kTetFace[k][0])->id, vertex(kTetFace[k][1])->id, vertex(kTetFace[k][2])->id);
+  }
 };
 
 // The held tetrahedra, in chunks of fixed size: addresses stay put as the pool grows (HeldTet holds an
@@ -98,14 +141,9 @@ class HeldPool {
   uint32_t size_ = 0;
 };
 
-struct VertexRec {
-  double p[3];
-  double s;
-};
-
 struct ArrivedTet {
-  uint32_t v[4];
-  TetGeom g;
+  PooledVertex* corner[4];
+  uint8_t order[4][3];  // TetGeom::order, set when the batch is rendered
   int32_t rays = 0;
 };
 
@@ -122,7 +160,11 @@ struct StreamRenderer::State {
   Phase phase = Phase::kIdle;
   LevelHeader header;
   ScalarReader reader;
-  FlatHashMap<uint32_t, VertexRec, IdHash> vertices;
+  VertexPool pool;
+  FlatHashMap<uint32_t, PooledVertex*, IdHash> ids;  // the live vertices (decoder's thread)
+  std::vector<PooledVertex*> retired;           // retired while `batch` was filled
+  std::vector<PooledVertex*> retired_flushing;  // retired while `flushing` was filled
+  std::vector<PooledVertex*> unheld;  // counts that reached zero in the rendering thread, to free
   std::vector<std::array<uint32_t, 3>> boundary;
   RaySegments rays;
   // Rays are not stored per pixel (that would be the largest structure at 256x256): prepareRay is
@@ -170,6 +212,17 @@ struct StreamRenderer::State {
     flush_running = false;
   }
   Status flush_status;  // what the last flushBatch returned (it runs on another thread)
+  // Between batches, with no flush running: the vertices retired while the batch just rendered was
+  // filled stop counting as live, and those that nothing holds are freed.
+  void settle() {
+    flushing.clear();
+    for (PooledVertex* v : retired_flushing)
+      if (--v->refs == 0) pool.free(v);
+    retired_flushing.swap(retired);
+    retired.clear();
+    for (PooledVertex* v : unheld) pool.free(v);
+    unheld.clear();
+  }
   std::atomic<uint64_t> lost{0};
 
   void release(uint32_t slot);
@@ -181,13 +234,17 @@ struct HeldMesh {
   StreamRenderer::State& st;
   tbb::enumerable_thread_specific<std::vector<uint32_t>>& zeroed;
 
-  const TetGeom& geom(uint32_t t) { return st.tets[t].g; }
+  // Orthographic views use the corners' sheared positions, as shearTetGeom would.
+  TetCorners geom(uint32_t t) const {
+    const HeldTet& h = st.tets[t];
+    return {h.corner, h.order, st.shared_frame};
+  }
   Link next(uint32_t t, int face, uint32_t* nt, int* nf) {
     const uint32_t n = st.tets[t].nbr[face];
     if (n == kOpenFace) return Link::kOpen;
     if (n == kReleasedFace) return Link::kReleased;
-    *nt = n;
-    *nf = st.tets[t].nbr_face[face];
+    *nt = n >> 2;
+    *nf = static_cast<int>(n & 3);
     return Link::kLinked;
   }
   void visited(uint32_t t) {
@@ -198,7 +255,7 @@ struct HeldMesh {
 
 void StreamRenderer::State::release(uint32_t slot) {
   HeldTet& t = tets[slot];
-  if (!t.alive) return;
+  if (!t.alive()) return;
   for (int k = 0; k < 4; ++k) {
     const uint32_t n = t.nbr[k];
     if (n == kOpenFace) {
@@ -212,10 +269,14 @@ void StreamRenderer::State::release(uint32_t slot) {
         }
       }
     } else if (n != kReleasedFace) {
-      tets[n].nbr[t.nbr_face[k]] = kReleasedFace;
+      tets[n >> 2].nbr[n & 3] = kReleasedFace;
     }
   }
-  t.alive = false;
+  for (int i = 0; i < 4; ++i) {
+    PooledVertex* v = t.vertex(i);
+    if (--v->refs == 0) unheld.push_back(v);
+  }
+  t.corner[0] = nullptr;
   free_slots.push_back(slot);
   --held;
 }
@@ -233,6 +294,8 @@ Status StreamRenderer::beginLevel(const LevelHeader& header) {
   GTN_ASSIGN_OR_RETURN(state_->reader, ScalarReader::create(header.point_fields, options_.field));
   state_->header = header;
   state_->batch_size = static_cast<size_t>(std::clamp<uint64_t>(header.tets / 64, kMinBatch, kMaxBatch));
+  state_->batch.reserve(state_->batch_size);
+  state_->flushing.reserve(state_->batch_size);
   state_->phase = State::Phase::kBoundary;
   return Status::ok();
 }
@@ -241,13 +304,16 @@ Status StreamRenderer::vertex(uint32_t id, const double xyz[3], const uint8_t* v
   State& st = *state_;
   if (st.phase != State::Phase::kBoundary && st.phase != State::Phase::kTets)
     return invalidData("renderer: vertex event outside a level");
-  VertexRec rec;
-  for (int i = 0; i < 3; ++i) rec.p[i] = xyz[i];
-  rec.s = st.reader.read(values);
-  const auto [slot, inserted] = st.vertices.tryEmplace(id);
+  const auto [slot, inserted] = st.ids.tryEmplace(id);
   if (!inserted) return invalidData("renderer: vertex " + std::to_string(id) + " emitted twice");
-  *slot = rec;
-  stats_.peak_vertices = std::max<uint64_t>(stats_.peak_vertices, st.vertices.size());
+  PooledVertex* v = st.pool.allocate();
+  *slot = v;
+  for (int i = 0; i < 3; ++i) v->p[i] = xyz[i];
+  v->s = st.reader.read(values);
+  if (st.shared_frame) shearPoint(st.frame, v->p, v->q);
+  v->id = id;
+  v->refs = 1;
+  stats_.peak_vertices = std::max<uint64_t>(stats_.peak_vertices, st.ids.size());
   return Status::ok();
 }
 
@@ -255,7 +321,7 @@ Status StreamRenderer::boundaryTriangle(const uint32_t v[3]) {
   State& st = *state_;
   if (st.phase != State::Phase::kBoundary) return invalidData("renderer: boundary triangle after the boundary ended");
   for (int i = 0; i < 3; ++i)
-    if (!st.vertices.find(v[i]))
+    if (!st.ids.find(v[i]))
       return invalidData("renderer: boundary triangle " + std::to_string(st.boundary.size()) +
                          " refers to vertex " + std::to_string(v[i]) + " not yet emitted");
   st.boundary.push_back({v[0], v[1], v[2]});
@@ -274,7 +340,7 @@ Status StreamRenderer::endBoundary() {
     for (int i = 0; i < 3; ++i) {
       auto [it, inserted] = local.emplace(tri[i], static_cast<uint32_t>(surface.points.size()));
       if (inserted) {
-        const VertexRec& v = *st.vertices.find(tri[i]);
+        const PooledVertex& v = **st.ids.find(tri[i]);
         surface.points.push_back({v.p[0], v.p[1], v.p[2]});
         surface.scalars.push_back(v.s);
       }
@@ -300,6 +366,9 @@ Status StreamRenderer::endBoundary() {
     for (int i = 0; i < 3; ++i) st.ortho_dir[i] = r0.d[i];
     st.ortho_t0 = r0.o[0] * r0.d[0] + r0.o[1] * r0.d[1] + r0.o[2] * r0.d[2];
     st.depth_slack = 1e-9 * setup_.camera.radius();
+  }
+  if (st.shared_frame) {
+    st.ids.forEach([&](uint32_t, PooledVertex* v) { shearPoint(st.frame, v->p, v->q); });
   }
   st.segs.resize(st.rays.segments.size());
   st.wait_next.assign(2 * st.segs.size(), kNone);
@@ -336,13 +405,11 @@ Status StreamRenderer::tet(const uint32_t v[4], const uint8_t*) {
   if (st.phase != State::Phase::kTets) return invalidData("renderer: tetrahedron before the end of the boundary");
   ArrivedTet a;
   for (int i = 0; i < 4; ++i) {
-    const VertexRec* rec = st.vertices.find(v[i]);
-    if (!rec)
+    PooledVertex* const* found = st.ids.find(v[i]);
+    if (!found)
       return invalidData("renderer: tetrahedron " + std::to_string(stats_.tets) + " refers to vertex " +
                          std::to_string(v[i]) + ", not emitted or already retired");
-    a.v[i] = v[i];
-    for (int c = 0; c < 3; ++c) a.g.p[i][c] = rec->p[c];
-    a.g.s[i] = rec->s;
+    a.corner[i] = *found;
   }
   ++stats_.tets;
   st.batch.push_back(a);
@@ -351,8 +418,8 @@ Status StreamRenderer::tet(const uint32_t v[4], const uint8_t*) {
     // touches the vertex map and `batch`, the flush everything else.
     st.waitFlush();
     GTN_RETURN_IF_ERROR(st.flush_status);
+    st.settle();
     std::swap(st.batch, st.flushing);
-    st.batch.clear();
     st.flush_running = true;
     st.flush_task.run([this] { state_->flush_status = flushBatch(); });
   }
@@ -360,7 +427,11 @@ Status StreamRenderer::tet(const uint32_t v[4], const uint8_t*) {
 }
 
 Status StreamRenderer::retireVertex(uint32_t id) {
-  state_->vertices.erase(id);
+  State& st = *state_;
+  PooledVertex* const* found = st.ids.find(id);
+  if (!found) return Status::ok();
+  st.retired.push_back(*found);
+  st.ids.erase(id);
   return Status::ok();
 }
 
@@ -374,31 +445,36 @@ Status StreamRenderer::flushBatch() {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, st.flushing.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ArrivedTet& a = st.flushing[i];
-      finishTetGeom(a.g);
-      const double* corners[4] = {a.g.p[0], a.g.p[1], a.g.p[2], a.g.p[3]};
+      TetGeom g;
+      for (int k = 0; k < 4; ++k) {
+        for (int c = 0; c < 3; ++c) g.p[k][c] = a.corner[k]->p[c];
+        g.s[k] = a.corner[k]->s;
+      }
+      finishTetGeom(g);
+      std::memcpy(a.order, g.order, sizeof(a.order));
+      const double* corners[4] = {g.p[0], g.p[1], g.p[2], g.p[3]};
       int box[4];
       a.rays = 0;
-      // Orthographic: the corners' screen positions and depths, before they are replaced by their
-      // sheared positions (every held tetrahedron is sheared: cursors may enter one no ray counts).
       double sx[4], sy[4], dmin = 1e300, dmax = -1e300;
-      const bool seen = pixelFootprint(cam, corners, 4, box, sx, sy);
+      if (!pixelFootprint(cam, corners, 4, box, sx, sy)) continue;
       if (st.shared_frame) {
-        if (seen) {
-          for (int k = 0; k < 4; ++k) {
-            const double d = (a.g.p[k][0] * st.ortho_dir[0] + a.g.p[k][1] * st.ortho_dir[1] +
-                              a.g.p[k][2] * st.ortho_dir[2]) - st.ortho_t0;
-            dmin = std::min(dmin, d), dmax = std::max(dmax, d);
-          }
+        // Orthographic: the corners' depths, then their sheared positions (the pool's, computed once
+        // per vertex: shearTetGeom's values).
+        for (int k = 0; k < 4; ++k) {
+          const double d = (g.p[k][0] * st.ortho_dir[0] + g.p[k][1] * st.ortho_dir[1] +
+                            g.p[k][2] * st.ortho_dir[2]) - st.ortho_t0;
+          dmin = std::min(dmin, d), dmax = std::max(dmax, d);
         }
-        shearTetGeom(a.g, st.frame);
+        for (int k = 0; k < 4; ++k)
+          for (int c = 0; c < 3; ++c) g.p[k][c] = a.corner[k]->q[c];
+        g.sheared = true;
       }
-      if (!seen) continue;
       // The rays of pixel p whose uncovered part overlaps the tetrahedron, by the exact crossings.
       auto exactCount = [&](size_t p, uint32_t s0, uint32_t s1) {
         const PreparedRay ray = st.pixelRay(p, cam);
         double tmin = 1e300, tmax = -1e300;
         Crossing x[4];
-        crossTetFaces(ray, a.g, -1, x);
+        crossTetFaces(ray, g, -1, x);
         for (int k = 0; k < 4; ++k) {
           if (!x[k].hit) continue;
           tmin = std::min(tmin, x[k].t);
@@ -466,7 +542,7 @@ Status StreamRenderer::flushBatch() {
     FaceKey keys[4];
     bool needed = a.rays > 0;
     for (int k = 0; k < 4; ++k) {
-      keys[k] = makeKey(a.v[kTetFace[k][0]], a.v[kTetFace[k][1]], a.v[kTetFace[k][2]]);
+      keys[k] = makeKey(a.corner[kTetFace[k][0]]->id, a.corner[kTetFace[k][1]]->id, a.corner[kTetFace[k][2]]->id);
       if (!needed) {
         const FaceEntry* e = st.faces.find(keys[k]);
         if (e && e->waiters != kNone) needed = true;
@@ -483,14 +559,13 @@ Status StreamRenderer::flushBatch() {
       slot = st.tets.grow();
     }
     HeldTet& t = st.tets[slot];
-    t.g = a.g;
     for (int k = 0; k < 4; ++k) {
-      t.v[k] = a.v[k];
+      t.corner[k] = a.corner[k];
+      ++a.corner[k]->refs;
       t.nbr[k] = kOpenFace;
-      t.nbr_face[k] = 0;
     }
+    std::memcpy(t.order, a.order, sizeof(t.order));
     t.pending.store(a.rays, std::memory_order_relaxed);
-    t.alive = true;
     ++st.held;
     ++stats_.tets_held;
     arrived_slots.push_back(slot);
@@ -503,18 +578,14 @@ Status StreamRenderer::flushBatch() {
       }
       st.takeWaiters(e, [&](uint32_t c) { triggers.push_back({c, slot, k}); });
       if (e.hasTet() && e.tet() != slot) {
-        HeldTet& other = st.tets[e.tet()];
-        t.nbr[k] = e.tet();
-        t.nbr_face[k] = static_cast<uint8_t>(e.face());
-        other.nbr[e.face()] = slot;
-        other.nbr_face[e.face()] = static_cast<uint8_t>(k);
+        st.tets[e.tet()].nbr[e.face()] = slot << 2 | static_cast<uint32_t>(k);
+        t.nbr[k] = e.held;
         st.faces.erase(keys[k]);
       } else {
         e.setTet(slot, k);
       }
     }
   }
-  st.flushing.clear();
   stats_.peak_tets_held = std::max(stats_.peak_tets_held, st.held);
 
   // 3. Advance the triggered cursors (parallel over segments; a segment's two cursors in one task).
@@ -566,7 +637,7 @@ Status StreamRenderer::flushBatch() {
     for (uint32_t slot : list)
       if (st.tets[slot].pending.load(std::memory_order_relaxed) <= 0) st.release(slot);
   for (uint32_t slot : arrived_slots)
-    if (st.tets[slot].alive && st.tets[slot].pending.load(std::memory_order_relaxed) <= 0) st.release(slot);
+    if (st.tets[slot].alive() && st.tets[slot].pending.load(std::memory_order_relaxed) <= 0) st.release(slot);
   return Status::ok();
 }
 
@@ -576,8 +647,8 @@ Status StreamRenderer::endLevel() {
   if (st.phase != State::Phase::kTets) return invalidData("renderer: endLevel out of order");
   st.waitFlush();
   GTN_RETURN_IF_ERROR(st.flush_status);
+  st.settle();
   std::swap(st.batch, st.flushing);
-  st.batch.clear();
   GTN_RETURN_IF_ERROR(flushBatch());
   const int w = setup_.camera.width(), h = setup_.camera.height();
   image_ = Image(w, h);

@@ -30,15 +30,16 @@ enum class CursorEnd { kWait, kBoundary, kLost, kMet };
 // Guard against cycling around an edge with zero-length steps.
 constexpr int kMaxZeroSteps = 64;
 
-// `Mesh` provides: `const TetGeom& geom(uint32_t tet)`, `Link next(uint32_t tet, int face, uint32_t*
-// next_tet, int* next_face)` and `void visited(uint32_t tet)`. The cursor enters `tet` through local
-// face `face`. On kWait, *wait_tet/*wait_face say at which face of which tetrahedron it waits.
+// `Mesh` provides: `geom(uint32_t tet)` (a TetGeom or a TetCorners: what exitFace takes), `Link
+// next(uint32_t tet, int face, uint32_t* next_tet, int* next_face)` and `void visited(uint32_t tet)`.
+// The cursor enters `tet` through local face `face`. On kWait, *wait_tet/*wait_face say at which face
+// of which tetrahedron it waits.
 template <class Mesh>
 CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, SegmentState& seg, bool front, uint32_t tet,
                         int face, Mesh& mesh, uint32_t* wait_tet, int* wait_face) {
   int zero_steps = 0;
   for (;;) {
-    const TetGeom& g = mesh.geom(tet);
+    const auto& g = mesh.geom(tet);
     Crossing x;
     const int exit = exitFace(ray, g, face, front, &x);
     mesh.visited(tet);
