@@ -147,11 +147,16 @@ struct ArrivedTet {
   int32_t rays = 0;
 };
 
-struct Trigger {
-  uint32_t cursor;
-  uint32_t tet;
-  int face;
-};
+// A cursor that enters a held tetrahedron through one of its faces, in one word: (cursor << 32) |
+// (slot << 2) | face. Sorted as integers, a segment's two cursors (2 * segment, 2 * segment + 1)
+// come together.
+using Trigger = uint64_t;
+Trigger makeTrigger(uint32_t cursor, uint32_t slot, int face) {
+  return static_cast<uint64_t>(cursor) << 32 | slot << 2 | static_cast<uint32_t>(face);
+}
+uint32_t triggerCursor(Trigger t) { return static_cast<uint32_t>(t >> 32); }
+uint32_t triggerSlot(Trigger t) { return static_cast<uint32_t>(t) >> 2; }
+int triggerFace(Trigger t) { return static_cast<int>(t & 3); }
 
 }  // namespace
 
@@ -224,6 +229,11 @@ struct StreamRenderer::State {
     unheld.clear();
   }
   std::atomic<uint64_t> lost{0};
+  // flushBatch's lists, kept from one batch to the next (cleared, not freed).
+  std::vector<Trigger> triggers;
+  std::vector<uint32_t> arrived_slots;
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> zeroed;  // pending fell to zero
+  tbb::enumerable_thread_specific<std::vector<Trigger>> waits;    // cursors to wait at open faces
 
   void release(uint32_t slot);
 };
@@ -536,8 +546,10 @@ Status StreamRenderer::flushBatch() {
 
   // 2. Hold the tetrahedra some ray needs, link them to held neighbours, collect the cursors waiting
   //    at their faces (sequential: the face map).
-  std::vector<Trigger> triggers;
-  std::vector<uint32_t> arrived_slots;
+  std::vector<Trigger>& triggers = st.triggers;
+  std::vector<uint32_t>& arrived_slots = st.arrived_slots;
+  triggers.clear();
+  arrived_slots.clear();
   for (ArrivedTet& a : st.flushing) {
     FaceKey keys[4];
     bool needed = a.rays > 0;
@@ -576,7 +588,7 @@ Status StreamRenderer::flushBatch() {
         e.setTet(slot, k);
         continue;
       }
-      st.takeWaiters(e, [&](uint32_t c) { triggers.push_back({c, slot, k}); });
+      st.takeWaiters(e, [&](uint32_t c) { triggers.push_back(makeTrigger(c, slot, k)); });
       if (e.hasTet() && e.tet() != slot) {
         st.tets[e.tet()].nbr[e.face()] = slot << 2 | static_cast<uint32_t>(k);
         t.nbr[k] = e.held;
@@ -589,51 +601,58 @@ Status StreamRenderer::flushBatch() {
   stats_.peak_tets_held = std::max(stats_.peak_tets_held, st.held);
 
   // 3. Advance the triggered cursors (parallel over segments; a segment's two cursors in one task).
-  std::sort(triggers.begin(), triggers.end(), [](const Trigger& a, const Trigger& b) { return a.cursor < b.cursor; });
-  std::vector<size_t> groups;
-  for (size_t i = 0; i < triggers.size(); ++i)
-    if (i == 0 || triggers[i].cursor / 2 != triggers[i - 1].cursor / 2) groups.push_back(i);
-  groups.push_back(triggers.size());
-  tbb::enumerable_thread_specific<std::vector<uint32_t>> zeroed;
-  tbb::enumerable_thread_specific<std::vector<Trigger>> waits;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, groups.size() - 1, 8), [&](const tbb::blocked_range<size_t>& r) {
-    HeldMesh mesh{st, zeroed};
-    std::vector<Trigger>& my_waits = waits.local();
-    for (size_t g = r.begin(); g < r.end(); ++g) {
-      const uint32_t si = triggers[groups[g]].cursor / 2;
+  std::sort(triggers.begin(), triggers.end());
+  const size_t num_triggers = triggers.size();
+  auto segmentOf = [&](size_t i) { return triggerCursor(triggers[i]) / 2; };
+  for (auto& list : st.zeroed) list.clear();
+  for (auto& list : st.waits) list.clear();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, num_triggers, 16), [&](const tbb::blocked_range<size_t>& r) {
+    HeldMesh mesh{st, st.zeroed};
+    std::vector<Trigger>& my_waits = st.waits.local();
+    // The range takes the segments whose first trigger it holds.
+    size_t i = r.begin(), end = r.end();
+    while (i > 0 && i < end && segmentOf(i) == segmentOf(i - 1)) ++i;
+    if (i == end) return;
+    while (end < num_triggers && segmentOf(end) == segmentOf(end - 1)) ++end;
+    while (i < end) {
+      const uint32_t si = segmentOf(i);
       SegmentState& seg = st.segs[si];
       const uint32_t pixel = seg.pixel;
       const PreparedRay ray = st.pixelRay(pixel, setup_.camera);
-      for (size_t i = groups[g]; i < groups[g + 1]; ++i) {
-        if (seg.done) break;
-        const Trigger& tr = triggers[i];
-        const bool front = tr.cursor % 2 == 0;
+      for (; i < end && segmentOf(i) == si; ++i) {
+        if (seg.done) continue;
+        const Trigger tr = triggers[i];
+        const uint32_t cursor = triggerCursor(tr);
+        const bool front = cursor % 2 == 0;
         if (!(front ? seg.front_active : seg.back_active)) continue;
         uint32_t wait_tet = 0;
         int wait_face = 0;
-        const CursorEnd end = advanceCursor(setup_, ray, seg, front, tr.tet, tr.face, mesh, &wait_tet, &wait_face);
-        if (end == CursorEnd::kWait) {
-          my_waits.push_back({tr.cursor, wait_tet, wait_face});
-        } else if (end != CursorEnd::kMet) {
+        const CursorEnd end_state =
+            advanceCursor(setup_, ray, seg, front, triggerSlot(tr), triggerFace(tr), mesh, &wait_tet, &wait_face);
+        if (end_state == CursorEnd::kWait) {
+          my_waits.push_back(makeTrigger(cursor, wait_tet, wait_face));
+        } else if (end_state != CursorEnd::kMet) {
           (front ? seg.front_active : seg.back_active) = false;
-          if (end == CursorEnd::kLost) st.lost.fetch_add(1, std::memory_order_relaxed);
+          if (end_state == CursorEnd::kLost) st.lost.fetch_add(1, std::memory_order_relaxed);
         }
       }
     }
   });
 
   // 4. Cursors now waiting at open faces of held tetrahedra.
-  for (const std::vector<Trigger>& list : waits) {
-    for (const Trigger& wt : list) {
-      const auto [e, inserted] = st.faces.tryEmplace(st.tets[wt.tet].key(wt.face));
-      if (inserted) e->setTet(wt.tet, wt.face);
-      st.addWaiter(*e, wt.cursor);
+  for (const std::vector<Trigger>& list : st.waits) {
+    for (const Trigger wt : list) {
+      const uint32_t slot = triggerSlot(wt);
+      const int face = triggerFace(wt);
+      const auto [e, inserted] = st.faces.tryEmplace(st.tets[slot].key(face));
+      if (inserted) e->setTet(slot, face);
+      st.addWaiter(*e, triggerCursor(wt));
     }
   }
   stats_.peak_face_entries = std::max<uint64_t>(stats_.peak_face_entries, st.faces.size());
 
   // 5. Release what no ray needs any more.
-  for (const std::vector<uint32_t>& list : zeroed)
+  for (const std::vector<uint32_t>& list : st.zeroed)
     for (uint32_t slot : list)
       if (st.tets[slot].pending.load(std::memory_order_relaxed) <= 0) st.release(slot);
   for (uint32_t slot : arrived_slots)
