@@ -177,6 +177,15 @@ struct StreamRenderer::State {
   PreparedRay pixelRay(size_t p, const Camera& camera) const {
     return prepareRay(camera.ray(static_cast<int>(p % camera.width()), static_cast<int>(p / camera.width())));
   }
+  // Segments do not store their pixel either: it is the last pixel whose range (pixel_start) starts
+  // at or before the segment, searched between the pixels of every kHintStride-th segment.
+  static constexpr uint32_t kHintStride = 64;
+  std::vector<uint32_t> pixel_hint;  // pixel of segment kHintStride * j; then the last pixel
+  uint32_t pixelOf(uint32_t segment) const {
+    const uint32_t* start = rays.pixel_start.data();
+    const uint32_t lo = pixel_hint[segment / kHintStride], hi = pixel_hint[segment / kHintStride + 1];
+    return static_cast<uint32_t>(std::upper_bound(start + lo, start + hi + 1, segment) - start - 1);
+  }
   bool shared_frame = false;            // orthographic: every ray has `frame`
   ShearFrame frame;
   double ortho_dir[3] = {0, 0, 0};  // orthographic: the rays' direction, and the depth of their
@@ -382,24 +391,23 @@ Status StreamRenderer::endBoundary() {
   }
   st.segs.resize(st.rays.segments.size());
   st.wait_next.assign(2 * st.segs.size(), kNone);
+  st.pixel_hint.clear();
+  st.pixel_hint.reserve(st.segs.size() / State::kHintStride + 2);
   for (size_t i = 0; i < st.segs.size(); ++i) {
     const RaySegment& rs = st.rays.segments[i];
     SegmentState& seg = st.segs[i];
     seg.tf = rs.t_near, seg.sf = rs.s_near, seg.tb = rs.t_far, seg.sb = rs.s_far;
-    seg.pixel = rs.pixel;
-    if (!(seg.tf < seg.tb)) {
-      seg.done = true;
-      continue;
-    }
+    if (i % State::kHintStride == 0) st.pixel_hint.push_back(rs.pixel);
+    if (seg.done()) continue;
     const auto& in = st.boundary[rs.entry_tri];
     st.addWaiter(*st.faces.tryEmplace(makeKey(in[0], in[1], in[2])).first, static_cast<uint32_t>(2 * i));
     if (rs.exit_tri != kNoTriangle) {
+      // Without an exit triangle the back cursor never waits anywhere: the front covers the segment.
       const auto& out = st.boundary[rs.exit_tri];
       st.addWaiter(*st.faces.tryEmplace(makeKey(out[0], out[1], out[2])).first, static_cast<uint32_t>(2 * i + 1));
-    } else {
-      seg.back_active = false;
     }
   }
+  st.pixel_hint.push_back(static_cast<uint32_t>(st.rays.pixel_start.size() - 2));
   stats_.segments = st.segs.size();
   // The segments' states hold what is left of them; the pixels keep their ranges (pixel_start).
   st.rays.segments.clear();
@@ -494,7 +502,7 @@ Status StreamRenderer::flushBatch() {
         if (tmin > tmax) return n;
         for (uint32_t s = s0; s < s1; ++s) {
           const SegmentState& seg = st.segs[s];
-          if (!seg.done && seg.tf <= tmax && tmin <= seg.tb) ++n;
+          if (!seg.done() && seg.tf <= tmax && tmin <= seg.tb) ++n;
         }
         return n;
       };
@@ -534,7 +542,7 @@ Status StreamRenderer::flushBatch() {
           if (row_inside && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
           if (row_inside && xc > xl + kSure && xc < xr - kSure && s1 == s0 + 1) {  // clearly inside
             const SegmentState& seg = st.segs[s0];
-            if (!seg.done && seg.tf <= dmax && dmin <= seg.tb) ++count;
+            if (!seg.done() && seg.tf <= dmax && dmin <= seg.tb) ++count;
             continue;
           }
           count += exactCount(p, s0, s1);
@@ -617,23 +625,22 @@ Status StreamRenderer::flushBatch() {
     while (i < end) {
       const uint32_t si = segmentOf(i);
       SegmentState& seg = st.segs[si];
-      const uint32_t pixel = seg.pixel;
-      const PreparedRay ray = st.pixelRay(pixel, setup_.camera);
+      const PreparedRay ray = st.pixelRay(st.pixelOf(si), setup_.camera);
+      // A cursor that stopped (met, boundary, lost) waits nowhere, so only waiting cursors come here;
+      // one may find its segment done by its partner meanwhile.
       for (; i < end && segmentOf(i) == si; ++i) {
-        if (seg.done) continue;
+        if (seg.done()) continue;
         const Trigger tr = triggers[i];
         const uint32_t cursor = triggerCursor(tr);
         const bool front = cursor % 2 == 0;
-        if (!(front ? seg.front_active : seg.back_active)) continue;
         uint32_t wait_tet = 0;
         int wait_face = 0;
         const CursorEnd end_state =
             advanceCursor(setup_, ray, seg, front, triggerSlot(tr), triggerFace(tr), mesh, &wait_tet, &wait_face);
         if (end_state == CursorEnd::kWait) {
           my_waits.push_back(makeTrigger(cursor, wait_tet, wait_face));
-        } else if (end_state != CursorEnd::kMet) {
-          (front ? seg.front_active : seg.back_active) = false;
-          if (end_state == CursorEnd::kLost) st.lost.fetch_add(1, std::memory_order_relaxed);
+        } else if (end_state == CursorEnd::kLost) {
+          st.lost.fetch_add(1, std::memory_order_relaxed);
         }
       }
     }

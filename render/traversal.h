@@ -15,13 +15,13 @@
 
 namespace gtn::render_internal {
 
+// 96 bytes: the streaming renderer keeps one per segment of the image, for the whole level.
 struct SegmentState {
   double tf = 0, sf = 0;  // front cursor: position and scalar at its crossing
   double tb = 0, sb = 0;  // back cursor
   Rgba front, back;
-  bool front_active = true, back_active = true;  // may still move
-  bool done = false;                              // the cursors met
-  uint32_t pixel = 0;                             // whose ray (the streaming renderer's)
+  // The cursors met (advanceCursor then sets tf = tb), or the segment was empty from the start.
+  bool done() const { return !(tf < tb); }
 };
 
 enum class Link { kLinked, kOpen, kBoundary, kReleased };
@@ -51,7 +51,6 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
       zero_steps = t_out == seg.tf ? zero_steps + 1 : 0;
       if (t_out >= limit) {
         seg.tf = limit;
-        seg.done = true;
         return CursorEnd::kMet;
       }
       seg.tf = t_out;
@@ -63,7 +62,6 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
       zero_steps = t_out == seg.tb ? zero_steps + 1 : 0;
       if (t_out <= limit) {
         seg.tb = limit;
-        seg.done = true;
         return CursorEnd::kMet;
       }
       seg.tb = t_out;
