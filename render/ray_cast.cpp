@@ -1,10 +1,10 @@
 #include "render/ray_cast.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -439,27 +439,25 @@ bool pixelFootprint(const Camera& camera, const double* const* points, int n, in
 }
 
 namespace {
+// A crossing of a pixel's ray with a boundary triangle; the pixel is where it lies in the array.
 struct Hit {
-  uint32_t pixel;
-  uint32_t tri;
   double t, s;
+  uint32_t tri;
   bool leaving;
 };
-}  // namespace
 
-RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
-  const int w = camera.width(), h = camera.height();
-  const size_t num_pixels = static_cast<size_t>(w) * h;
-  // 1. Each triangle against the pixels of its screen footprint (parallel over triangles): a
-  //    triangle covers a few pixels, so this tests far fewer pairs than pixels against bins.
-  tbb::enumerable_thread_specific<std::vector<Hit>> local_hits;
+// Calls f(pixel, triangle, crossing, leaving) for every crossing of a pixel's ray with a boundary
+// triangle (parallel over triangles, so in no particular order): each triangle against the pixels
+// of its screen footprint, which tests far fewer pairs than pixels against bins.
+template <class F>
+void forEachCrossing(const Camera& camera, const BoundarySurface& surface, F&& f) {
+  const int w = camera.width();
   // Orthographic rays share one direction, hence one shear frame: a triangle's canonical order and
   // sheared corners are then computed once, and each pixel only shears its ray's origin. The
   // arithmetic is crossTriangle's, step for step, so the crossings are the same bits.
   const bool ortho = camera.options().projection == Projection::kOrthographic;
   const ShearFrame frame = prepareRay(camera.ray(0, 0)).frame;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.triangles.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-    std::vector<Hit>& hits = local_hits.local();
     for (size_t i = r.begin(); i < r.end(); ++i) {
       const auto& tri = surface.triangles[i];
       const double* a = surface.points[tri[0]].data();
@@ -505,95 +503,140 @@ RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
           // Facing from the outward normal of the triangle as given.
           const double dn = n[0] * ray.ray.d[0] + n[1] * ray.ray.d[1] + n[2] * ray.ray.d[2];
           if (dn == 0) continue;
-          hits.push_back({static_cast<uint32_t>(py) * static_cast<uint32_t>(w) + static_cast<uint32_t>(px),
-                          static_cast<uint32_t>(i), x.t, x.s, dn > 0});
+          f(static_cast<uint32_t>(py) * static_cast<uint32_t>(w) + static_cast<uint32_t>(px), static_cast<uint32_t>(i),
+            x, dn > 0);
         }
       }
     }
   });
-  // 2. Group the hits by pixel (counting sort).
-  std::vector<uint32_t> hit_start(num_pixels + 1, 0);
-  size_t total_hits = 0;
-  for (const std::vector<Hit>& list : local_hits) {
-    total_hits += list.size();
-    for (const Hit& x : list) ++hit_start[x.pixel + 1];
-  }
-  for (size_t p = 0; p < num_pixels; ++p) hit_start[p + 1] += hit_start[p];
-  std::vector<Hit> hits(total_hits);
-  {
-    std::vector<uint32_t> fill(hit_start.begin(), hit_start.end() - 1);
-    for (const std::vector<Hit>& list : local_hits)
-      for (const Hit& x : list) hits[fill[x.pixel]++] = x;
-  }
-  local_hits.clear();
+}
 
-  // 3. Pair each pixel's crossings into segments (parallel over pixels; deterministic order).
-  const double eps = 1e-9 * camera.radius();
-  std::vector<uint32_t> seg_count(num_pixels + 1, 0);
-  std::vector<RaySegment> scratch_segments;  // per pixel, written at the pixel's first hit slot
-  scratch_segments.resize(total_hits);       // a pixel has at most as many segments as crossings
+// The boundary's crossings with every pixel's ray, grouped by pixel (hits[start[p], start[p + 1]))
+// and sorted by depth within a pixel. The crossings are computed twice, once to count them per pixel
+// and once to put them in place, so that they are never held twice over.
+struct PixelHits {
+  std::vector<Hit> hits;
+  std::vector<uint32_t> start;
+};
+PixelHits crossBoundary(const Camera& camera, const BoundarySurface& surface) {
+  const size_t num_pixels = static_cast<size_t>(camera.width()) * camera.height();
+  PixelHits out;
+  {
+    std::vector<std::atomic<uint32_t>> fill(num_pixels);
+    forEachCrossing(camera, surface, [&](uint32_t pixel, uint32_t, const Crossing&, bool) {
+      fill[pixel].fetch_add(1, std::memory_order_relaxed);
+    });
+    out.start.resize(num_pixels + 1);
+    out.start[0] = 0;
+    for (size_t p = 0; p < num_pixels; ++p) {
+      out.start[p + 1] = out.start[p] + fill[p].load(std::memory_order_relaxed);
+      fill[p].store(out.start[p], std::memory_order_relaxed);
+    }
+    out.hits.resize(out.start.back());
+    forEachCrossing(camera, surface, [&](uint32_t pixel, uint32_t tri, const Crossing& x, bool leaving) {
+      out.hits[fill[pixel].fetch_add(1, std::memory_order_relaxed)] = {x.t, x.s, tri, leaving};
+    });
+  }
+  // Within a pixel the order is total (a triangle crosses a ray once), so the sort fixes it.
   tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 512), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t p = r.begin(); p < r.end(); ++p) {
-      const uint32_t h0 = hit_start[p], h1 = hit_start[p + 1];
-      if (h0 == h1) continue;
-      Hit* first = hits.data() + h0;
-      Hit* last = hits.data() + h1;
-      std::sort(first, last, [](const Hit& x, const Hit& y) {
+      std::sort(out.hits.data() + out.start[p], out.hits.data() + out.start[p + 1], [](const Hit& x, const Hit& y) {
         if (x.t != y.t) return x.t < y.t;
         if (x.leaving != y.leaving) return x.leaving;
         return x.tri < y.tri;
       });
-      RaySegment* out = scratch_segments.data() + h0;
-      uint32_t made = 0;
-      int depth = 0;
-      for (const Hit* i = first; i < last;) {
-        // A group of crossings at the same depth: at most one step in and one step out.
-        const Hit* j = i;
-        const Hit* enter = nullptr;
-        const Hit* leave = nullptr;
-        while (j < last && j->t - i->t <= eps) {
-          if (j->leaving) {
-            if (!leave) leave = j;
-          } else if (!enter) {
-            enter = j;
-          }
-          ++j;
-        }
-        const int delta = (enter ? 1 : 0) - (leave ? 1 : 0);
-        if (delta > 0) {
-          if (depth == 0) {
-            RaySegment& seg = out[made++];
-            seg = RaySegment();
-            seg.pixel = static_cast<uint32_t>(p);
-            seg.entry_tri = enter->tri;
-            seg.t_near = enter->t;
-            seg.s_near = enter->s;
-          }
-          ++depth;
-        } else if (delta < 0 && depth > 0) {
-          if (--depth == 0) {
-            RaySegment& seg = out[made - 1];
-            seg.exit_tri = leave->tri;
-            seg.t_far = leave->t;
-            seg.s_far = leave->s;
-          }
-        }
-        i = j;
-      }
-      seg_count[p + 1] = made;
     }
   });
+  return out;
+}
+
+// Pairs one pixel's sorted crossings into segments, calling emit(segment) for each in order; returns
+// how many. A group of crossings at the same depth (within eps) counts at most one step in and one
+// step out.
+template <class Emit>
+uint32_t pairCrossings(const Hit* first, const Hit* last, uint32_t pixel, double eps, Emit&& emit) {
+  RaySegment seg;  // the last segment begun: its far end may still come
+  uint32_t made = 0;
+  int depth = 0;
+  for (const Hit* i = first; i < last;) {
+    const Hit* j = i;
+    const Hit* enter = nullptr;
+    const Hit* leave = nullptr;
+    while (j < last && j->t - i->t <= eps) {
+      if (j->leaving) {
+        if (!leave) leave = j;
+      } else if (!enter) {
+        enter = j;
+      }
+      ++j;
+    }
+    const int delta = (enter ? 1 : 0) - (leave ? 1 : 0);
+    if (delta > 0) {
+      if (depth == 0) {
+        if (made++) emit(seg);
+        seg = RaySegment();
+        seg.pixel = pixel;
+        seg.entry_tri = enter->tri;
+        seg.t_near = enter->t;
+        seg.s_near = enter->s;
+      }
+      ++depth;
+    } else if (delta < 0 && depth > 0) {
+      if (--depth == 0) {
+        seg.exit_tri = leave->tri;
+        seg.t_far = leave->t;
+        seg.s_far = leave->s;
+      }
+    }
+    i = j;
+  }
+  if (made) emit(seg);
+  return made;
+}
+
+// pixel_start from the crossings: the segments of each pixel counted (parallel), then summed.
+std::vector<uint32_t> segmentStarts(const PixelHits& ph, double eps) {
+  const size_t num_pixels = ph.start.size() - 1;
+  std::vector<uint32_t> start(num_pixels + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 512), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t p = r.begin(); p < r.end(); ++p) {
+      const Hit* hits = ph.hits.data();
+      start[p + 1] = pairCrossings(hits + ph.start[p], hits + ph.start[p + 1], static_cast<uint32_t>(p), eps,
+                                   [](const RaySegment&) {});
+    }
+  });
+  for (size_t p = 0; p < num_pixels; ++p) start[p + 1] += start[p];
+  return start;
+}
+}  // namespace
+
+RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
+  const double eps = 1e-9 * camera.radius();
+  const PixelHits ph = crossBoundary(camera, surface);
   RaySegments result;
-  result.pixel_start.resize(num_pixels + 1);
-  result.pixel_start[0] = 0;
-  for (size_t p = 0; p < num_pixels; ++p) result.pixel_start[p + 1] = result.pixel_start[p] + seg_count[p + 1];
+  result.pixel_start = segmentStarts(ph, eps);
   result.segments.resize(result.pixel_start.back());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t p = r.begin(); p < r.end(); ++p)
-      std::copy_n(scratch_segments.data() + hit_start[p], seg_count[p + 1],
-                  result.segments.data() + result.pixel_start[p]);
+  const size_t num_pixels = ph.start.size() - 1;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 512), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t p = r.begin(); p < r.end(); ++p) {
+      RaySegment* out = result.segments.data() + result.pixel_start[p];
+      pairCrossings(ph.hits.data() + ph.start[p], ph.hits.data() + ph.start[p + 1], static_cast<uint32_t>(p), eps,
+                    [&](const RaySegment& seg) { *out++ = seg; });
+    }
   });
   return result;
+}
+
+void castBoundary(const Camera& camera, const BoundarySurface& surface, std::vector<uint32_t>* pixel_start,
+                  SegmentSink& sink) {
+  const double eps = 1e-9 * camera.radius();
+  const PixelHits ph = crossBoundary(camera, surface);
+  *pixel_start = segmentStarts(ph, eps);
+  sink.begin(pixel_start->back());
+  const size_t num_pixels = ph.start.size() - 1;
+  for (size_t p = 0; p < num_pixels; ++p)
+    pairCrossings(ph.hits.data() + ph.start[p], ph.hits.data() + ph.start[p + 1], static_cast<uint32_t>(p), eps,
+                  [&](const RaySegment& seg) { sink.segment(seg); });
 }
 
 std::pair<double, double> boundaryRange(const BoundarySurface& surface) {

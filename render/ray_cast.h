@@ -213,6 +213,19 @@ struct RaySegments {
 };
 RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface);
 
+// Receives castBoundary's segments one at a time, in order, so that they need not be stored together.
+class SegmentSink {
+ public:
+  virtual ~SegmentSink() = default;
+  // Called once, before the segments: how many there will be.
+  virtual void begin(size_t segments) = 0;
+  virtual void segment(const RaySegment& segment) = 0;
+};
+// The same segments as above, handed to `sink` (the i-th call is segment i) after *pixel_start is
+// filled.
+void castBoundary(const Camera& camera, const BoundarySurface& surface, std::vector<uint32_t>* pixel_start,
+                  SegmentSink& sink);
+
 // floor and ceil of v as an int, for |v| < 2^31 (callers clamp first): truncation then one step,
 // which costs a few instructions where std::floor and std::ceil are library calls on baseline x86-64.
 inline int floorToInt(double v) {

@@ -171,7 +171,7 @@ struct StreamRenderer::State {
   std::vector<PooledVertex*> retired_flushing;  // retired while `flushing` was filled
   std::vector<PooledVertex*> unheld;  // counts that reached zero in the rendering thread, to free
   std::vector<std::array<uint32_t, 3>> boundary;
-  RaySegments rays;
+  std::vector<uint32_t> pixel_start;  // the segments of pixel p are segs[pixel_start[p], pixel_start[p + 1])
   // Rays are not stored per pixel (that would be the largest structure at 256x256): prepareRay is
   // cheap and deterministic, so recomputing a pixel's ray gives the very same crossings.
   PreparedRay pixelRay(size_t p, const Camera& camera) const {
@@ -182,7 +182,7 @@ struct StreamRenderer::State {
   static constexpr uint32_t kHintStride = 64;
   std::vector<uint32_t> pixel_hint;  // pixel of segment kHintStride * j; then the last pixel
   uint32_t pixelOf(uint32_t segment) const {
-    const uint32_t* start = rays.pixel_start.data();
+    const uint32_t* start = pixel_start.data();
     const uint32_t lo = pixel_hint[segment / kHintStride], hi = pixel_hint[segment / kHintStride + 1];
     return static_cast<uint32_t>(std::upper_bound(start + lo, start + hi + 1, segment) - start - 1);
   }
@@ -272,6 +272,38 @@ struct HeldMesh {
 };
 }  // namespace
 
+namespace {
+// castBoundary's segments, each made a segment state whose cursors wait at its boundary triangles.
+class SegmentBuilder : public SegmentSink {
+ public:
+  explicit SegmentBuilder(StreamRenderer::State& st) : st_(st) {}
+  void begin(size_t segments) override {
+    st_.segs.resize(segments);
+    st_.wait_next.assign(2 * segments, kNone);
+    st_.pixel_hint.clear();
+    st_.pixel_hint.reserve(segments / StreamRenderer::State::kHintStride + 2);
+  }
+  void segment(const RaySegment& rs) override {
+    const size_t i = next_++;
+    SegmentState& seg = st_.segs[i];
+    seg.tf = rs.t_near, seg.sf = rs.s_near, seg.tb = rs.t_far, seg.sb = rs.s_far;
+    if (i % StreamRenderer::State::kHintStride == 0) st_.pixel_hint.push_back(rs.pixel);
+    if (seg.done()) return;
+    const auto& in = st_.boundary[rs.entry_tri];
+    st_.addWaiter(*st_.faces.tryEmplace(makeKey(in[0], in[1], in[2])).first, static_cast<uint32_t>(2 * i));
+    if (rs.exit_tri != kNoTriangle) {
+      // Without an exit triangle the back cursor never waits anywhere: the front covers the segment.
+      const auto& out = st_.boundary[rs.exit_tri];
+      st_.addWaiter(*st_.faces.tryEmplace(makeKey(out[0], out[1], out[2])).first, static_cast<uint32_t>(2 * i + 1));
+    }
+  }
+
+ private:
+  StreamRenderer::State& st_;
+  size_t next_ = 0;
+};
+}  // namespace
+
 void StreamRenderer::State::release(uint32_t slot) {
   HeldTet& t = tets[slot];
   if (!t.alive()) return;
@@ -352,20 +384,23 @@ Status StreamRenderer::endBoundary() {
   if (st.phase != State::Phase::kBoundary) return invalidData("renderer: endBoundary out of order");
   // The boundary surface over its own vertices, in local numbering.
   BoundarySurface surface;
-  std::unordered_map<uint32_t, uint32_t> local;
-  local.reserve(st.boundary.size());
-  for (const auto& tri : st.boundary) {
-    std::array<uint32_t, 3> t;
-    for (int i = 0; i < 3; ++i) {
-      auto [it, inserted] = local.emplace(tri[i], static_cast<uint32_t>(surface.points.size()));
-      if (inserted) {
-        const PooledVertex& v = **st.ids.find(tri[i]);
-        surface.points.push_back({v.p[0], v.p[1], v.p[2]});
-        surface.scalars.push_back(v.s);
+  {
+    std::unordered_map<uint32_t, uint32_t> local;
+    local.reserve(st.boundary.size());
+    surface.triangles.reserve(st.boundary.size());
+    for (const auto& tri : st.boundary) {
+      std::array<uint32_t, 3> t;
+      for (int i = 0; i < 3; ++i) {
+        auto [it, inserted] = local.emplace(tri[i], static_cast<uint32_t>(surface.points.size()));
+        if (inserted) {
+          const PooledVertex& v = **st.ids.find(tri[i]);
+          surface.points.push_back({v.p[0], v.p[1], v.p[2]});
+          surface.scalars.push_back(v.s);
+        }
+        t[i] = it->second;
       }
-      t[i] = it->second;
+      surface.triangles.push_back(t);
     }
-    surface.triangles.push_back(t);
   }
   double bmin[3], bmax[3];
   sceneBox(options_, st.header, surface, bmin, bmax);
@@ -377,7 +412,6 @@ Status StreamRenderer::endBoundary() {
     setup_.transfer.hi = hi;
   }
   buildSampleTable(setup_);
-  st.rays = castBoundary(setup_.camera, surface);
   st.shared_frame = setup_.camera.options().projection == Projection::kOrthographic;
   {
     const Ray r0 = setup_.camera.ray(0, 0);
@@ -389,29 +423,12 @@ Status StreamRenderer::endBoundary() {
   if (st.shared_frame) {
     st.ids.forEach([&](uint32_t, PooledVertex* v) { shearPoint(st.frame, v->p, v->q); });
   }
-  st.segs.resize(st.rays.segments.size());
-  st.wait_next.assign(2 * st.segs.size(), kNone);
-  st.pixel_hint.clear();
-  st.pixel_hint.reserve(st.segs.size() / State::kHintStride + 2);
-  for (size_t i = 0; i < st.segs.size(); ++i) {
-    const RaySegment& rs = st.rays.segments[i];
-    SegmentState& seg = st.segs[i];
-    seg.tf = rs.t_near, seg.sf = rs.s_near, seg.tb = rs.t_far, seg.sb = rs.s_far;
-    if (i % State::kHintStride == 0) st.pixel_hint.push_back(rs.pixel);
-    if (seg.done()) continue;
-    const auto& in = st.boundary[rs.entry_tri];
-    st.addWaiter(*st.faces.tryEmplace(makeKey(in[0], in[1], in[2])).first, static_cast<uint32_t>(2 * i));
-    if (rs.exit_tri != kNoTriangle) {
-      // Without an exit triangle the back cursor never waits anywhere: the front covers the segment.
-      const auto& out = st.boundary[rs.exit_tri];
-      st.addWaiter(*st.faces.tryEmplace(makeKey(out[0], out[1], out[2])).first, static_cast<uint32_t>(2 * i + 1));
-    }
-  }
-  st.pixel_hint.push_back(static_cast<uint32_t>(st.rays.pixel_start.size() - 2));
+  // Each segment straight into its state, its cursors waiting at its boundary triangles: the
+  // segments themselves are never stored together.
+  SegmentBuilder builder(st);
+  castBoundary(setup_.camera, surface, &st.pixel_start, builder);
+  st.pixel_hint.push_back(static_cast<uint32_t>(st.pixel_start.size() - 2));
   stats_.segments = st.segs.size();
-  // The segments' states hold what is left of them; the pixels keep their ranges (pixel_start).
-  st.rays.segments.clear();
-  st.rays.segments.shrink_to_fit();
   st.boundary.clear();
   st.boundary.shrink_to_fit();
   st.phase = State::Phase::kTets;
@@ -511,7 +528,7 @@ Status StreamRenderer::flushBatch() {
         for (int py = box[1]; py <= box[3]; ++py) {
           for (int px = box[0]; px <= box[2]; ++px) {
             const size_t p = static_cast<size_t>(py) * w + px;
-            const uint32_t s0 = st.rays.pixel_start[p], s1 = st.rays.pixel_start[p + 1];
+            const uint32_t s0 = st.pixel_start[p], s1 = st.pixel_start[p + 1];
             if (s0 != s1) count += exactCount(p, s0, s1);
           }
         }
@@ -537,7 +554,7 @@ Status StreamRenderer::flushBatch() {
         for (int px = px0; px <= px1; ++px) {
           const double xc = px + 0.5;
           const size_t p = static_cast<size_t>(py) * w + px;
-          const uint32_t s0 = st.rays.pixel_start[p], s1 = st.rays.pixel_start[p + 1];
+          const uint32_t s0 = st.pixel_start[p], s1 = st.pixel_start[p + 1];
           if (s0 == s1) continue;
           if (row_inside && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
           if (row_inside && xc > xl + kSure && xc < xr - kSure && s1 == s0 + 1) {  // clearly inside
@@ -680,7 +697,7 @@ Status StreamRenderer::endLevel() {
   image_ = Image(w, h);
   for (size_t p = 0; p < static_cast<size_t>(w) * h; ++p) {
     Rgba acc;
-    for (uint32_t s = st.rays.pixel_start[p]; s < st.rays.pixel_start[p + 1]; ++s)
+    for (uint32_t s = st.pixel_start[p]; s < st.pixel_start[p + 1]; ++s)
       acc = over(acc, over(st.segs[s].front, st.segs[s].back));
     toRgb8(acc, &image_.rgb[3 * p]);
   }
