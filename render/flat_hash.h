@@ -4,7 +4,9 @@
 // entries says whether it is used and holds 7 more bits of the key's hash, so a probe compares keys
 // only where those bits agree: a miss reads the byte array alone, and the table can be three quarters
 // full (half the memory of a half-full one) without slowing lookups down. Sizes follow the live set:
-// the table doubles when it would be over three quarters full and halves when it falls under an eighth.
+// the table doubles when it would be over three quarters full and halves when it falls under a
+// sixteenth (the renderer's face map swings between a quarter and three quarters full from one batch
+// to the next: a table that halved at an eighth was reallocated back and forth).
 #pragma once
 
 #include <cstddef>
@@ -72,7 +74,7 @@ class FlatHashMap {
     }
     ctrl_[i] = kEmpty;
     --size_;
-    if (ctrl_.size() > 64 && 8 * size_ < ctrl_.size()) rehash(ctrl_.size() / 2);
+    if (ctrl_.size() > 64 && 16 * size_ < ctrl_.size()) rehash(ctrl_.size() / 2);
     return true;
   }
 
@@ -98,18 +100,25 @@ class FlatHashMap {
   static constexpr uint8_t kEmpty = 0;
   static uint8_t tagOf(size_t h) { return static_cast<uint8_t>(0x80 | ((h >> 24) & 0x7F)); }
 
+  // The live entries are moved out and the old table freed before the new one is allocated, so that
+  // the two tables are never held at once: halving then briefly holds the old table and a sixteenth
+  // of it, not one and a half tables; doubling holds three quarters of one table and the new one.
   void rehash(size_t capacity) {
-    std::vector<Slot> old_slots(capacity);
-    std::vector<uint8_t> old_ctrl(capacity, kEmpty);
-    old_slots.swap(slots_);
-    old_ctrl.swap(ctrl_);
+    std::vector<Slot> live;
+    live.reserve(size_);
+    for (size_t i = 0; i < ctrl_.size(); ++i)
+      if (ctrl_[i] != kEmpty) live.push_back(std::move(slots_[i]));
+    slots_ = std::vector<Slot>();
+    ctrl_ = std::vector<uint8_t>();
+    slots_.resize(capacity);
+    ctrl_.assign(capacity, kEmpty);
     mask_ = capacity - 1;
-    for (size_t i = 0; i < old_ctrl.size(); ++i) {
-      if (old_ctrl[i] == kEmpty) continue;
-      size_t j = hash_(old_slots[i].key) & mask_;
+    for (Slot& e : live) {
+      const size_t h = hash_(e.key);
+      size_t j = h & mask_;
       while (ctrl_[j] != kEmpty) j = (j + 1) & mask_;
-      ctrl_[j] = old_ctrl[i];
-      slots_[j] = std::move(old_slots[i]);
+      ctrl_[j] = tagOf(h);
+      slots_[j] = std::move(e);
     }
   }
 
