@@ -175,7 +175,14 @@ struct StreamRenderer::State {
   // Rays are not stored per pixel (that would be the largest structure at 256x256): prepareRay is
   // cheap and deterministic, so recomputing a pixel's ray gives the very same crossings.
   PreparedRay pixelRay(size_t p, const Camera& camera) const {
-    return prepareRay(camera.ray(static_cast<int>(p % camera.width()), static_cast<int>(p / camera.width())));
+    const Ray r = camera.ray(static_cast<int>(p % camera.width()), static_cast<int>(p / camera.width()));
+    if (!shared_frame) return prepareRay(r);
+    // Orthographic rays share their direction, hence prepareRay's frame: only the origin is sheared.
+    PreparedRay ray;
+    ray.ray = r;
+    ray.frame = frame;
+    shearPoint(frame, r.o, ray.origin);
+    return ray;
   }
   // Segments do not store their pixel either: it is the last pixel whose range (pixel_start) starts
   // at or before the segment, searched between the pixels of every kHintStride-th segment.
