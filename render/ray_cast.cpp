@@ -217,14 +217,19 @@ Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, c
   return crossSheared(S[0], S[1], S[2], s[o[0]], s[o[1]], s[o[2]]);
 }
 
-void finishTetGeom(TetGeom& g) {
+void faceOrders(const double* const corner[4], uint8_t order[4][3]) {
   for (int k = 0; k < 4; ++k) {
     const int* f = kTetFace[k];
-    const double* p[3] = {g.p[f[0]], g.p[f[1]], g.p[f[2]]};
+    const double* p[3] = {corner[f[0]], corner[f[1]], corner[f[2]]};
     int o[3];
     canonicalOrder(p, o);
-    for (int i = 0; i < 3; ++i) g.order[k][i] = static_cast<uint8_t>(f[o[i]]);
+    for (int i = 0; i < 3; ++i) order[k][i] = static_cast<uint8_t>(f[o[i]]);
   }
+}
+
+void finishTetGeom(TetGeom& g) {
+  const double* corner[4] = {g.p[0], g.p[1], g.p[2], g.p[3]};
+  faceOrders(corner, g.order);
   g.sheared = false;
 }
 
@@ -237,7 +242,7 @@ void shearTetGeom(TetGeom& g, const ShearFrame& frame) {
 }
 
 namespace {
-// The two ways of holding a tetrahedron, seen alike by shearedCorners and exitFaceOf: corner i's
+// The two ways of holding a tetrahedron, seen alike by the crossing functions below: corner i's
 // position, as sheared by shearTetGeom (when g.sheared) or as given, and its scalar.
 inline const double* shearedOf(const TetGeom& g, int i) { return g.p[i]; }
 inline const double* positionOf(const TetGeom& g, int i) { return g.p[i]; }
@@ -258,7 +263,9 @@ inline void shearedCorners(const PreparedRay& r, const Tet& g, double S[4][3]) {
 }
 }  // namespace
 
-void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]) {
+namespace {
+template <class Tet>
+void crossTetFacesOf(const PreparedRay& r, const Tet& g, int skip, Crossing out[4]) {
   double S[4][3];
   shearedCorners(r, g, S);
   for (int k = 0; k < 4; ++k) {
@@ -267,8 +274,16 @@ void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing ou
       continue;
     }
     const uint8_t* o = g.order[k];
-    out[k] = crossSheared(S[o[0]], S[o[1]], S[o[2]], g.s[o[0]], g.s[o[1]], g.s[o[2]]);
+    out[k] = crossSheared(S[o[0]], S[o[1]], S[o[2]], scalarOf(g, o[0]), scalarOf(g, o[1]), scalarOf(g, o[2]));
   }
+}
+}  // namespace
+
+void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]) {
+  crossTetFacesOf(r, g, skip, out);
+}
+void crossTetFaces(const PreparedRay& r, const TetCorners& g, int skip, Crossing out[4]) {
+  crossTetFacesOf(r, g, skip, out);
 }
 
 namespace {

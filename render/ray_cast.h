@@ -133,7 +133,7 @@ Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, c
 // must be called once the corners are set (it fixes each face's canonical vertex order, so that it
 // is not recomputed per ray); shearTetGeom() then optionally replaces the corners by their sheared
 // positions in the one frame all rays share (orthographic cameras), and then `frame` must be the
-// rays' frame. Held tetrahedra are most of the streaming renderer's memory: one copy of the corners.
+// rays' frame.
 struct TetGeom {
   double p[4][3];       // corners; after shearTetGeom, their shearPoint positions
   double s[4];
@@ -142,15 +142,13 @@ struct TetGeom {
 };
 void finishTetGeom(TetGeom& g);
 void shearTetGeom(TetGeom& g, const ShearFrame& frame);
-
-// The crossings of the ray with the four faces of `g` (face `skip` left out: not hit), each exactly as
-// crossTriangle computes it, sharing the vertices' transformation. When `g.sheared`, the ray's frame
-// must be the one shearTetGeom used.
-void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]);
+// TetGeom::order for corners at these positions (what finishTetGeom computes).
+void faceOrders(const double* const corner[4], uint8_t order[4][3]);
 
 // A tetrahedron whose corners are records shared with its neighbours (the streaming renderer's
 // vertices: held tetrahedra need no copies of their corners). `order` as TetGeom's; when `sheared`,
 // the corners' q (shearPoint positions, as shearTetGeom computes them) are used, else their p.
+// Every function below that takes a TetGeom or a TetCorners computes the same bits for either.
 struct CornerRecord {
   double p[3];
   double q[3];
@@ -162,10 +160,15 @@ struct TetCorners {
   bool sheared;
 };
 
+// The crossings of the ray with the four faces of `g` (face `skip` left out: not hit), each exactly as
+// crossTriangle computes it, sharing the vertices' transformation. When `g.sheared`, the ray's frame
+// must be the one shearTetGeom used.
+void crossTetFaces(const PreparedRay& r, const TetGeom& g, int skip, Crossing out[4]);
+void crossTetFaces(const PreparedRay& r, const TetCorners& g, int skip, Crossing out[4]);
+
 // Where a ray inside tetrahedron `g`, having come in through local face `entry` (kTetFace numbering),
 // leaves it: forward (increasing t) or backward. Returns the local face, or -1 when no other face is
-// crossed (the ray only grazed the tetrahedron, numerically). `out->t` is not clamped. The two forms
-// compute the same crossings, bit for bit.
+// crossed (the ray only grazed the tetrahedron, numerically). `out->t` is not clamped.
 int exitFace(const PreparedRay& r, const TetGeom& g, int entry, bool forward, Crossing* out);
 int exitFace(const PreparedRay& r, const TetCorners& g, int entry, bool forward, Crossing* out);
 

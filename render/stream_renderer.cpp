@@ -141,10 +141,18 @@ class HeldPool {
   uint32_t size_ = 0;
 };
 
+constexpr uint8_t kNoOrder = 0xFF;  // ArrivedTet::order[0][0] before the orders are computed
+
 struct ArrivedTet {
-  PooledVertex* corner[4];
-  uint8_t order[4][3];  // TetGeom::order, set when the batch is rendered
+  CornerRecord* corner[4];  // PooledVertex
+  uint8_t order[4][3];      // TetGeom::order, computed when the batch is rendered if needed
   int32_t rays = 0;
+  PooledVertex* vertex(int i) const { return static_cast<PooledVertex*>(corner[i]); }
+  void computeOrder() {
+    if (order[0][0] != kNoOrder) return;
+    const double* p[4] = {corner[0]->p, corner[1]->p, corner[2]->p, corner[3]->p};
+    faceOrders(p, order);
+  }
 };
 
 // A cursor that enters a held tetrahedron through one of its faces, in one word: (cursor << 32) |
@@ -487,35 +495,29 @@ Status StreamRenderer::flushBatch() {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, st.flushing.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ArrivedTet& a = st.flushing[i];
-      TetGeom g;
-      for (int k = 0; k < 4; ++k) {
-        for (int c = 0; c < 3; ++c) g.p[k][c] = a.corner[k]->p[c];
-        g.s[k] = a.corner[k]->s;
-      }
-      finishTetGeom(g);
-      std::memcpy(a.order, g.order, sizeof(a.order));
-      const double* corners[4] = {g.p[0], g.p[1], g.p[2], g.p[3]};
-      int box[4];
       a.rays = 0;
+      // The faces' canonical orders are computed only for the exact crossings and for a tetrahedron
+      // that will be held: most arrived tetrahedra need neither.
+      a.order[0][0] = kNoOrder;
+      const double* corners[4] = {a.corner[0]->p, a.corner[1]->p, a.corner[2]->p, a.corner[3]->p};
+      int box[4];
       double sx[4], sy[4], dmin = 1e300, dmax = -1e300;
       if (!pixelFootprint(cam, corners, 4, box, sx, sy)) continue;
       if (st.shared_frame) {
-        // Orthographic: the corners' depths, then their sheared positions (the pool's, computed once
-        // per vertex: shearTetGeom's values).
         for (int k = 0; k < 4; ++k) {
-          const double d = (g.p[k][0] * st.ortho_dir[0] + g.p[k][1] * st.ortho_dir[1] +
-                            g.p[k][2] * st.ortho_dir[2]) - st.ortho_t0;
+          const double d = (corners[k][0] * st.ortho_dir[0] + corners[k][1] * st.ortho_dir[1] +
+                            corners[k][2] * st.ortho_dir[2]) - st.ortho_t0;
           dmin = std::min(dmin, d), dmax = std::max(dmax, d);
         }
-        for (int k = 0; k < 4; ++k)
-          for (int c = 0; c < 3; ++c) g.p[k][c] = a.corner[k]->q[c];
-        g.sheared = true;
       }
+      // Orthographic: the corners' sheared positions (the pool's, computed once per vertex).
+      const TetCorners g{a.corner, a.order, st.shared_frame};
       // The rays of pixel p whose uncovered part overlaps the tetrahedron, by the exact crossings.
       auto exactCount = [&](size_t p, uint32_t s0, uint32_t s1) {
         const PreparedRay ray = st.pixelRay(p, cam);
         double tmin = 1e300, tmax = -1e300;
         Crossing x[4];
+        a.computeOrder();
         crossTetFaces(ray, g, -1, x);
         for (int k = 0; k < 4; ++k) {
           if (!x[k].hit) continue;
@@ -540,6 +542,7 @@ Status StreamRenderer::flushBatch() {
           }
         }
         a.rays = count;
+        if (count > 0) a.computeOrder();
         continue;
       }
       // Orthographic: rasterize the projected tetrahedron row by row. Pixels whose centre lies in
@@ -573,6 +576,7 @@ Status StreamRenderer::flushBatch() {
         }
       }
       a.rays = count;
+      if (count > 0) a.computeOrder();
     }
   });
 
@@ -586,7 +590,7 @@ Status StreamRenderer::flushBatch() {
     FaceKey keys[4];
     bool needed = a.rays > 0;
     for (int k = 0; k < 4; ++k) {
-      keys[k] = makeKey(a.corner[kTetFace[k][0]]->id, a.corner[kTetFace[k][1]]->id, a.corner[kTetFace[k][2]]->id);
+      keys[k] = makeKey(a.vertex(kTetFace[k][0])->id, a.vertex(kTetFace[k][1])->id, a.vertex(kTetFace[k][2])->id);
       if (!needed) {
         const FaceEntry* e = st.faces.find(keys[k]);
         if (e && e->waiters != kNone) needed = true;
@@ -605,9 +609,10 @@ Status StreamRenderer::flushBatch() {
     HeldTet& t = st.tets[slot];
     for (int k = 0; k < 4; ++k) {
       t.corner[k] = a.corner[k];
-      ++a.corner[k]->refs;
+      ++a.vertex(k)->refs;
       t.nbr[k] = kOpenFace;
     }
+    a.computeOrder();  // held for its waiters alone
     std::memcpy(t.order, a.order, sizeof(t.order));
     t.pending.store(a.rays, std::memory_order_relaxed);
     ++st.held;
