@@ -154,11 +154,12 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
         if (seg.tf >= seg.tb) continue;
         CursorEnd end = CursorEnd::kLost;
         if (findFace(rs.entry_tri, &tet, &face))
-          end = advanceCursor(setup, ray, seg, true, tet, face, walker, &wait_tet, &wait_face);
+          end = advanceCursor(setup, ray, seg, true, seg.front, tet, face, walker, &wait_tet, &wait_face);
         if (end == CursorEnd::kLost) lost.fetch_add(1, std::memory_order_relaxed);
         // What the front could not reach, the back cursor covers from the far end.
         if (end != CursorEnd::kMet && rs.exit_tri != kNoTriangle && findFace(rs.exit_tri, &tet, &face)) {
-          if (advanceCursor(setup, ray, seg, false, tet, face, walker, &wait_tet, &wait_face) == CursorEnd::kLost)
+          if (advanceCursor(setup, ray, seg, false, seg.back, tet, face, walker, &wait_tet, &wait_face) ==
+              CursorEnd::kLost)
             lost.fetch_add(1, std::memory_order_relaxed);
         }
         acc = over(acc, over(seg.front, seg.back));

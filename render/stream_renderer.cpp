@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <unordered_map>
 #include <vector>
 
@@ -21,7 +22,7 @@ namespace gtn {
 using render_internal::advanceCursor;
 using render_internal::CursorEnd;
 using render_internal::Link;
-using render_internal::SegmentState;
+using render_internal::SegmentCursors;
 
 namespace {
 
@@ -122,23 +123,82 @@ struct alignas(64) HeldTet {
   }
 };
 
-// The held tetrahedra, in chunks of fixed size: addresses stay put as the pool grows (HeldTet holds an
-// atomic), and an index finds its chunk by a shift. (std::deque fits two HeldTets in a block: a
-// quarter of each block wasted, and an index costs a division.)
-class HeldPool {
+// Entries in chunks of fixed size, with a free list: addresses stay put as the pool grows (HeldTet
+// holds an atomic), and an index finds its chunk by a shift. (std::deque fits two HeldTets in a
+// block: a quarter of each block wasted, and an index costs a division.)
+template <class T, uint32_t kShift>
+class SlotPool {
  public:
-  HeldTet& operator[](uint32_t i) { return chunks_[i >> kShift][i & kMask]; }
-  uint32_t size() const { return size_; }
-  // Index of a new, default-constructed entry at the end.
-  uint32_t grow() {
-    if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<HeldTet[]>(kChunk));
+  T& operator[](uint32_t i) { return chunks_[i >> kShift][i & kMask]; }
+  uint32_t size() const { return size_; }  // indices handed out, freed ones included
+  // A freed index, else a new, default-constructed entry at the end.
+  uint32_t allocate() {
+    if (!free_.empty()) {
+      const uint32_t i = free_.back();
+      free_.pop_back();
+      return i;
+    }
+    if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<T[]>(kChunk));
     return size_++;
+  }
+  void free(uint32_t i) { free_.push_back(i); }
+
+ private:
+  static constexpr uint32_t kChunk = 1u << kShift, kMask = kChunk - 1;
+  std::vector<std::unique_ptr<T[]>> chunks_;
+  std::vector<uint32_t> free_;
+  uint32_t size_ = 0;
+};
+
+// A segment as the streaming renderer keeps it (72 bytes, not SegmentState's 96). The back cursor's
+// colour is kept apart (State::backs) from the batch in which it first stops being blank until the
+// segment is done, when it is composited into `front` (over(over(f, b), 0) is over(f, b), bit for
+// bit): when the most tetrahedra are held, early in the level, most back cursors have composited
+// nothing but transparent samples.
+struct StreamSegment : SegmentCursors {
+  Rgba front;
+  uint32_t back = kNone;  // index into State::backs; none while the back colour is blank (zero)
+};
+
+// Whether c is exactly the zero colour (+0, so that leaving it out changes no bit).
+bool isBlank(const Rgba& c) {
+  const Rgba zero;
+  return std::memcmp(&c, &zero, sizeof(Rgba)) == 0;
+}
+
+// The back colours that are not blank, in chunks with a free list. Entries are taken and given back
+// by the tasks that advance cursors, under a lock (a few thousand times a level); the chunk directory
+// is reserved for one entry per segment, so that it never moves while other tasks read entries.
+class BackColours {
+ public:
+  void reserve(size_t segments) { chunks_.reserve(segments / kChunk + 1); }
+  Rgba& operator[](uint32_t i) { return chunks_[i >> kShift][i & kMask]; }
+  uint32_t allocate(const Rgba& c) {
+    uint32_t i;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!free_.empty()) {
+        i = free_.back();
+        free_.pop_back();
+      } else {
+        if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<Rgba[]>(kChunk));
+        i = size_++;
+      }
+    }
+    (*this)[i] = c;
+    return i;
+  }
+  void free(uint32_t i) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_.push_back(i);
   }
 
  private:
-  static constexpr uint32_t kShift = 9, kChunk = 1u << kShift, kMask = kChunk - 1;
-  std::vector<std::unique_ptr<HeldTet[]>> chunks_;
+  static constexpr uint32_t kShift = 10, kChunk = 1u << kShift, kMask = kChunk - 1;
+  std::vector<std::unique_ptr<Rgba[]>> chunks_;
+  std::vector<uint32_t> free_;
   uint32_t size_ = 0;
+  std::mutex mutex_;
 };
 
 constexpr uint8_t kNoOrder = 0xFF;  // ArrivedTet::order[0][0] before the orders are computed
@@ -206,7 +266,8 @@ struct StreamRenderer::State {
   double ortho_dir[3] = {0, 0, 0};  // orthographic: the rays' direction, and the depth of their
   double ortho_t0 = 0;              // origins' plane: ray parameter t of p = dir . p - t0
   double depth_slack = 0;
-  std::vector<SegmentState> segs;
+  std::vector<StreamSegment> segs;
+  BackColours backs;
   FlatHashMap<FaceKey, FaceEntry, FaceKeyHash> faces;
   // The waiter lists of `faces`: the cursor after each cursor. A cursor waits at one face at a time
   // (it leaves the list when the face's tetrahedron arrives), so one link per cursor is all the lists
@@ -226,8 +287,7 @@ struct StreamRenderer::State {
     }
     e.waiters = kNone;
   }
-  HeldPool tets;
-  std::vector<uint32_t> free_slots;
+  SlotPool<HeldTet, 9> tets;
   uint64_t held = 0;
   std::vector<ArrivedTet> batch;     // filled by the decoder
   std::vector<ArrivedTet> flushing;  // rendered (flushBatch) meanwhile, on another thread
@@ -294,13 +354,14 @@ class SegmentBuilder : public SegmentSink {
   explicit SegmentBuilder(StreamRenderer::State& st) : st_(st) {}
   void begin(size_t segments) override {
     st_.segs.resize(segments);
+    st_.backs.reserve(segments);
     st_.wait_next.assign(2 * segments, kNone);
     st_.pixel_hint.clear();
     st_.pixel_hint.reserve(segments / StreamRenderer::State::kHintStride + 2);
   }
   void segment(const RaySegment& rs) override {
     const size_t i = next_++;
-    SegmentState& seg = st_.segs[i];
+    StreamSegment& seg = st_.segs[i];
     seg.tf = rs.t_near, seg.sf = rs.s_near, seg.tb = rs.t_far, seg.sb = rs.s_far;
     if (i % StreamRenderer::State::kHintStride == 0) st_.pixel_hint.push_back(rs.pixel);
     if (seg.done()) return;
@@ -343,7 +404,7 @@ void StreamRenderer::State::release(uint32_t slot) {
     if (--v->refs == 0) unheld.push_back(v);
   }
   t.corner[0] = nullptr;
-  free_slots.push_back(slot);
+  tets.free(slot);
   --held;
 }
 
@@ -527,7 +588,7 @@ Status StreamRenderer::flushBatch() {
         int32_t n = 0;
         if (tmin > tmax) return n;
         for (uint32_t s = s0; s < s1; ++s) {
-          const SegmentState& seg = st.segs[s];
+          const StreamSegment& seg = st.segs[s];
           if (!seg.done() && seg.tf <= tmax && tmin <= seg.tb) ++n;
         }
         return n;
@@ -568,7 +629,7 @@ Status StreamRenderer::flushBatch() {
           if (s0 == s1) continue;
           if (row_inside && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
           if (row_inside && xc > xl + kSure && xc < xr - kSure && s1 == s0 + 1) {  // clearly inside
-            const SegmentState& seg = st.segs[s0];
+            const StreamSegment& seg = st.segs[s0];
             if (!seg.done() && seg.tf <= dmax && dmin <= seg.tb) ++count;
             continue;
           }
@@ -597,15 +658,9 @@ Status StreamRenderer::flushBatch() {
       }
     }
     if (!needed) continue;
-    uint32_t slot;
-    if (!st.free_slots.empty()) {
-      slot = st.free_slots.back();
-      st.free_slots.pop_back();
-    } else {
-      if (st.tets.size() >= kMaxHeldSlots)
-        return invalidData("renderer: more than " + std::to_string(kMaxHeldSlots) + " tetrahedra held at once");
-      slot = st.tets.grow();
-    }
+    if (st.held >= kMaxHeldSlots)
+      return invalidData("renderer: more than " + std::to_string(kMaxHeldSlots) + " tetrahedra held at once");
+    const uint32_t slot = st.tets.allocate();
     HeldTet& t = st.tets[slot];
     for (int k = 0; k < 4; ++k) {
       t.corner[k] = a.corner[k];
@@ -646,6 +701,7 @@ Status StreamRenderer::flushBatch() {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, num_triggers, 16), [&](const tbb::blocked_range<size_t>& r) {
     HeldMesh mesh{st, st.zeroed};
     std::vector<Trigger>& my_waits = st.waits.local();
+
     // The range takes the segments whose first trigger it holds.
     size_t i = r.begin(), end = r.end();
     while (i > 0 && i < end && segmentOf(i) == segmentOf(i - 1)) ++i;
@@ -653,8 +709,9 @@ Status StreamRenderer::flushBatch() {
     while (end < num_triggers && segmentOf(end) == segmentOf(end - 1)) ++end;
     while (i < end) {
       const uint32_t si = segmentOf(i);
-      SegmentState& seg = st.segs[si];
+      StreamSegment& seg = st.segs[si];
       const PreparedRay ray = st.pixelRay(st.pixelOf(si), setup_.camera);
+      Rgba fresh;  // the back colour while it has no place in `backs`
       // A cursor that stopped (met, boundary, lost) waits nowhere, so only waiting cursors come here;
       // one may find its segment done by its partner meanwhile.
       for (; i < end && segmentOf(i) == si; ++i) {
@@ -664,12 +721,26 @@ Status StreamRenderer::flushBatch() {
         const bool front = cursor % 2 == 0;
         uint32_t wait_tet = 0;
         int wait_face = 0;
-        const CursorEnd end_state =
-            advanceCursor(setup_, ray, seg, front, triggerSlot(tr), triggerFace(tr), mesh, &wait_tet, &wait_face);
+        Rgba& colour = front ? seg.front : seg.back != kNone ? st.backs[seg.back] : fresh;
+        const CursorEnd end_state = advanceCursor(setup_, ray, seg, front, colour, triggerSlot(tr), triggerFace(tr),
+                                                  mesh, &wait_tet, &wait_face);
         if (end_state == CursorEnd::kWait) {
           my_waits.push_back(makeTrigger(cursor, wait_tet, wait_face));
         } else if (end_state == CursorEnd::kLost) {
           st.lost.fetch_add(1, std::memory_order_relaxed);
+        }
+      }
+      if (seg.back != kNone) {
+        if (seg.done()) {
+          seg.front = over(seg.front, st.backs[seg.back]);
+          st.backs.free(seg.back);
+          seg.back = kNone;
+        }
+      } else if (!isBlank(fresh)) {
+        if (seg.done()) {
+          seg.front = over(seg.front, fresh);
+        } else {
+          seg.back = st.backs.allocate(fresh);
         }
       }
     }
@@ -709,8 +780,10 @@ Status StreamRenderer::endLevel() {
   image_ = Image(w, h);
   for (size_t p = 0; p < static_cast<size_t>(w) * h; ++p) {
     Rgba acc;
-    for (uint32_t s = st.pixel_start[p]; s < st.pixel_start[p + 1]; ++s)
-      acc = over(acc, over(st.segs[s].front, st.segs[s].back));
+    for (uint32_t s = st.pixel_start[p]; s < st.pixel_start[p + 1]; ++s) {
+      const StreamSegment& seg = st.segs[s];
+      acc = over(acc, over(seg.front, seg.back != kNone ? st.backs[seg.back] : Rgba()));
+    }
     toRgb8(acc, &image_.rgb[3 * p]);
   }
   stats_.lost_cursors = st.lost.load();

@@ -15,13 +15,18 @@
 
 namespace gtn::render_internal {
 
-// 96 bytes: the streaming renderer keeps one per segment of the image, for the whole level.
-struct SegmentState {
+// Where a segment's two cursors sit.
+struct SegmentCursors {
   double tf = 0, sf = 0;  // front cursor: position and scalar at its crossing
   double tb = 0, sb = 0;  // back cursor
-  Rgba front, back;
   // The cursors met (advanceCursor then sets tf = tb), or the segment was empty from the start.
   bool done() const { return !(tf < tb); }
+};
+
+// A segment with what its cursors have composited (the streaming renderer keeps the back colour
+// apart: see StreamSegment).
+struct SegmentState : SegmentCursors {
+  Rgba front, back;
 };
 
 enum class Link { kLinked, kOpen, kBoundary, kReleased };
@@ -32,11 +37,11 @@ constexpr int kMaxZeroSteps = 64;
 
 // `Mesh` provides: `geom(uint32_t tet)` (a TetGeom or a TetCorners: what exitFace takes), `Link
 // next(uint32_t tet, int face, uint32_t* next_tet, int* next_face)` and `void visited(uint32_t tet)`.
-// The cursor enters `tet` through local face `face`. On kWait, *wait_tet/*wait_face say at which face
-// of which tetrahedron it waits.
+// The cursor enters `tet` through local face `face` and composites into `colour` (the segment's front or
+// back colour). On kWait, *wait_tet/*wait_face say at which face of which tetrahedron it waits.
 template <class Mesh>
-CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, SegmentState& seg, bool front, uint32_t tet,
-                        int face, Mesh& mesh, uint32_t* wait_tet, int* wait_face) {
+CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, SegmentCursors& seg, bool front, Rgba& colour,
+                        uint32_t tet, int face, Mesh& mesh, uint32_t* wait_tet, int* wait_face) {
   int zero_steps = 0;
   for (;;) {
     const auto& g = mesh.geom(tet);
@@ -47,7 +52,7 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
     if (front) {
       const double t_out = x.t > seg.tf ? x.t : seg.tf;
       const double limit = seg.tb;
-      shadeInterval(setup, seg.tf, seg.sf, t_out, x.s, seg.tf, t_out < limit ? t_out : limit, true, &seg.front);
+      shadeInterval(setup, seg.tf, seg.sf, t_out, x.s, seg.tf, t_out < limit ? t_out : limit, true, &colour);
       zero_steps = t_out == seg.tf ? zero_steps + 1 : 0;
       if (t_out >= limit) {
         seg.tf = limit;
@@ -58,7 +63,7 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
     } else {
       const double t_out = x.t < seg.tb ? x.t : seg.tb;
       const double limit = seg.tf;
-      shadeInterval(setup, t_out, x.s, seg.tb, seg.sb, t_out > limit ? t_out : limit, seg.tb, false, &seg.back);
+      shadeInterval(setup, t_out, x.s, seg.tb, seg.sb, t_out > limit ? t_out : limit, seg.tb, false, &colour);
       zero_steps = t_out == seg.tb ? zero_steps + 1 : 0;
       if (t_out <= limit) {
         seg.tb = limit;
