@@ -158,6 +158,7 @@ class SlotPool {
 struct StreamSegment : SegmentCursors {
   Rgba front;
   uint32_t back = kNone;  // index into State::backs; none while the back colour is blank (zero)
+  uint32_t pixel = 0;     // whose ray
 };
 
 // Whether c is exactly the zero colour (+0, so that leaving it out changes no bit).
@@ -251,15 +252,6 @@ struct StreamRenderer::State {
     ray.frame = frame;
     shearPoint(frame, r.o, ray.origin);
     return ray;
-  }
-  // Segments do not store their pixel either: it is the last pixel whose range (pixel_start) starts
-  // at or before the segment, searched between the pixels of every kHintStride-th segment.
-  static constexpr uint32_t kHintStride = 64;
-  std::vector<uint32_t> pixel_hint;  // pixel of segment kHintStride * j; then the last pixel
-  uint32_t pixelOf(uint32_t segment) const {
-    const uint32_t* start = pixel_start.data();
-    const uint32_t lo = pixel_hint[segment / kHintStride], hi = pixel_hint[segment / kHintStride + 1];
-    return static_cast<uint32_t>(std::upper_bound(start + lo, start + hi + 1, segment) - start - 1);
   }
   bool shared_frame = false;            // orthographic: every ray has `frame`
   ShearFrame frame;
@@ -356,14 +348,12 @@ class SegmentBuilder : public SegmentSink {
     st_.segs.resize(segments);
     st_.backs.reserve(segments);
     st_.wait_next.assign(2 * segments, kNone);
-    st_.pixel_hint.clear();
-    st_.pixel_hint.reserve(segments / StreamRenderer::State::kHintStride + 2);
   }
   void segment(const RaySegment& rs) override {
     const size_t i = next_++;
     StreamSegment& seg = st_.segs[i];
     seg.tf = rs.t_near, seg.sf = rs.s_near, seg.tb = rs.t_far, seg.sb = rs.s_far;
-    if (i % StreamRenderer::State::kHintStride == 0) st_.pixel_hint.push_back(rs.pixel);
+    seg.pixel = rs.pixel;
     if (seg.done()) return;
     const auto& in = st_.boundary[rs.entry_tri];
     st_.addWaiter(*st_.faces.tryEmplace(makeKey(in[0], in[1], in[2])).first, static_cast<uint32_t>(2 * i));
@@ -503,7 +493,6 @@ Status StreamRenderer::endBoundary() {
   // segments themselves are never stored together.
   SegmentBuilder builder(st);
   castBoundary(setup_.camera, surface, &st.pixel_start, builder);
-  st.pixel_hint.push_back(static_cast<uint32_t>(st.pixel_start.size() - 2));
   stats_.segments = st.segs.size();
   st.boundary.clear();
   st.boundary.shrink_to_fit();
@@ -710,7 +699,7 @@ Status StreamRenderer::flushBatch() {
     while (i < end) {
       const uint32_t si = segmentOf(i);
       StreamSegment& seg = st.segs[si];
-      const PreparedRay ray = st.pixelRay(st.pixelOf(si), setup_.camera);
+      const PreparedRay ray = st.pixelRay(seg.pixel, setup_.camera);
       Rgba fresh;  // the back colour while it has no place in `backs`
       // A cursor that stopped (met, boundary, lost) waits nowhere, so only waiting cursors come here;
       // one may find its segment done by its partner meanwhile.
