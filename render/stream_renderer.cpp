@@ -56,17 +56,20 @@ struct IdHash {
   size_t operator()(uint32_t id) const { return static_cast<size_t>((id * 0x9E3779B97F4A7C15ull) >> 20); }
 };
 
+// A face of a held tetrahedron in one word: (slot << 2) | local face.
+uint32_t heldFace(uint32_t slot, int face) { return slot << 2 | static_cast<uint32_t>(face); }
+
 // A face where cursors wait: the one held tetrahedron that has it (if any is held) and the cursors
 // (2 * segment + 0 front / 1 back) waiting for the tetrahedron on its other side, as a list linked
-// through State::wait_next. The tetrahedron's slot and local face share one word (20-byte map
+// through State::cursor_word. The tetrahedron's slot and local face share one word (20-byte map
 // entries).
 struct FaceEntry {
-  uint32_t held = kNone;     // (slot << 2) | local face, or kNone
+  uint32_t held = kNone;     // heldFace, or kNone
   uint32_t waiters = kNone;  // the first waiting cursor, or kNone
   bool hasTet() const { return held != kNone; }
   uint32_t tet() const { return held >> 2; }
   int face() const { return static_cast<int>(held & 3); }
-  void setTet(uint32_t slot, int face) { held = slot << 2 | static_cast<uint32_t>(face); }
+  void setTet(uint32_t slot, int face) { held = heldFace(slot, face); }
 };
 // Held tetrahedra have slots below this, so that (slot << 2) | face fits FaceEntry::held.
 constexpr uint32_t kMaxHeldSlots = 0x3FFFFFFFu;
@@ -113,7 +116,7 @@ class VertexPool {
 // One cache line each.
 struct alignas(64) HeldTet {
   CornerRecord* corner[4];  // PooledVertex; corner[0] is null while the slot is free
-  uint32_t nbr[4];          // (neighbour's slot << 2) | its local face, or kOpenFace / kReleasedFace
+  uint32_t nbr[4];          // the neighbour's heldFace, or kOpenFace / kReleasedFace
   uint8_t order[4][3];      // TetGeom::order
   std::atomic<int32_t> pending{0};
   bool alive() const { return corner[0] != nullptr; }
@@ -216,17 +219,6 @@ struct ArrivedTet {
   }
 };
 
-// A cursor that enters a held tetrahedron through one of its faces, in one word: (cursor << 32) |
-// (slot << 2) | face. Sorted as integers, a segment's two cursors (2 * segment, 2 * segment + 1)
-// come together.
-using Trigger = uint64_t;
-Trigger makeTrigger(uint32_t cursor, uint32_t slot, int face) {
-  return static_cast<uint64_t>(cursor) << 32 | slot << 2 | static_cast<uint32_t>(face);
-}
-uint32_t triggerCursor(Trigger t) { return static_cast<uint32_t>(t >> 32); }
-uint32_t triggerSlot(Trigger t) { return static_cast<uint32_t>(t) >> 2; }
-int triggerFace(Trigger t) { return static_cast<int>(t & 3); }
-
 }  // namespace
 
 struct StreamRenderer::State {
@@ -261,19 +253,20 @@ struct StreamRenderer::State {
   std::vector<StreamSegment> segs;
   BackColours backs;
   FlatHashMap<FaceKey, FaceEntry, FaceKeyHash> faces;
-  // The waiter lists of `faces`: the cursor after each cursor. A cursor waits at one face at a time
-  // (it leaves the list when the face's tetrahedron arrives), so one link per cursor is all the lists
-  // need, allocated once at endBoundary.
-  std::vector<uint32_t> wait_next;
+  // One word per cursor, allocated once at endBoundary. While the cursor waits at a face, the next
+  // cursor waiting there: the waiter lists of `faces` (a cursor waits at one face at a time). From
+  // the batch that takes it off its list until it waits again, the heldFace it enters or, once it
+  // has stopped, the one where it is to wait; so the batch's lists hold bare cursors.
+  std::vector<uint32_t> cursor_word;
   void addWaiter(FaceEntry& e, uint32_t cursor) {
-    wait_next[cursor] = e.waiters;
+    cursor_word[cursor] = e.waiters;
     e.waiters = cursor;
   }
-  // Calls f(cursor) for each waiter of e and empties its list.
+  // Calls f(cursor) for each waiter of e and empties its list (f may set the cursor's word).
   template <class F>
   void takeWaiters(FaceEntry& e, F&& f) {
     for (uint32_t c = e.waiters; c != kNone;) {
-      const uint32_t next = wait_next[c];
+      const uint32_t next = cursor_word[c];
       f(c);
       c = next;
     }
@@ -306,10 +299,10 @@ struct StreamRenderer::State {
   }
   std::atomic<uint64_t> lost{0};
   // flushBatch's lists, kept from one batch to the next (cleared, not freed).
-  std::vector<Trigger> triggers;
+  std::vector<uint32_t> triggers;  // cursors that enter a tetrahedron of the batch
   std::vector<uint32_t> arrived_slots;
   tbb::enumerable_thread_specific<std::vector<uint32_t>> zeroed;  // pending fell to zero
-  tbb::enumerable_thread_specific<std::vector<Trigger>> waits;    // cursors to wait at open faces
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> waits;   // cursors to wait at open faces
 
   void release(uint32_t slot);
 };
@@ -347,7 +340,7 @@ class SegmentBuilder : public SegmentSink {
   void begin(size_t segments) override {
     st_.segs.resize(segments);
     st_.backs.reserve(segments);
-    st_.wait_next.assign(2 * segments, kNone);
+    st_.cursor_word.assign(2 * segments, kNone);
   }
   void segment(const RaySegment& rs) override {
     const size_t i = next_++;
@@ -632,7 +625,7 @@ Status StreamRenderer::flushBatch() {
 
   // 2. Hold the tetrahedra some ray needs, link them to held neighbours, collect the cursors waiting
   //    at their faces (sequential: the face map).
-  std::vector<Trigger>& triggers = st.triggers;
+  std::vector<uint32_t>& triggers = st.triggers;
   std::vector<uint32_t>& arrived_slots = st.arrived_slots;
   triggers.clear();
   arrived_slots.clear();
@@ -669,9 +662,12 @@ Status StreamRenderer::flushBatch() {
         e.setTet(slot, k);
         continue;
       }
-      st.takeWaiters(e, [&](uint32_t c) { triggers.push_back(makeTrigger(c, slot, k)); });
+      st.takeWaiters(e, [&](uint32_t c) {
+        st.cursor_word[c] = heldFace(slot, k);
+        triggers.push_back(c);
+      });
       if (e.hasTet() && e.tet() != slot) {
-        st.tets[e.tet()].nbr[e.face()] = slot << 2 | static_cast<uint32_t>(k);
+        st.tets[e.tet()].nbr[e.face()] = heldFace(slot, k);
         t.nbr[k] = e.held;
         st.faces.erase(keys[k]);
       } else {
@@ -684,12 +680,12 @@ Status StreamRenderer::flushBatch() {
   // 3. Advance the triggered cursors (parallel over segments; a segment's two cursors in one task).
   std::sort(triggers.begin(), triggers.end());
   const size_t num_triggers = triggers.size();
-  auto segmentOf = [&](size_t i) { return triggerCursor(triggers[i]) / 2; };
+  auto segmentOf = [&](size_t i) { return triggers[i] / 2; };
   for (auto& list : st.zeroed) list.clear();
   for (auto& list : st.waits) list.clear();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, num_triggers, 16), [&](const tbb::blocked_range<size_t>& r) {
     HeldMesh mesh{st, st.zeroed};
-    std::vector<Trigger>& my_waits = st.waits.local();
+    std::vector<uint32_t>& my_waits = st.waits.local();
 
     // The range takes the segments whose first trigger it holds.
     size_t i = r.begin(), end = r.end();
@@ -705,16 +701,17 @@ Status StreamRenderer::flushBatch() {
       // one may find its segment done by its partner meanwhile.
       for (; i < end && segmentOf(i) == si; ++i) {
         if (seg.done()) continue;
-        const Trigger tr = triggers[i];
-        const uint32_t cursor = triggerCursor(tr);
+        const uint32_t cursor = triggers[i];
+        const uint32_t enter = st.cursor_word[cursor];
         const bool front = cursor % 2 == 0;
         uint32_t wait_tet = 0;
         int wait_face = 0;
         Rgba& colour = front ? seg.front : seg.back != kNone ? st.backs[seg.back] : fresh;
-        const CursorEnd end_state = advanceCursor(setup_, ray, seg, front, colour, triggerSlot(tr), triggerFace(tr),
-                                                  mesh, &wait_tet, &wait_face);
+        const CursorEnd end_state = advanceCursor(setup_, ray, seg, front, colour, enter >> 2,
+                                                  static_cast<int>(enter & 3), mesh, &wait_tet, &wait_face);
         if (end_state == CursorEnd::kWait) {
-          my_waits.push_back(makeTrigger(cursor, wait_tet, wait_face));
+          st.cursor_word[cursor] = heldFace(wait_tet, wait_face);
+          my_waits.push_back(cursor);
         } else if (end_state == CursorEnd::kLost) {
           st.lost.fetch_add(1, std::memory_order_relaxed);
         }
@@ -736,13 +733,13 @@ Status StreamRenderer::flushBatch() {
   });
 
   // 4. Cursors now waiting at open faces of held tetrahedra.
-  for (const std::vector<Trigger>& list : st.waits) {
-    for (const Trigger wt : list) {
-      const uint32_t slot = triggerSlot(wt);
-      const int face = triggerFace(wt);
+  for (const std::vector<uint32_t>& list : st.waits) {
+    for (const uint32_t cursor : list) {
+      const uint32_t slot = st.cursor_word[cursor] >> 2;
+      const int face = static_cast<int>(st.cursor_word[cursor] & 3);
       const auto [e, inserted] = st.faces.tryEmplace(st.tets[slot].key(face));
       if (inserted) e->setTet(slot, face);
-      st.addWaiter(*e, triggerCursor(wt));
+      st.addWaiter(*e, cursor);
     }
   }
   stats_.peak_face_entries = std::max<uint64_t>(stats_.peak_face_entries, st.faces.size());
