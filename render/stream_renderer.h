@@ -13,7 +13,8 @@
 //   front to back or back to front, until they must wait again, meet, or reach the boundary.
 // * Each arriving tetrahedron counts the rays whose uncovered part it overlaps; cursors passing
 //   through it count down, and at zero it is released. A tetrahedron that no ray needs is never held.
-//   Vertices are released when the stream retires them (tetrahedra keep copies of their four corners).
+//   Vertices are shared records that arrived and held tetrahedra point to; a record is freed once
+//   the stream has retired its vertex and no held tetrahedron has it.
 //   Memory is therefore the peeling front plus the tetrahedra waiting for rays, plus the image.
 // * Tetrahedra are processed in batches so that the work on a batch runs in parallel (TBB): counting
 //   over the batch's tetrahedra, advancing over the triggered segments. A full batch is rendered on
