@@ -1,6 +1,7 @@
 #include "render/ray_cast.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -461,96 +462,126 @@ struct Hit {
   bool leaving;
 };
 
-// Calls f(pixel, triangle, crossing, leaving) for every crossing of a pixel's ray with a boundary
-// triangle (parallel over triangles, so in no particular order): each triangle against the pixels
-// of its screen footprint, which tests far fewer pairs than pixels against bins.
-template <class F>
-void forEachCrossing(const Camera& camera, const BoundarySurface& surface, F&& f) {
+// One boundary triangle ready to be crossed by pixels' rays. Orthographic rays share one direction,
+// hence one shear frame: the triangle's canonical order and sheared corners are then computed once,
+// and each pixel only shears its ray's origin. The arithmetic is crossTriangle's, step for step, so
+// the crossings are the same bits.
+class BoundaryTriangle {
+ public:
+  BoundaryTriangle(const Camera& camera, const ShearFrame& frame, const BoundarySurface& surface, uint32_t tri)
+      : camera_(camera), frame_(frame), ortho_(camera.options().projection == Projection::kOrthographic) {
+    const auto& t = surface.triangles[tri];
+    for (int k = 0; k < 3; ++k) corner_[k] = surface.points[t[k]].data(), sc_[k] = surface.scalars[t[k]];
+    const double *a = corner_[0], *b = corner_[1], *c = corner_[2];
+    const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n_[0] = e1[1] * e2[2] - e1[2] * e2[1], n_[1] = e1[2] * e2[0] - e1[0] * e2[2], n_[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    canonicalOrder(corner_, o_);
+    if (ortho_)
+      for (int k = 0; k < 3; ++k) shearPoint(frame, corner_[o_[k]], q_[k]);
+  }
+  const double* const* corners() const { return corner_; }
+  bool ortho() const { return ortho_; }
+  // Whether the ray of pixel (px, py) crosses the triangle, facing it one way or the other (from the
+  // outward normal of the triangle as given): *x the crossing, *leaving the facing.
+  bool cross(int px, int py, Crossing* x, bool* leaving) const {
+    PreparedRay ray;
+    if (ortho_) {
+      ray.ray = camera_.ray(px, py);
+      ray.frame = frame_;
+      shearPoint(frame_, ray.ray.o, ray.origin);
+      double S[3][3];
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j) S[k][j] = q_[k][j] - ray.origin[j];
+      *x = crossSheared(S[0], S[1], S[2], sc_[o_[0]], sc_[o_[1]], sc_[o_[2]]);
+    } else {
+      ray = prepareRay(camera_.ray(px, py));
+      *x = crossTriangle(ray, corner_[0], corner_[1], corner_[2], sc_[0], sc_[1], sc_[2]);
+    }
+    if (!x->hit) return false;
+    const double dn = n_[0] * ray.ray.d[0] + n_[1] * ray.ray.d[1] + n_[2] * ray.ray.d[2];
+    *leaving = dn > 0;
+    return dn != 0;
+  }
+
+ private:
+  const Camera& camera_;
+  const ShearFrame& frame_;
+  bool ortho_;
+  const double* corner_[3];
+  double sc_[3], n_[3];
+  int o_[3];
+  double q_[3][3];  // orthographic: the sheared corners in canonical order
+};
+
+// The boundary's crossings with every pixel's ray, grouped by pixel (hits[start[p], start[p + 1]))
+// and sorted by depth within a pixel. Each triangle is first tested against the pixels of its screen
+// footprint (parallel over triangles: far fewer pairs than pixels against bins), keeping only which
+// pairs cross (8 bytes each); the crossings of those pairs are then computed again straight into
+// place, so that they are never held twice over.
+struct PixelHits {
+  std::vector<Hit> hits;
+  std::vector<uint32_t> start;
+};
+PixelHits crossBoundary(const Camera& camera, const BoundarySurface& surface) {
   const int w = camera.width();
-  // Orthographic rays share one direction, hence one shear frame: a triangle's canonical order and
-  // sheared corners are then computed once, and each pixel only shears its ray's origin. The
-  // arithmetic is crossTriangle's, step for step, so the crossings are the same bits.
-  const bool ortho = camera.options().projection == Projection::kOrthographic;
+  const size_t num_pixels = static_cast<size_t>(w) * camera.height();
   const ShearFrame frame = prepareRay(camera.ray(0, 0)).frame;
+  struct Pair {
+    uint32_t tri, pixel;
+  };
+  tbb::enumerable_thread_specific<std::vector<Pair>> pairs;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.triangles.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<Pair>& mine = pairs.local();
     for (size_t i = r.begin(); i < r.end(); ++i) {
-      const auto& tri = surface.triangles[i];
-      const double* a = surface.points[tri[0]].data();
-      const double* b = surface.points[tri[1]].data();
-      const double* c = surface.points[tri[2]].data();
-      const double* corners[3] = {a, b, c};
+      const BoundaryTriangle tri(camera, frame, surface, static_cast<uint32_t>(i));
       int box[4];
       double sx[3], sy[3];
-      if (!pixelFootprint(camera, corners, 3, box, sx, sy)) continue;
+      if (!pixelFootprint(camera, tri.corners(), 3, box, sx, sy)) continue;
       const ScreenHull hull(sx, sy, 3);
-      const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-      const double sc[3] = {surface.scalars[tri[0]], surface.scalars[tri[1]], surface.scalars[tri[2]]};
-      int o[3];
-      canonicalOrder(corners, o);
-      double q[3][3];  // orthographic: the sheared corners in canonical order
-      if (ortho)
-        for (int k = 0; k < 3; ++k) shearPoint(frame, corners[o[k]], q[k]);
       for (int py = box[1]; py <= box[3]; ++py) {
         // Orthographic: the pixels clearly outside the projected triangle are not tested (the
         // crossing test agrees with the projection to about 1e-10 pixels).
         constexpr double kSure = ScreenHull::kSure;
         int px0 = box[0], px1 = box[2];
         double xl, xr;
-        if (ortho && hull.span(py + 0.5, kSure, &xl, &xr)) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
+        if (tri.ortho() && hull.span(py + 0.5, kSure, &xl, &xr)) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
         for (int px = px0; px <= px1; ++px) {
           Crossing x;
-          PreparedRay ray;
-          if (ortho) {
-            ray.ray = camera.ray(px, py);
-            ray.frame = frame;
-            shearPoint(frame, ray.ray.o, ray.origin);
-            double S[3][3];
-            for (int k = 0; k < 3; ++k)
-              for (int j = 0; j < 3; ++j) S[k][j] = q[k][j] - ray.origin[j];
-            x = crossSheared(S[0], S[1], S[2], sc[o[0]], sc[o[1]], sc[o[2]]);
-          } else {
-            ray = prepareRay(camera.ray(px, py));
-            x = crossTriangle(ray, a, b, c, sc[0], sc[1], sc[2]);
-          }
-          if (!x.hit) continue;
-          // Facing from the outward normal of the triangle as given.
-          const double dn = n[0] * ray.ray.d[0] + n[1] * ray.ray.d[1] + n[2] * ray.ray.d[2];
-          if (dn == 0) continue;
-          f(static_cast<uint32_t>(py) * static_cast<uint32_t>(w) + static_cast<uint32_t>(px), static_cast<uint32_t>(i),
-            x, dn > 0);
+          bool leaving;
+          if (tri.cross(px, py, &x, &leaving))
+            mine.push_back({static_cast<uint32_t>(i), static_cast<uint32_t>(py) * static_cast<uint32_t>(w) +
+                                                          static_cast<uint32_t>(px)});
         }
       }
     }
   });
-}
-
-// The boundary's crossings with every pixel's ray, grouped by pixel (hits[start[p], start[p + 1]))
-// and sorted by depth within a pixel. The crossings are computed twice, once to count them per pixel
-// and once to put them in place, so that they are never held twice over.
-struct PixelHits {
-  std::vector<Hit> hits;
-  std::vector<uint32_t> start;
-};
-PixelHits crossBoundary(const Camera& camera, const BoundarySurface& surface) {
-  const size_t num_pixels = static_cast<size_t>(camera.width()) * camera.height();
   PixelHits out;
+  out.start.assign(num_pixels + 1, 0);
+  for (const std::vector<Pair>& list : pairs)
+    for (const Pair& pr : list) ++out.start[pr.pixel + 1];
+  for (size_t p = 0; p < num_pixels; ++p) out.start[p + 1] += out.start[p];
+  out.hits.resize(out.start.back());
   {
     std::vector<std::atomic<uint32_t>> fill(num_pixels);
-    forEachCrossing(camera, surface, [&](uint32_t pixel, uint32_t, const Crossing&, bool) {
-      fill[pixel].fetch_add(1, std::memory_order_relaxed);
-    });
-    out.start.resize(num_pixels + 1);
-    out.start[0] = 0;
-    for (size_t p = 0; p < num_pixels; ++p) {
-      out.start[p + 1] = out.start[p] + fill[p].load(std::memory_order_relaxed);
-      fill[p].store(out.start[p], std::memory_order_relaxed);
+    for (size_t p = 0; p < num_pixels; ++p) fill[p].store(out.start[p], std::memory_order_relaxed);
+    for (const std::vector<Pair>& list : pairs) {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, list.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t j = r.begin(); j < r.end();) {
+          // A triangle's pairs are consecutive: it is set up once for them.
+          const uint32_t t = list[j].tri;
+          const BoundaryTriangle tri(camera, frame, surface, t);
+          for (; j < r.end() && list[j].tri == t; ++j) {
+            const uint32_t pixel = list[j].pixel;
+            Crossing x;
+            bool leaving = false;
+            tri.cross(static_cast<int>(pixel % static_cast<uint32_t>(w)), static_cast<int>(pixel / static_cast<uint32_t>(w)),
+                      &x, &leaving);
+            out.hits[fill[pixel].fetch_add(1, std::memory_order_relaxed)] = {x.t, x.s, t, leaving};
+          }
+        }
+      });
     }
-    out.hits.resize(out.start.back());
-    forEachCrossing(camera, surface, [&](uint32_t pixel, uint32_t tri, const Crossing& x, bool leaving) {
-      out.hits[fill[pixel].fetch_add(1, std::memory_order_relaxed)] = {x.t, x.s, tri, leaving};
-    });
   }
   // Within a pixel the order is total (a triangle crosses a ray once), so the sort fixes it.
   tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 512), [&](const tbb::blocked_range<size_t>& r) {
