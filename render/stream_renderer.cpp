@@ -170,39 +170,36 @@ bool isBlank(const Rgba& c) {
   return std::memcmp(&c, &zero, sizeof(Rgba)) == 0;
 }
 
-// The back colours that are not blank, in chunks with a free list. Entries are taken and given back
-// by the tasks that advance cursors, under a lock (a few thousand times a level); the chunk directory
-// is reserved for one entry per segment, so that it never moves while other tasks read entries.
+// The back colours that are not blank, in chunks. Entries are taken and given back by the tasks that
+// advance cursors, each thread keeping the entries it gives back for its next ones (no lock); only
+// growing takes a lock. The chunk directory is reserved for one entry per segment, so that it never
+// moves while other tasks read entries.
 class BackColours {
  public:
   void reserve(size_t segments) { chunks_.reserve(segments / kChunk + 1); }
   Rgba& operator[](uint32_t i) { return chunks_[i >> kShift][i & kMask]; }
   uint32_t allocate(const Rgba& c) {
+    std::vector<uint32_t>& mine = free_.local();
     uint32_t i;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (!free_.empty()) {
-        i = free_.back();
-        free_.pop_back();
-      } else {
-        if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<Rgba[]>(kChunk));
-        i = size_++;
-      }
+    if (!mine.empty()) {
+      i = mine.back();
+      mine.pop_back();
+    } else {
+      std::lock_guard<std::mutex> lock(grow_);
+      if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<Rgba[]>(kChunk));
+      i = size_++;
     }
     (*this)[i] = c;
     return i;
   }
-  void free(uint32_t i) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    free_.push_back(i);
-  }
+  void free(uint32_t i) { free_.local().push_back(i); }
 
  private:
   static constexpr uint32_t kShift = 10, kChunk = 1u << kShift, kMask = kChunk - 1;
   std::vector<std::unique_ptr<Rgba[]>> chunks_;
-  std::vector<uint32_t> free_;
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> free_;
   uint32_t size_ = 0;
-  std::mutex mutex_;
+  std::mutex grow_;
 };
 
 constexpr uint8_t kNoOrder = 0xFF;  // ArrivedTet::order[0][0] before the orders are computed
