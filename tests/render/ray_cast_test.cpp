@@ -36,15 +36,20 @@ class Collect : public SegmentSink {
   std::vector<RaySegment> got;
 };
 
+// A camera framing the cube [-1, 1]^3 with a w x h image.
+Camera cubeCamera(Projection projection, int w, int h) {
+  const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+  CameraOptions o;
+  o.width = w;
+  o.height = h;
+  o.projection = projection;
+  return Camera(lo, hi, o);
+}
+
 TEST(CastBoundary, SinkReceivesTheArraysSegmentsInOrder) {
   const BoundarySurface surface = octahedron();
-  const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
   for (Projection projection : {Projection::kOrthographic, Projection::kPerspective}) {
-    CameraOptions o;
-    o.width = 64;
-    o.height = 48;
-    o.projection = projection;
-    const Camera camera(lo, hi, o);
+    const Camera camera = cubeCamera(projection, 64, 48);
     const RaySegments array = castBoundary(camera, surface);
     ASSERT_GT(array.segments.size(), 250u);
     std::vector<uint32_t> pixel_start;
@@ -68,13 +73,8 @@ TEST(CastBoundary, SinkReceivesTheArraysSegmentsInOrder) {
 TEST(TetCorners, CrossLikeTetGeomBitForBit) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
-  const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
   for (Projection projection : {Projection::kOrthographic, Projection::kPerspective}) {
-    CameraOptions o;
-    o.width = 24;
-    o.height = 24;
-    o.projection = projection;
-    const Camera camera(lo, hi, o);
+    const Camera camera = cubeCamera(projection, 24, 24);
     const bool sheared = projection == Projection::kOrthographic;
     const ShearFrame frame = prepareRay(camera.ray(0, 0)).frame;
     int crossings = 0;
@@ -94,8 +94,8 @@ TEST(TetCorners, CrossLikeTetGeomBitForBit) {
       ASSERT_EQ(std::memcmp(order, g.order, sizeof(order)), 0);
       const CornerRecord* corners[4] = {&records[0], &records[1], &records[2], &records[3]};
       const TetCorners tc{corners, order, sheared};
-      for (int py = 0; py < o.height; py += 3) {
-        for (int px = 0; px < o.width; px += 3) {
+      for (int py = 0; py < camera.height(); py += 3) {
+        for (int px = 0; px < camera.width(); px += 3) {
           const PreparedRay ray = prepareRay(camera.ray(px, py));
           Crossing a[4], b[4];
           crossTetFaces(ray, g, -1, a);
