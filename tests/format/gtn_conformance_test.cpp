@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
@@ -136,6 +137,24 @@ TetMesh repeatedComponents() {
   return m;
 }
 
+// Values as text formats hold them (spec 10.2, decimal form): float64 coordinates and a float64 field
+// printed with a few decimals, among them values that have no such form (full precision, -0.0), which
+// the decoder reads through the per-value escape to the float form.
+TetMesh decimals() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat64;
+  addCubeGrid(m, 3, 0.0, 0.1);
+  const size_t np = m.numPoints();
+  for (size_t i = 0; i < m.coords.size(); ++i) m.coords[i] = std::nearbyint(m.coords[i] * 1e4 + 0.3 * (i % 7)) / 1e4;
+  m.coords[3 * 5] += 1e-13;  // a generator's own point among the printed ones
+  Field t("temperature", 1, ScalarType::kFloat64, np);
+  for (size_t v = 0; v < np; ++v) t.set<double>(v, 0, std::nearbyint(300000.0 + 37.0 * static_cast<double>(v % 11)) / 1000.0);
+  t.set<double>(7, 0, -0.0);
+  t.set<double>(8, 0, 1.0 / 3.0);
+  m.point_fields = {t};
+  return finish(m);
+}
+
 // A 5 x 5 x 5 grid of cubes with a density field: big enough for a merge tree and two mip levels.
 TetMesh levelsMesh() { return finish(densityGrid(5, 9)); }
 
@@ -216,6 +235,7 @@ std::vector<Sample> samples() {
   s.push_back(valid("two-components.f32.dir.v1.0.gtn", twoComponents, [] { return encodeFile(twoComponents(), options()); }));
   s.push_back(valid("repeated-components.f64.dir.v1.0.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
+  s.push_back(valid("decimals.f64.dir.v1.0.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
   s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithLevels(options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
                  const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
