@@ -113,6 +113,16 @@ inline void weightedRules(const double x[4], double* out, std::integer_sequence<
 
 enum SlotState : uint8_t { kFree = 0, kLive = 1, kRetired = 2 };
 
+// A source coordinate (held as double) stored as the file's coordinate type (float32 or float64).
+inline void storeCoordinate(ScalarType ct, double v, uint8_t* raw) {
+  if (ct == ScalarType::kFloat32) {
+    const float f = static_cast<float>(v);
+    std::memcpy(raw, &f, 4);
+  } else {
+    std::memcpy(raw, &v, 8);
+  }
+}
+
 inline uint64_t edgeKey(uint32_t a, uint32_t b) { return (uint64_t{a} << 32) | b; }
 // Whether two cell values' keys agree, compared in line: std::equal calls memcmp, which costs more
 // than comparing the few components a cell value has.
@@ -317,9 +327,7 @@ class LevelCoder {
   // Each value-coded component's form (section 10.2), at the start of its stream. For a float type a
   // bit (one model for the level) says whether it is coded in decimal form, then its decimal places
   // in 5 direct bits; otherwise a bit (another model) says whether it has a shift, then the shift in
-  // 6 direct bits. The encoder takes the fewest places and the fewest trailing zero bits of the
-  // component's values, and the decimal form when its integers are narrower than the shifted
-  // significands.
+  // 6 direct bits.
   Status codeValueForms() {
     struct Form {
       int decimals = -1;
@@ -395,7 +403,7 @@ class LevelCoder {
           double at_e[2];
           for (int j = 0; j < 2; ++j)
             at_e[j] = pair.places[j] >= 0 && pair.places[j] <= e ? pair.integer[j] * kPowersOfTen[e - pair.places[j]] : 1e300;
-          const bool both = std::fabs(at_e[0]) < 9007199254740992.0 && std::fabs(at_e[1]) < 9007199254740992.0;
+          const bool both = std::fabs(at_e[0]) < kDecimalLimit && std::fabs(at_e[1]) < kDecimalLimit;
           cost += both ? std::log2(std::fabs(at_e[1] - at_e[0]) + 1) + 1 : pair.float_bits + 4;
         }
         if (cost < best) best = cost, form = {e, 0};
@@ -409,14 +417,7 @@ class LevelCoder {
         const std::vector<double>& xyz = enc_->mesh->coords;
         const size_t n = xyz.size() / 3;
         std::vector<uint8_t> raw(n * scalarSize(ct));
-        for (size_t v = 0; v < n; ++v) {
-          if (ct == ScalarType::kFloat32) {
-            const float f = static_cast<float>(xyz[3 * v + i]);
-            std::memcpy(&raw[4 * v], &f, 4);
-          } else {
-            std::memcpy(&raw[8 * v], &xyz[3 * v + i], 8);
-          }
-        }
+        for (size_t v = 0; v < n; ++v) storeCoordinate(ct, xyz[3 * v + i], &raw[v * scalarSize(ct)]);
         form = choose(ct, raw.data(), n, scalarSize(ct));
       }
       GTN_RETURN_IF_ERROR(declare(*geo_, coord_vc_, ct, i, form, "the geometry stream"));
@@ -698,13 +699,7 @@ class LevelCoder {
     if constexpr (kEncode) {
       for (uint32_t i = 0; i < 3; ++i) {
         uint8_t raw[8];
-        const double v = enc_->mesh->coords[3 * size_t{src} + i];
-        if (ct == ScalarType::kFloat32) {
-          const float f = static_cast<float>(v);
-          std::memcpy(raw, &f, 4);
-        } else {
-          std::memcpy(raw, &v, 8);
-        }
+        storeCoordinate(ct, enc_->mesh->coords[3 * size_t{src} + i], raw);
         actual[i] = keyFromRaw(ct, raw);
       }
     }

@@ -202,6 +202,9 @@ class ValueCoder {
   std::vector<Component> comp_;  // then, once a component is decimal, the float models of each one
 };
 
+// Decimal-form integers stay below 2^53 in magnitude, where every integer is exactly a double.
+inline constexpr double kDecimalLimit = 9007199254740992.0;
+
 // 10^e for e = 0..22, each exactly a double.
 inline constexpr double kPowersOfTen[ValueCoder::kMaxDecimals + 1] = {
     1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19,
@@ -223,7 +226,7 @@ inline bool decimalInteger(ScalarType type, uint64_t key, int e, int64_t* out) {
   rawFromKey(type, key, raw);
   const double v = doubleFromRaw(type, raw);
   const double scaled = v * kPowersOfTen[e];
-  if (!(std::fabs(scaled) < 9007199254740992.0)) return false;  // 2^53; also NaN
+  if (!(std::fabs(scaled) < kDecimalLimit)) return false;  // also NaN
   const int64_t n0 = static_cast<int64_t>(std::nearbyint(scaled));
   const size_t size = scalarSize(type);
   for (const int64_t n : {n0, n0 - 1, n0 + 1}) {  // the product may have rounded across a half
@@ -251,7 +254,7 @@ uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actua
     uint8_t raw[8];
     rawFromKey(type_, pred_key, raw);
     const double np = value_detail::clampRound(doubleFromRaw(type_, raw) * kPowersOfTen[m.decimals],
-                                               -9007199254740992.0, 9007199254740992.0);
+                                               -kDecimalLimit, kDecimalLimit);
     const uint64_t k = codeKey(c, m, 64, ~uint64_t{0}, static_cast<uint64_t>(static_cast<int64_t>(np)) ^ sign,
                                static_cast<uint64_t>(n) ^ sign);
     decimalValue(type_, static_cast<int64_t>(k ^ sign), m.decimals, raw);
