@@ -19,7 +19,9 @@
 //                for reversed orientation; after the
 //                tetrahedron, for each of its vertices left on no open face, a bit "retired". When the
 //                face queue empties: bit "seed tetrahedron follows", then the seed's four vertices.
-//  geometry:     coordinates of each vertex when it is introduced, predicted from decoded neighbours.
+//  geometry:     coordinates of each vertex when it is introduced, predicted from decoded neighbours;
+//                unused points that lie on an edge (mid-edge nodes) right after the first tetrahedron
+//                with that edge, predicted at its midpoint; the other unused points after peeling.
 //  fields:       one stream per field, values predicted in the same order.
 // Vertices are identified while live by a "slot" in a pool that only holds the front, so the
 // decoder's memory follows the front and not the mesh.
@@ -32,8 +34,10 @@
 #include <memory>
 #include <string>
 #include <type_traits>
+#include <unordered_map>
 #include <utility>
 
+#include "codec/edge_points.h"
 #include "codec/flat_maps.h"
 #include "codec/nearest_grid.h"
 #include "codec/range_coder.h"
@@ -171,7 +175,8 @@ SymbolCosts<kBits> symbolCosts(const BitTree<kBits>& tree) {
 
 // How the field values of a new vertex are predicted.
 struct FieldPrediction {
-  enum Kind { kLast, kParallelogram, kInterpolate, kAverage } kind = kLast;
+  // kEdge: a point on the edge (s[0], s[1]), predicted at its midpoint (section 10.5).
+  enum Kind { kLast, kParallelogram, kInterpolate, kAverage, kEdge } kind = kLast;
   uint32_t s[4] = {kNoSlot, kNoSlot, kNoSlot, kNoSlot};
 };
 
@@ -200,6 +205,9 @@ struct EncoderSide {
   std::vector<uint32_t> vertex_order;
   std::vector<uint64_t> tet_order;
   std::vector<uint32_t> alias;  // per point-field component (flattened): earlier identical component, or ~0
+  // Unused points on an edge (findEdgePoints), by the edge's source vertices (a << 32 | b, a < b), in
+  // decreasing point order: coded from the back.
+  std::unordered_map<uint64_t, std::vector<uint32_t>> edge_points;
 };
 
 template <bool kEncode>
@@ -266,6 +274,9 @@ class LevelCoder {
   Status run() {
     GTN_RETURN_IF_ERROR(codeAliases());
     GTN_RETURN_IF_ERROR(codeValueForms());
+    uint32_t edge_points = 0;
+    if constexpr (kEncode) edge_points = !enc_->edge_points.empty();
+    edge_points_ = geo_->bit(edge_points_flag_, edge_points);
     GTN_RETURN_IF_ERROR(boundaryPhase());
     if constexpr (!kEncode) GTN_RETURN_IF_ERROR(sink_->endBoundary());
     GTN_RETURN_IF_ERROR(peelingPhase());
@@ -576,6 +587,9 @@ class LevelCoder {
       lambda[1] = 1;
       lambda[2] = -1;
       n = 3;
+    } else if (kind == FieldPrediction::kEdge) {
+      lambda[0] = lambda[1] = 0.5;
+      n = 2;
     }
     for (size_t f = 0; f < header_.point_fields.size(); ++f) {
       const FieldDesc& d = header_.point_fields[f];
@@ -759,7 +773,8 @@ class LevelCoder {
     if (fp.kind != FieldPrediction::kLast) {
       for (int m = 0; m < 4; ++m)
         if (fp.s[m] != kNoSlot && (m < 3 || has_d)) copy_src[ncopy++] = fp.s[m];
-      for (int m = 0; m < n_near_; ++m) copy_src[ncopy++] = near_[m];
+      if (fp.kind != FieldPrediction::kEdge)
+        for (int m = 0; m < n_near_; ++m) copy_src[ncopy++] = near_[m];
     }
     uint32_t prev_which = kNone32;  // copy source of the previous coordinate of this vertex
     for (uint32_t i = 0; i < 3; ++i) {
@@ -1457,6 +1472,7 @@ class LevelCoder {
       GTN_RETURN_IF_ERROR(sink_->tet(ids, cell_bytes_ ? cell_buf_.data() : nullptr));
     }
     ++tets_done_;
+    if (edge_points_) GTN_RETURN_IF_ERROR(codeEdgePoints(e, gate, fresh_apex));
     uint32_t rec = kNone32;
     if (cell_comps_ > 0) {
       if (!cell_free_.empty()) {
@@ -1496,6 +1512,47 @@ class LevelCoder {
       if constexpr (kEncode) done = enc_->remaining[enc_->slot_src[s]] == 0;
       done = con_->bit(retire_, done);
       if (done) GTN_RETURN_IF_ERROR(retire(s));
+    }
+    return Status::ok();
+  }
+
+  // The points on the edges of the tetrahedron (e, closing `gate`, -1 for a seed) that are coded now,
+  // while both ends are live (section 10.5): per edge, a bit per point and a final clear bit. An
+  // edge's points are coded with the first tetrahedron that has the edge, so the edges of a gate face
+  // rarely have any left (only behind a boundary face), and those to a new apex always do on a
+  // quadratic mesh: the bits' contexts tell these apart.
+  Status codeEdgePoints(const uint32_t e[4], long gate, bool fresh_apex) {
+    static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {1, 2}, {0, 3}, {1, 3}, {2, 3}};
+    const bool boundary_gate = gate >= 0 && faces_.at(gate).d == kNoSlot;
+    for (int k = 0; k < 6; ++k) {
+      const uint32_t a = e[kEdges[k][0]], b = e[kEdges[k][1]];
+      const uint32_t kind = gate < 0 || (k >= 3 && fresh_apex) ? 0 : (k >= 3 ? 1 : (boundary_gate ? 2 : 3));
+      std::vector<uint32_t>* pending = nullptr;
+      if constexpr (kEncode) {
+        const uint32_t sa = enc_->slot_src[a], sb = enc_->slot_src[b];
+        const auto it = enc_->edge_points.find(uint64_t{std::min(sa, sb)} << 32 | std::max(sa, sb));
+        if (it != enc_->edge_points.end()) pending = &it->second;
+      }
+      for (uint32_t more = 0;; more = 1) {
+        uint32_t bit = 0;
+        if constexpr (kEncode) bit = pending != nullptr && !pending->empty();
+        bit = geo_->bit(edge_point_[kind][more], bit);
+        if (!bit) break;
+        uint32_t src = 0;
+        if constexpr (kEncode) {
+          src = pending->back();
+          pending->pop_back();
+        }
+        FieldPrediction fp;
+        fp.kind = FieldPrediction::kEdge;
+        fp.s[0] = a;
+        fp.s[1] = b;
+        const double *pa = P(a), *pb = P(b);
+        const double mid[3] = {(pa[0] + pb[0]) * 0.5, (pa[1] + pb[1]) * 0.5, (pa[2] + pb[2]) * 0.5};
+        uint32_t s;
+        GTN_RETURN_IF_ERROR(introduceVertex(src, mid, fp, &s));
+        GTN_RETURN_IF_ERROR(retire(s));
+      }
     }
     return Status::ok();
   }
@@ -1817,6 +1874,9 @@ class LevelCoder {
   BitTree<5> copy_which_[3];
   const uint32_t* near_ = nullptr;  // apex candidates of the gate being decoded (copy sources)
   int n_near_ = 0;
+  bool edge_points_ = false;  // the level codes points on edges (section 10.5)
+  BitModel edge_points_flag_;
+  BitModel edge_point_[4][2];  // [edge kind (codeEdgePoints)][after a point on the same edge]
   uint32_t copy_last_[3] = {0, 0, 0};
   std::vector<double> pred_vals_;
 };
@@ -1887,6 +1947,11 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   }
   enc.vertex_order.assign(np, kNone32);
   enc.tet_order.assign(nt, 0);
+  if (options.edge_points) {
+    const std::vector<EdgePoint> found = findEdgePoints(mesh);
+    for (auto it = found.rbegin(); it != found.rend(); ++it)
+      enc.edge_points[uint64_t{it->a} << 32 | it->b].push_back(it->point);
+  }
   {
     struct Comp {
       const uint8_t* base;

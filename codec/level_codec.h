@@ -16,6 +16,9 @@ namespace gtn {
 struct EncodeOptions {
   // Reserved: keep the source's vertex and tetrahedron order (costs ~18-21 bits per tetrahedron).
   bool keep_order = false;
+  // Code the unused points that lie on an edge with that edge (spec section 10.5), not after the
+  // level: the mid-edge nodes of quadratic cells. Off only to measure what it saves.
+  bool edge_points = true;
 };
 
 // The coded streams of one level. `header` carries counts, field descriptions, bounding box and

@@ -201,11 +201,11 @@ inline size_t payloadBytes(const EncodedLevel& e) {
 }
 
 // Encodes, decodes through a CheckingSink, compares; returns the encoded level.
-inline EncodedLevel roundTrip(const TetMesh& m, uint64_t* peak_live = nullptr) {
-  auto enc = encodeLevel(m, EncodeOptions{});
+inline EncodedLevel roundTrip(const TetMesh& m, uint64_t* peak_live = nullptr, const EncodeOptions& options = {}) {
+  auto enc = encodeLevel(m, options);
   EXPECT_TRUE(enc.isOk()) << enc.status().message();
   if (!enc.isOk()) return {};
-  auto again = encodeLevel(m, EncodeOptions{});
+  auto again = encodeLevel(m, options);
   EXPECT_TRUE(again.isOk());
   if (again.isOk()) {
     EXPECT_EQ(again->connectivity, enc->connectivity) << "encoder is not deterministic";

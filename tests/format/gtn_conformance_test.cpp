@@ -155,6 +155,35 @@ TetMesh decimals() {
   return finish(m);
 }
 
+// A quadratic tetrahedral mesh as importers keep it (spec 10.5, edge points): the 2 x 2 x 2 cube grid,
+// float64, with a node on every edge of every tetrahedron that no tetrahedron uses, most at the edge's
+// midpoint, some off it (a curved cell's), and one point on no edge, coded after peeling.
+TetMesh edgePoints() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat64;
+  addCubeGrid(m, 2, 0.0, 0.5);
+  m = finish(m);
+  std::set<std::pair<uint32_t, uint32_t>> edges;
+  for (const Tet& t : m.tets)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) edges.insert({std::min(t[i], t[j]), std::max(t[i], t[j])});
+  const size_t corners = m.numPoints();
+  std::vector<double> pressure(corners);
+  for (size_t v = 0; v < corners; ++v) pressure[v] = 100.0 + m.point(v)[0] * m.point(v)[1] + m.point(v)[2];
+  size_t k = 0;
+  for (const auto& [a, b] : edges) {
+    const double bend = k++ % 5 == 0 ? 0.01 : 0.0;
+    for (int i = 0; i < 3; ++i) m.coords.push_back((m.point(a)[i] + m.point(b)[i]) * 0.5 + (i == 2 ? bend : 0.0));
+    pressure.push_back(0.5 * (pressure[a] + pressure[b]) + 0.001 * static_cast<double>(k % 3));
+  }
+  for (double v : {7.0, 7.0, 7.0}) m.coords.push_back(v);
+  pressure.push_back(-1.0);
+  Field f("pressure", 1, ScalarType::kFloat64, m.numPoints());
+  for (size_t v = 0; v < m.numPoints(); ++v) f.set<double>(v, 0, pressure[v]);
+  m.point_fields = {f};
+  return m;
+}
+
 // A 5 x 5 x 5 grid of cubes with a density field: big enough for a merge tree and two mip levels.
 TetMesh levelsMesh() { return finish(densityGrid(5, 9)); }
 
@@ -236,6 +265,7 @@ std::vector<Sample> samples() {
   s.push_back(valid("repeated-components.f64.dir.v1.0.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
   s.push_back(valid("decimals.f64.dir.v1.0.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
+  s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithLevels(options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
                  const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};

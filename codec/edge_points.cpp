@@ -1,0 +1,117 @@
+#include "codec/edge_points.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace gtn {
+
+namespace {
+
+constexpr int kTetEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+constexpr double kMaxOffset = 0.25;  // of the edge's length, from its midpoint
+constexpr int64_t kMaxCells = 512;   // cells one edge's search may visit
+constexpr int64_t kCellRange = int64_t{1} << 20;  // cell coordinates, clamped to [-range, range)
+
+}  // namespace
+
+std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh) {
+  const size_t np = mesh.numPoints();
+  std::vector<uint8_t> used(np, 0);
+  for (const Tet& t : mesh.tets)
+    for (uint32_t v : t)
+      if (v < np) used[v] = 1;
+  std::vector<uint32_t> unused;
+  for (size_t v = 0; v < np; ++v) {
+    const double* p = mesh.point(v);
+    if (!used[v] && std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))
+      unused.push_back(static_cast<uint32_t>(v));
+  }
+  if (unused.empty()) return {};
+
+  std::vector<uint64_t> edges;
+  edges.reserve(6 * mesh.tets.size());
+  for (const Tet& t : mesh.tets)
+    for (const auto& e : kTetEdges) {
+      const uint32_t a = std::min(t[e[0]], t[e[1]]), b = std::max(t[e[0]], t[e[1]]);
+      if (a != b && b < np) edges.push_back(uint64_t{a} << 32 | b);
+    }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  auto lengthSquared = [&](uint64_t e) {
+    const double *p = mesh.point(e >> 32), *q = mesh.point(static_cast<uint32_t>(e));
+    double s = 0;
+    for (int i = 0; i < 3; ++i) s += (q[i] - p[i]) * (q[i] - p[i]);
+    return s;
+  };
+  double total = 0;
+  size_t counted = 0;
+  for (uint64_t e : edges) {
+    const double l = std::sqrt(lengthSquared(e));
+    if (l > 0 && std::isfinite(l)) total += l, ++counted;
+  }
+  if (counted == 0) return {};
+  // Cells of half the mean edge length: a typical edge's search visits 8 of them.
+  const double cell = 0.5 * total / static_cast<double>(counted);
+  double lo[3];
+  for (int i = 0; i < 3; ++i) {
+    lo[i] = std::numeric_limits<double>::infinity();
+    for (uint32_t v : unused) lo[i] = std::min(lo[i], mesh.point(v)[i]);
+  }
+  auto cellOf = [&](double x, int i) {
+    const double c = std::floor((x - lo[i]) / cell);
+    return static_cast<int64_t>(std::clamp(c, -static_cast<double>(kCellRange), static_cast<double>(kCellRange - 1)));
+  };
+  // z lowest, so that a column of cells is one range of keys.
+  auto key = [](int64_t x, int64_t y, int64_t z) {
+    return static_cast<uint64_t>(x + kCellRange) << 42 | static_cast<uint64_t>(y + kCellRange) << 21 |
+           static_cast<uint64_t>(z + kCellRange);
+  };
+  std::vector<std::pair<uint64_t, uint32_t>> grid;  // (cell key, index into unused)
+  grid.reserve(unused.size());
+  for (uint32_t i = 0; i < unused.size(); ++i) {
+    const double* p = mesh.point(unused[i]);
+    grid.push_back({key(cellOf(p[0], 0), cellOf(p[1], 1), cellOf(p[2], 2)), i});
+  }
+  std::sort(grid.begin(), grid.end());
+
+  std::vector<double> best(unused.size(), std::numeric_limits<double>::infinity());
+  std::vector<uint64_t> best_edge(unused.size(), 0);
+  for (uint64_t e : edges) {
+    const double len2 = lengthSquared(e);
+    if (!(len2 > 0) || !std::isfinite(len2)) continue;
+    const double *p = mesh.point(e >> 32), *q = mesh.point(static_cast<uint32_t>(e));
+    const double m[3] = {(p[0] + q[0]) * 0.5, (p[1] + q[1]) * 0.5, (p[2] + q[2]) * 0.5};
+    const double r = kMaxOffset * std::sqrt(len2);
+    int64_t c0[3], c1[3], cells = 1;
+    for (int i = 0; i < 3; ++i) {
+      c0[i] = cellOf(m[i] - r, i);
+      c1[i] = cellOf(m[i] + r, i);
+      cells *= c1[i] - c0[i] + 1;
+    }
+    if (cells > kMaxCells) continue;
+    for (int64_t x = c0[0]; x <= c1[0]; ++x)
+      for (int64_t y = c0[1]; y <= c1[1]; ++y) {
+        const uint64_t first = key(x, y, c0[2]), last = key(x, y, c1[2]);
+        auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(first, uint32_t{0}));
+        for (; it != grid.end() && it->first <= last; ++it) {
+          const double* w = mesh.point(unused[it->second]);
+          double d2 = 0;
+          for (int i = 0; i < 3; ++i) d2 += (w[i] - m[i]) * (w[i] - m[i]);
+          const double score = d2 / len2;  // edges come in increasing (a, b): the first of equals stays
+          if (score <= kMaxOffset * kMaxOffset && score < best[it->second]) {
+            best[it->second] = score;
+            best_edge[it->second] = e;
+          }
+        }
+      }
+  }
+  std::vector<EdgePoint> out;
+  for (size_t i = 0; i < unused.size(); ++i)
+    if (best[i] <= kMaxOffset * kMaxOffset)
+      out.push_back({unused[i], static_cast<uint32_t>(best_edge[i] >> 32), static_cast<uint32_t>(best_edge[i])});
+  return out;
+}
+
+}  // namespace gtn
