@@ -1538,6 +1538,9 @@ class LevelCoder {
         if constexpr (kEncode) bit = pending != nullptr && !pending->empty();
         bit = geo_->bit(edge_point_[kind][more], bit);
         if (!bit) break;
+        if constexpr (!kEncode) {
+          if (!geo_->ok()) return bad("geometry stream is truncated or corrupt");
+        }
         uint32_t src = 0;
         if constexpr (kEncode) {
           src = pending->back();
