@@ -337,11 +337,13 @@ class LevelCoder {
 
   // Each value-coded component's form (section 10.2), at the start of its stream. For a float type a
   // bit (one model for the level) says whether it is coded in decimal form, then its decimal places
-  // in 5 direct bits; otherwise a bit (another model) says whether it has a shift, then the shift in
-  // 6 direct bits.
+  // in 5 direct bits; otherwise, for float64, a bit (another model) whether it is in printed-single
+  // form, then its digits in 5 direct bits; otherwise a bit (a third model) says whether it has a
+  // shift, then the shift in 6 direct bits.
   Status codeValueForms() {
     struct Form {
       int decimals = -1;
+      int printed = 0;
       uint32_t shift = 0;
     };
     auto declare = [&](Coder& c, ValueCoder& vc, ScalarType type, uint32_t comp, Form form, const std::string& what) -> Status {
@@ -356,6 +358,19 @@ class LevelCoder {
           }
           vc.setDecimals(comp, static_cast<int>(e));
           return Status::ok();
+        }
+        if (type == ScalarType::kFloat64) {
+          uint32_t printed = form.printed > 0;
+          printed = c.bit(printed_flag_, printed);
+          if (printed) {
+            const uint32_t p = c.direct(static_cast<uint32_t>(form.printed), 5);
+            if constexpr (!kEncode) {
+              if (p < 1 || p > ValueCoder::kMaxPrintedDigits)
+                return bad(what + " declares " + std::to_string(p) + " printed digits (1 to 17)");
+            }
+            vc.setPrinted(comp, static_cast<int>(p));
+            return Status::ok();
+          }
         }
       }
       uint32_t has = form.shift > 0;
@@ -384,6 +399,7 @@ class LevelCoder {
         int places[2];
         double integer[2];
         float float_bits;  // bit length of the difference of the shifted keys
+        uint64_t keys[2];
       };
       std::vector<Pair> pairs;
       const bool sample = n > 1024;
@@ -403,6 +419,7 @@ class LevelCoder {
         }
         const uint64_t d = (keys[1] > keys[0] ? keys[1] - keys[0] : keys[0] - keys[1]) >> z;
         pair.float_bits = static_cast<float>(bitLength(d));
+        pair.keys[0] = keys[0], pair.keys[1] = keys[1];
         pairs.push_back(pair);
       }
       double floats = 0;
@@ -417,7 +434,29 @@ class LevelCoder {
           const bool both = std::fabs(at_e[0]) < kDecimalLimit && std::fabs(at_e[1]) < kDecimalLimit;
           cost += both ? std::log2(std::fabs(at_e[1] - at_e[0]) + 1) + 1 : pair.float_bits + 4;
         }
-        if (cost < best) best = cost, form = {e, 0};
+        if (cost < best) best = cost, form = {e, 0, 0};
+      }
+      // Float64 values that are float32 values printed with p digits (0.200000002980232 for 0.2f): the
+      // p that most of the pairs' first values have (values that are float32 values exactly have a
+      // shift of 29 or more instead), costed like the decimal places, on the float32 keys.
+      if (type == ScalarType::kFloat64 && form.shift < 29) {
+        int count[ValueCoder::kMaxPrintedDigits] = {};
+        uint64_t single = 0;
+        for (const Pair& pair : pairs)
+          for (int digits = 1; digits < ValueCoder::kMaxPrintedDigits; ++digits)
+            count[digits] += printedSingleKey(pair.keys[0], digits, &single);
+        int digits = 0;
+        for (int d = 1; d < ValueCoder::kMaxPrintedDigits; ++d)
+          if (count[d] > count[digits]) digits = d;
+        if (digits > 0) {
+          double cost = 0;
+          for (const Pair& pair : pairs) {
+            uint64_t k32[2];
+            const bool both = printedSingleKey(pair.keys[0], digits, &k32[0]) && printedSingleKey(pair.keys[1], digits, &k32[1]);
+            cost += both ? bitLength(k32[1] > k32[0] ? k32[1] - k32[0] : k32[0] - k32[1]) + 1 : pair.float_bits + 4;
+          }
+          if (cost < best) form = {-1, digits, 0};
+        }
       }
       return form;
     };
@@ -1879,6 +1918,7 @@ class LevelCoder {
   int n_near_ = 0;
   bool edge_points_ = false;  // the level codes points on edges (section 10.5)
   BitModel edge_points_flag_;
+  BitModel printed_flag_;  // codeValueForms
   BitModel edge_point_[4][2];  // [edge kind (codeEdgePoints)][after a point on the same edge]
   uint32_t copy_last_[3] = {0, 0, 0};
   std::vector<double> pred_vals_;

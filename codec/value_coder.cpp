@@ -21,12 +21,20 @@ int ValueCoder::trailingZeros(ScalarType type, const uint8_t* p) {
   return raw == 0 ? static_cast<int>(8 * n) : __builtin_ctzll(raw);
 }
 
+void ValueCoder::addEscapeModels() {
+  if (comp_.size() != components_) return;
+  comp_.resize(2 * size_t{components_});
+  for (size_t i = components_; i < comp_.size(); ++i) comp_[i].bucket.resize(kContexts);
+}
+
 void ValueCoder::setDecimals(uint32_t comp, int e) {
   comp_[comp].decimals = e;
-  if (e >= 0 && comp_.size() == components_) {
-    comp_.resize(2 * size_t{components_});
-    for (size_t i = components_; i < comp_.size(); ++i) comp_[i].bucket.resize(kContexts);
-  }
+  if (e >= 0) addEscapeModels();
+}
+
+void ValueCoder::setPrinted(uint32_t comp, int digits) {
+  comp_[comp].printed = digits;
+  if (digits > 0) addEscapeModels();
 }
 
 int ValueCoder::decimalPlaces(ScalarType type, uint64_t key, int64_t* n) {

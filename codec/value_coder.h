@@ -17,9 +17,12 @@
 // 5.6770899999999997) is coded in decimal form: a bit per value says whether it is one, and such a
 // value is coded as the integer n = v * 10^e, from which IEEE division restores v = n / 10^e bit for
 // bit; the others (a mesh generator's own points among the input's, say) as floats, with their own
-// models (spec section 10.2).
+// models. A float64 component whose values are mostly float32 values printed with p digits and read
+// back (0.2f printed "%.15g" is 0.200000002980232) is coded in printed-single form: such a value as
+// its float32 value, the others as float64, behind the same per-value bit (spec section 10.2).
 #pragma once
 
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -177,6 +180,11 @@ class ValueCoder {
   // n; -1 when it has none (NaN, infinity, -0.0, more places or digits than that).
   static int decimalPlaces(ScalarType type, uint64_t key, int64_t* n);
 
+  // The significant digits p (1..kMaxPrintedDigits) of a float64 component coded in printed-single
+  // form, 0 for none.
+  void setPrinted(uint32_t comp, int digits);
+  static constexpr int kMaxPrintedDigits = 17;
+
  private:
   static constexpr int kTreeBits = 7;      // bucket 0..64
   static constexpr int kContexts = 17;     // previous bucket / 4
@@ -188,9 +196,12 @@ class ValueCoder {
     uint32_t last_bucket = 0;
     int shift = 0;
     int decimals = -1;
-    BitModel not_decimal[2];  // context: the previous value's bit
+    int printed = 0;
+    BitModel not_decimal[2];  // context: the previous value's bit (decimal or printed-single form)
     uint32_t last_not_decimal = 0;
   };
+  // Gives a component in decimal or printed-single form its float models, after the others.
+  void addEscapeModels();
   // Codes the residual of keys `w` bits wide (`mask` = 2^w - 1).
   template <class C>
   static uint64_t codeKey(C& c, Component& m, int w, uint64_t mask, uint64_t pred_key, uint64_t actual_key);
@@ -199,7 +210,7 @@ class ValueCoder {
   uint32_t components_;
   int bits_;
   uint64_t mask_;
-  std::vector<Component> comp_;  // then, once a component is decimal, the float models of each one
+  std::vector<Component> comp_;  // then, once a component is decimal or printed, the float models of each one
 };
 
 // Decimal-form integers stay below 2^53 in magnitude, where every integer is exactly a double.
@@ -218,6 +229,35 @@ inline void decimalValue(ScalarType type, int64_t n, int e, uint8_t* raw) {
   } else {
     value_detail::storeRaw<double>(raw, v);
   }
+}
+
+// The float64 that a float32 value f printed with p significant digits reads back as: a program that
+// holds single precision values in doubles and prints them with "%.15g" writes 0.200000002980232 for
+// 0.2f (Medit files from MMG do). printf's "%.*g" and strtod, exactly (std::to_chars and
+// std::from_chars are exact by their definition).
+inline double printedSingle(float f, int digits) {
+  if (!std::isfinite(f)) return f;  // never encoded; a corrupt stream's
+  char text[64];
+  const auto r = std::to_chars(text, text + sizeof text, static_cast<double>(f), std::chars_format::general, digits);
+  double v = 0;
+  std::from_chars(text, r.ptr, v);
+  return v;
+}
+
+// The float32 whose printing with `digits` digits is the float64 value with key `key`, as a key, or
+// false.
+inline bool printedSingleKey(uint64_t key, int digits, uint64_t* out) {
+  uint8_t raw[8];
+  rawFromKey(ScalarType::kFloat64, key, raw);
+  const double v = value_detail::loadRaw<double>(raw);
+  if (!(std::fabs(v) <= 3.4028234663852886e38)) return false;  // also NaN
+  const float f = static_cast<float>(v);
+  const double back = printedSingle(f, digits);
+  if (std::memcmp(&back, &v, sizeof v) != 0) return false;
+  uint8_t fraw[4];
+  value_detail::storeRaw<float>(fraw, f);
+  *out = keyFromRaw(ScalarType::kFloat32, fraw);
+  return true;
 }
 
 // The integer n whose decimal value n / 10^e is the value with key `key`, or false.
@@ -242,6 +282,21 @@ inline bool decimalInteger(ScalarType type, uint64_t key, int e, int64_t* out) {
 template <class C>
 uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actual_key) {
   Component& m = comp_[comp];
+  if (m.printed > 0) {
+    uint64_t single = 0;
+    uint32_t other = 0;
+    if constexpr (C::kEncoding) other = !printedSingleKey(actual_key, m.printed, &single);
+    other = c.bit(m.not_decimal[m.last_not_decimal], other);
+    m.last_not_decimal = other;
+    if (other) return codeKey(c, comp_[components_ + comp], bits_, mask_, pred_key, actual_key);
+    // The float32 keys: the prediction rounded to float32, the value's float32.
+    uint8_t raw[8];
+    rawFromKey(type_, pred_key, raw);
+    const uint64_t k = codeKey(c, m, 32, 0xFFFFFFFFu, keyFromPrediction(ScalarType::kFloat32, doubleFromRaw(type_, raw)), single);
+    rawFromKey(ScalarType::kFloat32, k, raw);
+    value_detail::storeRaw<double>(raw, printedSingle(value_detail::loadRaw<float>(raw), m.printed));
+    return keyFromRaw(type_, raw);
+  }
   if (m.decimals >= 0) {
     int64_t n = 0;
     uint32_t other = 0;

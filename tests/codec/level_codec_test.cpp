@@ -159,6 +159,60 @@ TEST(LevelCodec, DecimalValuesAreCodedAsIntegers) {
   EXPECT_LT(8.0 * e.geometry.size() / nv, 3 * 24.0) << "coordinates of 5 decimals";
 }
 
+// Float32 values that a program printed as doubles with 15 digits (MMG's Medit files: 0.2f as
+// 0.200000002980232) are coded as the float32 values they are (spec 10.2, printed-single form): they
+// cost what the float32 mesh costs, not a double's 52-bit significand; values of other forms among
+// them (a full double, -0.0, a value beyond float32's range) take the escape and survive too.
+TEST(LevelCodec, PrintedSingleValuesCostWhatTheirFloat32ValuesCost) {
+  TetMesh singles = gridMesh(12, 10, 9, 6);
+  singles.coord_type = ScalarType::kFloat32;
+  for (double& c : singles.coords) c = static_cast<float>(c * 3.14159265358979);  // no decimal form
+  const size_t n = singles.numPoints();
+  Field f32("pressure", 1, ScalarType::kFloat32, n);
+  for (size_t v = 0; v < n; ++v) f32.set<float>(v, 0, static_cast<float>(std::sin(0.3 * singles.point(v)[0]) * 1e3));
+  singles.point_fields = {f32};
+
+  TetMesh printed = singles;
+  printed.coord_type = ScalarType::kFloat64;
+  for (double& c : printed.coords) c = printedSingle(static_cast<float>(c), 15);
+  Field f64("pressure", 1, ScalarType::kFloat64, n);
+  for (size_t v = 0; v < n; ++v) f64.set<double>(v, 0, printedSingle(static_cast<float>(f32.get(v, 0)), 15));
+  f64.set<double>(5, 0, 1.0 / 3.0);
+  f64.set<double>(6, 0, -0.0);
+  f64.set<double>(7, 0, 1e300);
+  printed.point_fields = {f64};
+  printed.coords[3 * 11] = 1.0 / 7.0;
+  ASSERT_EQ(printed.coords[3], printedSingle(static_cast<float>(singles.coords[3]), 15));
+  ASSERT_NE(printed.coords[3], singles.coords[3]) << "the printed value is not the float32 value";
+
+  const EncodedLevel a = roundTrip(singles), b = roundTrip(printed);
+  const double nv = static_cast<double>(n);
+  EXPECT_LT(8.0 * b.geometry.size() / nv, 8.0 * a.geometry.size() / nv + 1.0);
+  EXPECT_LT(8.0 * b.point_fields[0].size() / nv, 8.0 * a.point_fields[0].size() / nv + 1.0);
+}
+
+TEST(LevelCodec, PrintedSingleKeysAreExact) {
+  auto key = [](double v) {
+    uint8_t raw[8];
+    std::memcpy(raw, &v, 8);
+    return keyFromRaw(ScalarType::kFloat64, raw);
+  };
+  uint64_t single = 0;
+  ASSERT_TRUE(printedSingleKey(key(0.200000002980232), 15, &single));
+  uint8_t raw[4];
+  rawFromKey(ScalarType::kFloat32, single, raw);
+  float f;
+  std::memcpy(&f, raw, 4);
+  EXPECT_EQ(f, 0.2f);
+  EXPECT_FALSE(printedSingleKey(key(0.2), 15, &single)) << "0.2f prints as 0.200000002980232";
+  EXPECT_FALSE(printedSingleKey(key(0.200000002980232), 16, &single));
+  EXPECT_TRUE(printedSingleKey(key(0.2000000029802322), 16, &single));
+  EXPECT_TRUE(printedSingleKey(key(-0.0), 15, &single));
+  EXPECT_FALSE(printedSingleKey(key(std::nan("")), 15, &single));
+  EXPECT_FALSE(printedSingleKey(key(1e39), 15, &single)) << "beyond float32's range";
+  EXPECT_EQ(printedSingle(-1.472f, 15), -1.47200000286102);
+}
+
 // Importers split a hexahedron into 5 or 6 tetrahedra and give each its cell's values. The siblings
 // are seldom behind the gate face but often across the other faces a tetrahedron closes, and a
 // symbol names those (spec section 10.7): a value new to the field is escaped about once per

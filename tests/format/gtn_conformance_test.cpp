@@ -11,6 +11,7 @@
 #include <functional>
 #include <set>
 
+#include "codec/value_coder.h"
 #include "format/gtn_file.h"
 #include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
@@ -155,6 +156,23 @@ TetMesh decimals() {
   return finish(m);
 }
 
+// Float32 values printed with 15 digits and read back as doubles, as MMG's Medit files hold them
+// (spec 10.2, printed-single form): coordinates and a float64 field, with a full double and a value
+// beyond float32's range taking the per-value escape.
+TetMesh printedSingles() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat64;
+  addCubeGrid(m, 3, 0.0, 0.37);
+  for (double& c : m.coords) c = printedSingle(static_cast<float>(c * 1.7 + 0.01), 15);
+  m.coords[3 * 4 + 1] = 1.0 / 3.0;
+  const size_t np = m.numPoints();
+  Field t("temperature", 1, ScalarType::kFloat64, np);
+  for (size_t v = 0; v < np; ++v) t.set<double>(v, 0, printedSingle(static_cast<float>(280.0 + 0.37 * static_cast<double>(v % 13)), 15));
+  t.set<double>(9, 0, 1e300);
+  m.point_fields = {t};
+  return finish(m);
+}
+
 // A quadratic tetrahedral mesh as importers keep it (spec 10.5, edge points): the 2 x 2 x 2 cube grid,
 // float64, with a node on every edge of every tetrahedron that no tetrahedron uses, most at the edge's
 // midpoint, some off it (a curved cell's), and one point on no edge, coded after peeling.
@@ -265,6 +283,7 @@ std::vector<Sample> samples() {
   s.push_back(valid("repeated-components.f64.dir.v1.0.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
   s.push_back(valid("decimals.f64.dir.v1.0.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
+  s.push_back(valid("printed-singles.f64.dir.v1.0.gtn", printedSingles, [] { return encodeFile(printedSingles(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithLevels(options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
