@@ -75,6 +75,31 @@ std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh) {
     grid.push_back({key(cellOf(p[0], 0), cellOf(p[1], 1), cellOf(p[2], 2)), i});
   }
   std::sort(grid.begin(), grid.end());
+  // Each occupied cell's range of `grid`, in an open-addressing table of twice as many entries or more
+  // (a cell is then one probe or two, where a binary search of `grid` would miss the cache every step).
+  struct Cell {
+    uint64_t key = ~uint64_t{0};  // ~0: empty (keys use 63 bits)
+    uint32_t begin = 0, end = 0;
+  };
+  int bits = 1;
+  while ((size_t{1} << bits) < 2 * grid.size()) ++bits;
+  std::vector<Cell> table(size_t{1} << bits);
+  auto home = [&](uint64_t k) { return static_cast<size_t>((k * 0x9E3779B97F4A7C15ull) >> (64 - bits)); };
+  const size_t mask = table.size() - 1;
+  for (uint32_t i = 0; i < grid.size();) {
+    uint32_t j = i;
+    while (j < grid.size() && grid[j].first == grid[i].first) ++j;
+    size_t h = home(grid[i].first);
+    while (table[h].key != ~uint64_t{0}) h = (h + 1) & mask;
+    table[h] = {grid[i].first, i, j};
+    i = j;
+  }
+  auto cellRange = [&](uint64_t k) -> const Cell* {
+    for (size_t h = home(k);; h = (h + 1) & mask) {
+      if (table[h].key == k) return &table[h];
+      if (table[h].key == ~uint64_t{0}) return nullptr;
+    }
+  };
 
   std::vector<double> best(unused.size(), std::numeric_limits<double>::infinity());
   std::vector<uint64_t> best_edge(unused.size(), 0);
@@ -92,20 +117,22 @@ std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh) {
     }
     if (cells > kMaxCells) continue;
     for (int64_t x = c0[0]; x <= c1[0]; ++x)
-      for (int64_t y = c0[1]; y <= c1[1]; ++y) {
-        const uint64_t first = key(x, y, c0[2]), last = key(x, y, c1[2]);
-        auto it = std::lower_bound(grid.begin(), grid.end(), std::make_pair(first, uint32_t{0}));
-        for (; it != grid.end() && it->first <= last; ++it) {
-          const double* w = mesh.point(unused[it->second]);
-          double d2 = 0;
-          for (int i = 0; i < 3; ++i) d2 += (w[i] - m[i]) * (w[i] - m[i]);
-          const double score = d2 / len2;  // edges come in increasing (a, b): the first of equals stays
-          if (score <= kMaxOffset * kMaxOffset && score < best[it->second]) {
-            best[it->second] = score;
-            best_edge[it->second] = e;
+      for (int64_t y = c0[1]; y <= c1[1]; ++y)
+        for (int64_t z = c0[2]; z <= c1[2]; ++z) {
+          const Cell* c = cellRange(key(x, y, z));
+          if (!c) continue;
+          for (uint32_t g = c->begin; g < c->end; ++g) {
+            const uint32_t i = grid[g].second;
+            const double* w = mesh.point(unused[i]);
+            double d2 = 0;
+            for (int k = 0; k < 3; ++k) d2 += (w[k] - m[k]) * (w[k] - m[k]);
+            const double score = d2 / len2;  // edges come in increasing (a, b): the first of equals stays
+            if (score <= kMaxOffset * kMaxOffset && score < best[i]) {
+              best[i] = score;
+              best_edge[i] = e;
+            }
           }
         }
-      }
   }
   std::vector<EdgePoint> out;
   for (size_t i = 0; i < unused.size(); ++i)

@@ -34,7 +34,6 @@
 #include <memory>
 #include <string>
 #include <type_traits>
-#include <unordered_map>
 #include <utility>
 
 #include "codec/edge_points.h"
@@ -205,9 +204,10 @@ struct EncoderSide {
   std::vector<uint32_t> vertex_order;
   std::vector<uint64_t> tet_order;
   std::vector<uint32_t> alias;  // per point-field component (flattened): earlier identical component, or ~0
-  // Unused points on an edge (findEdgePoints), by the edge's source vertices (a << 32 | b, a < b), in
-  // decreasing point order: coded from the back.
-  std::unordered_map<uint64_t, std::vector<uint32_t>> edge_points;
+  // Unused points on an edge (findEdgePoints) in (a, b, point) order, those of the edges whose lower
+  // source vertex is a from edge_point_start[a] on; a coded point's entry becomes kNone32.
+  std::vector<EdgePoint> edge_points;
+  std::vector<uint32_t> edge_point_start;
 };
 
 template <bool kEncode>
@@ -1566,15 +1566,18 @@ class LevelCoder {
     for (int k = 0; k < 6; ++k) {
       const uint32_t a = e[kEdges[k][0]], b = e[kEdges[k][1]];
       const uint32_t kind = gate < 0 || (k >= 3 && fresh_apex) ? 0 : (k >= 3 ? 1 : (boundary_gate ? 2 : 3));
-      std::vector<uint32_t>* pending = nullptr;
+      EdgePoint *next = nullptr, *end = nullptr;  // the encoder's entries of the edge
+      uint32_t hi = 0;
       if constexpr (kEncode) {
-        const uint32_t sa = enc_->slot_src[a], sb = enc_->slot_src[b];
-        const auto it = enc_->edge_points.find(uint64_t{std::min(sa, sb)} << 32 | std::max(sa, sb));
-        if (it != enc_->edge_points.end()) pending = &it->second;
+        const uint32_t sa = enc_->slot_src[a], sb = enc_->slot_src[b], lo = std::min(sa, sb);
+        hi = std::max(sa, sb);
+        next = enc_->edge_points.data() + enc_->edge_point_start[lo];
+        end = enc_->edge_points.data() + enc_->edge_point_start[lo + 1];
+        while (next != end && next->b < hi) ++next;
       }
       for (uint32_t more = 0;; more = 1) {
         uint32_t bit = 0;
-        if constexpr (kEncode) bit = pending != nullptr && !pending->empty();
+        if constexpr (kEncode) bit = next != end && next->b == hi && next->point != kNone32;
         bit = geo_->bit(edge_point_[kind][more], bit);
         if (!bit) break;
         if constexpr (!kEncode) {
@@ -1582,8 +1585,9 @@ class LevelCoder {
         }
         uint32_t src = 0;
         if constexpr (kEncode) {
-          src = pending->back();
-          pending->pop_back();
+          src = next->point;
+          next->point = kNone32;
+          ++next;
         }
         FieldPrediction fp;
         fp.kind = FieldPrediction::kEdge;
@@ -1991,9 +1995,13 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   enc.vertex_order.assign(np, kNone32);
   enc.tet_order.assign(nt, 0);
   if (options.edge_points) {
-    const std::vector<EdgePoint> found = findEdgePoints(mesh);
-    for (auto it = found.rbegin(); it != found.rend(); ++it)
-      enc.edge_points[uint64_t{it->a} << 32 | it->b].push_back(it->point);
+    enc.edge_points = findEdgePoints(mesh);
+    std::sort(enc.edge_points.begin(), enc.edge_points.end(), [](const EdgePoint& x, const EdgePoint& y) {
+      return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.point < y.point);
+    });
+    enc.edge_point_start.assign(np + 1, 0);
+    for (const EdgePoint& p : enc.edge_points) ++enc.edge_point_start[p.a + 1];
+    for (size_t v = 0; v < np; ++v) enc.edge_point_start[v + 1] += enc.edge_point_start[v];
   }
   {
     struct Comp {
