@@ -12,6 +12,9 @@ namespace {
 constexpr int kTetEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 constexpr double kMaxOffset = 0.25;  // of the edge's length, from its midpoint
 constexpr int64_t kMaxCells = 512;   // cells one edge's search may visit
+// Points a cell may hold and still be searched: more are coincident points (placeholders at the
+// origin, say), and searching them from every edge nearby would take time quadratic in their number.
+constexpr uint32_t kMaxCellPoints = 256;
 constexpr int64_t kCellRange = int64_t{1} << 20;  // cell coordinates, clamped to [-range, range)
 
 }  // namespace
@@ -63,7 +66,6 @@ std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh) {
     const double c = std::floor((x - lo[i]) / cell);
     return static_cast<int64_t>(std::clamp(c, -static_cast<double>(kCellRange), static_cast<double>(kCellRange - 1)));
   };
-  // z lowest, so that a column of cells is one range of keys.
   auto key = [](int64_t x, int64_t y, int64_t z) {
     return static_cast<uint64_t>(x + kCellRange) << 42 | static_cast<uint64_t>(y + kCellRange) << 21 |
            static_cast<uint64_t>(z + kCellRange);
@@ -120,7 +122,7 @@ std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh) {
       for (int64_t y = c0[1]; y <= c1[1]; ++y)
         for (int64_t z = c0[2]; z <= c1[2]; ++z) {
           const Cell* c = cellRange(key(x, y, z));
-          if (!c) continue;
+          if (!c || c->end - c->begin > kMaxCellPoints) continue;
           for (uint32_t g = c->begin; g < c->end; ++g) {
             const uint32_t i = grid[g].second;
             const double* w = mesh.point(unused[i]);

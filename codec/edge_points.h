@@ -21,7 +21,8 @@ struct EdgePoint {
 // For each unused point with finite coordinates that lies within a quarter of an edge's length of
 // that edge's midpoint, the edge whose midpoint is nearest relative to its length (the lowest (a, b)
 // among equals). Sorted by point. Edges whose search would visit more than a few hundred grid cells
-// (far longer than the mesh's typical edge) are not considered.
+// (far longer than the mesh's typical edge) are not considered, nor are points in a cell of more than
+// a few hundred (coincident points).
 std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh);
 
 }  // namespace gtn

@@ -57,6 +57,19 @@ TEST(EdgePoints, NoneWithoutUnusedPointsOrWithNonFiniteOnes) {
   EXPECT_TRUE(findEdgePoints(m).empty());
 }
 
+// Thousands of unused points at one spot (placeholders) are not searched from every edge: they stay
+// unused points, and the time stays linear.
+TEST(EdgePoints, CoincidentPointsAreLeftAlone) {
+  TetMesh m;
+  m.coords = {0, 0, 0, 2, 0, 0, 0, 2, 0, 0, 0, 2, 20, 0, 0, 22, 0, 0, 20, 2, 0, 20, 0, 2};
+  m.tets = {{0, 1, 2, 3}, {4, 5, 6, 7}};
+  const uint32_t mid01 = addPoint(m, 1, 0, 0);
+  for (int i = 0; i < 5000; ++i) addPoint(m, 21, 0, 0);  // the midpoint of (4, 5)
+  const std::vector<EdgePoint> found = findEdgePoints(m);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].point, mid01);
+}
+
 // The codec round trip of a quadratic grid: every mid-edge node decoded bit for bit, whether the
 // encoder codes the nodes on their edges or not, and on their edges for less.
 TEST(EdgePoints, QuadraticGridRoundTrips) {
