@@ -1,7 +1,8 @@
-// Containers for the peeling front. Everything is stored with the vertex slot it hangs from: each
-// slot owns a bucket of entries, chained to overflow buckets when it holds more. A walk
-// around a vertex, or the lookup of a face, then touches one or two lines instead of missing all
-// over a hash table of the whole front. Sizes follow the front (the slot pool), not the mesh.
+// Containers for the peeling front. Everything is found through the vertex slot it hangs from: a
+// slot owns a bucket of its edges, chained to overflow buckets when it holds more, and heads a chain
+// of its faces. A walk around a vertex, or the lookup of a face, then touches one or two lines
+// instead of missing all over a hash table of the whole front. Sizes follow the front (the slot
+// pool), not the mesh.
 #pragma once
 
 #include <cstddef>
@@ -78,17 +79,6 @@ class SlotTable {
       for (int j = 1; j < kKeys; ++j) m &= equalLanes<kCap>(b->key[j], k[j]);
       m &= (uint64_t{1} << b->n) - 1;
       if (m) return {b, static_cast<uint32_t>(__builtin_ctzll(m))};
-      if (b->next == kNil) return {nullptr, 0};
-      b = const_cast<Bucket*>(&extra_[b->next]);
-    }
-  }
-  // The entry of slot `a` whose value is `v`, or a null Ref.
-  Ref findValue(uint32_t a, uint32_t v) const {
-    if (a >= head_.size()) return {nullptr, 0};
-    Bucket* b = const_cast<Bucket*>(&head_[a]);
-    while (true) {
-      for (uint32_t i = 0; i < b->n; ++i)
-        if (b->value[i] == v) return {b, i};
       if (b->next == kNil) return {nullptr, 0};
       b = const_cast<Bucket*>(&extra_[b->next]);
     }
@@ -203,10 +193,15 @@ struct FrontFace {
   uint32_t d;
   uint32_t tet;
   uint32_t cell;  // record of the near tetrahedron's cell values (level codec), or ~0
+  uint32_t next;  // FaceMap's chain of the faces with the same smallest slot
 };
 
 // The open faces, at most one per vertex triple: records in a pool whose indices stay valid until
-// the face is erased, found through their smallest slot.
+// the face is erased, found through their smallest slot. Each slot heads a chain of its faces linked
+// through the records themselves: a slot is the smallest of one or two open faces on average, so
+// per-slot buckets (they took 128 bytes a slot, with overflow buckets besides) were mostly empty and
+// made the largest of the decoder's structures; a chain costs 4 bytes a slot and 4 a face, and a
+// lookup still reads one line of heads, which stays in cache, then the face's own record.
 class FaceMap {
  public:
   static constexpr uint32_t kEmptyFace = 0xFFFFFFFFu;
@@ -222,8 +217,12 @@ class FaceMap {
   }
   // Index of the face with sorted key `k`, or -1.
   long find(const uint32_t k[3]) const {
-    const auto r = table_.find(k[0], k + 1);
-    return r ? static_cast<long>(r.value()) : -1;
+    if (k[0] >= head_.size()) return -1;
+    for (uint32_t i = head_[k[0]]; i != kNil; i = pool_[i].next) {
+      const FrontFace& f = pool_[i];
+      if (f.key[1] == k[1] && f.key[2] == k[2]) return i;
+    }
+    return -1;
   }
   // True if `index` is the face with sorted key `k` (a cheap find() when the index is a guess).
   bool holds(long index, const uint32_t k[3]) const {
@@ -243,14 +242,19 @@ class FaceMap {
       i = static_cast<uint32_t>(pool_.size());
       pool_.push_back(f);
     }
-    table_.append(f.key[0], f.key + 1, i);
+    const uint32_t a = f.key[0];
+    if (a >= head_.size()) head_.resize(size_t{a} + 1, kNil);
+    pool_[i].next = head_[a];
+    head_[a] = i;
     ++size_;
     return i;
   }
   void eraseAt(long index) {
     const uint32_t i = static_cast<uint32_t>(index);
     FrontFace& f = pool_[i];
-    table_.erase(f.key[0], table_.findValue(f.key[0], i));
+    uint32_t* link = &head_[f.key[0]];
+    while (*link != i) link = &pool_[*link].next;
+    *link = f.next;
     f.key[0] = kEmptyFace;
     free_.push_back(i);
     --size_;
@@ -258,12 +262,14 @@ class FaceMap {
   size_t size() const { return size_; }
   // Starts loading what find(k) and at(index) will read.
   void prefetch(const uint32_t k[3], long index) const {
-    table_.prefetch(k[0]);
+    if (k[0] < head_.size()) __builtin_prefetch(&head_[k[0]]);
     if (index >= 0 && static_cast<size_t>(index) < pool_.size()) __builtin_prefetch(&pool_[static_cast<size_t>(index)]);
   }
 
  private:
-  SlotTable<2, 10> table_;  // sorted key[1], key[2] -> pool index; 8 + 10 * 12 bytes: two cache lines
+  static constexpr uint32_t kNil = 0xFFFFFFFFu;
+
+  std::vector<uint32_t> head_;  // [smallest slot] -> first face of its chain, or kNil
   std::vector<FrontFace> pool_;
   std::vector<uint32_t> free_;
   size_t size_ = 0;
