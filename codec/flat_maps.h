@@ -128,6 +128,8 @@ class SlotTable {
     extra_.clear();
     free_.clear();
   }
+  // Room for slots below n without reallocating (append grows by doubling otherwise).
+  void reserveSlots(size_t n) { head_.reserve(n); }
   // Starts loading slot `a`'s bucket into the cache.
   void prefetch(uint32_t a) const {
     if (a < head_.size()) __builtin_prefetch(&head_[a]);
@@ -170,6 +172,7 @@ class EdgeMap {
   }
   void eraseIf(uint64_t key, uint32_t value) { eraseIf(hi(key), lo(key), value); }
   void prefetch(uint32_t a) const { table_.prefetch(a); }
+  void reserveSlots(size_t n) { table_.reserveSlots(n); }
   void clear() {
     table_.clear();
     size_ = 0;
@@ -260,6 +263,7 @@ class FaceMap {
     --size_;
   }
   size_t size() const { return size_; }
+  void reserveSlots(size_t n) { head_.reserve(n); }
   // Starts loading what find(k) and at(index) will read.
   void prefetch(const uint32_t k[3], long index) const {
     if (k[0] < head_.size()) __builtin_prefetch(&head_[k[0]]);

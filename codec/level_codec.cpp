@@ -467,26 +467,50 @@ class LevelCoder {
       free_.pop_back();
     } else {
       s = static_cast<uint32_t>(state_.size());
+      if (s == state_.capacity()) reserveSlots(s + s / 4 + 64);
       state_.push_back(kFree);
       pos_.resize(pos_.size() + 3);
       vals_.resize(vals_.size() + item_bytes_);
       open_.push_back(0);
       pins_.push_back(0);
       ids_.push_back(0);
-      nxt_.push_back(kNoSlot);
-      prv_.push_back(kNoSlot);
-      corner_sum_.push_back(0.0);
-      corner_count_.push_back(0);
+      if (!boundary_done_) {
+        nxt_.push_back(kNoSlot);
+        prv_.push_back(kNoSlot);
+        corner_sum_.push_back(0.0);
+        corner_count_.push_back(0);
+      }
       if constexpr (kEncode) enc_->slot_src.push_back(kNone32);
     }
     state_[s] = kLive;
     open_[s] = 0;
     pins_[s] = 0;
-    nxt_[s] = kNoSlot;
-    prv_[s] = kNoSlot;
-    corner_sum_[s] = 0.0;
-    corner_count_[s] = 0;
+    if (!boundary_done_) {
+      nxt_[s] = kNoSlot;
+      prv_[s] = kNoSlot;
+      corner_sum_[s] = 0.0;
+      corner_count_[s] = 0;
+    }
     return s;
+  }
+  // Room for n slots in every per-slot array. The pool grows by a quarter, not the vectors' own
+  // doubling: these arrays (and the edge buckets, 64 bytes a slot) are most of the decoder's memory,
+  // and doubling left up to half of them unused (blunt fin's 9748 slots had room for 16384).
+  void reserveSlots(size_t n) {
+    state_.reserve(n);
+    pos_.reserve(3 * n);
+    vals_.reserve(item_bytes_ * n);
+    open_.reserve(n);
+    pins_.reserve(n);
+    ids_.reserve(n);
+    if (!boundary_done_) {
+      nxt_.reserve(n);
+      prv_.reserve(n);
+      corner_sum_.reserve(n);
+      corner_count_.reserve(n);
+    }
+    edges_.reserveSlots(n);
+    faces_.reserveSlots(n);
   }
   void freeSlot(uint32_t s) {
     state_[s] = kFree;
@@ -1057,8 +1081,14 @@ class LevelCoder {
       GTN_RETURN_IF_ERROR(addTriangle(v, tri));
     }
     // Freed, not just emptied: the decoder's memory should follow the peeling front from here on.
+    // The boundary loop and the corner angles are not needed either, nor kept for new slots.
     half_ = EdgeMap();
     hqueue_ = RingQueue<uint64_t>();
+    nxt_ = std::vector<uint32_t>();
+    prv_ = std::vector<uint32_t>();
+    corner_sum_ = std::vector<double>();
+    corner_count_ = std::vector<uint32_t>();
+    boundary_done_ = true;
     return Status::ok();
   }
 
@@ -1744,11 +1774,14 @@ class LevelCoder {
   std::vector<uint8_t> state_;
   std::vector<double> pos_;
   std::vector<uint8_t> vals_;
-  std::vector<uint32_t> open_, pins_, ids_, nxt_, prv_, free_;
-  // Per slot, over the boundary triangles added so far: the sum of their corner angles at the
-  // vertex (cornerAngle) and their count (section 10.3).
+  std::vector<uint32_t> open_, pins_, ids_, free_;
+  // Per slot while the boundary phase lasts: the open boundary loop (nxt_, prv_) and, over the
+  // boundary triangles added so far, the sum of their corner angles at the vertex (cornerAngle) and
+  // their count (section 10.3).
+  std::vector<uint32_t> nxt_, prv_;
   std::vector<double> corner_sum_;
   std::vector<uint32_t> corner_count_;
+  bool boundary_done_ = false;
 
   FaceMap faces_;
   EdgeMap edges_;  // directed edge of an open face -> its third vertex
