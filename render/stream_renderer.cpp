@@ -229,7 +229,24 @@ struct StreamRenderer::State {
   std::vector<PooledVertex*> retired_flushing;  // retired while `flushing` was filled
   std::vector<PooledVertex*> unheld;  // counts that reached zero in the rendering thread, to free
   std::vector<std::array<uint32_t, 3>> boundary;
-  std::vector<uint32_t> pixel_start;  // the segments of pixel p are segs[pixel_start[p], pixel_start[p + 1])
+  // The first segment of every kPixelBlock-th pixel. Segments are stored in pixel order and know
+  // their pixel, so any pixel's are found by a short walk from its block's first: an eighth of
+  // castBoundary's offset per pixel (256 KB at 256x256). The walks stop at a last, empty segment of
+  // no pixel (kNone), which they need not test for.
+  static constexpr uint32_t kPixelBlock = 8;
+  std::vector<uint32_t> block_start;
+  // The first segment of pixel p or of a later pixel.
+  uint32_t firstSegmentFrom(uint32_t p) const {
+    uint32_t s = block_start[p / kPixelBlock];
+    while (segs[s].pixel < p) ++s;
+    return s;
+  }
+  // The end of pixel p's segments, which begin at s (firstSegmentFrom for p, or the end of the
+  // pixel before p).
+  uint32_t pixelSegmentsEnd(uint32_t p, uint32_t s) const {
+    while (segs[s].pixel == p) ++s;
+    return s;
+  }
   // Rays are not stored per pixel (that would be the largest structure at 256x256): prepareRay is
   // cheap and deterministic, so recomputing a pixel's ray gives the very same crossings.
   PreparedRay pixelRay(size_t p, const Camera& camera) const {
@@ -335,7 +352,8 @@ class SegmentBuilder : public SegmentSink {
  public:
   explicit SegmentBuilder(StreamRenderer::State& st) : st_(st) {}
   void begin(size_t segments) override {
-    st_.segs.resize(segments);
+    st_.segs.resize(segments + 1);
+    st_.segs.back().pixel = kNone;  // State::block_start's walks end there
     st_.backs.reserve(segments);
     st_.cursor_word.assign(2 * segments, kNone);
   }
@@ -482,8 +500,14 @@ Status StreamRenderer::endBoundary() {
   // Each segment straight into its state, its cursors waiting at its boundary triangles: the
   // segments themselves are never stored together.
   SegmentBuilder builder(st);
-  castBoundary(setup_.camera, surface, &st.pixel_start, builder);
-  stats_.segments = st.segs.size();
+  {
+    std::vector<uint32_t> pixel_start;
+    castBoundary(setup_.camera, surface, &pixel_start, builder);
+    const size_t pixels = pixel_start.size() - 1;
+    st.block_start.resize(pixels / State::kPixelBlock + 1);
+    for (size_t b = 0; b < st.block_start.size(); ++b) st.block_start[b] = pixel_start[b * State::kPixelBlock];
+  }
+  stats_.segments = st.segs.size() - 1;
   st.boundary.clear();
   st.boundary.shrink_to_fit();
   st.phase = State::Phase::kTets;
@@ -575,9 +599,11 @@ Status StreamRenderer::flushBatch() {
       int32_t count = 0;
       if (!st.shared_frame) {
         for (int py = box[1]; py <= box[3]; ++py) {
+          const uint32_t row = static_cast<uint32_t>(py) * w;
+          uint32_t s1 = st.firstSegmentFrom(row + box[0]);
           for (int px = box[0]; px <= box[2]; ++px) {
-            const size_t p = static_cast<size_t>(py) * w + px;
-            const uint32_t s0 = st.pixel_start[p], s1 = st.pixel_start[p + 1];
+            const uint32_t p = row + px, s0 = s1;
+            s1 = st.pixelSegmentsEnd(p, s0);
             if (s0 != s1) count += exactCount(p, s0, s1);
           }
         }
@@ -601,10 +627,12 @@ Status StreamRenderer::flushBatch() {
         const bool row_inside = hull.span(yc, kSure, &xl, &xr);
         int px0 = box[0], px1 = box[2];
         if (row_inside) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
+        const uint32_t row = static_cast<uint32_t>(py) * w;
+        uint32_t s1 = px0 <= px1 ? st.firstSegmentFrom(row + px0) : 0;
         for (int px = px0; px <= px1; ++px) {
           const double xc = px + 0.5;
-          const size_t p = static_cast<size_t>(py) * w + px;
-          const uint32_t s0 = st.pixel_start[p], s1 = st.pixel_start[p + 1];
+          const uint32_t p = row + px, s0 = s1;
+          s1 = st.pixelSegmentsEnd(p, s0);
           if (s0 == s1) continue;
           if (row_inside && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
           if (row_inside && xc > xl + kSure && xc < xr - kSure && s1 == s0 + 1) {  // clearly inside
@@ -761,9 +789,10 @@ Status StreamRenderer::endLevel() {
   GTN_RETURN_IF_ERROR(flushBatch());
   const int w = setup_.camera.width(), h = setup_.camera.height();
   image_ = Image(w, h);
+  uint32_t s = 0;
   for (size_t p = 0; p < static_cast<size_t>(w) * h; ++p) {
     Rgba acc;
-    for (uint32_t s = st.pixel_start[p]; s < st.pixel_start[p + 1]; ++s) {
+    for (; st.segs[s].pixel == p; ++s) {
       const StreamSegment& seg = st.segs[s];
       acc = over(acc, over(seg.front, seg.back != kNone ? st.backs[seg.back] : Rgba()));
     }
