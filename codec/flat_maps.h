@@ -5,6 +5,7 @@
 // pool), not the mesh.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -189,14 +190,15 @@ class EdgeMap {
 
 // An open face of the peeling front: (a, b, c) oriented so that the undecoded tetrahedron behind it
 // is (a, b, c, x) with positive orientation; d is the fourth vertex of the decoded tetrahedron on the
-// near side (kNoSlot for a boundary triangle); tet is the encoder's undecoded tetrahedron.
+// near side (kNoSlot for a boundary triangle).
 struct FrontFace {
-  uint32_t key[3];  // sorted vertex slots; key[0] == kEmptyFace marks a free pool entry
-  uint32_t v[3];
+  uint32_t v[3];  // v[0] == kEmptyFace marks a free pool entry
   uint32_t d;
-  uint32_t tet;
   uint32_t cell;  // record of the near tetrahedron's cell values (level codec), or ~0
-  uint32_t next;  // FaceMap's chain of the faces with the same smallest slot
+  // Set by FaceMap: the larger two slots of the sorted key (the smallest heads the face's chain),
+  // and the next face of that chain.
+  uint32_t key12[2];
+  uint32_t next;
 };
 
 // The open faces, at most one per vertex triple: records in a pool whose indices stay valid until
@@ -204,7 +206,8 @@ struct FrontFace {
 // through the records themselves: a slot is the smallest of one or two open faces on average, so
 // per-slot buckets (they took 128 bytes a slot, with overflow buckets besides) were mostly empty and
 // made the largest of the decoder's structures; a chain costs 4 bytes a slot and 4 a face, and a
-// lookup still reads one line of heads, which stays in cache, then the face's own record.
+// lookup still reads one line of heads, which stays in cache, then the face's own record. A record
+// is 32 bytes: the key's smallest slot is the chain's, and the encoder keeps its own data apart.
 class FaceMap {
  public:
   static constexpr uint32_t kEmptyFace = 0xFFFFFFFFu;
@@ -223,7 +226,7 @@ class FaceMap {
     if (k[0] >= head_.size()) return -1;
     for (uint32_t i = head_[k[0]]; i != kNil; i = pool_[i].next) {
       const FrontFace& f = pool_[i];
-      if (f.key[1] == k[1] && f.key[2] == k[2]) return i;
+      if (f.key12[0] == k[1] && f.key12[1] == k[2]) return i;
     }
     return -1;
   }
@@ -231,7 +234,7 @@ class FaceMap {
   bool holds(long index, const uint32_t k[3]) const {
     if (index < 0 || static_cast<size_t>(index) >= pool_.size()) return false;
     const FrontFace& f = pool_[static_cast<size_t>(index)];
-    return f.key[0] == k[0] && f.key[1] == k[1] && f.key[2] == k[2];
+    return f.v[0] != kEmptyFace && f.key12[0] == k[1] && f.key12[1] == k[2] && smallest(f) == k[0];
   }
   const FrontFace& at(long i) const { return pool_[static_cast<size_t>(i)]; }
   // Inserts a face whose key is absent; returns its index.
@@ -245,20 +248,24 @@ class FaceMap {
       i = static_cast<uint32_t>(pool_.size());
       pool_.push_back(f);
     }
-    const uint32_t a = f.key[0];
-    if (a >= head_.size()) head_.resize(size_t{a} + 1, kNil);
-    pool_[i].next = head_[a];
-    head_[a] = i;
+    uint32_t k[3];
+    sortedKey(f.v, k);
+    FrontFace& g = pool_[i];
+    g.key12[0] = k[1];
+    g.key12[1] = k[2];
+    if (k[0] >= head_.size()) head_.resize(size_t{k[0]} + 1, kNil);
+    g.next = head_[k[0]];
+    head_[k[0]] = i;
     ++size_;
     return i;
   }
   void eraseAt(long index) {
     const uint32_t i = static_cast<uint32_t>(index);
     FrontFace& f = pool_[i];
-    uint32_t* link = &head_[f.key[0]];
+    uint32_t* link = &head_[smallest(f)];
     while (*link != i) link = &pool_[*link].next;
     *link = f.next;
-    f.key[0] = kEmptyFace;
+    f.v[0] = kEmptyFace;
     free_.push_back(i);
     --size_;
   }
@@ -272,6 +279,8 @@ class FaceMap {
 
  private:
   static constexpr uint32_t kNil = 0xFFFFFFFFu;
+
+  static uint32_t smallest(const FrontFace& f) { return std::min(f.v[0], std::min(f.v[1], f.v[2])); }
 
   std::vector<uint32_t> head_;  // [smallest slot] -> first face of its chain, or kNil
   std::vector<FrontFace> pool_;

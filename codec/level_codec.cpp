@@ -200,6 +200,7 @@ struct EncoderSide {
   std::vector<uint32_t> vertex_order;
   std::vector<uint64_t> tet_order;
   std::vector<uint32_t> alias;  // per point-field component (flattened): earlier identical component, or ~0
+  std::vector<uint32_t> face_tet;  // FaceMap index of an open face -> the undecoded tetrahedron behind it
 };
 
 template <bool kEncode>
@@ -883,21 +884,27 @@ class LevelCoder {
   }
 
   // ---- front faces -----------------------------------------------------------------------------
+  // `tet`: the encoder's undecoded tetrahedron behind the face.
   void openFace(const uint32_t v[3], uint32_t d, uint32_t tet, uint32_t cell = kNone32) {
     FrontFace f;
-    FaceMap::sortedKey(v, f.key);
     for (int i = 0; i < 3; ++i) f.v[i] = v[i];
     f.d = d;
-    f.tet = tet;
     f.cell = cell;
     if (cell != kNone32) ++cell_ref_[cell];
     const uint32_t face = static_cast<uint32_t>(faces_.insert(f));
+    if constexpr (kEncode) {
+      if (face >= enc_->face_tet.size()) enc_->face_tet.resize(size_t{face} + 1);
+      enc_->face_tet[face] = tet;
+    }
     for (int i = 0; i < 3; ++i) {
       ++open_[v[i]];
       edges_.put(edgeKey(v[i], v[(i + 1) % 3]), v[(i + 2) % 3]);
     }
     if (d != kNoSlot) ++pins_[d];
-    queue_.push_back({{f.key[0], f.key[1], f.key[2]}, face});
+    QueuedFace q;
+    FaceMap::sortedKey(v, q.key);
+    q.face = face;
+    queue_.push_back(q);
   }
   void closeFace(long index) {
     const FrontFace f = faces_.at(index);
@@ -1695,7 +1702,7 @@ class LevelCoder {
       gatherCandidates(g, side, p, &ctx);
       uint32_t sym = 0, x_src = 0, flip = 0;
       if constexpr (kEncode) {
-        const Tet& t = enc_->mesh->tets[g.tet];
+        const Tet& t = enc_->mesh->tets[enc_->face_tet[idx]];
         const uint32_t ga = enc_->slot_src[g.v[0]], gb = enc_->slot_src[g.v[1]], gcv = enc_->slot_src[g.v[2]];
         int xi = -1;
         for (int i = 0; i < 4; ++i)
@@ -1733,7 +1740,7 @@ class LevelCoder {
       scoreOrders(x);
       flip = con_->bit(flip_, flip);
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
-      GTN_RETURN_IF_ERROR(emitTet(e, g.tet, g.cell, idx, sym == kSymNew));
+      GTN_RETURN_IF_ERROR(emitTet(e, kEncode ? enc_->face_tet[idx] : 0, g.cell, idx, sym == kSymNew));
     }
     return Status::ok();
   }
