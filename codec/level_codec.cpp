@@ -512,6 +512,7 @@ class LevelCoder {
     }
     edges_.reserveSlots(n);
     faces_.reserveSlots(n);
+    if (grid_.built()) grid_.reserveSlots(n);
   }
   void freeSlot(uint32_t s) {
     state_[s] = kFree;
@@ -1664,6 +1665,7 @@ class LevelCoder {
       }
     }
     grid_.build(lo, hi, live_);
+    grid_.reserveSlots(state_.capacity());
     for (uint32_t t = 0; t < state_.size(); ++t)
       if (state_[t] == kLive) grid_.insert(t, P(t));
   }
