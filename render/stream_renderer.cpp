@@ -88,14 +88,15 @@ struct alignas(64) PooledVertex : CornerRecord {  // q: orthographic, set once t
   int32_t refs;
 };
 
-// The vertices, in chunks of fixed size (addresses stay put as the pool grows), with a free list.
-// Used by the decoder's thread only.
+// The vertices, in chunks of fixed size (addresses stay put as the pool grows), with a free list
+// linked through the freed records themselves (a list beside them took up to 200 KB at once on
+// combustion). Used by the decoder's thread only.
 class VertexPool {
  public:
   PooledVertex* allocate() {
-    if (!free_.empty()) {
-      PooledVertex* v = free_.back();
-      free_.pop_back();
+    if (free_) {
+      PooledVertex* v = free_;
+      std::memcpy(&free_, v->p, sizeof free_);
       return v;
     }
     if (chunks_.empty() || used_ == kChunk) {
@@ -104,13 +105,17 @@ class VertexPool {
     }
     return &chunks_.back()[used_++];
   }
-  void free(PooledVertex* v) { free_.push_back(v); }
+  // A freed record keeps the one freed before it where its position was.
+  void free(PooledVertex* v) {
+    std::memcpy(v->p, &free_, sizeof free_);
+    free_ = v;
+  }
 
  private:
   static constexpr size_t kChunk = 1024;  // 64 KiB
   std::vector<std::unique_ptr<PooledVertex[]>> chunks_;
   size_t used_ = 0;  // entries of the last chunk handed out
-  std::vector<PooledVertex*> free_;
+  PooledVertex* free_ = nullptr;  // the last freed record
 };
 
 // One cache line each.
@@ -120,15 +125,23 @@ struct alignas(64) HeldTet {
   uint8_t order[4][3];      // TetGeom::order
   std::atomic<int32_t> pending{0};
   bool alive() const { return corner[0] != nullptr; }
+  // While the slot is free: the slot freed before it (SlotPool's list), where the orders were.
+  uint32_t nextFree() const {
+    uint32_t n;
+    std::memcpy(&n, order, sizeof n);
+    return n;
+  }
+  void setNextFree(uint32_t n) { std::memcpy(order, &n, sizeof n); }
   PooledVertex* vertex(int i) const { return static_cast<PooledVertex*>(corner[i]); }
   FaceKey key(int k) const {
     return makeKey(vertex(kTetFace[k][0])->id, vertex(kTetFace[k][1])->id, vertex(kTetFace[k][2])->id);
   }
 };
 
-// Entries in chunks of fixed size, with a free list: addresses stay put as the pool grows (HeldTet
-// holds an atomic), and an index finds its chunk by a shift. (std::deque fits two HeldTets in a
-// block: a quarter of each block wasted, and an index costs a division.)
+// Entries in chunks of fixed size, with a free list linked through the freed entries (T::nextFree,
+// T::setNextFree): addresses stay put as the pool grows (HeldTet holds an atomic), and an index
+// finds its chunk by a shift. (std::deque fits two HeldTets in a block: a quarter of each block
+// wasted, and an index costs a division.)
 template <class T, uint32_t kShift>
 class SlotPool {
  public:
@@ -136,20 +149,23 @@ class SlotPool {
   uint32_t size() const { return size_; }  // indices handed out, freed ones included
   // A freed index, else a new, default-constructed entry at the end.
   uint32_t allocate() {
-    if (!free_.empty()) {
-      const uint32_t i = free_.back();
-      free_.pop_back();
+    if (free_ != kNoFree) {
+      const uint32_t i = free_;
+      free_ = (*this)[i].nextFree();
       return i;
     }
     if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<T[]>(kChunk));
     return size_++;
   }
-  void free(uint32_t i) { free_.push_back(i); }
+  void free(uint32_t i) {
+    (*this)[i].setNextFree(free_);
+    free_ = i;
+  }
 
  private:
-  static constexpr uint32_t kChunk = 1u << kShift, kMask = kChunk - 1;
+  static constexpr uint32_t kChunk = 1u << kShift, kMask = kChunk - 1, kNoFree = 0xFFFFFFFFu;
   std::vector<std::unique_ptr<T[]>> chunks_;
-  std::vector<uint32_t> free_;
+  uint32_t free_ = kNoFree;  // the last freed index
   uint32_t size_ = 0;
 };
 
