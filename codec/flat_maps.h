@@ -196,7 +196,7 @@ struct FrontFace {
   uint32_t d;
   uint32_t cell;  // record of the near tetrahedron's cell values (level codec), or ~0
   // Set by FaceMap: the larger two slots of the sorted key (the smallest heads the face's chain),
-  // and the next face of that chain.
+  // and the next face of that chain (of free records, while free).
   uint32_t key12[2];
   uint32_t next;
 };
@@ -240,9 +240,9 @@ class FaceMap {
   // Inserts a face whose key is absent; returns its index.
   long insert(const FrontFace& f) {
     uint32_t i;
-    if (!free_.empty()) {
-      i = free_.back();
-      free_.pop_back();
+    if (free_ != kNil) {
+      i = free_;
+      free_ = pool_[i].next;
       pool_[i] = f;
     } else {
       i = static_cast<uint32_t>(pool_.size());
@@ -266,7 +266,8 @@ class FaceMap {
     while (*link != i) link = &pool_[*link].next;
     *link = f.next;
     f.v[0] = kEmptyFace;
-    free_.push_back(i);
+    f.next = free_;
+    free_ = i;
     --size_;
   }
   size_t size() const { return size_; }
@@ -284,7 +285,7 @@ class FaceMap {
 
   std::vector<uint32_t> head_;  // [smallest slot] -> first face of its chain, or kNil
   std::vector<FrontFace> pool_;
-  std::vector<uint32_t> free_;
+  uint32_t free_ = kNil;  // the last freed record, whose `next` is the one freed before, and so on
   size_t size_ = 0;
 };
 
