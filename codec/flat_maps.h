@@ -1,9 +1,11 @@
-// Containers for the peeling front. Everything is stored with the vertex slot it hangs from: each
-// slot owns a bucket of entries, chained to overflow buckets when it holds more. A walk
-// around a vertex, or the lookup of a face, then touches one or two lines instead of missing all
-// over a hash table of the whole front. Sizes follow the front (the slot pool), not the mesh.
+// Containers for the peeling front. Everything is found through the vertex slot it hangs from: a
+// slot owns a bucket of its edges, chained to overflow buckets when it holds more, and heads a chain
+// of its faces. A walk around a vertex, or the lookup of a face, then touches one or two lines
+// instead of missing all over a hash table of the whole front. Sizes follow the front (the slot
+// pool), not the mesh.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -82,17 +84,6 @@ class SlotTable {
       b = const_cast<Bucket*>(&extra_[b->next]);
     }
   }
-  // The entry of slot `a` whose value is `v`, or a null Ref.
-  Ref findValue(uint32_t a, uint32_t v) const {
-    if (a >= head_.size()) return {nullptr, 0};
-    Bucket* b = const_cast<Bucket*>(&head_[a]);
-    while (true) {
-      for (uint32_t i = 0; i < b->n; ++i)
-        if (b->value[i] == v) return {b, i};
-      if (b->next == kNil) return {nullptr, 0};
-      b = const_cast<Bucket*>(&extra_[b->next]);
-    }
-  }
   void append(uint32_t a, const uint32_t k[kKeys], uint32_t v) {
     if (a >= head_.size()) head_.resize(size_t{a} + 1);
     uint32_t ref = kNil;  // kNil: the head bucket
@@ -138,6 +129,8 @@ class SlotTable {
     extra_.clear();
     free_.clear();
   }
+  // Room for slots below n without reallocating (append grows by doubling otherwise).
+  void reserveSlots(size_t n) { head_.reserve(n); }
   // Starts loading slot `a`'s bucket into the cache.
   void prefetch(uint32_t a) const {
     if (a < head_.size()) __builtin_prefetch(&head_[a]);
@@ -180,6 +173,7 @@ class EdgeMap {
   }
   void eraseIf(uint64_t key, uint32_t value) { eraseIf(hi(key), lo(key), value); }
   void prefetch(uint32_t a) const { table_.prefetch(a); }
+  void reserveSlots(size_t n) { table_.reserveSlots(n); }
   void clear() {
     table_.clear();
     size_ = 0;
@@ -196,17 +190,24 @@ class EdgeMap {
 
 // An open face of the peeling front: (a, b, c) oriented so that the undecoded tetrahedron behind it
 // is (a, b, c, x) with positive orientation; d is the fourth vertex of the decoded tetrahedron on the
-// near side (kNoSlot for a boundary triangle); tet is the encoder's undecoded tetrahedron.
+// near side (kNoSlot for a boundary triangle).
 struct FrontFace {
-  uint32_t key[3];  // sorted vertex slots; key[0] == kEmptyFace marks a free pool entry
-  uint32_t v[3];
+  uint32_t v[3];  // v[0] == kEmptyFace marks a free pool entry
   uint32_t d;
-  uint32_t tet;
   uint32_t cell;  // record of the near tetrahedron's cell values (level codec), or ~0
+  // Set by FaceMap: the larger two slots of the sorted key (the smallest heads the face's chain),
+  // and the next face of that chain (of free records, while free).
+  uint32_t key12[2];
+  uint32_t next;
 };
 
 // The open faces, at most one per vertex triple: records in a pool whose indices stay valid until
-// the face is erased, found through their smallest slot.
+// the face is erased, found through their smallest slot. Each slot heads a chain of its faces linked
+// through the records themselves: a slot is the smallest of one or two open faces on average, so
+// per-slot buckets (they took 128 bytes a slot, with overflow buckets besides) were mostly empty and
+// made the largest of the decoder's structures; a chain costs 4 bytes a slot and 4 a face, and a
+// lookup still reads one line of heads, which stays in cache, then the face's own record. A record
+// is 32 bytes: the key's smallest slot is the chain's, and the encoder keeps its own data apart.
 class FaceMap {
  public:
   static constexpr uint32_t kEmptyFace = 0xFFFFFFFFu;
@@ -222,50 +223,69 @@ class FaceMap {
   }
   // Index of the face with sorted key `k`, or -1.
   long find(const uint32_t k[3]) const {
-    const auto r = table_.find(k[0], k + 1);
-    return r ? static_cast<long>(r.value()) : -1;
+    if (k[0] >= head_.size()) return -1;
+    for (uint32_t i = head_[k[0]]; i != kNil; i = pool_[i].next) {
+      const FrontFace& f = pool_[i];
+      if (f.key12[0] == k[1] && f.key12[1] == k[2]) return i;
+    }
+    return -1;
   }
   // True if `index` is the face with sorted key `k` (a cheap find() when the index is a guess).
   bool holds(long index, const uint32_t k[3]) const {
     if (index < 0 || static_cast<size_t>(index) >= pool_.size()) return false;
     const FrontFace& f = pool_[static_cast<size_t>(index)];
-    return f.key[0] == k[0] && f.key[1] == k[1] && f.key[2] == k[2];
+    return f.v[0] != kEmptyFace && f.key12[0] == k[1] && f.key12[1] == k[2] && smallest(f) == k[0];
   }
   const FrontFace& at(long i) const { return pool_[static_cast<size_t>(i)]; }
   // Inserts a face whose key is absent; returns its index.
   long insert(const FrontFace& f) {
     uint32_t i;
-    if (!free_.empty()) {
-      i = free_.back();
-      free_.pop_back();
+    if (free_ != kNil) {
+      i = free_;
+      free_ = pool_[i].next;
       pool_[i] = f;
     } else {
       i = static_cast<uint32_t>(pool_.size());
       pool_.push_back(f);
     }
-    table_.append(f.key[0], f.key + 1, i);
+    uint32_t k[3];
+    sortedKey(f.v, k);
+    FrontFace& g = pool_[i];
+    g.key12[0] = k[1];
+    g.key12[1] = k[2];
+    if (k[0] >= head_.size()) head_.resize(size_t{k[0]} + 1, kNil);
+    g.next = head_[k[0]];
+    head_[k[0]] = i;
     ++size_;
     return i;
   }
   void eraseAt(long index) {
     const uint32_t i = static_cast<uint32_t>(index);
     FrontFace& f = pool_[i];
-    table_.erase(f.key[0], table_.findValue(f.key[0], i));
-    f.key[0] = kEmptyFace;
-    free_.push_back(i);
+    uint32_t* link = &head_[smallest(f)];
+    while (*link != i) link = &pool_[*link].next;
+    *link = f.next;
+    f.v[0] = kEmptyFace;
+    f.next = free_;
+    free_ = i;
     --size_;
   }
   size_t size() const { return size_; }
+  void reserveSlots(size_t n) { head_.reserve(n); }
   // Starts loading what find(k) and at(index) will read.
   void prefetch(const uint32_t k[3], long index) const {
-    table_.prefetch(k[0]);
+    if (k[0] < head_.size()) __builtin_prefetch(&head_[k[0]]);
     if (index >= 0 && static_cast<size_t>(index) < pool_.size()) __builtin_prefetch(&pool_[static_cast<size_t>(index)]);
   }
 
  private:
-  SlotTable<2, 10> table_;  // sorted key[1], key[2] -> pool index; 8 + 10 * 12 bytes: two cache lines
+  static constexpr uint32_t kNil = 0xFFFFFFFFu;
+
+  static uint32_t smallest(const FrontFace& f) { return std::min(f.v[0], std::min(f.v[1], f.v[2])); }
+
+  std::vector<uint32_t> head_;  // [smallest slot] -> first face of its chain, or kNil
   std::vector<FrontFace> pool_;
-  std::vector<uint32_t> free_;
+  uint32_t free_ = kNil;  // the last freed record, whose `next` is the one freed before, and so on
   size_t size_ = 0;
 };
 

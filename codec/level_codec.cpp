@@ -208,6 +208,7 @@ struct EncoderSide {
   // source vertex is a from edge_point_start[a] on; a coded point's entry becomes kNone32.
   std::vector<EdgePoint> edge_points;
   std::vector<uint32_t> edge_point_start;
+  std::vector<uint32_t> face_tet;  // FaceMap index of an open face -> the undecoded tetrahedron behind it
 };
 
 template <bool kEncode>
@@ -517,26 +518,51 @@ class LevelCoder {
       free_.pop_back();
     } else {
       s = static_cast<uint32_t>(state_.size());
+      if (s == state_.capacity()) reserveSlots(s + s / 4 + 64);
       state_.push_back(kFree);
       pos_.resize(pos_.size() + 3);
       vals_.resize(vals_.size() + item_bytes_);
       open_.push_back(0);
       pins_.push_back(0);
       ids_.push_back(0);
-      nxt_.push_back(kNoSlot);
-      prv_.push_back(kNoSlot);
-      corner_sum_.push_back(0.0);
-      corner_count_.push_back(0);
+      if (!boundary_done_) {
+        nxt_.push_back(kNoSlot);
+        prv_.push_back(kNoSlot);
+        corner_sum_.push_back(0.0);
+        corner_count_.push_back(0);
+      }
       if constexpr (kEncode) enc_->slot_src.push_back(kNone32);
     }
     state_[s] = kLive;
     open_[s] = 0;
     pins_[s] = 0;
-    nxt_[s] = kNoSlot;
-    prv_[s] = kNoSlot;
-    corner_sum_[s] = 0.0;
-    corner_count_[s] = 0;
+    if (!boundary_done_) {
+      nxt_[s] = kNoSlot;
+      prv_[s] = kNoSlot;
+      corner_sum_[s] = 0.0;
+      corner_count_[s] = 0;
+    }
     return s;
+  }
+  // Room for n slots in every per-slot array. The pool grows by a quarter, not the vectors' own
+  // doubling: these arrays (and the edge buckets, 64 bytes a slot) are most of the decoder's memory,
+  // and doubling left up to half of them unused (blunt fin's 9748 slots had room for 16384).
+  void reserveSlots(size_t n) {
+    state_.reserve(n);
+    pos_.reserve(3 * n);
+    vals_.reserve(item_bytes_ * n);
+    open_.reserve(n);
+    pins_.reserve(n);
+    ids_.reserve(n);
+    if (!boundary_done_) {
+      nxt_.reserve(n);
+      prv_.reserve(n);
+      corner_sum_.reserve(n);
+      corner_count_.reserve(n);
+    }
+    edges_.reserveSlots(n);
+    faces_.reserveSlots(n);
+    if (grid_.built()) grid_.reserveSlots(n);
   }
   void freeSlot(uint32_t s) {
     state_[s] = kFree;
@@ -913,21 +939,27 @@ class LevelCoder {
   }
 
   // ---- front faces -----------------------------------------------------------------------------
+  // `tet`: the encoder's undecoded tetrahedron behind the face.
   void openFace(const uint32_t v[3], uint32_t d, uint32_t tet, uint32_t cell = kNone32) {
     FrontFace f;
-    FaceMap::sortedKey(v, f.key);
     for (int i = 0; i < 3; ++i) f.v[i] = v[i];
     f.d = d;
-    f.tet = tet;
     f.cell = cell;
     if (cell != kNone32) ++cell_ref_[cell];
     const uint32_t face = static_cast<uint32_t>(faces_.insert(f));
+    if constexpr (kEncode) {
+      if (face >= enc_->face_tet.size()) enc_->face_tet.resize(size_t{face} + 1);
+      enc_->face_tet[face] = tet;
+    }
     for (int i = 0; i < 3; ++i) {
       ++open_[v[i]];
       edges_.put(edgeKey(v[i], v[(i + 1) % 3]), v[(i + 2) % 3]);
     }
     if (d != kNoSlot) ++pins_[d];
-    queue_.push_back({{f.key[0], f.key[1], f.key[2]}, face});
+    QueuedFace q;
+    FaceMap::sortedKey(v, q.key);
+    q.face = face;
+    queue_.push_back(q);
   }
   void closeFace(long index) {
     const FrontFace f = faces_.at(index);
@@ -1111,8 +1143,14 @@ class LevelCoder {
       GTN_RETURN_IF_ERROR(addTriangle(v, tri));
     }
     // Freed, not just emptied: the decoder's memory should follow the peeling front from here on.
+    // The boundary loop and the corner angles are not needed either, nor kept for new slots.
     half_ = EdgeMap();
     hqueue_ = RingQueue<uint64_t>();
+    nxt_ = std::vector<uint32_t>();
+    prv_ = std::vector<uint32_t>();
+    corner_sum_ = std::vector<double>();
+    corner_count_ = std::vector<uint32_t>();
+    boundary_done_ = true;
     return Status::ok();
   }
 
@@ -1730,6 +1768,7 @@ class LevelCoder {
       }
     }
     grid_.build(lo, hi, live_);
+    grid_.reserveSlots(state_.capacity());
     for (uint32_t t = 0; t < state_.size(); ++t)
       if (state_[t] == kLive) grid_.insert(t, P(t));
   }
@@ -1768,7 +1807,7 @@ class LevelCoder {
       gatherCandidates(g, side, p, &ctx);
       uint32_t sym = 0, x_src = 0, flip = 0;
       if constexpr (kEncode) {
-        const Tet& t = enc_->mesh->tets[g.tet];
+        const Tet& t = enc_->mesh->tets[enc_->face_tet[idx]];
         const uint32_t ga = enc_->slot_src[g.v[0]], gb = enc_->slot_src[g.v[1]], gcv = enc_->slot_src[g.v[2]];
         int xi = -1;
         for (int i = 0; i < 4; ++i)
@@ -1806,7 +1845,7 @@ class LevelCoder {
       scoreOrders(x);
       flip = con_->bit(flip_, flip);
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
-      GTN_RETURN_IF_ERROR(emitTet(e, g.tet, g.cell, idx, sym == kSymNew));
+      GTN_RETURN_IF_ERROR(emitTet(e, kEncode ? enc_->face_tet[idx] : 0, g.cell, idx, sym == kSymNew));
     }
     return Status::ok();
   }
@@ -1847,11 +1886,14 @@ class LevelCoder {
   std::vector<uint8_t> state_;
   std::vector<double> pos_;
   std::vector<uint8_t> vals_;
-  std::vector<uint32_t> open_, pins_, ids_, nxt_, prv_, free_;
-  // Per slot, over the boundary triangles added so far: the sum of their corner angles at the
-  // vertex (cornerAngle) and their count (section 10.3).
+  std::vector<uint32_t> open_, pins_, ids_, free_;
+  // Per slot while the boundary phase lasts: the open boundary loop (nxt_, prv_) and, over the
+  // boundary triangles added so far, the sum of their corner angles at the vertex (cornerAngle) and
+  // their count (section 10.3).
+  std::vector<uint32_t> nxt_, prv_;
   std::vector<double> corner_sum_;
   std::vector<uint32_t> corner_count_;
+  bool boundary_done_ = false;
 
   FaceMap faces_;
   EdgeMap edges_;  // directed edge of an open face -> its third vertex

@@ -39,6 +39,12 @@ class NearestGrid {
     head_.assign(static_cast<size_t>(n_) * n_ * n_ + 1, kNone);  // the last: non-finite points
   }
 
+  // Room for slots below n without reallocating (insert grows by doubling otherwise).
+  void reserveSlots(size_t n) {
+    cell_.reserve(n);
+    next_.reserve(n);
+    prev_.reserve(n);
+  }
   void insert(uint32_t s, const double* q) {
     if (s >= cell_.size()) {
       cell_.resize(s + 1, kNone);

@@ -88,14 +88,15 @@ struct alignas(64) PooledVertex : CornerRecord {  // q: orthographic, set once t
   int32_t refs;
 };
 
-// The vertices, in chunks of fixed size (addresses stay put as the pool grows), with a free list.
-// Used by the decoder's thread only.
+// The vertices, in chunks of fixed size (addresses stay put as the pool grows), with a free list
+// linked through the freed records themselves (a list beside them took up to 200 KB at once on
+// combustion). Used by the decoder's thread only.
 class VertexPool {
  public:
   PooledVertex* allocate() {
-    if (!free_.empty()) {
-      PooledVertex* v = free_.back();
-      free_.pop_back();
+    if (free_) {
+      PooledVertex* v = free_;
+      std::memcpy(&free_, v->p, sizeof free_);
       return v;
     }
     if (chunks_.empty() || used_ == kChunk) {
@@ -104,13 +105,17 @@ class VertexPool {
     }
     return &chunks_.back()[used_++];
   }
-  void free(PooledVertex* v) { free_.push_back(v); }
+  // A freed record keeps the one freed before it where its position was.
+  void free(PooledVertex* v) {
+    std::memcpy(v->p, &free_, sizeof free_);
+    free_ = v;
+  }
 
  private:
   static constexpr size_t kChunk = 1024;  // 64 KiB
   std::vector<std::unique_ptr<PooledVertex[]>> chunks_;
   size_t used_ = 0;  // entries of the last chunk handed out
-  std::vector<PooledVertex*> free_;
+  PooledVertex* free_ = nullptr;  // the last freed record
 };
 
 // One cache line each.
@@ -120,15 +125,23 @@ struct alignas(64) HeldTet {
   uint8_t order[4][3];      // TetGeom::order
   std::atomic<int32_t> pending{0};
   bool alive() const { return corner[0] != nullptr; }
+  // While the slot is free: the slot freed before it (SlotPool's list), where the orders were.
+  uint32_t nextFree() const {
+    uint32_t n;
+    std::memcpy(&n, order, sizeof n);
+    return n;
+  }
+  void setNextFree(uint32_t n) { std::memcpy(order, &n, sizeof n); }
   PooledVertex* vertex(int i) const { return static_cast<PooledVertex*>(corner[i]); }
   FaceKey key(int k) const {
     return makeKey(vertex(kTetFace[k][0])->id, vertex(kTetFace[k][1])->id, vertex(kTetFace[k][2])->id);
   }
 };
 
-// Entries in chunks of fixed size, with a free list: addresses stay put as the pool grows (HeldTet
-// holds an atomic), and an index finds its chunk by a shift. (std::deque fits two HeldTets in a
-// block: a quarter of each block wasted, and an index costs a division.)
+// Entries in chunks of fixed size, with a free list linked through the freed entries (T::nextFree,
+// T::setNextFree): addresses stay put as the pool grows (HeldTet holds an atomic), and an index
+// finds its chunk by a shift. (std::deque fits two HeldTets in a block: a quarter of each block
+// wasted, and an index costs a division.)
 template <class T, uint32_t kShift>
 class SlotPool {
  public:
@@ -136,20 +149,23 @@ class SlotPool {
   uint32_t size() const { return size_; }  // indices handed out, freed ones included
   // A freed index, else a new, default-constructed entry at the end.
   uint32_t allocate() {
-    if (!free_.empty()) {
-      const uint32_t i = free_.back();
-      free_.pop_back();
+    if (free_ != kNoFree) {
+      const uint32_t i = free_;
+      free_ = (*this)[i].nextFree();
       return i;
     }
     if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<T[]>(kChunk));
     return size_++;
   }
-  void free(uint32_t i) { free_.push_back(i); }
+  void free(uint32_t i) {
+    (*this)[i].setNextFree(free_);
+    free_ = i;
+  }
 
  private:
-  static constexpr uint32_t kChunk = 1u << kShift, kMask = kChunk - 1;
+  static constexpr uint32_t kChunk = 1u << kShift, kMask = kChunk - 1, kNoFree = 0xFFFFFFFFu;
   std::vector<std::unique_ptr<T[]>> chunks_;
-  std::vector<uint32_t> free_;
+  uint32_t free_ = kNoFree;  // the last freed index
   uint32_t size_ = 0;
 };
 
@@ -229,7 +245,24 @@ struct StreamRenderer::State {
   std::vector<PooledVertex*> retired_flushing;  // retired while `flushing` was filled
   std::vector<PooledVertex*> unheld;  // counts that reached zero in the rendering thread, to free
   std::vector<std::array<uint32_t, 3>> boundary;
-  std::vector<uint32_t> pixel_start;  // the segments of pixel p are segs[pixel_start[p], pixel_start[p + 1])
+  // The first segment of every kPixelBlock-th pixel. Segments are stored in pixel order and know
+  // their pixel, so any pixel's are found by a short walk from its block's first: an eighth of
+  // castBoundary's offset per pixel (256 KB at 256x256). The walks stop at a last, empty segment of
+  // no pixel (kNone), which they need not test for.
+  static constexpr uint32_t kPixelBlock = 8;
+  std::vector<uint32_t> block_start;
+  // The first segment of pixel p or of a later pixel.
+  uint32_t firstSegmentFrom(uint32_t p) const {
+    uint32_t s = block_start[p / kPixelBlock];
+    while (segs[s].pixel < p) ++s;
+    return s;
+  }
+  // The end of pixel p's segments, which begin at s (firstSegmentFrom for p, or the end of the
+  // pixel before p).
+  uint32_t pixelSegmentsEnd(uint32_t p, uint32_t s) const {
+    while (segs[s].pixel == p) ++s;
+    return s;
+  }
   // Rays are not stored per pixel (that would be the largest structure at 256x256): prepareRay is
   // cheap and deterministic, so recomputing a pixel's ray gives the very same crossings.
   PreparedRay pixelRay(size_t p, const Camera& camera) const {
@@ -335,7 +368,8 @@ class SegmentBuilder : public SegmentSink {
  public:
   explicit SegmentBuilder(StreamRenderer::State& st) : st_(st) {}
   void begin(size_t segments) override {
-    st_.segs.resize(segments);
+    st_.segs.resize(segments + 1);
+    st_.segs.back().pixel = kNone;  // State::block_start's walks end there
     st_.backs.reserve(segments);
     st_.cursor_word.assign(2 * segments, kNone);
   }
@@ -482,8 +516,14 @@ Status StreamRenderer::endBoundary() {
   // Each segment straight into its state, its cursors waiting at its boundary triangles: the
   // segments themselves are never stored together.
   SegmentBuilder builder(st);
-  castBoundary(setup_.camera, surface, &st.pixel_start, builder);
-  stats_.segments = st.segs.size();
+  {
+    std::vector<uint32_t> pixel_start;
+    castBoundary(setup_.camera, surface, &pixel_start, builder);
+    const size_t pixels = pixel_start.size() - 1;
+    st.block_start.resize(pixels / State::kPixelBlock + 1);
+    for (size_t b = 0; b < st.block_start.size(); ++b) st.block_start[b] = pixel_start[b * State::kPixelBlock];
+  }
+  stats_.segments = st.segs.size() - 1;
   st.boundary.clear();
   st.boundary.shrink_to_fit();
   st.phase = State::Phase::kTets;
@@ -575,9 +615,11 @@ Status StreamRenderer::flushBatch() {
       int32_t count = 0;
       if (!st.shared_frame) {
         for (int py = box[1]; py <= box[3]; ++py) {
+          const uint32_t row = static_cast<uint32_t>(py) * w;
+          uint32_t s1 = st.firstSegmentFrom(row + box[0]);
           for (int px = box[0]; px <= box[2]; ++px) {
-            const size_t p = static_cast<size_t>(py) * w + px;
-            const uint32_t s0 = st.pixel_start[p], s1 = st.pixel_start[p + 1];
+            const uint32_t p = row + px, s0 = s1;
+            s1 = st.pixelSegmentsEnd(p, s0);
             if (s0 != s1) count += exactCount(p, s0, s1);
           }
         }
@@ -601,10 +643,12 @@ Status StreamRenderer::flushBatch() {
         const bool row_inside = hull.span(yc, kSure, &xl, &xr);
         int px0 = box[0], px1 = box[2];
         if (row_inside) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
+        const uint32_t row = static_cast<uint32_t>(py) * w;
+        uint32_t s1 = px0 <= px1 ? st.firstSegmentFrom(row + px0) : 0;
         for (int px = px0; px <= px1; ++px) {
           const double xc = px + 0.5;
-          const size_t p = static_cast<size_t>(py) * w + px;
-          const uint32_t s0 = st.pixel_start[p], s1 = st.pixel_start[p + 1];
+          const uint32_t p = row + px, s0 = s1;
+          s1 = st.pixelSegmentsEnd(p, s0);
           if (s0 == s1) continue;
           if (row_inside && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
           if (row_inside && xc > xl + kSure && xc < xr - kSure && s1 == s0 + 1) {  // clearly inside
@@ -761,9 +805,10 @@ Status StreamRenderer::endLevel() {
   GTN_RETURN_IF_ERROR(flushBatch());
   const int w = setup_.camera.width(), h = setup_.camera.height();
   image_ = Image(w, h);
+  uint32_t s = 0;
   for (size_t p = 0; p < static_cast<size_t>(w) * h; ++p) {
     Rgba acc;
-    for (uint32_t s = st.pixel_start[p]; s < st.pixel_start[p + 1]; ++s) {
+    for (; st.segs[s].pixel == p; ++s) {
       const StreamSegment& seg = st.segs[s];
       acc = over(acc, over(seg.front, seg.back != kNone ? st.backs[seg.back] : Rgba()));
     }

@@ -69,10 +69,7 @@ TEST(FaceMap, FindsEveryOpenFaceByItsSortedKeyAndKeepsIndicesStable) {
       model.erase(it);
     } else {
       FrontFace f{};
-      for (int i = 0; i < 3; ++i) {
-        f.key[i] = k[i];
-        f.v[i] = v[i];
-      }
+      for (int i = 0; i < 3; ++i) f.v[i] = v[i];
       f.d = k[0] + k[1] + k[2];
       model[key] = faces.insert(f);
     }
