@@ -31,6 +31,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -647,74 +648,47 @@ class LevelCoder {
   }
 
   // The encoder's choice of field rule for field f (its first component flattened at k): the
-  // cheapest by signalling plus residual magnitudes, the lowest rule among equals. The previous rule
-  // and rule 0 are tried first, so that most rules stop after a component or two.
+  // cheapest by signalling plus residual magnitudes, the lowest rule among equals. Every rule is
+  // priced on every component, a component at a time: that straight-line loop costs less than
+  // trying the rules one by one and stopping each once it cannot win.
   uint32_t chooseFieldRule(size_t f, size_t k, const FieldPrediction& fp, bool has_d, const uint8_t* src_item) {
     const FieldDesc& d = header_.point_fields[f];
     const size_t vs = scalarSize(d.type);
-    const uint64_t mask = keyMask(scalarBits(d.type));
-    constexpr uint32_t kMaxComps = 16;
-    // The coded (not aliased) components, with their actual keys and every rule's prediction.
-    uint64_t actual[kMaxComps];
-    double predicted[kMaxComps][kFieldRules];
-    uint32_t n = 0;
-    const bool cached = d.components <= kMaxComps;
-    if (cached) {
-      const uint32_t n_cand = std::min<uint32_t>(n_near_, kCandidateRules);
+    const uint32_t n_cand = std::min<uint32_t>(n_near_, kCandidateRules);
+    const SymbolCosts<4> signal = symbolCosts(pf_rule_[f][pf_last_rule_[f]]);
+    int cost[kFieldRules];
+    for (uint32_t r = 0; r < kFieldRules; ++r) cost[r] = signal[r];
+    // `type` is d.type, as a compile-time constant for the usual float types (the key conversion in
+    // the innermost loop then has no switch).
+    auto price = [&](auto type) {
+      const uint64_t mask = keyMask(scalarBits(type));
       for (uint32_t c = 0; c < d.components; ++c) {
         if (alias_[k + c] != kNone32) continue;
         const size_t off = pf_offset_[f] + c * vs;
-        actual[n] = keyFromRaw(d.type, src_item + c * vs);
-        double x[4];
-        for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(d.type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
-        double* v = predicted[n];
+        const uint64_t actual = keyFromRaw(type, src_item + c * vs);
+        double x[4], v[kFieldRules] = {};
+        for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
         weightedRules(x, v, std::make_integer_sequence<uint32_t, kRules>());
         v[0] = pred_vals_[k + c];
-        for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(d.type, &vals_[near_[j] * item_bytes_ + off]);
-        ++n;
+        for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(type, &vals_[near_[j] * item_bytes_ + off]);
+        for (uint32_t r = 0; r < kFieldRules; ++r) cost[r] += 16 * residualBits(actual, keyFromPrediction(type, v[r]), mask);
       }
-    }
-    const SymbolCosts<4> signal = symbolCosts(pf_rule_[f][pf_last_rule_[f]]);
-    uint32_t order[kFieldRules];  // the allowed rules, in the order tried: the last, 0, the others
-    uint32_t n_order = 0;
-    const uint32_t last = pf_last_rule_[f];
-    for (uint32_t i = 0; i < kFieldRules; ++i) {
-      const uint32_t r = triedRule(i, last);
-      if (fieldRuleAllowed(r, has_d)) order[n_order++] = r;
-    }
-    // `type` is d.type, as a compile-time constant for the usual float types (the key conversion in
-    // the innermost loop then has no switch).
-    auto search = [&](auto type) {
-      int best = 1 << 30;
-      uint32_t rule = 0;
-      // Inlined into its one call: the call would cost as much as a short rule's evaluation.
-      auto consider = [&](uint32_t r) __attribute__((always_inline)) {
-        int cost = signal[r];
-        if (cached) {
-          for (uint32_t i = 0; i < n; ++i) {
-            if (cost > best || (cost == best && r > rule)) return;
-            cost += 16 * residualBits(actual[i], keyFromPrediction(type, predicted[i][r]), mask);
-          }
-        } else {
-          for (uint32_t c = 0; c < d.components; ++c) {
-            if (cost > best || (cost == best && r > rule)) return;
-            if (alias_[k + c] != kNone32) continue;
-            const size_t off = pf_offset_[f] + c * vs;
-            const double pv = r == 0 ? pred_vals_[k + c] : fieldRule(r, fp, type, off);
-            cost += 16 * residualBits(keyFromRaw(type, src_item + c * vs), keyFromPrediction(type, pv), mask);
-          }
-        }
-        if (cost < best || (cost == best && r < rule)) {
-          best = cost;
-          rule = r;
-        }
-      };
-      for (uint32_t i = 0; i < n_order; ++i) consider(order[i]);
-      return rule;
     };
-    if (d.type == ScalarType::kFloat32) return search(std::integral_constant<ScalarType, ScalarType::kFloat32>());
-    if (d.type == ScalarType::kFloat64) return search(std::integral_constant<ScalarType, ScalarType::kFloat64>());
-    return search(d.type);
+    if (d.type == ScalarType::kFloat32) {
+      price(std::integral_constant<ScalarType, ScalarType::kFloat32>());
+    } else if (d.type == ScalarType::kFloat64) {
+      price(std::integral_constant<ScalarType, ScalarType::kFloat64>());
+    } else {
+      price(d.type);
+    }
+    uint32_t rule = 0;
+    int best = std::numeric_limits<int>::max();
+    for (uint32_t r = 0; r < kFieldRules; ++r)
+      if (fieldRuleAllowed(r, has_d) && cost[r] < best) {
+        best = cost[r];
+        rule = r;
+      }
+    return rule;
   }
 
   // The keys of a `bits`-wide type are its low `bits` bits.
