@@ -209,6 +209,28 @@ struct EncoderSide {
   // source vertex is a from edge_point_start[a] on; a coded point's entry becomes kNone32.
   std::vector<EdgePoint> edge_points;
   std::vector<uint32_t> edge_point_start;
+
+  // The source is read in the front's order, which jumps about the arrays: these start loading what
+  // the coder will need a little later, as its own front data is (prefetchGate).
+  // Tetrahedron t's vertices and neighbours, read when t's gate face is coded.
+  void prefetchTet(uint32_t t) const {
+    __builtin_prefetch(&mesh->tets[t]);
+    __builtin_prefetch(&(*neighbor)[4 * size_t{t}]);
+  }
+  // What coding tetrahedron t (vertices v) with apex x reads after its candidates: the apex's
+  // coordinates and values when it is new, then (emitTet) the vertices' remaining counts and
+  // whether the neighbours are done.
+  void prefetchCoding(uint32_t t, const Tet& v, uint32_t x) const {
+    if (src_slot[x] == kNoSlot) {
+      __builtin_prefetch(&mesh->coords[3 * size_t{x}]);
+      for (const Field& f : mesh->point_fields) __builtin_prefetch(&f.bytes[size_t{x} * f.components * f.valueSize()]);
+    }
+    for (uint32_t u : v) __builtin_prefetch(&remaining[u]);
+    for (int j = 0; j < 4; ++j) {
+      const uint32_t nb = (*neighbor)[4 * size_t{t} + j];
+      if (nb < tet_done.size()) __builtin_prefetch(&tet_done[nb]);
+    }
+  }
 };
 
 template <bool kEncode>
@@ -1749,6 +1771,7 @@ class LevelCoder {
           if (t[i] != ga && t[i] != gb && t[i] != gcv) xi = i;
         if (xi < 0) return internal("gate face does not belong to its tetrahedron");
         x_src = t[xi];
+        enc_->prefetchCoding(g.tet, t, x_src);
         // Parity of (a, b, c, x) as a permutation of the stored order: its inversions are the 3 - xi
         // stored vertices after x's place and those among the places of a, b and c.
         auto place = [&](uint32_t v) { return int{t[1] == v} + 2 * int{t[2] == v} + 3 * int{t[3] == v}; };
@@ -1779,6 +1802,11 @@ class LevelCoder {
       apex_votes_ += side.sign(P(x));
       scoreOrders(x);
       flip = con_->bit(flip_, flip);
+      if constexpr (kEncode) {
+        // The next gate's face record was prefetched at the start of this one.
+        if (!queue_.empty() && faces_.holds(queue_.front().face, queue_.front().key))
+          enc_->prefetchTet(faces_.at(queue_.front().face).tet);
+      }
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
       GTN_RETURN_IF_ERROR(emitTet(e, g.tet, g.cell, idx, sym == kSymNew));
     }
