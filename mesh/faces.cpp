@@ -1,20 +1,13 @@
 #include "mesh/faces.h"
 
 #include <algorithm>
+#include <bit>
 
 namespace gtn {
 
 const int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 namespace {
-struct FaceKey {
-  uint32_t a;     // the smallest vertex
-  uint32_t slot;  // 4 * tet + local face
-  uint64_t bc;    // the other two, b << 32 | c with b < c: one comparison orders and matches them
-  bool operator<(const FaceKey& o) const { return a != o.a ? a < o.a : bc < o.bc; }
-  bool sameFace(const FaceKey& o) const { return a == o.a && bc == o.bc; }
-};
-
 // The smallest vertex of each local face of t: t's smallest vertex, but for the face opposite it,
 // which has the second smallest.
 void faceMinima(const Tet& t, uint32_t out[4]) {
@@ -26,12 +19,20 @@ void faceMinima(const Tet& t, uint32_t out[4]) {
     if (i != lo) second = std::min(second, t[i]);
   for (int k = 0; k < 4; ++k) out[k] = k == lo ? second : t[lo];
 }
+
+// A distinct face of a group: its sorted vertices a < b < c (bc = b << 32 | c), the slots (4 * tet +
+// local face) of its first two occurrences and how many there are.
+struct GroupFace {
+  uint32_t a;
+  uint64_t bc;
+  uint32_t first, second, count;
+};
 }  // namespace
 
-// Faces are grouped by their smallest vertex (a counting sort of the face slots, 4 bytes each), then
-// each small group is keyed and sorted on its own, while the tetrahedra it reads are still in cache:
-// sorting all the 16-byte keys at once, or bucketing them in place, cost most of the encoder's
-// set-up in cache misses. Equal faces share their smallest vertex, so they meet in one group.
+// Faces are grouped by their smallest vertex (a counting sort of the face slots, 4 bytes each); equal
+// faces share it, so they meet in one group, which is small and is matched on its own, in a hash
+// table, while the tetrahedra it reads are still in cache. Sorting all the 16-byte face keys instead
+// cost most of the encoder's set-up in cache misses, and sorting each group most of the rest.
 // Vertices beyond `points` (a damaged mesh) share one last group rather than sizing the groups by
 // them.
 FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
@@ -56,37 +57,53 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
       for (int k = 0; k < 4; ++k) slots[next[groupOf(m[k])]++] = static_cast<uint32_t>(4 * t + k);
     }
   }
-  std::vector<FaceKey> keys;
+  constexpr uint32_t kEmpty = 0xFFFFFFFFu;
+  std::vector<GroupFace> faces;
+  std::vector<uint32_t> table;    // open addressing, at most half full: index in faces, or kEmpty
+  std::vector<uint32_t> face_of;  // per slot of the group: its index in faces
   for (size_t g = 0; g < groups; ++g) {
-    keys.clear();
-    for (uint32_t i = start[g]; i < start[g + 1]; ++i) {
-      const uint32_t slot = slots[i];
+    const uint32_t n = start[g + 1] - start[g];
+    if (n == 0) continue;
+    const int bits = std::max(4, static_cast<int>(std::bit_width(2 * n - 1)));
+    table.assign(size_t{1} << bits, kEmpty);
+    faces.clear();
+    face_of.resize(n);
+    bool non_manifold = false;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t slot = slots[start[g] + i];
       const Tet& t = mesh.tets[slot / 4];
       const int k = slot % 4;
       uint32_t a = t[kTetFace[k][0]], b = t[kTetFace[k][1]], c = t[kTetFace[k][2]];
       if (a > b) std::swap(a, b);
       if (b > c) std::swap(b, c);
       if (a > b) std::swap(a, b);
-      keys.push_back({a, slot, (uint64_t{b} << 32) | c});
+      const uint64_t bc = (uint64_t{b} << 32) | c;
+      size_t h = ((bc ^ a) * 0x9E3779B97F4A7C15u) >> (64 - bits);
+      while (table[h] != kEmpty && !(faces[table[h]].bc == bc && faces[table[h]].a == a)) h = (h + 1) & (table.size() - 1);
+      if (table[h] == kEmpty) {
+        table[h] = static_cast<uint32_t>(faces.size());
+        faces.push_back({a, bc, slot, 0, 1});
+      } else {
+        GroupFace& f = faces[table[h]];
+        if (f.count == 1) f.second = slot;
+        non_manifold |= ++f.count == 3;
+      }
+      face_of[i] = table[h];
     }
-    std::sort(keys.begin(), keys.end());
-    size_t i = 0;
-    while (i < keys.size()) {
-      size_t j = i + 1;
-      while (j < keys.size() && keys[j].sameFace(keys[i])) ++j;
-      const size_t count = j - i;
-      ++adj.faces;
-      if (count == 1) {
+    adj.faces += faces.size();
+    for (const GroupFace& f : faces) {
+      if (f.count == 1) {
         ++adj.boundary_faces;
-      } else if (count == 2) {
-        adj.neighbor[keys[i].slot] = keys[i + 1].slot / 4;
-        adj.neighbor[keys[i + 1].slot] = keys[i].slot / 4;
+      } else if (f.count == 2) {
+        adj.neighbor[f.first] = f.second / 4;
+        adj.neighbor[f.second] = f.first / 4;
       } else {
         ++adj.non_manifold_faces;
-        for (size_t m = i; m < j; ++m) adj.neighbor[keys[m].slot] = kNonManifold;
       }
-      i = j;
     }
+    if (non_manifold)
+      for (uint32_t i = 0; i < n; ++i)
+        if (faces[face_of[i]].count > 2) adj.neighbor[slots[start[g] + i]] = kNonManifold;
   }
   return adj;
 }

@@ -86,7 +86,10 @@ TEST(Faces, ThreeTetrahedraOnOneFaceAreNonManifold) {
   TetMesh m;
   m.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 0.2, 0.2, 2};
   m.tets = {{0, 1, 2, 3}, {0, 2, 1, 4}, {0, 1, 2, 5}};
-  EXPECT_EQ(computeFaceAdjacency(m).non_manifold_faces, 1u);
+  const FaceAdjacency adj = computeFaceAdjacency(m);
+  EXPECT_EQ(adj.non_manifold_faces, 1u);
+  for (uint32_t t = 0; t < 3; ++t) EXPECT_EQ(adj.neighbor[4 * t + 3], kNonManifold);  // each one's (0, 1, 2)
+  EXPECT_EQ(adj.faces, 10u);
 }
 
 // A damaged mesh's vertex indices beyond its points still pair faces (they share one group).
