@@ -424,25 +424,34 @@ class LevelCoder {
         float float_bits;  // bit length of the difference of the shifted keys
         uint64_t keys[2];
       };
+      struct Value {
+        uint64_t key;
+        int places;
+        double integer;
+      };
+      int lo = ValueCoder::kMaxDecimals + 1, hi = -1;
+      auto valueAt = [&](size_t i) {
+        Value v{keyFromRaw(type, p + i * stride), -1, 0};
+        int64_t integer = 0;
+        v.places = ValueCoder::decimalPlaces(type, v.key, &integer);
+        v.integer = static_cast<double>(integer);
+        if (v.places >= 0) lo = std::min(lo, v.places), hi = std::max(hi, v.places);
+        return v;
+      };
       std::vector<Pair> pairs;
       const bool sample = n > 1024;
       uint64_t state = 0x9E3779B97F4A7C15u;
-      int lo = ValueCoder::kMaxDecimals + 1, hi = -1;
+      // Consecutive pairs share a value: its decimal places (a shortest-decimal conversion, most of
+      // the cost) are found once.
+      Value next = sample ? Value{} : valueAt(0);
       for (size_t k = 0; k < (sample ? 256 : n - 1); ++k) {
         state ^= state << 13, state ^= state >> 7, state ^= state << 17;
         const size_t i = sample ? state % (n - 1) : k;
-        Pair pair;
-        uint64_t keys[2];
-        for (int j = 0; j < 2; ++j) {
-          keys[j] = keyFromRaw(type, p + (i + j) * stride);
-          int64_t v = 0;
-          pair.places[j] = ValueCoder::decimalPlaces(type, keys[j], &v);
-          pair.integer[j] = static_cast<double>(v);
-          if (pair.places[j] >= 0) lo = std::min(lo, pair.places[j]), hi = std::max(hi, pair.places[j]);
-        }
-        const uint64_t d = (keys[1] > keys[0] ? keys[1] - keys[0] : keys[0] - keys[1]) >> z;
+        const Value a = sample ? valueAt(i) : next, b = valueAt(i + 1);
+        next = b;
+        Pair pair{{a.places, b.places}, {a.integer, b.integer}, 0, {a.key, b.key}};
+        const uint64_t d = (b.key > a.key ? b.key - a.key : a.key - b.key) >> z;
         pair.float_bits = static_cast<float>(bitLength(d));
-        pair.keys[0] = keys[0], pair.keys[1] = keys[1];
         pairs.push_back(pair);
       }
       double floats = 0;
