@@ -37,6 +37,10 @@
 #include <type_traits>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "codec/edge_points.h"
 #include "codec/flat_maps.h"
 #include "codec/nearest_grid.h"
@@ -692,7 +696,6 @@ class LevelCoder {
     // `type` is d.type, as a compile-time constant for the usual float types (the key conversion in
     // the innermost loop then has no switch).
     auto price = [&](auto type) {
-      const uint64_t mask = keyMask(scalarBits(type));
       for (uint32_t c = 0; c < d.components; ++c) {
         if (alias_[k + c] != kNone32) continue;
         const size_t off = pf_offset_[f] + c * vs;
@@ -702,7 +705,7 @@ class LevelCoder {
         weightedRules(x, v, std::make_integer_sequence<uint32_t, kRules>());
         v[0] = pred_vals_[k + c];
         for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(type, &vals_[near_[j] * item_bytes_ + off]);
-        for (uint32_t r = 0; r < kFieldRules; ++r) cost[r] += 16 * residualBits(actual, keyFromPrediction(type, v[r]), mask);
+        addRuleCosts(type, actual, v, cost);
       }
     };
     if (d.type == ScalarType::kFloat32) {
@@ -728,6 +731,49 @@ class LevelCoder {
   static int residualBits(uint64_t actual, uint64_t pred, uint64_t mask) {
     const uint64_t r = (actual - pred) & mask, n = (~r + 1) & mask;
     return bitLength(r < n ? r : n);
+  }
+  // Adds to cost[r] the residual cost of prediction v[r], 16 * residualBits, for every rule r of one
+  // component whose actual key is `actual`.
+  template <class Type>
+  static void addRuleCosts(Type type, uint64_t actual, const double* v, int* cost) {
+#if defined(__SSE2__)
+    // Four rules at a time for float32, the usual field type: the same arithmetic as
+    // keyFromPrediction (the range check, the float conversion) and residualBits (the smaller of the
+    // residual and its negation, modulo 2^32), whose bit length is the exponent of its exact
+    // conversion to double.
+    if constexpr (std::is_same_v<Type, std::integral_constant<ScalarType, ScalarType::kFloat32>>) {
+      static_assert(kFieldRules % 4 == 0);
+      const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7FFFFFFFFFFFFFFF));
+      const __m128d max_float = _mm_set1_pd(3.4028234663852886e38);
+      const __m128i sign = _mm_set1_epi32(static_cast<int>(0x80000000u));
+      const __m128i act = _mm_set1_epi32(static_cast<int>(actual));
+      for (uint32_t r = 0; r < kFieldRules; r += 4) {
+        __m128 f[2];
+        for (int h = 0; h < 2; ++h) {
+          const __m128d d = _mm_loadu_pd(v + r + 2 * h);
+          const __m128d in_range = _mm_cmple_pd(_mm_and_pd(d, abs_mask), max_float);  // not NaN or infinite
+          f[h] = _mm_cvtpd_ps(_mm_and_pd(d, in_range));
+        }
+        const __m128i bits = _mm_castps_si128(_mm_movelh_ps(f[0], f[1]));
+        const __m128i key = _mm_xor_si128(bits, _mm_or_si128(_mm_srai_epi32(bits, 31), sign));
+        const __m128i res = _mm_sub_epi32(act, key), neg = _mm_sub_epi32(_mm_setzero_si128(), res);
+        const __m128i less = _mm_cmplt_epi32(_mm_xor_si128(res, sign), _mm_xor_si128(neg, sign));
+        const __m128i mag = _mm_or_si128(_mm_and_si128(less, res), _mm_andnot_si128(less, neg));
+        // As int32 the largest magnitude, 2^31, is -2^31: the exponent is the same.
+        auto lengths = [&](__m128i two) {
+          const __m128i e = _mm_and_si128(_mm_srli_epi64(_mm_castpd_si128(_mm_cvtepi32_pd(two)), 52), _mm_set1_epi64x(0x7FF));
+          return _mm_subs_epu16(e, _mm_set1_epi16(1022));  // 0 (exponent 0) stays 0
+        };
+        const __m128i lo = lengths(mag), hi = lengths(_mm_shuffle_epi32(mag, _MM_SHUFFLE(3, 2, 3, 2)));
+        const __m128i len = _mm_castps_si128(_mm_shuffle_ps(_mm_castsi128_ps(lo), _mm_castsi128_ps(hi), _MM_SHUFFLE(2, 0, 2, 0)));
+        __m128i* c = reinterpret_cast<__m128i*>(cost + r);
+        _mm_storeu_si128(c, _mm_add_epi32(_mm_loadu_si128(c), _mm_slli_epi32(len, 4)));
+      }
+      return;
+    }
+#endif
+    const uint64_t mask = keyMask(scalarBits(type));
+    for (uint32_t r = 0; r < kFieldRules; ++r) cost[r] += 16 * residualBits(actual, keyFromPrediction(type, v[r]), mask);
   }
   static bool ruleAllowed(uint32_t rule, bool has_d, uint32_t rules) {
     return rule < rules && (has_d || kRuleWeights[rule][3] == 0.0);
