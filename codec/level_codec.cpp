@@ -31,10 +31,15 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <string>
 #include <type_traits>
 #include <utility>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "codec/edge_points.h"
 #include "codec/flat_maps.h"
@@ -209,6 +214,28 @@ struct EncoderSide {
   std::vector<EdgePoint> edge_points;
   std::vector<uint32_t> edge_point_start;
   std::vector<uint32_t> face_tet;  // FaceMap index of an open face -> the undecoded tetrahedron behind it
+
+  // The source is read in the front's order, which jumps about the arrays: these start loading what
+  // the coder will need a little later, as its own front data is (prefetchGate).
+  // Tetrahedron t's vertices and neighbours, read when t's gate face is coded.
+  void prefetchTet(uint32_t t) const {
+    __builtin_prefetch(&mesh->tets[t]);
+    __builtin_prefetch(&(*neighbor)[4 * size_t{t}]);
+  }
+  // What coding tetrahedron t (vertices v) with apex x reads after its candidates: the apex's
+  // coordinates and values when it is new, then (emitTet) the vertices' remaining counts and
+  // whether the neighbours are done.
+  void prefetchCoding(uint32_t t, const Tet& v, uint32_t x) const {
+    if (src_slot[x] == kNoSlot) {
+      __builtin_prefetch(&mesh->coords[3 * size_t{x}]);
+      for (const Field& f : mesh->point_fields) __builtin_prefetch(&f.bytes[size_t{x} * f.components * f.valueSize()]);
+    }
+    for (uint32_t u : v) __builtin_prefetch(&remaining[u]);
+    for (int j = 0; j < 4; ++j) {
+      const uint32_t nb = (*neighbor)[4 * size_t{t} + j];
+      if (nb < tet_done.size()) __builtin_prefetch(&tet_done[nb]);
+    }
+  }
 };
 
 template <bool kEncode>
@@ -402,25 +429,34 @@ class LevelCoder {
         float float_bits;  // bit length of the difference of the shifted keys
         uint64_t keys[2];
       };
+      struct Value {
+        uint64_t key;
+        int places;
+        double integer;
+      };
+      int lo = ValueCoder::kMaxDecimals + 1, hi = -1;
+      auto valueAt = [&](size_t i) {
+        Value v{keyFromRaw(type, p + i * stride), -1, 0};
+        int64_t integer = 0;
+        v.places = ValueCoder::decimalPlaces(type, v.key, &integer);
+        v.integer = static_cast<double>(integer);
+        if (v.places >= 0) lo = std::min(lo, v.places), hi = std::max(hi, v.places);
+        return v;
+      };
       std::vector<Pair> pairs;
       const bool sample = n > 1024;
       uint64_t state = 0x9E3779B97F4A7C15u;
-      int lo = ValueCoder::kMaxDecimals + 1, hi = -1;
+      // Consecutive pairs share a value: its decimal places (a shortest-decimal conversion, most of
+      // the cost) are found once.
+      Value next = sample ? Value{} : valueAt(0);
       for (size_t k = 0; k < (sample ? 256 : n - 1); ++k) {
         state ^= state << 13, state ^= state >> 7, state ^= state << 17;
         const size_t i = sample ? state % (n - 1) : k;
-        Pair pair;
-        uint64_t keys[2];
-        for (int j = 0; j < 2; ++j) {
-          keys[j] = keyFromRaw(type, p + (i + j) * stride);
-          int64_t v = 0;
-          pair.places[j] = ValueCoder::decimalPlaces(type, keys[j], &v);
-          pair.integer[j] = static_cast<double>(v);
-          if (pair.places[j] >= 0) lo = std::min(lo, pair.places[j]), hi = std::max(hi, pair.places[j]);
-        }
-        const uint64_t d = (keys[1] > keys[0] ? keys[1] - keys[0] : keys[0] - keys[1]) >> z;
+        const Value a = sample ? valueAt(i) : next, b = valueAt(i + 1);
+        next = b;
+        Pair pair{{a.places, b.places}, {a.integer, b.integer}, 0, {a.key, b.key}};
+        const uint64_t d = (b.key > a.key ? b.key - a.key : a.key - b.key) >> z;
         pair.float_bits = static_cast<float>(bitLength(d));
-        pair.keys[0] = keys[0], pair.keys[1] = keys[1];
         pairs.push_back(pair);
       }
       double floats = 0;
@@ -673,74 +709,46 @@ class LevelCoder {
   }
 
   // The encoder's choice of field rule for field f (its first component flattened at k): the
-  // cheapest by signalling plus residual magnitudes, the lowest rule among equals. The previous rule
-  // and rule 0 are tried first, so that most rules stop after a component or two.
+  // cheapest by signalling plus residual magnitudes, the lowest rule among equals. Every rule is
+  // priced on every component, a component at a time: that straight-line loop costs less than
+  // trying the rules one by one and stopping each once it cannot win.
   uint32_t chooseFieldRule(size_t f, size_t k, const FieldPrediction& fp, bool has_d, const uint8_t* src_item) {
     const FieldDesc& d = header_.point_fields[f];
     const size_t vs = scalarSize(d.type);
-    const uint64_t mask = keyMask(scalarBits(d.type));
-    constexpr uint32_t kMaxComps = 16;
-    // The coded (not aliased) components, with their actual keys and every rule's prediction.
-    uint64_t actual[kMaxComps];
-    double predicted[kMaxComps][kFieldRules];
-    uint32_t n = 0;
-    const bool cached = d.components <= kMaxComps;
-    if (cached) {
-      const uint32_t n_cand = std::min<uint32_t>(n_near_, kCandidateRules);
+    const uint32_t n_cand = std::min<uint32_t>(n_near_, kCandidateRules);
+    const SymbolCosts<4> signal = symbolCosts(pf_rule_[f][pf_last_rule_[f]]);
+    int cost[kFieldRules];
+    for (uint32_t r = 0; r < kFieldRules; ++r) cost[r] = signal[r];
+    // `type` is d.type, as a compile-time constant for the usual float types (the key conversion in
+    // the innermost loop then has no switch).
+    auto price = [&](auto type) {
       for (uint32_t c = 0; c < d.components; ++c) {
         if (alias_[k + c] != kNone32) continue;
         const size_t off = pf_offset_[f] + c * vs;
-        actual[n] = keyFromRaw(d.type, src_item + c * vs);
-        double x[4];
-        for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(d.type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
-        double* v = predicted[n];
+        const uint64_t actual = keyFromRaw(type, src_item + c * vs);
+        double x[4], v[kFieldRules] = {};
+        for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
         weightedRules(x, v, std::make_integer_sequence<uint32_t, kRules>());
         v[0] = pred_vals_[k + c];
-        for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(d.type, &vals_[near_[j] * item_bytes_ + off]);
-        ++n;
+        for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(type, &vals_[near_[j] * item_bytes_ + off]);
+        addRuleCosts(type, actual, v, cost);
       }
-    }
-    const SymbolCosts<4> signal = symbolCosts(pf_rule_[f][pf_last_rule_[f]]);
-    uint32_t order[kFieldRules];  // the allowed rules, in the order tried: the last, 0, the others
-    uint32_t n_order = 0;
-    const uint32_t last = pf_last_rule_[f];
-    for (uint32_t i = 0; i < kFieldRules; ++i) {
-      const uint32_t r = triedRule(i, last);
-      if (fieldRuleAllowed(r, has_d)) order[n_order++] = r;
-    }
-    // `type` is d.type, as a compile-time constant for the usual float types (the key conversion in
-    // the innermost loop then has no switch).
-    auto search = [&](auto type) {
-      int best = 1 << 30;
-      uint32_t rule = 0;
-      // Inlined into its one call: the call would cost as much as a short rule's evaluation.
-      auto consider = [&](uint32_t r) __attribute__((always_inline)) {
-        int cost = signal[r];
-        if (cached) {
-          for (uint32_t i = 0; i < n; ++i) {
-            if (cost > best || (cost == best && r > rule)) return;
-            cost += 16 * residualBits(actual[i], keyFromPrediction(type, predicted[i][r]), mask);
-          }
-        } else {
-          for (uint32_t c = 0; c < d.components; ++c) {
-            if (cost > best || (cost == best && r > rule)) return;
-            if (alias_[k + c] != kNone32) continue;
-            const size_t off = pf_offset_[f] + c * vs;
-            const double pv = r == 0 ? pred_vals_[k + c] : fieldRule(r, fp, type, off);
-            cost += 16 * residualBits(keyFromRaw(type, src_item + c * vs), keyFromPrediction(type, pv), mask);
-          }
-        }
-        if (cost < best || (cost == best && r < rule)) {
-          best = cost;
-          rule = r;
-        }
-      };
-      for (uint32_t i = 0; i < n_order; ++i) consider(order[i]);
-      return rule;
     };
-    if (d.type == ScalarType::kFloat32) return search(std::integral_constant<ScalarType, ScalarType::kFloat32>());
-    if (d.type == ScalarType::kFloat64) return search(std::integral_constant<ScalarType, ScalarType::kFloat64>());
-    return search(d.type);
+    if (d.type == ScalarType::kFloat32) {
+      price(std::integral_constant<ScalarType, ScalarType::kFloat32>());
+    } else if (d.type == ScalarType::kFloat64) {
+      price(std::integral_constant<ScalarType, ScalarType::kFloat64>());
+    } else {
+      price(d.type);
+    }
+    uint32_t rule = 0;
+    int best = std::numeric_limits<int>::max();
+    for (uint32_t r = 0; r < kFieldRules; ++r)
+      if (fieldRuleAllowed(r, has_d) && cost[r] < best) {
+        best = cost[r];
+        rule = r;
+      }
+    return rule;
   }
 
   // The keys of a `bits`-wide type are its low `bits` bits.
@@ -749,6 +757,49 @@ class LevelCoder {
   static int residualBits(uint64_t actual, uint64_t pred, uint64_t mask) {
     const uint64_t r = (actual - pred) & mask, n = (~r + 1) & mask;
     return bitLength(r < n ? r : n);
+  }
+  // Adds to cost[r] the residual cost of prediction v[r], 16 * residualBits, for every rule r of one
+  // component whose actual key is `actual`.
+  template <class Type>
+  static void addRuleCosts(Type type, uint64_t actual, const double* v, int* cost) {
+#if defined(__SSE2__)
+    // Four rules at a time for float32, the usual field type: the same arithmetic as
+    // keyFromPrediction (the range check, the float conversion) and residualBits (the smaller of the
+    // residual and its negation, modulo 2^32), whose bit length is the exponent of its exact
+    // conversion to double.
+    if constexpr (std::is_same_v<Type, std::integral_constant<ScalarType, ScalarType::kFloat32>>) {
+      static_assert(kFieldRules % 4 == 0);
+      const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7FFFFFFFFFFFFFFF));
+      const __m128d max_float = _mm_set1_pd(3.4028234663852886e38);
+      const __m128i sign = _mm_set1_epi32(static_cast<int>(0x80000000u));
+      const __m128i act = _mm_set1_epi32(static_cast<int>(actual));
+      for (uint32_t r = 0; r < kFieldRules; r += 4) {
+        __m128 f[2];
+        for (int h = 0; h < 2; ++h) {
+          const __m128d d = _mm_loadu_pd(v + r + 2 * h);
+          const __m128d in_range = _mm_cmple_pd(_mm_and_pd(d, abs_mask), max_float);  // not NaN or infinite
+          f[h] = _mm_cvtpd_ps(_mm_and_pd(d, in_range));
+        }
+        const __m128i bits = _mm_castps_si128(_mm_movelh_ps(f[0], f[1]));
+        const __m128i key = _mm_xor_si128(bits, _mm_or_si128(_mm_srai_epi32(bits, 31), sign));
+        const __m128i res = _mm_sub_epi32(act, key), neg = _mm_sub_epi32(_mm_setzero_si128(), res);
+        const __m128i less = _mm_cmplt_epi32(_mm_xor_si128(res, sign), _mm_xor_si128(neg, sign));
+        const __m128i mag = _mm_or_si128(_mm_and_si128(less, res), _mm_andnot_si128(less, neg));
+        // As int32 the largest magnitude, 2^31, is -2^31: the exponent is the same.
+        auto lengths = [&](__m128i two) {
+          const __m128i e = _mm_and_si128(_mm_srli_epi64(_mm_castpd_si128(_mm_cvtepi32_pd(two)), 52), _mm_set1_epi64x(0x7FF));
+          return _mm_subs_epu16(e, _mm_set1_epi16(1022));  // 0 (exponent 0) stays 0
+        };
+        const __m128i lo = lengths(mag), hi = lengths(_mm_shuffle_epi32(mag, _MM_SHUFFLE(3, 2, 3, 2)));
+        const __m128i len = _mm_castps_si128(_mm_shuffle_ps(_mm_castsi128_ps(lo), _mm_castsi128_ps(hi), _MM_SHUFFLE(2, 0, 2, 0)));
+        __m128i* c = reinterpret_cast<__m128i*>(cost + r);
+        _mm_storeu_si128(c, _mm_add_epi32(_mm_loadu_si128(c), _mm_slli_epi32(len, 4)));
+      }
+      return;
+    }
+#endif
+    const uint64_t mask = keyMask(scalarBits(type));
+    for (uint32_t r = 0; r < kFieldRules; ++r) cost[r] += 16 * residualBits(actual, keyFromPrediction(type, v[r]), mask);
   }
   static bool ruleAllowed(uint32_t rule, bool has_d, uint32_t rules) {
     return rule < rules && (has_d || kRuleWeights[rule][3] == 0.0);
@@ -1814,6 +1865,7 @@ class LevelCoder {
           if (t[i] != ga && t[i] != gb && t[i] != gcv) xi = i;
         if (xi < 0) return internal("gate face does not belong to its tetrahedron");
         x_src = t[xi];
+        enc_->prefetchCoding(enc_->face_tet[idx], t, x_src);
         // Parity of (a, b, c, x) as a permutation of the stored order: its inversions are the 3 - xi
         // stored vertices after x's place and those among the places of a, b and c.
         auto place = [&](uint32_t v) { return int{t[1] == v} + 2 * int{t[2] == v} + 3 * int{t[3] == v}; };
@@ -1844,6 +1896,11 @@ class LevelCoder {
       apex_votes_ += side.sign(P(x));
       scoreOrders(x);
       flip = con_->bit(flip_, flip);
+      if constexpr (kEncode) {
+        // The next gate's face record was prefetched at the start of this one.
+        if (!queue_.empty() && faces_.holds(queue_.front().face, queue_.front().key))
+          enc_->prefetchTet(enc_->face_tet[queue_.front().face]);
+      }
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
       GTN_RETURN_IF_ERROR(emitTet(e, kEncode ? enc_->face_tet[idx] : 0, g.cell, idx, sym == kSymNew));
     }

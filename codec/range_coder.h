@@ -73,24 +73,26 @@ class RangeEncoder {
       range_ = bound;
     }
     m.update(bit);
-    normalize();
+    if (range_ < (1u << 24)) [[unlikely]] normalize();
   }
   // `n` (1..16) raw bits of `value`, each equally likely.
   void encodeDirect(uint32_t value, int n) {
     range_ >>= n;
     low_ += uint64_t{value} * range_;
-    normalize();
+    if (range_ < (1u << 24)) normalize();
   }
   void flush() {
     for (int i = 0; i < 5; ++i) shiftLow();
   }
 
  private:
-  void normalize() {
-    while (range_ < (1u << 24)) {
+  // Out of line, as only about one bit in ten needs it: encodeBit then saves and restores no
+  // registers for it (they cost as much as the bit's arithmetic).
+  [[gnu::noinline]] void normalize() {
+    do {
       range_ <<= 8;
       shiftLow();
-    }
+    } while (range_ < (1u << 24));
   }
   void shiftLow() {
     if (static_cast<uint32_t>(low_) < 0xFF000000u || (low_ >> 32) != 0) {

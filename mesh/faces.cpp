@@ -1,90 +1,109 @@
 #include "mesh/faces.h"
 
 #include <algorithm>
+#include <bit>
 
 namespace gtn {
 
 const int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 namespace {
-struct FaceKey {
-  uint32_t a;     // the smallest vertex
-  uint32_t slot;  // 4 * tet + local face
-  uint64_t bc;    // the other two, b << 32 | c with b < c: one comparison orders and matches them
-  bool operator<(const FaceKey& o) const { return a != o.a ? a < o.a : bc < o.bc; }
-  bool sameFace(const FaceKey& o) const { return a == o.a && bc == o.bc; }
-};
-
-// Groups equal faces together (the order within a group, and of the groups, does not matter to the
-// callers). An in-place bucket sort on the smallest vertex (American flag sort: no second copy of
-// the keys, which would double the largest allocation of the generic pipeline), then a sort of each
-// small bucket: several times faster than sorting all the keys, which dominated the encoder's
-// set-up. Keys with a vertex beyond `points` (a damaged mesh) fall back to a plain sort rather than
-// sizing buckets by them.
-void sortFaceKeys(std::vector<FaceKey>& keys, size_t points) {
-  uint32_t max_v = 0;
-  for (const FaceKey& k : keys) max_v = std::max(max_v, k.a);
-  if (keys.empty() || max_v >= points) {
-    std::sort(keys.begin(), keys.end());
-    return;
-  }
-  const size_t buckets = size_t{max_v} + 1;
-  std::vector<uint32_t> start(buckets + 1, 0);
-  for (const FaceKey& k : keys) ++start[k.a + 1];
-  for (size_t v = 1; v <= buckets; ++v) start[v] += start[v - 1];
-  std::vector<uint32_t> next(start.begin(), start.end() - 1);
-  for (size_t b = 0; b < buckets; ++b) {
-    while (next[b] < start[b + 1]) {
-      const uint32_t target = keys[next[b]].a;
-      if (target == b) {
-        ++next[b];
-      } else {
-        std::swap(keys[next[b]], keys[next[target]++]);
-      }
-    }
-  }
-  for (size_t b = 0; b < buckets; ++b) {
-    if (start[b + 1] - start[b] > 1)
-      std::sort(keys.begin() + start[b], keys.begin() + start[b + 1],
-                [](const FaceKey& x, const FaceKey& y) { return x.bc < y.bc; });
-  }
+// The smallest vertex of each local face of t: t's smallest vertex, but for the face opposite it,
+// which has the second smallest.
+void faceMinima(const Tet& t, uint32_t out[4]) {
+  int lo = 0;
+  for (int i = 1; i < 4; ++i)
+    if (t[i] < t[lo]) lo = i;
+  uint32_t second = 0xFFFFFFFFu;
+  for (int i = 0; i < 4; ++i)
+    if (i != lo) second = std::min(second, t[i]);
+  for (int k = 0; k < 4; ++k) out[k] = k == lo ? second : t[lo];
 }
+
+// A distinct face of a group: its sorted vertices a < b < c (bc = b << 32 | c), the slots (4 * tet +
+// local face) of its first two occurrences and how many there are.
+struct GroupFace {
+  uint32_t a;
+  uint64_t bc;
+  uint32_t first, second, count;
+};
 }  // namespace
 
+// Faces are grouped by their smallest vertex (a counting sort of the face slots, 4 bytes each); equal
+// faces share it, so they meet in one group, which is small and is matched on its own, in a hash
+// table, while the tetrahedra it reads are still in cache. Sorting all the 16-byte face keys instead
+// cost most of the encoder's set-up in cache misses, and sorting each group most of the rest.
+// Vertices beyond `points` (a damaged mesh) share one last group rather than sizing the groups by
+// them.
 FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
   FaceAdjacency adj;
   const size_t nt = mesh.tets.size();
   adj.neighbor.assign(4 * nt, kNoNeighbor);
-  std::vector<FaceKey> keys(4 * nt);
-  for (size_t t = 0; t < nt; ++t) {
-    for (int k = 0; k < 4; ++k) {
-      FaceKey& key = keys[4 * t + k];
-      uint32_t a = mesh.tets[t][kTetFace[k][0]], b = mesh.tets[t][kTetFace[k][1]], c = mesh.tets[t][kTetFace[k][2]];
+  const size_t groups = mesh.numPoints() + 1;
+  auto groupOf = [&](uint32_t v) { return std::min<size_t>(v, groups - 1); };
+  std::vector<uint32_t> start(groups + 1, 0);
+  for (const Tet& t : mesh.tets) {
+    uint32_t m[4];
+    faceMinima(t, m);
+    for (int k = 0; k < 4; ++k) ++start[groupOf(m[k]) + 1];
+  }
+  for (size_t g = 1; g <= groups; ++g) start[g] += start[g - 1];
+  std::vector<uint32_t> slots(4 * nt);
+  {
+    std::vector<uint32_t> next(start.begin(), start.end() - 1);
+    for (size_t t = 0; t < nt; ++t) {
+      uint32_t m[4];
+      faceMinima(mesh.tets[t], m);
+      for (int k = 0; k < 4; ++k) slots[next[groupOf(m[k])]++] = static_cast<uint32_t>(4 * t + k);
+    }
+  }
+  constexpr uint32_t kEmpty = 0xFFFFFFFFu;
+  std::vector<GroupFace> faces;
+  std::vector<uint32_t> table;    // open addressing, at most half full: index in faces, or kEmpty
+  std::vector<uint32_t> face_of;  // per slot of the group: its index in faces
+  for (size_t g = 0; g < groups; ++g) {
+    const uint32_t n = start[g + 1] - start[g];
+    if (n == 0) continue;
+    const int bits = std::max(4, static_cast<int>(std::bit_width(2 * n - 1)));
+    table.assign(size_t{1} << bits, kEmpty);
+    faces.clear();
+    face_of.resize(n);
+    bool non_manifold = false;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t slot = slots[start[g] + i];
+      const Tet& t = mesh.tets[slot / 4];
+      const int k = slot % 4;
+      uint32_t a = t[kTetFace[k][0]], b = t[kTetFace[k][1]], c = t[kTetFace[k][2]];
       if (a > b) std::swap(a, b);
       if (b > c) std::swap(b, c);
       if (a > b) std::swap(a, b);
-      key.a = a;
-      key.bc = (uint64_t{b} << 32) | c;
-      key.slot = static_cast<uint32_t>(4 * t + k);
+      const uint64_t bc = (uint64_t{b} << 32) | c;
+      size_t h = ((bc ^ a) * 0x9E3779B97F4A7C15u) >> (64 - bits);
+      while (table[h] != kEmpty && !(faces[table[h]].bc == bc && faces[table[h]].a == a)) h = (h + 1) & (table.size() - 1);
+      if (table[h] == kEmpty) {
+        table[h] = static_cast<uint32_t>(faces.size());
+        faces.push_back({a, bc, slot, 0, 1});
+      } else {
+        GroupFace& f = faces[table[h]];
+        if (f.count == 1) f.second = slot;
+        non_manifold |= ++f.count == 3;
+      }
+      face_of[i] = table[h];
     }
-  }
-  sortFaceKeys(keys, mesh.numPoints());
-  size_t i = 0;
-  while (i < keys.size()) {
-    size_t j = i + 1;
-    while (j < keys.size() && keys[j].sameFace(keys[i])) ++j;
-    const size_t count = j - i;
-    ++adj.faces;
-    if (count == 1) {
-      ++adj.boundary_faces;
-    } else if (count == 2) {
-      adj.neighbor[keys[i].slot] = keys[i + 1].slot / 4;
-      adj.neighbor[keys[i + 1].slot] = keys[i].slot / 4;
-    } else {
-      ++adj.non_manifold_faces;
-      for (size_t m = i; m < j; ++m) adj.neighbor[keys[m].slot] = kNonManifold;
+    adj.faces += faces.size();
+    for (const GroupFace& f : faces) {
+      if (f.count == 1) {
+        ++adj.boundary_faces;
+      } else if (f.count == 2) {
+        adj.neighbor[f.first] = f.second / 4;
+        adj.neighbor[f.second] = f.first / 4;
+      } else {
+        ++adj.non_manifold_faces;
+      }
     }
-    i = j;
+    if (non_manifold)
+      for (uint32_t i = 0; i < n; ++i)
+        if (faces[face_of[i]].count > 2) adj.neighbor[slots[start[g] + i]] = kNonManifold;
   }
   return adj;
 }

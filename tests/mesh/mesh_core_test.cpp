@@ -86,7 +86,41 @@ TEST(Faces, ThreeTetrahedraOnOneFaceAreNonManifold) {
   TetMesh m;
   m.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 0.2, 0.2, 2};
   m.tets = {{0, 1, 2, 3}, {0, 2, 1, 4}, {0, 1, 2, 5}};
-  EXPECT_EQ(computeFaceAdjacency(m).non_manifold_faces, 1u);
+  const FaceAdjacency adj = computeFaceAdjacency(m);
+  EXPECT_EQ(adj.non_manifold_faces, 1u);
+  for (uint32_t t = 0; t < 3; ++t) EXPECT_EQ(adj.neighbor[4 * t + 3], kNonManifold);  // each one's (0, 1, 2)
+  EXPECT_EQ(adj.faces, 10u);
+}
+
+// A damaged mesh's vertex indices beyond its points still pair faces (they share one group).
+TEST(Faces, VerticesBeyondThePointsStillPair) {
+  TetMesh m;
+  m.coords = {0, 0, 0, 1, 0, 0};
+  m.tets = {{0, 7, 9, 1000000}, {9, 7, 0, 4000000000u}, {7, 9, 1000000, 5}};
+  const FaceAdjacency adj = computeFaceAdjacency(m);
+  EXPECT_EQ(adj.faces, 10u);
+  EXPECT_EQ(adj.boundary_faces, 8u);
+  EXPECT_EQ(adj.neighbor[4 * 0 + 3], 1u);  // (0, 7, 9)
+  EXPECT_EQ(adj.neighbor[4 * 1 + 3], 0u);
+  EXPECT_EQ(adj.neighbor[4 * 0 + 0], 2u);  // (7, 9, 1000000)
+  EXPECT_EQ(adj.neighbor[4 * 2 + 3], 0u);
+}
+
+// Every interior face of a grid is found from both sides.
+TEST(Faces, GridNeighboursAreMutual) {
+  const TetMesh m = structuredGrid(5, 5);
+  const FaceAdjacency adj = computeFaceAdjacency(m);
+  EXPECT_EQ(adj.boundary_faces, 6u * 4 * 4 * 2);
+  EXPECT_EQ(adj.non_manifold_faces, 0u);
+  for (size_t t = 0; t < m.tets.size(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t u = adj.neighbor[4 * t + k];
+      if (u == kNoNeighbor) continue;
+      ASSERT_LT(u, m.tets.size());
+      int back = 0;
+      for (int j = 0; j < 4; ++j) back += adj.neighbor[4 * size_t{u} + j] == t;
+      EXPECT_EQ(back, 1) << "tetrahedron " << t << " face " << k;
+    }
 }
 
 class HexSplit : public ::testing::TestWithParam<int> {};
