@@ -479,8 +479,10 @@ class LevelCoder {
       if (type == ScalarType::kFloat64 && form.shift < 29) {
         int count[ValueCoder::kMaxPrintedDigits] = {};
         uint64_t single = 0;
+        // A printing with p digits reads back as v only if v's shortest decimal has at most p: a full
+        // double (17) is never tried, so this costs one conversion per value where no form applies.
         for (const Pair& pair : pairs)
-          for (int digits = 1; digits < ValueCoder::kMaxPrintedDigits; ++digits)
+          for (int digits = std::max(1, shortestDigits(pair.keys[0])); digits < ValueCoder::kMaxPrintedDigits; ++digits)
             count[digits] += printedSingleKey(pair.keys[0], digits, &single);
         int digits = 0;
         for (int d = 1; d < ValueCoder::kMaxPrintedDigits; ++d)

@@ -260,6 +260,18 @@ inline bool printedSingleKey(uint64_t key, int digits, uint64_t* out) {
   return true;
 }
 
+// The significant digits of the shortest decimal that reads back as the float64 value with key `key`
+// (0 for infinities and NaN).
+inline int shortestDigits(uint64_t key) {
+  uint8_t raw[8];
+  rawFromKey(ScalarType::kFloat64, key, raw);
+  char text[64];
+  const auto r = std::to_chars(text, text + sizeof text, value_detail::loadRaw<double>(raw), std::chars_format::scientific);
+  int digits = 0;
+  for (const char* c = text; c < r.ptr && *c != 'e'; ++c) digits += *c >= '0' && *c <= '9';
+  return digits;
+}
+
 // The integer n whose decimal value n / 10^e is the value with key `key`, or false.
 inline bool decimalInteger(ScalarType type, uint64_t key, int e, int64_t* out) {
   uint8_t raw[8], back[8];

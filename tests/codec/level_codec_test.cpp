@@ -211,6 +211,12 @@ TEST(LevelCodec, PrintedSingleKeysAreExact) {
   EXPECT_FALSE(printedSingleKey(key(std::nan("")), 15, &single));
   EXPECT_FALSE(printedSingleKey(key(1e39), 15, &single)) << "beyond float32's range";
   EXPECT_EQ(printedSingle(-1.472f, 15), -1.47200000286102);
+  // The encoder tries only digit counts at least the shortest decimal's (the estimate's filter).
+  EXPECT_EQ(shortestDigits(key(0.200000002980232)), 15);
+  EXPECT_EQ(shortestDigits(key(0.1)), 1);
+  EXPECT_EQ(shortestDigits(key(-0.0)), 1);
+  EXPECT_EQ(shortestDigits(key(1.0 / 3.0)), 16);
+  EXPECT_EQ(shortestDigits(key(std::nan(""))), 0);
 }
 
 // Importers split a hexahedron into 5 or 6 tetrahedra and give each its cell's values. The siblings
