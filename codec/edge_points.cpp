@@ -33,12 +33,30 @@ std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh) {
   }
   if (unused.empty()) return {};
 
+  // Only edges whose search reaches the box of the unused points: a mesh with a few stray points
+  // (raptorTetra has 2) does not sort all its edges to find theirs.
+  double box_lo[3], box_hi[3];
+  for (int i = 0; i < 3; ++i) {
+    box_lo[i] = std::numeric_limits<double>::infinity();
+    box_hi[i] = -std::numeric_limits<double>::infinity();
+    for (uint32_t v : unused) box_lo[i] = std::min(box_lo[i], mesh.point(v)[i]), box_hi[i] = std::max(box_hi[i], mesh.point(v)[i]);
+  }
+  auto reachesBox = [&](uint32_t a, uint32_t b) {
+    const double *p = mesh.point(a), *q = mesh.point(b);
+    double len2 = 0;
+    for (int i = 0; i < 3; ++i) len2 += (q[i] - p[i]) * (q[i] - p[i]);
+    const double r = kMaxOffset * std::sqrt(len2);
+    for (int i = 0; i < 3; ++i) {
+      const double m = (p[i] + q[i]) * 0.5;
+      if (m + r < box_lo[i] || m - r > box_hi[i]) return false;  // NaN reaches: the search skips it
+    }
+    return true;
+  };
   std::vector<uint64_t> edges;
-  edges.reserve(6 * mesh.tets.size());
   for (const Tet& t : mesh.tets)
     for (const auto& e : kTetEdges) {
       const uint32_t a = std::min(t[e[0]], t[e[1]]), b = std::max(t[e[0]], t[e[1]]);
-      if (a != b && b < np) edges.push_back(uint64_t{a} << 32 | b);
+      if (a != b && b < np && reachesBox(a, b)) edges.push_back(uint64_t{a} << 32 | b);
     }
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
@@ -57,13 +75,8 @@ std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh) {
   if (counted == 0) return {};
   // Cells of half the mean edge length: a typical edge's search visits 8 of them.
   const double cell = 0.5 * total / static_cast<double>(counted);
-  double lo[3];
-  for (int i = 0; i < 3; ++i) {
-    lo[i] = std::numeric_limits<double>::infinity();
-    for (uint32_t v : unused) lo[i] = std::min(lo[i], mesh.point(v)[i]);
-  }
   auto cellOf = [&](double x, int i) {
-    const double c = std::floor((x - lo[i]) / cell);
+    const double c = std::floor((x - box_lo[i]) / cell);
     return static_cast<int64_t>(std::clamp(c, -static_cast<double>(kCellRange), static_cast<double>(kCellRange - 1)));
   };
   auto key = [](int64_t x, int64_t y, int64_t z) {
