@@ -5,11 +5,12 @@
 #include <limits>
 #include <utility>
 
+#include "mesh/faces.h"
+
 namespace gtn {
 
 namespace {
 
-constexpr int kTetEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 constexpr double kMaxOffset = 0.25;  // of the edge's length, from its midpoint
 constexpr int64_t kMaxCells = 512;   // cells one edge's search may visit
 // Points a cell may hold and still be searched: more are coincident points (placeholders at the
@@ -54,7 +55,7 @@ std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh) {
   };
   std::vector<uint64_t> edges;
   for (const Tet& t : mesh.tets)
-    for (const auto& e : kTetEdges) {
+    for (const auto& e : kTetEdge) {
       const uint32_t a = std::min(t[e[0]], t[e[1]]), b = std::max(t[e[0]], t[e[1]]);
       if (a != b && b < np && reachesBox(a, b)) edges.push_back(uint64_t{a} << 32 | b);
     }

@@ -1652,10 +1652,9 @@ class LevelCoder {
   // rarely have any left (only behind a boundary face), and those to a new apex always do on a
   // quadratic mesh: the bits' contexts tell these apart.
   Status codeEdgePoints(const uint32_t e[4], long gate, bool fresh_apex) {
-    static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {1, 2}, {0, 3}, {1, 3}, {2, 3}};
     const bool boundary_gate = gate >= 0 && faces_.at(gate).d == kNoSlot;
     for (int k = 0; k < 6; ++k) {
-      const uint32_t a = e[kEdges[k][0]], b = e[kEdges[k][1]];
+      const uint32_t a = e[kTetEdge[k][0]], b = e[kTetEdge[k][1]];
       const uint32_t kind = gate < 0 || (k >= 3 && fresh_apex) ? 0 : (k >= 3 ? 1 : (boundary_gate ? 2 : 3));
       EdgePoint *next = nullptr, *end = nullptr;  // the encoder's entries of the edge
       uint32_t hi = 0;
@@ -2018,12 +2017,12 @@ class LevelCoder {
   BitModel alias_flag_;     // a point-field component repeats an earlier one (codeAliases)
   BitModel shift_flag_;     // a component declares a shift (codeValueForms)
   BitModel decimal_flag_;   // a float component is coded in decimal form (codeValueForms)
+  BitModel printed_flag_;   // a float64 component is coded in printed-single form (codeValueForms)
   BitTree<5> copy_which_[3];
   const uint32_t* near_ = nullptr;  // apex candidates of the gate being decoded (copy sources)
   int n_near_ = 0;
   bool edge_points_ = false;  // the level codes points on edges (section 10.5)
   BitModel edge_points_flag_;
-  BitModel printed_flag_;  // codeValueForms
   BitModel edge_point_[4][2];  // [edge kind (codeEdgePoints)][after a point on the same edge]
   uint32_t copy_last_[3] = {0, 0, 0};
   std::vector<double> pred_vals_;

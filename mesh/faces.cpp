@@ -6,6 +6,7 @@
 namespace gtn {
 
 const int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+const int kTetEdge[6][2] = {{0, 1}, {0, 2}, {1, 2}, {0, 3}, {1, 3}, {2, 3}};
 
 namespace {
 // The smallest vertex of each local face of t: t's smallest vertex, but for the face opposite it,

@@ -14,6 +14,9 @@ namespace gtn {
 // Local faces of a tetrahedron: face k is opposite vertex k, listed so that for a positively oriented
 // tetrahedron its normal (right-hand rule) points outward.
 extern const int kTetFace[4][3];
+// Local edges of a tetrahedron: those of face 3's corners (0, 1, 2) first, then the three to corner 3
+// (the order in which the level codec codes edge points, spec section 10.5).
+extern const int kTetEdge[6][2];
 
 constexpr uint32_t kNoNeighbor = 0xFFFFFFFFu;   // boundary face
 constexpr uint32_t kNonManifold = 0xFFFFFFFEu;  // face shared by three or more tetrahedra

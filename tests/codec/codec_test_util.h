@@ -73,6 +73,14 @@ inline void addFields(TetMesh& m) {
   m.cell_fields = {region, q};
 }
 
+// The distinct edges (a < b) of the mesh's tetrahedra, in increasing order.
+inline std::set<std::pair<uint32_t, uint32_t>> tetEdges(const TetMesh& m) {
+  std::set<std::pair<uint32_t, uint32_t>> edges;
+  for (const Tet& t : m.tets)
+    for (const auto& e : kTetEdge) edges.insert({std::min(t[e[0]], t[e[1]]), std::max(t[e[0]], t[e[1]])});
+  return edges;
+}
+
 // A sink that enforces the mesh-stream rules and forwards to a TetMeshBuilder.
 class CheckingSink : public MeshSink {
  public:

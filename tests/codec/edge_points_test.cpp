@@ -76,10 +76,7 @@ TEST(EdgePoints, QuadraticGridRoundTrips) {
   TetMesh m = test::gridMesh(5, 4, 3, 5);
   test::addFields(m);
   const size_t corners = m.numPoints();
-  std::set<std::pair<uint32_t, uint32_t>> edges;
-  for (const Tet& t : m.tets)
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) edges.insert({std::min(t[i], t[j]), std::max(t[i], t[j])});
+  const std::set<std::pair<uint32_t, uint32_t>> edges = test::tetEdges(m);
   for (const auto& [a, b] : edges)
     for (int i = 0; i < 3; ++i) m.coords.push_back((m.point(a)[i] + m.point(b)[i]) * 0.5);
   for (Field& f : m.point_fields) {

@@ -93,10 +93,7 @@ TEST(LevelCodecReal, MidEdgeNodesAreCodedOnTheirEdges) {
   TetMesh m = importOrDie({{"vtk/spx.vtk"}, 6, 2.5});
   ASSERT_EQ(m.coord_type, ScalarType::kFloat32);
   ASSERT_EQ(m.point_fields.size(), 1u);
-  std::set<std::pair<uint32_t, uint32_t>> edges;
-  for (const Tet& t : m.tets)
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) edges.insert({std::min(t[i], t[j]), std::max(t[i], t[j])});
+  const std::set<std::pair<uint32_t, uint32_t>> edges = test::tetEdges(m);
   const size_t corners = m.numPoints();
   Field scalars = m.point_fields[0];
   scalars.bytes.resize((corners + edges.size()) * sizeof(float));

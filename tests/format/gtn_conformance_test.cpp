@@ -11,6 +11,7 @@
 #include <functional>
 #include <set>
 
+#include "codec/codec_test_util.h"
 #include "codec/value_coder.h"
 #include "format/gtn_file.h"
 #include "format/gtn_reader.h"
@@ -181,10 +182,7 @@ TetMesh edgePoints() {
   m.coord_type = ScalarType::kFloat64;
   addCubeGrid(m, 2, 0.0, 0.5);
   m = finish(m);
-  std::set<std::pair<uint32_t, uint32_t>> edges;
-  for (const Tet& t : m.tets)
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) edges.insert({std::min(t[i], t[j]), std::max(t[i], t[j])});
+  const std::set<std::pair<uint32_t, uint32_t>> edges = test::tetEdges(m);
   const size_t corners = m.numPoints();
   std::vector<double> pressure(corners);
   for (size_t v = 0; v < corners; ++v) pressure[v] = 100.0 + m.point(v)[0] * m.point(v)[1] + m.point(v)[2];
