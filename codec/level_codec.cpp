@@ -373,6 +373,7 @@ class LevelCoder {
       int decimals = -1;
       int printed = 0;
       uint32_t shift = 0;
+      bool exceptions = false;  // of the shift
     };
     auto declare = [&](Coder& c, ValueCoder& vc, ScalarType type, uint32_t comp, Form form, const std::string& what) -> Status {
       if (isFloatType(type)) {
@@ -403,12 +404,14 @@ class LevelCoder {
       }
       uint32_t has = form.shift > 0;
       has = c.bit(shift_flag_, has);
-      uint32_t shift = has ? c.direct(form.shift, 6) : 0;
+      if (!has) return Status::ok();
+      const uint32_t shift = c.direct(form.shift, 6);
       if constexpr (!kEncode) {
-        if (has && (shift == 0 || shift >= static_cast<uint32_t>(vc.bits())))
+        if (shift == 0 || shift >= static_cast<uint32_t>(vc.bits()))
           return bad(what + " declares an invalid shift of " + std::to_string(shift) + " bits");
       }
-      vc.setShift(comp, static_cast<int>(shift));
+      const uint32_t exceptions = c.bit(exceptions_flag_, form.exceptions);
+      vc.setShift(comp, static_cast<int>(shift), exceptions != 0);
       return Status::ok();
     };
     // The encoder's choice for `n` values `stride` bytes apart: the shift, or the decimal places whose
@@ -422,21 +425,23 @@ class LevelCoder {
       int z = scalarBits(type) - 1;
       for (size_t i = 0; i < n && z > 0; ++i) z = std::min(z, ValueCoder::trailingZeros(type, p + i * stride));
       form.shift = static_cast<uint32_t>(z);
-      if (!isFloatType(type) || n < 2) return form;
+      if (n < 2) return form;
       struct Pair {
         int places[2];
         double integer[2];
         float float_bits;  // bit length of the difference of the shifted keys
         uint64_t keys[2];
+        int zeros[2];  // trailing zero bits of the stored patterns, at most the width - 1
       };
       struct Value {
         uint64_t key;
         int places;
         double integer;
+        int zeros;
       };
       int lo = ValueCoder::kMaxDecimals + 1, hi = -1;
       auto valueAt = [&](size_t i) {
-        Value v{keyFromRaw(type, p + i * stride), -1, 0};
+        Value v{keyFromRaw(type, p + i * stride), -1, 0, std::min(ValueCoder::trailingZeros(type, p + i * stride), scalarBits(type) - 1)};
         int64_t integer = 0;
         v.places = ValueCoder::decimalPlaces(type, v.key, &integer);
         v.integer = static_cast<double>(integer);
@@ -454,7 +459,7 @@ class LevelCoder {
         const size_t i = sample ? state % (n - 1) : k;
         const Value a = sample ? valueAt(i) : next, b = valueAt(i + 1);
         next = b;
-        Pair pair{{a.places, b.places}, {a.integer, b.integer}, 0, {a.key, b.key}};
+        Pair pair{{a.places, b.places}, {a.integer, b.integer}, 0, {a.key, b.key}, {a.zeros, b.zeros}};
         const uint64_t d = (b.key > a.key ? b.key - a.key : a.key - b.key) >> z;
         pair.float_bits = static_cast<float>(bitLength(d));
         pairs.push_back(pair);
@@ -494,7 +499,28 @@ class LevelCoder {
             const bool both = printedSingleKey(pair.keys[0], digits, &k32[0]) && printedSingleKey(pair.keys[1], digits, &k32[1]);
             cost += both ? bitLength(k32[1] > k32[0] ? k32[1] - k32[0] : k32[0] - k32[1]) + 1 : pair.float_bits + 4;
           }
-          if (cost < best) form = {-1, digits, 0};
+          if (cost < best) best = cost, form = {-1, digits, 0};
+        }
+      }
+      // A shift with exceptions: s low bits that most values have zero, but not all (sums of float32
+      // values kept in doubles, with a few full doubles; exact zeros among computed values). Each s
+      // that some sampled value has is costed like the decimal places, on the keys shifted by s; a pair's
+      // second value is costed as predicted by the first, whose low bits the shift drops whatever they
+      // are (a zero next to full doubles costs a few bits of exponent instead of a whole double). The
+      // escape's models start cold: a few dozen bits, and no gain below some 64 values.
+      if (n < 64) return form;
+      constexpr double kColdModels = 32;
+      bool tried[64] = {};
+      for (const Pair& candidate : pairs) {
+        for (const int sh : candidate.zeros) {
+          if (sh <= z || tried[sh]) continue;
+          tried[sh] = true;
+          double cost = kColdModels;
+          for (const Pair& pair : pairs) {
+            const uint64_t d = pair.keys[1] > pair.keys[0] ? pair.keys[1] - pair.keys[0] : pair.keys[0] - pair.keys[1];
+            cost += pair.zeros[1] >= sh ? bitLength(d >> sh) + 1 : pair.float_bits + 4;
+          }
+          if (cost < best) best = cost, form = {-1, 0, static_cast<uint32_t>(sh), true};
         }
       }
       return form;
@@ -2016,6 +2042,7 @@ class LevelCoder {
   std::vector<uint32_t> field_coded_comps_;  // per field: components not aliased
   BitModel alias_flag_;     // a point-field component repeats an earlier one (codeAliases)
   BitModel shift_flag_;     // a component declares a shift (codeValueForms)
+  BitModel exceptions_flag_;  // a component's shift has exceptions (codeValueForms)
   BitModel decimal_flag_;   // a float component is coded in decimal form (codeValueForms)
   BitModel printed_flag_;   // a float64 component is coded in printed-single form (codeValueForms)
   BitTree<5> copy_which_[3];

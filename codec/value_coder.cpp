@@ -27,6 +27,12 @@ void ValueCoder::addEscapeModels() {
   for (size_t i = components_; i < comp_.size(); ++i) comp_[i].bucket.resize(kContexts);
 }
 
+void ValueCoder::setShift(uint32_t comp, int shift, bool exceptions) {
+  comp_[comp].shift = shift;
+  comp_[comp].exceptions = shift > 0 && exceptions;
+  if (comp_[comp].exceptions) addEscapeModels();
+}
+
 void ValueCoder::setDecimals(uint32_t comp, int e) {
   comp_[comp].decimals = e;
   if (e >= 0) addEscapeModels();

@@ -12,7 +12,9 @@
 //
 // A component whose values all end in s zero bits (a float64 array that holds float32 values ends in
 // 29 or more, small integers stored as floats in many more) is coded with s as its shift: keys and
-// predictions lose their s low bits, which the decoder restores. A float component whose values are
+// predictions lose their s low bits, which the decoder restores. When only most values end so (sums of
+// float32 values kept in doubles, with a few full doubles among them; exact zeros among computed
+// values), a bit per value says which do not, and those are coded whole. A float component whose values are
 // mostly decimals of at most e places (what text formats hold: 0.0260146, or 5.67709 printed as
 // 5.6770899999999997) is coded in decimal form: a bit per value says whether it is one, and such a
 // value is coded as the integer n = v * 10^e, from which IEEE division restores v = n / 10^e bit for
@@ -167,8 +169,9 @@ class ValueCoder {
   uint64_t code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actual_key);
 
   // The shift of component `comp`: the number of low bits that every value's stored bit pattern has
-  // zero, at most the width - 1. 0 until set.
-  void setShift(uint32_t comp, int shift) { comp_[comp].shift = shift; }
+  // zero, at most the width - 1; 0 until set. `exceptions`: only most values have them zero, and a bit
+  // per value says which do not (those are coded at the full width in models of their own).
+  void setShift(uint32_t comp, int shift, bool exceptions = false);
   int bits() const { return bits_; }
   // The number of trailing zero bits of a value's stored bit pattern (the value's type width for 0).
   static int trailingZeros(ScalarType type, const uint8_t* p);
@@ -195,9 +198,10 @@ class ValueCoder {
     BitModel high[65][4];  // the two bits below the leading one, as a 2-bit tree per bucket
     uint32_t last_bucket = 0;
     int shift = 0;
+    bool exceptions = false;  // of the shift
     int decimals = -1;
     int printed = 0;
-    BitModel not_decimal[2];  // context: the previous value's bit (decimal or printed-single form)
+    BitModel not_decimal[2];  // context: the previous value's bit (decimal, printed-single or shift form)
     uint32_t last_not_decimal = 0;
   };
   // Gives a component in decimal or printed-single form its float models, after the others.
@@ -329,6 +333,17 @@ uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actua
   }
   const int z = m.shift;
   if (z == 0) return codeKey(c, m, bits_, mask_, pred_key, actual_key);
+  if (m.exceptions) {
+    uint32_t other = 0;
+    if constexpr (C::kEncoding) {
+      uint8_t raw[8];
+      rawFromKey(type_, actual_key, raw);
+      other = trailingZeros(type_, raw) < z;
+    }
+    other = c.bit(m.not_decimal[m.last_not_decimal], other);
+    m.last_not_decimal = other;
+    if (other) return codeKey(c, comp_[components_ + comp], bits_, mask_, pred_key, actual_key);
+  }
   // The low z bits of every value's pattern are zero: those of a positive float's key and of an
   // integer's too, those of a negative float's key one (its key inverts the pattern).
   const int w = bits_ - z;

@@ -174,6 +174,27 @@ TetMesh printedSingles() {
   return finish(m);
 }
 
+// Sums of float32 values kept in doubles (spec 10.2, shift with exceptions): float64 coordinates and a
+// float64 field whose values mostly end in many zero bits, with full doubles among them that take the
+// per-value escape, and a zero that does not need it.
+TetMesh shiftExceptions() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat64;
+  addCubeGrid(m, 3, 0.0, 0.37);
+  for (double& c : m.coords) c = static_cast<double>(static_cast<float>(c * 1.7)) + static_cast<double>(static_cast<float>(c * 0.013));
+  m.coords[3 * 4 + 1] = 1.0 / 3.0;
+  const size_t np = m.numPoints();
+  Field s("stress", 1, ScalarType::kFloat64, np);
+  for (size_t v = 0; v < np; ++v)
+    s.set<double>(v, 0, static_cast<double>(static_cast<float>(4.1e6 + 977.3 * static_cast<double>(v % 13))) +
+                            static_cast<double>(static_cast<float>(3100.7 * static_cast<double>(v % 7))));
+  s.set<double>(9, 0, std::sqrt(2.0));
+  s.set<double>(10, 0, 0.0);
+  s.set<double>(20, 0, 1e300 / 3.0);
+  m.point_fields = {s};
+  return finish(m);
+}
+
 // A quadratic tetrahedral mesh as importers keep it (spec 10.5, edge points): the 2 x 2 x 2 cube grid,
 // float64, with a node on every edge of every tetrahedron that no tetrahedron uses, most at the edge's
 // midpoint, some off it (a curved cell's), and one point on no edge, coded after peeling.
@@ -282,6 +303,7 @@ std::vector<Sample> samples() {
                     [] { return encodeFile(repeatedComponents(), options()); }));
   s.push_back(valid("decimals.f64.dir.v1.0.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
   s.push_back(valid("printed-singles.f64.dir.v1.0.gtn", printedSingles, [] { return encodeFile(printedSingles(), options()); }));
+  s.push_back(valid("shift-exceptions.f64.dir.v1.0.gtn", shiftExceptions, [] { return encodeFile(shiftExceptions(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithLevels(options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
