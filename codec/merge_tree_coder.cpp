@@ -71,8 +71,6 @@ void computeErrorQuantiles(MergeTree& tree) {
 
 namespace {
 
-int bitLength(uint64_t x) { return x == 0 ? 0 : 64 - __builtin_clzll(x); }
-
 // Adaptive models of the body (one instance per encoder or decoder).
 struct Models {
   BitModel boundary;

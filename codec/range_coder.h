@@ -151,6 +151,8 @@ class RangeDecoder {
   }
   // True while no byte past the end was requested and the stream started correctly.
   bool ok() const { return !bad_ && overrun_ == 0; }
+  // A symbol decoded to a value the stream cannot hold (only a corrupt stream's).
+  void markCorrupt() { bad_ = true; }
   // After the last symbol: every byte consumed, none past the end.
   bool finishedCleanly() const { return ok() && pos_ == in_.size(); }
   size_t position() const { return pos_; }
@@ -175,6 +177,9 @@ class RangeDecoder {
   uint32_t code_ = 0;
   bool bad_ = false;
 };
+
+// The number of bits of v without its leading zeros (0 for 0).
+inline int bitLength(uint64_t v) { return v ? 64 - __builtin_clzll(v) : 0; }
 
 // One interface over both directions so that the encoder and the decoder run the same code: the
 // encoder passes the value to write and gets it back, the decoder ignores the argument and gets the
@@ -203,6 +208,7 @@ class EntropyCoder<true> {
   }
   void finish() { enc_.flush(); }
   bool ok() const { return true; }
+  void markCorrupt() {}
 
  private:
   RangeEncoder enc_;
@@ -223,6 +229,7 @@ class EntropyCoder<false> {
   }
   void finish() {}
   bool ok() const { return dec_.ok(); }
+  void markCorrupt() { dec_.markCorrupt(); }
   bool finishedCleanly() const { return dec_.finishedCleanly(); }
 
  private:

@@ -21,9 +21,12 @@
 // bit; the others (a mesh generator's own points among the input's, say) as floats, with their own
 // models. A float64 component whose values are mostly float32 values printed with p digits and read
 // back (0.2f printed "%.15g" is 0.200000002980232) is coded in printed-single form: such a value as
-// its float32 value, the others as float64, behind the same per-value bit (spec section 10.2).
+// its float32 value, the others as float64, behind the same per-value bit (spec section 10.2). A
+// component of few distinct values (a lattice's coordinates, a field of a few levels) is coded in
+// table form: its distinct values once, ascending, then each value as its place in that table.
 #pragma once
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -183,6 +186,12 @@ class ValueCoder {
   // n; -1 when it has none (NaN, infinity, -0.0, more places or digits than that).
   static int decimalPlaces(ScalarType type, uint64_t key, int64_t* n);
 
+  // The value table of component `comp`: its distinct keys, ascending (the encoder's `keys`, the
+  // decoder's result), of at most `limit` entries. Its values are then coded as places in the table.
+  // False for a corrupt table (too long, not ascending).
+  template <class C>
+  bool codeTable(C& c, uint32_t comp, std::vector<uint64_t>* keys, uint64_t limit);
+
   // The significant digits p (1..kMaxPrintedDigits) of a float64 component coded in printed-single
   // form, 0 for none.
   void setPrinted(uint32_t comp, int digits);
@@ -201,6 +210,8 @@ class ValueCoder {
     bool exceptions = false;  // of the shift
     int decimals = -1;
     int printed = 0;
+    std::vector<uint64_t> table;  // the distinct keys, ascending, of a component in table form
+    int table_bits = 0;           // the width of a place in it
     BitModel not_decimal[2];  // context: the previous value's bit (decimal, printed-single or shift form)
     uint32_t last_not_decimal = 0;
   };
@@ -296,8 +307,50 @@ inline bool decimalInteger(ScalarType type, uint64_t key, int e, int64_t* out) {
 }
 
 template <class C>
+bool ValueCoder::codeTable(C& c, uint32_t comp, std::vector<uint64_t>* keys, uint64_t limit) {
+  const uint32_t length = c.direct(static_cast<uint32_t>(bitLength(keys->size() - 1)), 6);
+  if (length > 32) return false;
+  const uint64_t size = uint64_t{c.direct(static_cast<uint32_t>(keys->size() - 1), static_cast<int>(length))} + 1;
+  if (size > limit) return false;
+  // Keys ascend, mostly by steps like the one before (a lattice's coordinates): each is predicted
+  // by the step before it, in models of the table's own. The decoder's table grows with what it
+  // decodes, not with the size a corrupt stream may claim.
+  Component models;
+  models.bucket.resize(kContexts);
+  std::vector<uint64_t>& k = *keys;
+  for (size_t i = 0; i < size; ++i) {
+    const uint64_t pred = i == 0 ? 0 : (i == 1 ? k[0] + 1 : 2 * k[i - 1] - k[i - 2]) & mask_;
+    const uint64_t key = codeKey(c, models, bits_, mask_, pred, C::kEncoding ? k[i] : 0);
+    if constexpr (!C::kEncoding) {
+      if ((i > 0 && key <= k[i - 1]) || !c.ok()) return false;
+      k.push_back(key);
+    }
+  }
+  Component& m = comp_[comp];
+  m.table = std::move(*keys);
+  m.table_bits = std::max(1, bitLength(size - 1));
+  return true;
+}
+
+template <class C>
 uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actual_key) {
   Component& m = comp_[comp];
+  if (!m.table.empty()) {
+    // The value's place, against the place of the table's key nearest to the prediction (the lower
+    // of two as near).
+    const std::vector<uint64_t>& t = m.table;
+    size_t at = static_cast<size_t>(std::lower_bound(t.begin(), t.end(), pred_key) - t.begin());
+    if (at == t.size() || (at > 0 && pred_key - t[at - 1] <= t[at] - pred_key)) --at;
+    uint64_t place = 0;
+    if constexpr (C::kEncoding) place = static_cast<uint64_t>(std::lower_bound(t.begin(), t.end(), actual_key) - t.begin());
+    const int w = m.table_bits;
+    place = codeKey(c, m, w, (uint64_t{1} << w) - 1, at, place);
+    if (place >= t.size()) {
+      c.markCorrupt();
+      place = t.size() - 1;
+    }
+    return t[place];
+  }
   if (m.printed > 0) {
     uint64_t single = 0;
     uint32_t other = 0;

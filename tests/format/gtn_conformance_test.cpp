@@ -195,6 +195,26 @@ TetMesh shiftExceptions() {
   return finish(m);
 }
 
+// A field of a few distinct values (spec 10.2, table form): 6 x 6 x 6 cubes, float32, with a float64
+// cell field `conductivity` that takes one of 9 irrational values per block of 2 x 2 x 2 cubes, and a
+// float64 point field `level` of 5 values: the cell field is coded as places in its table.
+TetMesh valueTable() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat32;
+  addCubeGrid(m, 6, 0.0, 1.0);
+  m = finish(m);
+  Field c("conductivity", 1, ScalarType::kFloat64, m.numTets());
+  for (size_t t = 0; t < m.numTets(); ++t) {
+    const size_t cube = t / 6, i = cube % 6, j = cube / 6 % 6, k = cube / 36;
+    c.set<double>(t, 0, std::sqrt(2.0 + static_cast<double>((i / 2 + 3 * (j / 2) + 2 * (k / 2)) % 9)));
+  }
+  Field l("level", 1, ScalarType::kFloat64, m.numPoints());
+  for (size_t v = 0; v < m.numPoints(); ++v) l.set<double>(v, 0, std::log(3.0 + static_cast<double>(v % 5)));
+  m.cell_fields = {c};
+  m.point_fields = {l};
+  return m;
+}
+
 // A quadratic tetrahedral mesh as importers keep it (spec 10.5, edge points): the 2 x 2 x 2 cube grid,
 // float64, with a node on every edge of every tetrahedron that no tetrahedron uses, most at the edge's
 // midpoint, some off it (a curved cell's), and one point on no edge, coded after peeling.
@@ -304,6 +324,7 @@ std::vector<Sample> samples() {
   s.push_back(valid("decimals.f64.dir.v1.0.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
   s.push_back(valid("printed-singles.f64.dir.v1.0.gtn", printedSingles, [] { return encodeFile(printedSingles(), options()); }));
   s.push_back(valid("shift-exceptions.f64.dir.v1.0.gtn", shiftExceptions, [] { return encodeFile(shiftExceptions(), options()); }));
+  s.push_back(valid("value-table.f32.dir.v1.0.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithLevels(options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
