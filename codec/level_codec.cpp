@@ -379,7 +379,9 @@ class LevelCoder {
     auto declare = [&](Coder& c, ValueCoder& vc, ScalarType type, uint32_t comp, Form form, uint64_t values,
                        const std::string& what) -> Status {
       if (c.bit(table_flag_, !form.table.empty())) {
-        if (!vc.codeTable(c, comp, &form.table, values)) return bad(what + " declares an invalid value table");
+        if (!vc.codeTable(c, comp, &form.table, values))
+          return bad(what + (c.ok() ? " declares an invalid value table (longer than its values, or not ascending)"
+                                    : " is truncated or corrupt in its value table"));
         return Status::ok();
       }
       if (isFloatType(type)) {
