@@ -422,8 +422,9 @@ class LevelCoder {
       vc.setShift(comp, static_cast<int>(shift), exceptions != 0);
       return Status::ok();
     };
-    // The encoder's choice for `n` values `stride` bytes apart: the shift, or the decimal places whose
-    // integers cost least when that saves a twentieth. Costs are estimated on the differences of
+    // The encoder's choice for `n` values `stride` bytes apart: the shift, or whichever of the decimal
+    // places, printed digits, larger shift with exceptions or value table costs least, when that saves
+    // a twentieth. Costs are estimated on the differences of
     // consecutive values in the source's order (neighbours there are mostly neighbours in space), as
     // bit lengths: of the integers' differences, of the shifted keys' differences for floats and for
     // values without a decimal form; over every value, or a sample of 256 pairs (pseudo-random: a
@@ -541,7 +542,8 @@ class LevelCoder {
       std::vector<uint64_t> keys;
       for (const Pair& pair : pairs) keys.insert(keys.end(), pair.keys, pair.keys + 2);
       std::sort(keys.begin(), keys.end());
-      if (static_cast<size_t>(std::unique(keys.begin(), keys.end()) - keys.begin()) * 2 > pairs.size() * 2) return form;
+      const size_t sampled_distinct = static_cast<size_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
+      if (sampled_distinct > pairs.size()) return form;  // more than half of the 2 per pair
       keys.resize(n);
       for (size_t i = 0; i < n; ++i) keys[i] = keyFromRaw(type, p + i * stride);
       std::sort(keys.begin(), keys.end());
