@@ -35,17 +35,6 @@ inline uint64_t equalLanes(const uint32_t* a, uint32_t v) {
   return m;
 }
 
-// Index of the first of a[0..n) equal to v, or -1, for n <= kMax; `a` must have room for n
-// rounded up to 4. Compares four at a time, with no branch that depends on where v is.
-template <uint32_t kMax>
-inline int indexOf(const uint32_t* a, int n, uint32_t v) {
-  static_assert(kMax < 64);
-  uint64_t m = 0;
-  for (int g = 0; 4 * g < n; ++g) m |= equalLanes<4>(a + 4 * g, v) << (4 * g);
-  m &= (uint64_t{1} << n) - 1;
-  return m ? __builtin_ctzll(m) : -1;
-}
-
 // Unordered small maps, one per slot (a non-negative 32-bit index), from a key of kKeys 32-bit words
 // to a 32-bit value. A slot's entries sit in its bucket, key words and values in separate arrays so
 // that a lookup compares every entry of a bucket at once, without a data-dependent branch per entry.

@@ -589,6 +589,7 @@ class LevelCoder {
       open_.push_back(0);
       pins_.push_back(0);
       ids_.push_back(0);
+      gather_mark_.push_back(0);
       if (!boundary_done_) {
         nxt_.push_back(kNoSlot);
         prv_.push_back(kNoSlot);
@@ -618,6 +619,7 @@ class LevelCoder {
     open_.reserve(n);
     pins_.reserve(n);
     ids_.reserve(n);
+    gather_mark_.reserve(n);
     if (!boundary_done_) {
       nxt_.reserve(n);
       prv_.reserve(n);
@@ -1274,16 +1276,20 @@ class LevelCoder {
     RawCandidate* c = raw_;
     int n = 0;
     uint32_t across[3] = {kNone32, kNone32, kNone32};  // the apex of the front face across each gate edge (c, a), (a, b), (b, c)
-    uint32_t seen[kMaxGather + 3] = {};  // c[i].s, for a vectorised membership test
+    if (++gather_epoch_ == kGatherEpochs) {
+      std::fill(gather_mark_.begin(), gather_mark_.end(), 0);
+      gather_epoch_ = 1;
+    }
+    const uint32_t tag = gather_epoch_ << kGatherIndexBits;
+    for (uint32_t s : g.v) gather_mark_[s] = tag | kGateMark;
     auto add = [&](uint32_t s) {
-      if (s == g.v[0] || s == g.v[1] || s == g.v[2]) return;
-      const int i = indexOf<kMaxGather>(seen, n, s);
-      if (i >= 0) {
-        ++c[i].w;
+      const uint32_t m = gather_mark_[s];
+      if ((m & ~kGateMark) == tag) {
+        if (m != (tag | kGateMark)) ++c[m & kGateMark].w;
         return;
       }
       if (n < kMaxGather) {
-        seen[n] = s;
+        gather_mark_[s] = tag | static_cast<uint32_t>(n);
         c[n++] = {s, 1};
       }
     };
@@ -2010,6 +2016,15 @@ class LevelCoder {
     uint32_t w;  // how many fan walks reached it
   };
   RawCandidate raw_[kMaxGather];  // the gate's candidates not evaluated yet, unordered
+  // Per slot, while gatherCandidates runs: gather_epoch_ above kGatherIndexBits bits that hold the
+  // slot's index in raw_, or kGateMark for the gate's own vertices (an older epoch: neither). Finding
+  // a fan vertex among the candidates so far is then one load, not a scan of them all.
+  static constexpr uint32_t kGatherIndexBits = 6;
+  static constexpr uint32_t kGateMark = (1u << kGatherIndexBits) - 1;
+  static constexpr uint32_t kGatherEpochs = 1u << (32 - kGatherIndexBits);
+  static_assert(kMaxGather < kGateMark);
+  std::vector<uint32_t> gather_mark_;
+  uint32_t gather_epoch_ = 0;
   int raw_n_ = 0;
   Candidate cand_[kMaxGather];  // the evaluated ones (whole groups, best multiplicities), unordered
   int cand_n_ = 0;

@@ -98,15 +98,5 @@ TEST(RingQueue, IsFifoAcrossGrowth) {
   EXPECT_TRUE(q.empty());
 }
 
-TEST(IndexOf, FindsTheFirstMatchAmongTheFirstN) {
-  uint32_t a[48 + 3] = {};
-  for (int i = 0; i < 48; ++i) a[i] = 1000 + (i % 20);
-  EXPECT_EQ(indexOf<48>(a, 48, 1005), 5);
-  EXPECT_EQ(indexOf<48>(a, 5, 1005), -1);  // past n does not count
-  EXPECT_EQ(indexOf<48>(a, 48, 999), -1);
-  EXPECT_EQ(indexOf<48>(a, 0, 1000), -1);
-  EXPECT_EQ(indexOf<48>(a, 48, 1019), 19);
-}
-
 }  // namespace
 }  // namespace gtn
