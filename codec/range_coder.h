@@ -123,7 +123,7 @@ class RangeDecoder {
     for (int i = 0; i < 5; ++i) code_ = (code_ << 8) | nextByte();
   }
 
-  uint32_t decodeBit(BitModel& m) {
+  [[gnu::always_inline]] uint32_t decodeBit(BitModel& m) {
     const uint32_t bound = (range_ >> 16) * m.p0();
     uint32_t bit;
     if (code_ < bound) {
@@ -135,7 +135,7 @@ class RangeDecoder {
       bit = 1;
     }
     m.update(bit);
-    normalize();
+    if (range_ < (1u << 24)) [[unlikely]] normalize();
     return bit;
   }
   uint32_t decodeDirect(int n) {
@@ -161,7 +161,9 @@ class RangeDecoder {
     ++overrun_;
     return 0;
   }
-  void normalize() {
+  // Out of line, as in the encoder: most bits need none, and decodeBit is then small enough to
+  // inline at its every call.
+  [[gnu::noinline]] void normalize() {
     while (range_ < (1u << 24)) {
       range_ <<= 8;
       code_ = (code_ << 8) | nextByte();
