@@ -1034,7 +1034,7 @@ class LevelCoder {
     }
     for (int i = 0; i < 3; ++i) {
       ++open_[v[i]];
-      edges_.put(edgeKey(v[i], v[(i + 1) % 3]), v[(i + 2) % 3]);
+      edges_.put(v[i], v[(i + 1) % 3], v[(i + 2) % 3]);
     }
     if (d != kNoSlot) ++pins_[d];
     QueuedFace q;
@@ -1042,12 +1042,27 @@ class LevelCoder {
     q.face = face;
     queue_.push_back(q);
   }
-  void closeFace(long index) {
+  // Closes the open face `index`, face k of the tetrahedron e that emitTet emits, which opens its
+  // faces j with closes[j] < 0. An edge that such a face puts again, in the same direction, is not
+  // erased: the eraseIf would find the new value and do nothing, whether before the put or after.
+  // The opened faces run their edges against face k's order in kTetFace (t0, t1, t2): the closed
+  // face shares their directions when it is the reverse of that order, and then its edge (t0, t2) is
+  // put again by face t1 if opened, and so on.
+  void closeFace(long index, int k, const uint32_t e[4], const long closes[4]) {
     const FrontFace f = faces_.at(index);
     faces_.eraseAt(index);
-    for (int i = 0; i < 3; ++i) {
-      --open_[f.v[i]];
-      edges_.eraseIf(edgeKey(f.v[i], f.v[(i + 1) % 3]), f.v[(i + 2) % 3]);
+    for (int i = 0; i < 3; ++i) --open_[f.v[i]];
+    const int* t = kTetFace[k];
+    const uint32_t o0 = e[t[0]], o1 = e[t[1]], o2 = e[t[2]];
+    const bool reversed = f.v[0] == o0 ? f.v[1] == o2 : (f.v[1] == o0 ? f.v[2] == o2 : f.v[0] == o2);
+    if (reversed) {
+      if (closes[t[1]] >= 0) edges_.eraseIf(o0, o2, o1);
+      if (closes[t[0]] >= 0) edges_.eraseIf(o2, o1, o0);
+      if (closes[t[2]] >= 0) edges_.eraseIf(o1, o0, o2);
+    } else {
+      edges_.eraseIf(o0, o1, o2);
+      edges_.eraseIf(o1, o2, o0);
+      edges_.eraseIf(o2, o0, o1);
     }
     if (f.d != kNoSlot) unpin(f.d);
     if (f.cell != kNone32) releaseCell(f.cell);
@@ -1296,10 +1311,11 @@ class LevelCoder {
     for (int j = 0; j < 3; ++j) {
       const uint32_t a = g.v[j], b = g.v[(j + 1) % 3], cc = g.v[(j + 2) % 3];
       // Forward around a: across edge (c, a), then on.
+      const EdgeMap::From around = edges_.from(a);
       uint32_t v = cc;
       bool closed = false;
       for (int step = 0; step < kFanSteps; ++step) {
-        const uint32_t w = edges_.find(edgeKey(a, v), kNone32);
+        const uint32_t w = around.find(v, kNone32);
         if (step == 0) across[j] = w;
         if (w == kNone32) break;
         if (w == b) {
@@ -1650,7 +1666,7 @@ class LevelCoder {
     }
     for (int k = 0; k < 4; ++k) {
       if (closes[k] >= 0) {
-        closeFace(closes[k]);
+        closeFace(closes[k], k, e, closes);
         continue;
       }
       const uint32_t f[3] = {e[kTetFace[k][0]], e[kTetFace[k][1]], e[kTetFace[k][2]]};

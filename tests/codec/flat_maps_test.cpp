@@ -34,6 +34,7 @@ TEST(EdgeMap, MatchesAMapUnderRandomOperations) {
       auto it = model.find({a, b});
       ASSERT_EQ(edges.find(a, b, 99u), it == model.end() ? 99u : it->second) << "step " << step;
       ASSERT_EQ(edges.find((uint64_t{a} << 32) | b, 99u), edges.find(a, b, 99u));
+      ASSERT_EQ(edges.from(a).find(b, 99u), edges.find(a, b, 99u));
     }
     ASSERT_EQ(edges.size(), model.size());
   }
@@ -42,6 +43,7 @@ TEST(EdgeMap, MatchesAMapUnderRandomOperations) {
   EXPECT_EQ(edges.size(), 0u);
   EXPECT_EQ(edges.find(3, 4, 99u), 99u);
   EXPECT_EQ(edges.find(1000000, 4, 99u), 99u);  // a slot never seen
+  EXPECT_EQ(edges.from(1000000).find(4, 99u), 99u);
 }
 
 TEST(FaceMap, FindsEveryOpenFaceByItsSortedKeyAndKeepsIndicesStable) {
