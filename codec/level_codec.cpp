@@ -1336,6 +1336,7 @@ class LevelCoder {
     }
     raw_n_ = n;
     cand_n_ = 0;
+    first_ = -1;
     gate_ = &g;
     side_ = &side;
     pred_ = p;
@@ -1491,16 +1492,24 @@ class LevelCoder {
   uint32_t candidateAt(int place) {
     evaluateGroups(place + 1);
     if (place >= cand_n_) return kNoSlot;
+    if (place == 0) return cand_[firstIndex()].s;
     return by_key_chosen_ ? candidateAt(place, ByKey()) : candidateAt(place, ByDistance());
+  }
+  // Index in cand_ of the first candidate of the chosen order (cand_ not empty), found once per
+  // gate: the groups evaluated later have smaller multiplicities and come after it in both orders.
+  int firstIndex() {
+    if (first_ < 0) first_ = by_key_chosen_ ? firstIndex(ByKey()) : firstIndex(ByDistance());
+    return first_;
+  }
+  template <class Before>
+  int firstIndex(Before before) const {
+    int best = 0;
+    for (int i = 1; i < cand_n_; ++i)
+      if (before(cand_[i], cand_[best])) best = i;
+    return best;
   }
   template <class Before>
   uint32_t candidateAt(int place, Before before) const {
-    if (place == 0) {  // the usual case: the first, in one pass
-      int best = 0;
-      for (int i = 1; i < cand_n_; ++i)
-        if (before(cand_[i], cand_[best])) best = i;
-      return cand_[best].s;
-    }
     Candidate tmp[kMaxGather];
     std::copy(cand_, cand_ + cand_n_, tmp);
     std::nth_element(tmp, tmp + place, tmp + cand_n_, before);
@@ -1526,9 +1535,12 @@ class LevelCoder {
   // order (no side to sweep into) both orders are the same.
   void scoreOrders(uint32_t x) {
     if (!delaunay_) return;
-    const int i = candidateIndex(x);
+    // The usual apex is the first candidate, whose place in the chosen order is 0.
+    const bool first = first_ >= 0 && cand_[first_].s == x;
+    const int i = first ? first_ : candidateIndex(x);
     if (i < 0) return;
-    const int rk = std::min(placeOf(i, true), kMaxCandidates), rd = std::min(placeOf(i, false), kMaxCandidates);
+    const int rk = first && by_key_chosen_ ? 0 : std::min(placeOf(i, true), kMaxCandidates);
+    const int rd = first && !by_key_chosen_ ? 0 : std::min(placeOf(i, false), kMaxCandidates);
     if (rk < rd && order_score_ < kOrderScoreLimit) ++order_score_;
     if (rd < rk && order_score_ > -kOrderScoreLimit) --order_score_;
   }
@@ -2044,6 +2056,7 @@ class LevelCoder {
   int raw_n_ = 0;
   Candidate cand_[kMaxGather];  // the evaluated ones (whole groups, best multiplicities), unordered
   int cand_n_ = 0;
+  int first_ = -1;  // firstIndex(), -1 until found
   const FrontFace* gate_ = nullptr;  // the gate face, its side filter and predicted apex, while
   const Orient3dFilter* side_ = nullptr;  // its candidates are evaluated
   const double* pred_ = nullptr;
