@@ -35,81 +35,83 @@ inline uint64_t equalLanes(const uint32_t* a, uint32_t v) {
   return m;
 }
 
-// Index of the first of a[0..n) equal to v, or -1, for n <= kMax; `a` must have room for n
-// rounded up to 4. Compares four at a time, with no branch that depends on where v is.
-template <uint32_t kMax>
-inline int indexOf(const uint32_t* a, int n, uint32_t v) {
-  static_assert(kMax < 64);
-  uint64_t m = 0;
-  for (int g = 0; 4 * g < n; ++g) m |= equalLanes<4>(a + 4 * g, v) << (4 * g);
-  m &= (uint64_t{1} << n) - 1;
-  return m ? __builtin_ctzll(m) : -1;
-}
-
-// Unordered small maps, one per slot (a non-negative 32-bit index), from a key of kKeys 32-bit words
-// to a 32-bit value. A slot's entries sit in its bucket, key words and values in separate arrays so
-// that a lookup compares every entry of a bucket at once, without a data-dependent branch per entry.
-// Removing an entry moves the slot's last entry into its place.
-template <int kKeys, uint32_t kCap>
-class SlotTable {
+// Map from a directed edge (a, b) of slots (never ~0) to a 32-bit value, stored with a. Slot a's
+// entries sit in its bucket, one cache line, chained to overflow buckets when it holds more; keys
+// and values in separate arrays, so that a lookup compares all of a bucket's keys at once, without
+// a data-dependent branch per entry. A bucket's key lanes past its entries hold kNil, which no key
+// equals, so that a lookup needs no count. Removing an entry moves the slot's last entry into its
+// place.
+class EdgeMap {
   static constexpr uint32_t kNil = 0xFFFFFFFFu;
-  // equalLanes reads whole groups of 4: the lanes past kCap must lie inside the bucket.
-  static_assert((kCap + 3) / 4 * 4 - kCap <= kCap);
+  static constexpr uint32_t kCap = 7;
   struct alignas(64) Bucket {
+    uint32_t key[kCap] = {kNil, kNil, kNil, kNil, kNil, kNil, kNil};
+    uint32_t value[kCap] = {};
     uint32_t n = 0;
     uint32_t next = kNil;
-    uint32_t key[kKeys][kCap];
-    uint32_t value[kCap];
   };
+  static_assert(sizeof(Bucket) == 64);
 
  public:
-  // Where an entry lives; valid until the next append or erase.
-  struct Ref {
-    Bucket* bucket;
-    uint32_t i;
-    explicit operator bool() const { return bucket != nullptr; }
-    uint32_t& value() const { return bucket->value[i]; }
-  };
+  // Value for (a, b), or `none`.
+  uint32_t find(uint32_t a, uint32_t b, uint32_t none) const {
+    return a < head_.size() ? findIn(&head_[a], b, none) : none;
+  }
+  // The same with the edge packed as (a << 32) | b.
+  uint32_t find(uint64_t key, uint32_t none) const { return find(hi(key), lo(key), none); }
 
-  // The entry of slot `a` with key `k`, or a null Ref.
-  Ref find(uint32_t a, const uint32_t k[kKeys]) const {
-    if (a >= head_.size()) return {nullptr, 0};
-    Bucket* b = const_cast<Bucket*>(&head_[a]);
-    while (true) {
-      uint64_t m = equalLanes<kCap>(b->key[0], k[0]);
-      for (int j = 1; j < kKeys; ++j) m &= equalLanes<kCap>(b->key[j], k[j]);
-      m &= (uint64_t{1} << b->n) - 1;
-      if (m) return {b, static_cast<uint32_t>(__builtin_ctzll(m))};
-      if (b->next == kNil) return {nullptr, 0};
-      b = const_cast<Bucket*>(&extra_[b->next]);
-    }
-  }
-  void append(uint32_t a, const uint32_t k[kKeys], uint32_t v) {
+  // The edges from one slot a, located once for a walk around a: find(b, none) is what
+  // EdgeMap::find(a, b, none) gives, while the map does not change.
+  class From {
+   public:
+    uint32_t find(uint32_t b, uint32_t none) const { return head_ ? map_->findIn(head_, b, none) : none; }
+
+   private:
+    friend class EdgeMap;
+    From(const EdgeMap* map, const Bucket* head) : map_(map), head_(head) {}
+    const EdgeMap* map_;
+    const Bucket* head_;
+  };
+  From from(uint32_t a) const { return From(this, a < head_.size() ? &head_[a] : nullptr); }
+
+  // Sets the value of (a, b), replacing an existing one. Always inline, as eraseIf: the front's
+  // updates are most of what the codec does per face, and a call costs as much as the usual update.
+  [[gnu::always_inline]] void put(uint32_t a, uint32_t b, uint32_t value) {
     if (a >= head_.size()) head_.resize(size_t{a} + 1);
-    uint32_t ref = kNil;  // kNil: the head bucket
-    while (bucket(a, ref).next != kNil) ref = bucket(a, ref).next;
-    if (bucket(a, ref).n == kCap) {
-      uint32_t fresh;
-      if (!free_.empty()) {
-        fresh = free_.back();
-        free_.pop_back();
-      } else {
-        fresh = static_cast<uint32_t>(extra_.size());
-        extra_.emplace_back();
+    Bucket* k = &head_[a];
+    uint32_t ref = kNil;  // k's index in extra_, kNil for the head bucket
+    while (true) {
+      if (const uint32_t m = lanes(*k, b)) {
+        k->value[__builtin_ctz(m)] = value;
+        return;
       }
-      extra_[fresh].n = 0;
-      extra_[fresh].next = kNil;
-      bucket(a, ref).next = fresh;
-      ref = fresh;
+      if (k->next == kNil) break;
+      ref = k->next;
+      k = &extra_[ref];
     }
-    Bucket& b = bucket(a, ref);
-    for (int j = 0; j < kKeys; ++j) b.key[j][b.n] = k[j];
-    b.value[b.n++] = v;
+    if (k->n == kCap) k = chainBucket(a, ref);
+    k->key[k->n] = b;
+    k->value[k->n++] = value;
+    ++size_;
   }
-  // Removes the entry `r` of slot `a` (a Ref that find(a, ...) returned).
-  void erase(uint32_t a, Ref r) {
+  void put(uint64_t key, uint32_t value) { put(hi(key), lo(key), value); }
+
+  // Removes (a, b) if it maps to `value`.
+  [[gnu::always_inline]] void eraseIf(uint32_t a, uint32_t b, uint32_t value) {
+    if (a >= head_.size()) return;
+    Bucket* const head = &head_[a];
+    Bucket* k = head;
+    uint32_t m;
+    while (!(m = lanes(*k, b))) {
+      if (k->next == kNil) return;
+      k = &extra_[k->next];
+    }
+    const uint32_t i = __builtin_ctz(m);
+    if (k->value[i] != value) return;
+    --size_;
+    // The slot's last entry fills the hole.
     Bucket* prev = nullptr;
-    Bucket* last = &head_[a];
+    Bucket* last = head;
     uint32_t last_ref = kNil;
     while (last->next != kNil) {
       prev = last;
@@ -117,65 +119,26 @@ class SlotTable {
       last = &extra_[last_ref];
     }
     const uint32_t l = --last->n;
-    for (int j = 0; j < kKeys; ++j) r.bucket->key[j][r.i] = last->key[j][l];
-    r.bucket->value[r.i] = last->value[l];
+    k->key[i] = last->key[l];
+    k->value[i] = last->value[l];
+    last->key[l] = kNil;
     if (last->n == 0 && prev) {
       prev->next = kNil;
       free_.push_back(last_ref);
     }
   }
-  void clear() {
-    head_.clear();
-    extra_.clear();
-    free_.clear();
-  }
-  // Room for slots below n without reallocating (append grows by doubling otherwise).
-  void reserveSlots(size_t n) { head_.reserve(n); }
+  void eraseIf(uint64_t key, uint32_t value) { eraseIf(hi(key), lo(key), value); }
+
   // Starts loading slot `a`'s bucket into the cache.
   void prefetch(uint32_t a) const {
     if (a < head_.size()) __builtin_prefetch(&head_[a]);
   }
-
- private:
-  Bucket& bucket(uint32_t a, uint32_t ref) { return ref == kNil ? head_[a] : extra_[ref]; }
-
-  std::vector<Bucket> head_;   // [slot]
-  std::vector<Bucket> extra_;  // overflow buckets
-  std::vector<uint32_t> free_;
-};
-
-// Map from a directed edge (a, b) of slots (never ~0) to a 32-bit value, stored with a.
-class EdgeMap {
- public:
-  // Value for (a, b), or `none`.
-  uint32_t find(uint32_t a, uint32_t b, uint32_t none) const {
-    const auto r = table_.find(a, &b);
-    return r ? r.value() : none;
-  }
-  // The same with the edge packed as (a << 32) | b.
-  uint32_t find(uint64_t key, uint32_t none) const { return find(hi(key), lo(key), none); }
-  // Sets the value of (a, b), replacing an existing one.
-  void put(uint32_t a, uint32_t b, uint32_t value) {
-    if (const auto r = table_.find(a, &b)) {
-      r.value() = value;
-      return;
-    }
-    table_.append(a, &b, value);
-    ++size_;
-  }
-  void put(uint64_t key, uint32_t value) { put(hi(key), lo(key), value); }
-  // Removes (a, b) if it maps to `value`.
-  void eraseIf(uint32_t a, uint32_t b, uint32_t value) {
-    const auto r = table_.find(a, &b);
-    if (!r || r.value() != value) return;
-    table_.erase(a, r);
-    --size_;
-  }
-  void eraseIf(uint64_t key, uint32_t value) { eraseIf(hi(key), lo(key), value); }
-  void prefetch(uint32_t a) const { table_.prefetch(a); }
-  void reserveSlots(size_t n) { table_.reserveSlots(n); }
+  // Room for slots below n without reallocating (put grows by doubling otherwise).
+  void reserveSlots(size_t n) { head_.reserve(n); }
   void clear() {
-    table_.clear();
+    head_.clear();
+    extra_.clear();
+    free_.clear();
     size_ = 0;
   }
   size_t size() const { return size_; }
@@ -183,8 +146,37 @@ class EdgeMap {
  private:
   static uint32_t hi(uint64_t key) { return static_cast<uint32_t>(key >> 32); }
   static uint32_t lo(uint64_t key) { return static_cast<uint32_t>(key); }
+  // Bit i set when bucket k's key i is b (equalLanes also compares value[0], as an eighth lane).
+  static uint32_t lanes(const Bucket& k, uint32_t b) {
+    return static_cast<uint32_t>(equalLanes<kCap>(k.key, b)) & ((1u << kCap) - 1);
+  }
+  uint32_t findIn(const Bucket* k, uint32_t b, uint32_t none) const {
+    while (true) {
+      if (const uint32_t m = lanes(*k, b)) return k->value[__builtin_ctz(m)];
+      if (k->next == kNil) return none;
+      k = &extra_[k->next];
+    }
+  }
+  // A new empty bucket chained after slot a's full last bucket (extra_[ref], or its head bucket for
+  // kNil).
+  [[gnu::noinline]] Bucket* chainBucket(uint32_t a, uint32_t ref) {
+    uint32_t fresh;
+    if (!free_.empty()) {
+      fresh = free_.back();
+      free_.pop_back();
+    } else {
+      fresh = static_cast<uint32_t>(extra_.size());
+      extra_.emplace_back();  // may move the buckets: the last one is found again below
+    }
+    (ref == kNil ? head_[a] : extra_[ref]).next = fresh;
+    Bucket* k = &extra_[fresh];
+    k->next = kNil;
+    return k;
+  }
 
-  SlotTable<1, 7> table_;  // 8 + 7 * 8 bytes: one cache line per slot
+  std::vector<Bucket> head_;   // [slot]
+  std::vector<Bucket> extra_;  // overflow buckets
+  std::vector<uint32_t> free_;
   size_t size_ = 0;
 };
 

@@ -627,6 +627,7 @@ class LevelCoder {
       open_.push_back(0);
       pins_.push_back(0);
       ids_.push_back(0);
+      gather_mark_.push_back(0);
       if (!boundary_done_) {
         nxt_.push_back(kNoSlot);
         prv_.push_back(kNoSlot);
@@ -656,6 +657,7 @@ class LevelCoder {
     open_.reserve(n);
     pins_.reserve(n);
     ids_.reserve(n);
+    gather_mark_.reserve(n);
     if (!boundary_done_) {
       nxt_.reserve(n);
       prv_.reserve(n);
@@ -1070,7 +1072,7 @@ class LevelCoder {
     }
     for (int i = 0; i < 3; ++i) {
       ++open_[v[i]];
-      edges_.put(edgeKey(v[i], v[(i + 1) % 3]), v[(i + 2) % 3]);
+      edges_.put(v[i], v[(i + 1) % 3], v[(i + 2) % 3]);
     }
     if (d != kNoSlot) ++pins_[d];
     QueuedFace q;
@@ -1078,12 +1080,27 @@ class LevelCoder {
     q.face = face;
     queue_.push_back(q);
   }
-  void closeFace(long index) {
+  // Closes the open face `index`, face k of the tetrahedron e that emitTet emits, which opens its
+  // faces j with closes[j] < 0. An edge that such a face puts again, in the same direction, is not
+  // erased: the eraseIf would find the new value and do nothing, whether before the put or after.
+  // The opened faces run their edges against face k's order in kTetFace (t0, t1, t2): the closed
+  // face shares their directions when it is the reverse of that order, and then its edge (t0, t2) is
+  // put again by face t1 if opened, and so on.
+  void closeFace(long index, int k, const uint32_t e[4], const long closes[4]) {
     const FrontFace f = faces_.at(index);
     faces_.eraseAt(index);
-    for (int i = 0; i < 3; ++i) {
-      --open_[f.v[i]];
-      edges_.eraseIf(edgeKey(f.v[i], f.v[(i + 1) % 3]), f.v[(i + 2) % 3]);
+    for (int i = 0; i < 3; ++i) --open_[f.v[i]];
+    const int* t = kTetFace[k];
+    const uint32_t o0 = e[t[0]], o1 = e[t[1]], o2 = e[t[2]];
+    const bool reversed = f.v[0] == o0 ? f.v[1] == o2 : (f.v[1] == o0 ? f.v[2] == o2 : f.v[0] == o2);
+    if (reversed) {
+      if (closes[t[1]] >= 0) edges_.eraseIf(o0, o2, o1);
+      if (closes[t[0]] >= 0) edges_.eraseIf(o2, o1, o0);
+      if (closes[t[2]] >= 0) edges_.eraseIf(o1, o0, o2);
+    } else {
+      edges_.eraseIf(o0, o1, o2);
+      edges_.eraseIf(o1, o2, o0);
+      edges_.eraseIf(o2, o0, o1);
     }
     if (f.d != kNoSlot) unpin(f.d);
     if (f.cell != kNone32) releaseCell(f.cell);
@@ -1312,26 +1329,31 @@ class LevelCoder {
     RawCandidate* c = raw_;
     int n = 0;
     uint32_t across[3] = {kNone32, kNone32, kNone32};  // the apex of the front face across each gate edge (c, a), (a, b), (b, c)
-    uint32_t seen[kMaxGather + 3] = {};  // c[i].s, for a vectorised membership test
+    if (++gather_epoch_ == kGatherEpochs) {
+      std::fill(gather_mark_.begin(), gather_mark_.end(), 0);
+      gather_epoch_ = 1;
+    }
+    const uint32_t tag = gather_epoch_ << kGatherIndexBits;
+    for (uint32_t s : g.v) gather_mark_[s] = tag | kGateMark;
     auto add = [&](uint32_t s) {
-      if (s == g.v[0] || s == g.v[1] || s == g.v[2]) return;
-      const int i = indexOf<kMaxGather>(seen, n, s);
-      if (i >= 0) {
-        ++c[i].w;
+      const uint32_t m = gather_mark_[s];
+      if ((m & ~kGateMark) == tag) {
+        if (m != (tag | kGateMark)) ++c[m & kGateMark].w;
         return;
       }
       if (n < kMaxGather) {
-        seen[n] = s;
+        gather_mark_[s] = tag | static_cast<uint32_t>(n);
         c[n++] = {s, 1};
       }
     };
     for (int j = 0; j < 3; ++j) {
       const uint32_t a = g.v[j], b = g.v[(j + 1) % 3], cc = g.v[(j + 2) % 3];
       // Forward around a: across edge (c, a), then on.
+      const EdgeMap::From around = edges_.from(a);
       uint32_t v = cc;
       bool closed = false;
       for (int step = 0; step < kFanSteps; ++step) {
-        const uint32_t w = edges_.find(edgeKey(a, v), kNone32);
+        const uint32_t w = around.find(v, kNone32);
         if (step == 0) across[j] = w;
         if (w == kNone32) break;
         if (w == b) {
@@ -1352,6 +1374,7 @@ class LevelCoder {
     }
     raw_n_ = n;
     cand_n_ = 0;
+    first_ = -1;
     gate_ = &g;
     side_ = &side;
     pred_ = p;
@@ -1507,16 +1530,24 @@ class LevelCoder {
   uint32_t candidateAt(int place) {
     evaluateGroups(place + 1);
     if (place >= cand_n_) return kNoSlot;
+    if (place == 0) return cand_[firstIndex()].s;
     return by_key_chosen_ ? candidateAt(place, ByKey()) : candidateAt(place, ByDistance());
+  }
+  // Index in cand_ of the first candidate of the chosen order (cand_ not empty), found once per
+  // gate: the groups evaluated later have smaller multiplicities and come after it in both orders.
+  int firstIndex() {
+    if (first_ < 0) first_ = by_key_chosen_ ? firstIndex(ByKey()) : firstIndex(ByDistance());
+    return first_;
+  }
+  template <class Before>
+  int firstIndex(Before before) const {
+    int best = 0;
+    for (int i = 1; i < cand_n_; ++i)
+      if (before(cand_[i], cand_[best])) best = i;
+    return best;
   }
   template <class Before>
   uint32_t candidateAt(int place, Before before) const {
-    if (place == 0) {  // the usual case: the first, in one pass
-      int best = 0;
-      for (int i = 1; i < cand_n_; ++i)
-        if (before(cand_[i], cand_[best])) best = i;
-      return cand_[best].s;
-    }
     Candidate tmp[kMaxGather];
     std::copy(cand_, cand_ + cand_n_, tmp);
     std::nth_element(tmp, tmp + place, tmp + cand_n_, before);
@@ -1542,9 +1573,12 @@ class LevelCoder {
   // order (no side to sweep into) both orders are the same.
   void scoreOrders(uint32_t x) {
     if (!delaunay_) return;
-    const int i = candidateIndex(x);
+    // The usual apex is the first candidate, whose place in the chosen order is 0.
+    const bool first = first_ >= 0 && cand_[first_].s == x;
+    const int i = first ? first_ : candidateIndex(x);
     if (i < 0) return;
-    const int rk = std::min(placeOf(i, true), kMaxCandidates), rd = std::min(placeOf(i, false), kMaxCandidates);
+    const int rk = first && by_key_chosen_ ? 0 : std::min(placeOf(i, true), kMaxCandidates);
+    const int rd = first && !by_key_chosen_ ? 0 : std::min(placeOf(i, false), kMaxCandidates);
     if (rk < rd && order_score_ < kOrderScoreLimit) ++order_score_;
     if (rd < rk && order_score_ > -kOrderScoreLimit) --order_score_;
   }
@@ -1682,7 +1716,7 @@ class LevelCoder {
     }
     for (int k = 0; k < 4; ++k) {
       if (closes[k] >= 0) {
-        closeFace(closes[k]);
+        closeFace(closes[k], k, e, closes);
         continue;
       }
       const uint32_t f[3] = {e[kTetFace[k][0]], e[kTetFace[k][1]], e[kTetFace[k][2]]};
@@ -2048,9 +2082,19 @@ class LevelCoder {
     uint32_t w;  // how many fan walks reached it
   };
   RawCandidate raw_[kMaxGather];  // the gate's candidates not evaluated yet, unordered
+  // Per slot, while gatherCandidates runs: gather_epoch_ above kGatherIndexBits bits that hold the
+  // slot's index in raw_, or kGateMark for the gate's own vertices (an older epoch: neither). Finding
+  // a fan vertex among the candidates so far is then one load, not a scan of them all.
+  static constexpr uint32_t kGatherIndexBits = 6;
+  static constexpr uint32_t kGateMark = (1u << kGatherIndexBits) - 1;
+  static constexpr uint32_t kGatherEpochs = 1u << (32 - kGatherIndexBits);
+  static_assert(kMaxGather < kGateMark);
+  std::vector<uint32_t> gather_mark_;
+  uint32_t gather_epoch_ = 0;
   int raw_n_ = 0;
   Candidate cand_[kMaxGather];  // the evaluated ones (whole groups, best multiplicities), unordered
   int cand_n_ = 0;
+  int first_ = -1;  // firstIndex(), -1 until found
   const FrontFace* gate_ = nullptr;  // the gate face, its side filter and predicted apex, while
   const Orient3dFilter* side_ = nullptr;  // its candidates are evaluated
   const double* pred_ = nullptr;

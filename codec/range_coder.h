@@ -123,7 +123,7 @@ class RangeDecoder {
     for (int i = 0; i < 5; ++i) code_ = (code_ << 8) | nextByte();
   }
 
-  uint32_t decodeBit(BitModel& m) {
+  [[gnu::always_inline]] uint32_t decodeBit(BitModel& m) {
     const uint32_t bound = (range_ >> 16) * m.p0();
     uint32_t bit;
     if (code_ < bound) {
@@ -135,8 +135,39 @@ class RangeDecoder {
       bit = 1;
     }
     m.update(bit);
-    normalize();
+    if (range_ < (1u << 24)) [[unlikely]] normalize();
     return bit;
+  }
+  // The symbol of a BitTree<kBits> (its models m), the bits decoded as decodeBit does with the
+  // coder's state in locals: the model updates cannot then make it reload and store it each bit.
+  template <int kBits>
+  uint32_t decodeTree(BitModel* m) {
+    uint32_t range = range_, code = code_, node = 1;
+    for (int i = 0; i < kBits; ++i) {
+      BitModel& b = m[node];
+      const uint32_t bound = (range >> 16) * b.p0();
+      uint32_t bit;
+      if (code < bound) {
+        range = bound;
+        bit = 0;
+      } else {
+        code -= bound;
+        range -= bound;
+        bit = 1;
+      }
+      b.update(bit);
+      if (range < (1u << 24)) [[unlikely]] {
+        range_ = range;
+        code_ = code;
+        normalize();
+        range = range_;
+        code = code_;
+      }
+      node = (node << 1) | bit;
+    }
+    range_ = range;
+    code_ = code;
+    return node - (1u << kBits);
   }
   uint32_t decodeDirect(int n) {
     range_ >>= n;
@@ -163,7 +194,9 @@ class RangeDecoder {
     ++overrun_;
     return 0;
   }
-  void normalize() {
+  // Out of line, as in the encoder: most bits need none, and decodeBit is then small enough to
+  // inline at its every call.
+  [[gnu::noinline]] void normalize() {
     while (range_ < (1u << 24)) {
       range_ <<= 8;
       code_ = (code_ << 8) | nextByte();
@@ -196,6 +229,13 @@ class EntropyCoder<true> {
     enc_.encodeBit(m, b);
     return b;
   }
+  // `symbol` through the BitTree<kBits> whose models are m.
+  template <int kBits>
+  uint32_t tree(BitModel* m, uint32_t symbol) {
+    uint32_t node = 1;
+    for (int i = kBits - 1; i >= 0; --i) node = (node << 1) | bit(m[node], (symbol >> i) & 1);
+    return node - (1u << kBits);
+  }
   // `n` (0..32) raw bits.
   uint32_t direct(uint32_t v, int n) {
     if (n > 16) {
@@ -220,6 +260,10 @@ class EntropyCoder<false> {
   static constexpr bool kEncoding = false;
   explicit EntropyCoder(std::span<const uint8_t> in) : dec_(in) {}
   uint32_t bit(BitModel& m, uint32_t) { return dec_.decodeBit(m); }
+  template <int kBits>
+  uint32_t tree(BitModel* m, uint32_t) {
+    return dec_.decodeTree<kBits>(m);
+  }
   uint32_t direct(uint32_t, int n) {
     if (n > 16) {
       const uint32_t hi = dec_.decodeDirect(n - 16);
@@ -242,9 +286,7 @@ struct BitTree {
   BitModel m[1 << kBits];
   template <class C>
   uint32_t code(C& c, uint32_t symbol) {
-    uint32_t node = 1;
-    for (int i = kBits - 1; i >= 0; --i) node = (node << 1) | c.bit(m[node], (symbol >> i) & 1);
-    return node - (1u << kBits);
+    return c.template tree<kBits>(m, symbol);
   }
 };
 

@@ -34,6 +34,7 @@ TEST(EdgeMap, MatchesAMapUnderRandomOperations) {
       auto it = model.find({a, b});
       ASSERT_EQ(edges.find(a, b, 99u), it == model.end() ? 99u : it->second) << "step " << step;
       ASSERT_EQ(edges.find((uint64_t{a} << 32) | b, 99u), edges.find(a, b, 99u));
+      ASSERT_EQ(edges.from(a).find(b, 99u), edges.find(a, b, 99u));
     }
     ASSERT_EQ(edges.size(), model.size());
   }
@@ -42,6 +43,7 @@ TEST(EdgeMap, MatchesAMapUnderRandomOperations) {
   EXPECT_EQ(edges.size(), 0u);
   EXPECT_EQ(edges.find(3, 4, 99u), 99u);
   EXPECT_EQ(edges.find(1000000, 4, 99u), 99u);  // a slot never seen
+  EXPECT_EQ(edges.from(1000000).find(4, 99u), 99u);
 }
 
 TEST(FaceMap, FindsEveryOpenFaceByItsSortedKeyAndKeepsIndicesStable) {
@@ -96,16 +98,6 @@ TEST(RingQueue, IsFifoAcrossGrowth) {
   }
   q.clear();
   EXPECT_TRUE(q.empty());
-}
-
-TEST(IndexOf, FindsTheFirstMatchAmongTheFirstN) {
-  uint32_t a[48 + 3] = {};
-  for (int i = 0; i < 48; ++i) a[i] = 1000 + (i % 20);
-  EXPECT_EQ(indexOf<48>(a, 48, 1005), 5);
-  EXPECT_EQ(indexOf<48>(a, 5, 1005), -1);  // past n does not count
-  EXPECT_EQ(indexOf<48>(a, 48, 999), -1);
-  EXPECT_EQ(indexOf<48>(a, 0, 1000), -1);
-  EXPECT_EQ(indexOf<48>(a, 48, 1019), 19);
 }
 
 }  // namespace
