@@ -356,21 +356,18 @@ inline void addSample(double alpha, const double rgb[3], bool front_to_back, Rgb
     acc->a = alpha + k * acc->a;
   }
 }
+}  // namespace
 
-// First sample index k with k * step >= t (exactly, in floating point).
-// `inv_step` is 1 / step: the estimate only starts the exact search below.
-int64_t firstSampleAtOrAfter(double t, double step, double inv_step) {
-  const double e = t * inv_step;
+int64_t firstSampleAtOrAfter(double t, double step) {
+  // An estimate, then the exact search.
+  const double e = t / step;
   int64_t k = 0;
   if (std::fabs(e) < 4e18) {  // also false for NaN; truncation then one up is ceil without a libm call
     k = static_cast<int64_t>(e);
     if (static_cast<double>(k) < e) ++k;
   }
-  while (static_cast<double>(k) * step < t) ++k;
-  while (static_cast<double>(k - 1) * step >= t) --k;
-  return k;
+  return firstSampleFrom(k, t, step);
 }
-}  // namespace
 
 void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, double lo,
                    double hi, bool front_to_back, Rgba* acc) {
@@ -388,11 +385,14 @@ void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_
     addSample(alpha, rgb, front_to_back, acc);
     return;
   }
-  const double step = setup.step;
-  const double inv_step = 1.0 / step;
-  const int64_t k0 = firstSampleAtOrAfter(lo, step, inv_step);  // samples [k0, k1)
-  const int64_t k1 = firstSampleAtOrAfter(hi, step, inv_step);
+  shadeSamples(setup, t_in, s_in, t_out, s_out, firstSampleAtOrAfter(lo, setup.step),
+               firstSampleAtOrAfter(hi, setup.step), front_to_back, acc);
+}
+
+void shadeSamples(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, int64_t k0,
+                  int64_t k1, bool front_to_back, Rgba* acc) {
   if (k1 <= k0) return;
+  const double step = setup.step;
   const double span = t_out - t_in;
   const double slope = span > 0 ? (s_out - s_in) / span : 0.0;
   const bool table = !setup.sample_table.empty();

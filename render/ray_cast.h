@@ -184,6 +184,19 @@ Rgba over(const Rgba& front, const Rgba& back);
 void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, double lo,
                    double hi, bool front_to_back, Rgba* acc);
 
+// Volume sampling's samples are t = k * step; [lo, hi) holds samples [first(lo), first(hi)), where
+// first(t) is the least k with k * step >= t, exactly (k * step is monotonic in k).
+int64_t firstSampleAtOrAfter(double t, double step);
+// first(t) found by stepping from any k: cheap from first(t') for a nearby t' (where a cursor was).
+inline int64_t firstSampleFrom(int64_t k, double t, double step) {
+  while (static_cast<double>(k) * step < t) ++k;
+  while (static_cast<double>(k - 1) * step >= t) --k;
+  return k;
+}
+// Volume sampling's shadeInterval with the samples [k0, k1) of [lo, hi) already found.
+void shadeSamples(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, int64_t k0,
+                  int64_t k1, bool front_to_back, Rgba* acc);
+
 // The boundary surface as the renderers see it: positions and scalars of its vertices and the
 // outward-oriented triangles over them.
 struct BoundarySurface {

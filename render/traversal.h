@@ -43,6 +43,12 @@ template <class Mesh>
 CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, SegmentCursors& seg, bool front, Rgba& colour,
                         uint32_t tet, int face, Mesh& mesh, uint32_t* wait_tet, int* wait_face) {
   int zero_steps = 0;
+  // Volume sampling: first(t) of the cursor's position (see firstSampleAtOrAfter), found once, when
+  // the first interval to shade comes, and then stepped along with the cursor, not searched for at
+  // both ends of every interval. The same samples as shadeInterval's.
+  const bool volume = setup.sampling == Sampling::kVolume;
+  bool have_k = false;
+  int64_t k = 0;
   for (;;) {
     const auto& g = mesh.geom(tet);
     Crossing x;
@@ -52,7 +58,15 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
     if (front) {
       const double t_out = x.t > seg.tf ? x.t : seg.tf;
       const double limit = seg.tb;
-      shadeInterval(setup, seg.tf, seg.sf, t_out, x.s, seg.tf, t_out < limit ? t_out : limit, true, &colour);
+      const double hi = t_out < limit ? t_out : limit;
+      if (!volume) {
+        shadeInterval(setup, seg.tf, seg.sf, t_out, x.s, seg.tf, hi, true, &colour);
+      } else if (hi > seg.tf) {
+        if (!have_k) k = firstSampleAtOrAfter(seg.tf, setup.step), have_k = true;
+        const int64_t k_hi = firstSampleFrom(k, hi, setup.step);
+        shadeSamples(setup, seg.tf, seg.sf, t_out, x.s, k, k_hi, true, &colour);
+        k = k_hi;
+      }
       zero_steps = t_out == seg.tf ? zero_steps + 1 : 0;
       if (t_out >= limit) {
         seg.tf = limit;
@@ -63,7 +77,15 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
     } else {
       const double t_out = x.t < seg.tb ? x.t : seg.tb;
       const double limit = seg.tf;
-      shadeInterval(setup, t_out, x.s, seg.tb, seg.sb, t_out > limit ? t_out : limit, seg.tb, false, &colour);
+      const double lo = t_out > limit ? t_out : limit;
+      if (!volume) {
+        shadeInterval(setup, t_out, x.s, seg.tb, seg.sb, lo, seg.tb, false, &colour);
+      } else if (seg.tb > lo) {
+        if (!have_k) k = firstSampleAtOrAfter(seg.tb, setup.step), have_k = true;
+        const int64_t k_lo = firstSampleFrom(k, lo, setup.step);
+        shadeSamples(setup, t_out, x.s, seg.tb, seg.sb, k_lo, k, false, &colour);
+        k = k_lo;
+      }
       zero_steps = t_out == seg.tb ? zero_steps + 1 : 0;
       if (t_out <= limit) {
         seg.tb = limit;
