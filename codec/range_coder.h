@@ -124,17 +124,7 @@ class RangeDecoder {
   }
 
   [[gnu::always_inline]] uint32_t decodeBit(BitModel& m) {
-    const uint32_t bound = (range_ >> 16) * m.p0();
-    uint32_t bit;
-    if (code_ < bound) {
-      range_ = bound;
-      bit = 0;
-    } else {
-      code_ -= bound;
-      range_ -= bound;
-      bit = 1;
-    }
-    m.update(bit);
+    const uint32_t bit = decide(range_, code_, m);
     if (range_ < (1u << 24)) [[unlikely]] normalize();
     return bit;
   }
@@ -144,18 +134,7 @@ class RangeDecoder {
   uint32_t decodeTree(BitModel* m) {
     uint32_t range = range_, code = code_, node = 1;
     for (int i = 0; i < kBits; ++i) {
-      BitModel& b = m[node];
-      const uint32_t bound = (range >> 16) * b.p0();
-      uint32_t bit;
-      if (code < bound) {
-        range = bound;
-        bit = 0;
-      } else {
-        code -= bound;
-        range -= bound;
-        bit = 1;
-      }
-      b.update(bit);
+      const uint32_t bit = decide(range, code, m[node]);
       if (range < (1u << 24)) [[unlikely]] {
         range_ = range;
         code_ = code;
@@ -193,6 +172,21 @@ class RangeDecoder {
     if (pos_ < in_.size()) return in_[pos_++];
     ++overrun_;
     return 0;
+  }
+  // One binary decision against model m: narrows the range, moves the code, updates the model.
+  [[gnu::always_inline]] static uint32_t decide(uint32_t& range, uint32_t& code, BitModel& m) {
+    const uint32_t bound = (range >> 16) * m.p0();
+    uint32_t bit;
+    if (code < bound) {
+      range = bound;
+      bit = 0;
+    } else {
+      code -= bound;
+      range -= bound;
+      bit = 1;
+    }
+    m.update(bit);
+    return bit;
   }
   // Out of line, as in the encoder: most bits need none, and decodeBit is then small enough to
   // inline at its every call.
