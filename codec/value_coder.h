@@ -308,9 +308,10 @@ inline bool decimalInteger(ScalarType type, uint64_t key, int e, int64_t* out) {
 
 template <class C>
 bool ValueCoder::codeTable(C& c, uint32_t comp, std::vector<uint64_t>* keys, uint64_t limit) {
-  const uint32_t length = c.direct(static_cast<uint32_t>(bitLength(keys->size() - 1)), 6);
+  const uint32_t last = C::kEncoding ? static_cast<uint32_t>(keys->size() - 1) : 0;  // D - 1 (the decoder's is read)
+  const uint32_t length = c.direct(static_cast<uint32_t>(bitLength(last)), 6);
   if (length > 32) return false;
-  const uint64_t size = uint64_t{c.direct(static_cast<uint32_t>(keys->size() - 1), static_cast<int>(length))} + 1;
+  const uint64_t size = uint64_t{c.direct(last, static_cast<int>(length))} + 1;
   if (size > limit) return false;
   // Keys ascend, mostly by steps like the one before (a lattice's coordinates): each is predicted
   // by the step before it, in models of the table's own. The decoder's table grows with what it
