@@ -88,6 +88,13 @@ constexpr uint32_t kCoordRules = 9;  // coordinates have their own per-axis copi
 // Field rules 13-15 repeat the first three apex candidates (spec section 10.4's order).
 constexpr uint32_t kFieldRules = 16;
 constexpr uint32_t kCandidateRules = 3;
+// Coordinate error carries (spec section 10.5): none, the stencil's a, b, c, d, the first three apex
+// candidates.
+constexpr uint32_t kCarries = 8;
+// What a carry must save beyond its signalling for the encoder to choose it, in 1/16 bits: the
+// residual-length estimate is coarse, and the smallest of 8 x 9 estimates is biased low (on meshes
+// without grid structure a carry wins by chance; 3 bits keeps those files within 0.3%).
+constexpr int kCarryMargin = 48;
 constexpr double kRuleWeights[kRules][4] = {
     {0, 0, 0, 0},  {1, 1, 0, -1}, {0, 1, 1, -1}, {1, 0, 1, -1}, {1, 1, -1, 0},
     {-1, 1, 1, 0}, {1, -1, 1, 0}, {1, 1, 1, -2}, {2.0 / 3, 2.0 / 3, 2.0 / 3, -1},
@@ -623,6 +630,7 @@ class LevelCoder {
       if (s == state_.capacity()) reserveSlots(s + s / 4 + 64);
       state_.push_back(kFree);
       pos_.resize(pos_.size() + 3);
+      err_.resize(err_.size() + 3);
       vals_.resize(vals_.size() + item_bytes_);
       open_.push_back(0);
       pins_.push_back(0);
@@ -653,6 +661,7 @@ class LevelCoder {
   void reserveSlots(size_t n) {
     state_.reserve(n);
     pos_.reserve(3 * n);
+    err_.reserve(3 * n);
     vals_.reserve(item_bytes_ * n);
     open_.reserve(n);
     pins_.reserve(n);
@@ -701,11 +710,6 @@ class LevelCoder {
   // Coordinate i of the stencil vertices (0 where there is none): the values rules weigh.
   void coordStencil(const FieldPrediction& fp, int i, double x[4]) const {
     for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? P(fp.s[j])[i] : 0.0;
-  }
-  // Key of a coordinate predicted by rule r from its stencil values x (rule 0: `rule0`).
-  static uint64_t ruleKey(uint32_t r, const double x[4], uint64_t rule0, ScalarType ct) {
-    if (r == 0) return rule0;
-    return keyFromPrediction(ct, kWeightedRule[r](x));
   }
   double fieldRule(uint32_t r, const FieldPrediction& fp, ScalarType type, size_t off) const {
     if (r >= kRules) return doubleFromRaw(type, &vals_[near_[r - kRules] * item_bytes_ + off]);
@@ -869,6 +873,14 @@ class LevelCoder {
     const uint64_t mask = keyMask(scalarBits(type));
     for (uint32_t r = 0; r < kFieldRules; ++r) cost[r] += 16 * residualBits(actual, keyFromPrediction(type, v[r]), mask);
   }
+  // The vertex whose error carry m (1 to kCarries - 1) names, or kNoSlot if there is none: the
+  // stencil's a, b, c, d (d only with has_d), then the first three apex candidates.
+  uint32_t carrySource(uint32_t m, const FieldPrediction& fp, bool has_d) const {
+    if (m >= 1 && m <= 3) return fp.s[m - 1];
+    if (m == 4) return has_d ? fp.s[3] : kNoSlot;
+    if (m >= 5 && m < kCarries && static_cast<int>(m - 5) < n_near_) return near_[m - 5];
+    return kNoSlot;
+  }
   static bool ruleAllowed(uint32_t rule, bool has_d, uint32_t rules) {
     return rule < rules && (has_d || kRuleWeights[rule][3] == 0.0);
   }
@@ -903,36 +915,66 @@ class LevelCoder {
     }
     uint64_t pk[3];
     for (int i = 0; i < 3; ++i) pk[i] = keyFromPrediction(ct, pred[i]);
+    // Copy sources: the stencil, then the apex candidates (front vertices around the gate), which
+    // on extruded and sheared grids hold the vertex's neighbours along a grid line.
+    uint32_t copy_src[4 + kMaxCandidates];
+    uint32_t ncopy = 0;
+    if (fp.kind != FieldPrediction::kLast) {
+      for (int m = 0; m < 4; ++m)
+        if (fp.s[m] != kNoSlot && (m < 3 || has_d)) copy_src[ncopy++] = fp.s[m];
+      if (fp.kind != FieldPrediction::kEdge)
+        for (int m = 0; m < n_near_; ++m) copy_src[ncopy++] = near_[m];
+    }
+    // The encoder's axes that a copy source will give (their residuals do not count when it chooses
+    // a prediction).
+    bool copied[3] = {false, false, false};
+    if constexpr (kEncode) {
+      for (int i = 0; i < 3; ++i)
+        for (uint32_t m = 0; m < ncopy && !copied[i]; ++m)
+          copied[i] = keyFromPrediction(ct, P(copy_src[m])[i]) == actual[i];
+    }
+    double base[3] = {pred[0], pred[1], pred[2]};  // the prediction before any carry (err_)
     if (choose) {
-      uint32_t rule = 0;
+      uint32_t rule = 0, carry = 0;
       if constexpr (kEncode) {
         // The cheapest rule, the lowest among equals; the previous rule first, so that most others
         // stop early.
         const SymbolCosts<4> signal = symbolCosts(geo_rule_[geo_last_rule_]);
+        const SymbolCosts<3> carry_signal = symbolCosts(geo_carry_[geo_last_carry_]);
         double predicted[3][kRules];  // every rule's prediction of each axis
         for (int i = 0; i < 3; ++i) {
           double stencil[4];
           coordStencil(fp, i, stencil);
           weightedRules(stencil, predicted[i], std::make_integer_sequence<uint32_t, kRules>());
+          predicted[i][0] = pred[i];
         }
         // `type` is ct as a compile-time constant (coordinates are float32 or float64).
         auto search = [&](auto type) {
           int best = 1 << 30;
-          auto consider = [&](uint32_t r) {
+          // Rule r with carry m (its errors e, null for none), against the best so far: the lowest
+          // carry, then the lowest rule, among equals.
+          auto consider = [&](uint32_t r, uint32_t m, const float* e) {
             if (!ruleAllowed(r, has_d, kCoordRules)) return;
-            int cost = signal[r];
+            int cost = signal[r] + carry_signal[m] + (m ? kCarryMargin : 0);
+            const bool later = m > carry || (m == carry && r > rule);
             for (int i = 0; i < 3; ++i) {
-              if (cost > best || (cost == best && r > rule)) return;
-              const uint64_t key = r == 0 ? pk[i] : keyFromPrediction(type, predicted[i][r]);
-              cost += 16 * residualBits(actual[i], key, cmask);
+              if (cost > best || (cost == best && later)) return;
+              if (copied[i]) continue;
+              const double v = e ? predicted[i][r] + static_cast<double>(e[i]) : predicted[i][r];
+              cost += 16 * residualBits(actual[i], keyFromPrediction(type, v), cmask);
             }
-            if (cost < best || (cost == best && r < rule)) {
+            if (cost < best || (cost == best && !later)) {
               best = cost;
               rule = r;
+              carry = m;
             }
           };
-          for (uint32_t i = 0; i < kCoordRules; ++i)
-            consider(triedRule(i, geo_last_rule_));
+          for (uint32_t i = 0; i < kCoordRules; ++i) consider(triedRule(i, geo_last_rule_), 0, nullptr);
+          for (uint32_t m = 1; m < kCarries; ++m) {
+            const uint32_t src = carrySource(m, fp, has_d);
+            if (src == kNoSlot) continue;
+            for (uint32_t i = 0; i < kCoordRules; ++i) consider(triedRule(i, geo_last_rule_), m, &err_[3 * size_t{src}]);
+          }
         };
         if (ct == ScalarType::kFloat32) {
           search(std::integral_constant<ScalarType, ScalarType::kFloat32>());
@@ -943,22 +985,22 @@ class LevelCoder {
       rule = geo_rule_[geo_last_rule_].code(*geo_, rule);
       if (!ruleAllowed(rule, has_d, kCoordRules)) return bad("invalid coordinate prediction rule");
       geo_last_rule_ = rule;
-      if (rule != 0)
-        for (int i = 0; i < 3; ++i) {
+      carry = geo_carry_[geo_last_carry_].code(*geo_, carry);
+      const uint32_t carry_src = carry == 0 ? kNoSlot : carrySource(carry, fp, has_d);
+      if (carry != 0 && carry_src == kNoSlot) return bad("coordinate error carried from an unknown vertex");
+      geo_last_carry_ = carry;
+      for (int i = 0; i < 3; ++i) {
+        if (rule != 0) {
           double stencil[4];
           coordStencil(fp, i, stencil);
-          pk[i] = ruleKey(rule, stencil, pk[i], ct);
+          base[i] = kWeightedRule[rule](stencil);
         }
-    }
-    // Copy sources: the stencil, then the apex candidates (front vertices around the gate), which
-    // on extruded and sheared grids hold the vertex's neighbours along a grid line.
-    uint32_t copy_src[4 + kMaxCandidates];
-    uint32_t ncopy = 0;
-    if (fp.kind != FieldPrediction::kLast) {
-      for (int m = 0; m < 4; ++m)
-        if (fp.s[m] != kNoSlot && (m < 3 || has_d)) copy_src[ncopy++] = fp.s[m];
-      if (fp.kind != FieldPrediction::kEdge)
-        for (int m = 0; m < n_near_; ++m) copy_src[ncopy++] = near_[m];
+        if (carry != 0) {
+          pk[i] = keyFromPrediction(ct, base[i] + static_cast<double>(err_[3 * size_t{carry_src} + i]));
+        } else if (rule != 0) {
+          pk[i] = keyFromPrediction(ct, base[i]);
+        }
+      }
     }
     uint32_t prev_which = kNone32;  // copy source of the previous coordinate of this vertex
     for (uint32_t i = 0; i < 3; ++i) {
@@ -1003,6 +1045,8 @@ class LevelCoder {
         if (!std::isfinite(x[i])) return bad("decoded a non-finite coordinate");
       }
     }
+    for (int i = 0; i < 3; ++i)
+      err_[3 * size_t{s} + i] = fp.kind == FieldPrediction::kLast ? 0.0f : static_cast<float>(x[i] - base[i]);
     if (item_bytes_ > 0) {
       computeFieldPrediction(fp, x);
       uint8_t* out = &vals_[s * item_bytes_];
@@ -2041,6 +2085,10 @@ class LevelCoder {
   // Slot pool.
   std::vector<uint8_t> state_;
   std::vector<double> pos_;
+  // Per slot, per axis: the vertex's coordinate minus its prediction before any carry (the
+  // prediction rule's, or the boundary's or edge's prediction; 0 for seeds), which later vertices
+  // may carry over (spec section 10.5).
+  std::vector<float> err_;
   std::vector<uint8_t> vals_;
   std::vector<uint32_t> open_, pins_, ids_, free_;
   // Per slot while the boundary phase lasts: the open boundary loop (nxt_, prv_) and, over the
@@ -2070,6 +2118,8 @@ class LevelCoder {
   BitTree<4> bsym_[kBoundaryContexts];
   BitTree<4> geo_rule_[16];
   uint32_t geo_last_rule_ = 0;
+  BitTree<3> geo_carry_[kCarries];  // [previous carry of this stream]
+  uint32_t geo_last_carry_ = 0;
   std::vector<std::array<BitTree<4>, 16>> pf_rule_;
   std::vector<uint32_t> pf_last_rule_;
   BitModel flip_, retire_, seed_more_, bseed_more_, bpartner_, seed_existing_;

@@ -195,6 +195,25 @@ TetMesh shiftExceptions() {
   return finish(m);
 }
 
+// A curvilinear grid (spec 10.5, error carries): 5 x 5 x 5 cubes bent into a twisted cylindrical
+// shell, float32. No rule predicts a vertex exactly, but a neighbour's error nearly does, and GEOM
+// carries it over.
+TetMesh curvilinear() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat32;
+  addCubeGrid(m, 5, 0.0, 1.0);
+  for (size_t v = 0; v < m.numPoints(); ++v) {
+    // Float arithmetic (GCC 12.2 at -O3 drops the rounding of a double product cast to float when it
+    // vectorises three such stores).
+    const float i = static_cast<float>(v % 6), j = static_cast<float>(v / 6 % 6), k = static_cast<float>(v / 36);
+    const float r = 2.0f + 0.3f * i + 0.02f * i * i, theta = 0.15f * j + 0.03f * k;
+    m.coords[3 * v] = r * std::cos(theta);
+    m.coords[3 * v + 1] = r * std::sin(theta);
+    m.coords[3 * v + 2] = 0.4f * k + 0.008f * i * j;
+  }
+  return finish(m);
+}
+
 // A field of a few distinct values (spec 10.2, table form): 6 x 6 x 6 cubes, float32, with a float64
 // cell field `conductivity` that takes one of 9 irrational values per block of 2 x 2 x 2 cubes, and a
 // float64 point field `level` of 5 values: the cell field is coded as places in its table.
@@ -325,6 +344,7 @@ std::vector<Sample> samples() {
   s.push_back(valid("printed-singles.f64.dir.v1.0.gtn", printedSingles, [] { return encodeFile(printedSingles(), options()); }));
   s.push_back(valid("shift-exceptions.f64.dir.v1.0.gtn", shiftExceptions, [] { return encodeFile(shiftExceptions(), options()); }));
   s.push_back(valid("value-table.f32.dir.v1.0.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
+  s.push_back(valid("curvilinear.f32.dir.v1.0.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithLevels(options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
