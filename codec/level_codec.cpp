@@ -970,6 +970,14 @@ class LevelCoder {
             }
           };
           for (uint32_t i = 0; i < kCoordRules; ++i) consider(triedRule(i, geo_last_rule_), 0, nullptr);
+          // A carry costs at least the cheapest rule and carry symbols and the margin: when the best
+          // without one costs no more, no carry can win (most vertices of grids with copied axes).
+          int floor = 1 << 30;
+          for (uint32_t r = 0; r < kCoordRules; ++r)
+            if (ruleAllowed(r, has_d, kCoordRules)) floor = std::min(floor, signal[r]);
+          int cheapest_carry = 1 << 30;
+          for (uint32_t m = 1; m < kCarries; ++m) cheapest_carry = std::min(cheapest_carry, carry_signal[m]);
+          if (best <= floor + cheapest_carry + kCarryMargin) return;
           for (uint32_t m = 1; m < kCarries; ++m) {
             const uint32_t src = carrySource(m, fp, has_d);
             if (src == kNoSlot) continue;
