@@ -11,10 +11,10 @@ namespace gtn {
 
 namespace {
 
-// A face of a cell type in local vertex numbers, cyclic order; size 3 or 4.
+// A face of a cell type in local vertex numbers, cyclic order; 3 to 6 vertices.
 struct Face {
   int n;
-  int v[4];
+  int v[6];
 };
 
 constexpr Face kHexFaces[] = {{4, {0, 1, 2, 3}}, {4, {4, 5, 6, 7}}, {4, {0, 1, 5, 4}},
@@ -23,6 +23,14 @@ constexpr Face kWedgeFaces[] = {{3, {0, 1, 2, 0}}, {3, {3, 4, 5, 0}}, {4, {0, 1,
                                 {4, {2, 0, 3, 5}}};
 constexpr Face kPyramidFaces[] = {{4, {0, 1, 2, 3}}, {3, {0, 1, 4, 0}}, {3, {1, 2, 4, 0}}, {3, {2, 3, 4, 0}},
                                   {3, {3, 0, 4, 0}}};
+// Prisms over a pentagon (points 0-4 the bottom, 5-9 the top, i + 5 above i) and over a hexagon
+// (0-5, 6-11).
+constexpr Face kPentagonalPrismFaces[] = {{5, {0, 1, 2, 3, 4}}, {5, {5, 6, 7, 8, 9}}, {4, {0, 1, 6, 5}},
+                                          {4, {1, 2, 7, 6}},    {4, {2, 3, 8, 7}},    {4, {3, 4, 9, 8}},
+                                          {4, {4, 0, 5, 9}}};
+constexpr Face kHexagonalPrismFaces[] = {{6, {0, 1, 2, 3, 4, 5}}, {6, {6, 7, 8, 9, 10, 11}}, {4, {0, 1, 7, 6}},
+                                         {4, {1, 2, 8, 7}},       {4, {2, 3, 9, 8}},         {4, {3, 4, 10, 9}},
+                                         {4, {4, 5, 11, 10}},     {4, {5, 0, 6, 11}}};
 
 int expectedPoints(int type) {
   switch (type) {
@@ -31,6 +39,8 @@ int expectedPoints(int type) {
     case kVtkHexahedron: return 8;
     case kVtkWedge: return 6;
     case kVtkPyramid: return 5;
+    case kVtkPentagonalPrism: return 10;
+    case kVtkHexagonalPrism: return 12;
     case kVtkQuadraticTetra: return 10;
     case kVtkQuadraticHexahedron: return 20;
     case kVtkQuadraticWedge: return 15;
@@ -107,14 +117,11 @@ class Splitter {
       bool has_apex = false;
       for (int k = 0; k < f.n; ++k) has_apex |= f.v[k] == apex;
       if (has_apex) continue;
-      if (f.n == 3) {
-        emit({g[apex], g[f.v[0]], g[f.v[1]], g[f.v[2]]}, cell);
-      } else {
-        const int m = minCorner(f, g);
-        const int a = f.v[m], b = f.v[(m + 1) % 4], c = f.v[(m + 2) % 4], d = f.v[(m + 3) % 4];
-        emit({g[apex], g[a], g[b], g[c]}, cell);
-        emit({g[apex], g[a], g[c], g[d]}, cell);
-      }
+      // The face as the fan from its smallest-index corner (a quadrilateral: its diagonal through
+      // that corner; a triangle: itself).
+      const int m = minCorner(f, g);
+      for (int k = 1; k + 1 < f.n; ++k)
+        emit({g[apex], g[f.v[m]], g[f.v[(m + k) % f.n]], g[f.v[(m + k + 1) % f.n]]}, cell);
     }
   }
 
@@ -197,12 +204,14 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
       case kVtkHexahedron: out_tets += 6; ++hexes; break;
       case kVtkWedge: out_tets += 3; break;
       case kVtkPyramid: out_tets += 2; break;
+      case kVtkPentagonalPrism: out_tets += 9; break;
+      case kVtkHexagonalPrism: out_tets += 12; break;
     }
   }
   if (!rejected.empty()) {
     return unsupported(path + ": unsupported cell types: " + typeCounts(rejected) +
-                       "; only tetrahedra (10, 24), hexahedra (11, 12, 25, 29), wedges (13, 26) and pyramids "
-                       "(14, 27) become tetrahedra");
+                       "; only tetrahedra (10, 24), hexahedra (11, 12, 25, 29), wedges (13, 26), pyramids "
+                       "(14, 27) and pentagonal and hexagonal prisms (15, 16) become tetrahedra");
   }
   if (!skipped.empty()) {
     size_t total = 0;
@@ -241,6 +250,8 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
       case kVtkHexahedron: splitter.hex(g, split, cell); break;
       case kVtkWedge: splitter.cone(kWedgeFaces, g, 6, cell); break;
       case kVtkPyramid: splitter.cone(kPyramidFaces, g, 5, cell); break;
+      case kVtkPentagonalPrism: splitter.cone(kPentagonalPrismFaces, g, 10, cell); break;
+      case kVtkHexagonalPrism: splitter.cone(kHexagonalPrismFaces, g, 12, cell); break;
     }
   }
   if (quadratic)

@@ -1,13 +1,15 @@
 // VTK cells into tetrahedra, conformingly: the legacy and XML VTK importers both hand their cells here.
 //
 // Rule: every quadrilateral face is cut along the diagonal through its vertex with the smallest global
-// index. Two cells sharing a face see the same four indices, so they cut it the same way. Each
-// hexahedron, wedge or pyramid is then split as the cone from its own smallest-index vertex v over the
-// faces that do not contain v (each already triangulated by the rule): every face that does contain v
-// has v as its smallest vertex, so its diagonal passes through v, which is exactly how the cone cuts
-// it. Hence the cut always agrees with the face rule and no configuration of Dompierre et al. (1999)
-// that needs a Steiner point can arise: hexahedra give 6 tetrahedra, wedges 3, pyramids 2, and
-// ImportReport::steiner_points stays 0. With split == 5 a hexahedron whose six face diagonals form
+// index, and every pentagon or hexagon as the fan from that vertex. Two cells sharing a face see the
+// same indices, so they cut it the same way. Each hexahedron, wedge, pyramid or pentagonal or
+// hexagonal prism is then split as the cone from its own smallest-index vertex v over the faces that
+// do not contain v (each already triangulated by the rule): every face that does contain v has v as
+// its smallest vertex, so its diagonals pass through v, which is exactly how the cone cuts it. Hence
+// the cut always agrees with the face rule and no configuration of Dompierre et al. (1999) that needs
+// a Steiner point can arise: hexahedra give 6 tetrahedra, wedges 3, pyramids 2, pentagonal prisms 9
+// (at most), hexagonal prisms 12, and ImportReport::steiner_points stays 0. (The cone is a valid
+// split of a convex cell, as VTK's prisms are meant to be.) With split == 5 a hexahedron whose six face diagonals form
 // one of the two inscribed tetrahedra ({0,2,5,7} or {1,3,4,6}) is cut into 5 instead.
 // Voxels are hexahedra numbered x fastest; quadratic tetrahedra, hexahedra, wedges and pyramids keep
 // only their corners (listed first). Cells of lower dimension (vertices, lines, triangles, quads,

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <map>
 #include <numeric>
 #include <random>
@@ -163,6 +165,63 @@ TEST(CellSplit, MixedWedgesPyramidsHexesAndTetsConform) {
   }
 }
 
+// Pentagonal and hexagonal prisms (VTK types 15 and 16): two hexagonal prisms stacked on a regular
+// hexagon and a pentagonal prism against a side of the lower one, numbered at random. The hexagon
+// they share and the quadrilateral the pentagonal prism shares are cut alike from both sides, so the
+// mesh is manifold, its boundary is exactly the outer faces' triangles and the volume adds up.
+TEST(CellSplit, PentagonalAndHexagonalPrismsConform) {
+  const double r3 = std::sqrt(3.0);
+  std::vector<std::array<double, 2>> hexagon, pentagon;
+  for (int i = 0; i < 6; ++i) hexagon.push_back({std::cos(i * M_PI / 3), std::sin(i * M_PI / 3)});
+  // On the side (hexagon[0], hexagon[1]), outward: a rectangle of depth 0.8 with a roof of 0.5.
+  const double nx = r3 / 2, ny = 0.5, mx = 0.75, my = r3 / 4;
+  pentagon = {hexagon[0], hexagon[1], {hexagon[1][0] + 0.8 * nx, hexagon[1][1] + 0.8 * ny},
+              {mx + 1.3 * nx, my + 1.3 * ny}, {hexagon[0][0] + 0.8 * nx, hexagon[0][1] + 0.8 * ny}};
+  for (uint32_t seed = 0; seed < 20; ++seed) {
+    // Points: the hexagon at z = 0, 1, 2 (0-17), the pentagon's 3 outer points at z = 0, 1 (18-23).
+    std::vector<std::array<double, 3>> pts;
+    for (int z = 0; z < 3; ++z)
+      for (const auto& h : hexagon) pts.push_back({h[0], h[1], double(z)});
+    for (int z = 0; z < 2; ++z)
+      for (int i = 2; i < 5; ++i) pts.push_back({pentagon[i][0], pentagon[i][1], double(z)});
+    std::vector<uint32_t> perm(pts.size());
+    std::iota(perm.begin(), perm.end(), 0);
+    std::mt19937 rng(seed);
+    std::shuffle(perm.begin(), perm.end(), rng);
+    TetMesh mesh;
+    mesh.coords.resize(3 * pts.size());
+    for (size_t p = 0; p < pts.size(); ++p)
+      for (int d = 0; d < 3; ++d) mesh.coords[3 * perm[p] + d] = pts[p][d];
+    auto H = [&](int z, int i) { return static_cast<int64_t>(perm[6 * z + i]); };
+    auto Q = [&](int z, int i) { return i < 2 ? H(z, i) : static_cast<int64_t>(perm[18 + 3 * z + (i - 2)]); };
+    VtkCells cells;
+    auto add = [&](int type, std::vector<int64_t> ids) {
+      cells.types.push_back(type);
+      cells.connectivity.insert(cells.connectivity.end(), ids.begin(), ids.end());
+      cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+    };
+    for (int z = 0; z < 2; ++z) {
+      std::vector<int64_t> ids;
+      for (int layer = z; layer <= z + 1; ++layer)
+        for (int i = 0; i < 6; ++i) ids.push_back(H(layer, i));
+      add(kVtkHexagonalPrism, ids);
+    }
+    std::vector<int64_t> ids;
+    for (int z = 0; z < 2; ++z)
+      for (int i = 0; i < 5; ++i) ids.push_back(Q(z, i));
+    add(kVtkPentagonalPrism, ids);
+    ImportResult r = splitInto(mesh, cells, 6);
+    const MeshStats s = computeMeshStats(r.mesh);
+    EXPECT_EQ(s.non_manifold_faces, 0u) << seed;
+    // Lower prism: bottom hexagon 4 triangles, 5 free sides 10; upper: top 4, sides 12; pentagonal
+    // prism: 3 + 3 for its pentagons, 4 free sides 8.
+    EXPECT_EQ(s.boundary_faces, 44u) << seed;
+    EXPECT_NEAR(s.total_volume, 2 * (3 * r3 / 2) + 1.05, 1e-12) << seed;
+    EXPECT_EQ(s.zero_volume, 0u) << seed;
+    EXPECT_LE(r.mesh.numTets(), 2u * 12 + 9u);
+  }
+}
+
 TEST(CellSplit, CellFieldsSpreadOverTheTetrahedraOfTheirCell) {
   Grid g = makeGrid(2, 1, 1, 7);
   Field per_cell("region", 1, ScalarType::kInt32, 2);
@@ -209,15 +268,15 @@ TEST(CellSplit, RejectsUnsupportedTypesWithNameAndCount) {
     for (int i = 0; i < n; ++i) cells.connectivity.push_back(i);
     cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
   };
-  add(15, 10), add(15, 10), add(16, 12), add(10, 4), add(42, 9), add(5, 3);
+  add(31, 12), add(31, 12), add(33, 18), add(10, 4), add(42, 9), add(5, 3);
   std::vector<Tet> tets;
   std::vector<uint32_t> tet_cell;
   ImportReport report;
   const Status st = splitVtkCells("in.vtu", cells, 20, 6, &tets, &tet_cell, &report);
   ASSERT_FALSE(st.isOk());
   EXPECT_EQ(st.code(), StatusCode::kUnsupported);
-  for (const char* part : {"in.vtu", "2 cells of type 15 (VTK_PENTAGONAL_PRISM)",
-                           "1 cell of type 16 (VTK_HEXAGONAL_PRISM)", "1 cell of type 42 (VTK_POLYHEDRON)"})
+  for (const char* part : {"in.vtu", "2 cells of type 31 (VTK_QUADRATIC_LINEAR_WEDGE)",
+                           "1 cell of type 33 (VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON)", "1 cell of type 42 (VTK_POLYHEDRON)"})
     EXPECT_NE(st.message().find(part), std::string::npos) << st.message() << " lacks " << part;
   // The triangle is not a reason to reject: cells of lower dimension are skipped.
   EXPECT_EQ(st.message().find("VTK_TRIANGLE"), std::string::npos) << st.message();

@@ -302,8 +302,8 @@ TEST(VtkLegacy, RejectsOtherDatasetsCellTypesAndBadIndices) {
               "DATASET STRUCTURED_POINTS is not supported");
   const std::string head = "# vtk DataFile Version 3.0\ntri\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
                            "0 0 0 1 0 0 0 1 0 0 0 1\n";
-  expectError(dir + "/prism.vtk", head + "CELLS 2 16\n10 0 1 2 3 0 1 2 3 0 1\n4 0 1 2 3\nCELL_TYPES 2\n15 10\n",
-              "1 cell of type 15 (VTK_PENTAGONAL_PRISM)");
+  expectError(dir + "/wedge.vtk", head + "CELLS 2 18\n12 0 1 2 3 0 1 2 3 0 1 2 3\n4 0 1 2 3\nCELL_TYPES 2\n31 10\n",
+              "1 cell of type 31 (VTK_QUADRATIC_LINEAR_WEDGE)");
   expectError(dir + "/tri.vtk", head + "CELLS 2 8\n3 0 1 2\n3 0 2 3\nCELL_TYPES 2\n5 5\n",
               "no volume cells, only 2 cells of type 5 (VTK_TRIANGLE)");
   expectError(dir + "/range.vtk", head + "CELLS 1 5\n4 0 1 2 4\nCELL_TYPES 1\n10\n",
