@@ -1,13 +1,17 @@
 // Legacy VTK (.vtk) import: DATASET UNSTRUCTURED_GRID in ASCII or BINARY (big-endian), the classic
-// CELLS layout and the OFFSETS/CONNECTIVITY layout of version 5.1, point and cell attributes
+// CELLS layout and the OFFSETS/CONNECTIVITY layout of version 5.1; the 3D structured datasets
+// STRUCTURED_GRID (a curvilinear grid, as PLOT3D's), RECTILINEAR_GRID and STRUCTURED_POINTS, whose
+// hexahedral cells are split like PLOT3D's (5 with alternating parity or 6); point and cell attributes
 // (SCALARS, COLOR_SCALARS, VECTORS, NORMALS, TEXTURE_COORDINATES, TENSORS, TENSORS6, GLOBAL_IDS,
 // PEDIGREE_IDS, FIELD) kept in their source types. String arrays (ASCII or BINARY) are skipped.
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstring>
 
 #include "convert/cell_split.h"
 #include "convert/import.h"
+#include "mesh/hex_split.h"
 #include "convert/text_reader.h"
 #include "convert/vtk_common.h"
 #include "format/file_io.h"
@@ -55,6 +59,16 @@ class LegacyReader {
   Status readCells();
   Status readCellTypes();
   Status readAttribute(const std::string& keyword);
+  // The structured datasets: DIMENSIONS, ORIGIN, SPACING (or ASPECT_RATIO), X/Y/Z_COORDINATES.
+  Status readDimensions();
+  Status readTriple(const std::string& keyword, double out[3]);
+  Status readAxis(int axis);
+  bool structured() const { return dataset_ != Dataset::kNone && dataset_ != Dataset::kUnstructured; }
+  uint64_t structuredPoints() const { return dims_[0] * dims_[1] * dims_[2]; }
+  uint64_t structuredCells() const { return (dims_[0] - 1) * (dims_[1] - 1) * (dims_[2] - 1); }
+  // Points (rectilinear and structured points: from the axes or the origin and spacing) and the
+  // cells of a structured dataset, split into result_.mesh.tets with their source cells.
+  Status finishStructured(const ImportOptions& options);
   Status readFieldData(std::vector<Field>* into);
   static bool isStringType(std::string_view name);
   // When the data type ahead names strings (STRING, UTF8_STRING): reads past the `kind` array `name`
@@ -70,6 +84,14 @@ class LegacyReader {
   std::string_view text_;
   TextReader tr_;
   bool binary_ = false;
+  bool bits_ahead_ = false;  // dataType read "bit": the next readValues reads a bit array
+  enum class Dataset { kNone, kUnstructured, kStructuredGrid, kRectilinear, kStructuredPoints };
+  Dataset dataset_ = Dataset::kNone;
+  uint64_t dims_[3] = {0, 0, 0};
+  bool have_dims_ = false;
+  double origin_[3] = {0, 0, 0}, spacing_[3] = {1, 1, 1};
+  std::vector<double> axis_[3];
+  bool have_axis_[3] = {false, false, false}, axis_f32_[3] = {false, false, false};
   ImportResult result_;
   VtkCells cells_;
   bool have_points_ = false, have_cells_ = false, have_types_ = false;
@@ -94,6 +116,11 @@ StatusOr<uint64_t> LegacyReader::count(const char* what) {
 StatusOr<ScalarType> LegacyReader::dataType(const std::string& what) {
   GTN_ASSIGN_OR_RETURN(std::string name, token("a data type"));
   ScalarType t;
+  if (upper(name) == "BIT") {
+    // vtkBitArray: kept as uint8 values 0 and 1 (readValues unpacks the next array).
+    bits_ahead_ = true;
+    return ScalarType::kUInt8;
+  }
   if (!vtkLegacyTypeFromName(name, &t))
     return Status(StatusCode::kUnsupported, path_ + ":" + std::to_string(tr_.line()) + ": " + what +
                                                 ": data type '" + name + "' is not supported");
@@ -115,6 +142,28 @@ Status LegacyReader::header() {
 }
 
 Status LegacyReader::readValues(ScalarType type, uint64_t n, const std::string& what, std::vector<uint8_t>* out) {
+  if (bits_ahead_) {
+    bits_ahead_ = false;
+    if (binary_) {
+      // Packed 8 to a byte, the first value in the most significant bit.
+      tr_.skipLine();
+      const size_t at = tr_.offset();
+      const size_t left = at <= text_.size() ? text_.size() - at : 0;
+      const uint64_t bytes = n / 8 + (n % 8 != 0);
+      if (bytes > left)
+        return invalidData(path_ + ": byte offset " + std::to_string(at) + ": file ends inside the binary data of " +
+                           what + " (" + std::to_string(n) + " bits need " + std::to_string(bytes) + " bytes, " +
+                           std::to_string(left) + " left)");
+      out->resize(n);
+      for (uint64_t i = 0; i < n; ++i)
+        (*out)[i] = (static_cast<uint8_t>(text_[at + i / 8]) >> (7 - i % 8)) & 1;
+      tr_.seek(at + bytes);
+      return Status::ok();
+    }
+    GTN_RETURN_IF_ERROR(readValues(ScalarType::kUInt8, n, what, out));
+    for (uint8_t& b : *out) b = b != 0;
+    return Status::ok();
+  }
   const size_t size = scalarSize(type);
   if (binary_) {
     tr_.skipLine();
@@ -387,6 +436,118 @@ Status LegacyReader::readAttribute(const std::string& kw) {
   return Status::ok();
 }
 
+Status LegacyReader::readDimensions() {
+  for (int a = 0; a < 3; ++a) {
+    GTN_ASSIGN_OR_RETURN(dims_[a], count("a DIMENSIONS value"));
+  }
+  for (int a = 0; a < 3; ++a)
+    if (dims_[a] < 2)
+      return Status(StatusCode::kUnsupported,
+                    tr_.error("DIMENSIONS " + std::to_string(dims_[0]) + " " + std::to_string(dims_[1]) + " " +
+                              std::to_string(dims_[2]) +
+                              ": a structured dataset with fewer than 2 points along an axis has no volume cells; "
+                              "only 3D grids can be split into tetrahedra")
+                        .message());
+  // Point indices are 32-bit. And the points of RECTILINEAR_GRID and STRUCTURED_POINTS are not in
+  // the file: a few bytes could declare billions of them, so their number is bounded by the file's
+  // size (any point data takes at least a byte per point).
+  const uint64_t limit = dataset_ == Dataset::kStructuredGrid ? UINT32_MAX : std::min<uint64_t>(UINT32_MAX, 64 * text_.size() + (1u << 20));
+  if (dims_[0] > limit || dims_[1] > limit / dims_[0] || dims_[2] > limit / (dims_[0] * dims_[1]))
+    return tr_.error("DIMENSIONS " + std::to_string(dims_[0]) + " " + std::to_string(dims_[1]) + " " +
+                     std::to_string(dims_[2]) + " declare more points than " +
+                     (limit == UINT32_MAX ? std::string("32-bit indices can number")
+                                          : "a file of " + std::to_string(text_.size()) + " bytes describes"));
+  have_dims_ = true;
+  return Status::ok();
+}
+
+Status LegacyReader::readTriple(const std::string& keyword, double out[3]) {
+  for (int a = 0; a < 3; ++a) {
+    GTN_ASSIGN_OR_RETURN(out[a], tr_.readDouble((keyword + " value").c_str()));
+    if (!std::isfinite(out[a])) return tr_.error(keyword + ": value " + std::to_string(a) + " is not finite");
+  }
+  return Status::ok();
+}
+
+Status LegacyReader::readAxis(int axis) {
+  const std::string what = std::string(1, static_cast<char>('X' + axis)) + "_COORDINATES";
+  GTN_ASSIGN_OR_RETURN(uint64_t n, count("coordinate count"));
+  GTN_ASSIGN_OR_RETURN(ScalarType type, dataType(what));
+  if (have_dims_ && n != dims_[axis])
+    return tr_.error(what + " " + std::to_string(n) + " does not match DIMENSIONS (" + std::to_string(dims_[axis]) +
+                     " along this axis)");
+  std::vector<uint8_t> raw;
+  GTN_RETURN_IF_ERROR(readValues(type, n, what, &raw));
+  scalarsToDouble(type, raw.data(), n, &axis_[axis]);
+  for (double v : axis_[axis])
+    if (!std::isfinite(v)) return tr_.error(what + ": a coordinate is not finite");
+  have_axis_[axis] = true;
+  axis_f32_[axis] = type == ScalarType::kFloat32;
+  return Status::ok();
+}
+
+Status LegacyReader::finishStructured(const ImportOptions& options) {
+  const char* name = dataset_ == Dataset::kStructuredGrid ? "STRUCTURED_GRID"
+                     : dataset_ == Dataset::kRectilinear  ? "RECTILINEAR_GRID"
+                                                          : "STRUCTURED_POINTS";
+  if (!have_dims_) return invalidData(path_ + ": DATASET " + name + " without DIMENSIONS");
+  const uint64_t nx = dims_[0], ny = dims_[1], nz = dims_[2], np = structuredPoints();
+  TetMesh& mesh = result_.mesh;
+  if (dataset_ == Dataset::kStructuredGrid) {
+    if (!have_points_) return invalidData(path_ + ": no POINTS section");
+    if (mesh.numPoints() != np)
+      return invalidData(path_ + ": POINTS " + std::to_string(mesh.numPoints()) + " does not match DIMENSIONS (" +
+                         std::to_string(nx) + " x " + std::to_string(ny) + " x " + std::to_string(nz) + " = " +
+                         std::to_string(np) + " points)");
+  } else if (dataset_ == Dataset::kRectilinear) {
+    for (int a = 0; a < 3; ++a)
+      if (!have_axis_[a])
+        return invalidData(path_ + ": RECTILINEAR_GRID without " + std::string(1, static_cast<char>('X' + a)) +
+                           "_COORDINATES");
+    mesh.coords.resize(3 * np);
+    for (uint64_t k = 0, v = 0; k < nz; ++k)
+      for (uint64_t j = 0; j < ny; ++j)
+        for (uint64_t i = 0; i < nx; ++i, ++v) {
+          mesh.coords[3 * v] = axis_[0][i];
+          mesh.coords[3 * v + 1] = axis_[1][j];
+          mesh.coords[3 * v + 2] = axis_[2][k];
+        }
+    mesh.coord_type = axis_f32_[0] && axis_f32_[1] && axis_f32_[2] ? ScalarType::kFloat32 : ScalarType::kFloat64;
+  } else {
+    // VTK's image data: point (i, j, k) at origin + (i, j, k) * spacing, in double.
+    mesh.coords.resize(3 * np);
+    for (uint64_t k = 0, v = 0; k < nz; ++k)
+      for (uint64_t j = 0; j < ny; ++j)
+        for (uint64_t i = 0; i < nx; ++i, ++v) {
+          mesh.coords[3 * v] = origin_[0] + static_cast<double>(i) * spacing_[0];
+          mesh.coords[3 * v + 1] = origin_[1] + static_cast<double>(j) * spacing_[1];
+          mesh.coords[3 * v + 2] = origin_[2] + static_cast<double>(k) * spacing_[2];
+        }
+    mesh.coord_type = ScalarType::kFloat64;
+  }
+  // The cells, i fastest (VTK's cell order, which CELL_DATA follows), split like PLOT3D's.
+  std::vector<uint32_t> tet_cell;
+  mesh.tets.reserve(structuredCells() * static_cast<uint64_t>(options.split == 5 ? 5 : 6));
+  tet_cell.reserve(mesh.tets.capacity());
+  auto id = [&](uint64_t i, uint64_t j, uint64_t k) { return static_cast<uint32_t>(i + nx * (j + ny * k)); };
+  uint32_t cell = 0;
+  for (uint64_t k = 0; k + 1 < nz; ++k)
+    for (uint64_t j = 0; j + 1 < ny; ++j)
+      for (uint64_t i = 0; i + 1 < nx; ++i, ++cell) {
+        const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+                               id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        if (options.split == 5) {
+          splitHexFive(h, (i + j + k) % 2 == 1, mesh.tets);
+        } else {
+          splitHexSix(h, mesh.tets);
+        }
+        tet_cell.resize(mesh.tets.size(), cell);
+      }
+  for (const Field& f : cell_fields_) mesh.cell_fields.push_back(expandCellField(f, tet_cell));
+  finishImport(result_);
+  return mesh.checkConsistency(path_);
+}
+
 StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
   GTN_RETURN_IF_ERROR(header());
   bool have_dataset = false;
@@ -395,11 +556,32 @@ StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
     const std::string kw = upper(t);
     if (kw == "DATASET") {
       GTN_ASSIGN_OR_RETURN(std::string type, token("dataset type"));
-      if (upper(type) != "UNSTRUCTURED_GRID")
-        return Status(StatusCode::kUnsupported, path_ + ":" + std::to_string(tr_.line()) + ": DATASET " + type +
-                                                    " is not supported (only UNSTRUCTURED_GRID holds tetrahedra)");
+      const std::string u = upper(type);
+      if (u == "UNSTRUCTURED_GRID") {
+        dataset_ = Dataset::kUnstructured;
+      } else if (u == "STRUCTURED_GRID") {
+        dataset_ = Dataset::kStructuredGrid;
+      } else if (u == "RECTILINEAR_GRID") {
+        dataset_ = Dataset::kRectilinear;
+      } else if (u == "STRUCTURED_POINTS") {
+        dataset_ = Dataset::kStructuredPoints;
+      } else {
+        return Status(StatusCode::kUnsupported,
+                      path_ + ":" + std::to_string(tr_.line()) + ": DATASET " + type +
+                          " is not supported (it holds no volume cells: only UNSTRUCTURED_GRID, STRUCTURED_GRID, "
+                          "RECTILINEAR_GRID and STRUCTURED_POINTS do)");
+      }
       have_dataset = true;
-    } else if (kw == "POINTS") {
+    } else if (kw == "DIMENSIONS" && structured() && section_ == 0) {
+      GTN_RETURN_IF_ERROR(readDimensions());
+    } else if (kw == "ORIGIN" && dataset_ == Dataset::kStructuredPoints && section_ == 0) {
+      GTN_RETURN_IF_ERROR(readTriple(kw, origin_));
+    } else if ((kw == "SPACING" || kw == "ASPECT_RATIO") && dataset_ == Dataset::kStructuredPoints && section_ == 0) {
+      GTN_RETURN_IF_ERROR(readTriple(kw, spacing_));
+    } else if ((kw == "X_COORDINATES" || kw == "Y_COORDINATES" || kw == "Z_COORDINATES") &&
+               dataset_ == Dataset::kRectilinear && section_ == 0) {
+      GTN_RETURN_IF_ERROR(readAxis(kw[0] - 'X'));
+    } else if (kw == "POINTS" && (dataset_ == Dataset::kUnstructured || dataset_ == Dataset::kStructuredGrid)) {
       GTN_RETURN_IF_ERROR(readPoints());
     } else if (kw == "CELLS") {
       GTN_RETURN_IF_ERROR(readCells());
@@ -408,7 +590,11 @@ StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
     } else if (kw == "POINT_DATA" || kw == "CELL_DATA") {
       GTN_ASSIGN_OR_RETURN(section_items_, count("item count"));
       section_ = kw == "POINT_DATA" ? 1 : 2;
-      const uint64_t expected = section_ == 1 ? result_.mesh.numPoints() : cells_.types.size();
+      uint64_t expected = section_ == 1 ? result_.mesh.numPoints() : cells_.types.size();
+      if (structured()) {
+        if (!have_dims_) return tr_.error(kw + " before DIMENSIONS");
+        expected = section_ == 1 ? structuredPoints() : structuredCells();
+      }
       if (section_items_ != expected)
         return tr_.error(kw + " " + std::to_string(section_items_) + " does not match the " +
                          std::to_string(expected) + (section_ == 1 ? " points" : " cells"));
@@ -423,6 +609,10 @@ StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
     }
   }
   if (!have_dataset) return invalidData(path_ + ": no DATASET line");
+  if (structured()) {
+    GTN_RETURN_IF_ERROR(finishStructured(options));
+    return std::move(result_);
+  }
   if (!have_points_) return invalidData(path_ + ": no POINTS section");
   if (!have_cells_ || !have_types_) return invalidData(path_ + ": no CELLS or no CELL_TYPES section");
   if (cells_.types.size() + 1 != cells_.offsets.size())

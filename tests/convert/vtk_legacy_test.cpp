@@ -297,9 +297,8 @@ TEST(VtkLegacy, RandomlyCorruptedFilesNeverCrash) {
 
 TEST(VtkLegacy, RejectsOtherDatasetsCellTypesAndBadIndices) {
   const std::string dir = tempDir("vtk_legacy_bad");
-  expectError(dir + "/sp.vtk",
-              "# vtk DataFile Version 3.0\nimage\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n",
-              "DATASET STRUCTURED_POINTS is not supported");
+  expectError(dir + "/poly.vtk", "# vtk DataFile Version 3.0\nsurface\nASCII\nDATASET POLYDATA\nPOINTS 0 float\n",
+              "DATASET POLYDATA is not supported (it holds no volume cells");
   const std::string head = "# vtk DataFile Version 3.0\ntri\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
                            "0 0 0 1 0 0 0 1 0 0 0 1\n";
   expectError(dir + "/wedge.vtk", head + "CELLS 2 18\n12 0 1 2 3 0 1 2 3 0 1 2 3\n4 0 1 2 3\nCELL_TYPES 2\n31 10\n",
@@ -312,6 +311,126 @@ TEST(VtkLegacy, RejectsOtherDatasetsCellTypesAndBadIndices) {
   expectError(dir + "/word.vtk", head + "CELLS 1 5\n4 0 1 x 3\nCELL_TYPES 1\n10\n", "is not a int32");
   expectError(dir + "/pd.vtk", head + "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 5\n",
               "POINT_DATA 5 does not match the 4 points");
+}
+
+// The 3D structured datasets: their hexahedral cells (i fastest, as CELL_DATA lists them) are split
+// like PLOT3D's, their point and cell data kept. A curvilinear STRUCTURED_GRID (ASCII), a
+// RECTILINEAR_GRID (BINARY, float axes) and a STRUCTURED_POINTS image with a bit array, in both
+// encodings.
+TEST(VtkLegacy, StructuredDatasetsBecomeSplitHexahedra) {
+  const std::string dir = tempDir("vtk_legacy_structured");
+  for (const int split : {5, 6}) {
+    ImportOptions options;
+    options.split = split;
+    {
+      // 3 x 3 x 2 points, sheared in x by z: 4 cells of volume 1 each.
+      std::string s = "# vtk DataFile Version 3.0\ncurvilinear\nASCII\nDATASET STRUCTURED_GRID\nDIMENSIONS 3 3 2\n"
+                      "POINTS 18 double\n";
+      for (int k = 0; k < 2; ++k)
+        for (int j = 0; j < 3; ++j)
+          for (int i = 0; i < 3; ++i) s += std::to_string(i + 0.5 * k) + " " + std::to_string(j) + " " + std::to_string(k) + "\n";
+      s += "CELL_DATA 4\nSCALARS zone int 1\nLOOKUP_TABLE default\n10 11 12 13\n";
+      s += "POINT_DATA 18\nSCALARS t float\nLOOKUP_TABLE default\n";
+      for (int v = 0; v < 18; ++v) s += std::to_string(v) + ".5\n";
+      writeFile(dir + "/sg.vtk", s);
+      auto r = importMesh({dir + "/sg.vtk"}, options);
+      ASSERT_TRUE(r.isOk()) << r.status().message();
+      const TetMesh& m = r->mesh;
+      EXPECT_EQ(m.numPoints(), 18u);
+      EXPECT_EQ(m.numTets(), 4u * split);
+      EXPECT_EQ(m.coord_type, ScalarType::kFloat64);
+      EXPECT_DOUBLE_EQ(m.point(7)[0], 1.0);  // (i, j, k) = (1, 2, 0)
+      EXPECT_DOUBLE_EQ(m.point(10)[0], 1.5);  // (1, 0, 1)
+      const MeshStats st = computeMeshStats(m);
+      EXPECT_NEAR(st.total_volume, 4.0, 1e-12);
+      EXPECT_EQ(st.inverted, 0u);
+      EXPECT_EQ(st.non_manifold_faces, 0u);
+      EXPECT_EQ(st.boundary_faces, 2u * (2 * 4 + 4 * 2));  // top and bottom 4 quads, 4 sides of 2
+      ASSERT_EQ(m.point_fields.size(), 1u);
+      EXPECT_EQ(m.point_fields[0].data<float>()[17], 17.5f);
+      ASSERT_EQ(m.cell_fields.size(), 1u);
+      // Each tetrahedron has its cell's zone: the cell (0, 1, 0) is zone 12 and lies in x < 1, y > 1.
+      const int32_t* zone = m.cell_fields[0].data<int32_t>();
+      for (size_t t = 0; t < m.numTets(); ++t) {
+        double c[3] = {0, 0, 0};
+        for (uint32_t v : m.tets[t])
+          for (int a = 0; a < 3; ++a) c[a] += m.point(v)[a] / 4;
+        const int i = c[0] - 0.5 * c[2] > 1 ? 1 : 0, j = c[1] > 1 ? 1 : 0;
+        EXPECT_EQ(zone[t], 10 + i + 2 * j) << "tetrahedron " << t;
+      }
+    }
+    {
+      // Rectilinear, BINARY: axes of 4, 2 and 3 float coordinates, unevenly spaced.
+      std::string s = "# vtk DataFile Version 3.0\nrectilinear\nBINARY\nDATASET RECTILINEAR_GRID\nDIMENSIONS 4 2 3\n";
+      s += "X_COORDINATES 4 float\n";
+      for (double v : {0.0, 0.5, 2.0, 2.25}) putBigEndian(s, ScalarType::kFloat32, v);
+      s += "\nY_COORDINATES 2 float\n";
+      for (double v : {-1.0, 1.0}) putBigEndian(s, ScalarType::kFloat32, v);
+      s += "\nZ_COORDINATES 3 float\n";
+      for (double v : {0.0, 0.125, 1.0}) putBigEndian(s, ScalarType::kFloat32, v);
+      s += "\nPOINT_DATA 24\nSCALARS id short\nLOOKUP_TABLE default\n";
+      for (int v = 0; v < 24; ++v) putBigEndian(s, ScalarType::kInt16, v);
+      s += "\n";
+      writeFile(dir + "/rg.vtk", s);
+      auto r = importMesh({dir + "/rg.vtk"}, options);
+      ASSERT_TRUE(r.isOk()) << r.status().message();
+      const TetMesh& m = r->mesh;
+      EXPECT_EQ(m.numPoints(), 24u);
+      EXPECT_EQ(m.numTets(), 3u * 1 * 2 * split);
+      EXPECT_EQ(m.coord_type, ScalarType::kFloat32);
+      EXPECT_DOUBLE_EQ(m.point(4 * 1 + 8 * 2 + 3)[0], 2.25);
+      EXPECT_DOUBLE_EQ(m.point(4 * 1 + 8 * 2 + 3)[1], 1.0);
+      EXPECT_DOUBLE_EQ(m.point(4 * 1 + 8 * 2 + 3)[2], 1.0);
+      EXPECT_NEAR(computeMeshStats(m).total_volume, 2.25 * 2.0 * 1.0, 1e-12);
+      EXPECT_EQ(m.point_fields[0].data<int16_t>()[23], 23);
+    }
+    for (const bool binary : {false, true}) {
+      // An image: origin (1, 2, 3), spacing (0.5, 0.25, 2), 3 x 2 x 2 points, a bit array of 12.
+      std::string s = "# vtk DataFile Version 2.0\nimage\n" + std::string(binary ? "BINARY" : "ASCII") +
+                      "\nDATASET STRUCTURED_POINTS\nDIMENSIONS 3 2 2\nORIGIN 1 2 3\nSPACING 0.5 0.25 2\n"
+                      "POINT_DATA 12\nSCALARS mask bit\nLOOKUP_TABLE default\n";
+      const int bits[12] = {1, 0, 1, 1, 0, 0, 1, 0, 0, 0, 0, 1};
+      if (binary) {
+        s += static_cast<char>(0xB2);  // 1011 0010
+        s += static_cast<char>(0x10);  // 0001 ....
+        s += "\n";
+      } else {
+        for (int b : bits) s += std::to_string(b) + " ";
+        s += "\n";
+      }
+      writeFile(dir + "/sp.vtk", s);
+      auto r = importMesh({dir + "/sp.vtk"}, options);
+      ASSERT_TRUE(r.isOk()) << r.status().message();
+      const TetMesh& m = r->mesh;
+      EXPECT_EQ(m.numTets(), 2u * split);
+      EXPECT_DOUBLE_EQ(m.point(11)[0], 2.0);
+      EXPECT_DOUBLE_EQ(m.point(11)[1], 2.25);
+      EXPECT_DOUBLE_EQ(m.point(11)[2], 5.0);
+      EXPECT_NEAR(computeMeshStats(m).total_volume, 1.0 * 0.25 * 2.0, 1e-12);
+      ASSERT_EQ(m.point_fields.size(), 1u);
+      ASSERT_EQ(m.point_fields[0].type, ScalarType::kUInt8);
+      for (int v = 0; v < 12; ++v) EXPECT_EQ(m.point_fields[0].data<uint8_t>()[v], bits[v]) << binary << " " << v;
+    }
+  }
+}
+
+TEST(VtkLegacy, StructuredDatasetsRejectWhatTheyCannotHold) {
+  const std::string dir = tempDir("vtk_legacy_structured_bad");
+  const std::string sg = "# vtk DataFile Version 3.0\ng\nASCII\nDATASET STRUCTURED_GRID\n";
+  expectError(dir + "/flat.vtk", sg + "DIMENSIONS 4 3 1\nPOINTS 12 float\n",
+              "DIMENSIONS 4 3 1: a structured dataset with fewer than 2 points along an axis has no volume cells");
+  expectError(dir + "/count.vtk", sg + "DIMENSIONS 2 2 2\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 1 1 0\n",
+              "POINTS 4 does not match DIMENSIONS (2 x 2 x 2 = 8 points)");
+  expectError(dir + "/nodims.vtk", sg + "POINTS 1 float\n0 0 0\n", "STRUCTURED_GRID without DIMENSIONS");
+  expectError(dir + "/early.vtk", sg + "POINT_DATA 8\n", "POINT_DATA before DIMENSIONS");
+  const std::string sp = "# vtk DataFile Version 3.0\ni\nASCII\nDATASET STRUCTURED_POINTS\n";
+  // A few bytes cannot describe data for a billion implicit points.
+  expectError(dir + "/huge.vtk", sp + "DIMENSIONS 1000 1000 1000\n", "declare more points than a file of");
+  expectError(dir + "/cd.vtk", sp + "DIMENSIONS 3 3 3\nCELL_DATA 27\n", "CELL_DATA 27 does not match the 8 cells");
+  const std::string rg = "# vtk DataFile Version 3.0\nr\nASCII\nDATASET RECTILINEAR_GRID\nDIMENSIONS 2 2 2\n";
+  expectError(dir + "/noz.vtk", rg + "X_COORDINATES 2 float\n0 1\nY_COORDINATES 2 float\n0 1\n",
+              "RECTILINEAR_GRID without Z_COORDINATES");
+  expectError(dir + "/axis.vtk", rg + "X_COORDINATES 3 float\n0 1 2\n", "X_COORDINATES 3 does not match DIMENSIONS");
 }
 
 TEST(VtkLegacy, QuadraticTetraKeepsCornersAndCountsMidEdgePoints) {
