@@ -273,6 +273,40 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   return Status::ok();
 }
 
+Status finishStructuredImport(const std::string& path, const uint64_t dims[3], const std::vector<Field>& cell_fields,
+                              const ImportOptions& options, ImportResult* result) {
+  const uint64_t nx = dims[0], ny = dims[1], nz = dims[2];
+  TetMesh& mesh = result->mesh;
+  if (mesh.numPoints() != nx * ny * nz)
+    return invalidData(path + ": " + std::to_string(mesh.numPoints()) + " points for a grid of " + std::to_string(nx) +
+                       " x " + std::to_string(ny) + " x " + std::to_string(nz));
+  const uint64_t num_cells = (nx - 1) * (ny - 1) * (nz - 1);
+  for (const Field& f : cell_fields)
+    if (f.itemCount() != num_cells)
+      return invalidData(path + ": cell field '" + f.name + "' has " + std::to_string(f.itemCount()) + " values for " +
+                         std::to_string(num_cells) + " cells");
+  std::vector<uint32_t> tet_cell;
+  mesh.tets.reserve(num_cells * static_cast<uint64_t>(options.split == 5 ? 5 : 6));
+  tet_cell.reserve(mesh.tets.capacity());
+  auto id = [&](uint64_t i, uint64_t j, uint64_t k) { return static_cast<uint32_t>(i + nx * (j + ny * k)); };
+  uint32_t cell = 0;
+  for (uint64_t k = 0; k + 1 < nz; ++k)
+    for (uint64_t j = 0; j + 1 < ny; ++j)
+      for (uint64_t i = 0; i + 1 < nx; ++i, ++cell) {
+        const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+                               id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        if (options.split == 5) {
+          splitHexFive(h, (i + j + k) % 2 == 1, mesh.tets);
+        } else {
+          splitHexSix(h, mesh.tets);
+        }
+        tet_cell.resize(mesh.tets.size(), cell);
+      }
+  for (const Field& f : cell_fields) mesh.cell_fields.push_back(expandCellField(f, tet_cell));
+  finishImport(*result);
+  return mesh.checkConsistency(path);
+}
+
 Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
                        const ImportOptions& options, ImportResult* result) {
   std::vector<uint32_t> tet_cell;

@@ -43,6 +43,14 @@ struct VtkCells {
 Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, int split,
                      std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report);
 
+// The common end of the structured datasets of both VTK importers (legacy STRUCTURED_GRID,
+// RECTILINEAR_GRID, STRUCTURED_POINTS; XML .vts, .vtr, .vti): result->mesh holds the dims[0] x
+// dims[1] x dims[2] points (i fastest) and their point fields. Splits the hexahedral cells (i fastest,
+// the order of `cell_fields`) like PLOT3D's: 5 tetrahedra with alternating parity or 6 around one
+// diagonal (options.split), spreads the cell fields over the tetrahedra and normalises orientation.
+Status finishStructuredImport(const std::string& path, const uint64_t dims[3], const std::vector<Field>& cell_fields,
+                              const ImportOptions& options, ImportResult* result);
+
 // The common end of both VTK importers: splits `cells` into result->mesh.tets (points and point
 // fields already set), spreads the per-cell fields over the tetrahedra into mesh.cell_fields, and
 // normalises orientation (finishImport).

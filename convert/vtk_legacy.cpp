@@ -11,7 +11,6 @@
 
 #include "convert/cell_split.h"
 #include "convert/import.h"
-#include "mesh/hex_split.h"
 #include "convert/text_reader.h"
 #include "convert/vtk_common.h"
 #include "format/file_io.h"
@@ -525,27 +524,7 @@ Status LegacyReader::finishStructured(const ImportOptions& options) {
         }
     mesh.coord_type = ScalarType::kFloat64;
   }
-  // The cells, i fastest (VTK's cell order, which CELL_DATA follows), split like PLOT3D's.
-  std::vector<uint32_t> tet_cell;
-  mesh.tets.reserve(structuredCells() * static_cast<uint64_t>(options.split == 5 ? 5 : 6));
-  tet_cell.reserve(mesh.tets.capacity());
-  auto id = [&](uint64_t i, uint64_t j, uint64_t k) { return static_cast<uint32_t>(i + nx * (j + ny * k)); };
-  uint32_t cell = 0;
-  for (uint64_t k = 0; k + 1 < nz; ++k)
-    for (uint64_t j = 0; j + 1 < ny; ++j)
-      for (uint64_t i = 0; i + 1 < nx; ++i, ++cell) {
-        const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
-                               id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
-        if (options.split == 5) {
-          splitHexFive(h, (i + j + k) % 2 == 1, mesh.tets);
-        } else {
-          splitHexSix(h, mesh.tets);
-        }
-        tet_cell.resize(mesh.tets.size(), cell);
-      }
-  for (const Field& f : cell_fields_) mesh.cell_fields.push_back(expandCellField(f, tet_cell));
-  finishImport(result_);
-  return mesh.checkConsistency(path_);
+  return finishStructuredImport(path_, dims_, cell_fields_, options, &result_);
 }
 
 StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {

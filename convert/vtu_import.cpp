@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstring>
+#include <sstream>
 
 #include "convert/cell_split.h"
 #include "convert/import.h"
@@ -44,6 +46,13 @@ class VtuReader {
                        std::vector<uint8_t>* out) const;
   StatusOr<size_t> compressedHeaderBytes(const uint8_t* first3, const std::string& where) const;
   Status readPiece(const pugi::xml_node& piece, size_t index);
+  // The structured files: StructuredGrid (.vts), RectilinearGrid (.vtr), ImageData (.vti), one piece
+  // covering the whole extent.
+  StatusOr<ImportResult> readStructured(const pugi::xml_node& root, const std::string& type,
+                                        const ImportOptions& options);
+  // A piece's PointData or CellData arrays of `items` tuples each, in file order, appended to *fields.
+  Status readSection(const pugi::xml_node& piece, const char* section, uint64_t items, const std::string& at,
+                     std::vector<Field>* fields);
 
   const std::string& path_;
   const std::string& text_;
@@ -342,6 +351,139 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
   GTN_RETURN_IF_ERROR(readData("CellData", static_cast<uint64_t>(nc), cell_fields_, cell_base));
   return Status::ok();
 }
+Status VtuReader::readSection(const pugi::xml_node& piece, const char* section, uint64_t items, const std::string& at,
+                              std::vector<Field>* fields) {
+  for (pugi::xml_node a : piece.child(section).children("DataArray")) {
+    const std::string name = a.attribute("Name").as_string();
+    Array arr;
+    GTN_RETURN_IF_ERROR(readArray(a, items, at + " " + section + " '" + name + "'", &arr));
+    Field f(name, arr.components, arr.type, 0);
+    f.bytes = std::move(arr.bytes);
+    fields->push_back(std::move(f));
+  }
+  return Status::ok();
+}
+
+// Six integers "x0 x1 y0 y1 z0 z1" (WholeExtent, Extent).
+bool parseExtent(const char* text, int64_t out[6]) {
+  std::istringstream in(text);
+  for (int i = 0; i < 6; ++i)
+    if (!(in >> out[i])) return false;
+  std::string rest;
+  return !(in >> rest);
+}
+
+// n finite doubles (Origin, Spacing, Direction).
+bool parseDoubles(const char* text, int n, double* out) {
+  std::istringstream in(text);
+  for (int i = 0; i < n; ++i)
+    if (!(in >> out[i]) || !std::isfinite(out[i])) return false;
+  std::string rest;
+  return !(in >> rest);
+}
+
+StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, const std::string& type,
+                                                 const ImportOptions& options) {
+  const pugi::xml_node grid = root.child(type.c_str());
+  if (!grid) return invalidData(path_ + ": no <" + type + "> element");
+  int64_t whole[6];
+  if (!parseExtent(grid.attribute("WholeExtent").as_string(), whole))
+    return fail("<" + type + ">", "missing or bad WholeExtent (six integers)");
+  std::vector<pugi::xml_node> pieces;
+  for (pugi::xml_node piece : grid.children("Piece")) pieces.push_back(piece);
+  if (pieces.size() != 1)
+    return unsupported(path_ + ": <" + type + "> has " + std::to_string(pieces.size()) +
+                       " pieces: only a file of one piece covering the WholeExtent is read");
+  const pugi::xml_node piece = pieces[0];
+  int64_t extent[6];
+  if (!parseExtent(piece.attribute("Extent").as_string(), extent)) return fail("Piece 0", "missing or bad Extent");
+  if (!std::equal(extent, extent + 6, whole))
+    return unsupported(path_ + ": Piece 0's Extent differs from the WholeExtent: only a file of one piece covering the "
+                       "WholeExtent is read");
+  uint64_t dims[3];
+  for (int a = 0; a < 3; ++a) {
+    if (extent[2 * a + 1] < extent[2 * a] || extent[2 * a + 1] - extent[2 * a] >= int64_t{UINT32_MAX})
+      return fail("Piece 0", "bad Extent");
+    dims[a] = static_cast<uint64_t>(extent[2 * a + 1] - extent[2 * a]) + 1;
+  }
+  const std::string dims_text = std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " + std::to_string(dims[2]);
+  if (dims[0] < 2 || dims[1] < 2 || dims[2] < 2)
+    return unsupported(path_ + ": a " + dims_text +
+                       " grid has fewer than 2 points along an axis, hence no volume cells; only 3D grids can be "
+                       "split into tetrahedra");
+  // 32-bit point indices; and ImageData's points are not in the file: a few bytes could declare
+  // billions, so their number is bounded by the file's size (any point data takes a byte a point).
+  const uint64_t limit =
+      type == "ImageData" ? std::min<uint64_t>(UINT32_MAX, 64 * text_.size() + (1u << 20)) : UINT32_MAX;
+  if (dims[0] > limit || dims[1] > limit / dims[0] || dims[2] > limit / (dims[0] * dims[1]))
+    return invalidData(path_ + ": Piece 0: a grid of " + dims_text + " points, more than " +
+                       (limit == UINT32_MAX ? std::string("32-bit indices can number")
+                                            : "a file of " + std::to_string(text_.size()) + " bytes describes"));
+  const uint64_t np = dims[0] * dims[1] * dims[2];
+  const uint64_t nc = (dims[0] - 1) * (dims[1] - 1) * (dims[2] - 1);
+  TetMesh& mesh = result_.mesh;
+  if (type == "StructuredGrid") {
+    const pugi::xml_node points = piece.child("Points").child("DataArray");
+    if (!points) return fail("Piece 0", "no <Points> DataArray");
+    Array pts;
+    GTN_RETURN_IF_ERROR(readArray(points, np, "Piece 0 Points", &pts));
+    if (pts.components != 3) return fail("Piece 0 Points", "NumberOfComponents is not 3");
+    scalarsToDouble(pts.type, pts.bytes.data(), 3 * np, &mesh.coords);
+    mesh.coord_type = pts.type == ScalarType::kFloat32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+  } else if (type == "RectilinearGrid") {
+    std::vector<double> axis[3];
+    bool all_f32 = true;
+    int a = 0;
+    for (pugi::xml_node node : piece.child("Coordinates").children("DataArray")) {
+      if (a == 3) return fail("Piece 0 Coordinates", "more than three DataArrays");
+      Array arr;
+      const std::string where = "Piece 0 Coordinates " + std::string(1, static_cast<char>('x' + a));
+      GTN_RETURN_IF_ERROR(readArray(node, dims[a], where, &arr));
+      if (arr.components != 1) return fail(where, "NumberOfComponents is not 1");
+      scalarsToDouble(arr.type, arr.bytes.data(), dims[a], &axis[a]);
+      all_f32 = all_f32 && arr.type == ScalarType::kFloat32;
+      ++a;
+    }
+    if (a != 3) return fail("Piece 0", "<Coordinates> needs three DataArrays (x, y, z)");
+    mesh.coords.resize(3 * np);
+    for (uint64_t k = 0, v = 0; k < dims[2]; ++k)
+      for (uint64_t j = 0; j < dims[1]; ++j)
+        for (uint64_t i = 0; i < dims[0]; ++i, ++v) {
+          mesh.coords[3 * v] = axis[0][i];
+          mesh.coords[3 * v + 1] = axis[1][j];
+          mesh.coords[3 * v + 2] = axis[2][k];
+        }
+    mesh.coord_type = all_f32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+  } else {
+    // ImageData: point (i, j, k) of the extent at Origin + Direction (i Sx, j Sy, k Sz), in double.
+    double origin[3] = {0, 0, 0}, spacing[3] = {1, 1, 1}, dir[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    if (grid.attribute("Origin") && !parseDoubles(grid.attribute("Origin").as_string(), 3, origin))
+      return fail("<ImageData>", "bad Origin (three numbers)");
+    if (grid.attribute("Spacing") && !parseDoubles(grid.attribute("Spacing").as_string(), 3, spacing))
+      return fail("<ImageData>", "bad Spacing (three numbers)");
+    if (grid.attribute("Direction") && !parseDoubles(grid.attribute("Direction").as_string(), 9, dir))
+      return fail("<ImageData>", "bad Direction (nine numbers)");
+    const bool axis_aligned = dir[0] == 1 && dir[1] == 0 && dir[2] == 0 && dir[3] == 0 && dir[4] == 1 &&
+                              dir[5] == 0 && dir[6] == 0 && dir[7] == 0 && dir[8] == 1;
+    mesh.coords.resize(3 * np);
+    for (uint64_t k = 0, v = 0; k < dims[2]; ++k)
+      for (uint64_t j = 0; j < dims[1]; ++j)
+        for (uint64_t i = 0; i < dims[0]; ++i, ++v) {
+          const double d[3] = {static_cast<double>(extent[0] + static_cast<int64_t>(i)) * spacing[0],
+                               static_cast<double>(extent[2] + static_cast<int64_t>(j)) * spacing[1],
+                               static_cast<double>(extent[4] + static_cast<int64_t>(k)) * spacing[2]};
+          for (int c = 0; c < 3; ++c)
+            mesh.coords[3 * v + c] =
+                axis_aligned ? origin[c] + d[c] : origin[c] + (dir[3 * c] * d[0] + dir[3 * c + 1] * d[1] + dir[3 * c + 2] * d[2]);
+        }
+    mesh.coord_type = ScalarType::kFloat64;
+  }
+  GTN_RETURN_IF_ERROR(readSection(piece, "PointData", np, "Piece 0", &mesh.point_fields));
+  GTN_RETURN_IF_ERROR(readSection(piece, "CellData", nc, "Piece 0", &cell_fields_));
+  GTN_RETURN_IF_ERROR(finishStructuredImport(path_, dims, cell_fields_, options, &result_));
+  return std::move(result_);
+}
+
 StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
   // Raw appended data after '_' is not XML: hand pugixml only what precedes it, closed again.
   std::string xml_text;
@@ -368,8 +510,11 @@ StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
   const pugi::xml_node root = doc.child("VTKFile");
   if (!root) return Status(StatusCode::kNotOurFile, path_ + ": no <VTKFile> element: not a VTK XML file");
   const std::string type = root.attribute("type").as_string();
-  if (type != "UnstructuredGrid")
-    return unsupported(path_ + ": VTKFile type \"" + type + "\" is not supported (only UnstructuredGrid)");
+  const bool structured = type == "StructuredGrid" || type == "RectilinearGrid" || type == "ImageData";
+  if (type != "UnstructuredGrid" && !structured)
+    return unsupported(path_ + ": VTKFile type \"" + type +
+                       "\" is not supported (it holds no volume cells: only UnstructuredGrid, StructuredGrid, "
+                       "RectilinearGrid and ImageData do)");
   const std::string order = root.attribute("byte_order").as_string("LittleEndian");
   if (order != "LittleEndian" && order != "BigEndian")
     return invalidData(path_ + ": unknown byte_order \"" + order + "\"");
@@ -389,6 +534,7 @@ StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
       return invalidData(path_ + ": unknown AppendedData encoding \"" + encoding + "\"");
     appended_base64_ = encoding == "base64";
   }
+  if (structured) return readStructured(root, type, options);
   const pugi::xml_node grid = root.child("UnstructuredGrid");
   if (!grid) return invalidData(path_ + ": no <UnstructuredGrid> element");
   size_t pieces = 0;

@@ -570,6 +570,105 @@ void expectError(const std::string& path, const std::string& part) {
   EXPECT_NE(r.status().message().find(part), std::string::npos) << r.status().message() << "\nlacks: " << part;
 }
 
+// The structured XML files: a curvilinear StructuredGrid (.vts, with point and cell data), a
+// RectilinearGrid (.vtr) and an ImageData (.vti) whose extent does not start at 0. Their hexahedra are
+// split like PLOT3D's; cell values follow VTK's cell order (i fastest).
+TEST(Vtu, StructuredFilesBecomeSplitHexahedra) {
+  const std::string dir = tempDir("vtu_structured");
+  writeFile(dir + "/g.vts", R"(<?xml version="1.0"?>
+<VTKFile type="StructuredGrid" version="0.1" byte_order="LittleEndian">
+<StructuredGrid WholeExtent="0 2 0 1 0 1"><Piece Extent="0 2 0 1 0 1">
+<PointData><DataArray type="Float32" Name="t" format="ascii">0 1 2 3 4 5 6 7 8 9 10 11.5</DataArray></PointData>
+<CellData><DataArray type="Int32" Name="zone" format="ascii">5 6</DataArray></CellData>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">
+0 0 0  1 0 0  2 0 0  0 1 0  1 1 0  2 1 0  0.5 0 1  1.5 0 1  2.5 0 1  0.5 1 1  1.5 1 1  2.5 1 1</DataArray></Points>
+</Piece></StructuredGrid></VTKFile>
+)");
+  writeFile(dir + "/g.vtr", R"(<?xml version="1.0"?>
+<VTKFile type="RectilinearGrid" version="0.1" byte_order="LittleEndian">
+<RectilinearGrid WholeExtent="0 2 0 1 0 1"><Piece Extent="0 2 0 1 0 1"><Coordinates>
+<DataArray type="Float32" format="ascii">0 1 3</DataArray>
+<DataArray type="Float32" format="ascii">0 2</DataArray>
+<DataArray type="Float32" format="ascii">0 0.5</DataArray>
+</Coordinates></Piece></RectilinearGrid></VTKFile>
+)");
+  writeFile(dir + "/g.vti", R"(<?xml version="1.0"?>
+<VTKFile type="ImageData" version="0.1" byte_order="LittleEndian">
+<ImageData WholeExtent="1 3 0 1 0 1" Origin="10 0 0" Spacing="0.5 1 2"><Piece Extent="1 3 0 1 0 1">
+<PointData><DataArray type="UInt8" Name="m" format="ascii">0 1 1 0 0 1 1 1 0 0 0 1</DataArray></PointData>
+</Piece></ImageData></VTKFile>
+)");
+  for (const int split : {5, 6}) {
+    ImportOptions options;
+    options.split = split;
+    auto g = importMesh({dir + "/g.vts"}, options);
+    ASSERT_TRUE(g.isOk()) << g.status().message();
+    EXPECT_EQ(g->mesh.numPoints(), 12u);
+    EXPECT_EQ(g->mesh.numTets(), 2u * split);
+    EXPECT_EQ(g->mesh.coord_type, ScalarType::kFloat64);
+    EXPECT_DOUBLE_EQ(g->mesh.point(11)[0], 2.5);
+    const MeshStats gs = computeMeshStats(g->mesh);
+    EXPECT_NEAR(gs.total_volume, 2.0, 1e-12);  // two sheared unit cubes
+    EXPECT_EQ(gs.inverted, 0u);
+    EXPECT_EQ(gs.non_manifold_faces, 0u);
+    EXPECT_EQ(g->mesh.point_fields[0].data<float>()[11], 11.5f);
+    ASSERT_EQ(g->mesh.cell_fields.size(), 1u);
+    for (size_t t = 0; t < g->mesh.numTets(); ++t) {
+      double cx = 0;  // the centroid's x, unsheared
+      for (uint32_t v : g->mesh.tets[t]) cx += (g->mesh.point(v)[0] - 0.5 * g->mesh.point(v)[2]) / 4;
+      EXPECT_EQ(g->mesh.cell_fields[0].data<int32_t>()[t], cx < 1 ? 5 : 6) << t;
+    }
+
+    auto r = importMesh({dir + "/g.vtr"}, options);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->mesh.coord_type, ScalarType::kFloat32);
+    EXPECT_DOUBLE_EQ(r->mesh.point(11)[0], 3.0);
+    EXPECT_DOUBLE_EQ(r->mesh.point(11)[1], 2.0);
+    EXPECT_DOUBLE_EQ(r->mesh.point(11)[2], 0.5);
+    EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 3.0 * 2.0 * 0.5, 1e-12);
+
+    auto i = importMesh({dir + "/g.vti"}, options);
+    ASSERT_TRUE(i.isOk()) << i.status().message();
+    EXPECT_DOUBLE_EQ(i->mesh.point(0)[0], 10.5);  // extent starts at i = 1
+    EXPECT_DOUBLE_EQ(i->mesh.point(11)[0], 11.5);
+    EXPECT_DOUBLE_EQ(i->mesh.point(11)[2], 2.0);
+    EXPECT_NEAR(computeMeshStats(i->mesh).total_volume, 1.0 * 1.0 * 2.0, 1e-12);
+    EXPECT_EQ(i->mesh.point_fields[0].data<uint8_t>()[11], 1);
+  }
+
+  // What they cannot hold: several pieces, a flat extent, more implicit points than the file could
+  // carry data for, a rectilinear grid with two axes, a dataset of no volume.
+  const std::string vti = readFile(dir + "/g.vti");
+  auto expectFails = [&](const std::string& name, std::string text, const std::string& from, const std::string& to,
+                         const std::string& part) {
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+    writeFile(dir + "/" + name, text);
+    expectError(dir + "/" + name, part);
+  };
+  expectFails("two.vti", vti, "</Piece>", "</Piece><Piece Extent=\"1 3 0 1 0 1\"></Piece>", "has 2 pieces");
+  expectFails("flat.vti", vti, "WholeExtent=\"1 3 0 1 0 1\"", "WholeExtent=\"1 3 0 1 0 0\"", "Extent differs");
+  std::string huge = vti;
+  for (const char* e : {"WholeExtent=\"1 3 0 1 0 1\"", "Extent=\"1 3 0 1 0 1\""}) {
+    const size_t at = huge.find(e);
+    huge.replace(at, std::strlen(e), std::string(e).substr(0, std::string(e).find('"')) + "\"0 2000 0 2000 0 2000\"");
+  }
+  writeFile(dir + "/huge2.vti", huge);
+  expectError(dir + "/huge2.vti", "more than a file of");
+  std::string flat = vti;
+  for (const char* e : {"WholeExtent=\"1 3 0 1 0 1\"", "Extent=\"1 3 0 1 0 1\""}) {
+    const size_t at = flat.find(e);
+    flat.replace(at, std::strlen(e), std::string(e).substr(0, std::string(e).find('"')) + "\"1 3 0 1 0 0\"");
+  }
+  writeFile(dir + "/flat2.vti", flat);
+  expectError(dir + "/flat2.vti", "fewer than 2 points along an axis");
+  expectFails("axes.vtr", readFile(dir + "/g.vtr"), "<DataArray type=\"Float32\" format=\"ascii\">0 0.5</DataArray>", "",
+              "<Coordinates> needs three DataArrays");
+  expectFails("poly.vtp", readFile(dir + "/g.vtr"), "type=\"RectilinearGrid\"", "type=\"PolyData\"",
+              "VTKFile type \"PolyData\" is not supported (it holds no volume cells");
+}
+
 TEST(Vtu, MalformedFilesFailWithTheFileNamed) {
   const std::string dir = tempDir("vtu_bad");
   writeFile(dir + "/type.vtu", twoPieces("0 1 2 3", "42"));
