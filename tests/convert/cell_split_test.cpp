@@ -117,6 +117,20 @@ TEST(CellSplit, FiveWhenTheDiagonalsAllowItSixOtherwise) {
   EXPECT_DOUBLE_EQ(computeMeshStats(r.mesh).total_volume, 1.0);
 }
 
+// The points `pts` numbered by a random permutation (seeded): the mesh's coordinates, and *perm with
+// perm[i] the index that pts[i] gets.
+TetMesh shuffledPoints(const std::vector<std::array<double, 3>>& pts, uint32_t seed, std::vector<uint32_t>* perm) {
+  perm->resize(pts.size());
+  std::iota(perm->begin(), perm->end(), 0);
+  std::mt19937 rng(seed);
+  std::shuffle(perm->begin(), perm->end(), rng);
+  TetMesh mesh;
+  mesh.coords.resize(3 * pts.size());
+  for (size_t p = 0; p < pts.size(); ++p)
+    for (int d = 0; d < 3; ++d) mesh.coords[3 * (*perm)[p] + d] = pts[p][d];
+  return mesh;
+}
+
 TEST(CellSplit, MixedWedgesPyramidsHexesAndTetsConform) {
   // A 2x1x1 block: the left cube as two wedges, the right cube as six pyramids around its centre,
   // plus nothing else; numbering shuffled. Volume 2, manifold, boundary = 10 quads x 2.
@@ -126,14 +140,8 @@ TEST(CellSplit, MixedWedgesPyramidsHexesAndTetsConform) {
       for (int j = 0; j < 2; ++j)
         for (int i = 0; i < 3; ++i) pts.push_back({double(i), double(j), double(k)});
     pts.push_back({1.5, 0.5, 0.5});  // centre of the right cube, index 12
-    std::vector<uint32_t> perm(pts.size());
-    std::iota(perm.begin(), perm.end(), 0);
-    std::mt19937 rng(seed);
-    std::shuffle(perm.begin(), perm.end(), rng);
-    TetMesh mesh;
-    mesh.coords.resize(3 * pts.size());
-    for (size_t p = 0; p < pts.size(); ++p)
-      for (int d = 0; d < 3; ++d) mesh.coords[3 * perm[p] + d] = pts[p][d];
+    std::vector<uint32_t> perm;
+    const TetMesh mesh = shuffledPoints(pts, seed, &perm);
     auto P = [&](int i, int j, int k) { return static_cast<int64_t>(perm[(k * 2 + j) * 3 + i]); };
     const int64_t c = perm[12];
     VtkCells cells;
@@ -184,14 +192,8 @@ TEST(CellSplit, PentagonalAndHexagonalPrismsConform) {
       for (const auto& h : hexagon) pts.push_back({h[0], h[1], double(z)});
     for (int z = 0; z < 2; ++z)
       for (int i = 2; i < 5; ++i) pts.push_back({pentagon[i][0], pentagon[i][1], double(z)});
-    std::vector<uint32_t> perm(pts.size());
-    std::iota(perm.begin(), perm.end(), 0);
-    std::mt19937 rng(seed);
-    std::shuffle(perm.begin(), perm.end(), rng);
-    TetMesh mesh;
-    mesh.coords.resize(3 * pts.size());
-    for (size_t p = 0; p < pts.size(); ++p)
-      for (int d = 0; d < 3; ++d) mesh.coords[3 * perm[p] + d] = pts[p][d];
+    std::vector<uint32_t> perm;
+    const TetMesh mesh = shuffledPoints(pts, seed, &perm);
     auto H = [&](int z, int i) { return static_cast<int64_t>(perm[6 * z + i]); };
     auto Q = [&](int z, int i) { return i < 2 ? H(z, i) : static_cast<int64_t>(perm[18 + 3 * z + (i - 2)]); };
     VtkCells cells;

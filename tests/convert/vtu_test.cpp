@@ -649,20 +649,19 @@ TEST(Vtu, StructuredFilesBecomeSplitHexahedra) {
   };
   expectFails("two.vti", vti, "</Piece>", "</Piece><Piece Extent=\"1 3 0 1 0 1\"></Piece>", "has 2 pieces");
   expectFails("flat.vti", vti, "WholeExtent=\"1 3 0 1 0 1\"", "WholeExtent=\"1 3 0 1 0 0\"", "Extent differs");
-  std::string huge = vti;
-  for (const char* e : {"WholeExtent=\"1 3 0 1 0 1\"", "Extent=\"1 3 0 1 0 1\""}) {
-    const size_t at = huge.find(e);
-    huge.replace(at, std::strlen(e), std::string(e).substr(0, std::string(e).find('"')) + "\"0 2000 0 2000 0 2000\"");
-  }
-  writeFile(dir + "/huge2.vti", huge);
-  expectError(dir + "/huge2.vti", "more than a file of");
-  std::string flat = vti;
-  for (const char* e : {"WholeExtent=\"1 3 0 1 0 1\"", "Extent=\"1 3 0 1 0 1\""}) {
-    const size_t at = flat.find(e);
-    flat.replace(at, std::strlen(e), std::string(e).substr(0, std::string(e).find('"')) + "\"1 3 0 1 0 0\"");
-  }
-  writeFile(dir + "/flat2.vti", flat);
-  expectError(dir + "/flat2.vti", "fewer than 2 points along an axis");
+  // The image with both extents (whole and piece) replaced.
+  auto withExtent = [&](const std::string& name, const std::string& extent, const std::string& part) {
+    std::string text = vti;
+    for (const std::string key : {"WholeExtent=", " Extent="}) {
+      const size_t at = text.find(key + "\"1 3 0 1 0 1\"");
+      ASSERT_NE(at, std::string::npos) << key;
+      text.replace(at + key.size(), 13, "\"" + extent + "\"");
+    }
+    writeFile(dir + "/" + name, text);
+    expectError(dir + "/" + name, part);
+  };
+  withExtent("huge2.vti", "0 2000 0 2000 0 2000", "more than a file of");
+  withExtent("flat2.vti", "1 3 0 1 0 0", "fewer than 2 points along an axis");
   expectFails("axes.vtr", readFile(dir + "/g.vtr"), "<DataArray type=\"Float32\" format=\"ascii\">0 0.5</DataArray>", "",
               "<Coordinates> needs three DataArrays");
   expectFails("poly.vtp", readFile(dir + "/g.vtr"), "type=\"RectilinearGrid\"", "type=\"PolyData\"",
