@@ -927,11 +927,15 @@ class LevelCoder {
     }
     // The encoder's axes that a copy source will give (their residuals do not count when it chooses
     // a prediction).
+    // first_copy: the first source that has the axis's value, kNone32 if none does.
     bool copied[3] = {false, false, false};
+    uint32_t first_copy[3] = {kNone32, kNone32, kNone32};
     if constexpr (kEncode) {
-      for (int i = 0; i < 3; ++i)
-        for (uint32_t m = 0; m < ncopy && !copied[i]; ++m)
-          copied[i] = keyFromPrediction(ct, P(copy_src[m])[i]) == actual[i];
+      for (int i = 0; i < 3; ++i) {
+        for (uint32_t m = 0; m < ncopy && first_copy[i] == kNone32; ++m)
+          if (keyFromPrediction(ct, P(copy_src[m])[i]) == actual[i]) first_copy[i] = m;
+        copied[i] = first_copy[i] != kNone32;
+      }
     }
     double base[3] = {pred[0], pred[1], pred[2]};  // the prediction before any carry (err_)
     if (choose) {
@@ -1021,12 +1025,10 @@ class LevelCoder {
           if (prev_which != kNone32 && keyFromPrediction(ct, P(copy_src[prev_which])[i]) == actual[i]) {
             hit = 1;
             which = prev_which;
+          } else if (copied[i]) {
+            hit = 1;
+            which = first_copy[i];
           }
-          for (uint32_t m = 0; m < ncopy && !hit; ++m)
-            if (keyFromPrediction(ct, P(copy_src[m])[i]) == actual[i]) {
-              hit = 1;
-              which = m;
-            }
         }
         hit = geo_->bit(copy_flag_[i][copy_last_[i] + 2 * (prev_which != kNone32)], hit);
         copy_last_[i] = hit;
