@@ -803,7 +803,7 @@ class LevelCoder {
         weightedRules(x, v, std::make_integer_sequence<uint32_t, kRules>());
         v[0] = pred_vals_[k + c];
         for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(type, &vals_[near_[j] * item_bytes_ + off]);
-        addRuleCosts(type, actual, v, cost);
+        addRuleCosts<kFieldRules>(type, actual, v, cost);
       }
     };
     if (d.type == ScalarType::kFloat32) {
@@ -830,22 +830,22 @@ class LevelCoder {
     const uint64_t r = (actual - pred) & mask, n = (~r + 1) & mask;
     return bitLength(r < n ? r : n);
   }
-  // Adds to cost[r] the residual cost of prediction v[r], 16 * residualBits, for every rule r of one
-  // component whose actual key is `actual`.
-  template <class Type>
+  // Adds to cost[r] the residual cost of prediction v[r], 16 * residualBits, for r < kCount (a multiple
+  // of 4): the rules of one component whose actual key is `actual`.
+  template <uint32_t kCount, class Type>
   static void addRuleCosts(Type type, uint64_t actual, const double* v, int* cost) {
+    static_assert(kCount % 4 == 0);
 #if defined(__SSE2__)
     // Four rules at a time for float32, the usual field type: the same arithmetic as
     // keyFromPrediction (the range check, the float conversion) and residualBits (the smaller of the
     // residual and its negation, modulo 2^32), whose bit length is the exponent of its exact
     // conversion to double.
     if constexpr (std::is_same_v<Type, std::integral_constant<ScalarType, ScalarType::kFloat32>>) {
-      static_assert(kFieldRules % 4 == 0);
       const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7FFFFFFFFFFFFFFF));
       const __m128d max_float = _mm_set1_pd(3.4028234663852886e38);
       const __m128i sign = _mm_set1_epi32(static_cast<int>(0x80000000u));
       const __m128i act = _mm_set1_epi32(static_cast<int>(actual));
-      for (uint32_t r = 0; r < kFieldRules; r += 4) {
+      for (uint32_t r = 0; r < kCount; r += 4) {
         __m128 f[2];
         for (int h = 0; h < 2; ++h) {
           const __m128d d = _mm_loadu_pd(v + r + 2 * h);
@@ -871,7 +871,7 @@ class LevelCoder {
     }
 #endif
     const uint64_t mask = keyMask(scalarBits(type));
-    for (uint32_t r = 0; r < kFieldRules; ++r) cost[r] += 16 * residualBits(actual, keyFromPrediction(type, v[r]), mask);
+    for (uint32_t r = 0; r < kCount; ++r) cost[r] += 16 * residualBits(actual, keyFromPrediction(type, v[r]), mask);
   }
   // The vertex whose error carry m (1 to kCarries - 1) names, or kNoSlot if there is none: the
   // stencil's a, b, c, d (d only with has_d), then the first three apex candidates.
@@ -982,10 +982,30 @@ class LevelCoder {
           int cheapest_carry = 1 << 30;
           for (uint32_t m = 1; m < kCarries; ++m) cheapest_carry = std::min(cheapest_carry, carry_signal[m]);
           if (best <= floor + cheapest_carry + kCarryMargin) return;
+          // Each carry with every rule, four rules at a time (addRuleCosts), then taken in the order
+          // and with the ties of `consider`.
+          constexpr uint32_t kPadded = (kCoordRules + 3) / 4 * 4;
           for (uint32_t m = 1; m < kCarries; ++m) {
             const uint32_t src = carrySource(m, fp, has_d);
             if (src == kNoSlot) continue;
-            for (uint32_t i = 0; i < kCoordRules; ++i) consider(triedRule(i, geo_last_rule_), m, &err_[3 * size_t{src}]);
+            const float* e = &err_[3 * size_t{src}];
+            int cost[kPadded];
+            for (uint32_t r = 0; r < kPadded; ++r) cost[r] = r < kCoordRules ? signal[r] + carry_signal[m] + kCarryMargin : 0;
+            for (int i = 0; i < 3; ++i) {
+              if (copied[i]) continue;
+              double v[kPadded] = {};
+              for (uint32_t r = 0; r < kCoordRules; ++r) v[r] = predicted[i][r] + static_cast<double>(e[i]);
+              addRuleCosts<kPadded>(type, actual[i], v, cost);
+            }
+            for (uint32_t i = 0; i < kCoordRules; ++i) {
+              const uint32_t r = triedRule(i, geo_last_rule_);
+              if (!ruleAllowed(r, has_d, kCoordRules)) continue;
+              if (cost[r] < best || (cost[r] == best && !(m > carry || (m == carry && r > rule)))) {
+                best = cost[r];
+                rule = r;
+                carry = m;
+              }
+            }
           }
         };
         if (ct == ScalarType::kFloat32) {
