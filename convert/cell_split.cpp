@@ -1,5 +1,6 @@
 #include "convert/cell_split.h"
 
+#include <algorithm>
 #include <array>
 #include <map>
 #include <string>
@@ -125,6 +126,30 @@ class Splitter {
     }
   }
 
+  // A polyhedron from its face stream `f` (checked): the cone from its smallest vertex over the fans
+  // of the faces without it.
+  void polyhedron(const int64_t* f, uint32_t cell) {
+    const int64_t num_faces = f[0];
+    uint32_t apex = UINT32_MAX;
+    for (int64_t k = 0, at = 1; k < num_faces; ++k, at += 1 + f[at])
+      for (int64_t i = 0; i < f[at]; ++i) apex = std::min(apex, static_cast<uint32_t>(f[at + 1 + i]));
+    for (int64_t k = 0, at = 1; k < num_faces; ++k, at += 1 + f[at]) {
+      const int64_t n = f[at];
+      const int64_t* v = f + at + 1;
+      int64_t m = 0;
+      bool has_apex = false;
+      for (int64_t i = 0; i < n; ++i) {
+        has_apex |= static_cast<uint32_t>(v[i]) == apex;
+        if (v[i] < v[m]) m = i;
+      }
+      if (has_apex) continue;
+      for (int64_t i = 1; i + 1 < n; ++i)
+        emit({apex, static_cast<uint32_t>(v[m]), static_cast<uint32_t>(v[(m + i) % n]),
+              static_cast<uint32_t>(v[(m + i + 1) % n])},
+             cell);
+    }
+  }
+
   // True when the hexahedron's six face diagonals (by the smallest-index rule) are the edges of one
   // inscribed tetrahedron; *odd says which ({1,3,4,6} rather than {0,2,5,7}).
   static bool fiveSplittable(const uint32_t* g, bool* odd) {
@@ -171,15 +196,72 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   if (num_cells >= UINT32_MAX) return unsupported(path + ": more than 2^32-1 cells");
   if (num_points >= UINT32_MAX) return unsupported(path + ": more than 2^32-1 points");
 
+  const bool separate_faces = !cells.face_offsets.empty();
+  if (separate_faces && cells.face_offsets.size() != num_cells)
+    return invalidData(path + ": " + std::to_string(cells.face_offsets.size()) + " face offsets for " +
+                       std::to_string(num_cells) + " cells");
+  // Each polyhedron's face stream: where it starts in faces or in connectivity.
+  std::vector<const int64_t*> streams;
+
   // First pass: check everything and count, so that an unsupported type is reported with the number
   // of cells that have it, before any work.
   std::map<int, size_t> rejected, skipped;
   size_t out_tets = 0, quadratic = 0, higher_order = 0, hexes = 0;
+  int64_t face_pos = 0;  // where the next polyhedron's stream starts in faces
   for (size_t c = 0; c < num_cells; ++c) {
     const int type = cells.types[c];
     if (isLowerDimensional(type)) {
       ++skipped[type];
       continue;
+    }
+    if (type == kVtkPolyhedron) {
+      const std::string at = path + ": cell " + std::to_string(c) + " (VTK_POLYHEDRON)";
+      const int64_t* f = nullptr;
+      int64_t len = 0;
+      if (separate_faces) {
+        const int64_t end = cells.face_offsets[c];
+        if (end < face_pos || end > static_cast<int64_t>(cells.faces.size()))
+          return invalidData(at + ": its face offset " + std::to_string(end) + " is not between " +
+                             std::to_string(face_pos) + " and the " + std::to_string(cells.faces.size()) +
+                             " face entries");
+        f = cells.faces.data() + face_pos;
+        len = end - face_pos;
+        face_pos = end;
+      } else {
+        f = cells.connectivity.data() + cells.offsets[c];
+        len = cells.offsets[c + 1] - cells.offsets[c];
+      }
+      // The stream: the face count, then each face's point count and points.
+      if (len < 1 || f[0] < 4 || f[0] > len)
+        return invalidData(at + ": a face stream must start with a face count of at least 4 (" +
+                           std::to_string(len < 1 ? 0 : f[0]) + " in " + std::to_string(len) + " entries)");
+      int64_t at_entry = 1;
+      for (int64_t k = 0; k < f[0]; ++k) {
+        if (at_entry >= len) return invalidData(at + ": the face stream ends at face " + std::to_string(k));
+        const int64_t n = f[at_entry];
+        if (n < 3 || n > len - at_entry - 1)
+          return invalidData(at + ": face " + std::to_string(k) + " has " + std::to_string(n) +
+                             " points (at least 3, within the stream)");
+        for (int64_t i = 0; i < n; ++i) {
+          const int64_t v = f[at_entry + 1 + i];
+          if (v < 0 || static_cast<uint64_t>(v) >= num_points)
+            return invalidData(at + " refers to point " + std::to_string(v) + " but there are " +
+                               std::to_string(num_points) + " points");
+        }
+        out_tets += static_cast<size_t>(n - 2);
+        at_entry += 1 + n;
+      }
+      if (at_entry != len)
+        return invalidData(at + ": " + std::to_string(len - at_entry) + " entries left after its " +
+                           std::to_string(f[0]) + " faces");
+      streams.push_back(f);
+      continue;
+    }
+    if (separate_faces && cells.face_offsets[c] >= 0) {
+      // VTK writes -1 for the cells that are not polyhedra; an offset is an error only if it moves.
+      if (cells.face_offsets[c] != face_pos)
+        return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) +
+                           ") is not a polyhedron but has face offset " + std::to_string(cells.face_offsets[c]));
     }
     const int want = expectedPoints(type);
     if (want < 0) {
@@ -211,7 +293,7 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   if (!rejected.empty()) {
     return unsupported(path + ": unsupported cell types: " + typeCounts(rejected) +
                        "; only tetrahedra (10, 24), hexahedra (11, 12, 25, 29), wedges (13, 26), pyramids "
-                       "(14, 27) and pentagonal and hexagonal prisms (15, 16) become tetrahedra");
+                       "(14, 27), pentagonal and hexagonal prisms (15, 16) and polyhedra (42) become tetrahedra");
   }
   if (!skipped.empty()) {
     size_t total = 0;
@@ -227,9 +309,14 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   tet_cell->reserve(tet_cell->size() + out_tets);
   Splitter splitter(tets, tet_cell);
   uint32_t g[27];
+  size_t next_stream = 0;
   for (size_t c = 0; c < num_cells; ++c) {
     const int type = cells.types[c];
     if (isLowerDimensional(type)) continue;
+    if (type == kVtkPolyhedron) {
+      splitter.polyhedron(streams[next_stream++], static_cast<uint32_t>(c));
+      continue;
+    }
     const int64_t begin = cells.offsets[c];
     const int n = static_cast<int>(cells.offsets[c + 1] - begin);
     for (int k = 0; k < n; ++k) g[k] = static_cast<uint32_t>(cells.connectivity[begin + k]);

@@ -8,9 +8,12 @@
 // its smallest vertex, so its diagonals pass through v, which is exactly how the cone cuts it. Hence
 // the cut always agrees with the face rule and no configuration of Dompierre et al. (1999) that needs
 // a Steiner point can arise: hexahedra give 6 tetrahedra, wedges 3, pyramids 2, pentagonal prisms 9
-// (at most), hexagonal prisms 12, and ImportReport::steiner_points stays 0. (The cone is a valid
-// split of a convex cell, as VTK's prisms are meant to be.) With split == 5 a hexahedron whose six face diagonals form
-// one of the two inscribed tetrahedra ({0,2,5,7} or {1,3,4,6}) is cut into 5 instead.
+// (at most), hexagonal prisms 12, and ImportReport::steiner_points stays 0. Polyhedra
+// (VTK_POLYHEDRON) are split the same way from their face streams: a tetrahedron for each triangle
+// of each face that does not contain the cell's smallest vertex. (The cone is a valid split of a
+// convex cell, as VTK's prisms are meant to be, and of a polyhedron star-shaped from that vertex.)
+// With split == 5 a hexahedron whose six face diagonals form one of the two inscribed tetrahedra
+// ({0,2,5,7} or {1,3,4,6}) is cut into 5 instead.
 // Voxels are hexahedra numbered x fastest; quadratic tetrahedra, hexahedra, wedges and pyramids keep
 // only their corners (listed first). Cells of lower dimension (vertices, lines, triangles, quads,
 // polygons, linear or not), which volume-mesh files carry as boundary faces and feature edges, are
@@ -28,10 +31,16 @@ namespace gtn {
 
 // Cells as VTK lays them out: cell c has types[c] and the point indices
 // connectivity[offsets[c] .. offsets[c + 1]); offsets has one entry more than types, starting at 0.
+// Polyhedra (VTK_POLYHEDRON, 42) also have a face stream: for each polyhedron its number of faces,
+// then per face its number of points and the points. XML files keep the streams apart (faces, and
+// faceoffsets: per cell the end of its stream in faces, -1 for other cells); when face_offsets is
+// empty, a polyhedron's connectivity is its face stream (the legacy layout).
 struct VtkCells {
   std::vector<int32_t> types;
   std::vector<int64_t> offsets{0};
   std::vector<int64_t> connectivity;
+  std::vector<int64_t> faces;
+  std::vector<int64_t> face_offsets;
 };
 
 // Splits every cell into tetrahedra: appends them to *tets and, for each, its source cell to

@@ -21,6 +21,7 @@ constexpr uint8_t kVtkWedge = 13;
 constexpr uint8_t kVtkPyramid = 14;
 constexpr uint8_t kVtkPentagonalPrism = 15;
 constexpr uint8_t kVtkHexagonalPrism = 16;
+constexpr uint8_t kVtkPolyhedron = 42;
 constexpr uint8_t kVtkQuadraticTetra = 24;
 constexpr uint8_t kVtkQuadraticHexahedron = 25;
 constexpr uint8_t kVtkQuadraticWedge = 26;

@@ -283,12 +283,17 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
 
   const pugi::xml_node cells = piece.child("Cells");
   Array conn, offs, types;
-  pugi::xml_node conn_node, offs_node, types_node;
+  pugi::xml_node conn_node, offs_node, types_node, faces_node, face_offs_node;
   for (pugi::xml_node a : cells.children("DataArray")) {
     const std::string name = a.attribute("Name").as_string();
     if (name == "connectivity") conn_node = a;
     else if (name == "offsets") offs_node = a;
     else if (name == "types") types_node = a;
+    else if (name == "faces") faces_node = a;
+    else if (name == "faceoffsets") face_offs_node = a;
+    else if (name == "polyhedron_offsets" || name == "face_connectivity")
+      return unsupported(path_ + ": " + at + ": polyhedra in VTK 9.4's layout (" + name +
+                         ") are not supported; the faces/faceoffsets layout of earlier VTK is");
   }
   if (nc > 0 && (!offs_node || !types_node || !conn_node))
     return fail(at, "<Cells> lacks one of the connectivity, offsets and types arrays");
@@ -322,6 +327,48 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
       return fail(at + " Cells connectivity",
                   "refers to point " + std::to_string(v) + " but the piece has " + std::to_string(np) + " points");
     cells_.connectivity.push_back(v + static_cast<int64_t>(point_base));
+  }
+
+  if (!face_offs_node && std::find(type_values.begin(), type_values.end(), int64_t{kVtkPolyhedron}) != type_values.end())
+    return fail(at + " Cells", "VTK_POLYHEDRON cells without the faces and faceoffsets arrays that describe them");
+  // Polyhedra: their face streams, with point indices and offsets made global like the cells'.
+  if (nc > 0 && (faces_node || face_offs_node)) {
+    if (!faces_node || !face_offs_node) return fail(at, "<Cells> has one of faces and faceoffsets without the other");
+    Array fo, fs;
+    std::vector<int64_t> face_offsets, faces;
+    GTN_RETURN_IF_ERROR(readArray(face_offs_node, static_cast<uint64_t>(nc), at + " Cells faceoffsets", &fo));
+    if (!scalarsToInt64(fo.type, fo.bytes.data(), static_cast<size_t>(nc), &face_offsets, &bad))
+      return fail(at + " Cells faceoffsets", "value " + std::to_string(bad) + " is not an offset");
+    const int64_t num_faces = *std::max_element(face_offsets.begin(), face_offsets.end());
+    if (num_faces > 0) {
+      GTN_RETURN_IF_ERROR(readArray(faces_node, static_cast<uint64_t>(num_faces), at + " Cells faces", &fs));
+      if (!scalarsToInt64(fs.type, fs.bytes.data(), static_cast<size_t>(num_faces), &faces, &bad))
+        return fail(at + " Cells faces", "value " + std::to_string(bad) + " is not an index");
+    }
+    // Earlier pieces without polyhedra get their -1 offsets now.
+    cells_.face_offsets.resize(cell_base, -1);
+    const int64_t face_base = static_cast<int64_t>(cells_.faces.size());
+    for (int64_t o : face_offsets) cells_.face_offsets.push_back(o < 0 ? -1 : o + face_base);
+    // Within each polyhedron's stream: the face count, then per face its point count and its points,
+    // which become global. A stream that does not parse is copied as it is: splitVtkCells rejects it.
+    size_t begin = 0;
+    for (int64_t end : face_offsets) {
+      if (end < 0) continue;
+      const size_t stop = std::min(static_cast<size_t>(end), faces.size());
+      size_t e = begin;
+      if (e < stop) {
+        cells_.faces.push_back(faces[e]);
+        for (int64_t k = faces[e++]; k > 0 && e < stop; --k) {
+          const int64_t n = faces[e];
+          cells_.faces.push_back(faces[e++]);
+          for (int64_t i = 0; i < n && e < stop; ++i, ++e) cells_.faces.push_back(faces[e] + static_cast<int64_t>(point_base));
+        }
+      }
+      for (; e < stop; ++e) cells_.faces.push_back(faces[e]);
+      begin = std::max(begin, stop);
+    }
+  } else if (!cells_.face_offsets.empty()) {
+    cells_.face_offsets.resize(cells_.types.size(), -1);
   }
 
   // Point and cell data: kept in file order, matched by name across pieces.

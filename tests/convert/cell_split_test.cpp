@@ -224,6 +224,108 @@ TEST(CellSplit, PentagonalAndHexagonalPrismsConform) {
   }
 }
 
+// Polyhedra (VTK_POLYHEDRON) from their face streams, in XML's layout (faces and faceoffsets beside
+// the cells) and in the legacy one (the stream as the cell's point list): a unit cube given as a
+// polyhedron of 6 quadrilaterals next to a hexahedron, and a tetrahedron-capped block of 5 faces (a
+// wedge as a polyhedron) on top; numbered at random. Shared faces are cut alike from both sides.
+TEST(CellSplit, PolyhedraSplitFromTheirFacesAndConform) {
+  for (const bool separate : {true, false}) {
+    for (uint32_t seed = 0; seed < 20; ++seed) {
+      std::vector<std::array<double, 3>> pts;
+      for (int k = 0; k < 2; ++k)
+        for (int j = 0; j < 2; ++j)
+          for (int i = 0; i < 3; ++i) pts.push_back({double(i), double(j), double(k)});
+      pts.push_back({0, 0, 2});  // 12, 13: the wedge's top edge above x = 0
+      pts.push_back({0, 1, 2});
+      std::vector<uint32_t> perm;
+      const TetMesh mesh = shuffledPoints(pts, seed, &perm);
+      auto P = [&](int i, int j, int k) { return static_cast<int64_t>(perm[(k * 2 + j) * 3 + i]); };
+      VtkCells cells;
+      auto add = [&](int type, const std::vector<int64_t>& points, const std::vector<std::vector<int64_t>>& faces) {
+        cells.types.push_back(type);
+        if (type == kVtkPolyhedron) {
+          std::vector<int64_t> stream = {static_cast<int64_t>(faces.size())};
+          for (const auto& f : faces) {
+            stream.push_back(static_cast<int64_t>(f.size()));
+            stream.insert(stream.end(), f.begin(), f.end());
+          }
+          if (separate) {
+            cells.connectivity.insert(cells.connectivity.end(), points.begin(), points.end());
+            cells.faces.insert(cells.faces.end(), stream.begin(), stream.end());
+            cells.face_offsets.push_back(static_cast<int64_t>(cells.faces.size()));
+          } else {
+            cells.connectivity.insert(cells.connectivity.end(), stream.begin(), stream.end());
+          }
+        } else {
+          cells.connectivity.insert(cells.connectivity.end(), points.begin(), points.end());
+          if (separate) cells.face_offsets.push_back(-1);
+        }
+        cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+      };
+      // The left cube [0,1]^3 as a polyhedron (faces in any orientation and starting corner).
+      const int64_t a = P(0, 0, 0), b = P(1, 0, 0), c = P(1, 1, 0), d = P(0, 1, 0);
+      const int64_t e = P(0, 0, 1), f = P(1, 0, 1), g = P(1, 1, 1), h = P(0, 1, 1);
+      add(kVtkPolyhedron, {a, b, c, d, e, f, g, h},
+          {{a, d, c, b}, {e, f, g, h}, {b, c, g, f}, {a, e, h, d}, {a, b, f, e}, {d, h, g, c}});
+      // The right cube [1,2] x [0,1]^2 as a hexahedron.
+      add(kVtkHexahedron, {P(1, 0, 0), P(2, 0, 0), P(2, 1, 0), P(1, 1, 0), P(1, 0, 1), P(2, 0, 1), P(2, 1, 1), P(1, 1, 1)},
+          {});
+      // On the left cube's top: a wedge with its ridge above x = 0, as a polyhedron of 5 faces.
+      const int64_t r0 = perm[12], r1 = perm[13];
+      add(kVtkPolyhedron, {e, f, g, h, r0, r1}, {{e, f, g, h}, {e, r0, f}, {h, g, r1}, {e, h, r1, r0}, {f, r0, r1, g}});
+      ImportResult r;
+      r.mesh = mesh;
+      const Status st = finishVtkImport("poly", cells, {}, ImportOptions{}, &r);
+      ASSERT_TRUE(st.isOk()) << st.message();
+      const MeshStats s = computeMeshStats(r.mesh);
+      EXPECT_EQ(s.non_manifold_faces, 0u) << seed;
+      // Two cubes: 10 squares, less the left top (covered) = 9 squares; the wedge: 2 triangles and 2
+      // quadrilaterals (its square base lies on the cube).
+      EXPECT_EQ(s.boundary_faces, 9u * 2 + 2 + 2 * 2) << seed;
+      EXPECT_NEAR(s.total_volume, 2.0 + 0.5, 1e-12) << seed;
+      EXPECT_EQ(s.zero_volume, 0u) << seed;
+      EXPECT_EQ(r.report.collapsed_tets, 0u);
+    }
+  }
+}
+
+TEST(CellSplit, MalformedFaceStreamsAreRejected) {
+  auto attempt = [](const std::vector<int64_t>& stream) {
+    VtkCells cells;
+    cells.types = {kVtkPolyhedron};
+    cells.connectivity = {0, 1, 2, 3};
+    cells.offsets = {0, 4};
+    cells.faces = stream;
+    cells.face_offsets = {static_cast<int64_t>(stream.size())};
+    std::vector<Tet> tets;
+    std::vector<uint32_t> tet_cell;
+    ImportReport report;
+    return splitVtkCells("p.vtu", cells, 4, 6, &tets, &tet_cell, &report);
+  };
+  const std::vector<int64_t> tet = {4, 3, 0, 1, 2, 3, 0, 3, 1, 3, 1, 3, 2, 3, 2, 3, 0};
+  EXPECT_TRUE(attempt(tet).isOk());
+  struct Case {
+    std::vector<int64_t> stream;
+    const char* part;
+  };
+  std::vector<int64_t> far = tet, extra = tet, two = tet, three = tet;
+  far[2] = 9;
+  extra.push_back(7);
+  two[1] = 2;
+  three[0] = 3;
+  const std::vector<Case> cases = {{far, "refers to point 9 but there are 4 points"},
+                                   {extra, "1 entries left after its 4 faces"},
+                                   {two, "face 0 has 2 points"},
+                                   {three, "face count of at least 4"},
+                                   {{}, "face count of at least 4"}};
+  for (const Case& k : cases) {
+    const Status st = attempt(k.stream);
+    ASSERT_FALSE(st.isOk()) << k.part;
+    EXPECT_NE(st.message().find("p.vtu: cell 0 (VTK_POLYHEDRON)"), std::string::npos) << st.message();
+    EXPECT_NE(st.message().find(k.part), std::string::npos) << st.message() << " lacks " << k.part;
+  }
+}
+
 TEST(CellSplit, CellFieldsSpreadOverTheTetrahedraOfTheirCell) {
   Grid g = makeGrid(2, 1, 1, 7);
   Field per_cell("region", 1, ScalarType::kInt32, 2);
@@ -270,7 +372,7 @@ TEST(CellSplit, RejectsUnsupportedTypesWithNameAndCount) {
     for (int i = 0; i < n; ++i) cells.connectivity.push_back(i);
     cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
   };
-  add(31, 12), add(31, 12), add(33, 18), add(10, 4), add(42, 9), add(5, 3);
+  add(31, 12), add(31, 12), add(33, 18), add(10, 4), add(71, 9), add(5, 3);
   std::vector<Tet> tets;
   std::vector<uint32_t> tet_cell;
   ImportReport report;
@@ -278,7 +380,7 @@ TEST(CellSplit, RejectsUnsupportedTypesWithNameAndCount) {
   ASSERT_FALSE(st.isOk());
   EXPECT_EQ(st.code(), StatusCode::kUnsupported);
   for (const char* part : {"in.vtu", "2 cells of type 31 (VTK_QUADRATIC_LINEAR_WEDGE)",
-                           "1 cell of type 33 (VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON)", "1 cell of type 42 (VTK_POLYHEDRON)"})
+                           "1 cell of type 33 (VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON)", "1 cell of type 71 (VTK_BEZIER_TETRAHEDRON)"})
     EXPECT_NE(st.message().find(part), std::string::npos) << st.message() << " lacks " << part;
   // The triangle is not a reason to reject: cells of lower dimension are skipped.
   EXPECT_EQ(st.message().find("VTK_TRIANGLE"), std::string::npos) << st.message();

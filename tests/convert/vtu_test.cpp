@@ -668,10 +668,55 @@ TEST(Vtu, StructuredFilesBecomeSplitHexahedra) {
               "VTKFile type \"PolyData\" is not supported (it holds no volume cells");
 }
 
+// Polyhedra as VTK (up to 9.3) and meshio write them: faces and faceoffsets beside the cells, face
+// indices local to the piece. Two pieces, each a unit cube as a polyhedron under a pyramid.
+TEST(Vtu, PolyhedraInSeveralPieces) {
+  const std::string dir = tempDir("vtu_polyhedra");
+  // The cube of a piece spans x in [x0, x0 + 1]; its pyramid's apex is at height 1.5.
+  auto make = [](double x0, int part) {
+    const double xyz[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
+                              {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 0.5, 1.5}};
+    std::string points;
+    for (const auto& p : xyz)
+      points += std::to_string(x0 + p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "  ";
+    return R"(<Piece NumberOfPoints="9" NumberOfCells="2">
+<CellData><DataArray type="Int32" Name="part" format="ascii">)" +
+           std::to_string(part) + " " + std::to_string(part) + R"(</DataArray></CellData>
+<Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">)" +
+           points + R"(</DataArray></Points>
+<Cells>
+<DataArray type="Int32" Name="connectivity" format="ascii">4 5 6 7 8  0 1 2 3 4 5 6 7</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">5 13</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">14 42</DataArray>
+<DataArray type="Int64" Name="faces" format="ascii">6 4 3 0 4 7 4 1 2 6 5 4 0 1 5 4 4 2 3 7 6 4 3 2 1 0 4 4 5 6 7</DataArray>
+<DataArray type="Int64" Name="faceoffsets" format="ascii">-1 31</DataArray>
+</Cells></Piece>
+)";
+  };
+  const std::string text = std::string(R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian"><UnstructuredGrid>
+)") + make(0, 1) + make(3, 2) + "</UnstructuredGrid></VTKFile>\n";
+  writeFile(dir + "/poly.vtu", text);
+  auto r = importMesh({dir + "/poly.vtu"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numPoints(), 18u);
+  EXPECT_EQ(r->mesh.numTets(), 2u * (2 + 6));
+  const MeshStats s = computeMeshStats(r->mesh);
+  EXPECT_EQ(s.non_manifold_faces, 0u);
+  EXPECT_EQ(s.boundary_faces, 2u * (5 * 2 + 4));
+  EXPECT_NEAR(s.total_volume, 2 * (1.0 + 0.5 / 3), 1e-6);
+  ASSERT_EQ(r->mesh.cell_fields.size(), 1u);
+  size_t second = 0;
+  for (size_t t = 0; t < r->mesh.numTets(); ++t) second += r->mesh.cell_fields[0].data<int32_t>()[t] == 2;
+  EXPECT_EQ(second, 8u);
+}
+
 TEST(Vtu, MalformedFilesFailWithTheFileNamed) {
   const std::string dir = tempDir("vtu_bad");
-  writeFile(dir + "/type.vtu", twoPieces("0 1 2 3", "42"));
-  expectError(dir + "/type.vtu", "1 cell of type 42 (VTK_POLYHEDRON)");
+  writeFile(dir + "/type.vtu", twoPieces("0 1 2 3", "71"));
+  expectError(dir + "/type.vtu", "1 cell of type 71 (VTK_BEZIER_TETRAHEDRON)");
+  writeFile(dir + "/poly.vtu", twoPieces("0 1 2 3", "42"));
+  expectError(dir + "/poly.vtu", "VTK_POLYHEDRON cells without the faces and faceoffsets arrays");
   writeFile(dir + "/range.vtu", twoPieces("0 1 2 4", "10"));
   expectError(dir + "/range.vtu", "refers to point 4 but the piece has 4 points");
 
