@@ -450,7 +450,9 @@ Status LegacyReader::readDimensions() {
   // Point indices are 32-bit. And the points of RECTILINEAR_GRID and STRUCTURED_POINTS are not in
   // the file: a few bytes could declare billions of them, so their number is bounded by the file's
   // size (any point data takes at least a byte per point).
-  const uint64_t limit = dataset_ == Dataset::kStructuredGrid ? UINT32_MAX : std::min<uint64_t>(UINT32_MAX, 64 * text_.size() + (1u << 20));
+  const uint64_t limit = dataset_ == Dataset::kStructuredGrid
+                             ? UINT32_MAX
+                             : std::min<uint64_t>(UINT32_MAX, 64 * text_.size() + (1u << 20));
   if (dims_[0] > limit || dims_[1] > limit / dims_[0] || dims_[2] > limit / (dims_[0] * dims_[1]))
     return tr_.error("DIMENSIONS " + std::to_string(dims_[0]) + " " + std::to_string(dims_[1]) + " " +
                      std::to_string(dims_[2]) + " declare more points than " +
@@ -499,10 +501,14 @@ Status LegacyReader::finishStructured(const ImportOptions& options) {
                          std::to_string(nx) + " x " + std::to_string(ny) + " x " + std::to_string(nz) + " = " +
                          std::to_string(np) + " points)");
   } else if (dataset_ == Dataset::kRectilinear) {
-    for (int a = 0; a < 3; ++a)
-      if (!have_axis_[a])
-        return invalidData(path_ + ": RECTILINEAR_GRID without " + std::string(1, static_cast<char>('X' + a)) +
-                           "_COORDINATES");
+    for (int a = 0; a < 3; ++a) {
+      const std::string what = std::string(1, static_cast<char>('X' + a)) + "_COORDINATES";
+      if (!have_axis_[a]) return invalidData(path_ + ": RECTILINEAR_GRID without " + what);
+      // (An axis read before DIMENSIONS was not checked against it.)
+      if (axis_[a].size() != dims_[a])
+        return invalidData(path_ + ": " + what + " has " + std::to_string(axis_[a].size()) +
+                           " values but DIMENSIONS " + std::to_string(dims_[a]) + " along this axis");
+    }
     mesh.coords.resize(3 * np);
     for (uint64_t k = 0, v = 0; k < nz; ++k)
       for (uint64_t j = 0; j < ny; ++j)

@@ -431,6 +431,11 @@ TEST(VtkLegacy, StructuredDatasetsRejectWhatTheyCannotHold) {
   expectError(dir + "/noz.vtk", rg + "X_COORDINATES 2 float\n0 1\nY_COORDINATES 2 float\n0 1\n",
               "RECTILINEAR_GRID without Z_COORDINATES");
   expectError(dir + "/axis.vtk", rg + "X_COORDINATES 3 float\n0 1 2\n", "X_COORDINATES 3 does not match DIMENSIONS");
+  // Axes before DIMENSIONS are checked when the grid is built.
+  expectError(dir + "/late.vtk",
+              "# vtk DataFile Version 3.0\nr\nASCII\nDATASET RECTILINEAR_GRID\nX_COORDINATES 3 float\n0 1 2\n"
+              "Y_COORDINATES 2 float\n0 1\nZ_COORDINATES 2 float\n0 1\nDIMENSIONS 2 2 2\n",
+              "X_COORDINATES has 3 values but DIMENSIONS 2 along this axis");
 }
 
 TEST(VtkLegacy, QuadraticTetraKeepsCornersAndCountsMidEdgePoints) {
