@@ -925,17 +925,13 @@ class LevelCoder {
       if (fp.kind != FieldPrediction::kEdge)
         for (int m = 0; m < n_near_; ++m) copy_src[ncopy++] = near_[m];
     }
-    // The encoder's axes that a copy source will give (their residuals do not count when it chooses
-    // a prediction).
-    // first_copy: the first source that has the axis's value, kNone32 if none does.
-    bool copied[3] = {false, false, false};
+    // The encoder's first copy source that has each axis's value, kNone32 if none does: a copied
+    // axis's residual does not count when the encoder chooses a prediction.
     uint32_t first_copy[3] = {kNone32, kNone32, kNone32};
     if constexpr (kEncode) {
-      for (int i = 0; i < 3; ++i) {
+      for (int i = 0; i < 3; ++i)
         for (uint32_t m = 0; m < ncopy && first_copy[i] == kNone32; ++m)
           if (keyFromPrediction(ct, P(copy_src[m])[i]) == actual[i]) first_copy[i] = m;
-        copied[i] = first_copy[i] != kNone32;
-      }
     }
     double base[3] = {pred[0], pred[1], pred[2]};  // the prediction before any carry (err_)
     if (choose) {
@@ -955,25 +951,26 @@ class LevelCoder {
         // `type` is ct as a compile-time constant (coordinates are float32 or float64).
         auto search = [&](auto type) {
           int best = 1 << 30;
-          // Rule r with carry m (its errors e, null for none), against the best so far: the lowest
-          // carry, then the lowest rule, among equals.
-          auto consider = [&](uint32_t r, uint32_t m, const float* e) {
-            if (!ruleAllowed(r, has_d, kCoordRules)) return;
-            int cost = signal[r] + carry_signal[m] + (m ? kCarryMargin : 0);
-            const bool later = m > carry || (m == carry && r > rule);
-            for (int i = 0; i < 3; ++i) {
-              if (cost > best || (cost == best && later)) return;
-              if (copied[i]) continue;
-              const double v = e ? predicted[i][r] + static_cast<double>(e[i]) : predicted[i][r];
-              cost += 16 * residualBits(actual[i], keyFromPrediction(type, v), cmask);
-            }
-            if (cost < best || (cost == best && !later)) {
-              best = cost;
-              rule = r;
-              carry = m;
-            }
+          // Whether rule r with carry m at `cost` would not replace the best so far: among equals
+          // the lowest carry, then the lowest rule, wins.
+          auto loses = [&](int cost, uint32_t r, uint32_t m) {
+            return cost > best || (cost == best && (m > carry || (m == carry && r > rule)));
           };
-          for (uint32_t i = 0; i < kCoordRules; ++i) consider(triedRule(i, geo_last_rule_), 0, nullptr);
+          auto take = [&](int cost, uint32_t r, uint32_t m) {
+            best = cost;
+            rule = r;
+            carry = m;
+          };
+          // The rules without a carry, each stopped as soon as it cannot win.
+          for (uint32_t t = 0; t < kCoordRules; ++t) {
+            const uint32_t r = triedRule(t, geo_last_rule_);
+            if (!ruleAllowed(r, has_d, kCoordRules)) continue;
+            int cost = signal[r] + carry_signal[0];
+            for (int i = 0; i < 3 && !loses(cost, r, 0); ++i)
+              if (first_copy[i] == kNone32)
+                cost += 16 * residualBits(actual[i], keyFromPrediction(type, predicted[i][r]), cmask);
+            if (!loses(cost, r, 0)) take(cost, r, 0);
+          }
           // A carry costs at least the cheapest rule and carry symbols and the margin: when the best
           // without one costs no more, no carry can win (most vertices of grids with copied axes).
           int floor = 1 << 30;
@@ -982,8 +979,8 @@ class LevelCoder {
           int cheapest_carry = 1 << 30;
           for (uint32_t m = 1; m < kCarries; ++m) cheapest_carry = std::min(cheapest_carry, carry_signal[m]);
           if (best <= floor + cheapest_carry + kCarryMargin) return;
-          // Each carry with every rule, four rules at a time (addRuleCosts), then taken in the order
-          // and with the ties of `consider`.
+          // Each carry with every rule, four rules at a time (addRuleCosts), then taken in the same
+          // order and with the same ties.
           constexpr uint32_t kPadded = (kCoordRules + 3) / 4 * 4;
           for (uint32_t m = 1; m < kCarries; ++m) {
             const uint32_t src = carrySource(m, fp, has_d);
@@ -992,19 +989,14 @@ class LevelCoder {
             int cost[kPadded];
             for (uint32_t r = 0; r < kPadded; ++r) cost[r] = r < kCoordRules ? signal[r] + carry_signal[m] + kCarryMargin : 0;
             for (int i = 0; i < 3; ++i) {
-              if (copied[i]) continue;
+              if (first_copy[i] != kNone32) continue;
               double v[kPadded] = {};
               for (uint32_t r = 0; r < kCoordRules; ++r) v[r] = predicted[i][r] + static_cast<double>(e[i]);
               addRuleCosts<kPadded>(type, actual[i], v, cost);
             }
-            for (uint32_t i = 0; i < kCoordRules; ++i) {
-              const uint32_t r = triedRule(i, geo_last_rule_);
-              if (!ruleAllowed(r, has_d, kCoordRules)) continue;
-              if (cost[r] < best || (cost[r] == best && !(m > carry || (m == carry && r > rule)))) {
-                best = cost[r];
-                rule = r;
-                carry = m;
-              }
+            for (uint32_t t = 0; t < kCoordRules; ++t) {
+              const uint32_t r = triedRule(t, geo_last_rule_);
+              if (ruleAllowed(r, has_d, kCoordRules) && !loses(cost[r], r, m)) take(cost[r], r, m);
             }
           }
         };
@@ -1045,7 +1037,7 @@ class LevelCoder {
           if (prev_which != kNone32 && keyFromPrediction(ct, P(copy_src[prev_which])[i]) == actual[i]) {
             hit = 1;
             which = prev_which;
-          } else if (copied[i]) {
+          } else if (first_copy[i] != kNone32) {
             hit = 1;
             which = first_copy[i];
           }
