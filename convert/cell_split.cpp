@@ -118,12 +118,19 @@ class Splitter {
       bool has_apex = false;
       for (int k = 0; k < f.n; ++k) has_apex |= f.v[k] == apex;
       if (has_apex) continue;
-      // The face as the fan from its smallest-index corner (a quadrilateral: its diagonal through
-      // that corner; a triangle: itself).
-      const int m = minCorner(f, g);
-      for (int k = 1; k + 1 < f.n; ++k)
-        emit({g[apex], g[f.v[m]], g[f.v[(m + k) % f.n]], g[f.v[(m + k + 1) % f.n]]}, cell);
+      fan(g[apex], f.n, [&](int64_t k) { return g[f.v[k]]; }, cell);
     }
+  }
+
+  // The tetrahedra from `apex` to the fan of a face of n corners (global index idx(k), cyclic order)
+  // from its smallest-index corner: a quadrilateral is cut along its diagonal through that corner, a
+  // triangle stays whole.
+  template <class Index>
+  void fan(uint32_t apex, int64_t n, Index idx, uint32_t cell) {
+    int64_t m = 0;
+    for (int64_t k = 1; k < n; ++k)
+      if (idx(k) < idx(m)) m = k;
+    for (int64_t k = 1; k + 1 < n; ++k) emit({apex, idx(m), idx((m + k) % n), idx((m + k + 1) % n)}, cell);
   }
 
   // A polyhedron from its face stream `f` (checked): the cone from its smallest vertex over the fans
@@ -136,17 +143,8 @@ class Splitter {
     for (int64_t k = 0, at = 1; k < num_faces; ++k, at += 1 + f[at]) {
       const int64_t n = f[at];
       const int64_t* v = f + at + 1;
-      int64_t m = 0;
-      bool has_apex = false;
-      for (int64_t i = 0; i < n; ++i) {
-        has_apex |= static_cast<uint32_t>(v[i]) == apex;
-        if (v[i] < v[m]) m = i;
-      }
-      if (has_apex) continue;
-      for (int64_t i = 1; i + 1 < n; ++i)
-        emit({apex, static_cast<uint32_t>(v[m]), static_cast<uint32_t>(v[(m + i) % n]),
-              static_cast<uint32_t>(v[(m + i + 1) % n])},
-             cell);
+      if (std::find(v, v + n, int64_t{apex}) != v + n) continue;
+      fan(apex, n, [&](int64_t i) { return static_cast<uint32_t>(v[i]); }, cell);
     }
   }
 
