@@ -358,6 +358,35 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   return Status::ok();
 }
 
+void rectilinearPoints(const std::vector<double> axes[3], std::vector<double>* coords) {
+  coords->resize(3 * axes[0].size() * axes[1].size() * axes[2].size());
+  size_t v = 0;
+  for (double z : axes[2])
+    for (double y : axes[1])
+      for (double x : axes[0]) {
+        (*coords)[v++] = x;
+        (*coords)[v++] = y;
+        (*coords)[v++] = z;
+      }
+}
+
+void imagePoints(const uint64_t dims[3], const int64_t first[3], const double origin[3], const double spacing[3],
+                 const double* direction, std::vector<double>* coords) {
+  coords->resize(3 * dims[0] * dims[1] * dims[2]);
+  size_t v = 0;
+  for (uint64_t k = 0; k < dims[2]; ++k)
+    for (uint64_t j = 0; j < dims[1]; ++j)
+      for (uint64_t i = 0; i < dims[0]; ++i) {
+        const double d[3] = {static_cast<double>(first[0] + static_cast<int64_t>(i)) * spacing[0],
+                             static_cast<double>(first[1] + static_cast<int64_t>(j)) * spacing[1],
+                             static_cast<double>(first[2] + static_cast<int64_t>(k)) * spacing[2]};
+        for (int c = 0; c < 3; ++c) {
+          const double* row = direction + 3 * c;
+          (*coords)[v++] = origin[c] + (direction ? row[0] * d[0] + row[1] * d[1] + row[2] * d[2] : d[c]);
+        }
+      }
+}
+
 Status finishStructuredImport(const std::string& path, const uint64_t dims[3], const std::vector<Field>& cell_fields,
                               const ImportOptions& options, ImportResult* result) {
   const uint64_t nx = dims[0], ny = dims[1], nz = dims[2];

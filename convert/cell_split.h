@@ -52,6 +52,13 @@ struct VtkCells {
 Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, int split,
                      std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report);
 
+// The points of a rectilinear grid, i fastest: (x[i], y[j], z[k]) from axes[0..2].
+void rectilinearPoints(const std::vector<double> axes[3], std::vector<double>* coords);
+// The points of VTK image data, i fastest: origin + direction (first + index) * spacing per axis, in
+// double (direction: 9 numbers row by row, or nullptr for the identity, which adds no rounding).
+void imagePoints(const uint64_t dims[3], const int64_t first[3], const double origin[3], const double spacing[3],
+                 const double* direction, std::vector<double>* coords);
+
 // The common end of the structured datasets of both VTK importers (legacy STRUCTURED_GRID,
 // RECTILINEAR_GRID, STRUCTURED_POINTS; XML .vts, .vtr, .vti): result->mesh holds the dims[0] x
 // dims[1] x dims[2] points (i fastest) and their point fields. Splits the hexahedral cells (i fastest,

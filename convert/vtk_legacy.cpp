@@ -65,8 +65,8 @@ class LegacyReader {
   bool structured() const { return dataset_ != Dataset::kNone && dataset_ != Dataset::kUnstructured; }
   uint64_t structuredPoints() const { return dims_[0] * dims_[1] * dims_[2]; }
   uint64_t structuredCells() const { return (dims_[0] - 1) * (dims_[1] - 1) * (dims_[2] - 1); }
-  // Points (rectilinear and structured points: from the axes or the origin and spacing) and the
-  // cells of a structured dataset, split into result_.mesh.tets with their source cells.
+  // Checks a structured dataset, makes the points of rectilinear grids and structured points (from
+  // the axes, or the origin and spacing) and hands it to finishStructuredImport.
   Status finishStructured(const ImportOptions& options);
   Status readFieldData(std::vector<Field>* into);
   static bool isStringType(std::string_view name);
@@ -509,25 +509,12 @@ Status LegacyReader::finishStructured(const ImportOptions& options) {
         return invalidData(path_ + ": " + what + " has " + std::to_string(axis_[a].size()) +
                            " values but DIMENSIONS " + std::to_string(dims_[a]) + " along this axis");
     }
-    mesh.coords.resize(3 * np);
-    for (uint64_t k = 0, v = 0; k < nz; ++k)
-      for (uint64_t j = 0; j < ny; ++j)
-        for (uint64_t i = 0; i < nx; ++i, ++v) {
-          mesh.coords[3 * v] = axis_[0][i];
-          mesh.coords[3 * v + 1] = axis_[1][j];
-          mesh.coords[3 * v + 2] = axis_[2][k];
-        }
+    rectilinearPoints(axis_, &mesh.coords);
     mesh.coord_type = axis_f32_[0] && axis_f32_[1] && axis_f32_[2] ? ScalarType::kFloat32 : ScalarType::kFloat64;
   } else {
-    // VTK's image data: point (i, j, k) at origin + (i, j, k) * spacing, in double.
-    mesh.coords.resize(3 * np);
-    for (uint64_t k = 0, v = 0; k < nz; ++k)
-      for (uint64_t j = 0; j < ny; ++j)
-        for (uint64_t i = 0; i < nx; ++i, ++v) {
-          mesh.coords[3 * v] = origin_[0] + static_cast<double>(i) * spacing_[0];
-          mesh.coords[3 * v + 1] = origin_[1] + static_cast<double>(j) * spacing_[1];
-          mesh.coords[3 * v + 2] = origin_[2] + static_cast<double>(k) * spacing_[2];
-        }
+    // VTK's image data: point (i, j, k) at origin + (i, j, k) * spacing.
+    const int64_t first[3] = {0, 0, 0};
+    imagePoints(dims_, first, origin_, spacing_, nullptr, &mesh.coords);
     mesh.coord_type = ScalarType::kFloat64;
   }
   return finishStructuredImport(path_, dims_, cell_fields_, options, &result_);

@@ -492,14 +492,7 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
       ++a;
     }
     if (a != 3) return fail("Piece 0", "<Coordinates> needs three DataArrays (x, y, z)");
-    mesh.coords.resize(3 * np);
-    for (uint64_t k = 0, v = 0; k < dims[2]; ++k)
-      for (uint64_t j = 0; j < dims[1]; ++j)
-        for (uint64_t i = 0; i < dims[0]; ++i, ++v) {
-          mesh.coords[3 * v] = axis[0][i];
-          mesh.coords[3 * v + 1] = axis[1][j];
-          mesh.coords[3 * v + 2] = axis[2][k];
-        }
+    rectilinearPoints(axis, &mesh.coords);
     mesh.coord_type = all_f32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
   } else {
     // ImageData: point (i, j, k) of the extent at Origin + Direction (i Sx, j Sy, k Sz), in double.
@@ -512,17 +505,8 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
       return fail("<ImageData>", "bad Direction (nine numbers)");
     const bool axis_aligned = dir[0] == 1 && dir[1] == 0 && dir[2] == 0 && dir[3] == 0 && dir[4] == 1 &&
                               dir[5] == 0 && dir[6] == 0 && dir[7] == 0 && dir[8] == 1;
-    mesh.coords.resize(3 * np);
-    for (uint64_t k = 0, v = 0; k < dims[2]; ++k)
-      for (uint64_t j = 0; j < dims[1]; ++j)
-        for (uint64_t i = 0; i < dims[0]; ++i, ++v) {
-          const double d[3] = {static_cast<double>(extent[0] + static_cast<int64_t>(i)) * spacing[0],
-                               static_cast<double>(extent[2] + static_cast<int64_t>(j)) * spacing[1],
-                               static_cast<double>(extent[4] + static_cast<int64_t>(k)) * spacing[2]};
-          for (int c = 0; c < 3; ++c)
-            mesh.coords[3 * v + c] =
-                axis_aligned ? origin[c] + d[c] : origin[c] + (dir[3 * c] * d[0] + dir[3 * c + 1] * d[1] + dir[3 * c + 2] * d[2]);
-        }
+    const int64_t first[3] = {extent[0], extent[2], extent[4]};
+    imagePoints(dims, first, origin, spacing, axis_aligned ? nullptr : dir, &mesh.coords);
     mesh.coord_type = ScalarType::kFloat64;
   }
   GTN_RETURN_IF_ERROR(readSection(piece, "PointData", np, "Piece 0", &mesh.point_fields));
