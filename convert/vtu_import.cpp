@@ -373,31 +373,28 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
 
   // Point and cell data: kept in file order, matched by name across pieces.
   auto readData = [&](const char* section, uint64_t items, std::vector<Field>& fields, size_t items_before) -> Status {
-    size_t k = 0;
-    for (pugi::xml_node a : piece.child(section).children("DataArray")) {
-      const std::string name = a.attribute("Name").as_string();
-      const std::string where = at + " " + section + " '" + name + "'";
-      Array arr;
-      GTN_RETURN_IF_ERROR(readArray(a, items, where, &arr));
-      if (index == 0) {
-        Field f(name, arr.components, arr.type, 0);
-        f.bytes = std::move(arr.bytes);
-        fields.push_back(std::move(f));
-      } else {
-        if (k >= fields.size() || fields[k].name != name || fields[k].type != arr.type ||
-            fields[k].components != arr.components || fields[k].itemCount() != items_before)
-          return fail(where, "does not match the arrays of Piece 0 (pieces must carry the same arrays)");
-        fields[k].bytes.insert(fields[k].bytes.end(), arr.bytes.begin(), arr.bytes.end());
-      }
-      ++k;
+    std::vector<Field> arrays;
+    GTN_RETURN_IF_ERROR(readSection(piece, section, items, at, &arrays));
+    if (index == 0) {
+      fields = std::move(arrays);
+      return Status::ok();
     }
-    if (k != fields.size()) return fail(at + " " + section, "does not carry the same arrays as Piece 0");
+    for (size_t k = 0; k < arrays.size(); ++k) {
+      const Field& a = arrays[k];
+      if (k >= fields.size() || fields[k].name != a.name || fields[k].type != a.type ||
+          fields[k].components != a.components || fields[k].itemCount() != items_before)
+        return fail(at + " " + section + " '" + a.name + "'",
+                    "does not match the arrays of Piece 0 (pieces must carry the same arrays)");
+      fields[k].bytes.insert(fields[k].bytes.end(), a.bytes.begin(), a.bytes.end());
+    }
+    if (arrays.size() != fields.size()) return fail(at + " " + section, "does not carry the same arrays as Piece 0");
     return Status::ok();
   };
   GTN_RETURN_IF_ERROR(readData("PointData", static_cast<uint64_t>(np), result_.mesh.point_fields, point_base));
   GTN_RETURN_IF_ERROR(readData("CellData", static_cast<uint64_t>(nc), cell_fields_, cell_base));
   return Status::ok();
 }
+
 Status VtuReader::readSection(const pugi::xml_node& piece, const char* section, uint64_t items, const std::string& at,
                               std::vector<Field>* fields) {
   for (pugi::xml_node a : piece.child(section).children("DataArray")) {
