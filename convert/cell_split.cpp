@@ -381,8 +381,9 @@ void imagePoints(const uint64_t dims[3], const int64_t first[3], const double or
                              static_cast<double>(first[1] + static_cast<int64_t>(j)) * spacing[1],
                              static_cast<double>(first[2] + static_cast<int64_t>(k)) * spacing[2]};
         for (int c = 0; c < 3; ++c) {
-          const double* row = direction + 3 * c;
-          (*coords)[v++] = origin[c] + (direction ? row[0] * d[0] + row[1] * d[1] + row[2] * d[2] : d[c]);
+          double p = d[c];
+          if (direction) p = direction[3 * c] * d[0] + direction[3 * c + 1] * d[1] + direction[3 * c + 2] * d[2];
+          (*coords)[v++] = origin[c] + p;
         }
       }
 }

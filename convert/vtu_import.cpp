@@ -446,9 +446,10 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
                        "WholeExtent is read");
   uint64_t dims[3];
   for (int a = 0; a < 3; ++a) {
-    if (extent[2 * a + 1] < extent[2 * a] || extent[2 * a + 1] - extent[2 * a] >= int64_t{UINT32_MAX})
-      return fail("Piece 0", "bad Extent");
-    dims[a] = static_cast<uint64_t>(extent[2 * a + 1] - extent[2 * a]) + 1;
+    // The span in unsigned arithmetic: the signed difference of extreme extents would overflow.
+    const uint64_t span = static_cast<uint64_t>(extent[2 * a + 1]) - static_cast<uint64_t>(extent[2 * a]);
+    if (extent[2 * a + 1] < extent[2 * a] || span >= UINT32_MAX) return fail("Piece 0", "bad Extent");
+    dims[a] = span + 1;
   }
   const std::string dims_text = std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " + std::to_string(dims[2]);
   if (dims[0] < 2 || dims[1] < 2 || dims[2] < 2)

@@ -635,6 +635,19 @@ TEST(Vtu, StructuredFilesBecomeSplitHexahedra) {
     EXPECT_NEAR(computeMeshStats(i->mesh).total_volume, 1.0 * 1.0 * 2.0, 1e-12);
     EXPECT_EQ(i->mesh.point_fields[0].data<uint8_t>()[11], 1);
   }
+  // A Direction turns the index axes: here x' = -y, y' = x (a quarter turn about z).
+  {
+    std::string turned = readFile(dir + "/g.vti");
+    turned.replace(turned.find("Spacing="), 8, "Direction=\"0 -1 0 1 0 0 0 0 1\" Spacing=");
+    writeFile(dir + "/turned.vti", turned);
+    auto t = importMesh({dir + "/turned.vti"}, ImportOptions{});
+    ASSERT_TRUE(t.isOk()) << t.status().message();
+    // Point 11 is index (3, 1, 1): d = (1.5, 1, 2), turned (-1, 1.5, 2), plus the origin (10, 0, 0).
+    EXPECT_DOUBLE_EQ(t->mesh.point(11)[0], 9.0);
+    EXPECT_DOUBLE_EQ(t->mesh.point(11)[1], 1.5);
+    EXPECT_DOUBLE_EQ(t->mesh.point(11)[2], 2.0);
+    EXPECT_NEAR(computeMeshStats(t->mesh).total_volume, 2.0, 1e-12);
+  }
 
   // What they cannot hold: several pieces, a flat extent, more implicit points than the file could
   // carry data for, a rectilinear grid with two axes, a dataset of no volume.
@@ -661,6 +674,7 @@ TEST(Vtu, StructuredFilesBecomeSplitHexahedra) {
     expectError(dir + "/" + name, part);
   };
   withExtent("huge2.vti", "0 2000 0 2000 0 2000", "more than a file of");
+  withExtent("wide.vti", "-9000000000000000000 9000000000000000000 0 1 0 1", "bad Extent");
   withExtent("flat2.vti", "1 3 0 1 0 0", "fewer than 2 points along an axis");
   expectFails("axes.vtr", readFile(dir + "/g.vtr"), "<DataArray type=\"Float32\" format=\"ascii\">0 0.5</DataArray>", "",
               "<Coordinates> needs three DataArrays");
