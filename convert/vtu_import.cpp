@@ -37,8 +37,17 @@ class VtuReader {
   Status fail(const std::string& where, const std::string& reason) const {
     return invalidData(path_ + ": " + where + ": " + reason);
   }
-  // Reads one DataArray of `tuples` tuples into *out; `where` names it in messages.
-  Status readArray(const pugi::xml_node& node, uint64_t tuples, const std::string& where, Array* out);
+  // Reads one DataArray of `tuples` tuples into *out; `where` names it in messages. With `at_least`
+  // the array may hold more tuples, which are kept (for arrays whose length the file does not state).
+  Status readArray(const pugi::xml_node& node, uint64_t tuples, const std::string& where, Array* out,
+                   bool at_least = false);
+  // A DataArray of integers (one component) as int64 values: exactly `count`, or with `at_least` at
+  // least that many.
+  Status readIndices(const pugi::xml_node& node, uint64_t count, const std::string& where,
+                     std::vector<int64_t>* out, bool at_least = false);
+  // Polyhedra in VTK 9.4's layout, made into the face streams of the earlier layout (VtkCells).
+  Status readPolyhedronTables(const pugi::xml_node* nodes, const std::vector<int64_t>& types, int64_t np,
+                              size_t point_base, size_t cell_base, const std::string& at);
   Status decodeBinary(std::string_view b64, const std::string& where, std::vector<uint8_t>* out);
   Status decodeRaw(size_t offset, const std::string& where, std::vector<uint8_t>* out);
   uint64_t headerValue(const uint8_t* p) const;
@@ -66,6 +75,7 @@ class VtuReader {
   std::vector<Field> cell_fields_;
   bool coords_float64_ = false;
   uint64_t expected_bytes_ = 0;  // of the array being decoded
+  bool at_least_ = false;        // expected_bytes_ is only the fewest the array may hold
 };
 
 uint64_t VtuReader::headerValue(const uint8_t* p) const {
@@ -102,9 +112,9 @@ Status VtuReader::inflateBlocks(const uint8_t* header, const uint8_t* blocks, si
     total += u;
   }
   // Checked before allocating: a header cannot make us reserve more than the array needs.
-  if (total != expected_bytes_)
+  if (total < expected_bytes_ || (!at_least_ && total != expected_bytes_))
     return fail(where, "compressed blocks hold " + std::to_string(total) + " bytes, expected " +
-                           std::to_string(expected_bytes_));
+                           (at_least_ ? "at least " : "") + std::to_string(expected_bytes_));
   out->resize(total);
   uint64_t in_pos = 0, out_pos = 0;
   for (uint64_t b = 0; b < num_blocks; ++b) {
@@ -200,7 +210,8 @@ Status VtuReader::decodeRaw(size_t offset, const std::string& where, std::vector
   return Status::ok();
 }
 
-Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const std::string& where, Array* out) {
+Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const std::string& where, Array* out,
+                            bool at_least) {
   const std::string type_name = node.attribute("type").as_string();
   if (!vtkXmlTypeFromName(type_name, &out->type))
     return Status(StatusCode::kUnsupported, path_ + ": " + where + ": data type '" + type_name + "' is not supported");
@@ -212,6 +223,7 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
   if (tuples > UINT64_MAX / comps / size) return fail(where, "too many values");
   const uint64_t count = tuples * comps;
   expected_bytes_ = count * size;
+  at_least_ = at_least;
   if (format == "ascii") {
     const std::string_view body = node.text().get();
     if (count > body.size() / 2 + 1)
@@ -219,13 +231,21 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
     TextReader tr(path_, body, '\0');
     out->bytes.resize(count * size);
     std::string_view t;
-    for (uint64_t i = 0; i < count; ++i) {
-      if (!tr.next(&t)) return fail(where, "has " + std::to_string(i) + " values, expected " + std::to_string(count));
+    uint64_t i = 0;
+    for (; i < count || at_least; ++i) {
+      if (!tr.next(&t)) {
+        if (i >= count) break;
+        return fail(where, "has " + std::to_string(i) + " values, expected " + std::to_string(count));
+      }
+      if (i >= count) out->bytes.resize((i + 1) * size);  // at_least: bounded by the text's length
       if (!parseScalarToken(t, out->type, out->bytes.data() + i * size))
         return fail(where, "value " + std::to_string(i) + " '" + std::string(t.substr(0, 40)) + "' is not a " +
                                scalarTypeName(out->type));
     }
-    if (tr.next(&t)) return fail(where, "has more than the " + std::to_string(count) + " values expected");
+    if (at_least && i % comps != 0)
+      return fail(where, "has " + std::to_string(i) + " values, not a whole number of " + std::to_string(comps) +
+                             "-component tuples");
+    if (!at_least && tr.next(&t)) return fail(where, "has more than the " + std::to_string(count) + " values expected");
     return Status::ok();  // text is already in host (little-endian) order
   }
   if (format == "binary") {
@@ -253,10 +273,13 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
   } else {
     return fail(where, "unknown format '" + format + "'");
   }
-  if (out->bytes.size() != count * size)
-    return fail(where, "holds " + std::to_string(out->bytes.size()) + " bytes, expected " +
+  if (at_least && out->bytes.size() >= count * size && out->bytes.size() % (comps * size) == 0) {
+    // as many tuples as it holds
+  } else if (out->bytes.size() != count * size) {
+    return fail(where, "holds " + std::to_string(out->bytes.size()) + " bytes, expected " + (at_least ? "at least " : "") +
                            std::to_string(count * size) + " (" + std::to_string(tuples) + " tuples of " +
                            std::to_string(comps) + " " + vtkXmlTypeName(out->type) + ")");
+  }
   if (big_endian_) swapByteOrder(out->bytes.data(), out->bytes.size(), size);
   return Status::ok();
 }
@@ -284,6 +307,8 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
   const pugi::xml_node cells = piece.child("Cells");
   Array conn, offs, types;
   pugi::xml_node conn_node, offs_node, types_node, faces_node, face_offs_node;
+  // VTK 9.4's polyhedron tables: polyhedron_offsets, polyhedron_to_faces, face_offsets, face_connectivity.
+  pugi::xml_node table_nodes[4];
   for (pugi::xml_node a : cells.children("DataArray")) {
     const std::string name = a.attribute("Name").as_string();
     if (name == "connectivity") conn_node = a;
@@ -291,10 +316,12 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
     else if (name == "types") types_node = a;
     else if (name == "faces") faces_node = a;
     else if (name == "faceoffsets") face_offs_node = a;
-    else if (name == "polyhedron_offsets" || name == "face_connectivity")
-      return unsupported(path_ + ": " + at + ": polyhedra in VTK 9.4's layout (" + name +
-                         ") are not supported; the faces/faceoffsets layout of earlier VTK is");
+    else if (name == "polyhedron_offsets") table_nodes[0] = a;
+    else if (name == "polyhedron_to_faces") table_nodes[1] = a;
+    else if (name == "face_offsets") table_nodes[2] = a;
+    else if (name == "face_connectivity") table_nodes[3] = a;
   }
+  const bool tables = table_nodes[0] || table_nodes[1] || table_nodes[2] || table_nodes[3];
   if (nc > 0 && (!offs_node || !types_node || !conn_node))
     return fail(at, "<Cells> lacks one of the connectivity, offsets and types arrays");
   std::vector<int64_t> offsets, connectivity, type_values;
@@ -329,10 +356,17 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
     cells_.connectivity.push_back(v + static_cast<int64_t>(point_base));
   }
 
-  if (!face_offs_node && std::find(type_values.begin(), type_values.end(), int64_t{kVtkPolyhedron}) != type_values.end())
-    return fail(at + " Cells", "VTK_POLYHEDRON cells without the faces and faceoffsets arrays that describe them");
-  // Polyhedra: their face streams, with point indices and offsets made global like the cells'.
-  if (nc > 0 && (faces_node || face_offs_node)) {
+  if (!face_offs_node && !tables &&
+      std::find(type_values.begin(), type_values.end(), int64_t{kVtkPolyhedron}) != type_values.end())
+    return fail(at + " Cells", "VTK_POLYHEDRON cells without the faces and faceoffsets arrays (or VTK 9.4's "
+                               "polyhedron_offsets, polyhedron_to_faces, face_offsets and face_connectivity) that "
+                               "describe them");
+  if (tables && (faces_node || face_offs_node))
+    return fail(at + " Cells", "both polyhedron layouts (faces/faceoffsets and VTK 9.4's tables)");
+  if (nc > 0 && tables) {
+    GTN_RETURN_IF_ERROR(readPolyhedronTables(table_nodes, type_values, np, point_base, cell_base, at));
+  } else if (nc > 0 && (faces_node || face_offs_node)) {
+    // Polyhedra: their face streams, with point indices and offsets made global like the cells'.
     if (!faces_node || !face_offs_node) return fail(at, "<Cells> has one of faces and faceoffsets without the other");
     Array fo, fs;
     std::vector<int64_t> face_offsets, faces;
@@ -392,6 +426,99 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
   };
   GTN_RETURN_IF_ERROR(readData("PointData", static_cast<uint64_t>(np), result_.mesh.point_fields, point_base));
   GTN_RETURN_IF_ERROR(readData("CellData", static_cast<uint64_t>(nc), cell_fields_, cell_base));
+  return Status::ok();
+}
+
+Status VtuReader::readIndices(const pugi::xml_node& node, uint64_t count, const std::string& where,
+                              std::vector<int64_t>* out, bool at_least) {
+  Array a;
+  GTN_RETURN_IF_ERROR(readArray(node, count, where, &a, at_least));
+  if (a.components != 1) return fail(where, "NumberOfComponents is not 1");
+  size_t bad = 0;
+  if (!scalarsToInt64(a.type, a.bytes.data(), a.bytes.size() / scalarSize(a.type), out, &bad))
+    return fail(where, "value " + std::to_string(bad) + " is not an index");
+  return Status::ok();
+}
+
+// VTK 9.4 keeps a polyhedron's faces in two tables: polyhedron_offsets (per cell, the end of its run in
+// polyhedron_to_faces; other cells have empty runs) and polyhedron_to_faces (face numbers), then
+// face_offsets (per face, the end of its points in face_connectivity) and face_connectivity. Both
+// offset arrays leave out the leading 0, as the cells' offsets do. Neighbouring polyhedra may share a
+// face. The tables become the stream of the earlier layout: per polyhedron its face count, then per
+// face its point count and its points, made global.
+Status VtuReader::readPolyhedronTables(const pugi::xml_node* nodes, const std::vector<int64_t>& types, int64_t np,
+                                       size_t point_base, size_t cell_base, const std::string& at) {
+  static const char* const kNames[4] = {"polyhedron_offsets", "polyhedron_to_faces", "face_offsets",
+                                        "face_connectivity"};
+  for (int k = 0; k < 4; ++k)
+    if (!nodes[k]) return fail(at + " Cells", std::string("VTK 9.4's polyhedron tables lack ") + kNames[k]);
+  const std::string where[4] = {at + " Cells polyhedron_offsets", at + " Cells polyhedron_to_faces",
+                                at + " Cells face_offsets", at + " Cells face_connectivity"};
+  auto checkEnds = [&](const std::vector<int64_t>& ends, size_t count, const std::string& w) -> Status {
+    for (size_t i = 0; i < count; ++i)
+      if (ends[i] < (i == 0 ? 0 : ends[i - 1]))
+        return fail(w, i == 0 ? "negative offset" : "decrease at entry " + std::to_string(i));
+    return Status::ok();
+  };
+  const size_t nc = types.size();
+  std::vector<int64_t> poly_ends, poly_faces, face_ends, face_points;
+  GTN_RETURN_IF_ERROR(readIndices(nodes[0], nc, where[0], &poly_ends));
+  GTN_RETURN_IF_ERROR(checkEnds(poly_ends, nc, where[0]));
+  const uint64_t refs = nc == 0 ? 0 : static_cast<uint64_t>(poly_ends.back());
+  if (refs > 0) GTN_RETURN_IF_ERROR(readIndices(nodes[1], refs, where[1], &poly_faces));
+  int64_t num_faces = 0;
+  for (size_t i = 0; i < poly_faces.size(); ++i) {
+    if (poly_faces[i] < 0 || poly_faces[i] >= INT32_MAX)
+      return fail(where[1], "entry " + std::to_string(i) + " names face " + std::to_string(poly_faces[i]));
+    num_faces = std::max(num_faces, poly_faces[i] + 1);
+  }
+  // The face tables may hold faces no polyhedron names; they are read, not used.
+  if (num_faces > 0) {
+    GTN_RETURN_IF_ERROR(readIndices(nodes[2], static_cast<uint64_t>(num_faces), where[2], &face_ends, true));
+    GTN_RETURN_IF_ERROR(checkEnds(face_ends, static_cast<size_t>(num_faces), where[2]));
+    GTN_RETURN_IF_ERROR(readIndices(nodes[3], static_cast<uint64_t>(face_ends[num_faces - 1]), where[3],
+                                    &face_points, true));
+  }
+  // A face bounds two cells at most: so the streams cannot grow much longer than the tables.
+  std::vector<uint8_t> uses(static_cast<size_t>(num_faces), 0);
+  uint64_t stream = 0;
+  for (size_t c = 0; c < nc; ++c) {
+    const int64_t begin = c == 0 ? 0 : poly_ends[c - 1];
+    if (types[c] != kVtkPolyhedron) {
+      if (poly_ends[c] != begin)
+        return fail(where[0], "cell " + std::to_string(c) + " (" + vtkCellTypeName(static_cast<int>(types[c])) +
+                                  ") is not a polyhedron but has " + std::to_string(poly_ends[c] - begin) + " faces");
+      continue;
+    }
+    stream += 1 + static_cast<uint64_t>(poly_ends[c] - begin);
+    for (int64_t i = begin; i < poly_ends[c]; ++i) {
+      const int64_t f = poly_faces[static_cast<size_t>(i)];
+      if (++uses[static_cast<size_t>(f)] > 2)
+        return fail(where[1], "face " + std::to_string(f) + " is named by more than two polyhedra");
+      stream += static_cast<uint64_t>(face_ends[f] - (f == 0 ? 0 : face_ends[f - 1]));
+    }
+  }
+  for (size_t i = 0; i < face_points.size(); ++i)
+    if (face_points[i] < 0 || face_points[i] >= np)
+      return fail(where[3], "refers to point " + std::to_string(face_points[i]) + " but the piece has " +
+                                std::to_string(np) + " points");
+  cells_.face_offsets.resize(cell_base, -1);  // earlier pieces without polyhedra
+  cells_.faces.reserve(cells_.faces.size() + stream);
+  for (size_t c = 0; c < nc; ++c) {
+    if (types[c] != kVtkPolyhedron) {
+      cells_.face_offsets.push_back(-1);
+      continue;
+    }
+    const int64_t begin = c == 0 ? 0 : poly_ends[c - 1];
+    cells_.faces.push_back(poly_ends[c] - begin);
+    for (int64_t i = begin; i < poly_ends[c]; ++i) {
+      const int64_t f = poly_faces[static_cast<size_t>(i)], first = f == 0 ? 0 : face_ends[f - 1];
+      cells_.faces.push_back(face_ends[f] - first);
+      for (int64_t k = first; k < face_ends[f]; ++k)
+        cells_.faces.push_back(face_points[static_cast<size_t>(k)] + static_cast<int64_t>(point_base));
+    }
+    cells_.face_offsets.push_back(static_cast<int64_t>(cells_.faces.size()));
+  }
   return Status::ok();
 }
 

@@ -15,6 +15,7 @@
 
 #include "convert/export.h"
 #include "convert/import.h"
+#include "convert/vtk_common.h"
 #include "mesh/mesh_stats.h"
 #include "test_util.h"
 
@@ -723,6 +724,114 @@ TEST(Vtu, PolyhedraInSeveralPieces) {
   size_t second = 0;
   for (size_t t = 0; t < r->mesh.numTets(); ++t) second += r->mesh.cell_fields[0].data<int32_t>()[t] == 2;
   EXPECT_EQ(second, 8u);
+}
+
+// Polyhedra as VTK 9.4 writes them: polyhedron_offsets and polyhedron_to_faces name each polyhedron's
+// faces in a face table (face_offsets, face_connectivity), so neighbours share a face. Two stacked
+// unit cubes as polyhedra sharing their middle face, under a pyramid, in two pieces; the same mesh in
+// the earlier layout gives the same tetrahedra.
+TEST(Vtu, PolyhedraInVtk94Tables) {
+  const std::string dir = tempDir("vtu_polyhedra94");
+  const int quads[11][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5},  {2, 3, 7, 6},  {3, 0, 4, 7},
+                            {8, 9, 10, 11}, {4, 5, 9, 8}, {5, 6, 10, 9}, {6, 7, 11, 10}, {7, 4, 8, 11}};
+  const int cube_faces[2][6] = {{0, 1, 2, 3, 4, 5}, {1, 6, 7, 8, 9, 10}};
+  // tables: "94" (VTK 9.4; `binary` puts the face table in base64 with one unused face at its end),
+  // "old" (faces/faceoffsets).
+  auto piece = [&](double x0, const std::string& tables, bool binary) {
+    std::string points;
+    for (int layer = 0; layer < 3; ++layer)
+      for (const auto& q : {std::pair{0, 0}, std::pair{1, 0}, std::pair{1, 1}, std::pair{0, 1}})
+        points += std::to_string(x0 + q.first) + " " + std::to_string(q.second) + " " + std::to_string(layer) + "  ";
+    points += std::to_string(x0 + 0.5) + " 0.5 2.5";
+    std::string text = R"(<Piece NumberOfPoints="13" NumberOfCells="3">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" +
+                       points + R"(</DataArray></Points>
+<Cells>
+<DataArray type="Int32" Name="connectivity" format="ascii">8 9 10 11 12  0 1 2 3 4 5 6 7  4 5 6 7 8 9 10 11</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">5 13 21</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">14 42 42</DataArray>
+)";
+    auto join = [](const std::vector<int64_t>& v) {
+      std::string out;
+      for (int64_t x : v) out += std::to_string(x) + " ";
+      return out;
+    };
+    auto array = [&](const char* name, std::vector<int64_t> v, bool base64) {
+      if (!base64) return std::string("<DataArray type=\"Int64\" Name=\"") + name + "\" format=\"ascii\">" + join(v) + "</DataArray>\n";
+      std::vector<uint8_t> bytes(4 + 8 * v.size());
+      const uint32_t size = static_cast<uint32_t>(8 * v.size());
+      std::memcpy(bytes.data(), &size, 4);
+      std::memcpy(bytes.data() + 4, v.data(), 8 * v.size());
+      return std::string("<DataArray type=\"Int64\" Name=\"") + name + "\" format=\"binary\">" +
+             base64Encode(bytes.data(), bytes.size()) + "</DataArray>\n";
+    };
+    if (tables == "94") {
+      std::vector<int64_t> to_faces, face_ends, face_points;
+      for (const auto& c : cube_faces) to_faces.insert(to_faces.end(), c, c + 6);
+      for (const auto& q : quads) {
+        face_points.insert(face_points.end(), q, q + 4);
+        face_ends.push_back(static_cast<int64_t>(face_points.size()));
+      }
+      if (binary) {  // a face no polyhedron names
+        face_points.insert(face_points.end(), {0, 1, 12});
+        face_ends.push_back(static_cast<int64_t>(face_points.size()));
+      }
+      text += array("polyhedron_offsets", {0, 6, 12}, false) + array("polyhedron_to_faces", to_faces, false) +
+              array("face_offsets", face_ends, binary) + array("face_connectivity", face_points, binary);
+    } else {
+      std::vector<int64_t> stream, ends{-1};
+      for (const auto& c : cube_faces) {
+        stream.push_back(6);
+        for (int f : c) {
+          stream.push_back(4);
+          stream.insert(stream.end(), quads[f], quads[f] + 4);
+        }
+        ends.push_back(static_cast<int64_t>(stream.size()));
+      }
+      text += array("faces", stream, false) + array("faceoffsets", ends, false);
+    }
+    return text + "</Cells></Piece>\n";
+  };
+  auto file = [&](const std::string& name, const std::string& tables, bool binary, const std::string& body_edit = "") {
+    std::string text = std::string(R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="2.3" byte_order="LittleEndian" header_type="UInt32"><UnstructuredGrid>
+)") + piece(0, tables, binary) + piece(3, tables, binary) + "</UnstructuredGrid></VTKFile>\n";
+    if (!body_edit.empty()) {
+      const size_t bar = body_edit.find('|');
+      const std::string from = body_edit.substr(0, bar), to = body_edit.substr(bar + 1);
+      const size_t at = text.find(from);
+      EXPECT_NE(at, std::string::npos) << from;
+      if (at != std::string::npos) text.replace(at, from.size(), to);
+    }
+    writeFile(dir + "/" + name, text);
+    return dir + "/" + name;
+  };
+  auto old = importMesh({file("old.vtu", "old", false)}, ImportOptions{});
+  ASSERT_TRUE(old.isOk()) << old.status().message();
+  for (bool binary : {false, true}) {
+    auto r = importMesh({file("new.vtu", "94", binary)}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->mesh.numTets(), 2u * (2 + 6 + 6));
+    const MeshStats s = computeMeshStats(r->mesh);
+    EXPECT_EQ(s.non_manifold_faces, 0u);
+    EXPECT_EQ(s.boundary_faces, 2u * (5 * 2 + 4 * 2 + 4));  // the shared faces are interior
+    EXPECT_NEAR(s.total_volume, 2 * (2.0 + 0.5 / 3), 1e-12);
+    expectSameMesh(r->mesh, old->mesh);
+  }
+
+  // What is wrong with the tables, named.
+  expectError(file("lack.vtu", "94", false, "Name=\"face_offsets\"|Name=\"face_offsetz\""),
+              "VTK 9.4's polyhedron tables lack face_offsets");
+  expectError(file("pyramid_faces.vtu", "94", false, ">0 6 12 <|>1 7 12 <"),
+              "cell 0 (VTK_PYRAMID) is not a polyhedron but has 1 faces");
+  expectError(file("decrease.vtu", "94", false, ">0 6 12 <|>0 7 6 <"), "polyhedron_offsets: decrease at entry 2");
+  expectError(file("face.vtu", "94", false, ">0 1 2 3 4 5 1 6 |>0 1 2 3 4 5 1 99 "), "face_offsets");
+  expectError(file("point.vtu", "94", false, ">0 3 2 1 |>0 3 2 13 "), "refers to point 13 but the piece has 13 points");
+  // A face named again and again: more than two polyhedra cannot share it.
+  expectError(file("shared.vtu", "94", false, ">0 1 2 3 4 5 1 6 7 8 9 10 |>1 1 1 1 1 1 1 1 1 1 1 1 "),
+              "more than two polyhedra");
+  expectError(file("both.vtu", "94", false, "</Cells>|<DataArray type=\"Int64\" Name=\"faces\" format=\"ascii\">0</DataArray></Cells>"),
+              "both polyhedron layouts");
 }
 
 TEST(Vtu, MalformedFilesFailWithTheFileNamed) {
