@@ -1,5 +1,8 @@
 // VTK XML UnstructuredGrid (.vtu) import: ascii, binary (base64) and appended (raw or base64) data
-// arrays, zlib-compressed or not, UInt32 or UInt64 headers, either byte order, several pieces.
+// arrays, uncompressed or compressed by any of VTK's compressors (zlib, LZ4, LZMA), UInt32 or UInt64
+// headers, either byte order, several pieces.
+#include <lz4.h>
+#include <lzma.h>
 #include <pugixml.hpp>
 #include <zlib.h>
 
@@ -19,8 +22,22 @@ namespace gtn {
 
 namespace {
 
-// zlib cannot expand one byte into more than 1032: bounds what a compressed block may claim.
-constexpr uint64_t kMaxZlibRatio = 1032;
+// VTK's compressors, each block compressed on its own (vtkZLibDataCompressor, vtkLZ4DataCompressor,
+// vtkLZMADataCompressor).
+enum class Compressor { kNone, kZlib, kLz4, kLzma };
+
+// How many bytes one compressed byte may become, which bounds what a block may claim before anything
+// is allocated: zlib cannot expand a byte into more than 1032, LZ4 into more than 255; an .xz stream
+// of a VTK block (32 KiB by default) cannot reach 1/1000, and 2^14 leaves room for larger blocks.
+uint64_t maxRatio(Compressor c) {
+  switch (c) {
+    case Compressor::kLz4: return 256;
+    case Compressor::kLzma: return uint64_t{1} << 14;
+    default: return 1032;
+  }
+}
+// What an LZMA block's decoder may allocate: the dictionary of xz's strongest preset (64 MiB) and more.
+constexpr uint64_t kLzmaMemLimit = uint64_t{128} << 20;
 
 struct Array {
   ScalarType type = ScalarType::kFloat32;
@@ -53,6 +70,9 @@ class VtuReader {
   uint64_t headerValue(const uint8_t* p) const;
   Status inflateBlocks(const uint8_t* header, const uint8_t* blocks, size_t available, const std::string& where,
                        std::vector<uint8_t>* out) const;
+  // One compressed block of the file's compressor: exactly out_size bytes from in_size.
+  Status inflateBlock(const uint8_t* in, uint64_t in_size, uint8_t* out, uint64_t out_size, const std::string& where,
+                      uint64_t index) const;
   StatusOr<size_t> compressedHeaderBytes(const uint8_t* first3, const std::string& where) const;
   Status readPiece(const pugi::xml_node& piece, size_t index);
   // The structured files: StructuredGrid (.vts), RectilinearGrid (.vtr), ImageData (.vti), one piece
@@ -68,6 +88,7 @@ class VtuReader {
   bool big_endian_ = false;
   int header_bytes_ = 4;
   bool compressed_ = false;
+  Compressor compressor_ = Compressor::kNone;
   bool appended_base64_ = false;
   size_t appended_begin_ = 0, appended_end_ = 0;  // bytes after '_' in the file
   ImportResult result_;
@@ -93,6 +114,46 @@ StatusOr<size_t> VtuReader::compressedHeaderBytes(const uint8_t* first3, const s
   return static_cast<size_t>((3 + blocks) * header_bytes_);
 }
 
+Status VtuReader::inflateBlock(const uint8_t* in, uint64_t in_size, uint8_t* out, uint64_t out_size,
+                               const std::string& where, uint64_t index) const {
+  auto corrupt = [&](const char* codec, const std::string& why) {
+    return fail(where, std::string(codec) + " block " + std::to_string(index) + " is corrupt (" + why + ")");
+  };
+  auto sizes = [&](uint64_t got) {
+    return "inflates to " + std::to_string(got) + " bytes, header says " + std::to_string(out_size);
+  };
+  switch (compressor_) {
+    case Compressor::kLz4: {
+      if (in_size > INT32_MAX || out_size > INT32_MAX) return corrupt("LZ4", "larger than LZ4 blocks can be");
+      const int got = LZ4_decompress_safe(reinterpret_cast<const char*>(in), reinterpret_cast<char*>(out),
+                                          static_cast<int>(in_size), static_cast<int>(out_size));
+      if (got < 0) return corrupt("LZ4", "not a valid LZ4 block of at most " + std::to_string(out_size) + " bytes");
+      if (static_cast<uint64_t>(got) != out_size) return corrupt("LZ4", sizes(static_cast<uint64_t>(got)));
+      return Status::ok();
+    }
+    case Compressor::kLzma: {
+      uint64_t memlimit = kLzmaMemLimit;
+      size_t in_pos = 0, out_pos = 0;
+      const lzma_ret rc = lzma_stream_buffer_decode(&memlimit, 0, nullptr, in, &in_pos, in_size, out, &out_pos,
+                                                    out_size);
+      if (rc == LZMA_MEMLIMIT_ERROR)
+        return corrupt("LZMA", "its decoder would need more than " + std::to_string(kLzmaMemLimit >> 20) + " MiB");
+      if (rc == LZMA_BUF_ERROR) return corrupt("LZMA", "it holds more than the " + std::to_string(out_size) +
+                                                           " bytes its header says, or is cut short");
+      if (rc != LZMA_OK) return corrupt("LZMA", "liblzma error " + std::to_string(static_cast<int>(rc)));
+      if (out_pos != out_size) return corrupt("LZMA", sizes(out_pos));
+      return Status::ok();
+    }
+    default: {
+      uLongf got = static_cast<uLongf>(out_size);
+      const int rc = uncompress(out, &got, in, static_cast<uLong>(in_size));
+      if (rc != Z_OK) return corrupt("zlib", zError(rc));
+      if (got != out_size) return corrupt("zlib", sizes(got));
+      return Status::ok();
+    }
+  }
+}
+
 Status VtuReader::inflateBlocks(const uint8_t* header, const uint8_t* blocks, size_t available,
                                 const std::string& where, std::vector<uint8_t>* out) const {
   const uint64_t num_blocks = headerValue(header);
@@ -105,7 +166,7 @@ Status VtuReader::inflateBlocks(const uint8_t* header, const uint8_t* blocks, si
     if (c > available || compressed_total > available - c)
       return fail(where, "compressed block " + std::to_string(b) + " runs past the end of the data (" +
                              std::to_string(available) + " bytes)");
-    if (u > kMaxZlibRatio * c + 64)
+    if (u > maxRatio(compressor_) * c + 64)
       return fail(where, "compressed block " + std::to_string(b) + " claims " + std::to_string(u) +
                              " bytes from " + std::to_string(c));
     compressed_total += c;
@@ -120,14 +181,7 @@ Status VtuReader::inflateBlocks(const uint8_t* header, const uint8_t* blocks, si
   for (uint64_t b = 0; b < num_blocks; ++b) {
     const uint64_t c = headerValue(header + (3 + b) * header_bytes_);
     const uint64_t u = (b + 1 == num_blocks && last_size != 0) ? last_size : block_size;
-    uLongf got = static_cast<uLongf>(u);
-    const int rc = uncompress(out->data() + out_pos, &got, blocks + in_pos, static_cast<uLong>(c));
-    if (rc != Z_OK || got != u)
-      return fail(where, "zlib block " + std::to_string(b) + " is corrupt (" +
-                             (rc == Z_OK ? "inflates to " + std::to_string(got) + " bytes, header says " +
-                                               std::to_string(u)
-                                         : std::string(zError(rc))) +
-                             ")");
+    GTN_RETURN_IF_ERROR(inflateBlock(blocks + in_pos, c, out->data() + out_pos, u, where, b));
     in_pos += c;
     out_pos += u;
   }
@@ -680,10 +734,15 @@ StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
     return invalidData(path_ + ": unknown header_type \"" + header_type + "\"");
   header_bytes_ = header_type == "UInt64" ? 8 : 4;
   const std::string compressor = root.attribute("compressor").as_string();
-  if (!compressor.empty() && compressor != "vtkZLibDataCompressor")
+  if (compressor.empty()) compressor_ = Compressor::kNone;
+  else if (compressor == "vtkZLibDataCompressor") compressor_ = Compressor::kZlib;
+  else if (compressor == "vtkLZ4DataCompressor") compressor_ = Compressor::kLz4;
+  else if (compressor == "vtkLZMADataCompressor") compressor_ = Compressor::kLzma;
+  else
     return unsupported(path_ + ": compressor \"" + compressor +
-                       "\" is not supported (only vtkZLibDataCompressor; re-save the file with zlib or no compression)");
-  compressed_ = !compressor.empty();
+                       "\" is not supported (VTK's vtkZLibDataCompressor, vtkLZ4DataCompressor and "
+                       "vtkLZMADataCompressor are)");
+  compressed_ = compressor_ != Compressor::kNone;
   if (appended_end_ != 0) {
     const std::string encoding = root.child("AppendedData").attribute("encoding").as_string("raw");
     if (encoding != "raw" && encoding != "base64")

@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 packages=(
   build-essential cmake pkg-config
   libcgal-dev libopenmesh-dev tetgen libzstd-dev zstd xz-utils libcli11-dev nlohmann-json3-dev
-  libxxhash-dev libpng-dev libtbb-dev libpugixml-dev zlib1g-dev
+  libxxhash-dev libpng-dev libtbb-dev libpugixml-dev zlib1g-dev liblz4-dev liblzma-dev
   libgtest-dev libgmock-dev libbenchmark-dev libfpzip-dev
   python3 python3-numpy python3-vtk9 python3-meshio xvfb gnuplot-nox
 )
