@@ -51,7 +51,7 @@ InputFormat detectInputFormat(const std::string& path) {
     return InputFormat::kGtn;
   if (ext == "gtn") return InputFormat::kGtn;
   if (h.rfind("# vtk DataFile", 0) == 0 || ext == "vtk") return InputFormat::kVtkLegacy;
-  if (ext == "vtu" || ext == "vts" || ext == "vtr" || ext == "vti" || h.find("<VTKFile") != std::string::npos)
+  if (ext == "vtu" || ext == "pvtu" || ext == "vts" || ext == "vtr" || ext == "vti" || h.find("<VTKFile") != std::string::npos)
     return InputFormat::kVtu;
   if (ext == "meshb") return InputFormat::kMeshb;
   if (ext == "mesh" || h.find("MeshVersionFormatted") != std::string::npos) return InputFormat::kMedit;

@@ -75,6 +75,8 @@ class VtuReader {
                       uint64_t index) const;
   StatusOr<size_t> compressedHeaderBytes(const uint8_t* first3, const std::string& where) const;
   Status readPiece(const pugi::xml_node& piece, size_t index);
+  // A parallel file (.pvtu): its pieces' .vtu files, read one after the other into one mesh.
+  StatusOr<ImportResult> readParallel(const pugi::xml_node& root, const ImportOptions& options);
   // The structured files: StructuredGrid (.vts), RectilinearGrid (.vtr), ImageData (.vti), one piece
   // covering the whole extent.
   StatusOr<ImportResult> readStructured(const pugi::xml_node& root, const std::string& type,
@@ -88,6 +90,7 @@ class VtuReader {
   bool big_endian_ = false;
   int header_bytes_ = 4;
   bool compressed_ = false;
+  bool in_parallel_ = false;  // a piece of a .pvtu, which must not be one itself
   Compressor compressor_ = Compressor::kNone;
   bool appended_base64_ = false;
   size_t appended_begin_ = 0, appended_end_ = 0;  // bytes after '_' in the file
@@ -694,6 +697,118 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
   return std::move(result_);
 }
 
+namespace {
+
+// VTK's ghost marks (vtkDataSetAttributes::DUPLICATECELL): a cell that another piece owns.
+constexpr char kGhostArray[] = "vtkGhostType";
+constexpr uint8_t kDuplicateCell = 1;
+
+// Appends field `b` (of the piece `where`) to `a`, which must have its name, type and components.
+Status appendField(Field& a, const Field& b, const std::string& where) {
+  if (a.name != b.name || a.type != b.type || a.components != b.components)
+    return invalidData(where + ": its array '" + b.name + "' (" + std::to_string(b.components) + " " +
+                       scalarTypeName(b.type) + ") does not match the first piece's '" + a.name + "' (" +
+                       std::to_string(a.components) + " " + scalarTypeName(a.type) + ")");
+  a.bytes.insert(a.bytes.end(), b.bytes.begin(), b.bytes.end());
+  return Status::ok();
+}
+
+}  // namespace
+
+StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const ImportOptions& options) {
+  const pugi::xml_node grid = root.child("PUnstructuredGrid");
+  if (!grid) return invalidData(path_ + ": no <PUnstructuredGrid> element");
+  std::vector<std::string> sources;
+  for (pugi::xml_node piece : grid.children("Piece")) {
+    const std::string source = piece.attribute("Source").as_string();
+    if (source.empty()) return invalidData(path_ + ": <Piece> " + std::to_string(sources.size()) + " has no Source");
+    sources.push_back(source);
+  }
+  if (sources.empty()) return invalidData(path_ + ": <PUnstructuredGrid> names no <Piece> file");
+  const size_t slash = path_.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "" : path_.substr(0, slash + 1);
+  ImportResult all;
+  bool float64 = false;
+  size_t ghosts = 0;
+  for (size_t k = 0; k < sources.size(); ++k) {
+    const std::string piece_path = sources[k][0] == '/' ? sources[k] : dir + sources[k];
+    auto pieceError = [&](const Status& st) {
+      return Status(st.code(), path_ + ": piece " + std::to_string(k) + ": " + st.message());
+    };
+    StatusOr<std::string> text = readWholeFile(piece_path);
+    if (!text.isOk()) return pieceError(text.status());
+    VtuReader reader(piece_path, *text);
+    reader.in_parallel_ = true;
+    StatusOr<ImportResult> read = reader.read(options);
+    if (!read.isOk()) return pieceError(read.status());
+    ImportResult r = std::move(*read);
+    TetMesh& m = r.mesh;
+    // Ghost cells are copies of cells that other pieces own: kept once, by their owner.
+    for (size_t f = 0; f < m.cell_fields.size(); ++f) {
+      const Field& g = m.cell_fields[f];
+      if (g.name != kGhostArray || g.type != ScalarType::kUInt8 || g.components != 1) continue;
+      size_t kept = 0;
+      for (size_t t = 0; t < m.tets.size(); ++t) {
+        if (g.bytes[t] & kDuplicateCell) continue;
+        m.tets[kept] = m.tets[t];
+        for (Field& c : m.cell_fields) {
+          const size_t item = c.components * c.valueSize();
+          std::memmove(c.bytes.data() + kept * item, c.bytes.data() + t * item, item);
+        }
+        ++kept;
+      }
+      ghosts += m.tets.size() - kept;
+      m.tets.resize(kept);
+      for (Field& c : m.cell_fields) c.bytes.resize(kept * c.components * c.valueSize());
+      break;
+    }
+    // The ghost marks themselves are VTK's bookkeeping, not data.
+    auto dropGhostArrays = [](std::vector<Field>& fields) {
+      fields.erase(std::remove_if(fields.begin(), fields.end(), [](const Field& f) { return f.name == kGhostArray; }),
+                   fields.end());
+    };
+    dropGhostArrays(m.point_fields);
+    dropGhostArrays(m.cell_fields);
+    float64 |= m.coord_type == ScalarType::kFloat64;
+    if (k == 0) {
+      all = std::move(r);
+      for (std::string& w : all.report.warnings) w = piece_path + ": " + w;
+      continue;
+    }
+    const std::string where = path_ + ": piece " + std::to_string(k) + " (" + piece_path + ")";
+    if (m.point_fields.size() != all.mesh.point_fields.size() || m.cell_fields.size() != all.mesh.cell_fields.size())
+      return invalidData(where + ": its point and cell arrays differ from the first piece's");
+    for (size_t f = 0; f < m.point_fields.size(); ++f)
+      GTN_RETURN_IF_ERROR(appendField(all.mesh.point_fields[f], m.point_fields[f], where));
+    for (size_t f = 0; f < m.cell_fields.size(); ++f)
+      GTN_RETURN_IF_ERROR(appendField(all.mesh.cell_fields[f], m.cell_fields[f], where));
+    const uint32_t base = static_cast<uint32_t>(all.mesh.numPoints());
+    if (all.mesh.numPoints() + m.numPoints() >= UINT32_MAX) return unsupported(path_ + ": more than 2^32-1 points");
+    for (Tet t : m.tets) {
+      for (uint32_t& v : t) v += base;
+      all.mesh.tets.push_back(t);
+    }
+    all.mesh.coords.insert(all.mesh.coords.end(), m.coords.begin(), m.coords.end());
+    ImportReport& a = all.report;
+    const ImportReport& b = r.report;
+    a.flipped += b.flipped;
+    a.zero_volume += b.zero_volume;
+    a.dropped_cells += b.dropped_cells;
+    a.welded_points += b.welded_points;
+    a.collapsed_tets += b.collapsed_tets;
+    a.steiner_points += b.steiner_points;
+    for (const std::string& w : b.warnings) a.warnings.push_back(piece_path + ": " + w);
+  }
+  all.mesh.coord_type = float64 ? ScalarType::kFloat64 : ScalarType::kFloat32;
+  if (ghosts > 0)
+    all.report.warnings.push_back(std::to_string(ghosts) +
+                                  " tetrahedra of ghost cells (vtkGhostType duplicates of other pieces' cells) dropped");
+  if (sources.size() > 1)
+    all.report.warnings.push_back(std::to_string(sources.size()) +
+                                  " pieces read; the points they share are kept once per piece (not welded)");
+  return all;
+}
+
 StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
   // Raw appended data after '_' is not XML: hand pugixml only what precedes it, closed again.
   std::string xml_text;
@@ -721,6 +836,10 @@ StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
   if (!root) return Status(StatusCode::kNotOurFile, path_ + ": no <VTKFile> element: not a VTK XML file");
   const std::string type = root.attribute("type").as_string();
   const bool structured = type == "StructuredGrid" || type == "RectilinearGrid" || type == "ImageData";
+  if (type == "PUnstructuredGrid") {
+    if (in_parallel_) return invalidData(path_ + ": a piece of a parallel file is itself a parallel file");
+    return readParallel(root, options);
+  }
   if (type != "UnstructuredGrid" && !structured)
     return unsupported(path_ + ": VTKFile type \"" + type +
                        "\" is not supported (it holds no volume cells: only UnstructuredGrid, StructuredGrid, "

@@ -917,6 +917,82 @@ TEST(Vtu, Lz4AndLzmaCompressedFilesReadLikeZlib) {
   expectError(dir + "/other.vtu", "compressor \"vtkZstdDataCompressor\" is not supported");
 }
 
+// A parallel file (.pvtu) names its pieces' .vtu files. Two unit cubes, one per piece; the first
+// piece also carries a ghost copy of the second's cube (vtkGhostType 1), which is dropped.
+TEST(Vtu, ParallelFilesReadTheirPieces) {
+  const std::string dir = tempDir("vtu_parallel");
+  auto cube = [](double x0) {
+    std::string pts;
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) pts += std::to_string(x0 + i) + " " + std::to_string(j) + " " + std::to_string(k) + " ";
+    return pts;
+  };
+  // Hexahedron corners of the 8 points above starting at `b` (VTK order).
+  auto hex = [](int b) {
+    std::string s;
+    for (int v : {0, 1, 3, 2, 4, 5, 7, 6}) s += std::to_string(b + v) + " ";
+    return s;
+  };
+  auto piece = [&](const std::string& points, int n_points, const std::string& conn, int n_cells,
+                   const std::string& ghost, const std::string& ids, const char* ids_type) {
+    std::string offsets, types;
+    for (int c = 1; c <= n_cells; ++c) offsets += std::to_string(8 * c) + " ", types += "12 ";
+    return R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian"><UnstructuredGrid>
+<Piece NumberOfPoints=")" + std::to_string(n_points) + "\" NumberOfCells=\"" + std::to_string(n_cells) + R"(">
+<CellData><DataArray type="UInt8" Name="vtkGhostType" format="ascii">)" + ghost + R"(</DataArray>
+<DataArray type=")" + ids_type + R"(" Name="id" format="ascii">)" + ids + R"(</DataArray></CellData>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" + points + R"(</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">)" + conn + R"(</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">)" + offsets + R"(</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">)" + types + R"(</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>
+)";
+  };
+  writeFile(dir + "/p_0.vtu", piece(cube(0) + cube(1), 16, hex(0) + hex(8), 2, "0 1", "0 1", "Int32"));
+  writeFile(dir + "/p_1.vtu", piece(cube(1), 8, hex(0), 1, "0", "1", "Int32"));
+  writeFile(dir + "/p_1i16.vtu", piece(cube(1), 8, hex(0), 1, "0", "1", "Int16"));
+  const std::string pvtu = R"(<?xml version="1.0"?>
+<VTKFile type="PUnstructuredGrid" version="1.0" byte_order="LittleEndian"><PUnstructuredGrid GhostLevel="1">
+<PCellData><PDataArray type="UInt8" Name="vtkGhostType"/><PDataArray type="Int32" Name="id"/></PCellData>
+<PPoints><PDataArray type="Float64" NumberOfComponents="3"/></PPoints>
+<Piece Source="p_0.vtu"/>
+<Piece Source="SECOND"/>
+</PUnstructuredGrid></VTKFile>
+)";
+  auto withSecond = [&](const std::string& name, const std::string& second) {
+    std::string text = pvtu;
+    text.replace(text.find("SECOND"), 6, second);
+    writeFile(dir + "/" + name, text);
+    return dir + "/" + name;
+  };
+  auto r = importMesh({withSecond("p.pvtu", "p_1.vtu")}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numPoints(), 24u);  // the ghost cube's points stay, unused
+  EXPECT_EQ(r->mesh.numTets(), 12u);
+  const MeshStats s = computeMeshStats(r->mesh);
+  EXPECT_NEAR(s.total_volume, 2.0, 1e-12);
+  EXPECT_EQ(s.unreferenced_points, 8u);
+  ASSERT_EQ(r->mesh.cell_fields.size(), 1u);  // vtkGhostType is not data
+  EXPECT_EQ(r->mesh.cell_fields[0].name, "id");
+  std::vector<int32_t> ids(r->mesh.cell_fields[0].data<int32_t>(), r->mesh.cell_fields[0].data<int32_t>() + 12);
+  EXPECT_EQ(std::count(ids.begin(), ids.end(), 0), 6);
+  EXPECT_EQ(std::count(ids.begin(), ids.end(), 1), 6);
+  // Every tetrahedron of the second cube has x >= 1 and id 1.
+  for (size_t t = 0; t < 12; ++t) {
+    double x = 0;
+    for (uint32_t v : r->mesh.tets[t]) x += r->mesh.point(v)[0] / 4;
+    EXPECT_EQ(x > 1, ids[t] == 1) << t;
+  }
+  const auto& w = r->report.warnings;
+  EXPECT_TRUE(std::any_of(w.begin(), w.end(), [](const std::string& m) { return m.find("6 tetrahedra of ghost") == 0; }));
+
+  expectError(withSecond("missing.pvtu", "p_9.vtu"), "p_9.vtu");
+  expectError(withSecond("types.pvtu", "p_1i16.vtu"), "its array 'id' (1 int16) does not match");
+  expectError(withSecond("self.pvtu", "self.pvtu"), "a piece of a parallel file is itself a parallel file");
+}
+
 TEST(Vtu, MalformedFilesFailWithTheFileNamed) {
   const std::string dir = tempDir("vtu_bad");
   writeFile(dir + "/type.vtu", twoPieces("0 1 2 3", "71"));
