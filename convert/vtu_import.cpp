@@ -726,7 +726,8 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
   }
   if (sources.empty()) return invalidData(path_ + ": <PUnstructuredGrid> names no <Piece> file");
   const size_t slash = path_.find_last_of('/');
-  const std::string dir = slash == std::string::npos ? "" : path_.substr(0, slash + 1);
+  // "./" for a file in the working directory: a piece named "-" is a file, not standard input.
+  const std::string dir = slash == std::string::npos ? "./" : path_.substr(0, slash + 1);
   ImportResult all;
   bool float64 = false;
   size_t ghosts = 0;
