@@ -28,11 +28,11 @@ enum class Compressor { kNone, kZlib, kLz4, kLzma };
 
 // How many bytes one compressed byte may become, which bounds what a block may claim before anything
 // is allocated: zlib cannot expand a byte into more than 1032, LZ4 into more than 255; an .xz stream
-// of a VTK block (32 KiB by default) cannot reach 1/1000, and 2^14 leaves room for larger blocks.
+// of a VTK block (32 KiB by default) takes 60 bytes or more, and 2^12 leaves room for larger blocks.
 uint64_t maxRatio(Compressor c) {
   switch (c) {
     case Compressor::kLz4: return 256;
-    case Compressor::kLzma: return uint64_t{1} << 14;
+    case Compressor::kLzma: return uint64_t{1} << 12;
     default: return 1032;
   }
 }
