@@ -610,6 +610,24 @@ bool parseDoubles(const char* text, int n, double* out) {
   return !(in >> rest);
 }
 
+// Copies a piece's block of items (i fastest) into the whole extent's (i fastest), marking them in
+// *seen. `cells`: the blocks are of cells (one fewer than points along each axis).
+void scatterBlock(const int64_t piece[6], const int64_t whole[6], bool cells, size_t item, const uint8_t* src,
+                  uint8_t* dst, std::vector<bool>* seen) {
+  uint64_t lo[3], n[3], wn[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = static_cast<uint64_t>(piece[2 * a]) - static_cast<uint64_t>(whole[2 * a]);
+    n[a] = static_cast<uint64_t>(piece[2 * a + 1]) - static_cast<uint64_t>(piece[2 * a]) + (cells ? 0 : 1);
+    wn[a] = static_cast<uint64_t>(whole[2 * a + 1]) - static_cast<uint64_t>(whole[2 * a]) + (cells ? 0 : 1);
+  }
+  for (uint64_t k = 0; k < n[2]; ++k)
+    for (uint64_t j = 0; j < n[1]; ++j) {
+      const uint64_t from = (k * n[1] + j) * n[0], to = ((lo[2] + k) * wn[1] + lo[1] + j) * wn[0] + lo[0];
+      std::memcpy(dst + to * item, src + from * item, n[0] * item);
+      for (uint64_t i = 0; i < n[0]; ++i) (*seen)[to + i] = true;
+    }
+}
+
 StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, const std::string& type,
                                                  const ImportOptions& options) {
   const pugi::xml_node grid = root.child(type.c_str());
@@ -617,22 +635,11 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
   int64_t whole[6];
   if (!parseExtent(grid.attribute("WholeExtent").as_string(), whole))
     return fail("<" + type + ">", "missing or bad WholeExtent (six integers)");
-  std::vector<pugi::xml_node> pieces;
-  for (pugi::xml_node piece : grid.children("Piece")) pieces.push_back(piece);
-  if (pieces.size() != 1)
-    return unsupported(path_ + ": <" + type + "> has " + std::to_string(pieces.size()) +
-                       " pieces: only a file of one piece covering the WholeExtent is read");
-  const pugi::xml_node piece = pieces[0];
-  int64_t extent[6];
-  if (!parseExtent(piece.attribute("Extent").as_string(), extent)) return fail("Piece 0", "missing or bad Extent");
-  if (!std::equal(extent, extent + 6, whole))
-    return unsupported(path_ + ": Piece 0's Extent differs from the WholeExtent: only a file of one piece covering the "
-                       "WholeExtent is read");
   uint64_t dims[3];
   for (int a = 0; a < 3; ++a) {
     // The span in unsigned arithmetic: the signed difference of extreme extents would overflow.
-    const uint64_t span = static_cast<uint64_t>(extent[2 * a + 1]) - static_cast<uint64_t>(extent[2 * a]);
-    if (extent[2 * a + 1] < extent[2 * a] || span >= UINT32_MAX) return fail("Piece 0", "bad Extent");
+    const uint64_t span = static_cast<uint64_t>(whole[2 * a + 1]) - static_cast<uint64_t>(whole[2 * a]);
+    if (whole[2 * a + 1] < whole[2 * a] || span >= UINT32_MAX) return fail("<" + type + ">", "bad WholeExtent");
     dims[a] = span + 1;
   }
   const std::string dims_text = std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " + std::to_string(dims[2]);
@@ -640,40 +647,128 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
     return unsupported(path_ + ": a " + dims_text +
                        " grid has fewer than 2 points along an axis, hence no volume cells; only 3D grids can be "
                        "split into tetrahedra");
-  // 32-bit point indices; and ImageData's points are not in the file: a few bytes could declare
-  // billions, so their number is bounded by the file's size (any point data takes a byte a point).
+  // 32-bit point indices; and the points of rectilinear grids and of image data are not in the file:
+  // a few bytes could declare billions, so their number is bounded by the file's size.
   const uint64_t limit =
-      type == "ImageData" ? std::min<uint64_t>(UINT32_MAX, 64 * text_.size() + (1u << 20)) : UINT32_MAX;
+      type != "StructuredGrid" ? std::min<uint64_t>(UINT32_MAX, 64 * text_.size() + (1u << 20)) : UINT32_MAX;
   if (dims[0] > limit || dims[1] > limit / dims[0] || dims[2] > limit / (dims[0] * dims[1]))
-    return invalidData(path_ + ": Piece 0: a grid of " + dims_text + " points, more than " +
+    return invalidData(path_ + ": a grid of " + dims_text + " points, more than " +
                        (limit == UINT32_MAX ? std::string("32-bit indices can number")
                                             : "a file of " + std::to_string(text_.size()) + " bytes describes"));
   const uint64_t np = dims[0] * dims[1] * dims[2];
   const uint64_t nc = (dims[0] - 1) * (dims[1] - 1) * (dims[2] - 1);
+
+  // Each piece: its extent (within the whole, cells of its own) and its arrays.
+  struct Piece {
+    int64_t extent[6];
+    uint64_t np = 0, nc = 0;
+    Array points;                    // StructuredGrid
+    std::vector<double> axis[3];     // RectilinearGrid
+    bool axis_f32 = true;
+    std::vector<Field> point_fields, cell_fields;
+  };
+  std::vector<Piece> pieces;
+  uint64_t piece_points = 0;
+  for (pugi::xml_node node : grid.children("Piece")) {
+    const std::string at = "Piece " + std::to_string(pieces.size());
+    Piece p;
+    if (!parseExtent(node.attribute("Extent").as_string(), p.extent)) return fail(at, "missing or bad Extent");
+    uint64_t pd[3];
+    for (int a = 0; a < 3; ++a) {
+      if (p.extent[2 * a] < whole[2 * a] || p.extent[2 * a + 1] > whole[2 * a + 1] ||
+          p.extent[2 * a + 1] <= p.extent[2 * a])
+        return fail(at, "Extent \"" + std::string(node.attribute("Extent").as_string()) +
+                            "\" is not a 3D block within the WholeExtent");
+      pd[a] = static_cast<uint64_t>(p.extent[2 * a + 1]) - static_cast<uint64_t>(p.extent[2 * a]) + 1;
+    }
+    p.np = pd[0] * pd[1] * pd[2];
+    p.nc = (pd[0] - 1) * (pd[1] - 1) * (pd[2] - 1);
+    piece_points += p.np;
+    if (type == "StructuredGrid") {
+      const pugi::xml_node points = node.child("Points").child("DataArray");
+      if (!points) return fail(at, "no <Points> DataArray");
+      GTN_RETURN_IF_ERROR(readArray(points, p.np, at + " Points", &p.points));
+      if (p.points.components != 3) return fail(at + " Points", "NumberOfComponents is not 3");
+    } else if (type == "RectilinearGrid") {
+      int a = 0;
+      for (pugi::xml_node c : node.child("Coordinates").children("DataArray")) {
+        if (a == 3) return fail(at + " Coordinates", "more than three DataArrays");
+        Array arr;
+        const std::string where = at + " Coordinates " + std::string(1, static_cast<char>('x' + a));
+        GTN_RETURN_IF_ERROR(readArray(c, pd[a], where, &arr));
+        if (arr.components != 1) return fail(where, "NumberOfComponents is not 1");
+        scalarsToDouble(arr.type, arr.bytes.data(), pd[a], &p.axis[a]);
+        p.axis_f32 = p.axis_f32 && arr.type == ScalarType::kFloat32;
+        ++a;
+      }
+      if (a != 3) return fail(at, "<Coordinates> needs three DataArrays (x, y, z)");
+    }
+    GTN_RETURN_IF_ERROR(readSection(node, "PointData", p.np, at, &p.point_fields));
+    GTN_RETURN_IF_ERROR(readSection(node, "CellData", p.nc, at, &p.cell_fields));
+    if (!pieces.empty()) {
+      // The same arrays as the first piece, in the same order.
+      auto same = [](const std::vector<Field>& x, const std::vector<Field>& y) {
+        if (x.size() != y.size()) return false;
+        for (size_t i = 0; i < x.size(); ++i)
+          if (x[i].name != y[i].name || x[i].type != y[i].type || x[i].components != y[i].components) return false;
+        return true;
+      };
+      if (!same(p.point_fields, pieces[0].point_fields) || !same(p.cell_fields, pieces[0].cell_fields))
+        return fail(at, "does not carry the same point and cell arrays as Piece 0");
+      if (type == "StructuredGrid" && p.points.type != pieces[0].points.type)
+        return fail(at + " Points", "a type other than Piece 0's");
+    }
+    pieces.push_back(std::move(p));
+  }
+  if (pieces.empty()) return fail("<" + type + ">", "no <Piece>");
+  // Pieces share their boundary layers; together they must hold every point of the whole extent (a
+  // check before the whole grid is allocated: the pieces' data is in the file, the whole's is not).
+  if (piece_points < np)
+    return fail("<" + type + ">", "its pieces hold " + std::to_string(piece_points) + " points, fewer than the " +
+                                      std::to_string(np) + " of the WholeExtent");
+
   TetMesh& mesh = result_.mesh;
+  const Piece& first = pieces[0];
+  const bool one = pieces.size() == 1;  // then it covers the whole (checked above) and is used as it is
+  std::vector<bool> point_seen(one ? 0 : np), cell_seen(one ? 0 : nc);
+  auto gather = [&](const std::vector<Field> Piece::*fields, bool cells, std::vector<Field>* out) {
+    const uint64_t items = cells ? nc : np;
+    for (size_t f = 0; f < (first.*fields).size(); ++f) {
+      const Field& proto = (first.*fields)[f];
+      if (one) {
+        out->push_back(proto);
+        continue;
+      }
+      Field whole_field(proto.name, proto.components, proto.type, items);
+      for (const Piece& p : pieces)
+        scatterBlock(p.extent, whole, cells, proto.components * proto.valueSize(), (p.*fields)[f].bytes.data(),
+                     whole_field.bytes.data(), cells ? &cell_seen : &point_seen);
+      out->push_back(std::move(whole_field));
+    }
+  };
   if (type == "StructuredGrid") {
-    const pugi::xml_node points = piece.child("Points").child("DataArray");
-    if (!points) return fail("Piece 0", "no <Points> DataArray");
-    Array pts;
-    GTN_RETURN_IF_ERROR(readArray(points, np, "Piece 0 Points", &pts));
-    if (pts.components != 3) return fail("Piece 0 Points", "NumberOfComponents is not 3");
-    scalarsToDouble(pts.type, pts.bytes.data(), 3 * np, &mesh.coords);
-    mesh.coord_type = pts.type == ScalarType::kFloat32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+    const size_t item = 3 * scalarSize(first.points.type);
+    std::vector<uint8_t> xyz;
+    if (!one) {
+      xyz.resize(np * item);
+      for (const Piece& p : pieces) scatterBlock(p.extent, whole, false, item, p.points.bytes.data(), xyz.data(), &point_seen);
+    }
+    scalarsToDouble(first.points.type, one ? first.points.bytes.data() : xyz.data(), 3 * np, &mesh.coords);
+    mesh.coord_type = first.points.type == ScalarType::kFloat32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
   } else if (type == "RectilinearGrid") {
     std::vector<double> axis[3];
     bool all_f32 = true;
-    int a = 0;
-    for (pugi::xml_node node : piece.child("Coordinates").children("DataArray")) {
-      if (a == 3) return fail("Piece 0 Coordinates", "more than three DataArrays");
-      Array arr;
-      const std::string where = "Piece 0 Coordinates " + std::string(1, static_cast<char>('x' + a));
-      GTN_RETURN_IF_ERROR(readArray(node, dims[a], where, &arr));
-      if (arr.components != 1) return fail(where, "NumberOfComponents is not 1");
-      scalarsToDouble(arr.type, arr.bytes.data(), dims[a], &axis[a]);
-      all_f32 = all_f32 && arr.type == ScalarType::kFloat32;
-      ++a;
+    for (int a = 0; a < 3; ++a) {
+      axis[a].assign(dims[a], 0.0);
+      std::vector<bool> seen(dims[a]);
+      for (const Piece& p : pieces) {
+        const uint64_t lo = static_cast<uint64_t>(p.extent[2 * a]) - static_cast<uint64_t>(whole[2 * a]);
+        for (size_t i = 0; i < p.axis[a].size(); ++i) axis[a][lo + i] = p.axis[a][i], seen[lo + i] = true;
+        all_f32 = all_f32 && p.axis_f32;
+      }
+      if (std::find(seen.begin(), seen.end(), false) != seen.end())
+        return fail("<" + type + ">", "its pieces leave out coordinates of the WholeExtent");
     }
-    if (a != 3) return fail("Piece 0", "<Coordinates> needs three DataArrays (x, y, z)");
     rectilinearPoints(axis, &mesh.coords);
     mesh.coord_type = all_f32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
   } else {
@@ -687,12 +782,23 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
       return fail("<ImageData>", "bad Direction (nine numbers)");
     const bool axis_aligned = dir[0] == 1 && dir[1] == 0 && dir[2] == 0 && dir[3] == 0 && dir[4] == 1 &&
                               dir[5] == 0 && dir[6] == 0 && dir[7] == 0 && dir[8] == 1;
-    const int64_t first[3] = {extent[0], extent[2], extent[4]};
-    imagePoints(dims, first, origin, spacing, axis_aligned ? nullptr : dir, &mesh.coords);
+    const int64_t lower[3] = {whole[0], whole[2], whole[4]};
+    imagePoints(dims, lower, origin, spacing, axis_aligned ? nullptr : dir, &mesh.coords);
     mesh.coord_type = ScalarType::kFloat64;
   }
-  GTN_RETURN_IF_ERROR(readSection(piece, "PointData", np, "Piece 0", &mesh.point_fields));
-  GTN_RETURN_IF_ERROR(readSection(piece, "CellData", nc, "Piece 0", &cell_fields_));
+  gather(&Piece::point_fields, false, &mesh.point_fields);
+  gather(&Piece::cell_fields, true, &cell_fields_);
+  if (one && !std::equal(first.extent, first.extent + 6, whole))
+    return fail("Piece 0", "Extent differs from the WholeExtent, which a single piece must cover");
+  if (!one) {
+    // Every point and cell of the whole extent from some piece. The points of a StructuredGrid were
+    // marked with its coordinates; an ImageData or RectilinearGrid without arrays has none to leave out.
+    const bool points_marked = type == "StructuredGrid" || !first.point_fields.empty();
+    if (points_marked && std::find(point_seen.begin(), point_seen.end(), false) != point_seen.end())
+      return fail("<" + type + ">", "its pieces leave out points of the WholeExtent");
+    if (!first.cell_fields.empty() && std::find(cell_seen.begin(), cell_seen.end(), false) != cell_seen.end())
+      return fail("<" + type + ">", "its pieces leave out cells of the WholeExtent");
+  }
   GTN_RETURN_IF_ERROR(finishStructuredImport(path_, dims, cell_fields_, options, &result_));
   return std::move(result_);
 }

@@ -656,8 +656,12 @@ TEST(Vtu, StructuredFilesBecomeSplitHexahedra) {
     writeFile(dir + "/" + name, text);
     expectError(dir + "/" + name, part);
   };
-  expectFails("two.vti", vti, "</Piece>", "</Piece><Piece Extent=\"1 3 0 1 0 1\"></Piece>", "has 2 pieces");
-  expectFails("flat.vti", vti, "WholeExtent=\"1 3 0 1 0 1\"", "WholeExtent=\"1 3 0 1 0 0\"", "Extent differs");
+  expectFails("two.vti", vti, "</Piece>", "</Piece><Piece Extent=\"1 3 0 1 0 1\"></Piece>",
+              "Piece 1: does not carry the same point and cell arrays as Piece 0");
+  expectFails("outside.vti", vti, "<Piece Extent=\"1 3 0 1 0 1\"", "<Piece Extent=\"1 4 0 1 0 1\"",
+              "Extent \"1 4 0 1 0 1\" is not a 3D block within the WholeExtent");
+  expectFails("part.vti", vti, "<Piece Extent=\"1 3 0 1 0 1\"", "<Piece Extent=\"1 2 0 1 0 1\"",
+              "Piece 0 PointData 'm': has more than the 8 values expected");
   // The image with both extents (whole and piece) replaced.
   auto withExtent = [&](const std::string& name, const std::string& extent, const std::string& part) {
     std::string text = vti;
@@ -670,12 +674,85 @@ TEST(Vtu, StructuredFilesBecomeSplitHexahedra) {
     expectError(dir + "/" + name, part);
   };
   withExtent("huge2.vti", "0 2000 0 2000 0 2000", "more than a file of");
-  withExtent("wide.vti", "-9000000000000000000 9000000000000000000 0 1 0 1", "bad Extent");
+  withExtent("wide.vti", "-9000000000000000000 9000000000000000000 0 1 0 1", "bad WholeExtent");
   withExtent("flat2.vti", "1 3 0 1 0 0", "fewer than 2 points along an axis");
   expectFails("axes.vtr", readFile(dir + "/g.vtr"), "<DataArray type=\"Float32\" format=\"ascii\">0 0.5</DataArray>", "",
               "<Coordinates> needs three DataArrays");
   expectFails("poly.vtp", readFile(dir + "/g.vtr"), "type=\"RectilinearGrid\"", "type=\"PolyData\"",
               "VTKFile type \"PolyData\" is not supported (it holds no volume cells");
+}
+
+// Structured XML files of several pieces (VTK's writers with SetNumberOfPieces): each piece a block of
+// the whole extent, neighbours sharing a layer of points. The grids of StructuredFilesBecomeSplitHexahedra
+// cut in two along i read as the files of one piece.
+TEST(Vtu, StructuredFilesOfSeveralPieces) {
+  const std::string dir = tempDir("vtu_structured_pieces");
+  const std::string head = R"(<?xml version="1.0"?>
+<VTKFile type="TYPE" version="0.1" byte_order="LittleEndian">
+<TYPE WholeExtent="WHOLE"ATTRS>
+)";
+  auto file = [&](const std::string& type, const std::string& whole, const std::string& attrs,
+                  const std::string& pieces) {
+    std::string text = head;
+    for (size_t at; (at = text.find("TYPE")) != std::string::npos;) text.replace(at, 4, type);
+    text.replace(text.find("WHOLE"), 5, whole);
+    text.replace(text.find("ATTRS"), 5, attrs);
+    return text + pieces + "</" + type + "></VTKFile>\n";
+  };
+  auto vtsPiece = [](const std::string& extent, const std::string& t, const std::string& zone, const std::string& xyz) {
+    return "<Piece Extent=\"" + extent + "\"><PointData><DataArray type=\"Float32\" Name=\"t\" format=\"ascii\">" + t +
+           "</DataArray></PointData><CellData><DataArray type=\"Int32\" Name=\"zone\" format=\"ascii\">" + zone +
+           "</DataArray></CellData><Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">" +
+           xyz + "</DataArray></Points></Piece>\n";
+  };
+  const std::string a_xyz = "0 0 0  1 0 0  0 1 0  1 1 0  0.5 0 1  1.5 0 1  0.5 1 1  1.5 1 1";
+  const std::string b_xyz = "1 0 0  2 0 0  1 1 0  2 1 0  1.5 0 1  2.5 0 1  1.5 1 1  2.5 1 1";
+  const std::string piece_a = vtsPiece("0 1 0 1 0 1", "0 1 3 4 6 7 9 10", "5", a_xyz);
+  const std::string piece_b = vtsPiece("1 2 0 1 0 1", "1 2 4 5 7 8 10 11.5", "6", b_xyz);
+  const std::string whole_vts = vtsPiece("0 2 0 1 0 1", "0 1 2 3 4 5 6 7 8 9 10 11.5", "5 6",
+                                         "0 0 0  1 0 0  2 0 0  0 1 0  1 1 0  2 1 0  0.5 0 1  1.5 0 1  2.5 0 1  0.5 1 1  "
+                                         "1.5 1 1  2.5 1 1");
+  auto rect = [](const std::string& extent, const std::string& x) {
+    return "<Piece Extent=\"" + extent + "\"><Coordinates><DataArray type=\"Float32\" format=\"ascii\">" + x +
+           "</DataArray><DataArray type=\"Float32\" format=\"ascii\">0 2</DataArray>"
+           "<DataArray type=\"Float32\" format=\"ascii\">0 0.5</DataArray></Coordinates></Piece>\n";
+  };
+  auto image = [](const std::string& extent, const std::string& m) {
+    return "<Piece Extent=\"" + extent + "\"><PointData><DataArray type=\"UInt8\" Name=\"m\" format=\"ascii\">" + m +
+           "</DataArray></PointData></Piece>\n";
+  };
+  const std::string spacing = " Origin=\"10 0 0\" Spacing=\"0.5 1 2\"";
+  const std::vector<std::pair<std::string, std::string>> pairs = {
+      {file("StructuredGrid", "0 2 0 1 0 1", "", whole_vts), file("StructuredGrid", "0 2 0 1 0 1", "", piece_b + piece_a)},
+      {file("RectilinearGrid", "0 2 0 1 0 1", "", rect("0 2 0 1 0 1", "0 1 3")),
+       file("RectilinearGrid", "0 2 0 1 0 1", "", rect("0 1 0 1 0 1", "0 1") + rect("1 2 0 1 0 1", "1 3"))},
+      {file("ImageData", "1 3 0 1 0 1", spacing, image("1 3 0 1 0 1", "0 1 1 0 0 1 1 1 0 0 0 1")),
+       file("ImageData", "1 3 0 1 0 1", spacing,
+            image("1 2 0 1 0 1", "0 1 0 0 1 1 0 0") + image("2 3 0 1 0 1", "1 1 0 1 1 0 0 1"))}};
+  const char* ext[3] = {"vts", "vtr", "vti"};
+  for (int f = 0; f < 3; ++f) {
+    SCOPED_TRACE(ext[f]);
+    writeFile(dir + "/one." + ext[f], pairs[f].first);
+    writeFile(dir + "/two." + ext[f], pairs[f].second);
+    auto one = importMesh({dir + "/one." + ext[f]}, ImportOptions{});
+    auto two = importMesh({dir + "/two." + ext[f]}, ImportOptions{});
+    ASSERT_TRUE(one.isOk()) << one.status().message();
+    ASSERT_TRUE(two.isOk()) << two.status().message();
+    EXPECT_EQ(two->mesh.numTets(), 12u);
+    expectSameMesh(two->mesh, one->mesh);
+  }
+  // Pieces that do not cover the whole extent, or do not agree.
+  auto vts = [&](const std::string& name, const std::string& pieces) {
+    writeFile(dir + "/" + name, file("StructuredGrid", "0 2 0 1 0 1", "", pieces));
+    return dir + "/" + name;
+  };
+  expectError(vts("short.vts", piece_a), "its pieces hold 8 points, fewer than the 12 of the WholeExtent");
+  expectError(vts("twice.vts", piece_a + piece_a), "its pieces leave out points of the WholeExtent");
+  expectError(vts("outside.vts", piece_a + vtsPiece("1 3 0 1 0 1", "1 2 4 5 7 8 10 11", "6", b_xyz)),
+              "Piece 1: Extent \"1 3 0 1 0 1\" is not a 3D block within the WholeExtent");
+  std::string other = piece_b;
+  other.replace(other.find("Name=\"t\""), 8, "Name=\"u\"");
+  expectError(vts("arrays.vts", piece_a + other), "Piece 1: does not carry the same point and cell arrays as Piece 0");
 }
 
 // Polyhedra as VTK (up to 9.3) and meshio write them: faces and faceoffsets beside the cells, face
