@@ -1,6 +1,7 @@
-// VTK XML UnstructuredGrid (.vtu) import: ascii, binary (base64) and appended (raw or base64) data
-// arrays, uncompressed or compressed by any of VTK's compressors (zlib, LZ4, LZMA), UInt32 or UInt64
-// headers, either byte order, several pieces.
+// VTK XML import: UnstructuredGrid (.vtu, and parallel .pvtu naming .vtu pieces), StructuredGrid
+// (.vts), RectilinearGrid (.vtr), ImageData (.vti). ascii, binary (base64) and appended (raw or base64)
+// data arrays, uncompressed or compressed by any of VTK's compressors (zlib, LZ4, LZMA), UInt32 or
+// UInt64 headers, either byte order, several pieces.
 #include <lz4.h>
 #include <lzma.h>
 #include <pugixml.hpp>
@@ -77,8 +78,8 @@ class VtuReader {
   Status readPiece(const pugi::xml_node& piece, size_t index);
   // A parallel file (.pvtu): its pieces' .vtu files, read one after the other into one mesh.
   StatusOr<ImportResult> readParallel(const pugi::xml_node& root, const ImportOptions& options);
-  // The structured files: StructuredGrid (.vts), RectilinearGrid (.vtr), ImageData (.vti), one piece
-  // covering the whole extent.
+  // The structured files: StructuredGrid (.vts), RectilinearGrid (.vtr), ImageData (.vti), of pieces
+  // that together cover the whole extent.
   StatusOr<ImportResult> readStructured(const pugi::xml_node& root, const std::string& type,
                                         const ImportOptions& options);
   // A piece's PointData or CellData arrays of `items` tuples each, in file order, appended to *fields.
