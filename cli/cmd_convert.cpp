@@ -86,7 +86,7 @@ Command addConvertCommand(CLI::App& app) {
   sub->add_option("-o,--output", args->output, "Output file: .gtn, .vtu, or .node/.ele (TetGen)")->required();
   sub->add_option("--split", args->split, "Hexahedra into 5 (alternating) or 6 (consistent diagonals) tetrahedra")
       ->check(CLI::IsMember({5, 6}));
-  sub->add_flag("--weld", args->weld, "PLOT3D: merge bit-identical points and drop collapsed tetrahedra");
+  sub->add_flag("--weld", args->weld, "merge bit-identical points (seams between PLOT3D blocks or VTK pieces) and drop collapsed tetrahedra");
   sub->add_flag("--compress", args->compress, ".vtu: zlib-compress the data arrays");
   sub->add_option("--levels", args->levels, ".gtn: mip levels beyond level 0 (default: down to a small mesh; 0 = none)")
       ->check(CLI::Range(0, 62));

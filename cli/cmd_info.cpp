@@ -242,7 +242,7 @@ Command addInfoCommand(CLI::App& app) {
   sub->add_option("inputs", args->inputs, "Input files (as for convert), or one .gtn file ('-': standard input)")
       ->required();
   sub->add_option("--split", args->split, "Hexahedra into 5 or 6 tetrahedra")->check(CLI::IsMember({5, 6}));
-  sub->add_flag("--weld", args->weld, "PLOT3D: merge bit-identical points");
+  sub->add_flag("--weld", args->weld, "merge bit-identical points (seams between PLOT3D blocks or VTK pieces)");
   sub->add_flag("--json", args->json, "Print one JSON object on standard output");
   sub->add_flag("--merge-tree", args->merge_tree,
                 ".gtn: statistics of level 0's merge tree (merges, roots, depth, fan-out, error quantiles)");

@@ -55,7 +55,7 @@ Command addValidateCommand(CLI::App& app) {
   sub->add_option("file", args->file, "The .gtn file to check");
   sub->add_option("--against", args->against, "Source file(s) that level 0 must equal (up to renumbering)");
   sub->add_option("--split", args->split, "--against: hexahedra into 5 or 6 tetrahedra")->check(CLI::IsMember({5, 6}));
-  sub->add_flag("--weld", args->weld, "--against: PLOT3D, merge bit-identical points");
+  sub->add_flag("--weld", args->weld, "--against: merge bit-identical points (seams between PLOT3D blocks or VTK pieces)");
   sub->add_flag("--json", args->json, "Print the report as one JSON document on standard output");
   sub->add_flag("--quick", args->quick, "Check the container and checksums only");
   sub->add_option("--max-issues", args->max_issues, "Keep at most N messages (counts stay exact)")

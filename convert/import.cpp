@@ -1,9 +1,11 @@
 #include "convert/import.h"
 
 #include <algorithm>
+#include <bit>
 #include <cctype>
 #include <cstdio>
 #include <cstring>
+#include <numeric>
 
 #include "format/file_io.h"
 #include "mesh/mesh_stats.h"
@@ -72,6 +74,54 @@ void finishImport(ImportResult& result) {
   result.report.zero_volume = zero;
 }
 
+void weldPoints(TetMesh& mesh, ImportReport& report) {
+  const size_t n = mesh.numPoints();
+  auto bits = [&](size_t p, int a) { return std::bit_cast<uint64_t>(mesh.coords[3 * p + a]); };
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
+    for (int a = 0; a < 3; ++a)
+      if (bits(x, a) != bits(y, a)) return bits(x, a) < bits(y, a);
+    return x < y;
+  });
+  std::vector<uint32_t> rep(n);
+  for (size_t r = 0; r < n;) {
+    size_t e = r + 1;
+    while (e < n && bits(order[e], 0) == bits(order[r], 0) && bits(order[e], 1) == bits(order[r], 1) &&
+           bits(order[e], 2) == bits(order[r], 2))
+      ++e;
+    for (size_t q = r; q < e; ++q) rep[order[q]] = order[r];
+    r = e;
+  }
+  std::vector<uint32_t> new_index(n);
+  uint32_t kept = 0;
+  for (size_t p = 0; p < n; ++p) {
+    if (rep[p] == p) {
+      new_index[p] = kept;
+      if (kept != p) {
+        for (int a = 0; a < 3; ++a) mesh.coords[3 * kept + a] = mesh.coords[3 * p + a];
+        for (Field& f : mesh.point_fields) f.copyItem(f, p, kept);
+      }
+      ++kept;
+    }
+  }
+  report.welded_points += n - kept;
+  if (kept == n) return;
+  mesh.coords.resize(3 * static_cast<size_t>(kept));
+  for (Field& f : mesh.point_fields) f.bytes.resize(static_cast<size_t>(kept) * f.components * f.valueSize());
+  size_t out = 0;
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const Tet& s = mesh.tets[t];
+    const Tet m = {new_index[rep[s[0]]], new_index[rep[s[1]]], new_index[rep[s[2]]], new_index[rep[s[3]]]};
+    if (m[0] == m[1] || m[0] == m[2] || m[0] == m[3] || m[1] == m[2] || m[1] == m[3] || m[2] == m[3]) continue;
+    for (Field& f : mesh.cell_fields) f.copyItem(f, t, out);
+    mesh.tets[out++] = m;
+  }
+  report.collapsed_tets += mesh.tets.size() - out;
+  mesh.tets.resize(out);
+  for (Field& f : mesh.cell_fields) f.bytes.resize(out * f.components * f.valueSize());
+}
+
 StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const ImportOptions& options) {
   if (inputs.empty()) return usageError("no input given");
   if (options.split != 5 && options.split != 6)
@@ -95,30 +145,36 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
         if (detectInputFormat(p) != InputFormat::kTetgen || base(p) != base(inputs[0]))
           return usageError(p + ": TetGen inputs must all be files of one mesh (" + base(inputs[0]) + ".*)");
       }
-      return importTetgen(inputs[0], options);
+    } else {
+      return usageError(std::string("a ") + inputFormatName(first) + " mesh is one file; got " +
+                        std::to_string(inputs.size()) + " inputs");
     }
-    return usageError(std::string("a ") + inputFormatName(first) + " mesh is one file; got " +
-                      std::to_string(inputs.size()) + " inputs");
   }
   const std::string& path = inputs[0];
   if (first != InputFormat::kTetgen && !isRegularFile(path)) {
     auto probe = readWholeFile(path, 1);
     if (!probe.isOk()) return probe.status();
   }
+  StatusOr<ImportResult> result = usageError("");
   switch (first) {
-    case InputFormat::kTetgen: return importTetgen(path, options);
-    case InputFormat::kVtkLegacy: return importVtkLegacy(path, options);
-    case InputFormat::kVtu: return importVtu(path, options);
-    case InputFormat::kMedit: return importMedit(path, options);
-    case InputFormat::kMeshb: return importMeshb(path, options);
-    case InputFormat::kOff: return importOff(path, options);
+    case InputFormat::kTetgen: result = importTetgen(path, options); break;
+    case InputFormat::kVtkLegacy: result = importVtkLegacy(path, options); break;
+    case InputFormat::kVtu: result = importVtu(path, options); break;
+    case InputFormat::kMedit: result = importMedit(path, options); break;
+    case InputFormat::kMeshb: result = importMeshb(path, options); break;
+    case InputFormat::kOff: result = importOff(path, options); break;
     case InputFormat::kGtn:
       return usageError(path + ": is a .gtn file; use 'gtn export' or 'gtn info' to read it");
     default:
       return Status(StatusCode::kNotOurFile,
                     path + ": cannot tell its format from the extension or content (known: PLOT3D .xyz/.q/.bin/.p3d, "
-                           "TetGen .node/.ele, VTK .vtk/.vtu/.vts/.vtr/.vti, Medit .mesh/.meshb, tetrahedral .off)");
+                           "TetGen .node/.ele, VTK .vtk/.vtu/.pvtu/.vts/.vtr/.vti, Medit .mesh/.meshb, tetrahedral .off)");
   }
+  if (result.isOk() && options.weld) {
+    weldPoints(result->mesh, result->report);
+    finishImport(*result);  // recounts zero-volume cells: some of them may have collapsed away
+  }
+  return result;
 }
 
 }  // namespace gtn

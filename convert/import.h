@@ -12,7 +12,7 @@ namespace gtn {
 
 struct ImportOptions {
   int split = 6;      // hexahedra into 5 (alternating parity) or 6 (consistent diagonals) tetrahedra
-  bool weld = false;  // PLOT3D: merge bit-identical points, drop tetrahedra that collapse
+  bool weld = false;  // merge bit-identical points, drop tetrahedra that collapse (weldPoints)
 };
 
 enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kMeshb, kOff, kGtn };
@@ -37,5 +37,11 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions& o
 // Normalises orientation after an importer built `result.mesh`: flips negative tetrahedra, counts
 // flips and zero-volume cells into the report.
 void finishImport(ImportResult& result);
+
+// --weld: merges points whose three coordinates are bit-identical into the first of them (its point
+// field values are kept), drops the tetrahedra that lose a vertex that way (with their cell field
+// values) and compacts points and point fields. Closes the seams between PLOT3D blocks and between
+// the pieces of VTK files; importMesh applies it when options.weld is set.
+void weldPoints(TetMesh& mesh, ImportReport& report);
 
 }  // namespace gtn

@@ -1076,53 +1076,6 @@ void splitCells(const std::vector<BlockDims>& blocks, const std::vector<int32_t>
   }
 }
 
-// --weld: merges points whose three coordinates are bit-identical into the first of them, drops the
-// tetrahedra that lose a vertex that way and compacts points and point fields.
-void weldPoints(TetMesh& mesh, ImportReport& report) {
-  const size_t n = mesh.numPoints();
-  auto bits = [&](size_t p, int a) { return std::bit_cast<uint64_t>(mesh.coords[3 * p + a]); };
-  std::vector<uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
-    for (int a = 0; a < 3; ++a)
-      if (bits(x, a) != bits(y, a)) return bits(x, a) < bits(y, a);
-    return x < y;
-  });
-  std::vector<uint32_t> rep(n);
-  for (size_t r = 0; r < n;) {
-    size_t e = r + 1;
-    while (e < n && bits(order[e], 0) == bits(order[r], 0) && bits(order[e], 1) == bits(order[r], 1) &&
-           bits(order[e], 2) == bits(order[r], 2))
-      ++e;
-    for (size_t q = r; q < e; ++q) rep[order[q]] = order[r];
-    r = e;
-  }
-  std::vector<uint32_t> new_index(n);
-  uint32_t kept = 0;
-  for (size_t p = 0; p < n; ++p) {
-    if (rep[p] == p) {
-      new_index[p] = kept;
-      if (kept != p) {
-        for (int a = 0; a < 3; ++a) mesh.coords[3 * kept + a] = mesh.coords[3 * p + a];
-        for (Field& f : mesh.point_fields) f.copyItem(f, p, kept);
-      }
-      ++kept;
-    }
-  }
-  report.welded_points = n - kept;
-  if (kept == n) return;
-  mesh.coords.resize(3 * static_cast<size_t>(kept));
-  for (Field& f : mesh.point_fields) f.bytes.resize(static_cast<size_t>(kept) * f.components * f.valueSize());
-  size_t out = 0;
-  for (const Tet& t : mesh.tets) {
-    Tet m = {new_index[rep[t[0]]], new_index[rep[t[1]]], new_index[rep[t[2]]], new_index[rep[t[3]]]};
-    if (m[0] == m[1] || m[0] == m[2] || m[0] == m[3] || m[1] == m[2] || m[1] == m[3] || m[2] == m[3]) continue;
-    mesh.tets[out++] = m;
-  }
-  report.collapsed_tets = mesh.tets.size() - out;
-  mesh.tets.resize(out);
-}
-
 }  // namespace
 
 StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, const ImportOptions& options) {

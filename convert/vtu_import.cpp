@@ -913,7 +913,7 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
                                   " tetrahedra of ghost cells (vtkGhostType duplicates of other pieces' cells) dropped");
   if (sources.size() > 1)
     all.report.warnings.push_back(std::to_string(sources.size()) +
-                                  " pieces read; the points they share are kept once per piece (not welded)");
+                                  " pieces read; the points they share are kept once per piece (--weld merges them)");
   return all;
 }
 

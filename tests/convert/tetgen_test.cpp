@@ -562,5 +562,28 @@ TEST(TetgenCli, InfoOnBasename) {
   EXPECT_EQ(j["inverted"], 0);
 }
 
+TEST(TetgenImport, WeldAppliesWhenTheMeshIsNamedByItsFiles) {
+  // Point 5 repeats point 1: the second tetrahedron keeps four corners, the third loses one.
+  const std::string dir = tempDir("tetgen_weld");
+  writeFile(dir + "/w.node", "6 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 1\n5 1 0 0\n");
+  writeFile(dir + "/w.ele", "3 4 0\n0 0 1 2 3\n1 5 2 3 4\n2 1 5 2 3\n");
+  ImportOptions weld;
+  weld.weld = true;
+  for (const std::vector<std::string>& inputs :
+       {std::vector<std::string>{dir + "/w"}, std::vector<std::string>{dir + "/w.node", dir + "/w.ele"}}) {
+    auto r = importMesh(inputs, weld);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->report.welded_points, 1u);
+    EXPECT_EQ(r->report.collapsed_tets, 1u);
+    EXPECT_EQ(r->mesh.numPoints(), 5u);
+    EXPECT_EQ(r->mesh.numTets(), 2u);
+    EXPECT_EQ(r->report.zero_volume, 0u);
+  }
+  auto plain = importMesh({dir + "/w.node", dir + "/w.ele"}, ImportOptions{});
+  ASSERT_TRUE(plain.isOk()) << plain.status().message();
+  EXPECT_EQ(plain->mesh.numPoints(), 6u);
+  EXPECT_EQ(plain->mesh.numTets(), 3u);
+}
+
 }  // namespace
 }  // namespace gtn

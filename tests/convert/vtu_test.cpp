@@ -1058,9 +1058,61 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
   const auto& w = r->report.warnings;
   EXPECT_TRUE(std::any_of(w.begin(), w.end(), [](const std::string& m) { return m.find("6 tetrahedra of ghost") == 0; }));
 
+  // Welded, the pieces make one conforming block of two cubes: 12 points, the shared square inside.
+  ImportOptions weld;
+  weld.weld = true;
+  auto welded = importMesh({dir + "/p.pvtu"}, weld);
+  ASSERT_TRUE(welded.isOk()) << welded.status().message();
+  EXPECT_EQ(welded->mesh.numPoints(), 12u);
+  EXPECT_EQ(welded->report.welded_points, 12u);
+  ASSERT_EQ(welded->mesh.numTets(), 12u);
+  const MeshStats ws = computeMeshStats(welded->mesh);
+  EXPECT_EQ(ws.boundary_faces, 20u);
+  EXPECT_EQ(ws.non_manifold_faces, 0u);
+  EXPECT_EQ(ws.unreferenced_points, 0u);
+  EXPECT_NEAR(ws.total_volume, 2.0, 1e-12);
+  EXPECT_EQ(welded->mesh.cell_fields[0].bytes, r->mesh.cell_fields[0].bytes);
+
   expectError(withSecond("missing.pvtu", "p_9.vtu"), "p_9.vtu");
   expectError(withSecond("types.pvtu", "p_1i16.vtu"), "its array 'id' (1 int16) does not match");
   expectError(withSecond("self.pvtu", "self.pvtu"), "a piece of a parallel file is itself a parallel file");
+}
+
+// --weld on a VTK file: the second tetrahedron has two bit-identical corners, so welding flattens
+// it; it goes with its cell value, and the first keeps its own.
+TEST(Vtu, WeldDropsCollapsedTetrahedraWithTheirCellValues) {
+  const std::string dir = tempDir("vtu_weld");
+  writeFile(dir + "/w.vtu", R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian"><UnstructuredGrid>
+<Piece NumberOfPoints="8" NumberOfCells="3">
+<PointData><DataArray type="Int32" Name="id" format="ascii">0 1 2 3 4 5 6 7</DataArray></PointData>
+<CellData><DataArray type="Float64" Name="w" format="ascii">0.5 0.25 0.125</DataArray></CellData>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0 0 0 1  5 0 0 6 0 0 5 1 0 5 0 0</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3  4 5 6 7  1 2 3 7</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">4 8 12</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">10 10 10</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>
+)");
+  auto plain = importMesh({dir + "/w.vtu"}, ImportOptions{});
+  ASSERT_TRUE(plain.isOk()) << plain.status().message();
+  EXPECT_EQ(plain->mesh.numTets(), 3u);
+  EXPECT_EQ(plain->report.zero_volume, 1u);  // corners 4 and 7 coincide
+  ImportOptions weld;
+  weld.weld = true;
+  auto r = importMesh({dir + "/w.vtu"}, weld);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->report.welded_points, 1u);
+  EXPECT_EQ(r->report.collapsed_tets, 1u);
+  EXPECT_EQ(r->report.zero_volume, 0u);  // the flat tetrahedron is gone
+  EXPECT_EQ(r->mesh.numPoints(), 7u);
+  ASSERT_EQ(r->mesh.numTets(), 2u);
+  ASSERT_EQ(r->mesh.cell_fields.size(), 1u);
+  EXPECT_EQ(r->mesh.cell_fields[0].itemCount(), 2u);
+  EXPECT_EQ(r->mesh.cell_fields[0].data<double>()[0], 0.5);
+  EXPECT_EQ(r->mesh.cell_fields[0].data<double>()[1], 0.125);
+  // The third tetrahedron's corner 7 became point 4 (the first of the two), point values kept.
+  EXPECT_EQ(r->mesh.point_fields[0].data<int32_t>()[4], 4);
+  EXPECT_EQ(r->mesh.point_fields[0].data<int32_t>()[6], 6);
 }
 
 TEST(Vtu, MalformedFilesFailWithTheFileNamed) {
