@@ -37,7 +37,7 @@ const char* inputFormatName(InputFormat f) {
     case InputFormat::kPlot3d: return "PLOT3D";
     case InputFormat::kTetgen: return "TetGen";
     case InputFormat::kVtkLegacy: return "legacy VTK";
-    case InputFormat::kVtu: return "VTK XML (.vtu, .vts, .vtr, .vti)";
+    case InputFormat::kVtu: return "VTK XML (.vtu, .vts, .vtr, .vti and their parallel forms)";
     case InputFormat::kMedit: return "Medit";
     case InputFormat::kMeshb: return "Medit binary (.meshb)";
     case InputFormat::kOff: return "tetrahedral OFF";
@@ -53,7 +53,8 @@ InputFormat detectInputFormat(const std::string& path) {
     return InputFormat::kGtn;
   if (ext == "gtn") return InputFormat::kGtn;
   if (h.rfind("# vtk DataFile", 0) == 0 || ext == "vtk") return InputFormat::kVtkLegacy;
-  if (ext == "vtu" || ext == "pvtu" || ext == "vts" || ext == "vtr" || ext == "vti" || h.find("<VTKFile") != std::string::npos)
+  if (ext == "vtu" || ext == "vts" || ext == "vtr" || ext == "vti" || ext == "pvtu" || ext == "pvts" || ext == "pvtr" ||
+      ext == "pvti" || h.find("<VTKFile") != std::string::npos)
     return InputFormat::kVtu;
   if (ext == "meshb") return InputFormat::kMeshb;
   if (ext == "mesh" || h.find("MeshVersionFormatted") != std::string::npos) return InputFormat::kMedit;
@@ -168,7 +169,7 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
     default:
       return Status(StatusCode::kNotOurFile,
                     path + ": cannot tell its format from the extension or content (known: PLOT3D .xyz/.q/.bin/.p3d, "
-                           "TetGen .node/.ele, VTK .vtk/.vtu/.pvtu/.vts/.vtr/.vti, Medit .mesh/.meshb, tetrahedral .off)");
+                           "TetGen .node/.ele, VTK .vtk/.vtu/.vts/.vtr/.vti and parallel .pvtu/.pvts/.pvtr/.pvti, Medit .mesh/.meshb, tetrahedral .off)");
   }
   if (result.isOk() && options.weld) {
     weldPoints(result->mesh, result->report);

@@ -1,7 +1,7 @@
-// VTK XML import: UnstructuredGrid (.vtu, and parallel .pvtu naming .vtu pieces), StructuredGrid
-// (.vts), RectilinearGrid (.vtr), ImageData (.vti). ascii, binary (base64) and appended (raw or base64)
-// data arrays, uncompressed or compressed by any of VTK's compressors (zlib, LZ4, LZMA), UInt32 or
-// UInt64 headers, either byte order, several pieces.
+// VTK XML import: UnstructuredGrid (.vtu), StructuredGrid (.vts), RectilinearGrid (.vtr), ImageData
+// (.vti), and their parallel files (.pvtu, .pvts, .pvtr, .pvti) naming pieces of their own kind.
+// ascii, binary (base64) and appended (raw or base64) data arrays, uncompressed or compressed by any
+// of VTK's compressors (zlib, LZ4, LZMA), UInt32 or UInt64 headers, either byte order, several pieces.
 #include <lz4.h>
 #include <lzma.h>
 #include <pugixml.hpp>
@@ -46,12 +46,60 @@ struct Array {
   std::vector<uint8_t> bytes;  // little-endian
 };
 
+// A block of a structured grid as one <Piece> holds it: its extent (within the whole, cells of its
+// own) and its arrays.
+struct StructuredPiece {
+  int64_t extent[6];
+  uint64_t np = 0, nc = 0;
+  Array points;                 // StructuredGrid
+  std::vector<double> axis[3];  // RectilinearGrid
+  bool axis_f32 = true;
+  std::vector<Field> point_fields, cell_fields;
+  std::string file, at;  // its file and "Piece i", for messages
+  int source = -1;       // k for the file of the k-th piece of a parallel file
+};
+
+// ImageData's placement of point (i, j, k): Origin + Direction (i Sx, j Sy, k Sz).
+struct ImageGeometry {
+  double origin[3] = {0, 0, 0};
+  double spacing[3] = {1, 1, 1};
+  double dir[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+};
+
+// VTK's ghost marks (vtkDataSetAttributes::DUPLICATECELL in cells): a cell that another piece owns.
+constexpr char kGhostArray[] = "vtkGhostType";
+constexpr uint8_t kDuplicateCell = 1;
+
+// The directory of `path` with its slash, "./" for a file in the working directory (so that a piece
+// named "-" is a file, never standard input).
+bool isParallelType(const std::string& type) {
+  return type == "PUnstructuredGrid" || type == "PStructuredGrid" || type == "PRectilinearGrid" || type == "PImageData";
+}
+
+// "<Name>" of an element, for messages.
+std::string tagOf(const pugi::xml_node& node) {
+  std::string tag(1, '<');
+  tag.append(node.name());
+  tag.push_back('>');
+  return tag;
+}
+
+std::string parentDirectory(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? "./" : path.substr(0, slash + 1);
+}
+
 class VtuReader {
  public:
   VtuReader(const std::string& path, const std::string& text) : path_(path), text_(text) {}
   StatusOr<ImportResult> read(const ImportOptions& options);
 
  private:
+  // "file: Piece i", or "parallel file: piece k: file: Piece i".
+  std::string pieceName(const StructuredPiece& p) const {
+    if (p.source < 0) return path_ + ": " + p.at;
+    return path_ + ": piece " + std::to_string(p.source) + ": " + p.file + ": " + p.at;
+  }
   Status fail(const std::string& where, const std::string& reason) const {
     return invalidData(path_ + ": " + where + ": " + reason);
   }
@@ -82,6 +130,25 @@ class VtuReader {
   // that together cover the whole extent.
   StatusOr<ImportResult> readStructured(const pugi::xml_node& root, const std::string& type,
                                         const ImportOptions& options);
+  // A parallel structured file (.pvts, .pvtr, .pvti): the pieces of its files as one structured grid.
+  StatusOr<ImportResult> readParallelStructured(const pugi::xml_node& root, const std::string& type,
+                                                const ImportOptions& options);
+  // The WholeExtent of `grid` and its point counts; `file_bytes` bounds the points that no array holds.
+  Status structuredWhole(const pugi::xml_node& grid, const std::string& type, uint64_t file_bytes, bool one_file,
+                         int64_t whole[6], uint64_t dims[3]) const;
+  // The <Piece> elements of `grid`, each within `whole`, appended to *pieces.
+  Status readStructuredPieces(const pugi::xml_node& grid, const std::string& type, const int64_t whole[6],
+                              std::vector<StructuredPiece>* pieces);
+  // The pieces placed in the whole extent (`grid` gives ImageData's Origin, Spacing and Direction),
+  // checked to carry the same arrays and to cover every point and cell, then split into tetrahedra.
+  StatusOr<ImportResult> assembleStructured(const pugi::xml_node& grid, const std::string& type, const int64_t whole[6],
+                                            const uint64_t dims[3], const std::vector<StructuredPiece>& pieces,
+                                            const ImageGeometry& image, const ImportOptions& options);
+  // ImageData's Origin, Spacing and Direction where `grid` gives them (others are left as they are).
+  Status imageGeometry(const pugi::xml_node& grid, ImageGeometry* image) const;
+  // Parses the file's XML (kept in doc_) and its byte order, header type, compressor and appended
+  // data; returns the <VTKFile> element.
+  StatusOr<pugi::xml_node> parse();
   // A piece's PointData or CellData arrays of `items` tuples each, in file order, appended to *fields.
   Status readSection(const pugi::xml_node& piece, const char* section, uint64_t items, const std::string& at,
                      std::vector<Field>* fields);
@@ -95,6 +162,7 @@ class VtuReader {
   Compressor compressor_ = Compressor::kNone;
   bool appended_base64_ = false;
   size_t appended_begin_ = 0, appended_end_ = 0;  // bytes after '_' in the file
+  pugi::xml_document doc_;
   ImportResult result_;
   VtkCells cells_;
   std::vector<Field> cell_fields_;
@@ -629,18 +697,15 @@ void scatterBlock(const int64_t piece[6], const int64_t whole[6], bool cells, si
     }
 }
 
-StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, const std::string& type,
-                                                 const ImportOptions& options) {
-  const pugi::xml_node grid = root.child(type.c_str());
-  if (!grid) return invalidData(path_ + ": no <" + type + "> element");
-  int64_t whole[6];
+Status VtuReader::structuredWhole(const pugi::xml_node& grid, const std::string& type, uint64_t file_bytes,
+                                  bool one_file, int64_t whole[6], uint64_t dims[3]) const {
+  const std::string element = tagOf(grid);
   if (!parseExtent(grid.attribute("WholeExtent").as_string(), whole))
-    return fail("<" + type + ">", "missing or bad WholeExtent (six integers)");
-  uint64_t dims[3];
+    return fail(element, "missing or bad WholeExtent (six integers)");
   for (int a = 0; a < 3; ++a) {
     // The span in unsigned arithmetic: the signed difference of extreme extents would overflow.
     const uint64_t span = static_cast<uint64_t>(whole[2 * a + 1]) - static_cast<uint64_t>(whole[2 * a]);
-    if (whole[2 * a + 1] < whole[2 * a] || span >= UINT32_MAX) return fail("<" + type + ">", "bad WholeExtent");
+    if (whole[2 * a + 1] < whole[2 * a] || span >= UINT32_MAX) return fail(element, "bad WholeExtent");
     dims[a] = span + 1;
   }
   const std::string dims_text = std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " + std::to_string(dims[2]);
@@ -649,30 +714,23 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
                        " grid has fewer than 2 points along an axis, hence no volume cells; only 3D grids can be "
                        "split into tetrahedra");
   // 32-bit point indices; and the points of rectilinear grids and of image data are not in the file:
-  // a few bytes could declare billions, so their number is bounded by the file's size.
+  // a few bytes could declare billions, so their number is bounded by the files' size.
   const uint64_t limit =
-      type != "StructuredGrid" ? std::min<uint64_t>(UINT32_MAX, 64 * text_.size() + (1u << 20)) : UINT32_MAX;
+      type != "StructuredGrid" ? std::min<uint64_t>(UINT32_MAX, 64 * file_bytes + (1u << 20)) : UINT32_MAX;
   if (dims[0] > limit || dims[1] > limit / dims[0] || dims[2] > limit / (dims[0] * dims[1]))
     return invalidData(path_ + ": a grid of " + dims_text + " points, more than " +
                        (limit == UINT32_MAX ? std::string("32-bit indices can number")
-                                            : "a file of " + std::to_string(text_.size()) + " bytes describes"));
-  const uint64_t np = dims[0] * dims[1] * dims[2];
-  const uint64_t nc = (dims[0] - 1) * (dims[1] - 1) * (dims[2] - 1);
+                                            : (one_file ? "a file of " : "files of ") + std::to_string(file_bytes) +
+                                                  (one_file ? " bytes describes" : " bytes describe")));
+  return Status::ok();
+}
 
-  // Each piece: its extent (within the whole, cells of its own) and its arrays.
-  struct Piece {
-    int64_t extent[6];
-    uint64_t np = 0, nc = 0;
-    Array points;                    // StructuredGrid
-    std::vector<double> axis[3];     // RectilinearGrid
-    bool axis_f32 = true;
-    std::vector<Field> point_fields, cell_fields;
-  };
-  std::vector<Piece> pieces;
-  uint64_t piece_points = 0;
+Status VtuReader::readStructuredPieces(const pugi::xml_node& grid, const std::string& type, const int64_t whole[6],
+                                       std::vector<StructuredPiece>* pieces) {
+  size_t index = 0;
   for (pugi::xml_node node : grid.children("Piece")) {
-    const std::string at = "Piece " + std::to_string(pieces.size());
-    Piece p;
+    const std::string at = "Piece " + std::to_string(index++);
+    StructuredPiece p;
     if (!parseExtent(node.attribute("Extent").as_string(), p.extent)) return fail(at, "missing or bad Extent");
     uint64_t pd[3];
     for (int a = 0; a < 3; ++a) {
@@ -684,7 +742,6 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
     }
     p.np = pd[0] * pd[1] * pd[2];
     p.nc = (pd[0] - 1) * (pd[1] - 1) * (pd[2] - 1);
-    piece_points += p.np;
     if (type == "StructuredGrid") {
       const pugi::xml_node points = node.child("Points").child("DataArray");
       if (!points) return fail(at, "no <Points> DataArray");
@@ -706,33 +763,141 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
     }
     GTN_RETURN_IF_ERROR(readSection(node, "PointData", p.np, at, &p.point_fields));
     GTN_RETURN_IF_ERROR(readSection(node, "CellData", p.nc, at, &p.cell_fields));
-    if (!pieces.empty()) {
-      // The same arrays as the first piece, in the same order.
-      auto same = [](const std::vector<Field>& x, const std::vector<Field>& y) {
-        if (x.size() != y.size()) return false;
-        for (size_t i = 0; i < x.size(); ++i)
-          if (x[i].name != y[i].name || x[i].type != y[i].type || x[i].components != y[i].components) return false;
-        return true;
-      };
-      if (!same(p.point_fields, pieces[0].point_fields) || !same(p.cell_fields, pieces[0].cell_fields))
-        return fail(at, "does not carry the same point and cell arrays as Piece 0");
-      if (type == "StructuredGrid" && p.points.type != pieces[0].points.type)
-        return fail(at + " Points", "a type other than Piece 0's");
-    }
-    pieces.push_back(std::move(p));
+    p.file = path_;
+    p.at = at;
+    pieces->push_back(std::move(p));
   }
-  if (pieces.empty()) return fail("<" + type + ">", "no <Piece>");
+  if (index == 0) return fail(tagOf(grid), "no <Piece>");
+  return Status::ok();
+}
+
+StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, const std::string& type,
+                                                 const ImportOptions& options) {
+  const pugi::xml_node grid = root.child(type.c_str());
+  if (!grid) return invalidData(path_ + ": no <" + type + "> element");
+  int64_t whole[6];
+  uint64_t dims[3];
+  GTN_RETURN_IF_ERROR(structuredWhole(grid, type, text_.size(), true, whole, dims));
+  std::vector<StructuredPiece> pieces;
+  GTN_RETURN_IF_ERROR(readStructuredPieces(grid, type, whole, &pieces));
+  ImageGeometry image;
+  if (type == "ImageData") GTN_RETURN_IF_ERROR(imageGeometry(grid, &image));
+  return assembleStructured(grid, type, whole, dims, pieces, image, options);
+}
+
+StatusOr<ImportResult> VtuReader::readParallelStructured(const pugi::xml_node& root, const std::string& type,
+                                                         const ImportOptions& options) {
+  const std::string ptype = "P" + type;
+  const pugi::xml_node grid = root.child(ptype.c_str());
+  if (!grid) return invalidData(path_ + ": no <" + ptype + "> element");
+  // The pieces' files first: together with this one they bound the points of a grid whose
+  // coordinates no array holds.
+  std::vector<std::string> paths, texts;
+  uint64_t bytes = text_.size();
+  for (pugi::xml_node piece : grid.children("Piece")) {
+    const std::string source = piece.attribute("Source").as_string();
+    if (source.empty()) return invalidData(path_ + ": <Piece> " + std::to_string(paths.size()) + " has no Source");
+    const std::string piece_path = source[0] == '/' ? source : parentDirectory(path_) + source;
+    StatusOr<std::string> text = readWholeFile(piece_path);
+    if (!text.isOk())
+      return Status(text.status().code(), path_ + ": piece " + std::to_string(paths.size()) + ": " + text.status().message());
+    bytes += text->size();
+    paths.push_back(piece_path);
+    texts.push_back(std::move(*text));
+  }
+  if (paths.empty()) return invalidData(path_ + ": <" + ptype + "> names no <Piece> file");
+  int64_t whole[6];
+  uint64_t dims[3];
+  GTN_RETURN_IF_ERROR(structuredWhole(grid, type, bytes, false, whole, dims));
+  std::vector<StructuredPiece> pieces;
+  ImageGeometry image;
+  for (size_t k = 0; k < paths.size(); ++k) {
+    auto pieceError = [&](const Status& st) {
+      return Status(st.code(), path_ + ": piece " + std::to_string(k) + ": " + st.message());
+    };
+    VtuReader reader(paths[k], texts[k]);
+    reader.in_parallel_ = true;
+    StatusOr<pugi::xml_node> piece_root = reader.parse();
+    if (!piece_root.isOk()) return pieceError(piece_root.status());
+    const std::string piece_type = piece_root->attribute("type").as_string();
+    if (isParallelType(piece_type))
+      return pieceError(invalidData(paths[k] + ": a piece of a parallel file is itself a parallel file"));
+    if (piece_type != type)
+      return pieceError(invalidData(paths[k] + ": a VTKFile of type \"" + piece_type + "\", not " + type));
+    const pugi::xml_node piece_grid = piece_root->child(type.c_str());
+    if (!piece_grid) return pieceError(invalidData(paths[k] + ": no <" + type + "> element"));
+    // The extents of a piece file's <Piece> elements are within the whole grid's, not only its own.
+    const size_t before = pieces.size();
+    if (Status st = reader.readStructuredPieces(piece_grid, type, whole, &pieces); !st.isOk()) return pieceError(st);
+    for (size_t i = before; i < pieces.size(); ++i) pieces[i].source = static_cast<int>(k);
+    if (type == "ImageData" && k == 0) {
+      // VTK's writers put Origin and Spacing on both elements but Direction only on the piece's.
+      if (Status st = reader.imageGeometry(piece_grid, &image); !st.isOk()) return pieceError(st);
+    }
+  }
+  if (type == "ImageData") GTN_RETURN_IF_ERROR(imageGeometry(grid, &image));
+  // Ghost marks differ from piece to piece for the points and cells that pieces share; they are
+  // VTK's bookkeeping, not data.
+  size_t ghost_arrays = 0;
+  for (StructuredPiece& p : pieces)
+    for (std::vector<Field>* fields : {&p.point_fields, &p.cell_fields}) {
+      const size_t before = fields->size();
+      fields->erase(std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kGhostArray; }),
+                    fields->end());
+      ghost_arrays += before - fields->size();
+    }
+  StatusOr<ImportResult> result = assembleStructured(grid, type, whole, dims, pieces, image, options);
+  if (result.isOk() && ghost_arrays > 0)
+    result->report.warnings.push_back("the pieces' vtkGhostType arrays (VTK's marks of shared points and cells) "
+                                      "were not kept");
+  return result;
+}
+
+Status VtuReader::imageGeometry(const pugi::xml_node& grid, ImageGeometry* image) const {
+  const std::string element = tagOf(grid);
+  if (grid.attribute("Origin") && !parseDoubles(grid.attribute("Origin").as_string(), 3, image->origin))
+    return fail(element, "bad Origin (three numbers)");
+  if (grid.attribute("Spacing") && !parseDoubles(grid.attribute("Spacing").as_string(), 3, image->spacing))
+    return fail(element, "bad Spacing (three numbers)");
+  if (grid.attribute("Direction") && !parseDoubles(grid.attribute("Direction").as_string(), 9, image->dir))
+    return fail(element, "bad Direction (nine numbers)");
+  return Status::ok();
+}
+
+StatusOr<ImportResult> VtuReader::assembleStructured(const pugi::xml_node& grid, const std::string& type,
+                                                     const int64_t whole[6], const uint64_t dims[3],
+                                                     const std::vector<StructuredPiece>& pieces,
+                                                     const ImageGeometry& image, const ImportOptions& options) {
+  const std::string element = tagOf(grid);
+  const uint64_t np = dims[0] * dims[1] * dims[2];
+  const uint64_t nc = (dims[0] - 1) * (dims[1] - 1) * (dims[2] - 1);
+  const StructuredPiece& first = pieces[0];
+  uint64_t piece_points = 0;
+  for (const StructuredPiece& p : pieces) {
+    piece_points += p.np;
+    // The same arrays as the first piece, in the same order.
+    auto same = [](const std::vector<Field>& x, const std::vector<Field>& y) {
+      if (x.size() != y.size()) return false;
+      for (size_t i = 0; i < x.size(); ++i)
+        if (x[i].name != y[i].name || x[i].type != y[i].type || x[i].components != y[i].components) return false;
+      return true;
+    };
+    const std::string first_name = p.file == first.file ? first.at : first.file + ": " + first.at;
+    if (!same(p.point_fields, first.point_fields) || !same(p.cell_fields, first.cell_fields))
+      return invalidData(pieceName(p) + ": does not carry the same point and cell arrays as " + first_name);
+    if (type == "StructuredGrid" && p.points.type != first.points.type)
+      return invalidData(pieceName(p) + " Points: a type other than " + first_name + "'s");
+  }
   // Pieces share their boundary layers; together they must hold every point of the whole extent (a
   // check before the whole grid is allocated: the pieces' data is in the file, the whole's is not).
   if (piece_points < np)
-    return fail("<" + type + ">", "its pieces hold " + std::to_string(piece_points) + " points, fewer than the " +
-                                      std::to_string(np) + " of the WholeExtent");
+    return fail(element, "its pieces hold " + std::to_string(piece_points) + " points, fewer than the " +
+                             std::to_string(np) + " of the WholeExtent");
 
   TetMesh& mesh = result_.mesh;
-  const Piece& first = pieces[0];
   const bool one = pieces.size() == 1;  // then it covers the whole (checked above) and is used as it is
   std::vector<bool> point_seen(one ? 0 : np), cell_seen(one ? 0 : nc);
-  auto gather = [&](const std::vector<Field> Piece::*fields, bool cells, std::vector<Field>* out) {
+  auto gather = [&](const std::vector<Field> StructuredPiece::*fields, bool cells, std::vector<Field>* out) {
     const uint64_t items = cells ? nc : np;
     for (size_t f = 0; f < (first.*fields).size(); ++f) {
       const Field& proto = (first.*fields)[f];
@@ -741,7 +906,7 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
         continue;
       }
       Field whole_field(proto.name, proto.components, proto.type, items);
-      for (const Piece& p : pieces)
+      for (const StructuredPiece& p : pieces)
         scatterBlock(p.extent, whole, cells, proto.components * proto.valueSize(), (p.*fields)[f].bytes.data(),
                      whole_field.bytes.data(), cells ? &cell_seen : &point_seen);
       out->push_back(std::move(whole_field));
@@ -752,7 +917,8 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
     std::vector<uint8_t> xyz;
     if (!one) {
       xyz.resize(np * item);
-      for (const Piece& p : pieces) scatterBlock(p.extent, whole, false, item, p.points.bytes.data(), xyz.data(), &point_seen);
+      for (const StructuredPiece& p : pieces)
+        scatterBlock(p.extent, whole, false, item, p.points.bytes.data(), xyz.data(), &point_seen);
     }
     scalarsToDouble(first.points.type, one ? first.points.bytes.data() : xyz.data(), 3 * np, &mesh.coords);
     mesh.coord_type = first.points.type == ScalarType::kFloat32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
@@ -762,53 +928,43 @@ StatusOr<ImportResult> VtuReader::readStructured(const pugi::xml_node& root, con
     for (int a = 0; a < 3; ++a) {
       axis[a].assign(dims[a], 0.0);
       std::vector<bool> seen(dims[a]);
-      for (const Piece& p : pieces) {
+      for (const StructuredPiece& p : pieces) {
         const uint64_t lo = static_cast<uint64_t>(p.extent[2 * a]) - static_cast<uint64_t>(whole[2 * a]);
         for (size_t i = 0; i < p.axis[a].size(); ++i) axis[a][lo + i] = p.axis[a][i], seen[lo + i] = true;
         all_f32 = all_f32 && p.axis_f32;
       }
       if (std::find(seen.begin(), seen.end(), false) != seen.end())
-        return fail("<" + type + ">", "its pieces leave out coordinates of the WholeExtent");
+        return fail(element, "its pieces leave out coordinates of the WholeExtent");
     }
     rectilinearPoints(axis, &mesh.coords);
     mesh.coord_type = all_f32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
   } else {
     // ImageData: point (i, j, k) of the extent at Origin + Direction (i Sx, j Sy, k Sz), in double.
-    double origin[3] = {0, 0, 0}, spacing[3] = {1, 1, 1}, dir[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    if (grid.attribute("Origin") && !parseDoubles(grid.attribute("Origin").as_string(), 3, origin))
-      return fail("<ImageData>", "bad Origin (three numbers)");
-    if (grid.attribute("Spacing") && !parseDoubles(grid.attribute("Spacing").as_string(), 3, spacing))
-      return fail("<ImageData>", "bad Spacing (three numbers)");
-    if (grid.attribute("Direction") && !parseDoubles(grid.attribute("Direction").as_string(), 9, dir))
-      return fail("<ImageData>", "bad Direction (nine numbers)");
+    const double* dir = image.dir;
     const bool axis_aligned = dir[0] == 1 && dir[1] == 0 && dir[2] == 0 && dir[3] == 0 && dir[4] == 1 &&
                               dir[5] == 0 && dir[6] == 0 && dir[7] == 0 && dir[8] == 1;
     const int64_t lower[3] = {whole[0], whole[2], whole[4]};
-    imagePoints(dims, lower, origin, spacing, axis_aligned ? nullptr : dir, &mesh.coords);
+    imagePoints(dims, lower, image.origin, image.spacing, axis_aligned ? nullptr : dir, &mesh.coords);
     mesh.coord_type = ScalarType::kFloat64;
   }
-  gather(&Piece::point_fields, false, &mesh.point_fields);
-  gather(&Piece::cell_fields, true, &cell_fields_);
+  gather(&StructuredPiece::point_fields, false, &mesh.point_fields);
+  gather(&StructuredPiece::cell_fields, true, &cell_fields_);
   if (one && !std::equal(first.extent, first.extent + 6, whole))
-    return fail("Piece 0", "Extent differs from the WholeExtent, which a single piece must cover");
+    return invalidData(pieceName(first) + ": Extent differs from the WholeExtent, which a single piece must cover");
   if (!one) {
     // Every point and cell of the whole extent from some piece. The points of a StructuredGrid were
     // marked with its coordinates; an ImageData or RectilinearGrid without arrays has none to leave out.
     const bool points_marked = type == "StructuredGrid" || !first.point_fields.empty();
     if (points_marked && std::find(point_seen.begin(), point_seen.end(), false) != point_seen.end())
-      return fail("<" + type + ">", "its pieces leave out points of the WholeExtent");
+      return fail(element, "its pieces leave out points of the WholeExtent");
     if (!first.cell_fields.empty() && std::find(cell_seen.begin(), cell_seen.end(), false) != cell_seen.end())
-      return fail("<" + type + ">", "its pieces leave out cells of the WholeExtent");
+      return fail(element, "its pieces leave out cells of the WholeExtent");
   }
   GTN_RETURN_IF_ERROR(finishStructuredImport(path_, dims, cell_fields_, options, &result_));
   return std::move(result_);
 }
 
 namespace {
-
-// VTK's ghost marks (vtkDataSetAttributes::DUPLICATECELL): a cell that another piece owns.
-constexpr char kGhostArray[] = "vtkGhostType";
-constexpr uint8_t kDuplicateCell = 1;
 
 // Appends field `b` (of the piece `where`) to `a`, which must have its name, type and components.
 Status appendField(Field& a, const Field& b, const std::string& where) {
@@ -832,9 +988,7 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
     sources.push_back(source);
   }
   if (sources.empty()) return invalidData(path_ + ": <PUnstructuredGrid> names no <Piece> file");
-  const size_t slash = path_.find_last_of('/');
-  // "./" for a file in the working directory: a piece named "-" is a file, not standard input.
-  const std::string dir = slash == std::string::npos ? "./" : path_.substr(0, slash + 1);
+  const std::string dir = parentDirectory(path_);
   ImportResult all;
   bool float64 = false;
   size_t ghosts = 0;
@@ -917,7 +1071,7 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
   return all;
 }
 
-StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
+StatusOr<pugi::xml_node> VtuReader::parse() {
   // Raw appended data after '_' is not XML: hand pugixml only what precedes it, closed again.
   std::string xml_text;
   std::string_view xml = text_;
@@ -935,23 +1089,12 @@ StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
     xml_text += "</AppendedData></VTKFile>";
     xml = xml_text;
   }
-  pugi::xml_document doc;
-  const pugi::xml_parse_result parsed = doc.load_buffer(xml.data(), xml.size(), pugi::parse_default, pugi::encoding_utf8);
+  const pugi::xml_parse_result parsed = doc_.load_buffer(xml.data(), xml.size(), pugi::parse_default, pugi::encoding_utf8);
   if (!parsed)
     return invalidData(path_ + ": byte offset " + std::to_string(parsed.offset) + ": not well-formed XML (" +
                        parsed.description() + ")");
-  const pugi::xml_node root = doc.child("VTKFile");
+  const pugi::xml_node root = doc_.child("VTKFile");
   if (!root) return Status(StatusCode::kNotOurFile, path_ + ": no <VTKFile> element: not a VTK XML file");
-  const std::string type = root.attribute("type").as_string();
-  const bool structured = type == "StructuredGrid" || type == "RectilinearGrid" || type == "ImageData";
-  if (type == "PUnstructuredGrid") {
-    if (in_parallel_) return invalidData(path_ + ": a piece of a parallel file is itself a parallel file");
-    return readParallel(root, options);
-  }
-  if (type != "UnstructuredGrid" && !structured)
-    return unsupported(path_ + ": VTKFile type \"" + type +
-                       "\" is not supported (it holds no volume cells: only UnstructuredGrid, StructuredGrid, "
-                       "RectilinearGrid and ImageData do)");
   const std::string order = root.attribute("byte_order").as_string("LittleEndian");
   if (order != "LittleEndian" && order != "BigEndian")
     return invalidData(path_ + ": unknown byte_order \"" + order + "\"");
@@ -976,6 +1119,21 @@ StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
       return invalidData(path_ + ": unknown AppendedData encoding \"" + encoding + "\"");
     appended_base64_ = encoding == "base64";
   }
+  return root;
+}
+
+StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
+  GTN_ASSIGN_OR_RETURN(const pugi::xml_node root, parse());
+  const std::string type = root.attribute("type").as_string();
+  const bool structured = type == "StructuredGrid" || type == "RectilinearGrid" || type == "ImageData";
+  const bool parallel = isParallelType(type);
+  if (parallel && in_parallel_) return invalidData(path_ + ": a piece of a parallel file is itself a parallel file");
+  if (type == "PUnstructuredGrid") return readParallel(root, options);
+  if (parallel) return readParallelStructured(root, type.substr(1), options);
+  if (type != "UnstructuredGrid" && !structured)
+    return unsupported(path_ + ": VTKFile type \"" + type +
+                       "\" is not supported (it holds no volume cells: only UnstructuredGrid, StructuredGrid, "
+                       "RectilinearGrid and ImageData do, and their parallel forms)");
   if (structured) return readStructured(root, type, options);
   const pugi::xml_node grid = root.child("UnstructuredGrid");
   if (!grid) return invalidData(path_ + ": no <UnstructuredGrid> element");

@@ -29,5 +29,19 @@ TEST(ImportDispatch, GitLfsPointerIsNamedAsSuch) {
   EXPECT_NE(r.status().message().find(dir + "/a.xyz: a Git LFS pointer"), std::string::npos) << r.status().message();
 }
 
+// The format of a file that does not exist (nothing to read) comes from its extension alone.
+TEST(ImportDispatch, FormatFromTheExtension) {
+  const std::string dir = test::tempDir("import_ext");
+  const std::pair<const char*, InputFormat> cases[] = {
+      {"a.vtu", InputFormat::kVtu},     {"a.vts", InputFormat::kVtu},      {"a.vtr", InputFormat::kVtu},
+      {"a.vti", InputFormat::kVtu},     {"a.pvtu", InputFormat::kVtu},     {"a.pvts", InputFormat::kVtu},
+      {"a.pvtr", InputFormat::kVtu},    {"a.pvti", InputFormat::kVtu},     {"a.VTK", InputFormat::kVtkLegacy},
+      {"a.mesh", InputFormat::kMedit},  {"a.meshb", InputFormat::kMeshb},  {"a.off", InputFormat::kOff},
+      {"a.node", InputFormat::kTetgen}, {"a.ele", InputFormat::kTetgen},   {"a.xyz", InputFormat::kPlot3d},
+      {"a.q", InputFormat::kPlot3d},    {"a.gtn", InputFormat::kGtn},      {"a.stl", InputFormat::kUnknown}};
+  for (const auto& [name, format] : cases)
+    EXPECT_EQ(detectInputFormat(dir + "/" + name), format) << name << ": " << inputFormatName(detectInputFormat(dir + "/" + name));
+}
+
 }  // namespace
 }  // namespace gtn

@@ -753,6 +753,90 @@ TEST(Vtu, StructuredFilesOfSeveralPieces) {
   std::string other = piece_b;
   other.replace(other.find("Name=\"t\""), 8, "Name=\"u\"");
   expectError(vts("arrays.vts", piece_a + other), "Piece 1: does not carry the same point and cell arrays as Piece 0");
+
+  // The same pieces in files of their own (each file's WholeExtent its piece's), named by a parallel
+  // file (.pvts, .pvtr, .pvti) as VTK's parallel writers make them: the same grid.
+  struct Split {
+    std::string type, whole, attrs, extent[2], piece[2];
+  };
+  const Split splits[3] = {
+      {"StructuredGrid", "0 2 0 1 0 1", "", {"0 1 0 1 0 1", "1 2 0 1 0 1"}, {piece_a, piece_b}},
+      {"RectilinearGrid",
+       "0 2 0 1 0 1",
+       "",
+       {"0 1 0 1 0 1", "1 2 0 1 0 1"},
+       {rect("0 1 0 1 0 1", "0 1"), rect("1 2 0 1 0 1", "1 3")}},
+      {"ImageData",
+       "1 3 0 1 0 1",
+       spacing,
+       {"1 2 0 1 0 1", "2 3 0 1 0 1"},
+       {image("1 2 0 1 0 1", "0 1 0 0 1 1 0 0"), image("2 3 0 1 0 1", "1 1 0 1 1 0 0 1")}}};
+  auto parallel = [&](const Split& sp, const std::string& name, const std::string& sources) {
+    std::string text = "<?xml version=\"1.0\"?>\n<VTKFile type=\"P" + sp.type + "\" version=\"0.1\">\n<P" + sp.type +
+                       " WholeExtent=\"" + sp.whole + "\" GhostLevel=\"0\"" + sp.attrs + ">\n" + sources + "</P" +
+                       sp.type + "></VTKFile>\n";
+    writeFile(dir + "/" + name, text);
+    return dir + "/" + name;
+  };
+  auto source = [](const std::string& extent, const std::string& file) {
+    return "<Piece Extent=\"" + extent + "\" Source=\"" + file + "\"/>\n";
+  };
+  const char* pext[3] = {"pvts", "pvtr", "pvti"};
+  for (int f = 0; f < 3; ++f) {
+    SCOPED_TRACE(pext[f]);
+    const Split& sp = splits[f];
+    std::string sources;
+    for (int k = 0; k < 2; ++k) {
+      const std::string name = "part" + std::to_string(k) + "." + ext[f];
+      // A piece file repeats Origin and Spacing; VTK's writers put Direction there only.
+      writeFile(dir + "/" + name, file(sp.type, sp.extent[k], sp.attrs, sp.piece[k]));
+      sources += source(sp.extent[k], name);
+    }
+    auto one = importMesh({dir + "/one." + ext[f]}, ImportOptions{});
+    auto par = importMesh({parallel(sp, std::string("all.") + pext[f], sources)}, ImportOptions{});
+    ASSERT_TRUE(one.isOk()) << one.status().message();
+    ASSERT_TRUE(par.isOk()) << par.status().message();
+    EXPECT_EQ(par->mesh.numTets(), 12u);
+    expectSameMesh(par->mesh, one->mesh);
+  }
+  // Ghost marks, which pieces disagree on, are dropped; the data is the same.
+  {
+    auto ghost = [](std::string piece, const std::string& marks) {
+      piece.insert(piece.find("</PointData>"),
+                   "<DataArray type=\"UInt8\" Name=\"vtkGhostType\" format=\"ascii\">" + marks + "</DataArray>");
+      return piece;
+    };
+    writeFile(dir + "/g0.vts", file("StructuredGrid", "0 1 0 1 0 1", "", ghost(piece_a, "0 0 0 0 0 0 0 0")));
+    writeFile(dir + "/g1.vts", file("StructuredGrid", "1 2 0 1 0 1", "", ghost(piece_b, "2 0 2 0 2 0 2 0")));
+    auto par = importMesh({parallel(splits[0], "ghost.pvts", source("0 1 0 1 0 1", "g0.vts") + source("1 2 0 1 0 1", "g1.vts"))},
+                          ImportOptions{});
+    auto one = importMesh({dir + "/one.vts"}, ImportOptions{});
+    ASSERT_TRUE(par.isOk()) << par.status().message();
+    ASSERT_TRUE(one.isOk()) << one.status().message();
+    expectSameMesh(par->mesh, one->mesh);
+    ASSERT_EQ(par->report.warnings.size(), 1u);
+    EXPECT_NE(par->report.warnings[0].find("vtkGhostType"), std::string::npos);
+  }
+  // A missing piece, a piece of another type, a piece that is itself parallel, a piece outside the
+  // whole extent, pieces that leave a gap, pieces whose arrays differ.
+  const Split& sg = splits[0];
+  expectError(parallel(sg, "missing.pvts", source("0 1 0 1 0 1", "part0.vts") + source("1 2 0 1 0 1", "nowhere.vts")),
+              "missing.pvts: piece 1:");
+  expectError(parallel(sg, "type.pvts", source("0 1 0 1 0 1", "part0.vts") + source("1 2 0 1 0 1", "part1.vtr")),
+              "piece 1: " + dir + "/part1.vtr: a VTKFile of type \"RectilinearGrid\", not StructuredGrid");
+  expectError(parallel(sg, "nested.pvts", source("0 1 0 1 0 1", "part0.vts") + source("1 2 0 1 0 1", "nested.pvts")),
+              "a piece of a parallel file is itself a parallel file");
+  writeFile(dir + "/wide.vts", file("StructuredGrid", "1 3 0 1 0 1", "", vtsPiece("1 3 0 1 0 1", "1 2 4 5 7 8 10 11 1 1 1 1", "6 6",
+                                                                                 b_xyz + " 3 0 0  3 1 0  3 0 1  3 1 1")));
+  expectError(parallel(sg, "wide.pvts", source("0 1 0 1 0 1", "part0.vts") + source("1 3 0 1 0 1", "wide.vts")),
+              "piece 1: " + dir + "/wide.vts: Piece 0: Extent \"1 3 0 1 0 1\" is not a 3D block within the WholeExtent");
+  expectError(parallel(sg, "gap.pvts", source("0 1 0 1 0 1", "part0.vts") + source("0 1 0 1 0 1", "part0.vts")),
+              "gap.pvts: <PStructuredGrid>: its pieces leave out points of the WholeExtent");
+  writeFile(dir + "/other.vts", file("StructuredGrid", "1 2 0 1 0 1", "", other));
+  expectError(parallel(sg, "arrays.pvts", source("0 1 0 1 0 1", "part0.vts") + source("1 2 0 1 0 1", "other.vts")),
+              "arrays.pvts: piece 1: " + dir + "/other.vts: Piece 0: does not carry the same point and cell arrays as " + dir +
+                  "/part0.vts: Piece 0");
+  expectError(parallel(sg, "none.pvts", ""), "none.pvts: <PStructuredGrid> names no <Piece> file");
 }
 
 // Polyhedra as VTK (up to 9.3) and meshio write them: faces and faceoffsets beside the cells, face
