@@ -44,7 +44,7 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
 int runConvert(const ConvertArgs& a) {
   const OutputFormat out_format = detectOutputFormat(a.output);
   if (out_format == OutputFormat::kUnknown)
-    return reportError(usageError(a.output + ": unknown output format (use .gtn, .vtu, .node or .ele)"));
+    return reportError(usageError(a.output + ": unknown output format (use .gtn, .vtu, .vtk, .node or .ele)"));
   for (const std::string& in : a.inputs) {
     if (in == a.output) return reportError(usageError(a.output + ": the output would overwrite an input"));
   }
@@ -57,13 +57,6 @@ int runConvert(const ConvertArgs& a) {
   TetMesh& mesh = imported->mesh;
   Status st;
   switch (out_format) {
-    case OutputFormat::kVtu: {
-      ExportOptions eo;
-      eo.compress = a.compress;
-      st = exportVtu(mesh, a.output, eo);
-      break;
-    }
-    case OutputFormat::kTetgen: st = exportTetgen(mesh, a.output); break;
     case OutputFormat::kGtn: {
       GtnWriteOptions wo;
       wo.tool_version = GTN_VERSION_STRING;
@@ -71,7 +64,11 @@ int runConvert(const ConvertArgs& a) {
       st = writeGtnWithLevels(a, mesh, wo);
       break;
     }
-    default: st = usageError("unknown output format");
+    default: {
+      ExportOptions eo;
+      eo.compress = a.compress;
+      st = exportMesh(mesh, a.output, eo);
+    }
   }
   if (!st.isOk()) return reportError(st);
   return 0;
@@ -83,7 +80,7 @@ Command addConvertCommand(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("convert", "Import a mesh (PLOT3D, TetGen, VTK, Medit, OFF) and write .gtn, .vtu or TetGen");
   sub->add_option("inputs", args->inputs, "Input files (PLOT3D: grid [Q] [function] or .p3d; TetGen: basename or .node/.ele)")
       ->required();
-  sub->add_option("-o,--output", args->output, "Output file: .gtn, .vtu, or .node/.ele (TetGen)")->required();
+  sub->add_option("-o,--output", args->output, "Output file: .gtn, .vtu (VTK XML), .vtk (legacy VTK) or .node/.ele (TetGen)")->required();
   sub->add_option("--split", args->split, "Hexahedra into 5 (alternating) or 6 (consistent diagonals) tetrahedra")
       ->check(CLI::IsMember({5, 6}));
   sub->add_flag("--weld", args->weld, "merge bit-identical points (seams between PLOT3D blocks or VTK pieces) and drop collapsed tetrahedra");

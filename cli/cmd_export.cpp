@@ -1,6 +1,6 @@
 // gtn export FILE.gtn -o OUTPUT [--level I | --ratio R | --merges N]: decode a stored level, or the mesh
 // simplified to a ratio or merge count (from the finest stored level not beyond it, the remaining merges
-// applied on the fly), and write it as .vtu or TetGen.
+// applied on the fly), and write it as .vtu, legacy .vtk or TetGen.
 #include <cstdint>
 #include <memory>
 
@@ -23,8 +23,8 @@ struct ExportArgs {
 
 int runExport(const ExportArgs& a) {
   const OutputFormat out_format = detectOutputFormat(a.output);
-  if (out_format != OutputFormat::kVtu && out_format != OutputFormat::kTetgen)
-    return reportError(usageError(a.output + ": unknown output format for export (use .vtu, .node or .ele)"));
+  if (out_format != OutputFormat::kVtu && out_format != OutputFormat::kVtkLegacy && out_format != OutputFormat::kTetgen)
+    return reportError(usageError(a.output + ": unknown output format for export (use .vtu, .vtk, .node or .ele)"));
   if (a.input == a.output) return reportError(usageError(a.output + ": the output would overwrite the input"));
   GtnOpenOptions oo;
   oo.verify = false;  // random access through the directory; every chunk read is still checksummed
@@ -43,13 +43,9 @@ int runExport(const ExportArgs& a) {
     st = r.decodeLevel(a.level, builder);
   }
   if (!st.isOk()) return reportError(st);
-  if (out_format == OutputFormat::kVtu) {
-    ExportOptions eo;
-    eo.compress = a.compress;
-    st = exportVtu(builder.mesh(), a.output, eo);
-  } else {
-    st = exportTetgen(builder.mesh(), a.output);
-  }
+  ExportOptions eo;
+  eo.compress = a.compress;
+  st = exportMesh(builder.mesh(), a.output, eo);
   if (!st.isOk()) return reportError(st);
   return 0;
 }
@@ -57,9 +53,9 @@ int runExport(const ExportArgs& a) {
 
 Command addExportCommand(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
-  CLI::App* sub = app.add_subcommand("export", "Decode a level of a .gtn file and write it as .vtu or TetGen .node/.ele");
+  CLI::App* sub = app.add_subcommand("export", "Decode a level of a .gtn file and write it as .vtu, .vtk or TetGen .node/.ele");
   sub->add_option("input", args->input, "Input .gtn file ('-' for standard input)")->required();
-  sub->add_option("-o,--output", args->output, "Output file: .vtu, or .node/.ele (TetGen)")->required();
+  sub->add_option("-o,--output", args->output, "Output file: .vtu (VTK XML), .vtk (legacy VTK) or .node/.ele (TetGen)")->required();
   CLI::Option* level = sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)");
   CLI::Option* ratio = sub->add_option("--ratio", args->ratio,
                                        "Simplification ratio: vertices merged away / vertices of level 0 (0 to 1)")

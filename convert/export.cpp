@@ -12,8 +12,18 @@ OutputFormat detectOutputFormat(const std::string& path) {
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (ext == "gtn") return OutputFormat::kGtn;
   if (ext == "vtu") return OutputFormat::kVtu;
+  if (ext == "vtk") return OutputFormat::kVtkLegacy;
   if (ext == "node" || ext == "ele") return OutputFormat::kTetgen;
   return OutputFormat::kUnknown;
+}
+
+Status exportMesh(const TetMesh& mesh, const std::string& path, const ExportOptions& options) {
+  switch (detectOutputFormat(path)) {
+    case OutputFormat::kVtu: return exportVtu(mesh, path, options);
+    case OutputFormat::kVtkLegacy: return exportVtkLegacy(mesh, path);
+    case OutputFormat::kTetgen: return exportTetgen(mesh, path);
+    default: return usageError(path + ": unknown output format (use .vtu, .vtk, .node or .ele)");
+  }
 }
 
 }  // namespace gtn

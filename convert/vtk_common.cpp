@@ -121,6 +121,22 @@ bool vtkLegacyTypeFromName(const std::string& name, ScalarType* out) {
   return false;
 }
 
+const char* vtkLegacyTypeName(ScalarType type) {
+  switch (type) {
+    case ScalarType::kInt8: return "char";
+    case ScalarType::kUInt8: return "unsigned_char";
+    case ScalarType::kInt16: return "short";
+    case ScalarType::kUInt16: return "unsigned_short";
+    case ScalarType::kInt32: return "int";
+    case ScalarType::kUInt32: return "unsigned_int";
+    case ScalarType::kInt64: return "vtktypeint64";
+    case ScalarType::kUInt64: return "vtktypeuint64";
+    case ScalarType::kFloat32: return "float";
+    case ScalarType::kFloat64: return "double";
+  }
+  return "double";
+}
+
 void swapByteOrder(uint8_t* data, size_t bytes, size_t value_size) {
   if (value_size <= 1) return;
   for (size_t i = 0; i + value_size <= bytes; i += value_size) std::reverse(data + i, data + i + value_size);

@@ -38,6 +38,8 @@ const char* vtkXmlTypeName(ScalarType type);
 // Legacy data type keyword ("float", "unsigned_short", "vtktypeint64", ...) to a ScalarType. "long"
 // and "unsigned_long" are 64-bit, as VTK reads them on LP64 systems.
 bool vtkLegacyTypeFromName(const std::string& name, ScalarType* out);
+// The legacy keyword VTK's writer uses for a ScalarType ("char", ..., "vtktypeint64", "double").
+const char* vtkLegacyTypeName(ScalarType type);
 
 // Reverses the byte order of each `value_size`-byte value in place.
 void swapByteOrder(uint8_t* data, size_t bytes, size_t value_size);

@@ -122,12 +122,19 @@ TEST_F(GtnCli, ConvertIsDeterministic) {
   EXPECT_EQ(first, test::readFile(out));
 }
 
-TEST_F(GtnCli, ExportRoundTripsToVtuAndTetgen) {
+TEST_F(GtnCli, ExportRoundTripsToVtuVtkAndTetgen) {
   const std::string gtn = dir_ + "/spx.gtn";
   ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + gtn).exit_code, 0);
   test::RunResult r = test::runGtn("export " + gtn + " -o " + dir_ + "/spx.vtu");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(meshSummary(infoJson(dir_ + "/spx.vtu")), meshSummary(infoJson(spx_)));
+  // Legacy .vtk, from the .gtn and straight from the source: the same file.
+  r = test::runGtn("export " + gtn + " -o " + dir_ + "/spx_out.vtk");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(meshSummary(infoJson(dir_ + "/spx_out.vtk")), meshSummary(infoJson(spx_)));
+  r = test::runGtn("convert " + dir_ + "/spx.vtu -o " + dir_ + "/spx_conv.vtk");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(test::readFile(dir_ + "/spx_conv.vtk"), test::readFile(dir_ + "/spx_out.vtk"));
   r = test::runGtn("export " + gtn + " -o " + dir_ + "/spx.node --level 0");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(test::fileExists(dir_ + "/spx.ele"));
