@@ -135,7 +135,16 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
                                                  "holds), not the file itself: fetch it, e.g. with 'git lfs pull'");
   const InputFormat first = detectInputFormat(inputs[0]);
   if (first == InputFormat::kPlot3d) return importPlot3d(inputs, options);
-  if (inputs.size() != 1) {
+  ImportOptions opts = options;
+  if (inputs.size() != 1 && (first == InputFormat::kMedit || first == InputFormat::kMeshb)) {
+    // A Medit mesh and its solution files.
+    for (size_t i = 1; i < inputs.size(); ++i) {
+      const std::string ext = lowerExtension(inputs[i]);
+      if (ext != "sol" && ext != "solb")
+        return usageError(inputs[i] + ": a Medit mesh takes solution files (.sol, .solb) besides it, not this");
+      opts.medit_solutions.push_back(inputs[i]);
+    }
+  } else if (inputs.size() != 1) {
     // A TetGen mesh may be named by several of its files (x.node x.ele): they must share a basename.
     if (first == InputFormat::kTetgen) {
       auto base = [](const std::string& p) {
@@ -158,18 +167,28 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
   }
   StatusOr<ImportResult> result = usageError("");
   switch (first) {
-    case InputFormat::kTetgen: result = importTetgen(path, options); break;
-    case InputFormat::kVtkLegacy: result = importVtkLegacy(path, options); break;
-    case InputFormat::kVtu: result = importVtu(path, options); break;
-    case InputFormat::kMedit: result = importMedit(path, options); break;
-    case InputFormat::kMeshb: result = importMeshb(path, options); break;
-    case InputFormat::kOff: result = importOff(path, options); break;
+    case InputFormat::kTetgen: result = importTetgen(path, opts); break;
+    case InputFormat::kVtkLegacy: result = importVtkLegacy(path, opts); break;
+    case InputFormat::kVtu: result = importVtu(path, opts); break;
+    case InputFormat::kMedit: result = importMedit(path, opts); break;
+    case InputFormat::kMeshb: result = importMeshb(path, opts); break;
+    case InputFormat::kOff: result = importOff(path, opts); break;
     case InputFormat::kGtn:
       return usageError(path + ": is a .gtn file; use 'gtn export' or 'gtn info' to read it");
     default:
       return Status(StatusCode::kNotOurFile,
                     path + ": cannot tell its format from the extension or content (known: PLOT3D .xyz/.q/.bin/.p3d, "
                            "TetGen .node/.ele, VTK .vtk/.vtu/.vts/.vtr/.vti and parallel .pvtu/.pvts/.pvtr/.pvti, Medit .mesh/.meshb, tetrahedral .off)");
+  }
+  if (result.isOk() && (first == InputFormat::kMedit || first == InputFormat::kMeshb) && opts.medit_solutions.empty()) {
+    // Medit and MMG load u.sol or u.solb beside u.mesh by themselves; say so rather than guess.
+    const size_t dot = path.find_last_of('.');
+    const std::string base = dot == std::string::npos || path.find('/', dot) != std::string::npos ? path : path.substr(0, dot);
+    for (const char* ext : {".sol", ".solb"})
+      if (isRegularFile(base + ext))
+        result->report.warnings.push_back(base + ext + " beside it holds solution values that were not read; name it "
+                                          "after the mesh to import them as fields (gtn convert " + path + " " +
+                                          base + ext + " ...)");
   }
   if (result.isOk() && options.weld) {
     weldPoints(result->mesh, result->report);

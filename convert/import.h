@@ -13,6 +13,8 @@ namespace gtn {
 struct ImportOptions {
   int split = 6;      // hexahedra into 5 (alternating parity) or 6 (consistent diagonals) tetrahedra
   bool weld = false;  // merge bit-identical points, drop tetrahedra that collapse (weldPoints)
+  // Medit meshes: solution files (.sol, .solb) whose values become fields (readMeditSolutions).
+  std::vector<std::string> medit_solutions;
 };
 
 enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kMeshb, kOff, kGtn };
@@ -22,7 +24,8 @@ const char* inputFormatName(InputFormat f);
 InputFormat detectInputFormat(const std::string& path);
 
 // Imports the mesh that `inputs` describe together: one mesh file, a TetGen basename or any of its
-// files, or PLOT3D grid [+ Q] [+ function] files or a .p3d meta-file.
+// files, PLOT3D grid [+ Q] [+ function] files or a .p3d meta-file, or a Medit mesh and its solution
+// files (.sol, .solb).
 StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const ImportOptions& options);
 
 // The importers (each in its own file under convert/).

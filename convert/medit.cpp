@@ -169,7 +169,9 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
   }
   if (!have_vertices) return reader.error("no Vertices section");
   if (cells.empty()) return reader.error(noVolumeElements(skipped_volume));
+  const bool tets_only = cells.other_refs.empty();
   GTN_RETURN_IF_ERROR(finishMeditImport(path, "medit", &cells, options, &result));
+  GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, &result));
   return result;
 }
 

@@ -59,4 +59,11 @@ std::string noVolumeElements(const std::string& skipped);
 Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells,
                          const ImportOptions& options, ImportResult* result);
 
+// Reads Medit solution files (.sol ASCII or .solb binary, told apart by their first bytes) into
+// result->mesh, after finishMeditImport: SolAtVertices sections become point fields and, when the
+// mesh was tetrahedra only (`tets_only`), SolAtTetrahedra sections cell fields, named after the file
+// (u.sol: "u", or "u_1", "u_2" ... for several types), float32 in version 1 files, float64 after.
+// Counts must match the mesh's; other solution sections are skipped with a warning.
+Status readMeditSolutions(const std::vector<std::string>& paths, bool tets_only, ImportResult* result);
+
 }  // namespace gtn

@@ -233,7 +233,9 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
   }
   if (!have_vertices_) return invalidData(path_ + ": no Vertices keyword");
   if (cells_.empty()) return invalidData(path_ + ": " + noVolumeElements(skipped_volume_));
+  const bool tets_only = cells_.other_refs.empty();
   GTN_RETURN_IF_ERROR(finishMeditImport(path_, "meshb", &cells_, options, &result_));
+  GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, &result_));
   return std::move(result_);
 }
 

@@ -239,5 +239,161 @@ TEST(MeshbErrors, EveryPrefixFailsCleanly) {
   }
 }
 
+// ---- Medit solution files (.sol, .solb) ----
+
+// Two tetrahedra sharing a face, in ASCII .mesh.
+const char kTwoTets[] =
+    "MeshVersionFormatted 2\nDimension 3\nVertices\n5\n0 0 0 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n1 1 1 1\n"
+    "Tetrahedra\n2\n1 2 3 4 7\n2 3 4 5 8\nEnd\n";
+
+// SolAtVertices: a scalar and a vector per vertex; SolAtTetrahedra: a symmetric matrix per tetrahedron.
+double vertexValue(int v, int c) { return 0.25 * v - c + (c == 2 ? 1e-7 : 0.0); }  // c = 0 scalar, 1-3 vector
+double tetValue(int t, int c) { return 10.0 * t + c + 0.5; }
+
+std::string asciiSolution(int version) {
+  std::string s = "MeshVersionFormatted " + std::to_string(version) + "\n# a comment\nDimension 3\nSolAtVertices\n5\n2 1 2\n";
+  char buf[64];
+  for (int v = 0; v < 5; ++v) {
+    for (int c = 0; c < 4; ++c) {
+      std::snprintf(buf, sizeof buf, "%.17g ", vertexValue(v, c));
+      s += buf;
+    }
+    s += "\n";
+  }
+  s += "SolAtTetrahedra\n2\n1 3\n";
+  for (int t = 0; t < 2; ++t) {
+    for (int c = 0; c < 6; ++c) s += std::to_string(tetValue(t, c)) + " ";
+    s += "\n";
+  }
+  return s + "End\n";
+}
+
+std::string binarySolution(int version, bool swap) {
+  MeshbWriter w(version, swap);
+  w.begin(3);
+  w.int32(3);
+  w.begin(64);  // SolAtTriangles: skipped
+  w.integer(1);
+  w.int32(1);
+  w.int32(1);
+  w.real(42);
+  w.begin(62);  // SolAtVertices: the count an integer, the type count and types 32-bit
+  w.integer(5);
+  w.int32(2);
+  w.int32(1);
+  w.int32(2);
+  for (int v = 0; v < 5; ++v)
+    for (int c = 0; c < 4; ++c) w.real(vertexValue(v, c));
+  w.begin(66);  // SolAtTetrahedra
+  w.integer(2);
+  w.int32(1);
+  w.int32(3);
+  for (int t = 0; t < 2; ++t)
+    for (int c = 0; c < 6; ++c) w.real(tetValue(t, c));
+  return w.end();
+}
+
+void expectSolutionFields(const TetMesh& m, int version, const std::string& where) {
+  // "ref" from the mesh, then the solution's fields, named after the file.
+  ASSERT_EQ(m.point_fields.size(), 3u) << where;
+  ASSERT_EQ(m.cell_fields.size(), 2u) << where;
+  const Field& scalar = m.point_fields[1];
+  const Field& vector = m.point_fields[2];
+  const Field& matrix = m.cell_fields[1];
+  EXPECT_EQ(scalar.name, "u_1") << where;
+  EXPECT_EQ(vector.name, "u_2") << where;
+  EXPECT_EQ(matrix.name, "u") << where;
+  EXPECT_EQ(scalar.components, 1u);
+  EXPECT_EQ(vector.components, 3u);
+  EXPECT_EQ(matrix.components, 6u);
+  const ScalarType type = version == 1 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+  EXPECT_EQ(scalar.type, type) << where;
+  EXPECT_EQ(matrix.type, type) << where;
+  auto expected = [&](double v) { return version == 1 ? static_cast<double>(static_cast<float>(v)) : v; };
+  for (int v = 0; v < 5; ++v) {
+    EXPECT_EQ(scalar.get(v, 0), expected(vertexValue(v, 0))) << where << " vertex " << v;
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(vector.get(v, c), expected(vertexValue(v, c + 1))) << where << " vertex " << v;
+  }
+  for (int t = 0; t < 2; ++t)
+    for (int c = 0; c < 6; ++c) EXPECT_EQ(matrix.get(t, c), expected(tetValue(t, c))) << where;
+}
+
+TEST(MeditSolution, AsciiAndBinaryFilesBecomeFields) {
+  const std::string dir = tempDir("medit-sol");
+  writeFile(dir + "/m.mesh", kTwoTets);
+  for (int version : {1, 2}) {
+    writeFile(dir + "/u.sol", asciiSolution(version));
+    auto r = importMesh({dir + "/m.mesh", dir + "/u.sol"}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    expectSolutionFields(r->mesh, version, "u.sol version " + std::to_string(version));
+    EXPECT_TRUE(r->report.warnings.empty());
+  }
+  for (int version = 1; version <= 4; ++version)
+    for (bool swap : {false, true}) {
+      const std::string where = "u.solb version " + std::to_string(version) + (swap ? " big-endian" : "");
+      writeFile(dir + "/u.solb", binarySolution(version, swap));
+      auto r = importMesh({dir + "/m.mesh", dir + "/u.solb"}, ImportOptions{});
+      ASSERT_TRUE(r.isOk()) << where << ": " << r.status().message();
+      expectSolutionFields(r->mesh, version, where);
+      ASSERT_EQ(r->report.warnings.size(), 1u) << where;
+      EXPECT_NE(r->report.warnings[0].find("solution keyword 64 skipped"), std::string::npos) << r->report.warnings[0];
+    }
+  // A binary mesh takes them too.
+  writeFile(dir + "/m.meshb", twoCubesAndATet(2, false));
+  writeFile(dir + "/c.sol", "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n13\n1 1\n"
+                            "0 1 2 3 4 5 6 7 8 9 10 11 12\nSolAtTetrahedra\n1\n1 1\n7\nEnd\n");
+  auto r = importMesh({dir + "/m.meshb", dir + "/c.sol"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ(r->mesh.point_fields.size(), 2u);
+  EXPECT_EQ(r->mesh.point_fields[1].name, "c");
+  EXPECT_EQ(r->mesh.point_fields[1].get(12, 0), 12.0);
+  // Its hexahedra were split: element values do not follow the tetrahedra, and are left out.
+  EXPECT_EQ(r->mesh.cell_fields.size(), 1u);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("SolAtTetrahedra skipped"), std::string::npos) << r->report.warnings[0];
+}
+
+TEST(MeditSolution, MismatchedOrMalformedFilesAreRejected) {
+  const std::string dir = tempDir("medit-sol-bad");
+  writeFile(dir + "/m.mesh", kTwoTets);
+  auto expectError = [&](const std::string& name, const std::string& text, const std::string& part) {
+    writeFile(dir + "/" + name, text);
+    auto r = importMesh({dir + "/m.mesh", dir + "/" + name}, ImportOptions{});
+    ASSERT_FALSE(r.isOk()) << name;
+    EXPECT_NE(r.status().message().find(dir + "/" + name), std::string::npos) << r.status().message();
+    EXPECT_NE(r.status().message().find(part), std::string::npos) << r.status().message() << "\nlacks: " << part;
+  };
+  expectError("count.sol", "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n4\n1 1\n0 1 2 3\nEnd\n",
+              "SolAtVertices has 4 entries but the mesh has 5 vertices");
+  expectError("type.sol", "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n5\n1 7\n0 1 2 3 4\nEnd\n",
+              "solution type 7");
+  expectError("short.sol", "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n5\n1 2\n0 1 2 3 4\nEnd\n",
+              "SolAtVertices values");
+  expectError("dim.sol", "MeshVersionFormatted 2\nDimension 2\nSolAtVertices\n5\n1 1\n0 1 2 3 4\nEnd\n",
+              "dimension 2");
+  expectError("words.sol", "MeshVersionFormatted 2\nDimension 3\nVertices\n5\nEnd\n", "unknown section 'Vertices' in a solution file");
+  std::string cut = binarySolution(2, false);
+  cut.resize(cut.size() - 40);
+  expectError("cut.solb", cut, "byte offset");
+  std::string huge = binarySolution(3, true);
+  expectError("huge.solb", huge.substr(0, 60), "byte offset");
+  // Only solution files may follow a Medit mesh.
+  auto r = importMesh({dir + "/m.mesh", dir + "/m.mesh"}, ImportOptions{});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("solution files (.sol, .solb)"), std::string::npos) << r.status().message();
+}
+
+TEST(MeditSolution, AFileBesideTheMeshIsPointedOut) {
+  const std::string dir = tempDir("medit-sol-beside");
+  writeFile(dir + "/m.mesh", kTwoTets);
+  writeFile(dir + "/m.sol", asciiSolution(2));
+  auto r = importMesh({dir + "/m.mesh"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.point_fields.size(), 1u);  // not read unless named
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find(dir + "/m.sol beside it holds solution values"), std::string::npos)
+      << r->report.warnings[0];
+}
+
 }  // namespace
 }  // namespace gtn

@@ -1,0 +1,306 @@
+// Medit solution files (.sol ASCII, .solb binary), the per-vertex and per-element values that Medit,
+// MMG, FreeFem and libMeshb write beside a .mesh/.meshb: SolAtVertices becomes point fields,
+// SolAtTetrahedra cell fields (of a mesh of tetrahedra only: the tetrahedra then keep the order of the
+// file's Tetrahedra section). Other SolAt* sections (of faces, edges, or of elements that are split)
+// are skipped with a warning.
+//
+// A solution section: a line count, a type count, the types (1 scalar, 2 vector of `dimension`
+// components, 3 symmetric matrix of d(d+1)/2, 4 full matrix of d^2), then per line the values of
+// every type in order. Reals are 32-bit in version 1, 64-bit from version 2. In binary (libMeshb's
+// layout, as for .meshb): the line count is an int32 (int64 in version 4), the type count and the
+// types are int32 in every version.
+#include <cstring>
+
+#include "convert/ascii_rows.h"
+#include "convert/medit_cells.h"
+#include "convert/text_reader.h"
+#include "format/file_io.h"
+
+namespace gtn {
+
+namespace {
+
+constexpr uint32_t kDimension = 3, kSolAtVertices = 62, kSolAtTetrahedra = 66, kEnd = 54;
+// Keyword codes of the other solution sections (skipped): SolAtPyramids, SolAtEdges .. SolAtHexahedra,
+// DSolAtVertices.
+bool otherSolutionKeyword(uint32_t code) { return code == 26 || (code >= 63 && code <= 69 && code != 66); }
+
+constexpr int64_t kMaxTypes = 1000;  // libMeshb's GmfMaxTyp
+
+bool sameKeyword(std::string_view a, const char* b) {
+  if (a.size() != std::strlen(b)) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) return false;
+  return true;
+}
+
+// Components of a solution type in 3D, 0 for an unknown type.
+uint32_t typeComponents(int64_t type) {
+  switch (type) {
+    case 1: return 1;
+    case 2: return 3;
+    case 3: return 6;
+    case 4: return 9;
+    default: return 0;
+  }
+}
+
+// The fields a solution section fills, named after the file ("u" for u.sol; "u_1", "u_2" ... when
+// the section has several types) unless the mesh already has the name.
+class SolutionTarget {
+ public:
+  SolutionTarget(const std::string& path, ImportResult* result) : result_(result) {
+    const size_t slash = path.find_last_of('/');
+    stem_ = path.substr(slash == std::string::npos ? 0 : slash + 1);
+    const size_t dot = stem_.find_last_of('.');
+    if (dot != std::string::npos && dot > 0) stem_.resize(dot);
+  }
+  // Fields for `types` on `items` entries (cells when `cells`), in the value type of `version`.
+  std::vector<Field> make(const std::vector<int64_t>& types, size_t items, int version, bool cells) const {
+    std::vector<Field> out;
+    const std::vector<Field>& existing = cells ? result_->mesh.cell_fields : result_->mesh.point_fields;
+    for (size_t k = 0; k < types.size(); ++k) {
+      std::string name = types.size() == 1 ? stem_ : stem_ + "_" + std::to_string(k + 1);
+      for (const Field& f : existing)
+        if (f.name == name) name += "_sol";
+      out.emplace_back(name, typeComponents(types[k]), version == 1 ? ScalarType::kFloat32 : ScalarType::kFloat64,
+                       items);
+    }
+    return out;
+  }
+
+ private:
+  ImportResult* result_;
+  std::string stem_;
+};
+
+// What a section must match: the mesh's vertices, or its tetrahedra (when it has only those).
+struct SectionTarget {
+  size_t items;
+  bool cells;
+};
+
+class SolutionReader {
+ public:
+  SolutionReader(const std::string& path, bool tets_only, ImportResult* result)
+      : path_(path), tets_only_(tets_only), result_(result), target_(path, result) {}
+
+  Status readAscii(const std::string& text);
+  Status readBinary(const std::string& bytes);
+  bool sawSolution() const { return saw_solution_; }
+
+ private:
+  // The entries of `section` (a keyword) must number what the mesh has; nullopt-like `ok` false for a
+  // section that is skipped (its warning given).
+  StatusOr<bool> accept(const char* section, bool cells, int64_t count, size_t* items) {
+    if (cells && !tets_only_) {
+      result_->report.warnings.push_back(path_ + ": " + section +
+                                         " skipped: the mesh's other elements were split into tetrahedra, which "
+                                         "element values do not follow");
+      return false;
+    }
+    *items = cells ? result_->mesh.numTets() : result_->mesh.numPoints();
+    if (count != static_cast<int64_t>(*items))
+      return Status(invalidData(path_ + ": " + section + " has " + std::to_string(count) + " entries but the mesh has " +
+                                std::to_string(*items) + (cells ? " tetrahedra" : " vertices")));
+    return true;
+  }
+  void store(std::vector<Field>* fields, bool cells) {
+    saw_solution_ = true;
+    auto& dest = cells ? result_->mesh.cell_fields : result_->mesh.point_fields;
+    for (Field& f : *fields) dest.push_back(std::move(f));
+  }
+
+  const std::string& path_;
+  bool tets_only_;
+  ImportResult* result_;
+  SolutionTarget target_;
+  bool saw_solution_ = false;
+};
+
+Status SolutionReader::readAscii(const std::string& text) {
+  TextReader reader(path_, text);
+  int version = 0;
+  int64_t dimension = 0;
+  std::string_view tok;
+  while (reader.next(&tok)) {
+    if (sameKeyword(tok, "End")) break;
+    if (sameKeyword(tok, "MeshVersionFormatted")) {
+      GTN_ASSIGN_OR_RETURN(const int64_t v, reader.readInt("solution version"));
+      if (v < 1 || v > 4) return reader.error("unknown MeshVersionFormatted " + std::to_string(v));
+      version = static_cast<int>(v);
+      continue;
+    }
+    if (version == 0)
+      return Status(StatusCode::kNotOurFile,
+                    reader.error("not a Medit solution file: it starts with " + quotedToken(tok)).message());
+    if (sameKeyword(tok, "Dimension")) {
+      GTN_ASSIGN_OR_RETURN(dimension, reader.readInt("dimension"));
+      if (dimension != 3) return reader.error("dimension " + std::to_string(dimension) + ": only 3D solutions are read");
+      continue;
+    }
+    const bool vertices = sameKeyword(tok, "SolAtVertices"), tets = sameKeyword(tok, "SolAtTetrahedra");
+    const bool other = !vertices && !tets && tok.size() > 5 && sameKeyword(tok.substr(0, 5), "SolAt");
+    if (sameKeyword(tok, "Time") || sameKeyword(tok, "Iterations")) {
+      if (!reader.next(&tok)) return reader.errorAtEnd("a value");
+      continue;
+    }
+    if (!vertices && !tets && !other) return reader.error("unknown section " + quotedToken(tok) + " in a solution file");
+    if (dimension != 3) return reader.error(std::string(tok) + " before a 'Dimension 3' line");
+    const std::string section(tok);
+    const size_t line = reader.line();
+    GTN_ASSIGN_OR_RETURN(const int64_t count, reader.readInt((section + " count").c_str()));
+    GTN_ASSIGN_OR_RETURN(const int64_t ntypes, reader.readInt((section + " type count").c_str()));
+    if (ntypes < 1 || ntypes > kMaxTypes) return reader.error(section + ": type count " + std::to_string(ntypes));
+    std::vector<int64_t> types(static_cast<size_t>(ntypes));
+    int64_t size = 0;
+    for (int64_t& t : types) {
+      GTN_ASSIGN_OR_RETURN(t, reader.readInt((section + " type").c_str()));
+      if (typeComponents(t) == 0)
+        return reader.error(section + ": solution type " + std::to_string(t) +
+                            " (known: 1 scalar, 2 vector, 3 symmetric matrix, 4 matrix)");
+      size += typeComponents(t);
+    }
+    GTN_RETURN_IF_ERROR(checkCountFits(reader, count, size, section + " values"));
+    size_t items = 0;
+    bool keep = false;
+    if (!other) {
+      GTN_ASSIGN_OR_RETURN(keep, accept(section.c_str(), tets, count, &items));
+    } else {
+      result_->report.warnings.push_back(path_ + ":" + std::to_string(line) + ": " + section +
+                                         " skipped (only SolAtVertices and SolAtTetrahedra are read)");
+    }
+    if (!keep) {
+      for (int64_t i = 0; i < count * size; ++i)
+        if (!reader.next(&tok)) return reader.errorAtEnd((section + " values").c_str());
+      continue;
+    }
+    std::vector<Field> fields = target_.make(types, items, version, tets);
+    for (size_t i = 0; i < items; ++i)
+      for (Field& f : fields)
+        for (uint32_t c = 0; c < f.components; ++c) {
+          GTN_ASSIGN_OR_RETURN(const double v, reader.readDouble((section + " value").c_str()));
+          if (f.type == ScalarType::kFloat32) f.set<float>(i, c, static_cast<float>(v));
+          else f.set<double>(i, c, v);
+        }
+    store(&fields, tets);
+  }
+  if (version == 0) return Status(StatusCode::kNotOurFile, path_ + ": empty, not a Medit solution file");
+  return Status::ok();
+}
+
+Status SolutionReader::readBinary(const std::string& bytes) {
+  size_t pos = 0;
+  bool swap = false;
+  auto fail = [&](uint64_t at, const std::string& why) {
+    return invalidData(path_ + ": byte offset " + std::to_string(at) + ": " + why);
+  };
+  auto word = [&](size_t size) {
+    uint64_t v = 0;
+    for (size_t i = 0; i < size; ++i)
+      v |= static_cast<uint64_t>(static_cast<uint8_t>(bytes[pos + (swap ? size - 1 - i : i)])) << (8 * i);
+    pos += size;
+    return v;
+  };
+  auto need = [&](uint64_t n, uint64_t end, const std::string& what) -> Status {
+    if (pos > end || n > end - pos)
+      return fail(pos, what + " needs " + std::to_string(n) + " bytes but only " +
+                           std::to_string(end > pos ? end - pos : 0) + " are left");
+    return Status::ok();
+  };
+  if (bytes.size() < 8) return Status(StatusCode::kNotOurFile, path_ + ": too short for a .solb header");
+  const uint64_t code = word(4);
+  if (code == 0x01000000u) swap = true;
+  else if (code != 1)
+    return Status(StatusCode::kNotOurFile, path_ + ": byte offset 0: not a .solb file (first word " +
+                                               std::to_string(code) + ", not 1)");
+  const uint64_t version = word(4);
+  if (version < 1 || version > 4)
+    return unsupported(path_ + ": byte offset 4: .solb version " + std::to_string(version) + " (known: 1 to 4)");
+  const size_t real_size = version == 1 ? 4 : 8, pos_size = version >= 3 ? 8 : 4, count_size = version == 4 ? 8 : 4;
+  int64_t dimension = 0;
+  while (pos < bytes.size()) {
+    const uint64_t at = pos;
+    GTN_RETURN_IF_ERROR(need(4 + pos_size, bytes.size(), "a keyword header"));
+    const uint32_t keyword = static_cast<uint32_t>(word(4));
+    const uint64_t next = word(pos_size);
+    if (keyword == kEnd) break;
+    if (next != 0 && (next <= at || next > bytes.size()))
+      return fail(at, "keyword " + std::to_string(keyword) + " says the next keyword is at byte offset " +
+                          std::to_string(next) + ", outside (" + std::to_string(at) + ", " +
+                          std::to_string(bytes.size()) + "]");
+    const uint64_t end = next ? next : bytes.size();
+    if (keyword == kDimension) {
+      GTN_RETURN_IF_ERROR(need(4, end, "Dimension"));
+      dimension = static_cast<int32_t>(word(4));
+      if (dimension != 3) return fail(at, "dimension " + std::to_string(dimension) + ": only 3D solutions are read");
+    } else if (keyword == kSolAtVertices || keyword == kSolAtTetrahedra || otherSolutionKeyword(keyword)) {
+      const bool tets = keyword == kSolAtTetrahedra;
+      const std::string section = keyword == kSolAtVertices ? "SolAtVertices"
+                                  : tets                    ? "SolAtTetrahedra"
+                                                            : "solution keyword " + std::to_string(keyword);
+      if (dimension != 3) return fail(at, section + " before a Dimension 3 keyword");
+      GTN_RETURN_IF_ERROR(need(count_size + 4, end, section + " header"));
+      const int64_t count = count_size == 8 ? static_cast<int64_t>(word(8)) : static_cast<int32_t>(word(4));
+      const int64_t ntypes = static_cast<int32_t>(word(4));
+      if (count < 0) return fail(at, section + " count " + std::to_string(count) + " is negative");
+      if (ntypes < 1 || ntypes > kMaxTypes) return fail(at, section + ": type count " + std::to_string(ntypes));
+      GTN_RETURN_IF_ERROR(need(4 * static_cast<uint64_t>(ntypes), end, section + " types"));
+      std::vector<int64_t> types(static_cast<size_t>(ntypes));
+      uint64_t size = 0;
+      for (int64_t& t : types) {
+        t = static_cast<int32_t>(word(4));
+        if (typeComponents(t) == 0)
+          return fail(at, section + ": solution type " + std::to_string(t) +
+                              " (known: 1 scalar, 2 vector, 3 symmetric matrix, 4 matrix)");
+        size += typeComponents(t);
+      }
+      if (static_cast<uint64_t>(count) > (end - pos) / (size * real_size))
+        return fail(at, section + ": " + std::to_string(count) + " entries of " + std::to_string(size * real_size) +
+                            " bytes do not fit in the " + std::to_string(end - pos) + " bytes before byte offset " +
+                            std::to_string(end));
+      if (otherSolutionKeyword(keyword)) {
+        result_->report.warnings.push_back(path_ + ": byte offset " + std::to_string(at) + ": " + section +
+                                           " skipped (only SolAtVertices and SolAtTetrahedra are read)");
+      } else {
+        size_t items = 0;
+        GTN_ASSIGN_OR_RETURN(const bool keep, accept(section.c_str(), tets, count, &items));
+        if (keep) {
+          std::vector<Field> fields = target_.make(types, items, static_cast<int>(version), tets);
+          for (size_t i = 0; i < items; ++i)
+            for (Field& f : fields)
+              for (uint32_t c = 0; c < f.components; ++c) {
+                const uint64_t v = word(real_size);
+                if (real_size == 4) {
+                  const uint32_t u = static_cast<uint32_t>(v);
+                  std::memcpy(f.bytes.data() + (i * f.components + c) * 4, &u, 4);
+                } else {
+                  std::memcpy(f.bytes.data() + (i * f.components + c) * 8, &v, 8);
+                }
+              }
+          store(&fields, tets);
+        }
+      }
+    }
+    if (next == 0) break;
+    pos = next;
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+Status readMeditSolutions(const std::vector<std::string>& paths, bool tets_only, ImportResult* result) {
+  for (const std::string& path : paths) {
+    GTN_ASSIGN_OR_RETURN(const std::string bytes, readWholeFile(path));
+    SolutionReader reader(path, tets_only, result);
+    const bool binary = bytes.size() >= 4 && (std::memcmp(bytes.data(), "\x01\0\0\0", 4) == 0 ||
+                                              std::memcmp(bytes.data(), "\0\0\0\x01", 4) == 0);
+    GTN_RETURN_IF_ERROR(binary ? reader.readBinary(bytes) : reader.readAscii(bytes));
+    if (!reader.sawSolution())
+      result->report.warnings.push_back(path + ": no SolAtVertices or SolAtTetrahedra section: no field read");
+  }
+  return Status::ok();
+}
+
+}  // namespace gtn
