@@ -78,7 +78,7 @@ constexpr NamedType kLegacyTypes[] = {
     {"long", ScalarType::kInt64},         {"unsigned_long", ScalarType::kUInt64},
     {"vtktypeint64", ScalarType::kInt64}, {"vtktypeuint64", ScalarType::kUInt64},
     {"float", ScalarType::kFloat32},      {"double", ScalarType::kFloat64},
-    {"vtkidtype", ScalarType::kInt64},
+    {"vtkidtype", ScalarType::kInt32},  // VTK writes vtkIdType arrays as 32-bit ints in legacy files
 };
 
 constexpr char kBase64Chars[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";

@@ -339,8 +339,14 @@ Status VtuReader::decodeRaw(size_t offset, const std::string& where, std::vector
 Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const std::string& where, Array* out,
                             bool at_least) {
   const std::string type_name = node.attribute("type").as_string();
-  if (!vtkXmlTypeFromName(type_name, &out->type))
+  // vtkBitArray: one 0/1 value per token in ASCII, packed eight to a byte (first value in the high
+  // bit) in binary; read as UInt8.
+  const bool bits = type_name == "Bit" && !at_least;
+  if (bits) {
+    out->type = ScalarType::kUInt8;
+  } else if (!vtkXmlTypeFromName(type_name, &out->type)) {
     return Status(StatusCode::kUnsupported, path_ + ": " + where + ": data type '" + type_name + "' is not supported");
+  }
   const int comps = node.attribute("NumberOfComponents").as_int(1);
   if (comps < 1 || comps > 4096) return fail(where, "bad NumberOfComponents " + std::to_string(comps));
   out->components = static_cast<uint32_t>(comps);
@@ -348,7 +354,7 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
   const std::string format = node.attribute("format").as_string("ascii");
   if (tuples > UINT64_MAX / comps / size) return fail(where, "too many values");
   const uint64_t count = tuples * comps;
-  expected_bytes_ = count * size;
+  expected_bytes_ = bits ? (count + 7) / 8 : count * size;
   at_least_ = at_least;
   if (format == "ascii") {
     const std::string_view body = node.text().get();
@@ -364,9 +370,9 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
         return fail(where, "has " + std::to_string(i) + " values, expected " + std::to_string(count));
       }
       if (i >= count) out->bytes.resize((i + 1) * size);  // at_least: bounded by the text's length
-      if (!parseScalarToken(t, out->type, out->bytes.data() + i * size))
+      if (!parseScalarToken(t, out->type, out->bytes.data() + i * size) || (bits && out->bytes[i] > 1))
         return fail(where, "value " + std::to_string(i) + " '" + std::string(t.substr(0, 40)) + "' is not a " +
-                               scalarTypeName(out->type));
+                               (bits ? "bit (0 or 1)" : scalarTypeName(out->type)));
     }
     if (at_least && i % comps != 0)
       return fail(where, "has " + std::to_string(i) + " values, not a whole number of " + std::to_string(comps) +
@@ -398,6 +404,16 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
     }
   } else {
     return fail(where, "unknown format '" + format + "'");
+  }
+  if (bits) {
+    if (out->bytes.size() != expected_bytes_)
+      return fail(where, "holds " + std::to_string(out->bytes.size()) + " bytes, expected " +
+                             std::to_string(expected_bytes_) + " (" + std::to_string(count) + " bits)");
+    std::vector<uint8_t> packed;
+    packed.swap(out->bytes);
+    out->bytes.resize(count);
+    for (uint64_t i = 0; i < count; ++i) out->bytes[i] = (packed[i / 8] >> (7 - i % 8)) & 1;
+    return Status::ok();
   }
   if (at_least && out->bytes.size() >= count * size && out->bytes.size() % (comps * size) == 0) {
     // as many tuples as it holds

@@ -517,7 +517,7 @@ TEST(VtkLegacy, IdsAndStringArraysAsVtkWritesThem) {
   EXPECT_EQ(m.cell_fields[0].name, "PedigreeElementId");
   EXPECT_EQ(m.cell_fields[0].data<int32_t>()[0], 271);
   EXPECT_EQ(m.cell_fields[1].name, "GlobalElementId");
-  EXPECT_EQ(m.cell_fields[1].type, ScalarType::kInt64);
+  EXPECT_EQ(m.cell_fields[1].type, ScalarType::kInt32);  // VTK's reader and writer: vtkIdType as int
   ASSERT_EQ(r->report.warnings.size(), 2u);
   EXPECT_NE(r->report.warnings[0].find("skipped FIELD array Names (string)"), std::string::npos)
       << r->report.warnings[0];
@@ -609,6 +609,40 @@ TEST(VtkLegacy, BinaryStringArraysAreSkippedByTheirLengths) {
                                       ": file ends inside the length of string 4 of FIELD array Names"),
             std::string::npos)
       << c.status().message();
+}
+
+// vtkDataWriter writes a vtkIdType array as 32-bit ints (its reader reads them so), in BINARY too; a
+// METADATA block may follow it. Bits are packed eight to a byte, the first in the high bit.
+TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
+  const std::string dir = tempDir("vtk_legacy_idtype");
+  auto be64 = [](std::initializer_list<int64_t> values) {
+    std::string out;
+    for (int64_t v : values)
+      for (int b = 7; b >= 0; --b) out.push_back(static_cast<char>((static_cast<uint64_t>(v) >> (8 * b)) & 0xFF));
+    return out;
+  };
+  const std::string text =
+      "# vtk DataFile Version 5.1\nvtk output\nBINARY\nDATASET UNSTRUCTURED_GRID\n"
+      "POINTS 4 float\n" + bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) +
+      "\nCELLS 2 4\nOFFSETS vtktypeint64\n" + be64({0, 4}) + "\nCONNECTIVITY vtktypeint64\n" + be64({0, 1, 2, 3}) +
+      "\nCELL_TYPES 1\n" + bigEndianInts({10}) +
+      "\n\nPOINT_DATA 4\nFIELD FieldData 3\nflags 1 4 bit\n\x50\nMETADATA\nINFORMATION 0\n\n"
+      "ids 1 4 vtkIdType\n" + bigEndianInts({7, -1, 9, 100000}) + "\nMETADATA\nINFORMATION 0\n\n"
+      "Temp 1 4 float\n" + bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\n";
+  writeFile(dir + "/ids.vtk", text);
+  auto r = importMesh({dir + "/ids.vtk"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const TetMesh& m = r->mesh;
+  ASSERT_EQ(m.numTets(), 1u);
+  ASSERT_EQ(m.point_fields.size(), 3u);
+  EXPECT_EQ(m.point_fields[0].name, "flags");
+  EXPECT_EQ(m.point_fields[0].bytes, (std::vector<uint8_t>{0, 1, 0, 1}));
+  EXPECT_EQ(m.point_fields[1].name, "ids");
+  EXPECT_EQ(m.point_fields[1].type, ScalarType::kInt32);
+  EXPECT_EQ(m.point_fields[1].data<int32_t>()[1], -1);
+  EXPECT_EQ(m.point_fields[1].data<int32_t>()[3], 100000);
+  EXPECT_EQ(m.point_fields[2].name, "Temp");
+  EXPECT_EQ(m.point_fields[2].data<float>()[3], 3.5f);
 }
 
 }  // namespace

@@ -1326,5 +1326,43 @@ TEST(Vtu, CliConvertsAndReportsCutFiles) {
   EXPECT_TRUE(info.out.empty()) << info.out;
 }
 
+// vtkBitArray in VTK XML: type="Bit", one 0/1 per token in ASCII, packed eight to a byte (the first
+// value in the high bit) in binary and appended data; read as UInt8.
+TEST(Vtu, BitArraysReadAsBytes) {
+  const std::string dir = tempDir("vtu_bits");
+  auto file = [](const std::string& bits_array) {
+    return std::string(R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian" header_type="UInt32">
+<UnstructuredGrid><Piece NumberOfPoints="5" NumberOfCells="2">
+<PointData>)") + bits_array + R"(</PointData>
+<Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0 0 0 1 1 1 1</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 1 2 3 4</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">4 8</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">10 10</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>
+)";
+  };
+  // 1 0 1 1 0 packed: 0xB0; the UInt32 size 1 and the byte, base64-encoded apart as VTK does.
+  const uint8_t header[4] = {1, 0, 0, 0}, packed[1] = {0xB0};
+  const std::string forms[2] = {
+      R"(<DataArray type="Bit" Name="f" format="ascii">1 0 1 1 0</DataArray>)",
+      R"(<DataArray type="Bit" Name="f" format="binary">)" + base64Encode(header, 4) + base64Encode(packed, 1) +
+          "</DataArray>"};
+  for (const std::string& form : forms) {
+    writeFile(dir + "/bits.vtu", file(form));
+    auto r = importMesh({dir + "/bits.vtu"}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    ASSERT_EQ(r->mesh.point_fields.size(), 1u);
+    EXPECT_EQ(r->mesh.point_fields[0].type, ScalarType::kUInt8);
+    EXPECT_EQ(r->mesh.point_fields[0].bytes, (std::vector<uint8_t>{1, 0, 1, 1, 0})) << form;
+  }
+  writeFile(dir + "/two.vtu", file(R"(<DataArray type="Bit" Name="f" format="ascii">1 0 2 1 0</DataArray>)"));
+  expectError(dir + "/two.vtu", "value 2 '2' is not a bit (0 or 1)");
+  const uint8_t header2[4] = {2, 0, 0, 0}, two_bytes[2] = {0xB0, 0};
+  writeFile(dir + "/long.vtu", file(R"(<DataArray type="Bit" Name="f" format="binary">)" + base64Encode(header2, 4) +
+                                    base64Encode(two_bytes, 2) + "</DataArray>"));
+  expectError(dir + "/long.vtu", "holds 2 bytes, expected 1 (5 bits)");
+}
+
 }  // namespace
 }  // namespace gtn
