@@ -73,6 +73,7 @@ constexpr NamedType kXmlTypes[] = {
 };
 constexpr NamedType kLegacyTypes[] = {
     {"char", ScalarType::kInt8},          {"unsigned_char", ScalarType::kUInt8},
+    {"signed_char", ScalarType::kInt8},
     {"short", ScalarType::kInt16},        {"unsigned_short", ScalarType::kUInt16},
     {"int", ScalarType::kInt32},          {"unsigned_int", ScalarType::kUInt32},
     {"long", ScalarType::kInt64},         {"unsigned_long", ScalarType::kUInt64},

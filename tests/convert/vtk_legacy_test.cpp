@@ -612,7 +612,8 @@ TEST(VtkLegacy, BinaryStringArraysAreSkippedByTheirLengths) {
 }
 
 // vtkDataWriter writes a vtkIdType array as 32-bit ints (its reader reads them so), in BINARY too; a
-// METADATA block may follow it. Bits are packed eight to a byte, the first in the high bit.
+// METADATA block may follow it. Bits are packed eight to a byte, the first in the high bit; a
+// vtkSignedCharArray is "signed_char".
 TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
   const std::string dir = tempDir("vtk_legacy_idtype");
   auto be64 = [](std::initializer_list<int64_t> values) {
@@ -626,15 +627,15 @@ TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
       "POINTS 4 float\n" + bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) +
       "\nCELLS 2 4\nOFFSETS vtktypeint64\n" + be64({0, 4}) + "\nCONNECTIVITY vtktypeint64\n" + be64({0, 1, 2, 3}) +
       "\nCELL_TYPES 1\n" + bigEndianInts({10}) +
-      "\n\nPOINT_DATA 4\nFIELD FieldData 3\nflags 1 4 bit\n\x50\nMETADATA\nINFORMATION 0\n\n"
+      "\n\nPOINT_DATA 4\nFIELD FieldData 4\nflags 1 4 bit\n\x50\nMETADATA\nINFORMATION 0\n\n"
       "ids 1 4 vtkIdType\n" + bigEndianInts({7, -1, 9, 100000}) + "\nMETADATA\nINFORMATION 0\n\n"
-      "Temp 1 4 float\n" + bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\n";
+      "Temp 1 4 float\n" + bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\nsc 1 4 signed_char\n\xFF\x02\xFD\x04\n";
   writeFile(dir + "/ids.vtk", text);
   auto r = importMesh({dir + "/ids.vtk"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
   const TetMesh& m = r->mesh;
   ASSERT_EQ(m.numTets(), 1u);
-  ASSERT_EQ(m.point_fields.size(), 3u);
+  ASSERT_EQ(m.point_fields.size(), 4u);
   EXPECT_EQ(m.point_fields[0].name, "flags");
   EXPECT_EQ(m.point_fields[0].bytes, (std::vector<uint8_t>{0, 1, 0, 1}));
   EXPECT_EQ(m.point_fields[1].name, "ids");
@@ -643,6 +644,9 @@ TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
   EXPECT_EQ(m.point_fields[1].data<int32_t>()[3], 100000);
   EXPECT_EQ(m.point_fields[2].name, "Temp");
   EXPECT_EQ(m.point_fields[2].data<float>()[3], 3.5f);
+  EXPECT_EQ(m.point_fields[3].name, "sc");  // vtkSignedCharArray
+  EXPECT_EQ(m.point_fields[3].type, ScalarType::kInt8);
+  EXPECT_EQ(m.point_fields[3].data<int8_t>()[2], -3);
 }
 
 }  // namespace
