@@ -7,11 +7,12 @@
 // A solution section: a line count, a type count, the types (1 scalar, 2 vector of `dimension`
 // components, 3 symmetric matrix of d(d+1)/2, 4 full matrix of d^2), then per line the values of
 // every type in order. Reals are 32-bit in version 1, 64-bit from version 2. In binary (libMeshb's
-// layout, as for .meshb): the line count is an int32 (int64 in version 4), the type count and the
-// types are int32 in every version.
+// layout, read by GmfBinary as for .meshb): the line count is an int32 (int64 in version 4), the type
+// count and the types are int32 in every version.
 #include <cstring>
 
 #include "convert/ascii_rows.h"
+#include "convert/gmf_binary.h"
 #include "convert/medit_cells.h"
 #include "convert/text_reader.h"
 #include "format/file_io.h"
@@ -20,7 +21,7 @@ namespace gtn {
 
 namespace {
 
-constexpr uint32_t kDimension = 3, kSolAtVertices = 62, kSolAtTetrahedra = 66, kEnd = 54;
+constexpr uint32_t kDimension = 3, kSolAtVertices = 62, kSolAtTetrahedra = 66;
 // Keyword codes of the other solution sections (skipped): SolAtPyramids, SolAtEdges .. SolAtHexahedra,
 // DSolAtVertices.
 bool otherSolutionKeyword(uint32_t code) { return code == 26 || (code >= 63 && code <= 69 && code != 66); }
@@ -190,100 +191,65 @@ Status SolutionReader::readAscii(const std::string& text) {
 }
 
 Status SolutionReader::readBinary(const std::string& bytes) {
-  size_t pos = 0;
-  bool swap = false;
-  auto fail = [&](uint64_t at, const std::string& why) {
-    return invalidData(path_ + ": byte offset " + std::to_string(at) + ": " + why);
-  };
-  auto word = [&](size_t size) {
-    uint64_t v = 0;
-    for (size_t i = 0; i < size; ++i)
-      v |= static_cast<uint64_t>(static_cast<uint8_t>(bytes[pos + (swap ? size - 1 - i : i)])) << (8 * i);
-    pos += size;
-    return v;
-  };
-  auto need = [&](uint64_t n, uint64_t end, const std::string& what) -> Status {
-    if (pos > end || n > end - pos)
-      return fail(pos, what + " needs " + std::to_string(n) + " bytes but only " +
-                           std::to_string(end > pos ? end - pos : 0) + " are left");
-    return Status::ok();
-  };
-  if (bytes.size() < 8) return Status(StatusCode::kNotOurFile, path_ + ": too short for a .solb header");
-  const uint64_t code = word(4);
-  if (code == 0x01000000u) swap = true;
-  else if (code != 1)
-    return Status(StatusCode::kNotOurFile, path_ + ": byte offset 0: not a .solb file (first word " +
-                                               std::to_string(code) + ", not 1)");
-  const uint64_t version = word(4);
-  if (version < 1 || version > 4)
-    return unsupported(path_ + ": byte offset 4: .solb version " + std::to_string(version) + " (known: 1 to 4)");
-  const size_t real_size = version == 1 ? 4 : 8, pos_size = version >= 3 ? 8 : 4, count_size = version == 4 ? 8 : 4;
+  GmfBinary in(path_, bytes);
+  GTN_RETURN_IF_ERROR(in.open(".solb"));
+  const size_t real_size = in.realSize();
   int64_t dimension = 0;
-  while (pos < bytes.size()) {
-    const uint64_t at = pos;
-    GTN_RETURN_IF_ERROR(need(4 + pos_size, bytes.size(), "a keyword header"));
-    const uint32_t keyword = static_cast<uint32_t>(word(4));
-    const uint64_t next = word(pos_size);
-    if (keyword == kEnd) break;
-    if (next != 0 && (next <= at || next > bytes.size()))
-      return fail(at, "keyword " + std::to_string(keyword) + " says the next keyword is at byte offset " +
-                          std::to_string(next) + ", outside (" + std::to_string(at) + ", " +
-                          std::to_string(bytes.size()) + "]");
-    const uint64_t end = next ? next : bytes.size();
+  uint32_t keyword = 0;
+  uint64_t at = 0, end = 0;
+  while (true) {
+    GTN_ASSIGN_OR_RETURN(const bool more, in.nextKeyword(&keyword, &at, &end));
+    if (!more) break;
     if (keyword == kDimension) {
-      GTN_RETURN_IF_ERROR(need(4, end, "Dimension"));
-      dimension = static_cast<int32_t>(word(4));
-      if (dimension != 3) return fail(at, "dimension " + std::to_string(dimension) + ": only 3D solutions are read");
-    } else if (keyword == kSolAtVertices || keyword == kSolAtTetrahedra || otherSolutionKeyword(keyword)) {
-      const bool tets = keyword == kSolAtTetrahedra;
-      const std::string section = keyword == kSolAtVertices ? "SolAtVertices"
-                                  : tets                    ? "SolAtTetrahedra"
-                                                            : "solution keyword " + std::to_string(keyword);
-      if (dimension != 3) return fail(at, section + " before a Dimension 3 keyword");
-      GTN_RETURN_IF_ERROR(need(count_size + 4, end, section + " header"));
-      const int64_t count = count_size == 8 ? static_cast<int64_t>(word(8)) : static_cast<int32_t>(word(4));
-      const int64_t ntypes = static_cast<int32_t>(word(4));
-      if (count < 0) return fail(at, section + " count " + std::to_string(count) + " is negative");
-      if (ntypes < 1 || ntypes > kMaxTypes) return fail(at, section + ": type count " + std::to_string(ntypes));
-      GTN_RETURN_IF_ERROR(need(4 * static_cast<uint64_t>(ntypes), end, section + " types"));
-      std::vector<int64_t> types(static_cast<size_t>(ntypes));
-      uint64_t size = 0;
-      for (int64_t& t : types) {
-        t = static_cast<int32_t>(word(4));
-        if (typeComponents(t) == 0)
-          return fail(at, section + ": solution type " + std::to_string(t) +
-                              " (known: 1 scalar, 2 vector, 3 symmetric matrix, 4 matrix)");
-        size += typeComponents(t);
-      }
-      if (static_cast<uint64_t>(count) > (end - pos) / (size * real_size))
-        return fail(at, section + ": " + std::to_string(count) + " entries of " + std::to_string(size * real_size) +
-                            " bytes do not fit in the " + std::to_string(end - pos) + " bytes before byte offset " +
-                            std::to_string(end));
-      if (otherSolutionKeyword(keyword)) {
-        result_->report.warnings.push_back(path_ + ": byte offset " + std::to_string(at) + ": " + section +
-                                           " skipped (only SolAtVertices and SolAtTetrahedra are read)");
-      } else {
-        size_t items = 0;
-        GTN_ASSIGN_OR_RETURN(const bool keep, accept(section.c_str(), tets, count, &items));
-        if (keep) {
-          std::vector<Field> fields = target_.make(types, items, static_cast<int>(version), tets);
-          for (size_t i = 0; i < items; ++i)
-            for (Field& f : fields)
-              for (uint32_t c = 0; c < f.components; ++c) {
-                const uint64_t v = word(real_size);
-                if (real_size == 4) {
-                  const uint32_t u = static_cast<uint32_t>(v);
-                  std::memcpy(f.bytes.data() + (i * f.components + c) * 4, &u, 4);
-                } else {
-                  std::memcpy(f.bytes.data() + (i * f.components + c) * 8, &v, 8);
-                }
-              }
-          store(&fields, tets);
-        }
-      }
+      GTN_RETURN_IF_ERROR(in.need(4, "Dimension", end));
+      dimension = static_cast<int32_t>(in.word(4));
+      if (dimension != 3) return in.fail(at, "dimension " + std::to_string(dimension) + ": only 3D solutions are read");
+      continue;
     }
-    if (next == 0) break;
-    pos = next;
+    if (keyword != kSolAtVertices && keyword != kSolAtTetrahedra && !otherSolutionKeyword(keyword)) continue;
+    const bool tets = keyword == kSolAtTetrahedra;
+    const std::string section = keyword == kSolAtVertices ? "SolAtVertices"
+                                : tets                    ? "SolAtTetrahedra"
+                                                          : "solution keyword " + std::to_string(keyword);
+    if (dimension != 3) return in.fail(at, section + " before a Dimension 3 keyword");
+    // The line count is an int of the version's size; the type count and the types are int32.
+    GTN_RETURN_IF_ERROR(in.need(in.intSize() + 4, section + " header", end));
+    const int64_t count = in.integer();
+    const int64_t ntypes = static_cast<int32_t>(in.word(4));
+    if (count < 0) return in.fail(at, section + " count " + std::to_string(count) + " is negative");
+    if (ntypes < 1 || ntypes > kMaxTypes) return in.fail(at, section + ": type count " + std::to_string(ntypes));
+    GTN_RETURN_IF_ERROR(in.need(4 * static_cast<uint64_t>(ntypes), section + " types", end));
+    std::vector<int64_t> types(static_cast<size_t>(ntypes));
+    uint64_t size = 0;
+    for (int64_t& t : types) {
+      t = static_cast<int32_t>(in.word(4));
+      if (typeComponents(t) == 0)
+        return in.fail(at, section + ": solution type " + std::to_string(t) +
+                               " (known: 1 scalar, 2 vector, 3 symmetric matrix, 4 matrix)");
+      size += typeComponents(t);
+    }
+    const uint64_t left = end - in.position();
+    if (static_cast<uint64_t>(count) > left / (size * real_size))
+      return in.fail(at, section + ": " + std::to_string(count) + " entries of " + std::to_string(size * real_size) +
+                             " bytes do not fit in the " + std::to_string(left) + " bytes before byte offset " +
+                             std::to_string(end));
+    if (otherSolutionKeyword(keyword)) {
+      result_->report.warnings.push_back(path_ + ": byte offset " + std::to_string(at) + ": " + section +
+                                         " skipped (only SolAtVertices and SolAtTetrahedra are read)");
+      continue;
+    }
+    size_t items = 0;
+    GTN_ASSIGN_OR_RETURN(const bool keep, accept(section.c_str(), tets, count, &items));
+    if (!keep) continue;
+    std::vector<Field> fields = target_.make(types, items, in.version(), tets);
+    for (size_t i = 0; i < items; ++i)
+      for (Field& f : fields)
+        for (uint32_t c = 0; c < f.components; ++c) {
+          // The field has the file's real width: the bits are copied as they are.
+          const uint64_t v = in.realBits();
+          std::memcpy(f.bytes.data() + (i * f.components + c) * real_size, &v, real_size);
+        }
+    store(&fields, tets);
   }
   return Status::ok();
 }
