@@ -37,6 +37,13 @@ Status GmfBinary::need(uint64_t n, const std::string& what, uint64_t end) const 
   return Status::ok();
 }
 
+Status GmfBinary::readDimension3(uint64_t at, uint64_t end, const std::string& why) {
+  GTN_RETURN_IF_ERROR(need(4, "Dimension", end));
+  const int64_t d = static_cast<int32_t>(word(4));
+  if (d != 3) return fail(at, "dimension " + std::to_string(d) + ": " + why);
+  return Status::ok();
+}
+
 StatusOr<bool> GmfBinary::nextKeyword(uint32_t* code, uint64_t* at, uint64_t* end) {
   if (done_) return false;
   if (next_ != 0) pos_ = next_;

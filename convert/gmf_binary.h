@@ -33,6 +33,9 @@ class GmfBinary {
   // the end of the file). False at the End keyword, after the last record or at the end of the file.
   StatusOr<bool> nextKeyword(uint32_t* code, uint64_t* at, uint64_t* end);
 
+  // The Dimension keyword's value (an int32 in every version), which must be 3; `why` completes the
+  // error for another ("only 3D solutions are read").
+  Status readDimension3(uint64_t at, uint64_t end, const std::string& why);
   // Fails unless `n` bytes from the read position lie before `end`.
   Status need(uint64_t n, const std::string& what, uint64_t end) const;
   Status fail(uint64_t at, const std::string& reason) const {

@@ -201,9 +201,8 @@ Status SolutionReader::readBinary(const std::string& bytes) {
     GTN_ASSIGN_OR_RETURN(const bool more, in.nextKeyword(&keyword, &at, &end));
     if (!more) break;
     if (keyword == kDimension) {
-      GTN_RETURN_IF_ERROR(in.need(4, "Dimension", end));
-      dimension = static_cast<int32_t>(in.word(4));
-      if (dimension != 3) return in.fail(at, "dimension " + std::to_string(dimension) + ": only 3D solutions are read");
+      GTN_RETURN_IF_ERROR(in.readDimension3(at, end, "only 3D solutions are read"));
+      dimension = 3;
       continue;
     }
     if (keyword != kSolAtVertices && keyword != kSolAtTetrahedra && !otherSolutionKeyword(keyword)) continue;

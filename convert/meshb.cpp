@@ -141,12 +141,8 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
     GTN_ASSIGN_OR_RETURN(const bool more, in_.nextKeyword(&keyword, &at, &end));
     if (!more) break;
     if (keyword == kDimension) {
-      GTN_RETURN_IF_ERROR(in_.need(4, "Dimension", end));
-      const int64_t d = static_cast<int32_t>(in_.word(4));
-      if (d != 3)
-        return in_.fail(at, "dimension " + std::to_string(d) +
-                                ": only 3-dimensional (tetrahedral) Medit meshes are supported");
-      dimension_ = d;
+      GTN_RETURN_IF_ERROR(in_.readDimension3(at, end, "only 3-dimensional (tetrahedral) Medit meshes are supported"));
+      dimension_ = 3;
     } else if (keyword == kVertices) {
       GTN_RETURN_IF_ERROR(readVertices(end));
     } else if (const MeditVolumeKeyword* kw = volumeKeyword(keyword)) {
