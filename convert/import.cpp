@@ -133,6 +133,9 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
     if (head(p, 64).rfind("version https://git-lfs.github.com/spec/", 0) == 0)
       return Status(StatusCode::kNotOurFile, p + ": a Git LFS pointer (the placeholder a clone without Git LFS "
                                                  "holds), not the file itself: fetch it, e.g. with 'git lfs pull'");
+  if (const std::string ext = lowerExtension(inputs[0]); ext == "sol" || ext == "solb")
+    return usageError(inputs[0] + ": a Medit solution file holds values, not a mesh: give it after its mesh "
+                                  "(gtn convert u.mesh " + inputs[0] + " ...)");
   const InputFormat first = detectInputFormat(inputs[0]);
   if (first == InputFormat::kPlot3d) return importPlot3d(inputs, options);
   ImportOptions opts = options;

@@ -381,6 +381,12 @@ TEST(MeditSolution, MismatchedOrMalformedFilesAreRejected) {
   auto r = importMesh({dir + "/m.mesh", dir + "/m.mesh"}, ImportOptions{});
   ASSERT_FALSE(r.isOk());
   EXPECT_NE(r.status().message().find("solution files (.sol, .solb)"), std::string::npos) << r.status().message();
+  // And a solution file is no mesh.
+  r = importMesh({dir + "/count.sol"}, ImportOptions{});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().code(), StatusCode::kUsage) << r.status().message();
+  EXPECT_NE(r.status().message().find("count.sol: a Medit solution file holds values, not a mesh"), std::string::npos)
+      << r.status().message();
 }
 
 TEST(MeditSolution, AFileBesideTheMeshIsPointedOut) {
