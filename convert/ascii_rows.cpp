@@ -24,6 +24,19 @@ Status checkCountFits(const TextReader& reader, int64_t count, int64_t tokens_pe
   return Status::ok();
 }
 
+Status checkRestFits(const TextReader& reader, int64_t announced, int64_t tokens_per_item, const std::string& what,
+                     size_t header_line) {
+  const uint64_t rest = reader.rest().size();
+  const uint64_t per_item = 2 * static_cast<uint64_t>(tokens_per_item > 0 ? tokens_per_item : 1);
+  if (announced > 1 && static_cast<uint64_t>(announced - 1) > (rest + 1) / per_item) {
+    return invalidData(reader.path() + ":" + std::to_string(header_line) + ": the header announces " +
+                       std::to_string(announced) + " " + what + ", rows of " + std::to_string(tokens_per_item) +
+                       " values like the first (line " + std::to_string(reader.line()) + "), but only " +
+                       std::to_string(rest) + " bytes follow it: the count is wrong or the file is truncated");
+  }
+  return Status::ok();
+}
+
 Status truncatedError(const TextReader& reader, size_t last_line, int64_t done, int64_t total, const std::string& what) {
   return invalidData(reader.path() + ":" + std::to_string(last_line) + ": the file ends after " + std::to_string(done) +
                      " of the " + std::to_string(total) + " " + what + " its header announces");

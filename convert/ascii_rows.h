@@ -22,6 +22,10 @@ bool readRow(TextReader& reader, std::vector<std::string_view>* tokens);
 // text (a token takes at least two bytes: itself and a separator). `what` names the items ("nodes");
 // the error names the file, the line of the count and both numbers. Negative counts fail too.
 Status checkCountFits(const TextReader& reader, int64_t count, int64_t tokens_per_item, const std::string& what);
+// The same for the items left after the first of `announced` (the row that fixed how wide every row
+// is), the error placed at the header's line `header_line` and naming the announced count.
+Status checkRestFits(const TextReader& reader, int64_t announced, int64_t tokens_per_item, const std::string& what,
+                     size_t header_line);
 
 // The error for a file that ends after `done` of the `total` items (`what`) its header announces,
 // placed at `last_line`, the line of the last row read.

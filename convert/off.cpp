@@ -60,6 +60,7 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
     first = 0;
   }
   if (counts.size() > 3) return reader.error("more than three counts (points, tetrahedra, edges) on the count line");
+  const size_t count_line = reader.line();
   const int64_t np = counts[0], nt = counts[1];
   if (np == 0) return reader.error("no points");
   GTN_RETURN_IF_ERROR(checkCountFits(reader, np, 3, "points"));
@@ -75,7 +76,7 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
     if (i == 0) {
       width = row.size();
       if (width < 3) return reader.error("a point row needs x y z; found " + std::to_string(width) + " values");
-      GTN_RETURN_IF_ERROR(checkCountFits(reader, np - 1, static_cast<int64_t>(width), "points"));
+      GTN_RETURN_IF_ERROR(checkRestFits(reader, np, static_cast<int64_t>(width), "points", count_line));
       mesh.coords.resize(3 * static_cast<size_t>(np));
       if (width > 3) scalars = Field("scalar", static_cast<uint32_t>(width - 3), ScalarType::kFloat64, np);
     } else if (row.size() != width) {
@@ -106,7 +107,7 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
         return reader.error("a tetrahedron row has 4 indices, optionally after a leading 4; found " +
                             std::to_string(tet_width) + " values");
       }
-      GTN_RETURN_IF_ERROR(checkCountFits(reader, nt - 1, static_cast<int64_t>(tet_width), "tetrahedra"));
+      GTN_RETURN_IF_ERROR(checkRestFits(reader, nt, static_cast<int64_t>(tet_width), "tetrahedra", count_line));
       mesh.tets.resize(static_cast<size_t>(nt));
     } else if (row.size() != tet_width) {
       return reader.error("tetrahedron row has " + std::to_string(row.size()) + " values; the first one has " +

@@ -475,7 +475,7 @@ TEST(OffErrors, BadInputs) {
   writeFile(p, replaced(kOff, "0 1 0 3", "0 one 0 3"));
   expectError(importOff(p, ImportOptions{}), p + ":5:");
   writeFile(p, replaced(kOff, "4 1 3 2 4\n", ""));
-  expectError(importOff(p, ImportOptions{}), p + ":8:");
+  expectError(importOff(p, ImportOptions{}), p + ":2: the header announces 2 tetrahedra, rows of 5 values like the first (line 8)");
   writeFile(p, replaced(kOff, "5 2", "5000000000000 2"));
   expectError(importOff(p, ImportOptions{}), p + ":2:");
   writeFile(p, replaced(kOff, "5 2", "500000 2"));
@@ -484,6 +484,11 @@ TEST(OffErrors, BadInputs) {
   expectError(importOff(p, ImportOptions{}), p + ":1:");
   writeFile(p, "hello\n");
   expectError(importOff(p, ImportOptions{}), p + ":1:");
+  // More rows announced than can follow the first: the header's count, at the header's line.
+  writeFile(p, replaced(kOff, "5 2", "5 40"));
+  expectError(importOff(p, ImportOptions{}), p + ":2: the header announces 40 tetrahedra, rows of 5 values like the first (line 8)");
+  writeFile(p, replaced(replaced(kOff, "5 2", "900 2"), "1 1 1 5\n4 0 1 2 3\n4 1 3 2 4\n", ""));
+  expectError(importOff(p, ImportOptions{}), p + ":2: the header announces 900 points");
 }
 
 // The surface OFF of Geomview and the shape benchmarks has the same header and point rows; its faces
