@@ -5,6 +5,7 @@
 // known section is skipped by its count, and an unknown keyword is an error (its entries could not be
 // skipped safely).
 #include <cctype>
+#include <cmath>
 #include <cstring>
 
 #include "convert/ascii_rows.h"
@@ -113,6 +114,8 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
       for (size_t i = 0; i < n; ++i) {
         for (int c = 0; c < 3; ++c) {
           GTN_ASSIGN_OR_RETURN(mesh.coords[3 * i + c], reader.readDouble("a vertex coordinate"));
+          if (!std::isfinite(mesh.coords[3 * i + c]))
+            return reader.error("vertex " + std::to_string(i + 1) + " has a non-finite " + "xyz"[c] + " coordinate");
         }
         GTN_ASSIGN_OR_RETURN(const int32_t r, readRef(reader));
         ref.set<int32_t>(i, 0, r);

@@ -8,6 +8,7 @@
 // are those of the ASCII reader; any other is skipped by its next-keyword position, which must move
 // forward and stay inside the file. Every count is checked against the bytes left before anything
 // is allocated.
+#include <cmath>
 #include <cstring>
 
 #include "convert/gmf_binary.h"
@@ -93,7 +94,11 @@ Status MeshbReader::readVertices(uint64_t end) {
   mesh.coord_type = in_.realSize() == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
   Field ref("ref", 1, ScalarType::kInt32, n);
   for (uint64_t i = 0; i < n; ++i) {
+    const uint64_t xyz_at = in_.position();
     for (int c = 0; c < 3; ++c) mesh.coords[3 * i + c] = in_.real();
+    if (!std::isfinite(mesh.coords[3 * i]) || !std::isfinite(mesh.coords[3 * i + 1]) ||
+        !std::isfinite(mesh.coords[3 * i + 2]))
+      return in_.fail(xyz_at, "vertex " + std::to_string(i + 1) + " has a non-finite coordinate");
     const uint64_t ref_at = in_.position();
     const int64_t r = in_.integer();
     if (r < INT32_MIN || r > INT32_MAX)

@@ -4,6 +4,7 @@
 // prefixed by 4. The format is line-oriented; '#' starts a comment. A surface OFF (triangle or
 // quadrilateral faces) is recognised and refused rather than read as meaningless tetrahedra.
 #include <cctype>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,9 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
     for (size_t c = 0; c < width; ++c) {
       GTN_ASSIGN_OR_RETURN(const double v, parseDoubleToken(reader, row[c], c < 3 ? "a coordinate" : "a scalar"));
       if (c < 3) {
+        if (!std::isfinite(v))
+          return reader.error("point " + std::to_string(i) + " has a non-finite " + "xyz"[c] + " coordinate " +
+                              quotedToken(row[c]));
         mesh.coords[3 * i + c] = v;
       } else {
         scalars.set<double>(static_cast<size_t>(i), static_cast<uint32_t>(c - 3), v);

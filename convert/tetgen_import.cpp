@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 
 #include "convert/ascii_rows.h"
@@ -211,6 +212,9 @@ StatusOr<Nodes> readNodes(const std::string& path, std::string_view text, TetMes
                             (nodes.layout.float32_coords ? "float32" : "number") + "), found " + quotedToken(tok));
       }
       mesh.coords[3 * i + c] = nodes.layout.float32_coords ? static_cast<double>(f) : v;
+      if (!std::isfinite(mesh.coords[3 * i + c]))
+        return reader.error("node " + std::to_string(number) + " has a non-finite " + "xyz"[c] + " coordinate " +
+                            quotedToken(tok));
     }
     GTN_RETURN_IF_ERROR(readAttributes(reader, row, 4, map, i));
     if (markers) {

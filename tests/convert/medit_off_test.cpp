@@ -216,6 +216,8 @@ TEST(MeditErrors, BadInputs) {
   expectError(importMedit(p, ImportOptions{}), p);
   writeFile(p, "MeshVersionFormatted 1\nDimension 3\nVertices\n100000000\n0 0 0 0\n");
   expectError(importMedit(p, ImportOptions{}), p + ":4:");
+  writeFile(p, replaced(kMedit, "1 0 0 11", "1 0 inf 11"));
+  expectError(importMedit(p, ImportOptions{}), p + ":8: vertex 2 has a non-finite z coordinate");
 }
 
 // Two unit cubes side by side as Medit hexahedra (corners 1-4 round the bottom face, 5-8 above them),
@@ -484,6 +486,8 @@ TEST(OffErrors, BadInputs) {
   expectError(importOff(p, ImportOptions{}), p + ":1:");
   writeFile(p, "hello\n");
   expectError(importOff(p, ImportOptions{}), p + ":1:");
+  writeFile(p, replaced(kOff, "0 1 0 3", "0 nan 0 3"));
+  expectError(importOff(p, ImportOptions{}), p + ":5: point 2 has a non-finite y coordinate 'nan'");
   // More rows announced than can follow the first: the header's count, at the header's line.
   writeFile(p, replaced(kOff, "5 2", "5 40"));
   expectError(importOff(p, ImportOptions{}), p + ":2: the header announces 40 tetrahedra, rows of 5 values like the first (line 8)");

@@ -467,6 +467,9 @@ TEST(TetgenErrors, NonNumericToken) {
   auto r = importTetgen(dir + "/m", ImportOptions{});
   EXPECT_NE(r.status().message().find("'x1'"), std::string::npos) << r.status().message();
   expectError(writeTetgen(dir, kNodes0, "1 4 0\n0 0 1 2 3.5\n"), dir + "/m.ele", ":2:");
+  // A coordinate that is a number but not a finite one: its line, node and axis.
+  expectError(writeTetgen(dir, "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 -inf 0\n3 0 0 1\n4 1 1 1\n", "0 4 0\n"),
+              dir + "/m.node", ":4: node 2 has a non-finite y coordinate '-inf'");
 }
 
 TEST(TetgenErrors, EmptyFile) {
