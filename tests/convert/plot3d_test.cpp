@@ -627,12 +627,27 @@ TEST_F(Plot3dSynthetic, IblankHolesDropCellsAndKeepTheField) {
 
 TEST_F(Plot3dSynthetic, LeftHandedBlockIsFlipped) {
   Block b = boxBlock(3, 3, 3);
+  const std::string right = write("right.xyz", gridFile({b}, GridOptions()));
   for (double& x : b.x) x = -x;  // mirror: every cell left-handed
-  const std::string xyz = write("left.xyz", gridFile({b}, GridOptions()));
-  auto r = importFiles({xyz}, 6);
-  ASSERT_TRUE(r.isOk()) << r.status().message();
-  EXPECT_EQ(r->report.flipped, 48u);
-  EXPECT_EQ(computeMeshStats(r->mesh).inverted, 0u);
+  const std::string left = write("left.xyz", gridFile({b}, GridOptions()));
+  // Every tetrahedron of a left-handed grid is flipped, none of a right-handed one, with either split.
+  for (int split : {5, 6}) {
+    SCOPED_TRACE(split);
+    auto r = importFiles({left}, split);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->report.flipped, 8u * split);
+    EXPECT_EQ(computeMeshStats(r->mesh).inverted, 0u);
+    auto l = importFiles({right}, split);
+    ASSERT_TRUE(l.isOk()) << l.status().message();
+    EXPECT_EQ(l->report.flipped, 0u);
+    // The same tetrahedra, corner for corner, apart from the exchanged pair that a flip makes.
+    ASSERT_EQ(r->mesh.tets.size(), l->mesh.tets.size());
+    for (size_t t = 0; t < r->mesh.tets.size(); ++t) {
+      const Tet& a = r->mesh.tets[t];
+      const Tet& c = l->mesh.tets[t];
+      EXPECT_TRUE(a[0] == c[0] && a[1] == c[1] && a[2] == c[3] && a[3] == c[2]) << t;
+    }
+  }
 }
 
 TEST_F(Plot3dSynthetic, FunctionFileAsSecondAndThirdInput) {
@@ -896,10 +911,8 @@ TEST(Plot3dSample, GeneratorWritesAValidDeterministicSample) {
     auto r = importFiles({a + "/sample.xyz", a + "/sample.q"}, split);
     ASSERT_TRUE(r.isOk()) << r.status().message();
     EXPECT_TRUE(r->report.warnings.empty());
-    // Right-handed cells: the six-tetrahedra split (whose tables are positively oriented) needs no flip.
-    if (split == 6) {
-      EXPECT_EQ(r->report.flipped, 0u);
-    }
+    // Right-handed cells: both splits' tables are positively oriented, so nothing is flipped.
+    EXPECT_EQ(r->report.flipped, 0u);
     EXPECT_EQ(r->report.zero_volume, 0u);
     const MeshStats s = computeMeshStats(r->mesh);
     EXPECT_EQ(s.points, 24u * 16u * 12u);
