@@ -585,6 +585,19 @@ TEST_F(Plot3dSynthetic, SubrecordsWithNegativeMarkers) {
   EXPECT_EQ(r->mesh.numTets(), 48u);
 }
 
+TEST_F(Plot3dSynthetic, AFullyBlankedGridSaysNoTetrahedraAreLeft) {
+  std::vector<Block> blocks = {boxBlock(3, 3, 3)};
+  blocks[0].iblank.assign(27, 0);
+  GridOptions o;
+  o.iblank = true;
+  auto r = importFiles({write("blank.xyz", gridFile(blocks, o))}, 6);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 0u);
+  EXPECT_EQ(r->report.dropped_cells, 8u);
+  ASSERT_FALSE(r->report.warnings.empty());
+  EXPECT_EQ(r->report.warnings.back(), "the mesh has no tetrahedra left: all 8 cells were dropped (IBLANK holes)");
+}
+
 TEST_F(Plot3dSynthetic, IblankHolesDropCellsAndKeepTheField) {
   std::vector<Block> blocks = {boxBlock(4, 4, 4)};
   blocks[0].iblank.assign(64, 1);
