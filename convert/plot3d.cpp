@@ -510,7 +510,8 @@ bool sameDims(const std::vector<BlockDims>& a, const std::vector<BlockDims>& b) 
 }
 
 // Picks the one fit among `fits` that `accept` takes, preferring the grid file's byte order and
-// record markers when several remain. Empty when none; an error when still ambiguous.
+// record markers when several remain, then fits with record markers over fits without. Empty when
+// none; an error when still ambiguous.
 StatusOr<std::optional<Fit>> pickOne(const std::string& path, Kind kind, std::vector<Fit> fits,
                                      const std::function<bool(const Fit&)>& accept, const Layout* prefer) {
   std::vector<Fit> ok;
@@ -521,6 +522,14 @@ StatusOr<std::optional<Fit>> pickOne(const std::string& path, Kind kind, std::ve
     for (const Fit& f : ok)
       if (f.layout.big_endian == prefer->big_endian && f.layout.marker == prefer->marker) same.push_back(f);
     if (!same.empty()) ok = std::move(same);
+  }
+  if (ok.size() > 1) {
+    // A fit whose record markers all check out carries a signature that a marker-less fit of the
+    // same size (the bytes merely adding up) does not: it wins.
+    std::vector<Fit> marked;
+    for (const Fit& f : ok)
+      if (f.layout.marker != 0) marked.push_back(f);
+    if (!marked.empty() && marked.size() < ok.size()) ok = std::move(marked);
   }
   if (ok.empty()) return std::optional<Fit>();
   if (ok.size() == 1) return std::optional<Fit>(std::move(ok[0]));

@@ -585,6 +585,26 @@ TEST_F(Plot3dSynthetic, SubrecordsWithNegativeMarkers) {
   EXPECT_EQ(r->mesh.numTets(), 48u);
 }
 
+// A 3x4x5 float64 grid with IBLANK, plane by plane with 4-byte markers, is exactly as long as a
+// marker-less float32 grid of 12x3x4: the reading whose record markers all check out is taken.
+TEST_F(Plot3dSynthetic, RecordMarkersOutweighASizeThatMerelyAddsUp) {
+  GridOptions o;
+  o.big_endian = false;
+  o.marker = 4;
+  o.precision = 8;
+  o.iblank = true;
+  o.planes = true;
+  std::vector<Block> blocks = {boxBlock(3, 4, 5)};
+  blocks[0].iblank.assign(60, 1);
+  const std::string bytes = gridFile(blocks, o);
+  ASSERT_EQ(bytes.size(), 12u + 4u * 12u * 3u * 4u * 3u);  // the marker-less float32 12x3x4 size
+  auto r = importFiles({write("coincidence.xyz", bytes)}, 6);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numPoints(), 60u);
+  EXPECT_EQ(r->mesh.numTets(), 144u);
+  expectCoords(r->mesh, blocks, 8);
+}
+
 TEST_F(Plot3dSynthetic, AFullyBlankedGridSaysNoTetrahedraAreLeft) {
   std::vector<Block> blocks = {boxBlock(3, 3, 3)};
   blocks[0].iblank.assign(27, 0);
