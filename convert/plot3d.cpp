@@ -471,9 +471,13 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
       }
     }
   }
-  // The interpretations that got furthest explain the failure best.
-  std::stable_sort(d.plausible.begin(), d.plausible.end(),
-                   [](const Attempt& a, const Attempt& b) { return a.progress > b.progress; });
+  // The interpretations that got furthest explain the failure best; those with record markers first:
+  // they got past a header whose markers checked out, which a marker-less reading of the same bytes
+  // (the marker taken for a dimension) gets past by chance.
+  std::stable_sort(d.plausible.begin(), d.plausible.end(), [](const Attempt& a, const Attempt& b) {
+    if ((a.layout.marker != 0) != (b.layout.marker != 0)) return a.layout.marker != 0;
+    return a.progress > b.progress;
+  });
   return d;
 }
 
