@@ -586,12 +586,35 @@ Status noFitError(const std::string& path, std::string_view bytes, Kind kind, co
   return invalidData(msg + "; " + triedText(d, kind));
 }
 
+// How a Q or function file fails when read with its grid's byte order, record markers, precision
+// and layout (files written together share them): the likeliest explanation, named first. Empty
+// for a grid read from text, or when that reading fits.
+std::string gridLayoutReading(std::string_view bytes, Kind kind, const Layout& grid) {
+  if (grid.ascii) return "";
+  Layout l = grid;
+  l.ndim = 3;
+  l.iblank = false;
+  l.overflow = false;
+  Fit fit;
+  std::string why;
+  bool header_ok = false;
+  uint64_t progress = 0;
+  if (tryLayout(bytes, l, kind, &fit, &why, &header_ok, &progress)) return "";
+  return "read like its grid (" + describeLayout(l, kind) + "): " + why;
+}
+
 // Why no interpretation of a Q or function file goes with the grid: its dimensions disagree with
 // the grid's, or nothing fits at all.
 Status noMatchError(const std::string& path, std::string_view bytes, Kind kind, const Detection& d,
-                    const std::vector<BlockDims>& grid_blocks, const std::string& grid_path) {
+                    const std::vector<BlockDims>& grid_blocks, const std::string& grid_path, const Layout& grid_layout) {
   const std::vector<Fit>& fits = d.exact.empty() ? d.zero_tail : d.exact;
-  if (fits.empty()) return noFitError(path, bytes, kind, d);
+  if (fits.empty()) {
+    const std::string likely = gridLayoutReading(bytes, kind, grid_layout);
+    if (likely.empty()) return noFitError(path, bytes, kind, d);
+    const Status all = noFitError(path, bytes, kind, d);
+    const std::string prefix = path + ": ";
+    return invalidData(prefix + likely + "; " + all.message().substr(all.message().rfind(prefix, 0) == 0 ? prefix.size() : 0));
+  }
   return invalidData(path + ": PLOT3D " + kindName(kind) + " file dimensions " + blocksText(fits[0].blocks) + " (" +
                      describeLayout(fits[0].layout, kind) + ") disagree with the grid's " + blocksText(grid_blocks) +
                      " (" + grid_path + ")");
@@ -1155,7 +1178,7 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
     return selectFit(path, *bytes, kind, *d, matches_grid, &grid.fit.layout, &warnings);
   };
   auto no_match = [&](const std::string& path, std::string_view bytes, Kind kind, const Detection& d) {
-    return noMatchError(path, bytes, kind, d, blocks, grid_path);
+    return noMatchError(path, bytes, kind, d, blocks, grid_path, grid.fit.layout);
   };
   if (!second_path.empty()) {
     GTN_ASSIGN_OR_RETURN(const std::string raw, readInput(second_path, Kind::kQ));
@@ -1178,10 +1201,13 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
                              "; as a function file: " + f_text.message());
         if (!dq.exact.empty() || !dq.zero_tail.empty()) return no_match(second_path, bytes, Kind::kQ, dq);
         if (!df.exact.empty() || !df.zero_tail.empty()) return no_match(second_path, fbytes, Kind::kFunction, df);
+        const std::string likely = gridLayoutReading(bytes, Kind::kQ, grid.fit.layout);
+        const std::string likely_f = gridLayoutReading(fbytes, Kind::kFunction, grid.fit.layout);
         return invalidData(second_path + ": neither a PLOT3D Q file nor a function file for the grid " + grid_path +
                            " (" + blocksText(blocks) + ")" +
                            (looksLikeText(raw) ? "; it looks like text, but not like ASCII PLOT3D either" : "") +
-                           "; as a Q file: " + triedText(dq, Kind::kQ) +
+                           (likely.empty() ? "" : "; as a Q file " + likely) + "; as a Q file: " + triedText(dq, Kind::kQ) +
+                           (likely_f.empty() ? "" : "; as a function file " + likely_f) +
                            "; as a function file: " + triedText(df, Kind::kFunction));
       }
       GTN_RETURN_IF_ERROR(addFunction(second_path, fbytes, f.fit, mesh));

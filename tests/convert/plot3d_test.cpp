@@ -843,6 +843,22 @@ TEST_F(Plot3dSynthetic, QDimensionsMustMatchTheGrid) {
   EXPECT_NE(t.status().message().find("grid 1 (3x3x3) data needs 540 bytes at byte 28, the file has 530 left"),
             std::string::npos)
       << t.status().message();
+
+  // Cut inside its dimensions record, next to a grid with record markers: the reading with the
+  // grid's layout is named first, with the record that does not fit.
+  GridOptions marked;
+  marked.marker = 4;
+  marked.multi = true;
+  const std::string mxyz = write("m.xyz", gridFile(blocks, marked));
+  const std::string mq = qFile(blocks, marked);
+  const std::string mcut = write("m.q", mq.substr(0, 20));
+  auto c = importFiles({mxyz, mcut});
+  ASSERT_FALSE(c.isOk());
+  EXPECT_NE(c.status().message().find("as a Q file read like its grid (big-endian, 4-byte record markers, multi-grid, "
+                                      "float32): dimensions: the record marker at byte 12 says 12 bytes, past the end "
+                                      "of the file"),
+            std::string::npos)
+      << c.status().message();
 }
 
 TEST_F(Plot3dSynthetic, MetaFileNamesTheFilesRelativeToItself) {
