@@ -279,8 +279,9 @@ std::string_view blockBytes(std::string_view bytes, const Fit& fit, size_t g, co
 }
 
 // Tries one interpretation. On failure `*why` says what did not fit, `*header_ok` whether the grid
-// count and dimensions at least made sense and `*progress` how far the records checked out (both
-// for ranking the explanations).
+// count and dimensions at least made sense (or, with record markers, were read from records whose
+// markers checked out: then an impossible value is the explanation) and `*progress` how far the
+// records checked out (both for ranking the explanations).
 bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std::string* why, bool* header_ok,
                uint64_t* progress) {
   *header_ok = false;
@@ -301,6 +302,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     ngrid = loadSigned(v.data(), 4, l.big_endian);
     if (ngrid < 1 || static_cast<uint64_t>(ngrid) > size / (4 * static_cast<uint64_t>(ints))) {
       *why = "grid count " + std::to_string(ngrid) + " is impossible for a file of " + std::to_string(size) + " bytes";
+      *header_ok = l.marker != 0;  // its record checked out: a real explanation
       return false;
     }
   }
@@ -320,6 +322,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     if (fit->nq < 1 || static_cast<uint64_t>(fit->nq) > size / value_bytes || fit->nqc < 0 ||
         static_cast<uint64_t>(fit->nqc) > size / value_bytes) {
       *why = "NQ " + std::to_string(fit->nq) + " and NQC " + std::to_string(fit->nqc) + " are impossible";
+      *header_ok = l.marker != 0;
       return false;
     }
   }
@@ -331,6 +334,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
       // Every point takes at least one real in the file: a larger count cannot fit.
       if (v < 1 || static_cast<uint64_t>(v) > size / value_bytes) {
         *why = "dimension " + std::to_string(a + 1) + " of grid " + std::to_string(g + 1) + " is " + std::to_string(v);
+        *header_ok = l.marker != 0;
         return false;
       }
       if (a < 3 && a < l.ndim) {
@@ -338,6 +342,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
         points *= static_cast<uint64_t>(v);
         if (points > size / value_bytes) {
           *why = "grid " + std::to_string(g + 1) + " has more points than the file has bytes for";
+          *header_ok = l.marker != 0;
           return false;
         }
       } else if (kind == Kind::kFunction) {

@@ -800,6 +800,18 @@ TEST_F(Plot3dSynthetic, BadInputsFailWithTheFileNamed) {
   ASSERT_EQ(padded->report.warnings.size(), 1u);
   EXPECT_NE(padded->report.warnings[0].find("8 trailing zero bytes"), std::string::npos);
 
+  // An impossible dimension in a record whose markers check out is named as such.
+  Block flat = boxBlock(3, 3, 3);
+  flat.n[1] = 0;
+  GridOptions marked;
+  marked.marker = 4;
+  auto zero = importFiles({write("zero.xyz", gridFile({flat}, marked))});
+  ASSERT_FALSE(zero.isOk());
+  EXPECT_NE(zero.status().message().find("[1] big-endian, 4-byte record markers, single grid, 3D, float32, no IBLANK: "
+                                         "dimension 2 of grid 1 is 0"),
+            std::string::npos)
+      << zero.status().message();
+
   // Text is not read, and the message says so.
   auto text = importFiles({write("ascii.xyz", "3 3 3\n0 1 2 0 1 2 0 1 2\n")});
   ASSERT_FALSE(text.isOk());
