@@ -124,22 +124,7 @@ void weldPoints(TetMesh& mesh, ImportReport& report) {
 }
 
 namespace {
-StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, const ImportOptions& options);
-}  // namespace
-
-StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const ImportOptions& options) {
-  StatusOr<ImportResult> result = importMeshOnce(inputs, options);
-  if (result.isOk() && result->mesh.tets.empty()) {
-    const ImportReport& r = result->report;
-    std::string why;
-    if (r.dropped_cells > 0) why = ": all " + std::to_string(r.dropped_cells) + " cells were dropped (IBLANK holes)";
-    else if (r.collapsed_tets > 0) why = ": --weld collapsed all " + std::to_string(r.collapsed_tets) + " tetrahedra";
-    result->report.warnings.push_back("the mesh has no tetrahedra left" + why);
-  }
-  return result;
-}
-
-namespace {
+// importMesh without the final check.
 StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, const ImportOptions& options) {
   if (inputs.empty()) return usageError("no input given");
   if (options.split != 5 && options.split != 6)
@@ -217,5 +202,17 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
   return result;
 }
 }  // namespace
+
+StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const ImportOptions& options) {
+  StatusOr<ImportResult> result = importMeshOnce(inputs, options);
+  if (result.isOk() && result->mesh.tets.empty()) {
+    const ImportReport& r = result->report;
+    std::string why;
+    if (r.dropped_cells > 0) why = ": all " + std::to_string(r.dropped_cells) + " cells were dropped (IBLANK holes)";
+    else if (r.collapsed_tets > 0) why = ": --weld collapsed all " + std::to_string(r.collapsed_tets) + " tetrahedra";
+    result->report.warnings.push_back("the mesh has no tetrahedra left" + why);
+  }
+  return result;
+}
 
 }  // namespace gtn
