@@ -34,7 +34,7 @@ int runCompare(const CompareArgs& args) {
     j["rmse"] = d->rmse;
     j["psnr"] = std::isinf(d->psnr) ? nlohmann::json(nullptr) : nlohmann::json(d->psnr);
     j["max_difference"] = d->max_difference;
-    std::printf("%s\n", j.dump(2).c_str());
+    std::printf("%s\n", jsonText(j).c_str());
   } else {
     std::printf("pixels compared  %llu of %d\n", static_cast<unsigned long long>(d->pixels), a->width * a->height);
     std::printf("rmse             %.4f\n", d->rmse);

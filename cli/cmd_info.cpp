@@ -183,7 +183,7 @@ int runGtnInfo(const InfoArgs& a) {
       if (!mt.isOk()) return reportError(mt.status());
       j["merge_tree"] = mt.value();
     }
-    std::printf("%s\n", j.dump(2).c_str());
+    std::printf("%s\n", jsonText(j).c_str());
     return 0;
   }
   std::printf("%s: .gtn format %s, %llu bytes, %zu level(s)%s\n", input.c_str(), version.c_str(),
@@ -208,7 +208,7 @@ int runGtnInfo(const InfoArgs& a) {
     auto mt = mergeTreeJson(r);
     if (!mt.isOk()) return reportError(mt.status());
     if (mt.value().is_null()) std::printf("  merge tree          none\n");
-    else std::printf("  merge tree          %s\n", mt.value().dump().c_str());
+    else std::printf("  merge tree          %s\n", jsonText(mt.value(), -1).c_str());
   }
   printText(input + " (level 0, decoded)", stats, ImportReport{}, mesh);
   return 0;
@@ -228,7 +228,7 @@ int runInfo(const InfoArgs& a) {
   if (a.json) {
     nlohmann::json j = statsToJson(stats, imported->report, imported->mesh);
     j["input"] = a.inputs;
-    std::printf("%s\n", j.dump(2).c_str());
+    std::printf("%s\n", jsonText(j).c_str());
   } else {
     printText(a.inputs[0], stats, imported->report, imported->mesh);
   }

@@ -196,7 +196,7 @@ int runRender(const RenderArgs& a) {
   if (!image.isOk()) return reportError(image.status());
   if (Status st = writePng(a.output, image.value()); !st.isOk()) return reportError(st);
   if (!a.dump_view.empty()) {
-    const std::string text = report["view"].dump(2) + "\n";
+    const std::string text = jsonText(report["view"]) + "\n";
     if (Status st = writeBytesAtomically(a.dump_view, text.data(), text.size()); !st.isOk()) return reportError(st);
   }
   const double total_ms = msSince(start);
@@ -214,7 +214,7 @@ int runRender(const RenderArgs& a) {
   report["tets_decoded"] = level->tets;
   report["total_ms"] = total_ms;
   if (a.json) {
-    std::printf("%s\n", report.dump(2).c_str());
+    std::printf("%s\n", jsonText(report).c_str());
   } else if (a.verbose || a.budget_ms >= 0) {
     std::fprintf(stderr, "gtn: render: level %zu + %llu merges (ratio %.4f), %llu tetrahedra decoded, %.1f ms\n",
                  level->level, static_cast<unsigned long long>(level->extra_merges), report["ratio"].get<double>(),

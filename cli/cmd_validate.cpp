@@ -41,7 +41,7 @@ int runValidate(const ValidateArgs& a) {
   StatusOr<ValidationReport> report = validateGtnFile(a.file, options);
   if (!report.isOk()) return reportError(report.status());
   if (a.json) {
-    std::printf("%s\n", report->toJson(a.file).dump(2).c_str());
+    std::printf("%s\n", jsonText(report->toJson(a.file)).c_str());
   } else {
     std::fputs(report->toText(a.file).c_str(), stdout);
   }

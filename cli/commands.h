@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <functional>
 #include <string>
@@ -30,6 +31,9 @@ int reportError(const Status& status);
 void warn(const std::string& message);
 // Prints what an importer changed (flips, drops, welds, warnings) on standard error.
 void printImportReport(const std::string& input, const ImportReport& report);
+// JSON as text for standard output; strings that are not UTF-8 (names in files written by older
+// versions, file names) get U+FFFD where their bytes are invalid instead of aborting the program.
+std::string jsonText(const nlohmann::json& j, int indent = 2);
 // The command line as the user typed it (for provenance).
 const std::string& commandLine();
 void setCommandLine(int argc, char** argv);

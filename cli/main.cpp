@@ -15,6 +15,10 @@ int reportError(const Status& status) {
   return exitCodeFor(status.code());
 }
 
+std::string jsonText(const nlohmann::json& j, int indent) {
+  return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 void warn(const std::string& message) { std::fprintf(stderr, "gtn: warning: %s\n", message.c_str()); }
 
 void printImportReport(const std::string& input, const ImportReport& r) {

@@ -9,6 +9,7 @@
 
 #include "format/file_io.h"
 #include "mesh/mesh_stats.h"
+#include "mesh/utf8.h"
 
 namespace gtn {
 
@@ -205,6 +206,17 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
 
 StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const ImportOptions& options) {
   StatusOr<ImportResult> result = importMeshOnce(inputs, options);
+  if (result.isOk()) {
+    // Names and metadata become the .gtn format's UTF-8 strings (and JSON): a name in another
+    // encoding (Latin-1 in older files) is transcoded.
+    TetMesh& m = result->mesh;
+    for (std::vector<Field>* fields : {&m.point_fields, &m.cell_fields})
+      for (Field& f : *fields) f.name = toUtf8(f.name);
+    for (auto& kv : m.metadata) {
+      kv.first = toUtf8(kv.first);
+      kv.second = toUtf8(kv.second);
+    }
+  }
   if (result.isOk() && result->mesh.tets.empty()) {
     const ImportReport& r = result->report;
     std::string why;

@@ -235,7 +235,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
     cache[key] = {{"tets", tets}, {"ms", ms}, {"decode_ms", dms}, {"offset_ms", offset}, {"floor", floor}};
     std::error_code ec;
     std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
-    const std::string text = cache.dump(1);
+    const std::string text = cache.dump(1, ' ', false, nlohmann::json::error_handler_t::replace);
     // A cache that cannot be written only costs a calibration next time.
     (void)writeBytesAtomically(cache_file, text.data(), text.size(), /*sync=*/false);
     source = "calibrated on levels " + names + ", cached in " + cache_file;
@@ -380,7 +380,7 @@ void recordBudgetRun(const std::string& path, const RenderOptions& options, bool
   offset = std::clamp(offset + 0.5 * (actual_ms - predicted_ms), -kMaxOffsetMs, kMaxOffsetMs);
   entry["offset_ms"] = offset;
   entry["spread_ms"] = spread;
-  const std::string out = cache.dump(1);
+  const std::string out = cache.dump(1, ' ', false, nlohmann::json::error_handler_t::replace);
   (void)writeBytesAtomically(cache_file, out.data(), out.size(), /*sync=*/false);
 }
 
@@ -415,7 +415,7 @@ void storeBoundaryRange(const std::string& path, const FieldSelector& field, std
   cache[rangeKey(path, field)] = {range.first, range.second};
   std::error_code ec;
   std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
-  const std::string out = cache.dump(1);
+  const std::string out = cache.dump(1, ' ', false, nlohmann::json::error_handler_t::replace);
   (void)writeBytesAtomically(cache_file, out.data(), out.size(), /*sync=*/false);  // a lost write costs a decode later
 }
 

@@ -645,6 +645,13 @@ TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
   EXPECT_EQ(m.point_fields[2].name, "Temp");
   EXPECT_EQ(m.point_fields[2].data<float>()[3], 3.5f);
   EXPECT_EQ(m.point_fields[3].name, "sc");  // vtkSignedCharArray
+  // A name in Latin-1 ("caf%E9" as VTK %-encodes it) becomes UTF-8, the .gtn format's strings.
+  std::string latin = text;
+  latin.replace(latin.find("\nTemp 1 4"), 9, "\ncaf%E9 1 4");
+  writeFile(dir + "/latin.vtk", latin);
+  auto l = importMesh({dir + "/latin.vtk"}, ImportOptions{});
+  ASSERT_TRUE(l.isOk()) << l.status().message();
+  EXPECT_EQ(l->mesh.point_fields[2].name, "caf\xC3\xA9");
   EXPECT_EQ(m.point_fields[3].type, ScalarType::kInt8);
   EXPECT_EQ(m.point_fields[3].data<int8_t>()[2], -3);
 }

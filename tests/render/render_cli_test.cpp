@@ -375,5 +375,30 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   EXPECT_GT(interpolated["extra_merges"].get<int64_t>(), 0) << interpolated.dump();
 }
 
+// A .gtn whose field name is not UTF-8 (files from before import made names UTF-8): --json output
+// replaces the bad bytes instead of aborting.
+TEST(JsonOutput, NamesThatAreNotUtf8DoNotAbort) {
+  const std::string dir = test::tempDir("json-latin1");
+  auto imported = importMesh({test::dataPath("vtk/spx.vtk")}, ImportOptions());
+  ASSERT_TRUE(imported.isOk());
+  TetMesh mesh = std::move(imported->mesh);
+  ASSERT_FALSE(mesh.point_fields.empty());
+  mesh.point_fields[0].name = "caf\xE9";
+  auto tree = rankMerges(mesh, RankingOptions(), nullptr);
+  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  LevelOptions lopt;
+  lopt.levels = 1;
+  auto levels = buildMipLevels(mesh, tree.value(), lopt);
+  ASSERT_TRUE(levels.isOk()) << levels.status().message();
+  const std::string path = dir + "/latin1.gtn";
+  ASSERT_TRUE(writeGtnFile(path, levels->inputs(mesh), GtnWriteOptions()).isOk());
+  for (const char* command : {"info ", "validate "}) {
+    const test::RunResult r = runGtn(std::string(command) + path + " --json");
+    EXPECT_EQ(r.exit_code, 0) << command << r.err;
+    EXPECT_NE(r.out.find("caf\xEF\xBF\xBD"), std::string::npos) << command << r.out.substr(0, 400);
+    EXPECT_TRUE(nlohmann::json::accept(r.out)) << command;
+  }
+}
+
 }  // namespace
 }  // namespace gtn
