@@ -215,6 +215,7 @@ Status LegacyReader::readPoints() {
 Status LegacyReader::readCells() {
   GTN_ASSIGN_OR_RETURN(uint64_t a, count("cell count"));
   GTN_ASSIGN_OR_RETURN(uint64_t b, count("cell list size"));
+  const size_t cells_line = tr_.line();
   TextReader peek = tr_;
   std::string_view t;
   if (peek.next(&t) && upper(t) == "OFFSETS") {
@@ -233,6 +234,10 @@ Status LegacyReader::readCells() {
     // Classic layout: per cell its point count, then the points (int32 in binary files).
     std::vector<int64_t> list;
     GTN_RETURN_IF_ERROR(readIndexArray(b, "CELLS", &list, ScalarType::kInt32));
+    // Every cell takes at least its count from the list: checked before anything is reserved.
+    if (a > list.size())
+      return invalidData(path_ + ":" + std::to_string(cells_line) + ": CELLS: " + std::to_string(a) +
+                         " cells cannot fit in a list of " + std::to_string(list.size()) + " numbers");
     cells_.offsets.assign(1, 0);
     cells_.connectivity.clear();
     cells_.offsets.reserve(a + 1);

@@ -524,6 +524,16 @@ TEST(VtkLegacy, IdsAndStringArraysAsVtkWritesThem) {
   EXPECT_NE(r->report.warnings[1].find("skipped PEDIGREE_IDS NodeNames (string)"), std::string::npos)
       << r->report.warnings[1];
 
+  // More cells than the cell list could hold fails before anything is allocated for them.
+  std::string many = text;
+  many.replace(many.find("CELLS 1 5"), 9, "CELLS 4294967296 5");
+  writeFile(dir + "/many.vtk", many);
+  auto mc = importMesh({dir + "/many.vtk"}, ImportOptions{});
+  ASSERT_FALSE(mc.isOk());
+  EXPECT_NE(mc.status().message().find("many.vtk:14: CELLS: 4294967296 cells cannot fit in a list of 5 numbers"),
+            std::string::npos)
+      << mc.status().message();
+
   // A string array cut short names the file, the line and the array.
   writeFile(dir + "/cut.vtk", text.substr(0, text.find("\nd\nTemp")));
   auto cut = importMesh({dir + "/cut.vtk"}, ImportOptions{});
