@@ -78,6 +78,10 @@ constexpr NamedType kLegacyTypes[] = {
     {"int", ScalarType::kInt32},          {"unsigned_int", ScalarType::kUInt32},
     {"long", ScalarType::kInt64},         {"unsigned_long", ScalarType::kUInt64},
     {"vtktypeint64", ScalarType::kInt64}, {"vtktypeuint64", ScalarType::kUInt64},
+    // The sized names of version 5.1 files, which meshio writes for every integer type.
+    {"vtktypeint8", ScalarType::kInt8},   {"vtktypeuint8", ScalarType::kUInt8},
+    {"vtktypeint16", ScalarType::kInt16}, {"vtktypeuint16", ScalarType::kUInt16},
+    {"vtktypeint32", ScalarType::kInt32}, {"vtktypeuint32", ScalarType::kUInt32},
     {"float", ScalarType::kFloat32},      {"double", ScalarType::kFloat64},
     {"vtkidtype", ScalarType::kInt32},  // VTK writes vtkIdType arrays as 32-bit ints in legacy files
 };

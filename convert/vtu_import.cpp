@@ -11,6 +11,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <sstream>
 
 #include "convert/cell_split.h"
@@ -84,6 +85,15 @@ std::string tagOf(const pugi::xml_node& node) {
   return tag;
 }
 
+// The text of a piece named by a parallel file. A FIFO or a device named there would block or never
+// end: only regular files are read (a missing one gets readWholeFile's error).
+StatusOr<std::string> readPieceFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !isRegularFile(path))
+    return Status(StatusCode::kIo, path + ": not a regular file (a directory, a FIFO or a device)");
+  return readWholeFile(path);
+}
+
 std::string parentDirectory(const std::string& path) {
   const size_t slash = path.find_last_of('/');
   return slash == std::string::npos ? "./" : path.substr(0, slash + 1);
@@ -93,6 +103,8 @@ class VtuReader {
  public:
   VtuReader(const std::string& path, const std::string& text) : path_(path), text_(text) {}
   StatusOr<ImportResult> read(const ImportOptions& options);
+  // read() once parse() has given the <VTKFile> element.
+  StatusOr<ImportResult> readParsed(const pugi::xml_node& root, const ImportOptions& options);
 
  private:
   // "file: Piece i", or "parallel file: piece k: file: Piece i".
@@ -814,9 +826,9 @@ StatusOr<ImportResult> VtuReader::readParallelStructured(const pugi::xml_node& r
     const std::string source = piece.attribute("Source").as_string();
     if (source.empty()) return invalidData(path_ + ": <Piece> " + std::to_string(paths.size()) + " has no Source");
     const std::string piece_path = source[0] == '/' ? source : parentDirectory(path_) + source;
-    StatusOr<std::string> text = readWholeFile(piece_path);
-    if (!text.isOk())
-      return Status(text.status().code(), path_ + ": piece " + std::to_string(paths.size()) + ": " + text.status().message());
+    const std::string at = path_ + ": piece " + std::to_string(paths.size()) + ": ";
+    StatusOr<std::string> text = readPieceFile(piece_path);
+    if (!text.isOk()) return Status(text.status().code(), at + text.status().message());
     bytes += text->size();
     paths.push_back(piece_path);
     texts.push_back(std::move(*text));
@@ -1013,11 +1025,16 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
     auto pieceError = [&](const Status& st) {
       return Status(st.code(), path_ + ": piece " + std::to_string(k) + ": " + st.message());
     };
-    StatusOr<std::string> text = readWholeFile(piece_path);
+    StatusOr<std::string> text = readPieceFile(piece_path);
     if (!text.isOk()) return pieceError(text.status());
     VtuReader reader(piece_path, *text);
     reader.in_parallel_ = true;
-    StatusOr<ImportResult> read = reader.read(options);
+    StatusOr<pugi::xml_node> piece_root = reader.parse();
+    if (!piece_root.isOk()) return pieceError(piece_root.status());
+    const std::string piece_type = piece_root->attribute("type").as_string();
+    if (piece_type != "UnstructuredGrid" && !isParallelType(piece_type))
+      return pieceError(invalidData(piece_path + ": a VTKFile of type \"" + piece_type + "\", not UnstructuredGrid"));
+    StatusOr<ImportResult> read = reader.readParsed(*piece_root, options);
     if (!read.isOk()) return pieceError(read.status());
     ImportResult r = std::move(*read);
     TetMesh& m = r.mesh;
@@ -1140,6 +1157,10 @@ StatusOr<pugi::xml_node> VtuReader::parse() {
 
 StatusOr<ImportResult> VtuReader::read(const ImportOptions& options) {
   GTN_ASSIGN_OR_RETURN(const pugi::xml_node root, parse());
+  return readParsed(root, options);
+}
+
+StatusOr<ImportResult> VtuReader::readParsed(const pugi::xml_node& root, const ImportOptions& options) {
   const std::string type = root.attribute("type").as_string();
   const bool structured = type == "StructuredGrid" || type == "RectilinearGrid" || type == "ImageData";
   const bool parallel = isParallelType(type);

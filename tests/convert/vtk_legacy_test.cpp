@@ -637,15 +637,16 @@ TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
       "POINTS 4 float\n" + bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) +
       "\nCELLS 2 4\nOFFSETS vtktypeint64\n" + be64({0, 4}) + "\nCONNECTIVITY vtktypeint64\n" + be64({0, 1, 2, 3}) +
       "\nCELL_TYPES 1\n" + bigEndianInts({10}) +
-      "\n\nPOINT_DATA 4\nFIELD FieldData 4\nflags 1 4 bit\n\x50\nMETADATA\nINFORMATION 0\n\n"
+      "\n\nPOINT_DATA 4\nFIELD FieldData 5\nflags 1 4 bit\n\x50\nMETADATA\nINFORMATION 0\n\n"
       "ids 1 4 vtkIdType\n" + bigEndianInts({7, -1, 9, 100000}) + "\nMETADATA\nINFORMATION 0\n\n"
-      "Temp 1 4 float\n" + bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\nsc 1 4 signed_char\n\xFF\x02\xFD\x04\n";
+      "Temp 1 4 float\n" + bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\nsc 1 4 signed_char\n\xFF\x02\xFD\x04\nw 1 4 vtktypeuint16\n" +
+      std::string("\x01\x00\x00\x02\xFF\xFF\x00\x04\n", 9);
   writeFile(dir + "/ids.vtk", text);
   auto r = importMesh({dir + "/ids.vtk"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
   const TetMesh& m = r->mesh;
   ASSERT_EQ(m.numTets(), 1u);
-  ASSERT_EQ(m.point_fields.size(), 4u);
+  ASSERT_EQ(m.point_fields.size(), 5u);
   EXPECT_EQ(m.point_fields[0].name, "flags");
   EXPECT_EQ(m.point_fields[0].bytes, (std::vector<uint8_t>{0, 1, 0, 1}));
   EXPECT_EQ(m.point_fields[1].name, "ids");
@@ -664,6 +665,9 @@ TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
   EXPECT_EQ(l->mesh.point_fields[2].name, "caf\xC3\xA9");
   EXPECT_EQ(m.point_fields[3].type, ScalarType::kInt8);
   EXPECT_EQ(m.point_fields[3].data<int8_t>()[2], -3);
+  EXPECT_EQ(m.point_fields[4].type, ScalarType::kUInt16);  // vtktypeuint16, as meshio writes it
+  EXPECT_EQ(m.point_fields[4].data<uint16_t>()[0], 256u);
+  EXPECT_EQ(m.point_fields[4].data<uint16_t>()[2], 65535u);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <lz4.h>
 #include <lzma.h>
+#include <sys/stat.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -1181,6 +1182,13 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
   expectError(withSecond("missing.pvtu", "p_9.vtu"), "p_9.vtu");
   expectError(withSecond("types.pvtu", "p_1i16.vtu"), "its array 'id' (1 int16) does not match");
   expectError(withSecond("self.pvtu", "self.pvtu"), "a piece of a parallel file is itself a parallel file");
+  // A piece of another kind, and a FIFO (reading it would wait for a writer forever).
+  writeFile(dir + "/img.vti", R"(<?xml version="1.0"?>
+<VTKFile type="ImageData" version="0.1"><ImageData WholeExtent="0 1 0 1 0 1"><Piece Extent="0 1 0 1 0 1"/></ImageData></VTKFile>
+)");
+  expectError(withSecond("kind.pvtu", "img.vti"), "piece 1: " + dir + "/img.vti: a VTKFile of type \"ImageData\", not UnstructuredGrid");
+  ASSERT_EQ(mkfifo((dir + "/fifo.vtu").c_str(), 0600), 0);
+  expectError(withSecond("fifo.pvtu", "fifo.vtu"), "piece 1: " + dir + "/fifo.vtu: not a regular file");
 }
 
 // --weld on a VTK file: the second tetrahedron has two bit-identical corners, so welding flattens
