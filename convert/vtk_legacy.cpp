@@ -436,6 +436,15 @@ Status LegacyReader::readAttribute(const std::string& kw) {
   Field f(decodeName(name), static_cast<uint32_t>(comps), type, 0);
   if (section_items_ > UINT64_MAX / comps) return tr_.error(kw + " " + name + ": too many values");
   GTN_RETURN_IF_ERROR(readValues(type, comps * section_items_, kw + " " + name, &f.bytes));
+  if (kw == "COLOR_SCALARS" && !binary_) {
+    // ASCII colours are written as floats in [0, 1]; VTK's reader makes them the bytes the binary
+    // form holds (255 v + 0.5, truncated), and so does this one.
+    Field bytes(f.name, f.components, ScalarType::kUInt8, section_items_);
+    const float* v = f.data<float>();
+    for (size_t i = 0; i < bytes.bytes.size(); ++i)
+      bytes.bytes[i] = static_cast<uint8_t>(std::clamp(255.0 * static_cast<double>(v[i]) + 0.5, 0.0, 255.0));
+    f = std::move(bytes);
+  }
   into->push_back(std::move(f));
   return Status::ok();
 }

@@ -670,5 +670,30 @@ TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
   EXPECT_EQ(m.point_fields[4].data<uint16_t>()[2], 65535u);
 }
 
+// COLOR_SCALARS: bytes in BINARY files, floats in [0, 1] in ASCII ones, which VTK's reader turns into
+// the same bytes (255 v + 0.5, truncated).
+TEST(VtkLegacy, ColorScalarsAreBytesInBothDialects) {
+  const std::string dir = tempDir("vtk_legacy_colors");
+  const std::string head = "# vtk DataFile Version 4.2\nc\n";
+  const std::string mesh_ascii = "ASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\n"
+                                 "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n";
+  writeFile(dir + "/a.vtk", head + mesh_ascii + "POINT_DATA 4\nCOLOR_SCALARS rgb 3\n0 0.5 1 0.2 0.4 0.6 0.001 0.999 0.25 1 1 1\n");
+  const std::string mesh_binary = "BINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n" +
+                                  bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) + "\nCELLS 1 5\n" +
+                                  bigEndianInts({4, 0, 1, 2, 3}) + "\nCELL_TYPES 1\n" + bigEndianInts({10}) + "\n";
+  const uint8_t rgb[12] = {0, 128, 255, 51, 102, 153, 0, 255, 64, 255, 255, 255};
+  writeFile(dir + "/b.vtk", head + mesh_binary + "POINT_DATA 4\nCOLOR_SCALARS rgb 3\n" +
+                                std::string(reinterpret_cast<const char*>(rgb), 12) + "\n");
+  for (const char* name : {"a.vtk", "b.vtk"}) {
+    auto r = importMesh({dir + "/" + name}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    ASSERT_EQ(r->mesh.point_fields.size(), 1u);
+    const Field& f = r->mesh.point_fields[0];
+    EXPECT_EQ(f.type, ScalarType::kUInt8) << name;
+    EXPECT_EQ(f.components, 3u);
+    EXPECT_EQ(f.bytes, std::vector<uint8_t>(rgb, rgb + 12)) << name;
+  }
+}
+
 }  // namespace
 }  // namespace gtn
