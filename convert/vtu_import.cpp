@@ -563,7 +563,10 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
   auto readData = [&](const char* section, uint64_t items, std::vector<Field>& fields, size_t items_before) -> Status {
     std::vector<Field> arrays;
     GTN_RETURN_IF_ERROR(readSection(piece, section, items, at, &arrays));
-    if (index == 0) {
+    // An empty piece's arrays hold nothing (VTK's writer names them as it likes, e.g. ImageScalars
+    // for RTData): they are not matched. The first piece with items sets the arrays.
+    if (items == 0 && index > 0) return Status::ok();
+    if (index == 0 || items_before == 0) {
       fields = std::move(arrays);
       return Status::ok();
     }

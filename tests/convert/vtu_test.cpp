@@ -579,6 +579,27 @@ TEST(Vtu, SeveralPiecesAreConcatenated) {
   EXPECT_EQ(r.mesh.point_fields[0].data<int32_t>()[5], 21);
   ASSERT_EQ(r.mesh.cell_fields.size(), 1u);
   EXPECT_EQ(r.mesh.cell_fields[0].data<float>()[1], 0.25f);
+
+  // Empty pieces, as VTK writes them when there are more pieces than cells: their arrays (named as
+  // VTK likes, here ImageScalars) hold nothing and are not matched, first or between.
+  const std::string empty =
+      R"(<Piece NumberOfPoints="0" NumberOfCells="0"><PointData><DataArray type="Float32" Name="ImageScalars" format="ascii"></DataArray></PointData>)"
+      R"(<CellData></CellData><Points><DataArray type="Float32" NumberOfComponents="3" format="ascii"></DataArray></Points>)"
+      R"(<Cells><DataArray type="Int64" Name="connectivity" format="ascii"></DataArray><DataArray type="Int64" Name="offsets" format="ascii"></DataArray>)"
+      R"(<DataArray type="UInt8" Name="types" format="ascii"></DataArray></Cells></Piece>)"
+      "\n";
+  std::string gaps = twoPieces("0 1 2 3", "10");
+  const size_t second = gaps.find("<Piece", gaps.find("<Piece") + 1);
+  gaps.insert(second, empty);
+  gaps.insert(gaps.find("<Piece"), empty);
+  const std::string gaps_path = tempDir("vtu_empty_pieces") + "/gaps.vtu";
+  writeFile(gaps_path, gaps);
+  ImportResult g = load(gaps_path);
+  ASSERT_EQ(g.mesh.numPoints(), 8u);
+  ASSERT_EQ(g.mesh.numTets(), 2u);
+  ASSERT_EQ(g.mesh.point_fields.size(), 1u);
+  EXPECT_EQ(g.mesh.point_fields[0].data<int32_t>()[5], 21);
+  ASSERT_EQ(g.mesh.cell_fields.size(), 1u);
 }
 
 void expectError(const std::string& path, const std::string& part) {
