@@ -153,7 +153,23 @@ Status wrongWidth(const TextReader& reader, size_t found, int64_t expected, cons
 struct Nodes {
   int64_t base = 0;
   Layout layout;
+  std::string warning;  // for the import report, or empty
 };
+
+// The marker-column name that meshio's TetGen writer records in its comment ("# attribute and marker
+// names: a b m": the last one), or "".
+std::string meshioMarkerName(std::string_view text) {
+  const std::string_view key = "# attribute and marker names:";
+  const size_t at = text.substr(0, 4096).find(key);
+  if (at == std::string_view::npos) return "";
+  std::string_view line = text.substr(at + key.size());
+  line = line.substr(0, line.find_first_of("\r\n"));
+  const size_t end = line.find_last_not_of(" \t");
+  if (end == std::string_view::npos) return "";
+  const size_t space = line.find_last_of(" \t", end);
+  const size_t begin = space == std::string_view::npos ? 0 : space + 1;
+  return std::string(line.substr(begin, end + 1 - begin));
+}
 
 StatusOr<Nodes> readNodes(const std::string& path, std::string_view text, TetMesh& mesh) {
   Nodes nodes;
@@ -179,7 +195,8 @@ StatusOr<Nodes> readNodes(const std::string& path, std::string_view text, TetMes
                        mapColumns(path, nodes.layout, tetgen::kPointFieldsKey, attributes, n, 1, markers == 1,
                                   "the boundary-marker column",
                                   [](int64_t j) { return "attribute_" + std::to_string(j); }));
-  if (markers == 1 && map.tagged < 0) {
+  const bool plain_marker = markers == 1 && map.tagged < 0;  // not a field the layout comment names
+  if (plain_marker) {
     map.tagged = static_cast<int>(map.fields.size());
     map.fields.emplace_back(tetgen::kBoundaryMarkerName, 1, ScalarType::kInt32, n);
   }
@@ -219,8 +236,24 @@ StatusOr<Nodes> readNodes(const std::string& path, std::string_view text, TetMes
     GTN_RETURN_IF_ERROR(readAttributes(reader, row, 4, map, i));
     if (markers) {
       Field& f = map.fields[map.tagged];
-      if (!tetgen::parseValue(row[4 + attributes], ScalarType::kInt32, f.bytes.data() + 4 * i))
-        return reader.error("expected the boundary marker (an int32), found " + quotedToken(row[4 + attributes]));
+      const std::string_view tok = row[4 + attributes];
+      double v;
+      if (f.type == ScalarType::kInt32 && !tetgen::parseValue(tok, ScalarType::kInt32, f.bytes.data() + 4 * i)) {
+        // meshio writes a point field into the marker column (naming it in a comment): a column of
+        // reals is read as that field, in float64.
+        if (!plain_marker || !parseDouble(tok, &v))
+          return reader.error("expected the boundary marker (an int32), found " + quotedToken(tok));
+        const std::string name = meshioMarkerName(text);
+        Field real(name.empty() ? tetgen::kBoundaryMarkerName : name, 1, ScalarType::kFloat64, n);
+        for (size_t j = 0; j < i; ++j) real.set<double>(j, 0, static_cast<double>(f.data<int32_t>()[j]));
+        f = std::move(real);
+        nodes.warning = "the boundary-marker column holds reals (a point field, as meshio writes one there): read "
+                        "as the float64 field '" + f.name + "'";
+      }
+      if (f.type == ScalarType::kFloat64) {
+        if (!parseDouble(tok, &v)) return reader.error("expected a number in the marker column, found " + quotedToken(tok));
+        f.set<double>(i, 0, v);
+      }
     }
   }
   if (readRow(reader, &row))
@@ -415,6 +448,7 @@ StatusOr<ImportResult> importTetgen(const std::string& path, const ImportOptions
   ImportResult result;
   TetMesh& mesh = result.mesh;
   GTN_ASSIGN_OR_RETURN(const Nodes nodes, readNodes(node_path, node_text, mesh));
+  if (!nodes.warning.empty()) result.report.warnings.push_back(node_path + ": " + nodes.warning);
   GTN_ASSIGN_OR_RETURN(const Tets tets, readTets(ele_path, ele_text, nodes.base, result));
   const int face_field = tets.face_field;
   std::vector<FaceEntry> faces;

@@ -588,5 +588,32 @@ TEST(TetgenImport, WeldAppliesWhenTheMeshIsNamedByItsFiles) {
   EXPECT_EQ(plain->mesh.numTets(), 3u);
 }
 
+// meshio's TetGen writer puts a point field into the boundary-marker column and names it in a
+// comment: a column of reals is read as that field.
+TEST(TetgenImport, MeshioPointFieldInTheMarkerColumn) {
+  const std::string dir = tempDir("tetgen_meshio");
+  writeFile(dir + "/m.node", "# This file was created by meshio v5.0.0\n# attribute and marker names: temp\n5 3 0 1\n"
+                             "0 0 0 0 1\n1 1 0 0 -0.5\n2 0 1 0 2.25\n3 0 0 1 3\n4 1 1 1 4e-3\n");
+  writeFile(dir + "/m.ele", "2 4 0\n0 0 1 2 3\n1 1 2 3 4\n");
+  auto r = importMesh({dir + "/m.node"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ(r->mesh.point_fields.size(), 1u);
+  const Field& f = r->mesh.point_fields[0];
+  EXPECT_EQ(f.name, "temp");
+  EXPECT_EQ(f.type, ScalarType::kFloat64);
+  EXPECT_EQ(f.data<double>()[0], 1.0);
+  EXPECT_EQ(f.data<double>()[1], -0.5);
+  EXPECT_EQ(f.data<double>()[4], 4e-3);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("read as the float64 field 'temp'"), std::string::npos) << r->report.warnings[0];
+  // Integer markers stay int32 boundary markers.
+  writeFile(dir + "/i.node", "5 3 0 1\n0 0 0 0 1\n1 1 0 0 -5\n2 0 1 0 2\n3 0 0 1 3\n4 1 1 1 4\n");
+  writeFile(dir + "/i.ele", "2 4 0\n0 0 1 2 3\n1 1 2 3 4\n");
+  auto i = importMesh({dir + "/i.node"}, ImportOptions{});
+  ASSERT_TRUE(i.isOk()) << i.status().message();
+  EXPECT_EQ(i->mesh.point_fields[0].type, ScalarType::kInt32);
+  EXPECT_TRUE(i->report.warnings.empty());
+}
+
 }  // namespace
 }  // namespace gtn
