@@ -59,21 +59,38 @@ bool isLowerDimensional(int type) {
     case 0: case 1: case 2: case 3: case 4: case 5: case 6: case 7: case 8: case 9:  // linear
     case 21: case 22: case 23: case 28: case 30: case 34: case 35: case 36:          // quadratic, cubic
     case 51:                                                                        // parametric curve
+    case 60: case 61: case 62: case 63:                                              // higher order
     case 68: case 69: case 70: case 75: case 76: case 77:                            // Lagrange, Bezier
       return true;
     default: return false;
   }
 }
 
-// The corners of a quadratic cell come first, in the order of its linear cell.
+// The corners of a quadratic, Lagrange or Bezier cell come first, in the order of its linear cell.
 int linearType(int type) {
   switch (type) {
-    case kVtkQuadraticTetra: return kVtkTetra;
+    case kVtkQuadraticTetra:
+    case 64: case 71: case 78: return kVtkTetra;  // higher-order, Lagrange, Bezier tetrahedra
     case kVtkQuadraticHexahedron:
-    case kVtkTriquadraticHexahedron: return kVtkHexahedron;
-    case kVtkQuadraticWedge: return kVtkWedge;
-    case kVtkQuadraticPyramid: return kVtkPyramid;
+    case kVtkTriquadraticHexahedron:
+    case 67: case 72: case 79: return kVtkHexahedron;
+    case kVtkQuadraticWedge:
+    case 65: case 73: case 80: return kVtkWedge;
+    case kVtkQuadraticPyramid:
+    case 74: case 81: return kVtkPyramid;
     default: return type;
+  }
+}
+
+// Lagrange and Bezier volume cells (and VTK's "higher order" ones) have as many points as their
+// order asks for, corners first: at least those of their linear cell. 0 for other types.
+int arbitraryOrderCorners(int type) {
+  switch (type) {
+    case 64: case 71: case 78: return 4;
+    case 67: case 72: case 79: return 8;
+    case 65: case 73: case 80: return 6;
+    case 74: case 81: return 5;
+    default: return 0;
   }
 }
 
@@ -262,14 +279,19 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
                            ") is not a polyhedron but has face offset " + std::to_string(cells.face_offsets[c]));
     }
     const int want = expectedPoints(type);
-    if (want < 0) {
+    const int at_least = arbitraryOrderCorners(type);
+    if (want < 0 && at_least == 0) {
       ++rejected[type];
       continue;
     }
     const int64_t begin = cells.offsets[c], end = cells.offsets[c + 1];
-    if (end < begin || end - begin != want)
+    if (end < begin || (want >= 0 && end - begin != want))
       return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) + ") has " +
                          std::to_string(end - begin) + " points, expected " + std::to_string(want));
+    if (at_least > 0 && end - begin < at_least)
+      return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) + ") has " +
+                         std::to_string(end - begin) + " points, fewer than its " + std::to_string(at_least) +
+                         " corners");
     for (int64_t k = begin; k < end; ++k) {
       const int64_t v = cells.connectivity[k];
       if (v < 0 || static_cast<uint64_t>(v) >= num_points)
@@ -290,8 +312,9 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   }
   if (!rejected.empty()) {
     return unsupported(path + ": unsupported cell types: " + typeCounts(rejected) +
-                       "; only tetrahedra (10, 24), hexahedra (11, 12, 25, 29), wedges (13, 26), pyramids "
-                       "(14, 27), pentagonal and hexagonal prisms (15, 16) and polyhedra (42) become tetrahedra");
+                       "; only tetrahedra (10, 24, 64, 71, 78), hexahedra (11, 12, 25, 29, 67, 72, 79), wedges "
+                       "(13, 26, 65, 73, 80), pyramids (14, 27, 74, 81), pentagonal and hexagonal prisms (15, 16) "
+                       "and polyhedra (42) become tetrahedra");
   }
   if (!skipped.empty()) {
     size_t total = 0;
@@ -316,7 +339,8 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
       continue;
     }
     const int64_t begin = cells.offsets[c];
-    const int n = static_cast<int>(cells.offsets[c + 1] - begin);
+    // Corners come first: an arbitrary-order cell's further points (beyond 27) are not needed.
+    const int n = static_cast<int>(std::min<int64_t>(cells.offsets[c + 1] - begin, 27));
     for (int k = 0; k < n; ++k) g[k] = static_cast<uint32_t>(cells.connectivity[begin + k]);
     const uint32_t cell = static_cast<uint32_t>(c);
     switch (linearType(type)) {
@@ -345,8 +369,9 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
                                "mid-edge points are kept as unreferenced points");
   if (higher_order)
     report->warnings.push_back(std::to_string(higher_order) +
-                               " quadratic hexahedra, wedges or pyramids reduced to their corners and split as "
-                               "linear cells; their other points are kept as unreferenced points");
+                               " higher-order cells (quadratic hexahedra, wedges or pyramids; Lagrange or Bezier "
+                               "cells) reduced to their corners and split as linear cells; their other points are "
+                               "kept as unreferenced points");
   if (hexes && split == 5 && splitter.hex_five_ < hexes)
     report->warnings.push_back(std::to_string(hexes - splitter.hex_five_) + " of " + std::to_string(hexes) +
                                " hexahedra split into 6 tetrahedra: their face diagonals do not allow 5");

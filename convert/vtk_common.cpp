@@ -50,8 +50,26 @@ const char* vtkCellTypeName(int type) {
     case 41: return "VTK_CONVEX_POINT_SET";
     case 42: return "VTK_POLYHEDRON";
     case 51: return "VTK_PARAMETRIC_CURVE";
-    case 67: return "VTK_LAGRANGE_TETRAHEDRON";
-    case 71: return "VTK_BEZIER_TETRAHEDRON";
+    case 60: return "VTK_HIGHER_ORDER_CURVE";
+    case 61: return "VTK_HIGHER_ORDER_TRIANGLE";
+    case 62: return "VTK_HIGHER_ORDER_QUADRILATERAL";
+    case 64: return "VTK_HIGHER_ORDER_TETRAHEDRON";
+    case 65: return "VTK_HIGHER_ORDER_WEDGE";
+    case 67: return "VTK_HIGHER_ORDER_HEXAHEDRON";
+    case 68: return "VTK_LAGRANGE_CURVE";
+    case 69: return "VTK_LAGRANGE_TRIANGLE";
+    case 70: return "VTK_LAGRANGE_QUADRILATERAL";
+    case 71: return "VTK_LAGRANGE_TETRAHEDRON";
+    case 72: return "VTK_LAGRANGE_HEXAHEDRON";
+    case 73: return "VTK_LAGRANGE_WEDGE";
+    case 74: return "VTK_LAGRANGE_PYRAMID";
+    case 75: return "VTK_BEZIER_CURVE";
+    case 76: return "VTK_BEZIER_TRIANGLE";
+    case 77: return "VTK_BEZIER_QUADRILATERAL";
+    case 78: return "VTK_BEZIER_TETRAHEDRON";
+    case 79: return "VTK_BEZIER_HEXAHEDRON";
+    case 80: return "VTK_BEZIER_WEDGE";
+    case 81: return "VTK_BEZIER_PYRAMID";
     default: return "unknown";
   }
 }

@@ -372,7 +372,7 @@ TEST(CellSplit, RejectsUnsupportedTypesWithNameAndCount) {
     for (int i = 0; i < n; ++i) cells.connectivity.push_back(i);
     cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
   };
-  add(31, 12), add(31, 12), add(33, 18), add(10, 4), add(71, 9), add(5, 3);
+  add(31, 12), add(31, 12), add(33, 18), add(10, 4), add(66, 9), add(5, 3);
   std::vector<Tet> tets;
   std::vector<uint32_t> tet_cell;
   ImportReport report;
@@ -380,7 +380,7 @@ TEST(CellSplit, RejectsUnsupportedTypesWithNameAndCount) {
   ASSERT_FALSE(st.isOk());
   EXPECT_EQ(st.code(), StatusCode::kUnsupported);
   for (const char* part : {"in.vtu", "2 cells of type 31 (VTK_QUADRATIC_LINEAR_WEDGE)",
-                           "1 cell of type 33 (VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON)", "1 cell of type 71 (VTK_BEZIER_TETRAHEDRON)"})
+                           "1 cell of type 33 (VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON)", "1 cell of type 66 (unknown)"})
     EXPECT_NE(st.message().find(part), std::string::npos) << st.message() << " lacks " << part;
   // The triangle is not a reason to reject: cells of lower dimension are skipped.
   EXPECT_EQ(st.message().find("VTK_TRIANGLE"), std::string::npos) << st.message();
@@ -473,7 +473,7 @@ TEST(CellSplit, QuadraticHexWedgePyramidKeepTheirCorners) {
   EXPECT_NEAR(s.total_volume, 1.0 + 1.0 + 0.5 + 1.0 / 3.0, 1e-12);
   EXPECT_EQ(s.zero_volume, 0u);
   ASSERT_EQ(r.report.warnings.size(), 1u);
-  EXPECT_NE(r.report.warnings[0].find("4 quadratic hexahedra, wedges or pyramids reduced to their corners"),
+  EXPECT_NE(r.report.warnings[0].find("4 higher-order cells (quadratic hexahedra, wedges or pyramids"),
             std::string::npos)
       << r.report.warnings[0];
   // A quadratic hexahedron with the point count of a linear one is malformed.
@@ -524,6 +524,47 @@ TEST(CellSplit, DegenerateHexahedronDropsFlatPieces) {
   const MeshStats s = computeMeshStats(r.mesh);
   EXPECT_DOUBLE_EQ(s.total_volume, 0.5);
   EXPECT_EQ(s.non_manifold_faces, 0u);
+}
+
+// Lagrange and Bezier volume cells of any order (VTK 9): their corners come first and are kept; a
+// cubic Lagrange hexahedron has 64 points, more than any fixed-size cell.
+TEST(CellSplit, LagrangeAndBezierCellsKeepTheirCorners) {
+  TetMesh mesh;
+  // A unit cube's corners in VTK order, then 56 further points (their positions do not matter).
+  const double corners[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  for (const auto& c : corners) mesh.coords.insert(mesh.coords.end(), {c[0], c[1], c[2]});
+  for (int k = 8; k < 64; ++k) mesh.coords.insert(mesh.coords.end(), {0.5, 0.5, 0.01 * k});
+  VtkCells cells;
+  auto add = [&](int type, int n) {
+    cells.types.push_back(type);
+    for (int k = 0; k < n; ++k) cells.connectivity.push_back(k);
+    cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+  };
+  add(72, 64);  // VTK_LAGRANGE_HEXAHEDRON, order 3
+  add(79, 27);  // VTK_BEZIER_HEXAHEDRON, order 2
+  // VTK_LAGRANGE_TETRAHEDRON, order 2: the cube's corners 0 1 3 4, then six edge points.
+  cells.types.push_back(71);
+  for (int64_t k : {0, 1, 3, 4, 8, 9, 10, 11, 12, 13}) cells.connectivity.push_back(k);
+  cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+  ImportResult r;
+  r.mesh = mesh;
+  const Status st = finishVtkImport("lagrange.vtu", cells, {}, ImportOptions{}, &r);
+  ASSERT_TRUE(st.isOk()) << st.message();
+  EXPECT_EQ(r.mesh.numTets(), 13u);
+  EXPECT_NEAR(computeMeshStats(r.mesh).total_volume, 2.0 + 1.0 / 6.0, 1e-12);
+  ASSERT_FALSE(r.report.warnings.empty());
+  EXPECT_NE(r.report.warnings[0].find("3 higher-order cells"), std::string::npos) << r.report.warnings[0];
+  // Fewer points than corners is an error.
+  VtkCells short_cell;
+  short_cell.types = {72};
+  short_cell.connectivity = {0, 1, 2, 3, 4, 5, 6};
+  short_cell.offsets = {0, 7};
+  ImportResult s2;
+  s2.mesh = mesh;
+  const Status bad = finishVtkImport("short.vtu", short_cell, {}, ImportOptions{}, &s2);
+  ASSERT_FALSE(bad.isOk());
+  EXPECT_NE(bad.message().find("VTK_LAGRANGE_HEXAHEDRON) has 7 points, fewer than its 8 corners"), std::string::npos)
+      << bad.message();
 }
 
 }  // namespace
