@@ -94,6 +94,7 @@ class SolutionReader {
   // The entries of `section` (a keyword) must number what the mesh has; nullopt-like `ok` false for a
   // section that is skipped (its warning given).
   StatusOr<bool> accept(const char* section, bool cells, int64_t count, size_t* items) {
+    saw_solution_ = true;
     if (cells && !tets_only_) {
       result_->report.warnings.push_back(path_ + ": " + section +
                                          " skipped: the mesh's other elements were split into tetrahedra, which "
@@ -168,6 +169,7 @@ Status SolutionReader::readAscii(const std::string& text) {
     if (!other) {
       GTN_ASSIGN_OR_RETURN(keep, accept(section.c_str(), tets, count, &items));
     } else {
+      saw_solution_ = true;
       result_->report.warnings.push_back(path_ + ":" + std::to_string(line) + ": " + section +
                                          " skipped (only SolAtVertices and SolAtTetrahedra are read)");
     }
@@ -233,6 +235,7 @@ Status SolutionReader::readBinary(const std::string& bytes) {
                              " bytes do not fit in the " + std::to_string(left) + " bytes before byte offset " +
                              std::to_string(end));
     if (otherSolutionKeyword(keyword)) {
+      saw_solution_ = true;
       result_->report.warnings.push_back(path_ + ": byte offset " + std::to_string(at) + ": " + section +
                                          " skipped (only SolAtVertices and SolAtTetrahedra are read)");
       continue;
@@ -263,7 +266,7 @@ Status readMeditSolutions(const std::vector<std::string>& paths, bool tets_only,
                                               std::memcmp(bytes.data(), "\0\0\0\x01", 4) == 0);
     GTN_RETURN_IF_ERROR(binary ? reader.readBinary(bytes) : reader.readAscii(bytes));
     if (!reader.sawSolution())
-      result->report.warnings.push_back(path + ": no SolAtVertices or SolAtTetrahedra section: no field read");
+      result->report.warnings.push_back(path + ": no solution section (SolAtVertices, SolAtTetrahedra, ...): no field read");
   }
   return Status::ok();
 }

@@ -302,6 +302,7 @@ Status LegacyReader::readFieldData(std::vector<Field>* into) {
       --a;
       continue;
     }
+    if (name == "NULL_ARRAY") continue;  // vtkDataWriter's line for an array that is null: nothing follows
     GTN_ASSIGN_OR_RETURN(uint64_t comps, count("component count"));
     GTN_ASSIGN_OR_RETURN(uint64_t tuples, count("tuple count"));
     GTN_ASSIGN_OR_RETURN(const bool strings, skipStringArray("FIELD array", name, comps, tuples, into != nullptr));

@@ -77,6 +77,19 @@ bool isParallelType(const std::string& type) {
   return type == "PUnstructuredGrid" || type == "PStructuredGrid" || type == "PRectilinearGrid" || type == "PImageData";
 }
 
+// An attribute holding a non-negative integer: `absent` when it is missing, -1 when it is not such a
+// number ("x", "-3", "1.5": pugixml's own conversion reads "x" as 0).
+long long integerAttribute(const pugi::xml_node& node, const char* name, long long absent) {
+  const pugi::xml_attribute a = node.attribute(name);
+  if (!a) return absent;
+  std::string_view text = a.value();
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) text.remove_prefix(1);
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
+  int64_t v = 0;
+  if (!parseInt(text, &v) || v < 0) return -1;
+  return v;
+}
+
 // "<Name>" of an element, for messages.
 std::string tagOf(const pugi::xml_node& node) {
   std::string tag(1, '<');
@@ -359,7 +372,7 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
   } else if (!vtkXmlTypeFromName(type_name, &out->type)) {
     return Status(StatusCode::kUnsupported, path_ + ": " + where + ": data type '" + type_name + "' is not supported");
   }
-  const int comps = node.attribute("NumberOfComponents").as_int(1);
+  const int comps = static_cast<int>(std::clamp<long long>(integerAttribute(node, "NumberOfComponents", 1), -1, 1 << 20));
   if (comps < 1 || comps > 4096) return fail(where, "bad NumberOfComponents " + std::to_string(comps));
   out->components = static_cast<uint32_t>(comps);
   const size_t size = scalarSize(out->type);
@@ -400,7 +413,7 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
     GTN_RETURN_IF_ERROR(decodeBinary(b64, where, &out->bytes));
   } else if (format == "appended") {
     if (appended_end_ == 0) return fail(where, "format=\"appended\" but the file has no <AppendedData>");
-    const long long offset = node.attribute("offset").as_llong(-1);
+    const long long offset = integerAttribute(node, "offset", -1);
     if (offset < 0) return fail(where, "appended array without a valid offset");
     if (appended_base64_) {
       const std::string_view region(text_.data() + appended_begin_, appended_end_ - appended_begin_);
@@ -440,8 +453,8 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
 
 Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
   const std::string at = "Piece " + std::to_string(index);
-  const long long np = piece.attribute("NumberOfPoints").as_llong(-1);
-  const long long nc = piece.attribute("NumberOfCells").as_llong(-1);
+  const long long np = integerAttribute(piece, "NumberOfPoints", -1);
+  const long long nc = integerAttribute(piece, "NumberOfCells", -1);
   if (np < 0 || nc < 0) return fail(at, "missing or bad NumberOfPoints/NumberOfCells");
   const size_t point_base = result_.mesh.numPoints();
   const size_t cell_base = cells_.types.size();
@@ -1170,6 +1183,18 @@ StatusOr<ImportResult> VtuReader::readParsed(const pugi::xml_node& root, const I
   if (parallel && in_parallel_) return invalidData(path_ + ": a piece of a parallel file is itself a parallel file");
   if (type == "PUnstructuredGrid") return readParallel(root, options);
   if (parallel) return readParallelStructured(root, type.substr(1), options);
+  if (type == "vtkMultiBlockDataSet" || type == "vtkPartitionedDataSet" || type == "vtkPartitionedDataSetCollection" ||
+      type == "vtkMultiPieceDataSet" || type == "Collection") {
+    // .vtm, .vtpd, .vtpc, .pvd: lists of other files (blocks, partitions, time steps).
+    std::string files;
+    size_t named = 0;
+    for (pugi::xpath_node n : root.select_nodes("//DataSet[@file]")) {
+      if (named++ < 3) files += std::string(files.empty() ? "" : ", ") + n.node().attribute("file").value();
+    }
+    return unsupported(path_ + ": VTKFile type \"" + type + "\" is a collection of other files" +
+                       (named ? " (" + files + (named > 3 ? ", ..." : "") + ")" : std::string()) +
+                       ": convert one of them");
+  }
   if (type != "UnstructuredGrid" && !structured)
     return unsupported(path_ + ": VTKFile type \"" + type +
                        "\" is not supported (it holds no volume cells: only UnstructuredGrid, StructuredGrid, "

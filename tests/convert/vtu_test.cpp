@@ -1257,6 +1257,18 @@ TEST(Vtu, MalformedFilesFailWithTheFileNamed) {
   expectError(dir + "/poly.vtu", "VTK_POLYHEDRON cells without the faces and faceoffsets arrays");
   writeFile(dir + "/range.vtu", twoPieces("0 1 2 4", "10"));
   expectError(dir + "/range.vtu", "refers to point 4 but the piece has 4 points");
+  // Counts and offsets that are not numbers (pugixml alone would read "abc" as 0).
+  std::string words = twoPieces("0 1 2 3", "10");
+  words.replace(words.find("NumberOfPoints=\"4\""), 18, "NumberOfPoints=\"abc\"");
+  writeFile(dir + "/words.vtu", words);
+  expectError(dir + "/words.vtu", "Piece 0: missing or bad NumberOfPoints/NumberOfCells");
+  // A collection of files (.vtm, .pvd) names them.
+  writeFile(dir + "/blocks.vtm", R"(<?xml version="1.0"?>
+<VTKFile type="vtkMultiBlockDataSet" version="1.0"><vtkMultiBlockDataSet>
+<DataSet index="0" file="blocks/blocks_0.vtu"/><DataSet index="1" file="blocks/blocks_1.vti"/>
+</vtkMultiBlockDataSet></VTKFile>
+)");
+  expectError(dir + "/blocks.vtm", "is a collection of other files (blocks/blocks_0.vtu, blocks/blocks_1.vti): convert one");
 
   const TetMesh mesh = makeTypedMesh();
   ASSERT_TRUE(exportVtu(mesh, dir + "/plain.vtu", ExportOptions{}).isOk());
