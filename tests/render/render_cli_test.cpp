@@ -177,20 +177,24 @@ TEST(RenderCommand, RejectsBadArguments) {
 }
 
 // spx as a .gtn file with mip levels and merge trees, made with the library (as `gtn convert` does).
+// `mesh` with its merge tree and `num_levels` stored levels, written to `path`.
+void writeGtnOf(const TetMesh& mesh, const std::string& path, int num_levels) {
+  RankingStats rstats;
+  auto tree = rankMerges(mesh, RankingOptions(), &rstats);
+  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  LevelOptions lopt;
+  lopt.levels = num_levels;
+  auto levels = buildMipLevels(mesh, tree.value(), lopt);
+  ASSERT_TRUE(levels.isOk()) << levels.status().message();
+  const Status st = writeGtnFile(path, levels->inputs(mesh), GtnWriteOptions());
+  EXPECT_TRUE(st.isOk()) << st.message();
+}
+
 std::string makeSpxGtn(const std::string& dir) {
   auto imported = importMesh({test::dataPath("vtk/spx.vtk")}, ImportOptions());
   EXPECT_TRUE(imported.isOk());
-  const TetMesh& mesh = imported->mesh;
-  RankingStats rstats;
-  auto tree = rankMerges(mesh, RankingOptions(), &rstats);
-  EXPECT_TRUE(tree.isOk()) << tree.status().message();
-  LevelOptions lopt;
-  lopt.levels = 3;
-  auto levels = buildMipLevels(mesh, tree.value(), lopt);
-  EXPECT_TRUE(levels.isOk()) << levels.status().message();
   const std::string path = dir + "/spx.gtn";
-  const Status st = writeGtnFile(path, levels->inputs(mesh), GtnWriteOptions());
-  EXPECT_TRUE(st.isOk()) << st.message();
+  writeGtnOf(imported->mesh, path, 3);
   return path;
 }
 
@@ -384,14 +388,9 @@ TEST(JsonOutput, NamesThatAreNotUtf8DoNotAbort) {
   TetMesh mesh = std::move(imported->mesh);
   ASSERT_FALSE(mesh.point_fields.empty());
   mesh.point_fields[0].name = "caf\xE9";
-  auto tree = rankMerges(mesh, RankingOptions(), nullptr);
-  ASSERT_TRUE(tree.isOk()) << tree.status().message();
-  LevelOptions lopt;
-  lopt.levels = 1;
-  auto levels = buildMipLevels(mesh, tree.value(), lopt);
-  ASSERT_TRUE(levels.isOk()) << levels.status().message();
   const std::string path = dir + "/latin1.gtn";
-  ASSERT_TRUE(writeGtnFile(path, levels->inputs(mesh), GtnWriteOptions()).isOk());
+  writeGtnOf(mesh, path, 1);
+  ASSERT_TRUE(test::fileExists(path));
   for (const char* command : {"info ", "validate "}) {
     const test::RunResult r = runGtn(std::string(command) + path + " --json");
     EXPECT_EQ(r.exit_code, 0) << command << r.err;
