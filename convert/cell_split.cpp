@@ -425,16 +425,34 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
     if (f.itemCount() != num_cells)
       return invalidData(path + ": cell field '" + f.name + "' has " + std::to_string(f.itemCount()) + " values for " +
                          std::to_string(num_cells) + " cells");
+  // VTK's blanking (vtkStructuredGrid::BlankCell, BlankPoint): a cell marked HIDDENCELL in the cell
+  // ghost array, or with a corner marked HIDDENPOINT in the point one, is not part of the grid (an
+  // overset hole, like a PLOT3D IBLANK of 0). Such cells are dropped, as IBLANK holes are.
+  constexpr uint8_t kHiddenPoint = 2, kHiddenCell = 32;  // vtkDataSetAttributes
+  auto ghostArray = [](const std::vector<Field>& fields, uint64_t items) -> const uint8_t* {
+    for (const Field& f : fields)
+      if (f.name == "vtkGhostType" && f.type == ScalarType::kUInt8 && f.components == 1 && f.itemCount() == items)
+        return f.bytes.data();
+    return nullptr;
+  };
+  const uint8_t* cell_ghost = ghostArray(cell_fields, num_cells);
+  const uint8_t* point_ghost = ghostArray(mesh.point_fields, mesh.numPoints());
   std::vector<uint32_t> tet_cell;
   mesh.tets.reserve(num_cells * static_cast<uint64_t>(options.split == 5 ? 5 : 6));
   tet_cell.reserve(mesh.tets.capacity());
   auto id = [&](uint64_t i, uint64_t j, uint64_t k) { return static_cast<uint32_t>(i + nx * (j + ny * k)); };
   uint32_t cell = 0;
+  size_t hidden = 0;
   for (uint64_t k = 0; k + 1 < nz; ++k)
     for (uint64_t j = 0; j + 1 < ny; ++j)
       for (uint64_t i = 0; i + 1 < nx; ++i, ++cell) {
         const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
                                id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        if ((cell_ghost && (cell_ghost[cell] & kHiddenCell)) ||
+            (point_ghost && std::any_of(h, h + 8, [&](uint32_t v) { return (point_ghost[v] & kHiddenPoint) != 0; }))) {
+          ++hidden;
+          continue;
+        }
         if (options.split == 5) {
           splitHexFive(h, (i + j + k) % 2 == 1, mesh.tets);
         } else {
@@ -443,6 +461,11 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
         tet_cell.resize(mesh.tets.size(), cell);
       }
   for (const Field& f : cell_fields) mesh.cell_fields.push_back(expandCellField(f, tet_cell));
+  if (hidden > 0) {
+    result->report.dropped_cells += hidden;
+    result->report.warnings.push_back(std::to_string(hidden) + " cells blanked by VTK (vtkGhostType HIDDENCELL, or a "
+                                      "HIDDENPOINT corner) dropped");
+  }
   finishImport(*result);
   return mesh.checkConsistency(path);
 }

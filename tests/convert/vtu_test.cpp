@@ -1405,5 +1405,39 @@ TEST(Vtu, BitArraysReadAsBytes) {
   expectError(dir + "/long.vtu", "holds 2 bytes, expected 1 (5 bits)");
 }
 
+// VTK's blanking of structured grids (BlankCell, BlankPoint): cells marked HIDDENCELL, or with a
+// corner marked HIDDENPOINT, are holes and are dropped, as PLOT3D IBLANK holes are.
+TEST(Vtu, BlankedStructuredCellsAreDropped) {
+  const std::string dir = tempDir("vtu_blanking");
+  // A 3 x 3 x 2 grid of points: 4 cells. Cell 0 hidden; point 8 (i = 2, j = 2, k = 0) hidden, a corner
+  // of cell 3 only.
+  std::string xyz;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) xyz += std::to_string(i) + " " + std::to_string(j) + " " + std::to_string(k) + " ";
+  const std::string text = R"(<?xml version="1.0"?>
+<VTKFile type="StructuredGrid" version="0.1"><StructuredGrid WholeExtent="0 2 0 2 0 1"><Piece Extent="0 2 0 2 0 1">
+<PointData><DataArray type="UInt8" Name="vtkGhostType" format="ascii">0 0 0 0 0 0 0 0 2 0 0 0 0 0 0 0 0 0</DataArray></PointData>
+<CellData><DataArray type="UInt8" Name="vtkGhostType" format="ascii">32 0 0 0</DataArray>
+<DataArray type="Int32" Name="zone" format="ascii">10 11 12 13</DataArray></CellData>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" + xyz + R"(</DataArray></Points>
+</Piece></StructuredGrid></VTKFile>
+)";
+  writeFile(dir + "/b.vts", text);
+  auto r = importMesh({dir + "/b.vts"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 12u);  // cells 1 and 2, six tetrahedra each
+  EXPECT_EQ(r->report.dropped_cells, 2u);
+  const Field* zone = nullptr;
+  for (const Field& f : r->mesh.cell_fields)
+    if (f.name == "zone") zone = &f;
+  ASSERT_NE(zone, nullptr);
+  EXPECT_EQ(zone->get(0, 0), 11);
+  EXPECT_EQ(zone->get(11, 0), 12);
+  EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 2.0, 1e-12);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("2 cells blanked by VTK"), std::string::npos) << r->report.warnings[0];
+}
+
 }  // namespace
 }  // namespace gtn
