@@ -880,20 +880,31 @@ StatusOr<ImportResult> VtuReader::readParallelStructured(const pugi::xml_node& r
     }
   }
   if (type == "ImageData") GTN_RETURN_IF_ERROR(imageGeometry(grid, &image));
-  // Ghost marks differ from piece to piece for the points and cells that pieces share; they are
-  // VTK's bookkeeping, not data.
+  // Ghost marks differ from piece to piece for the points and cells that pieces share (DUPLICATE
+  // bits); the blanking bits (HIDDENPOINT 2, HIDDENCELL 32) are the grid's and agree. Only those are
+  // kept while the grid is assembled and split (finishStructuredImport drops blanked cells); the
+  // arrays, VTK's bookkeeping rather than data, are not kept after that.
+  constexpr uint8_t kBlanking = 2 | 32;
   size_t ghost_arrays = 0;
   for (StructuredPiece& p : pieces)
-    for (std::vector<Field>* fields : {&p.point_fields, &p.cell_fields}) {
-      const size_t before = fields->size();
+    for (std::vector<Field>* fields : {&p.point_fields, &p.cell_fields})
+      for (Field& f : *fields) {
+        if (f.name != kGhostArray) continue;
+        ++ghost_arrays;
+        if (f.type != ScalarType::kUInt8 || f.components != 1) {
+          f.name += "_";  // not VTK's marks: kept as data under another name than the bookkeeping's
+          continue;
+        }
+        for (uint8_t& b : f.bytes) b &= kBlanking;
+      }
+  StatusOr<ImportResult> result = assembleStructured(grid, type, whole, dims, pieces, image, options);
+  if (result.isOk() && ghost_arrays > 0) {
+    for (std::vector<Field>* fields : {&result->mesh.point_fields, &result->mesh.cell_fields})
       fields->erase(std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kGhostArray; }),
                     fields->end());
-      ghost_arrays += before - fields->size();
-    }
-  StatusOr<ImportResult> result = assembleStructured(grid, type, whole, dims, pieces, image, options);
-  if (result.isOk() && ghost_arrays > 0)
     result->report.warnings.push_back("the pieces' vtkGhostType arrays (VTK's marks of shared points and cells) "
                                       "were not kept");
+  }
   return result;
 }
 

@@ -850,7 +850,7 @@ TEST(Vtu, StructuredFilesOfSeveralPieces) {
       return piece;
     };
     writeFile(dir + "/g0.vts", file("StructuredGrid", "0 1 0 1 0 1", "", ghost(piece_a, "0 0 0 0 0 0 0 0")));
-    writeFile(dir + "/g1.vts", file("StructuredGrid", "1 2 0 1 0 1", "", ghost(piece_b, "2 0 2 0 2 0 2 0")));
+    writeFile(dir + "/g1.vts", file("StructuredGrid", "1 2 0 1 0 1", "", ghost(piece_b, "1 0 1 0 1 0 1 0")));
     auto par = importMesh({parallel(splits[0], "ghost.pvts", source("0 1 0 1 0 1", "g0.vts") + source("1 2 0 1 0 1", "g1.vts"))},
                           ImportOptions{});
     auto one = importMesh({dir + "/one.vts"}, ImportOptions{});
@@ -859,6 +859,13 @@ TEST(Vtu, StructuredFilesOfSeveralPieces) {
     expectSameMesh(par->mesh, one->mesh);
     ASSERT_EQ(par->report.warnings.size(), 1u);
     EXPECT_NE(par->report.warnings[0].find("vtkGhostType"), std::string::npos);
+    // Blanking bits are the grid's: a point hidden in its piece hides its cell (HIDDENPOINT = 2).
+    writeFile(dir + "/g1.vts", file("StructuredGrid", "1 2 0 1 0 1", "", ghost(piece_b, "1 3 1 0 1 0 1 0")));
+    auto blank = importMesh({dir + "/ghost.pvts"}, ImportOptions{});
+    ASSERT_TRUE(blank.isOk()) << blank.status().message();
+    EXPECT_EQ(blank->mesh.numTets(), 6u);
+    EXPECT_EQ(blank->report.dropped_cells, 1u);
+    for (const Field& f : blank->mesh.point_fields) EXPECT_NE(f.name, "vtkGhostType");
   }
   // A missing piece, a piece of another type, a piece that is itself parallel, a piece outside the
   // whole extent, pieces that leave a gap, pieces whose arrays differ.
