@@ -475,6 +475,29 @@ Status finishVtkImport(const std::string& path, const VtkCells& cells, const std
   std::vector<uint32_t> tet_cell;
   GTN_RETURN_IF_ERROR(splitVtkCells(path, cells, result->mesh.numPoints(), options.split, &result->mesh.tets,
                                     &tet_cell, &result->report));
+  // Cells blanked by VTK (vtkGhostType HIDDENCELL) are not part of the mesh, as in structured grids.
+  for (const Field& f : cell_fields) {
+    if (f.name != "vtkGhostType" || f.type != ScalarType::kUInt8 || f.components != 1 ||
+        f.itemCount() != cells.types.size())
+      continue;
+    constexpr uint8_t kHiddenCell = 32;
+    std::vector<Tet>& tets = result->mesh.tets;
+    size_t kept = 0;
+    std::vector<bool> hidden_cell(cells.types.size(), false);
+    for (size_t c = 0; c < cells.types.size(); ++c) hidden_cell[c] = (f.bytes[c] & kHiddenCell) != 0;
+    const size_t hidden = static_cast<size_t>(std::count(hidden_cell.begin(), hidden_cell.end(), true));
+    if (hidden == 0) break;
+    for (size_t t = 0; t < tets.size(); ++t) {
+      if (hidden_cell[tet_cell[t]]) continue;
+      tets[kept] = tets[t];
+      tet_cell[kept++] = tet_cell[t];
+    }
+    tets.resize(kept);
+    tet_cell.resize(kept);
+    result->report.dropped_cells += hidden;
+    result->report.warnings.push_back(std::to_string(hidden) + " cells blanked by VTK (vtkGhostType HIDDENCELL) dropped");
+    break;
+  }
   for (const Field& f : cell_fields) {
     if (f.itemCount() != cells.types.size())
       return invalidData(path + ": cell field '" + f.name + "' has " + std::to_string(f.itemCount()) +

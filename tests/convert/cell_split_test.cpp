@@ -567,5 +567,33 @@ TEST(CellSplit, LagrangeAndBezierCellsKeepTheirCorners) {
       << bad.message();
 }
 
+// An unstructured cell blanked by VTK (vtkGhostType HIDDENCELL = 32) is dropped with its values.
+TEST(CellSplit, HiddenCellsAreDropped) {
+  TetMesh mesh;
+  mesh.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 3, 2, 2, 2, 3, 2, 2, 2, 3};
+  VtkCells cells;
+  auto add = [&](int type, std::vector<int64_t> ids) {
+    cells.types.push_back(type);
+    cells.connectivity.insert(cells.connectivity.end(), ids.begin(), ids.end());
+    cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+  };
+  add(kVtkTetra, {0, 1, 2, 3}), add(kVtkTetra, {1, 2, 3, 4}), add(kVtkTetra, {5, 6, 7, 8});
+  Field ghost("vtkGhostType", 1, ScalarType::kUInt8, 3);
+  ghost.bytes = {1, 32, 0};  // a duplicate (kept in a single file) and a hidden cell
+  Field id("id", 1, ScalarType::kInt32, 3);
+  for (int c = 0; c < 3; ++c) id.set<int32_t>(c, 0, 10 * c);
+  ImportResult r;
+  r.mesh = mesh;
+  const Status st = finishVtkImport("hidden.vtu", cells, {ghost, id}, ImportOptions{}, &r);
+  ASSERT_TRUE(st.isOk()) << st.message();
+  ASSERT_EQ(r.mesh.numTets(), 2u);
+  EXPECT_EQ(r.report.dropped_cells, 1u);
+  ASSERT_EQ(r.mesh.cell_fields.size(), 2u);
+  EXPECT_EQ(r.mesh.cell_fields[1].data<int32_t>()[0], 0);
+  EXPECT_EQ(r.mesh.cell_fields[1].data<int32_t>()[1], 20);
+  ASSERT_EQ(r.report.warnings.size(), 1u);
+  EXPECT_NE(r.report.warnings[0].find("1 cells blanked by VTK"), std::string::npos) << r.report.warnings[0];
+}
+
 }  // namespace
 }  // namespace gtn
