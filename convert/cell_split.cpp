@@ -428,15 +428,8 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
   // VTK's blanking (vtkStructuredGrid::BlankCell, BlankPoint): a cell marked HIDDENCELL in the cell
   // ghost array, or with a corner marked HIDDENPOINT in the point one, is not part of the grid (an
   // overset hole, like a PLOT3D IBLANK of 0). Such cells are dropped, as IBLANK holes are.
-  constexpr uint8_t kHiddenPoint = 2, kHiddenCell = 32;  // vtkDataSetAttributes
-  auto ghostArray = [](const std::vector<Field>& fields, uint64_t items) -> const uint8_t* {
-    for (const Field& f : fields)
-      if (f.name == "vtkGhostType" && f.type == ScalarType::kUInt8 && f.components == 1 && f.itemCount() == items)
-        return f.bytes.data();
-    return nullptr;
-  };
-  const uint8_t* cell_ghost = ghostArray(cell_fields, num_cells);
-  const uint8_t* point_ghost = ghostArray(mesh.point_fields, mesh.numPoints());
+  const uint8_t* cell_ghost = vtkGhostMarks(cell_fields, num_cells);
+  const uint8_t* point_ghost = vtkGhostMarks(mesh.point_fields, mesh.numPoints());
   std::vector<uint32_t> tet_cell;
   mesh.tets.reserve(num_cells * static_cast<uint64_t>(options.split == 5 ? 5 : 6));
   tet_cell.reserve(mesh.tets.capacity());
@@ -448,8 +441,8 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
       for (uint64_t i = 0; i + 1 < nx; ++i, ++cell) {
         const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
                                id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
-        if ((cell_ghost && (cell_ghost[cell] & kHiddenCell)) ||
-            (point_ghost && std::any_of(h, h + 8, [&](uint32_t v) { return (point_ghost[v] & kHiddenPoint) != 0; }))) {
+        if ((cell_ghost && (cell_ghost[cell] & kVtkHiddenCell)) ||
+            (point_ghost && std::any_of(h, h + 8, [&](uint32_t v) { return (point_ghost[v] & kVtkHiddenPoint) != 0; }))) {
           ++hidden;
           continue;
         }
@@ -471,32 +464,35 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
 }
 
 Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
-                       const ImportOptions& options, ImportResult* result) {
+                       const ImportOptions& options, ImportResult* result, size_t* duplicate_tets) {
   std::vector<uint32_t> tet_cell;
   GTN_RETURN_IF_ERROR(splitVtkCells(path, cells, result->mesh.numPoints(), options.split, &result->mesh.tets,
                                     &tet_cell, &result->report));
-  // Cells blanked by VTK (vtkGhostType HIDDENCELL) are not part of the mesh, as in structured grids.
-  for (const Field& f : cell_fields) {
-    if (f.name != "vtkGhostType" || f.type != ScalarType::kUInt8 || f.components != 1 ||
-        f.itemCount() != cells.types.size())
-      continue;
-    constexpr uint8_t kHiddenCell = 32;
+  // Cells blanked by VTK (HIDDENCELL) are not part of the mesh, as in structured grids; in a piece of
+  // a parallel file, neither are the copies of other pieces' cells (DUPLICATECELL).
+  if (const uint8_t* marks = vtkGhostMarks(cell_fields, cells.types.size())) {
     std::vector<Tet>& tets = result->mesh.tets;
-    size_t kept = 0;
-    std::vector<bool> hidden_cell(cells.types.size(), false);
-    for (size_t c = 0; c < cells.types.size(); ++c) hidden_cell[c] = (f.bytes[c] & kHiddenCell) != 0;
-    const size_t hidden = static_cast<size_t>(std::count(hidden_cell.begin(), hidden_cell.end(), true));
-    if (hidden == 0) break;
+    size_t kept = 0, duplicates = 0;
     for (size_t t = 0; t < tets.size(); ++t) {
-      if (hidden_cell[tet_cell[t]]) continue;
+      const uint8_t m = marks[tet_cell[t]];
+      if (m & kVtkHiddenCell) continue;
+      if (duplicate_tets && (m & kVtkDuplicateCell)) {
+        ++duplicates;
+        continue;
+      }
       tets[kept] = tets[t];
       tet_cell[kept++] = tet_cell[t];
     }
     tets.resize(kept);
     tet_cell.resize(kept);
-    result->report.dropped_cells += hidden;
-    result->report.warnings.push_back(std::to_string(hidden) + " cells blanked by VTK (vtkGhostType HIDDENCELL) dropped");
-    break;
+    if (duplicate_tets) *duplicate_tets += duplicates;
+    size_t hidden = 0;
+    for (size_t c = 0; c < cells.types.size(); ++c) hidden += (marks[c] & kVtkHiddenCell) != 0;
+    if (hidden > 0) {
+      result->report.dropped_cells += hidden;
+      result->report.warnings.push_back(std::to_string(hidden) +
+                                        " cells blanked by VTK (vtkGhostType HIDDENCELL) dropped");
+    }
   }
   for (const Field& f : cell_fields) {
     if (f.itemCount() != cells.types.size())

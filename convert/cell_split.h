@@ -68,9 +68,11 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
                               const ImportOptions& options, ImportResult* result);
 
 // The common end of both VTK importers: splits `cells` into result->mesh.tets (points and point
-// fields already set), spreads the per-cell fields over the tetrahedra into mesh.cell_fields, and
-// normalises orientation (finishImport).
+// fields already set), drops the cells that a vtkGhostType cell array marks hidden (and, with
+// `duplicate_tets`, those it marks as another piece's, counting their tetrahedra there), spreads
+// the per-cell fields over the tetrahedra into mesh.cell_fields, and normalises orientation
+// (finishImport).
 Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
-                       const ImportOptions& options, ImportResult* result);
+                       const ImportOptions& options, ImportResult* result, size_t* duplicate_tets = nullptr);
 
 }  // namespace gtn

@@ -144,6 +144,13 @@ bool vtkLegacyTypeFromName(const std::string& name, ScalarType* out) {
   return false;
 }
 
+const uint8_t* vtkGhostMarks(const std::vector<Field>& fields, size_t items) {
+  for (const Field& f : fields)
+    if (f.name == kVtkGhostArray && f.type == ScalarType::kUInt8 && f.components == 1 && f.itemCount() == items)
+      return f.bytes.data();
+  return nullptr;
+}
+
 const char* vtkLegacyTypeName(ScalarType type) {
   switch (type) {
     case ScalarType::kInt8: return "char";

@@ -28,6 +28,14 @@ constexpr uint8_t kVtkQuadraticWedge = 26;
 constexpr uint8_t kVtkQuadraticPyramid = 27;
 constexpr uint8_t kVtkTriquadraticHexahedron = 29;
 
+// vtkGhostType, VTK's marks of ghost and blanked points and cells (vtkDataSetAttributes): a
+// duplicate is a copy of what another piece owns, a hidden one is not part of the dataset (blanking).
+constexpr char kVtkGhostArray[] = "vtkGhostType";
+constexpr uint8_t kVtkDuplicatePoint = 1, kVtkHiddenPoint = 2;
+constexpr uint8_t kVtkDuplicateCell = 1, kVtkHiddenCell = 32;
+// The marks of `fields`' ghost array when it is VTK's (UInt8, one component, `items` values), or null.
+const uint8_t* vtkGhostMarks(const std::vector<Field>& fields, size_t items);
+
 // "VTK_TETRA", "VTK_QUADRATIC_HEXAHEDRON", ... or "unknown" for numbers VTK does not define.
 const char* vtkCellTypeName(int type);
 

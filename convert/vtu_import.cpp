@@ -67,10 +67,6 @@ struct ImageGeometry {
   double dir[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
 };
 
-// VTK's ghost marks (vtkDataSetAttributes::DUPLICATECELL in cells): a cell that another piece owns.
-constexpr char kGhostArray[] = "vtkGhostType";
-constexpr uint8_t kDuplicateCell = 1;
-
 // The directory of `path` with its slash, "./" for a file in the working directory (so that a piece
 // named "-" is a file, never standard input).
 bool isParallelType(const std::string& type) {
@@ -184,6 +180,7 @@ class VtuReader {
   int header_bytes_ = 4;
   bool compressed_ = false;
   bool in_parallel_ = false;  // a piece of a .pvtu, which must not be one itself
+  size_t duplicate_tets_ = 0;  // tetrahedra of a piece's ghost cells (copies of other pieces'), dropped
   Compressor compressor_ = Compressor::kNone;
   bool appended_base64_ = false;
   size_t appended_begin_ = 0, appended_end_ = 0;  // bytes after '_' in the file
@@ -884,12 +881,12 @@ StatusOr<ImportResult> VtuReader::readParallelStructured(const pugi::xml_node& r
   // bits); the blanking bits (HIDDENPOINT 2, HIDDENCELL 32) are the grid's and agree. Only those are
   // kept while the grid is assembled and split (finishStructuredImport drops blanked cells); the
   // arrays, VTK's bookkeeping rather than data, are not kept after that.
-  constexpr uint8_t kBlanking = 2 | 32;
+  constexpr uint8_t kBlanking = kVtkHiddenPoint | kVtkHiddenCell;
   size_t ghost_arrays = 0;
   for (StructuredPiece& p : pieces)
     for (std::vector<Field>* fields : {&p.point_fields, &p.cell_fields})
       for (Field& f : *fields) {
-        if (f.name != kGhostArray) continue;
+        if (f.name != kVtkGhostArray) continue;
         ++ghost_arrays;
         if (f.type != ScalarType::kUInt8 || f.components != 1) {
           f.name += "_";  // not VTK's marks: kept as data under another name than the bookkeeping's
@@ -900,7 +897,7 @@ StatusOr<ImportResult> VtuReader::readParallelStructured(const pugi::xml_node& r
   StatusOr<ImportResult> result = assembleStructured(grid, type, whole, dims, pieces, image, options);
   if (result.isOk() && ghost_arrays > 0) {
     for (std::vector<Field>* fields : {&result->mesh.point_fields, &result->mesh.cell_fields})
-      fields->erase(std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kGhostArray; }),
+      fields->erase(std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kVtkGhostArray; }),
                     fields->end());
     result->report.warnings.push_back("the pieces' vtkGhostType arrays (VTK's marks of shared points and cells) "
                                       "were not kept");
@@ -1065,28 +1062,12 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
     if (!read.isOk()) return pieceError(read.status());
     ImportResult r = std::move(*read);
     TetMesh& m = r.mesh;
-    // Ghost cells are copies of cells that other pieces own: kept once, by their owner.
-    for (size_t f = 0; f < m.cell_fields.size(); ++f) {
-      const Field& g = m.cell_fields[f];
-      if (g.name != kGhostArray || g.type != ScalarType::kUInt8 || g.components != 1) continue;
-      size_t kept = 0;
-      for (size_t t = 0; t < m.tets.size(); ++t) {
-        if (g.bytes[t] & kDuplicateCell) continue;
-        m.tets[kept] = m.tets[t];
-        for (Field& c : m.cell_fields) {
-          const size_t item = c.components * c.valueSize();
-          std::memmove(c.bytes.data() + kept * item, c.bytes.data() + t * item, item);
-        }
-        ++kept;
-      }
-      ghosts += m.tets.size() - kept;
-      m.tets.resize(kept);
-      for (Field& c : m.cell_fields) c.bytes.resize(kept * c.components * c.valueSize());
-      break;
-    }
+    // Ghost cells, copies of cells that other pieces own, were dropped by finishVtkImport: they are
+    // kept once, by their owner.
+    ghosts += reader.duplicate_tets_;
     // The ghost marks themselves are VTK's bookkeeping, not data.
     auto dropGhostArrays = [](std::vector<Field>& fields) {
-      fields.erase(std::remove_if(fields.begin(), fields.end(), [](const Field& f) { return f.name == kGhostArray; }),
+      fields.erase(std::remove_if(fields.begin(), fields.end(), [](const Field& f) { return f.name == kVtkGhostArray; }),
                    fields.end());
     };
     dropGhostArrays(m.point_fields);
@@ -1218,7 +1199,8 @@ StatusOr<ImportResult> VtuReader::readParsed(const pugi::xml_node& root, const I
   if (pieces == 0) return invalidData(path_ + ": <UnstructuredGrid> has no <Piece>");
   result_.mesh.coord_type = coords_float64_ ? ScalarType::kFloat64 : ScalarType::kFloat32;
   if (result_.mesh.numPoints() == 0) result_.mesh.coord_type = ScalarType::kFloat64;
-  GTN_RETURN_IF_ERROR(finishVtkImport(path_, cells_, cell_fields_, options, &result_));
+  GTN_RETURN_IF_ERROR(finishVtkImport(path_, cells_, cell_fields_, options, &result_,
+                                      in_parallel_ ? &duplicate_tets_ : nullptr));
   return std::move(result_);
 }
 
