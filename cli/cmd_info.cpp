@@ -223,7 +223,7 @@ int runInfo(const InfoArgs& a) {
   options.weld = a.weld;
   auto imported = importMesh(a.inputs, options);
   if (!imported.isOk()) return reportError(imported.status());
-  for (const std::string& w : imported->report.warnings) warn(a.inputs[0] + ": " + w);
+  for (const std::string& w : imported->report.warnings) warnAbout(a.inputs[0], w);
   const MeshStats stats = computeMeshStats(imported->mesh);
   if (a.json) {
     nlohmann::json j = statsToJson(stats, imported->report, imported->mesh);

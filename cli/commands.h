@@ -31,6 +31,9 @@ int reportError(const Status& status);
 void warn(const std::string& message);
 // Prints what an importer changed (flips, drops, welds, warnings) on standard error.
 void printImportReport(const std::string& input, const ImportReport& report);
+// An importer's warning about `input`, prefixed with the input's name unless it already names it
+// first (TetGen's name the .ele or .node file they are about).
+void warnAbout(const std::string& input, const std::string& warning);
 // JSON as text for standard output; strings that are not UTF-8 (names in files written by older
 // versions, file names) get U+FFFD where their bytes are invalid instead of aborting the program.
 std::string jsonText(const nlohmann::json& j, int indent = 2);

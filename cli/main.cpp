@@ -32,7 +32,11 @@ void printImportReport(const std::string& input, const ImportReport& r) {
   if (r.steiner_points)
     std::fprintf(stderr, "gtn: %s: added %zu Steiner points to split cells conformingly\n", input.c_str(),
                  r.steiner_points);
-  for (const std::string& w : r.warnings) warn(input + ": " + w);
+  for (const std::string& w : r.warnings) warnAbout(input, w);
+}
+
+void warnAbout(const std::string& input, const std::string& warning) {
+  warn(warning.rfind(input + ": ", 0) == 0 ? warning : input + ": " + warning);
 }
 
 const std::string& commandLine() { return g_command_line; }

@@ -163,6 +163,30 @@ TEST_F(GtnCli, RealDatasetWithCellField) {
   EXPECT_EQ(meshSummary(infoJson(dir_ + "/box.vtu")), meshSummary(j));
 }
 
+// An importer's warning that names its file first is not prefixed with the same name again; one
+// about a file of a basename input keeps the input's name in front.
+TEST_F(GtnCli, WarningsNameTheirFileOnce) {
+  const std::string base = dir_ + "/quad";
+  {
+    std::FILE* f = std::fopen((base + ".node").c_str(), "w");
+    ASSERT_TRUE(f);
+    std::fputs("10 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0.5 0 0\n6 0.5 0.5 0\n7 0 0.5 0\n"
+               "8 0 0 0.5\n9 0.5 0 0.5\n10 0 0.5 0.5\n", f);
+    std::fclose(f);
+    f = std::fopen((base + ".ele").c_str(), "w");
+    ASSERT_TRUE(f);
+    std::fputs("1 10 0\n1 1 2 3 4 5 6 7 8 9 10\n", f);
+    std::fclose(f);
+  }
+  test::RunResult r = test::runGtn("info " + base + ".ele");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("gtn: warning: " + base + ".ele: 10-node (quadratic) tetrahedra"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(base + ".ele: " + base + ".ele:"), std::string::npos) << r.err;
+  r = test::runGtn("convert " + base + " -o " + dir_ + "/quad.vtu");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("gtn: warning: " + base + ": " + base + ".ele: 10-node"), std::string::npos) << r.err;
+}
+
 TEST_F(GtnCli, ExitCodes) {
   const std::string gtn = dir_ + "/spx.gtn";
   ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + gtn).exit_code, 0);
