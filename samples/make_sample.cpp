@@ -1,14 +1,16 @@
-// gtn-make-sample OUTDIR: writes the project's own small PLOT3D sample, OUTDIR/sample.xyz and
+// gtn-make-sample OUTDIR [NI NJ NK]: writes the project's own small PLOT3D sample, OUTDIR/sample.xyz and
 // OUTDIR/sample.q (big-endian float32, no record markers, single grid without a grid count, whole
 // layout: the same layout as the blunt-fin files in ../shared/data/plot3d).
 //
-// The grid is a 24 x 16 x 12 sector of a cylindrical shell around a fin-like ridge: i runs outwards
+// The grid is a 24 x 16 x 12 sector (or NI x NJ x NK points of the same shape: the benchmarks' large
+// grid) of a cylindrical shell around a fin-like ridge: i runs outwards
 // from the body, j around the axis, k along it, so every cell is right-handed. The Q file holds a
 // smooth swirling flow along the axis. Only +, -, *, / are used (no libm), so the files are the same
 // bytes on every IEEE-754 platform; the program checks that every cell is non-degenerate and
 // right-handed under both hexahedron splits before writing anything.
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -21,7 +23,7 @@
 
 namespace {
 
-constexpr int kNi = 24, kNj = 16, kNk = 12;
+int kNi = 24, kNj = 16, kNk = 12;  // set once by main
 constexpr double kGamma = 1.4;
 
 struct Point {
@@ -71,9 +73,25 @@ double orient(const Point& a, const Point& b, const Point& c, const Point& d) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: gtn-make-sample OUTDIR\n");
+  if (argc != 2 && argc != 5) {
+    std::fprintf(stderr, "usage: gtn-make-sample OUTDIR [NI NJ NK]\n");
     return 2;
+  }
+  if (argc == 5) {
+    int* dims[3] = {&kNi, &kNj, &kNk};
+    for (int a = 0; a < 3; ++a) {
+      char* end = nullptr;
+      const long d = std::strtol(argv[2 + a], &end, 10);
+      if (*argv[2 + a] == '\0' || *end != '\0' || d < 2 || d > 1024) {
+        std::fprintf(stderr, "gtn-make-sample: error: dimension '%s': expected an integer from 2 to 1024\n", argv[2 + a]);
+        return 2;
+      }
+      *dims[a] = static_cast<int>(d);
+    }
+    if (static_cast<double>(kNi) * kNj * kNk > 5e7) {
+      std::fprintf(stderr, "gtn-make-sample: error: %d x %d x %d points: at most 5e7\n", kNi, kNj, kNk);
+      return 2;
+    }
   }
   const std::string dir = argv[1];
   std::error_code ec;
