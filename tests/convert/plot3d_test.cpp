@@ -989,6 +989,23 @@ TEST(Plot3dSample, GeneratorWritesAValidDeterministicSample) {
   EXPECT_EQ(test::runShell(makeSampleBinary()).exit_code, 2);
 }
 
+// The benchmarks' large grid: the same shape at other dimensions; bad dimensions are refused.
+TEST(Plot3dSample, GeneratorTakesDimensions) {
+  const std::string dir = test::tempDir("plot3d-sample-dims");
+  const test::RunResult made = test::runShell(makeSampleBinary() + " " + dir + " 31 9 5");
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  EXPECT_EQ(test::readFile(dir + "/sample.xyz").size(), 12u + 31u * 9u * 5u * 12u);
+  auto r = importFiles({dir + "/sample.xyz", dir + "/sample.q"}, 6);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const MeshStats s = computeMeshStats(r->mesh);
+  EXPECT_EQ(s.tets, 30u * 8u * 4u * 6u);
+  EXPECT_EQ(s.inverted + s.zero_volume, 0u);
+  for (const char* bad : {" 31 9", " 31 9 1", " 31 x 5", " 2000 2 2", " 1000 1000 100"}) {
+    const test::RunResult r2 = test::runShell(makeSampleBinary() + " " + dir + bad);
+    EXPECT_EQ(r2.exit_code, 2) << bad;
+  }
+}
+
 TEST(Plot3dCli, InfoJsonOnBluntFin) {
   const test::RunResult info = test::runGtn("info " + dataPath("plot3d/bluntfinxyz.bin") + " " +
                                             dataPath("plot3d/bluntfinq.bin") + " --split 5 --json");
