@@ -224,6 +224,9 @@ struct ArrivedTet {
   CornerRecord* corner[4];  // PooledVertex
   uint8_t order[4][3];      // TetGeom::order, computed when the batch is rendered if needed
   int32_t rays = 0;
+  // Whether some pixel's centre may lie in its projection (pixelFootprint, with its margin): when
+  // not, no ray crosses its faces and no cursor can wait at them.
+  bool visible = false;
   PooledVertex* vertex(int i) const { return static_cast<PooledVertex*>(corner[i]); }
   void computeOrder() {
     if (order[0][0] != kNoOrder) return;
@@ -576,6 +579,7 @@ Status StreamRenderer::flushBatch() {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ArrivedTet& a = st.flushing[i];
       a.rays = 0;
+      a.visible = false;
       // The faces' canonical orders are computed only for the exact crossings and for a tetrahedron
       // that will be held: most arrived tetrahedra need neither.
       a.order[0][0] = kNoOrder;
@@ -583,6 +587,7 @@ Status StreamRenderer::flushBatch() {
       int box[4];
       double sx[4], sy[4], dmin = 1e300, dmax = -1e300;
       if (!pixelFootprint(cam, corners, 4, box, sx, sy)) continue;
+      a.visible = true;
       if (st.shared_frame) {
         for (int k = 0; k < 4; ++k) {
           const double d = (corners[k][0] * st.ortho_dir[0] + corners[k][1] * st.ortho_dir[1] +
@@ -671,6 +676,8 @@ Status StreamRenderer::flushBatch() {
   triggers.clear();
   arrived_slots.clear();
   for (ArrivedTet& a : st.flushing) {
+    // Most tetrahedra of a large mesh lie between pixel centres: nothing to look up for them.
+    if (!a.visible) continue;
     FaceKey keys[4];
     bool needed = a.rays > 0;
     for (int k = 0; k < 4; ++k) {
