@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "convert/import.h"
 #include "convert/export.h"
 #include "format/gtn_reader.h"
 #include "simplify/levels.h"
@@ -29,7 +30,15 @@ int runExport(const ExportArgs& a) {
   GtnOpenOptions oo;
   oo.verify = false;  // random access through the directory; every chunk read is still checksummed
   auto reader = GtnReader::open(a.input, oo);
-  if (!reader.isOk()) return reportError(reader.status());
+  if (!reader.isOk()) {
+    // A mesh file given to export: say which command converts it.
+    const InputFormat in_format = detectInputFormat(a.input);
+    if (in_format != InputFormat::kGtn && in_format != InputFormat::kUnknown)
+      return reportError(usageError(a.input + ": a " + inputFormatName(in_format) +
+                                    " file, not .gtn: 'gtn export' reads .gtn files; use 'gtn convert " + a.input +
+                                    " -o " + a.output + "' to convert a mesh file"));
+    return reportError(reader.status());
+  }
   GtnReader& r = **reader;
   if (a.level >= r.levels())
     return reportError(usageError(a.input + ": --level " + std::to_string(a.level) + ": the file holds " +

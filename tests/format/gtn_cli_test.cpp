@@ -187,6 +187,15 @@ TEST_F(GtnCli, WarningsNameTheirFileOnce) {
   EXPECT_NE(r.err.find("gtn: warning: " + base + ": " + base + ".ele: 10-node"), std::string::npos) << r.err;
 }
 
+// A mesh file given to export is a usage error that names the command that converts it.
+TEST_F(GtnCli, ExportOfAMeshFilePointsToConvert) {
+  const test::RunResult r = test::runGtn("export " + spx_ + " -o " + dir_ + "/spx.vtu");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("a legacy VTK file, not .gtn"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("use 'gtn convert " + spx_ + " -o " + dir_ + "/spx.vtu'"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::fileExists(dir_ + "/spx.vtu"));
+}
+
 TEST_F(GtnCli, ExitCodes) {
   const std::string gtn = dir_ + "/spx.gtn";
   ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + gtn).exit_code, 0);
