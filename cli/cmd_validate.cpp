@@ -1,4 +1,6 @@
 // gtn validate FILE [--against SOURCE...] [--json] [--quick] [--max-issues N]: the reference validator.
+// gtn validate MESHFILE... [--split 5|6] [--weld] [--json] [--max-issues N]: the same report for a mesh
+// that `gtn convert` reads (what the importer changed, then the mesh checks).
 // gtn validate --list-issues [--markdown]: every issue code it can report.
 // Exit codes: 0 no error, 1 an error was found, 2 usage, 3 the file cannot be read.
 #include <cstdio>
@@ -7,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "convert/import.h"
 #include "validate/issues.h"
 #include "validate/validator.h"
 
@@ -14,7 +17,7 @@ namespace gtn::cli {
 
 namespace {
 struct ValidateArgs {
-  std::string file;
+  std::vector<std::string> files;
   std::vector<std::string> against;
   int split = 6;
   bool weld = false;
@@ -30,7 +33,7 @@ int runValidate(const ValidateArgs& a) {
     std::fputs(issueListText(a.markdown).c_str(), stdout);
     return 0;
   }
-  if (a.file.empty()) return reportError(usageError("validate: a FILE to validate is required"));
+  if (a.files.empty()) return reportError(usageError("validate: a FILE to validate is required"));
   if (a.quick && !a.against.empty()) return reportError(usageError("validate: --quick and --against exclude each other"));
   ValidateOptions options;
   options.quick = a.quick;
@@ -38,12 +41,22 @@ int runValidate(const ValidateArgs& a) {
   options.against = a.against;
   options.import_options.split = a.split;
   options.import_options.weld = a.weld;
-  StatusOr<ValidationReport> report = validateGtnFile(a.file, options);
+  // A .gtn file (or a file no importer knows, which the container checks then describe), else mesh files.
+  const InputFormat format = detectInputFormat(a.files.front());
+  const bool gtn = format == InputFormat::kGtn || format == InputFormat::kUnknown;
+  if (gtn && a.files.size() > 1)
+    return reportError(usageError("validate: one .gtn file at a time (" + std::to_string(a.files.size()) + " given)"));
+  if (!gtn && (a.quick || !a.against.empty()))
+    return reportError(usageError("validate: " + a.files.front() + ": --quick and --against apply to .gtn files, not to a " +
+                                  inputFormatName(format) + " file"));
+  StatusOr<ValidationReport> report = gtn ? validateGtnFile(a.files.front(), options) : validateMeshFiles(a.files, options);
   if (!report.isOk()) return reportError(report.status());
+  std::string name = a.files.front();
+  for (size_t i = 1; i < a.files.size(); ++i) name += " + " + a.files[i];
   if (a.json) {
-    std::printf("%s\n", jsonText(report->toJson(a.file)).c_str());
+    std::printf("%s\n", jsonText(report->toJson(name)).c_str());
   } else {
-    std::fputs(report->toText(a.file).c_str(), stdout);
+    std::fputs(report->toText(name).c_str(), stdout);
   }
   return report->hasErrors() ? 1 : 0;
 }
@@ -51,11 +64,15 @@ int runValidate(const ValidateArgs& a) {
 
 Command addValidateCommand(CLI::App& app) {
   auto args = std::make_shared<ValidateArgs>();
-  CLI::App* sub = app.add_subcommand("validate", "Check a .gtn file: container, decoding, mesh, merge tree, levels");
-  sub->add_option("file", args->file, "The .gtn file to check");
+  CLI::App* sub = app.add_subcommand(
+      "validate", "Check a .gtn file (container, decoding, mesh, merge tree, levels) or the mesh that mesh files describe");
+  sub->add_option("files", args->files,
+                  "The .gtn file to check, or mesh files as 'gtn convert' takes them (PLOT3D grid [Q], TetGen, VTK, Medit, OFF)");
   sub->add_option("--against", args->against, "Source file(s) that level 0 must equal (up to renumbering)");
-  sub->add_option("--split", args->split, "--against: hexahedra into 5 or 6 tetrahedra")->check(CLI::IsMember({5, 6}));
-  sub->add_flag("--weld", args->weld, "--against: merge bit-identical points (seams between PLOT3D blocks or VTK pieces)");
+  sub->add_option("--split", args->split, "mesh files and --against: hexahedra into 5 or 6 tetrahedra")
+      ->check(CLI::IsMember({5, 6}));
+  sub->add_flag("--weld", args->weld,
+                "mesh files and --against: merge bit-identical points (seams between PLOT3D blocks or VTK pieces)");
   sub->add_flag("--json", args->json, "Print the report as one JSON document on standard output");
   sub->add_flag("--quick", args->quick, "Check the container and checksums only");
   sub->add_option("--max-issues", args->max_issues, "Keep at most N messages (counts stay exact)")

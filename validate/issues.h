@@ -59,6 +59,14 @@ const char* severityName(Severity severity);  // "error", "warning", "info"
   X(kNonFiniteValue, "NON_FINITE_VALUE", kWarning, "mesh", "field values that are NaN or infinite")             \
   X(kUnreferencedPoint, "UNREFERENCED_POINT", kInfo, "mesh", "points no tetrahedron uses")                       \
   X(kFieldSizeMismatch, "FIELD_SIZE_MISMATCH", kError, "mesh", "fields whose item count differs from the mesh")  \
+  /* import: a mesh file given instead of a .gtn file, as the importer reads it */                                 \
+  X(kImportFailed, "IMPORT_FAILED", kError, "import",                                                           \
+    "mesh files the importer rejects (the message says where and why)")                                          \
+  X(kCellsReoriented, "CELLS_REORIENTED", kWarning, "import",                                                    \
+    "cells stored with negative orientation (the importer reorients them; left-handed PLOT3D grids are all so)") \
+  X(kCellsDropped, "CELLS_DROPPED", kInfo, "import",                                                             \
+    "cells the importer leaves out (blanked cells, IBLANK holes, other pieces' ghost cells)")                    \
+  X(kImportWarning, "IMPORT_WARNING", kInfo, "import", "warnings of the importer (the message says what)")       \
   /* merge tree: the ranked edge collapses of level 0 */                                                          \
   X(kMergeTreeUndecodable, "MERGE_TREE_UNDECODABLE", kError, "merge-tree",                                   \
     "merge-tree chunks that do not decode (the coder rejects the payload)")                                     \
@@ -108,7 +116,7 @@ struct IssueInfo {
   IssueCode id;
   const char* code;  // stable SCREAMING_CASE name
   Severity severity;
-  const char* layer;        // container, decoding, mesh, merge-tree, levels, against
+  const char* layer;        // container, decoding, import, mesh, merge-tree, levels, against
   const char* description;  // plural noun phrase
 };
 

@@ -319,6 +319,36 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
 
 namespace gtn {
 
+StatusOr<ValidationReport> validateMeshFiles(const std::vector<std::string>& inputs, const ValidateOptions& options) {
+  ValidationReport report(options.max_issues);
+  StatusOr<ImportResult> imported = importMesh(inputs, options.import_options);
+  if (!imported.isOk()) {
+    if (imported.status().code() == StatusCode::kIo) return imported.status();
+    report.add(IssueCode::kImportFailed, "/import", "/import", imported.status().message());
+    return report;
+  }
+  const ImportReport& r = imported->report;
+  if (r.flipped) {
+    report.addMany(IssueCode::kCellsReoriented, "/import", r.flipped, {"/import"},
+                   std::to_string(r.flipped) + " cells reoriented to positive volume");
+  }
+  if (r.dropped_cells) {
+    report.addMany(IssueCode::kCellsDropped, "/import", r.dropped_cells, {"/import"},
+                   std::to_string(r.dropped_cells) + " cells dropped");
+  }
+  for (size_t i = 0; i < r.warnings.size(); ++i)
+    report.add(IssueCode::kImportWarning, "/import", "/import/warnings/" + std::to_string(i), r.warnings[i]);
+  MeshCheckStats stats;
+  checkMesh(imported->mesh, "/mesh", report, &stats);
+  nlohmann::json mi = statsJson(stats);
+  mi["format"] = inputFormatName(detectInputFormat(inputs.front()));
+  if (r.welded_points) mi["welded_points"] = r.welded_points;
+  if (r.collapsed_tets) mi["collapsed_tets"] = r.collapsed_tets;
+  if (r.steiner_points) mi["steiner_points"] = r.steiner_points;
+  report.info()["mesh"] = std::move(mi);
+  return report;
+}
+
 ValidationReport validateGtnBytes(std::span<const uint8_t> bytes, const std::string& name,
                                   const ValidateOptions& options) {
   // The reader opens paths; an anonymous in-memory file gives it one without touching the disk.

@@ -55,4 +55,11 @@ ValidationReport validateGtnBytes(std::span<const uint8_t> bytes, const std::str
 // Reads and validates a file. A non-OK status only when the file cannot be read (exit code 3).
 StatusOr<ValidationReport> validateGtnFile(const std::string& path, const ValidateOptions& options);
 
+// Validates the mesh that mesh files describe (anything `gtn convert` reads: one mesh file, PLOT3D grid
+// and Q files, a TetGen basename, a Medit mesh and its solutions), imported with
+// options.import_options: what the importer changed (import layer), then the mesh checks of a level
+// under the scope "/mesh". A file the importer rejects is an IMPORT_FAILED error; a non-OK status only
+// when a file cannot be opened or read (exit code 3).
+StatusOr<ValidationReport> validateMeshFiles(const std::vector<std::string>& inputs, const ValidateOptions& options);
+
 }  // namespace gtn

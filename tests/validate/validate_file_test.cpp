@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -201,6 +202,59 @@ TEST(ValidateFile, BitFlipsAndTruncationsAreAllErrors) {
   }
   EXPECT_EQ(flips_clean, 0);
   EXPECT_EQ(truncations_clean, 0);
+}
+
+// Mesh files instead of a .gtn file: what the importer changed (import layer), then the mesh checks.
+TEST(ValidateMeshFiles, RealDatasetsAreValid) {
+  RunResult spx = runGtn("validate --json " + dataPath("vtk/spx.vtk"));
+  EXPECT_EQ(spx.exit_code, 0) << spx.err;
+  const nlohmann::json j = nlohmann::json::parse(spx.out);
+  EXPECT_TRUE(j["valid"].get<bool>());
+  EXPECT_EQ(j["info"]["mesh"]["tets"].get<int>(), 12936);
+  EXPECT_EQ(j["info"]["mesh"]["points"].get<int>(), 2896);
+  EXPECT_EQ(j["info"]["mesh"]["format"], "legacy VTK");
+
+  // Blunt fin split into 5: its 77 flat tetrahedra are warnings, the Q file's padding an import note.
+  RunResult fin = runGtn("validate --json --split 5 " + dataPath("plot3d/bluntfinxyz.bin") + " " +
+                         dataPath("plot3d/bluntfinq.bin"));
+  EXPECT_EQ(fin.exit_code, 0) << fin.err;
+  const nlohmann::json f = nlohmann::json::parse(fin.out);
+  EXPECT_EQ(f["counts"]["error"].get<int>(), 0);
+  std::map<std::string, int> counts;
+  for (const nlohmann::json& m : f["messages"]) counts[m["code"].get<std::string>()] = m["count"].get<int>();
+  EXPECT_EQ(counts["ZERO_VOLUME_TET"], 77);
+  EXPECT_EQ(counts["IMPORT_WARNING"], 1);
+  EXPECT_EQ(f["info"]["mesh"]["tets"].get<int>(), 187395);
+}
+
+TEST(ValidateMeshFiles, DefectsImportFailuresAndUsage) {
+  const std::string dir = tempDir("validate-mesh-files");
+  // Tetrahedron 1 repeats tetrahedron 0 with the opposite orientation, and the face (0, 1, 2) has a
+  // third tetrahedron, below it: tetrahedra 1 and 2 are stored negatively oriented.
+  const std::string head = "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 float\n"
+                           "0 0 0 1 0 0 0 1 0 0 0 1 1 1 -1\n";
+  writeFile(dir + "/dup.vtk", head + "CELLS 3 15\n4 0 1 2 3\n4 0 2 1 3\n4 0 1 2 4\nCELL_TYPES 3\n10 10 10\n");
+  RunResult dup = runGtn("validate --json " + dir + "/dup.vtk");
+  EXPECT_EQ(dup.exit_code, 1) << dup.err;
+  const nlohmann::json d = nlohmann::json::parse(dup.out);
+  std::map<std::string, int> counts;
+  for (const nlohmann::json& m : d["messages"]) counts[m["code"].get<std::string>()] = m["count"].get<int>();
+  EXPECT_EQ(counts["DUPLICATE_TET"], 1);
+  EXPECT_EQ(counts["NON_MANIFOLD_FACE"], 1);
+  EXPECT_EQ(counts["CELLS_REORIENTED"], 2) << dup.out;
+
+  // A file the importer rejects is reported, with the importer's place and reason.
+  writeFile(dir + "/short.vtk", head.substr(0, head.size() - 10));
+  RunResult bad = runGtn("validate " + dir + "/short.vtk");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.out.find("IMPORT_FAILED: " + dir + "/short.vtk:"), std::string::npos) << bad.out;
+  EXPECT_NE(bad.out.find("INVALID (1 errors"), std::string::npos) << bad.out;
+
+  EXPECT_EQ(runGtn("validate " + dir + "/missing.vtk").exit_code, 3);
+  EXPECT_EQ(runGtn("validate --quick " + dir + "/dup.vtk").exit_code, 2);
+  EXPECT_EQ(runGtn("validate " + dir + "/dup.vtk --against " + dir + "/dup.vtk").exit_code, 2);
+  const SpxFile& f = spxFile();
+  EXPECT_EQ(runGtn("validate " + f.gtn + " " + f.gtn).exit_code, 2);
 }
 
 }  // namespace
