@@ -368,6 +368,14 @@ std::map<std::string, Case> cases() {
     l1 = applied(base().tree, n);
     return twoLevels(base().tree, l1, n, double(n) / base().mesh.numPoints(), false);
   };
+  // Mesh files: a legacy VTK file whose CELLS list stops short.
+  c["IMPORT_FAILED"].decoded = [] {
+    const std::string path = base().dir + "/short-cells.vtk";
+    writeFile(path, "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+                    "0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2\n");
+    StatusOr<ValidationReport> r = validateMeshFiles({path}, {});
+    return r.isOk() ? std::move(r).value() : ValidationReport(100);
+  };
   // --against.
   c["SOURCE_UNREADABLE"].decoded = [] {
     ValidationReport r(100);
