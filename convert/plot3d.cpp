@@ -45,6 +45,7 @@
 #include "format/file_io.h"
 #include "format/gtn_bytes.h"
 #include "mesh/hex_split.h"
+#include "mesh/predicates.h"
 
 static_assert(std::endian::native == std::endian::little,
               "Field holds little-endian bytes: a big-endian host would need byte swapping here");
@@ -73,6 +74,10 @@ struct Layout {
   bool iblank = false;
   bool overflow = false;  // Q files: OVERFLOW's layout (NQ variables, a longer freestream record)
   bool planes = false;    // one record per k-plane (all components of the plane) instead of one per grid
+  // One record per component (x, y, z and IBLANK; each Q or function variable) instead of one per
+  // grid, as Fortran writes `write(u) x` / `write(u) y` / ...; the records, in order, are the whole
+  // layout.
+  bool components = false;
   bool ascii = false;  // read from text (transcoded; the binary members then describe the transcoding)
 };
 
@@ -90,6 +95,7 @@ std::string describeLayout(const Layout& l, Kind kind) {
   if (kind == Kind::kGrid) s += l.iblank ? ", IBLANK" : ", no IBLANK";
   if (kind == Kind::kQ && l.overflow) s += ", OVERFLOW";
   if (l.planes) s += ", planes";
+  if (l.components) s += ", one record per variable";
   return s;
 }
 
@@ -103,9 +109,11 @@ struct Constraints {
   std::optional<int> ndim;
   std::optional<bool> overflow;
   std::optional<bool> planes;
+  std::optional<bool> components;
 
   bool allows(const Layout& l, Kind kind) const {
     if (planes && *planes != l.planes) return false;
+    if (components && *components != l.components) return false;
     if (kind == Kind::kQ && overflow && *overflow != l.overflow) return false;
     if (big_endian && *big_endian != l.big_endian) return false;
     if (fortran && *fortran != (l.marker != 0)) return false;
@@ -354,6 +362,11 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     *why = "every grid has a single k-plane, so the planes layout is the whole layout";
     return false;
   }
+  if (l.components && kind == Kind::kFunction &&
+      std::all_of(fit->blocks.begin(), fit->blocks.end(), [](const BlockDims& b) { return b.nvar == 1; })) {
+    *why = "every grid has a single variable, so one record per variable is the whole layout";
+    return false;
+  }
   *header_ok = true;
   fit->layout = l;
   fit->headers.clear();
@@ -391,7 +404,26 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
         return false;
       fit->headers.push_back(std::move(header));
     }
-    if (l.planes) {
+    if (l.components) {
+      // One record per component; the block's record is their pieces in order, the whole layout.
+      std::vector<uint64_t> component_bytes;
+      if (kind == Kind::kGrid) {
+        component_bytes.assign(static_cast<size_t>(l.ndim), n * value_bytes);
+        if (l.iblank) component_bytes.push_back(n * 4);
+      } else {
+        component_bytes.assign(static_cast<size_t>(per_point / value_bytes), n * value_bytes);
+      }
+      if (component_bytes.size() < 2) {
+        *why = "a single variable: one record per variable is the whole layout";
+        return false;
+      }
+      Record& all = fit->data[static_cast<size_t>(g)];
+      for (size_t c = 0; c < component_bytes.size(); ++c) {
+        const std::string name = block_name + ", variable " + std::to_string(c + 1);
+        if (!cursor.next(component_bytes[c], name.c_str(), &rec, why)) return false;
+        all.insert(all.end(), rec.begin(), rec.end());
+      }
+    } else if (l.planes) {
       // One record per k-plane; the block's record is their pieces in order (blockBytes reorders).
       Record& all = fit->data[static_cast<size_t>(g)];
       const uint64_t plane_bytes = static_cast<uint64_t>(b.n[0] * b.n[1]) * per_point;
@@ -433,11 +465,13 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
         for (int ndim : {3, 2}) {
           if (ndim == 2 && kind != Kind::kGrid) continue;
           for (int precision : {4, 8}) {
-            for (int variant = 0; variant < 4; ++variant) {
+            for (int variant = 0; variant < 8; ++variant) {
               // Bit 0: with IBLANK for grids, OVERFLOW's layout for Q files; bit 1: written plane
-              // by plane (told apart by record markers only, 3D only).
+              // by plane (told apart by record markers only, 3D only); bit 2: one record per
+              // variable (record markers only).
               if ((variant & 1) && kind == Kind::kFunction) continue;
               if ((variant & 2) && (marker == 0 || ndim != 3)) continue;
+              if ((variant & 4) && (marker == 0 || (variant & 2))) continue;
               Layout l;
               l.big_endian = be != 0;
               l.marker = marker;
@@ -447,6 +481,7 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
               l.iblank = (variant & 1) != 0 && kind == Kind::kGrid;
               l.overflow = (variant & 1) != 0 && kind == Kind::kQ;
               l.planes = (variant & 2) != 0;
+              l.components = (variant & 4) != 0;
               if (!constraints.allows(l, kind)) continue;
               Fit fit;
               std::string why;
@@ -487,7 +522,8 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
 }
 
 std::string triedText(const Detection& d, Kind kind) {
-  std::string s = "tried big- and little-endian, no/4-byte/8-byte record markers, whole and planes, single and multi-grid, ";
+  std::string s = "tried big- and little-endian, no/4-byte/8-byte record markers, whole, planes and one record per "
+                  "variable, single and multi-grid, ";
   s += kind == Kind::kGrid ? "2D and 3D, float32 and float64, with and without IBLANK"
                            : (kind == Kind::kQ ? "float32 and float64, classic and OVERFLOW layouts" : "float32 and float64");
   s += " (binary; text files are read as ASCII PLOT3D)";
@@ -518,10 +554,48 @@ bool sameDims(const std::vector<BlockDims>& a, const std::vector<BlockDims>& b) 
   return true;
 }
 
+// How many cells of a grid fit read with `fit` have the orientation most of its cells have: the
+// sign of the corner at (i, j, k) spanned by its three neighbours (exact). A grid read with its own
+// layout is consistent (its cells all right- or all left-handed); read with another layout whose
+// records happen to have the same sizes, its points land in the wrong places and its cells go flat
+// or turn both ways.
+uint64_t consistentCells(std::string_view bytes, const Fit& fit) {
+  const Layout& l = fit.layout;
+  std::string scratch, reordered;
+  std::vector<size_t> components(static_cast<size_t>(l.ndim), static_cast<size_t>(l.precision));
+  if (l.iblank) components.push_back(4);
+  uint64_t positive = 0, negative = 0;
+  for (size_t g = 0; g < fit.blocks.size(); ++g) {
+    const BlockDims& b = fit.blocks[g];
+    if (l.ndim != 3 || b.n[0] < 2 || b.n[1] < 2 || b.n[2] < 2) continue;
+    const size_t n = b.points();
+    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
+    auto point = [&](int64_t i, int64_t j, int64_t k, double out[3]) {
+      const size_t at = static_cast<size_t>(i + b.n[0] * (j + b.n[1] * k));
+      for (int a = 0; a < 3; ++a) out[a] = loadReal(v.data() + (a * n + at) * l.precision, l.precision, l.big_endian);
+    };
+    for (int64_t k = 0; k + 1 < b.n[2]; ++k)
+      for (int64_t j = 0; j + 1 < b.n[1]; ++j)
+        for (int64_t i = 0; i + 1 < b.n[0]; ++i) {
+          double p[4][3];
+          point(i, j, k, p[0]);
+          point(i + 1, j, k, p[1]);
+          point(i, j + 1, k, p[2]);
+          point(i, j, k + 1, p[3]);
+          const double o = orient3d(p[0], p[1], p[2], p[3]);
+          positive += o > 0;
+          negative += o < 0;
+        }
+  }
+  return std::max(positive, negative);
+}
+
 // Picks the one fit among `fits` that `accept` takes, preferring the grid file's byte order and
-// record markers when several remain, then fits with record markers over fits without. Empty when
-// none; an error when still ambiguous.
-StatusOr<std::optional<Fit>> pickOne(const std::string& path, Kind kind, std::vector<Fit> fits,
+// record markers when several remain, then its records (whole, planes, per variable), then fits with
+// record markers over fits without; grid readings that differ only in their records (the planes of
+// a grid of 3 k-planes have the sizes of its x, y and z records) by the consistency of their cells.
+// Empty when none; an error when still ambiguous.
+StatusOr<std::optional<Fit>> pickOne(const std::string& path, std::string_view bytes, Kind kind, std::vector<Fit> fits,
                                      const std::function<bool(const Fit&)>& accept, const Layout* prefer) {
   std::vector<Fit> ok;
   for (Fit& f : fits)
@@ -531,6 +605,29 @@ StatusOr<std::optional<Fit>> pickOne(const std::string& path, Kind kind, std::ve
     for (const Fit& f : ok)
       if (f.layout.big_endian == prefer->big_endian && f.layout.marker == prefer->marker) same.push_back(f);
     if (!same.empty()) ok = std::move(same);
+  }
+  if (ok.size() > 1 && prefer) {
+    std::vector<Fit> same;
+    for (const Fit& f : ok)
+      if (f.layout.planes == prefer->planes && f.layout.components == prefer->components) same.push_back(f);
+    if (!same.empty()) ok = std::move(same);
+  }
+  if (ok.size() > 1 && kind == Kind::kGrid) {
+    // Readings alike but for their records: the one whose cells are consistent.
+    auto alike = [](const Layout& a, const Layout& b) {
+      return a.big_endian == b.big_endian && a.marker == b.marker && a.multi_grid == b.multi_grid &&
+             a.ndim == b.ndim && a.precision == b.precision && a.iblank == b.iblank;
+    };
+    std::vector<uint64_t> score(ok.size());
+    for (size_t i = 0; i < ok.size(); ++i) score[i] = consistentCells(bytes, ok[i]);
+    std::vector<Fit> kept;
+    for (size_t i = 0; i < ok.size(); ++i) {
+      bool beaten = false;
+      for (size_t j = 0; j < ok.size(); ++j)
+        beaten |= j != i && alike(ok[i].layout, ok[j].layout) && score[j] > score[i];
+      if (!beaten) kept.push_back(std::move(ok[i]));
+    }
+    ok = std::move(kept);
   }
   if (ok.size() > 1) {
     // A fit whose record markers all check out carries a signature that a marker-less fit of the
@@ -561,13 +658,13 @@ StatusOr<Selected> selectFit(const std::string& path, std::string_view bytes, Ki
                           const std::function<bool(const Fit&)>& accept, const Layout* prefer,
                           std::vector<std::string>* warnings) {
   Selected s;
-  GTN_ASSIGN_OR_RETURN(std::optional<Fit> exact, pickOne(path, kind, d.exact, accept, prefer));
+  GTN_ASSIGN_OR_RETURN(std::optional<Fit> exact, pickOne(path, bytes, kind, d.exact, accept, prefer));
   if (exact) {
     s.fit = std::move(*exact);
     s.found = true;
     return s;
   }
-  GTN_ASSIGN_OR_RETURN(std::optional<Fit> padded, pickOne(path, kind, d.zero_tail, accept, prefer));
+  GTN_ASSIGN_OR_RETURN(std::optional<Fit> padded, pickOne(path, bytes, kind, d.zero_tail, accept, prefer));
   if (padded) {
     s.fit = std::move(*padded);
     s.found = true;
@@ -813,6 +910,7 @@ Constraints imposed(const Layout& l) {
   c.ndim = l.ndim;
   c.overflow = l.overflow;
   c.planes = l.planes;
+  c.components = l.components;
   return c;
 }
 

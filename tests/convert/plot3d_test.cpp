@@ -227,6 +227,7 @@ struct GridOptions {
   bool iblank = false;
   size_t subrecord_chunk = 0;  // > 0: write data records as subrecords of this size
   bool planes = false;         // grid and Q files plane by plane (PLOT3D's /PLANES): a record per k-plane
+  bool per_variable = false;   // grid and Q files a record per variable (X, Y, Z, IBLANK; each Q variable)
 };
 
 // Writes the grid count record (multi-grid files) and leaves in b the dimensions of every grid, each
@@ -251,8 +252,22 @@ std::string gridFile(const std::vector<Block>& blocks, const GridOptions& o) {
   beginDims(w, b, blocks, o);
   w.record(b.s);
   for (const Block& g : blocks) {
-    // One record for the grid, or one per k-plane holding that plane's X, Y, Z (and IBLANK) values.
+    // One record for the grid, or one per k-plane holding that plane's X, Y, Z (and IBLANK) values,
+    // or one per variable.
     const size_t n = g.points(), span = o.planes ? static_cast<size_t>(g.n[0]) * g.n[1] : n;
+    if (o.per_variable) {
+      for (const auto* v : {&g.x, &g.y, &g.z}) {
+        b.s.clear();
+        for (size_t p = 0; p < n; ++p) b.real((*v)[p], o.precision);
+        w.record(b.s);
+      }
+      if (o.iblank) {
+        b.s.clear();
+        for (size_t p = 0; p < n; ++p) b.i32(g.iblank[p]);
+        w.record(b.s);
+      }
+      continue;
+    }
     for (size_t first = 0; first < n; first += span) {
       b.s.clear();
       for (const auto* v : {&g.x, &g.y, &g.z})
@@ -280,17 +295,22 @@ std::string qFile(const std::vector<Block>& blocks, const GridOptions& o) {
     b.s.clear();
     for (double v : {0.75, 2.5, 1.0e6, 0.125 + static_cast<double>(gi)}) b.real(v, o.precision);
     w.record(b.s);
-    // The five variables in one record, or in one record per k-plane.
+    // The five variables in one record, or in one record per k-plane, or one record each.
     const size_t n = g.points(), span = o.planes ? static_cast<size_t>(g.n[0]) * g.n[1] : n;
     for (size_t first = 0; first < n; first += span) {
       b.s.clear();
-      for (int var = 0; var < 5; ++var)
+      for (int var = 0; var < 5; ++var) {
         for (size_t p = first; p < first + span; ++p) {
           const double d = static_cast<double>(p);
           const double values[5] = {1 + d / 1000, d, -d, 2 * d, 3 + d};
           b.real(values[var], o.precision);
         }
-      w.record(b.s);
+        if (o.per_variable) {
+          w.record(b.s);
+          b.s.clear();
+        }
+      }
+      if (!o.per_variable) w.record(b.s);
     }
   }
   return w.out;
@@ -571,6 +591,57 @@ TEST_F(Plot3dSynthetic, PlanesLayoutWithRecordMarkers) {
   ASSERT_FALSE(r.isOk());
   EXPECT_EQ(r.status().message().find("ambiguous"), std::string::npos) << r.status().message();
   EXPECT_NE(r.status().message().find("a dimension below 2"), std::string::npos) << r.status().message();
+}
+
+// Fortran's `write(u) x` / `write(u) y` / ...: a record per variable, in grid and Q files, read with
+// the values of the whole layout. A grid of three k-planes has records of the same sizes either way
+// (three planes of X, Y and Z, or X, Y and Z of three planes): the reading whose cells are consistent
+// wins, both ways round; a Q file of five k-planes likewise follows its grid's records.
+TEST_F(Plot3dSynthetic, OneRecordPerVariable) {
+  std::vector<Block> blocks = {boxBlock(4, 3, 5), boxBlock(3, 3, 2, 3.0)};
+  for (Block& g : blocks) g.iblank.assign(g.points(), 1);
+  blocks[0].iblank[0] = 0;
+  for (int marker : {4, 8}) {
+    GridOptions o;
+    o.big_endian = marker == 8;
+    o.marker = marker;
+    o.multi = true;
+    o.precision = marker == 4 ? 4 : 8;
+    o.iblank = true;
+    const std::string tag = std::to_string(marker);
+    GridOptions vo = o;
+    vo.per_variable = true;
+    auto v = importFiles({write("var" + tag + ".xyz", gridFile(blocks, vo)), write("var" + tag + ".q", qFile(blocks, vo))}, 6);
+    ASSERT_TRUE(v.isOk()) << tag << ": " << v.status().message();
+    auto w = importFiles({write("whole" + tag + ".xyz", gridFile(blocks, o)), write("whole" + tag + ".q", qFile(blocks, o))}, 6);
+    ASSERT_TRUE(w.isOk()) << w.status().message();
+    expectCoords(v->mesh, blocks, o.precision);
+    EXPECT_EQ(v->mesh.coords, w->mesh.coords);
+    EXPECT_EQ(v->mesh.tets, w->mesh.tets);
+    for (const char* f : {"density", "momentum", "stagnation_energy", "iblank"})
+      EXPECT_EQ(v->mesh.findPointField(f)->bytes, w->mesh.findPointField(f)->bytes) << f;
+    EXPECT_NE(v->mesh.findMetadata("plot3d.layout")->find(", one record per variable"), std::string::npos)
+        << *v->mesh.findMetadata("plot3d.layout");
+  }
+  for (int nk : {3, 5}) {
+    const std::vector<Block> g = {boxBlock(4, 3, nk)};
+    GridOptions o;
+    o.big_endian = false;
+    o.marker = 4;
+    for (int mode = 0; mode < 2; ++mode) {
+      GridOptions m = o;
+      (mode == 0 ? m.planes : m.per_variable) = true;
+      const std::string name = "nk" + std::to_string(nk) + (mode == 0 ? "planes" : "vars");
+      auto r = importFiles({write(name + ".xyz", gridFile(g, m)), write(name + ".q", qFile(g, m))}, 6);
+      ASSERT_TRUE(r.isOk()) << name << ": " << r.status().message();
+      expectCoords(r->mesh, g, 4);
+      EXPECT_EQ(r->mesh.findPointField("momentum")->get(13, 2), 26.0) << name;
+      EXPECT_NE(r->mesh.findMetadata("plot3d.layout")->find(mode == 0 ? ", planes" : ", one record per variable"),
+                std::string::npos)
+          << name;
+      EXPECT_EQ(computeMeshStats(r->mesh).zero_volume, 0u) << name;
+    }
+  }
 }
 
 TEST_F(Plot3dSynthetic, SubrecordsWithNegativeMarkers) {
