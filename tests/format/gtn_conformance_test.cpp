@@ -263,6 +263,18 @@ TetMesh edgePoints() {
 // A 5 x 5 x 5 grid of cubes with a density field: big enough for a merge tree and two mip levels.
 TetMesh levelsMesh() { return finish(densityGrid(5, 9)); }
 
+// levelsMesh() plus 131000 points no tetrahedron uses, all at the origin with density 0: 131216 points,
+// more than 2^17, so that the first records of its merge tree code their child in 17 + 1 direct bits
+// (one call of 17 bits: spec sections 10.1 and 11).
+constexpr size_t kWidePoints = 216 + 131000;
+TetMesh wideMesh() {
+  TetMesh m = levelsMesh();
+  m.coords.resize(3 * kWidePoints, 0.0);
+  Field& f = m.point_fields[0];
+  f.bytes.resize(kWidePoints * f.components * f.valueSize(), 0);
+  return m;
+}
+
 GtnWriteOptions options(bool directory = true) {
   GtnWriteOptions o;
   o.tool_version = "conformance";
@@ -300,6 +312,21 @@ std::vector<uint8_t> encodeWithLevels(const GtnWriteOptions& o) {
   auto levels = buildMipLevels(mesh, *tree, lo);
   EXPECT_TRUE(levels.isOk());
   const std::string path = test::tempDir("conformance-levels") + "/levels.gtn";
+  EXPECT_TRUE(writeGtnFile(path, levels->inputs(mesh), o).isOk());
+  const std::string bytes = test::readFile(path);
+  return std::vector<uint8_t>(bytes.begin(), bytes.end());
+}
+
+// wideMesh() with its merge tree and no mip level.
+std::vector<uint8_t> encodeWide(const GtnWriteOptions& o) {
+  const TetMesh mesh = wideMesh();
+  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
+  EXPECT_TRUE(tree.isOk());
+  LevelOptions lo;
+  lo.levels = 0;
+  auto levels = buildMipLevels(mesh, *tree, lo);
+  EXPECT_TRUE(levels.isOk());
+  const std::string path = test::tempDir("conformance-wide") + "/wide.gtn";
   EXPECT_TRUE(writeGtnFile(path, levels->inputs(mesh), o).isOk());
   const std::string bytes = test::readFile(path);
   return std::vector<uint8_t>(bytes.begin(), bytes.end());
@@ -347,6 +374,7 @@ std::vector<Sample> samples() {
   s.push_back(valid("curvilinear.f32.dir.v1.0.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithLevels(options()); }));
+  s.push_back(valid("wide-merge-tree.f32.dir.v1.0.gtn", wideMesh, [] { return encodeWide(options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
                  const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
                  return encodeFile(cubeF32(), options(false),
@@ -482,6 +510,35 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsListed) {
     TetMeshBuilder b2;
     ASSERT_TRUE((*lazy)->decodeLevel(0, b2).isOk());
     EXPECT_EQ(b2.mesh().tets, got.tets);
+  }
+}
+
+// The merge tree of more than 2^17 points decodes to the ranking's tree: the same merges as the
+// levels file's grid (the unused points are never merged), in the wide file's vertex numbering.
+TEST(GtnConformance, WideMergeTreeDecodes) {
+  auto r = GtnReader::open(kDir + "wide-merge-tree.f32.dir.v1.0.gtn");
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ((*r)->levels(), 1u);
+  TetMeshBuilder b0;
+  ASSERT_TRUE((*r)->decodeLevel(0, b0).isOk());
+  const TetMesh& level0 = b0.mesh();
+  ASSERT_EQ(level0.numPoints(), kWidePoints);
+  auto payload = (*r)->mergeTreePayload(0);
+  ASSERT_TRUE(payload.isOk());
+  ASSERT_TRUE(payload->has_value());
+  auto tree = decodeMergeTree(**payload, level0.numPoints(), "wide level 0");
+  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  auto ranked = rankMerges(wideMesh(), RankingOptions{}, nullptr);
+  ASSERT_TRUE(ranked.isOk());
+  EXPECT_EQ(tree->merges, ranked->merges);
+  EXPECT_GT(tree->merges, 150u);
+  EXPECT_EQ(tree->boundaryMergesUpTo(tree->merges), ranked->boundaryMergesUpTo(ranked->merges));
+  EXPECT_EQ(tree->tetsRemovedUpTo(tree->merges), ranked->tetsRemovedUpTo(ranked->merges));
+  for (uint64_t n : {uint64_t{1}, uint64_t{50}, tree->merges}) {
+    auto got = applyMerges(level0, *tree, n);
+    auto want = applyMerges(wideMesh(), *ranked, n);
+    ASSERT_TRUE(got.isOk() && want.isOk());
+    EXPECT_TRUE(canonical(*got) == canonical(*want)) << n << " merges";
   }
 }
 
