@@ -582,6 +582,9 @@ uint64_t consistentCells(std::string_view bytes, const Fit& fit) {
           point(i + 1, j, k, p[1]);
           point(i, j + 1, k, p[2]);
           point(i, j, k + 1, p[3]);
+          bool finite = true;  // the exact predicate wants finite input; addGrid reports the others
+          for (const auto& q : p) finite &= std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]);
+          if (!finite) continue;
           const double o = orient3d(p[0], p[1], p[2], p[3]);
           positive += o > 0;
           negative += o < 0;
