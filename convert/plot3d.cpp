@@ -32,6 +32,7 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <string>
@@ -74,6 +75,7 @@ struct Layout {
   bool iblank = false;
   bool overflow = false;  // Q files: OVERFLOW's layout (NQ variables, a longer freestream record)
   bool planes = false;    // one record per k-plane (all components of the plane) instead of one per grid
+  bool dims_per_grid = false;  // multi-grid: each grid's dimensions in a record of its own (found, not tried)
   // One record per component (x, y, z and IBLANK; each Q or function variable) instead of one per
   // grid, as Fortran writes `write(u) x` / `write(u) y` / ...; the records, in order, are the whole
   // layout.
@@ -96,6 +98,7 @@ std::string describeLayout(const Layout& l, Kind kind) {
   if (kind == Kind::kQ && l.overflow) s += ", OVERFLOW";
   if (l.planes) s += ", planes";
   if (l.components) s += ", one record per variable";
+  if (l.dims_per_grid) s += ", dimensions per grid";
   return s;
 }
 
@@ -124,6 +127,21 @@ struct Constraints {
     return true;
   }
 };
+
+// What a .p3d meta-file fixed, in words ("" when nothing).
+std::string describeConstraints(const Constraints& c) {
+  std::vector<std::string> parts;
+  if (c.big_endian) parts.push_back(*c.big_endian ? "big-endian" : "little-endian");
+  if (c.fortran) parts.push_back(*c.fortran ? "record markers (Fortran)" : "no record markers (C)");
+  if (c.multi_grid) parts.push_back(*c.multi_grid ? "multi-grid" : "single grid");
+  if (c.precision) parts.push_back(*c.precision == 4 ? "float32" : "float64");
+  if (c.iblank) parts.push_back(*c.iblank ? "IBLANK" : "no IBLANK");
+  if (c.planes && *c.planes) parts.push_back("planes");
+  if (c.components && *c.components) parts.push_back("one record per variable");
+  std::string s;
+  for (const std::string& p : parts) s += (s.empty() ? "" : ", ") + p;
+  return s;
+}
 
 // A logical record: one piece, or several when it was written as Fortran subrecords.
 struct Piece {
@@ -248,6 +266,7 @@ class RecordCursor {
   }
 
   uint64_t pos() const { return pos_; }
+  void seek(uint64_t pos) { pos_ = pos; }
 
  private:
   std::string_view bytes_;
@@ -316,8 +335,27 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
   }
   const bool overflow = kind == Kind::kQ && l.overflow;
   const uint64_t dims_bytes = static_cast<uint64_t>(ngrid) * ints * 4 + (overflow ? 8 : 0);
-  if (!cursor.next(dims_bytes, "dimensions", &rec, why)) return false;
-  const std::string_view dv = recordBytes(bytes, rec, &scratch);
+  const uint64_t dims_at = cursor.pos();
+  std::string_view dv;
+  std::string dims_scratch;
+  bool dims_per_grid = false;
+  if (cursor.next(dims_bytes, "dimensions", &rec, why)) {
+    dv = recordBytes(bytes, rec, &scratch);
+  } else {
+    // Each grid's dimensions in a record of its own (`do g; write(u) ni(g), nj(g), nk(g); enddo`).
+    if (!l.multi_grid || l.marker == 0 || ngrid < 2 || overflow) return false;
+    const std::string why_whole = *why;
+    cursor.seek(dims_at);
+    for (int64_t g = 0; g < ngrid; ++g) {
+      if (!cursor.next(static_cast<uint64_t>(ints) * 4, "dimensions", &rec, why)) {
+        *why = why_whole;
+        return false;
+      }
+      dims_scratch.append(recordBytes(bytes, rec, &scratch));
+    }
+    dv = dims_scratch;
+    dims_per_grid = true;
+  }
   fit->blocks.assign(static_cast<size_t>(ngrid), BlockDims());
   const uint64_t value_bytes = static_cast<uint64_t>(l.precision);
   fit->nq = 5;
@@ -369,6 +407,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
   }
   *header_ok = true;
   fit->layout = l;
+  fit->layout.dims_per_grid = dims_per_grid;
   fit->headers.clear();
   fit->data.assign(static_cast<size_t>(ngrid), Record());
   for (int64_t g = 0; g < ngrid; ++g) {
@@ -593,11 +632,54 @@ uint64_t consistentCells(std::string_view bytes, const Fit& fit) {
   return std::max(positive, negative);
 }
 
+// How far apart the values of grid neighbours lie when the file is read with `fit`: the mean over
+// blocks, components and neighbour pairs along i, j and k of |difference|. Coordinates (grids) or
+// variables (Q and function files) vary smoothly over a grid; read with another layout whose records
+// happen to have the same sizes, one array's values land in another's places and the seams jump
+// (from density to energy, say). The readings being compared hold the same values in other places,
+// so their sums are on one scale. Non-finite values are left out.
+double roughness(std::string_view bytes, const Fit& fit, Kind kind) {
+  const Layout& l = fit.layout;
+  const size_t vb = static_cast<size_t>(l.precision);
+  std::string scratch, reordered;
+  double sum = 0;
+  uint64_t pairs = 0;
+  for (size_t g = 0; g < fit.blocks.size(); ++g) {
+    const BlockDims& b = fit.blocks[g];
+    const size_t n = b.points();
+    size_t count = kind == Kind::kGrid ? static_cast<size_t>(l.ndim)
+                                       : (kind == Kind::kQ ? static_cast<size_t>(fit.nq) : static_cast<size_t>(b.nvar));
+    std::vector<size_t> components(count, vb);
+    if (kind == Kind::kGrid && l.iblank) components.push_back(4);
+    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
+    std::vector<double> x(n);
+    for (size_t c = 0; c < count; ++c) {
+      for (size_t i = 0; i < n; ++i) x[i] = loadReal(v.data() + (c * n + i) * vb, l.precision, l.big_endian);
+      const size_t step[3] = {1, static_cast<size_t>(b.n[0]), static_cast<size_t>(b.n[0] * b.n[1])};
+      for (int a = 0; a < 3; ++a) {
+        for (size_t i = 0; i + step[a] < n; ++i) {
+          // Neighbours along axis a only: not across the end of a line or plane.
+          const size_t coord = a == 0 ? i % step[1] : (a == 1 ? (i / step[1]) % static_cast<size_t>(b.n[1]) : 0);
+          const size_t last = a == 0 ? static_cast<size_t>(b.n[0]) - 1 : (a == 1 ? static_cast<size_t>(b.n[1]) - 1 : 1);
+          if (a < 2 && coord == last) continue;
+          const double d = std::fabs(x[i + step[a]] - x[i]);
+          if (!std::isfinite(d)) continue;
+          sum += d;
+          ++pairs;
+        }
+      }
+    }
+  }
+  return pairs ? sum / static_cast<double>(pairs) : 0.0;
+}
+
 // Picks the one fit among `fits` that `accept` takes, preferring the grid file's byte order and
-// record markers when several remain, then its records (whole, planes, per variable), then fits with
-// record markers over fits without; grid readings that differ only in their records (the planes of
-// a grid of 3 k-planes have the sizes of its x, y and z records) by the consistency of their cells.
-// Empty when none; an error when still ambiguous.
+// record markers when several remain, then fits with record markers over fits without. Readings that
+// differ only in their records (whole, planes, one per variable: the planes of a grid of 3 k-planes
+// have the sizes of its x, y and z records, and a Q file of 5 k-planes likewise) are told apart by
+// their data: for grids the consistency of their cells first, then for every kind the roughness of
+// their values; only when the data cannot tell (the readings give the same values) does the grid's
+// own records decide. Empty when none; an error when still ambiguous.
 StatusOr<std::optional<Fit>> pickOne(const std::string& path, std::string_view bytes, Kind kind, std::vector<Fit> fits,
                                      const std::function<bool(const Fit&)>& accept, const Layout* prefer) {
   std::vector<Fit> ok;
@@ -609,26 +691,34 @@ StatusOr<std::optional<Fit>> pickOne(const std::string& path, std::string_view b
       if (f.layout.big_endian == prefer->big_endian && f.layout.marker == prefer->marker) same.push_back(f);
     if (!same.empty()) ok = std::move(same);
   }
-  if (ok.size() > 1 && prefer) {
-    std::vector<Fit> same;
-    for (const Fit& f : ok)
-      if (f.layout.planes == prefer->planes && f.layout.components == prefer->components) same.push_back(f);
-    if (!same.empty()) ok = std::move(same);
-  }
-  if (ok.size() > 1 && kind == Kind::kGrid) {
-    // Readings alike but for their records: the one whose cells are consistent.
+  if (ok.size() > 1) {
+    // Readings alike but for their records: the data decides.
     auto alike = [](const Layout& a, const Layout& b) {
       return a.big_endian == b.big_endian && a.marker == b.marker && a.multi_grid == b.multi_grid &&
-             a.ndim == b.ndim && a.precision == b.precision && a.iblank == b.iblank;
+             a.ndim == b.ndim && a.precision == b.precision && a.iblank == b.iblank && a.overflow == b.overflow;
     };
-    std::vector<uint64_t> score(ok.size());
-    for (size_t i = 0; i < ok.size(); ++i) score[i] = consistentCells(bytes, ok[i]);
+    std::vector<uint64_t> consistent(ok.size(), 0);
+    std::vector<double> rough(ok.size(), 0.0);
+    for (size_t i = 0; i < ok.size(); ++i) {
+      if (kind == Kind::kGrid) consistent[i] = consistentCells(bytes, ok[i]);
+      rough[i] = roughness(bytes, ok[i], kind);
+    }
+    auto sameRecords = [&](const Fit& f) {
+      return prefer && f.layout.planes == prefer->planes && f.layout.components == prefer->components;
+    };
+    // j beats i: more consistent cells; else values clearly smoother (a wrong reading's seams make
+    // it rougher by far; 1% keeps rounding noise out); else, the data agreeing, the grid's records.
+    auto beats = [&](size_t j, size_t i) {
+      if (consistent[j] != consistent[i]) return consistent[j] > consistent[i];
+      if (rough[j] < 0.99 * rough[i]) return true;
+      if (rough[i] < 0.99 * rough[j]) return false;
+      return sameRecords(ok[j]) && !sameRecords(ok[i]);
+    };
     std::vector<Fit> kept;
     for (size_t i = 0; i < ok.size(); ++i) {
       bool beaten = false;
-      for (size_t j = 0; j < ok.size(); ++j)
-        beaten |= j != i && alike(ok[i].layout, ok[j].layout) && score[j] > score[i];
-      if (!beaten) kept.push_back(std::move(ok[i]));
+      for (size_t j = 0; j < ok.size() && !beaten; ++j) beaten = j != i && alike(ok[i].layout, ok[j].layout) && beats(j, i);
+      if (!beaten) kept.push_back(ok[i]);
     }
     ok = std::move(kept);
   }
@@ -643,7 +733,9 @@ StatusOr<std::optional<Fit>> pickOne(const std::string& path, std::string_view b
   if (ok.empty()) return std::optional<Fit>();
   if (ok.size() == 1) return std::optional<Fit>(std::move(ok[0]));
   std::string msg = path + ": ambiguous PLOT3D " + kindName(kind) + " file: " + std::to_string(ok.size()) +
-                    " interpretations fit it; name the layout in a .p3d meta-file:";
+                    " interpretations fit it; name the layout in a .p3d meta-file (keys \"byte-order\", \"precision\", "
+                    "\"multi-grid\", \"blanking\", \"language\", and gtn's \"records\": \"whole\", \"planes\" or "
+                    "\"variables\"):";
   for (size_t i = 0; i < ok.size(); ++i)
     msg += " [" + std::to_string(i + 1) + "] " + describeLayout(ok[i].layout, kind) + ": grids " + blocksText(ok[i].blocks) +
            (i + 1 < ok.size() ? ";" : "");
@@ -684,9 +776,36 @@ StatusOr<std::string> readInput(const std::string& path, Kind kind) {
   return bytes;
 }
 
+// The likeliest reason a Fortran file fits nothing: its first record checks out with 4- or 8-byte
+// markers and holds a few 64-bit integers of dimension size (the header written with 64-bit default
+// integers, as `gfortran -fdefault-integer-8` does). Empty when it does not look so.
+std::string integerWidthHint(std::string_view bytes) {
+  for (int m : {4, 8})
+    for (bool be : {false, true}) {
+      if (bytes.size() < static_cast<size_t>(2 * m)) continue;
+      const int64_t len = loadSigned(bytes.data(), m, be);
+      if (len < 8 || len > 40 || len % 8 != 0 || bytes.size() < static_cast<uint64_t>(2 * m + len)) continue;
+      if (loadSigned(bytes.data() + m + len, m, be) != len) continue;
+      std::string values;
+      bool ints = true;
+      for (int64_t at = 0; at < len && ints; at += 8) {
+        const int64_t v = loadSigned(bytes.data() + m + at, 8, be);
+        ints = v >= 1 && v < (int64_t{1} << 31);
+        values += (at ? " " : "") + std::to_string(v);
+      }
+      if (!ints) continue;
+      return "its first record (" + std::string(be ? "big" : "little") + "-endian, " + std::to_string(m) +
+             "-byte markers) holds " + std::to_string(len) + " bytes that read as the 64-bit integers " + values +
+             ": files whose integers are 64-bit (Fortran compiled with 64-bit default integers, such as gfortran "
+             "-fdefault-integer-8) are not supported; write the dimensions (and IBLANK) as 4-byte integers";
+    }
+  return "";
+}
+
 Status noFitError(const std::string& path, std::string_view bytes, Kind kind, const Detection& d) {
   std::string msg = path + ": not a PLOT3D " + kindName(kind) + " file this reader understands (" +
                     std::to_string(bytes.size()) + " bytes): no interpretation fits its size exactly";
+  if (const std::string hint = integerWidthHint(bytes); !hint.empty()) msg += "; " + hint;
   if (looksLikeText(bytes)) msg += "; it looks like text, but not like ASCII PLOT3D either";
   return invalidData(msg + "; " + triedText(d, kind));
 }
@@ -754,6 +873,9 @@ StatusOr<AsciiValues> readAsciiValues(const std::string& path, std::string_view 
     token.assign(text.substr(i, e - i));
     for (char& ch : token)
       if (ch == 'D' || ch == 'd') ch = 'E';
+    if (token.find_first_not_of('*') == std::string::npos)
+      return invalidData(path + ":" + std::to_string(line) + ": ASCII PLOT3D: '" + token.substr(0, 40) +
+                         "' is a Fortran field that overflowed its format (the value did not fit its width)");
     if (token.find('*') != std::string::npos)
       return unsupported(path + ":" + std::to_string(line) + ": Fortran repeat counts ('" + token.substr(0, 40) +
                          "') are not supported in ASCII PLOT3D");
@@ -1004,6 +1126,12 @@ StatusOr<P3dFiles> readP3dMeta(const std::string& path) {
     } else if (key == "language") {
       if (!v.is_string() || (v != "C" && v != "Fortran")) return bad(key, "\"C\" or \"Fortran\"");
       if (!auto_detect) out.constraints.fortran = v == "Fortran";
+    } else if (key == "records") {
+      // gtn's own key (ParaView has none for this): how the data records are cut. Always obeyed.
+      if (!v.is_string() || (v != "whole" && v != "planes" && v != "variables"))
+        return bad(key, "\"whole\", \"planes\" or \"variables\"");
+      out.constraints.planes = v == "planes";
+      out.constraints.components = v == "variables";
     } else if (key == "2D") {
       if (!v.is_boolean()) return bad(key, "true or false");
       if (v.get<bool>()) return unsupported(path + ": \"2D\": true: 2D grids cannot become tetrahedra");
@@ -1256,16 +1384,38 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
   GTN_RETURN_IF_ERROR(asciiFallback(grid_path, Kind::kGrid, constraints, &grid_bytes, &grid_detection));
   GTN_ASSIGN_OR_RETURN(Selected grid, selectFit(grid_path, grid_bytes, Kind::kGrid, grid_detection,
                                              [](const Fit&) { return true; }, nullptr, &warnings));
-  if (!grid.found) return noFitError(grid_path, grid_bytes, Kind::kGrid, grid_detection);
+  if (!grid.found) {
+    const Status st = noFitError(grid_path, grid_bytes, Kind::kGrid, grid_detection);
+    const std::string fixed = meta ? describeConstraints(constraints) : "";
+    if (fixed.empty()) return st;
+    return Status(st.code(), st.message() + "; only readings that the meta-file " + inputs[0] + " allows were tried (" +
+                                 fixed + "): check its keys against the file");
+  }
   if (grid.fit.layout.ndim == 2)
     return unsupported(grid_path + ": a 2D PLOT3D grid (" + dimsText(grid.fit.blocks[0], 2) +
                        (grid.fit.blocks.size() > 1 ? " and more" : "") + "; " +
                        describeLayout(grid.fit.layout, Kind::kGrid) + "): only 3D grids can be split into tetrahedra");
-  for (size_t g = 0; g < grid.fit.blocks.size(); ++g) {
-    const BlockDims& b = grid.fit.blocks[g];
-    if (b.n[0] < 2 || b.n[1] < 2 || b.n[2] < 2)
-      return unsupported(grid_path + ": grid " + std::to_string(g + 1) + " is " + dimsText(b) +
-                         ": a dimension below 2 makes it a 2D (or 1D) grid, which has no cells to split into tetrahedra");
+  // A block with a dimension below 2 is a surface, line or point: it has no cells. Among blocks that
+  // have cells it is kept as points no tetrahedron uses (multi-block files carry such blocks); a file
+  // of them only has nothing to convert.
+  {
+    std::vector<size_t> flat;
+    for (size_t g = 0; g < grid.fit.blocks.size(); ++g) {
+      const BlockDims& b = grid.fit.blocks[g];
+      if (b.n[0] < 2 || b.n[1] < 2 || b.n[2] < 2) flat.push_back(g);
+    }
+    if (flat.size() == grid.fit.blocks.size())
+      return unsupported(grid_path + ": grid " + std::to_string(flat[0] + 1) + " is " + dimsText(grid.fit.blocks[flat[0]]) +
+                         ": a dimension below 2 makes it a 2D (or 1D) grid, which has no cells to split into tetrahedra" +
+                         (flat.size() > 1 ? " (and so are the other " + std::to_string(flat.size() - 1) + " grids)" : ""));
+    for (size_t i = 0; i < flat.size() && i < 20; ++i) {
+      const BlockDims& b = grid.fit.blocks[flat[i]];
+      warnings.push_back(grid_path + ": grid " + std::to_string(flat[i] + 1) + " is " + dimsText(b) +
+                         ": a dimension below 2, so it has no cells; its " + std::to_string(b.points()) +
+                         " points stay as points no tetrahedron uses");
+    }
+    if (flat.size() > 20)
+      warnings.push_back(grid_path + ": " + std::to_string(flat.size() - 20) + " more grids without cells");
   }
   TetMesh& mesh = result.mesh;
   std::vector<int32_t> iblank;

@@ -644,6 +644,111 @@ TEST_F(Plot3dSynthetic, OneRecordPerVariable) {
   }
 }
 
+// A grid and its Q file whose records are cut differently (planes and one record per variable) where
+// their sizes coincide (5 k-planes, 5 Q variables): the data decides each file's reading, not the
+// grid's choice. A .p3d key "records" can name it; a wrong one says what it restricted.
+TEST_F(Plot3dSynthetic, GridAndQFileCutDifferently) {
+  const std::vector<Block> g = {boxBlock(4, 3, 5)};
+  GridOptions planes, vars;
+  planes.marker = vars.marker = 4;
+  planes.planes = true;
+  vars.per_variable = true;
+  for (int mode = 0; mode < 2; ++mode) {
+    const GridOptions& go = mode == 0 ? planes : vars;
+    const GridOptions& qo = mode == 0 ? vars : planes;
+    const std::string name = mode == 0 ? "gp_qv" : "gv_qp";
+    auto r = importFiles({write(name + ".xyz", gridFile(g, go)), write(name + ".q", qFile(g, qo))}, 6);
+    ASSERT_TRUE(r.isOk()) << name << ": " << r.status().message();
+    expectCoords(r->mesh, g, 4);
+    const Field* density = r->mesh.findPointField("density");
+    const Field* momentum = r->mesh.findPointField("momentum");
+    for (size_t p : {size_t{0}, size_t{13}, size_t{59}}) {
+      EXPECT_EQ(density->get(p, 0), static_cast<double>(static_cast<float>(1 + p / 1000.0))) << name << " " << p;
+      EXPECT_EQ(momentum->get(p, 2), 2.0 * p) << name << " " << p;
+    }
+  }
+  // Three k-planes: the grid's own records settle it, in either direction, and a .p3d may say so.
+  const std::vector<Block> three = {boxBlock(4, 3, 3)};
+  write("three.xyz", gridFile(three, vars));
+  write("three.p3d", R"({"records": "variables", "filenames": [{"xyz": "three.xyz"}]})");
+  auto named = importFiles({dir_ + "/three.p3d"});
+  ASSERT_TRUE(named.isOk()) << named.status().message();
+  expectCoords(named->mesh, three, 4);
+  write("wrong.p3d", R"({"records": "whole", "byte-order": "big", "filenames": [{"xyz": "three.xyz"}]})");
+  auto wrong = importFiles({dir_ + "/wrong.p3d"});
+  ASSERT_FALSE(wrong.isOk());
+  EXPECT_NE(wrong.status().message().find("only readings that the meta-file " + dir_ + "/wrong.p3d allows were tried (big-endian)"),
+            std::string::npos)
+      << wrong.status().message();
+  write("bad.p3d", R"({"records": "rows", "filenames": [{"xyz": "three.xyz"}]})");
+  auto bad = importFiles({dir_ + "/bad.p3d"});
+  ASSERT_FALSE(bad.isOk());
+  EXPECT_NE(bad.status().message().find("\"records\" must be"), std::string::npos) << bad.status().message();
+}
+
+// Multi-grid files as some codes write them: each grid's dimensions in a record of its own, and a
+// block without cells (a dimension of 1), which is kept as points no tetrahedron uses.
+TEST_F(Plot3dSynthetic, DimensionsPerGridAndFlatBlocks) {
+  const std::vector<Block> blocks = {boxBlock(3, 3, 3), boxBlock(4, 3, 1, 5.0), boxBlock(2, 3, 2, 9.0)};
+  RecordWriter w{false, 4, ""};
+  Bytes b{false, ""};
+  b.i32(3);
+  w.record(b.s);
+  for (const Block& g : blocks) {
+    b.s.clear();
+    for (int a = 0; a < 3; ++a) b.i32(g.n[a]);
+    w.record(b.s);
+  }
+  for (const Block& g : blocks) {
+    b.s.clear();
+    for (const auto* v : {&g.x, &g.y, &g.z})
+      for (double x : *v) b.real(x, 4);
+    w.record(b.s);
+  }
+  auto r = importFiles({write("pergrid.xyz", w.out)}, 6);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  expectCoords(r->mesh, blocks, 4);
+  EXPECT_EQ(r->mesh.numTets(), (8u + 2u) * 6u);
+  EXPECT_NE(r->mesh.findMetadata("plot3d.layout")->find(", dimensions per grid"), std::string::npos);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("grid 2 is 4x3x1: a dimension below 2, so it has no cells; its 12 points stay"),
+            std::string::npos)
+      << r->report.warnings[0];
+  EXPECT_EQ(computeMeshStats(r->mesh).unreferenced_points, 12u);
+  // Only flat blocks: nothing to convert.
+  GridOptions o;
+  o.marker = 4;
+  o.multi = true;
+  auto flat = importFiles({write("flat2.xyz", gridFile({boxBlock(3, 3, 1), boxBlock(1, 3, 3)}, o))}, 6);
+  ASSERT_FALSE(flat.isOk());
+  EXPECT_NE(flat.status().message().find("grid 1 is 3x3x1: a dimension below 2"), std::string::npos) << flat.status().message();
+  EXPECT_NE(flat.status().message().find("(and so are the other 1 grids)"), std::string::npos) << flat.status().message();
+}
+
+// Files these readers cannot take say why: a header of 64-bit integers (gfortran
+// -fdefault-integer-8), and an ASCII field that overflowed its Fortran format.
+TEST_F(Plot3dSynthetic, SixtyFourBitIntegersAndOverflowedFieldsAreExplained) {
+  const Block g = boxBlock(3, 3, 2);
+  RecordWriter w{false, 4, ""};
+  Bytes b{false, ""};
+  for (int a = 0; a < 3; ++a) b.put(static_cast<uint64_t>(g.n[a]), 8);
+  w.record(b.s);
+  b.s.clear();
+  for (const auto* v : {&g.x, &g.y, &g.z})
+    for (double x : *v) b.real(x, 8);
+  w.record(b.s);
+  auto r = importFiles({write("i8.xyz", w.out)}, 6);
+  ASSERT_FALSE(r.isOk());
+  EXPECT_NE(r.status().message().find("holds 24 bytes that read as the 64-bit integers 3 3 2"), std::string::npos)
+      << r.status().message();
+  write("ovf.xyz", "3 3 2\n" + std::string("0.0 ") + "**********\n");
+  auto a = importFiles({dir_ + "/ovf.xyz"}, 6);
+  ASSERT_FALSE(a.isOk());
+  EXPECT_NE(a.status().message().find("ovf.xyz:2: ASCII PLOT3D: '**********' is a Fortran field that overflowed its format"),
+            std::string::npos)
+      << a.status().message();
+}
+
 TEST_F(Plot3dSynthetic, SubrecordsWithNegativeMarkers) {
   const std::vector<Block> blocks = {boxBlock(3, 3, 3)};
   GridOptions o;
