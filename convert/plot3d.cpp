@@ -4,11 +4,14 @@
 // PLOT3D files do not describe themselves, so every file is read by trying each interpretation
 // (byte order, no / 4-byte / 8-byte Fortran record markers, single grid or multi-grid with a leading
 // grid count, 2D or 3D, float32 or float64, IBLANK or not) and keeping those whose sizes match the
-// file exactly. Only the whole layout is read (all X, then all Y, then all Z per grid, i fastest).
-// When no interpretation fits exactly, one that fits with trailing zero bytes is accepted with a
-// warning; trailing data that is not zero is an error. When several fit, the import fails and lists
-// them: guessing would silently produce a wrong mesh. A text file that no binary interpretation fits
-// is read as ASCII PLOT3D, its layout decided the same way by its value count.
+// file exactly. Values are in the whole layout (all X, then all Y, then all Z per grid, i fastest),
+// cut into records three ways (below). When no interpretation fits exactly, one that fits with
+// trailing zero bytes is accepted with a warning; trailing data that is not zero is an error. When
+// several fit, the grid file's byte order and markers are preferred for its Q and function files, and
+// readings that differ only in how their records are cut are told apart by their data (see pickOne);
+// otherwise the import fails and lists them: guessing would silently produce a wrong mesh. A text file
+// that no binary interpretation fits is read as ASCII PLOT3D, its layout decided the same way by its
+// value count.
 //
 // Policies (ARCHITECTURE.md / FORMATS.md):
 // - Points keep grid order (i fastest, then j, then k), blocks concatenated, in source precision.
@@ -16,9 +19,11 @@
 //   (2) points are ordinary points. All points are kept and IBLANK becomes the int32 field "iblank".
 // - Blocks are never joined; --weld merges bit-identical points (across blocks too), keeps the first
 //   point's field values, and drops the tetrahedra that collapse.
-// - Files written plane by plane (PLOT3D's /PLANES: per grid one record per k-plane, holding all
-//   components of that plane) are told from whole files by their record markers; without markers the
-//   two cannot be told apart and the whole layout is assumed.
+// - Records: one per grid (whole), one per k-plane holding all components of that plane (PLOT3D's
+//   /PLANES), or one per component (Fortran's `write(u) x` / `write(u) y` / ...); with record markers
+//   these are told apart by the record sizes, and where sizes coincide (a grid of 3 k-planes, a Q file
+//   of 5) by the data. Without markers planes and whole cannot be told apart and whole is assumed.
+//   Multi-grid dimensions may also come one record per grid.
 // - Q files come in the classic layout (dimensions, then per grid four freestream reals and the five
 //   conserved variables) and NASA OVERFLOW's (OVERFLOW's q-file description, and VTK's reader of it):
 //   the dimension record ends with NQ and NQC, the number of variables and of species, and each grid's
