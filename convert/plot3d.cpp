@@ -22,7 +22,9 @@
 // - Records: one per grid (whole), one per k-plane holding all components of that plane (PLOT3D's
 //   /PLANES), or one per component (Fortran's `write(u) x` / `write(u) y` / ...); with record markers
 //   these are told apart by the record sizes, and where sizes coincide (a grid of 3 k-planes, a Q file
-//   of 5) by the data. Without markers planes and whole cannot be told apart and whole is assumed.
+//   of 5) by the data. Without markers planes and whole always have the same size: a grid is read
+//   plane by plane only when its cells come out more consistent so (else whole), and its Q and
+//   function files as their data says.
 //   Multi-grid dimensions may also come one record per grid.
 // - Q files come in the classic layout (dimensions, then per grid four freestream reals and the five
 //   conserved variables) and NASA OVERFLOW's (OVERFLOW's q-file description, and VTK's reader of it):
@@ -514,7 +516,7 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
               // by plane (told apart by record markers only, 3D only); bit 2: one record per
               // variable (record markers only).
               if ((variant & 1) && kind == Kind::kFunction) continue;
-              if ((variant & 2) && (marker == 0 || ndim != 3)) continue;
+              if ((variant & 2) && ndim != 3) continue;
               if ((variant & 4) && (marker == 0 || (variant & 2))) continue;
               Layout l;
               l.big_endian = be != 0;
@@ -558,8 +560,12 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
   // The interpretations that got furthest explain the failure best; those with record markers first:
   // they got past a header whose markers checked out, which a marker-less reading of the same bytes
   // (the marker taken for a dimension) gets past by chance.
+  // Without markers the planes reading is the rarer one: it explains a failure only after the others
+  // (it gets further in a truncated whole file, plane by plane).
   std::stable_sort(d.plausible.begin(), d.plausible.end(), [](const Attempt& a, const Attempt& b) {
     if ((a.layout.marker != 0) != (b.layout.marker != 0)) return a.layout.marker != 0;
+    const bool pa = a.layout.marker == 0 && a.layout.planes, pb = b.layout.marker == 0 && b.layout.planes;
+    if (pa != pb) return pb;
     return a.progress > b.progress;
   });
   return d;
@@ -598,76 +604,127 @@ bool sameDims(const std::vector<BlockDims>& a, const std::vector<BlockDims>& b) 
   return true;
 }
 
-// How many cells of a grid fit read with `fit` have the orientation most of its cells have: the
+// The values of one block read with a fit, found in place (no copy of the block): component c of
+// point p, in the whole layout's terms, wherever the fit's records put it (whole, planes or one
+// record per variable; a record may be in several pieces).
+class BlockValues {
+ public:
+  BlockValues(std::string_view bytes, const Fit& fit, size_t g, const std::vector<size_t>& component_bytes)
+      : bytes_(bytes), rec_(fit.data[g]), l_(fit.layout), cb_(component_bytes) {
+    const BlockDims& b = fit.blocks[g];
+    n_ = b.points();
+    plane_ = static_cast<uint64_t>(b.n[0] * b.n[1]);
+    uint64_t at = 0;
+    for (const Piece& piece : rec_) {
+      starts_.push_back(at);
+      at += piece.size;
+    }
+    before_.assign(cb_.size() + 1, 0);
+    for (size_t c = 0; c < cb_.size(); ++c) before_[c + 1] = before_[c] + cb_[c];
+  }
+  double real(size_t c, uint64_t p) const {
+    char buf[8];
+    read(offset(c, p), static_cast<size_t>(l_.precision), buf);
+    return loadReal(buf, l_.precision, l_.big_endian);
+  }
+
+ private:
+  uint64_t offset(size_t c, uint64_t p) const {
+    if (!l_.planes) return before_[c] * n_ + p * cb_[c];
+    const uint64_t k = p / plane_, in_plane = p % plane_;
+    return k * plane_ * before_.back() + before_[c] * plane_ + in_plane * cb_[c];
+  }
+  void read(uint64_t at, size_t size, char* out) const {
+    size_t i = static_cast<size_t>(std::upper_bound(starts_.begin(), starts_.end(), at) - starts_.begin()) - 1;
+    for (size_t done = 0; done < size; ++i) {  // a value may straddle two pieces (subrecords)
+      const uint64_t off = at + done - starts_[i];
+      const size_t take = static_cast<size_t>(std::min<uint64_t>(size - done, rec_[i].size - off));
+      std::memcpy(out + done, bytes_.data() + rec_[i].offset + off, take);
+      done += take;
+    }
+  }
+  std::string_view bytes_;
+  const Record& rec_;
+  const Layout& l_;
+  std::vector<size_t> cb_;
+  std::vector<uint64_t> starts_, before_;
+  uint64_t n_ = 0, plane_ = 1;
+};
+
+// The component byte sizes of a fit's block, as blockBytes takes them.
+std::vector<size_t> componentBytes(const Fit& fit, size_t g, Kind kind) {
+  const Layout& l = fit.layout;
+  const size_t vb = static_cast<size_t>(l.precision);
+  if (kind == Kind::kGrid) {
+    std::vector<size_t> c(static_cast<size_t>(l.ndim), vb);
+    if (l.iblank) c.push_back(4);
+    return c;
+  }
+  return std::vector<size_t>(kind == Kind::kQ ? static_cast<size_t>(fit.nq) : static_cast<size_t>(fit.blocks[g].nvar), vb);
+}
+
+// The data checks below look at a sample: enough to tell a right reading from a wrong one, at a cost
+// that does not grow with the grid (every marker-less 3D file has two readings to compare).
+constexpr uint64_t kSampleSize = 20000;
+uint64_t sampleStride(uint64_t count) { return std::max<uint64_t>(1, count / kSampleSize) | 1; }
+
+// How many sampled cells of a grid fit read with `fit` have the orientation most of them have: the
 // sign of the corner at (i, j, k) spanned by its three neighbours (exact). A grid read with its own
 // layout is consistent (its cells all right- or all left-handed); read with another layout whose
 // records happen to have the same sizes, its points land in the wrong places and its cells go flat
 // or turn both ways.
 uint64_t consistentCells(std::string_view bytes, const Fit& fit) {
   const Layout& l = fit.layout;
-  std::string scratch, reordered;
-  std::vector<size_t> components(static_cast<size_t>(l.ndim), static_cast<size_t>(l.precision));
-  if (l.iblank) components.push_back(4);
   uint64_t positive = 0, negative = 0;
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
     const BlockDims& b = fit.blocks[g];
     if (l.ndim != 3 || b.n[0] < 2 || b.n[1] < 2 || b.n[2] < 2) continue;
-    const size_t n = b.points();
-    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
-    auto point = [&](int64_t i, int64_t j, int64_t k, double out[3]) {
-      const size_t at = static_cast<size_t>(i + b.n[0] * (j + b.n[1] * k));
-      for (int a = 0; a < 3; ++a) out[a] = loadReal(v.data() + (a * n + at) * l.precision, l.precision, l.big_endian);
+    const BlockValues v(bytes, fit, g, componentBytes(fit, g, Kind::kGrid));
+    const uint64_t ci = static_cast<uint64_t>(b.n[0] - 1), cj = static_cast<uint64_t>(b.n[1] - 1),
+                   cells = ci * cj * static_cast<uint64_t>(b.n[2] - 1);
+    auto point = [&](uint64_t i, uint64_t j, uint64_t k, double out[3]) {
+      const uint64_t at = i + static_cast<uint64_t>(b.n[0]) * (j + static_cast<uint64_t>(b.n[1]) * k);
+      for (int a = 0; a < 3; ++a) out[a] = v.real(static_cast<size_t>(a), at);
     };
-    for (int64_t k = 0; k + 1 < b.n[2]; ++k)
-      for (int64_t j = 0; j + 1 < b.n[1]; ++j)
-        for (int64_t i = 0; i + 1 < b.n[0]; ++i) {
-          double p[4][3];
-          point(i, j, k, p[0]);
-          point(i + 1, j, k, p[1]);
-          point(i, j + 1, k, p[2]);
-          point(i, j, k + 1, p[3]);
-          bool finite = true;  // the exact predicate wants finite input; addGrid reports the others
-          for (const auto& q : p) finite &= std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]);
-          if (!finite) continue;
-          const double o = orient3d(p[0], p[1], p[2], p[3]);
-          positive += o > 0;
-          negative += o < 0;
-        }
+    for (uint64_t t = 0; t < cells; t += sampleStride(cells)) {
+      const uint64_t i = t % ci, j = (t / ci) % cj, k = t / (ci * cj);
+      double p[4][3];
+      point(i, j, k, p[0]);
+      point(i + 1, j, k, p[1]);
+      point(i, j + 1, k, p[2]);
+      point(i, j, k + 1, p[3]);
+      bool finite = true;  // the exact predicate wants finite input; addGrid reports the others
+      for (const auto& q : p) finite &= std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]);
+      if (!finite) continue;
+      const int o = orient3d(p[0], p[1], p[2], p[3]);
+      positive += o > 0;
+      negative += o < 0;
+    }
   }
   return std::max(positive, negative);
 }
 
 // How far apart the values of grid neighbours lie when the file is read with `fit`: the mean over
-// blocks, components and neighbour pairs along i, j and k of |difference|. Coordinates (grids) or
-// variables (Q and function files) vary smoothly over a grid; read with another layout whose records
-// happen to have the same sizes, one array's values land in another's places and the seams jump
-// (from density to energy, say). The readings being compared hold the same values in other places,
-// so their sums are on one scale. Non-finite values are left out.
+// blocks, components and sampled neighbour pairs along i, j and k of |difference|. Coordinates
+// (grids) or variables (Q and function files) vary smoothly over a grid; read with another layout
+// whose records happen to have the same sizes, one array's values land in another's places and the
+// seams jump (from density to energy, say). The readings being compared hold the same values in
+// other places, so their sums are on one scale. Non-finite values are left out.
 double roughness(std::string_view bytes, const Fit& fit, Kind kind) {
-  const Layout& l = fit.layout;
-  const size_t vb = static_cast<size_t>(l.precision);
-  std::string scratch, reordered;
   double sum = 0;
   uint64_t pairs = 0;
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
     const BlockDims& b = fit.blocks[g];
-    const size_t n = b.points();
-    size_t count = kind == Kind::kGrid ? static_cast<size_t>(l.ndim)
-                                       : (kind == Kind::kQ ? static_cast<size_t>(fit.nq) : static_cast<size_t>(b.nvar));
-    std::vector<size_t> components(count, vb);
-    if (kind == Kind::kGrid && l.iblank) components.push_back(4);
-    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
-    std::vector<double> x(n);
-    for (size_t c = 0; c < count; ++c) {
-      for (size_t i = 0; i < n; ++i) x[i] = loadReal(v.data() + (c * n + i) * vb, l.precision, l.big_endian);
-      const size_t step[3] = {1, static_cast<size_t>(b.n[0]), static_cast<size_t>(b.n[0] * b.n[1])};
+    const uint64_t n = b.points(), ni = static_cast<uint64_t>(b.n[0]), nj = static_cast<uint64_t>(b.n[1]);
+    const size_t count = kind == Kind::kGrid ? static_cast<size_t>(fit.layout.ndim) : componentBytes(fit, g, kind).size();
+    const BlockValues v(bytes, fit, g, componentBytes(fit, g, kind));
+    const uint64_t step[3] = {1, ni, ni * nj};
+    for (uint64_t p = 0; p < n; p += sampleStride(n)) {
+      const uint64_t i = p % ni, j = (p / ni) % nj;
       for (int a = 0; a < 3; ++a) {
-        for (size_t i = 0; i + step[a] < n; ++i) {
-          // Neighbours along axis a only: not across the end of a line or plane.
-          const size_t coord = a == 0 ? i % step[1] : (a == 1 ? (i / step[1]) % static_cast<size_t>(b.n[1]) : 0);
-          const size_t last = a == 0 ? static_cast<size_t>(b.n[0]) - 1 : (a == 1 ? static_cast<size_t>(b.n[1]) - 1 : 1);
-          if (a < 2 && coord == last) continue;
-          const double d = std::fabs(x[i + step[a]] - x[i]);
+        if ((a == 0 && i + 1 >= ni) || (a == 1 && j + 1 >= nj) || p + step[a] >= n) continue;
+        for (size_t c = 0; c < count; ++c) {
+          const double d = std::fabs(v.real(c, p + step[a]) - v.real(c, p));
           if (!std::isfinite(d)) continue;
           sum += d;
           ++pairs;
@@ -713,11 +770,17 @@ StatusOr<std::optional<Fit>> pickOne(const std::string& path, std::string_view b
     };
     // j beats i: more consistent cells; else values clearly smoother (a wrong reading's seams make
     // it rougher by far; 1% keeps rounding noise out); else, the data agreeing, the grid's records.
+    // Without record markers every 3D file also fits plane by plane: there a grid leaves the whole
+    // layout only for cells that are more consistent, never for smoothness alone.
+    auto whole = [](const Fit& f) { return !f.layout.planes && !f.layout.components; };
     auto beats = [&](size_t j, size_t i) {
       if (consistent[j] != consistent[i]) return consistent[j] > consistent[i];
-      if (rough[j] < 0.99 * rough[i]) return true;
-      if (rough[i] < 0.99 * rough[j]) return false;
-      return sameRecords(ok[j]) && !sameRecords(ok[i]);
+      if (!(kind == Kind::kGrid && ok[i].layout.marker == 0)) {
+        if (rough[j] < 0.99 * rough[i]) return true;
+        if (rough[i] < 0.99 * rough[j]) return false;
+      }
+      if (sameRecords(ok[j]) != sameRecords(ok[i])) return sameRecords(ok[j]);
+      return whole(ok[j]) && !whole(ok[i]);
     };
     std::vector<Fit> kept;
     for (size_t i = 0; i < ok.size(); ++i) {

@@ -686,6 +686,36 @@ TEST_F(Plot3dSynthetic, GridAndQFileCutDifferently) {
   EXPECT_NE(bad.status().message().find("\"records\" must be"), std::string::npos) << bad.status().message();
 }
 
+// Without record markers (C, or Fortran's access='stream') a file written plane by plane has the size
+// of a whole one: the grid is read plane by plane only because its cells come out consistent that way,
+// its Q file as its values say; a whole file (blunt fin's layout) stays whole.
+TEST_F(Plot3dSynthetic, PlanesWithoutRecordMarkers) {
+  std::vector<Block> blocks = {boxBlock(4, 3, 5), boxBlock(3, 3, 2, 3.0)};
+  for (Block& g : blocks) g.iblank.assign(g.points(), 1);
+  for (int iblank = 0; iblank < 2; ++iblank) {
+    GridOptions o;
+    o.big_endian = iblank == 0;
+    o.multi = true;
+    o.precision = iblank ? 8 : 4;
+    o.iblank = iblank != 0;
+    GridOptions po = o;
+    po.planes = true;
+    const std::string tag = std::to_string(iblank);
+    auto p = importFiles({write("sp" + tag + ".xyz", gridFile(blocks, po)), write("sp" + tag + ".q", qFile(blocks, po))}, 6);
+    ASSERT_TRUE(p.isOk()) << p.status().message();
+    expectCoords(p->mesh, blocks, o.precision);
+    EXPECT_NE(p->mesh.findMetadata("plot3d.layout")->find("no record markers"), std::string::npos);
+    EXPECT_NE(p->mesh.findMetadata("plot3d.layout")->find(", planes"), std::string::npos);
+    EXPECT_EQ(p->mesh.findPointField("momentum")->get(37, 2), 74.0);
+    EXPECT_EQ(p->report.flipped, 0u);
+    auto w = importFiles({write("sw" + tag + ".xyz", gridFile(blocks, o)), write("sw" + tag + ".q", qFile(blocks, o))}, 6);
+    ASSERT_TRUE(w.isOk()) << w.status().message();
+    EXPECT_EQ(w->mesh.findMetadata("plot3d.layout")->find(", planes"), std::string::npos);
+    EXPECT_EQ(w->mesh.coords, p->mesh.coords);
+    EXPECT_EQ(w->mesh.findPointField("momentum")->bytes, p->mesh.findPointField("momentum")->bytes);
+  }
+}
+
 // Multi-grid files as some codes write them: each grid's dimensions in a record of its own, and a
 // block without cells (a dimension of 1), which is kept as points no tetrahedron uses.
 TEST_F(Plot3dSynthetic, DimensionsPerGridAndFlatBlocks) {
