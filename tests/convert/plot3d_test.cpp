@@ -230,6 +230,17 @@ struct GridOptions {
   bool per_variable = false;   // grid and Q files a record per variable (X, Y, Z, IBLANK; each Q variable)
 };
 
+// Multi-grid with IBLANK and `marker`-byte record markers: float32 with 4-byte markers, float64 with 8.
+GridOptions markedMultiGrid(int marker, bool big_endian) {
+  GridOptions o;
+  o.big_endian = big_endian;
+  o.marker = marker;
+  o.multi = true;
+  o.precision = marker == 4 ? 4 : 8;
+  o.iblank = true;
+  return o;
+}
+
 // Writes the grid count record (multi-grid files) and leaves in b the dimensions of every grid, each
 // followed by `per_grid` when it is given (function files: the variable count); the caller may add
 // more and ends the record.
@@ -544,12 +555,7 @@ TEST_F(Plot3dSynthetic, PlanesLayoutWithRecordMarkers) {
   for (Block& g : blocks) g.iblank.assign(g.points(), 1);
   blocks[0].iblank[0] = 0;  // one hole: the cell at the origin goes
   for (int marker : {4, 8}) {
-    GridOptions o;
-    o.big_endian = marker == 4;
-    o.marker = marker;
-    o.multi = true;
-    o.precision = marker == 4 ? 4 : 8;
-    o.iblank = true;
+    const GridOptions o = markedMultiGrid(marker, marker == 4);
     const std::string tag = std::to_string(marker);
     GridOptions po = o;
     po.planes = true;
@@ -602,12 +608,7 @@ TEST_F(Plot3dSynthetic, OneRecordPerVariable) {
   for (Block& g : blocks) g.iblank.assign(g.points(), 1);
   blocks[0].iblank[0] = 0;
   for (int marker : {4, 8}) {
-    GridOptions o;
-    o.big_endian = marker == 8;
-    o.marker = marker;
-    o.multi = true;
-    o.precision = marker == 4 ? 4 : 8;
-    o.iblank = true;
+    const GridOptions o = markedMultiGrid(marker, marker == 8);
     const std::string tag = std::to_string(marker);
     GridOptions vo = o;
     vo.per_variable = true;

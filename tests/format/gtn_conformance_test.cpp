@@ -301,33 +301,17 @@ std::vector<uint8_t> encodeFile(const TetMesh& mesh, const GtnWriteOptions& o,
   return bytes;
 }
 
-// levelsMesh() with its merge tree (MTRE, section 11) and mip levels 1 and 2, as `gtn convert --levels 2`
+// `mesh` with its merge tree (MTRE, section 11) and `levels` mip levels, as `gtn convert --levels K`
 // writes it.
-std::vector<uint8_t> encodeWithLevels(const GtnWriteOptions& o) {
-  const TetMesh mesh = levelsMesh();
+std::vector<uint8_t> encodeWithTree(const TetMesh& mesh, int levels, const GtnWriteOptions& o) {
   auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
   EXPECT_TRUE(tree.isOk());
   LevelOptions lo;
-  lo.levels = 2;
-  auto levels = buildMipLevels(mesh, *tree, lo);
-  EXPECT_TRUE(levels.isOk());
-  const std::string path = test::tempDir("conformance-levels") + "/levels.gtn";
-  EXPECT_TRUE(writeGtnFile(path, levels->inputs(mesh), o).isOk());
-  const std::string bytes = test::readFile(path);
-  return std::vector<uint8_t>(bytes.begin(), bytes.end());
-}
-
-// wideMesh() with its merge tree and no mip level.
-std::vector<uint8_t> encodeWide(const GtnWriteOptions& o) {
-  const TetMesh mesh = wideMesh();
-  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
-  EXPECT_TRUE(tree.isOk());
-  LevelOptions lo;
-  lo.levels = 0;
-  auto levels = buildMipLevels(mesh, *tree, lo);
-  EXPECT_TRUE(levels.isOk());
-  const std::string path = test::tempDir("conformance-wide") + "/wide.gtn";
-  EXPECT_TRUE(writeGtnFile(path, levels->inputs(mesh), o).isOk());
+  lo.levels = levels;
+  auto built = buildMipLevels(mesh, *tree, lo);
+  EXPECT_TRUE(built.isOk());
+  const std::string path = test::tempDir("conformance-tree") + "/tree.gtn";
+  EXPECT_TRUE(writeGtnFile(path, built->inputs(mesh), o).isOk());
   const std::string bytes = test::readFile(path);
   return std::vector<uint8_t>(bytes.begin(), bytes.end());
 }
@@ -373,8 +357,8 @@ std::vector<Sample> samples() {
   s.push_back(valid("value-table.f32.dir.v1.0.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
   s.push_back(valid("curvilinear.f32.dir.v1.0.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
-  s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithLevels(options()); }));
-  s.push_back(valid("wide-merge-tree.f32.dir.v1.0.gtn", wideMesh, [] { return encodeWide(options()); }));
+  s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+  s.push_back(valid("wide-merge-tree.f32.dir.v1.0.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
                  const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
                  return encodeFile(cubeF32(), options(false),
