@@ -79,6 +79,8 @@ struct Layout {
   bool multi_grid = false;
   int ndim = 3;
   int precision = 4;  // bytes per real
+  int int_bytes = 4;  // bytes per integer (dimensions, counts, IBLANK): 8 from 64-bit default integers
+                      // (gfortran -fdefault-integer-8), tried with record markers only
   bool iblank = false;
   bool overflow = false;  // Q files: OVERFLOW's layout (NQ variables, a longer freestream record)
   bool planes = false;    // one record per k-plane (all components of the plane) instead of one per grid
@@ -102,6 +104,7 @@ std::string describeLayout(const Layout& l, Kind kind) {
   if (kind == Kind::kGrid) s += l.ndim == 3 ? ", 3D" : ", 2D";
   if (!l.ascii) s += l.precision == 4 ? ", float32" : ", float64";
   if (kind == Kind::kGrid) s += l.iblank ? ", IBLANK" : ", no IBLANK";
+  if (l.int_bytes == 8) s += ", 64-bit integers";
   if (kind == Kind::kQ && l.overflow) s += ", OVERFLOW";
   if (l.planes) s += ", planes";
   if (l.components) s += ", one record per variable";
@@ -330,18 +333,19 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
   std::string scratch;
   int64_t ngrid = 1;
   const int ints = kind == Kind::kFunction ? 4 : (kind == Kind::kGrid ? l.ndim : 3);
+  const uint64_t ib = static_cast<uint64_t>(l.int_bytes);
   if (l.multi_grid) {
-    if (!cursor.next(4, "grid count", &rec, why)) return false;
+    if (!cursor.next(ib, "grid count", &rec, why)) return false;
     const std::string_view v = recordBytes(bytes, rec, &scratch);
-    ngrid = loadSigned(v.data(), 4, l.big_endian);
-    if (ngrid < 1 || static_cast<uint64_t>(ngrid) > size / (4 * static_cast<uint64_t>(ints))) {
+    ngrid = loadSigned(v.data(), l.int_bytes, l.big_endian);
+    if (ngrid < 1 || static_cast<uint64_t>(ngrid) > size / (ib * static_cast<uint64_t>(ints))) {
       *why = "grid count " + std::to_string(ngrid) + " is impossible for a file of " + std::to_string(size) + " bytes";
       *header_ok = l.marker != 0;  // its record checked out: a real explanation
       return false;
     }
   }
   const bool overflow = kind == Kind::kQ && l.overflow;
-  const uint64_t dims_bytes = static_cast<uint64_t>(ngrid) * ints * 4 + (overflow ? 8 : 0);
+  const uint64_t dims_bytes = static_cast<uint64_t>(ngrid) * ints * ib + (overflow ? 2 * ib : 0);
   const uint64_t dims_at = cursor.pos();
   std::string_view dv;
   std::string dims_scratch;
@@ -354,7 +358,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     const std::string why_whole = *why;
     cursor.seek(dims_at);
     for (int64_t g = 0; g < ngrid; ++g) {
-      if (!cursor.next(static_cast<uint64_t>(ints) * 4, "dimensions", &rec, why)) {
+      if (!cursor.next(static_cast<uint64_t>(ints) * ib, "dimensions", &rec, why)) {
         *why = why_whole;
         return false;
       }
@@ -369,9 +373,9 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
   fit->nqc = 0;
   if (overflow) {
     // NQ and NQC follow the dimensions of all grids.
-    const char* tail = dv.data() + 4 * ngrid * ints;
-    fit->nq = loadSigned(tail, 4, l.big_endian);
-    fit->nqc = loadSigned(tail + 4, 4, l.big_endian);
+    const char* tail = dv.data() + ib * ngrid * ints;
+    fit->nq = loadSigned(tail, l.int_bytes, l.big_endian);
+    fit->nqc = loadSigned(tail + ib, l.int_bytes, l.big_endian);
     if (fit->nq < 1 || static_cast<uint64_t>(fit->nq) > size / value_bytes || fit->nqc < 0 ||
         static_cast<uint64_t>(fit->nqc) > size / value_bytes) {
       *why = "NQ " + std::to_string(fit->nq) + " and NQC " + std::to_string(fit->nqc) + " are impossible";
@@ -383,7 +387,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     BlockDims& b = fit->blocks[static_cast<size_t>(g)];
     uint64_t points = 1;
     for (int a = 0; a < ints; ++a) {
-      const int64_t v = loadSigned(dv.data() + 4 * (g * ints + a), 4, l.big_endian);
+      const int64_t v = loadSigned(dv.data() + ib * (g * ints + a), l.int_bytes, l.big_endian);
       // Every point takes at least one real in the file: a larger count cannot fit.
       if (v < 1 || static_cast<uint64_t>(v) > size / value_bytes) {
         *why = "dimension " + std::to_string(a + 1) + " of grid " + std::to_string(g + 1) + " is " + std::to_string(v);
@@ -421,7 +425,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     const BlockDims& b = fit->blocks[static_cast<size_t>(g)];
     const uint64_t n = b.points();
     uint64_t per_point = 0;
-    if (kind == Kind::kGrid) per_point = l.ndim * value_bytes + (l.iblank ? 4 : 0);
+    if (kind == Kind::kGrid) per_point = l.ndim * value_bytes + (l.iblank ? ib : 0);
     if (kind == Kind::kQ) {
       if (static_cast<uint64_t>(fit->nq) > size / value_bytes / n) {
         *why = "grid " + std::to_string(g + 1) + " (" + dimsText(b) + ", " + std::to_string(fit->nq) +
@@ -442,9 +446,9 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     const std::string block_name = "grid " + std::to_string(g + 1) + " (" +
                                    dimsText(b, kind == Kind::kGrid ? l.ndim : 3) + ") data";
     if (kind == Kind::kQ) {
-      // OVERFLOW: 13 + max(2, NQC) reals and the 4-byte integer IGAM (see the top of the file).
+      // OVERFLOW: 13 + max(2, NQC) reals and the integer IGAM (see the top of the file).
       const uint64_t header_bytes =
-          overflow ? 4 + (13 + static_cast<uint64_t>(std::max<int64_t>(2, fit->nqc))) * value_bytes : 4 * value_bytes;
+          overflow ? ib + (13 + static_cast<uint64_t>(std::max<int64_t>(2, fit->nqc))) * value_bytes : 4 * value_bytes;
       Record header;
       if (!cursor.next(header_bytes, ("grid " + std::to_string(g + 1) + " freestream header").c_str(), &header, why))
         return false;
@@ -455,7 +459,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
       std::vector<uint64_t> component_bytes;
       if (kind == Kind::kGrid) {
         component_bytes.assign(static_cast<size_t>(l.ndim), n * value_bytes);
-        if (l.iblank) component_bytes.push_back(n * 4);
+        if (l.iblank) component_bytes.push_back(n * ib);
       } else {
         component_bytes.assign(static_cast<size_t>(per_point / value_bytes), n * value_bytes);
       }
@@ -511,6 +515,8 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
         for (int ndim : {3, 2}) {
           if (ndim == 2 && kind != Kind::kGrid) continue;
           for (int precision : {4, 8}) {
+            for (int int_bytes : {4, 8}) {
+            if (int_bytes == 8 && marker == 0) continue;  // sizes alone cannot vouch for it
             for (int variant = 0; variant < 8; ++variant) {
               // Bit 0: with IBLANK for grids, OVERFLOW's layout for Q files; bit 1: written plane
               // by plane (told apart by record markers only, 3D only); bit 2: one record per
@@ -528,6 +534,7 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
               l.overflow = (variant & 1) != 0 && kind == Kind::kQ;
               l.planes = (variant & 2) != 0;
               l.components = (variant & 4) != 0;
+              l.int_bytes = int_bytes;
               if (!constraints.allows(l, kind)) continue;
               Fit fit;
               std::string why;
@@ -552,6 +559,7 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
                                           fit.end});
               }
             }
+            }  // int_bytes
           }
         }
       }
@@ -574,6 +582,7 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
 std::string triedText(const Detection& d, Kind kind) {
   std::string s = "tried big- and little-endian, no/4-byte/8-byte record markers, whole, planes and one record per "
                   "variable, single and multi-grid, ";
+  s += "32-bit integers (and 64-bit ones with record markers), ";
   s += kind == Kind::kGrid ? "2D and 3D, float32 and float64, with and without IBLANK"
                            : (kind == Kind::kQ ? "float32 and float64, classic and OVERFLOW layouts" : "float32 and float64");
   s += " (binary; text files are read as ASCII PLOT3D)";
@@ -657,7 +666,7 @@ std::vector<size_t> componentBytes(const Fit& fit, size_t g, Kind kind) {
   const size_t vb = static_cast<size_t>(l.precision);
   if (kind == Kind::kGrid) {
     std::vector<size_t> c(static_cast<size_t>(l.ndim), vb);
-    if (l.iblank) c.push_back(4);
+    if (l.iblank) c.push_back(static_cast<size_t>(l.int_bytes));
     return c;
   }
   return std::vector<size_t>(kind == Kind::kQ ? static_cast<size_t>(fit.nq) : static_cast<size_t>(fit.blocks[g].nvar), vb);
@@ -844,36 +853,9 @@ StatusOr<std::string> readInput(const std::string& path, Kind kind) {
   return bytes;
 }
 
-// The likeliest reason a Fortran file fits nothing: its first record checks out with 4- or 8-byte
-// markers and holds a few 64-bit integers of dimension size (the header written with 64-bit default
-// integers, as `gfortran -fdefault-integer-8` does). Empty when it does not look so.
-std::string integerWidthHint(std::string_view bytes) {
-  for (int m : {4, 8})
-    for (bool be : {false, true}) {
-      if (bytes.size() < static_cast<size_t>(2 * m)) continue;
-      const int64_t len = loadSigned(bytes.data(), m, be);
-      if (len < 8 || len > 40 || len % 8 != 0 || bytes.size() < static_cast<uint64_t>(2 * m + len)) continue;
-      if (loadSigned(bytes.data() + m + len, m, be) != len) continue;
-      std::string values;
-      bool ints = true;
-      for (int64_t at = 0; at < len && ints; at += 8) {
-        const int64_t v = loadSigned(bytes.data() + m + at, 8, be);
-        ints = v >= 1 && v < (int64_t{1} << 31);
-        values += (at ? " " : "") + std::to_string(v);
-      }
-      if (!ints) continue;
-      return "its first record (" + std::string(be ? "big" : "little") + "-endian, " + std::to_string(m) +
-             "-byte markers) holds " + std::to_string(len) + " bytes that read as the 64-bit integers " + values +
-             ": files whose integers are 64-bit (Fortran compiled with 64-bit default integers, such as gfortran "
-             "-fdefault-integer-8) are not supported; write the dimensions (and IBLANK) as 4-byte integers";
-    }
-  return "";
-}
-
 Status noFitError(const std::string& path, std::string_view bytes, Kind kind, const Detection& d) {
   std::string msg = path + ": not a PLOT3D " + kindName(kind) + " file this reader understands (" +
                     std::to_string(bytes.size()) + " bytes): no interpretation fits its size exactly";
-  if (const std::string hint = integerWidthHint(bytes); !hint.empty()) msg += "; " + hint;
   if (looksLikeText(bytes)) msg += "; it looks like text, but not like ASCII PLOT3D either";
   return invalidData(msg + "; " + triedText(d, kind));
 }
@@ -1271,7 +1253,7 @@ Status addGrid(const std::string& path, std::string_view bytes, const Fit& fit, 
   if (l.iblank) iblank->resize(total);
   std::string scratch, reordered;
   std::vector<size_t> components(3, static_cast<size_t>(l.precision));
-  if (l.iblank) components.push_back(4);
+  if (l.iblank) components.push_back(static_cast<size_t>(l.int_bytes));
   size_t base = 0;
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
     const size_t n = fit.blocks[g].points();
@@ -1292,7 +1274,7 @@ Status addGrid(const std::string& path, std::string_view bytes, const Fit& fit, 
     if (l.iblank) {
       const char* src = v.data() + 3 * n * l.precision;
       for (size_t i = 0; i < n; ++i)
-        (*iblank)[base + i] = static_cast<int32_t>(loadSigned(src + 4 * i, 4, l.big_endian));
+        (*iblank)[base + i] = static_cast<int32_t>(loadSigned(src + l.int_bytes * i, l.int_bytes, l.big_endian));
     }
     base += n;
   }
