@@ -315,6 +315,19 @@ std::string_view blockBytes(std::string_view bytes, const Fit& fit, size_t g, co
   return *reordered;
 }
 
+// The byte size of each component of a point of block g (X, Y, Z and IBLANK; the Q or function
+// variables), as blockBytes takes them.
+std::vector<size_t> componentBytes(const Fit& fit, size_t g, Kind kind) {
+  const Layout& l = fit.layout;
+  const size_t vb = static_cast<size_t>(l.precision);
+  if (kind == Kind::kGrid) {
+    std::vector<size_t> c(static_cast<size_t>(l.ndim), vb);
+    if (l.iblank) c.push_back(static_cast<size_t>(l.int_bytes));
+    return c;
+  }
+  return std::vector<size_t>(kind == Kind::kQ ? static_cast<size_t>(fit.nq) : static_cast<size_t>(fit.blocks[g].nvar), vb);
+}
+
 // Tries one interpretation. On failure `*why` says what did not fit, `*header_ok` whether the grid
 // count and dimensions at least made sense (or, with record markers, were read from records whose
 // markers checked out: then an impossible value is the explanation) and `*progress` how far the
@@ -456,13 +469,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
     }
     if (l.components) {
       // One record per component; the block's record is their pieces in order, the whole layout.
-      std::vector<uint64_t> component_bytes;
-      if (kind == Kind::kGrid) {
-        component_bytes.assign(static_cast<size_t>(l.ndim), n * value_bytes);
-        if (l.iblank) component_bytes.push_back(n * ib);
-      } else {
-        component_bytes.assign(static_cast<size_t>(per_point / value_bytes), n * value_bytes);
-      }
+      const std::vector<size_t> component_bytes = componentBytes(*fit, static_cast<size_t>(g), kind);
       if (component_bytes.size() < 2) {
         *why = "a single variable: one record per variable is the whole layout";
         return false;
@@ -470,7 +477,7 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
       Record& all = fit->data[static_cast<size_t>(g)];
       for (size_t c = 0; c < component_bytes.size(); ++c) {
         const std::string name = block_name + ", variable " + std::to_string(c + 1);
-        if (!cursor.next(component_bytes[c], name.c_str(), &rec, why)) return false;
+        if (!cursor.next(n * component_bytes[c], name.c_str(), &rec, why)) return false;
         all.insert(all.end(), rec.begin(), rec.end());
       }
     } else if (l.planes) {
@@ -660,18 +667,6 @@ class BlockValues {
   uint64_t n_ = 0, plane_ = 1;
 };
 
-// The component byte sizes of a fit's block, as blockBytes takes them.
-std::vector<size_t> componentBytes(const Fit& fit, size_t g, Kind kind) {
-  const Layout& l = fit.layout;
-  const size_t vb = static_cast<size_t>(l.precision);
-  if (kind == Kind::kGrid) {
-    std::vector<size_t> c(static_cast<size_t>(l.ndim), vb);
-    if (l.iblank) c.push_back(static_cast<size_t>(l.int_bytes));
-    return c;
-  }
-  return std::vector<size_t>(kind == Kind::kQ ? static_cast<size_t>(fit.nq) : static_cast<size_t>(fit.blocks[g].nvar), vb);
-}
-
 // The data checks below look at a sample: enough to tell a right reading from a wrong one, at a cost
 // that does not grow with the grid (every marker-less 3D file has two readings to compare).
 constexpr uint64_t kSampleSize = 20000;
@@ -725,8 +720,9 @@ double roughness(std::string_view bytes, const Fit& fit, Kind kind) {
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
     const BlockDims& b = fit.blocks[g];
     const uint64_t n = b.points(), ni = static_cast<uint64_t>(b.n[0]), nj = static_cast<uint64_t>(b.n[1]);
-    const size_t count = kind == Kind::kGrid ? static_cast<size_t>(fit.layout.ndim) : componentBytes(fit, g, kind).size();
-    const BlockValues v(bytes, fit, g, componentBytes(fit, g, kind));
+    const std::vector<size_t> cb = componentBytes(fit, g, kind);
+    const size_t count = kind == Kind::kGrid ? static_cast<size_t>(fit.layout.ndim) : cb.size();  // not IBLANK
+    const BlockValues v(bytes, fit, g, cb);
     const uint64_t step[3] = {1, ni, ni * nj};
     for (uint64_t p = 0; p < n; p += sampleStride(n)) {
       const uint64_t i = p % ni, j = (p / ni) % nj;
@@ -1252,12 +1248,10 @@ Status addGrid(const std::string& path, std::string_view bytes, const Fit& fit, 
   mesh.coords.resize(3 * total);
   if (l.iblank) iblank->resize(total);
   std::string scratch, reordered;
-  std::vector<size_t> components(3, static_cast<size_t>(l.precision));
-  if (l.iblank) components.push_back(static_cast<size_t>(l.int_bytes));
   size_t base = 0;
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
     const size_t n = fit.blocks[g].points();
-    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
+    const std::string_view v = blockBytes(bytes, fit, g, componentBytes(fit, g, Kind::kGrid), &scratch, &reordered);
     for (int a = 0; a < 3; ++a) {
       const char* src = v.data() + a * n * l.precision;
       for (size_t i = 0; i < n; ++i) {
@@ -1300,7 +1294,6 @@ void addQ(std::string_view bytes, const Fit& fit, TetMesh& mesh, std::vector<std
   // The freestream reals before OVERFLOW's IGAM: FSMACH ALPHA REY TIME, then GAMINF BETA TINF.
   const int header_reals = l.overflow ? 7 : 4;
   std::string scratch, reordered;
-  const std::vector<size_t> components(nq, static_cast<size_t>(l.precision));
   size_t base = 0;
   double first_header[7] = {0, 0, 0, 0, 0, 0, 0};
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
@@ -1314,7 +1307,7 @@ void addQ(std::string_view bytes, const Fit& fit, TetMesh& mesh, std::vector<std
       warnings->push_back(path + ": grid " + std::to_string(g + 1) +
                           " has other freestream values than grid 1; metadata keeps grid 1's");
     }
-    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
+    const std::string_view v = blockBytes(bytes, fit, g, componentBytes(fit, g, Kind::kQ), &scratch, &reordered);
     const size_t p = static_cast<size_t>(l.precision);
     for (size_t q = 0; q < nq; ++q) {
       const char* src = v.data() + q * n * p;
@@ -1353,11 +1346,10 @@ Status addFunction(const std::string& path, std::string_view bytes, const Fit& f
   const size_t first = mesh.point_fields.size();
   for (int64_t k = 0; k < nvar; ++k) mesh.point_fields.emplace_back("function_" + std::to_string(k), 1, type, total);
   std::string scratch, reordered;
-  const std::vector<size_t> components(static_cast<size_t>(nvar), static_cast<size_t>(l.precision));
   size_t base = 0;
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
     const size_t n = fit.blocks[g].points();
-    const std::string_view v = blockBytes(bytes, fit, g, components, &scratch, &reordered);
+    const std::string_view v = blockBytes(bytes, fit, g, componentBytes(fit, g, Kind::kFunction), &scratch, &reordered);
     for (int64_t k = 0; k < nvar; ++k)
       copyValues(v.data() + k * n * l.precision, n, l.precision, l.big_endian, &mesh.point_fields[first + k], base, 1);
     base += n;

@@ -77,6 +77,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: gtn-make-sample OUTDIR [NI NJ NK]\n");
     return 2;
   }
+  if (argv[1][0] == '-') {  // an option, not a directory to create
+    const bool help = std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0;
+    std::fprintf(help ? stdout : stderr, "usage: gtn-make-sample OUTDIR [NI NJ NK]\n");
+    return help ? 0 : 2;
+  }
   if (argc == 5) {
     int* dims[3] = {&kNi, &kNj, &kNk};
     for (int a = 0; a < 3; ++a) {

@@ -1208,6 +1208,11 @@ TEST(Plot3dSample, GeneratorWritesAValidDeterministicSample) {
     EXPECT_EQ(s.fields[0].non_finite + s.fields[1].non_finite + s.fields[2].non_finite, 0u);
   }
   EXPECT_EQ(test::runShell(makeSampleBinary()).exit_code, 2);
+  // Options are not taken for a directory to create.
+  const test::RunResult help = test::runShell("cd " + a + " && " + makeSampleBinary() + " --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("usage: gtn-make-sample OUTDIR"), std::string::npos) << help.out;
+  EXPECT_FALSE(test::fileExists(a + "/--help"));
 }
 
 // The benchmarks' large grid: the same shape at other dimensions; bad dimensions are refused.
