@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -154,19 +155,28 @@ class NearestGrid {
         }
       }
       // The distance from p to the nearest face of the visited box that has cells beyond it, less
-      // a margin for the rounding of the cell boundaries.
+      // a margin for the rounding of the cell boundaries. Infinite only when no face has cells
+      // beyond it: over a box near the double range a distance or its square can overflow, and
+      // then the largest double stands for it (a lower bound, so no point is taken as final too
+      // soon; an infinite one claimed the whole grid seen, and the encoder ranked an escape among
+      // the points of the first rings only, which the decoder could not find).
+      constexpr double kLargest = std::numeric_limits<double>::max();
       double safe = INFINITY;
+      auto bound = [&](double gap, double a, double b) {
+        const double d = gap - 1e-9 * (std::fabs(a) + std::fabs(b));
+        safe = std::min(safe, std::isnan(d) ? 0.0 : std::min(d, kLargest));  // NaN: inf - inf
+      };
       for (int i = 0; i < 3; ++i) {
         if (lo[i] > 0) {
           const double edge = origin_[i] + lo[i] * h_[i];
-          safe = std::min(safe, p[i] - edge - 1e-9 * (std::fabs(p[i]) + std::fabs(edge)));
+          bound(p[i] - edge, p[i], edge);
         }
         if (hi[i] < n_ - 1) {
           const double edge = origin_[i] + (hi[i] + 1) * h_[i];
-          safe = std::min(safe, edge - p[i] - 1e-9 * (std::fabs(p[i]) + std::fabs(edge)));
+          bound(edge - p[i], p[i], edge);
         }
       }
-      const double safe2 = safe == INFINITY ? INFINITY : (safe > 0 ? safe * safe : 0.0);
+      const double safe2 = safe == INFINITY ? INFINITY : (safe > 0 ? std::min(safe * safe, kLargest) : 0.0);
       last_safe2_ = safe2;
       if (stop(safe2) || safe2 == INFINITY) return true;
       if (cells > max_cells) return false;

@@ -426,6 +426,25 @@ TEST(LevelCodec, CoordinatesNearTheDoubleRangeStillRoundTrip) {
   EXPECT_EQ(e.header.tets, m.numTets());
 }
 
+TEST(LevelCodec, EscapesRankedOverABoxNearTheDoubleRange) {
+  // Two points far out (2^53 + 1 and the largest double) make the escape grid's cells so large that
+  // squared distances to them overflow: the encoder once ranked an escape among the grid's first
+  // rings only and wrote a file the decoder refused ("escape rank beyond the live vertices").
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat64;
+  m.coords = {10, 0, 0, 10, 10, 0, 9007199254740993.0, 0, 10, 10, 0, 10, 4, 4, 4, 6, 4, 4,
+              6, 6, 4, 4, 6, 4, 4, 4, 6, 6, 4, 6, 1.7976931348623157e308, 6, 6, 4, 6, 6,
+              2, 2, 1, 1, 1, 2, 2, 1, 2, 1, 2, 2};
+  const uint32_t tets[14][4] = {{14, 15, 9, 3}, {10, 5, 11, 6}, {15, 9, 3, 10}, {12, 16, 9, 3}, {10, 3, 4, 11},
+                                {9, 3, 10, 11}, {9, 12, 3, 11},  {5, 13, 7, 6}, {5, 12, 9, 11},  {5, 9, 10, 11},
+                                {5, 8, 12, 7},  {4, 10, 11, 1},  {11, 10, 6, 1}, {11, 7, 2, 1}};
+  for (const auto& t : tets) m.tets.push_back({t[0] - 1, t[1] - 1, t[2] - 1, t[3] - 1});
+  size_t zero = 0;
+  normalizeOrientation(m, &zero);
+  const EncodedLevel e = roundTrip(m);
+  EXPECT_EQ(e.header.tets, 14u);
+}
+
 TEST(LevelCodec, RejectsNonManifoldFaces) {
   TetMesh m;
   m.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 1, 1, 1};

@@ -144,5 +144,39 @@ TEST(NearestGrid, BoxTooSmallForItsCells) {
   EXPECT_EQ(grid.kth(p, 6, d, ok, all), NearestGrid::kNone);
 }
 
+TEST(NearestGrid, BoxNearTheDoubleRange) {
+  // Cells of about 1e306: the distance to the first ring's faces squares to infinity. That must not
+  // count as having seen the whole grid (the answers then came from the first rings only).
+  NearestGrid grid;
+  const double lo[3] = {0, 0, 0}, hi[3] = {1.7976931348623157e308, 10, 10};
+  grid.build(lo, hi, 40);
+  std::vector<double> pos;
+  for (uint32_t s = 0; s < 40; ++s) {
+    const double x = s % 4 == 0 ? 1e307 * (s / 4) : (s % 4 == 1 ? 1.7976931348623157e308 : 0.5 * s);
+    pos.insert(pos.end(), {x, static_cast<double>(s % 10), static_cast<double>(s % 7)});
+    grid.insert(s, &pos[3 * s]);
+  }
+  for (const double px : {1.0, 3e306, 9e307, 1.7e308}) {
+    const double p[3] = {px, 4, 4};
+    auto d = [&](uint32_t s) {
+      const double dx = pos[3 * s] - p[0], dy = pos[3 * s + 1] - p[1], dz = pos[3 * s + 2] - p[2];
+      const double e = dx * dx + dy * dy + dz * dz;
+      return e <= kMaxKey ? e : kMaxKey;
+    };
+    auto ok = [](uint32_t s) { return s % 5 != 3; };
+    auto all = [&](auto fn) {
+      for (uint32_t s = 0; s < 40; ++s) fn(s);
+    };
+    std::vector<std::pair<double, uint32_t>> order;
+    for (uint32_t s = 0; s < 40; ++s)
+      if (ok(s)) order.push_back({d(s), s});
+    std::sort(order.begin(), order.end());
+    for (uint64_t r = 0; r < order.size(); ++r) {
+      EXPECT_EQ(grid.kth(p, r, d, ok, all), order[r].second) << "query x " << px << " rank " << r;
+      EXPECT_EQ(grid.rankOf(p, order[r].first, order[r].second, d, ok, all), r) << "query x " << px << " rank " << r;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace gtn
