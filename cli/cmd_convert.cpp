@@ -1,5 +1,5 @@
 // gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--compress] [--levels K] [--no-merge-tree]
-//   [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W]
+//   [--no-verify] [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W]
 #include <memory>
 
 #include "cli/commands.h"
@@ -20,6 +20,7 @@ struct ConvertArgs {
   bool compress = false;
   int levels = -1;  // mip levels beyond level 0, -1 = automatic
   bool no_merge_tree = false;
+  bool no_verify = false;  // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
   double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes
   RankingOptions ranking;
 };
@@ -61,6 +62,7 @@ int runConvert(const ConvertArgs& a) {
       GtnWriteOptions wo;
       wo.tool_version = GTN_VERSION_STRING;
       wo.command_line = commandLine();
+      wo.verify = !a.no_verify;
       st = writeGtnWithLevels(a, mesh, wo);
       break;
     }
@@ -92,6 +94,8 @@ Command addConvertCommand(CLI::App& app) {
                   "of level 0's bytes (default 2, the paper's bound; 0 = no bound)")
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
+  sub->add_flag("--no-verify", args->no_verify,
+                ".gtn: do not decode each level back and compare it with its mesh before the file is written (faster; the check guards against encoder bugs)");
   sub->add_option("--simplify-field", args->ranking.field,
                   ".gtn: point field whose first component is the density of the simplification error "
                   "(default: the first point field; 'none' = volume only)");

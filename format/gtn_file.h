@@ -36,6 +36,9 @@ struct GtnWriteOptions {
   // framing included); the first level that would pass the bound and all coarser ones are left out.
   // Every kept level still stores the rest of the merge tree, so nothing is lost but the shortcut.
   double level_storage_limit = 0.0;
+  // Decode every level that is written and check that it gives back its mesh exactly
+  // (codec/level_check.h) before the file is committed; a level that would not fails the write.
+  bool verify = true;
 };
 
 // Encodes every level (encodeLevel), then writes the file atomically (format/file_io.h): prefix,

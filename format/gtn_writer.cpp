@@ -1,5 +1,6 @@
 #include <cstdio>
 
+#include "codec/level_check.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
 
@@ -169,6 +170,17 @@ StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, siz
   return out;
 }
 
+// With options.verify: level i decodes back to its mesh (otherwise the encoder has a bug, and the file
+// must not replace anything).
+Status checkDecodesBack(const std::string& path, const std::vector<GtnLevelInput>& levels, size_t i,
+                        const EncodedLevel& e, const GtnWriteOptions& options) {
+  if (!options.verify) return Status::ok();
+  const std::string why = losslessMismatch(*levels[i].mesh, e);
+  if (why.empty()) return Status::ok();
+  return invalidData(path + ": level " + std::to_string(i) + " would not decode back to its mesh (" + why +
+                     "), so the file was not written; this is a bug in gtn's encoder, please report it with the input");
+}
+
 // How many of `encoded` (level 0 first) fit the storage bound: the bytes each level takes in the
 // file, measured by writing them to a counter with the same options.
 StatusOr<size_t> levelsWithinBound(const std::vector<EncodedInput>& encoded, const std::vector<GtnLevelInput>& levels,
@@ -208,6 +220,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     auto n = levelsWithinBound(encoded, levels, options);
     if (!n.isOk()) return Status(n.status().code(), path + ": " + n.status().message());
     count = *n;
+    for (size_t i = 0; i < count; ++i) GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels, i, encoded[i].level, options));
   }
   return writeFileAtomically(path, [&](std::FILE* f) -> Status {
     GtnStreamWriter w(
@@ -223,6 +236,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
         auto e = encodeInput(levels, i);
         if (!e.isOk()) return e.status();
         one = std::move(e).value();
+        GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels, i, one.level, options));
       }
       const EncodedInput& e = bounded ? encoded[i] : one;
       if (i == 0) GTN_RETURN_IF_ERROR(w.begin(e.level.header, count));

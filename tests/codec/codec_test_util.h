@@ -10,6 +10,7 @@
 #include <cstring>
 #include <set>
 
+#include "codec/level_check.h"
 #include "codec/level_codec.h"
 #include "mesh/faces.h"
 #include "mesh/hex_split.h"
@@ -228,6 +229,7 @@ inline EncodedLevel roundTrip(const TetMesh& m, uint64_t* peak_live = nullptr, c
   EXPECT_EQ(stats.peak_live_vertices, sink.peak);
   if (peak_live) *peak_live = stats.peak_live_vertices;
   expectSameMesh(m, *enc, sink.builder.mesh(), sink.builder.boundary());
+  EXPECT_EQ(losslessMismatch(m, *enc), "");  // the writer's check agrees
   return std::move(enc).value();
 }
 

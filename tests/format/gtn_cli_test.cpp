@@ -122,6 +122,23 @@ TEST_F(GtnCli, ConvertIsDeterministic) {
   EXPECT_EQ(first, test::readFile(out));
 }
 
+// The writer decodes every level back before committing the file (GtnWriteOptions::verify);
+// --no-verify skips that and writes the same levels.
+TEST_F(GtnCli, NoVerifyWritesTheSameLevels) {
+  const std::string a = dir_ + "/checked.gtn", b = dir_ + "/unchecked.gtn";
+  ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + a).exit_code, 0);
+  const test::RunResult r = test::runGtn("convert " + spx_ + " -o " + b + " --no-verify");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json ja = infoJson(a), jb = infoJson(b);
+  EXPECT_EQ(meshSummary(ja), meshSummary(jb));
+  ASSERT_EQ(ja.at("sections").size(), jb.at("sections").size());
+  for (size_t i = 0; i < ja.at("sections").size(); ++i) {
+    if (ja["sections"][i].at("name") == "header") continue;  // the command line differs
+    EXPECT_EQ(ja["sections"][i], jb["sections"][i]);
+  }
+  EXPECT_NE(jb.at("provenance").dump().find("--no-verify"), std::string::npos);
+}
+
 TEST_F(GtnCli, ExportRoundTripsToVtuVtkAndTetgen) {
   const std::string gtn = dir_ + "/spx.gtn";
   ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + gtn).exit_code, 0);
