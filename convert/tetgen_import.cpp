@@ -306,14 +306,15 @@ StatusOr<Tets> readTets(const std::string& path, std::string_view text, int64_t 
     if (!readRow(reader, &row)) return truncatedError(reader, last_line, t, count, "tetrahedra");
     last_line = reader.line();
     if (row.size() != static_cast<size_t>(width)) return wrongWidth(reader, row.size(), width, layout_text);
-    GTN_RETURN_IF_ERROR(parseIntToken(reader, row[0], INT64_MIN, INT64_MAX, "tetrahedron number").status());
+    GTN_ASSIGN_OR_RETURN(const int64_t number, parseIntToken(reader, row[0], INT64_MIN, INT64_MAX, "tetrahedron number"));
+    const std::string which = "tetrahedron " + std::to_string(number);  // as the file numbers it
     for (int k = 0; k < 4; ++k) {
       int64_t v;
       if (!parseInt(row[1 + k], &v)) {
         return reader.error("expected a node number (an integer), found " + quotedToken(row[1 + k]));
       }
       if (v < base || v - base >= np) {
-        return reader.error("tetrahedron " + std::to_string(t) + " refers to node " + std::to_string(v) +
+        return reader.error(which + " refers to node " + std::to_string(v) +
                             ", which the .node does not have (its nodes are numbered " + std::to_string(base) +
                             " to " + std::to_string(base + np - 1) + ")");
       }
@@ -322,7 +323,7 @@ StatusOr<Tets> readTets(const std::string& path, std::string_view text, int64_t 
     for (int k = 4; k < per_tet; ++k) {
       int64_t v;
       if (!parseInt(row[1 + k], &v) || v < base || v - base >= np)
-        return reader.error("tetrahedron " + std::to_string(t) + " has a bad edge node " + quotedToken(row[1 + k]));
+        return reader.error(which + " has a bad edge node " + quotedToken(row[1 + k]));
     }
     GTN_RETURN_IF_ERROR(readAttributes(reader, row, 1 + per_tet, map, t));
   }
@@ -339,8 +340,9 @@ struct FaceEntry {
 };
 
 // The .face, sorted by vertex triple, duplicates removed. `has_markers`: the header's marker flag.
-// `quadratic`: the mesh has 10-node tetrahedra, so each face row lists 3 edge nodes after its corners
-// (TetGen -o2).
+// `quadratic`: the mesh has 10-node tetrahedra, so each face row may list 3 edge nodes after its
+// corners (TetGen -o2 does for the faces of a -p mesh, not for the convex hull of a point set); the
+// first row tells which, and the others must agree.
 StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_view text, int64_t base, int64_t np,
                                            bool quadratic, bool* has_markers) {
   TextReader reader(path, text);
@@ -350,9 +352,8 @@ StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_
   int64_t markers = 0;
   if (row.size() > 1) { GTN_ASSIGN_OR_RETURN(markers, parseIntToken(reader, row[1], 0, 1, "boundary marker flag")); }
   *has_markers = markers == 1;
-  const int64_t edge_nodes = quadratic ? 3 : 0;
-  const int64_t width = 4 + edge_nodes + markers;
-  GTN_RETURN_IF_ERROR(checkCountFits(reader, count, width, "faces"));
+  int64_t edge_nodes = quadratic ? -1 : 0;  // -1: not known before the first row
+  GTN_RETURN_IF_ERROR(checkCountFits(reader, count, 4 + markers, "faces"));
   std::vector<FaceEntry> faces(static_cast<size_t>(count));
   size_t last_line = reader.line();
   for (FaceEntry& face : faces) {
@@ -360,19 +361,26 @@ StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_
     if (!readRow(reader, &row)) return truncatedError(reader, last_line, i, count, "faces");
     last_line = reader.line();
     // TetGen's -nn switch appends the two adjacent tetrahedra to each row; they are recomputed here.
-    if (row.size() != static_cast<size_t>(width) && row.size() != static_cast<size_t>(width + 2)) {
-      return wrongWidth(reader, row.size(), width,
-                        std::string("number, 3 node numbers") + (quadratic ? ", 3 edge nodes" : "") +
-                            (markers ? ", marker" : "") + " [, 2 adjacent tetrahedra]");
+    if (edge_nodes < 0) {
+      const size_t plain = static_cast<size_t>(4 + markers);
+      edge_nodes = row.size() == plain || row.size() == plain + 2 ? 0 : 3;
     }
-    GTN_RETURN_IF_ERROR(parseIntToken(reader, row[0], INT64_MIN, INT64_MAX, "face number").status());
+    const int64_t width = 4 + edge_nodes + markers;
+    if (row.size() != static_cast<size_t>(width) && row.size() != static_cast<size_t>(width + 2)) {
+      std::string edges;
+      if (quadratic && i == 0) edges = " [, 3 edge nodes]";
+      if (quadratic && i > 0) edges = edge_nodes ? ", 3 edge nodes (as on the first row)" : " (no edge nodes, as on the first row)";
+      return wrongWidth(reader, row.size(), width,
+                        "number, 3 node numbers" + edges + (markers ? ", marker" : "") + " [, 2 adjacent tetrahedra]");
+    }
+    GTN_ASSIGN_OR_RETURN(const int64_t number, parseIntToken(reader, row[0], INT64_MIN, INT64_MAX, "face number"));
     uint32_t v[3];
     for (int k = 0; k < 3; ++k) {
       int64_t x;
       if (!parseInt(row[1 + k], &x))
         return reader.error("expected a node number (an integer), found " + quotedToken(row[1 + k]));
       if (x < base || x - base >= np) {
-        return reader.error("face " + std::to_string(i) + " refers to node " + std::to_string(x) +
+        return reader.error("face " + std::to_string(number) + " refers to node " + std::to_string(x) +
                             ", which the .node does not have");
       }
       v[k] = static_cast<uint32_t>(x - base);

@@ -391,6 +391,35 @@ TEST(TetgenProgram, QuadraticTetsAndFaces) {
   EXPECT_NEAR(s.total_volume, 2.0, 1e-12);
 }
 
+// A point set (no -p): TetGen -o2 lists the convex hull's faces with their three corners only.
+TEST(TetgenProgram, QuadraticTetsOfAPointSetWithHullFaces) {
+  if (!fileExists("/usr/bin/tetgen")) GTEST_SKIP() << "/usr/bin/tetgen is not installed";
+  const std::string dir = tempDir("tetgen-program-o2-points");
+  std::string node = "27 3 0 0\n";
+  for (int i = 0; i < 27; ++i)
+    node += std::to_string(i + 1) + " " + std::to_string(i % 3 + 0.1 * (i % 5)) + " " + std::to_string(i / 3 % 3) +
+            " " + std::to_string(i / 9 + 0.05 * (i % 7)) + "\n";
+  writeFile(dir + "/cloud.node", node);
+  const test::RunResult run = test::runShell("cd " + dir + " && /usr/bin/tetgen -Qo2 cloud.node");
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  std::istringstream face_header(readFile(dir + "/cloud.1.face"));
+  size_t faces = 0;
+  face_header >> faces;
+  std::string first_row;
+  std::getline(face_header, first_row);
+  std::getline(face_header, first_row);
+  std::istringstream row(first_row);
+  size_t values = 0;
+  for (std::string token; row >> token;) ++values;
+  EXPECT_EQ(values, 4u) << "TetGen now writes edge nodes on hull faces: " << first_row;
+  const ImportResult r = mustImport(dir + "/cloud.1");
+  EXPECT_EQ(r.mesh.numTets(), std::stoul(readFile(dir + "/cloud.1.ele")));
+  const MeshStats s = computeMeshStats(r.mesh);
+  EXPECT_EQ(s.inverted, 0u);
+  EXPECT_EQ(s.boundary_faces, faces);
+  EXPECT_GT(s.unreferenced_points, 0u);  // the edge nodes
+}
+
 // --- Hand-written files: syntax variants and malformed inputs -------------------------------------
 
 std::string writeTetgen(const std::string& dir, const std::string& node, const std::string& ele,
@@ -456,6 +485,9 @@ TEST(TetgenErrors, EleNamesMissingNode) {
   expectError(writeTetgen(dir, kNodes0, "2 4 0\n0 0 1 2 3\n1 1 2 3 7\n"), dir + "/m.ele", ":3:");
   auto r = importTetgen(dir + "/m", ImportOptions{});
   EXPECT_NE(r.status().message().find("node 7"), std::string::npos) << r.status().message();
+  // The tetrahedron as the file numbers it (the second row, numbered 1), not by its place.
+  EXPECT_NE(r.status().message().find("tetrahedron 1 refers"), std::string::npos) << r.status().message();
+  expectError(writeTetgen(dir, kNodes0, "2 4 0\n10 0 1 2 3\n20 1 2 3 7\n"), dir + "/m.ele", ":3: tetrahedron 20 refers");
   // One-based nodes: 0 is missing.
   expectError(writeTetgen(dir, kNodes1, "1 4 0\n1 0 1 2 3\n"), dir + "/m.ele", ":2:");
 }
