@@ -2,8 +2,10 @@
 // fixed number of values. Vertices and the volume elements (Tetrahedra, Hexahedra, Prisms, Pyramids)
 // are read (1-based, a reference number after each); hexahedra, prisms and pyramids are split into
 // tetrahedra as the VTK importers split theirs (medit_cells.h gives the corner numbering). Every other
-// known section is skipped by its count, and an unknown keyword is an error (its entries could not be
-// skipped safely).
+// known section is skipped: by its count of values, or, for the links to a geometry whose layout
+// changed between libMeshb versions, one line per entry (as libMeshb writes them). An unknown keyword
+// is an error (its entries could not be skipped safely).
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstring>
@@ -26,11 +28,17 @@ bool sameKeyword(std::string_view a, const char* b) {
   return true;
 }
 
-// Sections skipped by count: values per entry, with -1 standing for the dimension.
+// Sections skipped: values per entry, with -1 standing for the dimension.
+enum class Skip {
+  kValues,  // a count, then count x values values
+  kLines,   // a count, then count lines (libMeshb changed these entries' layout between versions)
+  kSingle,  // no count: `values` values (Iterations, Time, ...)
+};
 struct SkippedSection {
   const char* keyword;
   int values;
   bool volume = false;  // higher-order volume elements: skipping them loses volume, so a warning says so
+  Skip skip = Skip::kValues;
 };
 constexpr SkippedSection kSkipped[] = {
     {"Edges", 3},           {"Triangles", 4},          {"Quadrilaterals", 5},
@@ -42,6 +50,21 @@ constexpr SkippedSection kSkipped[] = {
     {"Tangents", -1},       {"NormalAtVertices", 2},   {"NormalAtTriangleVertices", 3},
     {"NormalAtQuadrilateralVertices", 3}, {"TangentAtEdgeVertices", 3}, {"TangentAtVertices", 2},
     {"Crack", 2},
+    // Links of the mesh to a geometry (libMeshb's GmfVertexOnGeometricVertex and its kin); the
+    // singular and plural spellings of the two libMeshb generations.
+    {"VertexOnGeometricVertex", 0, false, Skip::kLines}, {"VertexOnGeometricEdge", 0, false, Skip::kLines},
+    {"VertexOnGeometricTriangle", 0, false, Skip::kLines}, {"VertexOnGeometricQuadrilateral", 0, false, Skip::kLines},
+    {"EdgeOnGeometricEdge", 0, false, Skip::kLines}, {"TriangleOnGeometricTriangle", 0, false, Skip::kLines},
+    {"TriangleOnGeometricQuadrilateral", 0, false, Skip::kLines},
+    {"QuadrilateralOnGeometricTriangle", 0, false, Skip::kLines},
+    {"QuadrilateralOnGeometricQuadrilateral", 0, false, Skip::kLines},
+    {"VerticesOnGeometricVertices", 0, false, Skip::kLines}, {"VerticesOnGeometricEdges", 0, false, Skip::kLines},
+    {"VerticesOnGeometricTriangles", 0, false, Skip::kLines},
+    {"VerticesOnGeometricQuadrilaterals", 0, false, Skip::kLines},
+    {"EdgesOnGeometricEdges", 0, false, Skip::kLines}, {"SubDomainFromGeom", 0, false, Skip::kLines},
+    {"SubDomainFromMesh", 0, false, Skip::kLines},
+    {"Iterations", 1, false, Skip::kSingle}, {"Time", 1, false, Skip::kSingle},
+    {"AngleOfCornerBound", 1, false, Skip::kSingle}, {"BoundingBox", 6, false, Skip::kSingle},
 };
 
 StatusOr<int64_t> readCount(TextReader& reader, int64_t values_per_entry, const std::string& what) {
@@ -110,24 +133,48 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
       GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, 4, "vertices"));
       const size_t n = static_cast<size_t>(count);
       mesh.coords.resize(3 * n);
+      // References are integers, but TetGen -g writes a point attribute there, a real number: then
+      // they are all kept as float64 (`real_refs` holds them once the first one is not an integer).
       Field ref("ref", 1, ScalarType::kInt32, n);
+      std::vector<double> real_refs;
       for (size_t i = 0; i < n; ++i) {
         for (int c = 0; c < 3; ++c) {
           GTN_ASSIGN_OR_RETURN(mesh.coords[3 * i + c], reader.readDouble("a vertex coordinate"));
           if (!std::isfinite(mesh.coords[3 * i + c]))
             return reader.error("vertex " + std::to_string(i + 1) + " has a non-finite " + "xyz"[c] + " coordinate");
         }
-        GTN_ASSIGN_OR_RETURN(const int32_t r, readRef(reader));
-        ref.set<int32_t>(i, 0, r);
+        std::string_view r_tok;
+        if (!reader.next(&r_tok)) return reader.errorAtEnd("a reference number");
+        int64_t r = 0;
+        double x = 0;
+        if (real_refs.empty() && parseInt(r_tok, &r) && r >= INT32_MIN && r <= INT32_MAX) {
+          ref.set<int32_t>(i, 0, static_cast<int32_t>(r));
+          continue;
+        }
+        if (!parseDouble(r_tok, &x))
+          return reader.error("expected vertex " + std::to_string(i + 1) + "'s reference (a number), found " +
+                              quotedToken(r_tok));
+        if (real_refs.empty()) {
+          real_refs.reserve(n);
+          for (size_t j = 0; j < i; ++j) real_refs.push_back(ref.get(j, 0));
+          result.report.warnings.push_back("vertex " + std::to_string(i + 1) + " (line " + std::to_string(reader.line()) +
+                                           ") has the reference " + std::string(r_tok) +
+                                           ", not a 32-bit integer (TetGen -g writes a point attribute there): the "
+                                           "vertex references are kept as float64");
+        }
+        real_refs.push_back(x);
+      }
+      if (!real_refs.empty()) {
+        ref = Field("ref", 1, ScalarType::kFloat64, n);
+        for (size_t i = 0; i < n; ++i) ref.set<double>(i, 0, real_refs[i]);
       }
       mesh.point_fields.push_back(std::move(ref));
       have_vertices = true;
     } else if (const MeditVolumeKeyword* kw = volumeKeyword(tok)) {
-      if (!have_vertices) return reader.error(std::string(kw->name) + " before Vertices is not supported");
-      if (!cells.firstSection(*kw)) return reader.error(std::string("a second ") + kw->name + " section");
+      cells.addSection(*kw, "line " + std::to_string(reader.line()));
       GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, kw->corners + 1, kw->name));
       const size_t n = static_cast<size_t>(count);
-      const int64_t np = static_cast<int64_t>(mesh.numPoints());
+      const int64_t np = have_vertices ? static_cast<int64_t>(mesh.numPoints()) : kMaxItems;
       cells.reserve(*kw, n, &mesh);
       for (size_t e = 0; e < n; ++e) {
         uint32_t corners[8];
@@ -137,6 +184,7 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
             return reader.error(std::string(kw->singular) + " " + std::to_string(e + 1) + " refers to vertex " +
                                 std::to_string(v) + "; vertices are numbered 1 to " + std::to_string(np));
           }
+          if (!have_vertices) cells.noteLateVertex(v, std::string(kw->singular) + " " + std::to_string(e + 1), reader.line());
           corners[k] = static_cast<uint32_t>(v - 1);
         }
         GTN_ASSIGN_OR_RETURN(const int32_t r, readRef(reader));
@@ -156,9 +204,23 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
       if (dimension != 3) return reader.error(std::string(section->keyword) + " before a 'Dimension 3' line");
       const int64_t values = section->values < 0 ? dimension : section->values;
       const size_t line = reader.line();
-      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, values, section->keyword));
-      for (int64_t i = 0; i < count * values; ++i) {
-        if (!reader.next(&tok)) return reader.errorAtEnd((std::string(section->keyword) + " entries").c_str());
+      const std::string entries = std::string(section->keyword) + " entries";
+      if (section->skip == Skip::kSingle) {
+        for (int64_t i = 0; i < values; ++i)
+          if (!reader.next(&tok)) return reader.errorAtEnd(entries.c_str());
+        seen_keyword = true;
+        continue;
+      }
+      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, std::max<int64_t>(values, 1), section->keyword));
+      if (section->skip == Skip::kLines) {
+        reader.skipLine();  // the rest of the count's line
+        for (int64_t i = 0; i < count; ++i) {
+          if (!reader.next(&tok)) return reader.errorAtEnd(entries.c_str());
+          reader.skipLine();
+        }
+      }
+      for (int64_t i = 0; section->skip == Skip::kValues && i < count * values; ++i) {
+        if (!reader.next(&tok)) return reader.errorAtEnd(entries.c_str());
       }
       if (section->volume && count > 0) {
         const std::string what = std::to_string(count) + " " + section->keyword + " elements (line " +
@@ -172,6 +234,11 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
   }
   if (!have_vertices) return reader.error("no Vertices section");
   if (cells.empty()) return reader.error(noVolumeElements(skipped_volume));
+  if (cells.late_vertex > static_cast<int64_t>(mesh.numPoints()))
+    return invalidData(path + ":" + std::to_string(cells.late_place) + ": " + cells.late_element + " refers to vertex " +
+                       std::to_string(cells.late_vertex) + "; vertices are numbered 1 to " +
+                       std::to_string(mesh.numPoints()));
+  cells.warnAboutSections(&result);
   const bool tets_only = cells.other_refs.empty();
   GTN_RETURN_IF_ERROR(finishMeditImport(path, "medit", &cells, options, &result));
   GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, &result));

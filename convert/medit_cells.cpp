@@ -11,11 +11,18 @@ const MeditVolumeKeyword kMeditVolumeKeywords[4] = {
     {"Pyramids", "pyramid", 5, kVtkPyramid},
 };
 
-bool MeditCells::firstSection(const MeditVolumeKeyword& kw) {
+void MeditCells::addSection(const MeditVolumeKeyword& kw, const std::string& where) {
   const size_t index = static_cast<size_t>(&kw - kMeditVolumeKeywords);
-  if (seen[index]) return false;
-  seen[index] = true;
-  return true;
+  sections[index] += (section_count[index]++ ? ", " : "") + where;
+}
+
+void MeditCells::warnAboutSections(ImportResult* result) const {
+  for (size_t i = 0; i < 4; ++i) {
+    if (section_count[i] < 2) continue;
+    result->report.warnings.push_back(std::to_string(section_count[i]) + " " + kMeditVolumeKeywords[i].name +
+                                      " sections (" + sections[i] +
+                                      ") read one after the other, as meshio does (libMeshb reads only the last)");
+  }
 }
 
 void MeditCells::reserve(const MeditVolumeKeyword& kw, size_t n, TetMesh* mesh) {

@@ -33,14 +33,31 @@ extern const MeditVolumeKeyword kMeditVolumeKeywords[4];
 
 // The volume elements read so far. Tetrahedra go straight to mesh.tets (their references to
 // tet_refs); the other elements wait in `others`, 0-based, until finishMeditImport splits them.
+//
+// A keyword may have several sections (meshio writes one per block of cells); they are read one
+// after the other. libMeshb keeps only the last one it meets, so a warning says which were joined.
+// Keywords may come in any order (GMF), elements before Vertices too: the vertex numbers of those
+// are checked once the vertices are known (checkLateVertices).
 struct MeditCells {
   std::vector<int32_t> tet_refs;
   VtkCells others;
   std::vector<int32_t> other_refs;
-  bool seen[4] = {false, false, false, false};  // which of kMeditVolumeKeywords had its section
+  std::string sections[4];  // per keyword of kMeditVolumeKeywords, where its sections begin ("line 7")
+  int section_count[4] = {0, 0, 0, 0};
+  // The largest vertex number read before the Vertices section, and where: the element ("tetrahedron
+  // 5") and a place (a line, or a byte offset) for the error.
+  int64_t late_vertex = 0;
+  std::string late_element;
+  uint64_t late_place = 0;
   bool empty() const { return tet_refs.empty() && other_refs.empty(); }
-  // Notes a section of `kw`: false when the keyword already had one.
-  bool firstSection(const MeditVolumeKeyword& kw);
+  // Notes a section of `kw` that begins at `where` ("line 7", "byte offset 120").
+  void addSection(const MeditVolumeKeyword& kw, const std::string& where);
+  // Warnings for the keywords that had several sections.
+  void warnAboutSections(ImportResult* result) const;
+  // Notes vertex number v (1 or more) of `element` at `place`, read before the vertices.
+  void noteLateVertex(int64_t v, const std::string& element, uint64_t place) {
+    if (v > late_vertex) late_vertex = v, late_element = element, late_place = place;
+  }
   // Makes room for n elements of `kw`.
   void reserve(const MeditVolumeKeyword& kw, size_t n, TetMesh* mesh);
   // One element of `kw`: its corners (0-based) and its reference.

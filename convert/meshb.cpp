@@ -112,11 +112,11 @@ Status MeshbReader::readVertices(uint64_t end) {
 
 Status MeshbReader::readElements(const MeditVolumeKeyword& kw, uint64_t end) {
   const uint64_t at = in_.position();
-  if (!have_vertices_) return in_.fail(at, std::string(kw.name) + " before Vertices is not supported");
-  if (!cells_.firstSection(kw)) return in_.fail(at, std::string("a second ") + kw.name + " keyword");
+  cells_.addSection(kw, "byte offset " + std::to_string(at));
   GTN_ASSIGN_OR_RETURN(const uint64_t n, count(kw.name, (kw.corners + 1) * in_.intSize(), end));
   TetMesh& mesh = result_.mesh;
-  const int64_t np = static_cast<int64_t>(mesh.numPoints());
+  // Before the Vertices keyword (any order is allowed) only the range of an index is checked here.
+  const int64_t np = have_vertices_ ? static_cast<int64_t>(mesh.numPoints()) : int64_t{UINT32_MAX} - 1;
   cells_.reserve(kw, n, &mesh);
   for (uint64_t e = 0; e < n; ++e) {
     uint32_t corners[8];
@@ -126,6 +126,7 @@ Status MeshbReader::readElements(const MeditVolumeKeyword& kw, uint64_t end) {
       if (v < 1 || v > np)
         return in_.fail(v_at, std::string(kw.singular) + " " + std::to_string(e + 1) + " refers to vertex " +
                                   std::to_string(v) + "; vertices are numbered 1 to " + std::to_string(np));
+      if (!have_vertices_) cells_.noteLateVertex(v, std::string(kw.singular) + " " + std::to_string(e + 1), v_at);
       corners[k] = static_cast<uint32_t>(v - 1);
     }
     const uint64_t ref_at = in_.position();
@@ -165,6 +166,10 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
   }
   if (!have_vertices_) return invalidData(path_ + ": no Vertices keyword");
   if (cells_.empty()) return invalidData(path_ + ": " + noVolumeElements(skipped_volume_));
+  if (cells_.late_vertex > static_cast<int64_t>(result_.mesh.numPoints()))
+    return in_.fail(cells_.late_place, cells_.late_element + " refers to vertex " + std::to_string(cells_.late_vertex) +
+                                           "; vertices are numbered 1 to " + std::to_string(result_.mesh.numPoints()));
+  cells_.warnAboutSections(&result_);
   const bool tets_only = cells_.other_refs.empty();
   GTN_RETURN_IF_ERROR(finishMeditImport(path_, "meshb", &cells_, options, &result_));
   GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, &result_));

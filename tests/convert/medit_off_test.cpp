@@ -197,6 +197,59 @@ TEST(MeditImport, SkipsTheSectionsMmgWrites) {
       << bad.status().message();
 }
 
+// GMF lets keywords come in any order and meshio writes one section per block of cells: a second
+// Tetrahedra section before the Vertices is read, joined to the first with a warning, and its vertex
+// numbers are checked once the vertices are known. Links to a geometry (whose entries changed layout
+// between libMeshb versions) are skipped line by line, and Iterations, Time, AngleOfCornerBound and
+// BoundingBox by their values.
+TEST(MeditImport, AnyKeywordOrderSeveralSectionsAndGeometryLinks) {
+  const std::string dir = tempDir("medit-order");
+  const std::string moved =
+      replaced(replaced(kMedit, "2 4 3 5 8\n", ""), "Tetrahedra\n2\n", "Tetrahedra\n1\n");
+  const std::string text = replaced(
+      moved, "Vertices\n",
+      "Tetrahedra 1\n2 4 3 5 8\nIterations 12\nTime\n0.25\nAngleOfCornerBound 45.0\nBoundingBox\n0 1 0 1 0 1\n"
+      "VertexOnGeometricEdge\n2\n1 3 0.5\n2 3 0.25\nVerticesOnGeometricVertices 1\n4 1 0.0\n"
+      "SubDomainFromMesh 1\n3 1 1 2\nEdgeOnGeometricEdge\n1\n1 1\nVertices\n");
+  writeFile(dir + "/o.mesh", text);
+  auto r = importMedit(dir + "/o.mesh", ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ(r->mesh.numPoints(), 5u);
+  ASSERT_EQ(r->mesh.numTets(), 2u);
+  // File order: the section before the vertices first.
+  EXPECT_TRUE(r->mesh.tets[0] == (Tet{1, 3, 4, 2}));
+  EXPECT_TRUE(r->mesh.tets[1] == (Tet{0, 1, 2, 3}));
+  EXPECT_EQ(r->mesh.cell_fields[0].get(0, 0), 8);
+  EXPECT_EQ(r->mesh.cell_fields[0].get(1, 0), 7);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("2 Tetrahedra sections (line 5, line "), std::string::npos)
+      << r->report.warnings[0];
+  // A vertex number beyond the vertices that follow is reported where it was read.
+  writeFile(dir + "/far.mesh", replaced(text, "Tetrahedra 1\n2 4 3 5 8\n", "Tetrahedra 1\n2 4 3 9 8\n"));
+  expectError(importMedit(dir + "/far.mesh", ImportOptions{}),
+              dir + "/far.mesh:6: tetrahedron 1 refers to vertex 9; vertices are numbered 1 to 5");
+}
+
+// TetGen -g writes a point attribute as the vertex reference: reals keep every reference as float64.
+TEST(MeditImport, RealVertexReferencesBecomeFloat64) {
+  const std::string dir = tempDir("medit-real-refs");
+  writeFile(dir + "/g.mesh", replaced(replaced(kMedit, "0 0 1 13", "0 0 1 13.5"), "1 1 1 14", "1 1 1 1e10"));
+  auto r = importMedit(dir + "/g.mesh", ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const Field& ref = r->mesh.point_fields[0];
+  EXPECT_EQ(ref.type, ScalarType::kFloat64);
+  EXPECT_EQ(ref.get(0, 0), 10.0);
+  EXPECT_EQ(ref.get(3, 0), 13.5);
+  EXPECT_EQ(ref.get(4, 0), 1e10);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_NE(r->report.warnings[0].find("vertex 4 (line 10) has the reference 13.5"), std::string::npos)
+      << r->report.warnings[0];
+  EXPECT_EQ(r->mesh.cell_fields[0].type, ScalarType::kInt32);  // element references stay integers
+  writeFile(dir + "/bad.mesh", replaced(kMedit, "0 0 1 13", "0 0 1 thirteen"));
+  expectError(importMedit(dir + "/bad.mesh", ImportOptions{}),
+              dir + "/bad.mesh:10: expected vertex 4's reference (a number), found 'thirteen'");
+}
+
 TEST(MeditErrors, BadInputs) {
   const std::string dir = tempDir("medit-errors");
   const std::string p = dir + "/b.mesh";
