@@ -12,24 +12,29 @@ namespace gtn {
 
 namespace {
 
-// A face of a cell type in local vertex numbers, cyclic order; 3 to 6 vertices.
+// A face of a cell type in local vertex numbers, cyclic order; 3 to 6 vertices. Every face turns
+// outward (right-hand rule) on a cell that VTK's vtkCellValidator accepts: the cone over the faces
+// (Splitter::cone) then gives positively oriented tetrahedra, and only cells that really are
+// inverted are reported as flipped. (A hexahedron's, pyramid's or prism's first face turns inward,
+// towards the opposite face or the apex; a wedge's first face turns outward, as vtkWedge documents,
+// although its parametric coordinates say otherwise.)
 struct Face {
   int n;
   int v[6];
 };
 
-constexpr Face kHexFaces[] = {{4, {0, 1, 2, 3}}, {4, {4, 5, 6, 7}}, {4, {0, 1, 5, 4}},
+constexpr Face kHexFaces[] = {{4, {0, 3, 2, 1}}, {4, {4, 5, 6, 7}}, {4, {0, 1, 5, 4}},
                               {4, {1, 2, 6, 5}}, {4, {2, 3, 7, 6}}, {4, {3, 0, 4, 7}}};
-constexpr Face kWedgeFaces[] = {{3, {0, 1, 2, 0}}, {3, {3, 4, 5, 0}}, {4, {0, 1, 4, 3}}, {4, {1, 2, 5, 4}},
-                                {4, {2, 0, 3, 5}}};
-constexpr Face kPyramidFaces[] = {{4, {0, 1, 2, 3}}, {3, {0, 1, 4, 0}}, {3, {1, 2, 4, 0}}, {3, {2, 3, 4, 0}},
+constexpr Face kWedgeFaces[] = {{3, {0, 1, 2, 0}}, {3, {3, 5, 4, 0}}, {4, {0, 3, 4, 1}}, {4, {1, 4, 5, 2}},
+                                {4, {2, 5, 3, 0}}};
+constexpr Face kPyramidFaces[] = {{4, {0, 3, 2, 1}}, {3, {0, 1, 4, 0}}, {3, {1, 2, 4, 0}}, {3, {2, 3, 4, 0}},
                                   {3, {3, 0, 4, 0}}};
 // Prisms over a pentagon (points 0-4 the bottom, 5-9 the top, i + 5 above i) and over a hexagon
 // (0-5, 6-11).
-constexpr Face kPentagonalPrismFaces[] = {{5, {0, 1, 2, 3, 4}}, {5, {5, 6, 7, 8, 9}}, {4, {0, 1, 6, 5}},
+constexpr Face kPentagonalPrismFaces[] = {{5, {0, 4, 3, 2, 1}}, {5, {5, 6, 7, 8, 9}}, {4, {0, 1, 6, 5}},
                                           {4, {1, 2, 7, 6}},    {4, {2, 3, 8, 7}},    {4, {3, 4, 9, 8}},
                                           {4, {4, 0, 5, 9}}};
-constexpr Face kHexagonalPrismFaces[] = {{6, {0, 1, 2, 3, 4, 5}}, {6, {6, 7, 8, 9, 10, 11}}, {4, {0, 1, 7, 6}},
+constexpr Face kHexagonalPrismFaces[] = {{6, {0, 5, 4, 3, 2, 1}}, {6, {6, 7, 8, 9, 10, 11}}, {4, {0, 1, 7, 6}},
                                          {4, {1, 2, 8, 7}},       {4, {2, 3, 9, 8}},         {4, {3, 4, 10, 9}},
                                          {4, {4, 5, 11, 10}},     {4, {5, 0, 6, 11}}};
 

@@ -449,6 +449,51 @@ TEST(CellSplit, VoxelSplitsLikeItsHexahedron) {
   }
 }
 
+// A cell that vtkCellValidator accepts gives only positively oriented tetrahedra, whatever the
+// numbering of its points, so the import reports no flips; its mirror image is all flips.
+TEST(CellSplit, ValidCellsNeedNoFlipsAndMirroredOnesAllDo) {
+  struct Case {
+    int type;
+    std::vector<std::array<double, 3>> corners;
+  };
+  std::vector<Case> cases = {
+      {kVtkHexahedron, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}},
+      {kVtkVoxel, {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}}},
+      // vtkWedge: the first triangle's normal points away from the second (VTK's parametric
+      // coordinates for the wedge are the mirror image, which the validator rejects).
+      {kVtkWedge, {{0, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 1}, {1, 0, 1}}},
+      {kVtkPyramid, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5, 0.5, 1}}},
+  };
+  for (int sides : {5, 6}) {
+    Case c{sides == 5 ? kVtkPentagonalPrism : kVtkHexagonalPrism, {}};
+    for (double z : {0.0, 1.0})
+      for (int i = 0; i < sides; ++i)
+        c.corners.push_back({std::cos(2 * M_PI * i / sides), std::sin(2 * M_PI * i / sides), z});
+    cases.push_back(c);
+  }
+  for (const Case& c : cases) {
+    const size_t n = c.corners.size();
+    for (uint32_t seed = 0; seed < 12; ++seed) {
+      std::vector<uint32_t> at(n);
+      std::iota(at.begin(), at.end(), 0u);
+      std::shuffle(at.begin(), at.end(), std::mt19937(seed));
+      for (const double mirror : {1.0, -1.0}) {
+        TetMesh mesh;
+        mesh.coords.resize(3 * n);
+        VtkCells cells;
+        cells.types = {c.type};
+        for (size_t i = 0; i < n; ++i) {
+          for (int d = 0; d < 3; ++d) mesh.coords[3 * at[i] + d] = c.corners[i][d] * (d == 2 ? mirror : 1.0);
+          cells.connectivity.push_back(at[i]);
+        }
+        cells.offsets.push_back(static_cast<int64_t>(n));
+        const ImportResult r = splitInto(mesh, cells, 6);
+        EXPECT_EQ(r.report.flipped, mirror > 0 ? 0u : r.mesh.numTets()) << "type " << c.type << " seed " << seed;
+      }
+    }
+  }
+}
+
 TEST(CellSplit, QuadraticHexWedgePyramidKeepTheirCorners) {
   // A unit cube as a 20-point quadratic hexahedron, and a wedge and a pyramid beside it; the extra
   // points sit anywhere (they are dropped): only the corners (listed first) shape the tetrahedra.
