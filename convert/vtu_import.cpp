@@ -1199,8 +1199,30 @@ StatusOr<ImportResult> VtuReader::readParsed(const pugi::xml_node& root, const I
   if (pieces == 0) return invalidData(path_ + ": <UnstructuredGrid> has no <Piece>");
   result_.mesh.coord_type = coords_float64_ ? ScalarType::kFloat64 : ScalarType::kFloat32;
   if (result_.mesh.numPoints() == 0) result_.mesh.coord_type = ScalarType::kFloat64;
+  // Ghost cells (vtkGhostType DUPLICATECELL) are copies of cells another piece owns: dropped when
+  // that piece is read too (a .pvtu, or several pieces in this file), kept with a warning otherwise.
+  const bool several = pieces > 1;
   GTN_RETURN_IF_ERROR(finishVtkImport(path_, cells_, cell_fields_, options, &result_,
-                                      in_parallel_ ? &duplicate_tets_ : nullptr));
+                                      in_parallel_ || several ? &duplicate_tets_ : nullptr));
+  if (several) {
+    if (duplicate_tets_ > 0)
+      result_.report.warnings.push_back(std::to_string(duplicate_tets_) +
+                                        " tetrahedra of ghost cells (vtkGhostType duplicates of other pieces' cells) dropped");
+    for (std::vector<Field>* fields : {&result_.mesh.point_fields, &result_.mesh.cell_fields})
+      fields->erase(std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kVtkGhostArray; }),
+                    fields->end());
+    result_.report.warnings.push_back(std::to_string(pieces) +
+                                      " pieces read; the points they share are kept once per piece (--weld merges them)");
+  } else if (!in_parallel_) {
+    if (const uint8_t* marks = vtkGhostMarks(cell_fields_, cells_.types.size())) {
+      size_t copies = 0;
+      for (size_t c = 0; c < cells_.types.size(); ++c) copies += (marks[c] & kVtkDuplicateCell) && !(marks[c] & kVtkHiddenCell);
+      if (copies > 0)
+        result_.report.warnings.push_back(std::to_string(copies) +
+                                          " cells are ghost copies of another piece's cells (vtkGhostType DUPLICATECELL); "
+                                          "kept, as the file holds no other piece");
+    }
+  }
   return std::move(result_);
 }
 

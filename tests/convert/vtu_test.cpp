@@ -1217,6 +1217,30 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
   expectError(withSecond("kind.pvtu", "img.vti"), "piece 1: " + dir + "/img.vti: a VTKFile of type \"ImageData\", not UnstructuredGrid");
   ASSERT_EQ(mkfifo((dir + "/fifo.vtu").c_str(), 0600), 0);
   expectError(withSecond("fifo.pvtu", "fifo.vtu"), "piece 1: " + dir + "/fifo.vtu: not a regular file");
+
+  // The same two pieces as two <Piece> elements of one .vtu (vtkXMLUnstructuredGridWriter with
+  // several pieces and a ghost level): the ghost copy is dropped there too.
+  std::string both = piece(cube(0) + cube(1), 16, hex(0) + hex(8), 2, "0 1", "0 1", "Int32");
+  const std::string second = piece(cube(1), 8, hex(0), 1, "0", "1", "Int32");
+  const size_t second_piece = second.find("<Piece");
+  both.insert(both.find("</UnstructuredGrid>"),
+              second.substr(second_piece, second.find("</UnstructuredGrid>") - second_piece));
+  writeFile(dir + "/both.vtu", both);
+  auto one = importMesh({dir + "/both.vtu"}, ImportOptions{});
+  ASSERT_TRUE(one.isOk()) << one.status().message();
+  EXPECT_EQ(one->mesh.numTets(), 12u);
+  EXPECT_NEAR(computeMeshStats(one->mesh).total_volume, 2.0, 1e-12);
+  ASSERT_EQ(one->mesh.cell_fields.size(), 1u);
+  const auto& ow = one->report.warnings;
+  EXPECT_TRUE(std::any_of(ow.begin(), ow.end(), [](const std::string& m) { return m.find("6 tetrahedra of ghost") == 0; }));
+  EXPECT_TRUE(std::any_of(ow.begin(), ow.end(), [](const std::string& m) { return m.find("2 pieces read") == 0; }));
+  // A piece alone keeps its ghost copy (no other piece owns it here), and says so.
+  auto alone = importMesh({dir + "/p_0.vtu"}, ImportOptions{});
+  ASSERT_TRUE(alone.isOk()) << alone.status().message();
+  EXPECT_EQ(alone->mesh.numTets(), 12u);
+  ASSERT_EQ(alone->report.warnings.size(), 1u);
+  EXPECT_EQ(alone->report.warnings[0].find("1 cells are ghost copies of another piece's cells"), 0u)
+      << alone->report.warnings[0];
 }
 
 // --weld on a VTK file: the second tetrahedron has two bit-identical corners, so welding flattens
