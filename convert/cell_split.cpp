@@ -52,6 +52,10 @@ int expectedPoints(int type) {
     case kVtkQuadraticWedge: return 15;
     case kVtkQuadraticPyramid: return 13;
     case kVtkTriquadraticHexahedron: return 27;
+    case 31: return 12;  // VTK_QUADRATIC_LINEAR_WEDGE
+    case 32: return 18;  // VTK_BIQUADRATIC_QUADRATIC_WEDGE
+    case 33: return 24;  // VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON
+    case 37: return 19;  // VTK_TRIQUADRATIC_PYRAMID
     default: return -1;
   }
 }
@@ -78,10 +82,13 @@ int linearType(int type) {
     case 64: case 71: case 78: return kVtkTetra;  // higher-order, Lagrange, Bezier tetrahedra
     case kVtkQuadraticHexahedron:
     case kVtkTriquadraticHexahedron:
+    case 33:
     case 67: case 72: case 79: return kVtkHexahedron;
     case kVtkQuadraticWedge:
+    case 31: case 32:
     case 65: case 73: case 80: return kVtkWedge;
     case kVtkQuadraticPyramid:
+    case 37:
     case 74: case 81: return kVtkPyramid;
     default: return type;
   }
@@ -317,8 +324,8 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   }
   if (!rejected.empty()) {
     return unsupported(path + ": unsupported cell types: " + typeCounts(rejected) +
-                       "; only tetrahedra (10, 24, 64, 71, 78), hexahedra (11, 12, 25, 29, 67, 72, 79), wedges "
-                       "(13, 26, 65, 73, 80), pyramids (14, 27, 74, 81), pentagonal and hexagonal prisms (15, 16) "
+                       "; only tetrahedra (10, 24, 64, 71, 78), hexahedra (11, 12, 25, 29, 33, 67, 72, 79), wedges "
+                       "(13, 26, 31, 32, 65, 73, 80), pyramids (14, 27, 37, 74, 81), pentagonal and hexagonal prisms (15, 16) "
                        "and polyhedra (42) become tetrahedra");
   }
   if (!skipped.empty()) {

@@ -601,7 +601,9 @@ StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
     return std::move(result_);
   }
   if (!have_points_) return invalidData(path_ + ": no POINTS section");
-  if (!have_cells_ || !have_types_) return invalidData(path_ + ": no CELLS or no CELL_TYPES section");
+  // VTK's writer leaves both out for a grid without cells (read as such, like a .vtu of 0 cells).
+  if (have_cells_ != have_types_)
+    return invalidData(path_ + (have_cells_ ? ": CELLS without a CELL_TYPES section" : ": CELL_TYPES without a CELLS section"));
   if (cells_.types.size() + 1 != cells_.offsets.size())
     return invalidData(path_ + ": CELL_TYPES lists " + std::to_string(cells_.types.size()) + " cells but CELLS " +
                        std::to_string(cells_.offsets.size() - 1));

@@ -372,15 +372,15 @@ TEST(CellSplit, RejectsUnsupportedTypesWithNameAndCount) {
     for (int i = 0; i < n; ++i) cells.connectivity.push_back(i);
     cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
   };
-  add(31, 12), add(31, 12), add(33, 18), add(10, 4), add(66, 9), add(5, 3);
+  add(41, 12), add(41, 12), add(38, 18), add(10, 4), add(66, 9), add(5, 3);
   std::vector<Tet> tets;
   std::vector<uint32_t> tet_cell;
   ImportReport report;
   const Status st = splitVtkCells("in.vtu", cells, 20, 6, &tets, &tet_cell, &report);
   ASSERT_FALSE(st.isOk());
   EXPECT_EQ(st.code(), StatusCode::kUnsupported);
-  for (const char* part : {"in.vtu", "2 cells of type 31 (VTK_QUADRATIC_LINEAR_WEDGE)",
-                           "1 cell of type 33 (VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON)", "1 cell of type 66 (unknown)"})
+  for (const char* part : {"in.vtu", "2 cells of type 41 (VTK_CONVEX_POINT_SET)", "1 cell of type 38 (unknown)",
+                           "1 cell of type 66 (unknown)"})
     EXPECT_NE(st.message().find(part), std::string::npos) << st.message() << " lacks " << part;
   // The triangle is not a reason to reject: cells of lower dimension are skipped.
   EXPECT_EQ(st.message().find("VTK_TRIANGLE"), std::string::npos) << st.message();
@@ -512,13 +512,19 @@ TEST(CellSplit, QuadraticHexWedgePyramidKeepTheirCorners) {
   add(kVtkTriquadraticHexahedron, {0, 1, 2, 3, 4, 5, 6, 7}, 19);
   add(kVtkQuadraticWedge, {0, 1, 2, 4, 5, 6}, 9);
   add(kVtkQuadraticPyramid, {0, 1, 2, 3, 6}, 8);
+  // VTK_QUADRATIC_LINEAR_WEDGE, VTK_BIQUADRATIC_QUADRATIC_WEDGE, VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON
+  // and VTK_TRIQUADRATIC_PYRAMID.
+  add(31, {0, 1, 2, 4, 5, 6}, 6);
+  add(32, {0, 1, 2, 4, 5, 6}, 12);
+  add(33, {0, 1, 2, 3, 4, 5, 6, 7}, 16);
+  add(37, {0, 1, 2, 3, 6}, 14);
   ImportResult r = splitInto(mesh, cells, 6);
-  EXPECT_EQ(r.mesh.numTets(), 6u + 6u + 3u + 2u);
+  EXPECT_EQ(r.mesh.numTets(), 6u + 6u + 3u + 2u + 3u + 3u + 6u + 2u);
   const MeshStats s = computeMeshStats(r.mesh);
-  EXPECT_NEAR(s.total_volume, 1.0 + 1.0 + 0.5 + 1.0 / 3.0, 1e-12);
+  EXPECT_NEAR(s.total_volume, 1.0 + 1.0 + 0.5 + 1.0 / 3.0 + 0.5 + 0.5 + 1.0 + 1.0 / 3.0, 1e-12);
   EXPECT_EQ(s.zero_volume, 0u);
   ASSERT_EQ(r.report.warnings.size(), 1u);
-  EXPECT_NE(r.report.warnings[0].find("4 higher-order cells (quadratic hexahedra, wedges or pyramids"),
+  EXPECT_NE(r.report.warnings[0].find("8 higher-order cells (quadratic hexahedra, wedges or pyramids"),
             std::string::npos)
       << r.report.warnings[0];
   // A quadratic hexahedron with the point count of a linear one is malformed.

@@ -301,8 +301,9 @@ TEST(VtkLegacy, RejectsOtherDatasetsCellTypesAndBadIndices) {
               "DATASET POLYDATA is not supported (it holds no volume cells");
   const std::string head = "# vtk DataFile Version 3.0\ntri\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
                            "0 0 0 1 0 0 0 1 0 0 0 1\n";
-  expectError(dir + "/wedge.vtk", head + "CELLS 2 18\n12 0 1 2 3 0 1 2 3 0 1 2 3\n4 0 1 2 3\nCELL_TYPES 2\n31 10\n",
-              "1 cell of type 31 (VTK_QUADRATIC_LINEAR_WEDGE)");
+  expectError(dir + "/convex.vtk", head + "CELLS 2 10\n4 0 1 2 3\n4 0 1 2 3\nCELL_TYPES 2\n41 10\n",
+              "1 cell of type 41 (VTK_CONVEX_POINT_SET)");
+  expectError(dir + "/half.vtk", head + "CELLS 1 5\n4 0 1 2 3\n", "CELLS without a CELL_TYPES section");
   expectError(dir + "/tri.vtk", head + "CELLS 2 8\n3 0 1 2\n3 0 2 3\nCELL_TYPES 2\n5 5\n",
               "no volume cells, only 2 cells of type 5 (VTK_TRIANGLE)");
   expectError(dir + "/range.vtk", head + "CELLS 1 5\n4 0 1 2 4\nCELL_TYPES 1\n10\n",
