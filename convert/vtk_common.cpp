@@ -144,6 +144,13 @@ bool vtkLegacyTypeFromName(const std::string& name, ScalarType* out) {
   return false;
 }
 
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (size_t i = 0; i < names.size() && i < 5; ++i) out += (i ? ", '" : "'") + names[i] + "'";
+  if (names.size() > 5) out += ", ...";
+  return out;
+}
+
 const uint8_t* vtkGhostMarks(const std::vector<Field>& fields, size_t items) {
   for (const Field& f : fields)
     if (f.name == kVtkGhostArray && f.type == ScalarType::kUInt8 && f.components == 1 && f.itemCount() == items)

@@ -36,6 +36,9 @@ constexpr uint8_t kVtkDuplicateCell = 1, kVtkHiddenCell = 32;
 // The marks of `fields`' ghost array when it is VTK's (UInt8, one component, `items` values), or null.
 const uint8_t* vtkGhostMarks(const std::vector<Field>& fields, size_t items);
 
+// Array names for a warning, quoted: "'TIME', 'CYCLE'", the first five and "..." after them.
+std::string joinNames(const std::vector<std::string>& names);
+
 // "VTK_TETRA", "VTK_QUADRATIC_HEXAHEDRON", ... or "unknown" for numbers VTK does not define.
 const char* vtkCellTypeName(int type);
 

@@ -293,6 +293,8 @@ void LegacyReader::skipMetadata() {
 }
 
 Status LegacyReader::readFieldData(std::vector<Field>* into) {
+  std::vector<std::string> dataset_arrays;  // into == nullptr: the names of what is read past
+  const size_t field_line = tr_.line();       // of the FIELD keyword
   GTN_ASSIGN_OR_RETURN(std::string field_name, token("field name"));
   GTN_ASSIGN_OR_RETURN(uint64_t arrays, count("array count"));
   for (uint64_t a = 0; a < arrays; ++a) {
@@ -306,7 +308,10 @@ Status LegacyReader::readFieldData(std::vector<Field>* into) {
     GTN_ASSIGN_OR_RETURN(uint64_t comps, count("component count"));
     GTN_ASSIGN_OR_RETURN(uint64_t tuples, count("tuple count"));
     GTN_ASSIGN_OR_RETURN(const bool strings, skipStringArray("FIELD array", name, comps, tuples, into != nullptr));
-    if (strings) continue;
+    if (strings) {
+      if (!into) dataset_arrays.push_back(decodeName(name));
+      continue;
+    }
     GTN_ASSIGN_OR_RETURN(ScalarType type, dataType("FIELD array " + name));
     if (comps == 0 || comps > 4096) return tr_.error("FIELD array " + name + ": bad component count");
     if (tuples > UINT64_MAX / comps) return tr_.error("FIELD array " + name + ": too many values");
@@ -317,8 +322,14 @@ Status LegacyReader::readFieldData(std::vector<Field>* into) {
         return tr_.error("FIELD array " + name + " has " + std::to_string(tuples) + " tuples, expected " +
                          std::to_string(section_items_));
       into->push_back(std::move(f));
+    } else {
+      dataset_arrays.push_back(f.name);
     }
   }
+  // The dataset's own arrays (TIME, CYCLE, ...) describe no point or cell: a warning names them.
+  if (!into && !dataset_arrays.empty())
+    result_.report.warnings.push_back("line " + std::to_string(field_line) + ": the dataset's FIELD arrays (" +
+                                      joinNames(dataset_arrays) + ") are not kept: they belong to no point or cell");
   return Status::ok();
 }
 

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <set>
 #include <sstream>
 
 #include "convert/cell_split.h"
@@ -181,6 +182,7 @@ class VtuReader {
   bool compressed_ = false;
   bool in_parallel_ = false;  // a piece of a .pvtu, which must not be one itself
   size_t duplicate_tets_ = 0;  // tetrahedra of a piece's ghost cells (copies of other pieces'), dropped
+  std::set<std::string> skipped_arrays_;  // "PointData/name" of the non-numeric arrays warned about
   Compressor compressor_ = Compressor::kNone;
   bool appended_base64_ = false;
   size_t appended_begin_ = 0, appended_end_ = 0;  // bytes after '_' in the file
@@ -691,8 +693,16 @@ Status VtuReader::readPolyhedronTables(const pugi::xml_node* nodes, const std::v
 
 Status VtuReader::readSection(const pugi::xml_node& piece, const char* section, uint64_t items, const std::string& at,
                               std::vector<Field>* fields) {
-  for (pugi::xml_node a : piece.child(section).children("DataArray")) {
+  for (pugi::xml_node a : piece.child(section).children()) {
     const std::string name = a.attribute("Name").as_string();
+    if (std::string(a.name()) != "DataArray") {
+      // VTK writes its string arrays as <Array type="String">: text, not mesh data.
+      if (a.type() == pugi::node_element && skipped_arrays_.insert(std::string(section) + "/" + name).second)
+        result_.report.warnings.push_back(std::string("skipped <") + a.name() + "> '" + name + "' (" +
+                                          a.attribute("type").as_string() + ") of " + section +
+                                          ": only numeric DataArrays are mesh data");
+      continue;
+    }
     Array arr;
     GTN_RETURN_IF_ERROR(readArray(a, items, at + " " + section + " '" + name + "'", &arr));
     Field f(name, arr.components, arr.type, 0);
@@ -1191,6 +1201,13 @@ StatusOr<ImportResult> VtuReader::readParsed(const pugi::xml_node& root, const I
     return unsupported(path_ + ": VTKFile type \"" + type +
                        "\" is not supported (it holds no volume cells: only UnstructuredGrid, StructuredGrid, "
                        "RectilinearGrid and ImageData do, and their parallel forms)");
+  // The dataset's own arrays (TIME, CYCLE, ...) describe no point or cell: a warning names them.
+  std::vector<std::string> dataset_arrays;
+  for (pugi::xml_node a : root.child(type.c_str()).child("FieldData").children())
+    if (a.type() == pugi::node_element) dataset_arrays.push_back(a.attribute("Name").as_string());
+  if (!dataset_arrays.empty())
+    result_.report.warnings.push_back("the dataset's FieldData arrays (" + joinNames(dataset_arrays) +
+                                      ") are not kept: they belong to no point or cell");
   if (structured) return readStructured(root, type, options);
   const pugi::xml_node grid = root.child("UnstructuredGrid");
   if (!grid) return invalidData(path_ + ": no <UnstructuredGrid> element");

@@ -304,6 +304,21 @@ TEST(VtkLegacy, RejectsOtherDatasetsCellTypesAndBadIndices) {
   expectError(dir + "/convex.vtk", head + "CELLS 2 10\n4 0 1 2 3\n4 0 1 2 3\nCELL_TYPES 2\n41 10\n",
               "1 cell of type 41 (VTK_CONVEX_POINT_SET)");
   expectError(dir + "/half.vtk", head + "CELLS 1 5\n4 0 1 2 3\n", "CELLS without a CELL_TYPES section");
+  // The dataset's own FIELD arrays (VTK writes TIME there) are read past with a warning that names them.
+  writeFile(dir + "/time.vtk", "# vtk DataFile Version 3.0\ntime\nASCII\nDATASET UNSTRUCTURED_GRID\nFIELD FieldData 2\n"
+                               "TIME 1 1 double\n1.5\nCYCLE 1 1 int\n7\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\n"
+                               "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n");
+  auto timed = importMesh({dir + "/time.vtk"}, ImportOptions{});
+  ASSERT_TRUE(timed.isOk()) << timed.status().message();
+  EXPECT_EQ(timed->mesh.numTets(), 1u);
+  EXPECT_EQ(timed->report.warnings,
+            std::vector<std::string>{"line 5: the dataset's FIELD arrays ('TIME', 'CYCLE') are not kept: they belong to no point or cell"});
+  // No cells at all (VTK's writer then leaves out CELLS and CELL_TYPES): an empty mesh, as from a .vtu.
+  writeFile(dir + "/none.vtk", "# vtk DataFile Version 5.1\nnone\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 2 float\n0 0 0 1 0 0\n");
+  auto none = importMesh({dir + "/none.vtk"}, ImportOptions{});
+  ASSERT_TRUE(none.isOk()) << none.status().message();
+  EXPECT_EQ(none->mesh.numPoints(), 2u);
+  EXPECT_EQ(none->mesh.numTets(), 0u);
   expectError(dir + "/tri.vtk", head + "CELLS 2 8\n3 0 1 2\n3 0 2 3\nCELL_TYPES 2\n5 5\n",
               "no volume cells, only 2 cells of type 5 (VTK_TRIANGLE)");
   expectError(dir + "/range.vtk", head + "CELLS 1 5\n4 0 1 2 4\nCELL_TYPES 1\n10\n",
@@ -519,11 +534,13 @@ TEST(VtkLegacy, IdsAndStringArraysAsVtkWritesThem) {
   EXPECT_EQ(m.cell_fields[0].data<int32_t>()[0], 271);
   EXPECT_EQ(m.cell_fields[1].name, "GlobalElementId");
   EXPECT_EQ(m.cell_fields[1].type, ScalarType::kInt32);  // VTK's reader and writer: vtkIdType as int
-  ASSERT_EQ(r->report.warnings.size(), 2u);
-  EXPECT_NE(r->report.warnings[0].find("skipped FIELD array Names (string)"), std::string::npos)
-      << r->report.warnings[0];
-  EXPECT_NE(r->report.warnings[1].find("skipped PEDIGREE_IDS NodeNames (string)"), std::string::npos)
+  ASSERT_EQ(r->report.warnings.size(), 3u);
+  EXPECT_EQ(r->report.warnings[0], "line 5: the dataset's FIELD arrays ('QA_Records', 'Info Records') are not kept: "
+                                   "they belong to no point or cell");
+  EXPECT_NE(r->report.warnings[1].find("skipped FIELD array Names (string)"), std::string::npos)
       << r->report.warnings[1];
+  EXPECT_NE(r->report.warnings[2].find("skipped PEDIGREE_IDS NodeNames (string)"), std::string::npos)
+      << r->report.warnings[2];
 
   // More cells than the cell list could hold fails before anything is allocated for them.
   std::string many = text;
@@ -596,9 +613,10 @@ TEST(VtkLegacy, BinaryStringArraysAreSkippedByTheirLengths) {
   EXPECT_EQ(m.point_fields[1].name, "after");
   EXPECT_EQ(m.point_fields[1].data<float>()[0], -1.0f);
   EXPECT_EQ(m.point_fields[1].data<float>()[3], -4.0f);
-  ASSERT_EQ(r->report.warnings.size(), 2u);
-  EXPECT_NE(r->report.warnings[0].find("skipped FIELD array Names (string)"), std::string::npos);
-  EXPECT_NE(r->report.warnings[1].find("skipped PEDIGREE_IDS NodeNames (string)"), std::string::npos);
+  ASSERT_EQ(r->report.warnings.size(), 3u);
+  EXPECT_EQ(r->report.warnings[0].find("line 5: the dataset's FIELD arrays ('Info Records')"), 0u);
+  EXPECT_NE(r->report.warnings[1].find("skipped FIELD array Names (string)"), std::string::npos);
+  EXPECT_NE(r->report.warnings[2].find("skipped PEDIGREE_IDS NodeNames (string)"), std::string::npos);
 
   // A length that runs past the end, and a file cut inside a length header, name the byte offset.
   const size_t names_at = text.find(names);

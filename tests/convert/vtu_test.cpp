@@ -334,6 +334,13 @@ TEST(Vtu, RoundTripsBitForBit) {
   EXPECT_NE(readFile(dir + "/typed.vtk").find("region%20&%20<id> 1 162 short\n"), std::string::npos);
   // Compression pays on real data.
   EXPECT_LT(readFile(dir + "/lv_z.vtu").size(), readFile(dir + "/lv.vtu").size());
+  // Tabs and line breaks in a name are character references: an XML parser turns them into spaces
+  // in an attribute otherwise (VTK's own writer loses them so).
+  TetMesh odd = makeTypedMesh();
+  odd.cell_fields[0].name = "a\tb\nc\rd";
+  ASSERT_TRUE(exportVtu(odd, dir + "/odd.vtu", ExportOptions{}).isOk());
+  EXPECT_NE(readFile(dir + "/odd.vtu").find("Name=\"a&#9;b&#10;c&#13;d\""), std::string::npos);
+  expectSameMesh(load(dir + "/odd.vtu").mesh, odd);
 }
 
 // ---- Real clients: VTK's reader and meshio (Debian python3-vtk9, python3-meshio). ----
@@ -600,6 +607,23 @@ TEST(Vtu, SeveralPiecesAreConcatenated) {
   ASSERT_EQ(g.mesh.point_fields.size(), 1u);
   EXPECT_EQ(g.mesh.point_fields[0].data<int32_t>()[5], 21);
   ASSERT_EQ(g.mesh.cell_fields.size(), 1u);
+  EXPECT_EQ(r.report.warnings, std::vector<std::string>{"2 pieces read; the points they share are kept once per piece (--weld merges them)"});
+
+  // What is not mesh data goes with a warning, once: VTK's string arrays (<Array type="String">, in
+  // every piece) and the dataset's own FieldData.
+  std::string text = twoPieces("0 1 2 3", "10");
+  for (size_t at = text.find("<PointData>"); at != std::string::npos; at = text.find("<PointData>", at + 1))
+    text.insert(at + 11, R"(<Array type="String" Name="label" format="ascii">97 0 98 0 99 0 100 0</Array>)");
+  text.insert(text.find("<Piece"), R"(<FieldData><DataArray type="Float64" Name="TIME" NumberOfTuples="1" format="ascii">1.5</DataArray></FieldData>)");
+  const std::string text_path = tempDir("vtu_text_arrays") + "/text.vtu";
+  writeFile(text_path, text);
+  ImportResult t = load(text_path);
+  EXPECT_EQ(t.mesh.point_fields.size(), 1u);
+  const std::vector<std::string> want = {
+      "the dataset's FieldData arrays ('TIME') are not kept: they belong to no point or cell",
+      "skipped <Array> 'label' (String) of PointData: only numeric DataArrays are mesh data",
+      "2 pieces read; the points they share are kept once per piece (--weld merges them)"};
+  EXPECT_EQ(t.report.warnings, want);
 }
 
 void expectError(const std::string& path, const std::string& part) {
