@@ -56,14 +56,14 @@ bool parseFloat(std::string_view token, float* out) { return parseFloating(token
 void TextReader::skipSpace(bool stop_at_newline) {
   while (pos_ < text_.size()) {
     const char c = text_[pos_];
-    if (c == '\n') {
+    if (lineBreakAt(pos_)) {
       if (stop_at_newline) return;
       ++line_;
       ++pos_;
     } else if (isSpace(c)) {
       ++pos_;
     } else if (comment_ != '\0' && c == comment_) {
-      while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+      while (pos_ < text_.size() && !lineBreakAt(pos_)) ++pos_;
     } else {
       return;
     }
@@ -85,12 +85,12 @@ bool TextReader::next(std::string_view* token) {
 
 bool TextReader::nextOnLine(std::string_view* token) {
   skipSpace(true);
-  if (pos_ >= text_.size() || text_[pos_] == '\n') return false;
+  if (pos_ >= text_.size() || lineBreakAt(pos_)) return false;
   return next(token);
 }
 
 void TextReader::skipLine() {
-  while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+  while (pos_ < text_.size() && !lineBreakAt(pos_)) ++pos_;
   if (pos_ < text_.size()) {
     ++pos_;
     ++line_;
@@ -104,7 +104,7 @@ bool TextReader::atEnd() {
 
 void TextReader::seek(size_t offset) {
   for (size_t i = pos_; i < offset && i < text_.size(); ++i)
-    if (text_[i] == '\n') ++line_;
+    if (lineBreakAt(i)) ++line_;
   pos_ = offset;
 }
 

@@ -14,9 +14,12 @@ namespace gtn {
 
 class TextReader {
  public:
-  // `comment` = '\0' for formats without comments.
+  // `comment` = '\0' for formats without comments. A UTF-8 byte order mark at the start is skipped
+  // (editors on Windows write one). Lines end with LF, CR LF or a lone CR (classic Mac OS).
   TextReader(std::string path, std::string_view text, char comment = '#')
-      : path_(std::move(path)), text_(text), comment_(comment) {}
+      : path_(std::move(path)), text_(text), comment_(comment) {
+    if (text_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;
+  }
 
   // Next token, or false at the end of the text.
   bool next(std::string_view* token);
@@ -44,6 +47,10 @@ class TextReader {
 
  private:
   void skipSpace(bool stop_at_newline);
+  // Whether a line ends at text_[i]: LF, or CR not followed by LF (CR LF ends at its LF).
+  bool lineBreakAt(size_t i) const {
+    return text_[i] == '\n' || (text_[i] == '\r' && (i + 1 == text_.size() || text_[i + 1] != '\n'));
+  }
 
   std::string path_;
   std::string_view text_;

@@ -88,6 +88,29 @@ TEST(TextReader, TokensNumbersCommentsAndLines) {
   EXPECT_NE(v.status().message().find("'foo'"), std::string::npos);
 }
 
+// A UTF-8 byte order mark is skipped; lines end with LF, CR LF or a lone CR (classic Mac OS), and
+// a comment ends with its line whichever it is.
+TEST(TextReader, ByteOrderMarkAndEveryLineEnding) {
+  for (const char* eol : {"\n", "\r\n", "\r"}) {
+    const std::string e = eol;
+    const std::string text = "\xEF\xBB\xBF" "2 1 # count" + e + e + "7 8" + e + "9";  // outlives the reader
+    TextReader r("m.node", text);
+    std::string_view tok;
+    ASSERT_TRUE(r.next(&tok));
+    EXPECT_EQ(tok, "2");
+    ASSERT_TRUE(r.nextOnLine(&tok));
+    EXPECT_EQ(tok, "1");
+    EXPECT_FALSE(r.nextOnLine(&tok)) << "the comment ends the line";
+    ASSERT_TRUE(r.next(&tok));
+    EXPECT_EQ(tok, "7");
+    EXPECT_EQ(r.line(), 3u) << "line ending " << (e == "\r" ? "CR" : e == "\n" ? "LF" : "CR LF");
+    r.skipLine();
+    ASSERT_TRUE(r.next(&tok));
+    EXPECT_EQ(tok, "9");
+    EXPECT_EQ(r.line(), 4u);
+  }
+}
+
 TEST(TextReader, ShortestRoundTripTextReadsBackBitExact) {
   const double values[] = {0.1, 1.0 / 3.0, 6.02214076e23, -4.9e-324, 123456789.123456789};
   for (double x : values) {
