@@ -36,7 +36,11 @@ void printImportReport(const std::string& input, const ImportReport& r) {
 }
 
 void warnAbout(const std::string& input, const std::string& warning) {
-  warn(warning.rfind(input + ": ", 0) == 0 ? warning : input + ": " + warning);
+  // A warning that already names the input, or one of its files ("m.1" for "m.1.ele: ..."), as is.
+  const bool named = warning.rfind(input, 0) == 0 && warning.size() > input.size() &&
+                     (warning.compare(input.size(), 2, ": ") == 0 ||
+                      (warning[input.size()] == '.' && warning.find(": ", input.size()) < warning.find(' ', input.size())));
+  warn(named ? warning : input + ": " + warning);
 }
 
 const std::string& commandLine() { return g_command_line; }
