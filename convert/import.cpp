@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "format/file_io.h"
+#include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/utf8.h"
 
@@ -126,6 +127,24 @@ void weldPoints(TetMesh& mesh, ImportReport& report) {
 
 namespace {
 // importMesh without the final check.
+// A .gtn file as an input: its lossless level 0, decoded whole (gtn convert x.gtn -o y.vtu is gtn
+// export's level 0; -o y.gtn re-encodes it, with other levels or none). Mip levels and the merge tree
+// are not read: a .gtn output gets its own from level 0.
+StatusOr<ImportResult> importGtn(const std::string& path) {
+  GTN_ASSIGN_OR_RETURN(std::unique_ptr<GtnReader> reader, GtnReader::open(path));
+  if (reader->levels() == 0) return invalidData(path + ": the file holds no level");
+  TetMeshBuilder builder;
+  GTN_RETURN_IF_ERROR(reader->decodeLevel(0, builder));
+  ImportResult result;
+  result.mesh = std::move(builder.mesh());
+  if (reader->levels() > 1)
+    result.report.warnings.push_back("read level 0, the lossless mesh, of its " + std::to_string(reader->levels()) +
+                                     " levels (the mip levels and the merge tree are not read)");
+  finishImport(result);
+  GTN_RETURN_IF_ERROR(result.mesh.checkConsistency(path));
+  return result;
+}
+
 StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, const ImportOptions& options) {
   if (inputs.empty()) return usageError("no input given");
   if (options.split != 5 && options.split != 6)
@@ -179,8 +198,7 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
     case InputFormat::kMedit: result = importMedit(path, opts); break;
     case InputFormat::kMeshb: result = importMeshb(path, opts); break;
     case InputFormat::kOff: result = importOff(path, opts); break;
-    case InputFormat::kGtn:
-      return usageError(path + ": is a .gtn file; use 'gtn export' or 'gtn info' to read it");
+    case InputFormat::kGtn: result = importGtn(path); break;
     default:
       return Status(StatusCode::kNotOurFile,
                     path + ": cannot tell its format from the extension or content (known: PLOT3D .xyz/.q/.bin/.p3d, "

@@ -139,6 +139,23 @@ TEST_F(GtnCli, NoVerifyWritesTheSameLevels) {
   EXPECT_NE(jb.at("provenance").dump().find("--no-verify"), std::string::npos);
 }
 
+// A .gtn file is an input like any mesh file: its level 0. To .vtu it is what export writes; to
+// .gtn it is re-encoded (here without levels) and still equals its source.
+TEST_F(GtnCli, GtnFileAsConvertInput) {
+  const std::string gtn = dir_ + "/spx.gtn", again = dir_ + "/again.gtn";
+  ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + gtn + " --levels 2").exit_code, 0);
+  const test::RunResult r = test::runGtn("convert " + gtn + " -o " + dir_ + "/c.vtu");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("read level 0, the lossless mesh, of its 3 levels"), std::string::npos) << r.err;
+  ASSERT_EQ(test::runGtn("export " + gtn + " -o " + dir_ + "/e.vtu").exit_code, 0);
+  EXPECT_EQ(test::readFile(dir_ + "/c.vtu"), test::readFile(dir_ + "/e.vtu"));
+  ASSERT_EQ(test::runGtn("convert " + gtn + " -o " + again + " --levels 0 --no-merge-tree").exit_code, 0);
+  const test::RunResult v = test::runGtn("validate " + again + " --against " + spx_);
+  EXPECT_EQ(v.exit_code, 0) << v.out << v.err;
+  EXPECT_EQ(meshSummary(infoJson(again)), meshSummary(infoJson(spx_)));
+  EXPECT_EQ(test::runGtn("convert " + gtn + " -o " + gtn).exit_code, 2);  // never over its input
+}
+
 TEST_F(GtnCli, ExportRoundTripsToVtuVtkAndTetgen) {
   const std::string gtn = dir_ + "/spx.gtn";
   ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + gtn).exit_code, 0);
