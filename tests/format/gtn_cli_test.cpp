@@ -260,9 +260,10 @@ TEST_F(GtnCli, ExitCodes) {
   r = test::runShell("cat " + spx_ + " | " + GTN_BINARY + " info -");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("not a .gtn file"), std::string::npos) << r.err;
-  // A .gtn input to convert is a usage error and writes nothing.
-  r = test::runGtn("convert " + gtn + " -o " + dir_ + "/again.vtu");
-  EXPECT_EQ(r.exit_code, 2) << r.err;
+  // A damaged .gtn input to convert fails with the reader's reason and writes nothing.
+  r = test::runGtn("convert " + dir_ + "/bad.gtn -o " + dir_ + "/again.vtu");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find(dir_ + "/bad.gtn"), std::string::npos) << r.err;
   EXPECT_FALSE(test::fileExists(dir_ + "/again.vtu"));
 }
 
