@@ -1,6 +1,7 @@
 // gtn render INPUT -o IMAGE.png [options]: the streaming renderer (integrated decompression,
 // simplification and ray casting), or the generic in-memory baseline.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -57,6 +58,15 @@ Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   if (a.projection == "ortho") o->camera.projection = Projection::kOrthographic;
   else if (a.projection == "persp") o->camera.projection = Projection::kPerspective;
   else return usageError("--projection must be ortho or persp");
+  // Every number must be finite: a NaN or infinite camera angle left the rays undefined, and the
+  // boundary's crossings were never sorted out (the render hung).
+  const std::pair<const char*, double> numbers[] = {
+      {"--azimuth", a.azimuth}, {"--elevation", a.elevation}, {"--zoom", a.zoom}, {"--step", a.step},
+      {"--opacity-unit-distance", a.unit_distance}, {"--ratio", a.ratio}, {"--budget-ms", a.budget_ms}};
+  for (const auto& [name, value] : numbers)
+    if (!std::isfinite(value)) return usageError(std::string(name) + " must be a finite number");
+  for (double v : a.range)
+    if (!std::isfinite(v)) return usageError("--range must be two finite numbers");
   o->camera.azimuth = a.azimuth;
   o->camera.elevation = a.elevation;
   if (!(a.zoom > 0)) return usageError("--zoom must be positive");

@@ -608,14 +608,16 @@ uint32_t pairCrossings(const Hit* first, const Hit* last, uint32_t pixel, double
     const Hit* j = i;
     const Hit* enter = nullptr;
     const Hit* leave = nullptr;
-    while (j < last && j->t - i->t <= eps) {
+    // The crossings within eps of i's, i itself always (a NaN depth, from a degenerate camera, is
+    // within nothing: testing it against itself never moved on).
+    do {
       if (j->leaving) {
         if (!leave) leave = j;
       } else if (!enter) {
         enter = j;
       }
       ++j;
-    }
+    } while (j < last && j->t - i->t <= eps);
     const int delta = (enter ? 1 : 0) - (leave ? 1 : 0);
     if (delta > 0) {
       if (depth == 0) {

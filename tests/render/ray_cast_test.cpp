@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <cstring>
 #include <random>
 
@@ -44,6 +46,23 @@ Camera cubeCamera(Projection projection, int w, int h) {
   o.height = h;
   o.projection = projection;
   return Camera(lo, hi, o);
+}
+
+// A camera whose angle is not a number (the CLI refuses one; a library caller might not) gives rays
+// of NaN depth: casting ends, with segments or none, instead of looping on crossings that compare
+// with nothing.
+TEST(CastBoundary, NonFiniteCameraEnds) {
+  const BoundarySurface surface = octahedron();
+  for (Projection projection : {Projection::kOrthographic, Projection::kPerspective}) {
+    const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    CameraOptions o;
+    o.width = 8;
+    o.height = 8;
+    o.projection = projection;
+    o.azimuth = std::numeric_limits<double>::quiet_NaN();
+    const RaySegments cast = castBoundary(Camera(lo, hi, o), surface);
+    EXPECT_EQ(cast.pixel_start.size(), 65u);
+  }
 }
 
 TEST(CastBoundary, SinkReceivesTheArraysSegmentsInOrder) {

@@ -173,6 +173,13 @@ TEST(RenderCommand, RejectsBadArguments) {
   EXPECT_EQ(runGtn("render " + spx + " -o " + dir + "/x.png --level 0 --ratio 0.5").exit_code, 2);
   EXPECT_EQ(runGtn("render " + spx + " -o " + dir + "/x.png --ratio 0.5").exit_code, 2);  // no merge tree
   EXPECT_EQ(runGtn("render " + dir + "/missing.vtk -o " + dir + "/x.png").exit_code, 3);
+  // Numbers that are not finite (a NaN azimuth made the render hang).
+  for (const char* option : {"--azimuth nan", "--elevation inf", "--zoom inf", "--step nan", "--ratio nan",
+                             "--budget-ms inf", "--range 0 inf", "--opacity-unit-distance -inf"}) {
+    const test::RunResult r = runGtn("render " + spx + " -o " + dir + "/x.png " + option);
+    EXPECT_EQ(r.exit_code, 2) << option << ": " << r.err;
+    EXPECT_NE(r.err.find("finite"), std::string::npos) << option << ": " << r.err;
+  }
   EXPECT_FALSE(test::fileExists(dir + "/x.png"));
 }
 
