@@ -5,6 +5,7 @@
 #include "cli/commands.h"
 #include "convert/export.h"
 #include "convert/import.h"
+#include "format/file_io.h"
 #include "format/gtn_file.h"
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
@@ -47,7 +48,7 @@ int runConvert(const ConvertArgs& a) {
   if (out_format == OutputFormat::kUnknown)
     return reportError(usageError(a.output + ": unknown output format (use .gtn, .vtu, .vtk, .node or .ele)"));
   for (const std::string& in : a.inputs) {
-    if (in == a.output) return reportError(usageError(a.output + ": the output would overwrite an input"));
+    if (in == a.output || sameFile(in, a.output)) return reportError(usageError(a.output + ": the output would overwrite an input"));
   }
   ImportOptions options;
   options.split = a.split;

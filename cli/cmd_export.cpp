@@ -7,6 +7,7 @@
 #include "cli/commands.h"
 #include "convert/import.h"
 #include "convert/export.h"
+#include "format/file_io.h"
 #include "format/gtn_reader.h"
 #include "simplify/levels.h"
 
@@ -26,7 +27,7 @@ int runExport(const ExportArgs& a) {
   const OutputFormat out_format = detectOutputFormat(a.output);
   if (out_format != OutputFormat::kVtu && out_format != OutputFormat::kVtkLegacy && out_format != OutputFormat::kTetgen)
     return reportError(usageError(a.output + ": unknown output format for export (use .vtu, .vtk, .node or .ele)"));
-  if (a.input == a.output) return reportError(usageError(a.output + ": the output would overwrite the input"));
+  if (a.input == a.output || sameFile(a.input, a.output)) return reportError(usageError(a.output + ": the output would overwrite the input"));
   GtnOpenOptions oo;
   oo.verify = false;  // random access through the directory; every chunk read is still checksummed
   auto reader = GtnReader::open(a.input, oo);

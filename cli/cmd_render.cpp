@@ -176,6 +176,10 @@ int runRender(const RenderArgs& a) {
   if (Status st = buildOptions(a, &options); !st.isOk()) return reportError(st);
   const int chosen = (a.level >= 0) + (a.ratio >= 0) + (a.merges >= 0) + (a.budget_ms >= 0);
   if (chosen > 1) return reportError(usageError("use at most one of --level, --ratio, --merges and --budget-ms"));
+  for (const std::string& in : a.inputs)
+    for (const std::string& out : {a.output, a.dump_view})
+      if (!out.empty() && (in == out || sameFile(in, out)))
+        return reportError(usageError(out + ": the output would overwrite an input"));
   auto input = RenderInput::open(a.inputs);
   if (!input.isOk()) return reportError(input.status());
   const bool generic = a.pipeline == "generic";

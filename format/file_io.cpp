@@ -79,18 +79,62 @@ StatusOr<std::string> readWholeFile(const std::string& path, uint64_t max_bytes)
   return data;
 }
 
+bool sameFile(const std::string& a, const std::string& b) {
+  struct stat sa, sb;
+  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+namespace {
+// Where an output named `path` goes: the file a symbolic link names (followed link by link, also
+// when it does not exist yet), and what is there now.
+enum class Target { kNew, kRegular, kInPlace, kRefused };
+Target outputTarget(const std::string& path, std::string* target, std::string* why) {
+  *target = path;
+  for (int hops = 0; hops < 40; ++hops) {
+    struct stat sb;
+    if (::lstat(target->c_str(), &sb) != 0) return Target::kNew;
+    if (S_ISLNK(sb.st_mode)) {
+      char buf[4096];
+      const ssize_t n = ::readlink(target->c_str(), buf, sizeof buf - 1);
+      if (n <= 0) break;
+      const std::string link(buf, static_cast<size_t>(n));
+      const size_t slash = target->find_last_of('/');
+      *target = link[0] == '/' || slash == std::string::npos ? link : target->substr(0, slash + 1) + link;
+      continue;
+    }
+    if (S_ISREG(sb.st_mode)) return Target::kRegular;
+    if (S_ISCHR(sb.st_mode) || S_ISFIFO(sb.st_mode)) return Target::kInPlace;
+    *why = S_ISDIR(sb.st_mode) ? "is a directory" : S_ISBLK(sb.st_mode) ? "is a block device, not written" : "is not a file";
+    return Target::kRefused;
+  }
+  *why = "is a chain of symbolic links that does not end";
+  return Target::kRefused;
+}
+}  // namespace
+
 Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write, bool sync) {
   if (path == "-") {
     GTN_RETURN_IF_ERROR(write(stdout));
     if (std::fflush(stdout) != 0) return ioError("standard output: write failed: " + errnoText());
     return Status::ok();
   }
+  std::string target, why;
+  const Target kind = outputTarget(path, &target, &why);
+  if (kind == Target::kRefused) return ioError(path + ": " + why);
+  if (kind == Target::kInPlace) {
+    std::FILE* f = std::fopen(target.c_str(), "wb");
+    if (!f) return ioError(path + ": cannot open for writing: " + errnoText());
+    Status st = write(f);
+    if (st.isOk() && (std::fflush(f) != 0 || std::ferror(f))) st = ioError(path + ": write failed: " + errnoText());
+    if (std::fclose(f) != 0 && st.isOk()) st = ioError(path + ": write failed: " + errnoText());
+    return st;
+  }
   std::string tmp;
-  GTN_RETURN_IF_ERROR(writeTemporary(path, write, &tmp, sync));
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = errnoText();
+  GTN_RETURN_IF_ERROR(writeTemporary(target, write, &tmp, sync));
+  if (std::rename(tmp.c_str(), target.c_str()) != 0) {
+    const std::string why_not = errnoText();
     unlink(tmp.c_str());
-    return ioError(path + ": cannot rename the finished temporary file into place: " + why);
+    return ioError(path + ": cannot rename the finished temporary file into place: " + why_not);
   }
   return Status::ok();
 }
@@ -111,9 +155,13 @@ AtomicFileGroup::~AtomicFileGroup() {
 }
 
 Status AtomicFileGroup::add(const std::string& path, const std::function<Status(std::FILE*)>& write) {
+  std::string target, why;
+  const Target kind = outputTarget(path, &target, &why);
+  if (kind == Target::kInPlace) why = "is not a regular file (a group of files is written whole or not at all)";
+  if (kind == Target::kRefused || kind == Target::kInPlace) return ioError(path + ": " + why);
   std::string tmp;
-  GTN_RETURN_IF_ERROR(writeTemporary(path, write, &tmp));
-  files_.emplace_back(tmp, path);
+  GTN_RETURN_IF_ERROR(writeTemporary(target, write, &tmp));
+  files_.emplace_back(tmp, target);
   return Status::ok();
 }
 

@@ -18,10 +18,16 @@ StatusOr<std::string> readWholeFile(const std::string& path, uint64_t max_bytes 
 // True when `path` names an existing regular file.
 bool isRegularFile(const std::string& path);
 
+// True when both paths exist and name the same file (through links too).
+bool sameFile(const std::string& a, const std::string& b);
+
 // Writes `path` atomically: `write` receives a FILE* to a temporary file beside `path`; when it
 // returns ok, the file is flushed, synced (unless `sync` is false: a cache, which a crash may lose
 // but never leaves half written) and renamed to `path`; otherwise the temporary is removed.
-// "-" writes to standard output directly.
+// "-" writes to standard output directly. A symbolic link is followed (the file it names is
+// replaced, the link stays). An existing character device or FIFO (/dev/null, /dev/stdout, a pipe)
+// is written in place, as it cannot be replaced without destroying it; a directory, block device or
+// socket is refused.
 Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write,
                            bool sync = true);
 
@@ -30,6 +36,8 @@ Status writeBytesAtomically(const std::string& path, const void* data, size_t si
 
 // Several outputs that must all appear or none (TetGen's .node/.ele/.face): each is written to a
 // temporary; commit() renames all; the destructor removes the temporaries of an uncommitted group.
+// Links are followed as by writeFileAtomically; a path that names anything but a regular file (or
+// nothing) is refused.
 class AtomicFileGroup {
  public:
   ~AtomicFileGroup();

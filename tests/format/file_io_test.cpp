@@ -1,6 +1,11 @@
 // Reading inputs and atomic outputs: a failed write leaves nothing behind and never touches the target.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <unistd.h>
+
 #include <cstring>
 #include <filesystem>
 
@@ -59,6 +64,50 @@ TEST(FileIo, GroupCommitsAllOrNothing) {
   ASSERT_TRUE(g.add(dir + "/b.node", [](std::FILE* f) { std::fputs("b", f); return Status::ok(); }).isOk());
   ASSERT_TRUE(g.commit().isOk());
   EXPECT_EQ(test::readFile(dir + "/b.node"), "b");
+}
+
+// Outputs that are not plain files: a symbolic link is followed (the link stays), a character device
+// or FIFO is written in place (renaming over it destroyed it: `-o /dev/null` as root replaced the
+// system's /dev/null), a directory is refused.
+TEST(FileIo, LinksDevicesAndFifosAreNotReplaced) {
+  const std::string dir = test::tempDir("fileio-special");
+  test::writeFile(dir + "/real.txt", "old");
+  ASSERT_EQ(symlink("real.txt", (dir + "/link.txt").c_str()), 0);
+  ASSERT_TRUE(writeBytesAtomically(dir + "/link.txt", "new", 3).isOk());
+  struct stat sb;
+  ASSERT_EQ(lstat((dir + "/link.txt").c_str(), &sb), 0);
+  EXPECT_TRUE(S_ISLNK(sb.st_mode));
+  EXPECT_EQ(test::readFile(dir + "/real.txt"), "new");
+  ASSERT_EQ(symlink("later.txt", (dir + "/dangling.txt").c_str()), 0);
+  ASSERT_TRUE(writeBytesAtomically(dir + "/dangling.txt", "made", 4).isOk());
+  EXPECT_EQ(test::readFile(dir + "/later.txt"), "made");
+  EXPECT_TRUE(sameFile(dir + "/dangling.txt", dir + "/later.txt"));
+  EXPECT_FALSE(sameFile(dir + "/real.txt", dir + "/later.txt"));
+
+  // A FIFO with a reader: the bytes go through it, and it stays a FIFO.
+  const std::string fifo = dir + "/pipe";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const int reader = open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(reader, 0);
+  ASSERT_TRUE(writeBytesAtomically(fifo, "through", 7).isOk());
+  char got[16] = {};
+  EXPECT_EQ(read(reader, got, sizeof got), 7);
+  EXPECT_STREQ(got, "through");
+  close(reader);
+  ASSERT_EQ(stat(fifo.c_str(), &sb), 0);
+  EXPECT_TRUE(S_ISFIFO(sb.st_mode));
+  EXPECT_FALSE(AtomicFileGroup().add(fifo, [](std::FILE*) { return Status::ok(); }).isOk());
+
+  // A private null device (root only): written in place, still a device.
+  const std::string null_dev = dir + "/null";
+  if (mknod(null_dev.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0) {
+    ASSERT_TRUE(writeBytesAtomically(null_dev, "gone", 4).isOk());
+    ASSERT_EQ(stat(null_dev.c_str(), &sb), 0);
+    EXPECT_TRUE(S_ISCHR(sb.st_mode));
+  }
+  const Status to_dir = writeBytesAtomically(dir, "x", 1);
+  ASSERT_FALSE(to_dir.isOk());
+  EXPECT_NE(to_dir.message().find(dir + ": is a directory"), std::string::npos) << to_dir.message();
 }
 
 TEST(TextReader, TokensNumbersCommentsAndLines) {

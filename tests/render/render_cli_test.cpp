@@ -181,6 +181,12 @@ TEST(RenderCommand, RejectsBadArguments) {
     EXPECT_NE(r.err.find("finite"), std::string::npos) << option << ": " << r.err;
   }
   EXPECT_FALSE(test::fileExists(dir + "/x.png"));
+  // The image or the view never replaces an input (it did: -o input.gtn).
+  const std::string copy = dir + "/copy.vtk";
+  test::writeFile(copy, test::readFile(spx));
+  EXPECT_EQ(runGtn("render " + copy + " -o " + copy).exit_code, 2);
+  EXPECT_EQ(runGtn("render " + copy + " -o " + dir + "/y.png --dump-view " + copy).exit_code, 2);
+  EXPECT_EQ(test::readFile(copy), test::readFile(spx));
 }
 
 // spx as a .gtn file with mip levels and merge trees, made with the library (as `gtn convert` does).
