@@ -93,7 +93,7 @@ Command addConvertCommand(CLI::App& app) {
   sub->add_option("--level-storage", args->level_storage,
                   ".gtn: automatic levels stop before all levels together would take more than this multiple "
                   "of level 0's bytes (default 2, the paper's bound; 0 = no bound)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finiteAtLeastZero());
   sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
   sub->add_flag("--no-verify", args->no_verify,
                 ".gtn: do not decode each level back and compare it with its mesh before the file is written (faster; the check guards against encoder bugs)");
@@ -101,9 +101,9 @@ Command addConvertCommand(CLI::App& app) {
                   ".gtn: point field whose first component is the density of the simplification error "
                   "(default: the first point field; 'none' = volume only)");
   sub->add_option("--w-density", args->ranking.w_density, ".gtn: weight of the density (mass) error")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finiteAtLeastZero());
   sub->add_option("--w-geometry", args->ranking.w_geometry, ".gtn: weight of the boundary geometry error")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finiteAtLeastZero());
   return {sub, [args] { return runConvert(*args); }};
 }
 

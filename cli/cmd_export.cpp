@@ -71,7 +71,7 @@ Command addExportCommand(CLI::App& app) {
                                        "Simplification ratio: vertices merged away / vertices of level 0 (0 to 1)")
                            ->check(CLI::Range(0.0, 1.0));
   CLI::Option* merges = sub->add_option("--merges", args->merges, "Number of merges of the merge tree to apply")
-                            ->check(CLI::NonNegativeNumber);
+                            ->check(finiteAtLeastZero());
   level->excludes(ratio)->excludes(merges);
   ratio->excludes(merges);
   sub->add_flag("--compress", args->compress, ".vtu: zlib-compress the data arrays");

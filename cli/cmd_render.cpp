@@ -7,6 +7,7 @@
 
 #if defined(__GLIBC__)
 #include <malloc.h>
+#include <unistd.h>
 #endif
 
 #include <nlohmann/json.hpp>
@@ -82,7 +83,12 @@ Status buildOptions(const RenderArgs& a, RenderOptions* o) {
     GTN_ASSIGN_OR_RETURN(std::string text, readWholeFile(a.transfer, 1 << 20));
     GTN_ASSIGN_OR_RETURN(o->transfer, parseTransferFunction(text, a.transfer));
   } else {
-    GTN_ASSIGN_OR_RETURN(o->transfer, transferPreset(a.transfer));
+    auto preset = transferPreset(a.transfer);
+    // A name with a dot or a slash was meant as a file.
+    if (!preset.isOk() && a.transfer.find_first_of("./") != std::string::npos)
+      return ioError(a.transfer + ": cannot open the transfer function file (" +
+                     (access(a.transfer.c_str(), F_OK) == 0 ? "not a regular file" : "no such file") + ")");
+    GTN_ASSIGN_OR_RETURN(o->transfer, std::move(preset));
   }
   if (!a.range.empty()) {
     if (a.range.size() != 2 || !(a.range[0] < a.range[1])) return usageError("--range needs LO HI with LO < HI");
@@ -126,7 +132,7 @@ nlohmann::json describeSetup(const RenderSetup& s) {
 
 // One render of the resolved level; fills `report` with what happened (and `report["view"]` with the
 // resolved camera and transfer function).
-StatusOr<Image> renderOnce(RenderInput& input, const ResolvedLevel& level, const RenderOptions& options,
+StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const RenderOptions& options,
                            bool generic, nlohmann::json& report) {
   if (generic) {
     TetMeshBuilder builder;
@@ -205,7 +211,25 @@ int runRender(const RenderArgs& a) {
   }
   auto level = (*input)->resolve(choice);
   if (!level.isOk()) return reportError(level.status());
+  // The field asked for, checked against the file before anything is decoded.
+  if (auto field = ScalarReader::create((*input)->levelHeader(level->level).point_fields, options.field); !field.isOk())
+    return reportError(Status(field.status().code(), a.inputs[0] + ": " + field.status().message()));
   if (Status st = (*input)->fixView(level.value(), &options); !st.isOk()) return reportError(st);
+  // A step so small that the rays would take hours (1e-9 ran for minutes): at most kMaxSteps samples
+  // across the box (the default takes 400).
+  constexpr double kMaxSteps = 100000;
+  if (options.step > 0 && options.has_scene_box) {
+    double d2 = 0;
+    for (int i = 0; i < 3; ++i) d2 += (options.scene_max[i] - options.scene_min[i]) * (options.scene_max[i] - options.scene_min[i]);
+    if (std::sqrt(d2) / options.step > kMaxSteps) {
+      char why[200];
+      std::snprintf(why, sizeof why,
+                    "--step %g takes more than 100000 samples across the bounding box (diagonal %g); the default "
+                    "is the diagonal / 400",
+                    options.step, std::sqrt(d2));
+      return reportError(usageError(why));
+    }
+  }
   auto image = renderOnce(**input, level.value(), options, generic, report);
   if (!image.isOk()) return reportError(image.status());
   if (Status st = writePng(a.output, image.value()); !st.isOk()) return reportError(st);
@@ -259,10 +283,13 @@ Command addRenderCommand(CLI::App& app) {
   sub->add_option("--step", a->step, "volume sampling step (default: diagonal / 400)");
   sub->add_option("--pipeline", a->pipeline, "integrated (streaming, default) or generic (whole mesh in memory)")
       ->check(CLI::IsMember({"integrated", "generic"}));
-  sub->add_option("--level", a->level, "render stored level I as is");
-  sub->add_option("--ratio", a->ratio, "simplification ratio in [0, 1]: merged vertices / vertices");
-  sub->add_option("--merges", a->merges, "number of merges of the merge tree to apply");
-  sub->add_option("--budget-ms", a->budget_ms, "choose level and merges to render within T milliseconds");
+  // Checked here: a negative value meant "not given" below, and was ignored silently.
+  sub->add_option("--level", a->level, "render stored level I as is")->check(finiteAtLeastZero());
+  sub->add_option("--ratio", a->ratio, "simplification ratio in [0, 1]: merged vertices / vertices")
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--merges", a->merges, "number of merges of the merge tree to apply")->check(finiteAtLeastZero());
+  sub->add_option("--budget-ms", a->budget_ms, "choose level and merges to render within T milliseconds")
+      ->check(finiteAtLeastZero(true));
   sub->add_option("--dump-view", a->dump_view,
                   "write the camera and transfer function used (vtkCamera / vtkVolumeProperty terms) as JSON");
   sub->add_flag("-v,--verbose", a->verbose, "say what was chosen and how long it took");

@@ -4,6 +4,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <string>
 
@@ -24,6 +26,20 @@ Command addExportCommand(CLI::App& app);
 Command addValidateCommand(CLI::App& app);
 Command addRenderCommand(CLI::App& app);
 Command addCompareCommand(CLI::App& app);
+
+// An option's number: finite and at least 0 (`positive`: above 0), with a short message otherwise
+// (CLI11's NonNegativeNumber prints the largest double as its bound).
+inline CLI::Validator finiteAtLeastZero(bool positive = false) {
+  return CLI::Validator(
+      [positive](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || v < 0 || (positive && v == 0))
+          return "'" + text + "' is not a finite number " + (positive ? "above 0" : "of 0 or more");
+        return "";
+      },
+      positive ? "NUMBER > 0" : "NUMBER >= 0");
+}
 
 // Prints "gtn: error: <message>" on standard error and returns the exit code for the status.
 int reportError(const Status& status);

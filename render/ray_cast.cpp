@@ -61,7 +61,10 @@ double loadScalar(const uint8_t* p, ScalarType type) {
 StatusOr<ScalarReader> ScalarReader::create(const std::vector<FieldDesc>& fields, const FieldSelector& selector) {
   ScalarReader r;
   if (fields.empty()) {
-    // A mesh without point fields renders its geometry: a constant scalar.
+    // A mesh without point fields renders its geometry: a constant scalar. A field asked for by
+    // name is not there (it was ignored).
+    if (!selector.name.empty())
+      return usageError("no point field named '" + selector.name + "' (the mesh has no point fields)");
     r.components_ = 0;
     r.description_ = "(no point field: constant 0)";
     return r;

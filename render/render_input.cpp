@@ -69,6 +69,7 @@ StatusOr<ResolvedLevel> RenderInput::resolve(const LevelChoice& choice) const {
     target = static_cast<int64_t>(std::llround(choice.ratio * static_cast<double>(levelZeroPoints())));
   }
   fill(0);
+  r.exact_merges = choice.ratio < 0;
   if (target <= 0) return r;
   std::vector<uint64_t> stored;
   for (size_t i = 0; i < levels(); ++i) stored.push_back(levelHeader(i).merges);
@@ -81,7 +82,7 @@ StatusOr<ResolvedLevel> RenderInput::resolve(const LevelChoice& choice) const {
   return r;
 }
 
-Status RenderInput::stream(const ResolvedLevel& level, MeshSink& sink) {
+Status RenderInput::stream(ResolvedLevel& level, MeshSink& sink) {
   if (!reader_) {
     return decodeLevel(encoded_->header, payloadOf(*encoded_), sink, nullptr, path_);
   }
@@ -91,6 +92,13 @@ Status RenderInput::stream(const ResolvedLevel& level, MeshSink& sink) {
   GTN_ASSIGN_OR_RETURN(MergeTree tree,
                        decodeMergeTree(*payload, level.points, path_ + ": level " + std::to_string(level.level),
                                        level.extra_merges));
+  if (tree.merges < level.extra_merges) {
+    if (level.exact_merges)
+      return usageError(path_ + ", level " + std::to_string(level.level) + ": " +
+                        std::to_string(level.total_merges()) + " merges requested, the merge tree has " +
+                        std::to_string(level.stored_merges + tree.merges));
+    level.extra_merges = tree.merges;
+  }
   StreamSimplifier simplifier(tree, level.extra_merges, sink);
   return reader_->decodeLevel(level.level, simplifier);
 }

@@ -29,6 +29,9 @@ struct ResolvedLevel {
   uint64_t stored_merges = 0;  // merges already applied in that level
   uint64_t extra_merges = 0;   // merges applied on the fly
   uint64_t points = 0, tets = 0;  // of the stored level (what is decoded)
+  // Asked for by number (--merges): more than the merge tree holds is an error. Merges from a ratio
+  // stop where the tree ends (stream lowers extra_merges to what it applied).
+  bool exact_merges = false;
   uint64_t total_merges() const { return stored_merges + extra_merges; }
 };
 
@@ -49,7 +52,7 @@ class RenderInput {
   // an input without a merge tree.
   StatusOr<ResolvedLevel> resolve(const LevelChoice& choice) const;
   // Decodes the chosen level into `sink`, through the on-the-fly simplifier when extra merges apply.
-  Status stream(const ResolvedLevel& level, MeshSink& sink);
+  Status stream(ResolvedLevel& level, MeshSink& sink);
 
   // Fixes what must not change between levels of one file: the camera frames level 0's bounding box,
   // and, unless the caller gave a range, the transfer function spans the selected scalar over level

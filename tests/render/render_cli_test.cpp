@@ -181,6 +181,22 @@ TEST(RenderCommand, RejectsBadArguments) {
     EXPECT_NE(r.err.find("finite"), std::string::npos) << option << ": " << r.err;
   }
   EXPECT_FALSE(test::fileExists(dir + "/x.png"));
+  // Values that were ignored or ran away: negative selections (-1 meant "not given"), a step of
+  // a billion samples, a transfer file that is not there (reported as an unknown preset), a field on
+  // a mesh without point fields.
+  for (const char* option : {"--ratio -0.5", "--merges -5", "--level -2", "--budget-ms -50", "--budget-ms 0",
+                             "--step 1e-9"})
+    EXPECT_EQ(runGtn("render " + spx + " -o " + dir + "/x.png " + option).exit_code, 2) << option;
+  const test::RunResult tf = runGtn("render " + spx + " -o " + dir + "/x.png --transfer " + dir + "/none.tf");
+  EXPECT_EQ(tf.exit_code, 3) << tf.err;
+  EXPECT_NE(tf.err.find(dir + "/none.tf: cannot open the transfer function file (no such file)"), std::string::npos) << tf.err;
+  const std::string spheres = test::dataPath("tetgen/cornell_spheres.1");
+  const test::RunResult nofield = runGtn("render " + spheres + " -o " + dir + "/x.png --field face_marker");
+  EXPECT_EQ(nofield.exit_code, 2) << nofield.err;
+  EXPECT_NE(nofield.err.find(spheres + ": no point field named 'face_marker' (the mesh has no point fields)"),
+            std::string::npos)
+      << nofield.err;
+  EXPECT_FALSE(test::fileExists(dir + "/x.png"));
   // The image or the view never replaces an input (it did: -o input.gtn).
   const std::string copy = dir + "/copy.vtk";
   test::writeFile(copy, test::readFile(spx));
@@ -248,6 +264,14 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   EXPECT_EQ(l2["extra_merges"], 0);
   EXPECT_EQ(render(gtn, "m.png", "--merges 100")["extra_merges"], 100);
   EXPECT_EQ(runGtn("render " + gtn + " -o " + dir + "/x.png --level 9").exit_code, 2);
+  // More merges than the tree holds: an error by number (it rendered the whole tree and reported the
+  // number asked for), and a ratio of 1 stops where the tree ends.
+  const test::RunResult many = runGtn("render " + gtn + " -o " + dir + "/x.png --merges 100000000");
+  EXPECT_EQ(many.exit_code, 2) << many.err;
+  EXPECT_NE(many.err.find(": 100000000 merges requested, the merge tree has "), std::string::npos) << many.err;
+  const nlohmann::json all = render(gtn, "all.png", "--ratio 1");
+  EXPECT_LT(all["ratio"].get<double>(), 1.0);
+  EXPECT_GT(all["ratio"].get<double>(), 0.9);
   // A time budget: calibrates once (cached under XDG_CACHE_HOME), then reads the cache.
   const std::string env = "XDG_CACHE_HOME=" + dir + "/cache ";
   const test::RunResult b1 = test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir +
