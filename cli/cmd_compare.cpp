@@ -23,7 +23,7 @@ int runCompare(const CompareArgs& args) {
   auto b = readPng(args.b);
   if (!b.isOk()) return reportError(b.status());
   auto d = compareImages(a.value(), b.value());
-  if (!d.isOk()) return reportError(d.status());
+  if (!d.isOk()) return reportError(Status(d.status().code(), args.a + ", " + args.b + ": " + d.status().message()));
   if (args.json) {
     nlohmann::json j;
     j["a"] = args.a;
@@ -36,7 +36,8 @@ int runCompare(const CompareArgs& args) {
     j["max_difference"] = d->max_difference;
     std::printf("%s\n", jsonText(j).c_str());
   } else {
-    std::printf("pixels compared  %llu of %d\n", static_cast<unsigned long long>(d->pixels), a->width * a->height);
+    std::printf("pixels compared  %llu of %d%s\n", static_cast<unsigned long long>(d->pixels), a->width * a->height,
+                d->pixels == 0 ? " (both images are all background: nothing to compare)" : "");
     std::printf("rmse             %.4f\n", d->rmse);
     if (std::isinf(d->psnr)) std::printf("psnr             inf\n");
     else std::printf("psnr             %.2f dB\n", d->psnr);

@@ -91,7 +91,10 @@ StatusOr<Image> readPng(const std::string& path) {
   // Bound the allocation by what a PNG of this size could plausibly decompress to.
   if (w == 0 || h == 0 || static_cast<uint64_t>(w) * h > (uint64_t{1} << 28)) png_error(png, "image size out of range");
   png_set_strip_16(png);
-  png_set_strip_alpha(png);
+  // Transparency is composited over black, the renderers' background: a transparent pixel is
+  // background (stripping the alpha kept its colour).
+  png_color_16 black{};
+  png_set_background(png, &black, PNG_BACKGROUND_GAMMA_SCREEN, 0, 1.0);
   png_set_palette_to_rgb(png);
   png_set_expand_gray_1_2_4_to_8(png);
   png_set_gray_to_rgb(png);

@@ -1,5 +1,6 @@
 // The render and compare subcommands, end to end on real datasets.
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <fstream>
@@ -23,6 +24,35 @@ nlohmann::json compareJson(const std::string& a, const std::string& b) {
   const test::RunResult r = runGtn("compare " + a + " " + b + " --json");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return nlohmann::json::parse(r.out, nullptr, false);
+}
+
+// A w x h RGBA PNG (colour type 6), every pixel `rgba`, written with zlib directly (writePng writes RGB).
+void writeRgbaPng(const std::string& path, int w, int h, const uint8_t rgba[4]) {
+  std::string raw;
+  for (int y = 0; y < h; ++y) {
+    raw += '\0';
+    for (int x = 0; x < w; ++x) raw.append(reinterpret_cast<const char*>(rgba), 4);
+  }
+  std::vector<uint8_t> z(compressBound(raw.size()));
+  uLongf zn = z.size();
+  ASSERT_EQ(compress(z.data(), &zn, reinterpret_cast<const Bytef*>(raw.data()), raw.size()), Z_OK);
+  auto be32 = [](std::string& s, uint32_t v) {
+    for (int i = 3; i >= 0; --i) s += static_cast<char>((v >> (8 * i)) & 0xFF);
+  };
+  std::string png = "\x89PNG\r\n\x1a\n";
+  auto chunk = [&](const char* type, const std::string& data) {
+    be32(png, static_cast<uint32_t>(data.size()));
+    const std::string body = type + data;
+    png += body;
+    be32(png, static_cast<uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(body.data()), body.size())));
+  };
+  std::string ihdr;
+  be32(ihdr, w), be32(ihdr, h);
+  ihdr += std::string("\x08\x06\x00\x00\x00", 5);
+  chunk("IHDR", ihdr);
+  chunk("IDAT", std::string(reinterpret_cast<const char*>(z.data()), zn));
+  chunk("IEND", "");
+  test::writeFile(path, png);
 }
 
 TEST(CompareCommand, KnownImages) {
@@ -54,6 +84,19 @@ TEST(CompareCommand, KnownImages) {
   test::writeFile(dir + "/not.png", "hello");
   EXPECT_EQ(runGtn("compare " + dir + "/a.png " + dir + "/not.png").exit_code, 1);
   EXPECT_EQ(runGtn("compare " + dir + "/a.png " + dir + "/missing.png").exit_code, 3);
+  const test::RunResult sizes = runGtn("compare " + dir + "/a.png " + dir + "/c.png");
+  EXPECT_NE(sizes.err.find(dir + "/a.png, " + dir + "/c.png: images differ in size: 4x2 and 3x3"), std::string::npos)
+      << sizes.err;
+  // Transparency is background (composited over black): a transparent red image equals a black one,
+  // and an opaque red one does not.
+  const uint8_t clear_red[4] = {200, 0, 0, 0}, red[4] = {200, 0, 0, 255};
+  writeRgbaPng(dir + "/clear.png", 4, 2, clear_red);
+  writeRgbaPng(dir + "/red.png", 4, 2, red);
+  ASSERT_TRUE(writePng(dir + "/black.png", Image(4, 2)).isOk());
+  EXPECT_EQ(compareJson(dir + "/clear.png", dir + "/black.png")["pixels_compared"], 0);
+  EXPECT_EQ(compareJson(dir + "/red.png", dir + "/black.png")["max_difference"], 200);
+  const test::RunResult nothing = runGtn("compare " + dir + "/clear.png " + dir + "/black.png");
+  EXPECT_NE(nothing.out.find("nothing to compare"), std::string::npos) << nothing.out;
 }
 
 TEST(RenderCommand, IntegratedMatchesGenericOnSpx) {
