@@ -149,6 +149,15 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
   if (inputs.empty()) return usageError("no input given");
   if (options.split != 5 && options.split != 6)
     return usageError("--split must be 5 or 6, not " + std::to_string(options.split));
+  // Standard input carries a .gtn stream (the one format that can be read front to back without
+  // knowing its kind from a name; mesh formats are named by their files).
+  if (inputs.size() == 1 && inputs[0] == "-") {
+    StatusOr<ImportResult> r = importGtn("-");
+    if (!r.isOk() && r.status().message().find("bad magic") != std::string::npos)
+      return Status(r.status().code(), r.status().message() + "; standard input is read as a .gtn stream: name a "
+                                                              "mesh file instead");
+    return r;
+  }
   // A repository cloned without Git LFS holds a short text pointer in place of each large file; every
   // importer would misread one as a malformed file of its own format.
   for (const std::string& p : inputs)

@@ -18,7 +18,7 @@ StatusOr<std::unique_ptr<RenderInput>> RenderInput::open(const std::vector<std::
   std::unique_ptr<RenderInput> in(new RenderInput());
   const std::string& path = inputs[0];
   in->path_ = path;
-  if (inputs.size() == 1 && detectInputFormat(path) == InputFormat::kGtn) {
+  if (inputs.size() == 1 && (path == "-" || detectInputFormat(path) == InputFormat::kGtn)) {  // "-": a .gtn stream
     GtnOpenOptions options;
     options.verify = false;  // chunks are still checksummed as they are read
     GTN_ASSIGN_OR_RETURN(in->reader_, GtnReader::open(path, options));

@@ -154,6 +154,13 @@ TEST_F(GtnCli, GtnFileAsConvertInput) {
   EXPECT_EQ(v.exit_code, 0) << v.out << v.err;
   EXPECT_EQ(meshSummary(infoJson(again)), meshSummary(infoJson(spx_)));
   EXPECT_EQ(test::runGtn("convert " + gtn + " -o " + gtn).exit_code, 2);  // never over its input
+  // From standard input too (a .gtn stream; a mesh file is named instead).
+  const test::RunResult piped = test::runShell("cat " + gtn + " | " + GTN_BINARY + " convert - -o " + dir_ + "/p.vtu");
+  ASSERT_EQ(piped.exit_code, 0) << piped.err;
+  EXPECT_EQ(test::readFile(dir_ + "/p.vtu"), test::readFile(dir_ + "/e.vtu"));
+  const test::RunResult text = test::runShell("cat " + spx_ + " | " + GTN_BINARY + " convert - -o " + dir_ + "/q.vtu");
+  EXPECT_EQ(text.exit_code, 1) << text.err;
+  EXPECT_NE(text.err.find("standard input is read as a .gtn stream"), std::string::npos) << text.err;
 }
 
 TEST_F(GtnCli, ExportRoundTripsToVtuVtkAndTetgen) {

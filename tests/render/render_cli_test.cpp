@@ -307,6 +307,12 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   EXPECT_EQ(l2["extra_merges"], 0);
   EXPECT_EQ(render(gtn, "m.png", "--merges 100")["extra_merges"], 100);
   EXPECT_EQ(runGtn("render " + gtn + " -o " + dir + "/x.png --level 9").exit_code, 2);
+  // A .gtn stream on standard input renders as the file does.
+  const test::RunResult piped =
+      test::runShell("cat " + gtn + " | " + GTN_BINARY + " render - -o " + dir + "/piped.png --level 2 --size 32x32");
+  ASSERT_EQ(piped.exit_code, 0) << piped.err;
+  ASSERT_EQ(runGtn("render " + gtn + " -o " + dir + "/named.png --level 2 --size 32x32").exit_code, 0);
+  EXPECT_EQ(test::readFile(dir + "/piped.png"), test::readFile(dir + "/named.png"));
   // More merges than the tree holds: an error by number (it rendered the whole tree and reported the
   // number asked for), and a ratio of 1 stops where the tree ends.
   const test::RunResult many = runGtn("render " + gtn + " -o " + dir + "/x.png --merges 100000000");
