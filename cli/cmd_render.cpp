@@ -274,7 +274,7 @@ Command addRenderCommand(CLI::App& app) {
   sub->add_option("--zoom", a->zoom, "magnification; 1 frames the bounding box (default 1)");
   sub->add_option("--field", a->field, "point field to render: NAME, NAME:COMPONENT or NAME:mag (default: the first)");
   sub->add_option("--transfer", a->transfer,
-                  "transfer function: a preset (cool-warm, grey, hot) or a file (see render/transfer_function.h)");
+                  "transfer function: a preset (cool-warm, grey, hot) or a file of 'range LO HI' and 'point X R G B O' lines (README)");
   sub->add_option("--range", a->range, "scalar range LO HI of the transfer function (default: the boundary's)")
       ->expected(2);
   sub->add_option("--opacity-unit-distance", a->unit_distance,
