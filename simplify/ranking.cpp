@@ -17,6 +17,11 @@ constexpr uint32_t kDead = 0xFFFFFFFFu;   // tets_[t][0] of a collapsed tetrahed
 constexpr uint32_t kOmega = 0xFFFFFFFEu;  // the virtual vertex coning the boundary
 constexpr double kFlipMargin = 1e-3;
 constexpr double kLocalWeight = 1.0 / 16;  // see ranking.h
+// A vertex in more tetrahedra than this is neither merged nor merged onto (while its star is that
+// large): evaluating a vertex costs its star times its targets, and it is evaluated again after every
+// merge next to it, so a star of S tetrahedra costs about S^3 (a book of 1000 tetrahedra around one
+// edge ran for minutes). Real meshes stay far below: the largest star of the shared datasets is 110.
+constexpr uint32_t kMaxStar = 256;
 
 inline void cross(const double* a, const double* b, double* out) {
   out[0] = a[1] * b[2] - a[2] * b[1];
@@ -126,6 +131,8 @@ class Ranker {
   std::vector<uint32_t> next_;  // per corner: next corner of the same vertex
   std::vector<uint32_t> head_;  // per vertex: first corner
   std::vector<uint8_t> boundary_, frozen_, alive_;
+  std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
+  bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
   std::vector<uint32_t> version_;
   std::priority_queue<QueueEntry, std::vector<QueueEntry>, std::greater<QueueEntry>> heap_;
   MergeTree tree_;
@@ -182,6 +189,9 @@ void Ranker::init() {
       head_[v] = c;
     }
   }
+  star_size_.assign(np, 0);
+  for (const Tet& q : tets_)
+    for (uint32_t v : q) ++star_size_[v];
   boundary_.assign(np, 0);
   frozen_.assign(np, 0);
   alive_.assign(np, 1);
@@ -285,7 +295,7 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
 
 void Ranker::candidates(uint32_t v, std::vector<Candidate>& out) {
   out.clear();
-  if (!alive_[v] || frozen_[v]) return;
+  if (!alive_[v] || frozen_[v] || crowded(v)) return;
   gatherStar(v, corners_);
   if (corners_.empty()) return;
   const double* pv = pos(v);
@@ -324,7 +334,7 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out) {
   }
   uniqueByMark(targets_);
   for (uint32_t w : targets_) {
-    if (frozen_[w]) continue;
+    if (frozen_[w] || crowded(w)) continue;
     ++evaluations_;
     const bool same = samePosition(v, w);
     const double* pw = pos(w);
@@ -407,7 +417,7 @@ void Ranker::linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std:
 }
 
 bool Ranker::validate(uint32_t v, uint32_t w) {
-  if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w]) return false;
+  if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w] || crowded(v) || crowded(w)) return false;
   if (boundary_[v] && !boundary_[w]) return false;
   gatherStar(v, corners_);
   gatherStar(w, corners_w_);
@@ -505,10 +515,12 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
       if (x != v) recompute_.push_back(x);
     }
     if (q[0] == w || q[1] == w || q[2] == w || q[3] == w) {
+      for (uint32_t x : q) --star_size_[x];
       q[0] = kDead;
       ++removed;
     } else {
       q[c & 3] = w;
+      ++star_size_[w];
     }
   }
   if (!corners_.empty()) {
