@@ -65,6 +65,10 @@ int runConvert(const ConvertArgs& a) {
       wo.command_line = commandLine();
       wo.verify = !a.no_verify;
       st = writeGtnWithLevels(a, mesh, wo);
+      // The encoder's refusals are about the mesh: name its input and where to see the details.
+      if (!st.isOk() && st.message().rfind("encodeLevel: ", 0) == 0)
+        st = Status(st.code(), a.inputs[0] + ": cannot be encoded: " + st.message().substr(13) + " (gtn validate " +
+                                   a.inputs[0] + " lists the problems)");
       break;
     }
     default: {

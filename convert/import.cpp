@@ -244,6 +244,30 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
       kv.second = toUtf8(kv.second);
     }
   }
+  if (result.isOk()) {
+    // A cell listing one point twice is no tetrahedron (the importers that split cells drop such
+    // pieces themselves): it goes, with its cell values, instead of failing the encoder later.
+    TetMesh& m = result->mesh;
+    size_t out = 0;
+    for (size_t t = 0; t < m.tets.size(); ++t) {
+      const Tet& q = m.tets[t];
+      if (q[0] == q[1] || q[0] == q[2] || q[0] == q[3] || q[1] == q[2] || q[1] == q[3] || q[2] == q[3]) continue;
+      if (out != t) {
+        for (Field& f : m.cell_fields) f.copyItem(f, t, out);
+        m.tets[out] = q;
+      }
+      ++out;
+    }
+    if (out < m.tets.size()) {
+      const size_t dropped = m.tets.size() - out;
+      m.tets.resize(out);
+      for (Field& f : m.cell_fields) f.bytes.resize(out * f.components * f.valueSize());
+      result->report.dropped_cells += dropped;
+      result->report.warnings.push_back(std::to_string(dropped) +
+                                        " tetrahedra that list a point twice (flat, no tetrahedra) dropped");
+      finishImport(*result);  // recounts zero-volume tetrahedra
+    }
+  }
   if (result.isOk() && result->mesh.tets.empty()) {
     const ImportReport& r = result->report;
     std::string why;

@@ -1,7 +1,9 @@
 #include "render/render_input.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <unordered_map>
 
 #include "convert/import.h"
@@ -159,6 +161,21 @@ class BoundaryRangeSink : public MeshSink {
 
 Status RenderInput::fixView(const ResolvedLevel& level, RenderOptions* options) {
   const LevelHeader& h0 = levelHeader(0);
+  // The crossing arithmetic multiplies three coordinates (or their differences): beyond about 1e100
+  // it overflows, below about 1e-100 it underflows, and the image came out blank without a word.
+  double largest = 0, extent = 0;
+  for (int i = 0; i < 3; ++i) {
+    largest = std::max({largest, std::fabs(h0.bbox_min[i]), std::fabs(h0.bbox_max[i])});
+    extent = std::max(extent, h0.bbox_max[i] - h0.bbox_min[i]);
+  }
+  if (largest > 1e100 || (extent > 0 && extent < 1e-100)) {
+    char why[200];
+    std::snprintf(why, sizeof why,
+                  ": coordinates up to %g across %g cannot be rendered (the ray crossings need sizes between "
+                  "1e-100 and 1e100); scale the mesh",
+                  largest, extent);
+    return unsupported(path_ + why);
+  }
   bool box_ok = false;
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(h0.bbox_min[i]) || !std::isfinite(h0.bbox_max[i]) || h0.bbox_min[i] > h0.bbox_max[i]) {

@@ -43,5 +43,26 @@ TEST(ImportDispatch, FormatFromTheExtension) {
     EXPECT_EQ(detectInputFormat(dir + "/" + name), format) << name << ": " << inputFormatName(detectInputFormat(dir + "/" + name));
 }
 
+// A tetrahedron that lists a point twice is no tetrahedron: dropped with its cell value and a warning
+// (the encoder refused the whole file: "tetrahedron 1 repeats a vertex").
+TEST(ImportDispatch, TetrahedraListingAPointTwiceAreDropped) {
+  const std::string dir = test::tempDir("import-repeated");
+  const std::string path = dir + "/r.vtk";
+  test::writeFile(path, "# vtk DataFile Version 3.0\nr\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 double\n"
+                        "0 0 0 1 0 0 0 1 0 0 0 1 1 1 1\nCELLS 3 15\n4 0 1 2 3\n4 1 1 2 4\n4 1 3 2 4\n"
+                        "CELL_TYPES 3\n10 10 10\nCELL_DATA 3\nSCALARS id int 1\nLOOKUP_TABLE default\n7 8 9\n");
+  auto r = importMesh({path}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ(r->mesh.numTets(), 2u);
+  ASSERT_EQ(r->mesh.cell_fields.size(), 1u);
+  EXPECT_EQ(r->mesh.cell_fields[0].data<int32_t>()[0], 7);
+  EXPECT_EQ(r->mesh.cell_fields[0].data<int32_t>()[1], 9);
+  EXPECT_EQ(r->report.dropped_cells, 1u);
+  EXPECT_EQ(r->report.zero_volume, 0u);
+  ASSERT_EQ(r->report.warnings.size(), 1u);
+  EXPECT_EQ(r->report.warnings[0], "1 tetrahedra that list a point twice (flat, no tetrahedra) dropped");
+  EXPECT_EQ(test::runGtn("convert " + path + " -o " + dir + "/r.gtn").exit_code, 0);
+}
+
 }  // namespace
 }  // namespace gtn

@@ -240,6 +240,16 @@ TEST(RenderCommand, RejectsBadArguments) {
             std::string::npos)
       << nofield.err;
   EXPECT_FALSE(test::fileExists(dir + "/x.png"));
+  // Coordinates beyond what the crossing arithmetic holds are refused (the image came out blank).
+  for (const char* scale : {"1e120", "1e-120"}) {
+    const std::string big = dir + "/scaled.vtk";
+    test::writeFile(big, std::string("# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n") +
+                             "0 0 0 " + scale + " 0 0 0 " + scale + " 0 0 0 " + scale +
+                             "\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n");
+    const test::RunResult r = runGtn("render " + big + " -o " + dir + "/x.png --size 8x8");
+    EXPECT_EQ(r.exit_code, 1) << scale << ": " << r.err;
+    EXPECT_NE(r.err.find("cannot be rendered"), std::string::npos) << r.err;
+  }
   // The image or the view never replaces an input (it did: -o input.gtn).
   const std::string copy = dir + "/copy.vtk";
   test::writeFile(copy, test::readFile(spx));
