@@ -63,7 +63,7 @@ Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   // boundary's crossings were never sorted out (the render hung).
   const std::pair<const char*, double> numbers[] = {
       {"--azimuth", a.azimuth}, {"--elevation", a.elevation}, {"--zoom", a.zoom}, {"--step", a.step},
-      {"--opacity-unit-distance", a.unit_distance}, {"--ratio", a.ratio}, {"--budget-ms", a.budget_ms}};
+      {"--opacity-unit-distance", a.unit_distance}, {"--ratio", a.ratio}};  // (--budget-ms: its validator)
   for (const auto& [name, value] : numbers)
     if (!std::isfinite(value)) return usageError(std::string(name) + " must be a finite number");
   for (double v : a.range)

@@ -357,8 +357,8 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
     const uint32_t cell = static_cast<uint32_t>(c);
     switch (linearType(type)) {
       case kVtkTetra:
-        // A flat input tetrahedron is kept as it is (finishImport reports it); only the pieces of
-        // split cells are dropped when a repeated index flattens them.
+        // An input tetrahedron is kept as it is: finishImport reports a flat one and drops one that
+        // repeats an index, as the split drops the pieces of other cells that a repeated index flattens.
         tets->push_back({g[0], g[1], g[2], g[3]});
         tet_cell->push_back(cell);
         break;

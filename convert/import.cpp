@@ -71,7 +71,34 @@ InputFormat detectInputFormat(const std::string& path) {
   return InputFormat::kUnknown;
 }
 
+namespace {
+// Drops the tetrahedra that list a point twice, with their cell values; returns how many went.
+size_t dropFlatTets(TetMesh& mesh) {
+  size_t out = 0;
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const Tet& q = mesh.tets[t];
+    if (q[0] == q[1] || q[0] == q[2] || q[0] == q[3] || q[1] == q[2] || q[1] == q[3] || q[2] == q[3]) continue;
+    if (out != t) {
+      for (Field& f : mesh.cell_fields) f.copyItem(f, t, out);
+      mesh.tets[out] = q;
+    }
+    ++out;
+  }
+  const size_t dropped = mesh.tets.size() - out;
+  mesh.tets.resize(out);
+  for (Field& f : mesh.cell_fields) f.bytes.resize(out * f.components * f.valueSize());
+  return dropped;
+}
+}  // namespace
+
 void finishImport(ImportResult& result) {
+  // A cell listing one point twice is no tetrahedron (a tetrahedron cell with a repeated index; the
+  // split of other cells leaves such pieces out itself): it goes, instead of failing the encoder.
+  if (const size_t flat = dropFlatTets(result.mesh)) {
+    result.report.dropped_cells += flat;
+    result.report.warnings.push_back(std::to_string(flat) +
+                                     " tetrahedra that list a point twice (flat, no tetrahedra) dropped");
+  }
   size_t zero = 0;
   result.report.flipped += normalizeOrientation(result.mesh, &zero);
   result.report.zero_volume = zero;
@@ -112,17 +139,9 @@ void weldPoints(TetMesh& mesh, ImportReport& report) {
   if (kept == n) return;
   mesh.coords.resize(3 * static_cast<size_t>(kept));
   for (Field& f : mesh.point_fields) f.bytes.resize(static_cast<size_t>(kept) * f.components * f.valueSize());
-  size_t out = 0;
-  for (size_t t = 0; t < mesh.tets.size(); ++t) {
-    const Tet& s = mesh.tets[t];
-    const Tet m = {new_index[rep[s[0]]], new_index[rep[s[1]]], new_index[rep[s[2]]], new_index[rep[s[3]]]};
-    if (m[0] == m[1] || m[0] == m[2] || m[0] == m[3] || m[1] == m[2] || m[1] == m[3] || m[2] == m[3]) continue;
-    for (Field& f : mesh.cell_fields) f.copyItem(f, t, out);
-    mesh.tets[out++] = m;
-  }
-  report.collapsed_tets += mesh.tets.size() - out;
-  mesh.tets.resize(out);
-  for (Field& f : mesh.cell_fields) f.bytes.resize(out * f.components * f.valueSize());
+  for (Tet& q : mesh.tets)
+    for (uint32_t& v : q) v = new_index[rep[v]];
+  report.collapsed_tets += dropFlatTets(mesh);
 }
 
 namespace {
@@ -153,7 +172,7 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
   // knowing its kind from a name; mesh formats are named by their files).
   if (inputs.size() == 1 && inputs[0] == "-") {
     StatusOr<ImportResult> r = importGtn("-");
-    if (!r.isOk() && r.status().message().find("bad magic") != std::string::npos)
+    if (!r.isOk() && r.status().code() == StatusCode::kNotOurFile)
       return Status(r.status().code(), r.status().message() + "; standard input is read as a .gtn stream: name a "
                                                               "mesh file instead");
     return r;
@@ -242,30 +261,6 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
     for (auto& kv : m.metadata) {
       kv.first = toUtf8(kv.first);
       kv.second = toUtf8(kv.second);
-    }
-  }
-  if (result.isOk()) {
-    // A cell listing one point twice is no tetrahedron (the importers that split cells drop such
-    // pieces themselves): it goes, with its cell values, instead of failing the encoder later.
-    TetMesh& m = result->mesh;
-    size_t out = 0;
-    for (size_t t = 0; t < m.tets.size(); ++t) {
-      const Tet& q = m.tets[t];
-      if (q[0] == q[1] || q[0] == q[2] || q[0] == q[3] || q[1] == q[2] || q[1] == q[3] || q[2] == q[3]) continue;
-      if (out != t) {
-        for (Field& f : m.cell_fields) f.copyItem(f, t, out);
-        m.tets[out] = q;
-      }
-      ++out;
-    }
-    if (out < m.tets.size()) {
-      const size_t dropped = m.tets.size() - out;
-      m.tets.resize(out);
-      for (Field& f : m.cell_fields) f.bytes.resize(out * f.components * f.valueSize());
-      result->report.dropped_cells += dropped;
-      result->report.warnings.push_back(std::to_string(dropped) +
-                                        " tetrahedra that list a point twice (flat, no tetrahedra) dropped");
-      finishImport(*result);  // recounts zero-volume tetrahedra
     }
   }
   if (result.isOk() && result->mesh.tets.empty()) {

@@ -109,6 +109,24 @@ std::string parentDirectory(const std::string& path) {
   return slash == std::string::npos ? "./" : path.substr(0, slash + 1);
 }
 
+// The ghost marks are VTK's bookkeeping, not data: a mesh made of several pieces does not keep them.
+void dropGhostArrays(TetMesh& mesh) {
+  for (std::vector<Field>* fields : {&mesh.point_fields, &mesh.cell_fields})
+    fields->erase(std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kVtkGhostArray; }),
+                  fields->end());
+}
+
+// What reading several unstructured pieces into one mesh did (a .pvtu's files, or the <Piece>s of one
+// .vtu): the ghost copies of other pieces' cells went, the points the pieces share stayed apart.
+void reportPieces(size_t pieces, size_t ghost_tets, ImportReport* report) {
+  if (ghost_tets > 0)
+    report->warnings.push_back(std::to_string(ghost_tets) +
+                               " tetrahedra of ghost cells (vtkGhostType duplicates of other pieces' cells) dropped");
+  if (pieces > 1)
+    report->warnings.push_back(std::to_string(pieces) +
+                               " pieces read; the points they share are kept once per piece (--weld merges them)");
+}
+
 class VtuReader {
  public:
   VtuReader(const std::string& path, const std::string& text) : path_(path), text_(text) {}
@@ -906,9 +924,7 @@ StatusOr<ImportResult> VtuReader::readParallelStructured(const pugi::xml_node& r
       }
   StatusOr<ImportResult> result = assembleStructured(grid, type, whole, dims, pieces, image, options);
   if (result.isOk() && ghost_arrays > 0) {
-    for (std::vector<Field>* fields : {&result->mesh.point_fields, &result->mesh.cell_fields})
-      fields->erase(std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kVtkGhostArray; }),
-                    fields->end());
+    dropGhostArrays(result->mesh);
     result->report.warnings.push_back("the pieces' vtkGhostType arrays (VTK's marks of shared points and cells) "
                                       "were not kept");
   }
@@ -1075,13 +1091,7 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
     // Ghost cells, copies of cells that other pieces own, were dropped by finishVtkImport: they are
     // kept once, by their owner.
     ghosts += reader.duplicate_tets_;
-    // The ghost marks themselves are VTK's bookkeeping, not data.
-    auto dropGhostArrays = [](std::vector<Field>& fields) {
-      fields.erase(std::remove_if(fields.begin(), fields.end(), [](const Field& f) { return f.name == kVtkGhostArray; }),
-                   fields.end());
-    };
-    dropGhostArrays(m.point_fields);
-    dropGhostArrays(m.cell_fields);
+    dropGhostArrays(m);
     float64 |= m.coord_type == ScalarType::kFloat64;
     if (k == 0) {
       all = std::move(r);
@@ -1113,12 +1123,7 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
     for (const std::string& w : b.warnings) a.warnings.push_back(piece_path + ": " + w);
   }
   all.mesh.coord_type = float64 ? ScalarType::kFloat64 : ScalarType::kFloat32;
-  if (ghosts > 0)
-    all.report.warnings.push_back(std::to_string(ghosts) +
-                                  " tetrahedra of ghost cells (vtkGhostType duplicates of other pieces' cells) dropped");
-  if (sources.size() > 1)
-    all.report.warnings.push_back(std::to_string(sources.size()) +
-                                  " pieces read; the points they share are kept once per piece (--weld merges them)");
+  reportPieces(sources.size(), ghosts, &all.report);
   return all;
 }
 
@@ -1222,14 +1227,8 @@ StatusOr<ImportResult> VtuReader::readParsed(const pugi::xml_node& root, const I
   GTN_RETURN_IF_ERROR(finishVtkImport(path_, cells_, cell_fields_, options, &result_,
                                       in_parallel_ || several ? &duplicate_tets_ : nullptr));
   if (several) {
-    if (duplicate_tets_ > 0)
-      result_.report.warnings.push_back(std::to_string(duplicate_tets_) +
-                                        " tetrahedra of ghost cells (vtkGhostType duplicates of other pieces' cells) dropped");
-    for (std::vector<Field>* fields : {&result_.mesh.point_fields, &result_.mesh.cell_fields})
-      fields->erase(std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kVtkGhostArray; }),
-                    fields->end());
-    result_.report.warnings.push_back(std::to_string(pieces) +
-                                      " pieces read; the points they share are kept once per piece (--weld merges them)");
+    dropGhostArrays(result_.mesh);
+    reportPieces(pieces, duplicate_tets_, &result_.report);
   } else if (!in_parallel_) {
     if (const uint8_t* marks = vtkGhostMarks(cell_fields_, cells_.types.size())) {
       size_t copies = 0;
