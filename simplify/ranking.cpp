@@ -5,6 +5,10 @@
 #include <cmath>
 #include <queue>
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include "mesh/faces.h"
 #include "mesh/predicates.h"
 
@@ -36,17 +40,6 @@ inline void triNormal(const double* a, const double* b, const double* c, double*
   const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
   cross(u, w, n);
 }
-
-// A tetrahedron of the star of the vertex being evaluated, reduced to what the candidate errors need:
-// its volume is linear in the position of that vertex.
-struct StarTet {
-  uint32_t corner;  // 4 * tet + local index of the vertex
-  uint32_t o[3];    // the other three vertices
-  double n[3];      // inward normal of the opposite face: volume(p) = (n . p - d) / 6
-  double d;
-  double other_density;  // density sum of the other three vertices
-  double mass;           // current mass
-};
 
 struct BoundaryFace {
   uint32_t x, y;  // the face is (v, x, y), outward
@@ -95,10 +88,63 @@ void sortUnique(std::vector<T>& v) {
   v.erase(std::unique(v.begin(), v.end()), v.end());
 }
 
+// A face (v, x, y) of the star of v: key (min(x, y) << 32 | max(x, y)), then its tetrahedron and
+// local face. Every face holds v, so ordering by the other two orders the sorted triples alike.
+struct StarFace {
+  uint64_t key;
+  uint32_t t, j;
+  bool operator<(const StarFace& o) const { return key != o.key ? key < o.key : (t != o.t ? t < o.t : j < o.j); }
+};
+
+// What evaluating one vertex needs besides the mesh: scratch buffers reused from one vertex to the
+// next, one set per thread (the vertices around a merge are evaluated in parallel).
+struct Workspace {
+  explicit Workspace(size_t points) : mark(points, 0), target_index(points, 0) {}
+
+  // Deduplicates small vertex lists without sorting: mark[x] == stamp means x is already listed.
+  void uniqueByMark(std::vector<uint32_t>& list) {
+    if (++stamp == 0) {
+      std::fill(mark.begin(), mark.end(), 0);
+      stamp = 1;
+    }
+    size_t n = 0;
+    for (uint32_t x : list) {
+      if (mark[x] == stamp) continue;
+      mark[x] = stamp;
+      list[n++] = x;
+    }
+    list.resize(n);
+  }
+  std::vector<uint32_t> mark;
+  uint32_t stamp = 0;
+
+  std::vector<uint32_t> corners, targets;
+  // The star of the vertex being evaluated, one array per quantity so that the volumes after a merge
+  // are computed for all its tetrahedra at once. Per tetrahedron: the other three vertices, the
+  // inward normal n of their face and d, with volume(p) = (n . p - d) / 6, the density sum of the
+  // other three vertices, the current volume and mass, and the volume with v moved to the target.
+  std::vector<std::array<uint32_t, 3>> star_o;
+  std::vector<double> nx, ny, nz, d, od, vol, mass, vol_w;
+  // Per target (its index in targets): the star tetrahedra that hold it, ascending.
+  std::vector<uint32_t> target_index, holds_start, holds;
+  std::vector<BoundaryFace> faces;
+  std::vector<StarFace> face_keys;
+  std::vector<Candidate> cands;
+  uint64_t evaluations = 0;  // candidate errors computed
+  uint64_t dropped = 0;      // dead corners dropped from the stars' runs
+};
+
+// Below this many vertices to evaluate, the evaluations run on the calling thread.
+constexpr size_t kParallelEvaluations = 8;
+
 class Ranker {
  public:
   Ranker(const TetMesh& mesh, std::vector<double> density, const RankingOptions& options)
-      : mesh_(mesh), density_(std::move(density)), options_(options) {}
+      : mesh_(mesh),
+        density_(std::move(density)),
+        options_(options),
+        ws_(mesh.numPoints()),
+        thread_ws_(Workspace(mesh.numPoints())) {}
 
   MergeTree run(RankingStats* stats);
 
@@ -110,14 +156,16 @@ class Ranker {
     return p[0] == q[0] && p[1] == q[1] && p[2] == q[2];
   }
   void init();
-  void gatherStar(uint32_t v, std::vector<uint32_t>& corners);
-  void gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces);
-  void candidates(uint32_t v, std::vector<Candidate>& out);
+  void gatherStar(uint32_t v, std::vector<uint32_t>& corners, Workspace& ws);
+  void gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
+                           Workspace& ws) const;
+  void candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws);
   bool validate(uint32_t v, uint32_t w);
   void linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces,
               std::vector<Tri>& tris, std::vector<Edge>& edges, std::vector<uint32_t>& verts);
   void merge(uint32_t v, uint32_t w, float error);
-  void recompute(uint32_t v);
+  // Evaluates the vertices of `list` again (distinct) and queues each one's best target.
+  void recompute(const std::vector<uint32_t>& list);
   void push(uint32_t v, const Candidate& c) {
     heap_.push(QueueEntry{static_cast<float>(c.error), v, c.w, version_[v]});
   }
@@ -128,48 +176,40 @@ class Ranker {
   double mass_scale_ = 1, area_scale_ = 1;
 
   std::vector<Tet> tets_;
-  std::vector<uint32_t> next_;  // per corner: next corner of the same vertex
-  std::vector<uint32_t> head_;  // per vertex: first corner
+  // Each vertex's corners (4 * tet + local index), in one pool: a vertex's list is a contiguous run,
+  // so that gathering a star reads independent words instead of chasing a linked list. Corners of
+  // collapsed tetrahedra are dropped lazily, by gatherStar (each evaluation rewrites only its own
+  // vertex's run). A merge writes the target's new list at the pool's end (the source's corners,
+  // then its own: the order every sum over a star follows); the pool is compacted when its dead runs
+  // outweigh the live ones.
+  std::vector<uint32_t> star_pool_;
+  std::vector<uint64_t> star_begin_;
+  std::vector<uint32_t> star_len_;
+  uint64_t star_live_ = 0;  // corners in the vertices' runs (dead corners not yet dropped included)
+  void compactStars();
+  // Takes the workspaces' counts of dropped corners off star_live_.
+  void collectDropped() {
+    star_live_ -= ws_.dropped;
+    ws_.dropped = 0;
+    for (Workspace& ws : thread_ws_) {
+      star_live_ -= ws.dropped;
+      ws.dropped = 0;
+    }
+  }
   std::vector<uint8_t> boundary_, frozen_, alive_;
   std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
   bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
   std::vector<uint32_t> version_;
   std::priority_queue<QueueEntry, std::vector<QueueEntry>, std::greater<QueueEntry>> heap_;
   MergeTree tree_;
-  uint64_t evaluations_ = 0;
 
-  // Deduplicates small vertex lists without sorting: mark_[x] == stamp_ means x is already listed.
-  void uniqueByMark(std::vector<uint32_t>& list) {
-    if (++stamp_ == 0) {
-      std::fill(mark_.begin(), mark_.end(), 0);
-      stamp_ = 1;
-    }
-    size_t n = 0;
-    for (uint32_t x : list) {
-      if (mark_[x] == stamp_) continue;
-      mark_[x] = stamp_;
-      list[n++] = x;
-    }
-    list.resize(n);
-  }
-  std::vector<uint32_t> mark_;
-  uint32_t stamp_ = 0;
-
-  // Scratch buffers reused across calls.
-  std::vector<uint32_t> corners_, corners_w_, targets_, recompute_;
-  std::vector<StarTet> star_;
+  Workspace ws_;  // the calling thread's
+  tbb::enumerable_thread_specific<Workspace> thread_ws_;
+  std::vector<Candidate> best_;      // recompute's results, per listed vertex
+  std::vector<uint32_t> all_;        // every vertex, for the first evaluation
+  // Scratch buffers of validate and merge.
+  std::vector<uint32_t> corners_, corners_w_, recompute_;
   std::vector<BoundaryFace> faces_, faces_w_;
-  std::vector<Candidate> cands_;
-  // A face (v, x, y) of the star of v: key (min(x, y) << 32 | max(x, y)), then its tetrahedron and
-  // local face. Every face holds v, so ordering by the other two orders the sorted triples alike.
-  struct StarFace {
-    uint64_t key;
-    uint32_t t, j;
-    bool operator<(const StarFace& o) const {
-      return key != o.key ? key < o.key : (t != o.t ? t < o.t : j < o.j);
-    }
-  };
-  std::vector<StarFace> face_keys_;
   std::vector<Tri> tris_a_, tris_b_;
   std::vector<Edge> edges_a_, edges_b_;
   std::vector<uint32_t> verts_a_, verts_b_, lk_verts_;
@@ -179,24 +219,24 @@ void Ranker::init() {
   const size_t np = mesh_.numPoints();
   const size_t nt = mesh_.numTets();
   tets_ = mesh_.tets;
-  next_.assign(4 * nt, kNil);
-  head_.assign(np, kNil);
-  for (size_t t = nt; t-- > 0;) {
-    for (int k = 3; k >= 0; --k) {
-      const uint32_t v = tets_[t][k];
-      const uint32_t c = static_cast<uint32_t>(4 * t + k);
-      next_[c] = head_[v];
-      head_[v] = c;
-    }
-  }
   star_size_.assign(np, 0);
   for (const Tet& q : tets_)
     for (uint32_t v : q) ++star_size_[v];
+  // Every vertex's corners in ascending order.
+  star_begin_.assign(np, 0);
+  star_len_.assign(np, 0);
+  for (size_t v = 1; v < np; ++v) star_begin_[v] = star_begin_[v - 1] + star_size_[v - 1];
+  star_pool_.assign(4 * nt, 0);
+  for (size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t v = tets_[t][k];
+      star_pool_[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
+    }
+  star_live_ = star_pool_.size();
   boundary_.assign(np, 0);
   frozen_.assign(np, 0);
   alive_.assign(np, 1);
   version_.assign(np, 0);
-  mark_.assign(np, 0);
   {
     const FaceAdjacency adj = computeFaceAdjacency(mesh_);
     double area = 0;
@@ -233,30 +273,38 @@ void Ranker::init() {
   tree_.error.assign(np, 0.0f);
 }
 
-void Ranker::gatherStar(uint32_t v, std::vector<uint32_t>& corners) {
-  corners.clear();
-  uint32_t prev = kNil;
-  uint32_t c = head_[v];
-  while (c != kNil) {
-    const uint32_t nx = next_[c];
-    if (tets_[c >> 2][0] == kDead) {
-      if (prev == kNil) {
-        head_[v] = nx;
-      } else {
-        next_[prev] = nx;
-      }
-    } else {
-      corners.push_back(c);
-      prev = c;
-    }
-    c = nx;
+void Ranker::gatherStar(uint32_t v, std::vector<uint32_t>& corners, Workspace& ws) {
+  uint32_t* run = star_pool_.data() + star_begin_[v];
+  const uint32_t n = star_len_[v];
+  uint32_t m = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t c = run[i];
+    run[m] = c;
+    m += tets_[c >> 2][0] != kDead;
   }
+  ws.dropped += n - m;
+  star_len_[v] = m;
+  corners.assign(run, run + m);
 }
 
-void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces) {
+void Ranker::compactStars() {
+  std::vector<uint32_t> pool;
+  pool.reserve(star_live_ + star_live_ / 4);
+  for (size_t v = 0; v < star_len_.size(); ++v) {
+    const uint64_t b = star_begin_[v];
+    star_begin_[v] = pool.size();
+    pool.insert(pool.end(), star_pool_.begin() + static_cast<std::ptrdiff_t>(b),
+                star_pool_.begin() + static_cast<std::ptrdiff_t>(b + star_len_[v]));
+  }
+  star_pool_.swap(pool);
+}
+
+void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
+                                 Workspace& ws) const {
   faces.clear();
   if (!boundary_[v]) return;
   // Faces containing v: three per tetrahedron; those seen once are on the boundary.
+  std::vector<StarFace>& face_keys_ = ws.face_keys;
   face_keys_.clear();
   for (uint32_t c : corners) {
     const uint32_t t = c >> 2;
@@ -293,79 +341,100 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
   }
 }
 
-void Ranker::candidates(uint32_t v, std::vector<Candidate>& out) {
+void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) {
   out.clear();
   if (!alive_[v] || frozen_[v] || crowded(v)) return;
-  gatherStar(v, corners_);
-  if (corners_.empty()) return;
+  gatherStar(v, ws.corners, ws);
+  if (ws.corners.empty()) return;
   const double* pv = pos(v);
   const double rho_v = density_[v];
-  star_.clear();
-  targets_.clear();
-  for (uint32_t c : corners_) {
+  const size_t ns = ws.corners.size();
+  ws.star_o.resize(ns);
+  for (auto* a : {&ws.nx, &ws.ny, &ws.nz, &ws.d, &ws.od, &ws.vol, &ws.mass, &ws.vol_w})
+    a->resize(ns);
+  ws.targets.clear();
+  for (size_t i = 0; i < ns; ++i) {
+    const uint32_t c = ws.corners[i];
     const uint32_t t = c >> 2;
     const int k = c & 3;
-    StarTet s;
-    s.corner = c;
     const uint32_t a = tets_[t][kTetFace[k][0]], b = tets_[t][kTetFace[k][1]], d = tets_[t][kTetFace[k][2]];
-    s.o[0] = a;
-    s.o[1] = b;
-    s.o[2] = d;
+    ws.star_o[i] = {a, b, d};
     double nout[3];
     triNormal(pos(a), pos(b), pos(d), nout);
-    s.n[0] = -nout[0];
-    s.n[1] = -nout[1];
-    s.n[2] = -nout[2];
-    s.d = dot(s.n, pos(a));
-    s.other_density = density_[a] + density_[b] + density_[d];
-    const double vol = (dot(s.n, pv) - s.d) / 6.0;
-    s.mass = 0.25 * (rho_v + s.other_density) * vol;
-    star_.push_back(s);
-    if (!boundary_[v]) targets_.insert(targets_.end(), {a, b, d});
+    const double n[3] = {-nout[0], -nout[1], -nout[2]};
+    ws.nx[i] = n[0];
+    ws.ny[i] = n[1];
+    ws.nz[i] = n[2];
+    ws.d[i] = dot(n, pos(a));
+    ws.od[i] = density_[a] + density_[b] + density_[d];
+    ws.vol[i] = (dot(n, pv) - ws.d[i]) / 6.0;
+    ws.mass[i] = 0.25 * (rho_v + ws.od[i]) * ws.vol[i];
+    if (!boundary_[v]) ws.targets.insert(ws.targets.end(), {a, b, d});
   }
-  gatherBoundaryFaces(v, corners_, faces_);
+  gatherBoundaryFaces(v, ws.corners, ws.faces, ws);
   double face_area = 0;
   if (boundary_[v]) {
-    for (const BoundaryFace& f : faces_) {
-      targets_.push_back(f.x);
-      targets_.push_back(f.y);
+    for (const BoundaryFace& f : ws.faces) {
+      ws.targets.push_back(f.x);
+      ws.targets.push_back(f.y);
       face_area += f.area;
     }
   }
-  uniqueByMark(targets_);
-  for (uint32_t w : targets_) {
+  ws.uniqueByMark(ws.targets);
+  // Which star tetrahedra hold each target (mark == stamp marks the targets), ascending.
+  const size_t nt = ws.targets.size();
+  for (size_t j = 0; j < nt; ++j) ws.target_index[ws.targets[j]] = static_cast<uint32_t>(j);
+  ws.holds_start.assign(nt + 1, 0);
+  for (size_t i = 0; i < ns; ++i)
+    for (uint32_t x : ws.star_o[i])
+      if (ws.mark[x] == ws.stamp) ++ws.holds_start[ws.target_index[x] + 1];
+  for (size_t j = 0; j < nt; ++j) ws.holds_start[j + 1] += ws.holds_start[j];
+  ws.holds.resize(ws.holds_start[nt]);
+  for (size_t i = 0; i < ns; ++i)
+    for (uint32_t x : ws.star_o[i])
+      if (ws.mark[x] == ws.stamp) ws.holds[ws.holds_start[ws.target_index[x]]++] = static_cast<uint32_t>(i);
+  // holds_start[j] now ends target j's list; target 0's begins at 0, target j's at the end of j - 1.
+  const double *nx = ws.nx.data(), *ny = ws.ny.data(), *nz = ws.nz.data(), *sd = ws.d.data(),
+               *od = ws.od.data(), *mass = ws.mass.data(), *vol_v = ws.vol.data();
+  double* vol_w = ws.vol_w.data();
+  for (size_t j = 0; j < nt; ++j) {
+    const uint32_t w = ws.targets[j];
     if (frozen_[w] || crowded(w)) continue;
-    ++evaluations_;
+    ++ws.evaluations;
     const bool same = samePosition(v, w);
     const double* pw = pos(w);
     const double rho_w = density_[w];
+    // The volume of every star tetrahedron with v moved to w, in one pass that the compiler
+    // vectorizes (the same arithmetic, element by element); then the sums, in the star's order.
+    const double p0 = pw[0], p1 = pw[1], p2 = pw[2];
+    if (!same)
+      for (size_t i = 0; i < ns; ++i) vol_w[i] = (nx[i] * p0 + ny[i] * p1 + nz[i] * p2 - sd[i]) / 6.0;
+    const double* vols = same ? vol_v : vol_w;
+    const uint32_t* hold = ws.holds.data() + (j == 0 ? 0 : ws.holds_start[j - 1]);
+    const uint32_t* hold_end = ws.holds.data() + ws.holds_start[j];
     double net = 0, local = 0;
     bool ok = true;
-    for (const StarTet& s : star_) {
-      if (s.o[0] == w || s.o[1] == w || s.o[2] == w) {
-        net -= s.mass;
-        local += std::fabs(s.mass);
+    for (size_t i = 0; i < ns; ++i) {
+      if (hold != hold_end && *hold == i) {
+        ++hold;
+        net -= mass[i];
+        local += std::fabs(mass[i]);
         continue;
       }
-      double vol;
-      if (same) {
-        vol = (dot(s.n, pv) - s.d) / 6.0;
-      } else {
-        vol = (dot(s.n, pw) - s.d) / 6.0;
-        if (!(vol > 0)) {
-          ok = false;
-          break;
-        }
+      const double vi = vols[i];
+      if (!same && !(vi > 0)) {
+        ok = false;
+        break;
       }
-      const double change = 0.25 * (rho_w + s.other_density) * vol - s.mass;
-      net += change;
-      local += std::fabs(change);
+      const double ch = 0.25 * (rho_w + od[i]) * vi - mass[i];
+      net += ch;
+      local += std::fabs(ch);
     }
     if (!ok) continue;
     const double ed = std::fabs(net) + kLocalWeight * local;
     double eg = 0;
     if (boundary_[v] && face_area > 0) {
-      for (const BoundaryFace& f : faces_) {
+      for (const BoundaryFace& f : ws.faces) {
         if (f.x == w || f.y == w) continue;
         double nn[3];
         triNormal(pw, pos(f.x), pos(f.y), nn);
@@ -375,7 +444,7 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out) {
           break;
         }
         eg += std::fabs(new_area - f.area) * f.area;
-        for (const BoundaryFace& g : faces_) {
+        for (const BoundaryFace& g : ws.faces) {
           if (&g == &f) continue;
           const bool has_w = g.x == w || g.y == w;
           const bool shares = g.x == f.x || g.y == f.x || g.x == f.y || g.y == f.y;
@@ -419,10 +488,10 @@ void Ranker::linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std:
 bool Ranker::validate(uint32_t v, uint32_t w) {
   if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w] || crowded(v) || crowded(w)) return false;
   if (boundary_[v] && !boundary_[w]) return false;
-  gatherStar(v, corners_);
-  gatherStar(w, corners_w_);
-  gatherBoundaryFaces(v, corners_, faces_);
-  gatherBoundaryFaces(w, corners_w_, faces_w_);
+  gatherStar(v, corners_, ws_);
+  gatherStar(w, corners_w_, ws_);
+  gatherBoundaryFaces(v, corners_, faces_, ws_);
+  gatherBoundaryFaces(w, corners_w_, faces_w_, ws_);
   // Tetrahedra around the edge vw and the vertices of Lk(vw).
   size_t edge_tets = 0;
   lk_verts_.clear();
@@ -505,7 +574,7 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
 }
 
 void Ranker::merge(uint32_t v, uint32_t w, float error) {
-  gatherStar(v, corners_);
+  gatherStar(v, corners_, ws_);
   recompute_.clear();
   recompute_.push_back(w);
   uint32_t removed = 0;
@@ -523,10 +592,19 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
       ++star_size_[w];
     }
   }
-  if (!corners_.empty()) {
-    next_[corners_.back()] = head_[w];
-    head_[w] = head_[v];
-    head_[v] = kNil;
+  // w's list becomes v's corners, then its own (the killed ones are dropped when next gathered).
+  {
+    const uint64_t b = star_pool_.size();
+    const uint32_t nw = star_len_[w];
+    star_pool_.resize(b + corners_.size() + nw);
+    std::copy(corners_.begin(), corners_.end(), star_pool_.begin() + static_cast<std::ptrdiff_t>(b));
+    std::copy_n(star_pool_.begin() + static_cast<std::ptrdiff_t>(star_begin_[w]), nw,
+                star_pool_.begin() + static_cast<std::ptrdiff_t>(b + corners_.size()));
+    star_begin_[w] = b;
+    star_len_[w] = static_cast<uint32_t>(corners_.size()) + nw;
+    star_len_[v] = 0;
+    collectDropped();
+    if (star_pool_.size() > 2 * star_live_ + 4096) compactStars();
   }
   alive_[v] = 0;
   ++version_[v];
@@ -535,25 +613,43 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
   tree_.removed[v] = removed;
   tree_.boundary[v] = boundary_[v];
   tree_.error[v] = error;
-  uniqueByMark(recompute_);
-  for (uint32_t x : recompute_) recompute(x);
+  ws_.uniqueByMark(recompute_);
+  recompute(recompute_);
 }
 
-void Ranker::recompute(uint32_t v) {
-  ++version_[v];
-  candidates(v, cands_);
-  if (cands_.empty()) return;
-  const Candidate* best = &cands_[0];
-  for (const Candidate& c : cands_) {
-    if (c.error < best->error || (c.error == best->error && c.w < best->w)) best = &c;
+void Ranker::recompute(const std::vector<uint32_t>& list) {
+  // The evaluations read the mesh and each rewrites only its own vertex's star run, so they run in
+  // parallel; the results are queued afterwards in the list's order, as one thread would.
+  const size_t n = list.size();
+  best_.resize(n);
+  auto evaluate = [&](size_t i, Workspace& ws) {
+    candidates(list[i], ws.cands, ws);
+    Candidate best{0, kNil};
+    for (const Candidate& c : ws.cands)
+      if (best.w == kNil || c.error < best.error || (c.error == best.error && c.w < best.w)) best = c;
+    best_[i] = best;
+  };
+  if (n < kParallelEvaluations) {
+    for (size_t i = 0; i < n; ++i) evaluate(i, ws_);
+  } else {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2), [&](const tbb::blocked_range<size_t>& r) {
+      Workspace& ws = thread_ws_.local();
+      for (size_t i = r.begin(); i < r.end(); ++i) evaluate(i, ws);
+    });
   }
-  push(v, *best);
+  for (size_t i = 0; i < n; ++i) {
+    ++version_[list[i]];
+    if (best_[i].w != kNil) push(list[i], best_[i]);
+  }
 }
 
 MergeTree Ranker::run(RankingStats* stats) {
   init();
   const uint32_t np = static_cast<uint32_t>(mesh_.numPoints());
-  for (uint32_t v = 0; v < np; ++v) recompute(v);
+  all_.resize(np);
+  for (uint32_t v = 0; v < np; ++v) all_[v] = v;
+  recompute(all_);
+  all_ = std::vector<uint32_t>();
   uint64_t popped = 0, rejected = 0;
   std::vector<Candidate> sorted;
   while (!heap_.empty() && tree_.merges < options_.max_merges) {
@@ -568,7 +664,7 @@ MergeTree Ranker::run(RankingStats* stats) {
     ++rejected;
     // The cheap filter let an invalid target through: take the best target that passes every check.
     ++version_[e.v];
-    candidates(e.v, sorted);
+    candidates(e.v, sorted, ws_);
     std::sort(sorted.begin(), sorted.end(), [](const Candidate& a, const Candidate& b) {
       return a.error < b.error || (a.error == b.error && a.w < b.w);
     });
@@ -582,7 +678,8 @@ MergeTree Ranker::run(RankingStats* stats) {
   if (stats) {
     stats->popped = popped;
     stats->rejected = rejected;
-    stats->evaluations = evaluations_;
+    stats->evaluations = ws_.evaluations;
+    for (const Workspace& ws : thread_ws_) stats->evaluations += ws.evaluations;
   }
   return std::move(tree_);
 }
