@@ -7,6 +7,8 @@
 #include <map>
 #include <optional>
 
+#include <tbb/task_arena.h>
+
 #include "convert/import.h"
 #include "format/gtn_file.h"
 #include "format/gtn_reader.h"
@@ -101,6 +103,28 @@ TEST_P(Datasets, RankingSimplifiesAndEveryPrefixIsValid) {
     EXPECT_EQ(c.boundary_euler, src.boundary_euler);
     EXPECT_EQ(m->numTets(), d.mesh.numTets() - d.tree.tetsRemovedUpTo(n));
   }
+}
+
+// The vertices around a merge are evaluated in parallel; the tree must be the one a single thread
+// ranks, merge for merge (a race on the shared star runs or an order that depends on the threads
+// would change it).
+TEST_P(Datasets, RankingOnOneThreadGivesTheSameTree) {
+  const Ranked& d = dataset(GetParam());
+  ASSERT_GT(d.mesh.numTets(), 0u);
+  RankingStats stats;
+  std::optional<StatusOr<MergeTree>> one;
+  tbb::task_arena arena(1);
+  arena.execute([&] { one.emplace(rankMerges(d.mesh, RankingOptions{}, &stats)); });
+  ASSERT_TRUE(one->isOk()) << one->status().message();
+  const MergeTree& t = one->value();
+  EXPECT_EQ(t.merges, d.tree.merges);
+  EXPECT_EQ(t.parent, d.tree.parent);
+  EXPECT_EQ(t.rank, d.tree.rank);
+  EXPECT_EQ(t.removed, d.tree.removed);
+  EXPECT_EQ(t.boundary, d.tree.boundary);
+  EXPECT_EQ(t.error, d.tree.error);
+  EXPECT_EQ(stats.evaluations, d.stats.evaluations);
+  EXPECT_EQ(stats.rejected, d.stats.rejected);
 }
 
 TEST_P(Datasets, OnTheFlyEqualsApplyOnTheDecodedStream) {
