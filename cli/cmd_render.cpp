@@ -5,11 +5,6 @@
 #include <cstdio>
 #include <memory>
 
-#if defined(__GLIBC__)
-#include <malloc.h>
-#include <unistd.h>
-#endif
-
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
@@ -163,21 +158,8 @@ StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const Rende
   return renderer.image();
 }
 
-// glibc serves a block of 128 KiB or more from its own mapping, but raises that threshold to the
-// size of any such block freed (up to 32 MiB): from then on large blocks come from the heap, and a
-// freed one stays resident unless it lies at the heap's top. Rendering frees large blocks all along
-// (the decoder's per-slot arrays and the hash tables are reallocated as they grow, and a level's
-// buffers are freed when it ends), so the threshold is fixed: every large block is mapped, and
-// unmapped when freed. Both pipelines run with it.
-void returnFreedLargeBlocks() {
-#if defined(__GLIBC__)
-  mallopt(M_MMAP_THRESHOLD, 128 * 1024);
-#endif
-}
-
 int runRender(const RenderArgs& a) {
   const Clock::time_point start = Clock::now();
-  returnFreedLargeBlocks();
   RenderOptions options;
   if (Status st = buildOptions(a, &options); !st.isOk()) return reportError(st);
   const int chosen = (a.level >= 0) + (a.ratio >= 0) + (a.merges >= 0) + (a.budget_ms >= 0);

@@ -2,6 +2,10 @@
 #include <cstdio>
 #include <vector>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include "cli/commands.h"
 
 namespace gtn::cli {
@@ -55,8 +59,24 @@ void setCommandLine(int argc, char** argv) {
 
 }  // namespace gtn::cli
 
+namespace {
+// glibc serves a block of 128 KiB or more from its own mapping, but raises that threshold to the
+// size of any such block freed (up to 32 MiB): from then on large blocks come from the heap, and a
+// freed one stays resident unless it lies at the heap's top. Every command frees large blocks all
+// along (rendering: the decoder's per-slot arrays and hash tables as they grow, a level's buffers when
+// it ends; converting: each level's encoder, the checks run beside the next level's encoding), so the
+// threshold is fixed: every large block is mapped, and unmapped when freed. (On a 2.5 M-tetrahedron
+// conversion the peak resident set fell from 268 to 255 MB.)
+void returnFreedLargeBlocks() {
+#if defined(__GLIBC__)
+  mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+#endif
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace gtn::cli;
+  returnFreedLargeBlocks();
   setCommandLine(argc, argv);
   CLI::App app{"gtn: compressed irregular-grid volume data (tetrahedral meshes) - convert, inspect, export"};
   app.require_subcommand(1);

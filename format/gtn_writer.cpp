@@ -1,5 +1,7 @@
 #include <cstdio>
 
+#include <tbb/task_group.h>
+
 #include "codec/level_check.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
@@ -212,15 +214,28 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
   std::vector<EncodedInput> encoded;
   size_t count = levels.size();
   if (bounded) {
+    // Each level is checked on another thread while the next one is encoded: one encoder's memory
+    // at a time, as before, and the check's time hidden behind the encoding. (The levels beyond the
+    // bound are checked too, but they are the smallest.) Failures are reported in level order.
+    encoded.reserve(levels.size());  // the checks read encoded[i] while later levels are added
+    std::vector<Status> checks(levels.size());
+    tbb::task_group checking;
+    Status failed;
     for (size_t i = 0; i < levels.size(); ++i) {
       auto e = encodeInput(levels, i);
-      if (!e.isOk()) return e.status();
+      if (!e.isOk()) {
+        failed = e.status();
+        break;
+      }
       encoded.push_back(std::move(e).value());
+      checking.run([&, i] { checks[i] = checkDecodesBack(path, levels, i, encoded[i].level, options); });
     }
+    checking.wait();
+    GTN_RETURN_IF_ERROR(failed);
     auto n = levelsWithinBound(encoded, levels, options);
     if (!n.isOk()) return Status(n.status().code(), path + ": " + n.status().message());
     count = *n;
-    for (size_t i = 0; i < count; ++i) GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels, i, encoded[i].level, options));
+    for (size_t i = 0; i < count; ++i) GTN_RETURN_IF_ERROR(checks[i]);
   }
   return writeFileAtomically(path, [&](std::FILE* f) -> Status {
     GtnStreamWriter w(
