@@ -144,7 +144,7 @@ class Ranker {
         density_(std::move(density)),
         options_(options),
         ws_(mesh.numPoints()),
-        thread_ws_(Workspace(mesh.numPoints())) {}
+        thread_ws_([points = mesh.numPoints()] { return Workspace(points); }) {}
 
   MergeTree run(RankingStats* stats);
 
