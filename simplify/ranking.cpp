@@ -143,7 +143,6 @@ class Ranker {
       : mesh_(mesh),
         density_(std::move(density)),
         options_(options),
-        ws_(mesh.numPoints()),
         thread_ws_([points = mesh.numPoints()] { return Workspace(points); }) {}
 
   MergeTree run(RankingStats* stats);
@@ -189,8 +188,6 @@ class Ranker {
   void compactStars();
   // Takes the workspaces' counts of dropped corners off star_live_.
   void collectDropped() {
-    star_live_ -= ws_.dropped;
-    ws_.dropped = 0;
     for (Workspace& ws : thread_ws_) {
       star_live_ -= ws.dropped;
       ws.dropped = 0;
@@ -203,8 +200,8 @@ class Ranker {
   std::priority_queue<QueueEntry, std::vector<QueueEntry>, std::greater<QueueEntry>> heap_;
   MergeTree tree_;
 
-  Workspace ws_;  // the calling thread's
   tbb::enumerable_thread_specific<Workspace> thread_ws_;
+  Workspace* ws_ = nullptr;  // the calling thread's (also its own in the parallel evaluations)
   std::vector<Candidate> best_;      // recompute's results, per listed vertex
   std::vector<uint32_t> all_;        // every vertex, for the first evaluation
   // Scratch buffers of validate and merge.
@@ -488,10 +485,10 @@ void Ranker::linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std:
 bool Ranker::validate(uint32_t v, uint32_t w) {
   if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w] || crowded(v) || crowded(w)) return false;
   if (boundary_[v] && !boundary_[w]) return false;
-  gatherStar(v, corners_, ws_);
-  gatherStar(w, corners_w_, ws_);
-  gatherBoundaryFaces(v, corners_, faces_, ws_);
-  gatherBoundaryFaces(w, corners_w_, faces_w_, ws_);
+  gatherStar(v, corners_, *ws_);
+  gatherStar(w, corners_w_, *ws_);
+  gatherBoundaryFaces(v, corners_, faces_, *ws_);
+  gatherBoundaryFaces(w, corners_w_, faces_w_, *ws_);
   // Tetrahedra around the edge vw and the vertices of Lk(vw).
   size_t edge_tets = 0;
   lk_verts_.clear();
@@ -574,7 +571,7 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
 }
 
 void Ranker::merge(uint32_t v, uint32_t w, float error) {
-  gatherStar(v, corners_, ws_);
+  gatherStar(v, corners_, *ws_);
   recompute_.clear();
   recompute_.push_back(w);
   uint32_t removed = 0;
@@ -613,7 +610,7 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
   tree_.removed[v] = removed;
   tree_.boundary[v] = boundary_[v];
   tree_.error[v] = error;
-  ws_.uniqueByMark(recompute_);
+  ws_->uniqueByMark(recompute_);
   recompute(recompute_);
 }
 
@@ -630,7 +627,7 @@ void Ranker::recompute(const std::vector<uint32_t>& list) {
     best_[i] = best;
   };
   if (n < kParallelEvaluations) {
-    for (size_t i = 0; i < n; ++i) evaluate(i, ws_);
+    for (size_t i = 0; i < n; ++i) evaluate(i, *ws_);
   } else {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2), [&](const tbb::blocked_range<size_t>& r) {
       Workspace& ws = thread_ws_.local();
@@ -645,6 +642,7 @@ void Ranker::recompute(const std::vector<uint32_t>& list) {
 
 MergeTree Ranker::run(RankingStats* stats) {
   init();
+  ws_ = &thread_ws_.local();
   const uint32_t np = static_cast<uint32_t>(mesh_.numPoints());
   all_.resize(np);
   for (uint32_t v = 0; v < np; ++v) all_[v] = v;
@@ -664,7 +662,7 @@ MergeTree Ranker::run(RankingStats* stats) {
     ++rejected;
     // The cheap filter let an invalid target through: take the best target that passes every check.
     ++version_[e.v];
-    candidates(e.v, sorted, ws_);
+    candidates(e.v, sorted, *ws_);
     std::sort(sorted.begin(), sorted.end(), [](const Candidate& a, const Candidate& b) {
       return a.error < b.error || (a.error == b.error && a.w < b.w);
     });
@@ -678,7 +676,7 @@ MergeTree Ranker::run(RankingStats* stats) {
   if (stats) {
     stats->popped = popped;
     stats->rejected = rejected;
-    stats->evaluations = ws_.evaluations;
+    stats->evaluations = 0;
     for (const Workspace& ws : thread_ws_) stats->evaluations += ws.evaluations;
   }
   return std::move(tree_);
