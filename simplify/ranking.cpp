@@ -203,7 +203,6 @@ class Ranker {
   tbb::enumerable_thread_specific<Workspace> thread_ws_;
   Workspace* ws_ = nullptr;  // the calling thread's (also its own in the parallel evaluations)
   std::vector<Candidate> best_;      // recompute's results, per listed vertex
-  std::vector<uint32_t> all_;        // every vertex, for the first evaluation
   // Scratch buffers of validate and merge.
   std::vector<uint32_t> corners_, corners_w_, recompute_;
   std::vector<BoundaryFace> faces_, faces_w_;
@@ -301,8 +300,8 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
   faces.clear();
   if (!boundary_[v]) return;
   // Faces containing v: three per tetrahedron; those seen once are on the boundary.
-  std::vector<StarFace>& face_keys_ = ws.face_keys;
-  face_keys_.clear();
+  std::vector<StarFace>& keys = ws.face_keys;
+  keys.clear();
   for (uint32_t c : corners) {
     const uint32_t t = c >> 2;
     const int k = c & 3;
@@ -315,16 +314,16 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
         if (u != v && n < 2) other[n++] = u;
       }
       const uint32_t x = std::min(other[0], other[1]), y = std::max(other[0], other[1]);
-      face_keys_.push_back({(uint64_t{x} << 32) | y, t, static_cast<uint32_t>(j)});
+      keys.push_back({(uint64_t{x} << 32) | y, t, static_cast<uint32_t>(j)});
     }
   }
-  std::sort(face_keys_.begin(), face_keys_.end());
-  for (size_t i = 0; i < face_keys_.size();) {
+  std::sort(keys.begin(), keys.end());
+  for (size_t i = 0; i < keys.size();) {
     size_t j = i + 1;
-    while (j < face_keys_.size() && face_keys_[j].key == face_keys_[i].key) ++j;
+    while (j < keys.size() && keys[j].key == keys[i].key) ++j;
     if (j - i == 1) {
-      const uint32_t t = face_keys_[i].t;
-      const int f = static_cast<int>(face_keys_[i].j);
+      const uint32_t t = keys[i].t;
+      const int f = static_cast<int>(keys[i].j);
       uint32_t tri[3] = {tets_[t][kTetFace[f][0]], tets_[t][kTetFace[f][1]], tets_[t][kTetFace[f][2]]};
       while (tri[0] != v) std::rotate(tri, tri + 1, tri + 3);
       BoundaryFace bf;
@@ -379,14 +378,14 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) 
   }
   ws.uniqueByMark(ws.targets);
   // Which star tetrahedra hold each target (mark == stamp marks the targets), ascending.
-  const size_t nt = ws.targets.size();
-  for (size_t j = 0; j < nt; ++j) ws.target_index[ws.targets[j]] = static_cast<uint32_t>(j);
-  ws.holds_start.assign(nt + 1, 0);
+  const size_t num_targets = ws.targets.size();
+  for (size_t j = 0; j < num_targets; ++j) ws.target_index[ws.targets[j]] = static_cast<uint32_t>(j);
+  ws.holds_start.assign(num_targets + 1, 0);
   for (size_t i = 0; i < ns; ++i)
     for (uint32_t x : ws.star_o[i])
       if (ws.mark[x] == ws.stamp) ++ws.holds_start[ws.target_index[x] + 1];
-  for (size_t j = 0; j < nt; ++j) ws.holds_start[j + 1] += ws.holds_start[j];
-  ws.holds.resize(ws.holds_start[nt]);
+  for (size_t j = 0; j < num_targets; ++j) ws.holds_start[j + 1] += ws.holds_start[j];
+  ws.holds.resize(ws.holds_start[num_targets]);
   for (size_t i = 0; i < ns; ++i)
     for (uint32_t x : ws.star_o[i])
       if (ws.mark[x] == ws.stamp) ws.holds[ws.holds_start[ws.target_index[x]]++] = static_cast<uint32_t>(i);
@@ -394,7 +393,7 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) 
   const double *nx = ws.nx.data(), *ny = ws.ny.data(), *nz = ws.nz.data(), *sd = ws.d.data(),
                *od = ws.od.data(), *mass = ws.mass.data(), *vol_v = ws.vol.data();
   double* vol_w = ws.vol_w.data();
-  for (size_t j = 0; j < nt; ++j) {
+  for (size_t j = 0; j < num_targets; ++j) {
     const uint32_t w = ws.targets[j];
     if (frozen_[w] || crowded(w)) continue;
     ++ws.evaluations;
@@ -644,10 +643,11 @@ MergeTree Ranker::run(RankingStats* stats) {
   init();
   ws_ = &thread_ws_.local();
   const uint32_t np = static_cast<uint32_t>(mesh_.numPoints());
-  all_.resize(np);
-  for (uint32_t v = 0; v < np; ++v) all_[v] = v;
-  recompute(all_);
-  all_ = std::vector<uint32_t>();
+  {
+    std::vector<uint32_t> all(np);
+    for (uint32_t v = 0; v < np; ++v) all[v] = v;
+    recompute(all);
+  }
   uint64_t popped = 0, rejected = 0;
   std::vector<Candidate> sorted;
   while (!heap_.empty() && tree_.merges < options_.max_merges) {
