@@ -1170,8 +1170,10 @@ StatusOr<P3dFiles> readP3dMeta(const std::string& path) {
       if (!v.is_boolean()) return bad(key, "true or false");
       if (!auto_detect) out.constraints.iblank = v.get<bool>();
     } else if (key == "language") {
-      if (!v.is_string() || (v != "C" && v != "Fortran")) return bad(key, "\"C\" or \"Fortran\"");
-      if (!auto_detect) out.constraints.fortran = v == "Fortran";
+      // ParaView's reader spells them "C" and "fortran" (and nothing else); "Fortran" is read too.
+      if (!v.is_string() || (v != "C" && v != "fortran" && v != "Fortran"))
+        return bad(key, "\"C\" or \"fortran\"");
+      if (!auto_detect) out.constraints.fortran = v != "C";
     } else if (key == "records") {
       // gtn's own key (ParaView has none for this): how the data records are cut. Always obeyed.
       if (!v.is_string() || (v != "whole" && v != "planes" && v != "variables"))

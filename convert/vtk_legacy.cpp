@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "convert/ascii_rows.h"
 #include "convert/cell_split.h"
 #include "convert/import.h"
 #include "convert/text_reader.h"
@@ -122,7 +123,7 @@ StatusOr<ScalarType> LegacyReader::dataType(const std::string& what) {
   }
   if (!vtkLegacyTypeFromName(name, &t))
     return Status(StatusCode::kUnsupported, path_ + ":" + std::to_string(tr_.line()) + ": " + what +
-                                                ": data type '" + name + "' is not supported");
+                                                ": data type " + quotedToken(name) + " is not supported");
   return t;
 }
 
@@ -135,7 +136,7 @@ Status LegacyReader::header() {
   tr_.seek(e2 + 1);
   GTN_ASSIGN_OR_RETURN(std::string mode, token("ASCII or BINARY"));
   const std::string m = upper(mode);
-  if (m != "ASCII" && m != "BINARY") return tr_.error("expected ASCII or BINARY, found '" + mode + "'");
+  if (m != "ASCII" && m != "BINARY") return tr_.error("expected ASCII or BINARY, found " + quotedToken(mode));
   binary_ = m == "BINARY";
   return Status::ok();
 }
@@ -185,8 +186,8 @@ Status LegacyReader::readValues(ScalarType type, uint64_t n, const std::string& 
   for (uint64_t i = 0; i < n; ++i) {
     if (!tr_.next(&t)) return tr_.errorAtEnd(("value " + std::to_string(i) + " of " + what).c_str());
     if (!parseScalarToken(t, type, out->data() + i * size))
-      return tr_.error("value " + std::to_string(i) + " of " + what + " is not a " + scalarTypeName(type) + ": '" +
-                       std::string(t.substr(0, 40)) + "'");
+      return tr_.error("value " + std::to_string(i) + " of " + what + " is not a " + scalarTypeName(type) + ": " +
+                       quotedToken(t));
   }
   return Status::ok();
 }
@@ -224,7 +225,7 @@ Status LegacyReader::readCells() {
     GTN_ASSIGN_OR_RETURN(ScalarType ot, dataType("OFFSETS"));
     GTN_RETURN_IF_ERROR(readIndexArray(a, "OFFSETS", &cells_.offsets, ot));
     GTN_ASSIGN_OR_RETURN(std::string kw, token("CONNECTIVITY"));
-    if (upper(kw) != "CONNECTIVITY") return tr_.error("expected CONNECTIVITY after OFFSETS, found '" + kw + "'");
+    if (upper(kw) != "CONNECTIVITY") return tr_.error("expected CONNECTIVITY after OFFSETS, found " + quotedToken(kw));
     GTN_ASSIGN_OR_RETURN(ScalarType ct, dataType("CONNECTIVITY"));
     GTN_RETURN_IF_ERROR(readIndexArray(b, "CONNECTIVITY", &cells_.connectivity, ct));
     if (cells_.offsets.empty()) cells_.offsets.push_back(0);
@@ -443,7 +444,7 @@ Status LegacyReader::readAttribute(const std::string& kw) {
     if (comps < 1 || comps > 3) return tr_.error("TEXTURE_COORDINATES " + name + ": bad dimension");
     GTN_ASSIGN_OR_RETURN(type, dataType(kw + " " + name));
   } else {
-    return tr_.error("unknown keyword '" + kw + "'");
+    return tr_.error("unknown keyword " + quotedToken(kw));
   }
   Field f(decodeName(name), static_cast<uint32_t>(comps), type, 0);
   if (section_items_ > UINT64_MAX / comps) return tr_.error(kw + " " + name + ": too many values");
@@ -603,7 +604,7 @@ StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
     } else if (section_ != 0) {
       GTN_RETURN_IF_ERROR(readAttribute(kw));
     } else {
-      return tr_.error("unexpected keyword '" + std::string(t.substr(0, 40)) + "'");
+      return tr_.error("unexpected keyword " + quotedToken(t));
     }
   }
   if (!have_dataset) return invalidData(path_ + ": no DATASET line");

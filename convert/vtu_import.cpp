@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 
+#include "convert/ascii_rows.h"
 #include "convert/cell_split.h"
 #include "convert/import.h"
 #include "convert/text_reader.h"
@@ -413,7 +414,7 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
       }
       if (i >= count) out->bytes.resize((i + 1) * size);  // at_least: bounded by the text's length
       if (!parseScalarToken(t, out->type, out->bytes.data() + i * size) || (bits && out->bytes[i] > 1))
-        return fail(where, "value " + std::to_string(i) + " '" + std::string(t.substr(0, 40)) + "' is not a " +
+        return fail(where, "value " + std::to_string(i) + " " + quotedToken(t) + " is not a " +
                                (bits ? "bit (0 or 1)" : scalarTypeName(out->type)));
     }
     if (at_least && i % comps != 0)

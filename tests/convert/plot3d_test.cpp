@@ -1130,6 +1130,31 @@ TEST_F(Plot3dSynthetic, MetaFileNamesTheFilesRelativeToItself) {
   EXPECT_FALSE(importFiles({dir_ + "/sub/broken.p3d"}).isOk());
 }
 
+TEST_F(Plot3dSynthetic, MetaFileTakesParaViewsSpellingOfLanguage) {
+  // ParaView's vtkPlot3DMetaReader knows "C" and "fortran" (lower case) only: its meta-files say so.
+  const std::vector<Block> blocks = {boxBlock(3, 4, 3)};
+  GridOptions o;
+  o.big_endian = false;
+  o.marker = 4;
+  write("lang.xyz", gridFile(blocks, o));
+  const std::string meta = write("lang.p3d", R"({
+    "auto-detect-format": false, "byte-order": "little", "precision": 32, "multi-grid": false,
+    "language": "fortran", "filenames": [ {"time": 0, "xyz": "lang.xyz"} ]
+  })");
+  auto r = importFiles({meta});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  expectCoords(r->mesh, blocks, 4);
+
+  // "C" means no record markers: this file has them, so nothing fits.
+  write("lang_c.p3d", R"({"auto-detect-format": false, "language": "C", "filenames": [{"xyz": "lang.xyz"}]})");
+  EXPECT_FALSE(importFiles({dir_ + "/lang_c.p3d"}).isOk());
+
+  write("lang_bad.p3d", R"({"language": "cobol", "filenames": [{"xyz": "lang.xyz"}]})");
+  auto bad = importFiles({dir_ + "/lang_bad.p3d"});
+  ASSERT_FALSE(bad.isOk());
+  EXPECT_NE(bad.status().message().find("\"fortran\""), std::string::npos) << bad.status().message();
+}
+
 TEST_F(Plot3dSynthetic, WeldMergesBitIdenticalPointsAndDropsCollapsedTets) {
   // One cell whose top face collapses to a point: a pyramid.
   Block b = boxBlock(2, 2, 2);

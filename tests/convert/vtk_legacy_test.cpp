@@ -325,6 +325,10 @@ TEST(VtkLegacy, RejectsOtherDatasetsCellTypesAndBadIndices) {
               "cell 0 refers to point 4 but there are 4 points");
   expectError(dir + "/short.vtk", head + "CELLS 1 5\n4 0 1 2\n", "file ends");
   expectError(dir + "/word.vtk", head + "CELLS 1 5\n4 0 1 x 3\nCELL_TYPES 1\n10\n", "is not a int32");
+  // Bytes of a damaged file are not echoed raw (they would not be UTF-8): shown as '?'.
+  expectError(dir + "/byte.vtk", head + "CELLS 1 5\n4 0 1 \xff 3\nCELL_TYPES 1\n10\n", "is not a int32: '?'");
+  expectError(dir + "/keyword.vtk", head + "CELLS 1 5\n4 0 1 2 3\nCELL_TYP\xc9S 1\n10\n",
+              "unexpected keyword 'CELL_TYP?S'");
   expectError(dir + "/pd.vtk", head + "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 5\n",
               "POINT_DATA 5 does not match the 4 points");
 }

@@ -1454,6 +1454,9 @@ TEST(Vtu, BitArraysReadAsBytes) {
   }
   writeFile(dir + "/two.vtu", file(R"(<DataArray type="Bit" Name="f" format="ascii">1 0 2 1 0</DataArray>)"));
   expectError(dir + "/two.vtu", "value 2 '2' is not a bit (0 or 1)");
+  // Control bytes and bytes beyond ASCII in a bad value are shown as '?', not echoed raw.
+  writeFile(dir + "/byte.vtu", file("<DataArray type=\"Bit\" Name=\"f\" format=\"ascii\">1 0 \x7f 1 0</DataArray>"));
+  expectError(dir + "/byte.vtu", "value 2 '?' is not a bit (0 or 1)");
   const uint8_t header2[4] = {2, 0, 0, 0}, two_bytes[2] = {0xB0, 0};
   writeFile(dir + "/long.vtu", file(R"(<DataArray type="Bit" Name="f" format="binary">)" + base64Encode(header2, 4) +
                                     base64Encode(two_bytes, 2) + "</DataArray>"));
