@@ -2,6 +2,9 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
 
 namespace gtn {
 
@@ -15,6 +18,33 @@ std::string shown(std::string_view token) {
   return "'" + s + (token.size() > 40 ? "...'" : "'");
 }
 
+// Whether `token` (a decimal beyond T's range) is T's largest finite value, in magnitude, rounded to
+// the token's own number of significant digits: a writer that prints doubles with fewer than 17
+// digits turns DBL_MAX into a decimal above it (VTK's legacy ASCII writer, %.11lg, prints
+// 1.7976931349e+308, which VTK itself then refuses).
+template <class T>
+bool isRoundedMax(std::string_view token) {
+  if (!token.empty() && (token.front() == '-' || token.front() == '+')) token.remove_prefix(1);
+  const size_t e = token.find_first_of("eE");
+  const std::string_view mantissa = token.substr(0, e);
+  int digits = 0;
+  bool leading = true;
+  for (const char c : mantissa) {
+    if (c < '0' || c > '9') continue;
+    if (c != '0') leading = false;
+    if (!leading) ++digits;
+  }
+  // Trailing zeros of a mantissa with a point are significant too ("1.80e308" has 3 digits); a
+  // count beyond 17 is no rounding of a double.
+  if (digits < 1 || digits > 17) return false;
+  char max[40];
+  std::snprintf(max, sizeof max, "%.*e", digits - 1, static_cast<double>(std::numeric_limits<T>::max()));
+  long double a, b;
+  const auto [pa, ea] = std::from_chars(token.data(), token.data() + token.size(), a);
+  const auto [pb, eb] = std::from_chars(max, max + std::strlen(max), b);
+  return ea == std::errc() && eb == std::errc() && pa == token.data() + token.size() && a == b;
+}
+
 template <class T>
 bool parseFloating(std::string_view token, T* out) {
   if (token.empty()) return false;
@@ -24,7 +54,8 @@ bool parseFloating(std::string_view token, T* out) {
   if (ec == std::errc::result_out_of_range && ptr == end) {
     // Underflow reads as strtod reads it: a float below FLT_MIN as its float subnormal, anything
     // below the smallest subnormal as a signed zero (TetGen writes values such as 1.6e-322, and
-    // files declare as float values that only a double holds). Overflow stays an error.
+    // files declare as float values that only a double holds). Overflow stays an error, unless the
+    // token is the largest value printed with fewer digits (isRoundedMax).
     double d;
     auto [dptr, dec] = std::from_chars(token.data(), end, d);
     if (dec == std::errc() && dptr == end && std::fabs(d) < 1) {
@@ -35,6 +66,10 @@ bool parseFloating(std::string_view token, T* out) {
     if (dec == std::errc::result_out_of_range && e != std::string_view::npos && e + 1 < token.size() &&
         token[e + 1] == '-') {
       *out = token.front() == '-' ? -T(0) : T(0);
+      return true;
+    }
+    if (isRoundedMax<T>(token)) {
+      *out = token.front() == '-' ? -std::numeric_limits<T>::max() : std::numeric_limits<T>::max();
       return true;
     }
     return false;

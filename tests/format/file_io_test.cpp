@@ -8,6 +8,7 @@
 
 #include <cstring>
 #include <filesystem>
+#include <limits>
 
 #include "convert/text_reader.h"
 #include "format/file_io.h"
@@ -175,6 +176,24 @@ TEST(TextReader, ShortestRoundTripTextReadsBackBitExact) {
   double z;
   EXPECT_FALSE(parseDouble("1.0x", &z));
   EXPECT_FALSE(parseDouble("", &z));
+  // The largest finite value printed with fewer digits lies above it: it reads as that value (VTK's
+  // legacy ASCII writer prints DBL_MAX as 1.7976931349e+308). Other overflows are refused.
+  const double dmax = std::numeric_limits<double>::max();
+  ASSERT_TRUE(parseDouble("1.7976931349e+308", &z));
+  EXPECT_EQ(z, dmax);
+  ASSERT_TRUE(parseDouble("-1.79769313486232E308", &z));
+  EXPECT_EQ(z, -dmax);
+  ASSERT_TRUE(parseDouble("+1.80e308", &z));
+  EXPECT_EQ(z, dmax);
+  EXPECT_FALSE(parseDouble("1.9e308", &z));
+  EXPECT_FALSE(parseDouble("1.7976931349e+309", &z));
+  EXPECT_FALSE(parseDouble("1.797693134863e308", &z));  // 13 digits: DBL_MAX rounds to ...862e308
+  ASSERT_TRUE(parseFloat("3.403e38", &f));
+  EXPECT_EQ(f, std::numeric_limits<float>::max());
+  ASSERT_TRUE(parseFloat("-3.4028235e+38", &f));
+  EXPECT_EQ(f, -std::numeric_limits<float>::max());
+  EXPECT_FALSE(parseFloat("3.5e38", &f));
+  EXPECT_FALSE(parseFloat("1e39", &f));
 }
 
 }  // namespace
