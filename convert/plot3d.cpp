@@ -1103,6 +1103,7 @@ Status asciiFallback(const std::string& path, Kind kind, const Constraints& cons
 
 struct P3dFiles {
   std::string xyz, q, function;
+  std::vector<std::string> function_names;  // "function-names": the function file's variables
   Constraints constraints;
   std::vector<std::string> warnings;
 };
@@ -1180,6 +1181,16 @@ StatusOr<P3dFiles> readP3dMeta(const std::string& path) {
         return bad(key, "\"whole\", \"planes\" or \"variables\"");
       out.constraints.planes = v == "planes";
       out.constraints.components = v == "variables";
+    } else if (key == "function-names") {
+      // ParaView's names for the function file's variables, in order.
+      if (!v.is_array()) return bad(key, "a list of names");
+      for (const nlohmann::json& name : v) {
+        if (!name.is_string() || name.get<std::string>().empty()) return bad(key, "a list of non-empty names");
+        const std::string n = name.get<std::string>();
+        if (std::find(out.function_names.begin(), out.function_names.end(), n) != out.function_names.end())
+          return invalidData(path + ": key \"function-names\" lists \"" + n + "\" twice");
+        out.function_names.push_back(n);
+      }
     } else if (key == "2D") {
       if (!v.is_boolean()) return bad(key, "true or false");
       if (v.get<bool>()) return unsupported(path + ": \"2D\": true: 2D grids cannot become tetrahedra");
@@ -1335,7 +1346,10 @@ void addQ(std::string_view bytes, const Fit& fit, TetMesh& mesh, std::vector<std
   }
 }
 
-Status addFunction(const std::string& path, std::string_view bytes, const Fit& fit, TetMesh& mesh) {
+// The function file's variables become point fields named `names` (a .p3d meta-file's
+// "function-names", `meta` naming it), then function_k for the variables beyond them.
+Status addFunction(const std::string& path, std::string_view bytes, const Fit& fit, TetMesh& mesh,
+                   const std::vector<std::string>& names = {}, const std::string& meta = "") {
   const Layout& l = fit.layout;
   const int64_t nvar = fit.blocks[0].nvar;
   for (size_t g = 1; g < fit.blocks.size(); ++g) {
@@ -1346,7 +1360,15 @@ Status addFunction(const std::string& path, std::string_view bytes, const Fit& f
   const size_t total = mesh.numPoints();
   const ScalarType type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
   const size_t first = mesh.point_fields.size();
-  for (int64_t k = 0; k < nvar; ++k) mesh.point_fields.emplace_back("function_" + std::to_string(k), 1, type, total);
+  for (int64_t k = 0; k < nvar; ++k) {
+    const std::string name = static_cast<size_t>(k) < names.size() ? names[k] : "function_" + std::to_string(k);
+    for (const Field& f : mesh.point_fields) {
+      if (f.name == name)
+        return invalidData(meta + ": key \"function-names\": \"" + name + "\" names a field of the Q file or another "
+                           "function variable already");
+    }
+    mesh.point_fields.emplace_back(name, 1, type, total);
+  }
   std::string scratch, reordered;
   size_t base = 0;
   for (size_t g = 0; g < fit.blocks.size(); ++g) {
@@ -1400,6 +1422,7 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
   std::vector<std::string>& warnings = result.report.warnings;
 
   std::string grid_path, second_path, function_path;
+  std::vector<std::string> function_names;
   Constraints constraints;
   const bool meta = isP3dMeta(inputs[0]);
   for (size_t i = 1; i < inputs.size(); ++i) {
@@ -1413,6 +1436,9 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
     warnings = files.warnings;
     if (!files.q.empty()) second_path = files.q;
     function_path = files.function;
+    function_names = files.function_names;
+    if (!function_names.empty() && function_path.empty())
+      warnings.push_back(inputs[0] + ": \"function-names\" given, but the time step read names no function file");
   } else {
     if (inputs.size() > 3)
       return usageError("PLOT3D takes a grid file, an optional Q file and an optional function file; got " +
@@ -1520,10 +1546,17 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
     GTN_ASSIGN_OR_RETURN(Selected f, for_grid(function_path, &bytes, Kind::kFunction, &df, &f_text));
     if (!f_text.isOk()) return f_text;
     if (!f.found) return no_match(function_path, bytes, Kind::kFunction, df);
-    GTN_RETURN_IF_ERROR(addFunction(function_path, bytes, f.fit, mesh));
+    GTN_RETURN_IF_ERROR(addFunction(function_path, bytes, f.fit, mesh, function_names, inputs[0]));
+    const size_t nvar = static_cast<size_t>(f.fit.blocks[0].nvar);
+    if (function_names.size() > nvar)
+      warnings.push_back(inputs[0] + ": \"function-names\" lists " + std::to_string(function_names.size()) +
+                         " names for the " + std::to_string(nvar) + " variables of " + function_path +
+                         "; the last " + std::to_string(function_names.size() - nvar) + " name nothing");
   }
 
   if (!iblank.empty()) {
+    if (mesh.findPointField("iblank"))
+      return invalidData(inputs[0] + ": key \"function-names\": \"iblank\" names the grid's IBLANK field already");
     Field field("iblank", 1, ScalarType::kInt32, iblank.size());
     std::memcpy(field.bytes.data(), iblank.data(), iblank.size() * sizeof(int32_t));
     mesh.point_fields.push_back(std::move(field));

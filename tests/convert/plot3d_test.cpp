@@ -1155,6 +1155,53 @@ TEST_F(Plot3dSynthetic, MetaFileTakesParaViewsSpellingOfLanguage) {
   EXPECT_NE(bad.status().message().find("\"fortran\""), std::string::npos) << bad.status().message();
 }
 
+// ParaView's "function-names" name the function file's variables in order; variables beyond the list
+// keep function_k.
+TEST_F(Plot3dSynthetic, MetaFileNamesTheFunctionVariables) {
+  const std::vector<Block> blocks = {boxBlock(3, 4, 3)};
+  GridOptions o;
+  write("fn.xyz", gridFile(blocks, o));
+  write("fn.q", qFile(blocks, o));
+  write("fn.f", functionFile(blocks, o, 3));
+  const std::string plain = write("plain.p3d", R"({"filenames": [{"xyz": "fn.xyz", "q": "fn.q", "function": "fn.f"}]})");
+  auto unnamed = importFiles({plain});
+  ASSERT_TRUE(unnamed.isOk()) << unnamed.status().message();
+  const std::string named = write("named.p3d", R"({"function-names": ["pressure", "temperature"],
+    "filenames": [{"xyz": "fn.xyz", "q": "fn.q", "function": "fn.f"}]})");
+  auto r = importFiles({named});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const std::pair<const char*, const char*> renamed[] = {
+      {"pressure", "function_0"}, {"temperature", "function_1"}, {"function_2", "function_2"}};
+  for (const auto& [name, was] : renamed) {
+    const Field* f = r->mesh.findPointField(name);
+    const Field* g = unnamed->mesh.findPointField(was);
+    ASSERT_TRUE(f && g) << name;
+    EXPECT_EQ(f->bytes, g->bytes) << name;
+  }
+  EXPECT_FALSE(r->mesh.findPointField("function_0"));
+  for (const std::string& w : r->report.warnings) EXPECT_EQ(w.find("function-names"), std::string::npos) << w;
+
+  // More names than variables: a warning; a name twice, a name of a Q field, or not a list: errors.
+  write("more.p3d", R"({"function-names": ["a", "b", "c", "d"], "filenames": [{"xyz": "fn.xyz", "function": "fn.f"}]})");
+  auto more = importFiles({dir_ + "/more.p3d"});
+  ASSERT_TRUE(more.isOk()) << more.status().message();
+  EXPECT_TRUE(more->mesh.findPointField("c"));
+  bool warned = false;
+  for (const std::string& w : more->report.warnings) warned |= w.find("lists 4 names for the 3 variables") != std::string::npos;
+  EXPECT_TRUE(warned);
+  write("twice.p3d", R"({"function-names": ["a", "a"], "filenames": [{"xyz": "fn.xyz", "function": "fn.f"}]})");
+  auto twice = importFiles({dir_ + "/twice.p3d"});
+  ASSERT_FALSE(twice.isOk());
+  EXPECT_NE(twice.status().message().find("lists \"a\" twice"), std::string::npos) << twice.status().message();
+  write("clash.p3d", R"({"function-names": ["density"], "filenames": [{"xyz": "fn.xyz", "q": "fn.q", "function": "fn.f"}]})");
+  auto clash = importFiles({dir_ + "/clash.p3d"});
+  ASSERT_FALSE(clash.isOk());
+  EXPECT_NE(clash.status().message().find("clash.p3d: key \"function-names\": \"density\""), std::string::npos)
+      << clash.status().message();
+  write("notlist.p3d", R"({"function-names": "p", "filenames": [{"xyz": "fn.xyz", "function": "fn.f"}]})");
+  EXPECT_FALSE(importFiles({dir_ + "/notlist.p3d"}).isOk());
+}
+
 TEST_F(Plot3dSynthetic, WeldMergesBitIdenticalPointsAndDropsCollapsedTets) {
   // One cell whose top face collapses to a point: a pyramid.
   Block b = boxBlock(2, 2, 2);
