@@ -38,6 +38,12 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
   lo.levels = a.levels;
   lo.merge_tree = !a.no_merge_tree;
   GTN_ASSIGN_OR_RETURN(MipLevels levels, buildMipLevels(mesh, tree, lo));
+  // Levels stop where the merge tree does (a small or flat mesh has few merges): say so rather than
+  // write fewer levels than --levels asked for without a word.
+  if (a.levels > 0 && levels.merges.size() - 1 < static_cast<size_t>(a.levels))
+    warn(a.inputs[0] + ": --levels " + std::to_string(a.levels) + ": the merge tree has " +
+         std::to_string(tree.merges) + " merge(s) of " + std::to_string(mesh.numPoints()) + " points, enough for " +
+         std::to_string(levels.merges.size() - 1) + " level(s) beyond level 0");
   GtnWriteOptions bounded = wo;
   if (a.levels < 0) bounded.level_storage_limit = a.level_storage;
   return writeGtnFile(a.output, levels.inputs(mesh), bounded);

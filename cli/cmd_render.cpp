@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include <nlohmann/json.hpp>
@@ -37,6 +38,14 @@ struct RenderArgs {
   std::string dump_view;
   bool verbose = false, json = false;
 };
+
+// Whether two outputs, neither of which need exist yet, name one file ("x.png" and "./x.png").
+bool samePathToBe(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code ea, eb;
+  const fs::path pa = fs::weakly_canonical(fs::absolute(a, ea), ea), pb = fs::weakly_canonical(fs::absolute(b, eb), eb);
+  return !ea && !eb && pa == pb;
+}
 
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) {
@@ -87,6 +96,13 @@ Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   }
   if (!a.range.empty()) {
     if (a.range.size() != 2 || !(a.range[0] < a.range[1])) return usageError("--range needs LO HI with LO < HI");
+    // The scalars are placed by (s - LO) / (HI - LO): a width beyond the largest double put every
+    // sample at LO (--range -1e308 1e308 gave a blank image).
+    if (!std::isfinite(a.range[1] - a.range[0])) {
+      char why[120];
+      std::snprintf(why, sizeof why, "--range %g %g: HI - LO must not exceed the largest double", a.range[0], a.range[1]);
+      return usageError(why);
+    }
     o->transfer.has_range = true;
     o->transfer.lo = a.range[0];
     o->transfer.hi = a.range[1];
@@ -168,6 +184,14 @@ int runRender(const RenderArgs& a) {
     for (const std::string& out : {a.output, a.dump_view})
       if (!out.empty() && (in == out || sameFile(in, out)))
         return reportError(usageError(out + ": the output would overwrite an input"));
+  // The image and the view in one file (the view replaced the image), or two documents on standard
+  // output together (the PNG's bytes and the JSON interleaved).
+  const int to_stdout = (a.output == "-") + (a.dump_view == "-") + a.json;
+  if (to_stdout > 1)
+    return reportError(usageError("only one of -o -, --dump-view - and --json can write to standard output"));
+  if (!a.dump_view.empty() && (a.dump_view == a.output || sameFile(a.dump_view, a.output) ||
+                               samePathToBe(a.dump_view, a.output)))
+    return reportError(usageError(a.output + ": -o and --dump-view name the same file"));
   auto input = RenderInput::open(a.inputs);
   if (!input.isOk()) return reportError(input.status());
   const bool generic = a.pipeline == "generic";

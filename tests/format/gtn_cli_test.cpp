@@ -163,6 +163,24 @@ TEST_F(GtnCli, GtnFileAsConvertInput) {
   EXPECT_NE(text.err.find("standard input is read as a .gtn stream"), std::string::npos) << text.err;
 }
 
+// --levels K on a mesh whose merge tree runs out first writes fewer levels: with a warning that says
+// how many (it said nothing).
+TEST_F(GtnCli, FewerLevelsThanAskedAreReported) {
+  const std::string gtn = dir_ + "/spx.gtn";
+  test::RunResult r = test::runGtn("convert " + spx_ + " -o " + gtn + " --levels 12");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = infoJson(gtn);
+  ASSERT_LT(j["levels"].size(), 13u);
+  EXPECT_NE(r.err.find("--levels 12: the merge tree has"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("enough for " + std::to_string(j["levels"].size() - 1) + " level(s) beyond level 0"),
+            std::string::npos)
+      << r.err;
+  r = test::runGtn("convert " + spx_ + " -o " + gtn + " --levels 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("--levels"), std::string::npos) << r.err;
+  EXPECT_EQ(infoJson(gtn)["levels"].size(), 4u);
+}
+
 TEST_F(GtnCli, ExportRoundTripsToVtuVtkAndTetgen) {
   const std::string gtn = dir_ + "/spx.gtn";
   ASSERT_EQ(test::runGtn("convert " + spx_ + " -o " + gtn).exit_code, 0);

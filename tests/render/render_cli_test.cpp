@@ -256,6 +256,23 @@ TEST(RenderCommand, RejectsBadArguments) {
   EXPECT_EQ(runGtn("render " + copy + " -o " + copy).exit_code, 2);
   EXPECT_EQ(runGtn("render " + copy + " -o " + dir + "/y.png --dump-view " + copy).exit_code, 2);
   EXPECT_EQ(test::readFile(copy), test::readFile(spx));
+  // Nor does the view replace the image (it did: --dump-view x.png -o x.png left JSON in x.png), nor
+  // do two documents share standard output (-o - --json interleaved the PNG and the report).
+  const test::RunResult same = runGtn("render " + spx + " -o " + dir + "/z.png --dump-view " + dir + "/./z.png");
+  EXPECT_EQ(same.exit_code, 2) << same.err;
+  EXPECT_NE(same.err.find("-o and --dump-view name the same file"), std::string::npos) << same.err;
+  EXPECT_FALSE(test::fileExists(dir + "/z.png"));
+  for (const char* option : {"-o - --json", "-o - --dump-view -", "-o /dev/null --dump-view - --json"}) {
+    const test::RunResult r = runGtn("render " + spx + " " + option);
+    EXPECT_EQ(r.exit_code, 2) << option << ": " << r.err;
+    EXPECT_TRUE(r.out.empty()) << option;
+    EXPECT_NE(r.err.find("standard output"), std::string::npos) << option << ": " << r.err;
+  }
+  // A --range wider than the largest double put every sample at LO: a blank image.
+  const test::RunResult wide = runGtn("render " + spx + " -o " + dir + "/x.png --range -1e308 1e308");
+  EXPECT_EQ(wide.exit_code, 2) << wide.err;
+  EXPECT_NE(wide.err.find("HI - LO"), std::string::npos) << wide.err;
+  EXPECT_FALSE(test::fileExists(dir + "/x.png"));
 }
 
 // spx as a .gtn file with mip levels and merge trees, made with the library (as `gtn convert` does).
