@@ -96,13 +96,6 @@ Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   }
   if (!a.range.empty()) {
     if (a.range.size() != 2 || !(a.range[0] < a.range[1])) return usageError("--range needs LO HI with LO < HI");
-    // The scalars are placed by (s - LO) / (HI - LO): a width beyond the largest double put every
-    // sample at LO (--range -1e308 1e308 gave a blank image).
-    if (!std::isfinite(a.range[1] - a.range[0])) {
-      char why[120];
-      std::snprintf(why, sizeof why, "--range %g %g: HI - LO must not exceed the largest double", a.range[0], a.range[1]);
-      return usageError(why);
-    }
     o->transfer.has_range = true;
     o->transfer.lo = a.range[0];
     o->transfer.hi = a.range[1];
@@ -128,7 +121,7 @@ nlohmann::json describeSetup(const RenderSetup& s) {
   const TransferFunction& tf = s.transfer;
   for (const TransferPoint& p : tf.points) {
     points.push_back({{"x", p.x},
-                      {"value", tf.lo + p.x * (tf.hi - tf.lo)},
+                      {"value", tf.valueAt(p.x)},
                       {"rgb", {p.rgb[0], p.rgb[1], p.rgb[2]}},
                       {"opacity", p.opacity}});
   }

@@ -135,13 +135,17 @@ void buildSampleTable(RenderSetup& s) {
   const int n = RenderSetup::kSampleTableSize;
   s.sample_table.resize(n);
   const double lo = s.transfer.lo, hi = s.transfer.hi;
+  // hi - lo may exceed the largest double (sentinels of +-DBL_MAX): the table is then indexed by the
+  // scalars' halves (table_pre), which is exact.
+  const bool halves = !std::isfinite(hi - lo);
   for (int i = 0; i < n; ++i) {
-    const double scalar = hi > lo ? lo + (hi - lo) * i / (n - 1) : lo;
+    const double scalar = !(hi > lo) ? lo : (halves ? s.transfer.valueAt(static_cast<double>(i) / (n - 1)) : lo + (hi - lo) * i / (n - 1));
     double rgb[3], e;
     s.transfer.evaluate(scalar, rgb, &e);
     s.sample_table[i] = {rgb[0], rgb[1], rgb[2], -std::expm1(-e * s.inv_unit_distance * s.step)};
   }
-  s.table_scale = hi > lo ? (n - 1) / (hi - lo) : 0.0;
+  s.table_pre = halves ? 0.5 : 1.0;
+  s.table_scale = hi > lo ? (n - 1) / (s.table_pre * hi - s.table_pre * lo) : 0.0;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -399,7 +403,8 @@ void shadeSamples(const RenderSetup& setup, double t_in, double s_in, double t_o
   const double span = t_out - t_in;
   const double slope = span > 0 ? (s_out - s_in) / span : 0.0;
   const bool table = !setup.sample_table.empty();
-  const double lo_s = setup.transfer.lo, scale = setup.table_scale;
+  // pre is 1 but for ranges wider than the largest double (then 0.5, exact): s * 1.0 is s.
+  const double pre = setup.table_pre, lo_s = pre * setup.transfer.lo, scale = setup.table_scale;
   constexpr double kLast = RenderSetup::kSampleTableSize - 1;
   for (int64_t i = 0; i < k1 - k0; ++i) {
     const int64_t k = front_to_back ? k0 + i : k1 - 1 - i;
@@ -407,7 +412,7 @@ void shadeSamples(const RenderSetup& setup, double t_in, double s_in, double t_o
     const double s = s_in + slope * (t - t_in);
     double rgb[3], alpha;
     if (table) {
-      double x = (s - lo_s) * scale;
+      double x = (pre * s - lo_s) * scale;
       if (!(x >= 0)) x = 0;  // also catches NaN
       if (x > kLast) x = kLast;
       const int j = std::min(static_cast<int>(x), RenderSetup::kSampleTableSize - 2);

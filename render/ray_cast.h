@@ -90,7 +90,8 @@ struct RenderSetup {
   // exact evaluation by far less than one grey level.
   static constexpr int kSampleTableSize = 4096;
   std::vector<std::array<double, 4>> sample_table;  // rgb, alpha per step
-  double table_scale = 0;                          // (kSampleTableSize - 1) / (hi - lo)
+  double table_scale = 0;  // (kSampleTableSize - 1) / (pre hi - pre lo), pre = table_pre
+  double table_pre = 1;    // 1, or 0.5 when hi - lo overflows: entry (pre s - pre lo) * table_scale
 };
 RenderSetup resolveSetup(const RenderOptions& options, const double bbox_min[3], const double bbox_max[3]);
 // Fills setup.sample_table for the transfer function's final range (volume sampling only).

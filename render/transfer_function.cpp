@@ -23,9 +23,20 @@ TransferFunction fromTable(const std::vector<std::array<double, 5>>& rows) {
 }
 }  // namespace
 
-void TransferFunction::evaluate(double scalar, double rgb[3], double* extinction) const {
+double TransferFunction::position(double scalar) const {
   const double span = hi - lo;
-  double x = span > 0 ? (scalar - lo) / span : 0.5;
+  if (std::isfinite(span)) return span > 0 ? (scalar - lo) / span : 0.5;
+  return (0.5 * scalar - 0.5 * lo) / (0.5 * hi - 0.5 * lo);
+}
+
+double TransferFunction::valueAt(double x) const {
+  const double span = hi - lo;
+  if (std::isfinite(span)) return lo + span * x;
+  return 2.0 * (0.5 * lo + (0.5 * hi - 0.5 * lo) * x);
+}
+
+void TransferFunction::evaluate(double scalar, double rgb[3], double* extinction) const {
+  double x = position(scalar);
   if (!(x >= 0)) x = 0;  // also catches NaN
   if (x > 1) x = 1;
   size_t i = 1;

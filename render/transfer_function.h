@@ -36,6 +36,11 @@ struct TransferFunction {
 
   // Colour and extinction per unit distance (the interpolated opacity o; divide by D for sigma).
   void evaluate(double scalar, double rgb[3], double* extinction) const;
+  // The position of a scalar in the range (0 at lo, 1 at hi, not clamped; 0.5 for an empty range),
+  // and the scalar at a position: exact halves when hi - lo exceeds the largest double (a field with
+  // -DBL_MAX and DBL_MAX sentinels), where the plain formulas overflow.
+  double position(double scalar) const;
+  double valueAt(double x) const;
 };
 
 // Names of the presets: "cool-warm" (the default: Moreland's diverging map, opacity ramping from 0 to
