@@ -41,6 +41,14 @@ std::string fileKey(const std::string& path) {
   return abs + "|" + std::to_string(st.st_size) + "|" + std::to_string(st.st_mtime);
 }
 
+// Whether what is cached for `path` can be found again: a regular file, known by its path, size and
+// modification time. Standard input ("-") and pipes are other streams every time (they all had the
+// key of "-": one stream's calibration and colour range served the next).
+bool cacheable(const std::string& path) {
+  struct stat st {};
+  return path != "-" && ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
 std::string cacheKey(const std::string& path, const RenderOptions& o, bool generic) {
   return fileKey(path) + "|" + std::to_string(o.camera.width) + "x" + std::to_string(o.camera.height) + "|" +
          (o.sampling == Sampling::kFace ? "face" : "volume") + "|" + (generic ? "generic" : "integrated");
@@ -107,8 +115,9 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
   if (!(budget_ms > 0)) return usageError("--budget-ms must be positive");
   const std::string key = "v3|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
+  const bool cached = cacheable(path);
   nlohmann::json cache = nlohmann::json::object();
-  if (auto text = readWholeFile(cache_file, 1 << 24); text.isOk()) {
+  if (auto text = readWholeFile(cache_file, 1 << 24); cached && text.isOk()) {
     cache = nlohmann::json::parse(text.value(), nullptr, false);
     if (!cache.is_object()) cache = nlohmann::json::object();
   }
@@ -151,6 +160,26 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       floor_merges = f["merges"].get<double>();
       floor_tets = f["tets"].get<double>();
       floor_ms = f["ms"].get<double>();
+    }
+  }
+  // A calibration names the file's levels and its coarsest tree: another file under the same key
+  // (replaced within the same second by one of the same size) is calibrated again, not planned with
+  // them (a floor of more merges than the tree holds failed the run).
+  if (!points.empty()) {
+    bool same = true;
+    for (const auto& [tets, ms] : points) {
+      bool found = false;
+      for (size_t i = 0; i < input.levels() && !found; ++i) found = static_cast<double>(input.levelHeader(i).tets) == tets;
+      same &= found;
+    }
+    if (floor_merges > 0) {
+      auto merges = input.mergeTreeMerges(input.levels() - 1);
+      same &= merges.isOk() && static_cast<double>(*merges) == floor_merges;
+    }
+    if (!same) {
+      points.clear();
+      decode_points.clear();
+      floor_merges = floor_tets = floor_ms = 0;
     }
   }
   // What a real run costs beyond the calibration's timings, learnt from the budgeted runs since: a
@@ -232,13 +261,18 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       floor = {{"merges", floor_merges}, {"tets", floor_tets}, {"ms", floor_ms}};
       names += " and " + std::to_string(coarsest) + " with all " + std::to_string(tree_merges) + " merges of its tree";
     }
-    cache[key] = {{"tets", tets}, {"ms", ms}, {"decode_ms", dms}, {"offset_ms", offset}, {"floor", floor}};
-    std::error_code ec;
-    std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
-    const std::string text = cache.dump(1, ' ', false, nlohmann::json::error_handler_t::replace);
-    // A cache that cannot be written only costs a calibration next time.
-    (void)writeBytesAtomically(cache_file, text.data(), text.size(), /*sync=*/false);
-    source = "calibrated on levels " + names + ", cached in " + cache_file;
+    if (cached) {
+      cache[key] = {{"tets", tets}, {"ms", ms}, {"decode_ms", dms}, {"offset_ms", offset}, {"floor", floor}};
+      std::error_code ec;
+      std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
+      const std::string text = cache.dump(1, ' ', false, nlohmann::json::error_handler_t::replace);
+      // A cache that cannot be written only costs a calibration next time.
+      (void)writeBytesAtomically(cache_file, text.data(), text.size(), /*sync=*/false);
+      source = "calibrated on levels " + names + ", cached in " + cache_file;
+    } else {
+      source = "calibrated on levels " + names + ", not cached (" + (path == "-" ? "standard input" : path) +
+               " is no regular file)";
+    }
   }
   std::sort(points.begin(), points.end());
   std::sort(decode_points.begin(), decode_points.end());
@@ -362,7 +396,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
 
 void recordBudgetRun(const std::string& path, const RenderOptions& options, bool generic, double predicted_ms,
                      double actual_ms) {
-  if (!(predicted_ms > 0) || !(actual_ms > 0)) return;
+  if (!(predicted_ms > 0) || !(actual_ms > 0) || !cacheable(path)) return;
   const std::string key = "v3|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
   auto text = readWholeFile(cache_file, 1 << 24);
@@ -392,6 +426,7 @@ std::string rangeKey(const std::string& path, const FieldSelector& field) {
 }  // namespace
 
 std::optional<std::pair<double, double>> cachedBoundaryRange(const std::string& path, const FieldSelector& field) {
+  if (!cacheable(path)) return std::nullopt;
   auto text = readWholeFile(cachePath(), 1 << 24);
   if (!text.isOk()) return std::nullopt;
   const nlohmann::json cache = nlohmann::json::parse(text.value(), nullptr, false);
@@ -405,7 +440,7 @@ std::optional<std::pair<double, double>> cachedBoundaryRange(const std::string& 
 }
 
 void storeBoundaryRange(const std::string& path, const FieldSelector& field, std::pair<double, double> range) {
-  if (!std::isfinite(range.first) || !std::isfinite(range.second)) return;
+  if (!std::isfinite(range.first) || !std::isfinite(range.second) || !cacheable(path)) return;
   const std::string cache_file = cachePath();
   nlohmann::json cache = nlohmann::json::object();
   if (auto text = readWholeFile(cache_file, 1 << 24); text.isOk()) {

@@ -14,7 +14,9 @@
 // sixteenth and a quarter of level 0's tetrahedra, and level 0 (after one warm-up run), whole and
 // decoding alone, and the floor, and is cached in
 // $XDG_CACHE_HOME/gatun/render-calibration.json (default ~/.cache/gatun/...) keyed by the file's path,
-// size and modification time and the settings that change the cost (size, sampling, pipeline).
+// size and modification time and the settings that change the cost (size, sampling, pipeline);
+// standard input and pipes are calibrated every time, not cached. A cached calibration whose levels
+// or coarsest tree are not the file's is made again.
 #pragma once
 
 #include <optional>

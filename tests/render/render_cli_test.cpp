@@ -397,6 +397,19 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
             0);
   EXPECT_TRUE(test::fileExists(dir + "/fresh-cache/gatun/render-calibration.json"));
   EXPECT_EQ(compareJson(dir + "/cached.png", dir + "/fresh.png")["max_difference"].get<int>(), 0);
+  // Standard input is another stream every time: nothing is cached for it. (Every stream had the key
+  // of "-": one stream's calibration planned the next with more merges than its tree held, an error,
+  // and its colour range coloured the next.)
+  const std::string other = dir + "/other.gtn";
+  ASSERT_EQ(runGtn("convert " + spx + " -o " + other + " --levels 1").exit_code, 0);
+  const std::string stdin_env = "XDG_CACHE_HOME=" + dir + "/stdin-cache ";
+  for (const std::string& f : {gtn, other, gtn}) {
+    const test::RunResult s = test::runShell("cat " + f + " | " + stdin_env + GTN_BINARY " render - -o " + dir +
+                                             "/s.png --size 32x32 --budget-ms 0.001 -v");
+    ASSERT_EQ(s.exit_code, 0) << f << ": " << s.err;
+    EXPECT_NE(s.err.find("not cached (standard input is no regular file)"), std::string::npos) << s.err;
+  }
+  EXPECT_FALSE(test::fileExists(dir + "/stdin-cache/gatun/render-calibration.json"));
 
   // The plans for a range of budgets, from a calibration written here (so that the choice does not
   // depend on this machine's speed): a larger budget never gives a coarser plan, the finest plan
