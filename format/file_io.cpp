@@ -4,7 +4,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -14,15 +16,24 @@ namespace gtn {
 namespace {
 std::string errnoText() { return std::strerror(errno); }
 
-// Creates a temporary file next to `path` and returns its name and an open FILE*.
+// Creates a temporary file next to `path` and returns its name and an open FILE*. Its mode is that of
+// the file it will replace, or for a new file 0666 less the umask, as the shell's `>` gives (mkstemp
+// made it 0600, and it was then set to 0644 whatever the umask said).
 Status openTemporary(const std::string& path, std::string* tmp_name, std::FILE** file) {
-  std::string templ = path + ".tmp-XXXXXX";
-  std::vector<char> buf(templ.begin(), templ.end());
-  buf.push_back('\0');
-  const int fd = mkstemp(buf.data());
+  static std::atomic<uint64_t> serial{0};
+  int fd = -1;
+  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+    const uint64_t n = (static_cast<uint64_t>(::getpid()) << 32) ^ (serial++ * 0x9E3779B97F4A7C15ull) ^
+                       static_cast<uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
+    char suffix[24];
+    std::snprintf(suffix, sizeof suffix, ".tmp-%06llx", static_cast<unsigned long long>(n & 0xFFFFFF));
+    *tmp_name = path + suffix;
+    fd = ::open(tmp_name->c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0 && errno != EEXIST) break;
+  }
   if (fd < 0) return ioError(path + ": cannot create a temporary file beside it: " + errnoText());
-  fchmod(fd, 0644);
-  *tmp_name = buf.data();
+  struct stat old;
+  if (::stat(path.c_str(), &old) == 0 && S_ISREG(old.st_mode)) fchmod(fd, old.st_mode & 0777);
   *file = fdopen(fd, "wb");
   if (!*file) {
     close(fd);
@@ -110,6 +121,13 @@ Target outputTarget(const std::string& path, std::string* target, std::string* w
   *why = "is a chain of symbolic links that does not end";
   return Target::kRefused;
 }
+
+// A file the user may not write is not replaced (the rename would replace it all the same, as the
+// directory allows it): a file made read-only is kept, as `cp` and the shell's `>` keep it.
+Status checkReplaceable(const std::string& path, const std::string& target, Target kind) {
+  if (kind == Target::kNew || ::access(target.c_str(), W_OK) == 0 || errno != EACCES) return Status::ok();
+  return ioError(path + ": is read-only (not replaced)");
+}
 }  // namespace
 
 Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write, bool sync) {
@@ -121,6 +139,7 @@ Status writeFileAtomically(const std::string& path, const std::function<Status(s
   std::string target, why;
   const Target kind = outputTarget(path, &target, &why);
   if (kind == Target::kRefused) return ioError(path + ": " + why);
+  GTN_RETURN_IF_ERROR(checkReplaceable(path, target, kind));
   if (kind == Target::kInPlace) {
     std::FILE* f = std::fopen(target.c_str(), "wb");
     if (!f) return ioError(path + ": cannot open for writing: " + errnoText());
@@ -159,6 +178,7 @@ Status AtomicFileGroup::add(const std::string& path, const std::function<Status(
   const Target kind = outputTarget(path, &target, &why);
   if (kind == Target::kInPlace) why = "is not a regular file (a group of files is written whole or not at all)";
   if (kind == Target::kRefused || kind == Target::kInPlace) return ioError(path + ": " + why);
+  GTN_RETURN_IF_ERROR(checkReplaceable(path, target, kind));
   std::string tmp;
   GTN_RETURN_IF_ERROR(writeTemporary(target, write, &tmp));
   files_.emplace_back(tmp, target);

@@ -52,6 +52,46 @@ TEST(FileIo, FailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
   EXPECT_EQ(test::readFile(target), "new");
 }
 
+// A new file gets 0666 less the umask, as the shell's '>' gives it; a replaced file keeps its mode; a
+// file the user may not write is not replaced (root may write any).
+TEST(FileIo, OutputsKeepModesAndTheUmask) {
+  const std::string dir = test::tempDir("fileio-modes");
+  auto mode = [](const std::string& path) {
+    struct stat sb;
+    EXPECT_EQ(::stat(path.c_str(), &sb), 0) << path;
+    return sb.st_mode & 0777;
+  };
+  const mode_t old_mask = ::umask(027);
+  ASSERT_TRUE(writeBytesAtomically(dir + "/new.txt", "a", 1).isOk());
+  EXPECT_EQ(mode(dir + "/new.txt"), 0640u);
+  ::umask(0);
+  ASSERT_TRUE(writeBytesAtomically(dir + "/open.txt", "a", 1).isOk());
+  EXPECT_EQ(mode(dir + "/open.txt"), 0666u);
+  ::umask(old_mask);
+  ASSERT_EQ(::chmod((dir + "/new.txt").c_str(), 0600), 0);
+  ASSERT_TRUE(writeBytesAtomically(dir + "/new.txt", "bb", 2).isOk());
+  EXPECT_EQ(test::readFile(dir + "/new.txt"), "bb");
+  EXPECT_EQ(mode(dir + "/new.txt"), 0600u);
+  AtomicFileGroup g;
+  ASSERT_TRUE(g.add(dir + "/open.txt", [](std::FILE* f) { std::fputs("g", f); return Status::ok(); }).isOk());
+  ASSERT_TRUE(g.commit().isOk());
+  EXPECT_EQ(mode(dir + "/open.txt"), 0666u);
+  ASSERT_EQ(::chmod((dir + "/new.txt").c_str(), 0444), 0);
+  const Status st = writeBytesAtomically(dir + "/new.txt", "ccc", 3);
+  if (::geteuid() != 0) {
+    ASSERT_FALSE(st.isOk());
+    EXPECT_NE(st.message().find("new.txt: is read-only (not replaced)"), std::string::npos) << st.message();
+    EXPECT_EQ(test::readFile(dir + "/new.txt"), "bb");
+    EXPECT_FALSE(AtomicFileGroup().add(dir + "/new.txt", [](std::FILE*) { return Status::ok(); }).isOk());
+  } else {
+    EXPECT_TRUE(st.isOk()) << st.message();
+    EXPECT_EQ(mode(dir + "/new.txt"), 0444u);
+  }
+  size_t entries = 0;
+  for ([[maybe_unused]] auto& e : std::filesystem::directory_iterator(dir)) ++entries;
+  EXPECT_EQ(entries, 2u);  // no temporary left behind
+}
+
 TEST(FileIo, GroupCommitsAllOrNothing) {
   const std::string dir = test::tempDir("fileio-group");
   {
