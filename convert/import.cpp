@@ -208,10 +208,11 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
         if (detectInputFormat(p) != InputFormat::kTetgen || base(p) != base(inputs[0]))
           return usageError(p + ": TetGen inputs must all be files of one mesh (" + base(inputs[0]) + ".*)");
       }
-    } else {
-      return usageError(std::string("a ") + inputFormatName(first) + " mesh is one file; got " +
-                        std::to_string(inputs.size()) + " inputs");
+    } else if (first != InputFormat::kUnknown) {
+      return usageError(inputs[1] + ": " + inputs[0] + " is a " + inputFormatName(first) +
+                        " mesh, which is one file; this is an input too many");
     }
+    // Of an unknown format, the first input's own error says why (its format cannot be told).
   }
   const std::string& path = inputs[0];
   if (first != InputFormat::kTetgen && !isRegularFile(path)) {

@@ -29,6 +29,23 @@ TEST(ImportDispatch, GitLfsPointerIsNamedAsSuch) {
   EXPECT_NE(r.status().message().find(dir + "/a.xyz: a Git LFS pointer"), std::string::npos) << r.status().message();
 }
 
+// Several inputs where the format takes one: the error names the extra input; of an unknown format,
+// the first file's own error says why ("a unknown mesh is one file; got 2 inputs" named neither).
+TEST(ImportDispatch, OneFileFormatsNameTheExtraInput) {
+  const std::string dir = test::tempDir("import-extra");
+  test::writeFile(dir + "/foo", "hi\n");
+  test::writeFile(dir + "/bar", "hi\n");
+  auto r = importMesh({dir + "/foo", dir + "/bar"}, ImportOptions{});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().message().rfind(dir + "/foo: cannot tell its format", 0), 0u) << r.status().message();
+  r = importMesh({test::dataPath("vtk/spx.vtk"), dir + "/bar"}, ImportOptions{});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().code(), StatusCode::kUsage);
+  EXPECT_EQ(r.status().message().rfind(dir + "/bar: ", 0), 0u) << r.status().message();
+  EXPECT_NE(r.status().message().find("spx.vtk is a legacy VTK mesh, which is one file"), std::string::npos)
+      << r.status().message();
+}
+
 // The format of a file that does not exist (nothing to read) comes from its extension alone.
 TEST(ImportDispatch, FormatFromTheExtension) {
   const std::string dir = test::tempDir("import_ext");
