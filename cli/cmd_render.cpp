@@ -211,8 +211,13 @@ int runRender(const RenderArgs& a) {
   auto level = (*input)->resolve(choice);
   if (!level.isOk()) return reportError(level.status());
   // The field asked for, checked against the file before anything is decoded.
-  if (auto field = ScalarReader::create((*input)->levelHeader(level->level).point_fields, options.field); !field.isOk())
-    return reportError(Status(field.status().code(), a.inputs[0] + ": " + field.status().message()));
+  const LevelHeader& header = (*input)->levelHeader(level->level);
+  if (auto field = ScalarReader::create(header.point_fields, options.field); !field.isOk()) {
+    std::string why = field.status().message();
+    for (const FieldDesc& c : header.cell_fields)
+      if (c.name == options.field.name) why += "; '" + c.name + "' is a cell field, and render shows point fields";
+    return reportError(Status(field.status().code(), a.inputs[0] + ": " + why));
+  }
   if (Status st = (*input)->fixView(level.value(), &options); !st.isOk()) return reportError(st);
   // A step so small that the rays would take hours (1e-9 ran for minutes): at most kMaxSteps samples
   // across the box (the default takes 400).

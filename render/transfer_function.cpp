@@ -71,9 +71,21 @@ StatusOr<TransferFunction> transferPreset(const std::string& name) {
   return usageError("unknown transfer function preset '" + name + "' (known: " + known + ")");
 }
 
+namespace {
+// A word of the file for a message: cut to 40 characters, bytes outside printable ASCII as '?'.
+std::string shownWord(const std::string& word) {
+  std::string s = word.substr(0, 40);
+  for (char& c : s)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return s + (word.size() > 40 ? "..." : "");
+}
+}  // namespace
+
 StatusOr<TransferFunction> parseTransferFunction(const std::string& text, const std::string& what) {
   TransferFunction tf;
-  std::istringstream lines(text);
+  // A UTF-8 byte order mark (editors on Windows write one) is no part of the first directive.
+  const bool bom = text.rfind("\xEF\xBB\xBF", 0) == 0;
+  std::istringstream lines(bom ? text.substr(3) : text);
   std::string line;
   int line_no = 0;
   while (std::getline(lines, line)) {
@@ -98,10 +110,10 @@ StatusOr<TransferFunction> parseTransferFunction(const std::string& text, const 
         return invalidData(where + "point positions must not decrease");
       tf.points.push_back(p);
     } else {
-      return invalidData(where + "unknown directive '" + word + "' (expected 'range' or 'point')");
+      return invalidData(where + "unknown directive '" + shownWord(word) + "' (expected 'range' or 'point')");
     }
     std::string extra;
-    if (in >> extra) return invalidData(where + "unexpected '" + extra + "' at the end of the line");
+    if (in >> extra) return invalidData(where + "unexpected '" + shownWord(extra) + "' at the end of the line");
   }
   if (tf.points.size() < 2) return invalidData(what + ": a transfer function needs at least two points");
   return tf;

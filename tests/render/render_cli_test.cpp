@@ -236,7 +236,8 @@ TEST(RenderCommand, RejectsBadArguments) {
   const std::string spheres = test::dataPath("tetgen/cornell_spheres.1");
   const test::RunResult nofield = runGtn("render " + spheres + " -o " + dir + "/x.png --field face_marker");
   EXPECT_EQ(nofield.exit_code, 2) << nofield.err;
-  EXPECT_NE(nofield.err.find(spheres + ": no point field named 'face_marker' (the mesh has no point fields)"),
+  EXPECT_NE(nofield.err.find(spheres + ": no point field named 'face_marker' (the mesh has no point fields); "
+                             "'face_marker' is a cell field, and render shows point fields"),
             std::string::npos)
       << nofield.err;
   EXPECT_FALSE(test::fileExists(dir + "/x.png"));

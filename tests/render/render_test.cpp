@@ -362,6 +362,26 @@ TEST(TransferFunction, ParsesAndRejects) {
   EXPECT_NE(bad.status().message().find("bad.tf:2"), std::string::npos);
   EXPECT_FALSE(parseTransferFunction("point 0 0 0 0 0\n", "one.tf").isOk());
   EXPECT_FALSE(transferPreset("rainbow").isOk());
+  // A UTF-8 byte order mark is skipped; a word that is no directive is shown without raw bytes.
+  auto bom = parseTransferFunction("\xEF\xBB\xBFpoint 0 0 0 0 0\npoint 1 1 1 1 1\n", "bom.tf");
+  ASSERT_TRUE(bom.isOk()) << bom.status().message();
+  EXPECT_EQ(bom->points.size(), 2u);
+  auto word = parseTransferFunction("p\xC3\xB6int 0 0 0 0 0\n", "word.tf");
+  ASSERT_FALSE(word.isOk());
+  EXPECT_NE(word.status().message().find("word.tf:1: unknown directive 'p??int'"), std::string::npos)
+      << word.status().message();
+  // Positions in a range wider than the largest double: by exact halves.
+  TransferFunction wide = *bom;
+  wide.lo = -1.5e308;
+  wide.hi = 1.5e308;
+  EXPECT_EQ(wide.position(0.0), 0.5);
+  EXPECT_EQ(wide.position(1.5e308), 1.0);
+  EXPECT_EQ(wide.valueAt(0.5), 0.0);
+  EXPECT_EQ(wide.valueAt(1.0), 1.5e308);
+  EXPECT_EQ(wide.valueAt(0.0), -1.5e308);
+  wide.evaluate(1.5e308, rgb, &e);
+  EXPECT_EQ(rgb[0], 1.0);
+  EXPECT_EQ(e, 1.0);
 }
 
 TEST(FieldSelector, ComponentsAndMagnitude) {
