@@ -56,6 +56,8 @@ int runConvert(const ConvertArgs& a) {
   for (const std::string& in : a.inputs) {
     if (in == a.output || sameFile(in, a.output)) return reportError(usageError(a.output + ": the output would overwrite an input"));
   }
+  if (a.compress && out_format != OutputFormat::kVtu)
+    warn(a.output + ": --compress applies to .vtu outputs only; ignored");
   ImportOptions options;
   options.split = a.split;
   options.weld = a.weld;

@@ -224,6 +224,7 @@ int runInfo(const InfoArgs& a) {
   auto imported = importMesh(a.inputs, options);
   if (!imported.isOk()) return reportError(imported.status());
   for (const std::string& w : imported->report.warnings) warnAbout(a.inputs[0], w);
+  if (a.merge_tree) warn(a.inputs[0] + ": --merge-tree describes the merge tree of a .gtn file; a mesh has none");
   const MeshStats stats = computeMeshStats(imported->mesh);
   if (a.json) {
     nlohmann::json j = statsToJson(stats, imported->report, imported->mesh);

@@ -246,6 +246,15 @@ TEST_F(GtnCli, WarningsNameTheirFileOnce) {
   // Given by its basename, the mesh's files are named by the warning itself: no prefix.
   EXPECT_NE(r.err.find("gtn: warning: " + base + ".ele: 10-node"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find(base + ": " + base + ".ele:"), std::string::npos) << r.err;
+  // Options that do nothing for these inputs or outputs say so (they were ignored without a word).
+  r = test::runGtn("convert " + base + " -o " + dir_ + "/quad.vtk --compress");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find(dir_ + "/quad.vtk: --compress applies to .vtu outputs only; ignored"), std::string::npos) << r.err;
+  r = test::runGtn("convert " + base + " -o " + dir_ + "/quad.vtu --compress");
+  EXPECT_EQ(r.err.find("--compress"), std::string::npos) << r.err;
+  r = test::runGtn("info " + base + ".ele --merge-tree");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("--merge-tree describes the merge tree of a .gtn file; a mesh has none"), std::string::npos) << r.err;
 }
 
 // A mesh file given to export is a usage error that names the command that converts it.
