@@ -139,7 +139,8 @@ void buildSampleTable(RenderSetup& s) {
   // scalars' halves (table_pre), which is exact.
   const bool halves = !std::isfinite(hi - lo);
   for (int i = 0; i < n; ++i) {
-    const double scalar = !(hi > lo) ? lo : (halves ? s.transfer.valueAt(static_cast<double>(i) / (n - 1)) : lo + (hi - lo) * i / (n - 1));
+    double scalar = lo;
+    if (hi > lo) scalar = halves ? s.transfer.valueAt(static_cast<double>(i) / (n - 1)) : lo + (hi - lo) * i / (n - 1);
     double rgb[3], e;
     s.transfer.evaluate(scalar, rgb, &e);
     s.sample_table[i] = {rgb[0], rgb[1], rgb[2], -std::expm1(-e * s.inv_unit_distance * s.step)};

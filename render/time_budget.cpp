@@ -169,7 +169,8 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
     bool same = true;
     for (const auto& [tets, ms] : points) {
       bool found = false;
-      for (size_t i = 0; i < input.levels() && !found; ++i) found = static_cast<double>(input.levelHeader(i).tets) == tets;
+      for (size_t i = 0; i < input.levels() && !found; ++i)
+        found = static_cast<double>(input.levelHeader(i).tets) == tets;
       same &= found;
     }
     if (floor_merges > 0) {
