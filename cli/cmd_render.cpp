@@ -233,6 +233,15 @@ int runRender(const RenderArgs& a) {
                     options.step, std::sqrt(d2));
       return reportError(usageError(why));
     }
+    // The other end: samples so far apart that most rays take none (spx with --step 20: a blank image).
+    if (options.sampling == Sampling::kVolume && std::sqrt(d2) < 4 * options.step) {
+      char why[200];
+      std::snprintf(why, sizeof why,
+                    "--step %g takes fewer than 4 samples across the bounding box (diagonal %g): most rays take "
+                    "none, and the image may be blank",
+                    options.step, std::sqrt(d2));
+      warn(a.inputs[0] + ": " + why);
+    }
   }
   auto image = renderOnce(**input, level.value(), options, generic, report);
   if (!image.isOk()) return reportError(image.status());
