@@ -24,14 +24,18 @@ StatusOr<FieldSelector> parseFieldSelector(const std::string& text) {
     return sel;
   }
   sel.name = text.substr(0, colon);
+  sel.whole = text;
   const std::string suffix = text.substr(colon + 1);
   if (sel.name.empty()) return usageError("field selection '" + text + "' has no field name");
   if (suffix == "mag") {
     sel.magnitude = true;
     return sel;
   }
-  if (suffix.empty() || suffix.size() > 9 || suffix.find_first_not_of("0123456789") != std::string::npos)
-    return usageError("field selection '" + text + "': expected NAME, NAME:COMPONENT or NAME:mag");
+  if (suffix.empty() || suffix.size() > 9 || suffix.find_first_not_of("0123456789") != std::string::npos) {
+    sel.name = text;  // only a field of that very name can match
+    sel.bad_suffix = true;
+    return sel;
+  }
   sel.component = static_cast<uint32_t>(std::stoul(suffix));
   return sel;
 }
@@ -71,8 +75,21 @@ StatusOr<ScalarReader> ScalarReader::create(const std::vector<FieldDesc>& fields
   }
   size_t offset = 0;
   const FieldDesc* found = nullptr;
+  FieldSelector sel = selector;
+  // A field named with the colon itself comes first ("a:b" is no component of "a").
+  if (!sel.whole.empty()) {
+    for (const FieldDesc& f : fields)
+      if (f.name == sel.whole) {
+        sel.name = sel.whole;
+        sel.magnitude = sel.bad_suffix = false;
+        sel.component = 0;
+      }
+  }
+  if (sel.bad_suffix)
+    return usageError("field selection '" + sel.whole +
+                      "': expected NAME, NAME:COMPONENT or NAME:mag, or the name of a field");
   for (const FieldDesc& f : fields) {
-    if (selector.name.empty() || f.name == selector.name) {
+    if (sel.name.empty() || f.name == sel.name) {
       found = &f;
       break;
     }
@@ -81,22 +98,22 @@ StatusOr<ScalarReader> ScalarReader::create(const std::vector<FieldDesc>& fields
   if (!found) {
     std::string known;
     for (const FieldDesc& f : fields) known += (known.empty() ? "" : ", ") + f.name;
-    return usageError("no point field named '" + selector.name + "' (fields: " + known + ")");
+    return usageError("no point field named '" + sel.name + "' (fields: " + known + ")");
   }
-  if (!selector.magnitude && selector.component >= found->components)
+  if (!sel.magnitude && sel.component >= found->components)
     return usageError("field '" + found->name + "' has " + std::to_string(found->components) +
-                      " components; component " + std::to_string(selector.component) + " does not exist");
+                      " components; component " + std::to_string(sel.component) + " does not exist");
   r.offset_ = offset;
   r.type_ = found->type;
   r.components_ = found->components;
-  r.magnitude_ = selector.magnitude;
-  r.component_ = selector.component;
+  r.magnitude_ = sel.magnitude;
+  r.component_ = sel.component;
   r.description_ = found->name;
-  if (selector.magnitude) {
+  if (sel.magnitude) {
     r.description_ += ":mag";
   } else if (found->components > 1) {
     r.description_ += ':';
-    r.description_ += std::to_string(selector.component);
+    r.description_ += std::to_string(sel.component);
   }
   return r;
 }

@@ -39,8 +39,14 @@ struct FieldSelector {
   std::string name;  // empty: the first point field
   bool magnitude = false;
   uint32_t component = 0;
+  // The selection as given when it holds a colon: a field named so ("a:b", "v:2") is taken whole
+  // first. `bad_suffix`: no NAME:COMPONENT or NAME:mag reading either (an error unless such a field
+  // exists; `name` then holds the whole text).
+  std::string whole;
+  bool bad_suffix = false;
 };
-// "NAME", "NAME:2" (component), "NAME:mag" (magnitude); "" selects the first point field.
+// "NAME", "NAME:2" (component), "NAME:mag" (magnitude); "" selects the first point field. A field
+// whose name holds a colon is selected by that name (ScalarReader::create looks for it first).
 StatusOr<FieldSelector> parseFieldSelector(const std::string& text);
 
 // Reads the selected scalar from a vertex event's concatenated field values.

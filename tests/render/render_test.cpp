@@ -400,7 +400,29 @@ TEST(FieldSelector, ComponentsAndMagnitude) {
   EXPECT_DOUBLE_EQ(first->read(values.data()), 1.5);
   EXPECT_FALSE(ScalarReader::create(fields, parseFieldSelector("v:3").value()).isOk());
   EXPECT_FALSE(ScalarReader::create(fields, parseFieldSelector("w").value()).isOk());
-  EXPECT_FALSE(parseFieldSelector("v:x").isOk());
+  EXPECT_FALSE(ScalarReader::create(fields, parseFieldSelector("v:x").value()).isOk());
+  EXPECT_FALSE(parseFieldSelector(":2").isOk());
+  // A field whose name holds a colon is selected by that name, first ("a:b" was refused, and "v:2"
+  // would be v's component 2 were there no field of that name).
+  std::vector<FieldDesc> colons = {{"v", 3, ScalarType::kFloat32}, {"a:b", 1, ScalarType::kFloat64},
+                                   {"v:2", 1, ScalarType::kFloat64}};
+  std::vector<uint8_t> vals(12 + 8 + 8);
+  const double ab = 7.25, v2 = -3.5;
+  std::memcpy(vals.data(), v, 12);
+  std::memcpy(vals.data() + 12, &ab, 8);
+  std::memcpy(vals.data() + 20, &v2, 8);
+  auto named = ScalarReader::create(colons, parseFieldSelector("a:b").value());
+  ASSERT_TRUE(named.isOk()) << named.status().message();
+  EXPECT_DOUBLE_EQ(named->read(vals.data()), 7.25);
+  auto v2_field = ScalarReader::create(colons, parseFieldSelector("v:2").value());
+  ASSERT_TRUE(v2_field.isOk());
+  EXPECT_DOUBLE_EQ(v2_field->read(vals.data()), -3.5);
+  auto v1 = ScalarReader::create(colons, parseFieldSelector("v:1").value());
+  ASSERT_TRUE(v1.isOk());
+  EXPECT_DOUBLE_EQ(v1->read(vals.data()), 4.0);
+  auto ab_mag = ScalarReader::create(colons, parseFieldSelector("a:b:mag").value());
+  ASSERT_TRUE(ab_mag.isOk()) << ab_mag.status().message();
+  EXPECT_DOUBLE_EQ(ab_mag->read(vals.data()), 7.25);
 }
 
 }  // namespace
