@@ -42,13 +42,6 @@ Status truncatedError(const TextReader& reader, size_t last_line, int64_t done, 
                      " of the " + std::to_string(total) + " " + what + " its header announces");
 }
 
-std::string quotedToken(std::string_view token) {
-  std::string s(token.substr(0, 40));
-  for (char& c : s)
-    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
-  return "'" + s + (token.size() > 40 ? "...'" : "'");
-}
-
 StatusOr<int64_t> parseIntToken(const TextReader& reader, std::string_view token, int64_t lo, int64_t hi,
                                 const std::string& what) {
   int64_t v;

@@ -37,7 +37,4 @@ StatusOr<int64_t> parseIntToken(const TextReader& reader, std::string_view token
 // `token` as a double (correctly rounded), or an error at the reader's line.
 StatusOr<double> parseDoubleToken(const TextReader& reader, std::string_view token, const std::string& what);
 
-// A token for an error message: quoted, cut to 40 characters, bytes outside printable ASCII shown as '?'.
-std::string quotedToken(std::string_view token);
-
 }  // namespace gtn

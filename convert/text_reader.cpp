@@ -11,12 +11,6 @@ namespace gtn {
 namespace {
 bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 
-std::string shown(std::string_view token) {
-  std::string s(token.substr(0, 40));
-  for (char& c : s)
-    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
-  return "'" + s + (token.size() > 40 ? "...'" : "'");
-}
 
 // Whether `token` (a decimal beyond T's range) is T's largest finite value, in magnitude, rounded to
 // the token's own number of significant digits: a writer that prints doubles with fewer than 17
@@ -77,6 +71,13 @@ bool parseFloating(std::string_view token, T* out) {
   return ec == std::errc() && ptr == end;
 }
 }  // namespace
+
+std::string quotedToken(std::string_view token) {
+  std::string s(token.substr(0, 40));
+  for (char& c : s)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return "'" + s + (token.size() > 40 ? "...'" : "'");
+}
 
 bool parseInt(std::string_view token, int64_t* out) {
   if (!token.empty() && token.front() == '+') token.remove_prefix(1);
@@ -155,7 +156,7 @@ StatusOr<int64_t> TextReader::readInt(const char* what) {
   std::string_view tok;
   if (!next(&tok)) return errorAtEnd(what);
   int64_t v;
-  if (!parseInt(tok, &v)) return error("expected " + std::string(what) + " (an integer), found " + shown(tok));
+  if (!parseInt(tok, &v)) return error("expected " + std::string(what) + " (an integer), found " + quotedToken(tok));
   return v;
 }
 
@@ -163,7 +164,7 @@ StatusOr<double> TextReader::readDouble(const char* what) {
   std::string_view tok;
   if (!next(&tok)) return errorAtEnd(what);
   double v;
-  if (!parseDouble(tok, &v)) return error("expected " + std::string(what) + " (a number), found " + shown(tok));
+  if (!parseDouble(tok, &v)) return error("expected " + std::string(what) + " (a number), found " + quotedToken(tok));
   return v;
 }
 
@@ -171,7 +172,7 @@ StatusOr<float> TextReader::readFloat(const char* what) {
   std::string_view tok;
   if (!next(&tok)) return errorAtEnd(what);
   float v;
-  if (!parseFloat(tok, &v)) return error("expected " + std::string(what) + " (a number), found " + shown(tok));
+  if (!parseFloat(tok, &v)) return error("expected " + std::string(what) + " (a number), found " + quotedToken(tok));
   return v;
 }
 

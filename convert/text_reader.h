@@ -60,6 +60,9 @@ class TextReader {
   size_t token_line_ = 1;
 };
 
+// A token for an error message: quoted, cut to 40 characters, bytes outside printable ASCII shown as '?'.
+std::string quotedToken(std::string_view token);
+
 // Parses a whole token as a number; false when the token is not exactly a number.
 bool parseInt(std::string_view token, int64_t* out);
 bool parseDouble(std::string_view token, double* out);

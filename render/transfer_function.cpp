@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "convert/text_reader.h"
+
 namespace gtn {
 
 namespace {
@@ -71,16 +73,6 @@ StatusOr<TransferFunction> transferPreset(const std::string& name) {
   return usageError("unknown transfer function preset '" + name + "' (known: " + known + ")");
 }
 
-namespace {
-// A word of the file for a message: cut to 40 characters, bytes outside printable ASCII as '?'.
-std::string shownWord(const std::string& word) {
-  std::string s = word.substr(0, 40);
-  for (char& c : s)
-    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
-  return s + (word.size() > 40 ? "..." : "");
-}
-}  // namespace
-
 StatusOr<TransferFunction> parseTransferFunction(const std::string& text, const std::string& what) {
   TransferFunction tf;
   // A UTF-8 byte order mark (editors on Windows write one) is no part of the first directive.
@@ -110,10 +102,10 @@ StatusOr<TransferFunction> parseTransferFunction(const std::string& text, const 
         return invalidData(where + "point positions must not decrease");
       tf.points.push_back(p);
     } else {
-      return invalidData(where + "unknown directive '" + shownWord(word) + "' (expected 'range' or 'point')");
+      return invalidData(where + "unknown directive " + quotedToken(word) + " (expected 'range' or 'point')");
     }
     std::string extra;
-    if (in >> extra) return invalidData(where + "unexpected '" + shownWord(extra) + "' at the end of the line");
+    if (in >> extra) return invalidData(where + "unexpected " + quotedToken(extra) + " at the end of the line");
   }
   if (tf.points.size() < 2) return invalidData(what + ": a transfer function needs at least two points");
   return tf;
