@@ -7,6 +7,7 @@
 
 #include "convert/vtk_common.h"
 #include "mesh/hex_split.h"
+#include "mesh/predicates.h"
 
 namespace gtn {
 
@@ -126,7 +127,9 @@ int minCorner(const Face& f, const uint32_t* g) {
 
 class Splitter {
  public:
-  Splitter(std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell) : tets_(tets), tet_cell_(tet_cell) {}
+  // `coords`: the points (3 per point), or nullptr to split by indices alone.
+  Splitter(std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, const double* coords)
+      : tets_(tets), tet_cell_(tet_cell), coords_(coords) {}
 
   void emit(const Tet& t, uint32_t cell) {
     if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) {
@@ -137,18 +140,30 @@ class Splitter {
     tet_cell_->push_back(cell);
   }
 
-  // The cone from the cell's smallest-index vertex over the faces that do not contain it.
+  // The cone from the cell's smallest-index vertex over the faces that do not contain it. When the
+  // cell is not convex (a twisted hexahedron, say) some of those tetrahedra can come out inverted
+  // while the others are not, and flipping them would make them overlap their neighbours: then the
+  // cone is taken from the next vertex (by global index) that the face rule allows as an apex (every
+  // face through it cut through it) and whose cone has no such mix, if there is one.
   template <size_t N>
   void cone(const Face (&faces)[N], const uint32_t* g, int num_vertices, uint32_t cell) {
-    int apex = 0;
-    for (int k = 1; k < num_vertices; ++k)
-      if (g[k] < g[apex]) apex = k;
-    for (const Face& f : faces) {
-      bool has_apex = false;
-      for (int k = 0; k < f.n; ++k) has_apex |= f.v[k] == apex;
-      if (has_apex) continue;
-      fan(g[apex], f.n, [&](int64_t k) { return g[f.v[k]]; }, cell);
+    int order[12];
+    for (int k = 0; k < num_vertices; ++k) order[k] = k;
+    std::sort(order, order + num_vertices, [&](int a, int b) { return g[a] < g[b]; });
+    coneFrom(faces, g, order[0], &scratch_);
+    if (coords_ && mixedOrientation(scratch_)) {
+      for (int k = 1; k < num_vertices; ++k) {
+        if (!allowedApex(faces, g, order[k])) continue;
+        coneFrom(faces, g, order[k], &other_);
+        if (!mixedOrientation(other_)) {
+          scratch_.swap(other_);
+          ++resplit_;
+          break;
+        }
+      }
+      if (scratch_.empty() || mixedOrientation(scratch_)) ++mixed_;
     }
+    for (const Tet& t : scratch_) emit(t, cell);
   }
 
   // The tetrahedra from `apex` to the fan of a face of n corners (global index idx(k), cyclic order)
@@ -161,6 +176,9 @@ class Splitter {
       if (idx(k) < idx(m)) m = k;
     for (int64_t k = 1; k + 1 < n; ++k) emit({apex, idx(m), idx((m + k) % n), idx((m + k + 1) % n)}, cell);
   }
+
+  size_t resplit_ = 0;  // cells split from another vertex than their smallest (cone)
+  size_t mixed_ = 0;    // cells whose every allowed cone mixes orientations
 
   // A polyhedron from its face stream `f` (checked): the cone from its smallest vertex over the fans
   // of the faces without it.
@@ -194,9 +212,11 @@ class Splitter {
     if (split == 5 && fiveSplittable(g, &odd)) {
       five_scratch_.clear();
       splitHexFive(g, odd, five_scratch_);
-      for (const Tet& t : five_scratch_) emit(t, cell);
-      ++hex_five_;
-      return;
+      if (!coords_ || !mixedOrientation(five_scratch_)) {
+        for (const Tet& t : five_scratch_) emit(t, cell);
+        ++hex_five_;
+        return;
+      }
     }
     cone(kHexFaces, g, 8, cell);
   }
@@ -207,12 +227,47 @@ class Splitter {
  private:
   std::vector<Tet>* tets_;
   std::vector<uint32_t>* tet_cell_;
-  std::vector<Tet> five_scratch_;
+  // The cone from local vertex `apex` over the faces without it, into *out.
+  template <size_t N>
+  static void coneFrom(const Face (&faces)[N], const uint32_t* g, int apex, std::vector<Tet>* out) {
+    out->clear();
+    for (const Face& f : faces) {
+      if (std::find(f.v, f.v + f.n, apex) != f.v + f.n) continue;
+      const int m = minCorner(f, g);
+      for (int k = 1; k + 1 < f.n; ++k) out->push_back({g[apex], g[f.v[m]], g[f.v[(m + k) % f.n]], g[f.v[(m + k + 1) % f.n]]});
+    }
+  }
+  // True when every face through local vertex v is cut through v by the face rule: a triangle, a
+  // quadrilateral whose diagonal (from its smallest corner) ends at v, or a larger face fanned from v.
+  template <size_t N>
+  static bool allowedApex(const Face (&faces)[N], const uint32_t* g, int v) {
+    for (const Face& f : faces) {
+      const int at = static_cast<int>(std::find(f.v, f.v + f.n, v) - f.v);
+      if (at == f.n || f.n == 3) continue;
+      const int m = minCorner(f, g);
+      if (at != m && !(f.n == 4 && at == (m + 2) % 4)) return false;
+    }
+    return true;
+  }
+  // Some tetrahedra positively oriented and some negatively (flat ones count as neither).
+  bool mixedOrientation(const std::vector<Tet>& tets) const {
+    bool pos = false, neg = false;
+    for (const Tet& t : tets) {
+      const int o = orient3d(coords_ + 3 * size_t{t[0]}, coords_ + 3 * size_t{t[1]}, coords_ + 3 * size_t{t[2]},
+                             coords_ + 3 * size_t{t[3]});
+      pos |= o > 0;
+      neg |= o < 0;
+    }
+    return pos && neg;
+  }
+
+  const double* coords_;
+  std::vector<Tet> five_scratch_, scratch_, other_;
 };
 
 }  // namespace
 
-Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, int split,
+Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, const double* coords, int split,
                      std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report) {
   const size_t num_cells = cells.types.size();
   if (cells.offsets.size() != num_cells + 1 || cells.offsets[0] != 0 ||
@@ -340,7 +395,7 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
 
   tets->reserve(tets->size() + out_tets);
   tet_cell->reserve(tet_cell->size() + out_tets);
-  Splitter splitter(tets, tet_cell);
+  Splitter splitter(tets, tet_cell, coords);
   uint32_t g[27];
   size_t next_stream = 0;
   for (size_t c = 0; c < num_cells; ++c) {
@@ -387,6 +442,14 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   if (hexes && split == 5 && splitter.hex_five_ < hexes)
     report->warnings.push_back(std::to_string(hexes - splitter.hex_five_) + " of " + std::to_string(hexes) +
                                " hexahedra split into 6 tetrahedra: their face diagonals do not allow 5");
+  if (splitter.resplit_)
+    report->warnings.push_back(std::to_string(splitter.resplit_) +
+                               " cells that are not convex split from another vertex than their smallest, so that "
+                               "none of their tetrahedra comes out inverted");
+  if (splitter.mixed_)
+    report->warnings.push_back(std::to_string(splitter.mixed_) +
+                               " cells that are not convex have inverted tetrahedra however they are split without "
+                               "adding points; once flipped these overlap their neighbours (gtn validate reports it)");
   if (splitter.collapsed_) {
     report->collapsed_tets += splitter.collapsed_;
     report->warnings.push_back(std::to_string(splitter.collapsed_) +
@@ -478,7 +541,8 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
 Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
                        const ImportOptions& options, ImportResult* result, size_t* duplicate_tets) {
   std::vector<uint32_t> tet_cell;
-  GTN_RETURN_IF_ERROR(splitVtkCells(path, cells, result->mesh.numPoints(), options.split, &result->mesh.tets,
+  GTN_RETURN_IF_ERROR(splitVtkCells(path, cells, result->mesh.numPoints(), result->mesh.coords.data(), options.split,
+                                    &result->mesh.tets,
                                     &tet_cell, &result->report));
   // Cells blanked by VTK (HIDDENCELL) are not part of the mesh, as in structured grids; in a piece of
   // a parallel file, neither are the copies of other pieces' cells (DUPLICATECELL).

@@ -49,7 +49,10 @@ struct VtkCells {
 // counts them by type). Fails, naming `path`, when a volume cell type is not supported or no cell is
 // a volume cell (with each type's number, name and how many cells have it), when a cell has the
 // wrong number of points, or when an index is out of range.
-Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, int split,
+// `coords` (3 per point, or nullptr): with them, a cell whose cone from its smallest vertex would mix
+// inverted and positive tetrahedra (a cell that is not convex) is coned from another vertex that the
+// face rule allows, when one gives no such mix.
+Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, const double* coords, int split,
                      std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report);
 
 // The points of a rectilinear grid, i fastest: (x[i], y[j], z[k]) from axes[0..2].

@@ -15,6 +15,7 @@
 
 #include "convert/vtk_common.h"
 #include "mesh/mesh_stats.h"
+#include "mesh/predicates.h"
 
 namespace gtn {
 namespace {
@@ -300,7 +301,7 @@ TEST(CellSplit, MalformedFaceStreamsAreRejected) {
     std::vector<Tet> tets;
     std::vector<uint32_t> tet_cell;
     ImportReport report;
-    return splitVtkCells("p.vtu", cells, 4, 6, &tets, &tet_cell, &report);
+    return splitVtkCells("p.vtu", cells, 4, nullptr, 6, &tets, &tet_cell, &report);
   };
   const std::vector<int64_t> tet = {4, 3, 0, 1, 2, 3, 0, 3, 1, 3, 1, 3, 2, 3, 2, 3, 0};
   EXPECT_TRUE(attempt(tet).isOk());
@@ -376,7 +377,7 @@ TEST(CellSplit, RejectsUnsupportedTypesWithNameAndCount) {
   std::vector<Tet> tets;
   std::vector<uint32_t> tet_cell;
   ImportReport report;
-  const Status st = splitVtkCells("in.vtu", cells, 20, 6, &tets, &tet_cell, &report);
+  const Status st = splitVtkCells("in.vtu", cells, 20, nullptr, 6, &tets, &tet_cell, &report);
   ASSERT_FALSE(st.isOk());
   EXPECT_EQ(st.code(), StatusCode::kUnsupported);
   for (const char* part : {"in.vtu", "2 cells of type 41 (VTK_CONVEX_POINT_SET)", "1 cell of type 38 (unknown)",
@@ -494,6 +495,62 @@ TEST(CellSplit, ValidCellsNeedNoFlipsAndMirroredOnesAllDo) {
   }
 }
 
+// A hexahedron that is not convex (one corner pushed in): the cone from its smallest vertex mixes an
+// inverted tetrahedron with positive ones, and flipping it would overlap the others. The split is
+// taken from global point 4 (local corner 7) instead, which the face rule allows (every face through
+// it is cut through it), and its tetrahedra tile the cell. With no coordinates it is the plain cone.
+TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) {
+  // Global point g at corners[g]; the cell lists its local corners 0..7 as these global indices.
+  const uint32_t local_to_global[8] = {0, 5, 1, 7, 6, 2, 3, 4};
+  const double cube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  TetMesh mesh;
+  mesh.coords.resize(24);
+  VtkCells cells;
+  cells.types = {kVtkHexahedron};
+  for (int l = 0; l < 8; ++l) {
+    for (int d = 0; d < 3; ++d) mesh.coords[3 * local_to_global[l] + d] = cube[l][d];
+    cells.connectivity.push_back(local_to_global[l]);
+  }
+  cells.offsets.push_back(8);
+  const double dent[3] = {0.75, 0.5, 0.5};  // local corner 1, global point 5
+  std::copy(dent, dent + 3, &mesh.coords[3 * 5]);
+  auto volume = [&](const Tet& t) { return signedVolume(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]), mesh.point(t[3])); };
+  for (const bool with_coords : {false, true}) {
+    std::vector<Tet> tets;
+    std::vector<uint32_t> tet_cell;
+    ImportReport report;
+    ASSERT_TRUE(splitVtkCells("h.vtu", cells, 8, with_coords ? mesh.coords.data() : nullptr, 6, &tets, &tet_cell, &report).isOk());
+    ASSERT_EQ(tets.size(), 6u);
+    size_t negative = 0;
+    for (const Tet& t : tets) negative += volume(t) < 0;
+    if (!with_coords) {
+      EXPECT_EQ(negative, 1u);  // the plain cone from global 0 inverts one piece
+      for (const Tet& t : tets) EXPECT_TRUE(std::find(t.begin(), t.end(), 0u) != t.end());
+      continue;
+    }
+    EXPECT_EQ(negative, 0u);
+    for (const Tet& t : tets) EXPECT_TRUE(std::find(t.begin(), t.end(), 4u) != t.end()) << "coned from global 4 (local 7)";
+    ASSERT_EQ(report.warnings.size(), 1u);
+    EXPECT_NE(report.warnings[0].find("1 cells that are not convex split from another vertex"), std::string::npos) << report.warnings[0];
+    // The pieces tile the cell: their boundary is the cell's 12 face triangles, each once.
+    std::map<std::array<uint32_t, 3>, int> faces;
+    for (const Tet& t : tets)
+      for (int skip = 0; skip < 4; ++skip) {
+        std::array<uint32_t, 3> f;
+        for (int i = 0, k = 0; i < 4; ++i)
+          if (i != skip) f[k++] = t[i];
+        std::sort(f.begin(), f.end());
+        ++faces[f];
+      }
+    size_t once = 0;
+    for (const auto& [f, n] : faces) {
+      EXPECT_LE(n, 2);
+      once += n == 1;
+    }
+    EXPECT_EQ(once, 12u);
+  }
+}
+
 TEST(CellSplit, QuadraticHexWedgePyramidKeepTheirCorners) {
   // A unit cube as a 20-point quadratic hexahedron, and a wedge and a pyramid beside it; the extra
   // points sit anywhere (they are dropped): only the corners (listed first) shape the tetrahedra.
@@ -535,7 +592,7 @@ TEST(CellSplit, QuadraticHexWedgePyramidKeepTheirCorners) {
   std::vector<Tet> tets;
   std::vector<uint32_t> tet_cell;
   ImportReport report;
-  const Status st = splitVtkCells("q.vtu", bad, 27, 6, &tets, &tet_cell, &report);
+  const Status st = splitVtkCells("q.vtu", bad, 27, nullptr, 6, &tets, &tet_cell, &report);
   ASSERT_FALSE(st.isOk());
   EXPECT_NE(st.message().find("q.vtu: cell 0 (VTK_QUADRATIC_HEXAHEDRON) has 8 points, expected 20"), std::string::npos)
       << st.message();
@@ -549,13 +606,13 @@ TEST(CellSplit, RejectsBadIndicesAndPointCounts) {
   std::vector<Tet> tets;
   std::vector<uint32_t> tet_cell;
   ImportReport report;
-  Status st = splitVtkCells("m.vtk", cells, 4, 6, &tets, &tet_cell, &report);
+  Status st = splitVtkCells("m.vtk", cells, 4, nullptr, 6, &tets, &tet_cell, &report);
   ASSERT_FALSE(st.isOk());
   EXPECT_NE(st.message().find("m.vtk: cell 0 refers to point 7 but there are 4 points"), std::string::npos)
       << st.message();
   cells.types = {kVtkHexahedron};
   cells.connectivity = {0, 1, 2, 3};
-  st = splitVtkCells("m.vtk", cells, 4, 6, &tets, &tet_cell, &report);
+  st = splitVtkCells("m.vtk", cells, 4, nullptr, 6, &tets, &tet_cell, &report);
   ASSERT_FALSE(st.isOk());
   EXPECT_NE(st.message().find("has 4 points, expected 8"), std::string::npos) << st.message();
 }
