@@ -47,6 +47,24 @@ struct BoundaryFace {
   double area;
 };
 
+inline double norm1(const double* a, const double* b) {
+  return std::fabs(b[0] - a[0]) + std::fabs(b[1] - a[1]) + std::fabs(b[2] - a[2]);
+}
+
+// Whether the boundary triangle f = (v, x, y) still faces its old way once v moves from pv to pw;
+// n_new receives its new normal. The margin on the angle is not enough on its own: when the new
+// triangle is flat up to rounding, n_new is rounding noise and its angle to the old normal anything,
+// and the validator's exact sign (validate/merge_checks.cpp) may come out negative. So the dot
+// product must also exceed a bound on its rounding error (a few ulp of the product of the edge
+// lengths; 1e-12 of it, the validator's filter too, is far above) so that its sign is certain.
+inline bool keepsFacing(const double* pv, const double* pw, const double* px, const double* py, const BoundaryFace& f,
+                        double* n_new) {
+  triNormal(pw, px, py, n_new);
+  const double d = dot(f.n, n_new);
+  const double rounding = 1e-12 * norm1(pv, px) * norm1(pv, py) * norm1(pw, px) * norm1(pw, py);
+  return d > kFlipMargin * norm(f.n) * norm(n_new) && d > rounding;
+}
+
 struct Candidate {
   double error;
   uint32_t w;
@@ -433,9 +451,9 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) 
       for (const BoundaryFace& f : ws.faces) {
         if (f.x == w || f.y == w) continue;
         double nn[3];
-        triNormal(pw, pos(f.x), pos(f.y), nn);
+        const bool facing = keepsFacing(pv, pw, pos(f.x), pos(f.y), f, nn);
         const double new_area = 0.5 * norm(nn);
-        if (!same && !(dot(f.n, nn) > kFlipMargin * norm(f.n) * norm(nn))) {
+        if (!same && !facing) {
           ok = false;
           break;
         }
@@ -517,11 +535,14 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
     }
     if (!same) {
       double nn[3];
-      triNormal(pos(w), pos(f.x), pos(f.y), nn);
-      if (!(dot(f.n, nn) > kFlipMargin * norm(f.n) * norm(nn))) return false;
+      if (!keepsFacing(pos(v), pos(w), pos(f.x), pos(f.y), f, nn)) return false;
     }
   }
-  if (boundary_[v] && edge_faces == 0) return false;  // not a boundary edge
+  // A boundary merge runs along a boundary edge, and one in exactly two boundary triangles: readers
+  // store only the merge's boundary flag and take it to remove two (stream_simplifier.cpp). An edge
+  // in four or more (a non-manifold boundary: two parts of the surface touching along it) passes the
+  // link condition of the coned complex, which is no manifold there, yet removes them all.
+  if (boundary_[v] && edge_faces != 2) return false;
   // A collapsing tetrahedron T = (v, w, x, y) glues its faces (v, x, y) and (w, x, y). When one of them
   // is on the boundary, the tetrahedron across the other one inherits the boundary triangle: the
   // streamed triangle keeps T's orientation, the mesh's takes the neighbour's. They agree when both

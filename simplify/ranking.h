@@ -24,14 +24,18 @@
 // point field (or field "none") the density is 1 and the mass is the volume.
 //
 // Constraints (a candidate violating one is never chosen):
-//  - a boundary vertex merges only into a boundary vertex along a boundary edge; interior vertices
-//    merge into any neighbour;
+//  - a boundary vertex merges only into a boundary vertex along a boundary edge in exactly two
+//    boundary triangles (the two a boundary merge removes, as readers assume: an edge where the
+//    boundary is non-manifold, in four or more, never collapses); interior vertices merge into any
+//    neighbour;
 //  - every tetrahedron that changes (contains v, not w) keeps a positive orientation by the exact
 //    predicate orient3d: no tetrahedron is inverted or newly flattened. Exception: when w has exactly
 //    v's coordinates the geometry of every changed tetrahedron is unchanged, so tetrahedra that were
 //    already flat in the source (coincident PLOT3D points) may stay flat; flat ones collapse;
 //  - no boundary triangle flips: the old and new normals of every changed boundary triangle satisfy
-//    n_old . n_new > 1e-3 |n_old| |n_new| (a conservative margin against rounding);
+//    n_old . n_new > 1e-3 |n_old| |n_new| (a conservative margin against rounding), and n_old . n_new
+//    exceeds a bound on its rounding error, so that its sign is certain (a new triangle flat up to
+//    rounding has a meaningless float normal; the validator decides the sign exactly);
 //  - the link condition of Dey, Edelsbrunner, Guha and Nekhayev for the complex with the boundary
 //    coned to a virtual vertex: Lk(v) ∩ Lk(w) = Lk(vw). It keeps every intermediate mesh a
 //    manifold tetrahedral mesh of the same topology (no duplicate tetrahedron, no face in three);

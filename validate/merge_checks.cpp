@@ -248,11 +248,13 @@ class Replay {
     if (check && !moved_.empty()) checkManifoldAround(t, c, what);
     // Boundary triangles around c.
     if (is_boundary_[c]) {
+      uint64_t boundary_removed = 0;
       for (uint32_t b : binc_[c]) {
         if (!balive_[b]) continue;
         Triangle& tri = btris_[b];
         if (contains(tri, t)) {
           balive_[b] = 0;
+          ++boundary_removed;
           continue;
         }
         Triangle before = tri;
@@ -268,6 +270,15 @@ class Replay {
         }
       }
       binc_[c].clear();
+      // Readers know only the boundary flag: the stream simplifier takes a boundary merge to remove
+      // exactly the two boundary triangles of a manifold boundary edge. One across an edge in more
+      // (a non-manifold boundary) makes every simplification past it disagree with its header. (None
+      // removed: not along a boundary edge, reported above.)
+      if (check && is_boundary_[t] && boundary_removed != 0 && boundary_removed != 2) {
+        report_.add(IssueCode::kMergeAnnotationMismatch, kScope, vertexPath(c),
+                    what + " removes " + std::to_string(boundary_removed) +
+                        " boundary triangles; a boundary merge removes 2");
+      }
     }
     list.clear();
     list.shrink_to_fit();

@@ -4,6 +4,7 @@
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
 #include "simplify_test_util.h"
+#include "validate/merge_checks.h"
 
 namespace gtn::test {
 namespace {
@@ -119,6 +120,66 @@ TEST(Ranking, OptionsSelectFieldAndWeights) {
   EXPECT_EQ(capped->merges, 10u);
   auto bad = rankMerges(m, RankingOptions{"", -1, 1, UINT64_MAX}, nullptr);
   EXPECT_FALSE(bad.isOk());
+}
+
+// The errors the validator's replay of `tree` on `mesh` reports (validate/merge_checks.h).
+std::vector<std::string> replayErrors(const TetMesh& mesh, const MergeTree& tree) {
+  MergeForest forest;
+  forest.parent = tree.parent;
+  forest.rank.assign(tree.rank.begin(), tree.rank.end());
+  forest.boundary = tree.boundary;
+  forest.removed = tree.removed;
+  ValidationReport report;
+  checkMergeTree(mesh, forest, {}, report);
+  return report.errorCodes();
+}
+
+// After every merge, the mesh has the boundary triangles a reader infers from the tree (two fewer per
+// boundary merge: all the stream simplifier knows), and the stream simplifier agrees at the end.
+void expectTreeKeepsBoundaryCounts(const TetMesh& mesh, const MergeTree& tree) {
+  const uint64_t source = checkMesh(mesh).boundary_triangles;
+  for (uint64_t n = 1; n <= tree.merges; ++n) {
+    auto m = applyMerges(mesh, tree, n);
+    ASSERT_TRUE(m.isOk());
+    ASSERT_EQ(checkMesh(*m).boundary_triangles, source - 2 * tree.boundaryMergesUpTo(n)) << "after merge " << n;
+  }
+  expectStreamMatchesApply(mesh, tree, tree.merges, false);
+}
+
+// Two boxes of 3x3x3 cells touching along one edge of each, the line x = y = 0 (a TetGen mesh of a
+// brain had seven such edges): the boundary edges on it are in four boundary triangles, two of each
+// box. Collapsing one passed the link condition (of a complex that is no manifold there) and removed
+// all four, while readers, who know only the boundary flag, remove two: every simplification past it
+// failed ("27346 boundary triangles, the merge tree implies 27348") and the validator said nothing.
+TEST(Ranking, NeverCollapsesANonManifoldBoundaryEdge) {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat64;
+  std::map<std::array<double, 3>, uint32_t> index;  // welds the points of the shared line
+  for (int box = 0; box < 2; ++box) {
+    const TetMesh g = makeGrid(3, 3, 3, 1 + box);
+    const double shift = box == 0 ? 0.0 : -3.0;
+    std::vector<uint32_t> to(g.numPoints());
+    for (size_t v = 0; v < g.numPoints(); ++v) {
+      const std::array<double, 3> p{g.point(v)[0] + shift, g.point(v)[1] + shift, g.point(v)[2]};
+      auto [it, added] = index.emplace(p, static_cast<uint32_t>(m.numPoints()));
+      if (added) m.coords.insert(m.coords.end(), p.begin(), p.end());
+      to[v] = it->second;
+    }
+    for (const Tet& t : g.tets) m.tets.push_back({to[t[0]], to[t[1]], to[t[2]], to[t[3]]});
+  }
+  Field rho("rho", 1, ScalarType::kFloat64, m.numPoints());
+  for (size_t v = 0; v < m.numPoints(); ++v) rho.set<double>(v, 0, 1.0 + 0.1 * m.point(v)[2]);
+  m.point_fields.push_back(std::move(rho));
+  addIdField(m);
+  ASSERT_EQ(m.numPoints(), 2 * 64 - 4u);
+  for (const char* field : {"", "none"}) {
+    SCOPED_TRACE(std::string("field '") + field + "'");
+    auto tree = rankMerges(m, RankingOptions{field, 1, 1, UINT64_MAX}, nullptr);
+    ASSERT_TRUE(tree.isOk()) << tree.status().message();
+    EXPECT_GT(tree->merges, m.numPoints() / 2);
+    EXPECT_EQ(replayErrors(m, *tree), std::vector<std::string>());
+    expectTreeKeepsBoundaryCounts(m, *tree);
+  }
 }
 
 TEST(Apply, EveryPrefixIsAValidMesh) {

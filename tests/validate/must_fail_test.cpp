@@ -489,6 +489,27 @@ TEST(MustFail, MergeDefectsAsFiles) {
 }
 
 // The --against codes on the real path: the base file against sources written as .vtu files.
+// Two tetrahedra touching along the edge (0, 1) only: the edge is in four boundary triangles. Merging
+// 0 into 1 removes all four, while a reader, told only that the merge is a boundary merge, removes two
+// and finds the boundary count wrong (`gtn export --merges` failed on such a TetGen mesh that the
+// validator called valid). The flag and the count of removed tetrahedra are right; the merge is not.
+TEST(MustFail, BoundaryMergeRemovingFourTrianglesIsAnAnnotationMismatch) {
+  TetMesh m;
+  m.coords = {0, 0, 0, 0, 0, 1, 1, 0, 0.5, 1, 1, 0.5, -1, 0, 0.5, -1, -1, 0.5};
+  m.tets = {{0, 1, 2, 3}, {0, 1, 4, 5}};
+  size_t zero = 0;
+  normalizeOrientation(m, &zero);
+  MergeForest forest = *withMerge(m, 0, 1).forest;
+  forest.boundary.assign(m.numPoints(), 0);
+  forest.removed.assign(m.numPoints(), 0);
+  forest.boundary[0] = 1;
+  forest.removed[0] = 2;
+  ValidationReport r(100);
+  checkMergeTree(m, forest, {}, r);
+  EXPECT_EQ(r.errorCodes(), std::vector<std::string>{"MERGE_ANNOTATION_MISMATCH"}) << r.toText("edge");
+  EXPECT_NE(r.toText("edge").find("removes 4 boundary triangles"), std::string::npos) << r.toText("edge");
+}
+
 TEST(MustFail, SourceDefectsAgainstFiles) {
   const auto against = [](const TetMesh& source, const std::string& name) {
     const std::string path = base().dir + "/" + name + ".vtu";
