@@ -193,6 +193,7 @@ struct FieldPrediction {
 // What the encoder knows and the decoder does not.
 struct EncoderSide {
   const TetMesh* mesh = nullptr;
+  bool delaunay_first = false;  // the level's "Delaunay first" bit (looksDelaunay)
   const std::vector<uint32_t>* neighbor = nullptr;
   std::vector<uint32_t> src_slot;  // source vertex -> live slot
   std::vector<uint32_t> slot_src;  // slot -> source vertex
@@ -311,6 +312,9 @@ class LevelCoder {
     uint32_t edge_points = 0;
     if constexpr (kEncode) edge_points = !enc_->edge_points.empty();
     edge_points_ = geo_->bit(edge_points_flag_, edge_points);
+    uint32_t delaunay_first = 0;
+    if constexpr (kEncode) delaunay_first = enc_->delaunay_first;
+    delaunay_first_ = con_->bit(delaunay_first_flag_, delaunay_first);
     GTN_RETURN_IF_ERROR(boundaryPhase());
     if constexpr (!kEncode) GTN_RETURN_IF_ERROR(sink_->endBoundary());
     GTN_RETURN_IF_ERROR(peelingPhase());
@@ -1460,6 +1464,8 @@ class LevelCoder {
     // candidate's place is the number of candidates before it: nothing is sorted unless the whole
     // list is needed (a new vertex's copy sources), and the list's prefix is the same either way.
     by_key_chosen_ = delaunay_ && order_score_ > 0;
+    // Ranking by key first needs every candidate keyed.
+    if (by_key_chosen_ && delaunay_first_) evaluateAllGroups();
     // The context: the best multiplicity, how many share it (up to 3), how close the nearest of
     // those lies to the predicted apex, and across how many gate edges (up to 2) the front face's
     // apex is the first candidate (then the tetrahedron closes that face).
@@ -1468,10 +1474,16 @@ class LevelCoder {
     uint32_t near = 2;
     uint32_t adjacent = 0;
     if (cand_n_ > 0) {
-      // cand_ holds one group: the best multiplicity's (evaluateGroups stops after it).
-      const uint32_t best_w = cand_[0].w, top = static_cast<uint32_t>(cand_n_);
-      double best_dist = cand_[0].dist;
-      for (int i = 1; i < cand_n_; ++i) best_dist = std::min(best_dist, cand_[i].dist);
+      // Over the best multiplicity's group: the only one evaluated so far, unless the Delaunay order
+      // is chosen.
+      uint32_t best_w = 0, top = 0;
+      double best_dist = 0;
+      for (int i = 0; i < cand_n_; ++i) best_w = std::max(best_w, cand_[i].w);
+      for (int i = 0; i < cand_n_; ++i) {
+        if (cand_[i].w != best_w) continue;
+        best_dist = top == 0 ? cand_[i].dist : std::min(best_dist, cand_[i].dist);
+        ++top;
+      }
       k = 1 + (std::min<uint32_t>(best_w, 3) - 1) * 3 + std::min<uint32_t>(top, 3) - 1;
       const double *a = P(g.v[0]), *b = P(g.v[1]), *cc = P(g.v[2]);
       double e2 = 0;
@@ -1509,18 +1521,37 @@ class LevelCoder {
         x.key = x.dist;
         if (delaunay_) {
           if (!swept_ready_) prepareSweep();
-          const double e[3] = {q[0] - cc0_[0], q[1] - cc0_[1], q[2] - cc0_[2]};
-          const double h = nn_[0] * e[0] + nn_[1] * e[1] + nn_[2] * e[2];
-          // In units of 1/64 of the face's circumradius, so that nearly cospherical candidates (every
-          // cell of a structured grid) tie and fall back to the distance order.
-          const double t = h > 0 ? (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - r2_) / (2 * h) : 1e300;
-          const double y = t * key_scale_;
-          x.key = y < 1e18 ? floorKey(y) : 1e18;  // NaN too
+          x.key = sweepKey(q);
         }
       }
     }
   }
-  void evaluateAllGroups() { evaluateGroups(kMaxGather + 1); }
+  // The Delaunay order's key of q (prepareSweep first): the sweep parameter at which q is met, in
+  // units of 1/64 of the face's circumradius, so that nearly cospherical candidates (every cell of
+  // a structured grid) tie and fall back to the distance order.
+  double sweepKey(const double* q) const {
+    const double e[3] = {q[0] - cc0_[0], q[1] - cc0_[1], q[2] - cc0_[2]};
+    const double h = nn_[0] * e[0] + nn_[1] * e[1] + nn_[2] * e[2];
+    const double t = h > 0 ? (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - r2_) / (2 * h) : 1e300;
+    const double y = t * key_scale_;
+    return y < 1e18 ? floorKey(y) : 1e18;  // NaN too
+  }
+  // The same for every group at once (the Delaunay order ranks by key first).
+  void evaluateAllGroups() {
+    if (raw_n_ == 0) return;
+    if (delaunay_ && !swept_ready_) prepareSweep();
+    for (int i = 0; i < raw_n_; ++i) {
+      const uint32_t s = raw_[i].s;
+      const double* q = P(s);
+      if (wrong_ != 0 && side_->sign(q) == wrong_) continue;
+      Candidate& x = cand_[cand_n_++];
+      x.s = s;
+      x.w = raw_[i].w;
+      x.dist = apexDistance(q, pred_);
+      x.key = delaunay_ ? sweepKey(q) : x.dist;
+    }
+    raw_n_ = 0;
+  }
   // The circumcentre and radius of the gate face and its normal into the undecoded side.
   void prepareSweep() {
     const FrontFace& g = *gate_;
@@ -1547,7 +1578,10 @@ class LevelCoder {
     if (x.dist != y.dist) return x.dist < y.dist;
     return x.s < y.s;
   }
-  static bool beforeByKey(const Candidate& x, const Candidate& y) {
+  // The Delaunay order: by key, then count, in a level that sets "Delaunay first"; by count, then
+  // key, in others.
+  static bool beforeByKey(const Candidate& x, const Candidate& y, bool key_first) {
+    if (key_first && x.key != y.key) return x.key < y.key;
     if (x.w != y.w) return x.w > y.w;
     if (x.key != y.key) return x.key < y.key;
     if (x.dist != y.dist) return x.dist < y.dist;
@@ -1558,14 +1592,15 @@ class LevelCoder {
     bool operator()(const Candidate& x, const Candidate& y) const { return beforeByDistance(x, y); }
   };
   struct ByKey {
-    bool operator()(const Candidate& x, const Candidate& y) const { return beforeByKey(x, y); }
+    bool key_first;
+    bool operator()(const Candidate& x, const Candidate& y) const { return beforeByKey(x, y, key_first); }
   };
   // Place of the candidate at index i in one order (0 = first).
   int placeOf(int i, bool by_key) const {
     int place = 0;
     const Candidate& x = cand_[i];
     if (by_key) {
-      for (int j = 0; j < cand_n_; ++j) place += beforeByKey(cand_[j], x);
+      for (int j = 0; j < cand_n_; ++j) place += beforeByKey(cand_[j], x, delaunay_first_);
     } else {
       for (int j = 0; j < cand_n_; ++j) place += beforeByDistance(cand_[j], x);
     }
@@ -1597,12 +1632,12 @@ class LevelCoder {
     evaluateGroups(place + 1);
     if (place >= cand_n_) return kNoSlot;
     if (place == 0) return cand_[firstIndex()].s;
-    return by_key_chosen_ ? candidateAt(place, ByKey()) : candidateAt(place, ByDistance());
+    return by_key_chosen_ ? candidateAt(place, ByKey{delaunay_first_}) : candidateAt(place, ByDistance());
   }
   // Index in cand_ of the first candidate of the chosen order (cand_ not empty), found once per
   // gate: the groups evaluated later have smaller multiplicities and come after it in both orders.
   int firstIndex() {
-    if (first_ < 0) first_ = by_key_chosen_ ? firstIndex(ByKey()) : firstIndex(ByDistance());
+    if (first_ < 0) first_ = by_key_chosen_ ? firstIndex(ByKey{delaunay_first_}) : firstIndex(ByDistance());
     return first_;
   }
   template <class Before>
@@ -1622,7 +1657,7 @@ class LevelCoder {
   // The first kMaxCandidates candidates in the chosen order; returns their count.
   int orderedCandidates(uint32_t* out) {
     evaluateAllGroups();
-    if (by_key_chosen_) return orderedCandidates(out, ByKey());
+    if (by_key_chosen_) return orderedCandidates(out, ByKey{delaunay_first_});
     return orderedCandidates(out, ByDistance());
   }
   template <class Before>
@@ -1923,12 +1958,15 @@ class LevelCoder {
     return d <= kMaxKey ? d : kMaxKey;
   }
 
-  // An apex outside the candidate list: its rank by distance to the predicted apex among the live
-  // vertices not on the wrong side of the gate face, or its slot. A rank may cost a scan of every
-  // live vertex, so it is allowed only while the live counts of the ranked escapes so far stay
-  // within kEscapeScanBudget per tetrahedron and boundary triangle decoded so far: the decoder's
-  // work stays linear in what it outputs, whatever the stream (or the header's counts) says. In a
-  // thin shell the apex lies across the shell, near the prediction but far along the front.
+  // An apex outside the candidate list: its rank among the live vertices not on the wrong side of
+  // the gate face, or its slot. The rank is by sweep key (then distance to the predicted apex) in a
+  // "Delaunay first" level while the Delaunay order is in use, else by distance: the apex of a
+  // Delaunay tetrahedron is the first vertex the sweep meets, whichever fan it lies on, and in a
+  // thin shell the apex lies across the shell, near the prediction but far along the front. A rank
+  // may cost a scan of every live vertex, so it is allowed only while the live counts of the ranked
+  // escapes so far stay within kEscapeScanBudget per tetrahedron and boundary triangle decoded so
+  // far: the decoder's work stays linear in what it outputs, whatever the stream (or the header's
+  // counts) says.
   Status codeEscape(const FrontFace& g, const Orient3dFilter& side, const double p[3], uint32_t xs, uint32_t* x) {
     const bool allowed = escape_scan_ + live_ <= kEscapeScanBudget * (tets_done_ + btris_done_ + 1);
     uint32_t by_rank = 0;
@@ -1941,10 +1979,26 @@ class LevelCoder {
       for (uint32_t t = 0; t < state_.size(); ++t)
         if (state_[t] == kLive) fn(t);
     };
+    if (delaunay_ && !swept_ready_) prepareSweep();
+    const bool swept = by_key_chosen_ && delaunay_first_ && key_scale_ > 0 && std::isfinite(key_scale_) &&
+                       std::isfinite(r2_) && std::isfinite(cc0_[0]) && std::isfinite(cc0_[1]) && std::isfinite(cc0_[2]);
+    auto key = [&](uint32_t t) { return NearestGrid::Key{sweepKey(P(t)), apexDistance(P(t), p)}; };
+    // Every vertex with a key below the bound lies within sqrt(safe2) of the circumcentre C: one
+    // at sweep parameter tau (a length along the normal) lies in the sphere of centre C + tau n
+    // through a, b and c, so within |tau| + sqrt(R^2 + tau^2) of C when tau >= 0, and within R of C
+    // when tau < 0. Margins keep rounding on the safe side.
+    auto bound = [&](double safe2) {
+      const double s = std::sqrt(safe2) * (1 - 1e-9), r = std::sqrt(r2_);
+      if (!(s > r * (1 + 1e-6))) return -std::numeric_limits<double>::infinity();
+      const double tau = (s - r) * (s + r) / (2 * s) - 1e-9 * (s + r);
+      const double y = 64.0 * tau / r;
+      return y < 1e18 ? floorKey(y) - 1 : 1e18;
+    };
     if (allowed && !grid_.built()) buildGrid();
     if constexpr (kEncode) {
       if (allowed && isLive(xs) && eligible(xs)) {
-        rank = grid_.rankOf(p, dist(xs), xs, dist, eligible, all);
+        rank = swept ? grid_.rankOfBy(cc0_, key(xs), xs, key, bound, eligible, all)
+                     : grid_.rankOf(p, dist(xs), xs, dist, eligible, all);
         by_rank = rank < (uint64_t{1} << kEscapeRankBits);
       }
     }
@@ -1964,8 +2018,8 @@ class LevelCoder {
       *x = xs;
       return Status::ok();
     }
-    // The rank-th eligible live vertex in (distance, slot) order.
-    *x = grid_.kth(p, rank, dist, eligible, all);
+    // The rank-th eligible live vertex in that order.
+    *x = swept ? grid_.kthBy(cc0_, rank, key, bound, eligible, all) : grid_.kth(p, rank, dist, eligible, all);
     if (*x == NearestGrid::kNone) return bad("escape rank beyond the live vertices");
     return Status::ok();
   }
@@ -2205,10 +2259,66 @@ class LevelCoder {
   int n_near_ = 0;
   bool edge_points_ = false;  // the level codes points on edges (section 10.5)
   BitModel edge_points_flag_;
+  bool delaunay_first_ = false;  // the Delaunay order ranks by key before count (section 10.4)
+  BitModel delaunay_first_flag_;
   BitModel edge_point_[4][2];  // [edge kind (codeEdgePoints)][after a point on the same edge]
   uint32_t copy_last_[3] = {0, 0, 0};
   std::vector<double> pred_vals_;
 };
+
+// Whether the mesh looks like a Delaunay tetrahedralization, for the encoder's "Delaunay first" bit
+// (section 10.4): over up to about 4096 tetrahedra spread through the mesh, at most 5% of their
+// interior faces have the vertex across clearly inside the tetrahedron's circumsphere. Meshes from
+// Delaunay meshers (TetGen, CGAL) pass, with no violation or a few; the levels that simplification
+// leaves (its collapses break the empty-sphere property, about 30% of the faces) and curvilinear
+// grids (20-35%) do not, and they rank better by count first. A floating-point test: the bit is the
+// encoder's choice, which decoders only read.
+bool looksDelaunay(const TetMesh& mesh, const FaceAdjacency& adj) {
+  const size_t nt = mesh.numTets();
+  const size_t step = std::max<size_t>(1, nt / 4096);
+  size_t tested = 0, inside = 0;
+  auto det3 = [](const double* a, const double* b, const double* c) {
+    return a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+  };
+  for (size_t t = 0; t < nt; t += step) {
+    const Tet& a = mesh.tets[t];
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t u = adj.neighbor[4 * t + k];
+      if (u >= nt) continue;
+      uint32_t e = kNone32;
+      for (uint32_t v : mesh.tets[u])
+        if (v != a[0] && v != a[1] && v != a[2] && v != a[3]) e = v;
+      if (e == kNone32) continue;
+      // The insphere determinant relative to e (rows p_i - e, lifted by |p_i - e|^2), signed by the
+      // tetrahedron's orientation; "clearly": beyond 1e-8 of the size of its terms.
+      double m[4][3], l[4], scale = 0;
+      for (int i = 0; i < 4; ++i) {
+        const double* p = mesh.point(a[i]);
+        const double* q = mesh.point(e);
+        l[i] = 0;
+        for (int d = 0; d < 3; ++d) {
+          m[i][d] = p[d] - q[d];
+          l[i] += m[i][d] * m[i][d];
+        }
+        scale = std::max(scale, l[i]);
+      }
+      const double ins = -l[0] * det3(m[1], m[2], m[3]) + l[1] * det3(m[0], m[2], m[3]) - l[2] * det3(m[0], m[1], m[3]) +
+                         l[3] * det3(m[0], m[1], m[2]);
+      const double* p0 = mesh.point(a[0]);
+      double e1[3], e2[3], e3[3];
+      for (int d = 0; d < 3; ++d) {
+        e1[d] = mesh.point(a[1])[d] - p0[d];
+        e2[d] = mesh.point(a[2])[d] - p0[d];
+        e3[d] = mesh.point(a[3])[d] - p0[d];
+      }
+      const double o = det3(e1, e2, e3);
+      if (!(o != 0) || !std::isfinite(ins)) continue;
+      ++tested;
+      if ((o > 0 ? -ins : ins) > 1e-8 * scale * scale * std::sqrt(scale)) ++inside;
+    }
+  }
+  return tested > 0 && inside <= tested / 20;
+}
 
 }  // namespace
 
@@ -2248,6 +2358,7 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
 
   EncoderSide enc;
   enc.mesh = &mesh;
+  enc.delaunay_first = looksDelaunay(mesh, adj);
   enc.neighbor = &adj.neighbor;
   enc.src_slot.assign(np, kNoSlot);
   enc.remaining.assign(np, 0);

@@ -1,10 +1,12 @@
-// Rank queries by distance over a changing set of points (the live vertices of the level codec):
-// "the r-th point in (distance, slot) order" and "how many points come before this one". The
-// answers are defined by that order alone, so they equal a scan of every point; the grid only
-// finds them sooner. Points are chained per cell in arrays indexed by slot (no allocation per
-// point); a query looks at rings of cells around the query point until every point that can still
-// come before the answer lies inside the rings, and falls back to a scan of every point when the
-// rings would visit more cells than there are points.
+// Rank queries over a changing set of points (the live vertices of the level codec): "the r-th
+// point in (key, slot) order" and "how many points come before this one", where the key is the
+// distance to a query point or, more generally, any key for which the caller can say which keys
+// are final once every point within some distance of a centre has been seen (the Delaunay sweep's
+// key is). The answers are defined by that order alone, so they equal a scan of every point; the
+// grid only finds them sooner. Points are chained per cell in arrays indexed by slot (no
+// allocation per point); a query looks at rings of cells around the centre until every point that
+// can still come before the answer lies inside the rings, and falls back to a scan of every point
+// when the rings would visit more cells than there are points.
 #pragma once
 
 #include <algorithm>
@@ -19,7 +21,12 @@ namespace gtn {
 class NearestGrid {
  public:
   static constexpr uint32_t kNone = 0xFFFFFFFFu;
-  using Ranked = std::pair<double, uint32_t>;  // (distance, slot)
+  // A point's key: ordered by k, then by d (then by slot).
+  struct Key {
+    double k, d;
+    bool operator<(const Key& o) const { return k != o.k ? k < o.k : d < o.d; }
+    bool operator==(const Key& o) const { return k == o.k && d == o.d; }
+  };
 
   bool built() const { return n_ > 0; }
 
@@ -74,39 +81,53 @@ class NearestGrid {
   // fewer qualify. `all(fn)` calls fn(s) for every point (the fallback scan).
   template <class Dist, class Ok, class All>
   uint32_t kth(const double p[3], uint64_t r, Dist dist, Ok ok, All all) {
-    buf_.clear();
-    const bool done = visit(p, [&](uint32_t s) {
-      if (ok(s)) buf_.push_back({dist(s), s});
-    }, [&](double safe2) {
-      // Points closer than the safe radius are final: every point before them has been seen.
-      const auto mid = std::partition(buf_.begin(), buf_.end(), [&](const Ranked& x) { return x.first < safe2; });
-      return static_cast<uint64_t>(mid - buf_.begin()) > r;
-    });
-    if (!done) {  // the fallback: every point
-      buf_.clear();
-      all([&](uint32_t s) {
-        if (ok(s)) buf_.push_back({dist(s), s});
-      });
-    }
-    if (r >= buf_.size()) return kNone;
-    // After a successful ring test the final points are at the front, in no order.
-    auto end = buf_.end();
-    if (done && last_safe2_ >= 0) end = std::partition(buf_.begin(), buf_.end(), [&](const Ranked& x) { return x.first < last_safe2_; });
-    std::nth_element(buf_.begin(), buf_.begin() + static_cast<long>(r), end);
-    return buf_[r].second;
+    return kthBy(p, r, [&](uint32_t s) { return Key{dist(s), 0.0}; }, [](double safe2) { return safe2; }, ok, all);
   }
-
   // How many points with ok(s) come before (d, x) in (dist(s), s) order (x itself not counted).
   template <class Dist, class Ok, class All>
   uint64_t rankOf(const double p[3], double d, uint32_t x, Dist dist, Ok ok, All all) {
+    return rankOfBy(p, Key{d, 0.0}, x, [&](uint32_t s) { return Key{dist(s), 0.0}; }, [](double safe2) { return safe2; }, ok, all);
+  }
+
+  // The same in (key(s), s) order. `final(safe2)`: a bound b such that every point with key.k < b
+  // lies within sqrt(safe2) of `centre` (-infinity when none surely does; infinite safe2 means
+  // every point has been seen).
+  template <class KeyOf, class Final, class Ok, class All>
+  uint32_t kthBy(const double centre[3], uint64_t r, KeyOf key, Final final, Ok ok, All all) {
+    // The r + 1 first points seen so far, in a heap whose top is the last of them: a point after the
+    // top is not asked ok(s), and the answer is the top once every point before it has been seen.
+    buf_.clear();
+    auto each = [&](uint32_t s) {
+      const Ranked x{key(s), s};
+      if (buf_.size() > r && !(x < buf_.front())) return;
+      if (!ok(s)) return;
+      buf_.push_back(x);
+      std::push_heap(buf_.begin(), buf_.end());
+      if (buf_.size() > r + 1) {
+        std::pop_heap(buf_.begin(), buf_.end());
+        buf_.pop_back();
+      }
+    };
+    const bool done = visit(centre, each, [&](double safe2) {
+      // Every point whose key is below the bound has been seen.
+      return buf_.size() > r && (safe2 == INFINITY || buf_.front().key.k < final(safe2));
+    });
+    if (!done) {  // the fallback: every point
+      buf_.clear();
+      all(each);
+    }
+    return buf_.size() > r ? buf_.front().slot : kNone;
+  }
+  template <class KeyOf, class Final, class Ok, class All>
+  uint64_t rankOfBy(const double centre[3], Key kx, uint32_t x, KeyOf key, Final final, Ok ok, All all) {
     uint64_t rank = 0;
     auto before = [&](uint32_t s) {
       if (s == x) return;
-      const double e = dist(s);
-      if ((e < d || (e == d && s < x)) && ok(s)) ++rank;
+      const Key e = key(s);
+      if ((e < kx || (e == kx && s < x)) && ok(s)) ++rank;
     };
-    // Done once the rings hold every point at distance d or less.
-    const bool done = visit(p, before, [&](double safe2) { return safe2 > d; });
+    // Done once the rings hold every point whose key is kx.k or less.
+    const bool done = visit(centre, before, [&](double safe2) { return safe2 == INFINITY || final(safe2) > kx.k; });
     if (!done) {
       rank = 0;
       all(before);
@@ -125,13 +146,18 @@ class NearestGrid {
     return (cellIndex(2, q[2]) * n_ + cellIndex(1, q[1])) * n_ + cellIndex(0, q[0]);
   }
 
+  struct Ranked {
+    Key key;
+    uint32_t slot;
+    bool operator<(const Ranked& o) const { return key < o.key || (key == o.key && slot < o.slot); }
+  };
+
   // Calls each(s) for the points of growing rings of cells around p, and stop(safe2) after each
   // ring, safe2 being a squared radius within which every point has been visited (infinite once
   // the rings cover the grid). Returns true when stop said so or every point was visited; false
   // when the rings grew too costly (the caller then scans every point itself).
   template <class Each, class Stop>
   bool visit(const double p[3], Each each, Stop stop) {
-    last_safe2_ = -1;
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return false;
     for (uint32_t s = head_.back(); s != kNone; s = next_[s]) each(s);
     int c[3];
@@ -177,7 +203,6 @@ class NearestGrid {
         }
       }
       const double safe2 = safe == INFINITY ? INFINITY : (safe > 0 ? std::min(safe * safe, kLargest) : 0.0);
-      last_safe2_ = safe2;
       if (stop(safe2) || safe2 == INFINITY) return true;
       if (cells > max_cells) return false;
     }
@@ -185,7 +210,6 @@ class NearestGrid {
 
   int n_ = 0;
   double origin_[3] = {0, 0, 0}, h_[3] = {1, 1, 1};
-  double last_safe2_ = -1;
   uint64_t count_ = 0;
   std::vector<uint32_t> head_, cell_, next_, prev_;
   std::vector<Ranked> buf_;

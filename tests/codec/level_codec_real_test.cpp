@@ -15,7 +15,9 @@ namespace {
 struct RealCase {
   std::vector<std::string> files;
   int split;
-  double max_connectivity_bits;  // boundary + peeling, per tetrahedron
+  // Boundary + peeling, per tetrahedron: below the cut-border machine's 2.04 (the goal; the
+  // paper's 2.5 is its requirement), or less where a dataset does much better.
+  double max_connectivity_bits;
 };
 
 // xz -9 size of the raw coordinate and field arrays as the source stores them.
@@ -64,7 +66,7 @@ void checkCase(const RealCase& c, uint64_t* peak = nullptr) {
   EXPECT_LT(ours, xzOfRawArrays(m, name)) << c.files[0];
 }
 
-TEST(LevelCodecReal, SpxVtk) { checkCase({{"vtk/spx.vtk"}, 6, 2.5}); }
+TEST(LevelCodecReal, SpxVtk) { checkCase({{"vtk/spx.vtk"}, 6, 2.04}); }
 
 TEST(LevelCodecReal, BluntFinFiveSplitKeepsTheFrontSmall) {
   uint64_t peak = 0;
@@ -72,16 +74,16 @@ TEST(LevelCodecReal, BluntFinFiveSplitKeepsTheFrontSmall) {
   EXPECT_LE(peak, 40960u / 2) << "peak live vertices must stay at most half of the points";
 }
 
-TEST(LevelCodecReal, TetgenCornellSpheres) { checkCase({{"tetgen/cornell_spheres.1.ele"}, 6, 2.5}); }
+TEST(LevelCodecReal, TetgenCornellSpheres) { checkCase({{"tetgen/cornell_spheres.1.ele"}, 6, 2.04}); }
 
 // 331 points printed with 8 decimals, whose repeated decimal patterns xz -9 finds in the raw float64
 // values: the closest of the shared datasets to xz.
-TEST(LevelCodecReal, TetgenCornellBoxWithRegionAttribute) { checkCase({{"tetgen/cornellbox_orig.1.ele"}, 6, 2.5}); }
+TEST(LevelCodecReal, TetgenCornellBoxWithRegionAttribute) { checkCase({{"tetgen/cornellbox_orig.1.ele"}, 6, 2.04}); }
 
 TEST(LevelCodecReal, VtuWithManyFieldsAndUnusedPoints) {
-  checkCase({{"vtu/lv_guccione.vtu"}, 6, 2.5});
-  checkCase({{"vtu/raptorTetra_19409.vtu"}, 6, 2.5});
-  checkCase({{"vtu/fire_ug.vtu"}, 6, 2.5});
+  checkCase({{"vtu/lv_guccione.vtu"}, 6, 2.04});
+  checkCase({{"vtu/raptorTetra_19409.vtu"}, 6, 2.04});
+  checkCase({{"vtu/fire_ug.vtu"}, 6, 2.04});
 }
 
 // A quadratic mesh as importers keep it (spec 10.5, edge points): spx's tetrahedra, with a node that no
@@ -90,7 +92,7 @@ TEST(LevelCodecReal, VtuWithManyFieldsAndUnusedPoints) {
 // average of the ends. Coded on their edges, the nodes cost a fraction of what they cost as unused
 // points after the level, and the decoder emits them while it peels.
 TEST(LevelCodecReal, MidEdgeNodesAreCodedOnTheirEdges) {
-  TetMesh m = importOrDie({{"vtk/spx.vtk"}, 6, 2.5});
+  TetMesh m = importOrDie({{"vtk/spx.vtk"}, 6, 2.04});
   ASSERT_EQ(m.coord_type, ScalarType::kFloat32);
   ASSERT_EQ(m.point_fields.size(), 1u);
   const std::set<std::pair<uint32_t, uint32_t>> edges = test::tetEdges(m);
@@ -143,11 +145,11 @@ TEST(LevelCodecReal, MidEdgeNodesAreCodedOnTheirEdges) {
 
 // Ossicles is a thin shell (3412 boundary triangles for 5058 tetrahedra, nearly every point on the
 // boundary): the boundary surface costs about 0.6 bit per tetrahedron, and many apexes lie across
-// the shell, outside the front fans (ranked escapes, spec 10.4, reach them). The hardest dataset
-// for the paper's 2.5 bits.
-TEST(LevelCodecReal, VtuThinShellOssicles) { checkCase({{"vtu/Ossicles.vtu"}, 6, 2.5}); }
+// the shell, outside the front fans (ranked escapes, spec 10.4, reach them). The hardest dataset:
+// it is a Delaunay mesh, and ranked by the Delaunay sweep first it takes about 1.4 bits.
+TEST(LevelCodecReal, VtuThinShellOssicles) { checkCase({{"vtu/Ossicles.vtu"}, 6, 1.6}); }
 
-TEST(LevelCodecReal, MeditBunny) { checkCase({{"medit/bunny.mesh"}, 6, 2.5}); }
+TEST(LevelCodecReal, MeditBunny) { checkCase({{"medit/bunny.mesh"}, 6, 2.04}); }
 
 }  // namespace
 }  // namespace gtn

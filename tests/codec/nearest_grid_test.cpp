@@ -91,6 +91,51 @@ void runScenario(uint32_t seed, bool clustered) {
   }
 }
 
+// kthBy / rankOfBy with a key that is not the distance to the rings' centre: the squared distance
+// to another point q (then the distance to p, then the slot), final below (S - |q - c|)^2 once every
+// point within S of the centre c has been seen. Same answers as sorting every point.
+TEST(NearestGrid, KeyedRanksEqualAScanOfEveryPoint) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Model m;
+  const uint32_t slots = 400;
+  m.pos.resize(3 * slots);
+  m.live.assign(slots, 1);
+  for (uint32_t s = 0; s < slots; ++s)
+    for (int i = 0; i < 3; ++i) m.pos[3 * s + i] = s % 7 == 0 ? 0.25 * std::round(u(rng) * 4) : u(rng);
+  NearestGrid grid;
+  const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+  grid.build(lo, hi, slots);
+  for (uint32_t s = 0; s < slots; ++s) grid.insert(s, m.P(s));
+  for (int query = 0; query < 300; ++query) {
+    double c[3], q[3], p[3];
+    for (int i = 0; i < 3; ++i) {
+      c[i] = u(rng);
+      q[i] = c[i] + 0.3 * u(rng);
+      p[i] = u(rng);
+    }
+    const double off = std::sqrt((q[0] - c[0]) * (q[0] - c[0]) + (q[1] - c[1]) * (q[1] - c[1]) + (q[2] - c[2]) * (q[2] - c[2]));
+    auto key = [&](uint32_t s) { return NearestGrid::Key{dist(m, s, q), dist(m, s, p)}; };
+    auto bound = [&](double safe2) {
+      const double s = std::sqrt(safe2) * (1 - 1e-12) - off;
+      return s > 0 ? s * s : -std::numeric_limits<double>::infinity();
+    };
+    auto ok = [&](uint32_t s) { return s % 5 != static_cast<uint32_t>(query % 5); };
+    auto all = [&](auto fn) {
+      for (uint32_t s = 0; s < slots; ++s) fn(s);
+    };
+    std::vector<std::pair<std::pair<double, double>, uint32_t>> order;
+    for (uint32_t s = 0; s < slots; ++s)
+      if (ok(s)) order.push_back({{key(s).k, key(s).d}, s});
+    std::sort(order.begin(), order.end());
+    const uint64_t r = query % 4 == 0 ? rng() % order.size() : rng() % 4;
+    ASSERT_EQ(grid.kthBy(c, r, key, bound, ok, all), order[r].second) << "query " << query << " rank " << r;
+    ASSERT_EQ(grid.kthBy(c, order.size(), key, bound, ok, all), NearestGrid::kNone);
+    const size_t i = rng() % order.size();
+    ASSERT_EQ(grid.rankOfBy(c, key(order[i].second), order[i].second, key, bound, ok, all), i) << "query " << query;
+  }
+}
+
 TEST(NearestGrid, RanksEqualAScanOfEveryPoint) {
   for (uint32_t seed = 1; seed <= 4; ++seed) runScenario(seed, false);
 }
