@@ -377,6 +377,15 @@ class Replay {
 
 }  // namespace
 
+MergeForest forestFromTree(const MergeTree& tree) {
+  MergeForest f;
+  f.parent = tree.parent;
+  f.rank.assign(tree.rank.begin(), tree.rank.end());
+  f.boundary = tree.boundary;
+  f.removed = tree.removed;
+  return f;
+}
+
 void checkMergeTree(const TetMesh& level0, const MergeForest& forest, const std::vector<StoredLevel>& levels,
                     ValidationReport& report, MergeReplayStats* stats) {
   MergeReplayStats local;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "codec/merge_tree_coder.h"
 #include "mesh/tet_mesh.h"
 #include "validate/report.h"
 
@@ -26,6 +27,9 @@ struct MergeForest {
   std::vector<uint8_t> boundary;
   std::vector<uint32_t> removed;
 };
+
+// The forest of a decoded merge tree, with its annotations.
+MergeForest forestFromTree(const MergeTree& tree);
 
 // A stored mip level to compare with the replay.
 struct StoredLevel {

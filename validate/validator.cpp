@@ -215,15 +215,6 @@ IssueCode classifyContainerFailure(const Status& status) {
   return IssueCode::kMalformedContainer;
 }
 
-MergeForest forestFromTree(const MergeTree& tree) {
-  MergeForest f;
-  f.parent = tree.parent;
-  f.rank.assign(tree.rank.begin(), tree.rank.end());
-  f.boundary = tree.boundary;
-  f.removed = tree.removed;
-  return f;
-}
-
 }  // namespace
 
 StatusOr<ValidationReport> validateGtnFile(const std::string& path, const ValidateOptions& options) {

@@ -124,13 +124,8 @@ TEST(Ranking, OptionsSelectFieldAndWeights) {
 
 // The errors the validator's replay of `tree` on `mesh` reports (validate/merge_checks.h).
 std::vector<std::string> replayErrors(const TetMesh& mesh, const MergeTree& tree) {
-  MergeForest forest;
-  forest.parent = tree.parent;
-  forest.rank.assign(tree.rank.begin(), tree.rank.end());
-  forest.boundary = tree.boundary;
-  forest.removed = tree.removed;
   ValidationReport report;
-  checkMergeTree(mesh, forest, {}, report);
+  checkMergeTree(mesh, forestFromTree(tree), {}, report);
   return report.errorCodes();
 }
 
