@@ -217,12 +217,14 @@ class Splitter {
         ++hex_five_;
         return;
       }
+      ++five_inverted_;  // not convex enough for 5: the cone below may do
     }
     cone(kHexFaces, g, 8, cell);
   }
 
   size_t collapsed_ = 0;
   size_t hex_five_ = 0;
+  size_t five_inverted_ = 0;  // hexahedra whose diagonals allow 5 tetrahedra, of which some come out inverted
 
  private:
   std::vector<Tet>* tets_;
@@ -439,9 +441,12 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
                                " higher-order cells (quadratic hexahedra, wedges or pyramids; Lagrange or Bezier "
                                "cells) reduced to their corners and split as linear cells; their other points are "
                                "kept as unreferenced points");
-  if (hexes && split == 5 && splitter.hex_five_ < hexes)
-    report->warnings.push_back(std::to_string(hexes - splitter.hex_five_) + " of " + std::to_string(hexes) +
-                               " hexahedra split into 6 tetrahedra: their face diagonals do not allow 5");
+  if (hexes && split == 5 && splitter.hex_five_ + splitter.five_inverted_ < hexes)
+    report->warnings.push_back(std::to_string(hexes - splitter.hex_five_ - splitter.five_inverted_) + " of " +
+                               std::to_string(hexes) + " hexahedra split into 6 tetrahedra: their face diagonals do not allow 5");
+  if (splitter.five_inverted_)
+    report->warnings.push_back(std::to_string(splitter.five_inverted_) + " of " + std::to_string(hexes) +
+                               " hexahedra split into 6 tetrahedra: not convex, 5 would invert some");
   if (splitter.resplit_)
     report->warnings.push_back(std::to_string(splitter.resplit_) +
                                " cells that are not convex split from another vertex than their smallest, so that "

@@ -520,6 +520,13 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
     std::vector<uint32_t> tet_cell;
     ImportReport report;
     ASSERT_TRUE(splitVtkCells("h.vtu", cells, 8, with_coords ? mesh.coords.data() : nullptr, 6, &tets, &tet_cell, &report).isOk());
+    // Asked for 5 (its diagonals allow it only when they form an inscribed tetrahedron), the split
+    // never inverts a piece either.
+    std::vector<Tet> five;
+    std::vector<uint32_t> five_cell;
+    ImportReport five_report;
+    ASSERT_TRUE(splitVtkCells("h.vtu", cells, 8, mesh.coords.data(), 5, &five, &five_cell, &five_report).isOk());
+    for (const Tet& t : five) EXPECT_GT(volume(t), 0.0);
     ASSERT_EQ(tets.size(), 6u);
     size_t negative = 0;
     for (const Tet& t : tets) negative += volume(t) < 0;
