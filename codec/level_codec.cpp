@@ -1510,20 +1510,29 @@ class LevelCoder {
         }
         const uint32_t s = raw_[i].s;
         raw_[i] = raw_[--raw_n_];
-        const double* q = P(s);
-        if (wrong_ != 0 && side_->sign(q) == wrong_) continue;
-        Candidate& x = cand_[cand_n_++];
-        x.s = s;
-        x.w = w;
-        // Sort keys must be ordered values: overflowing coordinates (NaN or infinite distances) sort
-        // last, so that the comparison stays a strict weak order.
-        x.dist = apexDistance(q, pred_);
-        x.key = x.dist;
-        if (delaunay_) {
-          if (!swept_ready_) prepareSweep();
-          x.key = sweepKey(q);
-        }
+        evaluate(s, w);
       }
+    }
+  }
+  // The same for every group at once (ranking by key first needs every candidate keyed).
+  void evaluateAllGroups() {
+    for (int i = 0; i < raw_n_; ++i) evaluate(raw_[i].s, raw_[i].w);
+    raw_n_ = 0;
+  }
+  // Drops candidate s if it is on the wrong side, else keys it into cand_.
+  void evaluate(uint32_t s, uint32_t w) {
+    const double* q = P(s);
+    if (wrong_ != 0 && side_->sign(q) == wrong_) return;
+    Candidate& x = cand_[cand_n_++];
+    x.s = s;
+    x.w = w;
+    // Sort keys must be ordered values: overflowing coordinates (NaN or infinite distances) sort
+    // last, so that the comparison stays a strict weak order.
+    x.dist = apexDistance(q, pred_);
+    x.key = x.dist;
+    if (delaunay_) {
+      if (!swept_ready_) prepareSweep();
+      x.key = sweepKey(q);
     }
   }
   // The Delaunay order's key of q (prepareSweep first): the sweep parameter at which q is met, in
@@ -1535,22 +1544,6 @@ class LevelCoder {
     const double t = h > 0 ? (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - r2_) / (2 * h) : 1e300;
     const double y = t * key_scale_;
     return y < 1e18 ? floorKey(y) : 1e18;  // NaN too
-  }
-  // The same for every group at once (the Delaunay order ranks by key first).
-  void evaluateAllGroups() {
-    if (raw_n_ == 0) return;
-    if (delaunay_ && !swept_ready_) prepareSweep();
-    for (int i = 0; i < raw_n_; ++i) {
-      const uint32_t s = raw_[i].s;
-      const double* q = P(s);
-      if (wrong_ != 0 && side_->sign(q) == wrong_) continue;
-      Candidate& x = cand_[cand_n_++];
-      x.s = s;
-      x.w = raw_[i].w;
-      x.dist = apexDistance(q, pred_);
-      x.key = delaunay_ ? sweepKey(q) : x.dist;
-    }
-    raw_n_ = 0;
   }
   // The circumcentre and radius of the gate face and its normal into the undecoded side.
   void prepareSweep() {
@@ -1979,8 +1972,9 @@ class LevelCoder {
       for (uint32_t t = 0; t < state_.size(); ++t)
         if (state_[t] == kLive) fn(t);
     };
-    if (delaunay_ && !swept_ready_) prepareSweep();
-    const bool swept = by_key_chosen_ && delaunay_first_ && key_scale_ > 0 && std::isfinite(key_scale_) &&
+    const bool by_key = by_key_chosen_ && delaunay_first_;
+    if (by_key && !swept_ready_) prepareSweep();
+    const bool swept = by_key && key_scale_ > 0 && std::isfinite(key_scale_) &&
                        std::isfinite(r2_) && std::isfinite(cc0_[0]) && std::isfinite(cc0_[1]) && std::isfinite(cc0_[2]);
     auto key = [&](uint32_t t) { return NearestGrid::Key{sweepKey(P(t)), apexDistance(P(t), p)}; };
     // Every vertex with a key below the bound lies within sqrt(safe2) of the circumcentre C: one
@@ -2277,7 +2271,7 @@ bool looksDelaunay(const TetMesh& mesh, const FaceAdjacency& adj) {
   const size_t nt = mesh.numTets();
   const size_t step = std::max<size_t>(1, nt / 4096);
   size_t tested = 0, inside = 0;
-  auto det3 = [](const double* a, const double* b, const double* c) {
+  auto det3 = [](const double* a, const double* b, const double* c) {  // a . (b x c)
     return a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
   };
   for (size_t t = 0; t < nt; t += step) {
@@ -2304,14 +2298,7 @@ bool looksDelaunay(const TetMesh& mesh, const FaceAdjacency& adj) {
       }
       const double ins = -l[0] * det3(m[1], m[2], m[3]) + l[1] * det3(m[0], m[2], m[3]) - l[2] * det3(m[0], m[1], m[3]) +
                          l[3] * det3(m[0], m[1], m[2]);
-      const double* p0 = mesh.point(a[0]);
-      double e1[3], e2[3], e3[3];
-      for (int d = 0; d < 3; ++d) {
-        e1[d] = mesh.point(a[1])[d] - p0[d];
-        e2[d] = mesh.point(a[2])[d] - p0[d];
-        e3[d] = mesh.point(a[3])[d] - p0[d];
-      }
-      const double o = det3(e1, e2, e3);
+      const double o = signedVolume(mesh.point(a[0]), mesh.point(a[1]), mesh.point(a[2]), mesh.point(a[3]));
       if (!(o != 0) || !std::isfinite(ins)) continue;
       ++tested;
       if ((o > 0 ? -ins : ins) > 1e-8 * scale * scale * std::sqrt(scale)) ++inside;

@@ -89,11 +89,11 @@ class NearestGrid {
     return rankOfBy(p, Key{d, 0.0}, x, [&](uint32_t s) { return Key{dist(s), 0.0}; }, [](double safe2) { return safe2; }, ok, all);
   }
 
-  // The same in (key(s), s) order. `final(safe2)`: a bound b such that every point with key.k < b
+  // The same in (key(s), s) order. `bound(safe2)`: a b such that every point with key.k < b
   // lies within sqrt(safe2) of `centre` (-infinity when none surely does; infinite safe2 means
   // every point has been seen).
-  template <class KeyOf, class Final, class Ok, class All>
-  uint32_t kthBy(const double centre[3], uint64_t r, KeyOf key, Final final, Ok ok, All all) {
+  template <class KeyOf, class Bound, class Ok, class All>
+  uint32_t kthBy(const double centre[3], uint64_t r, KeyOf key, Bound bound, Ok ok, All all) {
     // The r + 1 first points seen so far, in a heap whose top is the last of them: a point after the
     // top is not asked ok(s), and the answer is the top once every point before it has been seen.
     buf_.clear();
@@ -110,7 +110,7 @@ class NearestGrid {
     };
     const bool done = visit(centre, each, [&](double safe2) {
       // Every point whose key is below the bound has been seen.
-      return buf_.size() > r && (safe2 == INFINITY || buf_.front().key.k < final(safe2));
+      return buf_.size() > r && (safe2 == INFINITY || buf_.front().key.k < bound(safe2));
     });
     if (!done) {  // the fallback: every point
       buf_.clear();
@@ -118,8 +118,8 @@ class NearestGrid {
     }
     return buf_.size() > r ? buf_.front().slot : kNone;
   }
-  template <class KeyOf, class Final, class Ok, class All>
-  uint64_t rankOfBy(const double centre[3], Key kx, uint32_t x, KeyOf key, Final final, Ok ok, All all) {
+  template <class KeyOf, class Bound, class Ok, class All>
+  uint64_t rankOfBy(const double centre[3], Key kx, uint32_t x, KeyOf key, Bound bound, Ok ok, All all) {
     uint64_t rank = 0;
     auto before = [&](uint32_t s) {
       if (s == x) return;
@@ -127,7 +127,7 @@ class NearestGrid {
       if ((e < kx || (e == kx && s < x)) && ok(s)) ++rank;
     };
     // Done once the rings hold every point whose key is kx.k or less.
-    const bool done = visit(centre, before, [&](double safe2) { return safe2 == INFINITY || final(safe2) > kx.k; });
+    const bool done = visit(centre, before, [&](double safe2) { return safe2 == INFINITY || bound(safe2) > kx.k; });
     if (!done) {
       rank = 0;
       all(before);

@@ -161,24 +161,21 @@ class Splitter {
           break;
         }
       }
-      if (scratch_.empty() || mixedOrientation(scratch_)) ++mixed_;
+      if (mixedOrientation(scratch_)) ++mixed_;
     }
     for (const Tet& t : scratch_) emit(t, cell);
   }
 
-  // The tetrahedra from `apex` to the fan of a face of n corners (global index idx(k), cyclic order)
-  // from its smallest-index corner: a quadrilateral is cut along its diagonal through that corner, a
-  // triangle stays whole.
+  // Appends to *out the tetrahedra from `apex` to the fan of a face of n corners (global index
+  // idx(k), cyclic order) from its smallest-index corner: a quadrilateral is cut along its diagonal
+  // through that corner, a triangle stays whole.
   template <class Index>
-  void fan(uint32_t apex, int64_t n, Index idx, uint32_t cell) {
+  static void fan(uint32_t apex, int64_t n, Index idx, std::vector<Tet>* out) {
     int64_t m = 0;
     for (int64_t k = 1; k < n; ++k)
       if (idx(k) < idx(m)) m = k;
-    for (int64_t k = 1; k + 1 < n; ++k) emit({apex, idx(m), idx((m + k) % n), idx((m + k + 1) % n)}, cell);
+    for (int64_t k = 1; k + 1 < n; ++k) out->push_back({apex, idx(m), idx((m + k) % n), idx((m + k + 1) % n)});
   }
-
-  size_t resplit_ = 0;  // cells split from another vertex than their smallest (cone)
-  size_t mixed_ = 0;    // cells whose every allowed cone mixes orientations
 
   // A polyhedron from its face stream `f` (checked): the cone from its smallest vertex over the fans
   // of the faces without it.
@@ -187,12 +184,14 @@ class Splitter {
     uint32_t apex = UINT32_MAX;
     for (int64_t k = 0, at = 1; k < num_faces; ++k, at += 1 + f[at])
       for (int64_t i = 0; i < f[at]; ++i) apex = std::min(apex, static_cast<uint32_t>(f[at + 1 + i]));
+    scratch_.clear();
     for (int64_t k = 0, at = 1; k < num_faces; ++k, at += 1 + f[at]) {
       const int64_t n = f[at];
       const int64_t* v = f + at + 1;
       if (std::find(v, v + n, int64_t{apex}) != v + n) continue;
-      fan(apex, n, [&](int64_t i) { return static_cast<uint32_t>(v[i]); }, cell);
+      fan(apex, n, [&](int64_t i) { return static_cast<uint32_t>(v[i]); }, &scratch_);
     }
+    for (const Tet& t : scratch_) emit(t, cell);
   }
 
   // True when the hexahedron's six face diagonals (by the smallest-index rule) are the edges of one
@@ -223,6 +222,8 @@ class Splitter {
   }
 
   size_t collapsed_ = 0;
+  size_t resplit_ = 0;  // cells split from another vertex than their smallest (cone)
+  size_t mixed_ = 0;    // cells whose every allowed cone mixes orientations
   size_t hex_five_ = 0;
   size_t five_inverted_ = 0;  // hexahedra whose diagonals allow 5 tetrahedra, of which some come out inverted
 
@@ -235,8 +236,7 @@ class Splitter {
     out->clear();
     for (const Face& f : faces) {
       if (std::find(f.v, f.v + f.n, apex) != f.v + f.n) continue;
-      const int m = minCorner(f, g);
-      for (int k = 1; k + 1 < f.n; ++k) out->push_back({g[apex], g[f.v[m]], g[f.v[(m + k) % f.n]], g[f.v[(m + k + 1) % f.n]]});
+      fan(g[apex], f.n, [&](int64_t k) { return g[f.v[k]]; }, out);
     }
   }
   // True when every face through local vertex v is cut through v by the face rule: a triangle, a
@@ -547,8 +547,7 @@ Status finishVtkImport(const std::string& path, const VtkCells& cells, const std
                        const ImportOptions& options, ImportResult* result, size_t* duplicate_tets) {
   std::vector<uint32_t> tet_cell;
   GTN_RETURN_IF_ERROR(splitVtkCells(path, cells, result->mesh.numPoints(), result->mesh.coords.data(), options.split,
-                                    &result->mesh.tets,
-                                    &tet_cell, &result->report));
+                                    &result->mesh.tets, &tet_cell, &result->report));
   // Cells blanked by VTK (HIDDENCELL) are not part of the mesh, as in structured grids; in a piece of
   // a parallel file, neither are the copies of other pieces' cells (DUPLICATECELL).
   if (const uint8_t* marks = vtkGhostMarks(cell_fields, cells.types.size())) {
