@@ -1,5 +1,7 @@
 #include "convert/ascii_rows.h"
 
+#include <cctype>
+
 namespace gtn {
 
 bool readRow(TextReader& reader, std::vector<std::string_view>* tokens) {
@@ -57,6 +59,15 @@ StatusOr<double> parseDoubleToken(const TextReader& reader, std::string_view tok
   double v;
   if (!parseDouble(token, &v)) return reader.error("expected " + what + " (a number), found " + quotedToken(token));
   return v;
+}
+
+bool sameKeyword(std::string_view token, std::string_view word) {
+  if (token.size() != word.size()) return false;
+  for (size_t i = 0; i < token.size(); ++i) {
+    if (std::tolower(static_cast<unsigned char>(token[i])) != std::tolower(static_cast<unsigned char>(word[i])))
+      return false;
+  }
+  return true;
 }
 
 }  // namespace gtn

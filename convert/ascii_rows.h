@@ -37,4 +37,7 @@ StatusOr<int64_t> parseIntToken(const TextReader& reader, std::string_view token
 // `token` as a double (correctly rounded), or an error at the reader's line.
 StatusOr<double> parseDoubleToken(const TextReader& reader, std::string_view token, const std::string& what);
 
+// Whether `token` is the keyword `word`, ignoring ASCII case (Medit's keywords, OFF's header).
+bool sameKeyword(std::string_view token, std::string_view word);
+
 }  // namespace gtn

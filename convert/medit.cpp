@@ -6,9 +6,7 @@
 // changed between libMeshb versions, one line per entry (as libMeshb writes them). An unknown keyword
 // is an error (its entries could not be skipped safely).
 #include <algorithm>
-#include <cctype>
 #include <cmath>
-#include <cstring>
 
 #include "convert/ascii_rows.h"
 #include "convert/import.h"
@@ -19,14 +17,6 @@ namespace gtn {
 
 namespace {
 constexpr int64_t kMaxItems = 0xFFFFFFFDll;
-
-bool sameKeyword(std::string_view a, const char* b) {
-  if (a.size() != std::strlen(b)) return false;
-  for (size_t i = 0; i < a.size(); ++i) {
-    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) return false;
-  }
-  return true;
-}
 
 // Sections skipped: values per entry, with -1 standing for the dimension.
 enum class Skip {

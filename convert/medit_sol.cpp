@@ -28,13 +28,6 @@ bool otherSolutionKeyword(uint32_t code) { return code == 26 || (code >= 63 && c
 
 constexpr int64_t kMaxTypes = 1000;  // libMeshb's GmfMaxTyp
 
-bool sameKeyword(std::string_view a, const char* b) {
-  if (a.size() != std::strlen(b)) return false;
-  for (size_t i = 0; i < a.size(); ++i)
-    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) return false;
-  return true;
-}
-
 // Components of a solution type in 3D, 0 for an unknown type.
 uint32_t typeComponents(int64_t type) {
   switch (type) {

@@ -48,6 +48,14 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
                     reader.error("expected the point count or an OFF keyword, found " + quotedToken(row[0])).message());
     }
     first = 1;
+    // Geomview's binary OFF ("OFF BINARY", then big-endian counts and arrays) is a surface format.
+    if (row.size() > 1 && sameKeyword(row[1], "BINARY")) {
+      return Status(StatusCode::kUnsupported,
+                    reader.error("binary OFF ('" + std::string(row[0]) +
+                                 " BINARY', Geomview's) holds a surface of polygons, which has no volume; only the "
+                                 "ASCII tetrahedral OFF of ZSweep and HAVS is read")
+                        .message());
+    }
   }
   std::vector<int64_t> counts;
   while (true) {

@@ -579,6 +579,15 @@ TEST(OffErrors, SurfaceOffIsNotReadAsTetrahedra) {
                                               "values mixed are the faces of a surface OFF"),
             std::string::npos)
       << r.status().message();
+  // Geomview's binary OFF is a surface format too; it is named, not misread as counts.
+  const std::string binary = dir + "/binary.off";
+  writeFile(binary, std::string("OFF BINARY\n\0\0\0\4\0\0\0\4\0\0\0\6", 23));
+  r = importOff(binary, ImportOptions{});
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().code(), StatusCode::kUnsupported);
+  EXPECT_NE(r.status().message().find(binary + ":1: binary OFF ('OFF BINARY', Geomview's) holds a surface"),
+            std::string::npos)
+      << r.status().message();
   // A tetrahedral OFF whose rows happen to start with 3 is still read when its tetrahedra are not all so.
   const std::string tets = dir + "/tets.off";
   writeFile(tets, "5\n2\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n3 0 1 2\n1 3 2 4\n");
