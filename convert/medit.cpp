@@ -3,9 +3,11 @@
 // are read (1-based, a reference number after each); hexahedra, prisms and pyramids are split into
 // tetrahedra as the VTK importers split theirs (medit_cells.h gives the corner numbering). Every other
 // known section is skipped: by its count of values, or, for the links to a geometry whose layout
-// changed between libMeshb versions, one line per entry (as libMeshb writes them). An unknown keyword
-// is an error (its entries could not be skipped safely).
+// changed between libMeshb versions, one line per entry (as libMeshb writes them). A section of
+// another program is skipped, with a warning, up to the next keyword: entries are numbers, keywords
+// words. A file whose first keyword is unknown is not a Medit file.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "convert/ascii_rows.h"
@@ -71,6 +73,13 @@ StatusOr<int32_t> readRef(TextReader& reader) {
   return static_cast<int32_t>(v);
 }
 
+// Whether a token is a word (a section keyword), not a number: entries hold only numbers (nan and
+// inf among them).
+bool isKeyword(std::string_view tok) {
+  double x;
+  return std::isalpha(static_cast<unsigned char>(tok[0])) && !parseDouble(tok, &x);
+}
+
 // The volume keyword `tok` names (Hexaedra is an old spelling of Hexahedra, Pentahedra an old name
 // of Prisms), or null.
 const MeditVolumeKeyword* volumeKeyword(std::string_view tok) {
@@ -92,9 +101,14 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
   MeditCells cells;
   bool have_vertices = false, seen_keyword = false;
   std::string skipped_volume;  // higher-order volume sections skipped, for the error when nothing else is left
-  std::string_view tok;
+  std::string_view tok, pending;  // pending: a keyword already read (it ended a skipped section)
   while (true) {
-    if (!reader.next(&tok)) break;
+    if (!pending.empty()) {
+      tok = pending;
+      pending = {};
+    } else if (!reader.next(&tok)) {
+      break;
+    }
     if (sameKeyword(tok, "End")) break;
     if (sameKeyword(tok, "MeshVersionFormatted")) {
       GTN_ASSIGN_OR_RETURN(const int64_t version, reader.readInt("mesh version"));
@@ -189,7 +203,27 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
         if (!seen_keyword)
           return Status(StatusCode::kNotOurFile, reader.error("not a Medit .mesh file: it starts with " +
                                                               quotedToken(tok)).message());
-        return reader.error("unknown Medit section " + quotedToken(tok) + " (its entries cannot be skipped safely)");
+        if (!isKeyword(tok))
+          return reader.error("expected a section keyword, found " + quotedToken(tok) +
+                              " (the section before holds more values than its count says)");
+        // Other programs add their own sections (ParMmg's ParallelTriangleCommunicators, whose
+        // entries follow in a second section without a count; libMeshb's ISolAtTetrahedra ...).
+        // Every entry of every section is numbers, so an unknown one ends at the next word.
+        const std::string name(tok);
+        const size_t line = reader.line();
+        uint64_t numbers = 0;
+        std::string_view t;
+        while (reader.next(&t)) {
+          if (isKeyword(t)) {
+            pending = t;
+            break;
+          }
+          ++numbers;
+        }
+        result.report.warnings.push_back("skipped the unknown section '" + name + "' (line " + std::to_string(line) +
+                                         ", " + std::to_string(numbers) + " numbers up to the next keyword)");
+        seen_keyword = true;
+        continue;
       }
       if (dimension != 3) return reader.error(std::string(section->keyword) + " before a 'Dimension 3' line");
       const int64_t values = section->values < 0 ? dimension : section->values;
@@ -211,6 +245,10 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
       }
       for (int64_t i = 0; section->skip == Skip::kValues && i < count * values; ++i) {
         if (!reader.next(&tok)) return reader.errorAtEnd(entries.c_str());
+        if (isKeyword(tok))
+          return reader.error(std::string(section->keyword) + " (line " + std::to_string(line) + ") announces " +
+                              std::to_string(count) + " entries of " + std::to_string(values) + " values; found " +
+                              quotedToken(tok) + " after " + std::to_string(i) + " values");
       }
       if (section->volume && count > 0) {
         const std::string what = std::to_string(count) + " " + section->keyword + " elements (line " +

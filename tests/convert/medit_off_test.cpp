@@ -230,6 +230,33 @@ TEST(MeditImport, AnyKeywordOrderSeveralSectionsAndGeometryLinks) {
               dir + "/far.mesh:6: tetrahedron 1 refers to vertex 9; vertices are numbered 1 to 5");
 }
 
+// Sections of other programs are skipped up to the next keyword, with a warning: ParMmg's
+// communicators (the second without a count), libMeshb's ISolAtTetrahedra, one holding a NaN.
+TEST(MeditImport, SkipsSectionsOfOtherProgramsToTheNextKeyword) {
+  const std::string dir = tempDir("medit-unknown");
+  const std::string text = replaced(kMedit, "Tetrahedra\n",
+                                    "ParallelTriangleCommunicators\n1\n1 2\nParallelCommunicatorTriangles\n"
+                                    "1 1 0\n2 2 0\nMyValues 2\nnan 1.5e3\n-inf\nTetrahedra\n");
+  writeFile(dir + "/p.mesh", replaced(text, "End\n", "ISolAtTetrahedra\n1\n1 0 0 0\nEnd\n"));
+  auto r = importMedit(dir + "/p.mesh", ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numPoints(), 5u);
+  ASSERT_EQ(r->mesh.numTets(), 2u);  // the Tetrahedra after the skipped sections
+  EXPECT_EQ(r->mesh.cell_fields[0].get(1, 0), 8);
+  ASSERT_EQ(r->report.warnings.size(), 4u);
+  EXPECT_EQ(r->report.warnings[0],
+            "skipped the unknown section 'ParallelTriangleCommunicators' (line 24, 3 numbers up to the next keyword)");
+  EXPECT_EQ(r->report.warnings[1],
+            "skipped the unknown section 'ParallelCommunicatorTriangles' (line 27, 6 numbers up to the next keyword)");
+  EXPECT_EQ(r->report.warnings[2], "skipped the unknown section 'MyValues' (line 30, 4 numbers up to the next keyword)");
+  EXPECT_NE(r->report.warnings[3].find("'ISolAtTetrahedra'"), std::string::npos) << r->report.warnings[3];
+  // A file that starts with an unknown word is still no Medit file.
+  writeFile(dir + "/q.mesh", "Foo 1\n" + text);
+  auto q = importMedit(dir + "/q.mesh", ImportOptions{});
+  ASSERT_FALSE(q.isOk());
+  EXPECT_EQ(q.status().code(), StatusCode::kNotOurFile);
+}
+
 // TetGen -g writes a point attribute as the vertex reference: reals keep every reference as float64.
 TEST(MeditImport, RealVertexReferencesBecomeFloat64) {
   const std::string dir = tempDir("medit-real-refs");
@@ -259,8 +286,19 @@ TEST(MeditErrors, BadInputs) {
   expectError(importMedit(p, ImportOptions{}), p + ":27:");
   writeFile(p, replaced(kMedit, "1 0 0 11", "1 zero 0 11"));
   expectError(importMedit(p, ImportOptions{}), p + ":8:");
+  // An unknown section is skipped with a warning (SkipsSectionsOfOtherProgramsToTheNextKeyword);
+  // the section it ends is not: Corners' second count is no keyword.
   writeFile(p, replaced(kMedit, "Corners 1 1", "Wonders 1 1"));
-  expectError(importMedit(p, ImportOptions{}), p + ":19:");
+  auto w = importMedit(p, ImportOptions{});
+  ASSERT_TRUE(w.isOk()) << w.status().message();
+  ASSERT_EQ(w->report.warnings.size(), 1u);
+  EXPECT_EQ(w->report.warnings[0], "skipped the unknown section 'Wonders' (line 19, 2 numbers up to the next keyword)");
+  writeFile(p, replaced(kMedit, "Corners 1 1", "Corners 2 1"));
+  expectError(importMedit(p, ImportOptions{}),
+              p + ":20: Corners (line 19) announces 2 entries of 1 values; found 'Ridges' after 1 values");
+  writeFile(p, replaced(kMedit, "Corners 1 1", "Corners 1 1 4"));
+  expectError(importMedit(p, ImportOptions{}),
+              p + ":19: expected a section keyword, found '4' (the section before holds more values than its count says)");
   writeFile(p, replaced(kMedit, "Tetrahedra\n2\n", "Tetrahedra\n3\n"));
   expectError(importMedit(p, ImportOptions{}), "b.mesh:");
   writeFile(p, std::string(kMedit).substr(0, std::string(kMedit).find("2 4 3 5 8")));
