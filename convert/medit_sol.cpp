@@ -100,8 +100,27 @@ class SolutionReader {
                                 std::to_string(*items) + (cells ? " tetrahedra" : " vertices")));
     return true;
   }
-  void store(std::vector<Field>* fields, bool cells) {
+  // Keeps the fields of one section (`types`, in order). A symmetric matrix (type 3) is stored by
+  // Medit as its lower triangle by rows, m11 m21 m22 m31 m32 m33; its components are put in VTK's
+  // order for 6-component tensors, XX YY ZZ XY YZ XZ, which every exported file and viewer
+  // assumes, and a warning says so.
+  void store(std::vector<Field>* fields, const std::vector<int64_t>& types, bool cells, const std::string& where) {
     saw_solution_ = true;
+    constexpr uint32_t kToVtk[6] = {0, 3, 1, 5, 4, 2};  // Medit component c goes to VTK component kToVtk[c]
+    for (size_t k = 0; k < fields->size(); ++k) {
+      Field& f = (*fields)[k];
+      if (types[k] != 3) continue;
+      const size_t vs = f.valueSize(), item = 6 * vs;
+      std::vector<uint8_t> row(item);
+      for (size_t i = 0; i < f.itemCount(); ++i) {
+        uint8_t* p = f.bytes.data() + i * item;
+        for (uint32_t c = 0; c < 6; ++c) std::memcpy(row.data() + kToVtk[c] * vs, p + c * vs, vs);
+        std::memcpy(p, row.data(), item);
+      }
+      result_->report.warnings.push_back(path_ + ": " + where + ": the symmetric matrix '" + f.name +
+                                         "' is stored in VTK's component order (XX YY ZZ XY YZ XZ), not Medit's "
+                                         "(m11 m21 m22 m31 m32 m33)");
+    }
     auto& dest = cells ? result_->mesh.cell_fields : result_->mesh.point_fields;
     for (Field& f : *fields) dest.push_back(std::move(f));
   }
@@ -179,7 +198,7 @@ Status SolutionReader::readAscii(const std::string& text) {
           if (f.type == ScalarType::kFloat32) f.set<float>(i, c, static_cast<float>(v));
           else f.set<double>(i, c, v);
         }
-    store(&fields, tets);
+    store(&fields, types, tets, "line " + std::to_string(line));
   }
   if (version == 0) return Status(StatusCode::kNotOurFile, path_ + ": empty, not a Medit solution file");
   return Status::ok();
@@ -244,7 +263,7 @@ Status SolutionReader::readBinary(const std::string& bytes) {
           const uint64_t v = in.realBits();
           std::memcpy(f.bytes.data() + (i * f.components + c) * real_size, &v, real_size);
         }
-    store(&fields, tets);
+    store(&fields, types, tets, "byte offset " + std::to_string(at));
   }
   return Status::ok();
 }

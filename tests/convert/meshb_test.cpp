@@ -314,8 +314,15 @@ void expectSolutionFields(const TetMesh& m, int version, const std::string& wher
     EXPECT_EQ(scalar.get(v, 0), expected(vertexValue(v, 0))) << where << " vertex " << v;
     for (int c = 0; c < 3; ++c) EXPECT_EQ(vector.get(v, c), expected(vertexValue(v, c + 1))) << where << " vertex " << v;
   }
+  // The symmetric matrix, m11 m21 m22 m31 m32 m33 in the file, in VTK's order XX YY ZZ XY YZ XZ.
+  constexpr int kFromMedit[6] = {0, 2, 5, 1, 4, 3};
   for (int t = 0; t < 2; ++t)
-    for (int c = 0; c < 6; ++c) EXPECT_EQ(matrix.get(t, c), expected(tetValue(t, c))) << where;
+    for (int c = 0; c < 6; ++c) EXPECT_EQ(matrix.get(t, c), expected(tetValue(t, kFromMedit[c]))) << where;
+}
+
+bool saysMatrixOrder(const std::string& warning) {
+  return warning.find("the symmetric matrix 'u' is stored in VTK's component order (XX YY ZZ XY YZ XZ), not Medit's "
+                      "(m11 m21 m22 m31 m32 m33)") != std::string::npos;
 }
 
 TEST(MeditSolution, AsciiAndBinaryFilesBecomeFields) {
@@ -326,7 +333,9 @@ TEST(MeditSolution, AsciiAndBinaryFilesBecomeFields) {
     auto r = importMesh({dir + "/m.mesh", dir + "/u.sol"}, ImportOptions{});
     ASSERT_TRUE(r.isOk()) << r.status().message();
     expectSolutionFields(r->mesh, version, "u.sol version " + std::to_string(version));
-    EXPECT_TRUE(r->report.warnings.empty());
+    ASSERT_EQ(r->report.warnings.size(), 1u);
+    EXPECT_TRUE(saysMatrixOrder(r->report.warnings[0])) << r->report.warnings[0];
+    EXPECT_NE(r->report.warnings[0].find("u.sol: line 12: "), std::string::npos) << r->report.warnings[0];
   }
   for (int version = 1; version <= 4; ++version)
     for (bool swap : {false, true}) {
@@ -335,8 +344,9 @@ TEST(MeditSolution, AsciiAndBinaryFilesBecomeFields) {
       auto r = importMesh({dir + "/m.mesh", dir + "/u.solb"}, ImportOptions{});
       ASSERT_TRUE(r.isOk()) << where << ": " << r.status().message();
       expectSolutionFields(r->mesh, version, where);
-      ASSERT_EQ(r->report.warnings.size(), 1u) << where;
+      ASSERT_EQ(r->report.warnings.size(), 2u) << where;
       EXPECT_NE(r->report.warnings[0].find("solution keyword 64 skipped"), std::string::npos) << r->report.warnings[0];
+      EXPECT_TRUE(saysMatrixOrder(r->report.warnings[1])) << r->report.warnings[1];
     }
   // A binary mesh takes them too.
   writeFile(dir + "/m.meshb", twoCubesAndATet(2, false));
