@@ -178,18 +178,28 @@ class Splitter {
   }
 
   // A polyhedron from its face stream `f` (checked): the cone from its smallest vertex over the fans
-  // of the faces without it.
+  // of the faces without it; when that mixes orientations (a cell that is not convex), from the next
+  // vertex the face rule allows whose cone does not, as cone() does (among the first kMaxApexTries).
   void polyhedron(const int64_t* f, uint32_t cell) {
     const int64_t num_faces = f[0];
-    uint32_t apex = UINT32_MAX;
+    corners_.clear();
     for (int64_t k = 0, at = 1; k < num_faces; ++k, at += 1 + f[at])
-      for (int64_t i = 0; i < f[at]; ++i) apex = std::min(apex, static_cast<uint32_t>(f[at + 1 + i]));
-    scratch_.clear();
-    for (int64_t k = 0, at = 1; k < num_faces; ++k, at += 1 + f[at]) {
-      const int64_t n = f[at];
-      const int64_t* v = f + at + 1;
-      if (std::find(v, v + n, int64_t{apex}) != v + n) continue;
-      fan(apex, n, [&](int64_t i) { return static_cast<uint32_t>(v[i]); }, &scratch_);
+      for (int64_t i = 0; i < f[at]; ++i) corners_.push_back(static_cast<uint32_t>(f[at + 1 + i]));
+    std::sort(corners_.begin(), corners_.end());
+    corners_.erase(std::unique(corners_.begin(), corners_.end()), corners_.end());
+    polyhedronCone(f, corners_[0], &scratch_);
+    if (coords_ && mixedOrientation(scratch_)) {
+      constexpr size_t kMaxApexTries = 64;
+      for (size_t k = 1; k < corners_.size() && k < kMaxApexTries; ++k) {
+        if (!allowedPolyhedronApex(f, corners_[k])) continue;
+        polyhedronCone(f, corners_[k], &other_);
+        if (!mixedOrientation(other_)) {
+          scratch_.swap(other_);
+          ++resplit_;
+          break;
+        }
+      }
+      if (mixedOrientation(scratch_)) ++mixed_;
     }
     for (const Tet& t : scratch_) emit(t, cell);
   }
@@ -251,6 +261,29 @@ class Splitter {
     }
     return true;
   }
+  // The cone from vertex `apex` over the fans of the faces of face stream f without it, into *out.
+  static void polyhedronCone(const int64_t* f, uint32_t apex, std::vector<Tet>* out) {
+    out->clear();
+    for (int64_t k = 0, at = 1; k < f[0]; ++k, at += 1 + f[at]) {
+      const int64_t n = f[at];
+      const int64_t* v = f + at + 1;
+      if (std::find(v, v + n, int64_t{apex}) != v + n) continue;
+      fan(apex, n, [&](int64_t i) { return static_cast<uint32_t>(v[i]); }, out);
+    }
+  }
+  // allowedApex for a polyhedron: every face through `apex` is a triangle, a quadrilateral whose
+  // diagonal from its smallest corner ends at it, or a larger face whose smallest corner it is.
+  static bool allowedPolyhedronApex(const int64_t* f, uint32_t apex) {
+    for (int64_t k = 0, at = 1; k < f[0]; ++k, at += 1 + f[at]) {
+      const int64_t n = f[at];
+      const int64_t* v = f + at + 1;
+      const int64_t pos = std::find(v, v + n, int64_t{apex}) - v;
+      if (pos == n || n == 3) continue;
+      const int64_t m = std::min_element(v, v + n) - v;
+      if (pos != m && !(n == 4 && pos == (m + 2) % 4)) return false;
+    }
+    return true;
+  }
   // Some tetrahedra positively oriented and some negatively (flat ones count as neither).
   bool mixedOrientation(const std::vector<Tet>& tets) const {
     bool pos = false, neg = false;
@@ -265,6 +298,7 @@ class Splitter {
 
   const double* coords_;
   std::vector<Tet> five_scratch_, scratch_, other_;
+  std::vector<uint32_t> corners_;  // a polyhedron's distinct vertices, ascending
 };
 
 }  // namespace
@@ -454,7 +488,7 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   if (splitter.mixed_)
     report->warnings.push_back(std::to_string(splitter.mixed_) +
                                " cells that are not convex have inverted tetrahedra however they are split without "
-                               "adding points; once flipped these overlap their neighbours (gtn validate reports it)");
+                               "adding points; once flipped these overlap their neighbours, which gtn validate sees only where the boundary folds");
   if (splitter.collapsed_) {
     report->collapsed_tets += splitter.collapsed_;
     report->warnings.push_back(std::to_string(splitter.collapsed_) +

@@ -515,6 +515,7 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
   const double dent[3] = {0.75, 0.5, 0.5};  // local corner 1, global point 5
   std::copy(dent, dent + 3, &mesh.coords[3 * 5]);
   auto volume = [&](const Tet& t) { return signedVolume(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]), mesh.point(t[3])); };
+  double hex_volume = 0;
   for (const bool with_coords : {false, true}) {
     std::vector<Tet> tets;
     std::vector<uint32_t> tet_cell;
@@ -536,6 +537,7 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
       continue;
     }
     EXPECT_EQ(negative, 0u);
+    for (const Tet& t : tets) hex_volume += volume(t);
     for (const Tet& t : tets) EXPECT_TRUE(std::find(t.begin(), t.end(), 4u) != t.end()) << "coned from global 4 (local 7)";
     ASSERT_EQ(report.warnings.size(), 1u);
     EXPECT_NE(report.warnings[0].find("1 cells that are not convex split from another vertex"), std::string::npos) << report.warnings[0];
@@ -555,6 +557,36 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
       once += n == 1;
     }
     EXPECT_EQ(once, 12u);
+  }
+  // The same cell as a VTK_POLYHEDRON (its faces in a face stream) is coned from global 4 too.
+  const int hex_faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  VtkCells poly;
+  poly.types = {kVtkPolyhedron};
+  poly.connectivity = {6};
+  for (const auto& f : hex_faces) {
+    poly.connectivity.push_back(4);
+    for (int l : f) poly.connectivity.push_back(local_to_global[l]);
+  }
+  poly.offsets = {0, static_cast<int64_t>(poly.connectivity.size())};
+  for (const bool with_coords : {false, true}) {
+    std::vector<Tet> tets;
+    std::vector<uint32_t> tet_cell;
+    ImportReport report;
+    ASSERT_TRUE(splitVtkCells("p.vtk", poly, 8, with_coords ? mesh.coords.data() : nullptr, 6, &tets, &tet_cell, &report).isOk());
+    ASSERT_EQ(tets.size(), 6u);
+    size_t negative = 0;
+    double total = 0;
+    for (const Tet& t : tets) negative += volume(t) < 0, total += std::fabs(volume(t));
+    if (!with_coords) {
+      EXPECT_EQ(negative, 1u);  // the plain cone from global 0
+      continue;
+    }
+    EXPECT_EQ(negative, 0u);
+    EXPECT_NEAR(total, hex_volume, 1e-12);  // the same faces, cut by the same rule: the same cell
+    for (const Tet& t : tets) EXPECT_TRUE(std::find(t.begin(), t.end(), 4u) != t.end()) << "coned from global 4";
+    ASSERT_EQ(report.warnings.size(), 1u);
+    EXPECT_NE(report.warnings[0].find("1 cells that are not convex split from another vertex"), std::string::npos)
+        << report.warnings[0];
   }
 }
 
