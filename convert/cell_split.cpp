@@ -150,20 +150,9 @@ class Splitter {
     int order[12];
     for (int k = 0; k < num_vertices; ++k) order[k] = k;
     std::sort(order, order + num_vertices, [&](int a, int b) { return g[a] < g[b]; });
-    coneFrom(faces, g, order[0], &scratch_);
-    if (coords_ && mixedOrientation(scratch_)) {
-      for (int k = 1; k < num_vertices; ++k) {
-        if (!allowedApex(faces, g, order[k])) continue;
-        coneFrom(faces, g, order[k], &other_);
-        if (!mixedOrientation(other_)) {
-          scratch_.swap(other_);
-          ++resplit_;
-          break;
-        }
-      }
-      if (mixedOrientation(scratch_)) ++mixed_;
-    }
-    for (const Tet& t : scratch_) emit(t, cell);
+    coneAvoidingMix(
+        static_cast<size_t>(num_vertices), [&](size_t k) { return allowedApex(faces, g, order[k]); },
+        [&](size_t k, std::vector<Tet>* out) { coneFrom(faces, g, order[k], out); }, cell);
   }
 
   // Appends to *out the tetrahedra from `apex` to the fan of a face of n corners (global index
@@ -187,21 +176,10 @@ class Splitter {
       for (int64_t i = 0; i < f[at]; ++i) corners_.push_back(static_cast<uint32_t>(f[at + 1 + i]));
     std::sort(corners_.begin(), corners_.end());
     corners_.erase(std::unique(corners_.begin(), corners_.end()), corners_.end());
-    polyhedronCone(f, corners_[0], &scratch_);
-    if (coords_ && mixedOrientation(scratch_)) {
-      constexpr size_t kMaxApexTries = 64;
-      for (size_t k = 1; k < corners_.size() && k < kMaxApexTries; ++k) {
-        if (!allowedPolyhedronApex(f, corners_[k])) continue;
-        polyhedronCone(f, corners_[k], &other_);
-        if (!mixedOrientation(other_)) {
-          scratch_.swap(other_);
-          ++resplit_;
-          break;
-        }
-      }
-      if (mixedOrientation(scratch_)) ++mixed_;
-    }
-    for (const Tet& t : scratch_) emit(t, cell);
+    constexpr size_t kMaxApexTries = 64;
+    coneAvoidingMix(
+        std::min(corners_.size(), kMaxApexTries), [&](size_t k) { return allowedPolyhedronApex(f, corners_[k]); },
+        [&](size_t k, std::vector<Tet>* out) { polyhedronCone(f, corners_[k], out); }, cell);
   }
 
   // True when the hexahedron's six face diagonals (by the smallest-index rule) are the edges of one
@@ -240,6 +218,26 @@ class Splitter {
  private:
   std::vector<Tet>* tets_;
   std::vector<uint32_t>* tet_cell_;
+  // Emits the cone from apex 0 of n candidate apexes (ascending global index); when it mixes
+  // orientations, the first cone from an allowed apex that does not (cone() says why), counted.
+  // allowed(k): whether the face rule allows apex k; coneOf(k, out): its cone into *out.
+  template <class Allowed, class ConeOf>
+  void coneAvoidingMix(size_t n, Allowed allowed, ConeOf coneOf, uint32_t cell) {
+    coneOf(0, &scratch_);
+    if (coords_ && mixedOrientation(scratch_)) {
+      for (size_t k = 1; k < n; ++k) {
+        if (!allowed(k)) continue;
+        coneOf(k, &other_);
+        if (!mixedOrientation(other_)) {
+          scratch_.swap(other_);
+          ++resplit_;
+          break;
+        }
+      }
+      if (mixedOrientation(scratch_)) ++mixed_;
+    }
+    for (const Tet& t : scratch_) emit(t, cell);
+  }
   // The cone from local vertex `apex` over the faces without it, into *out.
   template <size_t N>
   static void coneFrom(const Face (&faces)[N], const uint32_t* g, int apex, std::vector<Tet>* out) {
@@ -249,15 +247,17 @@ class Splitter {
       fan(g[apex], f.n, [&](int64_t k) { return g[f.v[k]]; }, out);
     }
   }
+  // Whether the face rule (fan from the smallest corner, at place m) cuts a face of n corners
+  // through its corner at place `at`: a triangle always, a quadrilateral when `at` ends the diagonal
+  // from m, a larger face when `at` is m.
+  static bool cutThrough(int64_t n, int64_t at, int64_t m) { return n == 3 || at == m || (n == 4 && at == (m + 2) % 4); }
   // True when every face through local vertex v is cut through v by the face rule: a triangle, a
   // quadrilateral whose diagonal (from its smallest corner) ends at v, or a larger face fanned from v.
   template <size_t N>
   static bool allowedApex(const Face (&faces)[N], const uint32_t* g, int v) {
     for (const Face& f : faces) {
       const int at = static_cast<int>(std::find(f.v, f.v + f.n, v) - f.v);
-      if (at == f.n || f.n == 3) continue;
-      const int m = minCorner(f, g);
-      if (at != m && !(f.n == 4 && at == (m + 2) % 4)) return false;
+      if (at != f.n && !cutThrough(f.n, at, minCorner(f, g))) return false;
     }
     return true;
   }
@@ -278,9 +278,7 @@ class Splitter {
       const int64_t n = f[at];
       const int64_t* v = f + at + 1;
       const int64_t pos = std::find(v, v + n, int64_t{apex}) - v;
-      if (pos == n || n == 3) continue;
-      const int64_t m = std::min_element(v, v + n) - v;
-      if (pos != m && !(n == 4 && pos == (m + 2) % 4)) return false;
+      if (pos != n && !cutThrough(n, pos, std::min_element(v, v + n) - v)) return false;
     }
     return true;
   }
