@@ -1,6 +1,7 @@
 #include "convert/cell_split.h"
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <map>
 #include <string>
@@ -117,6 +118,14 @@ std::string typeCounts(const std::map<int, size_t>& counts) {
   return list;
 }
 
+// x rounded to float32, through a volatile: GCC 12.2 at -O3 vectorises the rounding of a point's
+// first two coordinates into a plain copy that drops it (seen in Splitter::steinerCone; the float32
+// Steiner point test fails without this).
+double roundedToFloat32(double x) {
+  volatile float f = static_cast<float>(x);
+  return f;
+}
+
 // Position in the face's cycle of its vertex with the smallest global index.
 int minCorner(const Face& f, const uint32_t* g) {
   int m = 0;
@@ -127,9 +136,13 @@ int minCorner(const Face& f, const uint32_t* g) {
 
 class Splitter {
  public:
-  // `coords`: the points (3 per point), or nullptr to split by indices alone.
-  Splitter(std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, const double* coords)
-      : tets_(tets), tet_cell_(tet_cell), coords_(coords) {}
+  // `coords`: the num_points points (3 per point), or nullptr to split by indices alone. `steiner`:
+  // where to add a point inside a cell that no cone from a vertex splits without inversions, or
+  // nullptr to add none; `float32`: whether its coordinates must be float32 values.
+  Splitter(std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, const double* coords, size_t num_points,
+           SteinerPoints* steiner, bool float32)
+      : tets_(tets), tet_cell_(tet_cell), coords_(coords), num_points_(num_points), steiner_(steiner),
+        float32_(float32) {}
 
   void emit(const Tet& t, uint32_t cell) {
     if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) {
@@ -147,12 +160,19 @@ class Splitter {
   // face through it cut through it) and whose cone has no such mix, if there is one.
   template <size_t N>
   void cone(const Face (&faces)[N], const uint32_t* g, int num_vertices, uint32_t cell) {
-    int order[12];
-    for (int k = 0; k < num_vertices; ++k) order[k] = k;
-    std::sort(order, order + num_vertices, [&](int a, int b) { return g[a] < g[b]; });
+    int order[12];  // local vertices by ascending global index (insertion sort: at most 12)
+    for (int k = 0; k < num_vertices; ++k) {
+      int at = k;
+      for (; at > 0 && g[order[at - 1]] > g[k]; --at) order[at] = order[at - 1];
+      order[at] = k;
+    }
     coneAvoidingMix(
         static_cast<size_t>(num_vertices), [&](size_t k) { return allowedApex(faces, g, order[k]); },
-        [&](size_t k, std::vector<Tet>* out) { coneFrom(faces, g, order[k], out); }, cell);
+        [&](size_t k, std::vector<Tet>* out) { coneFrom(faces, g, order[k], g[order[k]], out); },
+        [&](std::vector<uint32_t>* out) {
+          for (int k = 0; k < num_vertices; ++k) out->push_back(g[order[k]]);
+        },
+        [&](uint32_t point, std::vector<Tet>* out) { coneFrom(faces, g, -1, point, out); }, cell);
   }
 
   // Appends to *out the tetrahedra from `apex` to the fan of a face of n corners (global index
@@ -179,7 +199,9 @@ class Splitter {
     constexpr size_t kMaxApexTries = 64;
     coneAvoidingMix(
         std::min(corners_.size(), kMaxApexTries), [&](size_t k) { return allowedPolyhedronApex(f, corners_[k]); },
-        [&](size_t k, std::vector<Tet>* out) { polyhedronCone(f, corners_[k], out); }, cell);
+        [&](size_t k, std::vector<Tet>* out) { polyhedronCone(f, corners_[k], out); },
+        [&](std::vector<uint32_t>* out) { out->insert(out->end(), corners_.begin(), corners_.end()); },
+        [&](uint32_t point, std::vector<Tet>* out) { polyhedronCone(f, point, out); }, cell);
   }
 
   // True when the hexahedron's six face diagonals (by the smallest-index rule) are the edges of one
@@ -211,7 +233,8 @@ class Splitter {
 
   size_t collapsed_ = 0;
   size_t resplit_ = 0;  // cells split from another vertex than their smallest (cone)
-  size_t mixed_ = 0;    // cells whose every allowed cone mixes orientations
+  size_t mixed_ = 0;    // cells whose every allowed cone mixes orientations, even from a Steiner point
+  size_t steiner_cells_ = 0;  // cells split from an added point
   size_t hex_five_ = 0;
   size_t five_inverted_ = 0;  // hexahedra whose diagonals allow 5 tetrahedra, of which some come out inverted
 
@@ -219,10 +242,15 @@ class Splitter {
   std::vector<Tet>* tets_;
   std::vector<uint32_t>* tet_cell_;
   // Emits the cone from apex 0 of n candidate apexes (ascending global index); when it mixes
-  // orientations, the first cone from an allowed apex that does not (cone() says why), counted.
-  // allowed(k): whether the face rule allows apex k; coneOf(k, out): its cone into *out.
-  template <class Allowed, class ConeOf>
-  void coneAvoidingMix(size_t n, Allowed allowed, ConeOf coneOf, uint32_t cell) {
+  // orientations, the first cone from an allowed apex that does not (cone() says why), counted; when
+  // every one does, the cone from a Steiner point at the mean of the cell's corners over all its
+  // faces (cut by the face rule, so neighbours still agree), if that one does not.
+  // allowed(k): whether the face rule allows apex k; coneOf(k, out): its cone into *out;
+  // corners(out): the cell's distinct corners, appended; coneFromPoint(p, out): the cone from
+  // point p (a vertex of no face) over every face, into *out.
+  template <class Allowed, class ConeOf, class Corners, class ConeFromPoint>
+  void coneAvoidingMix(size_t n, Allowed allowed, ConeOf coneOf, Corners corners, ConeFromPoint coneFromPoint,
+                       uint32_t cell) {
     coneOf(0, &scratch_);
     if (coords_ && mixedOrientation(scratch_)) {
       for (size_t k = 1; k < n; ++k) {
@@ -234,17 +262,114 @@ class Splitter {
           break;
         }
       }
-      if (mixedOrientation(scratch_)) ++mixed_;
+      if (mixedOrientation(scratch_) && !(steiner_ && steinerCone(corners, coneFromPoint))) ++mixed_;
     }
     for (const Tet& t : scratch_) emit(t, cell);
   }
-  // The cone from local vertex `apex` over the faces without it, into *out.
+  // Adds a point inside the cell (rounded to float32 when the points are) and, when its cone over
+  // the faces has no inverted tetrahedron beside a positive one, takes that cone into scratch_ and
+  // keeps the point; otherwise adds nothing and returns false. The point tried first is the mean of
+  // the corners; then, in a cell that it does not see whole, the mean of the vertices of the cell's
+  // kernel (the points that see every face triangle from inside), when there is one.
+  template <class Corners, class ConeFromPoint>
+  bool steinerCone(Corners corners, ConeFromPoint coneFromPoint) {
+    const size_t first_corner = steiner_->corners.size();
+    corners(&steiner_->corners);
+    std::sort(steiner_->corners.begin() + first_corner, steiner_->corners.end());
+    steiner_->corners.erase(std::unique(steiner_->corners.begin() + first_corner, steiner_->corners.end()),
+                            steiner_->corners.end());
+    const size_t count = steiner_->corners.size() - first_corner;
+    const size_t point = num_points_ + steiner_->coords.size() / 3;
+    if (point < UINT32_MAX) {
+      double mean[3] = {0, 0, 0};
+      for (size_t k = first_corner; k < steiner_->corners.size(); ++k)
+        for (int d = 0; d < 3; ++d) mean[d] += coords_[3 * size_t{steiner_->corners[k]} + d];
+      for (int d = 0; d < 3; ++d) mean[d] /= static_cast<double>(count);
+      steiner_->coords.resize(steiner_->coords.size() + 3);
+      double* at = &steiner_->coords[3 * (point - num_points_)];
+      coneFromPoint(static_cast<uint32_t>(point), &other_);  // its tetrahedra: (point, face triangle)
+      double kernel[3];
+      for (const double* candidate : {static_cast<const double*>(mean), static_cast<const double*>(kernel)}) {
+        if (candidate == kernel && !kernelMean(other_, mean, kernel)) break;
+        for (int d = 0; d < 3; ++d) at[d] = float32_ ? roundedToFloat32(candidate[d]) : candidate[d];
+        if (!mixedOrientation(other_)) {
+          scratch_.swap(other_);
+          steiner_->corner_offsets.push_back(steiner_->corners.size());
+          ++steiner_cells_;
+          return true;
+        }
+      }
+      steiner_->coords.resize(steiner_->coords.size() - 3);
+    }
+    steiner_->corners.resize(first_corner);
+    return false;
+  }
+  // The mean of the vertices of the kernel of the closed surface of the triangles (a, b, c) of
+  // `cone`'s tetrahedra (p, a, b, c): the points from which every triangle turns the same way, all
+  // one side or all the other. False when it is empty (or the surface has more than kMaxKernelPlanes
+  // triangles). Each vertex is where three triangle planes meet (in coordinates relative to `origin`,
+  // for precision); the mean of the vertices of a convex polytope lies inside it.
+  bool kernelMean(const std::vector<Tet>& cone, const double origin[3], double out[3]) const {
+    constexpr size_t kMaxKernelPlanes = 32;
+    const size_t m = cone.size();
+    if (m < 4 || m > kMaxKernelPlanes) return false;
+    double n[kMaxKernelPlanes][3], h[kMaxKernelPlanes], len[kMaxKernelPlanes];
+    double extent = 0;
+    for (size_t i = 0; i < m; ++i) {
+      double q[3][3];
+      for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 3; ++d) {
+          q[k][d] = at(cone[i][k + 1])[d] - origin[d];
+          extent = std::max(extent, std::fabs(q[k][d]));
+        }
+      const double u[3] = {q[1][0] - q[0][0], q[1][1] - q[0][1], q[1][2] - q[0][2]};
+      const double v[3] = {q[2][0] - q[0][0], q[2][1] - q[0][1], q[2][2] - q[0][2]};
+      n[i][0] = u[1] * v[2] - u[2] * v[1];
+      n[i][1] = u[2] * v[0] - u[0] * v[2];
+      n[i][2] = u[0] * v[1] - u[1] * v[0];
+      h[i] = n[i][0] * q[0][0] + n[i][1] * q[0][1] + n[i][2] * q[0][2];
+      len[i] = std::sqrt(n[i][0] * n[i][0] + n[i][1] * n[i][1] + n[i][2] * n[i][2]);
+    }
+    auto cross = [](const double* a, const double* b, double* c) {
+      c[0] = a[1] * b[2] - a[2] * b[1];
+      c[1] = a[2] * b[0] - a[0] * b[2];
+      c[2] = a[0] * b[1] - a[1] * b[0];
+    };
+    for (const double side : {1.0, -1.0}) {
+      double sum[3] = {0, 0, 0};
+      size_t vertices = 0;
+      for (size_t i = 0; i < m; ++i)
+        for (size_t j = i + 1; j < m; ++j)
+          for (size_t k = j + 1; k < m; ++k) {
+            double jk[3], ki[3], ij[3];
+            cross(n[j], n[k], jk);
+            cross(n[k], n[i], ki);
+            cross(n[i], n[j], ij);
+            const double det = n[i][0] * jk[0] + n[i][1] * jk[1] + n[i][2] * jk[2];
+            if (!(std::fabs(det) > 1e-9 * len[i] * len[j] * len[k])) continue;  // planes nearly parallel
+            double p[3];
+            for (int d = 0; d < 3; ++d) p[d] = (h[i] * jk[d] + h[j] * ki[d] + h[k] * ij[d]) / det;
+            bool inside = true;
+            for (size_t l = 0; l < m && inside; ++l)
+              inside = side * (h[l] - (n[l][0] * p[0] + n[l][1] * p[1] + n[l][2] * p[2])) >= -1e-12 * len[l] * extent;
+            if (!inside) continue;
+            for (int d = 0; d < 3; ++d) sum[d] += p[d];
+            ++vertices;
+          }
+      if (vertices == 0) continue;
+      for (int d = 0; d < 3; ++d) out[d] = origin[d] + sum[d] / static_cast<double>(vertices);
+      return true;
+    }
+    return false;
+  }
+  // The cone from point `apex` over the faces without local vertex `skip` (the apex itself, or -1
+  // for a point inside the cell), into *out.
   template <size_t N>
-  static void coneFrom(const Face (&faces)[N], const uint32_t* g, int apex, std::vector<Tet>* out) {
+  static void coneFrom(const Face (&faces)[N], const uint32_t* g, int skip, uint32_t apex, std::vector<Tet>* out) {
     out->clear();
     for (const Face& f : faces) {
-      if (std::find(f.v, f.v + f.n, apex) != f.v + f.n) continue;
-      fan(g[apex], f.n, [&](int64_t k) { return g[f.v[k]]; }, out);
+      if (std::find(f.v, f.v + f.n, skip) != f.v + f.n) continue;
+      fan(apex, f.n, [&](int64_t k) { return g[f.v[k]]; }, out);
     }
   }
   // Whether the face rule (fan from the smallest corner, at place m) cuts a face of n corners
@@ -282,12 +407,15 @@ class Splitter {
     }
     return true;
   }
+  // Point i: an input point, or a Steiner point added so far.
+  const double* at(uint32_t i) const {
+    return i < num_points_ ? coords_ + 3 * size_t{i} : steiner_->coords.data() + 3 * (i - num_points_);
+  }
   // Some tetrahedra positively oriented and some negatively (flat ones count as neither).
   bool mixedOrientation(const std::vector<Tet>& tets) const {
     bool pos = false, neg = false;
     for (const Tet& t : tets) {
-      const int o = orient3d(coords_ + 3 * size_t{t[0]}, coords_ + 3 * size_t{t[1]}, coords_ + 3 * size_t{t[2]},
-                             coords_ + 3 * size_t{t[3]});
+      const int o = orient3d(at(t[0]), at(t[1]), at(t[2]), at(t[3]));
       pos |= o > 0;
       neg |= o < 0;
     }
@@ -295,6 +423,9 @@ class Splitter {
   }
 
   const double* coords_;
+  size_t num_points_;
+  SteinerPoints* steiner_;
+  bool float32_;
   std::vector<Tet> five_scratch_, scratch_, other_;
   std::vector<uint32_t> corners_;  // a polyhedron's distinct vertices, ascending
 };
@@ -302,7 +433,8 @@ class Splitter {
 }  // namespace
 
 Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, const double* coords, int split,
-                     std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report) {
+                     std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report,
+                     SteinerPoints* steiner, bool float32) {
   const size_t num_cells = cells.types.size();
   if (cells.offsets.size() != num_cells + 1 || cells.offsets[0] != 0 ||
       cells.offsets.back() != static_cast<int64_t>(cells.connectivity.size()))
@@ -429,7 +561,7 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
 
   tets->reserve(tets->size() + out_tets);
   tet_cell->reserve(tet_cell->size() + out_tets);
-  Splitter splitter(tets, tet_cell, coords);
+  Splitter splitter(tets, tet_cell, coords, num_points, coords ? steiner : nullptr, float32);
   uint32_t g[27];
   size_t next_stream = 0;
   for (size_t c = 0; c < num_cells; ++c) {
@@ -483,10 +615,18 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
     report->warnings.push_back(std::to_string(splitter.resplit_) +
                                " cells that are not convex split from another vertex than their smallest, so that "
                                "none of their tetrahedra comes out inverted");
+  if (splitter.steiner_cells_) {
+    report->steiner_points += splitter.steiner_cells_;
+    report->warnings.push_back(std::to_string(splitter.steiner_cells_) +
+                               " cells that are not convex split around a point added at the mean of their corners "
+                               "(a Steiner point, its point fields the mean of theirs): however they are split from "
+                               "a vertex, some of their tetrahedra come out inverted");
+  }
   if (splitter.mixed_)
     report->warnings.push_back(std::to_string(splitter.mixed_) +
-                               " cells that are not convex have inverted tetrahedra however they are split without "
-                               "adding points; once flipped these overlap their neighbours, which gtn validate sees only where the boundary folds");
+                               " cells that are not convex have inverted tetrahedra however they are split, even "
+                               "from a point added inside; once flipped these overlap their neighbours, which gtn "
+                               "validate sees only where the boundary folds");
   if (splitter.collapsed_) {
     report->collapsed_tets += splitter.collapsed_;
     report->warnings.push_back(std::to_string(splitter.collapsed_) +
@@ -575,11 +715,45 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
   return mesh.checkConsistency(path);
 }
 
+namespace {
+
+// Appends the Steiner points to `mesh`, each point field's value the mean of its corners' (in double,
+// rounded to the field's type) for floating-point fields, and its smallest corner's for integer
+// fields (labels and ids, which a mean would not keep).
+void appendSteinerPoints(const SteinerPoints& steiner, TetMesh* mesh) {
+  const size_t first = mesh->numPoints(), count = steiner.coords.size() / 3;
+  if (count == 0) return;
+  mesh->coords.insert(mesh->coords.end(), steiner.coords.begin(), steiner.coords.end());
+  for (Field& f : mesh->point_fields) {
+    f.bytes.resize((first + count) * f.components * f.valueSize());
+    for (size_t k = 0; k < count; ++k) {
+      const uint32_t* corner = steiner.corners.data() + steiner.corner_offsets[k];
+      const size_t n = steiner.corner_offsets[k + 1] - steiner.corner_offsets[k];
+      if (!isFloatType(f.type)) {
+        f.copyItem(f, corner[0], first + k);
+        continue;
+      }
+      for (uint32_t c = 0; c < f.components; ++c) {
+        double sum = 0;
+        for (size_t i = 0; i < n; ++i) sum += f.get(corner[i], c);
+        const double mean = sum / static_cast<double>(n);
+        if (f.type == ScalarType::kFloat32) f.set(first + k, c, static_cast<float>(mean));
+        else f.set(first + k, c, mean);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
                        const ImportOptions& options, ImportResult* result, size_t* duplicate_tets) {
   std::vector<uint32_t> tet_cell;
+  SteinerPoints steiner;
   GTN_RETURN_IF_ERROR(splitVtkCells(path, cells, result->mesh.numPoints(), result->mesh.coords.data(), options.split,
-                                    &result->mesh.tets, &tet_cell, &result->report));
+                                    &result->mesh.tets, &tet_cell, &result->report, &steiner,
+                                    result->mesh.coord_type == ScalarType::kFloat32));
+  appendSteinerPoints(steiner, &result->mesh);
   // Cells blanked by VTK (HIDDENCELL) are not part of the mesh, as in structured grids; in a piece of
   // a parallel file, neither are the copies of other pieces' cells (DUPLICATECELL).
   if (const uint8_t* marks = vtkGhostMarks(cell_fields, cells.types.size())) {

@@ -8,10 +8,14 @@
 // its smallest vertex, so its diagonals pass through v, which is exactly how the cone cuts it. Hence
 // the cut always agrees with the face rule and no configuration of Dompierre et al. (1999) that needs
 // a Steiner point can arise: hexahedra give 6 tetrahedra, wedges 3, pyramids 2, pentagonal prisms 9
-// (at most), hexagonal prisms 12, and ImportReport::steiner_points stays 0. Polyhedra
+// (at most), hexagonal prisms 12. Polyhedra
 // (VTK_POLYHEDRON) are split the same way from their face streams: a tetrahedron for each triangle
 // of each face that does not contain the cell's smallest vertex. (The cone is a valid split of a
 // convex cell, as VTK's prisms are meant to be, and of a polyhedron star-shaped from that vertex.)
+// A cell that is not convex can make the cone mix inverted and positive tetrahedra; it is then coned
+// from another vertex the face rule allows, and when every such cone mixes (a warped face, say), from a
+// Steiner point added at the mean of its corners, over all its faces: the only case that adds points
+// (ImportReport::steiner_points).
 // With split == 5 a hexahedron whose six face diagonals form one of the two inscribed tetrahedra
 // ({0,2,5,7} or {1,3,4,6}) is cut into 5 instead.
 // Voxels are hexahedra numbered x fastest; quadratic tetrahedra, hexahedra, wedges and pyramids keep
@@ -43,6 +47,14 @@ struct VtkCells {
   std::vector<int64_t> face_offsets;
 };
 
+// Points added inside cells (splitVtkCells): point k has coordinates coords[3k .. 3k + 3) and is the
+// mean of the input points corners[corner_offsets[k] .. corner_offsets[k + 1]).
+struct SteinerPoints {
+  std::vector<double> coords;
+  std::vector<size_t> corner_offsets{0};
+  std::vector<uint32_t> corners;
+};
+
 // Splits every cell into tetrahedra: appends them to *tets and, for each, its source cell to
 // *tet_cell. Tetrahedra that a degenerate cell (a repeated point index) makes flat by repetition are
 // dropped and counted in report->collapsed_tets. Cells of lower dimension are skipped (a warning
@@ -51,9 +63,12 @@ struct VtkCells {
 // wrong number of points, or when an index is out of range.
 // `coords` (3 per point, or nullptr): with them, a cell whose cone from its smallest vertex would mix
 // inverted and positive tetrahedra (a cell that is not convex) is coned from another vertex that the
-// face rule allows, when one gives no such mix.
+// face rule allows, when one gives no such mix, and otherwise, with `steiner`, from a point added to
+// *steiner (numbered from num_points on; float32: its coordinates rounded to float32), when that
+// gives no such mix.
 Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, const double* coords, int split,
-                     std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report);
+                     std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report,
+                     SteinerPoints* steiner = nullptr, bool float32 = false);
 
 // The points of a rectilinear grid, i fastest: (x[i], y[j], z[k]) from axes[0..2].
 void rectilinearPoints(const std::vector<double> axes[3], std::vector<double>* coords);

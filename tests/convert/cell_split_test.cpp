@@ -590,6 +590,87 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
   }
 }
 
+// A hexahedron with a warped face (pyvista's qualityEx.vtk: a frustum whose bottom corner 4 is lifted
+// out of its face's plane) mixes orientations however it is coned from a vertex. It is split around a
+// Steiner point instead, over its 12 face triangles (the face rule's, so a neighbour would agree):
+// none inverted, the tetrahedra fill the cell exactly once, and the point carries the mean of its
+// corners' floating-point fields and its smallest corner's integer ones. With float32 points the
+// added point is a float32 value too (the check that caught GCC 12's dropped rounding).
+TEST(CellSplit, WarpedHexahedronIsSplitAroundASteinerPoint) {
+  const double corner[8][3] = {{0, 0, -1},      {1, 0, -1},      {1, 1, -1},      {0, 1, -1},
+                               {0.3, 0.3, -1.3}, {0.7, 0.3, -2.0}, {0.7, 0.7, -2.0}, {0.3, 0.7, -2.0}};
+  const int local_to_global[8] = {4, 5, 6, 7, 0, 1, 2, 3};  // the file's "8 12 13 14 15 8 9 10 11", renumbered
+  for (const bool float32 : {false, true}) {
+    TetMesh points;
+    points.coord_type = float32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+    // Moved off the origin so that no coordinate of the corners' mean is a float32 value by chance.
+    for (const auto& c : corner)
+      for (int d = 0; d < 3; ++d) {
+        const double x = c[d] + 0.1 * (d + 1);
+        points.coords.push_back(float32 ? static_cast<double>(static_cast<float>(x)) : x);
+      }
+    Field temperature("temperature", 2, ScalarType::kFloat64, 8), id("id", 1, ScalarType::kInt32, 8);
+    for (size_t i = 0; i < 8; ++i) {
+      temperature.set<double>(i, 0, 10.0 + static_cast<double>(i));
+      temperature.set<double>(i, 1, 0.5 * static_cast<double>(i * i));
+      id.set<int32_t>(i, 0, 100 + static_cast<int32_t>(i));
+    }
+    points.point_fields = {temperature, id};
+    VtkCells cells;
+    cells.types = {kVtkHexahedron};
+    for (int l = 0; l < 8; ++l) cells.connectivity.push_back(local_to_global[l]);
+    cells.offsets.push_back(8);
+    const ImportResult r = splitInto(points, cells, 6);
+    const std::string where = float32 ? "float32" : "float64";
+    ASSERT_EQ(r.report.steiner_points, 1u) << where;
+    ASSERT_EQ(r.mesh.numPoints(), 9u);
+    ASSERT_EQ(r.mesh.numTets(), 12u) << "the cone from the added point over 6 faces of 2 triangles";
+    const double* s = r.mesh.point(8);
+    for (int d = 0; d < 3; ++d) {
+      if (float32) {
+        EXPECT_EQ(static_cast<double>(static_cast<float>(s[d])), s[d]) << "coordinate " << d;
+      }
+      double lo = 1e300, hi = -1e300;
+      for (size_t i = 0; i < 8; ++i) lo = std::min(lo, r.mesh.point(i)[d]), hi = std::max(hi, r.mesh.point(i)[d]);
+      EXPECT_GT(s[d], lo);
+      EXPECT_LT(s[d], hi);
+    }
+    // Every tetrahedron has the added point and none is inverted; their volumes add up to the
+    // cell's, taken from its six faces (each cut along the diagonal through its smallest global
+    // index) by the divergence theorem: a mixed split, flipped, would add up to more.
+    double split_volume = 0;
+    for (const Tet& t : r.mesh.tets) {
+      EXPECT_TRUE(std::find(t.begin(), t.end(), 8u) != t.end());
+      const double v = signedVolume(r.mesh.point(t[0]), r.mesh.point(t[1]), r.mesh.point(t[2]), r.mesh.point(t[3]));
+      EXPECT_GT(v, 0.0) << where;
+      split_volume += v;
+    }
+    const int hex_faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    const double origin[3] = {0, 0, 0};
+    double cell_volume = 0;
+    for (const auto& f : hex_faces) {
+      int m = 0;
+      for (int k = 1; k < 4; ++k)
+        if (local_to_global[f[k]] < local_to_global[f[m]]) m = k;
+      auto p = [&](int k) { return r.mesh.point(local_to_global[f[(m + k) % 4]]); };
+      cell_volume += signedVolume(origin, p(0), p(1), p(2)) + signedVolume(origin, p(0), p(2), p(3));
+    }
+    EXPECT_NEAR(split_volume, std::fabs(cell_volume), 1e-12) << where;
+    const MeshStats stats = computeMeshStats(r.mesh);
+    EXPECT_EQ(stats.boundary_faces, 12u);
+    EXPECT_EQ(stats.non_manifold_faces, 0u);
+    EXPECT_EQ(stats.inverted, 0u);
+    // Fields: the mean of the 8 corners, and for integers the smallest corner's (global 0, value 100).
+    ASSERT_EQ(r.mesh.point_fields.size(), 2u);
+    EXPECT_EQ(r.mesh.point_fields[0].get(8, 0), 13.5);
+    EXPECT_EQ(r.mesh.point_fields[0].get(8, 1), 0.5 * 140.0 / 8.0);
+    EXPECT_EQ(r.mesh.point_fields[1].get(8, 0), 100.0);
+    bool warned = false;
+    for (const std::string& w : r.report.warnings) warned |= w.find("1 cells that are not convex split around a point added") != std::string::npos;
+    EXPECT_TRUE(warned) << where;
+  }
+}
+
 TEST(CellSplit, QuadraticHexWedgePyramidKeepTheirCorners) {
   // A unit cube as a 20-point quadratic hexahedron, and a wedge and a pyramid beside it; the extra
   // points sit anywhere (they are dropped): only the corners (listed first) shape the tetrahedra.

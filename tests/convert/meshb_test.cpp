@@ -363,6 +363,28 @@ TEST(MeditSolution, AsciiAndBinaryFilesBecomeFields) {
   EXPECT_NE(r->report.warnings[0].find("SolAtTetrahedra skipped"), std::string::npos) << r->report.warnings[0];
 }
 
+// A Medit hexahedron with a warped face is split around an added point (cell_split.h); the vertex
+// solution is read before the split, so it counts the file's 8 vertices, and the added point gets
+// the mean of the corners' values.
+TEST(MeditSolution, VertexValuesFollowAPointAddedInAWarpedHexahedron) {
+  const std::string dir = tempDir("medit-sol-steiner");
+  writeFile(dir + "/w.mesh",
+            "MeshVersionFormatted 2\nDimension 3\nVertices\n8\n0 0 -1 0\n1 0 -1 0\n1 1 -1 0\n0 1 -1 0\n"
+            "0.3 0.3 -1.3 0\n0.7 0.3 -2 0\n0.7 0.7 -2 0\n0.3 0.7 -2 0\nHexahedra\n1\n5 6 7 8 1 2 3 4 3\nEnd\n");
+  writeFile(dir + "/w.sol", "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n8\n1 1\n1\n2\n3\n4\n5\n6\n7\n9\nEnd\n");
+  auto r = importMesh({dir + "/w.mesh", dir + "/w.sol"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->report.steiner_points, 1u);
+  ASSERT_EQ(r->mesh.numPoints(), 9u);
+  EXPECT_EQ(r->mesh.numTets(), 12u);
+  EXPECT_EQ(computeMeshStats(r->mesh).inverted, 0u);
+  const Field* w = r->mesh.findPointField("w");
+  ASSERT_NE(w, nullptr);
+  EXPECT_EQ(w->get(8, 0), 37.0 / 8.0);
+  ASSERT_EQ(r->mesh.cell_fields.size(), 1u);
+  for (size_t t = 0; t < r->mesh.numTets(); ++t) EXPECT_EQ(r->mesh.cell_fields[0].get(t, 0), 3.0);
+}
+
 TEST(MeditSolution, MismatchedOrMalformedFilesAreRejected) {
   const std::string dir = tempDir("medit-sol-bad");
   writeFile(dir + "/m.mesh", kTwoTets);
