@@ -1,8 +1,9 @@
 #include "convert/cell_split.h"
 
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
+#include <memory>
 #include <map>
 #include <string>
 
@@ -150,7 +151,7 @@ class Splitter {
       return;
     }
     tets_->push_back(t);
-    tet_cell_->push_back(cell);
+    if (tet_cell_) tet_cell_->push_back(cell);
   }
 
   // The cone from the cell's smallest-index vertex over the faces that do not contain it. When the
@@ -229,6 +230,53 @@ class Splitter {
       ++five_inverted_;  // not convex enough for 5: the cone below may do
     }
     cone(kHexFaces, g, 8, cell);
+  }
+
+  // A structured grid's hexahedron h (VTK corner order) into 5 tetrahedra (odd: the cell's parity) or
+  // 6, as splitHexFive and splitHexSix cut it; when those mix orientations (a warped cell), around a
+  // Steiner point over its faces, each cut along the diagonal the 5 or 6 use, as its neighbours do.
+  void gridHex(const uint32_t* h, int split, bool odd, uint32_t cell) {
+    scratch_.clear();
+    if (split == 5) splitHexFive(h, odd, scratch_);
+    else splitHexSix(h, scratch_);
+    if (coords_ && steiner_ && mixedOrientation(scratch_)) {
+      pieces_ = scratch_;
+      auto joined = [&](uint32_t x, uint32_t y) {
+        for (const Tet& t : pieces_)
+          if (std::find(t.begin(), t.end(), x) != t.end() && std::find(t.begin(), t.end(), y) != t.end()) return true;
+        return false;
+      };
+      const bool fixed = steinerCone([&](std::vector<uint32_t>* out) { out->insert(out->end(), h, h + 8); },
+                                     [&](uint32_t point, std::vector<Tet>* out) {
+                                       out->clear();
+                                       for (const Face& f : kHexFaces) {
+                                         const uint32_t q[4] = {h[f.v[0]], h[f.v[1]], h[f.v[2]], h[f.v[3]]};
+                                         const int m = joined(q[0], q[2]) ? 0 : 1;  // the diagonal's first end
+                                         out->push_back({point, q[m], q[m + 1], q[m + 2]});
+                                         out->push_back({point, q[m], q[m + 2], q[(m + 3) % 4]});
+                                       }
+                                     });
+      if (!fixed) ++mixed_;
+    }
+    for (const Tet& t : scratch_) emit(t, cell);
+  }
+
+  // The warnings (and the Steiner point count) for the cells split around an added point, and for
+  // those no split fixes.
+  void reportAdded(ImportReport* report) const {
+    if (steiner_cells_) {
+      report->steiner_points += steiner_cells_;
+      report->warnings.push_back(std::to_string(steiner_cells_) +
+                                 " cells that are not convex split around a point added inside them (a Steiner point: "
+                                 "the mean of their corners, or of their kernel's vertices; its point fields the mean "
+                                 "of the corners'): split between their vertices alone, some of their tetrahedra "
+                                 "come out inverted");
+    }
+    if (mixed_)
+      report->warnings.push_back(std::to_string(mixed_) +
+                                 " cells that are not convex have inverted tetrahedra however they are split, even "
+                                 "from a point added inside; once flipped these overlap their neighbours, which gtn "
+                                 "validate sees only where the boundary folds");
   }
 
   size_t collapsed_ = 0;
@@ -426,7 +474,7 @@ class Splitter {
   size_t num_points_;
   SteinerPoints* steiner_;
   bool float32_;
-  std::vector<Tet> five_scratch_, scratch_, other_;
+  std::vector<Tet> five_scratch_, scratch_, other_, pieces_;
   std::vector<uint32_t> corners_;  // a polyhedron's distinct vertices, ascending
 };
 
@@ -615,24 +663,67 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
     report->warnings.push_back(std::to_string(splitter.resplit_) +
                                " cells that are not convex split from another vertex than their smallest, so that "
                                "none of their tetrahedra comes out inverted");
-  if (splitter.steiner_cells_) {
-    report->steiner_points += splitter.steiner_cells_;
-    report->warnings.push_back(std::to_string(splitter.steiner_cells_) +
-                               " cells that are not convex split around a point added at the mean of their corners "
-                               "(a Steiner point, its point fields the mean of theirs): however they are split from "
-                               "a vertex, some of their tetrahedra come out inverted");
-  }
-  if (splitter.mixed_)
-    report->warnings.push_back(std::to_string(splitter.mixed_) +
-                               " cells that are not convex have inverted tetrahedra however they are split, even "
-                               "from a point added inside; once flipped these overlap their neighbours, which gtn "
-                               "validate sees only where the boundary folds");
+  splitter.reportAdded(report);
   if (splitter.collapsed_) {
     report->collapsed_tets += splitter.collapsed_;
     report->warnings.push_back(std::to_string(splitter.collapsed_) +
                                " tetrahedra of degenerate cells (repeated point indices) dropped");
   }
   return Status::ok();
+}
+
+namespace {
+
+// Appends the Steiner points to `mesh`, each point field's value the mean of its corners' (in double,
+// rounded to the field's type) for floating-point fields, and its smallest corner's for integer
+// fields (labels and ids, which a mean would not keep).
+void appendSteinerPoints(const SteinerPoints& steiner, TetMesh* mesh) {
+  const size_t first = mesh->numPoints(), count = steiner.coords.size() / 3;
+  if (count == 0) return;
+  mesh->coords.insert(mesh->coords.end(), steiner.coords.begin(), steiner.coords.end());
+  for (Field& f : mesh->point_fields) {
+    f.bytes.resize((first + count) * f.components * f.valueSize());
+    for (size_t k = 0; k < count; ++k) {
+      const uint32_t* corner = steiner.corners.data() + steiner.corner_offsets[k];
+      const size_t n = steiner.corner_offsets[k + 1] - steiner.corner_offsets[k];
+      if (!isFloatType(f.type)) {
+        f.copyItem(f, corner[0], first + k);
+        continue;
+      }
+      for (uint32_t c = 0; c < f.components; ++c) {
+        double sum = 0;
+        for (size_t i = 0; i < n; ++i) sum += f.get(corner[i], c);
+        const double mean = sum / static_cast<double>(n);
+        if (f.type == ScalarType::kFloat32) f.set(first + k, c, static_cast<float>(mean));
+        else f.set(first + k, c, mean);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+struct GridHexSplitter::Impl {
+  Impl(TetMesh* m, std::vector<uint32_t>* tet_cell)
+      : mesh(m),
+        splitter(&m->tets, tet_cell, m->coords.data(), m->numPoints(), &steiner,
+                 m->coord_type == ScalarType::kFloat32) {}
+  TetMesh* mesh;
+  SteinerPoints steiner;
+  Splitter splitter;
+};
+
+GridHexSplitter::GridHexSplitter(TetMesh* mesh, std::vector<uint32_t>* tet_cell)
+    : impl_(std::make_unique<Impl>(mesh, tet_cell)) {}
+GridHexSplitter::~GridHexSplitter() = default;
+
+void GridHexSplitter::split(const uint32_t h[8], int split, bool odd, uint32_t cell) {
+  impl_->splitter.gridHex(h, split, odd, cell);
+}
+
+void GridHexSplitter::finish(ImportReport* report) {
+  appendSteinerPoints(impl_->steiner, impl_->mesh);
+  impl_->splitter.reportAdded(report);
 }
 
 void rectilinearPoints(const std::vector<double> axes[3], std::vector<double>* coords) {
@@ -688,6 +779,7 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
   auto id = [&](uint64_t i, uint64_t j, uint64_t k) { return static_cast<uint32_t>(i + nx * (j + ny * k)); };
   uint32_t cell = 0;
   size_t hidden = 0;
+  GridHexSplitter grid(&mesh, &tet_cell);
   for (uint64_t k = 0; k + 1 < nz; ++k)
     for (uint64_t j = 0; j + 1 < ny; ++j)
       for (uint64_t i = 0; i + 1 < nx; ++i, ++cell) {
@@ -698,13 +790,9 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
           ++hidden;
           continue;
         }
-        if (options.split == 5) {
-          splitHexFive(h, (i + j + k) % 2 == 1, mesh.tets);
-        } else {
-          splitHexSix(h, mesh.tets);
-        }
-        tet_cell.resize(mesh.tets.size(), cell);
+        grid.split(h, options.split, (i + j + k) % 2 == 1, cell);
       }
+  grid.finish(&result->report);
   for (const Field& f : cell_fields) mesh.cell_fields.push_back(expandCellField(f, tet_cell));
   if (hidden > 0) {
     result->report.dropped_cells += hidden;
@@ -714,37 +802,6 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
   finishImport(*result);
   return mesh.checkConsistency(path);
 }
-
-namespace {
-
-// Appends the Steiner points to `mesh`, each point field's value the mean of its corners' (in double,
-// rounded to the field's type) for floating-point fields, and its smallest corner's for integer
-// fields (labels and ids, which a mean would not keep).
-void appendSteinerPoints(const SteinerPoints& steiner, TetMesh* mesh) {
-  const size_t first = mesh->numPoints(), count = steiner.coords.size() / 3;
-  if (count == 0) return;
-  mesh->coords.insert(mesh->coords.end(), steiner.coords.begin(), steiner.coords.end());
-  for (Field& f : mesh->point_fields) {
-    f.bytes.resize((first + count) * f.components * f.valueSize());
-    for (size_t k = 0; k < count; ++k) {
-      const uint32_t* corner = steiner.corners.data() + steiner.corner_offsets[k];
-      const size_t n = steiner.corner_offsets[k + 1] - steiner.corner_offsets[k];
-      if (!isFloatType(f.type)) {
-        f.copyItem(f, corner[0], first + k);
-        continue;
-      }
-      for (uint32_t c = 0; c < f.components; ++c) {
-        double sum = 0;
-        for (size_t i = 0; i < n; ++i) sum += f.get(corner[i], c);
-        const double mean = sum / static_cast<double>(n);
-        if (f.type == ScalarType::kFloat32) f.set(first + k, c, static_cast<float>(mean));
-        else f.set(first + k, c, mean);
-      }
-    }
-  }
-}
-
-}  // namespace
 
 Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
                        const ImportOptions& options, ImportResult* result, size_t* duplicate_tets) {

@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,25 @@ struct SteinerPoints {
 Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, const double* coords, int split,
                      std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report,
                      SteinerPoints* steiner = nullptr, bool float32 = false);
+
+// Splits the hexahedra of a structured grid (PLOT3D, VTK's structured datasets) into tetrahedra as
+// splitHexFive (odd: the cell's parity) and splitHexSix do, appending them to mesh->tets (and each
+// one's `cell` to *tet_cell, when given), except a cell whose pieces would mix inverted and positive
+// tetrahedra (a warped cell): that one is split around a Steiner point over its faces, cut along the
+// same diagonals, so that its neighbours still agree. finish() appends the added points to the mesh
+// (point fields: floating-point ones the mean of the cell's corners, integer ones its smallest
+// corner's) and reports them; the mesh's points must not change before it.
+class GridHexSplitter {
+ public:
+  explicit GridHexSplitter(TetMesh* mesh, std::vector<uint32_t>* tet_cell = nullptr);
+  ~GridHexSplitter();
+  void split(const uint32_t h[8], int split, bool odd, uint32_t cell = 0);
+  void finish(ImportReport* report);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // The points of a rectilinear grid, i fastest: (x[i], y[j], z[k]) from axes[0..2].
 void rectilinearPoints(const std::vector<double> axes[3], std::vector<double>* coords);

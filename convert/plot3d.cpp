@@ -48,6 +48,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "convert/cell_split.h"
 #include "convert/import.h"
 #include "convert/text_reader.h"
 #include "format/file_io.h"
@@ -1381,12 +1382,14 @@ Status addFunction(const std::string& path, std::string_view bytes, const Fit& f
   return Status::ok();
 }
 
-// Hexahedral cells into tetrahedra, block by block; cells with a hole vertex are dropped.
+// Hexahedral cells into tetrahedra, block by block; cells with a hole vertex are dropped, and warped
+// cells are split around an added point (GridHexSplitter).
 void splitCells(const std::vector<BlockDims>& blocks, const std::vector<int32_t>& iblank, int split, TetMesh& mesh,
                 ImportReport& report) {
   uint64_t cells = 0;
   for (const BlockDims& b : blocks) cells += static_cast<uint64_t>((b.n[0] - 1) * (b.n[1] - 1) * (b.n[2] - 1));
   mesh.tets.reserve(cells * static_cast<uint64_t>(split));
+  GridHexSplitter grid(&mesh);
   uint64_t base = 0;
   for (const BlockDims& b : blocks) {
     const uint64_t ni = b.n[0], nj = b.n[1], nk = b.n[2];
@@ -1400,16 +1403,13 @@ void splitCells(const std::vector<BlockDims>& blocks, const std::vector<int32_t>
             ++report.dropped_cells;
             continue;
           }
-          if (split == 5) {
-            splitHexFive(h, (i + j + k) % 2 == 1, mesh.tets);
-          } else {
-            splitHexSix(h, mesh.tets);
-          }
+          grid.split(h, split, (i + j + k) % 2 == 1);
         }
       }
     }
     base += b.points();
   }
+  grid.finish(&report);
 }
 
 }  // namespace

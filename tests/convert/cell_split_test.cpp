@@ -14,6 +14,7 @@
 #include <set>
 
 #include "convert/vtk_common.h"
+#include "mesh/hex_split.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
 
@@ -669,6 +670,69 @@ TEST(CellSplit, WarpedHexahedronIsSplitAroundASteinerPoint) {
     for (const std::string& w : r.report.warnings) warned |= w.find("1 cells that are not convex split around a point added") != std::string::npos;
     EXPECT_TRUE(warned) << where;
   }
+}
+
+// The same warped cell in a structured grid (PLOT3D, VTK structured datasets): where a grid split (5,
+// either parity, or 6) mixes its pieces' orientations, it is split around an added point over its faces cut
+// along the diagonals those pieces use; every piece then turns the same way and the faces keep
+// their diagonals (the 12 face triangles are those of the 5- or 6-split).
+TEST(CellSplit, WarpedStructuredCellIsSplitAroundASteinerPointAlongItsGridDiagonals) {
+  const double corner[8][3] = {{0.3, 0.3, -1.3}, {0.7, 0.3, -2.0}, {0.7, 0.7, -2.0}, {0.3, 0.7, -2.0},
+                               {0, 0, -1},       {1, 0, -1},       {1, 1, -1},       {0, 1, -1}};
+  const uint32_t h[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+  int mixed_splits = 0;
+  for (const auto& [split, odd] : {std::pair{6, false}, std::pair{5, false}, std::pair{5, true}}) {
+    const std::string where = "split " + std::to_string(split) + (odd ? " odd" : "");
+    TetMesh mesh;
+    for (const auto& c : corner) mesh.coords.insert(mesh.coords.end(), c, c + 3);
+    mesh.point_fields = {Field("f", 1, ScalarType::kFloat64, 8)};
+    for (size_t i = 0; i < 8; ++i) mesh.point_fields[0].set<double>(i, 0, static_cast<double>(i));
+    std::vector<Tet> plain;
+    if (split == 5) splitHexFive(h, odd, plain);
+    else splitHexSix(h, plain);
+    auto signs = [&](const std::vector<Tet>& tets) {
+      std::set<int> s;
+      for (const Tet& t : tets) s.insert(orient3d(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]), mesh.point(t[3])));
+      return s;
+    };
+    const bool mixed = signs(plain).count(1) && signs(plain).count(-1);
+    mixed_splits += mixed;
+    std::vector<uint32_t> tet_cell;
+    ImportReport report;
+    GridHexSplitter grid(&mesh, &tet_cell);
+    grid.split(h, split, odd, 7);
+    grid.finish(&report);
+    if (!mixed) {  // kept as it is
+      EXPECT_EQ(report.steiner_points, 0u) << where;
+      EXPECT_EQ(mesh.tets, plain) << where;
+      EXPECT_TRUE(report.warnings.empty()) << where;
+      continue;
+    }
+    EXPECT_EQ(report.steiner_points, 1u) << where;
+    ASSERT_EQ(mesh.numPoints(), 9u);
+    ASSERT_EQ(mesh.tets.size(), 12u);
+    EXPECT_EQ(tet_cell, std::vector<uint32_t>(12, 7));
+    EXPECT_EQ(signs(mesh.tets), std::set<int>{1}) << where;
+    EXPECT_EQ(mesh.point_fields[0].get(8, 0), 3.5);
+    // The cell's surface: the faces of the plain split seen once, and of the new one without point 8.
+    auto surface = [](const std::vector<Tet>& tets, bool drop_apex) {
+      std::map<std::array<uint32_t, 3>, int> count;
+      for (const Tet& t : tets)
+        for (int skip = 0; skip < 4; ++skip) {
+          std::array<uint32_t, 3> f;
+          for (int i = 0, k = 0; i < 4; ++i)
+            if (i != skip) f[k++] = t[i];
+          std::sort(f.begin(), f.end());
+          if (!drop_apex || f[2] != 8) ++count[f];
+        }
+      std::set<std::array<uint32_t, 3>> once;
+      for (const auto& [f, n] : count)
+        if (n == 1) once.insert(f);
+      return once;
+    };
+    EXPECT_EQ(surface(mesh.tets, true), surface(plain, false)) << where;
+  }
+  EXPECT_GE(mixed_splits, 1) << "the warped cell mixes orientations under some grid split";
 }
 
 TEST(CellSplit, QuadraticHexWedgePyramidKeepTheirCorners) {

@@ -9,13 +9,16 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "convert/import.h"
+#include "mesh/faces.h"
 #include "mesh/mesh_stats.h"
+#include "mesh/predicates.h"
 #include "test_util.h"
 
 namespace gtn {
@@ -45,11 +48,12 @@ StatusOr<ImportResult> importFiles(const std::vector<std::string>& files, int sp
   return importMesh(files, o);
 }
 
-// Checks every coordinate and every Q value of a real dataset against the raw big-endian file.
-void expectBitExact(const ImportResult& r, const std::string& xyz_path, const std::string& q_path) {
+// Checks every coordinate and every Q value of a real dataset against the raw big-endian file; the
+// `added` Steiner points of warped cells come after the file's points.
+void expectBitExact(const ImportResult& r, const std::string& xyz_path, const std::string& q_path, size_t added = 0) {
   const std::string xyz = test::readFile(xyz_path), q = test::readFile(q_path);
   const size_t n = static_cast<size_t>(be32(xyz, 0)) * be32(xyz, 4) * be32(xyz, 8);
-  ASSERT_EQ(r.mesh.numPoints(), n);
+  ASSERT_EQ(r.mesh.numPoints(), n + added);
   ASSERT_EQ(r.mesh.coord_type, ScalarType::kFloat32);
   size_t coord_mismatch = 0;
   for (size_t p = 0; p < n; ++p) {
@@ -68,9 +72,9 @@ void expectBitExact(const ImportResult& r, const std::string& xyz_path, const st
   EXPECT_EQ(density->components, 1u);
   EXPECT_EQ(momentum->components, 3u);
   EXPECT_EQ(energy->components, 1u);
-  ASSERT_EQ(density->itemCount(), n);
-  ASSERT_EQ(momentum->itemCount(), n);
-  ASSERT_EQ(energy->itemCount(), n);
+  ASSERT_EQ(density->itemCount(), n + added);
+  ASSERT_EQ(momentum->itemCount(), n + added);
+  ASSERT_EQ(energy->itemCount(), n + added);
   const size_t data = 12 + 16;
   size_t q_mismatch = 0;
   for (size_t p = 0; p < n; ++p) {
@@ -120,15 +124,32 @@ TEST(Plot3dImport, CombustionChamberBothSplits) {
   auto five = importFiles({xyz, q}, 5);
   ASSERT_TRUE(five.isOk()) << five.status().message();
   const MeshStats s5 = computeMeshStats(five->mesh);
-  EXPECT_EQ(s5.points, 47025u);
-  EXPECT_EQ(s5.tets, 215040u);
-  EXPECT_EQ(s5.faces, 437888u);
+  // Two warped cells would give 5 tetrahedra of mixed orientation (flipped, they overlapped their
+  // neighbours): each is split around an added point into 12 instead.
+  EXPECT_EQ(five->report.steiner_points, 2u);
+  EXPECT_EQ(five->report.flipped, 0u);
+  EXPECT_EQ(s5.points, 47025u + 2u);
+  EXPECT_EQ(s5.tets, 215040u - 2u * 5u + 2u * 12u);
   EXPECT_EQ(s5.boundary_faces, 15616u);
   EXPECT_EQ(s5.non_manifold_faces, 0u);
   EXPECT_EQ(s5.inverted, 0u);
   EXPECT_EQ(five->report.zero_volume, s5.zero_volume);
-  EXPECT_TRUE(five->report.warnings.empty());
-  expectBitExact(*five, xyz, q);
+  ASSERT_EQ(five->report.warnings.size(), 1u);
+  EXPECT_NE(five->report.warnings[0].find("2 cells that are not convex split around a point added"), std::string::npos)
+      << five->report.warnings[0];
+  expectBitExact(*five, xyz, q, 2);
+  // Each added point's fields are the mean of its cell's 8 corners.
+  const Field* density = five->mesh.findPointField("density");
+  for (uint32_t p = 47025; p < 47027; ++p) {
+    std::set<uint32_t> corners;
+    for (const Tet& t : five->mesh.tets)
+      if (std::find(t.begin(), t.end(), p) != t.end()) corners.insert(t.begin(), t.end());
+    corners.erase(p);
+    ASSERT_EQ(corners.size(), 8u);
+    double sum = 0;
+    for (uint32_t c : corners) sum += density->get(c, 0);
+    EXPECT_EQ(density->get(p, 0), static_cast<double>(static_cast<float>(sum / 8.0)));
+  }
 
   auto six = importFiles({xyz, q}, 6);
   ASSERT_TRUE(six.isOk()) << six.status().message();
@@ -139,6 +160,17 @@ TEST(Plot3dImport, CombustionChamberBothSplits) {
   EXPECT_EQ(s6.non_manifold_faces, 0u);
   EXPECT_EQ(s6.inverted, 0u);
   EXPECT_EQ(six->report.zero_volume, s6.zero_volume);
+  // Each split closes up: its tetrahedra add up to the volume its boundary encloses (divergence
+  // theorem). (The two splits differ by a little: they cut the curved cell faces along other
+  // diagonals. The two warped cells' inverted slivers were too thin to show here; flipped == 0 is
+  // what shows they are gone.)
+  for (const ImportResult* r : {&*five, &*six}) {
+    double enclosed = 0;
+    const double origin[3] = {0, 0, 0};
+    for (const Triangle& t : boundaryTriangles(r->mesh, computeFaceAdjacency(r->mesh)))
+      enclosed += signedVolume(origin, r->mesh.point(t[0]), r->mesh.point(t[1]), r->mesh.point(t[2]));
+    EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, enclosed, 1e-9 * enclosed);
+  }
   // The Q header is all zero: the metadata says so rather than being left out.
   EXPECT_EQ(*six->mesh.findMetadata("plot3d.fsmach"), "0");
 }
