@@ -57,6 +57,20 @@ Grid makeGrid(int nx, int ny, int nz, uint32_t seed) {
   return g;
 }
 
+// How many of the tetrahedra have each triangle (its vertices ascending) as a face.
+std::map<std::array<uint32_t, 3>, int> faceCounts(const std::vector<Tet>& tets) {
+  std::map<std::array<uint32_t, 3>, int> count;
+  for (const Tet& t : tets)
+    for (int skip = 0; skip < 4; ++skip) {
+      std::array<uint32_t, 3> f;
+      for (int i = 0, k = 0; i < 4; ++i)
+        if (i != skip) f[k++] = t[i];
+      std::sort(f.begin(), f.end());
+      ++count[f];
+    }
+  return count;
+}
+
 ImportResult splitInto(const TetMesh& points, const VtkCells& cells, int split) {
   ImportResult r;
   r.mesh = points;
@@ -543,15 +557,7 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
     ASSERT_EQ(report.warnings.size(), 1u);
     EXPECT_NE(report.warnings[0].find("1 cells that are not convex split from another vertex"), std::string::npos) << report.warnings[0];
     // The pieces tile the cell: their boundary is the cell's 12 face triangles, each once.
-    std::map<std::array<uint32_t, 3>, int> faces;
-    for (const Tet& t : tets)
-      for (int skip = 0; skip < 4; ++skip) {
-        std::array<uint32_t, 3> f;
-        for (int i = 0, k = 0; i < 4; ++i)
-          if (i != skip) f[k++] = t[i];
-        std::sort(f.begin(), f.end());
-        ++faces[f];
-      }
+    const std::map<std::array<uint32_t, 3>, int> faces = faceCounts(tets);
     size_t once = 0;
     for (const auto& [f, n] : faces) {
       EXPECT_LE(n, 2);
@@ -716,18 +722,9 @@ TEST(CellSplit, WarpedStructuredCellIsSplitAroundASteinerPointAlongItsGridDiagon
     EXPECT_EQ(mesh.point_fields[0].get(8, 0), 3.5);
     // The cell's surface: the faces of the plain split seen once, and of the new one without point 8.
     auto surface = [](const std::vector<Tet>& tets, bool drop_apex) {
-      std::map<std::array<uint32_t, 3>, int> count;
-      for (const Tet& t : tets)
-        for (int skip = 0; skip < 4; ++skip) {
-          std::array<uint32_t, 3> f;
-          for (int i = 0, k = 0; i < 4; ++i)
-            if (i != skip) f[k++] = t[i];
-          std::sort(f.begin(), f.end());
-          if (!drop_apex || f[2] != 8) ++count[f];
-        }
       std::set<std::array<uint32_t, 3>> once;
-      for (const auto& [f, n] : count)
-        if (n == 1) once.insert(f);
+      for (const auto& [f, n] : faceCounts(tets))
+        if (n == 1 && (!drop_apex || f[2] != 8)) once.insert(f);
       return once;
     };
     EXPECT_EQ(surface(mesh.tets, true), surface(plain, false)) << where;
