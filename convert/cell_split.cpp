@@ -291,8 +291,8 @@ class Splitter {
   std::vector<uint32_t>* tet_cell_;
   // Emits the cone from apex 0 of n candidate apexes (ascending global index); when it mixes
   // orientations, the first cone from an allowed apex that does not (cone() says why), counted; when
-  // every one does, the cone from a Steiner point at the mean of the cell's corners over all its
-  // faces (cut by the face rule, so neighbours still agree), if that one does not.
+  // every one does, the cone from a Steiner point inside the cell over all its faces (cut by the face
+  // rule, so neighbours still agree; steinerCone), if that one does not.
   // allowed(k): whether the face rule allows apex k; coneOf(k, out): its cone into *out;
   // corners(out): the cell's distinct corners, appended; coneFromPoint(p, out): the cone from
   // point p (a vertex of no face) over every face, into *out.
