@@ -361,6 +361,11 @@ class Splitter {
     constexpr size_t kMaxKernelPlanes = 32;
     const size_t m = cone.size();
     if (m < 4 || m > kMaxKernelPlanes) return false;
+    auto cross = [](const double* a, const double* b, double* c) {
+      c[0] = a[1] * b[2] - a[2] * b[1];
+      c[1] = a[2] * b[0] - a[0] * b[2];
+      c[2] = a[0] * b[1] - a[1] * b[0];
+    };
     double n[kMaxKernelPlanes][3], h[kMaxKernelPlanes], len[kMaxKernelPlanes];
     double extent = 0;
     for (size_t i = 0; i < m; ++i) {
@@ -372,17 +377,10 @@ class Splitter {
         }
       const double u[3] = {q[1][0] - q[0][0], q[1][1] - q[0][1], q[1][2] - q[0][2]};
       const double v[3] = {q[2][0] - q[0][0], q[2][1] - q[0][1], q[2][2] - q[0][2]};
-      n[i][0] = u[1] * v[2] - u[2] * v[1];
-      n[i][1] = u[2] * v[0] - u[0] * v[2];
-      n[i][2] = u[0] * v[1] - u[1] * v[0];
+      cross(u, v, n[i]);
       h[i] = n[i][0] * q[0][0] + n[i][1] * q[0][1] + n[i][2] * q[0][2];
       len[i] = std::sqrt(n[i][0] * n[i][0] + n[i][1] * n[i][1] + n[i][2] * n[i][2]);
     }
-    auto cross = [](const double* a, const double* b, double* c) {
-      c[0] = a[1] * b[2] - a[2] * b[1];
-      c[1] = a[2] * b[0] - a[0] * b[2];
-      c[2] = a[0] * b[1] - a[1] * b[0];
-    };
     for (const double side : {1.0, -1.0}) {
       double sum[3] = {0, 0, 0};
       size_t vertices = 0;

@@ -267,12 +267,7 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
                        std::to_string(cells.late_vertex) + "; vertices are numbered 1 to " +
                        std::to_string(mesh.numPoints()));
   cells.warnAboutSections(&result);
-  const bool tets_only = cells.other_refs.empty();
-  // Vertex solutions join the points before a split that may add points inside cells (their values
-  // are then averaged there); element solutions are kept only for tetrahedra alone, read after.
-  if (!tets_only) GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, &result));
   GTN_RETURN_IF_ERROR(finishMeditImport(path, "medit", &cells, options, &result));
-  if (tets_only) GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, &result));
   return result;
 }
 

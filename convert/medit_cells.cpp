@@ -59,7 +59,9 @@ std::string noVolumeElements(const std::string& skipped) {
 Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells,
                          const ImportOptions& options, ImportResult* result) {
   TetMesh& mesh = result->mesh;
-  if (cells->other_refs.empty()) {
+  const bool tets_only = cells->other_refs.empty();
+  if (!tets_only) GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, result));
+  if (tets_only) {
     // Tetrahedra only: they stay as they are, one reference each.
     Field ref("ref", 1, ScalarType::kInt32, cells->tet_refs.size());
     for (size_t t = 0; t < cells->tet_refs.size(); ++t) ref.set<int32_t>(t, 0, cells->tet_refs[t]);
@@ -93,7 +95,9 @@ Status finishMeditImport(const std::string& path, const char* format, MeditCells
     GTN_RETURN_IF_ERROR(finishVtkImport(path, all, {ref}, options, result));
   }
   mesh.setMetadata("source.format", format);
-  return mesh.checkConsistency(path);
+  GTN_RETURN_IF_ERROR(mesh.checkConsistency(path));
+  if (tets_only) GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, result));
+  return Status::ok();
 }
 
 }  // namespace gtn

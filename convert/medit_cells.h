@@ -71,13 +71,16 @@ std::string noVolumeElements(const std::string& skipped);
 // Ends a Medit import once result->mesh has its points, point fields and tetrahedra: splits the
 // other elements into tetrahedra (options.split, the VTK importers' warnings), adds the cell field
 // "ref" (each tetrahedron carries the reference of its element: tetrahedra first, then the other
-// elements in file order), normalises orientation and checks the mesh. `format` names the source
+// elements in file order), normalises orientation, checks the mesh and reads the solution files of
+// options.medit_solutions (readMeditSolutions: before the split when there are other elements, so
+// that vertex values count the file's vertices and are averaged onto any point the split adds;
+// after it for tetrahedra alone, whose element values are kept). `format` names the source
 // ("medit", "meshb") in the metadata.
 Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells,
                          const ImportOptions& options, ImportResult* result);
 
 // Reads Medit solution files (.sol ASCII or .solb binary, told apart by their first bytes) into
-// result->mesh, after finishMeditImport: SolAtVertices sections become point fields and, when the
+// result->mesh (called by finishMeditImport): SolAtVertices sections become point fields and, when the
 // mesh was tetrahedra only (`tets_only`), SolAtTetrahedra sections cell fields, named after the file
 // (u.sol: "u", or "u_1", "u_2" ... for several types), float32 in version 1 files, float64 after.
 // Counts must match the mesh's; other solution sections are skipped with a warning.

@@ -170,11 +170,7 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
     return in_.fail(cells_.late_place, cells_.late_element + " refers to vertex " + std::to_string(cells_.late_vertex) +
                                            "; vertices are numbered 1 to " + std::to_string(result_.mesh.numPoints()));
   cells_.warnAboutSections(&result_);
-  const bool tets_only = cells_.other_refs.empty();
-  // Vertex solutions join the points before a split that may add points inside cells (as medit.cpp).
-  if (!tets_only) GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, &result_));
   GTN_RETURN_IF_ERROR(finishMeditImport(path_, "meshb", &cells_, options, &result_));
-  if (tets_only) GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, &result_));
   return std::move(result_);
 }
 
