@@ -14,7 +14,8 @@
 // convex cell, as VTK's prisms are meant to be, and of a polyhedron star-shaped from that vertex.)
 // A cell that is not convex can make the cone mix inverted and positive tetrahedra; it is then coned
 // from another vertex the face rule allows, and when every such cone mixes (a warped face, say), from a
-// Steiner point added at the mean of its corners, over all its faces: the only case that adds points
+// Steiner point added inside it (the mean of its corners, or of its kernel's vertices), over all its
+// faces: with GridHexSplitter's warped grid cells, the only cases that add points
 // (ImportReport::steiner_points).
 // With split == 5 a hexahedron whose six face diagonals form one of the two inscribed tetrahedra
 // ({0,2,5,7} or {1,3,4,6}) is cut into 5 instead.
@@ -48,8 +49,9 @@ struct VtkCells {
   std::vector<int64_t> face_offsets;
 };
 
-// Points added inside cells (splitVtkCells): point k has coordinates coords[3k .. 3k + 3) and is the
-// mean of the input points corners[corner_offsets[k] .. corner_offsets[k + 1]).
+// Points added inside cells (splitVtkCells, GridHexSplitter): point k has coordinates
+// coords[3k .. 3k + 3) and lies in the cell of the input points corners[corner_offsets[k] ..
+// corner_offsets[k + 1]), whose mean gives its point fields.
 struct SteinerPoints {
   std::vector<double> coords;
   std::vector<size_t> corner_offsets{0};

@@ -53,7 +53,6 @@
 #include "convert/text_reader.h"
 #include "format/file_io.h"
 #include "format/gtn_bytes.h"
-#include "mesh/hex_split.h"
 #include "mesh/predicates.h"
 
 static_assert(std::endian::native == std::endian::little,
