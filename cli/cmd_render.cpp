@@ -141,7 +141,7 @@ StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const Rende
   if (generic) {
     TetMeshBuilder builder;
     const Clock::time_point t0 = Clock::now();
-    GTN_RETURN_IF_ERROR(input.stream(level, builder));
+    GTN_RETURN_IF_ERROR(input.stream(level, builder, &options.field));
     report["decode_ms"] = msSince(t0);
     GenericRenderStats stats;
     const Clock::time_point t1 = Clock::now();
@@ -154,7 +154,7 @@ StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const Rende
     return image;
   }
   StreamRenderer renderer(options);
-  GTN_RETURN_IF_ERROR(input.stream(level, renderer));
+  GTN_RETURN_IF_ERROR(input.stream(level, renderer, &options.field));
   const StreamRenderStats& s = renderer.stats();
   report["tets_rendered"] = s.tets;
   report["tets_held"] = s.tets_held;

@@ -305,9 +305,23 @@ class LevelCoder {
     sink_ = sink;
     what_ = what;
   }
+  // The fields to decode (decoder only; null or empty vectors: all). Takes effect in run(), once the
+  // repeat declarations say which other fields the kept ones need.
+  void setFields(const DecodeFields* fields) {
+    pf_skip_.assign(header_.point_fields.size(), 0);
+    cf_skip_.assign(header_.cell_fields.size(), 0);
+    if (!fields) return;
+    if (!fields->point.empty())
+      for (size_t f = 0; f < pf_skip_.size(); ++f) pf_skip_[f] = f >= fields->point.size() || !fields->point[f];
+    if (!fields->cell.empty())
+      for (size_t f = 0; f < cf_skip_.size(); ++f) cf_skip_[f] = f >= fields->cell.size() || !fields->cell[f];
+  }
 
   Status run() {
+    pf_skip_.resize(header_.point_fields.size(), 0);
+    cf_skip_.resize(header_.cell_fields.size(), 0);
     GTN_RETURN_IF_ERROR(codeAliases());
+    keepRepeatedFields();
     GTN_RETURN_IF_ERROR(codeValueForms());
     uint32_t edge_points = 0;
     if constexpr (kEncode) edge_points = !enc_->edge_points.empty();
@@ -334,10 +348,10 @@ class LevelCoder {
       if (!con_->finishedCleanly()) return bad("connectivity stream is corrupt, truncated or has trailing bytes");
       if (!geo_->finishedCleanly()) return bad("geometry stream is corrupt, truncated or has trailing bytes");
       for (size_t f = 0; f < pf_.size(); ++f)
-        if (!pf_[f]->finishedCleanly())
+        if (!pf_skip_[f] && !pf_[f]->finishedCleanly())
           return bad("point field stream '" + header_.point_fields[f].name + "' is corrupt, truncated or has trailing bytes");
       for (size_t f = 0; f < cf_.size(); ++f)
-        if (!cf_[f]->finishedCleanly())
+        if (!cf_skip_[f] && !cf_[f]->finishedCleanly())
           return bad("cell field stream '" + header_.cell_fields[f].name + "' is corrupt, truncated or has trailing bytes");
       GTN_RETURN_IF_ERROR(sink_->endLevel());
     }
@@ -371,6 +385,16 @@ class LevelCoder {
       }
     }
     return Status::ok();
+  }
+
+  // A field left out of the decode is decoded after all when a kept field repeats one of its
+  // components. A component repeats an earlier one, so one pass from the last field back takes
+  // repeats of repeats along.
+  void keepRepeatedFields() {
+    std::vector<size_t> field_of;
+    for (size_t f = 0; f < header_.point_fields.size(); ++f) field_of.insert(field_of.end(), header_.point_fields[f].components, f);
+    for (size_t k = field_of.size(); k-- > 0;)
+      if (!pf_skip_[field_of[k]] && alias_[k] != kNone32) pf_skip_[field_of[alias_[k]]] = 0;
   }
 
   // Each value-coded component's form (section 10.2), at the start of its stream. For a float type a
@@ -771,6 +795,10 @@ class LevelCoder {
     for (size_t f = 0; f < header_.point_fields.size(); ++f) {
       const FieldDesc& d = header_.point_fields[f];
       const size_t vs = scalarSize(d.type);
+      if (pf_skip_[f]) {
+        k += d.components;
+        continue;
+      }
       for (uint32_t c = 0; c < d.components; ++c, ++k) {
         const size_t off = pf_offset_[f] + c * vs;
         if (kind == FieldPrediction::kLast) {
@@ -1080,6 +1108,10 @@ class LevelCoder {
       for (size_t f = 0; f < header_.point_fields.size(); ++f) {
         const FieldDesc& d = header_.point_fields[f];
         const size_t vs = scalarSize(d.type);
+        if (pf_skip_[f]) {
+          k += d.components;
+          continue;
+        }
         const uint8_t* src_item = nullptr;
         if constexpr (kEncode) src_item = enc_->mesh->point_fields[f].bytes.data() + size_t{src} * d.itemBytes();
         uint32_t rule = 0;
@@ -1711,6 +1743,10 @@ class LevelCoder {
       const FieldDesc& d = header_.cell_fields[f];
       const size_t vs = scalarSize(d.type);
       const uint32_t nc = d.components;
+      if (cf_skip_[f]) {
+        j += nc;
+        continue;
+      }
       uint64_t* pred = &cell_pred_[0];
       uint64_t* act = &cell_act_[0];
       for (uint32_t c = 0; c < nc; ++c) {
@@ -2147,6 +2183,7 @@ class LevelCoder {
   std::vector<ValueCoder> pf_vc_, cf_vc_;
   std::vector<size_t> pf_offset_, cf_offset_;
   size_t item_bytes_ = 0, cell_bytes_ = 0;
+  std::vector<char> pf_skip_, cf_skip_;  // fields whose values the decoder leaves out (setFields)
 
   EncoderSide* enc_ = nullptr;
   MeshSink* sink_ = nullptr;
@@ -2424,7 +2461,7 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
 }
 
 Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink, DecodeStats* stats,
-                   const std::string& what) {
+                   const std::string& what, const DecodeFields* fields) {
   if (header.coord_type != ScalarType::kFloat32 && header.coord_type != ScalarType::kFloat64)
     return invalidData(what + ": coordinates must be float32 or float64");
   if (header.points >= kNone32) return invalidData(what + ": too many points for one level");
@@ -2446,6 +2483,7 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
   LevelCoder<false> coder(header, std::make_unique<Dec>(payload.boundary), std::make_unique<Dec>(payload.connectivity),
                           std::make_unique<Dec>(payload.geometry), std::move(pf), std::move(cf));
   coder.setDecoder(&sink, &what);
+  coder.setFields(fields);
   const Status st = coder.run();
   if (stats) stats->peak_live_vertices = coder.peakLive();
   return st;

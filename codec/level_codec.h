@@ -40,6 +40,16 @@ struct EncodedLevel {
 // Encodes a mesh whose tetrahedra are positively oriented (zero-volume ones allowed).
 StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& options);
 
+// Which fields a decode delivers; empty vectors select every field. A consumer that needs only some
+// (the renderer needs one point field and no cell field) leaves the others out, and their values are
+// not decoded (spec section 9): a field's values depend on its own stream, CONN and GEOM alone, and on
+// the streams of the components it repeats, which are decoded with it. The values of a field left out
+// reach the sink unspecified (zero bytes unless a kept field repeats one of its components), and a
+// corrupt stream left out goes unnoticed beyond its chunk checksum: validators decode everything.
+struct DecodeFields {
+  std::vector<bool> point, cell;  // point[f]: decode header.point_fields[f]; likewise cell
+};
+
 // Views of the coded streams of one level as read back from a file.
 struct LevelPayload {
   std::span<const uint8_t> boundary, connectivity, geometry;
@@ -55,7 +65,8 @@ LevelPayload payloadOf(const EncodedLevel& encoded);
 
 // Decodes one level and emits its events (mesh_stream.h order) to `sink`. Fails with kInvalidData,
 // never crashes, on any corrupt payload; `what` names the source in messages (file and level).
+// `fields`: which fields to decode (null: all).
 Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink,
-                   DecodeStats* stats, const std::string& what);
+                   DecodeStats* stats, const std::string& what, const DecodeFields* fields = nullptr);
 
 }  // namespace gtn

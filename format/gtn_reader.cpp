@@ -522,11 +522,11 @@ StatusOr<std::optional<std::vector<uint8_t>>> GtnReader::mergeTreePayload(size_t
   return std::optional<std::vector<uint8_t>>();
 }
 
-Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats) {
+Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, const DecodeFields* fields) {
   GTN_ASSIGN_OR_RETURN(GtnLevelStreams s, readLevelStreams(i));
   const std::string what = file_.path + ": level " + std::to_string(i);
   CheckingSink checker(sink, s.header, what);
-  GTN_RETURN_IF_ERROR(gtn::decodeLevel(s.header, s.payload(), checker, stats, what));
+  GTN_RETURN_IF_ERROR(gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields));
   if (!checker.ended()) return invalidData(what + ": the decoder stopped before the end of the level");
   return Status::ok();
 }

@@ -86,8 +86,9 @@ class GtnReader {
   bool openedByDirectory() const { return by_directory_; }
 
   // Decodes level `i` with the codec and streams it to `sink`; checks the stream's counts against the
-  // level header. `stats` (optional) receives the decoder's statistics.
-  Status decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats = nullptr);
+  // level header. `stats` (optional) receives the decoder's statistics; `fields` (optional) says which
+  // fields to decode (level_codec.h).
+  Status decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats = nullptr, const DecodeFields* fields = nullptr);
   // Reads (and checksums) level `i`'s coded streams without decoding them.
   StatusOr<GtnLevelStreams> readLevelStreams(size_t i);
   // The raw merge-tree payload of level `i` (MTRE), or nullopt when the level has none.

@@ -104,6 +104,7 @@ StatusOr<ScalarReader> ScalarReader::create(const std::vector<FieldDesc>& fields
     return usageError("field '" + found->name + "' has " + std::to_string(found->components) +
                       " components; component " + std::to_string(sel.component) + " does not exist");
   r.offset_ = offset;
+  r.field_ = static_cast<size_t>(found - fields.data());
   r.type_ = found->type;
   r.components_ = found->components;
   r.magnitude_ = sel.magnitude;
@@ -116,6 +117,14 @@ StatusOr<ScalarReader> ScalarReader::create(const std::vector<FieldDesc>& fields
     r.description_ += std::to_string(sel.component);
   }
   return r;
+}
+
+DecodeFields ScalarReader::decodeFields(size_t point_fields, size_t cell_fields) const {
+  DecodeFields d;
+  d.point.assign(point_fields, false);
+  d.cell.assign(cell_fields, false);
+  if (field_ < point_fields) d.point[field_] = true;
+  return d;
 }
 
 double ScalarReader::read(const uint8_t* values) const {

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "codec/level_codec.h"
 #include "mesh/mesh_stream.h"
 #include "render/camera.h"
 #include "render/image.h"
@@ -57,8 +58,12 @@ class ScalarReader {
   static StatusOr<ScalarReader> create(const std::vector<FieldDesc>& fields, const FieldSelector& selector);
   double read(const uint8_t* values) const;
   const std::string& description() const { return description_; }
+  // The fields a decode must deliver for this reader: the selected point field alone (none for a mesh
+  // without point fields), no cell field.
+  DecodeFields decodeFields(size_t point_fields, size_t cell_fields) const;
 
  private:
+  size_t field_ = SIZE_MAX;  // the selected field's index; SIZE_MAX without point fields
   size_t offset_ = 0;
   ScalarType type_ = ScalarType::kFloat32;
   uint32_t components_ = 1, component_ = 0;

@@ -84,11 +84,17 @@ StatusOr<ResolvedLevel> RenderInput::resolve(const LevelChoice& choice) const {
   return r;
 }
 
-Status RenderInput::stream(ResolvedLevel& level, MeshSink& sink) {
-  if (!reader_) {
-    return decodeLevel(encoded_->header, payloadOf(*encoded_), sink, nullptr, path_);
+Status RenderInput::stream(ResolvedLevel& level, MeshSink& sink, const FieldSelector* only) {
+  DecodeFields fields;
+  if (only) {
+    const LevelHeader& h = levelHeader(level.level);
+    GTN_ASSIGN_OR_RETURN(ScalarReader reader, ScalarReader::create(h.point_fields, *only));
+    fields = reader.decodeFields(h.point_fields.size(), h.cell_fields.size());
   }
-  if (level.extra_merges == 0) return reader_->decodeLevel(level.level, sink);
+  if (!reader_) {
+    return decodeLevel(encoded_->header, payloadOf(*encoded_), sink, nullptr, path_, &fields);
+  }
+  if (level.extra_merges == 0) return reader_->decodeLevel(level.level, sink, nullptr, &fields);
   GTN_ASSIGN_OR_RETURN(auto payload, reader_->mergeTreePayload(level.level));
   if (!payload) return usageError(path_ + ": level " + std::to_string(level.level) + " has no merge tree");
   GTN_ASSIGN_OR_RETURN(MergeTree tree,
@@ -102,7 +108,7 @@ Status RenderInput::stream(ResolvedLevel& level, MeshSink& sink) {
     level.extra_merges = tree.merges;
   }
   StreamSimplifier simplifier(tree, level.extra_merges, sink);
-  return reader_->decodeLevel(level.level, simplifier);
+  return reader_->decodeLevel(level.level, simplifier, nullptr, &fields);
 }
 
 }  // namespace gtn
@@ -196,7 +202,9 @@ Status RenderInput::fixView(const ResolvedLevel& level, RenderOptions* options) 
     return Status::ok();
   }
   BoundaryRangeSink sink(options->field);
-  const Status st = reader_->decodeLevel(0, sink);
+  GTN_ASSIGN_OR_RETURN(ScalarReader reader, ScalarReader::create(h0.point_fields, options->field));
+  const DecodeFields fields = reader.decodeFields(h0.point_fields.size(), h0.cell_fields.size());
+  const Status st = reader_->decodeLevel(0, sink, nullptr, &fields);
   if (!sink.stopped()) {
     GTN_RETURN_IF_ERROR(st);
     return Status::ok();  // a level without boundary: the renderer's own default applies

@@ -52,7 +52,9 @@ class RenderInput {
   // an input without a merge tree.
   StatusOr<ResolvedLevel> resolve(const LevelChoice& choice) const;
   // Decodes the chosen level into `sink`, through the on-the-fly simplifier when extra merges apply.
-  Status stream(ResolvedLevel& level, MeshSink& sink);
+  // With `only`, the values of that scalar's field alone are decoded (the renderers read no other):
+  // the other fields' values reach the sink unspecified. Fails with kUsage when it selects nothing.
+  Status stream(ResolvedLevel& level, MeshSink& sink, const FieldSelector* only = nullptr);
 
   // Fixes what must not change between levels of one file: the camera frames level 0's bounding box,
   // and, unless the caller gave a range, the transfer function spans the selected scalar over level

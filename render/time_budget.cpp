@@ -49,9 +49,11 @@ bool cacheable(const std::string& path) {
   return path != "-" && ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
+// The field is part of the key: a run decodes the values of the rendered field alone.
 std::string cacheKey(const std::string& path, const RenderOptions& o, bool generic) {
   return fileKey(path) + "|" + std::to_string(o.camera.width) + "x" + std::to_string(o.camera.height) + "|" +
-         (o.sampling == Sampling::kFace ? "face" : "volume") + "|" + (generic ? "generic" : "integrated");
+         (o.sampling == Sampling::kFace ? "face" : "volume") + "|" + (generic ? "generic" : "integrated") +
+         "|field " + o.field.name + "|" + o.field.whole;
 }
 
 // Time of one end-to-end render of `choice` (decode + render; the image is kept in `image` when
@@ -64,13 +66,13 @@ StatusOr<double> timeChoice(RenderInput& input, const LevelChoice& choice, const
   GTN_RETURN_IF_ERROR(input.fixView(resolved, &fixed));
   if (generic) {
     TetMeshBuilder builder;
-    GTN_RETURN_IF_ERROR(input.stream(resolved, builder));
+    GTN_RETURN_IF_ERROR(input.stream(resolved, builder, &fixed.field));
     GTN_ASSIGN_OR_RETURN(Image image, renderGeneric(builder.header(), builder.mesh(), builder.boundary(), fixed));
     if (image_out) *image_out = std::move(image);
     if (tets_out) *tets_out = builder.mesh().numTets();
   } else {
     StreamRenderer renderer(fixed);
-    GTN_RETURN_IF_ERROR(input.stream(resolved, renderer));
+    GTN_RETURN_IF_ERROR(input.stream(resolved, renderer, &fixed.field));
     if (image_out) *image_out = renderer.image();
     if (tets_out) *tets_out = renderer.stats().tets;
   }
@@ -82,15 +84,15 @@ StatusOr<double> timeLevel(RenderInput& input, size_t level, const RenderOptions
   choice.level = static_cast<int>(level);
   return timeChoice(input, choice, options, generic, image_out);
 }
-// Time of decoding stored level `level` alone, into a sink that keeps nothing: the part of a run that
-// simplifying on the fly cannot save.
-StatusOr<double> timeDecode(RenderInput& input, size_t level) {
+// Time of decoding stored level `level` alone (the field a render reads), into a sink that keeps
+// nothing: the part of a run that simplifying on the fly cannot save.
+StatusOr<double> timeDecode(RenderInput& input, size_t level, const FieldSelector& field) {
   LevelChoice choice;
   choice.level = static_cast<int>(level);
   GTN_ASSIGN_OR_RETURN(ResolvedLevel resolved, input.resolve(choice));
   const auto t0 = std::chrono::steady_clock::now();
   CountingSink sink;
-  GTN_RETURN_IF_ERROR(input.stream(resolved, sink));
+  GTN_RETURN_IF_ERROR(input.stream(resolved, sink, &field));
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -113,7 +115,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
                                       const RenderOptions& options, bool generic, double elapsed_ms,
                                       std::string* explanation, double* predicted_ms) {
   if (!(budget_ms > 0)) return usageError("--budget-ms must be positive");
-  const std::string key = "v3|" + cacheKey(path, options, generic);
+  const std::string key = "v4|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
   const bool cached = cacheable(path);
   nlohmann::json cache = nlohmann::json::object();
@@ -241,7 +243,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
     std::string names;
     for (size_t level : timed) {
       GTN_ASSIGN_OR_RETURN(double t, timeLevel(input, level, options, generic));
-      GTN_ASSIGN_OR_RETURN(double d, timeDecode(input, level));
+      GTN_ASSIGN_OR_RETURN(double d, timeDecode(input, level, options.field));
       const double n = static_cast<double>(input.levelHeader(level).tets);
       points.emplace_back(n, t);
       decode_points.emplace_back(n, std::min(d, t));
@@ -398,7 +400,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
 void recordBudgetRun(const std::string& path, const RenderOptions& options, bool generic, double predicted_ms,
                      double actual_ms) {
   if (!(predicted_ms > 0) || !(actual_ms > 0) || !cacheable(path)) return;
-  const std::string key = "v3|" + cacheKey(path, options, generic);
+  const std::string key = "v4|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
   auto text = readWholeFile(cache_file, 1 << 24);
   if (!text.isOk()) return;

@@ -233,4 +233,48 @@ inline EncodedLevel roundTrip(const TetMesh& m, uint64_t* peak_live = nullptr, c
   return std::move(enc).value();
 }
 
+// Decodes `e`, with the fields `fields` selects (null: all), into a mesh; fails the test on an error.
+inline TetMesh decodeToMesh(const EncodedLevel& e, const DecodeFields* fields = nullptr) {
+  CheckingSink sink;
+  const Status st = decodeLevel(e.header, payloadOf(e), sink, nullptr, "test level", fields);
+  EXPECT_TRUE(st.isOk()) << st.message();
+  EXPECT_TRUE(sink.ended);
+  return std::move(sink.builder.mesh());
+}
+
+// Decodes `e` once per field with that field alone selected and compares with the full decode: the same
+// points and tetrahedra in the same order, and the selected field's values bit for bit. `unselected_zero`:
+// no field of the level repeats a component of another, so every field left out must arrive as zero bytes
+// (its values were not decoded). Returns the number of decodes that matched.
+inline int expectFieldsDecodeAlone(const EncodedLevel& e, bool unselected_zero) {
+  const TetMesh full = decodeToMesh(e);
+  const size_t np = e.header.point_fields.size(), nc = e.header.cell_fields.size();
+  int matched = 0;
+  for (size_t i = 0; i < np + nc; ++i) {
+    DecodeFields only;
+    only.point.assign(np, false);
+    only.cell.assign(nc, false);
+    (i < np ? only.point[i] : only.cell[i - np]) = true;
+    const TetMesh got = decodeToMesh(e, &only);
+    const std::string name = i < np ? e.header.point_fields[i].name : e.header.cell_fields[i - np].name;
+    EXPECT_TRUE(got.coords == full.coords) << name;
+    EXPECT_TRUE(got.tets == full.tets) << name;
+    bool same = got.coords == full.coords && got.tets == full.tets;
+    for (size_t f = 0; f < np + nc; ++f) {
+      const Field& a = f < np ? full.point_fields[f] : full.cell_fields[f - np];
+      const Field& b = f < np ? got.point_fields[f] : got.cell_fields[f - np];
+      if (f == i) {
+        EXPECT_TRUE(a.bytes == b.bytes) << "field " << name << " decoded alone differs";
+        same = same && a.bytes == b.bytes;
+      } else if (unselected_zero) {
+        const bool zero = std::all_of(b.bytes.begin(), b.bytes.end(), [](uint8_t x) { return x == 0; });
+        EXPECT_TRUE(zero) << "field " << b.name << " was decoded with " << name << " alone";
+        same = same && zero;
+      }
+    }
+    matched += same;
+  }
+  return matched;
+}
+
 }  // namespace gtn::test

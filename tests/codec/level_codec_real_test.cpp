@@ -74,6 +74,21 @@ TEST(LevelCodecReal, BluntFinFiveSplitKeepsTheFrontSmall) {
   EXPECT_LE(peak, 40960u / 2) << "peak live vertices must stay at most half of the points";
 }
 
+// The renderer decodes the one field it shows. Blunt fin's three fields share no component, so each
+// decoded alone leaves the other two as zeros; lv_guccione has ten point fields (float64, up to nine
+// components each) and two cell fields.
+TEST(LevelCodecReal, EachFieldDecodesAlone) {
+  const RealCase fin{{"plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, 5, 1.0};
+  auto e = encodeLevel(importOrDie(fin), EncodeOptions());
+  ASSERT_TRUE(e.isOk()) << e.status().message();
+  EXPECT_EQ(test::expectFieldsDecodeAlone(*e, /*unselected_zero=*/true), 3);
+  const TetMesh lv = importOrDie({{"vtu/lv_guccione.vtu"}, 6, 2.04});
+  ASSERT_EQ(lv.point_fields.size() + lv.cell_fields.size(), 12u);
+  e = encodeLevel(lv, EncodeOptions());
+  ASSERT_TRUE(e.isOk()) << e.status().message();
+  EXPECT_EQ(test::expectFieldsDecodeAlone(*e, /*unselected_zero=*/false), 12);
+}
+
 TEST(LevelCodecReal, TetgenCornellSpheres) { checkCase({{"tetgen/cornell_spheres.1.ele"}, 6, 2.04}); }
 
 // 331 points printed with 8 decimals, whose repeated decimal patterns xz -9 finds in the raw float64

@@ -27,6 +27,15 @@ TEST(LevelCodec, StructuredGridSixSplitWithFields) {
   EXPECT_LT(bitsPerTet(e.connectivity, m) + bitsPerTet(e.boundary, m), 2.5);
 }
 
+// A consumer that needs one field decodes that field's stream alone (the renderer reads one scalar):
+// five point fields of five types and two cell fields, each decoded alone, the others left as zeros.
+TEST(LevelCodec, EachFieldDecodesAlone) {
+  TetMesh m = gridMesh(12, 10, 9, 6);
+  test::addFields(m);
+  const EncodedLevel e = roundTrip(m);
+  EXPECT_EQ(test::expectFieldsDecodeAlone(e, /*unselected_zero=*/true), 7);
+}
+
 TEST(LevelCodec, ComponentsRepeatedAsOtherFieldsCostAlmostNothing) {
   TetMesh m = gridMesh(12, 10, 9, 6);
   test::addFields(m);
@@ -51,6 +60,18 @@ TEST(LevelCodec, ComponentsRepeatedAsOtherFieldsCostAlmostNothing) {
   EXPECT_LT(e.point_fields[n - 3].size(), 16u) << "vy repeats velocity's y component";
   EXPECT_LT(e.point_fields[n - 2].size(), 16u) << "pressure_again repeats pressure";
   EXPECT_GT(e.point_fields[n - 1].size(), e.point_fields[0].size()) << "almost_vy differs at one vertex";
+
+  // Each field decodes alone; vy alone takes velocity along, whose y component it repeats, and
+  // leaves pressure undecoded.
+  EXPECT_EQ(test::expectFieldsDecodeAlone(e, /*unselected_zero=*/false), static_cast<int>(n + m.cell_fields.size()));
+  DecodeFields only;
+  only.point.assign(n, false);
+  only.point[n - 3] = true;
+  const TetMesh full = test::decodeToMesh(e), got = test::decodeToMesh(e, &only);
+  EXPECT_TRUE(got.point_fields[1].bytes == full.point_fields[1].bytes) << "velocity decoded for vy";
+  EXPECT_TRUE(std::all_of(got.point_fields[0].bytes.begin(), got.point_fields[0].bytes.end(),
+                          [](uint8_t b) { return b == 0; }))
+      << "pressure left out";
 }
 
 // Grids often repeat their boundary values in the next layer (blunt fin's solver does on two planes).
@@ -506,6 +527,28 @@ TEST(LevelCodecCorrupt, EveryTruncatedStreamFailsCleanly) {
     CountingSink sink;
     EXPECT_FALSE(decodeLevel(c.header, payloadOf(c), sink, nullptr, "x").isOk());
   }
+}
+
+// A field left out is not decoded: the damage in its values goes unnoticed by a decode of another
+// field (its chunk checksum is what guards it in a file), and the other field comes out whole.
+TEST(LevelCodecCorrupt, AFieldLeftOutIsNotDecoded) {
+  TetMesh m = gridMesh(12, 10, 9, 6);
+  test::addFields(m);
+  const EncodedLevel e = roundTrip(m);
+  const TetMesh full = test::decodeToMesh(e);
+  EncodedLevel c = e;
+  c.point_fields[1].resize(c.point_fields[1].size() / 2);  // velocity, cut after its declarations
+  CountingSink counting;
+  EXPECT_FALSE(decodeLevel(c.header, payloadOf(c), counting, nullptr, "x").isOk());
+  DecodeFields only;
+  only.point = {true, false, false, false, false};
+  const TetMesh got = test::decodeToMesh(c, &only);
+  EXPECT_TRUE(got.point_fields[0].bytes == full.point_fields[0].bytes);
+  EXPECT_TRUE(got.tets == full.tets);
+  only.point = {false, true, false, false, false};
+  test::CheckingSink sink;
+  const Status st = decodeLevel(c.header, payloadOf(c), sink, nullptr, "x", &only);
+  EXPECT_EQ(st.code(), StatusCode::kInvalidData) << "velocity itself is decoded, and found cut";
 }
 
 TEST(LevelCodecCorrupt, RandomByteFlipsNeverCrash) {

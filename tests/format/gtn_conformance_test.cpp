@@ -494,6 +494,22 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsListed) {
     TetMeshBuilder b2;
     ASSERT_TRUE((*lazy)->decodeLevel(0, b2).isOk());
     EXPECT_EQ(b2.mesh().tets, got.tets);
+    // Each field decoded alone (as a renderer decodes the one it shows) comes out as in the full
+    // decode: the repeats and value forms of every stream are read, the values of the others skipped.
+    const size_t np = got.point_fields.size(), nc = got.cell_fields.size();
+    for (size_t i = 0; i < np + nc; ++i) {
+      DecodeFields only;
+      only.point.assign(np, false);
+      only.cell.assign(nc, false);
+      (i < np ? only.point[i] : only.cell[i - np]) = true;
+      TetMeshBuilder alone;
+      const Status sa = (*lazy)->decodeLevel(0, alone, nullptr, &only);
+      ASSERT_TRUE(sa.isOk()) << sa.message();
+      const Field& full_field = i < np ? got.point_fields[i] : got.cell_fields[i - np];
+      const Field& alone_field = i < np ? alone.mesh().point_fields[i] : alone.mesh().cell_fields[i - np];
+      EXPECT_TRUE(full_field.bytes == alone_field.bytes) << full_field.name << " decoded alone differs";
+      EXPECT_EQ(alone.mesh().tets, got.tets);
+    }
   }
 }
 
