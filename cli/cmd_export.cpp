@@ -1,6 +1,7 @@
-// gtn export FILE.gtn -o OUTPUT [--level I | --ratio R | --merges N]: decode a stored level, or the mesh
-// simplified to a ratio or merge count (from the finest stored level not beyond it, the remaining merges
-// applied on the fly), and write it as .vtu, legacy .vtk or TetGen.
+// gtn export FILE.gtn -o OUTPUT [--level I | --ratio R | --merges N] [--fields A,B]: decode a stored
+// level, or the mesh simplified to a ratio or merge count (from the finest stored level not beyond it,
+// the remaining merges applied on the fly), and write it as .vtu, legacy .vtk or TetGen; with --fields,
+// only the named fields (the others are not decoded).
 #include <cstdint>
 #include <memory>
 
@@ -21,7 +22,42 @@ struct ExportArgs {
   bool compress = false;
   double ratio = -1;    // < 0: not given
   int64_t merges = -1;  // < 0: not given
+  std::vector<std::string> fields;  // empty: all
 };
+
+// The point and cell fields named in `names` (a name may be both), as a decode selection; a usage
+// error names the fields the file has.
+StatusOr<DecodeFields> selectFields(const LevelHeader& h, const std::vector<std::string>& names, const std::string& input) {
+  DecodeFields d;
+  d.point.assign(h.point_fields.size(), false);
+  d.cell.assign(h.cell_fields.size(), false);
+  for (const std::string& name : names) {
+    bool found = false;
+    for (size_t f = 0; f < h.point_fields.size(); ++f)
+      if (h.point_fields[f].name == name) d.point[f] = found = true;
+    for (size_t f = 0; f < h.cell_fields.size(); ++f)
+      if (h.cell_fields[f].name == name) d.cell[f] = found = true;
+    if (found) continue;
+    std::string known;
+    for (const auto* list : {&h.point_fields, &h.cell_fields})
+      for (const FieldDesc& f : *list) known += (known.empty() ? "" : ", ") + f.name;
+    return usageError(input + ": --fields: no field named '" + name + "' (" +
+                      (known.empty() ? std::string("the file has no fields") : "fields: " + known) + ")");
+  }
+  return d;
+}
+
+// Drops from `mesh` the fields `keep` leaves out (their values were not decoded).
+void dropFields(TetMesh& mesh, const DecodeFields& keep) {
+  auto drop = [](std::vector<Field>& fields, const std::vector<bool>& kept) {
+    std::vector<Field> out;
+    for (size_t f = 0; f < fields.size(); ++f)
+      if (f < kept.size() && kept[f]) out.push_back(std::move(fields[f]));
+    fields = std::move(out);
+  };
+  drop(mesh.point_fields, keep.point);
+  drop(mesh.cell_fields, keep.cell);
+}
 
 int runExport(const ExportArgs& a) {
   const OutputFormat out_format = detectOutputFormat(a.output);
@@ -44,15 +80,22 @@ int runExport(const ExportArgs& a) {
   if (a.level >= r.levels())
     return reportError(usageError(a.input + ": --level " + std::to_string(a.level) + ": the file holds " +
                                   std::to_string(r.levels()) + " level(s), 0 to " + std::to_string(r.levels() - 1)));
+  DecodeFields fields;  // every field unless --fields names some
+  if (!a.fields.empty()) {
+    auto selected = selectFields(r.level(a.level).header, a.fields, a.input);
+    if (!selected.isOk()) return reportError(selected.status());
+    fields = std::move(selected).value();
+  }
   TetMeshBuilder builder;
   Status st;
   if (a.ratio >= 0 || a.merges >= 0) {
     const uint64_t target = a.merges >= 0 ? static_cast<uint64_t>(a.merges) : mergesForRatio(r, a.ratio);
-    st = streamSimplified(r, target, builder, nullptr, /*clamp=*/a.merges < 0);
+    st = streamSimplified(r, target, builder, nullptr, /*clamp=*/a.merges < 0, &fields);
   } else {
-    st = r.decodeLevel(a.level, builder);
+    st = r.decodeLevel(a.level, builder, nullptr, &fields);
   }
   if (!st.isOk()) return reportError(st);
+  if (!a.fields.empty()) dropFields(builder.mesh(), fields);
   ExportOptions eo;
   eo.compress = a.compress;
   st = exportMesh(builder.mesh(), a.output, eo);
@@ -75,6 +118,9 @@ Command addExportCommand(CLI::App& app) {
   level->excludes(ratio)->excludes(merges);
   ratio->excludes(merges);
   sub->add_flag("--compress", args->compress, ".vtu: zlib-compress the data arrays");
+  sub->add_option("--fields", args->fields,
+                  "Export only these point or cell fields (names, comma-separated); the others are not decoded")
+      ->delimiter(',');
   return {sub, [args] { return runExport(*args); }};
 }
 

@@ -90,10 +90,10 @@ uint64_t mergesForRatio(const GtnReader& reader, double ratio) {
 }
 
 Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out,
-                        bool clamp) {
+                        bool clamp, const DecodeFields* fields) {
   GTN_ASSIGN_OR_RETURN(SimplifyPlan plan, planSimplification(reader, target_merges));
   if (plan_out) *plan_out = plan;
-  if (plan.extra_merges == 0) return reader.decodeLevel(plan.level, sink);
+  if (plan.extra_merges == 0) return reader.decodeLevel(plan.level, sink, nullptr, fields);
   auto payload_or = reader.mergeTreePayload(plan.level);
   if (!payload_or.isOk()) return payload_or.status();
   const std::optional<std::vector<uint8_t>>& payload = payload_or.value();
@@ -109,7 +109,7 @@ Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sin
     return usageError(what + ": " + std::to_string(target_merges) + " merges requested, the merge tree has " +
                       std::to_string(reader.level(plan.level).header.merges + tree.merges));
   StreamSimplifier filter(tree, plan.extra_merges, sink);
-  return reader.decodeLevel(plan.level, filter);
+  return reader.decodeLevel(plan.level, filter, nullptr, fields);
 }
 
 }  // namespace gtn

@@ -62,7 +62,8 @@ uint64_t mergesForRatio(const GtnReader& reader, double ratio);
 // remain, filters it through a StreamSimplifier with that level's merge tree. Fails with kUsage when
 // merges remain and the level stores no merge tree, or the target exceeds the stored merges (unless
 // `clamp`, which then applies them all: a ratio beyond what the tree allows gets the coarsest mesh).
+// `fields` (optional): the fields to decode (level_codec.h).
 Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out = nullptr,
-                        bool clamp = false);
+                        bool clamp = false, const DecodeFields* fields = nullptr);
 
 }  // namespace gtn

@@ -222,6 +222,34 @@ TEST_F(GtnCli, RealDatasetWithCellField) {
   EXPECT_EQ(meshSummary(infoJson(dir_ + "/box.vtu")), meshSummary(j));
 }
 
+// --fields exports the named point and cell fields alone, with the values a full export has (their
+// ranges agree), on a stored level and through the simplifier; an unknown name lists the fields.
+TEST_F(GtnCli, ExportSomeFields) {
+  const std::string gtn = dir_ + "/lv.gtn";
+  test::RunResult r = test::runGtn("convert " + test::dataPath("vtu/lv_guccione.vtu") + " -o " + gtn);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string& view : {std::string(""), std::string(" --ratio 0.6")}) {
+    SCOPED_TRACE(view);
+    r = test::runGtn("export " + gtn + view + " -o " + dir_ + "/all.vtu");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = test::runGtn("export " + gtn + view + " -o " + dir_ + "/some.vtu --fields Stress,E_Jacobian");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json all = infoJson(dir_ + "/all.vtu"), some = infoJson(dir_ + "/some.vtu");
+    ASSERT_EQ(all["fields"].size(), 12u);
+    json want = json::array();
+    for (const json& f : all["fields"])
+      if (f["name"] == "Stress" || f["name"] == "E_Jacobian") want.push_back(f);
+    ASSERT_EQ(want.size(), 2u);
+    EXPECT_EQ(some["fields"], want);
+    EXPECT_EQ(some["tets"], all["tets"]);
+    EXPECT_EQ(some["volume"], all["volume"]);
+  }
+  r = test::runGtn("export " + gtn + " -o " + dir_ + "/none.vtu --fields Stress,stress");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no field named 'stress' (fields: Displacement, VonMises_stress"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::fileExists(dir_ + "/none.vtu"));
+}
+
 // An importer's warning that names its file first is not prefixed with the same name again; one
 // about a file of a basename input keeps the input's name in front.
 TEST_F(GtnCli, WarningsNameTheirFileOnce) {
