@@ -1,8 +1,9 @@
 // How the decoder fuzz target reads its input, shared by the target (fuzz_gtn_decoder.cpp) and the
 // replay of its corpus as an ordinary test (tests/validate/fuzz_corpus_test.cpp). Layout of an input:
 // byte 0 selects the decoder (odd: merge tree, with byte 1 the point count); for a level, bytes 1..6
-// give small counts and the field layout, bytes 7 and 8 the lengths of the boundary and connectivity
-// streams (their xor that of the geometry stream), the remainder being the field streams.
+// give small counts and the field layout (byte 4's bits 3 and 4 leave the point or the cell field out of
+// the decode, as a renderer does), bytes 7 and 8 the lengths of the boundary and connectivity streams
+// (their xor that of the geometry stream), the remainder being the field streams.
 #pragma once
 
 #include <algorithm>
@@ -46,9 +47,12 @@ inline bool decodeFuzzInput(const uint8_t* data, size_t size) {
   const std::span<const uint8_t> rest(data + pos, size - pos);
   if (!h.point_fields.empty()) payload.point_fields.push_back(rest);
   if (!h.cell_fields.empty()) payload.cell_fields.push_back(rest);
+  DecodeFields fields;
+  fields.point.assign(h.point_fields.size(), (data[4] & 8) == 0);
+  fields.cell.assign(h.cell_fields.size(), (data[4] & 16) == 0);
   CountingSink sink;
   DecodeStats stats;
-  return decodeLevel(h, payload, sink, &stats, "fuzz").isOk();
+  return decodeLevel(h, payload, sink, &stats, "fuzz", &fields).isOk();
 }
 
 }  // namespace gtn::fuzz
