@@ -42,7 +42,7 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
 
 // Which fields a decode delivers; empty vectors select every field. A consumer that needs only some
 // (the renderer needs one point field and no cell field) leaves the others out, and their values are
-// not decoded (spec section 9): a field's values depend on its own stream, CONN and GEOM alone, and on
+// not decoded (spec section 10): a field's values depend on its own stream, CONN and GEOM alone, and on
 // the streams of the components it repeats, which are decoded with it. The values of a field left out
 // reach the sink unspecified (zero bytes unless a kept field repeats one of its components), and a
 // corrupt stream left out goes unnoticed beyond its chunk checksum: validators decode everything.
