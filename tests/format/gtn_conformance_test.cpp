@@ -4,11 +4,17 @@
 // committed files (they are decode-compatibility vectors: a later codec must still read them).
 #include <gtest/gtest.h>
 
+#include <CGAL/Delaunay_triangulation_3.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_3.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <random>
 #include <set>
 
 #include "codec/codec_test_util.h"
@@ -260,6 +266,75 @@ TetMesh edgePoints() {
   return m;
 }
 
+// The Delaunay tetrahedralization of `n` points drawn in the unit cube (std::mt19937_64, whose output
+// the C++ standard fixes; coordinates multiples of 2^-20, in general position), made by CGAL. The
+// tetrahedra are put in a canonical order (sorted corners, then sorted, then oriented), so the mesh is
+// the same whatever order CGAL enumerates them in.
+TetMesh delaunayPoints(size_t n) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Vb = CGAL::Triangulation_vertex_base_with_info_3<uint32_t, K>;
+  using Tds = CGAL::Triangulation_data_structure_3<Vb, CGAL::Delaunay_triangulation_cell_base_3<K>>;
+  using Delaunay = CGAL::Delaunay_triangulation_3<K, Tds>;
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat64;
+  std::mt19937_64 rng(20261125);
+  std::vector<std::pair<K::Point_3, uint32_t>> points;
+  for (size_t i = 0; i < n; ++i) {
+    double p[3];
+    for (double& c : p) c = static_cast<double>(rng() >> 44) / 1048576.0;
+    m.coords.insert(m.coords.end(), p, p + 3);
+    points.emplace_back(K::Point_3(p[0], p[1], p[2]), static_cast<uint32_t>(i));
+  }
+  const Delaunay dt(points.begin(), points.end());
+  for (auto c = dt.finite_cells_begin(); c != dt.finite_cells_end(); ++c) {
+    Tet t;
+    for (int k = 0; k < 4; ++k) t[k] = c->vertex(k)->info();
+    std::sort(t.begin(), t.end());
+    m.tets.push_back(t);
+  }
+  std::sort(m.tets.begin(), m.tets.end());
+  return finish(m);
+}
+// A Delaunay mesh (spec 10.4, "Delaunay first"): 400 random points, float64, with a float32 point field.
+// The encoder sets the bit for it, and its candidates and escapes rank by the sweep key first.
+TetMesh delaunayMesh() {
+  TetMesh m = delaunayPoints(400);
+  Field f("temperature", 1, ScalarType::kFloat32, m.numPoints());
+  for (size_t v = 0; v < m.numPoints(); ++v) {
+    const double* p = m.point(v);
+    f.set<float>(v, 0, static_cast<float>(300.0 + 20.0 * p[0] * p[1] - 7.0 * p[2]));
+  }
+  m.point_fields = {f};
+  return m;
+}
+// A degenerate Delaunay sweep (spec 10.4.1, C-6 and C-8): delaunayPoints(400) plus 4 copies, far away,
+// of a 3 x 3 x 3 point lattice (6 tetrahedra per cube) sheared in z and squashed by 2^-515 in y. Its
+// gate faces are needles whose circumradius squared overflows: the sweep of such a face is degenerate,
+// and an escape ranked there goes by distance, where ranking by the sweep key would name another vertex.
+// The Delaunay part keeps the level's "Delaunay first" bit set.
+TetMesh degenerateSweep() {
+  TetMesh m = delaunayPoints(400);
+  const double squash = std::ldexp(1.0, -515);
+  for (int copy = 1; copy <= 4; ++copy) {
+    const uint32_t base = static_cast<uint32_t>(m.numPoints());
+    auto id = [&](int i, int j, int k) { return base + static_cast<uint32_t>((k * 3 + j) * 3 + i); };
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) {
+          const double x = i * 0.37 + 0.013 * i * i, y = j * 1.1 + 0.2 * (j % 3), z = k * 0.71 + 0.05 * (k % 2) + 0.3 * y;
+          m.coords.insert(m.coords.end(), {x + 3000.0 * copy, y * squash, z - 2000.0});
+        }
+    static const int kKuhn[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+          uint32_t c[8];
+          for (int b = 0; b < 8; ++b) c[b] = id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+          for (const auto& t : kKuhn) m.tets.push_back({c[t[0]], c[t[1]], c[t[2]], c[t[3]]});
+        }
+  }
+  return finish(m);
+}
 // A 5 x 5 x 5 grid of cubes with a density field: big enough for a merge tree and two mip levels.
 TetMesh levelsMesh() { return finish(densityGrid(5, 9)); }
 
@@ -357,6 +432,9 @@ std::vector<Sample> samples() {
   s.push_back(valid("value-table.f32.dir.v1.0.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
   s.push_back(valid("curvilinear.f32.dir.v1.0.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
+  s.push_back(valid("delaunay.f64.dir.v1.0.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
+  s.push_back(valid("degenerate-sweep.f64.dir.v1.0.gtn", degenerateSweep,
+                    [] { return encodeFile(degenerateSweep(), options()); }));
   s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(valid("wide-merge-tree.f32.dir.v1.0.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
