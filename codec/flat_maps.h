@@ -166,6 +166,7 @@ class EdgeMap {
       free_.pop_back();
     } else {
       fresh = static_cast<uint32_t>(extra_.size());
+      if (extra_.size() == extra_.capacity()) extra_.reserve(extra_.size() + extra_.size() / 4 + 16);
       extra_.emplace_back();  // may move the buckets: the last one is found again below
     }
     (ref == kNil ? head_[a] : extra_[ref]).next = fresh;
@@ -222,12 +223,6 @@ class FaceMap {
     }
     return -1;
   }
-  // True if `index` is the face with sorted key `k` (a cheap find() when the index is a guess).
-  bool holds(long index, const uint32_t k[3]) const {
-    if (index < 0 || static_cast<size_t>(index) >= pool_.size()) return false;
-    const FrontFace& f = pool_[static_cast<size_t>(index)];
-    return f.v[0] != kEmptyFace && f.key12[0] == k[1] && f.key12[1] == k[2] && smallest(f) == k[0];
-  }
   const FrontFace& at(long i) const { return pool_[static_cast<size_t>(i)]; }
   // Inserts a face whose key is absent; returns its index.
   long insert(const FrontFace& f) {
@@ -238,6 +233,8 @@ class FaceMap {
       pool_[i] = f;
     } else {
       i = static_cast<uint32_t>(pool_.size());
+      // Grown by a quarter, as the slots are: doubling left up to half of the records unused.
+      if (pool_.size() == pool_.capacity()) pool_.reserve(pool_.size() + pool_.size() / 4 + 64);
       pool_.push_back(f);
     }
     uint32_t k[3];
@@ -264,10 +261,9 @@ class FaceMap {
   }
   size_t size() const { return size_; }
   void reserveSlots(size_t n) { head_.reserve(n); }
-  // Starts loading what find(k) and at(index) will read.
-  void prefetch(const uint32_t k[3], long index) const {
+  // Starts loading the head of find(k)'s chain.
+  void prefetch(const uint32_t k[3]) const {
     if (k[0] < head_.size()) __builtin_prefetch(&head_[k[0]]);
-    if (index >= 0 && static_cast<size_t>(index) < pool_.size()) __builtin_prefetch(&pool_[static_cast<size_t>(index)]);
   }
 
  private:
@@ -281,32 +277,42 @@ class FaceMap {
   size_t size_ = 0;
 };
 
-// FIFO queue in one growing ring buffer (std::deque allocates a block every few hundred pushes).
+// FIFO queue in one growing ring buffer (std::deque allocates a block every few hundred pushes),
+// grown by a quarter rather than doubled: the level codec's queue of gate faces is among the
+// decoder's largest structures.
 template <class T>
 class RingQueue {
  public:
-  bool empty() const { return head_ == tail_; }
-  size_t size() const { return tail_ - head_; }
-  const T& front() const { return buf_[head_ & mask_]; }
-  void pop_front() { ++head_; }
-  void push_back(const T& v) {
-    if (tail_ - head_ == buf_.size()) grow();
-    buf_[tail_++ & mask_] = v;
+  bool empty() const { return size_ == 0; }
+  size_t size() const { return size_; }
+  const T& front() const { return buf_[head_]; }
+  void pop_front() {
+    if (++head_ == buf_.size()) head_ = 0;
+    --size_;
   }
-  void clear() { head_ = tail_ = 0; }
+  void push_back(const T& v) {
+    if (size_ == buf_.size()) grow();
+    size_t i = head_ + size_;
+    if (i >= buf_.size()) i -= buf_.size();
+    buf_[i] = v;
+    ++size_;
+  }
+  void clear() { head_ = size_ = 0; }
 
  private:
   void grow() {
-    std::vector<T> next(buf_.empty() ? 64 : 2 * buf_.size());
-    for (size_t i = head_; i != tail_; ++i) next[i - head_] = buf_[i & mask_];
-    tail_ -= head_;
+    std::vector<T> next(buf_.size() + buf_.size() / 4 + 64);
+    for (size_t k = 0; k < size_; ++k) {
+      size_t i = head_ + k;
+      if (i >= buf_.size()) i -= buf_.size();
+      next[k] = buf_[i];
+    }
     head_ = 0;
     buf_.swap(next);
-    mask_ = buf_.size() - 1;
   }
 
   std::vector<T> buf_;
-  size_t head_ = 0, tail_ = 0, mask_ = 0;
+  size_t head_ = 0, size_ = 0;
 };
 
 }  // namespace gtn

@@ -270,7 +270,6 @@ class LevelCoder {
       cf_offset_.push_back(cell_bytes_);
       cell_bytes_ += d.itemBytes();
     }
-    last_vals_.assign(item_bytes_, 0);
     cell_buf_.assign(cell_bytes_, 0);
     last_cell_keys_.resize(header.cell_fields.size());
     for (size_t f = 0; f < header.cell_fields.size(); ++f) {
@@ -289,11 +288,8 @@ class LevelCoder {
     cell_last_sym_.assign(header.cell_fields.size(), 0);
     pred_vals_.resize(std::max<size_t>(1, item_bytes_));
     for (size_t f = 0; f < header.point_fields.size(); ++f)
-      for (uint32_t c = 0; c < header.point_fields[f].components; ++c) {
-        comp_off_.push_back(pf_offset_[f] + c * scalarSize(header.point_fields[f].type));
-        comp_type_.push_back(header.point_fields[f].type);
-      }
-    alias_.assign(comp_off_.size(), kNone32);
+      for (uint32_t c = 0; c < header.point_fields[f].components; ++c) comp_type_.push_back(header.point_fields[f].type);
+    alias_.assign(comp_type_.size(), kNone32);
     field_coded_comps_.resize(header.point_fields.size());
     for (size_t f = 0; f < header.point_fields.size(); ++f) field_coded_comps_[f] = header.point_fields[f].components;
     pf_rule_.resize(header.point_fields.size());
@@ -322,6 +318,7 @@ class LevelCoder {
     cf_skip_.resize(header_.cell_fields.size(), 0);
     GTN_RETURN_IF_ERROR(codeAliases());
     keepRepeatedFields();
+    layOutSlotValues();
     GTN_RETURN_IF_ERROR(codeValueForms());
     uint32_t edge_points = 0;
     if constexpr (kEncode) edge_points = !enc_->edge_points.empty();
@@ -360,6 +357,16 @@ class LevelCoder {
 
   uint64_t peakLive() const { return peak_live_; }
 
+  // Slot s's values as the sink takes them: every field at its offset, those left out zero.
+  const uint8_t* sinkValues(uint32_t s) {
+    if (item_bytes_ == 0) return nullptr;
+    if (slot_bytes_ == item_bytes_) return &vals_[s * slot_bytes_];
+    for (size_t f = 0; f < header_.point_fields.size(); ++f)
+      if (!pf_skip_[f])
+        std::memcpy(&sink_vals_[pf_offset_[f]], &vals_[s * slot_bytes_ + slot_off_[f]], header_.point_fields[f].itemBytes());
+    return sink_vals_.data();
+  }
+
  private:
   // Point-field components that repeat an earlier component bit for bit at every vertex (a vector
   // field stored again as scalars, say) are declared at the start of their field's stream and cost
@@ -385,6 +392,25 @@ class LevelCoder {
       }
     }
     return Status::ok();
+  }
+
+  // The slots keep the values of the decoded fields alone, packed (the sink is handed them at the
+  // offsets of every field, pf_offset_, the others zero): a render that shows one of blunt fin's 5
+  // components keeps 4 bytes a slot, not 20.
+  void layOutSlotValues() {
+    slot_off_.assign(header_.point_fields.size(), 0);
+    slot_bytes_ = 0;
+    for (size_t f = 0; f < header_.point_fields.size(); ++f) {
+      if (pf_skip_[f]) continue;
+      slot_off_[f] = slot_bytes_;
+      slot_bytes_ += header_.point_fields[f].itemBytes();
+    }
+    comp_slot_off_.clear();
+    for (size_t f = 0; f < header_.point_fields.size(); ++f)
+      for (uint32_t c = 0; c < header_.point_fields[f].components; ++c)
+        comp_slot_off_.push_back(slot_off_[f] + c * scalarSize(header_.point_fields[f].type));
+    last_vals_.assign(slot_bytes_, 0);
+    if (slot_bytes_ != item_bytes_) sink_vals_.assign(item_bytes_, 0);
   }
 
   // A field left out of the decode is decoded after all when a kept field repeats one of its
@@ -659,7 +685,7 @@ class LevelCoder {
       state_.push_back(kFree);
       pos_.resize(pos_.size() + 3);
       err_.resize(err_.size() + 3);
-      vals_.resize(vals_.size() + item_bytes_);
+      vals_.resize(vals_.size() + slot_bytes_);
       open_.push_back(0);
       pins_.push_back(0);
       ids_.push_back(0);
@@ -690,7 +716,7 @@ class LevelCoder {
     state_.reserve(n);
     pos_.reserve(3 * n);
     err_.reserve(3 * n);
-    vals_.reserve(item_bytes_ * n);
+    vals_.reserve(slot_bytes_ * n);
     open_.reserve(n);
     pins_.reserve(n);
     ids_.reserve(n);
@@ -740,9 +766,9 @@ class LevelCoder {
     for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? P(fp.s[j])[i] : 0.0;
   }
   double fieldRule(uint32_t r, const FieldPrediction& fp, ScalarType type, size_t off) const {
-    if (r >= kRules) return doubleFromRaw(type, &vals_[near_[r - kRules] * item_bytes_ + off]);
+    if (r >= kRules) return doubleFromRaw(type, &vals_[near_[r - kRules] * slot_bytes_ + off]);
     double x[4];
-    for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
+    for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(type, &vals_[fp.s[j] * slot_bytes_ + off]) : 0.0;
     return kWeightedRule[r](x);
   }
 
@@ -800,13 +826,13 @@ class LevelCoder {
         continue;
       }
       for (uint32_t c = 0; c < d.components; ++c, ++k) {
-        const size_t off = pf_offset_[f] + c * vs;
+        const size_t off = slot_off_[f] + c * vs;
         if (kind == FieldPrediction::kLast) {
           pred_vals_[k] = doubleFromRaw(d.type, &last_vals_[off]);
           continue;
         }
         double v = 0;
-        for (int i = 0; i < n; ++i) v += lambda[i] * doubleFromRaw(d.type, &vals_[fp.s[i] * item_bytes_ + off]);
+        for (int i = 0; i < n; ++i) v += lambda[i] * doubleFromRaw(d.type, &vals_[fp.s[i] * slot_bytes_ + off]);
         pred_vals_[k] = v;
       }
     }
@@ -828,13 +854,13 @@ class LevelCoder {
     auto price = [&](auto type) {
       for (uint32_t c = 0; c < d.components; ++c) {
         if (alias_[k + c] != kNone32) continue;
-        const size_t off = pf_offset_[f] + c * vs;
+        const size_t off = slot_off_[f] + c * vs;
         const uint64_t actual = keyFromRaw(type, src_item + c * vs);
         double x[4], v[kFieldRules] = {};
-        for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(type, &vals_[fp.s[j] * item_bytes_ + off]) : 0.0;
+        for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoSlot ? doubleFromRaw(type, &vals_[fp.s[j] * slot_bytes_ + off]) : 0.0;
         weightedRules(x, v, std::make_integer_sequence<uint32_t, kRules>());
         v[0] = pred_vals_[k + c];
-        for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(type, &vals_[near_[j] * item_bytes_ + off]);
+        for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(type, &vals_[near_[j] * slot_bytes_ + off]);
         addRuleCosts<kFieldRules>(type, actual, v, cost);
       }
     };
@@ -1101,9 +1127,9 @@ class LevelCoder {
     }
     for (int i = 0; i < 3; ++i)
       err_[3 * size_t{s} + i] = fp.kind == FieldPrediction::kLast ? 0.0f : static_cast<float>(x[i] - base[i]);
-    if (item_bytes_ > 0) {
+    if (slot_bytes_ > 0) {
       computeFieldPrediction(fp, x);
-      uint8_t* out = &vals_[s * item_bytes_];
+      uint8_t* out = &vals_[s * slot_bytes_];
       size_t k = 0;
       for (size_t f = 0; f < header_.point_fields.size(); ++f) {
         const FieldDesc& d = header_.point_fields[f];
@@ -1122,9 +1148,9 @@ class LevelCoder {
           pf_last_rule_[f] = rule;
         }
         for (uint32_t c = 0; c < d.components; ++c, ++k) {
-          const size_t off = pf_offset_[f] + c * vs;
+          const size_t off = slot_off_[f] + c * vs;
           if (alias_[k] != kNone32) {
-            std::memcpy(out + off, out + comp_off_[alias_[k]], vs);
+            std::memcpy(out + off, out + comp_slot_off_[alias_[k]], vs);
             continue;
           }
           uint64_t act = 0;
@@ -1134,7 +1160,7 @@ class LevelCoder {
           rawFromKey(d.type, key, out + off);
         }
       }
-      std::memcpy(last_vals_.data(), out, item_bytes_);
+      std::memcpy(last_vals_.data(), out, slot_bytes_);
     }
     const uint32_t id = static_cast<uint32_t>(next_id_++);
     ids_[s] = id;
@@ -1143,7 +1169,7 @@ class LevelCoder {
       enc_->src_slot[src] = s;
       enc_->slot_src[s] = src;
     } else {
-      GTN_RETURN_IF_ERROR(sink_->vertex(id, x, item_bytes_ ? &vals_[s * item_bytes_] : nullptr));
+      GTN_RETURN_IF_ERROR(sink_->vertex(id, x, sinkValues(s)));
     }
     std::memcpy(last_pos_, x, sizeof(last_pos_));
     ++live_;
@@ -1179,7 +1205,6 @@ class LevelCoder {
     if (d != kNoSlot) ++pins_[d];
     QueuedFace q;
     FaceMap::sortedKey(v, q.key);
-    q.face = face;
     queue_.push_back(q);
   }
   // Closes the open face `index`, face k of the tetrahedron e that emitTet emits, which opens its
@@ -1934,8 +1959,8 @@ class LevelCoder {
   }
 
   // Starts loading the front data of the likely next gate face while this one is coded.
-  void prefetchGate(const uint32_t key[3], uint32_t face) const {
-    faces_.prefetch(key, face);
+  void prefetchGate(const uint32_t key[3]) const {
+    faces_.prefetch(key);
     for (int i = 0; i < 3; ++i) {
       edges_.prefetch(key[i]);
       if (key[i] < state_.size()) __builtin_prefetch(P(key[i]));
@@ -2080,10 +2105,10 @@ class LevelCoder {
         const QueuedFace q = queue_.front();
         queue_.pop_front();
         // The face opened with this entry, or else one opened later on the same vertices.
-        idx = faces_.holds(q.face, q.key) ? q.face : faces_.find(q.key);
+        idx = faces_.find(q.key);
         if (idx >= 0) break;
       }
-      if (!queue_.empty()) prefetchGate(queue_.front().key, queue_.front().face);
+      if (!queue_.empty()) prefetchGate(queue_.front().key);
       if constexpr (!kEncode) {
         if (!con_->ok()) return bad("connectivity stream is truncated or corrupt");
         if (!geo_->ok()) return bad("geometry stream is truncated or corrupt");
@@ -2147,8 +2172,8 @@ class LevelCoder {
       flip = con_->bit(flip_, flip);
       if constexpr (kEncode) {
         // The next gate's face record was prefetched at the start of this one.
-        if (!queue_.empty() && faces_.holds(queue_.front().face, queue_.front().key))
-          enc_->prefetchTet(enc_->face_tet[queue_.front().face]);
+        if (!queue_.empty())
+          if (const long next = faces_.find(queue_.front().key); next >= 0) enc_->prefetchTet(enc_->face_tet[next]);
       }
       const uint32_t e[4] = {g.v[0], flip ? g.v[2] : g.v[1], flip ? g.v[1] : g.v[2], x};
       GTN_RETURN_IF_ERROR(emitTet(e, kEncode ? enc_->face_tet[idx] : 0, g.cell, idx, sym == kSymNew));
@@ -2183,6 +2208,9 @@ class LevelCoder {
   std::vector<ValueCoder> pf_vc_, cf_vc_;
   std::vector<size_t> pf_offset_, cf_offset_;
   size_t item_bytes_ = 0, cell_bytes_ = 0;
+  std::vector<size_t> slot_off_, comp_slot_off_;  // layOutSlotValues: offsets in a slot's values
+  size_t slot_bytes_ = 0;                         // a slot's values (item_bytes_ when nothing is left out)
+  std::vector<uint8_t> sink_vals_;                // sinkValues' buffer, when fields are left out
   std::vector<char> pf_skip_, cf_skip_;  // fields whose values the decoder leaves out (setFields)
 
   EncoderSide* enc_ = nullptr;
@@ -2209,9 +2237,11 @@ class LevelCoder {
   FaceMap faces_;
   EdgeMap edges_;  // directed edge of an open face -> its third vertex
   EdgeMap half_;   // open boundary half-edge -> third vertex of its triangle
+  // The sorted key of a face when it was opened: the face is found again by its key (at most one
+  // open face has it), which is also how a face opened later on the same vertices is taken at this
+  // entry. 12 bytes: the queue keeps the entries of faces closed since (23332 at once on blunt fin).
   struct QueuedFace {
-    uint32_t key[3];  // sorted
-    uint32_t face;    // its index when queued
+    uint32_t key[3];
   };
   RingQueue<QueuedFace> queue_;
   RingQueue<uint64_t> hqueue_;
@@ -2275,7 +2305,6 @@ class LevelCoder {
   BitModel copy_flag_[3][4];  // [axis][hit of the previous vertex's axis + 2 * previous axis hit]
   BitModel copy_same_[3];
   // Point-field components: byte offset in a vertex's values, type, earlier identical component.
-  std::vector<size_t> comp_off_;
   std::vector<ScalarType> comp_type_;
   std::vector<uint32_t> alias_;
   std::vector<uint32_t> field_coded_comps_;  // per field: components not aliased

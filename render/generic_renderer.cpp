@@ -148,7 +148,7 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
       for (uint32_t si = s0; si < s1; ++si) {
         const RaySegment& rs = rays.segments[si];
         SegmentState seg;
-        seg.tf = rs.t_near, seg.sf = rs.s_near, seg.tb = rs.t_far, seg.sb = rs.s_far;
+        seg.tf = rs.t_near, seg.sf = static_cast<float>(rs.s_near), seg.tb = rs.t_far, seg.sb = static_cast<float>(rs.s_far);
         uint32_t tet, wait_tet;
         int face, wait_face;
         if (seg.tf >= seg.tb) continue;

@@ -169,16 +169,27 @@ class SlotPool {
   uint32_t size_ = 0;
 };
 
-// A segment as the streaming renderer keeps it (72 bytes, not SegmentState's 96). The back cursor's
+// A colour as segments keep it between batches: float, a sixteenth of a millionth of a grey level
+// (the compositing itself stays double, as the generic renderer's).
+struct StoredRgba {
+  float r = 0, g = 0, b = 0, a = 0;
+  StoredRgba() = default;
+  explicit StoredRgba(const Rgba& c)
+      : r(static_cast<float>(c.r)), g(static_cast<float>(c.g)), b(static_cast<float>(c.b)), a(static_cast<float>(c.a)) {}
+  Rgba get() const { return {r, g, b, a}; }
+};
+
+// A segment as the streaming renderer keeps it (48 bytes, not SegmentState's 88). The back cursor's
 // colour is kept apart (State::backs) from the batch in which it first stops being blank until the
 // segment is done, when it is composited into `front` (over(over(f, b), 0) is over(f, b), bit for
 // bit): when the most tetrahedra are held, early in the level, most back cursors have composited
 // nothing but transparent samples.
 struct StreamSegment : SegmentCursors {
-  Rgba front;
+  StoredRgba front;
   uint32_t back = kNone;  // index into State::backs; none while the back colour is blank (zero)
   uint32_t pixel = 0;     // whose ray
 };
+static_assert(sizeof(StreamSegment) == 48);
 
 // Whether c is exactly the zero colour (+0, so that leaving it out changes no bit).
 bool isBlank(const Rgba& c) {
@@ -193,8 +204,8 @@ bool isBlank(const Rgba& c) {
 class BackColours {
  public:
   void reserve(size_t segments) { chunks_.reserve(segments / kChunk + 1); }
-  Rgba& operator[](uint32_t i) { return chunks_[i >> kShift][i & kMask]; }
-  uint32_t allocate(const Rgba& c) {
+  StoredRgba& operator[](uint32_t i) { return chunks_[i >> kShift][i & kMask]; }
+  uint32_t allocate(const StoredRgba& c) {
     std::vector<uint32_t>& mine = free_.local();
     uint32_t i;
     if (!mine.empty()) {
@@ -202,7 +213,7 @@ class BackColours {
       mine.pop_back();
     } else {
       std::lock_guard<std::mutex> lock(grow_);
-      if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<Rgba[]>(kChunk));
+      if ((size_ >> kShift) == chunks_.size()) chunks_.push_back(std::make_unique<StoredRgba[]>(kChunk));
       i = size_++;
     }
     (*this)[i] = c;
@@ -212,7 +223,7 @@ class BackColours {
 
  private:
   static constexpr uint32_t kShift = 10, kChunk = 1u << kShift, kMask = kChunk - 1;
-  std::vector<std::unique_ptr<Rgba[]>> chunks_;
+  std::vector<std::unique_ptr<StoredRgba[]>> chunks_;
   tbb::enumerable_thread_specific<std::vector<uint32_t>> free_;
   uint32_t size_ = 0;
   std::mutex grow_;
@@ -379,7 +390,7 @@ class SegmentBuilder : public SegmentSink {
   void segment(const RaySegment& rs) override {
     const size_t i = next_++;
     StreamSegment& seg = st_.segs[i];
-    seg.tf = rs.t_near, seg.sf = rs.s_near, seg.tb = rs.t_far, seg.sb = rs.s_far;
+    seg.tf = rs.t_near, seg.sf = static_cast<float>(rs.s_near), seg.tb = rs.t_far, seg.sb = static_cast<float>(rs.s_far);
     seg.pixel = rs.pixel;
     if (seg.done()) return;
     const auto& in = st_.boundary[rs.entry_tri];
@@ -744,7 +755,9 @@ Status StreamRenderer::flushBatch() {
       const uint32_t si = segmentOf(i);
       StreamSegment& seg = st.segs[si];
       const PreparedRay ray = st.pixelRay(seg.pixel, setup_.camera);
-      Rgba fresh;  // the back colour while it has no place in `backs`
+      // The colours in double while the segment's cursors advance.
+      Rgba front_colour = seg.front.get();
+      Rgba back_colour = seg.back != kNone ? st.backs[seg.back].get() : Rgba();
       // A cursor that stopped (met, boundary, lost) waits nowhere, so only waiting cursors come here;
       // one may find its segment done by its partner meanwhile.
       for (; i < end && segmentOf(i) == si; ++i) {
@@ -754,7 +767,7 @@ Status StreamRenderer::flushBatch() {
         const bool front = cursor % 2 == 0;
         uint32_t wait_tet = 0;
         int wait_face = 0;
-        Rgba& colour = front ? seg.front : seg.back != kNone ? st.backs[seg.back] : fresh;
+        Rgba& colour = front ? front_colour : back_colour;
         const CursorEnd end_state = advanceCursor(setup_, ray, seg, front, colour, enter >> 2,
                                                   static_cast<int>(enter & 3), mesh, &wait_tet, &wait_face);
         if (end_state == CursorEnd::kWait) {
@@ -764,17 +777,16 @@ Status StreamRenderer::flushBatch() {
           st.lost.fetch_add(1, std::memory_order_relaxed);
         }
       }
-      if (seg.back != kNone) {
-        if (seg.done()) {
-          seg.front = over(seg.front, st.backs[seg.back]);
-          st.backs.free(seg.back);
-          seg.back = kNone;
-        }
-      } else if (!isBlank(fresh)) {
-        if (seg.done()) {
-          seg.front = over(seg.front, fresh);
-        } else {
-          seg.back = st.backs.allocate(fresh);
+      if (seg.done()) {
+        seg.front = StoredRgba(over(front_colour, back_colour));
+        if (seg.back != kNone) st.backs.free(seg.back);
+        seg.back = kNone;
+      } else {
+        seg.front = StoredRgba(front_colour);
+        if (seg.back != kNone) {
+          st.backs[seg.back] = StoredRgba(back_colour);
+        } else if (!isBlank(back_colour)) {
+          seg.back = st.backs.allocate(StoredRgba(back_colour));
         }
       }
     }
@@ -817,7 +829,7 @@ Status StreamRenderer::endLevel() {
     Rgba acc;
     for (; st.segs[s].pixel == p; ++s) {
       const StreamSegment& seg = st.segs[s];
-      acc = over(acc, over(seg.front, seg.back != kNone ? st.backs[seg.back] : Rgba()));
+      acc = over(acc, over(seg.front.get(), seg.back != kNone ? st.backs[seg.back].get() : Rgba()));
     }
     toRgb8(acc, &image_.rgb[3 * p]);
   }

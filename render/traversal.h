@@ -16,9 +16,12 @@
 namespace gtn::render_internal {
 
 // Where a segment's two cursors sit.
+// Positions stay doubles (the crossings they are compared with are exact to the bit); the scalars
+// there are only shaded, and float keeps them to far below a grey level (the streaming renderer
+// holds a segment per pixel's ray part for the whole level: 8 bytes of 48).
 struct SegmentCursors {
-  double tf = 0, sf = 0;  // front cursor: position and scalar at its crossing
-  double tb = 0, sb = 0;  // back cursor
+  double tf = 0, tb = 0;  // front and back cursor: position at its crossing
+  float sf = 0, sb = 0;   // and the scalar there
   // The cursors met (advanceCursor then sets tf = tb), or the segment was empty from the start.
   bool done() const { return !(tf < tb); }
 };
@@ -73,7 +76,7 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
         return CursorEnd::kMet;
       }
       seg.tf = t_out;
-      seg.sf = x.s;
+      seg.sf = static_cast<float>(x.s);
     } else {
       const double t_out = x.t < seg.tb ? x.t : seg.tb;
       const double limit = seg.tf;
@@ -92,7 +95,7 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
         return CursorEnd::kMet;
       }
       seg.tb = t_out;
-      seg.sb = x.s;
+      seg.sb = static_cast<float>(x.s);
     }
     if (zero_steps > kMaxZeroSteps) return CursorEnd::kLost;
     uint32_t next_tet;
