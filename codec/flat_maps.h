@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -34,6 +35,32 @@ inline uint64_t equalLanes(const uint32_t* a, uint32_t v) {
 #endif
   return m;
 }
+
+// An array of T grown a chunk of 2^kShift entries at a time: growing moves nothing (a vector holds
+// its old and new buffers at once while it grows, and the edge buckets' growth was then the
+// decoder's, and the streaming renderer's, peak of memory), and addresses stay put. Entries past
+// the size are default values.
+template <class T, uint32_t kShift>
+class ChunkedArray {
+ public:
+  size_t size() const { return size_; }
+  T& operator[](size_t i) { return chunks_[i >> kShift][i & kMask]; }
+  const T& operator[](size_t i) const { return chunks_[i >> kShift][i & kMask]; }
+  // Grows to n entries (n >= size()), the new ones default values.
+  void grow(size_t n) {
+    while ((chunks_.size() << kShift) < n) chunks_.push_back(std::make_unique<T[]>(kChunk));
+    size_ = n;
+  }
+  void clear() {
+    chunks_.clear();
+    size_ = 0;
+  }
+
+ private:
+  static constexpr size_t kChunk = size_t{1} << kShift, kMask = kChunk - 1;
+  std::vector<std::unique_ptr<T[]>> chunks_;
+  size_t size_ = 0;
+};
 
 // Map from a directed edge (a, b) of slots (never ~0) to a 32-bit value, stored with a. Slot a's
 // entries sit in its bucket, one cache line, chained to overflow buckets when it holds more; keys
@@ -77,7 +104,7 @@ class EdgeMap {
   // Sets the value of (a, b), replacing an existing one. Always inline, as eraseIf: the front's
   // updates are most of what the codec does per face, and a call costs as much as the usual update.
   [[gnu::always_inline]] void put(uint32_t a, uint32_t b, uint32_t value) {
-    if (a >= head_.size()) head_.resize(size_t{a} + 1);
+    if (a >= head_.size()) head_.grow(size_t{a} + 1);
     Bucket* k = &head_[a];
     uint32_t ref = kNil;  // k's index in extra_, kNil for the head bucket
     while (true) {
@@ -133,8 +160,6 @@ class EdgeMap {
   void prefetch(uint32_t a) const {
     if (a < head_.size()) __builtin_prefetch(&head_[a]);
   }
-  // Room for slots below n without reallocating (put grows by doubling otherwise).
-  void reserveSlots(size_t n) { head_.reserve(n); }
   void clear() {
     head_.clear();
     extra_.clear();
@@ -166,8 +191,7 @@ class EdgeMap {
       free_.pop_back();
     } else {
       fresh = static_cast<uint32_t>(extra_.size());
-      if (extra_.size() == extra_.capacity()) extra_.reserve(extra_.size() + extra_.size() / 4 + 16);
-      extra_.emplace_back();  // may move the buckets: the last one is found again below
+      extra_.grow(size_t{fresh} + 1);
     }
     (ref == kNil ? head_[a] : extra_[ref]).next = fresh;
     Bucket* k = &extra_[fresh];
@@ -175,8 +199,8 @@ class EdgeMap {
     return k;
   }
 
-  std::vector<Bucket> head_;   // [slot]
-  std::vector<Bucket> extra_;  // overflow buckets
+  ChunkedArray<Bucket, 9> head_;   // [slot], 32 KiB a chunk
+  ChunkedArray<Bucket, 6> extra_;  // overflow buckets, 4 KiB a chunk
   std::vector<uint32_t> free_;
   size_t size_ = 0;
 };

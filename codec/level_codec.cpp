@@ -710,8 +710,9 @@ class LevelCoder {
     return s;
   }
   // Room for n slots in every per-slot array. The pool grows by a quarter, not the vectors' own
-  // doubling: these arrays (and the edge buckets, 64 bytes a slot) are most of the decoder's memory,
-  // and doubling left up to half of them unused (blunt fin's 9748 slots had room for 16384).
+  // doubling: these arrays are most of the decoder's memory after the edge buckets (64 bytes a slot,
+  // grown a chunk at a time), and doubling left up to half of them unused (blunt fin's 9748 slots
+  // had room for 16384).
   void reserveSlots(size_t n) {
     state_.reserve(n);
     pos_.reserve(3 * n);
@@ -727,7 +728,6 @@ class LevelCoder {
       corner_sum_.reserve(n);
       corner_count_.reserve(n);
     }
-    edges_.reserveSlots(n);
     faces_.reserveSlots(n);
     if (grid_.built()) grid_.reserveSlots(n);
   }
