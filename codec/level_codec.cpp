@@ -304,6 +304,7 @@ class LevelCoder {
   // The fields to decode (decoder only; null or empty vectors: all). Takes effect in run(), once the
   // repeat declarations say which other fields the kept ones need.
   void setFields(const DecodeFields* fields) {
+    fields_ = fields;
     pf_skip_.assign(header_.point_fields.size(), 0);
     cf_skip_.assign(header_.cell_fields.size(), 0);
     if (!fields) return;
@@ -320,6 +321,8 @@ class LevelCoder {
     keepRepeatedFields();
     layOutSlotValues();
     GTN_RETURN_IF_ERROR(codeValueForms());
+    // The streams left out are read no further.
+    if (fields_ && fields_->streams_done) fields_->streams_done(pf_skip_, cf_skip_);
     uint32_t edge_points = 0;
     if constexpr (kEncode) edge_points = !enc_->edge_points.empty();
     edge_points_ = geo_->bit(edge_points_flag_, edge_points);
@@ -2212,6 +2215,7 @@ class LevelCoder {
   size_t slot_bytes_ = 0;                         // a slot's values (item_bytes_ when nothing is left out)
   std::vector<uint8_t> sink_vals_;                // sinkValues' buffer, when fields are left out
   std::vector<char> pf_skip_, cf_skip_;  // fields whose values the decoder leaves out (setFields)
+  const DecodeFields* fields_ = nullptr;
 
   EncoderSide* enc_ = nullptr;
   MeshSink* sink_ = nullptr;

