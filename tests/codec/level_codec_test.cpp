@@ -72,6 +72,27 @@ TEST(LevelCodec, ComponentsRepeatedAsOtherFieldsCostAlmostNothing) {
   EXPECT_TRUE(std::all_of(got.point_fields[0].bytes.begin(), got.point_fields[0].bytes.end(),
                           [](uint8_t b) { return b == 0; }))
       << "pressure left out";
+
+  // Once the declarations are read, the decode says which streams it reads no further (velocity is
+  // not among them: vy repeats it), and those may be freed: here they are overwritten with garbage,
+  // and the decode goes on to the same mesh.
+  std::vector<std::vector<uint8_t>> streams;
+  for (const auto& f : e.point_fields) streams.push_back(f);
+  LevelPayload payload = payloadOf(e);
+  for (size_t f = 0; f < n; ++f) payload.point_fields[f] = streams[f];
+  int calls = 0;
+  only.streams_done = [&](const std::vector<char>& point_out, const std::vector<char>& cell_out) {
+    ++calls;
+    EXPECT_EQ(point_out, (std::vector<char>{1, 0, 1, 1, 1, 0, 1, 1}));
+    EXPECT_EQ(cell_out, (std::vector<char>{0, 0})) << "empty cell selection: every cell field";
+    for (size_t f = 0; f < point_out.size(); ++f)
+      if (point_out[f]) std::fill(streams[f].begin(), streams[f].end(), uint8_t{0xFF});
+  };
+  test::CheckingSink sink;
+  ASSERT_TRUE(decodeLevel(e.header, payload, sink, nullptr, "x", &only).isOk());
+  EXPECT_EQ(calls, 1);
+  EXPECT_TRUE(sink.builder.mesh().point_fields[5].bytes == full.point_fields[5].bytes);
+  EXPECT_TRUE(sink.builder.mesh().tets == full.tets);
 }
 
 // Grids often repeat their boundary values in the next layer (blunt fin's solver does on two planes).
