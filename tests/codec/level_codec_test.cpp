@@ -1,7 +1,10 @@
 // Lossless round trips of the level codec on synthetic meshes that exercise every structural case,
 // and the decoder's behaviour on corrupt payloads.
 #include <gtest/gtest.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
+#include <cstring>
 #include <random>
 
 #include "codec/level_codec.h"
@@ -74,25 +77,41 @@ TEST(LevelCodec, ComponentsRepeatedAsOtherFieldsCostAlmostNothing) {
       << "pressure left out";
 
   // Once the declarations are read, the decode says which streams it reads no further (velocity is
-  // not among them: vy repeats it), and those may be freed: here they are overwritten with garbage,
-  // and the decode goes on to the same mesh.
-  std::vector<std::vector<uint8_t>> streams;
-  for (const auto& f : e.point_fields) streams.push_back(f);
+  // not among them: vy repeats it), and those may be freed: here their pages are made unreadable,
+  // so that a read after the call would crash the test, and the decode goes on to the same mesh.
+  const size_t page = static_cast<size_t>(sysconf(_SC_PAGESIZE));
+  struct Mapped {
+    void* base;
+    size_t size;
+  };
+  std::vector<Mapped> maps;
   LevelPayload payload = payloadOf(e);
-  for (size_t f = 0; f < n; ++f) payload.point_fields[f] = streams[f];
+  for (size_t f = 0; f < n; ++f) {
+    const std::vector<uint8_t>& src = e.point_fields[f];
+    const size_t size = (src.size() + page - 1) / page * page;
+    void* base = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    ASSERT_NE(base, MAP_FAILED);
+    std::memcpy(base, src.data(), src.size());
+    maps.push_back({base, size});
+    payload.point_fields[f] = std::span<const uint8_t>(static_cast<const uint8_t*>(base), src.size());
+  }
   int calls = 0;
   only.streams_done = [&](const std::vector<char>& point_out, const std::vector<char>& cell_out) {
     ++calls;
     EXPECT_EQ(point_out, (std::vector<char>{1, 0, 1, 1, 1, 0, 1, 1}));
     EXPECT_EQ(cell_out, (std::vector<char>{0, 0})) << "empty cell selection: every cell field";
     for (size_t f = 0; f < point_out.size(); ++f)
-      if (point_out[f]) std::fill(streams[f].begin(), streams[f].end(), uint8_t{0xFF});
+      if (point_out[f]) EXPECT_EQ(mprotect(maps[f].base, maps[f].size, PROT_NONE), 0);
   };
   test::CheckingSink sink;
   ASSERT_TRUE(decodeLevel(e.header, payload, sink, nullptr, "x", &only).isOk());
   EXPECT_EQ(calls, 1);
-  EXPECT_TRUE(sink.builder.mesh().point_fields[5].bytes == full.point_fields[5].bytes);
-  EXPECT_TRUE(sink.builder.mesh().tets == full.tets);
+  const TetMesh& after = sink.builder.mesh();
+  EXPECT_TRUE(after.point_fields[5].bytes == full.point_fields[5].bytes);
+  EXPECT_TRUE(after.point_fields[1].bytes == full.point_fields[1].bytes);
+  for (size_t f = 0; f < m.cell_fields.size(); ++f) EXPECT_TRUE(after.cell_fields[f].bytes == full.cell_fields[f].bytes);
+  EXPECT_TRUE(after.tets == full.tets);
+  for (const Mapped& map : maps) munmap(map.base, map.size);
 }
 
 // Grids often repeat their boundary values in the next layer (blunt fin's solver does on two planes).
