@@ -100,8 +100,11 @@ TEST(LevelCodec, ComponentsRepeatedAsOtherFieldsCostAlmostNothing) {
     ++calls;
     EXPECT_EQ(point_out, (std::vector<char>{1, 0, 1, 1, 1, 0, 1, 1}));
     EXPECT_EQ(cell_out, (std::vector<char>{0, 0})) << "empty cell selection: every cell field";
-    for (size_t f = 0; f < point_out.size(); ++f)
-      if (point_out[f]) EXPECT_EQ(mprotect(maps[f].base, maps[f].size, PROT_NONE), 0);
+    for (size_t f = 0; f < point_out.size(); ++f) {
+      if (point_out[f]) {
+        EXPECT_EQ(mprotect(maps[f].base, maps[f].size, PROT_NONE), 0);
+      }
+    }
   };
   test::CheckingSink sink;
   ASSERT_TRUE(decodeLevel(e.header, payload, sink, nullptr, "x", &only).isOk());
