@@ -527,7 +527,7 @@ Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, cons
   const std::string what = file_.path + ": level " + std::to_string(i);
   CheckingSink checker(sink, s.header, what);
   // The streams of the fields left out are freed once their declarations are read (a render of
-  // blunt fin's density holds 0.25 MB less, combustion's 0.4 MB).
+  // blunt fin's density holds 0.3 MB less at its peak, and so does combustion's).
   DecodeFields selected;
   if (fields) {
     selected = *fields;
