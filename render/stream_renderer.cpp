@@ -169,8 +169,8 @@ class SlotPool {
   uint32_t size_ = 0;
 };
 
-// A colour as segments keep it between batches: float, a sixteenth of a millionth of a grey level
-// (the compositing itself stays double, as the generic renderer's).
+// A colour as segments keep it between batches: float, which rounds it by at most 2e-5 of a grey
+// level (the compositing itself stays double, as the generic renderer's).
 struct StoredRgba {
   float r = 0, g = 0, b = 0, a = 0;
   StoredRgba() = default;
