@@ -56,6 +56,15 @@ Camera::Camera(const double bbox_min[3], const double bbox_max[3], const CameraO
     half_h_ = std::tan(half_fov) / options_.zoom;
     half_w_ = half_h_ * aspect;
   }
+  // x = (v . right / half_w + 1) W / 2 and y = (1 - v . up / half_h) H / 2, v = p - eye (divided by
+  // the depth v . forward first, in perspective).
+  const double kx = 0.5 * options_.width / half_w_, ky = -0.5 * options_.height / half_h_;
+  for (int i = 0; i < 3; ++i) screen_x_[i] = kx * right_[i], screen_y_[i] = ky * up_[i];
+  screen_x_[3] = 0.5 * options_.width, screen_y_[3] = 0.5 * options_.height;
+  if (options_.projection == Projection::kOrthographic) {
+    screen_x_[3] -= dot(screen_x_, eye_);
+    screen_y_[3] -= dot(screen_y_, eye_);
+  }
 }
 
 Ray Camera::ray(int px, int py) const {
@@ -82,17 +91,12 @@ double Camera::viewAngleDeg() const {
   return 2.0 * std::atan(half_h_) * 180.0 / kPi;
 }
 
-bool Camera::project(const double p[3], double* x, double* y) const {
+bool Camera::projectPerspective(const double p[3], double* x, double* y) const {
   const double v[3] = {p[0] - eye_[0], p[1] - eye_[1], p[2] - eye_[2]};
-  double sx = dot(v, right_), sy = dot(v, up_);
-  if (options_.projection == Projection::kPerspective) {
-    const double depth = dot(v, forward_);
-    if (!(depth > 0)) return false;
-    sx /= depth;
-    sy /= depth;
-  }
-  *x = (sx / half_w_ + 1.0) * 0.5 * options_.width;
-  *y = (1.0 - sy / half_h_) * 0.5 * options_.height;
+  const double depth = dot(v, forward_);
+  if (!(depth > 0)) return false;
+  *x = dot(v, screen_x_) / depth + screen_x_[3];
+  *y = dot(v, screen_y_) / depth + screen_y_[3];
   return std::isfinite(*x) && std::isfinite(*y);
 }
 

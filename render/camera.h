@@ -6,6 +6,7 @@
 // (degrees). Pixel (0, 0) is the top-left corner; rays go through pixel centres.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 namespace gtn {
@@ -36,7 +37,15 @@ class Camera {
   const CameraOptions& options() const { return options_; }
   Ray ray(int px, int py) const;
   // Continuous pixel coordinates of a point (x right, y down); false if behind a perspective eye.
-  bool project(const double p[3], double* x, double* y) const;
+  // Inline: the streaming renderer projects the four corners of every tetrahedron that arrives.
+  bool project(const double p[3], double* x, double* y) const {
+    if (options_.projection == Projection::kOrthographic) {
+      *x = screen_x_[0] * p[0] + screen_x_[1] * p[1] + screen_x_[2] * p[2] + screen_x_[3];
+      *y = screen_y_[0] * p[0] + screen_y_[1] * p[1] + screen_y_[2] * p[2] + screen_y_[3];
+      return std::isfinite(*x) && std::isfinite(*y);
+    }
+    return projectPerspective(p, x, y);
+  }
   // Radius of the framed bounding sphere.
   double radius() const { return radius_; }
 
@@ -56,6 +65,11 @@ class Camera {
   double forward_[3] = {0, 0, -1}, right_[3] = {1, 0, 0}, up_[3] = {0, 1, 0};
   double eye_[3] = {0, 0, 0};  // perspective eye, or the orthographic rays' plane centre
   double half_w_ = 1, half_h_ = 1;  // orthographic: world units; perspective: tangents
+  // Orthographic: pixel x = screen_x_ . (p, 1), y = screen_y_ . (p, 1). Perspective: the same before
+  // the division by depth, relative to the eye and without the offset (screen_x_[3], screen_y_[3]
+  // are then the image centre).
+  double screen_x_[4] = {0, 0, 0, 0}, screen_y_[4] = {0, 0, 0, 0};
+  bool projectPerspective(const double p[3], double* x, double* y) const;
 };
 
 }  // namespace gtn

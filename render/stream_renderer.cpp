@@ -343,7 +343,15 @@ struct StreamRenderer::State {
   }
   std::atomic<uint64_t> lost{0};
   // flushBatch's lists, kept from one batch to the next (cleared, not freed).
-  std::vector<uint32_t> triggers;  // cursors that enter a tetrahedron of the batch
+  // The segments with a cursor that enters a tetrahedron of the batch, each once, and per segment
+  // which of its cursors do (bit 0 the front, bit 1 the back; zero outside flushBatch's steps 2-3).
+  std::vector<uint32_t> trigger_segs;
+  std::vector<uint8_t> triggered;
+  void trigger(uint32_t cursor) {
+    uint8_t& bits = triggered[cursor / 2];
+    if (bits == 0) trigger_segs.push_back(cursor / 2);
+    bits |= static_cast<uint8_t>(1u << (cursor % 2));
+  }
   std::vector<uint32_t> arrived_slots;
   tbb::enumerable_thread_specific<std::vector<uint32_t>> zeroed;  // pending fell to zero
   tbb::enumerable_thread_specific<std::vector<uint32_t>> waits;   // cursors to wait at open faces
@@ -386,6 +394,7 @@ class SegmentBuilder : public SegmentSink {
     st_.segs.back().pixel = kNone;  // State::block_start's walks end there
     st_.backs.reserve(segments);
     st_.cursor_word.assign(2 * segments, kNone);
+    st_.triggered.assign(segments, 0);
   }
   void segment(const RaySegment& rs) override {
     const size_t i = next_++;
@@ -682,9 +691,8 @@ Status StreamRenderer::flushBatch() {
 
   // 2. Hold the tetrahedra some ray needs, link them to held neighbours, collect the cursors waiting
   //    at their faces (sequential: the face map).
-  std::vector<uint32_t>& triggers = st.triggers;
   std::vector<uint32_t>& arrived_slots = st.arrived_slots;
-  triggers.clear();
+  st.trigger_segs.clear();
   arrived_slots.clear();
   for (ArrivedTet& a : st.flushing) {
     // Most tetrahedra of a large mesh lie between pixel centres: nothing to look up for them.
@@ -723,7 +731,7 @@ Status StreamRenderer::flushBatch() {
       }
       st.takeWaiters(e, [&](uint32_t c) {
         st.cursor_word[c] = heldFace(slot, k);
-        triggers.push_back(c);
+        st.trigger(c);
       });
       if (e.hasTet() && e.tet() != slot) {
         st.tets[e.tet()].nbr[e.face()] = heldFace(slot, k);
@@ -736,35 +744,30 @@ Status StreamRenderer::flushBatch() {
   }
   stats_.peak_tets_held = std::max(stats_.peak_tets_held, st.held);
 
-  // 3. Advance the triggered cursors (parallel over segments; a segment's two cursors in one task).
-  std::sort(triggers.begin(), triggers.end());
-  const size_t num_triggers = triggers.size();
-  auto segmentOf = [&](size_t i) { return triggers[i] / 2; };
+  // 3. Advance the triggered cursors (parallel over segments; a segment's cursors in one task, the
+  //    front first). Segments do not interact within a batch (nothing is released before step 5), so
+  //    the order of the segments does not matter.
   for (auto& list : st.zeroed) list.clear();
   for (auto& list : st.waits) list.clear();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, num_triggers, 16), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, st.trigger_segs.size(), 8), [&](const tbb::blocked_range<size_t>& r) {
     HeldMesh mesh{st, st.zeroed};
     std::vector<uint32_t>& my_waits = st.waits.local();
-
-    // The range takes the segments whose first trigger it holds.
-    size_t i = r.begin(), end = r.end();
-    while (i > 0 && i < end && segmentOf(i) == segmentOf(i - 1)) ++i;
-    if (i == end) return;
-    while (end < num_triggers && segmentOf(end) == segmentOf(end - 1)) ++end;
-    while (i < end) {
-      const uint32_t si = segmentOf(i);
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const uint32_t si = st.trigger_segs[i];
+      const uint8_t which = st.triggered[si];
+      st.triggered[si] = 0;
       StreamSegment& seg = st.segs[si];
       const PreparedRay ray = st.pixelRay(seg.pixel, setup_.camera);
       // The colours in double while the segment's cursors advance.
       Rgba front_colour = seg.front.get();
       Rgba back_colour = seg.back != kNone ? st.backs[seg.back].get() : Rgba();
       // A cursor that stopped (met, boundary, lost) waits nowhere, so only waiting cursors come here;
-      // one may find its segment done by its partner meanwhile.
-      for (; i < end && segmentOf(i) == si; ++i) {
-        if (seg.done()) continue;
-        const uint32_t cursor = triggers[i];
+      // the back one may find its segment done by the front meanwhile.
+      for (uint32_t end = 0; end < 2; ++end) {
+        if (!(which >> end & 1) || seg.done()) continue;
+        const uint32_t cursor = 2 * si + end;
         const uint32_t enter = st.cursor_word[cursor];
-        const bool front = cursor % 2 == 0;
+        const bool front = end == 0;
         uint32_t wait_tet = 0;
         int wait_face = 0;
         Rgba& colour = front ? front_colour : back_colour;
