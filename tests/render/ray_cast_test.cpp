@@ -127,8 +127,18 @@ TEST(TetCorners, CrossLikeTetGeomBitForBit) {
           for (int entry = 0; entry < 4; ++entry) {
             for (bool forward : {true, false}) {
               Crossing x, y;
-              ASSERT_EQ(exitFace(ray, g, entry, forward, &x), exitFace(ray, tc, entry, forward, &y));
+              const int exit = exitFace(ray, g, entry, forward, &x);
+              ASSERT_EQ(exit, exitFace(ray, tc, entry, forward, &y));
               ASSERT_TRUE(x.hit == y.hit && sameBits(x.t, y.t) && sameBits(x.s, y.s));
+              // The farthest face crossed other than the entry, exactly as crossTetFaces crosses it.
+              int want = -1;
+              for (int k = 0; k < 4; ++k)
+                if (k != entry && a[k].hit && (want < 0 || (forward ? a[k].t > a[want].t : a[k].t < a[want].t)))
+                  want = k;
+              ASSERT_EQ(exit, want);
+              if (want >= 0) {
+                ASSERT_TRUE(x.hit && sameBits(x.t, a[want].t) && sameBits(x.s, a[want].s));
+              }
             }
           }
         }
