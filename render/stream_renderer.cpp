@@ -265,6 +265,10 @@ struct StreamRenderer::State {
   // no pixel (kNone), which they need not test for.
   static constexpr uint32_t kPixelBlock = 8;
   std::vector<uint32_t> block_start;
+  // Each pixel's number of segments, 255 for 255 or more: counting a tetrahedron's rays reads these
+  // bytes, not the segments, for the pixels it covers (in a valid mesh a pixel with one segment whose
+  // centre lies clearly inside the tetrahedron's projection always needs it).
+  std::vector<uint8_t> pixel_segments;
   // The first segment of pixel p or of a later pixel.
   uint32_t firstSegmentFrom(uint32_t p) const {
     uint32_t s = block_start[p / kPixelBlock];
@@ -291,9 +295,6 @@ struct StreamRenderer::State {
   }
   bool shared_frame = false;            // orthographic: every ray has `frame`
   ShearFrame frame;
-  double ortho_dir[3] = {0, 0, 0};  // orthographic: the rays' direction, and the depth of their
-  double ortho_t0 = 0;              // origins' plane: ray parameter t of p = dir . p - t0
-  double depth_slack = 0;
   std::vector<StreamSegment> segs;
   BackColours backs;
   FlatHashMap<FaceKey, FaceEntry, FaceKeyHash> faces;
@@ -526,13 +527,7 @@ Status StreamRenderer::endBoundary() {
   }
   buildSampleTable(setup_);
   st.shared_frame = setup_.camera.options().projection == Projection::kOrthographic;
-  {
-    const Ray r0 = setup_.camera.ray(0, 0);
-    st.frame = prepareRay(r0).frame;
-    for (int i = 0; i < 3; ++i) st.ortho_dir[i] = r0.d[i];
-    st.ortho_t0 = r0.o[0] * r0.d[0] + r0.o[1] * r0.d[1] + r0.o[2] * r0.d[2];
-    st.depth_slack = 1e-9 * setup_.camera.radius();
-  }
+  st.frame = prepareRay(setup_.camera.ray(0, 0)).frame;
   if (st.shared_frame) {
     st.ids.forEach([&](uint32_t, PooledVertex* v) { shearPoint(st.frame, v->p, v->q); });
   }
@@ -545,6 +540,9 @@ Status StreamRenderer::endBoundary() {
     const size_t pixels = pixel_start.size() - 1;
     st.block_start.resize(pixels / State::kPixelBlock + 1);
     for (size_t b = 0; b < st.block_start.size(); ++b) st.block_start[b] = pixel_start[b * State::kPixelBlock];
+    st.pixel_segments.resize(pixels);
+    for (size_t p = 0; p < pixels; ++p)
+      st.pixel_segments[p] = static_cast<uint8_t>(std::min<uint32_t>(255, pixel_start[p + 1] - pixel_start[p]));
   }
   stats_.segments = st.segs.size() - 1;
   st.boundary.clear();
@@ -605,16 +603,9 @@ Status StreamRenderer::flushBatch() {
       a.order[0][0] = kNoOrder;
       const double* corners[4] = {a.corner[0]->p, a.corner[1]->p, a.corner[2]->p, a.corner[3]->p};
       int box[4];
-      double sx[4], sy[4], dmin = 1e300, dmax = -1e300;
+      double sx[4], sy[4];
       if (!pixelFootprint(cam, corners, 4, box, sx, sy)) continue;
       a.visible = true;
-      if (st.shared_frame) {
-        for (int k = 0; k < 4; ++k) {
-          const double d = (corners[k][0] * st.ortho_dir[0] + corners[k][1] * st.ortho_dir[1] +
-                            corners[k][2] * st.ortho_dir[2]) - st.ortho_t0;
-          dmin = std::min(dmin, d), dmax = std::max(dmax, d);
-        }
-      }
       // Orthographic: the corners' sheared positions (the pool's, computed once per vertex).
       const TetCorners g{a.corner, a.order, st.shared_frame};
       // The rays of pixel p whose uncovered part overlaps the tetrahedron, by the exact crossings.
@@ -655,11 +646,12 @@ Status StreamRenderer::flushBatch() {
       // Orthographic: rasterize the projected tetrahedron row by row. Pixels whose centre lies in
       // its projection by a clear margin are hit (the crossing test is watertight), pixels clearly
       // outside are not; only those near its outline need the exact crossings. A hit pixel with one
-      // segment needs the tetrahedron unless the segment is done: its cursors cannot have passed a
-      // tetrahedron that has not arrived (the depth test below only guards against invalid meshes).
-      dmin -= st.depth_slack, dmax += st.depth_slack;
+      // segment needs the tetrahedron: its cursors cannot have passed a tetrahedron that has not
+      // arrived, nor met before it. (In an invalid mesh where they did, the tetrahedron is held
+      // until the level ends: memory, not the image.) Only the pixels' segment counts are read.
       constexpr double kSure = ScreenHull::kSure;  // rounding differences are about 1e-10 pixels
       const ScreenHull hull(sx, sy, 4);
+      const uint8_t* nseg = st.pixel_segments.data();
       for (int py = box[1]; py <= box[3]; ++py) {
         const double yc = py + 0.5;
         // The projection's span on this row. Only the pixels within kSure of it can fail the
@@ -669,19 +661,18 @@ Status StreamRenderer::flushBatch() {
         int px0 = box[0], px1 = box[2];
         if (row_inside) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
         const uint32_t row = static_cast<uint32_t>(py) * w;
-        uint32_t s1 = px0 <= px1 ? st.firstSegmentFrom(row + px0) : 0;
         for (int px = px0; px <= px1; ++px) {
+          const uint32_t p = row + px;
+          const uint8_t n = nseg[p];
+          if (n == 0) continue;
           const double xc = px + 0.5;
-          const uint32_t p = row + px, s0 = s1;
-          s1 = st.pixelSegmentsEnd(p, s0);
-          if (s0 == s1) continue;
           if (row_inside && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
-          if (row_inside && xc > xl + kSure && xc < xr - kSure && s1 == s0 + 1) {  // clearly inside
-            const StreamSegment& seg = st.segs[s0];
-            if (!seg.done() && seg.tf <= dmax && dmin <= seg.tb) ++count;
+          if (row_inside && n == 1 && xc > xl + kSure && xc < xr - kSure) {  // clearly inside
+            ++count;
             continue;
           }
-          count += exactCount(p, s0, s1);
+          const uint32_t s0 = st.firstSegmentFrom(p);
+          count += exactCount(p, s0, st.pixelSegmentsEnd(p, s0));
         }
       }
       a.rays = count;
