@@ -163,6 +163,7 @@ StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const Rende
   report["peak_face_entries"] = s.peak_face_entries;
   report["segments"] = s.segments;
   report["lost_cursors"] = s.lost_cursors;
+  report["tets_left_held"] = s.tets_left_held;
   report["view"] = describeSetup(renderer.setup());
   return renderer.image();
 }

@@ -828,6 +828,7 @@ Status StreamRenderer::endLevel() {
     toRgb8(acc, &image_.rgb[3 * p]);
   }
   stats_.lost_cursors = st.lost.load();
+  stats_.tets_left_held = st.held;
   state_ = std::make_unique<State>();
   state_->phase = State::Phase::kDone;
   return Status::ok();

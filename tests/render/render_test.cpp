@@ -196,6 +196,8 @@ TEST(StreamRenderer, MatchesGenericOnGrid) {
       EXPECT_EQ(r.stream_stats.lost_cursors, 0u);
       EXPECT_EQ(r.generic_stats.lost_cursors, 0u);
       EXPECT_EQ(r.stream_stats.tets, mesh.numTets());
+      // Every ray counted for a tetrahedron passed through it: none was left held.
+      EXPECT_EQ(r.stream_stats.tets_left_held, 0u);
     }
   }
 }
@@ -328,6 +330,7 @@ void checkDecodedRender(const TetMesh& mesh, RenderOptions o, double held_fracti
         << s.peak_tets_held << " of " << mesh.numTets();
     EXPECT_LE(s.peak_vertices, stats.peak_live_vertices);
     EXPECT_LE(s.lost_cursors, 2u);
+    EXPECT_EQ(s.tets_left_held, 0u);
   }
 }
 
