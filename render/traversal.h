@@ -67,7 +67,8 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
       } else if (hi > seg.tf) {
         if (!have_k) k = firstSampleAtOrAfter(seg.tf, setup.step), have_k = true;
         const int64_t k_hi = firstSampleFrom(k, hi, setup.step);
-        shadeSamples(setup, seg.tf, seg.sf, t_out, x.s, k, k_hi, true, &colour);
+        // About one crossing in three holds no sample: no call for those.
+        if (k_hi > k) shadeSamples(setup, seg.tf, seg.sf, t_out, x.s, k, k_hi, true, &colour);
         k = k_hi;
       }
       zero_steps = t_out == seg.tf ? zero_steps + 1 : 0;
@@ -86,7 +87,7 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
       } else if (seg.tb > lo) {
         if (!have_k) k = firstSampleAtOrAfter(seg.tb, setup.step), have_k = true;
         const int64_t k_lo = firstSampleFrom(k, lo, setup.step);
-        shadeSamples(setup, t_out, x.s, seg.tb, seg.sb, k_lo, k, false, &colour);
+        if (k > k_lo) shadeSamples(setup, t_out, x.s, seg.tb, seg.sb, k_lo, k, false, &colour);
         k = k_lo;
       }
       zero_steps = t_out == seg.tb ? zero_steps + 1 : 0;
