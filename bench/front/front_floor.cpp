@@ -107,8 +107,8 @@ double replay(const std::vector<std::array<uint32_t, 4>>& tets, uint32_t pool, s
   const double t0 = threadSeconds();
   for (const auto& e : tets) {
     if (!queue.empty()) queue.pop_front();
-    for (const auto& fk : kFace) {
-      const uint32_t f[3] = {e[fk[0]], e[fk[1]], e[fk[2]]};
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t f[3] = {e[kFace[k][0]], e[kFace[k][1]], e[kFace[k][2]]};
       uint32_t key[3];
       gtn::FaceMap::sortedKey(f, key);
       const long at = faces.find(key);
@@ -121,7 +121,7 @@ double replay(const std::vector<std::array<uint32_t, 4>>& tets, uint32_t pool, s
       } else {
         gtn::FrontFace g{};
         for (int j = 0; j < 3; ++j) g.v[j] = f[j];
-        g.d = e[&fk - kFace];
+        g.d = e[k];
         g.cell = ~0u;
         faces.insert(g);
         if constexpr (kEdges) {
@@ -215,7 +215,12 @@ int main(int argc, char** argv) {
     const double faces = fastest(5, [&] { return replay<false>(tets, pool, &closed_faces); });
     // Every interior face is closed once, by the second of its two tetrahedra.
     const size_t interior = (4 * tets.size() - enc->header.boundary_triangles) / 2;
-    if (!ok || closed_all != interior || closed_faces != interior) {
+    if (!ok) {
+      std::printf("%-16s a timed decode failed\n", ds.name.c_str());
+      status = 1;
+      continue;
+    }
+    if (closed_all != interior || closed_faces != interior) {
       std::printf("%-16s replay disagrees: %zu and %zu faces closed, %zu interior\n", ds.name.c_str(), closed_all,
                   closed_faces, interior);
       status = 1;
