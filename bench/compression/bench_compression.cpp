@@ -41,6 +41,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "codec/level_check.h"
 #include "codec/level_codec.h"
 #include "convert/import.h"
@@ -95,23 +96,8 @@ void operator delete[](void* p, size_t, std::align_val_t) noexcept { heap::relea
 namespace {
 
 // Thread CPU time: the benchmark machine may be shared, and wall-clock rates would measure the load.
-struct Clock {
-  struct time_point {
-    double s;
-  };
-  static time_point now() {
-    timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return {ts.tv_sec + 1e-9 * ts.tv_nsec};
-  }
-};
-double seconds(Clock::time_point a, Clock::time_point b) { return b.s - a.s; }
-
-struct Dataset {
-  std::string name;
-  std::vector<std::string> inputs;
-  int split = 6;
-};
+using gtn::bench::Dataset;
+using gtn::bench::threadSeconds;
 
 // Size of `data` compressed by a command reading stdin (e.g. "xz -9 -c").
 size_t externalSize(const std::vector<uint8_t>& data, const std::string& command) {
@@ -227,22 +213,7 @@ int main(int argc, char** argv) {
     }
     for (const std::string& arg : args) sets.push_back(namedDataset(arg, split));
   } else {
-    const std::string dir =
-        argc > 1 ? argv[1] : (std::getenv("GTN_DATA_DIR") ? std::getenv("GTN_DATA_DIR") : GTN_DEFAULT_DATA_DIR);
-    sets = {
-        {"bluntfin/5", {dir + "/plot3d/bluntfinxyz.bin", dir + "/plot3d/bluntfinq.bin"}, 5},
-        {"bluntfin/6", {dir + "/plot3d/bluntfinxyz.bin", dir + "/plot3d/bluntfinq.bin"}, 6},
-        {"combustion/5", {dir + "/plot3d/combxyz.bin", dir + "/plot3d/combq.bin"}, 5},
-        {"combustion/6", {dir + "/plot3d/combxyz.bin", dir + "/plot3d/combq.bin"}, 6},
-        {"spx", {dir + "/vtk/spx.vtk"}, 6},
-        {"cornell_spheres", {dir + "/tetgen/cornell_spheres.1.ele"}, 6},
-        {"cornellbox_orig", {dir + "/tetgen/cornellbox_orig.1.ele"}, 6},
-        {"bunny", {dir + "/medit/bunny.mesh"}, 6},
-        {"lv_guccione", {dir + "/vtu/lv_guccione.vtu"}, 6},
-        {"raptorTetra", {dir + "/vtu/raptorTetra_19409.vtu"}, 6},
-        {"Ossicles", {dir + "/vtu/Ossicles.vtu"}, 6},
-        {"fire_ug/6", {dir + "/vtu/fire_ug.vtu"}, 6},
-    };
+    sets = gtn::bench::sharedDatasets(gtn::bench::dataDir(argc > 1 ? argv[1] : nullptr, GTN_DEFAULT_DATA_DIR));
     if (argc > 2) filter = argv[2];
     skip_baselines = argc > 3 && std::string(argv[3]) == "--no-baselines";
   }
@@ -280,13 +251,13 @@ int main(int argc, char** argv) {
 
     // Encode, repeated: the fastest run counts (other processes only ever slow a run down).
     int reps = 0;
-    auto t0 = Clock::now();
+    double t0 = threadSeconds();
     gtn::StatusOr<gtn::EncodedLevel> enc = gtn::encodeLevel(m, gtn::EncodeOptions{});
-    double enc_s = seconds(t0, Clock::now()), spent = enc_s;
+    double enc_s = threadSeconds() - t0, spent = enc_s;
     while (enc.isOk() && (spent < 0.6 || reps < 3) && reps < 50) {
-      t0 = Clock::now();
+      t0 = threadSeconds();
       enc = gtn::encodeLevel(m, gtn::EncodeOptions{});
-      const double s = seconds(t0, Clock::now());
+      const double s = threadSeconds() - t0;
       enc_s = std::min(enc_s, s);
       spent += s;
       ++reps;
@@ -305,9 +276,9 @@ int main(int argc, char** argv) {
     do {
       gtn::CountingSink sink;
       const size_t heap_base = heap::resetPeak();
-      t0 = Clock::now();
+      t0 = threadSeconds();
       const gtn::Status st = gtn::decodeLevel(e.header, pl, sink, &stats, d.name);
-      const double s = seconds(t0, Clock::now());
+      const double s = threadSeconds() - t0;
       heap_peak = std::max(heap_peak, heap::peak.load() - heap_base);
       if (!st.isOk()) {
         fail("decode", st.message());

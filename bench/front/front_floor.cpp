@@ -2,11 +2,11 @@
 //
 //   build/bench-front [DATA_DIR [DATASET_SUBSTRING]]
 //
-// For each dataset the level is encoded, then decoded (the fastest of several runs, thread CPU time,
-// into a sink that only counts: the decoder's own rate, as bench-compression's "dec" column). The
-// decode's events are recorded once, and the front's bookkeeping is replayed from them with the
-// decoder's own containers (codec/flat_maps.h), vertices in slots reused last-freed-first as the
-// decoder's pool does: per tetrahedron, its four faces looked up by sorted key, each open one closed
+// For each dataset of the shared data directory the level is encoded, then decoded (the fastest of
+// several runs, thread CPU time, into a sink that only counts: the decoder's own rate, as
+// bench-compression's "dec" column). One more decode gives the tetrahedra in stream order over
+// slots (reused last-freed-first, as the decoder's pool is), and the front's bookkeeping is
+// replayed from them with the decoder's own containers (codec/flat_maps.h): per tetrahedron, its four faces looked up by sorted key, each open one closed
 // (erased with its three edges) and each other one opened (inserted, its edges put, its key queued),
 // and one queued key taken. No symbol is decoded, no candidate gathered, no value predicted. Two
 // replays: the face map, the edge map and the queue together (what the decoder keeps), and the
@@ -16,85 +16,57 @@
 // The figures bound what the format's connectivity design allows: a decoder cannot be faster than
 // its bookkeeping. Issue 4 asks for 5 million tetrahedra per second (200 ns a tetrahedron), geometry
 // and fields included.
-#include <time.h>
-
 #include <algorithm>
 #include <array>
 #include <cstdio>
-#include <cstdlib>
-#include <filesystem>
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "codec/flat_maps.h"
 #include "codec/level_codec.h"
 #include "convert/import.h"
+#include "mesh/faces.h"
 
 namespace {
 
-double threadSeconds() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+using gtn::bench::threadSeconds;
 
-// The decode's events as the replay needs them: +1 + id for a vertex, -1 - id for its retirement,
-// and each tetrahedron as its four ids (kTet marks one in `events`, its ids in `tets`).
-struct Recording : gtn::MeshSink {
-  static constexpr int64_t kTet = INT64_MIN;
-  std::vector<int64_t> events;
+// The decoded tetrahedra, in stream order, over slots instead of vertex ids: a vertex takes the
+// last freed slot, or a new one, and frees it when the stream retires it.
+struct SlotSink : gtn::MeshSink {
   std::vector<std::array<uint32_t, 4>> tets;
-  gtn::Status beginLevel(const gtn::LevelHeader&) override { return gtn::Status::ok(); }
+  uint32_t pool = 0;  // slots ever used
+  gtn::Status beginLevel(const gtn::LevelHeader& h) override {
+    slot_.assign(h.points, 0);
+    return gtn::Status::ok();
+  }
   gtn::Status vertex(uint32_t id, const double*, const uint8_t*) override {
-    events.push_back(1 + int64_t{id});
+    uint32_t s = pool;
+    if (free_.empty()) {
+      ++pool;
+    } else {
+      s = free_.back();
+      free_.pop_back();
+    }
+    slot_[id] = s;
     return gtn::Status::ok();
   }
   gtn::Status boundaryTriangle(const uint32_t*) override { return gtn::Status::ok(); }
   gtn::Status endBoundary() override { return gtn::Status::ok(); }
   gtn::Status tet(const uint32_t* v, const uint8_t*) override {
-    events.push_back(kTet);
-    tets.push_back({v[0], v[1], v[2], v[3]});
+    tets.push_back({slot_[v[0]], slot_[v[1]], slot_[v[2]], slot_[v[3]]});
     return gtn::Status::ok();
   }
   gtn::Status retireVertex(uint32_t id) override {
-    events.push_back(-1 - int64_t{id});
+    free_.push_back(slot_[id]);
     return gtn::Status::ok();
   }
   gtn::Status endLevel() override { return gtn::Status::ok(); }
+
+ private:
+  std::vector<uint32_t> slot_, free_;
 };
-
-// The recording with every vertex id replaced by its slot (a pool that reuses the last freed slot
-// first, as the decoder's does): the tetrahedra in order, over slots.
-std::vector<std::array<uint32_t, 4>> slotTets(const Recording& r, size_t points, uint32_t* pool) {
-  std::vector<uint32_t> slot(points, 0), free;
-  std::vector<std::array<uint32_t, 4>> out;
-  out.reserve(r.tets.size());
-  uint32_t next = 0;
-  size_t t = 0;
-  for (const int64_t e : r.events) {
-    if (e == Recording::kTet) {
-      const auto& v = r.tets[t++];
-      out.push_back({slot[v[0]], slot[v[1]], slot[v[2]], slot[v[3]]});
-    } else if (e > 0) {
-      uint32_t s = next;
-      if (!free.empty()) {
-        s = free.back();
-        free.pop_back();
-      } else {
-        ++next;
-      }
-      slot[static_cast<size_t>(e - 1)] = s;
-    } else {
-      free.push_back(slot[static_cast<size_t>(-1 - e)]);
-    }
-  }
-  *pool = next;
-  return out;
-}
-
-// A tetrahedron's faces, each with its vertices in the order that keeps the fourth vertex behind it
-// (the codec's kTetFace).
-constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 // One replay of the bookkeeping; returns its thread CPU seconds. `closed`: faces found open.
 template <bool kEdges>
@@ -108,7 +80,7 @@ double replay(const std::vector<std::array<uint32_t, 4>>& tets, uint32_t pool, s
   for (const auto& e : tets) {
     if (!queue.empty()) queue.pop_front();
     for (int k = 0; k < 4; ++k) {
-      const uint32_t f[3] = {e[kFace[k][0]], e[kFace[k][1]], e[kFace[k][2]]};
+      const uint32_t f[3] = {e[gtn::kTetFace[k][0]], e[gtn::kTetFace[k][1]], e[gtn::kTetFace[k][2]]};
       uint32_t key[3];
       gtn::FaceMap::sortedKey(f, key);
       const long at = faces.find(key);
@@ -148,36 +120,16 @@ double fastest(int runs, F f) {
   return best;
 }
 
-struct Dataset {
-  std::string name;
-  std::vector<std::string> inputs;
-  int split = 6;
-};
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string dir = argc > 1 ? argv[1] : "";
-  if (dir.empty()) {
-    const char* env = std::getenv("GTN_DATA_DIR");
-    dir = env && *env ? env : GTN_DEFAULT_DATA_DIR;
-  }
+  const std::string dir = gtn::bench::dataDir(argc > 1 ? argv[1] : nullptr, GTN_DEFAULT_DATA_DIR);
   const std::string filter = argc > 2 ? argv[2] : "";
-  const std::filesystem::path d(dir);
-  const std::vector<Dataset> all = {
-      {"bluntfin/5", {(d / "plot3d/bluntfinxyz.bin").string(), (d / "plot3d/bluntfinq.bin").string()}, 5},
-      {"bluntfin/6", {(d / "plot3d/bluntfinxyz.bin").string(), (d / "plot3d/bluntfinq.bin").string()}, 6},
-      {"combustion/5", {(d / "plot3d/combxyz.bin").string(), (d / "plot3d/combq.bin").string()}, 5},
-      {"combustion/6", {(d / "plot3d/combxyz.bin").string(), (d / "plot3d/combq.bin").string()}, 6},
-      {"spx", {(d / "vtk/spx.vtk").string()}},
-      {"bunny", {(d / "medit/bunny.mesh").string()}},
-      {"cornell_spheres", {(d / "tetgen/cornell_spheres.1.ele").string()}},
-  };
   std::printf("ns per tetrahedron (thread CPU time, fastest run); Mt/s = million tetrahedra per second\n");
   std::printf("%-16s %8s | %8s %6s | %10s %6s %6s | %10s %6s %6s\n", "dataset", "tets", "decode", "Mt/s",
               "faces+edg", "Mt/s", "share", "faces", "Mt/s", "share");
   int status = 0;
-  for (const Dataset& ds : all) {
+  for (const gtn::bench::Dataset& ds : gtn::bench::sharedDatasets(dir)) {
     if (!filter.empty() && ds.name.find(filter) == std::string::npos) continue;
     gtn::ImportOptions io;
     io.split = ds.split;
@@ -195,8 +147,8 @@ int main(int argc, char** argv) {
       continue;
     }
     const gtn::LevelPayload pl = gtn::payloadOf(*enc);
-    Recording rec;
-    if (const gtn::Status st = gtn::decodeLevel(enc->header, pl, rec, nullptr, ds.name); !st.isOk()) {
+    SlotSink slots;
+    if (const gtn::Status st = gtn::decodeLevel(enc->header, pl, slots, nullptr, ds.name); !st.isOk()) {
       std::printf("%-16s decode failed: %s\n", ds.name.c_str(), st.message().c_str());
       status = 1;
       continue;
@@ -208,11 +160,10 @@ int main(int argc, char** argv) {
       ok &= gtn::decodeLevel(enc->header, pl, sink, nullptr, ds.name).isOk();
       return threadSeconds() - t0;
     });
-    uint32_t pool = 0;
-    const auto tets = slotTets(rec, m.numPoints(), &pool);
+    const auto& tets = slots.tets;
     size_t closed_all = 0, closed_faces = 0;
-    const double both = fastest(5, [&] { return replay<true>(tets, pool, &closed_all); });
-    const double faces = fastest(5, [&] { return replay<false>(tets, pool, &closed_faces); });
+    const double both = fastest(5, [&] { return replay<true>(tets, slots.pool, &closed_all); });
+    const double faces = fastest(5, [&] { return replay<false>(tets, slots.pool, &closed_faces); });
     // Every interior face is closed once, by the second of its two tetrahedra.
     const size_t interior = (4 * tets.size() - enc->header.boundary_triangles) / 2;
     if (!ok) {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "codec/level_codec.h"
 #include "codec/merge_tree_coder.h"
 #include "convert/import.h"
@@ -110,12 +111,7 @@ class RecordingSink : public MeshSink {
   std::vector<uint8_t> values_, cells;
 };
 
-// CPU time of this thread: what the decode costs, not what other processes on the machine take.
-double threadSeconds() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
+using gtn::bench::threadSeconds;
 
 // Total volume and total mass (density = the ranking's field, 1 without one).
 void volumeMass(const TetMesh& m, const std::string& field, double* volume, double* mass) {
