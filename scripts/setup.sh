@@ -9,7 +9,8 @@ packages=(
   libcgal-dev libopenmesh-dev tetgen libzstd-dev zstd xz-utils libcli11-dev nlohmann-json3-dev
   libxxhash-dev libpng-dev libtbb-dev libpugixml-dev zlib1g-dev liblz4-dev liblzma-dev
   libgtest-dev libgmock-dev libbenchmark-dev libfpzip-dev
-  python3 python3-numpy python3-vtk9 python3-meshio xvfb gnuplot-nox
+  python3 python3-numpy python3-vtk9 python3-meshio xvfb xauth gnuplot-nox
+  libexodusii-dev gmsh
 )
 missing=()
 for p in "${packages[@]}"; do
