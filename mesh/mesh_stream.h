@@ -1,4 +1,4 @@
-// The mesh stream (ARCHITECTURE.md): the one event sequence the decoder produces and the simplifier,
+// The mesh stream (docs/design.md): the one event sequence the decoder produces and the simplifier,
 // the renderer and the in-memory builder consume, so that each piece of data passes through memory
 // once. Order of events for one level:
 //   beginLevel, then vertex/boundaryTriangle events for the boundary surface (each triangle after its

@@ -24,7 +24,7 @@ int orient3d(const double* a, const double* b, const double* c, const double* d)
   // The filter decides the common case without leaving the function.
   if (const int sign = orient3dCertain(a, b, c, d)) return sign;
   // CGAL::orientation(p, q, r, s) is POSITIVE when s lies on the positive side of (p, q, r), that is
-  // when det[q - p, r - p, s - p] > 0, the convention of ARCHITECTURE.md.
+  // when det[q - p, r - p, s - p] > 0, the convention of docs/design.md.
   return toInt(CGAL::orientation(Point3(a[0], a[1], a[2]), Point3(b[0], b[1], b[2]), Point3(c[0], c[1], c[2]),
                                  Point3(d[0], d[1], d[2])));
 }

@@ -17,7 +17,7 @@ enum class StatusCode {
   kIo,             // a file could not be opened, read or written (exit 3)
 };
 
-// Process exit code the CLI uses for a status code (ARCHITECTURE.md: 0, 1 invalid, 2 usage, 3 I/O).
+// Process exit code the CLI uses for a status code (docs/design.md: 0, 1 invalid, 2 usage, 3 I/O).
 int exitCodeFor(StatusCode code);
 
 class [[nodiscard]] Status {
