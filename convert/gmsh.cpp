@@ -8,7 +8,8 @@
 // quadrangles) are skipped with a warning counting them by type, and so are their $ElementData values.
 // Cell fields, as meshio names them: "gmsh:physical" (the element's physical group: its first tag in
 // MSH 2, its entity's first physical tag in MSH 4.1; 0 for none) and "gmsh:geometrical" (its
-// elementary entity). $NodeData and $ElementData become point and cell fields (float64, their
+// elementary entity). MSH 2 lists an element once per physical group it belongs to: the repetitions
+// (same type and nodes) are read once, in the first group, with a warning. $NodeData and $ElementData become point and cell fields (float64, their
 // number of components) named by their first string tag; of several time steps of one name, the
 // last (the largest time step index) is read, the sections of that step (partitions) together, and a
 // warning says so. $ElementNodeData and other sections are skipped with a warning naming them. Names
@@ -22,6 +23,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -303,6 +305,7 @@ class MshReader {
   Status readData(const std::string& section);
   Status addElement(int64_t tag, const GmshType& type, const int64_t* nodes, int32_t physical, int32_t geometrical,
                     size_t at);
+  void dropRepeatedElements();
   Status buildFields(ImportResult* result, std::vector<Field>* cell_fields);
 
   std::string path_;
@@ -330,6 +333,7 @@ class MshReader {
   std::vector<DataSection> data_;
   std::vector<std::string> unread_sections_;
   size_t element_node_data_ = 0;
+  size_t repeated_ = 0;
 };
 
 Status MshReader::readFormat() {
@@ -604,6 +608,57 @@ Status MshReader::readElements() {
   return expectEnd("Elements");
 }
 
+// MSH 2 has no entities: gmsh writes an element that belongs to several physical groups once per
+// group (same type, same nodes, another tag). The repetitions go; gmsh:physical keeps the first group.
+void MshReader::dropRepeatedElements() {
+  const size_t n = cells_.types.size();
+  auto nodesOf = [&](uint32_t c) {
+    return std::span<const int64_t>(cells_.connectivity.data() + cells_.offsets[c],
+                                    static_cast<size_t>(cells_.offsets[c + 1] - cells_.offsets[c]));
+  };
+  auto same = [&](uint32_t a, uint32_t b) {
+    return cells_.types[a] == cells_.types[b] && std::ranges::equal(nodesOf(a), nodesOf(b));
+  };
+  // Cells ordered by type and nodes, then by index: repetitions follow their first occurrence.
+  std::vector<uint32_t> order(n);
+  for (size_t c = 0; c < n; ++c) order[c] = static_cast<uint32_t>(c);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    if (cells_.types[a] != cells_.types[b]) return cells_.types[a] < cells_.types[b];
+    const std::span<const int64_t> x = nodesOf(a), y = nodesOf(b);
+    if (std::ranges::lexicographical_compare(x, y)) return true;
+    if (std::ranges::lexicographical_compare(y, x)) return false;
+    return a < b;
+  });
+  std::vector<uint32_t> keep_as(n);  // each cell's first occurrence
+  for (size_t i = 0; i < n; ++i)
+    keep_as[order[i]] = i > 0 && same(order[i - 1], order[i]) ? keep_as[order[i - 1]] : order[i];
+  std::vector<uint32_t> new_index(n);
+  VtkCells kept;
+  kept.types.reserve(n);
+  size_t out = 0;
+  for (size_t c = 0; c < n; ++c) {
+    if (keep_as[c] != c) {
+      new_index[c] = new_index[keep_as[c]];
+      continue;
+    }
+    new_index[c] = static_cast<uint32_t>(out);
+    kept.types.push_back(cells_.types[c]);
+    kept.connectivity.insert(kept.connectivity.end(), cells_.connectivity.begin() + cells_.offsets[c],
+                             cells_.connectivity.begin() + cells_.offsets[c + 1]);
+    kept.offsets.push_back(static_cast<int64_t>(kept.connectivity.size()));
+    physical_[out] = physical_[c];
+    geometrical_[out] = geometrical_[c];
+    ++out;
+  }
+  repeated_ = n - out;
+  if (repeated_ == 0) return;
+  cells_ = std::move(kept);
+  physical_.resize(out);
+  geometrical_.resize(out);
+  for (uint32_t& c : element_cell_)
+    if (c != TagMap::kNone) c = new_index[c];
+}
+
 Status MshReader::readData(const std::string& section) {
   const size_t section_at = token_at_;
   DataSection data;
@@ -761,6 +816,7 @@ StatusOr<ImportResult> MshReader::read(const ImportOptions& options) {
       GTN_RETURN_IF_ERROR(readNodes());
     } else if (section == "Elements") {
       GTN_RETURN_IF_ERROR(readElements());
+      if (version_ == 2) dropRepeatedElements();
     } else if (section == "NodeData" || section == "ElementData" || section == "ElementNodeData") {
       GTN_RETURN_IF_ERROR(readData(section));
     } else {
@@ -815,6 +871,10 @@ StatusOr<ImportResult> MshReader::read(const ImportOptions& options) {
     warnings.push_back(std::to_string(total) + " higher-order elements (" + typeCounts(higher_order_) +
                        ") reduced to their corners; their other nodes are kept as unreferenced points");
   }
+  if (repeated_ > 0)
+    warnings.push_back(std::to_string(repeated_) +
+                       " volume elements repeated with the same nodes (MSH 2 lists an element once per physical "
+                       "group) read once; gmsh:physical holds the first group of each");
   if (multi_physical_ > 0)
     warnings.push_back(std::to_string(multi_physical_) +
                        " volume entities belong to several physical groups; gmsh:physical holds the first of each");

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "convert/import.h"
@@ -301,6 +302,42 @@ TEST(GmshImport, RecombinedHexahedraAndPrisms) {
     ASSERT_EQ(c.exit_code, 0) << c.err;
     const auto val = runGtn("validate '" + path + ".gtn'");
     EXPECT_EQ(val.exit_code, 0) << val.out << val.err;
+  }
+}
+
+// A volume in two physical groups: MSH 2.2 lists each of its elements twice (once per group), MSH
+// 4.1 gives its entity two physical tags. Either way each element is read once, in the first group.
+TEST(GmshImport, VolumeInTwoPhysicalGroups) {
+  std::string why;
+  if (!gmshAvailable(&why)) GTEST_SKIP() << why;
+  const std::string dir = tempDir("gmsh_two_groups");
+  const std::string geo = dir + "/two.geo";
+  writeFile(geo, "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1, 1};\nMesh.MeshSizeMax = 0.5;\n"
+                 "Physical Volume(\"a\", 1) = {1};\nPhysical Volume(\"b\", 2) = {1};\n");
+  size_t tets = 0;
+  for (const auto& v : kVariants) {
+    const std::string path = dir + "/two_" + v[0] + v[1] + ".msh";
+    const auto g = runShell("gmsh -3 -format " + std::string(v[0]) + " " + v[1] + " '" + geo + "' -o '" + path + "'");
+    ASSERT_EQ(g.exit_code, 0) << g.out << g.err;
+    SCOPED_TRACE(path);
+    auto r = importMesh({path}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const TetMesh& m = r->mesh;
+    if (tets == 0) tets = m.numTets();
+    EXPECT_EQ(m.numTets(), tets);
+    std::set<Tet> distinct;
+    for (Tet t : m.tets) {
+      std::sort(t.begin(), t.end());
+      distinct.insert(t);
+    }
+    EXPECT_EQ(distinct.size(), m.numTets());
+    const Field* physical = findField(m.cell_fields, "gmsh:physical");
+    ASSERT_NE(physical, nullptr);
+    for (size_t t = 0; t < m.numTets(); ++t) ASSERT_EQ(physical->data<int32_t>()[t], 1);
+    EXPECT_TRUE(hasWarning(r->report, std::string(v[0]) == "msh22"
+                                          ? std::to_string(tets) + " volume elements repeated with the same nodes"
+                                          : "1 volume entities belong to several physical groups"))
+        << allWarnings(r->report);
   }
 }
 
