@@ -520,7 +520,7 @@ Status MshReader::readElements() {
     return type;
   };
   if (version_ == 2) {
-    GTN_ASSIGN_OR_RETURN(const int64_t n, textCount("element count", binary_ ? 12 : 8));
+    GTN_ASSIGN_OR_RETURN(const int64_t n, textCount("element count", 8));
     if (binary_) skipLineEnd();
     element_map_.tags.reserve(static_cast<size_t>(n));
     int64_t done = 0;
