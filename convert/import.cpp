@@ -44,6 +44,7 @@ const char* inputFormatName(InputFormat f) {
     case InputFormat::kMeshb: return "Medit binary (.meshb)";
     case InputFormat::kOff: return "tetrahedral OFF";
     case InputFormat::kGtn: return ".gtn";
+    case InputFormat::kGmsh: return "gmsh (.msh)";
     default: return "unknown";
   }
 }
@@ -58,6 +59,7 @@ InputFormat detectInputFormat(const std::string& path) {
   if (ext == "vtu" || ext == "vts" || ext == "vtr" || ext == "vti" || ext == "pvtu" || ext == "pvts" || ext == "pvtr" ||
       ext == "pvti" || h.find("<VTKFile") != std::string::npos)
     return InputFormat::kVtu;
+  if (ext == "msh" || h.rfind("$MeshFormat", 0) == 0) return InputFormat::kGmsh;
   if (ext == "meshb") return InputFormat::kMeshb;
   if (ext == "mesh" || h.find("MeshVersionFormatted") != std::string::npos) return InputFormat::kMedit;
   if (ext == "off" || ext == "toff") return InputFormat::kOff;
@@ -228,10 +230,11 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
     case InputFormat::kMeshb: result = importMeshb(path, opts); break;
     case InputFormat::kOff: result = importOff(path, opts); break;
     case InputFormat::kGtn: result = importGtn(path); break;
+    case InputFormat::kGmsh: result = importGmsh(path, opts); break;
     default:
       return Status(StatusCode::kNotOurFile,
                     path + ": cannot tell its format from the extension or content (known: PLOT3D .xyz/.q/.bin/.p3d, "
-                           "TetGen .node/.ele, VTK .vtk/.vtu/.vts/.vtr/.vti and parallel .pvtu/.pvts/.pvtr/.pvti, Medit .mesh/.meshb, tetrahedral .off)");
+                           "TetGen .node/.ele, VTK .vtk/.vtu/.vts/.vtr/.vti and parallel .pvtu/.pvts/.pvtr/.pvti, Medit .mesh/.meshb, tetrahedral .off, gmsh .msh)");
   }
   if (result.isOk() && (first == InputFormat::kMedit || first == InputFormat::kMeshb) && opts.medit_solutions.empty()) {
     // Medit and MMG load u.sol or u.solb beside u.mesh by themselves; say so rather than guess.

@@ -17,7 +17,7 @@ struct ImportOptions {
   std::vector<std::string> medit_solutions;
 };
 
-enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kMeshb, kOff, kGtn };
+enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kMeshb, kOff, kGtn, kGmsh };
 const char* inputFormatName(InputFormat f);
 
 // Format of one input path from its extension and first bytes.
@@ -36,6 +36,7 @@ StatusOr<ImportResult> importVtu(const std::string& path, const ImportOptions& o
 StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions& options);
 StatusOr<ImportResult> importMeshb(const std::string& path, const ImportOptions& options);
 StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions& options);
+StatusOr<ImportResult> importGmsh(const std::string& path, const ImportOptions& options);
 
 // Normalises orientation after an importer built `result.mesh`: flips negative tetrahedra, counts
 // flips and zero-volume cells into the report.

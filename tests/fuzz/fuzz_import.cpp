@@ -2,8 +2,9 @@
 // extension); for TetGen and PLOT3D the rest is cut at its first 0xFF byte into two files (.node and
 // .ele, grid and Q file). Whatever the bytes, an import must end in a mesh or a clear error: no crash,
 // hang or runaway allocation (run with -rss_limit_mb and -timeout). First bytes 0xF7 and 0xF8 make the
-// rest a Medit solution file (.sol, .solb) for a fixed mesh of two tetrahedra. The .p3d meta-file is
-// left out: it names other files, and the fuzzer would be reading whatever paths it makes up.
+// rest a Medit solution file (.sol, .solb) for a fixed mesh of two tetrahedra; 0xF6 makes it a gmsh
+// .msh file. The .p3d meta-file is left out: it names other files, and the fuzzer would be reading
+// whatever paths it makes up.
 #include <unistd.h>
 
 #include <cstdio>
@@ -50,7 +51,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;
   }
   static const char* const kExtensions[] = {"vtk", "vtu", "mesh", "meshb", "off", "node", "xyz"};
-  const std::string ext = kExtensions[data[0] % (sizeof kExtensions / sizeof kExtensions[0])];
+  const std::string ext =
+      data[0] == 0xF6 ? "msh" : kExtensions[data[0] % (sizeof kExtensions / sizeof kExtensions[0])];
   const uint8_t* body = data + 1;
   const size_t n = size - 1;
   const std::string base = scratch() + "/in";
