@@ -133,13 +133,24 @@ inline FlatTorus makeFlatTorus(uint32_t seed, bool with_flats = true, int nu = 2
       if (a[0] == b[r] && a[1] == b[(r + 1) % 3] && a[2] == b[(r + 2) % 3]) return true;
     return false;
   };
-  for (Tet& t : flats) {
-    for (int f = 0; f < 4; ++f) {
-      const std::array<uint32_t, 3> tri = {t[kTetFace[f][0]], t[kTetFace[f][1]], t[kTetFace[f][2]]};
-      const auto it = listed.find(key(tri[0], tri[1], tri[2]));
-      if (it == listed.end()) continue;
-      if (sameCycle(tri, it->second)) std::swap(t[2], t[3]);
-      break;
+  // Passes until every flat one is oriented: one whose faces are all flat ones' or on the boundary
+  // (a boundary quad over triangles both split) follows the flat ones oriented before it.
+  std::vector<char> oriented(flats.size(), 0);
+  for (bool progress = true; progress;) {
+    progress = false;
+    for (size_t i = 0; i < flats.size(); ++i) {
+      Tet& t = flats[i];
+      for (int f = 0; f < 4 && !oriented[i]; ++f) {
+        const std::array<uint32_t, 3> tri = {t[kTetFace[f][0]], t[kTetFace[f][1]], t[kTetFace[f][2]]};
+        const auto it = listed.find(key(tri[0], tri[1], tri[2]));
+        if (it == listed.end()) continue;
+        if (sameCycle(tri, it->second)) std::swap(t[2], t[3]);
+        oriented[i] = progress = true;
+        for (int g = 0; g < 4; ++g) {
+          const std::array<uint32_t, 3> own = {t[kTetFace[g][0]], t[kTetFace[g][1]], t[kTetFace[g][2]]};
+          listed.emplace(key(own[0], own[1], own[2]), own);
+        }
+      }
     }
   }
   // How many flat tetrahedra have a face that no other tetrahedron has.

@@ -7,6 +7,7 @@
 #include "convert/export.h"
 #include "flat_mesh.h"
 #include "format/gtn_file.h"
+#include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
 #include "test_util.h"
 
@@ -28,7 +29,7 @@ nlohmann::json renderJson(const std::string& input, const std::string& png, cons
 }
 
 TEST(FlatTorus, HasFlatTetrahedraInsideAndOnTheBoundary) {
-  for (uint32_t seed : {1u, 2u, 3u}) {
+  for (uint32_t seed = 1; seed <= 8; ++seed) {
     const test::FlatTorus t = test::makeFlatTorus(seed);
     const TetMesh& m = t.mesh;
     EXPECT_TRUE(m.checkConsistency("torus").isOk());
@@ -52,6 +53,32 @@ TEST(FlatTorus, HasFlatTetrahedraInsideAndOnTheBoundary) {
         std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
         EXPECT_EQ(++uses[tri], 1) << seed << ": a face listed twice in the same orientation";
       }
+  }
+}
+
+// orientFlatTets puts back the orientation a mesher gave: listed the other way, half the flat
+// tetrahedra are swapped back, and nothing else changes.
+TEST(FlatTorus, OrientFlatTetsMatchesTheNeighbours) {
+  const test::FlatTorus made = test::makeFlatTorus(6);
+  TetMesh m = made.mesh;
+  EXPECT_EQ(orientFlatTets(m), 0u);
+  EXPECT_EQ(m.tets, made.mesh.tets);
+  size_t flat = 0, swapped = 0;
+  for (Tet& t : m.tets)
+    if (orient3d(m.point(t[0]), m.point(t[1]), m.point(t[2]), m.point(t[3])) == 0 && flat++ % 2 == 0)
+      std::swap(t[1], t[2]), ++swapped;
+  ASSERT_GT(swapped, 20u);
+  EXPECT_EQ(orientFlatTets(m), swapped);
+  // The same orientation: each flat tetrahedron lists its corners as made, up to an even permutation.
+  for (size_t i = 0; i < m.tets.size(); ++i) {
+    Tet a = m.tets[i], b = made.mesh.tets[i];
+    int parity = 0;
+    for (int x = 0; x < 4; ++x)
+      for (int y = x + 1; y < 4; ++y) parity += (a[x] > a[y]) + (b[x] > b[y]);
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    EXPECT_EQ(a, b) << i;
+    EXPECT_EQ(parity % 2, 0) << i;
   }
 }
 
@@ -158,7 +185,10 @@ TEST(RenderFlat, NoRayIsLostOnTheSharedDatasets) {
   const std::string dir = test::tempDir("render-lost");
   const std::vector<std::string> inputs = {
       test::dataPath("vtk/spx.vtk"), test::dataPath("tetgen/cornell_spheres.1"), test::dataPath("medit/bunny.mesh"),
-      test::dataPath("plot3d/bluntfinxyz.bin") + " " + test::dataPath("plot3d/bluntfinq.bin")};
+      test::dataPath("plot3d/bluntfinxyz.bin") + " " + test::dataPath("plot3d/bluntfinq.bin"),
+      test::dataPath("plot3d/combxyz.bin") + " " + test::dataPath("plot3d/combq.bin"),
+      test::dataPath("tetgen/cornellbox_orig.1"), test::dataPath("vtu/Ossicles.vtu"), test::dataPath("vtu/fire_ug.vtu"),
+      test::dataPath("vtu/lv_guccione.vtu"), test::dataPath("vtu/raptorTetra_19409.vtu")};
   for (const std::string& input : inputs)
     for (const std::string pipeline : {"integrated", "generic"})
       for (const std::string sampling : {"volume", "face"}) {
