@@ -134,9 +134,11 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
   const std::string cache_file = cachePath();
   const bool cached = options.use_cache && cacheable(path);
   nlohmann::json cache = nlohmann::json::object();
-  if (auto text = readWholeFile(cache_file, 1 << 24); cached && text.isOk()) {
-    cache = nlohmann::json::parse(text.value(), nullptr, false);
-    if (!cache.is_object()) cache = nlohmann::json::object();
+  if (cached) {
+    if (auto text = readWholeFile(cache_file, 1 << 24); text.isOk()) {
+      cache = nlohmann::json::parse(text.value(), nullptr, false);
+      if (!cache.is_object()) cache = nlohmann::json::object();
+    }
   }
   // Measured (tetrahedra, ms) points, sorted by tetrahedra: whole runs, and decoding alone.
   std::vector<std::pair<double, double>> points, decode_points;
