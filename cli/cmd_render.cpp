@@ -36,7 +36,7 @@ struct RenderArgs {
   int64_t merges = -1;
   double budget_ms = -1;
   std::string dump_view;
-  bool verbose = false, json = false;
+  bool verbose = false, json = false, no_cache = false;
 };
 
 // Whether two outputs, neither of which need exist yet, name one file ("x.png" and "./x.png").
@@ -82,6 +82,7 @@ Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   if (a.step < 0 || a.unit_distance < 0) return usageError("--step and --opacity-unit-distance must be positive");
   o->step = a.step;
   o->opacity_unit_distance = a.unit_distance;
+  o->use_cache = !a.no_cache;
   GTN_ASSIGN_OR_RETURN(o->field, parseFieldSelector(a.field));
   if (isRegularFile(a.transfer)) {
     GTN_ASSIGN_OR_RETURN(std::string text, readWholeFile(a.transfer, 1 << 20));
@@ -150,6 +151,7 @@ StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const Rende
     report["tets_rendered"] = stats.tets;
     report["segments"] = stats.segments;
     report["lost_cursors"] = stats.lost_cursors;
+    report["lost_rays"] = stats.lost_rays;
     report["view"] = describeSetup(stats.setup);
     return image;
   }
@@ -163,6 +165,7 @@ StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const Rende
   report["peak_face_entries"] = s.peak_face_entries;
   report["segments"] = s.segments;
   report["lost_cursors"] = s.lost_cursors;
+  report["lost_rays"] = s.lost_rays;
   report["tets_left_held"] = s.tets_left_held;
   report["view"] = describeSetup(renderer.setup());
   return renderer.image();
@@ -197,17 +200,19 @@ int runRender(const RenderArgs& a) {
   choice.ratio = a.ratio;
   choice.merges = a.merges;
   if (a.budget_ms >= 0) {
-    std::string explanation;
+    std::string explanation, shortfall;
     budget_start_ms = msSince(start);
-    auto budget =
-        chooseForBudget(**input, a.inputs[0], a.budget_ms, options, generic, budget_start_ms, &explanation, &predicted_ms);
+    auto budget = chooseForBudget(**input, a.inputs[0], a.budget_ms, options, generic, budget_start_ms, &explanation,
+                                  &predicted_ms, &shortfall);
     if (!budget.isOk()) return reportError(budget.status());
     choice = budget.value();
     report["budget_ms"] = a.budget_ms;
     report["budget_choice"] = explanation;
+    report["budget_met"] = shortfall.empty();  // as predicted
     calibrated_now = explanation.rfind("calibrated", 0) == 0;
     budget_start_ms = msSince(start);  // the rest of the run is what was predicted
     if (a.verbose) std::fprintf(stderr, "gtn: render: %s\n", explanation.c_str());
+    if (!shortfall.empty()) warn(a.inputs[0] + ": " + shortfall);
   }
   auto level = (*input)->resolve(choice);
   if (!level.isOk()) return reportError(level.status());
@@ -306,6 +311,8 @@ Command addRenderCommand(CLI::App& app) {
       ->check(finiteAtLeastZero(true));
   sub->add_option("--dump-view", a->dump_view,
                   "write the camera and transfer function used (vtkCamera / vtkVolumeProperty terms) as JSON");
+  sub->add_flag("--no-cache", a->no_cache,
+                "neither read nor write the render cache ($XDG_CACHE_HOME/gatun: budget calibrations, colour ranges)");
   sub->add_flag("-v,--verbose", a->verbose, "say what was chosen and how long it took");
   sub->add_flag("--json", a->json, "write a JSON report to standard output");
   return {sub, [a] { return runRender(*a); }};

@@ -104,6 +104,9 @@ void finishImport(ImportResult& result) {
   size_t zero = 0;
   result.report.flipped += normalizeOrientation(result.mesh, &zero);
   result.report.zero_volume = zero;
+  if (const size_t turned = zero ? orientFlatTets(result.mesh) : 0)
+    result.report.warnings.push_back(std::to_string(turned) +
+                                     " tetrahedra of zero volume reoriented to agree with their neighbours");
 }
 
 void weldPoints(TetMesh& mesh, ImportReport& report) {

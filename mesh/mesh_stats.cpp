@@ -109,4 +109,49 @@ size_t normalizeOrientation(TetMesh& mesh, size_t* zero_volume) {
   return flipped;
 }
 
+size_t orientFlatTets(TetMesh& mesh) {
+  const size_t n = mesh.tets.size();
+  std::vector<char> flat(n, 0);
+  bool any = false;
+  for (size_t t = 0; t < n; ++t) {
+    const Tet& v = mesh.tets[t];
+    flat[t] = orient3d(mesh.point(v[0]), mesh.point(v[1]), mesh.point(v[2]), mesh.point(v[3])) == 0;
+    any |= flat[t] != 0;
+  }
+  if (!any) return 0;
+  FaceAdjacency adj = computeFaceAdjacency(mesh);
+  // Whether face k of a and face j of b list their (shared) vertices in the same cyclic order.
+  auto sameOrder = [&](const Tet& a, int k, const Tet& b, int j) {
+    const uint32_t x[3] = {a[kTetFace[k][0]], a[kTetFace[k][1]], a[kTetFace[k][2]]};
+    const uint32_t y[3] = {b[kTetFace[j][0]], b[kTetFace[j][1]], b[kTetFace[j][2]]};
+    for (int r = 0; r < 3; ++r)
+      if (x[0] == y[r] && x[1] == y[(r + 1) % 3] && x[2] == y[(r + 2) % 3]) return true;
+    return false;
+  };
+  // Breadth first from the oriented (solid) tetrahedra into the flat ones.
+  std::vector<uint32_t> queue;
+  for (size_t t = 0; t < n; ++t)
+    if (!flat[t]) queue.push_back(static_cast<uint32_t>(t));
+  size_t swapped = 0;
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const uint32_t t = queue[head];
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t f = adj.neighbor[4 * static_cast<size_t>(t) + k];
+      if (f == kNoNeighbor || f == kNonManifold || !flat[f]) continue;
+      int j = 0;
+      while (j < 4 && adj.neighbor[4 * static_cast<size_t>(f) + j] != t) ++j;
+      if (j == 4) continue;
+      flat[f] = 0;  // oriented from here on
+      if (sameOrder(mesh.tets[t], k, mesh.tets[f], j)) {
+        // Swapping corners 2 and 3 reverses every face and exchanges local faces 2 and 3.
+        std::swap(mesh.tets[f][2], mesh.tets[f][3]);
+        std::swap(adj.neighbor[4 * static_cast<size_t>(f) + 2], adj.neighbor[4 * static_cast<size_t>(f) + 3]);
+        ++swapped;
+      }
+      queue.push_back(f);
+    }
+  }
+  return swapped;
+}
+
 }  // namespace gtn

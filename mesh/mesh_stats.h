@@ -34,4 +34,13 @@ MeshStats computeMeshStats(const TetMesh& mesh);
 // vertices; returns how many were flipped and counts zero-volume cells into *zero_volume.
 size_t normalizeOrientation(TetMesh& mesh, size_t* zero_volume);
 
+// Orients every tetrahedron of zero volume (exact predicate) as its neighbours are oriented, so that
+// each face it shares is listed in opposite orders by the two tetrahedra: its volume says nothing,
+// and a file may list it either way. Reached from the tetrahedra of nonzero volume through shared
+// faces (a flat one oriented counts as oriented for the next); one listed in the other order has its
+// last two vertices swapped. Flat tetrahedra that no face chain links to a solid one are left as
+// they are. Returns how many were swapped. Wrongly listed, a flat tetrahedron on the boundary turned
+// its boundary triangles inward, and renderers saw rays leave the volume where they entered it.
+size_t orientFlatTets(TetMesh& mesh);
+
 }  // namespace gtn

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <unordered_map>
 
@@ -137,7 +138,7 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
 
   const int w = setup.camera.width(), h = setup.camera.height();
   std::vector<Rgba> pixels(static_cast<size_t>(w) * h);
-  std::atomic<uint64_t> lost{0};
+  std::atomic<uint64_t> lost{0}, lost_rays{0};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
     InMemoryMesh walker{mesh, scalars, adj, {}};
     for (size_t p = r.begin(); p < r.end(); ++p) {
@@ -145,6 +146,7 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
       if (s0 == s1) continue;
       const PreparedRay ray = prepareRay(setup.camera.ray(static_cast<int>(p % w), static_cast<int>(p / w)));
       Rgba acc;
+      bool ray_lost = false;
       for (uint32_t si = s0; si < s1; ++si) {
         const RaySegment& rs = rays.segments[si];
         SegmentState seg;
@@ -156,14 +158,19 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
         if (findFace(rs.entry_tri, &tet, &face))
           end = advanceCursor(setup, ray, seg, true, seg.front, tet, face, walker, &wait_tet, &wait_face);
         if (end == CursorEnd::kLost) lost.fetch_add(1, std::memory_order_relaxed);
-        // What the front could not reach, the back cursor covers from the far end.
+        // What the front could not reach, the back cursor covers from the far end. A segment without
+        // an exit triangle ends where the front reaches the boundary.
+        CursorEnd back_end = rs.exit_tri == kNoTriangle ? CursorEnd::kBoundary : CursorEnd::kLost;
         if (end != CursorEnd::kMet && rs.exit_tri != kNoTriangle && findFace(rs.exit_tri, &tet, &face)) {
-          if (advanceCursor(setup, ray, seg, false, seg.back, tet, face, walker, &wait_tet, &wait_face) ==
-              CursorEnd::kLost)
-            lost.fetch_add(1, std::memory_order_relaxed);
+          back_end = advanceCursor(setup, ray, seg, false, seg.back, tet, face, walker, &wait_tet, &wait_face);
+          if (back_end == CursorEnd::kLost) lost.fetch_add(1, std::memory_order_relaxed);
         }
+        if (!seg.done() && !(end == CursorEnd::kBoundary && back_end == CursorEnd::kBoundary)) ray_lost = true;
         acc = over(acc, over(seg.front, seg.back));
       }
+      // (Pixels whose crossings did not pair are counted below, once.)
+      if (ray_lost && !std::binary_search(rays.unpaired.begin(), rays.unpaired.end(), static_cast<uint32_t>(p)))
+        lost_rays.fetch_add(1, std::memory_order_relaxed);
       pixels[p] = acc;
     }
   });
@@ -171,6 +178,7 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
     stats->tets = mesh.tets.size();
     stats->segments = rays.segments.size();
     stats->lost_cursors = lost.load();
+    stats->lost_rays = lost_rays.load() + rays.unpaired.size();
     stats->setup = setup;
   }
   return toImage(w, h, pixels);

@@ -16,6 +16,9 @@ struct GenericRenderStats {
   uint64_t tets = 0;
   uint64_t segments = 0;
   uint64_t lost_cursors = 0;  // cursors that lost their way (numerical degeneracies)
+  // Pixels whose ray has a part inside the volume that was not integrated: a segment whose cursors
+  // neither met nor both stopped at the boundary. None in a valid mesh.
+  uint64_t lost_rays = 0;
   RenderSetup setup;          // the resolved camera and transfer function (range fixed)
 };
 

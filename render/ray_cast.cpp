@@ -633,9 +633,11 @@ PixelHits crossBoundary(const Camera& camera, const BoundarySurface& surface) {
 
 // Pairs one pixel's sorted crossings into segments, calling emit(segment) for each in order; returns
 // how many. A group of crossings at the same depth (within eps) counts at most one step in and one
-// step out.
+// step out. *unpaired is set when a group steps out where the ray is outside (a boundary triangle
+// facing inward: that part of the ray is lost).
 template <class Emit>
-uint32_t pairCrossings(const Hit* first, const Hit* last, uint32_t pixel, double eps, Emit&& emit) {
+uint32_t pairCrossings(const Hit* first, const Hit* last, uint32_t pixel, double eps, Emit&& emit,
+                       bool* unpaired = nullptr) {
   RaySegment seg;  // the last segment begun: its far end may still come
   uint32_t made = 0;
   int depth = 0;
@@ -670,6 +672,8 @@ uint32_t pairCrossings(const Hit* first, const Hit* last, uint32_t pixel, double
         seg.t_far = leave->t;
         seg.s_far = leave->s;
       }
+    } else if (delta < 0 && unpaired) {
+      *unpaired = true;
     }
     i = j;
   }
@@ -677,18 +681,29 @@ uint32_t pairCrossings(const Hit* first, const Hit* last, uint32_t pixel, double
   return made;
 }
 
-// pixel_start from the crossings: the segments of each pixel counted (parallel), then summed.
-std::vector<uint32_t> segmentStarts(const PixelHits& ph, double eps) {
+// pixel_start from the crossings: the segments of each pixel counted (parallel), then summed; the
+// pixels whose crossings do not pair (pairCrossings) into *unpaired, in order.
+std::vector<uint32_t> segmentStarts(const PixelHits& ph, double eps, std::vector<uint32_t>* unpaired) {
   const size_t num_pixels = ph.start.size() - 1;
   std::vector<uint32_t> start(num_pixels + 1, 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 512), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t p = r.begin(); p < r.end(); ++p) {
       const Hit* hits = ph.hits.data();
+      bool bad = false;
       start[p + 1] = pairCrossings(hits + ph.start[p], hits + ph.start[p + 1], static_cast<uint32_t>(p), eps,
-                                   [](const RaySegment&) {});
+                                   [](const RaySegment&) {}, &bad);
+      // The top bit marks the pixel (counts stay far below it: a pixel has at most its crossings).
+      if (bad) start[p + 1] |= 0x80000000u;
     }
   });
-  for (size_t p = 0; p < num_pixels; ++p) start[p + 1] += start[p];
+  unpaired->clear();
+  for (size_t p = 0; p < num_pixels; ++p) {
+    if (start[p + 1] & 0x80000000u) {
+      start[p + 1] &= 0x7FFFFFFFu;
+      unpaired->push_back(static_cast<uint32_t>(p));
+    }
+    start[p + 1] += start[p];
+  }
   return start;
 }
 }  // namespace
@@ -697,7 +712,7 @@ RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
   const double eps = 1e-9 * camera.radius();
   const PixelHits ph = crossBoundary(camera, surface);
   RaySegments result;
-  result.pixel_start = segmentStarts(ph, eps);
+  result.pixel_start = segmentStarts(ph, eps, &result.unpaired);
   result.segments.resize(result.pixel_start.back());
   const size_t num_pixels = ph.start.size() - 1;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 512), [&](const tbb::blocked_range<size_t>& r) {
@@ -711,10 +726,11 @@ RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface) {
 }
 
 void castBoundary(const Camera& camera, const BoundarySurface& surface, std::vector<uint32_t>* pixel_start,
-                  SegmentSink& sink) {
+                  SegmentSink& sink, std::vector<uint32_t>* unpaired) {
   const double eps = 1e-9 * camera.radius();
   const PixelHits ph = crossBoundary(camera, surface);
-  *pixel_start = segmentStarts(ph, eps);
+  std::vector<uint32_t> none;
+  *pixel_start = segmentStarts(ph, eps, unpaired ? unpaired : &none);
   sink.begin(pixel_start->back());
   const size_t num_pixels = ph.start.size() - 1;
   for (size_t p = 0; p < num_pixels; ++p)

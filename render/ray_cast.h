@@ -84,6 +84,9 @@ struct RenderOptions {
   // 0's, so that every level and ratio of a file is seen from the same camera.
   bool has_scene_box = false;
   double scene_min[3] = {0, 0, 0}, scene_max[3] = {0, 0, 0};
+  // Whether render_input.h and time_budget.h may read and write their cache (time_budget.h: budget
+  // calibrations and level 0's colour range); false (--no-cache): neither read nor written.
+  bool use_cache = true;
 };
 
 // The options resolved against a level: camera framed on the bounding box, range fixed.
@@ -234,10 +237,13 @@ struct RaySegment {
 // depth counting over groups of crossings at equal depth (within a tolerance relative to the scene's
 // size), so that duplicated crossings on shared edges, silhouette grazes and coincident boundary
 // sheets of unwelded seams neither split nor drop parts of the volume. Parallel (TBB) over triangles,
-// then over pixels.
+// then over pixels. `unpaired`: the pixels, in order, where a group of crossings leaves the volume
+// while the ray is outside it (a boundary triangle facing inward): that crossing is ignored, and
+// the part of the ray it bounds is lost. None for a consistently oriented boundary.
 struct RaySegments {
   std::vector<RaySegment> segments;
   std::vector<uint32_t> pixel_start;
+  std::vector<uint32_t> unpaired;
 };
 RaySegments castBoundary(const Camera& camera, const BoundarySurface& surface);
 
@@ -249,10 +255,10 @@ class SegmentSink {
   virtual void begin(size_t segments) = 0;
   virtual void segment(const RaySegment& segment) = 0;
 };
-// The same segments as above, handed to `sink` (the i-th call is segment i) after *pixel_start is
-// filled.
+// The same segments as above, handed to `sink` (the i-th call is segment i) after *pixel_start (and
+// *unpaired, when given) is filled.
 void castBoundary(const Camera& camera, const BoundarySurface& surface, std::vector<uint32_t>* pixel_start,
-                  SegmentSink& sink);
+                  SegmentSink& sink, std::vector<uint32_t>* unpaired = nullptr);
 
 // floor and ceil of v as an int, for |v| < 2^31 (callers clamp first): truncation then one step,
 // which costs a few instructions where std::floor and std::ceil are library calls on baseline x86-64.

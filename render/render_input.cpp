@@ -195,7 +195,7 @@ Status RenderInput::fixView(const ResolvedLevel& level, RenderOptions* options) 
     for (int i = 0; i < 3; ++i) options->scene_min[i] = h0.bbox_min[i], options->scene_max[i] = h0.bbox_max[i];
   }
   if (options->transfer.has_range || !reader_ || (level.level == 0 && level.extra_merges == 0)) return Status::ok();
-  if (const auto cached = cachedBoundaryRange(path_, options->field)) {
+  if (const auto cached = options->use_cache ? cachedBoundaryRange(path_, options->field) : std::nullopt) {
     options->transfer.has_range = true;
     options->transfer.lo = cached->first;
     options->transfer.hi = cached->second;
@@ -210,7 +210,7 @@ Status RenderInput::fixView(const ResolvedLevel& level, RenderOptions* options) 
     return Status::ok();  // a level without boundary: the renderer's own default applies
   }
   const auto [lo, hi] = sink.range();
-  storeBoundaryRange(path_, options->field, {lo, hi});
+  if (options->use_cache) storeBoundaryRange(path_, options->field, {lo, hi});
   options->transfer.has_range = true;
   options->transfer.lo = lo;
   options->transfer.hi = hi;

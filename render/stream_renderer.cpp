@@ -348,6 +348,10 @@ struct StreamRenderer::State {
   // which of its cursors do (bit 0 the front, bit 1 the back; zero outside flushBatch's steps 2-3).
   std::vector<uint32_t> trigger_segs;
   std::vector<uint8_t> triggered;
+  // Per segment, which cursors stopped at the boundary (bit 0 the front, bit 1 the back; the back of
+  // a segment without an exit triangle from the start): a segment left undone otherwise lost its ray.
+  std::vector<uint8_t> at_boundary;
+  std::vector<uint32_t> unpaired;  // castBoundary's: pixels whose boundary crossings do not pair
   void trigger(uint32_t cursor) {
     uint8_t& bits = triggered[cursor / 2];
     if (bits == 0) trigger_segs.push_back(cursor / 2);
@@ -396,6 +400,7 @@ class SegmentBuilder : public SegmentSink {
     st_.backs.reserve(segments);
     st_.cursor_word.assign(2 * segments, kNone);
     st_.triggered.assign(segments, 0);
+    st_.at_boundary.assign(segments, 0);
   }
   void segment(const RaySegment& rs) override {
     const size_t i = next_++;
@@ -406,9 +411,11 @@ class SegmentBuilder : public SegmentSink {
     const auto& in = st_.boundary[rs.entry_tri];
     st_.addWaiter(*st_.faces.tryEmplace(makeKey(in[0], in[1], in[2])).first, static_cast<uint32_t>(2 * i));
     if (rs.exit_tri != kNoTriangle) {
-      // Without an exit triangle the back cursor never waits anywhere: the front covers the segment.
       const auto& out = st_.boundary[rs.exit_tri];
       st_.addWaiter(*st_.faces.tryEmplace(makeKey(out[0], out[1], out[2])).first, static_cast<uint32_t>(2 * i + 1));
+    } else {
+      // Without an exit triangle the back cursor never waits anywhere: the front covers the segment.
+      st_.at_boundary[i] = 2;
     }
   }
 
@@ -536,7 +543,7 @@ Status StreamRenderer::endBoundary() {
   SegmentBuilder builder(st);
   {
     std::vector<uint32_t> pixel_start;
-    castBoundary(setup_.camera, surface, &pixel_start, builder);
+    castBoundary(setup_.camera, surface, &pixel_start, builder, &st.unpaired);
     const size_t pixels = pixel_start.size() - 1;
     st.block_start.resize(pixels / State::kPixelBlock + 1);
     for (size_t b = 0; b < st.block_start.size(); ++b) st.block_start[b] = pixel_start[b * State::kPixelBlock];
@@ -769,6 +776,8 @@ Status StreamRenderer::flushBatch() {
           my_waits.push_back(cursor);
         } else if (end_state == CursorEnd::kLost) {
           st.lost.fetch_add(1, std::memory_order_relaxed);
+        } else if (end_state == CursorEnd::kBoundary) {
+          st.at_boundary[si] |= static_cast<uint8_t>(1u << end);
         }
       }
       if (seg.done()) {
@@ -819,12 +828,17 @@ Status StreamRenderer::endLevel() {
   const int w = setup_.camera.width(), h = setup_.camera.height();
   image_ = Image(w, h);
   uint32_t s = 0;
+  size_t next_unpaired = 0;
   for (size_t p = 0; p < static_cast<size_t>(w) * h; ++p) {
     Rgba acc;
+    bool lost = next_unpaired < st.unpaired.size() && st.unpaired[next_unpaired] == p;
+    next_unpaired += lost;
     for (; st.segs[s].pixel == p; ++s) {
       const StreamSegment& seg = st.segs[s];
       acc = over(acc, over(seg.front.get(), seg.back != kNone ? st.backs[seg.back].get() : Rgba()));
+      lost |= !seg.done() && st.at_boundary[s] != 3;
     }
+    stats_.lost_rays += lost;
     toRgb8(acc, &image_.rgb[3 * p]);
   }
   stats_.lost_cursors = st.lost.load();

@@ -39,6 +39,10 @@ struct StreamRenderStats {
   uint64_t peak_face_entries = 0;    // largest size of the face map
   uint64_t segments = 0;             // ray segments
   uint64_t lost_cursors = 0;         // cursors that lost their way (numerical degeneracies)
+  // Pixels whose ray has a part inside the volume that was not integrated: a segment whose cursors
+  // neither met nor both stopped at the boundary (a cursor lost, or waiting for a tetrahedron that
+  // never came). None in a valid mesh.
+  uint64_t lost_rays = 0;
   // Tetrahedra still held when the level ended: more rays were counted for them than passed. None
   // in a valid mesh (a ray is counted for every tetrahedron it will cross); the image is right either
   // way, but these were held longer than needed.

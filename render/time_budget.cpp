@@ -1,6 +1,7 @@
 #include "render/time_budget.h"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -14,6 +15,7 @@
 #include "format/file_io.h"
 #include "render/generic_renderer.h"
 #include "render/stream_renderer.h"
+#include "simplify/levels.h"
 
 namespace gtn {
 
@@ -21,10 +23,12 @@ namespace {
 // Bound of the learnt offset: beyond it the calibration is stale, not the run slower.
 constexpr double kMaxOffsetMs = 2000.0;
 
+// $XDG_CACHE_HOME/gatun/render-calibration.json, or under $HOME/.cache when XDG_CACHE_HOME is unset,
+// empty or relative (the XDG base directory specification: a relative path is invalid, ignored).
 std::string cachePath() {
   const char* xdg = std::getenv("XDG_CACHE_HOME");
   std::string base;
-  if (xdg && *xdg) base = xdg;
+  if (xdg && *xdg == '/') base = xdg;
   else if (const char* home = std::getenv("HOME"); home && *home) base = std::string(home) + "/.cache";
   else base = std::filesystem::temp_directory_path().string();
   return base + "/gatun/render-calibration.json";
@@ -47,6 +51,17 @@ std::string fileKey(const std::string& path) {
 bool cacheable(const std::string& path) {
   struct stat st {};
   return path != "-" && ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+// The merges of the coarsest level's tree that the cheapest plan applies on the fly: down to
+// LevelOptions::min_points vertices (the fewest the automatic levels keep), never further. Merging
+// on to the last tetrahedron met any budget with an image that no longer showed the object (one
+// tetrahedron); a coarsest level with no more vertices than that is the floor as it is.
+StatusOr<uint64_t> floorMerges(RenderInput& input) {
+  const size_t coarsest = input.levels() - 1;
+  GTN_ASSIGN_OR_RETURN(const uint64_t tree, input.mergeTreeMerges(coarsest));
+  const uint64_t points = input.levelHeader(coarsest).points, keep = LevelOptions().min_points;
+  return points > keep ? std::min(tree, points - keep) : 0;
 }
 
 // The field is part of the key: a run decodes the values of the rendered field alone.
@@ -113,15 +128,17 @@ double interpolate(const std::vector<std::pair<double, double>>& points, double 
 
 StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& path, double budget_ms,
                                       const RenderOptions& options, bool generic, double elapsed_ms,
-                                      std::string* explanation, double* predicted_ms) {
+                                      std::string* explanation, double* predicted_ms, std::string* shortfall) {
   if (!(budget_ms > 0)) return usageError("--budget-ms must be positive");
   const std::string key = "v4|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
-  const bool cached = cacheable(path);
+  const bool cached = options.use_cache && cacheable(path);
   nlohmann::json cache = nlohmann::json::object();
-  if (auto text = readWholeFile(cache_file, 1 << 24); cached && text.isOk()) {
-    cache = nlohmann::json::parse(text.value(), nullptr, false);
-    if (!cache.is_object()) cache = nlohmann::json::object();
+  if (cached) {
+    if (auto text = readWholeFile(cache_file, 1 << 24); text.isOk()) {
+      cache = nlohmann::json::parse(text.value(), nullptr, false);
+      if (!cache.is_object()) cache = nlohmann::json::object();
+    }
   }
   // Measured (tetrahedra, ms) points, sorted by tetrahedra: whole runs, and decoding alone.
   std::vector<std::pair<double, double>> points, decode_points;
@@ -176,7 +193,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       same &= found;
     }
     if (floor_merges > 0) {
-      auto merges = input.mergeTreeMerges(input.levels() - 1);
+      auto merges = floorMerges(input);
       same &= merges.isOk() && static_cast<double>(*merges) == floor_merges;
     }
     if (!same) {
@@ -229,9 +246,15 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
     {
       Image image;
       GTN_ASSIGN_OR_RETURN(const double warm_ms, timeLevel(input, coarsest, options, generic, &image));
-      const std::string probe = cache_file + ".probe.png";
+      // Beside the cache, or (nothing cached) in the temporary directory.
       std::error_code ec;
-      std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
+      std::string probe = cache_file + ".probe.png";
+      if (cached) {
+        std::filesystem::create_directories(std::filesystem::path(cache_file).parent_path(), ec);
+      } else {
+        probe = (std::filesystem::temp_directory_path(ec) / ("gatun-render-probe-" + std::to_string(::getpid()) + ".png"))
+                    .string();
+      }
       const auto t0 = std::chrono::steady_clock::now();
       const Status written = writePng(probe, image);
       const double png_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -253,7 +276,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       names += (names.empty() ? "" : ", ") + std::to_string(level);
     }
     nlohmann::json floor = nullptr;
-    GTN_ASSIGN_OR_RETURN(const uint64_t tree_merges, input.mergeTreeMerges(coarsest));
+    GTN_ASSIGN_OR_RETURN(const uint64_t tree_merges, floorMerges(input));
     if (tree_merges > 0) {
       LevelChoice all;
       all.merges = static_cast<int64_t>(input.levelHeader(coarsest).merges + tree_merges);
@@ -262,7 +285,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       floor_merges = static_cast<double>(tree_merges);
       floor_tets = static_cast<double>(rendered);
       floor = {{"merges", floor_merges}, {"tets", floor_tets}, {"ms", floor_ms}};
-      names += " and " + std::to_string(coarsest) + " with all " + std::to_string(tree_merges) + " merges of its tree";
+      names += " and " + std::to_string(coarsest) + " with " + std::to_string(tree_merges) + " merges of its tree";
     }
     if (cached) {
       cache[key] = {{"tets", tets}, {"ms", ms}, {"decode_ms", dms}, {"offset_ms", offset}, {"floor", floor}};
@@ -272,6 +295,8 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
       // A cache that cannot be written only costs a calibration next time.
       (void)writeBytesAtomically(cache_file, text.data(), text.size(), /*sync=*/false);
       source = "calibrated on levels " + names + ", cached in " + cache_file;
+    } else if (!options.use_cache) {
+      source = "calibrated on levels " + names + ", not cached (--no-cache)";
     } else {
       source = "calibrated on levels " + names + ", not cached (" + (path == "-" ? "standard input" : path) +
                " is no regular file)";
@@ -379,7 +404,7 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
   }
   if (has_floor) {
     char p[128];
-    std::snprintf(p, sizeof p, ", level %zu with all %.0f merges of its tree %.0f tets %.1f ms", coarsest, floor_merges,
+    std::snprintf(p, sizeof p, ", level %zu with %.0f merges of its tree %.0f tets %.1f ms", coarsest, floor_merges,
                   floor_tets, floor_ms);
     model += p;
   }
@@ -394,12 +419,22 @@ StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& pat
                 predicted > available ? " (the cheapest plan; the budget cannot be met)" : "");
   *explanation = buf;
   if (predicted_ms) *predicted_ms = predicted;
+  if (shortfall) {
+    shortfall->clear();
+    if (predicted > available) {
+      std::snprintf(buf, sizeof buf,
+                    "--budget-ms %g cannot be met: the cheapest plan that still shows the mesh, level %zu + %llu merges "
+                    "on the fly, is predicted at %.1f ms (%.1f ms already spent); rendering it",
+                    budget_ms, chosen_level, static_cast<unsigned long long>(extra), predicted, elapsed_ms);
+      *shortfall = buf;
+    }
+  }
   return choice;
 }
 
 void recordBudgetRun(const std::string& path, const RenderOptions& options, bool generic, double predicted_ms,
                      double actual_ms) {
-  if (!(predicted_ms > 0) || !(actual_ms > 0) || !cacheable(path)) return;
+  if (!(predicted_ms > 0) || !(actual_ms > 0) || !options.use_cache || !cacheable(path)) return;
   const std::string key = "v4|" + cacheKey(path, options, generic);
   const std::string cache_file = cachePath();
   auto text = readWholeFile(cache_file, 1 << 24);

@@ -9,14 +9,16 @@
 // between level i's and level i+1's counts. The choice is the finest plan that fits 80% of the
 // budget less what the run already spent (and less 1.5 times the learnt spread): a stored level as
 // is, else level i with the fewest merges that fit, else the next level; below the coarsest
-// level, its own tree's merges on the fly, down to the floor (all of them), which is also what a
-// budget nothing meets gets. Calibration times the coarsest level, the finest levels with at most a
-// sixteenth and a quarter of level 0's tetrahedra, and level 0 (after one warm-up run), whole and
-// decoding alone, and the floor, and is cached in
+// level, its own tree's merges on the fly, down to the floor (the coarsest level merged down to
+// LevelOptions::min_points vertices, or as it is when it has no more: coarser images no longer show
+// the object), which is also what a budget nothing meets gets. Calibration times the coarsest level,
+// the finest levels with at most a sixteenth and a quarter of level 0's tetrahedra, and level 0
+// (after one warm-up run), whole and decoding alone, and the floor, and is cached in
 // $XDG_CACHE_HOME/gatun/render-calibration.json (default ~/.cache/gatun/...) keyed by the file's path,
 // size and modification time and the settings that change the cost (size, sampling, pipeline);
-// standard input and pipes are calibrated every time, not cached. A cached calibration whose levels
-// or coarsest tree are not the file's is made again.
+// standard input and pipes are calibrated every time, not cached, as is everything when
+// RenderOptions::use_cache is false. A relative XDG_CACHE_HOME is ignored (the XDG specification). A
+// cached calibration whose levels or floor are not the file's is made again.
 #pragma once
 
 #include <optional>
@@ -30,10 +32,12 @@ namespace gtn {
 
 // Chooses the level for `budget_ms` of which `elapsed_ms` are already spent; `explanation` receives a
 // sentence saying what was measured or read from the cache, the model and the choice, and
-// `predicted_ms` (optional) the predicted time of the rest of the run.
+// `predicted_ms` (optional) the predicted time of the rest of the run, and `shortfall` (optional) a
+// sentence when even the floor is predicted to miss the budget, else nothing.
 StatusOr<LevelChoice> chooseForBudget(RenderInput& input, const std::string& path, double budget_ms,
                                       const RenderOptions& options, bool generic, double elapsed_ms,
-                                      std::string* explanation, double* predicted_ms = nullptr);
+                                      std::string* explanation, double* predicted_ms = nullptr,
+                                      std::string* shortfall = nullptr);
 
 // After a budgeted run that used a cached calibration: moves the cached offset (added to every
 // prediction) half way towards actual - predicted, and the cached spread (the room a plan keeps)
