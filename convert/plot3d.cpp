@@ -1426,7 +1426,7 @@ std::vector<uint8_t> seamParities(const std::vector<BlockDims>& blocks, const st
       }
     }
   };
-  // The welded identity of every side point: the first point bit-identical to it.
+  // The welded identity of every side point: the first side point bit-identical to it.
   std::vector<uint32_t> rep(mesh.numPoints());
   std::iota(rep.begin(), rep.end(), 0u);
   {
