@@ -801,12 +801,86 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
   return mesh.checkConsistency(path);
 }
 
+namespace {
+
+// --weld: `cells` with each point as its welded identity (rep), so that the face rule, which orders a
+// face's points by index, cuts a face that two pieces share alike on both sides (each piece numbers
+// its copies of the shared points in its own order). A cell that welding would make degenerate keeps
+// its own points (weldPoints drops what collapses, as for any input), as does an entry the split
+// will reject (an index out of range, a malformed face stream).
+VtkCells weldedCells(const VtkCells& cells, const std::vector<uint32_t>& rep) {
+  VtkCells out = cells;
+  const size_t num_cells = cells.types.size();
+  if (cells.offsets.size() != num_cells + 1) return out;
+  const bool separate_faces = cells.face_offsets.size() == num_cells;
+  auto valid = [&](int64_t v) { return v >= 0 && static_cast<uint64_t>(v) < rep.size(); };
+  std::vector<int64_t*> entries;  // the point entries of one cell
+  std::vector<int64_t> own, welded;
+  int64_t face_pos = 0;
+  for (size_t c = 0; c < num_cells; ++c) {
+    entries.clear();
+    const int64_t begin = cells.offsets[c], end = cells.offsets[c + 1];
+    if (begin < 0 || end < begin || end > static_cast<int64_t>(cells.connectivity.size())) return out;
+    if (cells.types[c] == kVtkPolyhedron) {
+      // Its face stream (the face count, then each face's point count and points): in faces (XML,
+      // with the cell's points in connectivity too) or in connectivity (legacy).
+      int64_t* f = out.connectivity.data() + begin;
+      int64_t len = end - begin;
+      if (separate_faces) {
+        const int64_t stop = cells.face_offsets[c];
+        if (stop < face_pos || stop > static_cast<int64_t>(cells.faces.size())) return out;
+        for (int64_t k = begin; k < end; ++k) entries.push_back(&out.connectivity[k]);
+        f = out.faces.data() + face_pos;
+        len = stop - face_pos;
+        face_pos = stop;
+      }
+      bool ok = len >= 1;
+      int64_t at = 1;
+      for (int64_t k = 0; ok && k < f[0]; ++k) {
+        ok = at < len && f[at] >= 0 && f[at] <= len - at - 1;
+        if (!ok) break;
+        for (int64_t i = 0; i < f[at]; ++i) entries.push_back(f + at + 1 + i);
+        at += 1 + f[at];
+      }
+      if (!ok) continue;
+    } else {
+      for (int64_t k = begin; k < end; ++k) entries.push_back(&out.connectivity[k]);
+    }
+    if (!std::all_of(entries.begin(), entries.end(), [&](const int64_t* e) { return valid(*e); })) continue;
+    own.clear();
+    welded.clear();
+    for (const int64_t* e : entries) {
+      own.push_back(*e);
+      welded.push_back(rep[*e]);
+    }
+    for (std::vector<int64_t>* v : {&own, &welded}) {
+      std::sort(v->begin(), v->end());
+      v->erase(std::unique(v->begin(), v->end()), v->end());
+    }
+    if (own.size() != welded.size()) continue;
+    for (int64_t* e : entries) *e = rep[*e];
+  }
+  return out;
+}
+
+}  // namespace
+
 Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
                        const ImportOptions& options, ImportResult* result, size_t* duplicate_tets) {
   std::vector<uint32_t> tet_cell;
   SteinerPoints steiner;
-  GTN_RETURN_IF_ERROR(splitVtkCells(path, cells, result->mesh.numPoints(), result->mesh.coords.data(), options.split,
-                                    &result->mesh.tets, &tet_cell, &result->report, &steiner,
+  VtkCells welded;
+  if (options.weld) {
+    const std::vector<uint32_t> rep = weldIdentities(result->mesh);
+    for (size_t p = 0; p < rep.size(); ++p) {
+      if (rep[p] == p) continue;
+      welded = weldedCells(cells, rep);
+      break;
+    }
+  }
+  const VtkCells& split_cells = welded.types.empty() ? cells : welded;
+  GTN_RETURN_IF_ERROR(splitVtkCells(path, split_cells, result->mesh.numPoints(), result->mesh.coords.data(),
+                                    options.split, &result->mesh.tets, &tet_cell, &result->report, &steiner,
                                     result->mesh.coord_type == ScalarType::kFloat32));
   appendSteinerPoints(steiner, &result->mesh);
   // Cells blanked by VTK (HIDDENCELL) are not part of the mesh, as in structured grids; in a piece of

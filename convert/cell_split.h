@@ -111,7 +111,8 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
 // fields already set), drops the cells that a vtkGhostType cell array marks hidden (and, with
 // `duplicate_tets`, those it marks as another piece's, counting their tetrahedra there), spreads
 // the per-cell fields over the tetrahedra into mesh.cell_fields, and normalises orientation
-// (finishImport).
+// (finishImport). With options.weld the cells are split seeing each point as its welded identity
+// (weldIdentities), so that the face rule cuts a face that pieces share alike in each piece.
 Status finishVtkImport(const std::string& path, const VtkCells& cells, const std::vector<Field>& cell_fields,
                        const ImportOptions& options, ImportResult* result, size_t* duplicate_tets = nullptr);
 

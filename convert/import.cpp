@@ -109,7 +109,7 @@ void finishImport(ImportResult& result) {
                                      " tetrahedra of zero volume reoriented to agree with their neighbours");
 }
 
-void weldPoints(TetMesh& mesh, ImportReport& report) {
+std::vector<uint32_t> weldIdentities(const TetMesh& mesh) {
   const size_t n = mesh.numPoints();
   auto bits = [&](size_t p, int a) { return std::bit_cast<uint64_t>(mesh.coords[3 * p + a]); };
   std::vector<uint32_t> order(n);
@@ -128,6 +128,12 @@ void weldPoints(TetMesh& mesh, ImportReport& report) {
     for (size_t q = r; q < e; ++q) rep[order[q]] = order[r];
     r = e;
   }
+  return rep;
+}
+
+void weldPoints(TetMesh& mesh, ImportReport& report) {
+  const size_t n = mesh.numPoints();
+  const std::vector<uint32_t> rep = weldIdentities(mesh);
   std::vector<uint32_t> new_index(n);
   uint32_t kept = 0;
   for (size_t p = 0; p < n; ++p) {

@@ -47,5 +47,8 @@ void finishImport(ImportResult& result);
 // values) and compacts points and point fields. Closes the seams between PLOT3D blocks and between
 // the pieces of VTK files; importMesh applies it when options.weld is set.
 void weldPoints(TetMesh& mesh, ImportReport& report);
+// Each point's welded identity: the first point (smallest index) whose coordinates are bit-identical
+// to its own.
+std::vector<uint32_t> weldIdentities(const TetMesh& mesh);
 
 }  // namespace gtn

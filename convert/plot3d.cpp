@@ -18,7 +18,9 @@
 // - IBLANK: a cell with any hole vertex (IBLANK 0) is dropped and counted; fringe (negative) and wall
 //   (2) points are ordinary points. All points are kept and IBLANK becomes the int32 field "iblank".
 // - Blocks are never joined; --weld merges bit-identical points (across blocks too), keeps the first
-//   point's field values, and drops the tetrahedra that collapse.
+//   point's field values, and drops the tetrahedra that collapse. With --weld each block's 5-split
+//   parity is chosen so that welded seams conform wherever they can; the seams that cannot are
+//   warned about (seamParities).
 // - Records: one per grid (whole), one per k-plane holding all components of that plane (PLOT3D's
 //   /PLANES), or one per component (Fortran's `write(u) x` / `write(u) y` / ...); with record markers
 //   these are told apart by the record sizes, and where sizes coincide (a grid of 3 k-planes, a Q file
@@ -34,12 +36,14 @@
 //   classic ones (density, momentum, stagnation energy); the others (species densities, turbulence
 //   quantities) become the fields q6 .. qNQ.
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <optional>
 #include <string>
@@ -1381,16 +1385,207 @@ Status addFunction(const std::string& path, std::string_view bytes, const Fit& f
   return Status::ok();
 }
 
+// --weld: where cell faces of blocks weld together (the faces on the sides of blocks whose four
+// corners are bit-identical to another side face's), the tetrahedra on both sides must cut the face
+// along the same diagonal, or the seam stays as boundary triangles inside the volume. The 5-split
+// cuts every face along the diagonal joining its two corners of even (i + j + k + parity) (hex_split),
+// so each block's parity (0 or 1, added to i + j + k) can be chosen: a welded face asks for the two
+// blocks' parities to be equal or to differ, whatever the directions of their index axes there. The
+// demands are met block pair by block pair, the pairs sharing the most faces first (a union-find
+// that keeps each block's parity relative to its root; the first block keeps parity 0); a demand
+// that contradicts those already met (an odd cycle of seams, a block meeting itself after an odd
+// number of cells, faces whose corners pair up differently on the two sides) cannot be met. The
+// 6-split cuts every face along the diagonal of increasing indices, which has no choice: faces where
+// the two blocks' index directions disagree cannot conform. Warnings name the blocks of every seam
+// that does not conform, with its number of faces. Returns each block's parity.
+std::vector<uint8_t> seamParities(const std::vector<BlockDims>& blocks, const std::vector<int32_t>& iblank, int split,
+                                  const TetMesh& mesh, std::vector<std::string>* warnings) {
+  const size_t nb = blocks.size();
+  std::vector<uint8_t> parity(nb, 0);
+  std::vector<uint64_t> first(nb + 1, 0);
+  for (size_t b = 0; b < nb; ++b) first[b + 1] = first[b] + blocks[b].points();
+  auto hasCells = [&](size_t b) { return blocks[b].n[0] >= 2 && blocks[b].n[1] >= 2 && blocks[b].n[2] >= 2; };
+  auto id = [&](size_t b, const int64_t x[3]) {
+    const int64_t* n = blocks[b].n;
+    return static_cast<uint32_t>(first[b] + static_cast<uint64_t>(x[0] + n[0] * (x[1] + n[1] * x[2])));
+  };
+  // Calls f(b, a, x) for every side face of every block: the face of the cell at the side of axis a,
+  // corner x (x[a] the side's index), spanning the other two axes.
+  auto forSideFaces = [&](auto&& f) {
+    for (size_t b = 0; b < nb; ++b) {
+      if (!hasCells(b)) continue;
+      const int64_t* n = blocks[b].n;
+      for (int a = 0; a < 3; ++a) {
+        const int u = (a + 1) % 3, v = (a + 2) % 3;
+        for (const int64_t side : {int64_t{0}, n[a] - 1}) {
+          int64_t x[3];
+          x[a] = side;
+          for (x[v] = 0; x[v] + 1 < n[v]; ++x[v])
+            for (x[u] = 0; x[u] + 1 < n[u]; ++x[u]) f(b, a, x);
+        }
+      }
+    }
+  };
+  // The welded identity of every side point: the first side point bit-identical to it.
+  std::vector<uint32_t> rep(mesh.numPoints());
+  std::iota(rep.begin(), rep.end(), 0u);
+  {
+    std::vector<uint32_t> side;
+    forSideFaces([&](size_t b, int a, const int64_t x[3]) {
+      const int u = (a + 1) % 3, v = (a + 2) % 3;
+      for (int c = 0; c < 4; ++c) {
+        int64_t y[3] = {x[0], x[1], x[2]};
+        y[u] += c & 1;
+        y[v] += c >> 1;
+        side.push_back(id(b, y));
+      }
+    });
+    std::sort(side.begin(), side.end());
+    side.erase(std::unique(side.begin(), side.end()), side.end());
+    auto bits = [&](uint32_t p) {
+      return std::array<uint64_t, 3>{std::bit_cast<uint64_t>(mesh.coords[3 * size_t{p}]),
+                                     std::bit_cast<uint64_t>(mesh.coords[3 * size_t{p} + 1]),
+                                     std::bit_cast<uint64_t>(mesh.coords[3 * size_t{p} + 2])};
+    };
+    std::stable_sort(side.begin(), side.end(), [&](uint32_t p, uint32_t q) { return bits(p) < bits(q); });
+    for (size_t i = 1; i < side.size(); ++i)
+      if (bits(side[i]) == bits(side[i - 1])) rep[side[i]] = rep[side[i - 1]];
+  }
+  // Every side face whose cell is kept and whose corners are four welded points: its corners' welded
+  // identities (sorted) and the diagonal its cell's split cuts along at parity 0.
+  struct SideFace {
+    std::array<uint32_t, 4> key;
+    uint32_t block;
+    std::array<uint32_t, 2> diagonal;
+    bool operator<(const SideFace& o) const { return key != o.key ? key < o.key : block < o.block; }
+  };
+  std::vector<SideFace> faces;
+  forSideFaces([&](size_t b, int a, const int64_t x[3]) {
+    const int u = (a + 1) % 3, v = (a + 2) % 3;
+    const int64_t* n = blocks[b].n;
+    int64_t cell[3] = {x[0], x[1], x[2]};
+    if (cell[a] == n[a] - 1) --cell[a];
+    if (!iblank.empty()) {
+      for (int c = 0; c < 8; ++c) {
+        const int64_t y[3] = {cell[0] + (c & 1), cell[1] + ((c >> 1) & 1), cell[2] + (c >> 2)};
+        if (iblank[id(b, y)] == 0) return;
+      }
+    }
+    uint32_t r[4];  // around the face: (0, 0), (1, 0), (1, 1), (0, 1) along (u, v)
+    for (int c = 0; c < 4; ++c) {
+      int64_t y[3] = {x[0], x[1], x[2]};
+      y[u] += c == 1 || c == 2;
+      y[v] += c >= 2;
+      r[c] = rep[id(b, y)];
+    }
+    SideFace f{{r[0], r[1], r[2], r[3]}, static_cast<uint32_t>(b), {}};
+    std::sort(f.key.begin(), f.key.end());
+    if (std::adjacent_find(f.key.begin(), f.key.end()) != f.key.end()) return;  // collapsed
+    // Corner (0, 0) has even i + j + k: the 5-split's diagonal at parity 0 runs through it, as the
+    // 6-split's always does; otherwise the 5-split's runs through the other two.
+    const bool even = (x[0] + x[1] + x[2]) % 2 == 0;
+    f.diagonal = split == 6 || even ? std::array<uint32_t, 2>{r[0], r[2]} : std::array<uint32_t, 2>{r[1], r[3]};
+    std::sort(f.diagonal.begin(), f.diagonal.end());
+    faces.push_back(f);
+  });
+  std::sort(faces.begin(), faces.end());
+  // Per pair of blocks (smaller first; a block may meet itself): faces asking for equal parities,
+  // for different ones, and faces whose corners pair up differently on the two sides.
+  struct Demand {
+    uint64_t same = 0, differ = 0, twisted = 0;
+  };
+  std::map<std::pair<uint32_t, uint32_t>, Demand> demands;
+  for (size_t i = 0; i < faces.size();) {
+    size_t j = i + 1;
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    for (size_t k = i + 1; k < j; ++k) {
+      const SideFace &f = faces[i], &g = faces[k];
+      std::array<uint32_t, 2> other;
+      std::set_difference(f.key.begin(), f.key.end(), f.diagonal.begin(), f.diagonal.end(), other.begin());
+      Demand& d = demands[{f.block, g.block}];
+      if (g.diagonal == f.diagonal) ++d.same;
+      else if (g.diagonal == other) ++d.differ;
+      else ++d.twisted;
+    }
+    i = j;
+  }
+  if (demands.empty()) return parity;
+  if (split == 5) {
+    std::vector<uint32_t> parent(nb);
+    std::iota(parent.begin(), parent.end(), 0u);
+    std::vector<uint8_t> relative(nb, 0);  // parity relative to the parent
+    auto find = [&](uint32_t x) {
+      uint8_t p = 0;
+      uint32_t root = x;
+      while (parent[root] != root) {
+        p ^= relative[root];
+        root = parent[root];
+      }
+      // Path compression: every block on the way points at the root.
+      for (uint8_t q = p; parent[x] != x;) {
+        const uint32_t next = parent[x];
+        const uint8_t r = relative[x];
+        parent[x] = root;
+        relative[x] = q;
+        q ^= r;
+        x = next;
+      }
+      return std::make_pair(root, p);
+    };
+    std::vector<std::pair<std::pair<uint32_t, uint32_t>, Demand>> order(demands.begin(), demands.end());
+    std::stable_sort(order.begin(), order.end(), [](const auto& x, const auto& y) {
+      return std::max(x.second.same, x.second.differ) > std::max(y.second.same, y.second.differ);
+    });
+    for (const auto& [blocks_pair, d] : order) {
+      if (blocks_pair.first == blocks_pair.second || d.same + d.differ == 0) continue;
+      const auto [ra, pa] = find(blocks_pair.first);
+      const auto [rb, pb] = find(blocks_pair.second);
+      if (ra == rb) continue;
+      const uint8_t want = d.differ > d.same ? 1 : 0;
+      const uint32_t root = std::min(ra, rb), child = std::max(ra, rb);
+      parent[child] = root;
+      relative[child] = pa ^ pb ^ want;
+    }
+    for (uint32_t b = 0; b < nb; ++b) parity[b] = find(b).second;
+  }
+  size_t told = 0, untold = 0;
+  const std::string how = split == 5 ? "(no choice of the grids' split parities makes every seam agree)"
+                                     : "(their index lines run in other directions there; --split 5 may conform)";
+  for (const auto& [pair, d] : demands) {
+    const bool equal = split == 6 || parity[pair.first] == parity[pair.second];
+    const uint64_t bad = (equal ? d.differ : d.same) + d.twisted;
+    if (bad == 0) continue;
+    if (told == 20) {
+      ++untold;
+      continue;
+    }
+    ++told;
+    const std::string who = pair.first == pair.second
+                                ? "grid " + std::to_string(pair.first + 1) + " meets itself"
+                                : "grids " + std::to_string(pair.first + 1) + " and " + std::to_string(pair.second + 1) +
+                                      " meet";
+    warnings->push_back("--weld: " + who + " at " + std::to_string(d.same + d.differ + d.twisted) + " cell faces, " +
+                        std::to_string(bad) + " of which --split " + std::to_string(split) +
+                        " cuts along different diagonals on the two sides " + how +
+                        ": those faces stay as boundary triangles inside the volume, a non-conforming interface "
+                        "(gtn validate: NONCONFORMING_INTERFACE)");
+  }
+  if (untold > 0) warnings->push_back("--weld: " + std::to_string(untold) + " more seams that do not conform");
+  return parity;
+}
+
 // Hexahedral cells into tetrahedra, block by block; cells with a hole vertex are dropped, and warped
-// cells are split around an added point (GridHexSplitter).
-void splitCells(const std::vector<BlockDims>& blocks, const std::vector<int32_t>& iblank, int split, TetMesh& mesh,
-                ImportReport& report) {
+// cells are split around an added point (GridHexSplitter). The 5-split of block b alternates with
+// (i + j + k + parity[b]) % 2.
+void splitCells(const std::vector<BlockDims>& blocks, const std::vector<int32_t>& iblank, int split,
+                const std::vector<uint8_t>& parity, TetMesh& mesh, ImportReport& report) {
   uint64_t cells = 0;
   for (const BlockDims& b : blocks) cells += static_cast<uint64_t>((b.n[0] - 1) * (b.n[1] - 1) * (b.n[2] - 1));
   mesh.tets.reserve(cells * static_cast<uint64_t>(split));
   GridHexSplitter grid(&mesh);
   uint64_t base = 0;
-  for (const BlockDims& b : blocks) {
+  for (size_t g = 0; g < blocks.size(); ++g) {
+    const BlockDims& b = blocks[g];
     const uint64_t ni = b.n[0], nj = b.n[1], nk = b.n[2];
     auto id = [&](uint64_t i, uint64_t j, uint64_t k) { return static_cast<uint32_t>(base + i + ni * (j + nj * k)); };
     for (uint64_t k = 0; k + 1 < nk; ++k) {
@@ -1402,7 +1597,7 @@ void splitCells(const std::vector<BlockDims>& blocks, const std::vector<int32_t>
             ++report.dropped_cells;
             continue;
           }
-          grid.split(h, split, (i + j + k) % 2 == 1);
+          grid.split(h, split, (i + j + k + parity[g]) % 2 == 1);
         }
       }
     }
@@ -1560,7 +1755,9 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
     std::memcpy(field.bytes.data(), iblank.data(), iblank.size() * sizeof(int32_t));
     mesh.point_fields.push_back(std::move(field));
   }
-  splitCells(blocks, iblank, options.split, mesh, result.report);
+  const std::vector<uint8_t> parity = options.weld ? seamParities(blocks, iblank, options.split, mesh, &warnings)
+                                                   : std::vector<uint8_t>(blocks.size(), 0);
+  splitCells(blocks, iblank, options.split, parity, mesh, result.report);
   if (options.weld) weldPoints(mesh, result.report);
 
   mesh.setMetadata("source.format", "plot3d");

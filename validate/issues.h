@@ -50,6 +50,10 @@ const char* severityName(Severity severity);  // "error", "warning", "info"
     "boundary edges in an odd number of boundary triangles (the surface has a hole)")                          \
   X(kBoundaryOrientation, "BOUNDARY_ORIENTATION", kError, "mesh",                                                \
     "boundary edges used more often in one direction than the other (inconsistent orientation)")               \
+  X(kNonconformingInterface, "NONCONFORMING_INTERFACE", kWarning, "mesh",                                        \
+    "boundary triangles that cover the same surface as boundary triangles facing the other way (a "             \
+    "non-conforming interface inside the volume: welded blocks that cut a shared quadrilateral along "           \
+    "different diagonals)")                                                                                      \
   X(kInvertedTet, "INVERTED_TET", kError, "mesh", "inverted tetrahedra (negative volume, exact predicate)")      \
   X(kZeroVolumeTet, "ZERO_VOLUME_TET", kWarning, "mesh", "zero-volume tetrahedra (exact predicate)")             \
   X(kZeroVolumeTetFromSource, "ZERO_VOLUME_TET_FROM_SOURCE", kInfo, "mesh",                                      \

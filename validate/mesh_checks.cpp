@@ -106,6 +106,126 @@ bool checkBoundaryEdges(std::vector<DirEdge>& dir_edges, const std::string& scop
   return closed;
 }
 
+// A boundary triangle as a tetrahedron's face: its outward corners and where it is.
+struct BoundaryFace {
+  Triangle tri;
+  uint32_t tet;
+  uint8_t face;
+};
+
+// Boundary triangles in more than this many are not examined as diagonals of a non-conforming
+// quadrilateral (the pairs on one edge grow as the square of their number).
+constexpr size_t kMaxEdgeTriangles = 16;
+
+// A non-conforming interface: four coplanar points (a, b, c, d) of a convex quadrilateral whose two
+// triangles along the diagonal a-c are boundary faces facing one way and whose two along b-d are
+// boundary faces facing the other way. Two parts of the volume then meet there with shared points
+// but no shared face: what welding two blocks that cut their common face along different diagonals
+// leaves inside the volume. (Four points that are not coplanar would bound a tetrahedral cavity,
+// which a valid mesh may have.) Each pair of triangles on one boundary edge, facing the same way, is
+// a candidate: its other diagonal's two triangles are looked up by vertex set, so the cost is linear
+// in the boundary. Signs are exact (orient3d, orient2dProjected). Returns the triangles found.
+uint64_t checkInterfaces(const TetMesh& mesh, const std::vector<BoundaryFace>& faces, const std::vector<uint8_t>& finite,
+                         const std::string& scope, ValidationReport& report) {
+  auto sorted3 = [](Triangle t) {
+    std::sort(t.begin(), t.end());
+    return t;
+  };
+  std::vector<std::pair<Triangle, uint32_t>> by_set(faces.size());
+  for (size_t f = 0; f < faces.size(); ++f) by_set[f] = {sorted3(faces[f].tri), static_cast<uint32_t>(f)};
+  std::sort(by_set.begin(), by_set.end());
+  auto lookup = [&](uint32_t x, uint32_t y, uint32_t z) -> int64_t {
+    const Triangle key = sorted3({x, y, z});
+    auto it = std::lower_bound(by_set.begin(), by_set.end(), std::make_pair(key, uint32_t{0}));
+    return it == by_set.end() || it->first != key ? -1 : int64_t{it->second};
+  };
+  std::vector<std::pair<uint64_t, uint32_t>> edges;
+  edges.reserve(3 * faces.size());
+  for (size_t f = 0; f < faces.size(); ++f) {
+    for (int e = 0; e < 3; ++e) {
+      const uint64_t a = faces[f].tri[e], b = faces[f].tri[(e + 1) % 3];
+      edges.push_back({(std::min(a, b) << 32) | std::max(a, b), static_cast<uint32_t>(f)});
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  // The corner of triangle `t` that is neither x nor y, and whether t runs from x to y.
+  auto other = [](const Triangle& t, uint32_t x, uint32_t y) {
+    for (int e = 0; e < 3; ++e)
+      if (t[e] != x && t[e] != y) return t[e];
+    return t[0];
+  };
+  auto runs = [](const Triangle& t, uint32_t x, uint32_t y) {
+    for (int e = 0; e < 3; ++e)
+      if (t[e] == x) return t[(e + 1) % 3] == y;
+    return false;
+  };
+  std::vector<uint8_t> flagged(faces.size(), 0);
+  uint64_t count = 0;
+  std::vector<std::string> paths;
+  auto flag = [&](uint32_t f) {
+    if (flagged[f]) return;
+    flagged[f] = 1;
+    ++count;
+    if (paths.size() < ValidationReport::kMaxPaths)
+      paths.push_back(tetPath(scope, faces[f].tet) + "/faces/" + std::to_string(faces[f].face));
+  };
+  std::string detail;
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i + 1;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    const uint32_t a = static_cast<uint32_t>(edges[i].first >> 32), c = static_cast<uint32_t>(edges[i].first);
+    for (size_t p = i; j - i <= kMaxEdgeTriangles && p < j; ++p) {
+      for (size_t q = p + 1; q < j; ++q) {
+        const uint32_t f1 = edges[p].second, f2 = edges[q].second;
+        const Triangle &t1 = faces[f1].tri, &t2 = faces[f2].tri;
+        // Facing the same way: they run along a-c in opposite directions.
+        if (runs(t1, a, c) == runs(t2, a, c)) continue;
+        const uint32_t b = other(t1, a, c), d = other(t2, a, c);
+        if (b == d) continue;
+        // Each quadrilateral once: from its diagonal with the smaller key.
+        if (edges[i].first > ((uint64_t{std::min(b, d)} << 32) | std::max(b, d))) continue;
+        const int64_t u1 = lookup(a, b, d), u2 = lookup(c, b, d);
+        if (u1 < 0 || u2 < 0) continue;
+        if (!finite[a] || !finite[b] || !finite[c] || !finite[d]) continue;
+        const double *pa = mesh.point(a), *pb = mesh.point(b), *pc = mesh.point(c), *pd = mesh.point(d);
+        if (orient3d(pa, pb, pc, pd) != 0) continue;
+        // Projected along the axis the plane faces most (its normal's largest component is not zero
+        // unless the triangle is degenerate, which the signs below then show), the two triangles of
+        // each diagonal must have one sign, the other diagonal's the opposite: then the quadrilateral
+        // is convex and both pairs cover it, facing opposite ways.
+        double n[3];
+        const double e1[3] = {pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]};
+        const double e2[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        int drop = 0;
+        for (int k = 1; k < 3; ++k)
+          if (std::fabs(n[k]) > std::fabs(n[drop])) drop = k;
+        auto sign = [&](const Triangle& t) {
+          return orient2dProjected(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]), drop);
+        };
+        const int s1 = sign(t1);
+        if (s1 == 0 || sign(t2) != s1 || sign(faces[u1].tri) != -s1 || sign(faces[u2].tri) != -s1) continue;
+        if (detail.empty())
+          detail = "the quadrilateral " + std::to_string(a) + "-" + std::to_string(b) + "-" + std::to_string(c) + "-" +
+                   std::to_string(d) + " is covered by boundary triangles along its diagonal " + std::to_string(a) +
+                   "-" + std::to_string(c) + " facing one way and along " + std::to_string(b) + "-" +
+                   std::to_string(d) + " facing the other: the parts of the volume on its two sides share its "
+                   "points but not its faces";
+        flag(f1);
+        flag(f2);
+        flag(static_cast<uint32_t>(u1));
+        flag(static_cast<uint32_t>(u2));
+      }
+    }
+    i = j;
+  }
+  if (count > 0) report.addMany(IssueCode::kNonconformingInterface, scope, count, paths, detail);
+  report.setTotal(IssueCode::kNonconformingInterface, scope, faces.size());
+  return count;
+}
+
 }  // namespace
 
 bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& report, MeshCheckStats* stats) {
@@ -257,15 +377,20 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
   };
   std::vector<DirEdge> dir_edges;
   dir_edges.reserve(3 * adj.boundary_faces);
+  std::vector<BoundaryFace> boundary;
+  boundary.reserve(adj.boundary_faces);
   for (size_t t = 0; t < nt; ++t) {
     for (int k = 0; k < 4; ++k) {
       if (adj.neighbor[4 * t + k] != kNoNeighbor) continue;
       const bool exempt = st.zero_volume > 0 && nearFlat(t);
       const Triangle tri = {mesh.tets[t][kTetFace[k][0]], mesh.tets[t][kTetFace[k][1]], mesh.tets[t][kTetFace[k][2]]};
       addTriangleEdges(tri, exempt, dir_edges);
+      // A zero-volume tetrahedron alone covers a quadrilateral from both sides (ZERO_VOLUME_TET).
+      if (!flat[t]) boundary.push_back({tri, static_cast<uint32_t>(t), static_cast<uint8_t>(k)});
     }
   }
   checkBoundaryEdges(dir_edges, scope, check_orientation, report);
+  checkInterfaces(mesh, boundary, finite, scope, report);
   return true;
 }
 

@@ -20,12 +20,14 @@ struct MeshCheckStats {
 
 // Checks one level: indices in range and distinct, field sizes, finite coordinates (error) and values
 // (warning), unreferenced points (info), every face in at most two tetrahedra, no duplicate
-// tetrahedra, the boundary surface closed and consistently oriented, and each tetrahedron's
-// orientation by exact predicates (inverted: error; zero volume: warning). `scope` is the level's
-// logical path ("/levels/2"); messages locate items below it ("/levels/2/tets/1234"). Returns false
-// when the indices are too broken for any later check that walks the mesh (an index out of range or
-// a repeated vertex stops the checks there). Boundary edges are checked only when every face is
-// manifold, their orientation only when no tetrahedron is inverted (one code per defect).
+// tetrahedra, the boundary surface closed and consistently oriented, no boundary triangles covering
+// a quadrilateral that others cover facing the other way along its other diagonal (a non-conforming
+// interface: warning), and each tetrahedron's orientation by exact predicates (inverted: error; zero
+// volume: warning). `scope` is the level's logical path ("/levels/2"); messages locate items below
+// it ("/levels/2/tets/1234"). Returns false when the indices are too broken for any later check that
+// walks the mesh (an index out of range or a repeated vertex stops the checks there). Boundary edges
+// and interfaces are checked only when every face is manifold, the edges' orientation only when no
+// tetrahedron is inverted (one code per defect).
 bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& report,
                MeshCheckStats* stats = nullptr);
 

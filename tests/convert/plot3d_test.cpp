@@ -4,13 +4,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <functional>
 #include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -20,6 +23,7 @@
 #include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
 #include "test_util.h"
+#include "validate/mesh_checks.h"
 
 namespace gtn {
 namespace {
@@ -1277,6 +1281,172 @@ TEST_F(Plot3dSynthetic, WeldMergesBitIdenticalPointsAndDropsCollapsedTets) {
   EXPECT_EQ(fs.coincident_points, 0u);
   EXPECT_EQ(fs.inverted, 0u);
   EXPECT_EQ(fin->mesh.findPointField("density")->itemCount(), fs.points);
+}
+
+// ---- Welded seams between blocks -----------------------------------------------------------------
+
+// A block whose point (i, j, k) is at p(i, j, k).
+Block mappedBlock(int ni, int nj, int nk, const std::function<std::array<double, 3>(int, int, int)>& p) {
+  Block b{{ni, nj, nk}, {}, {}, {}, {}};
+  for (int k = 0; k < nk; ++k)
+    for (int j = 0; j < nj; ++j)
+      for (int i = 0; i < ni; ++i) {
+        const std::array<double, 3> q = p(i, j, k);
+        b.x.push_back(q[0]);
+        b.y.push_back(q[1]);
+        b.z.push_back(q[2]);
+      }
+  return b;
+}
+
+// boxBlock's point (i, j, k) of the box starting at x = origin.
+std::array<double, 3> boxPoint(int i, int j, int k, double origin) {
+  return {origin + i + 0.125 * j, j + 0.25 * k, k + 0.0625 * (origin + i)};
+}
+
+// A ring of `blocks` annular sectors around the z axis (i radial, r from 1 to 2; j around, each block
+// `cells` cells of it; k along z), every seam a plane through the axis; the last block ends where the
+// first begins, bit for bit.
+std::vector<Block> ringBlocks(int blocks, int cells) {
+  std::vector<Block> out;
+  const int around = blocks * cells;
+  for (int b = 0; b < blocks; ++b)
+    out.push_back(mappedBlock(3, cells + 1, 3, [&](int i, int j, int k) {
+      const double t = 2 * M_PI * ((b * cells + j) % around) / around, r = 1 + 0.5 * i;
+      return std::array<double, 3>{r * std::cos(t), r * std::sin(t), 0.5 * k};
+    }));
+  return out;
+}
+
+// What the validator says about a mesh's non-conforming interfaces (boundary triangles), and that it
+// finds no error.
+uint64_t nonconforming(const TetMesh& mesh) {
+  ValidationReport report;
+  checkMesh(mesh, "/mesh", report);
+  EXPECT_FALSE(report.hasErrors()) << report.toText("mesh");
+  return report.count(IssueCode::kNonconformingInterface);
+}
+
+std::vector<std::string> seamWarnings(const ImportReport& r) {
+  std::vector<std::string> out;
+  for (const std::string& w : r.warnings)
+    if (w.rfind("--weld:", 0) == 0) out.push_back(w);
+  return out;
+}
+
+TEST_F(Plot3dSynthetic, WeldedBlocksOfOppositeParityConformWithSplitFive) {
+  // The second block starts where the first (3 cells along i) ends: at their seam the first has odd
+  // i + j + k where the second has even, so cutting both with parity i + j + k leaves the seam's 4
+  // quadrilaterals as 16 boundary triangles inside the volume. In the second, the same box is indexed
+  // with its axes permuted and one of them reversed.
+  const Block whole = boxBlock(6, 3, 3);
+  const Block first = boxBlock(4, 3, 3), second = boxBlock(3, 3, 3, 3.0);
+  const Block turned = mappedBlock(3, 3, 3, [](int i, int j, int k) { return boxPoint(k, 2 - j, i, 3.0); });
+  GridOptions o;
+  o.multi = true;
+  o.precision = 8;
+  const std::string one = write("whole.xyz", gridFile({whole}, o));
+  auto single = importFiles({one}, 5);
+  ASSERT_TRUE(single.isOk()) << single.status().message();
+  const MeshStats ss = computeMeshStats(single->mesh);
+  for (const Block& b : {second, turned}) {
+    const std::string xyz = write("two.xyz", gridFile({first, b}, o));
+    auto r = importFiles({xyz}, 5, true);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const MeshStats s = computeMeshStats(r->mesh);
+    EXPECT_EQ(r->report.welded_points, 9u);
+    EXPECT_EQ(s.points, ss.points);
+    EXPECT_EQ(s.tets, ss.tets);
+    EXPECT_EQ(s.boundary_faces, ss.boundary_faces);
+    EXPECT_EQ(s.faces, ss.faces);
+    EXPECT_EQ(s.non_manifold_faces, 0u);
+    EXPECT_NEAR(s.total_volume, ss.total_volume, 1e-12);
+    EXPECT_EQ(nonconforming(r->mesh), 0u);
+    EXPECT_EQ(seamWarnings(r->report), std::vector<std::string>{});
+  }
+  // The 6-split cuts every face along its diagonal of increasing indices: in the turned block that is
+  // the seam's other diagonal, which no choice can change. The convert warns, naming the grids, and
+  // the validator finds the 16 triangles.
+  const std::string xyz = write("turned.xyz", gridFile({first, turned}, o));
+  auto six = importFiles({xyz}, 6, true);
+  ASSERT_TRUE(six.isOk()) << six.status().message();
+  EXPECT_EQ(computeMeshStats(six->mesh).boundary_faces, computeMeshStats(importFiles({one}, 6)->mesh).boundary_faces + 16);
+  EXPECT_EQ(nonconforming(six->mesh), 16u);
+  const std::vector<std::string> w = seamWarnings(six->report);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("grids 1 and 2 meet at 4 cell faces, 4 of which --split 6 cuts along different diagonals"),
+            std::string::npos)
+      << w[0];
+  EXPECT_NE(w[0].find("NONCONFORMING_INTERFACE"), std::string::npos) << w[0];
+  // Unwelded, the blocks stay apart: nothing to conform.
+  auto apart = importFiles({xyz}, 6);
+  ASSERT_TRUE(apart.isOk());
+  EXPECT_EQ(nonconforming(apart->mesh), 0u);
+  EXPECT_EQ(seamWarnings(apart->report), std::vector<std::string>{});
+}
+
+TEST_F(Plot3dSynthetic, WeldedRingsConformWhereTheirParitiesAllowIt) {
+  GridOptions o;
+  o.multi = true;
+  o.precision = 8;
+  // Rings of blocks, each seam asking for the two blocks' parities to differ (3 cells per block) or
+  // agree (2): an even ring, or agreeing seams, conform all around; the parities propagate block to
+  // block.
+  for (const auto& [blocks, cells] : std::vector<std::pair<int, int>>{{4, 3}, {3, 2}, {2, 3}, {1, 4}}) {
+    SCOPED_TRACE(std::to_string(blocks) + " blocks of " + std::to_string(cells) + " cells");
+    const std::string xyz = write("ring.xyz", gridFile(ringBlocks(blocks, cells), o));
+    auto r = importFiles({xyz}, 5, true);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const MeshStats s = computeMeshStats(r->mesh);
+    // The inner and outer walls and the two ends: 2 x 2 quadrilaterals per cell around each, 2
+    // triangles per quadrilateral.
+    EXPECT_EQ(s.boundary_faces, static_cast<uint64_t>(blocks * cells) * 4 * 2 * 2);
+    EXPECT_EQ(s.non_manifold_faces, 0u);
+    EXPECT_EQ(s.inverted, 0u);
+    EXPECT_EQ(nonconforming(r->mesh), 0u);
+    EXPECT_EQ(seamWarnings(r->report), std::vector<std::string>{});
+  }
+  // An odd ring of seams that each ask for different parities, and one block around with an odd number
+  // of cells (meeting itself): one seam cannot conform. The convert warns naming its grids, and the
+  // validator finds its 4 quadrilaterals covered from both sides (16 triangles).
+  for (const auto& [blocks, cells, who] : std::vector<std::tuple<int, int, std::string>>{
+           {3, 3, "grids 2 and 3 meet"}, {1, 9, "grid 1 meets itself"}}) {
+    SCOPED_TRACE(who);
+    const std::string xyz = write("odd.xyz", gridFile(ringBlocks(blocks, cells), o));
+    auto r = importFiles({xyz}, 5, true);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(computeMeshStats(r->mesh).boundary_faces, static_cast<uint64_t>(blocks * cells) * 4 * 2 * 2 + 16);
+    EXPECT_EQ(nonconforming(r->mesh), 16u);
+    const std::vector<std::string> w = seamWarnings(r->report);
+    ASSERT_EQ(w.size(), 1u);
+    EXPECT_NE(w[0].find(who + " at 4 cell faces, 4 of which --split 5 cuts along different diagonals"),
+              std::string::npos)
+        << w[0];
+  }
+}
+
+TEST_F(Plot3dSynthetic, ConvertWarnsOfASeamThatCannotConformAndValidateReportsIt) {
+  GridOptions o;
+  o.multi = true;
+  o.precision = 8;
+  const std::string xyz = write("odd.xyz", gridFile(ringBlocks(3, 3), o));
+  const std::string out = dir_ + "/odd.gtn";
+  const test::RunResult c = test::runGtn("convert " + xyz + " --split 5 --weld --levels 1 -o " + out);
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_NE(c.err.find("grids 2 and 3 meet at 4 cell faces"), std::string::npos) << c.err;
+  const test::RunResult v = test::runGtn("validate " + out + " --json");
+  EXPECT_EQ(v.exit_code, 0) << v.out << v.err;
+  EXPECT_NE(v.out.find("NONCONFORMING_INTERFACE"), std::string::npos) << v.out;
+  const test::RunResult src = test::runGtn("validate " + xyz + " --split 5 --weld");
+  EXPECT_NE(src.out.find("NONCONFORMING_INTERFACE"), std::string::npos) << src.out;
+  // An even ring conforms: nothing to say.
+  const std::string even = write("even.xyz", gridFile(ringBlocks(4, 3), o));
+  const test::RunResult e = test::runGtn("convert " + even + " --split 5 --weld --levels 1 -o " + dir_ + "/even.gtn");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_EQ(e.err.find("--weld:"), std::string::npos) << e.err;
+  const test::RunResult ev = test::runGtn("validate " + dir_ + "/even.gtn");
+  EXPECT_EQ(ev.exit_code, 0) << ev.out;
+  EXPECT_EQ(ev.out.find("NONCONFORMING_INTERFACE"), std::string::npos) << ev.out;
 }
 
 // ---- Sample generator and CLI --------------------------------------------------------------------

@@ -8,6 +8,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -21,6 +22,7 @@
 #include "convert/vtk_common.h"
 #include "mesh/mesh_stats.h"
 #include "test_util.h"
+#include "validate/mesh_checks.h"
 
 namespace gtn {
 namespace {
@@ -1259,6 +1261,64 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
   ASSERT_EQ(alone->report.warnings.size(), 1u);
   EXPECT_EQ(alone->report.warnings[0].find("1 cells are ghost copies of another piece's cells"), 0u)
       << alone->report.warnings[0];
+}
+
+// A <Piece> of one hexahedron, its corners (VTK order) at `corners`, stored in the order `order` (the
+// stored point k is corner order[k]).
+std::string hexPiece(const std::vector<std::array<double, 3>>& corners, const std::array<int, 8>& order) {
+  std::string points, conn;
+  std::array<int, 8> stored_at{};
+  for (int k = 0; k < 8; ++k) {
+    stored_at[order[k]] = k;
+    for (double v : corners[order[k]]) points += std::to_string(v) + " ";
+  }
+  for (int c = 0; c < 8; ++c) conn += std::to_string(stored_at[c]) + " ";
+  return R"(<Piece NumberOfPoints="8" NumberOfCells="1">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" + points + R"(</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">)" + conn + R"(</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">8</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">12</DataArray></Cells>
+</Piece>
+)";
+}
+
+// Two hexahedra side by side in two pieces of a .vtu, the second numbering its points in another
+// order: welded, the face rule sees the points they share as one, so both cut their common face
+// along the same diagonal and it is inside the mesh, not a non-conforming interface.
+TEST(Vtu, WeldedPiecesCutTheFacesTheyShareAlike) {
+  const std::string dir = tempDir("vtu_weld_seam");
+  auto cube = [](double x0) {
+    std::vector<std::array<double, 3>> c;
+    for (const auto& [dx, dy, dz] : std::vector<std::array<double, 3>>{
+             {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}})
+      c.push_back({x0 + dx, dy, dz});
+    return c;
+  };
+  // In the second piece the shared face's corner (1, 1, 0) comes first: the face's smallest index
+  // sits elsewhere than in the first piece, at (1, 0, 0).
+  writeFile(dir + "/p.vtu", R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian"><UnstructuredGrid>
+)" + hexPiece(cube(0), {0, 1, 2, 3, 4, 5, 6, 7}) + hexPiece(cube(1), {3, 0, 1, 2, 4, 5, 6, 7}) +
+                                  "</UnstructuredGrid></VTKFile>\n");
+  for (int split : {5, 6}) {
+    SCOPED_TRACE(split);
+    ImportOptions weld;
+    weld.weld = true;
+    weld.split = split;
+    auto r = importMesh({dir + "/p.vtu"}, weld);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->report.welded_points, 4u);
+    EXPECT_EQ(r->report.collapsed_tets, 0u);
+    const MeshStats s = computeMeshStats(r->mesh);
+    EXPECT_EQ(s.points, 12u);
+    EXPECT_EQ(s.boundary_faces, 20u);
+    EXPECT_EQ(s.non_manifold_faces, 0u);
+    EXPECT_NEAR(s.total_volume, 2.0, 1e-12);
+    ValidationReport report;
+    checkMesh(r->mesh, "/mesh", report);
+    EXPECT_FALSE(report.hasErrors()) << report.toText("p.vtu");
+    EXPECT_EQ(report.count(IssueCode::kNonconformingInterface), 0u) << report.toText("p.vtu");
+  }
 }
 
 // --weld on a VTK file: the second tetrahedron has two bit-identical corners, so welding flattens

@@ -12,6 +12,7 @@
 #include <map>
 
 #include "convert/export.h"
+#include "mesh/hex_split.h"
 #include "mesh/mesh_stats.h"
 #include "simplify/apply.h"
 #include "validate/mesh_checks.h"
@@ -541,6 +542,52 @@ TEST(MustFail, EveryErrorCodeHasACase) {
     if (info.severity != Severity::kError) continue;
     EXPECT_TRUE(all.count(info.code)) << "no must-fail case for " << info.code;
   }
+}
+
+// Two unit cubes side by side sharing the four points of their common face, each cut into 5
+// tetrahedra with the given parities: equal parities cut the common face along different diagonals
+// (a non-conforming interface), opposite ones along the same.
+TetMesh twoCubes(bool odd_first, bool odd_second, double lift = 0) {
+  TetMesh m;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 3; ++i) m.coords.insert(m.coords.end(), {i + lift * (i == 1 && j == 1 && k == 1), double(j), double(k)});
+  auto id = [](int i, int j, int k) { return static_cast<uint32_t>(i + 3 * (j + 2 * k)); };
+  for (int c = 0; c < 2; ++c) {
+    const uint32_t h[8] = {id(c, 0, 0), id(c + 1, 0, 0), id(c + 1, 1, 0), id(c, 1, 0),
+                           id(c, 0, 1), id(c + 1, 0, 1), id(c + 1, 1, 1), id(c, 1, 1)};
+    splitHexFive(h, c == 0 ? odd_first : odd_second, m.tets);
+  }
+  size_t zero = 0;
+  normalizeOrientation(m, &zero);
+  return m;
+}
+
+TEST(MustFail, NonconformingInterfaceIsAWarning) {
+  // The common face cut along different diagonals: its four triangles are boundary faces covering the
+  // same square from both sides. Closed and consistently oriented, so no error, but a warning that
+  // names the four triangles.
+  ValidationReport r = reportOf(decodedOf(twoCubes(false, false)));
+  EXPECT_FALSE(r.hasErrors()) << r.toText("seam");
+  EXPECT_EQ(r.count(IssueCode::kNonconformingInterface), 4u) << r.toText("seam");
+  const std::string text = r.toText("seam");
+  EXPECT_NE(text.find("NONCONFORMING_INTERFACE"), std::string::npos) << text;
+  EXPECT_NE(text.find("4 boundary triangles that cover the same surface"), std::string::npos) << text;
+  // Cut alike, the face is inside: nothing to report.
+  ValidationReport ok = reportOf(decodedOf(twoCubes(false, true)));
+  EXPECT_EQ(ok.count(IssueCode::kNonconformingInterface), 0u) << ok.toText("conforming");
+  EXPECT_EQ(ok.count(Severity::kWarning), 0u) << ok.toText("conforming");
+  // The common face's corner (1, 1, 1) moved out of its plane: the four triangles bound a thin
+  // tetrahedron, as those of a cavity that a valid mesh may have do (below): not this pattern.
+  EXPECT_EQ(reportOf(decodedOf(twoCubes(false, false, 0.25))).count(IssueCode::kNonconformingInterface), 0u);
+  // A cube without its central tetrahedron: a cavity bounded by four boundary triangles, two on each
+  // diagonal of a square of its faces' corners, but not coplanar.
+  TetMesh cavity = twoCubes(false, true);
+  cavity.tets.resize(5);
+  cavity.tets.erase(cavity.tets.begin());
+  ValidationReport c = reportOf(decodedOf(cavity));
+  EXPECT_FALSE(c.hasErrors()) << c.toText("cavity");
+  EXPECT_EQ(c.count(IssueCode::kNonconformingInterface), 0u) << c.toText("cavity");
 }
 
 TEST(MustFail, WarningsAndInfosKeepTheFileValid) {
