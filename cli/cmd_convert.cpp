@@ -1,8 +1,13 @@
 // gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--compress] [--levels K] [--no-merge-tree]
-//   [--no-verify] [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W]
+//   [--no-verify] [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W] [-q]
+#include <sys/stat.h>
+
+#include <chrono>
+#include <cstdio>
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/progress_line.h"
 #include "convert/export.h"
 #include "convert/import.h"
 #include "format/file_io.h"
@@ -24,6 +29,7 @@ struct ConvertArgs {
   bool no_verify = false;  // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
   double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes
   RankingOptions ranking;
+  bool quiet = false;  // -q: no progress line, no summary
 };
 
 // Level 0, its mip levels and merge trees as the options ask (simplify/levels.h).
@@ -33,7 +39,11 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
     level0.mesh = &mesh;
     return writeGtnFile(a.output, {level0}, wo);
   }
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, nullptr));
+  reportProgress(wo.progress, "rank merges", 0.0);
+  RankingOptions ranking = a.ranking;
+  ranking.progress = wo.progress;
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, ranking, nullptr));
+  reportProgress(wo.progress, "build levels");
   LevelOptions lo;
   lo.levels = a.levels;
   lo.merge_tree = !a.no_merge_tree;
@@ -49,7 +59,45 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
   return writeGtnFile(a.output, levels.inputs(mesh), bounded);
 }
 
+// The size of a file, or -1 when it has none (standard input, a pipe) or cannot be read.
+int64_t fileBytes(const std::string& path) {
+  struct stat sb;
+  if (path == "-" || ::stat(path.c_str(), &sb) != 0 || !S_ISREG(sb.st_mode)) return -1;
+  return static_cast<int64_t>(sb.st_size);
+}
+
+// The one line a finished conversion prints on standard error: what was read and written, their
+// sizes and ratio, bits per tetrahedron of the output, the time taken.
+void printSummary(const ConvertArgs& a, size_t tets, double seconds) {
+  std::string in_names;
+  int64_t in_bytes = 0;
+  for (const std::string& in : a.inputs) {
+    in_names += (in_names.empty() ? "" : " + ") + in;
+    const int64_t b = fileBytes(in);
+    in_bytes = in_bytes < 0 || b < 0 ? -1 : in_bytes + b;
+  }
+  const int64_t out_bytes = fileBytes(a.output);
+  std::string line = "gtn: " + in_names;
+  if (in_bytes >= 0) line += " (" + std::to_string(in_bytes) + " bytes)";
+  line += " -> " + a.output;
+  if (out_bytes >= 0) line += " (" + std::to_string(out_bytes) + " bytes)";
+  char buf[160];
+  if (in_bytes > 0 && out_bytes >= 0) {
+    std::snprintf(buf, sizeof buf, ": %.2f%% of the input", 100.0 * static_cast<double>(out_bytes) / static_cast<double>(in_bytes));
+    line += buf;
+  }
+  if (tets > 0 && out_bytes >= 0) {
+    std::snprintf(buf, sizeof buf, ", %.2f bits/tet (%zu tetrahedra)", 8.0 * static_cast<double>(out_bytes) / static_cast<double>(tets),
+                  tets);
+    line += buf;
+  }
+  std::snprintf(buf, sizeof buf, ", %.2f s", seconds);
+  line += buf;
+  std::fprintf(stderr, "%s\n", line.c_str());
+}
+
 int runConvert(const ConvertArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
   const OutputFormat out_format = detectOutputFormat(a.output);
   if (out_format == OutputFormat::kUnknown)
     return reportError(usageError(a.output + ": unknown output format (use .gtn, .vtu, .vtk, .node or .ele)"));
@@ -58,6 +106,8 @@ int runConvert(const ConvertArgs& a) {
   }
   if (a.compress && out_format != OutputFormat::kVtu)
     warn(a.output + ": --compress applies to .vtu outputs only; ignored");
+  ProgressLine progress("gtn convert", !a.quiet);
+  progress.update("import");
   ImportOptions options;
   options.split = a.split;
   options.weld = a.weld;
@@ -70,7 +120,10 @@ int runConvert(const ConvertArgs& a) {
     case OutputFormat::kGtn: {
       GtnWriteOptions wo;
       wo.tool_version = GTN_VERSION_STRING;
-      wo.command_line = commandLine();
+      std::vector<std::string> paths = a.inputs;
+      paths.push_back(a.output);
+      wo.command_line = commandLineWithFileNames(paths);  // file names only: no directories in the file
+      wo.progress = progress.callback();
       wo.verify = !a.no_verify;
       st = writeGtnWithLevels(a, mesh, wo);
       // The encoder's refusals are about the mesh: name its input and where to see the details.
@@ -80,12 +133,16 @@ int runConvert(const ConvertArgs& a) {
       break;
     }
     default: {
+      progress.update("write " + a.output);
       ExportOptions eo;
       eo.compress = a.compress;
       st = exportMesh(mesh, a.output, eo);
     }
   }
   if (!st.isOk()) return reportError(st);
+  progress.clear();
+  if (!a.quiet)
+    printSummary(a, mesh.numTets(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return 0;
 }
 }  // namespace
@@ -116,6 +173,8 @@ Command addConvertCommand(CLI::App& app) {
       ->check(finiteAtLeastZero());
   sub->add_option("--w-geometry", args->ranking.w_geometry, ".gtn: weight of the boundary geometry error")
       ->check(finiteAtLeastZero());
+  sub->add_flag("-q,--quiet", args->quiet,
+                "no progress line (shown while standard error is a terminal) and no summary line at the end");
   return {sub, [args] { return runConvert(*args); }};
 }
 

@@ -678,6 +678,8 @@ MergeTree Ranker::run(RankingStats* stats) {
     ++popped;
     if (validate(e.v, e.w)) {
       merge(e.v, e.w, e.error);
+      if (tree_.merges % 16384 == 0)
+        reportProgress(options_.progress, "rank merges", static_cast<double>(tree_.merges) / np);
       continue;
     }
     ++rejected;

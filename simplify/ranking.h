@@ -50,6 +50,7 @@
 #include <string>
 
 #include "codec/merge_tree_coder.h"
+#include "mesh/progress.h"
 #include "mesh/tet_mesh.h"
 
 namespace gtn {
@@ -60,6 +61,7 @@ struct RankingOptions {
   double w_density = 1.0;
   double w_geometry = 1.0;
   uint64_t max_merges = UINT64_MAX;  // stop after this many merges
+  ProgressFn progress;               // optional: "rank merges" and the share of the points merged
 };
 
 struct RankingStats {
