@@ -2,14 +2,18 @@
 //   [--no-verify] [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W] [-q]
 #include <sys/stat.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <utility>
 
 #include "cli/commands.h"
 #include "cli/progress_line.h"
 #include "convert/export.h"
 #include "convert/import.h"
+#include "convert/tetgen_layout.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
 #include "simplify/levels.h"
@@ -66,20 +70,45 @@ int64_t fileBytes(const std::string& path) {
   return static_cast<int64_t>(sb.st_size);
 }
 
+// The files a TetGen mesh named by `path` (a basename, .node or .ele) takes that exist: .node, .ele
+// and .face; other paths as they are.
+std::vector<std::string> meshFiles(const std::string& path, bool tetgen) {
+  if (!tetgen) return {path};
+  const std::string base = tetgen::basePath(path);
+  std::vector<std::string> files;
+  for (const char* ext : {".node", ".ele", ".face"})
+    if (isRegularFile(base + ext)) files.push_back(base + ext);
+  return files;
+}
+
+// Names and total size of the files (-1: unknown, e.g. standard input or a .p3d meta-file, whose
+// data files it names).
+std::pair<std::string, int64_t> describeFiles(const std::vector<std::string>& files) {
+  std::string names;
+  int64_t bytes = files.empty() ? -1 : 0;
+  for (const std::string& f : files) {
+    names += (names.empty() ? "" : " + ") + f;
+    std::string ext = f.size() > 4 ? f.substr(f.size() - 4) : "";
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const int64_t b = ext == ".p3d" ? -1 : fileBytes(f);
+    bytes = bytes < 0 || b < 0 ? -1 : bytes + b;
+  }
+  return {names, bytes};
+}
+
 // The one line a finished conversion prints on standard error: what was read and written, their
 // sizes and ratio, bits per tetrahedron of the output, the time taken.
 void printSummary(const ConvertArgs& a, size_t tets, double seconds) {
-  std::string in_names;
-  int64_t in_bytes = 0;
-  for (const std::string& in : a.inputs) {
-    in_names += (in_names.empty() ? "" : " + ") + in;
-    const int64_t b = fileBytes(in);
-    in_bytes = in_bytes < 0 || b < 0 ? -1 : in_bytes + b;
-  }
-  const int64_t out_bytes = fileBytes(a.output);
+  std::vector<std::string> inputs;
+  for (const std::string& in : a.inputs)
+    for (const std::string& f : meshFiles(in, in != "-" && detectInputFormat(in) == InputFormat::kTetgen))
+      if (std::find(inputs.begin(), inputs.end(), f) == inputs.end()) inputs.push_back(f);
+  const auto [in_names, in_bytes] = describeFiles(inputs);
+  const auto [out_names, out_bytes] =
+      describeFiles(meshFiles(a.output, detectOutputFormat(a.output) == OutputFormat::kTetgen));
   std::string line = "gtn: " + in_names;
   if (in_bytes >= 0) line += " (" + std::to_string(in_bytes) + " bytes)";
-  line += " -> " + a.output;
+  line += " -> " + out_names;
   if (out_bytes >= 0) line += " (" + std::to_string(out_bytes) + " bytes)";
   char buf[160];
   if (in_bytes > 0 && out_bytes >= 0) {

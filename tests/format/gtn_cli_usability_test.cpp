@@ -131,6 +131,20 @@ TEST_F(UsabilityCli, ConvertEndsWithASummaryLineWhoseFiguresAreTheFiles) {
     ASSERT_EQ(q.exit_code, 0) << q.err;
     EXPECT_EQ(q.err, "");
   }
+  // A TetGen output is three files; their sizes add up, and so do those of a TetGen input.
+  const RunResult t = runGtn("convert " + vtk_ + " -o " + dir_ + "/t.ele");
+  ASSERT_EQ(t.exit_code, 0) << t.err;
+  const uint64_t tetgen_bytes = fileSize(dir_ + "/t.node") + fileSize(dir_ + "/t.ele") + fileSize(dir_ + "/t.face");
+  EXPECT_NE(t.err.find(" -> " + dir_ + "/t.node + " + dir_ + "/t.ele + " + dir_ + "/t.face (" +
+                       std::to_string(tetgen_bytes) + " bytes)"),
+            std::string::npos)
+      << t.err;
+  const RunResult back = runGtn("convert " + dir_ + "/t -o " + dir_ + "/t.gtn");
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  EXPECT_NE(back.err.find("gtn: " + dir_ + "/t.node + " + dir_ + "/t.ele + " + dir_ + "/t.face (" +
+                          std::to_string(tetgen_bytes) + " bytes) -> "),
+            std::string::npos)
+      << back.err;
   // Several inputs: their sizes add up.
   const std::string xyz = dir_ + "/two.xyz";
   test::writeFile(xyz, plot3dBlocks(2, 5, 4, 3));
@@ -166,6 +180,21 @@ TEST_F(UsabilityCli, ProgressShowsOnATerminalOnly) {
   ASSERT_EQ(redirected.exit_code, 0) << redirected.err;
   EXPECT_EQ(redirected.err.find("gtn convert:"), std::string::npos) << redirected.err;
   EXPECT_EQ(redirected.err.find('\r'), std::string::npos) << redirected.err;
+
+  // export and render show the share of the level decoded, on a terminal only.
+  const std::string gtn = dir_ + "/p.gtn";
+  const std::vector<std::pair<std::string, std::string>> decoders = {
+      {"export " + gtn + " -o " + dir_ + "/p.vtu", "gtn export: decode"},
+      {"render " + gtn + " --size 16x16 -o " + dir_ + "/p.png", "gtn render: decode and render level 0"}};
+  for (const auto& [args, stage] : decoders) {
+    SCOPED_TRACE(args);
+    const RunResult shown = test::runShell("script -qec '" + std::string(GTN_BINARY) + " " + args + "' /dev/null");
+    ASSERT_EQ(shown.exit_code, 0) << shown.out;
+    EXPECT_NE(shown.out.find(stage), std::string::npos) << shown.out;
+    const RunResult plain = runGtn(args);
+    ASSERT_EQ(plain.exit_code, 0) << plain.err;
+    EXPECT_EQ(plain.err.find(stage), std::string::npos) << plain.err;
+  }
 }
 
 // ---- the header's command line (item 12a) -------------------------------------------------------
