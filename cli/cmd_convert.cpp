@@ -44,9 +44,7 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
     return writeGtnFile(a.output, {level0}, wo);
   }
   reportProgress(wo.progress, "rank merges", 0.0);
-  RankingOptions ranking = a.ranking;
-  ranking.progress = wo.progress;
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, ranking, nullptr));
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, nullptr, wo.progress));
   reportProgress(wo.progress, "build levels");
   LevelOptions lo;
   lo.levels = a.levels;

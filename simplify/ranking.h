@@ -61,7 +61,6 @@ struct RankingOptions {
   double w_density = 1.0;
   double w_geometry = 1.0;
   uint64_t max_merges = UINT64_MAX;  // stop after this many merges
-  ProgressFn progress;               // optional: "rank merges" and the share of the points merged
 };
 
 struct RankingStats {
@@ -75,6 +74,8 @@ struct RankingStats {
 
 // Ranks the merges of `mesh` (tetrahedra positively oriented, zero-volume ones allowed). The tree's
 // error vector and quantiles are filled. Fails with kUsage if `options.field` names no point field.
-StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats);
+// `progress` (optional) is told "rank merges" with the share of the points merged so far.
+StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats,
+                               const ProgressFn& progress = {});
 
 }  // namespace gtn
