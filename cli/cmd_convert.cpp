@@ -1,8 +1,11 @@
 // gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--compress] [--levels K] [--no-merge-tree]
-//   [--no-verify] [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W]
+//   [--no-verify] [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W] [-q]
+#include <chrono>
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/convert_summary.h"
+#include "cli/progress_line.h"
 #include "convert/export.h"
 #include "convert/import.h"
 #include "format/file_io.h"
@@ -24,6 +27,7 @@ struct ConvertArgs {
   bool no_verify = false;  // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
   double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes
   RankingOptions ranking;
+  bool quiet = false;  // -q: no progress line, no summary
 };
 
 // Level 0, its mip levels and merge trees as the options ask (simplify/levels.h).
@@ -33,7 +37,9 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
     level0.mesh = &mesh;
     return writeGtnFile(a.output, {level0}, wo);
   }
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, nullptr));
+  reportProgress(wo.progress, "rank merges", 0.0);
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, nullptr, wo.progress));
+  reportProgress(wo.progress, "build levels");
   LevelOptions lo;
   lo.levels = a.levels;
   lo.merge_tree = !a.no_merge_tree;
@@ -50,6 +56,7 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
 }
 
 int runConvert(const ConvertArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
   const OutputFormat out_format = detectOutputFormat(a.output);
   if (out_format == OutputFormat::kUnknown)
     return reportError(usageError(a.output + ": unknown output format (use .gtn, .vtu, .vtk, .node or .ele)"));
@@ -58,6 +65,8 @@ int runConvert(const ConvertArgs& a) {
   }
   if (a.compress && out_format != OutputFormat::kVtu)
     warn(a.output + ": --compress applies to .vtu outputs only; ignored");
+  ProgressLine progress("gtn convert", !a.quiet);
+  progress.update("import");
   ImportOptions options;
   options.split = a.split;
   options.weld = a.weld;
@@ -70,7 +79,10 @@ int runConvert(const ConvertArgs& a) {
     case OutputFormat::kGtn: {
       GtnWriteOptions wo;
       wo.tool_version = GTN_VERSION_STRING;
-      wo.command_line = commandLine();
+      std::vector<std::string> paths = a.inputs;
+      paths.push_back(a.output);
+      wo.command_line = commandLineWithFileNames(paths);  // file names only: no directories in the file
+      wo.progress = progress.callback();
       wo.verify = !a.no_verify;
       st = writeGtnWithLevels(a, mesh, wo);
       // The encoder's refusals are about the mesh: name its input and where to see the details.
@@ -80,12 +92,17 @@ int runConvert(const ConvertArgs& a) {
       break;
     }
     default: {
+      progress.update("write " + a.output);
       ExportOptions eo;
       eo.compress = a.compress;
       st = exportMesh(mesh, a.output, eo);
     }
   }
   if (!st.isOk()) return reportError(st);
+  progress.clear();
+  if (!a.quiet)
+    printConvertSummary(a.inputs, a.output, mesh.numTets(),
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return 0;
 }
 }  // namespace
@@ -116,6 +133,8 @@ Command addConvertCommand(CLI::App& app) {
       ->check(finiteAtLeastZero());
   sub->add_option("--w-geometry", args->ranking.w_geometry, ".gtn: weight of the boundary geometry error")
       ->check(finiteAtLeastZero());
+  sub->add_flag("-q,--quiet", args->quiet,
+                "no progress line (shown while standard error is a terminal) and no summary line at the end");
   return {sub, [args] { return runConvert(*args); }};
 }
 

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/progress_line.h"
 #include "convert/import.h"
 #include "convert/export.h"
 #include "format/file_io.h"
@@ -66,7 +67,7 @@ int runExport(const ExportArgs& a) {
   if (a.input == a.output || sameFile(a.input, a.output)) return reportError(usageError(a.output + ": the output would overwrite the input"));
   GtnOpenOptions oo;
   oo.verify = false;  // random access through the directory; every chunk read is still checksummed
-  auto reader = GtnReader::open(a.input, oo);
+  auto reader = openGtnChecked(a.input, oo, warn);
   if (!reader.isOk()) {
     // A mesh file given to export: say which command converts it.
     const InputFormat in_format = detectInputFormat(a.input);
@@ -87,15 +88,20 @@ int runExport(const ExportArgs& a) {
     fields = std::move(selected).value();
   }
   TetMeshBuilder builder;
+  // On a terminal, the share of the level decoded, then the write.
+  ProgressLine progress("gtn export", true);
+  ProgressMeshSink shown(builder, progress.callback(), "decode");
+  MeshSink& sink = progress.active() ? static_cast<MeshSink&>(shown) : builder;
   Status st;
   if (a.ratio >= 0 || a.merges >= 0) {
     const uint64_t target = a.merges >= 0 ? static_cast<uint64_t>(a.merges) : mergesForRatio(r, a.ratio);
-    st = streamSimplified(r, target, builder, nullptr, /*clamp=*/a.merges < 0, &fields);
+    st = streamSimplified(r, target, sink, nullptr, /*clamp=*/a.merges < 0, &fields);
   } else {
-    st = r.decodeLevel(a.level, builder, nullptr, &fields);
+    st = r.decodeLevel(a.level, sink, nullptr, &fields);
   }
   if (!st.isOk()) return reportError(st);
   if (!a.fields.empty()) dropFields(builder.mesh(), fields);
+  progress.update("write " + a.output);
   ExportOptions eo;
   eo.compress = a.compress;
   st = exportMesh(builder.mesh(), a.output, eo);

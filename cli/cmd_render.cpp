@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "cli/progress_line.h"
 #include "format/file_io.h"
 #include "render/generic_renderer.h"
 #include "render/render_input.h"
@@ -191,6 +192,7 @@ int runRender(const RenderArgs& a) {
     return reportError(usageError(a.output + ": -o and --dump-view name the same file"));
   auto input = RenderInput::open(a.inputs);
   if (!input.isOk()) return reportError(input.status());
+  for (const std::string& w : (*input)->warnings()) warn(w);
   const bool generic = a.pipeline == "generic";
   nlohmann::json report;
   LevelChoice choice;
@@ -249,7 +251,10 @@ int runRender(const RenderArgs& a) {
       warn(a.inputs[0] + ": " + why);
     }
   }
+  ProgressLine progress("gtn render", true);  // on a terminal: the share of the level decoded and rendered
+  (*input)->setProgress(progress.callback());
   auto image = renderOnce(**input, level.value(), options, generic, report);
+  progress.clear();
   if (!image.isOk()) return reportError(image.status());
   if (Status st = writePng(a.output, image.value()); !st.isOk()) return reportError(st);
   if (!a.dump_view.empty()) {

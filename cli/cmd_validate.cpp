@@ -21,6 +21,7 @@ struct ValidateArgs {
   std::vector<std::string> against;
   int split = 6;
   bool weld = false;
+  bool split_given = false;  // --split on the command line (otherwise --against takes the file's)
   bool json = false;
   bool quick = false;
   size_t max_issues = 100;
@@ -41,6 +42,8 @@ int runValidate(const ValidateArgs& a) {
   options.against = a.against;
   options.import_options.split = a.split;
   options.import_options.weld = a.weld;
+  options.split_from_file = !a.split_given;
+  options.weld_from_file = !a.weld;
   // A .gtn file (or a file no importer knows, which the container checks then describe), else mesh files.
   const InputFormat format = detectInputFormat(a.files.front());
   const bool gtn = format == InputFormat::kGtn || format == InputFormat::kUnknown;
@@ -69,17 +72,24 @@ Command addValidateCommand(CLI::App& app) {
   sub->add_option("files", args->files,
                   "The .gtn file to check, or mesh files as 'gtn convert' takes them (PLOT3D grid [Q], TetGen, VTK, Medit, OFF)");
   sub->add_option("--against", args->against, "Source file(s) that level 0 must equal (up to renumbering)");
-  sub->add_option("--split", args->split, "mesh files and --against: hexahedra into 5 or 6 tetrahedra")
-      ->check(CLI::IsMember({5, 6}));
+  CLI::Option* split =
+      sub->add_option("--split", args->split,
+                      "mesh files and --against: hexahedra into 5 or 6 tetrahedra (--against: default as the "
+                      ".gtn file records it, else 6)")
+          ->check(CLI::IsMember({5, 6}));
   sub->add_flag("--weld", args->weld,
-                "mesh files and --against: merge bit-identical points (seams between PLOT3D blocks or VTK pieces)");
+                "mesh files and --against: merge bit-identical points (seams between PLOT3D blocks or VTK pieces); "
+                "--against: also when the .gtn file records it");
   sub->add_flag("--json", args->json, "Print the report as one JSON document on standard output");
   sub->add_flag("--quick", args->quick, "Check the container and checksums only");
   sub->add_option("--max-issues", args->max_issues, "Keep at most N messages (counts stay exact)")
       ->check(CLI::Range(size_t{1}, size_t{1000000}));
   sub->add_flag("--list-issues", args->list_issues, "List every issue code the validator can report");
   sub->add_flag("--markdown", args->markdown, "--list-issues: as the Markdown page docs/validation-issues.md");
-  return {sub, [args] { return runValidate(*args); }};
+  return {sub, [args, split] {
+            args->split_given = split->count() > 0;
+            return runValidate(*args);
+          }};
 }
 
 }  // namespace gtn::cli

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "convert/import.h"
 #include "mesh/status.h"
@@ -53,8 +54,11 @@ void warnAbout(const std::string& input, const std::string& warning);
 // JSON as text for standard output; strings that are not UTF-8 (names in files written by older
 // versions, file names) get U+FFFD where their bytes are invalid instead of aborting the program.
 std::string jsonText(const nlohmann::json& j, int indent = 2);
-// The command line as the user typed it (for provenance).
+// The command line as the user typed it.
 const std::string& commandLine();
 void setCommandLine(int argc, char** argv);
+// The command line for provenance (.gtn headers): the program and each argument that is one of
+// `paths` (or an option's value that is) reduced to its file name, without directories.
+std::string commandLineWithFileNames(const std::vector<std::string>& paths);
 
 }  // namespace gtn::cli

@@ -1,4 +1,5 @@
 // gtn: convert, inspect, validate, export and render irregular-grid volume data.
+#include <algorithm>
 #include <cstdio>
 #include <vector>
 
@@ -7,14 +8,25 @@
 #endif
 
 #include "cli/commands.h"
+#include "cli/progress_line.h"
 
 namespace gtn::cli {
 
 namespace {
 std::string g_command_line;
+std::vector<std::string> g_arguments;
+
+// A path's last component ("/data/run 3/grid.xyz" gives "grid.xyz"); "-" and names without a
+// directory as they are.
+std::string fileName(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  if (slash == std::string::npos || slash + 1 == path.size()) return path;
+  return path.substr(slash + 1);
 }
+}  // namespace
 
 int reportError(const Status& status) {
+  ProgressLine::erase();
   std::fprintf(stderr, "gtn: error: %s\n", status.message().c_str());
   return exitCodeFor(status.code());
 }
@@ -23,9 +35,13 @@ std::string jsonText(const nlohmann::json& j, int indent) {
   return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-void warn(const std::string& message) { std::fprintf(stderr, "gtn: warning: %s\n", message.c_str()); }
+void warn(const std::string& message) {
+  ProgressLine::erase();
+  std::fprintf(stderr, "gtn: warning: %s\n", message.c_str());
+}
 
 void printImportReport(const std::string& input, const ImportReport& r) {
+  ProgressLine::erase();
   if (r.flipped) std::fprintf(stderr, "gtn: %s: flipped %zu tetrahedra to positive orientation\n", input.c_str(), r.flipped);
   if (r.zero_volume)
     std::fprintf(stderr, "gtn: %s: %zu tetrahedra have zero volume (kept)\n", input.c_str(), r.zero_volume);
@@ -51,10 +67,32 @@ const std::string& commandLine() { return g_command_line; }
 
 void setCommandLine(int argc, char** argv) {
   g_command_line.clear();
+  g_arguments.clear();
   for (int i = 0; i < argc; ++i) {
     if (i) g_command_line += ' ';
     g_command_line += argv[i];
+    g_arguments.emplace_back(argv[i]);
   }
+}
+
+std::string commandLineWithFileNames(const std::vector<std::string>& paths) {
+  auto isPath = [&](const std::string& s) { return std::find(paths.begin(), paths.end(), s) != paths.end(); };
+  std::string out;
+  for (size_t i = 0; i < g_arguments.size(); ++i) {
+    const std::string& arg = g_arguments[i];
+    std::string shown = arg;
+    if (i == 0 || isPath(arg)) {
+      shown = fileName(arg);
+    } else if (arg.size() > 2 && arg[0] == '-') {
+      // --output=PATH, or -oPATH (a short option with its value attached).
+      const size_t eq = arg.rfind("--", 0) == 0 ? arg.find('=') : std::string::npos;
+      if (eq != std::string::npos && isPath(arg.substr(eq + 1))) shown = arg.substr(0, eq + 1) + fileName(arg.substr(eq + 1));
+      else if (arg[1] != '-' && isPath(arg.substr(2))) shown = arg.substr(0, 2) + fileName(arg.substr(2));
+    }
+    if (i) out += ' ';
+    out += shown;
+  }
+  return out;
 }
 
 }  // namespace gtn::cli

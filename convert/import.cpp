@@ -161,11 +161,14 @@ namespace {
 // export's level 0; -o y.gtn re-encodes it, with other levels or none). Mip levels and the merge tree
 // are not read: a .gtn output gets its own from level 0.
 StatusOr<ImportResult> importGtn(const std::string& path) {
-  GTN_ASSIGN_OR_RETURN(std::unique_ptr<GtnReader> reader, GtnReader::open(path));
+  ImportResult result;
+  GtnOpenOptions oo;
+  oo.verify = false;  // level 0 is read, checksummed as it is; damage elsewhere is a warning
+  GTN_ASSIGN_OR_RETURN(std::unique_ptr<GtnReader> reader,
+                       openGtnChecked(path, oo, [&](const std::string& w) { result.report.warnings.push_back(w); }));
   if (reader->levels() == 0) return invalidData(path + ": the file holds no level");
   TetMeshBuilder builder;
   GTN_RETURN_IF_ERROR(reader->decodeLevel(0, builder));
-  ImportResult result;
   result.mesh = std::move(builder.mesh());
   if (reader->levels() > 1)
     result.report.warnings.push_back("read level 0, the lossless mesh, of its " + std::to_string(reader->levels()) +
@@ -265,6 +268,12 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
 
 StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const ImportOptions& options) {
   StatusOr<ImportResult> result = importMeshOnce(inputs, options);
+  if (result.isOk() && !inputs.empty() && inputs[0] != "-" && detectInputFormat(inputs[0]) != InputFormat::kGtn) {
+    // How the mesh was made, where it differs from the defaults: `gtn validate --against` imports
+    // the source again the same way (spec/gtn-format.md, "Metadata keys").
+    if (options.split != 6) result->mesh.setMetadata(kMetadataSplit, std::to_string(options.split));
+    if (options.weld) result->mesh.setMetadata(kMetadataWeld, "yes");
+  }
   if (result.isOk()) {
     // Names and metadata become the .gtn format's UTF-8 strings (and JSON): a name in another
     // encoding (Latin-1 in older files) is transcoded.

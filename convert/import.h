@@ -17,6 +17,11 @@ struct ImportOptions {
   std::vector<std::string> medit_solutions;
 };
 
+// Metadata that importMesh adds to a mesh imported with options other than the defaults (a .gtn input
+// keeps its own): the split ("5") and --weld ("yes"). `gtn validate --against` reads them.
+inline constexpr const char* kMetadataSplit = "import.split";
+inline constexpr const char* kMetadataWeld = "import.weld";
+
 enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kMeshb, kOff, kGtn, kGmsh };
 const char* inputFormatName(InputFormat f);
 

@@ -162,6 +162,12 @@ Status parseGtnChunkHeader(std::span<const uint8_t> b, uint64_t offset, uint64_t
   return Status::ok();
 }
 
+bool gtnChunkChecksumMatches(const ChunkHeader& h, std::span<const uint8_t> chunk) {
+  const size_t body = h.header_size + h.stored_size;
+  if (chunk.size() != h.totalSize()) return false;
+  return XXH3_64bits(chunk.data(), body) == loadU64(chunk.data() + body);
+}
+
 StatusOr<std::vector<uint8_t>> openGtnChunk(const ChunkHeader& h, std::span<const uint8_t> chunk,
                                             const std::string& what) {
   if (chunk.size() != h.totalSize())

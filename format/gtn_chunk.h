@@ -94,6 +94,9 @@ struct ChunkHeader {
 Status parseGtnChunkHeader(std::span<const uint8_t> bytes, uint64_t offset, uint64_t remaining,
                            const std::string& what, ChunkHeader* header, size_t* needed);
 
+// Whether a whole chunk's stored checksum matches its bytes (`chunk` as for openGtnChunk).
+bool gtnChunkChecksumMatches(const ChunkHeader& header, std::span<const uint8_t> chunk);
+
 // Verifies the checksum of a whole chunk (`chunk` = header bytes, stored payload, checksum) and
 // returns its payload, decompressed when the zstd flag is set (exactly raw_size bytes, one frame).
 StatusOr<std::vector<uint8_t>> openGtnChunk(const ChunkHeader& header, std::span<const uint8_t> chunk,

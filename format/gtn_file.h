@@ -12,6 +12,7 @@
 #include "codec/level_codec.h"
 #include "format/gtn_records.h"
 #include "mesh/mesh_stream.h"
+#include "mesh/progress.h"
 #include "mesh/tet_mesh.h"
 
 namespace gtn {
@@ -39,6 +40,9 @@ struct GtnWriteOptions {
   // Decode every level that is written and check that it gives back its mesh exactly
   // (codec/level_check.h) before the file is committed; a level that would not fails the write.
   bool verify = true;
+  // Optional: told "encode level I (N levels)" and "verify level I (N levels)" with the fraction of all
+  // levels' tetrahedra done (mesh/progress.h).
+  ProgressFn progress;
 };
 
 // Encodes every level (encodeLevel), then writes the file atomically (format/file_io.h): prefix,

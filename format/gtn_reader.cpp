@@ -4,6 +4,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#define XXH_STATIC_LINKING_ONLY  // XXH3_state_t on the stack
+#include <xxhash.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -194,6 +198,7 @@ StatusOr<std::unique_ptr<GtnReader>> GtnReader::open(const std::string& path, co
     GTN_ASSIGN_OR_RETURN(std::string data, readWholeFile(path));
     r->source_ = std::make_unique<MemorySource>(std::move(data));
   }
+  r->tolerant_scan_ = !options.verify;
   return finishOpen(std::move(r), !options.verify && path != "-");
 }
 
@@ -202,6 +207,7 @@ StatusOr<std::unique_ptr<GtnReader>> GtnReader::openMemory(std::string bytes, co
   std::unique_ptr<GtnReader> r(new GtnReader());
   r->file_.path = name;
   r->source_ = std::make_unique<MemorySource>(std::move(bytes));
+  r->tolerant_scan_ = !options.verify;
   return finishOpen(std::move(r), !options.verify);
 }
 
@@ -238,7 +244,7 @@ std::string GtnReader::sectionName(const ChunkTag& tag, size_t index_in_level) c
   return "unknown:" + tag.str();
 }
 
-StatusOr<std::vector<uint8_t>> GtnReader::readChunk(const GtnChunkInfo& c, ChunkHeader* out_header) {
+StatusOr<std::vector<uint8_t>> GtnReader::readChunkBytes(const GtnChunkInfo& c, ChunkHeader* out_header) {
   const uint64_t size = source_->size();
   const std::string& what = file_.path;
   if (c.offset >= size) return invalidData(at(what, c.offset) + "chunk offset beyond the end of the file");
@@ -253,8 +259,74 @@ StatusOr<std::vector<uint8_t>> GtnReader::readChunk(const GtnChunkInfo& c, Chunk
                        " bytes, found '" + h.tag.str() + "' of " + std::to_string(h.totalSize()) + " bytes");
   std::vector<uint8_t> chunk(h.totalSize());
   GTN_RETURN_IF_ERROR(source_->read(c.offset, chunk.size(), chunk.data()));
+  *out_header = h;
+  return chunk;
+}
+
+StatusOr<std::vector<uint8_t>> GtnReader::readChunk(const GtnChunkInfo& c, ChunkHeader* out_header) {
+  ChunkHeader h;
+  GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> chunk, readChunkBytes(c, &h));
   if (out_header) *out_header = h;
-  return openGtnChunk(h, chunk, what);
+  return openGtnChunk(h, chunk, file_.path);
+}
+
+StatusOr<bool> GtnReader::checksumMatches(const GtnChunkInfo& c) {
+  // c.offset and c.bytes come from a scan or a checked directory: the chunk lies within the file.
+  if (c.bytes < kChunkFixedHeaderSize + kChunkChecksumSize || c.offset > source_->size() ||
+      c.bytes > source_->size() - c.offset)
+    return invalidData(at(file_.path, c.offset) + "chunk '" + c.tag.str() + "' reaches beyond the end of the file");
+  XXH3_state_t state;
+  XXH3_64bits_reset(&state);
+  std::vector<uint8_t> buffer(static_cast<size_t>(std::min<uint64_t>(c.bytes, uint64_t{1} << 20)));
+  const uint64_t body = c.bytes - kChunkChecksumSize;
+  Status st;
+  for (uint64_t done = 0; done < body && st.isOk();) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(buffer.size(), body - done));
+    st = source_->read(c.offset + done, n, buffer.data());
+    XXH3_64bits_update(&state, buffer.data(), n);
+    done += n;
+  }
+  const uint64_t digest = XXH3_64bits_digest(&state);
+  GTN_RETURN_IF_ERROR(st);
+  uint8_t stored[kChunkChecksumSize];
+  GTN_RETURN_IF_ERROR(source_->read(c.offset + body, kChunkChecksumSize, stored));
+  uint64_t expected = 0;
+  for (size_t i = 0; i < kChunkChecksumSize; ++i) expected |= static_cast<uint64_t>(stored[i]) << (8 * i);
+  return digest == expected;
+}
+
+StatusOr<std::vector<GtnDamagedChunk>> GtnReader::damagedChunks() {
+  std::vector<GtnDamagedChunk> out;
+  auto check = [&](const GtnChunkInfo& c, int64_t level) -> Status {
+    GTN_ASSIGN_OR_RETURN(bool ok, checksumMatches(c));
+    if (ok) return Status::ok();
+    GtnDamagedChunk d;
+    d.chunk = c;
+    d.level = level;
+    d.message = at(file_.path, c.offset) + "checksum mismatch in chunk '" + c.tag.str() + "' (" +
+                (level >= 0 ? "level " + std::to_string(level) + ", " : std::string()) + c.section + ", " +
+                std::to_string(c.bytes) + " bytes): the chunk is damaged";
+    out.push_back(std::move(d));
+    return Status::ok();
+  };
+  for (const GtnChunkInfo& c : file_.chunks)
+    if (c.tag == kTagFileHeader) GTN_RETURN_IF_ERROR(check(c, -1));
+  for (size_t i = 0; i < levels_.size(); ++i)
+    for (const GtnChunkInfo& c : levels_[i].chunks) GTN_RETURN_IF_ERROR(check(c, static_cast<int64_t>(i)));
+  for (const GtnChunkInfo& c : file_.chunks)
+    if (c.tag != kTagFileHeader) GTN_RETURN_IF_ERROR(check(c, -1));
+  std::stable_sort(out.begin(), out.end(),
+                   [](const GtnDamagedChunk& a, const GtnDamagedChunk& b) { return a.chunk.offset < b.chunk.offset; });
+  return out;
+}
+
+StatusOr<std::unique_ptr<GtnReader>> openGtnChecked(const std::string& path, const GtnOpenOptions& options,
+                                                    const std::function<void(const std::string&)>& warn) {
+  GTN_ASSIGN_OR_RETURN(std::unique_ptr<GtnReader> reader, GtnReader::open(path, options));
+  GTN_ASSIGN_OR_RETURN(std::vector<GtnDamagedChunk> damaged, reader->damagedChunks());
+  if (warn)
+    for (const GtnDamagedChunk& d : damaged) warn(d.message);
+  return reader;
 }
 
 Status GtnReader::scan() {
@@ -295,7 +367,15 @@ Status GtnReader::scan() {
     GtnChunkInfo c;
     c.offset = pos;
     ChunkHeader h;
-    GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> payload, readChunk(c, &h));
+    GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> chunk, readChunkBytes(c, &h));
+    // A scan for partial reading goes past a damaged content chunk (nothing here reads its payload);
+    // damagedChunks() names it and reading it fails. Structural chunks must be intact.
+    const bool content = isLevelTag(h.tag) || (!isKnownTag(h.tag) && h.ancillary());
+    std::vector<uint8_t> payload;
+    if (!(tolerant_scan_ && content && !gtnChunkChecksumMatches(h, chunk))) {
+      GTN_ASSIGN_OR_RETURN(payload, openGtnChunk(h, chunk, what));
+    }
+    std::vector<uint8_t>().swap(chunk);
     c.tag = h.tag;
     c.bytes = h.totalSize();
     c.stored_bytes = h.stored_size;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -65,8 +66,16 @@ struct GtnOpenOptions {
   // true: read every chunk front to back at open, checking framing, order and checksums, and reject
   // truncation and trailing bytes. false: with a seekable file that has a valid trailer and directory,
   // read only the prefix, GHDR, trailer, directory and level headers (each chunk still checksummed
-  // when read); without them, fall back to the full scan.
+  // when read); without them, fall back to the full scan, which then goes past a level's content
+  // chunk (BNDY ... MTRE, or an ancillary chunk) whose checksum fails: reading that chunk fails.
   bool verify = true;
+};
+
+// A chunk whose stored checksum does not match its bytes.
+struct GtnDamagedChunk {
+  GtnChunkInfo chunk;
+  int64_t level = -1;   // the level that holds it; -1 for a file-level chunk
+  std::string message;  // names the file, the byte offset, the chunk and its level
 };
 
 class GtnReader {
@@ -94,6 +103,11 @@ class GtnReader {
   // The raw merge-tree payload of level `i` (MTRE), or nullopt when the level has none.
   StatusOr<std::optional<std::vector<uint8_t>>> mergeTreePayload(size_t i);
 
+  // Checks the checksum of every chunk the reader knows of (all of them after a full scan; with the
+  // directory, those it lists and the header, directory and trailer): one pass of XXH3-64 over the
+  // stored bytes, nothing decompressed, memory bounded. Lists the chunks that fail, in file order.
+  StatusOr<std::vector<GtnDamagedChunk>> damagedChunks();
+
   // Bytes per kind of content, summed over the file; the sizes add up to the file size. Names:
   // prefix, header, level_header, boundary, connectivity, geometry, point_field:<name>,
   // cell_field:<name>, merge_tree, directory, trailer, unknown:<type>.
@@ -107,12 +121,23 @@ class GtnReader {
   Status scan();
   Status openByDirectory();
   StatusOr<std::vector<uint8_t>> readChunk(const GtnChunkInfo& c, ChunkHeader* header = nullptr);
+  // The whole chunk at c.offset (framing, stored payload, checksum), its framing checked, not its checksum.
+  StatusOr<std::vector<uint8_t>> readChunkBytes(const GtnChunkInfo& c, ChunkHeader* header);
+  StatusOr<bool> checksumMatches(const GtnChunkInfo& c);
   std::string sectionName(const ChunkTag& tag, size_t index_in_level) const;
 
   std::unique_ptr<Source> source_;
   GtnFileInfo file_;
   std::vector<GtnLevelInfo> levels_;
   bool by_directory_ = false;
+  bool tolerant_scan_ = false;  // the scan goes past damaged content chunks (GtnOpenOptions::verify false)
 };
+
+// How every command opens a .gtn file: GtnReader::open, then GtnReader::damagedChunks, with `warn`
+// called once per damaged chunk (its message names the file, offset, chunk and level). A command that
+// needs a damaged chunk still fails when it reads it; one that does not (level 0 of a file whose merge
+// tree or a coarse level is damaged) goes on after the warning.
+StatusOr<std::unique_ptr<GtnReader>> openGtnChecked(const std::string& path, const GtnOpenOptions& options,
+                                                    const std::function<void(const std::string&)>& warn);
 
 }  // namespace gtn

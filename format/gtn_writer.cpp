@@ -211,6 +211,15 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
   // With a storage bound every level is encoded first (the encoded streams are small); without one,
   // one level is encoded at a time, so the encoder's memory is released before the next level.
   const bool bounded = options.level_storage_limit > 0.0 && levels.size() > 1;
+  // Progress: the share of all levels' tetrahedra before level i (level 0 takes most of the time).
+  std::vector<double> before(levels.size() + 1, 0.0);
+  for (size_t i = 0; i < levels.size(); ++i)
+    before[i + 1] = before[i] + static_cast<double>(levels[i].mesh->numTets());
+  auto progress = [&](const char* what, size_t i) {
+    reportProgress(options.progress, std::string(what) + " level " + std::to_string(i) + " (" +
+                                         std::to_string(levels.size()) + " levels)",
+                   before.back() > 0 ? before[i] / before.back() : 0.0);
+  };
   std::vector<EncodedInput> encoded;
   size_t count = levels.size();
   if (bounded) {
@@ -222,6 +231,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     tbb::task_group checking;
     Status failed;
     for (size_t i = 0; i < levels.size(); ++i) {
+      progress(options.verify ? "encode and verify" : "encode", i);
       auto e = encodeInput(levels, i);
       if (!e.isOk()) {
         failed = e.status();
@@ -248,9 +258,11 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     for (size_t i = 0; i < count; ++i) {
       EncodedInput one;
       if (!bounded) {
+        progress("encode", i);
         auto e = encodeInput(levels, i);
         if (!e.isOk()) return e.status();
         one = std::move(e).value();
+        if (options.verify) progress("verify", i);
         GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels, i, one.level, options));
       }
       const EncodedInput& e = bounded ? encoded[i] : one;

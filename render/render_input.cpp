@@ -23,7 +23,10 @@ StatusOr<std::unique_ptr<RenderInput>> RenderInput::open(const std::vector<std::
   if (inputs.size() == 1 && (path == "-" || detectInputFormat(path) == InputFormat::kGtn)) {  // "-": a .gtn stream
     GtnOpenOptions options;
     options.verify = false;  // chunks are still checksummed as they are read
-    GTN_ASSIGN_OR_RETURN(in->reader_, GtnReader::open(path, options));
+    RenderInput* self = in.get();
+    GTN_ASSIGN_OR_RETURN(in->reader_, openGtnChecked(path, options, [self](const std::string& w) {
+                           self->warnings_.push_back(w);
+                         }));
     if (in->reader_->levels() == 0) return invalidData(path + ": the file holds no level");
     return in;
   }
@@ -84,7 +87,9 @@ StatusOr<ResolvedLevel> RenderInput::resolve(const LevelChoice& choice) const {
   return r;
 }
 
-Status RenderInput::stream(ResolvedLevel& level, MeshSink& sink, const FieldSelector* only) {
+Status RenderInput::stream(ResolvedLevel& level, MeshSink& out, const FieldSelector* only) {
+  ProgressMeshSink shown(out, progress_, "decode and render level " + std::to_string(level.level));
+  MeshSink& sink = progress_ ? static_cast<MeshSink&>(shown) : out;
   DecodeFields fields;
   if (only) {
     const LevelHeader& h = levelHeader(level.level);

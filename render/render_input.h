@@ -12,6 +12,7 @@
 
 #include "codec/level_codec.h"
 #include "format/gtn_reader.h"
+#include "mesh/progress.h"
 #include "mesh/mesh_stream.h"
 #include "render/ray_cast.h"
 
@@ -41,6 +42,12 @@ class RenderInput {
   static StatusOr<std::unique_ptr<RenderInput>> open(const std::vector<std::string>& inputs);
   ~RenderInput();
 
+  // Optional: stream() reports "decode level I" with the share of its tetrahedra (mesh/progress.h).
+  void setProgress(ProgressFn fn) { progress_ = std::move(fn); }
+
+  // What open() found and the caller should say (damaged chunks of a .gtn file that may not be needed).
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
   size_t levels() const;
   const LevelHeader& levelHeader(size_t i) const;
   bool hasMergeTree(size_t i) const;
@@ -66,6 +73,8 @@ class RenderInput {
  private:
   RenderInput() = default;
   std::string path_;
+  std::vector<std::string> warnings_;
+  ProgressFn progress_;
   std::unique_ptr<GtnReader> reader_;    // .gtn input
   std::unique_ptr<EncodedLevel> encoded_;  // any other input, encoded in memory
 };

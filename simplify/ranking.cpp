@@ -163,7 +163,7 @@ class Ranker {
         options_(options),
         thread_ws_([points = mesh.numPoints()] { return Workspace(points); }) {}
 
-  MergeTree run(RankingStats* stats);
+  MergeTree run(RankingStats* stats, const ProgressFn& progress);
 
  private:
   const double* pos(uint32_t v) const { return mesh_.coords.data() + 3 * size_t{v}; }
@@ -660,7 +660,7 @@ void Ranker::recompute(const std::vector<uint32_t>& list) {
   }
 }
 
-MergeTree Ranker::run(RankingStats* stats) {
+MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   init();
   ws_ = &thread_ws_.local();
   const uint32_t np = static_cast<uint32_t>(mesh_.numPoints());
@@ -678,6 +678,8 @@ MergeTree Ranker::run(RankingStats* stats) {
     ++popped;
     if (validate(e.v, e.w)) {
       merge(e.v, e.w, e.error);
+      if (tree_.merges % 16384 == 0)
+        reportProgress(progress, "rank merges", static_cast<double>(tree_.merges) / np);
       continue;
     }
     ++rejected;
@@ -705,7 +707,8 @@ MergeTree Ranker::run(RankingStats* stats) {
 
 }  // namespace
 
-StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats) {
+StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats,
+                               const ProgressFn& progress) {
   const auto start = std::chrono::steady_clock::now();
   GTN_RETURN_IF_ERROR(mesh.checkConsistency("simplification input"));
   if (mesh.numPoints() >= 0xFFFFFFF0u || mesh.numTets() >= 0x3FFFFFFFu)
@@ -734,7 +737,7 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
   }
   Ranker ranker(mesh, std::move(density), options);
   RankingStats local;
-  MergeTree tree = ranker.run(&local);
+  MergeTree tree = ranker.run(&local, progress);
   tree.field = field ? field->name : "";
   tree.w_density = options.w_density;
   tree.w_geometry = options.w_geometry;

@@ -50,6 +50,7 @@
 #include <string>
 
 #include "codec/merge_tree_coder.h"
+#include "mesh/progress.h"
 #include "mesh/tet_mesh.h"
 
 namespace gtn {
@@ -73,6 +74,8 @@ struct RankingStats {
 
 // Ranks the merges of `mesh` (tetrahedra positively oriented, zero-volume ones allowed). The tree's
 // error vector and quantiles are filled. Fails with kUsage if `options.field` names no point field.
-StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats);
+// `progress` (optional) is told "rank merges" with the share of the points merged so far.
+StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats,
+                               const ProgressFn& progress = {});
 
 }  // namespace gtn

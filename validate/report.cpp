@@ -122,9 +122,20 @@ std::string ValidationReport::toText(const std::string& file) const {
     out += "\n";
   }
   if (truncated()) out += "(more messages left out: --max-issues)\n";
-  out += file + ": " + (hasErrors() ? "INVALID" : "valid") + " (" + std::to_string(count(Severity::kError)) +
-         " errors, " + std::to_string(count(Severity::kWarning)) + " warnings, " +
-         std::to_string(count(Severity::kInfo)) + " infos)\n";
+  // One finding per line above, each with its count: the summary counts those lines, and the items
+  // (cells, faces, points...) they cover where that is more.
+  auto summary = [&](Severity severity, const char* one, const char* many) {
+    uint64_t lines = 0;
+    for (const ReportedIssue& issue : issues_)
+      if (issueInfo(issue.code).severity == severity) ++lines;
+    const uint64_t items = count(severity);
+    std::string t = std::to_string(lines) + " " + (lines == 1 ? one : many);
+    if (items != lines) t += " (" + std::to_string(items) + " items)";
+    return t;
+  };
+  out += file + ": " + (hasErrors() ? "INVALID" : "valid") + " (" + summary(Severity::kError, "error", "errors") +
+         ", " + summary(Severity::kWarning, "warning", "warnings") + ", " + summary(Severity::kInfo, "info", "infos") +
+         ")\n";
   return out;
 }
 

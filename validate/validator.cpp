@@ -48,14 +48,15 @@ nlohmann::json statsJson(const MeshCheckStats& s) {
 
 }  // namespace
 
-void compareWithSource(const TetMesh& level0, const TetMesh& source, ValidationReport& report) {
+void compareWithSource(const TetMesh& level0, const TetMesh& source, ValidationReport& report,
+                       const std::string& hint) {
   const std::string scope = "/levels/0";
   bool comparable = true;
   if (level0.numPoints() != source.numPoints() || level0.numTets() != source.numTets()) {
     report.add(IssueCode::kSourceCountMismatch, scope, scope,
                "level 0 has " + std::to_string(level0.numPoints()) + " points and " +
                    std::to_string(level0.numTets()) + " tetrahedra, the source " + std::to_string(source.numPoints()) +
-                   " and " + std::to_string(source.numTets()));
+                   " and " + std::to_string(source.numTets()) + hint);
   }
   std::string why;
   if (level0.coord_type != source.coord_type) {
@@ -152,12 +153,32 @@ void validateDecoded(const DecodedFile& file, const ValidateOptions& options, Va
   }
 
   if (!options.against.empty()) {
-    StatusOr<ImportResult> source = importMesh(options.against, options.import_options);
+    // The source is imported as the file was made: its split and --weld from level 0's metadata
+    // unless given.
+    ImportOptions io = options.import_options;
+    const std::string* split = level0.findMetadata(kMetadataSplit);
+    const std::string* weld = level0.findMetadata(kMetadataWeld);
+    std::string taken;
+    if (options.split_from_file && split && (*split == "5" || *split == "6")) {
+      io.split = *split == "5" ? 5 : 6;
+      taken += std::string(taken.empty() ? "" : ", ") + "--split " + *split;
+    }
+    if (options.weld_from_file && weld && *weld == "yes") {
+      io.weld = true;
+      taken += std::string(taken.empty() ? "" : ", ") + "--weld";
+    }
+    if (!taken.empty()) report.info()["against"]["from_metadata"] = taken;
+    std::string hint = "; the source was imported with --split " + std::to_string(io.split) +
+                       (io.weld ? " --weld" : " without --weld") +
+                       (taken.empty() ? std::string() : " (" + taken + " from the file's metadata)");
+    if (!file.command_line.empty()) hint += "; the file was made by: " + file.command_line;
+    hint += "; give --split and --weld as it was converted";
+    StatusOr<ImportResult> source = importMesh(options.against, io);
     if (!source.isOk()) {
       report.add(IssueCode::kSourceUnreadable, "/against", "/against", source.status().message());
     } else {
       const uint64_t errors_before = report.count(Severity::kError);
-      compareWithSource(level0, source->mesh, report);
+      compareWithSource(level0, source->mesh, report, hint);
       if (report.count(Severity::kError) == errors_before) {
         report.reclassify(IssueCode::kZeroVolumeTet, IssueCode::kZeroVolumeTetFromSource, levelScope(0));
       }
@@ -256,6 +277,7 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
 
   // Decoding: every level into memory, then the mesh, merge-tree and levels layers.
   DecodedFile decoded;
+  decoded.command_line = fi.header.command_line;
   for (size_t i = 0; i < reader.levels(); ++i) {
     const std::string scope = "/levels/" + std::to_string(i);
     TetMeshBuilder builder;
@@ -320,12 +342,10 @@ StatusOr<ValidationReport> validateMeshFiles(const std::vector<std::string>& inp
   }
   const ImportReport& r = imported->report;
   if (r.flipped) {
-    report.addMany(IssueCode::kCellsReoriented, "/import", r.flipped, {"/import"},
-                   std::to_string(r.flipped) + " cells reoriented to positive volume");
+    report.addMany(IssueCode::kCellsReoriented, "/import", r.flipped, {}, "");
   }
   if (r.dropped_cells) {
-    report.addMany(IssueCode::kCellsDropped, "/import", r.dropped_cells, {"/import"},
-                   std::to_string(r.dropped_cells) + " cells dropped");
+    report.addMany(IssueCode::kCellsDropped, "/import", r.dropped_cells, {}, "");
   }
   for (size_t i = 0; i < r.warnings.size(); ++i)
     report.add(IssueCode::kImportWarning, "/import", "/import/warnings/" + std::to_string(i), r.warnings[i]);

@@ -23,6 +23,10 @@ struct ValidateOptions {
   size_t max_issues = 100;         // messages kept in the report (counts stay exact)
   std::vector<std::string> against;  // source files: level 0 must equal the imported source
   ImportOptions import_options;    // how to import `against` (e.g. --split 5 for PLOT3D)
+  // Take the split and --weld for `against` from level 0's metadata (import.split, import.weld, as
+  // `gtn convert` records them) instead of import_options (the CLI: when --split, --weld are not given).
+  bool split_from_file = false;
+  bool weld_from_file = false;
 };
 
 // One decoded level as the validator examines it.
@@ -39,6 +43,7 @@ struct DecodedFile {
   std::vector<DecodedLevel> levels;  // level 0 first
   std::optional<MergeForest> forest;
   bool forest_undecodable = false;  // level 0 has a merge tree that did not decode (already reported)
+  std::string command_line;         // the file header's provenance (hints in messages)
 };
 
 // Runs the mesh, merge-tree, levels and --against layers on decoded content.
@@ -46,7 +51,9 @@ void validateDecoded(const DecodedFile& file, const ValidateOptions& options, Va
 
 // Compares level 0 with a source mesh up to renumbering: counts, field descriptions, then bit-exact
 // positions and values of every point and tetrahedron (SOURCE_* issues).
-void compareWithSource(const TetMesh& level0, const TetMesh& source, ValidationReport& report);
+// `hint` (optional) is added to a SOURCE_COUNT_MISMATCH message.
+void compareWithSource(const TetMesh& level0, const TetMesh& source, ValidationReport& report,
+                       const std::string& hint = "");
 
 // Validates the bytes of a .gtn file; every problem becomes an issue (this never fails).
 ValidationReport validateGtnBytes(std::span<const uint8_t> bytes, const std::string& name,

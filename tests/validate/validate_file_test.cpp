@@ -165,7 +165,7 @@ TEST(ValidateFile, CliJsonPathsAggregationMaxIssuesAndQuick) {
   EXPECT_EQ(t["counts"], j["counts"]);
   const RunResult text = runGtn("validate --max-issues 1 " + path);
   EXPECT_NE(text.out.find("--max-issues"), std::string::npos) << text.out;
-  EXPECT_NE(text.out.find("INVALID (2 errors, 0 warnings, 2 infos)"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("INVALID (1 error (2 items), 0 warnings, 2 infos)"), std::string::npos) << text.out;
 
   const RunResult quick = runGtn("validate --quick --json " + path);
   EXPECT_EQ(quick.exit_code, 0) << quick.out;
@@ -248,7 +248,7 @@ TEST(ValidateMeshFiles, DefectsImportFailuresAndUsage) {
   RunResult bad = runGtn("validate " + dir + "/short.vtk");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.out.find("IMPORT_FAILED: " + dir + "/short.vtk:"), std::string::npos) << bad.out;
-  EXPECT_NE(bad.out.find("INVALID (1 errors"), std::string::npos) << bad.out;
+  EXPECT_NE(bad.out.find("INVALID (1 error,"), std::string::npos) << bad.out;
 
   EXPECT_EQ(runGtn("validate " + dir + "/missing.vtk").exit_code, 3);
   EXPECT_EQ(runGtn("validate --quick " + dir + "/dup.vtk").exit_code, 2);
