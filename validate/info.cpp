@@ -119,7 +119,7 @@ std::string mergeTreeReportText(const MergeTreeReport& rep, const std::string& i
   const MergeTreeStats& s = rep.stats;
   std::string t;
   auto line = [&](const std::string& label, const std::string& value) { t += in + padRight(label, 20) + value + "\n"; };
-  line("ranking", "density " + (rep.field.empty() ? std::string("volume only") : rep.field) + ", w_density " +
+  line("ranking", (rep.field.empty() ? std::string("volume only (no density field)") : "density field " + rep.field) + ", w_density " +
                       general(rep.w_density) + ", w_geometry " + general(rep.w_geometry));
   line("merges", number(s.merges) + " of " + number(s.points) + " vertices (boundary " + number(s.boundary_merges) +
                      "), " + number(s.tets_removed) + " tetrahedra removed");

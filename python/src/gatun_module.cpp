@@ -123,7 +123,16 @@ py::dict readGtn(const std::string& path, std::optional<size_t> level, std::opti
     py::gil_scoped_release release;
     GtnOpenOptions oo;
     oo.verify = false;  // random access through the directory; every chunk read is still checksummed
-    std::unique_ptr<GtnReader> reader = valueOr(GtnReader::open(path, oo));
+    auto opened = GtnReader::open(path, oo);
+    if (!opened.isOk()) {
+      // A mesh file given to read: say what reads it.
+      const InputFormat in_format = detectInputFormat(path);
+      if (in_format != InputFormat::kGtn && in_format != InputFormat::kUnknown)
+        raise(usageError(path + ": a " + inputFormatName(in_format) +
+                         " file, not .gtn: gatun.read reads .gtn files; convert it with 'gtn convert " + path +
+                         " -o FILE.gtn' or read it with meshio"));
+    }
+    std::unique_ptr<GtnReader> reader = valueOr(std::move(opened));
     GtnReader& r = *reader;
     level_read = level.value_or(0);
     if (level_read >= r.levels())

@@ -21,16 +21,22 @@ def assert_same_array(a, b):
     assert np.ascontiguousarray(a).tobytes() == np.ascontiguousarray(b).tobytes()
 
 
+def one_column(ref, values):
+    """meshio gives a 1-component VTK array as (n, 1); gatun gives (n,)."""
+    ref = np.asarray(ref)
+    return ref[:, 0] if values.ndim == 1 and ref.ndim == 2 and ref.shape[1] == 1 else ref
+
+
 def assert_matches_export(mesh, ref):
     assert_same_array(mesh.points, ref.points)
     assert [b.type for b in ref.cells] == ["tetra"]
     assert_same_array(mesh.tets.astype(np.int64), ref.cells[0].data.astype(np.int64))
     assert sorted(mesh.point_data) == sorted(ref.point_data)
     for name, values in mesh.point_data.items():
-        assert_same_array(values, ref.point_data[name])
+        assert_same_array(values, one_column(ref.point_data[name], values))
     assert sorted(mesh.cell_data) == sorted(ref.cell_data)
     for name, values in mesh.cell_data.items():
-        assert_same_array(values, ref.cell_data[name][0])
+        assert_same_array(values, one_column(ref.cell_data[name][0], values))
 
 
 @pytest.mark.parametrize("name", ["bunny", "bluntfin"])
@@ -119,7 +125,7 @@ def test_box_is_exact_not_bounding_boxes(tmp_path):
     assert len(part.points) == 4
 
 
-def test_bad_arguments_and_files(gtn, converted, tmp_path):
+def test_bad_arguments_and_files(gtn, converted, data_dir, tmp_path):
     with pytest.raises(gatun.UsageError, match="level and ratio exclude each other"):
         gatun.read(converted["bunny"], level=1, ratio=0.5)
     with pytest.raises(ValueError, match=r"level 9: the file holds \d+ level\(s\)"):
@@ -130,13 +136,17 @@ def test_bad_arguments_and_files(gtn, converted, tmp_path):
         gatun.read(converted["bunny"], box=(1, 1, 1, 0, 0, 0))
     with pytest.raises(gatun.UsageError, match="threads"):
         gatun.read(converted["bunny"], threads=0)
+    with pytest.raises(gatun.UsageError, match="bunny.mesh: a Medit file, not .gtn: gatun.read reads .gtn files"):
+        gatun.read(data_dir / "medit" / "bunny.mesh")
     missing = tmp_path / "missing.gtn"
     with pytest.raises(OSError) as e:
         gatun.read(missing)
     assert isinstance(e.value, gatun.IoError) and isinstance(e.value, gatun.Error)
     # A damaged file: the exception carries the message gtn prints.
     data = bytearray(converted["bunny"].read_bytes())
-    data[len(data) // 2] ^= 0xFF
+    info = gatun.info(converted["bunny"])
+    head = sum(s["bytes"] for s in info["sections"] if s["name"] in ("prefix", "header"))
+    data[head + info["levels"][0]["bytes"] // 2] ^= 0xFF  # inside level 0
     bad = tmp_path / "bad.gtn"
     bad.write_bytes(bytes(data))
     r = gtn.run("export", bad, "-o", tmp_path / "bad.vtu", check=False)
