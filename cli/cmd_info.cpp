@@ -6,6 +6,7 @@
 
 #include "cli/commands.h"
 #include "convert/import.h"
+#include "format/file_io.h"
 #include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
 #include "cli/merge_tree_plot.h"
@@ -79,6 +80,8 @@ int runGtnInfo(const InfoArgs& a) {
   const std::string version = std::to_string(f.major) + "." + std::to_string(f.minor);
 
   if (!a.plot.empty()) {
+    if (a.plot == input || sameFile(input, a.plot))
+      return reportError(usageError(a.plot + ": --plot: the output would overwrite the input"));
     Status plotted = plotMergeTree(r, a.plot);
     if (!plotted.isOk()) return reportError(plotted);
   }
@@ -121,6 +124,7 @@ int runInfo(const InfoArgs& a) {
   for (const std::string& in : a.inputs)
     // Standard input cannot be sniffed without consuming it: only a .gtn file is read from a pipe.
     if (in == "-" || detectInputFormat(in) == InputFormat::kGtn) return runGtnInfo(a);
+  if (!a.plot.empty()) return reportError(usageError(a.inputs[0] + ": --plot draws the merge tree of a .gtn file; a mesh has none"));
   ImportOptions options;
   options.split = a.split;
   options.weld = a.weld;
@@ -129,7 +133,6 @@ int runInfo(const InfoArgs& a) {
   for (const std::string& w : imported->report.warnings) warnAbout(a.inputs[0], w);
   if (a.merge_tree) warn(a.inputs[0] + ": --merge-tree describes the merge tree of a .gtn file; a mesh has none");
   const MeshStats stats = computeMeshStats(imported->mesh);
-  if (!a.plot.empty()) return reportError(usageError(a.inputs[0] + ": --plot draws the merge tree of a .gtn file; a mesh has none"));
   if (a.json) {
     nlohmann::json j = meshInfoJson(stats, imported->report, imported->mesh);
     j["input"] = a.inputs;
@@ -150,7 +153,8 @@ Command addInfoCommand(CLI::App& app) {
   sub->add_flag("--weld", args->weld, "merge bit-identical points (seams between PLOT3D blocks or VTK pieces)");
   sub->add_flag("--json", args->json, "Print one JSON object on standard output");
   sub->add_flag("--merge-tree", args->merge_tree,
-                ".gtn: statistics of level 0's merge tree (merges, roots, depth, fan-out, error quantiles)");
+                ".gtn: level 0's merge tree as a table (merges, roots, depth, fan-out, error quantiles; per "
+                "stored level: ratio, points, tetrahedra, bytes, merges, largest error)");
   sub->add_option("--plot", args->plot,
                   ".gtn: draw level 0's merge error against the simplification ratio, stored levels marked, "
                   "as a PNG image (needs gnuplot)");

@@ -104,6 +104,14 @@ TEST_F(InfoMergeTree, PlotDrawsTheCurve) {
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_NE(refused.err.find("stores no merge tree"), std::string::npos) << refused.err;
   EXPECT_FALSE(fileExists(dir_ + "/flat.png"));
+  const std::string before = readFile(dir_ + "/spx.gtn");
+  const RunResult self = runGtn("info " + dir_ + "/spx.gtn --plot " + dir_ + "/spx.gtn");
+  EXPECT_EQ(self.exit_code, 2);
+  EXPECT_NE(self.err.find("the output would overwrite the input"), std::string::npos) << self.err;
+  EXPECT_EQ(readFile(dir_ + "/spx.gtn"), before);
+  const RunResult mesh = runGtn("info " + dataPath("vtk/spx.vtk") + " --plot " + dir_ + "/mesh.png");
+  EXPECT_EQ(mesh.exit_code, 2);
+  EXPECT_NE(mesh.err.find("a mesh has none"), std::string::npos) << mesh.err;
 }
 
 }  // namespace
