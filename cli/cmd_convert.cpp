@@ -10,8 +10,7 @@
 #include "convert/import.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
-#include "simplify/levels.h"
-#include "simplify/ranking.h"
+#include "simplify/write_gtn.h"
 
 namespace gtn::cli {
 
@@ -30,29 +29,17 @@ struct ConvertArgs {
   bool quiet = false;  // -q: no progress line, no summary
 };
 
-// Level 0, its mip levels and merge trees as the options ask (simplify/levels.h).
+// Level 0, its mip levels and merge trees as the options ask (simplify/write_gtn.h).
 Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWriteOptions& wo) {
-  if (a.levels == 0 && a.no_merge_tree) {
-    GtnLevelInput level0;
-    level0.mesh = &mesh;
-    return writeGtnFile(a.output, {level0}, wo);
-  }
-  reportProgress(wo.progress, "rank merges", 0.0);
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, nullptr, wo.progress));
-  reportProgress(wo.progress, "build levels");
-  LevelOptions lo;
-  lo.levels = a.levels;
-  lo.merge_tree = !a.no_merge_tree;
-  GTN_ASSIGN_OR_RETURN(MipLevels levels, buildMipLevels(mesh, tree, lo));
-  // Levels stop where the merge tree does (a small or flat mesh has few merges): say so rather than
-  // write fewer levels than --levels asked for without a word.
-  if (a.levels > 0 && levels.merges.size() - 1 < static_cast<size_t>(a.levels))
-    warn(a.inputs[0] + ": --levels " + std::to_string(a.levels) + ": the merge tree has " +
-         std::to_string(tree.merges) + " merge(s) of " + std::to_string(mesh.numPoints()) + " points, enough for " +
-         std::to_string(levels.merges.size() - 1) + " level(s) beyond level 0");
-  GtnWriteOptions bounded = wo;
-  if (a.levels < 0) bounded.level_storage_limit = a.level_storage;
-  return writeGtnFile(a.output, levels.inputs(mesh), bounded);
+  GtnConvertOptions o;
+  o.levels = a.levels;
+  o.merge_tree = !a.no_merge_tree;
+  o.level_storage = a.level_storage;
+  o.ranking = a.ranking;
+  std::vector<std::string> warnings;
+  Status st = gtn::writeGtnWithLevels(a.output, mesh, o, wo, a.inputs[0], &warnings);
+  for (const std::string& w : warnings) warn(w);
+  return st;
 }
 
 int runConvert(const ConvertArgs& a) {
@@ -85,10 +72,9 @@ int runConvert(const ConvertArgs& a) {
       wo.progress = progress.callback();
       wo.verify = !a.no_verify;
       st = writeGtnWithLevels(a, mesh, wo);
-      // The encoder's refusals are about the mesh: name its input and where to see the details.
-      if (!st.isOk() && st.message().rfind("encodeLevel: ", 0) == 0)
-        st = Status(st.code(), a.inputs[0] + ": cannot be encoded: " + st.message().substr(13) + " (gtn validate " +
-                                   a.inputs[0] + " lists the problems)");
+      // The encoder's refusals are about the mesh: say where to see the details.
+      if (!st.isOk() && st.message().rfind(a.inputs[0] + ": cannot be encoded: ", 0) == 0)
+        st = Status(st.code(), st.message() + " (gtn validate " + a.inputs[0] + " lists the problems)");
       break;
     }
     default: {

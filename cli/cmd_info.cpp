@@ -1,4 +1,4 @@
-// gtn info INPUT... [--split 5|6] [--weld] [--json]: what a mesh holds.
+// gtn info INPUT... [--split 5|6] [--weld] [--json] [--merge-tree] [--plot FILE.png]: what a mesh holds.
 #include <cstdio>
 #include <memory>
 
@@ -6,9 +6,11 @@
 
 #include "cli/commands.h"
 #include "convert/import.h"
+#include "format/file_io.h"
 #include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
-#include "simplify/apply.h"
+#include "cli/merge_tree_plot.h"
+#include "validate/info.h"
 
 namespace gtn::cli {
 
@@ -19,69 +21,8 @@ struct InfoArgs {
   bool weld = false;
   bool json = false;
   bool merge_tree = false;
+  std::string plot;  // --plot FILE.png
 };
-
-// Level 0's merge tree statistics (`--merge-tree`), null when the file stores none.
-StatusOr<nlohmann::json> mergeTreeJson(GtnReader& r) {
-  auto payload = r.mergeTreePayload(0);
-  if (!payload.isOk()) return payload.status();
-  if (!payload.value().has_value()) return nlohmann::json(nullptr);
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload.value(), r.level(0).header.points,
-                                                       r.file().path + ", level 0"));
-  const MergeTreeStats s = computeMergeTreeStats(tree);
-  nlohmann::json q = nlohmann::json::object();
-  const char* names[9] = {"min", "p01", "p10", "p25", "p50", "p75", "p90", "p99", "max"};
-  for (size_t i = 0; i < tree.error_quantiles.size() && i < 9; ++i) q[names[i]] = tree.error_quantiles[i];
-  return nlohmann::json{{"merges", s.merges},
-                        {"roots", s.roots},
-                        {"boundary_merges", s.boundary_merges},
-                        {"tets_removed", s.tets_removed},
-                        {"depth", {{"max", s.depth_max}, {"mean", s.depth_mean}}},
-                        {"fanout", {{"max", s.fanout_max}, {"mean", s.fanout_mean}}},
-                        {"error_quantiles", q},
-                        {"field", tree.field},
-                        {"w_density", tree.w_density},
-                        {"w_geometry", tree.w_geometry}};
-}
-
-nlohmann::json statsToJson(const MeshStats& s, const ImportReport& r, const TetMesh& mesh) {
-  nlohmann::json j;
-  j["points"] = s.points;
-  j["tets"] = s.tets;
-  j["faces"] = s.faces;
-  j["boundary_faces"] = s.boundary_faces;
-  j["non_manifold_faces"] = s.non_manifold_faces;
-  j["inverted"] = s.inverted;
-  j["zero_volume"] = s.zero_volume;
-  j["unreferenced_points"] = s.unreferenced_points;
-  j["coincident_points"] = s.coincident_points;
-  j["coordinate_type"] = scalarTypeName(mesh.coord_type);
-  j["bbox"] = {{"min", {s.bbox_min[0], s.bbox_min[1], s.bbox_min[2]}},
-               {"max", {s.bbox_max[0], s.bbox_max[1], s.bbox_max[2]}}};
-  j["volume"] = {{"min", s.min_volume}, {"max", s.max_volume}, {"total", s.total_volume}};
-  nlohmann::json fields = nlohmann::json::array();
-  for (const FieldStats& f : s.fields) {
-    fields.push_back({{"name", f.name},
-                      {"components", f.components},
-                      {"type", scalarTypeName(f.type)},
-                      {"location", f.per_cell ? "cell" : "point"},
-                      {"min", f.min},
-                      {"max", f.max},
-                      {"non_finite", f.non_finite}});
-  }
-  j["fields"] = fields;
-  nlohmann::json meta = nlohmann::json::object();
-  for (const auto& [k, v] : mesh.metadata) meta[k] = v;
-  j["metadata"] = meta;
-  j["import"] = {{"flipped", r.flipped},
-                 {"zero_volume", r.zero_volume},
-                 {"dropped_cells", r.dropped_cells},
-                 {"welded_points", r.welded_points},
-                 {"collapsed_tets", r.collapsed_tets},
-                 {"steiner_points", r.steiner_points},
-                 {"warnings", r.warnings}};
-  return j;
-}
 
 void printText(const std::string& name, const MeshStats& s, const ImportReport& r, const TetMesh& mesh) {
   std::printf("%s\n", name.c_str());
@@ -136,54 +77,19 @@ int runGtnInfo(const InfoArgs& a) {
     else if (c.tag == kTagMergeTree) merge_tree += c.bytes;
   }
   const double tets = static_cast<double>(r.level(0).header.tets);
-  auto bpt = [&](uint64_t bytes) -> nlohmann::json {
-    if (tets == 0) return nullptr;
-    return 8.0 * static_cast<double>(bytes) / tets;
-  };
   const std::string version = std::to_string(f.major) + "." + std::to_string(f.minor);
 
+  if (!a.plot.empty()) {
+    if (a.plot == input || sameFile(input, a.plot))
+      return reportError(usageError(a.plot + ": --plot: the output would overwrite the input"));
+    Status plotted = plotMergeTree(r, a.plot);
+    if (!plotted.isOk()) return reportError(plotted);
+  }
   if (a.json) {
-    nlohmann::json j = statsToJson(stats, ImportReport{}, mesh);
-    j.erase("import");
-    j["input"] = a.inputs;
-    j["format"] = "gtn";
-    j["format_version"] = version;
-    j["bytes"] = f.bytes;
-    j["provenance"] = {{"tool_version", f.header.tool_version}, {"command_line", f.header.command_line}};
-    j["has_directory"] = f.has_directory;
-    nlohmann::json sections = nlohmann::json::array();
-    for (const GtnSection& s : r.sections()) sections.push_back({{"name", s.name}, {"bytes", s.bytes}});
-    j["sections"] = sections;
-    j["bits_per_tet"] = {{"connectivity", bpt(connectivity)},
-                         {"geometry", bpt(geometry)},
-                         {"fields", bpt(fields)},
-                         {"merge_tree", bpt(merge_tree)},
-                         {"total", bpt(total)}};
-    j["peak_live_vertices"] = decode_stats.peak_live_vertices;
-    nlohmann::json levels = nlohmann::json::array();
-    for (size_t i = 0; i < r.levels(); ++i) {
-      const GtnLevelInfo& l = r.level(i);
-      nlohmann::json chunks = nlohmann::json::array();
-      for (const GtnChunkInfo& c : l.chunks)
-        chunks.push_back({{"type", c.tag.str()}, {"section", c.section}, {"bytes", c.bytes},
-                          {"raw_bytes", c.raw_bytes}, {"zstd", c.zstd}});
-      levels.push_back({{"level", i},
-                        {"points", l.header.points},
-                        {"tets", l.header.tets},
-                        {"boundary_triangles", l.header.boundary_triangles},
-                        {"merges", l.header.merges},
-                        {"ratio", l.ratio},
-                        {"merge_tree", l.has_merge_tree},
-                        {"bytes", l.bytes},
-                        {"chunks", chunks}});
-    }
-    j["levels"] = levels;
-    if (a.merge_tree) {
-      auto mt = mergeTreeJson(r);
-      if (!mt.isOk()) return reportError(mt.status());
-      j["merge_tree"] = mt.value();
-    }
-    std::printf("%s\n", jsonText(j).c_str());
+    auto j = gtnInfoJson(r, mesh, decode_stats, a.merge_tree);
+    if (!j.isOk()) return reportError(j.status());
+    j.value()["input"] = a.inputs;
+    std::printf("%s\n", jsonText(j.value()).c_str());
     return 0;
   }
   std::printf("%s: .gtn format %s, %llu bytes, %zu level(s)%s\n", input.c_str(), version.c_str(),
@@ -205,10 +111,10 @@ int runGtnInfo(const InfoArgs& a) {
                 8.0 * total / tets);
   std::printf("  peak live vertices  %llu\n", static_cast<unsigned long long>(decode_stats.peak_live_vertices));
   if (a.merge_tree) {
-    auto mt = mergeTreeJson(r);
+    auto mt = mergeTreeReport(r);
     if (!mt.isOk()) return reportError(mt.status());
-    if (mt.value().is_null()) std::printf("  merge tree          none\n");
-    else std::printf("  merge tree          %s\n", jsonText(mt.value(), -1).c_str());
+    if (!mt.value()) std::printf("  merge tree          none\n");
+    else std::printf("  merge tree (level 0)\n%s", mergeTreeReportText(*mt.value(), "    ").c_str());
   }
   printText(input + " (level 0, decoded)", stats, ImportReport{}, mesh);
   return 0;
@@ -218,6 +124,7 @@ int runInfo(const InfoArgs& a) {
   for (const std::string& in : a.inputs)
     // Standard input cannot be sniffed without consuming it: only a .gtn file is read from a pipe.
     if (in == "-" || detectInputFormat(in) == InputFormat::kGtn) return runGtnInfo(a);
+  if (!a.plot.empty()) return reportError(usageError(a.inputs[0] + ": --plot draws the merge tree of a .gtn file; a mesh has none"));
   ImportOptions options;
   options.split = a.split;
   options.weld = a.weld;
@@ -227,7 +134,7 @@ int runInfo(const InfoArgs& a) {
   if (a.merge_tree) warn(a.inputs[0] + ": --merge-tree describes the merge tree of a .gtn file; a mesh has none");
   const MeshStats stats = computeMeshStats(imported->mesh);
   if (a.json) {
-    nlohmann::json j = statsToJson(stats, imported->report, imported->mesh);
+    nlohmann::json j = meshInfoJson(stats, imported->report, imported->mesh);
     j["input"] = a.inputs;
     std::printf("%s\n", jsonText(j).c_str());
   } else {
@@ -246,7 +153,11 @@ Command addInfoCommand(CLI::App& app) {
   sub->add_flag("--weld", args->weld, "merge bit-identical points (seams between PLOT3D blocks or VTK pieces)");
   sub->add_flag("--json", args->json, "Print one JSON object on standard output");
   sub->add_flag("--merge-tree", args->merge_tree,
-                ".gtn: statistics of level 0's merge tree (merges, roots, depth, fan-out, error quantiles)");
+                ".gtn: level 0's merge tree as a table (merges, roots, depth, fan-out, error quantiles; per "
+                "stored level: ratio, points, tetrahedra, bytes, merges, largest error)");
+  sub->add_option("--plot", args->plot,
+                  ".gtn: draw level 0's merge error against the simplification ratio, stored levels marked, "
+                  "as a PNG image (needs gnuplot)");
   return {sub, [args] { return runInfo(*args); }};
 }
 

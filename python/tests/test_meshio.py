@@ -1,0 +1,74 @@
+"""`import gatun` registers .gtn with meshio: meshio -> .gtn -> meshio keeps the mesh (up to renumbering)."""
+
+import warnings
+
+import meshio
+import numpy as np
+import pytest
+
+import gatun
+
+
+def canonical(points, tets, point_data, cell_data):
+    """The mesh with points sorted lexicographically and tetrahedra as sorted point lists, sorted."""
+    order = np.lexsort(points.T[::-1])
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    t = np.sort(rank[np.asarray(tets, dtype=np.int64)], axis=1)
+    torder = np.lexsort(t.T[::-1])
+    return (points[order], t[torder], {k: np.asarray(v)[order] for k, v in point_data.items()},
+            {k: np.asarray(v)[torder] for k, v in cell_data.items()})
+
+
+def assert_same(a, b):
+    for x, y in zip(a[:2], b[:2]):
+        assert np.array_equal(x, y)
+    for da, db in zip(a[2:], b[2:]):
+        assert sorted(da) == sorted(db)
+        for k in da:
+            assert da[k].dtype == db[k].dtype and np.array_equal(da[k], db[k], equal_nan=True)
+
+
+def test_registered():
+    assert "gatun" in meshio._helpers.extension_to_filetypes[".gtn"]
+
+
+def test_round_trip_medit_bunny(data_dir, tmp_path):
+    source = meshio.read(data_dir / "medit" / "bunny.mesh")
+    tetra = [b for b in source.cells if b.type == "tetra"]
+    mesh = meshio.Mesh(source.points, tetra, point_data=source.point_data,
+                       cell_data={k: [v[i] for i, b in enumerate(source.cells) if b.type == "tetra"]
+                                  for k, v in source.cell_data.items()})
+    path = tmp_path / "bunny.gtn"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # orientation fixes, if any, are checked below
+        meshio.write(path, mesh)
+    back = meshio.read(path)
+    assert [b.type for b in back.cells] == ["tetra"]
+    assert len(back.points) == len(mesh.points) and len(back.cells[0].data) == len(mesh.cells[0].data)
+    assert back.points.dtype == mesh.points.dtype
+    # Orientation may have been normalised: compare tetrahedra as point sets.
+    a = canonical(mesh.points, mesh.cells[0].data, mesh.point_data, {k: v[0] for k, v in mesh.cell_data.items()})
+    b = canonical(back.points, back.cells[0].data, back.point_data, {k: v[0] for k, v in back.cell_data.items()})
+    assert_same(a, b)
+
+
+def test_round_trip_blunt_fin_from_gtn(converted, tmp_path):
+    # meshio reads a gtn file written by `gtn convert`, writes it as .gtn, reads it back.
+    first = meshio.read(converted["bluntfin"])
+    path = tmp_path / "again.gtn"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        meshio.write(path, first)
+    second = meshio.read(path)
+    assert_same(canonical(first.points, first.cells[0].data, first.point_data, {}),
+                canonical(second.points, second.cells[0].data, second.point_data, {}))
+
+
+def test_other_cells_are_refused(tmp_path):
+    points = np.eye(4, 3)
+    mesh = meshio.Mesh(points, [("tetra", [[0, 1, 2, 3]]), ("triangle", [[0, 1, 2], [1, 2, 3]])])
+    path = tmp_path / "mixed.gtn"
+    with pytest.raises(gatun.UsageError, match=r"tetrahedra only; the mesh has other cells \(2 triangle\)"):
+        meshio.write(path, mesh)
+    assert not path.exists()
