@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libfpzip-dev
   python3 python3-numpy python3-vtk9 python3-meshio xvfb xauth gnuplot-nox
   libexodusii-dev gmsh
+  pybind11-dev python3-dev python3-pytest python3-matplotlib python3-setuptools python3-pip
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -23,7 +24,7 @@ if ((${#missing[@]})); then
   apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DGTN_BUILD_PYTHON=ON
 cmake --build build -j"$(nproc)"
 
 if [[ "${1:-}" != "--no-sample" ]]; then
