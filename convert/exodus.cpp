@@ -27,6 +27,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <type_traits>
 
 #include "convert/cell_split.h"
 #include "convert/import.h"
@@ -37,19 +38,80 @@ namespace gtn {
 
 namespace {
 
+// The Exodus library, loaded when the first Exodus file is read: linked in, it would load MPI (Debian
+// builds it on the MPI flavour of netCDF and HDF5) into every gtn process, which then takes about
+// 80 ms more to start. Null, with the reason in *why, when it cannot be loaded.
+struct ExodusApi {
+  decltype(&::ex_close) ex_close = nullptr;
+  decltype(&::ex_get_block_param) ex_get_block_param = nullptr;
+  decltype(&::ex_get_conn) ex_get_conn = nullptr;
+  decltype(&::ex_get_coord) ex_get_coord = nullptr;
+  decltype(&::ex_get_err) ex_get_err = nullptr;
+  decltype(&::ex_get_ids) ex_get_ids = nullptr;
+  decltype(&::ex_get_init_ext) ex_get_init_ext = nullptr;
+  decltype(&::ex_get_time) ex_get_time = nullptr;
+  decltype(&::ex_get_truth_table) ex_get_truth_table = nullptr;
+  decltype(&::ex_get_var) ex_get_var = nullptr;
+  decltype(&::ex_get_variable_names) ex_get_variable_names = nullptr;
+  decltype(&::ex_get_variable_param) ex_get_variable_param = nullptr;
+  decltype(&::ex_inquire_int) ex_inquire_int = nullptr;
+  decltype(&::ex_opts) ex_opts = nullptr;
+  decltype(&::ex_set_max_name_length) ex_set_max_name_length = nullptr;
+  decltype(&::ex_set_int64_status) ex_set_int64_status = nullptr;
+  decltype(&::ex_open_int) ex_open_int = nullptr;
+  const char* (*nc_strerror)(int) = nullptr;  // of the netCDF library the Exodus library loads (optional)
+};
+const ExodusApi* exodusApi(std::string* why) {
+  static std::string error;
+  static const ExodusApi* api = [&]() -> const ExodusApi* {
+    void* lib = nullptr;
+    // The library's name at run time, then the one the build found.
+    for (const char* name : {"libexoIIv2c.so.5", GTN_EXODUS_LIBRARY}) {
+      lib = dlopen(name, RTLD_NOW | RTLD_LOCAL);
+      if (lib) break;
+      error = dlerror();
+    }
+    if (!lib) return nullptr;
+    static ExodusApi api;
+    bool ok = true;
+    auto load = [&](auto& f, const char* name) {
+      f = reinterpret_cast<std::remove_reference_t<decltype(f)>>(dlsym(lib, name));
+      if (!f && ok) ok = false, error = std::string("the library has no ") + name;
+    };
+    load(api.ex_close, "ex_close");
+    load(api.ex_get_block_param, "ex_get_block_param");
+    load(api.ex_get_conn, "ex_get_conn");
+    load(api.ex_get_coord, "ex_get_coord");
+    load(api.ex_get_err, "ex_get_err");
+    load(api.ex_get_ids, "ex_get_ids");
+    load(api.ex_get_init_ext, "ex_get_init_ext");
+    load(api.ex_get_time, "ex_get_time");
+    load(api.ex_get_truth_table, "ex_get_truth_table");
+    load(api.ex_get_var, "ex_get_var");
+    load(api.ex_get_variable_names, "ex_get_variable_names");
+    load(api.ex_get_variable_param, "ex_get_variable_param");
+    load(api.ex_inquire_int, "ex_inquire_int");
+    load(api.ex_opts, "ex_opts");
+    load(api.ex_set_max_name_length, "ex_set_max_name_length");
+    load(api.ex_set_int64_status, "ex_set_int64_status");
+    load(api.ex_open_int, "ex_open_int");
+    api.nc_strerror = reinterpret_cast<const char* (*)(int)>(dlsym(lib, "nc_strerror"));
+    return ok ? &api : nullptr;
+  }();
+  if (!api) *why = error;
+  return api;
+}
+
 // The Exodus library's last error, as netCDF states it where it has a netCDF code.
-std::string exodusError() {
+std::string exodusError(const ExodusApi& api) {
   const char* msg = nullptr;
   const char* func = nullptr;
   int code = 0;
-  ex_get_err(&msg, &func, &code);
+  api.ex_get_err(&msg, &func, &code);
   std::string s = msg && *msg ? msg : "";
   if (code > 0 || code < -1) {
-    // Negative codes are netCDF's. Its nc_strerror is looked up where the Exodus library loaded it
-    // (Debian's is built on the MPI flavour of netCDF, libnetcdf_mpi, which has no link-time name).
-    using StrError = const char* (*)(int);
-    static const auto nc_error = reinterpret_cast<StrError>(dlsym(RTLD_DEFAULT, "nc_strerror"));
-    const char* nc = code < 0 && nc_error ? nc_error(code) : nullptr;
+    // Negative codes are netCDF's.
+    const char* nc = code < 0 && api.nc_strerror ? api.nc_strerror(code) : nullptr;
     if (nc && s.find(nc) == std::string::npos) s += std::string(s.empty() ? "" : " (") + nc + (s.empty() ? "" : ")");
   }
   return s.empty() ? "the Exodus library gave no reason" : s;
@@ -57,9 +119,10 @@ std::string exodusError() {
 
 // Closes the file on every way out.
 struct ExodusFile {
+  const ExodusApi& api;
   int id = -1;
   ~ExodusFile() {
-    if (id >= 0) ex_close(id);
+    if (id >= 0) api.ex_close(id);
   }
 };
 
@@ -95,13 +158,13 @@ bool volumeType(const std::string& type, VolumeType* out) {
 }
 
 // Reads `names` (count names of `type`) with the database's name length.
-StatusOr<std::vector<std::string>> readNames(const std::string& path, int exoid, ex_entity_type type, int count,
+StatusOr<std::vector<std::string>> readNames(const ExodusApi& api, const std::string& path, int exoid, ex_entity_type type, int count,
                                              size_t name_length, const char* what) {
   std::vector<std::vector<char>> buffers(static_cast<size_t>(count), std::vector<char>(name_length + 1, '\0'));
   std::vector<char*> pointers;
   for (auto& b : buffers) pointers.push_back(b.data());
-  if (count > 0 && ex_get_variable_names(exoid, type, count, pointers.data()) < 0)
-    return invalidData(path + ": cannot read the names of the " + what + ": " + exodusError());
+  if (count > 0 && api.ex_get_variable_names(exoid, type, count, pointers.data()) < 0)
+    return invalidData(path + ": cannot read the names of the " + what + ": " + exodusError(api));
   std::vector<std::string> names;
   for (auto& b : buffers) {
     b.back() = '\0';
@@ -302,6 +365,12 @@ struct Block {
 }  // namespace
 
 StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions& options) {
+  std::string why;
+  const ExodusApi* loaded = exodusApi(&why);
+  if (!loaded)
+    return unsupported(path + ": an Exodus II file, but the Exodus library (libexoIIv2c, Debian's libexodusii5) "
+                       "cannot be loaded: " + why);
+  const ExodusApi& api = *loaded;
   struct stat sb;
   if (::stat(path.c_str(), &sb) != 0) return ioError(path + ": cannot read it");
   const uint64_t file_size = static_cast<uint64_t>(sb.st_size);
@@ -324,22 +393,22 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
   }
   // The library would print its errors and, by default in some versions, abort: it is told to do
   // neither, and its messages go into ours.
-  ex_opts(EX_DEFAULT);
+  api.ex_opts(EX_DEFAULT);
   int comp_ws = 8, io_ws = 0;
   float version = 0;
-  ExodusFile file;
-  file.id = ex_open(path.c_str(), EX_READ, &comp_ws, &io_ws, &version);
+  ExodusFile file{api};
+  file.id = api.ex_open_int(path.c_str(), EX_READ, &comp_ws, &io_ws, &version, EX_API_VERS_NODOT);
   if (file.id < 0)
-    return invalidData(path + ": cannot open it as an Exodus II file (ex_open: " + exodusError() + ")");
+    return invalidData(path + ": cannot open it as an Exodus II file (ex_open: " + exodusError(api) + ")");
   const int exoid = file.id;
-  ex_set_int64_status(exoid, EX_ALL_INT64_API);
-  const int64_t used_name_length = ex_inquire_int(exoid, EX_INQ_DB_MAX_USED_NAME_LENGTH);
+  api.ex_set_int64_status(exoid, EX_ALL_INT64_API);
+  const int64_t used_name_length = api.ex_inquire_int(exoid, EX_INQ_DB_MAX_USED_NAME_LENGTH);
   const size_t name_length = static_cast<size_t>(std::clamp<int64_t>(used_name_length, MAX_STR_LENGTH, 255));
-  ex_set_max_name_length(exoid, static_cast<int>(name_length));
+  api.ex_set_max_name_length(exoid, static_cast<int>(name_length));
 
   ex_init_params init{};
-  if (ex_get_init_ext(exoid, &init) < 0)
-    return invalidData(path + ": cannot read the Exodus header (ex_get_init_ext: " + exodusError() + ")");
+  if (api.ex_get_init_ext(exoid, &init) < 0)
+    return invalidData(path + ": cannot read the Exodus header (ex_get_init_ext: " + exodusError(api) + ")");
   if (init.num_dim != 3)
     return unsupported(path + ": a " + std::to_string(init.num_dim) +
                        "-dimensional Exodus II mesh; only 3-dimensional meshes hold tetrahedra");
@@ -365,8 +434,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
   {
     std::vector<double> xyz[3];
     for (auto& a : xyz) a.resize(num_nodes);
-    if (num_nodes > 0 && ex_get_coord(exoid, xyz[0].data(), xyz[1].data(), xyz[2].data()) < 0)
-      return invalidData(path + ": cannot read the node coordinates (ex_get_coord: " + exodusError() + ")");
+    if (num_nodes > 0 && api.ex_get_coord(exoid, xyz[0].data(), xyz[1].data(), xyz[2].data()) < 0)
+      return invalidData(path + ": cannot read the node coordinates (ex_get_coord: " + exodusError(api) + ")");
     mesh.coords.resize(3 * num_nodes);
     for (size_t i = 0; i < num_nodes; ++i)
       for (int c = 0; c < 3; ++c) {
@@ -382,8 +451,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
   // Element blocks: the volume ones become cells, the others are counted for a warning.
   const int num_blocks = static_cast<int>(init.num_elem_blk);
   std::vector<int64_t> ids(static_cast<size_t>(num_blocks));
-  if (num_blocks > 0 && ex_get_ids(exoid, EX_ELEM_BLOCK, ids.data()) < 0)
-    return invalidData(path + ": cannot read the element block ids (ex_get_ids: " + exodusError() + ")");
+  if (num_blocks > 0 && api.ex_get_ids(exoid, EX_ELEM_BLOCK, ids.data()) < 0)
+    return invalidData(path + ": cannot read the element block ids (ex_get_ids: " + exodusError(api) + ")");
   std::vector<Block> blocks(ids.size());
   VtkCells cells;
   std::vector<int32_t> cell_block;
@@ -396,9 +465,9 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     ex_block param{};
     param.id = blk.id;
     param.type = EX_ELEM_BLOCK;
-    if (ex_get_block_param(exoid, &param) < 0)
+    if (api.ex_get_block_param(exoid, &param) < 0)
       return invalidData(path + ": cannot read element block " + std::to_string(blk.id) + " (ex_get_block_param: " +
-                         exodusError() + ")");
+                         exodusError(api) + ")");
     param.topology[MAX_STR_LENGTH] = '\0';
     blk.type = trimmed(param.topology);
     blk.elements = param.num_entry;
@@ -424,8 +493,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     blk.first_cell = cells.types.size();
     if (blk.nodes_per_element > blk.vt.corners) higher_order[upper(blk.type)] += blk.elements;
     std::vector<int64_t> conn(static_cast<size_t>(blk.elements * blk.nodes_per_element));
-    if (ex_get_conn(exoid, EX_ELEM_BLOCK, blk.id, conn.data(), nullptr, nullptr) < 0)
-      return invalidData(path + ": cannot read the connectivity of " + where + " (ex_get_conn: " + exodusError() +
+    if (api.ex_get_conn(exoid, EX_ELEM_BLOCK, blk.id, conn.data(), nullptr, nullptr) < 0)
+      return invalidData(path + ": cannot read the connectivity of " + where + " (ex_get_conn: " + exodusError(api) +
                          ")");
     cells.types.reserve(cells.types.size() + static_cast<size_t>(blk.elements));
     cells.connectivity.reserve(cells.connectivity.size() + static_cast<size_t>(blk.elements) * blk.vt.corners);
@@ -465,7 +534,7 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
                        "stay as points that no tetrahedron uses");
 
   // The time step.
-  const int64_t steps = ex_inquire_int(exoid, EX_INQ_TIME);
+  const int64_t steps = api.ex_inquire_int(exoid, EX_INQ_TIME);
   int step = 0;
   if (options.exodus_time_step != 0) {
     if (options.exodus_time_step < 0 || options.exodus_time_step > steps)
@@ -483,10 +552,10 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     cell_fields.push_back(std::move(id));
   }
   int num_node_vars = 0, num_elem_vars = 0, num_global_vars = 0;
-  if (ex_get_variable_param(exoid, EX_NODAL, &num_node_vars) < 0 ||
-      ex_get_variable_param(exoid, EX_ELEM_BLOCK, &num_elem_vars) < 0 ||
-      ex_get_variable_param(exoid, EX_GLOBAL, &num_global_vars) < 0)
-    return invalidData(path + ": cannot read the variable counts (ex_get_variable_param: " + exodusError() + ")");
+  if (api.ex_get_variable_param(exoid, EX_NODAL, &num_node_vars) < 0 ||
+      api.ex_get_variable_param(exoid, EX_ELEM_BLOCK, &num_elem_vars) < 0 ||
+      api.ex_get_variable_param(exoid, EX_GLOBAL, &num_global_vars) < 0)
+    return invalidData(path + ": cannot read the variable counts (ex_get_variable_param: " + exodusError(api) + ")");
   if (num_node_vars < 0 || num_elem_vars < 0 || num_global_vars < 0 || num_node_vars > 100000 ||
       num_elem_vars > 100000 || num_global_vars > 100000)
     return invalidData(path + ": implausible variable counts (" + std::to_string(num_node_vars) + " nodal, " +
@@ -495,9 +564,9 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     warnings.push_back("the file defines variables but holds no time step, so no values: no fields read");
   if (step > 0) {
     double time = 0;
-    if (ex_get_time(exoid, step, &time) < 0)
+    if (api.ex_get_time(exoid, step, &time) < 0)
       return invalidData(path + ": cannot read the time of step " + std::to_string(step) + " (ex_get_time: " +
-                         exodusError() + ")");
+                         exodusError(api) + ")");
     char text[64];
     std::snprintf(text, sizeof text, "%.17g", time);
     mesh.setMetadata("exodus.time", text);
@@ -508,15 +577,15 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
 
     // Nodal variables.
     GTN_ASSIGN_OR_RETURN(const std::vector<std::string> node_names,
-                         readNames(path, exoid, EX_NODAL, num_node_vars, name_length, "nodal variables"));
+                         readNames(api, path, exoid, EX_NODAL, num_node_vars, name_length, "nodal variables"));
     std::vector<double> values;
     for (const VariableGroup& g : groupVariables(node_names)) {
       Field f(g.name, static_cast<uint32_t>(g.variables.size()), value_type, num_nodes);
       for (size_t c = 0; c < g.variables.size(); ++c) {
         values.assign(num_nodes, 0.0);
-        if (num_nodes > 0 && ex_get_var(exoid, step, EX_NODAL, g.variables[c] + 1, 1, init.num_nodes, values.data()) < 0)
+        if (num_nodes > 0 && api.ex_get_var(exoid, step, EX_NODAL, g.variables[c] + 1, 1, init.num_nodes, values.data()) < 0)
           return invalidData(path + ": cannot read nodal variable '" + node_names[g.variables[c]] + "' at time step " +
-                             std::to_string(step) + " (ex_get_var: " + exodusError() + ")");
+                             std::to_string(step) + " (ex_get_var: " + exodusError(api) + ")");
         for (size_t i = 0; i < num_nodes; ++i) putValue(f, i, static_cast<uint32_t>(c), values[i]);
       }
       mesh.point_fields.push_back(std::move(f));
@@ -524,12 +593,12 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
 
     // Element variables, where the truth table defines them.
     GTN_ASSIGN_OR_RETURN(const std::vector<std::string> elem_names,
-                         readNames(path, exoid, EX_ELEM_BLOCK, num_elem_vars, name_length, "element variables"));
+                         readNames(api, path, exoid, EX_ELEM_BLOCK, num_elem_vars, name_length, "element variables"));
     std::vector<int> truth(static_cast<size_t>(num_blocks) * static_cast<size_t>(num_elem_vars), 1);
     if (num_blocks > 0 && num_elem_vars > 0 &&
-        ex_get_truth_table(exoid, EX_ELEM_BLOCK, num_blocks, num_elem_vars, truth.data()) < 0)
+        api.ex_get_truth_table(exoid, EX_ELEM_BLOCK, num_blocks, num_elem_vars, truth.data()) < 0)
       return invalidData(path + ": cannot read the element variable truth table (ex_get_truth_table: " +
-                         exodusError() + ")");
+                         exodusError(api) + ")");
     for (const VariableGroup& g : groupVariables(elem_names)) {
       Field f(g.name, static_cast<uint32_t>(g.variables.size()), value_type, num_cells);
       std::vector<int64_t> undefined_blocks;
@@ -546,10 +615,10 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
             continue;
           }
           values.assign(n, 0.0);
-          if (ex_get_var(exoid, step, EX_ELEM_BLOCK, var + 1, blk.id, blk.elements, values.data()) < 0)
+          if (api.ex_get_var(exoid, step, EX_ELEM_BLOCK, var + 1, blk.id, blk.elements, values.data()) < 0)
             return invalidData(path + ": cannot read element variable '" + elem_names[var] + "' of element block " +
                                std::to_string(blk.id) + " at time step " + std::to_string(step) + " (ex_get_var: " +
-                               exodusError() + ")");
+                               exodusError(api) + ")");
           for (size_t e = 0; e < n; ++e) putValue(f, blk.first_cell + e, static_cast<uint32_t>(c), values[e]);
         }
       }
@@ -564,11 +633,11 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
 
     // Global variables: one value each, kept as metadata.
     GTN_ASSIGN_OR_RETURN(const std::vector<std::string> global_names,
-                         readNames(path, exoid, EX_GLOBAL, num_global_vars, name_length, "global variables"));
+                         readNames(api, path, exoid, EX_GLOBAL, num_global_vars, name_length, "global variables"));
     values.assign(static_cast<size_t>(num_global_vars), 0.0);
-    if (num_global_vars > 0 && ex_get_var(exoid, step, EX_GLOBAL, 1, 0, num_global_vars, values.data()) < 0)
+    if (num_global_vars > 0 && api.ex_get_var(exoid, step, EX_GLOBAL, 1, 0, num_global_vars, values.data()) < 0)
       return invalidData(path + ": cannot read the global variables at time step " + std::to_string(step) +
-                         " (ex_get_var: " + exodusError() + ")");
+                         " (ex_get_var: " + exodusError(api) + ")");
     for (int i = 0; i < num_global_vars; ++i) {
       char text[64];
       std::snprintf(text, sizeof text, "%.17g", values[static_cast<size_t>(i)]);
@@ -593,7 +662,7 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
       if (n > 0) warnings.push_back("skipped " + std::to_string(n) + " " + what + " (not read)");
     for (const auto& [type, what] : {std::pair{EX_NODE_SET, "node set"}, std::pair{EX_SIDE_SET, "side set"}}) {
       int n = 0;
-      if (ex_get_variable_param(exoid, type, &n) >= 0 && n > 0)
+      if (api.ex_get_variable_param(exoid, type, &n) >= 0 && n > 0)
         warnings.push_back("skipped " + std::to_string(n) + " " + what + " variables (not read)");
     }
   }
