@@ -1,4 +1,4 @@
-// gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--compress] [--levels K] [--no-merge-tree]
+// gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--time-step N] [--compress] [--levels K] [--no-merge-tree]
 //   [--no-verify] [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W] [-q]
 #include <chrono>
 #include <memory>
@@ -20,6 +20,7 @@ struct ConvertArgs {
   std::string output;
   int split = 6;
   bool weld = false;
+  int time_step = 0;
   bool compress = false;
   int levels = -1;  // mip levels beyond level 0, -1 = automatic
   bool no_merge_tree = false;
@@ -57,6 +58,7 @@ int runConvert(const ConvertArgs& a) {
   ImportOptions options;
   options.split = a.split;
   options.weld = a.weld;
+  options.exodus_time_step = a.time_step;
   auto imported = importMesh(a.inputs, options);
   if (!imported.isOk()) return reportError(imported.status());
   printImportReport(a.inputs[0], imported->report);
@@ -102,6 +104,9 @@ Command addConvertCommand(CLI::App& app) {
   sub->add_option("--split", args->split, "Hexahedra into 5 (alternating) or 6 (consistent diagonals) tetrahedra")
       ->check(CLI::IsMember({5, 6}));
   sub->add_flag("--weld", args->weld, "merge bit-identical points (seams between PLOT3D blocks or VTK pieces) and drop collapsed tetrahedra");
+  sub->add_option("--time-step", args->time_step,
+                  "Exodus II: the time step (1, 2, ...) whose variables become fields (default: the last)")
+      ->check(CLI::PositiveNumber);
   sub->add_flag("--compress", args->compress, ".vtu: zlib-compress the data arrays");
   sub->add_option("--levels", args->levels, ".gtn: mip levels beyond level 0 (default: down to a small mesh; 0 = none)")
       ->check(CLI::Range(0, 62));

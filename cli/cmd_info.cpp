@@ -1,4 +1,4 @@
-// gtn info INPUT... [--split 5|6] [--weld] [--json] [--merge-tree] [--plot FILE.png]: what a mesh holds.
+// gtn info INPUT... [--split 5|6] [--weld] [--time-step N] [--json] [--merge-tree] [--plot FILE.png]: what a mesh holds.
 #include <cstdio>
 #include <memory>
 
@@ -19,6 +19,7 @@ struct InfoArgs {
   std::vector<std::string> inputs;
   int split = 6;
   bool weld = false;
+  int time_step = 0;
   bool json = false;
   bool merge_tree = false;
   std::string plot;  // --plot FILE.png
@@ -128,6 +129,7 @@ int runInfo(const InfoArgs& a) {
   ImportOptions options;
   options.split = a.split;
   options.weld = a.weld;
+  options.exodus_time_step = a.time_step;
   auto imported = importMesh(a.inputs, options);
   if (!imported.isOk()) return reportError(imported.status());
   for (const std::string& w : imported->report.warnings) warnAbout(a.inputs[0], w);
@@ -151,6 +153,9 @@ Command addInfoCommand(CLI::App& app) {
       ->required();
   sub->add_option("--split", args->split, "Hexahedra into 5 or 6 tetrahedra")->check(CLI::IsMember({5, 6}));
   sub->add_flag("--weld", args->weld, "merge bit-identical points (seams between PLOT3D blocks or VTK pieces)");
+  sub->add_option("--time-step", args->time_step,
+                  "Exodus II: the time step (1, 2, ...) whose variables become fields (default: the last)")
+      ->check(CLI::PositiveNumber);
   sub->add_flag("--json", args->json, "Print one JSON object on standard output");
   sub->add_flag("--merge-tree", args->merge_tree,
                 ".gtn: level 0's merge tree as a table (merges, roots, depth, fan-out, error quantiles; per "

@@ -1,5 +1,5 @@
 // gtn validate FILE [--against SOURCE...] [--json] [--quick] [--max-issues N]: the reference validator.
-// gtn validate MESHFILE... [--split 5|6] [--weld] [--json] [--max-issues N]: the same report for a mesh
+// gtn validate MESHFILE... [--split 5|6] [--weld] [--time-step N] [--json] [--max-issues N]: the same report for a mesh
 // that `gtn convert` reads (what the importer changed, then the mesh checks).
 // gtn validate --list-issues [--markdown]: every issue code it can report.
 // Exit codes: 0 no error, 1 an error was found, 2 usage, 3 the file cannot be read.
@@ -22,6 +22,7 @@ struct ValidateArgs {
   int split = 6;
   bool weld = false;
   bool split_given = false;  // --split on the command line (otherwise --against takes the file's)
+  int time_step = 0;
   bool json = false;
   bool quick = false;
   size_t max_issues = 100;
@@ -44,6 +45,7 @@ int runValidate(const ValidateArgs& a) {
   options.import_options.weld = a.weld;
   options.split_from_file = !a.split_given;
   options.weld_from_file = !a.weld;
+  options.import_options.exodus_time_step = a.time_step;
   // A .gtn file (or a file no importer knows, which the container checks then describe), else mesh files.
   const InputFormat format = detectInputFormat(a.files.front());
   const bool gtn = format == InputFormat::kGtn || format == InputFormat::kUnknown;
@@ -80,6 +82,9 @@ Command addValidateCommand(CLI::App& app) {
   sub->add_flag("--weld", args->weld,
                 "mesh files and --against: merge bit-identical points (seams between PLOT3D blocks or VTK pieces); "
                 "--against: also when the .gtn file records it");
+  sub->add_option("--time-step", args->time_step,
+                  "Exodus II: the time step (1, 2, ...) whose variables become fields (default: the last)")
+      ->check(CLI::PositiveNumber);
   sub->add_flag("--json", args->json, "Print the report as one JSON document on standard output");
   sub->add_flag("--quick", args->quick, "Check the container and checksums only");
   sub->add_option("--max-issues", args->max_issues, "Keep at most N messages (counts stay exact)")

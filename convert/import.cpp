@@ -45,6 +45,7 @@ const char* inputFormatName(InputFormat f) {
     case InputFormat::kOff: return "tetrahedral OFF";
     case InputFormat::kGtn: return ".gtn";
     case InputFormat::kGmsh: return "gmsh (.msh)";
+    case InputFormat::kExodus: return "Exodus II";
     default: return "unknown";
   }
 }
@@ -55,6 +56,11 @@ InputFormat detectInputFormat(const std::string& path) {
   if (h.size() >= 4 && static_cast<unsigned char>(h[0]) == 0x8E && h[1] == 'G' && h[2] == 'T' && h[3] == 'N')
     return InputFormat::kGtn;
   if (ext == "gtn") return InputFormat::kGtn;
+  // Exodus II is netCDF: classic ("CDF" and 1, 2 or 5) or netCDF-4, an HDF5 file.
+  if ((h.size() >= 4 && h.compare(0, 3, "CDF") == 0 && (h[3] == 1 || h[3] == 2 || h[3] == 5)) ||
+      h.rfind("\x89HDF\r\n\x1a\n", 0) == 0 || ext == "exo" || ext == "e" || ext == "ex2" || ext == "exii" ||
+      ext == "gen")
+    return InputFormat::kExodus;
   if (h.rfind("# vtk DataFile", 0) == 0 || ext == "vtk") return InputFormat::kVtkLegacy;
   if (ext == "vtu" || ext == "vts" || ext == "vtr" || ext == "vti" || ext == "pvtu" || ext == "pvts" || ext == "pvtr" ||
       ext == "pvti" || h.find("<VTKFile") != std::string::npos)
@@ -243,10 +249,11 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
     case InputFormat::kOff: result = importOff(path, opts); break;
     case InputFormat::kGtn: result = importGtn(path); break;
     case InputFormat::kGmsh: result = importGmsh(path, opts); break;
+    case InputFormat::kExodus: result = importExodus(path, opts); break;
     default:
       return Status(StatusCode::kNotOurFile,
                     path + ": cannot tell its format from the extension or content (known: PLOT3D .xyz/.q/.bin/.p3d, "
-                           "TetGen .node/.ele, VTK .vtk/.vtu/.vts/.vtr/.vti and parallel .pvtu/.pvts/.pvtr/.pvti, Medit .mesh/.meshb, tetrahedral .off, gmsh .msh)");
+                           "TetGen .node/.ele, VTK .vtk/.vtu/.vts/.vtr/.vti and parallel .pvtu/.pvts/.pvtr/.pvti, Medit .mesh/.meshb, tetrahedral .off, gmsh .msh, Exodus II .exo/.e/.ex2)");
   }
   if (result.isOk() && (first == InputFormat::kMedit || first == InputFormat::kMeshb) && opts.medit_solutions.empty()) {
     // Medit and MMG load u.sol or u.solb beside u.mesh by themselves; say so rather than guess.

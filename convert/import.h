@@ -15,6 +15,8 @@ struct ImportOptions {
   bool weld = false;  // merge bit-identical points, drop tetrahedra that collapse (weldPoints)
   // Medit meshes: solution files (.sol, .solb) whose values become fields (readMeditSolutions).
   std::vector<std::string> medit_solutions;
+  // Exodus II: the time step (1-based) whose variables become fields; 0 reads the last one.
+  int exodus_time_step = 0;
 };
 
 // Metadata that importMesh adds to a mesh imported with options other than the defaults (a .gtn input
@@ -22,7 +24,7 @@ struct ImportOptions {
 inline constexpr const char* kMetadataSplit = "import.split";
 inline constexpr const char* kMetadataWeld = "import.weld";
 
-enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kMeshb, kOff, kGtn, kGmsh };
+enum class InputFormat { kUnknown, kPlot3d, kTetgen, kVtkLegacy, kVtu, kMedit, kMeshb, kOff, kGtn, kGmsh, kExodus };
 const char* inputFormatName(InputFormat f);
 
 // Format of one input path from its extension and first bytes.
@@ -42,6 +44,7 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
 StatusOr<ImportResult> importMeshb(const std::string& path, const ImportOptions& options);
 StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions& options);
 StatusOr<ImportResult> importGmsh(const std::string& path, const ImportOptions& options);
+StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions& options);
 
 // Normalises orientation after an importer built `result.mesh`: flips negative tetrahedra, counts
 // flips and zero-volume cells into the report.

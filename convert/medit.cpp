@@ -3,9 +3,11 @@
 // are read (1-based, a reference number after each); hexahedra, prisms and pyramids are split into
 // tetrahedra as the VTK importers split theirs (medit_cells.h gives the corner numbering). Every other
 // known section is skipped: by its count of values, or, for the links to a geometry whose layout
-// changed between libMeshb versions, one line per entry (as libMeshb writes them). A section of
-// another program is skipped, with a warning, up to the next keyword: entries are numbers, keywords
-// words. A file whose first keyword is unknown is not a Medit file.
+// changed between libMeshb versions, one line per entry (as libMeshb writes them); a warning per
+// keyword counts its entries (boundary triangles and their references, edges, corners ...). The
+// single values (Iterations, Time, AngleOfCornerBound, BoundingBox) become metadata
+// ("medit.Time"). A section of another program is skipped, with a warning, up to the next keyword:
+// entries are numbers, keywords words. A file whose first keyword is unknown is not a Medit file.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -59,6 +61,26 @@ constexpr SkippedSection kSkipped[] = {
     {"AngleOfCornerBound", 1, false, Skip::kSingle}, {"BoundingBox", 6, false, Skip::kSingle},
 };
 
+// What a skipped section held, for its warning.
+std::string skippedWhat(const SkippedSection& s) {
+  const std::string k = s.keyword;
+  if (k.rfind("Edges", 0) == 0 || k.rfind("Triangles", 0) == 0 || k.rfind("Quadrilaterals", 0) == 0)
+    return "elements of lower dimension, with their references: only volume elements become tetrahedra";
+  if (k == "Corners" || k == "Ridges" || k.rfind("Required", 0) == 0) return "marks on vertices and elements, not read";
+  if (k.find("Normal") != std::string::npos || k.find("Tangent") != std::string::npos)
+    return "normals and tangents, not read";
+  if (s.skip == Skip::kLines) return "links to a geometry, not read";
+  return "not read";
+}
+
+// The entries of one keyword's skipped sections: how many, and where the first began.
+struct SkippedEntries {
+  const SkippedSection* section;
+  int64_t entries = 0;
+  size_t line = 0;
+  int sections = 0;
+};
+
 StatusOr<int64_t> readCount(TextReader& reader, int64_t values_per_entry, const std::string& what) {
   GTN_ASSIGN_OR_RETURN(const int64_t count, reader.readInt((what + " count").c_str()));
   if (count > kMaxItems) return reader.error(what + " count " + std::to_string(count) + " is too large");
@@ -101,6 +123,7 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
   MeditCells cells;
   bool have_vertices = false, seen_keyword = false;
   std::string skipped_volume;  // higher-order volume sections skipped, for the error when nothing else is left
+  std::vector<SkippedEntries> skipped;  // the other skipped sections, per keyword in file order
   std::string_view tok, pending;  // pending: a keyword already read (it ended a skipped section)
   while (true) {
     if (!pending.empty()) {
@@ -230,8 +253,13 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
       const size_t line = reader.line();
       const std::string entries = std::string(section->keyword) + " entries";
       if (section->skip == Skip::kSingle) {
-        for (int64_t i = 0; i < values; ++i)
+        std::string text;
+        for (int64_t i = 0; i < values; ++i) {
           if (!reader.next(&tok)) return reader.errorAtEnd(entries.c_str());
+          if (i) text += ' ';
+          text += tok;
+        }
+        mesh.setMetadata(std::string("medit.") + section->keyword, text);
         seen_keyword = true;
         continue;
       }
@@ -250,6 +278,13 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
                               std::to_string(count) + " entries of " + std::to_string(values) + " values; found " +
                               quotedToken(tok) + " after " + std::to_string(i) + " values");
       }
+      if (!section->volume && count > 0) {
+        auto it = std::find_if(skipped.begin(), skipped.end(),
+                               [&](const SkippedEntries& e) { return e.section == section; });
+        if (it == skipped.end()) it = skipped.insert(skipped.end(), SkippedEntries{section, 0, line, 0});
+        it->entries += count;
+        ++it->sections;
+      }
       if (section->volume && count > 0) {
         const std::string what = std::to_string(count) + " " + section->keyword + " elements (line " +
                                  std::to_string(line) + ")";
@@ -267,6 +302,11 @@ StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions&
                        std::to_string(cells.late_vertex) + "; vertices are numbered 1 to " +
                        std::to_string(mesh.numPoints()));
   cells.warnAboutSections(&result);
+  for (const SkippedEntries& e : skipped)
+    result.report.warnings.push_back("skipped " + std::to_string(e.entries) + " " + e.section->keyword + " (line " +
+                                     std::to_string(e.line) + (e.sections > 1 ? " and " + std::to_string(e.sections - 1) +
+                                                                                   " more sections" : "") +
+                                     "): " + skippedWhat(*e.section));
   GTN_RETURN_IF_ERROR(finishMeditImport(path, "medit", &cells, options, &result));
   return result;
 }

@@ -6,10 +6,16 @@
 // keywords an int count (int64 in version 4) and that many entries: a vertex is `dimension` reals and
 // an int reference, an element its corner numbers (1-based) and an int reference. The keywords read
 // are those of the ASCII reader; any other is skipped by its next-keyword position, which must move
-// forward and stay inside the file. Every count is checked against the bytes left before anything
-// is allocated.
+// forward and stay inside the file, with a warning per keyword that counts its entries (boundary
+// triangles, edges, corners ...); the single values (Iterations, Time, AngleOfCornerBound,
+// BoundingBox) become metadata ("medit.Time"). Every count is checked against the bytes left before
+// anything is allocated.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <iterator>
+#include <vector>
 
 #include "convert/gmf_binary.h"
 #include "convert/import.h"
@@ -33,6 +39,40 @@ constexpr SkippedVolume kSkippedVolumes[] = {
     {96, "TetrahedraP3"}, {97, "TetrahedraP4"}, {98, "HexahedraQ3"},  {99, "HexahedraQ4"}, {100, "PyramidsP3"},
     {101, "PyramidsP4"},  {102, "PrismsP3"},    {103, "PrismsP4"},
 };
+
+// libMeshb's keyword names by code (GmfKwdCod; "" for the codes it reserves).
+constexpr const char* kKeywordNames[] = {
+    "", "MeshVersionFormatted", "", "Dimension", "Vertices", "Edges", "Triangles", "Quadrilaterals", "Tetrahedra",
+    "Prisms", "Hexahedra", "IterationsAll", "TimesAll", "Corners", "Ridges", "RequiredVertices", "RequiredEdges",
+    "RequiredTriangles", "RequiredQuadrilaterals", "TangentAtEdgeVertices", "NormalAtVertices",
+    "NormalAtTriangleVertices", "NormalAtQuadrilateralVertices", "AngleOfCornerBound", "TrianglesP2", "EdgesP2",
+    "SolAtPyramids", "QuadrilateralsQ2", "ISolAtPyramids", "SubDomainFromGeom", "TetrahedraP2", "Fault_NearTri",
+    "Fault_Inter", "HexahedraQ2", "ExtraVerticesAtEdges", "ExtraVerticesAtTriangles",
+    "ExtraVerticesAtQuadrilaterals", "ExtraVerticesAtTetrahedra", "ExtraVerticesAtPrisms",
+    "ExtraVerticesAtHexahedra", "VerticesOnGeometricVertices", "VerticesOnGeometricEdges",
+    "VerticesOnGeometricTriangles", "VerticesOnGeometricQuadrilaterals", "EdgesOnGeometricEdges", "Fault_FreeEdge",
+    "Polyhedra", "Polygons", "Fault_Overlap", "Pyramids", "BoundingBox", "Body", "PrivateTable", "Fault_BadShape",
+    "End", "TrianglesOnGeometricTriangles", "TrianglesOnGeometricQuadrilaterals",
+    "QuadrilateralsOnGeometricTriangles", "QuadrilateralsOnGeometricQuadrilaterals", "Tangents", "Normals",
+    "TangentAtVertices", "SolAtVertices", "SolAtEdges", "SolAtTriangles", "SolAtQuadrilaterals", "SolAtTetrahedra",
+    "SolAtPrisms", "SolAtHexahedra", "DSolAtVertices", "ISolAtVertices", "ISolAtEdges", "ISolAtTriangles",
+    "ISolAtQuadrilaterals", "ISolAtTetrahedra", "ISolAtPrisms", "ISolAtHexahedra", "Iterations", "Time",
+    "Fault_SmallTri", "CoarseHexahedra", "Comments", "PeriodicVertices", "PeriodicEdges", "PeriodicTriangles",
+    "PeriodicQuadrilaterals", "PrismsP2", "PyramidsP2", "QuadrilateralsQ3", "QuadrilateralsQ4", "TrianglesP3",
+    "TrianglesP4", "EdgesP3", "EdgesP4", "IRefGroups", "DRefGroups", "TetrahedraP3", "TetrahedraP4", "HexahedraQ3",
+    "HexahedraQ4", "PyramidsP3", "PyramidsP4", "PrismsP3", "PrismsP4",
+};
+constexpr uint32_t kAngleOfCornerBound = 23, kBoundingBox = 50, kIterations = 77, kTime = 78;
+
+// What a skipped keyword held, for its warning.
+std::string skippedWhat(const std::string& k) {
+  if (k.rfind("Edges", 0) == 0 || k.rfind("Triangles", 0) == 0 || k.rfind("Quadrilaterals", 0) == 0 ||
+      k == "Polygons")
+    return "elements of lower dimension, with their references: only volume elements become tetrahedra";
+  if (k == "Corners" || k == "Ridges" || k.rfind("Required", 0) == 0) return "marks on vertices and elements, not read";
+  if (k.find("Sol") != std::string::npos) return "solution values inside the mesh file, not read";
+  return "not read";
+}
 
 // The volume keyword for a GMF keyword code, or null.
 const MeditVolumeKeyword* volumeKeyword(uint32_t code) {
@@ -62,6 +102,15 @@ class MeshbReader {
   int64_t dimension_ = 0;
   bool have_vertices_ = false;
   std::string skipped_volume_;
+  // The other skipped keywords in file order: name, entries (-1: not counted), first byte offset, records.
+  struct Skipped {
+    std::string name;
+    int64_t entries;
+    uint64_t at;
+    int records;
+  };
+  std::vector<Skipped> skipped_;
+  Status skip(uint32_t keyword, uint64_t at, uint64_t end);
   ImportResult result_;
   MeditCells cells_;
 };
@@ -139,6 +188,37 @@ Status MeshbReader::readElements(const MeditVolumeKeyword& kw, uint64_t end) {
   return Status::ok();
 }
 
+// A keyword the reader does not use: a single value becomes metadata; the others are counted for a
+// warning (the entry count that starts their data, where they have one).
+Status MeshbReader::skip(uint32_t keyword, uint64_t at, uint64_t end) {
+  const bool named = keyword < std::size(kKeywordNames) && kKeywordNames[keyword][0] != '\0';
+  const std::string name = named ? kKeywordNames[keyword] : "keyword " + std::to_string(keyword);
+  if (keyword == kAngleOfCornerBound || keyword == kBoundingBox || keyword == kIterations || keyword == kTime) {
+    const int n = keyword == kBoundingBox ? 6 : 1;
+    const uint64_t size = keyword == kIterations ? in_.intSize() : in_.realSize();
+    GTN_RETURN_IF_ERROR(in_.need(n * size, name, end));
+    std::string text;
+    for (int i = 0; i < n; ++i) {
+      char value[32];
+      if (keyword == kIterations) std::snprintf(value, sizeof value, "%lld", static_cast<long long>(in_.integer()));
+      else std::snprintf(value, sizeof value, "%.17g", in_.real());
+      if (i) text += ' ';
+      text += value;
+    }
+    result_.mesh.setMetadata("medit." + name, text);
+    return Status::ok();
+  }
+  int64_t entries = -1;
+  if (named && end - in_.position() >= in_.intSize()) entries = in_.integer();
+  if (entries < 0) entries = -1;
+  auto it = std::find_if(skipped_.begin(), skipped_.end(), [&](const Skipped& s) { return s.name == name; });
+  if (it == skipped_.end()) it = skipped_.insert(skipped_.end(), Skipped{name, 0, at, 0});
+  if (entries < 0) it->entries = -1;
+  else if (it->entries >= 0) it->entries += entries;
+  ++it->records;
+  return Status::ok();
+}
+
 StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
   GTN_RETURN_IF_ERROR(in_.open(".meshb"));
   uint32_t keyword = 0;
@@ -154,14 +234,17 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
     } else if (const MeditVolumeKeyword* kw = volumeKeyword(keyword)) {
       GTN_RETURN_IF_ERROR(readElements(*kw, end));
     } else {
+      bool volume = false;
       for (const SkippedVolume& v : kSkippedVolumes) {
         if (v.code != keyword) continue;
+        volume = true;
         skipped_volume_ += (skipped_volume_.empty() ? "" : ", ") + std::string(v.name) + " (byte offset " +
                            std::to_string(at) + ")";
         result_.report.warnings.push_back("skipped " + std::string(v.name) + " at byte offset " + std::to_string(at) +
                                           ": higher-order and polyhedral elements are not read, so their volume is "
                                           "missing");
       }
+      if (!volume) GTN_RETURN_IF_ERROR(skip(keyword, at, end));
     }
   }
   if (!have_vertices_) return invalidData(path_ + ": no Vertices keyword");
@@ -170,6 +253,13 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
     return in_.fail(cells_.late_place, cells_.late_element + " refers to vertex " + std::to_string(cells_.late_vertex) +
                                            "; vertices are numbered 1 to " + std::to_string(result_.mesh.numPoints()));
   cells_.warnAboutSections(&result_);
+  for (const Skipped& s : skipped_) {
+    const std::string where = "byte offset " + std::to_string(s.at) +
+                              (s.records > 1 ? " and " + std::to_string(s.records - 1) + " more records" : "");
+    result_.report.warnings.push_back(
+        "skipped " + (s.entries >= 0 ? std::to_string(s.entries) + " " + s.name : s.name) + " (" + where + "): " +
+        (s.name.rfind("keyword ", 0) == 0 ? std::string("a keyword unknown to this reader, not read") : skippedWhat(s.name)));
+  }
   GTN_RETURN_IF_ERROR(finishMeditImport(path_, "meshb", &cells_, options, &result_));
   return std::move(result_);
 }

@@ -416,8 +416,9 @@ StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_
 // Checks that every listed face belongs to a tetrahedron and stores the markers per local face.
 // Runs after orientation normalisation, which swaps vertices 2 and 3 of flipped tetrahedra and so
 // changes which local face is which.
+// `interior` gets the number of listed faces that two tetrahedra share.
 Status applyFaces(const std::string& path, const std::vector<FaceEntry>& faces, int64_t base, Field* marker_field,
-                  TetMesh& mesh) {
+                  TetMesh& mesh, size_t* interior) {
   std::vector<uint8_t> found(faces.size(), 0);
   for (size_t t = 0; t < mesh.tets.size(); ++t) {
     const Tet& tet = mesh.tets[t];
@@ -426,7 +427,8 @@ Status applyFaces(const std::string& path, const std::vector<FaceEntry>& faces, 
       auto it = std::lower_bound(faces.begin(), faces.end(), key,
                                  [](const FaceEntry& e, const std::array<uint32_t, 3>& x) { return e.v < x; });
       if (it == faces.end() || it->v != key) continue;
-      found[it - faces.begin()] = 1;
+      uint8_t& seen = found[it - faces.begin()];
+      if (seen < 2 && ++seen == 2) ++*interior;
       if (marker_field) marker_field->set<int32_t>(t, static_cast<uint32_t>(k), it->marker);
     }
   }
@@ -482,7 +484,31 @@ StatusOr<ImportResult> importTetgen(const std::string& path, const ImportOptions
       marker_field = &mesh.cell_fields[face_field];
     }
   }
-  if (has_face_file) GTN_RETURN_IF_ERROR(applyFaces(face_path, faces, nodes.base, marker_field, mesh));
+  if (has_face_file) {
+    size_t interior = 0;
+    GTN_RETURN_IF_ERROR(applyFaces(face_path, faces, nodes.base, marker_field, mesh, &interior));
+    // Without markers the list itself is kept nowhere: that is no loss where it lists boundary faces
+    // (the tetrahedra have them), but faces inside the mesh are a choice the file made.
+    if (!face_markers && interior > 0)
+      result.report.warnings.push_back(face_path + ": " + std::to_string(interior) + " of its " +
+                                       std::to_string(faces.size()) +
+                                       " faces lie inside the mesh; without markers, which faces it lists is not kept");
+  }
+  // Files of the mesh that are not read, each named: TetGen's edges (-e, boundary edges with their
+  // markers), volume constraints (-a) and metric (-m). Adjacency (.neigh) is recomputed.
+  for (const auto& [ext, what] : {std::pair{".edge", "edges"}, std::pair{".vol", "volume constraints"},
+                                  std::pair{".mtr", "metric values"}}) {
+    const std::string p = base_path + ext;
+    if (!pathExists(p)) continue;
+    std::string count;
+    if (StatusOr<std::string> text = readWholeFile(p); text.isOk()) {
+      TextReader reader(p, *text);
+      std::vector<std::string_view> row;
+      int64_t n = 0;
+      if (readRow(reader, &row) && parseInt(row[0], &n)) count = std::to_string(n) + " ";
+    }
+    result.report.warnings.push_back(p + " beside it (" + count + what + ") is not read");
+  }
 
   mesh.metadata = nodes.layout.metadata;
   mesh.setMetadata("source.format", "tetgen");

@@ -99,6 +99,10 @@ class LegacyReader {
   int section_ = 0;
   uint64_t section_items_ = 0;
   std::vector<Field> cell_fields_;
+  // What is read past, for the warnings: METADATA blocks (annotations of arrays) and lookup tables.
+  size_t metadata_blocks_ = 0, metadata_line_ = 0;
+  std::vector<std::string> lookup_tables_;
+  void warnAboutSkipped();
 };
 
 StatusOr<std::string> LegacyReader::token(const char* what) {
@@ -281,6 +285,7 @@ Status LegacyReader::readCellTypes() {
 
 void LegacyReader::skipMetadata() {
   // METADATA blocks (version 5.1) end at the first empty line.
+  if (metadata_blocks_++ == 0) metadata_line_ = tr_.line();
   tr_.skipLine();
   while (tr_.offset() < text_.size()) {
     const size_t at = tr_.offset();
@@ -291,6 +296,18 @@ void LegacyReader::skipMetadata() {
     tr_.skipLine();
     if (blank) break;
   }
+}
+
+void LegacyReader::warnAboutSkipped() {
+  if (metadata_blocks_ > 0)
+    result_.report.warnings.push_back("skipped " + std::to_string(metadata_blocks_) + " METADATA block" +
+                                      (metadata_blocks_ > 1 ? "s" : "") + " (line " + std::to_string(metadata_line_) +
+                                      (metadata_blocks_ > 1 ? " and on" : "") +
+                                      "): component names and information keys of arrays, not read");
+  if (!lookup_tables_.empty())
+    result_.report.warnings.push_back("skipped " + std::to_string(lookup_tables_.size()) + " LOOKUP_TABLE definition" +
+                                      (lookup_tables_.size() > 1 ? "s" : "") + " (" + joinNames(lookup_tables_) +
+                                      "): colour tables are not read");
 }
 
 Status LegacyReader::readFieldData(std::vector<Field>* into) {
@@ -423,6 +440,7 @@ Status LegacyReader::readAttribute(const std::string& kw) {
     GTN_ASSIGN_OR_RETURN(uint64_t entries, count("lookup table size"));
     if (entries > UINT64_MAX / 4) return tr_.error("lookup table too large");
     std::vector<uint8_t> skipped;
+    lookup_tables_.push_back(name);
     return readValues(binary_ ? ScalarType::kUInt8 : ScalarType::kFloat32, 4 * entries, "LOOKUP_TABLE " + name,
                       &skipped);
   } else if (kw == "GLOBAL_IDS" || kw == "PEDIGREE_IDS") {
@@ -608,6 +626,7 @@ StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
     }
   }
   if (!have_dataset) return invalidData(path_ + ": no DATASET line");
+  warnAboutSkipped();
   if (structured()) {
     GTN_RETURN_IF_ERROR(finishStructured(options));
     return std::move(result_);

@@ -347,8 +347,11 @@ StatusOr<ValidationReport> validateMeshFiles(const std::vector<std::string>& inp
   if (r.dropped_cells) {
     report.addMany(IssueCode::kCellsDropped, "/import", r.dropped_cells, {}, "");
   }
-  for (size_t i = 0; i < r.warnings.size(); ++i)
-    report.add(IssueCode::kImportWarning, "/import", "/import/warnings/" + std::to_string(i), r.warnings[i]);
+  // Each warning says something of its own (what was skipped, what was changed): a message each.
+  for (size_t i = 0; i < r.warnings.size(); ++i) {
+    const std::string path = "/import/warnings/" + std::to_string(i);
+    report.add(IssueCode::kImportWarning, path, path, r.warnings[i]);
+  }
   MeshCheckStats stats;
   checkMesh(imported->mesh, "/mesh", report, &stats);
   nlohmann::json mi = statsJson(stats);

@@ -160,6 +160,18 @@ TEST(MeditImport, SkipsOtherSectionsAndKeepsRefs) {
   EXPECT_EQ(m.point_fields[0].get(4, 0), 14);
   EXPECT_EQ(m.cell_fields[0].get(0, 0), 7);
   EXPECT_EQ(m.cell_fields[0].get(1, 0), 8);
+  // Nothing is left out without a word: one warning per skipped keyword, with its entries.
+  const std::vector<std::string> want = {
+      "skipped 2 Edges (line 12): elements of lower dimension, with their references: only volume elements become "
+      "tetrahedra",
+      "skipped 2 Triangles (line 15): elements of lower dimension, with their references: only volume elements "
+      "become tetrahedra",
+      "skipped 1 Corners (line 19): marks on vertices and elements, not read",
+      "skipped 1 Ridges (line 20): marks on vertices and elements, not read",
+      "skipped 1 Normals (line 28): normals and tangents, not read",
+      "skipped 1 NormalAtVertices (line 30): normals and tangents, not read",
+  };
+  EXPECT_EQ(r->report.warnings, want);
 }
 
 void expectError(StatusOr<ImportResult> r, const std::string& where) {
@@ -221,9 +233,16 @@ TEST(MeditImport, AnyKeywordOrderSeveralSectionsAndGeometryLinks) {
   EXPECT_TRUE(r->mesh.tets[1] == (Tet{0, 1, 2, 3}));
   EXPECT_EQ(r->mesh.cell_fields[0].get(0, 0), 8);
   EXPECT_EQ(r->mesh.cell_fields[0].get(1, 0), 7);
-  ASSERT_EQ(r->report.warnings.size(), 1u);
+  ASSERT_EQ(r->report.warnings.size(), 11u);  // the 6 sections of kMedit it skips last
   EXPECT_NE(r->report.warnings[0].find("2 Tetrahedra sections (line 5, line "), std::string::npos)
       << r->report.warnings[0];
+  EXPECT_EQ(r->report.warnings[1], "skipped 2 VertexOnGeometricEdge (line 13): links to a geometry, not read");
+  EXPECT_EQ(r->report.warnings[4], "skipped 1 EdgeOnGeometricEdge (line 21): links to a geometry, not read");
+  // The single values are kept as metadata.
+  ASSERT_NE(r->mesh.findMetadata("medit.Time"), nullptr);
+  EXPECT_EQ(*r->mesh.findMetadata("medit.Time"), "0.25");
+  EXPECT_EQ(*r->mesh.findMetadata("medit.Iterations"), "12");
+  EXPECT_EQ(*r->mesh.findMetadata("medit.BoundingBox"), "0 1 0 1 0 1");
   // A vertex number beyond the vertices that follow is reported where it was read.
   writeFile(dir + "/far.mesh", replaced(text, "Tetrahedra 1\n2 4 3 5 8\n", "Tetrahedra 1\n2 4 3 9 8\n"));
   expectError(importMedit(dir + "/far.mesh", ImportOptions{}),
@@ -243,7 +262,7 @@ TEST(MeditImport, SkipsSectionsOfOtherProgramsToTheNextKeyword) {
   EXPECT_EQ(r->mesh.numPoints(), 5u);
   ASSERT_EQ(r->mesh.numTets(), 2u);  // the Tetrahedra after the skipped sections
   EXPECT_EQ(r->mesh.cell_fields[0].get(1, 0), 8);
-  ASSERT_EQ(r->report.warnings.size(), 4u);
+  ASSERT_EQ(r->report.warnings.size(), 10u);  // and the 6 sections of kMedit it skips
   EXPECT_EQ(r->report.warnings[0],
             "skipped the unknown section 'ParallelTriangleCommunicators' (line 24, 3 numbers up to the next keyword)");
   EXPECT_EQ(r->report.warnings[1],
@@ -257,6 +276,43 @@ TEST(MeditImport, SkipsSectionsOfOtherProgramsToTheNextKeyword) {
   EXPECT_EQ(q.status().code(), StatusCode::kNotOurFile);
 }
 
+// Item by item, what a Medit file holds besides its volume (boundary triangles and quadrilaterals with
+// their references, edges, corners, ridges, required entities, tangents), counted over several
+// sections of a keyword; gtn info and gtn validate show it.
+TEST(MeditImport, EverySkippedSectionIsCountedAndShown) {
+  const std::string dir = tempDir("medit-left-out");
+  const std::string text = replaced(
+      kMedit, "Corners 1 1\n",
+      "Corners 1 1\nQuadrilaterals 1\n1 2 5 3 9\nTriangles 1\n1 3 4 6\nRequiredVertices 2\n1 2\n"
+      "RequiredTriangles 1 2\nTangents 1\n1 0 0\nTangentAtVertices 1\n2 1\nTrianglesP2 0\n");
+  writeFile(dir + "/b.mesh", text);
+  auto r = importMesh({dir + "/b.mesh"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ(r->mesh.numTets(), 2u);
+  const std::string lower = ": elements of lower dimension, with their references: only volume elements become tetrahedra";
+  const std::vector<std::string> want = {
+      "skipped 2 Edges (line 12)" + lower,
+      "skipped 3 Triangles (line 15 and 1 more sections)" + lower,
+      "skipped 1 Corners (line 19): marks on vertices and elements, not read",
+      "skipped 1 Quadrilaterals (line 20)" + lower,
+      "skipped 2 RequiredVertices (line 24): marks on vertices and elements, not read",
+      "skipped 1 RequiredTriangles (line 26): marks on vertices and elements, not read",
+      "skipped 1 Tangents (line 27): normals and tangents, not read",
+      "skipped 1 TangentAtVertices (line 29): normals and tangents, not read",
+      "skipped 1 Ridges (line 32): marks on vertices and elements, not read",
+      "skipped 1 Normals (line 40): normals and tangents, not read",
+      "skipped 1 NormalAtVertices (line 42): normals and tangents, not read",
+  };
+  EXPECT_EQ(r->report.warnings, want);
+  // The command line shows them: info on standard error, validate as import warnings.
+  auto info = test::runGtn("info " + dir + "/b.mesh");
+  EXPECT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.err.find("skipped 3 Triangles (line 15 and 1 more sections)"), std::string::npos) << info.err;
+  auto validate = test::runGtn("validate --json " + dir + "/b.mesh");
+  EXPECT_NE(validate.out.find("skipped 1 Quadrilaterals (line 20)"), std::string::npos) << validate.out;
+  EXPECT_NE(validate.out.find("skipped 2 Edges (line 12)"), std::string::npos) << validate.out;
+}
+
 // TetGen -g writes a point attribute as the vertex reference: reals keep every reference as float64.
 TEST(MeditImport, RealVertexReferencesBecomeFloat64) {
   const std::string dir = tempDir("medit-real-refs");
@@ -268,7 +324,7 @@ TEST(MeditImport, RealVertexReferencesBecomeFloat64) {
   EXPECT_EQ(ref.get(0, 0), 10.0);
   EXPECT_EQ(ref.get(3, 0), 13.5);
   EXPECT_EQ(ref.get(4, 0), 1e10);
-  ASSERT_EQ(r->report.warnings.size(), 1u);
+  ASSERT_EQ(r->report.warnings.size(), 7u);  // and the 6 sections of kMedit it skips
   EXPECT_NE(r->report.warnings[0].find("vertex 4 (line 10) has the reference 13.5"), std::string::npos)
       << r->report.warnings[0];
   EXPECT_EQ(r->mesh.cell_fields[0].type, ScalarType::kInt32);  // element references stay integers
@@ -291,7 +347,7 @@ TEST(MeditErrors, BadInputs) {
   writeFile(p, replaced(kMedit, "Corners 1 1", "Wonders 1 1"));
   auto w = importMedit(p, ImportOptions{});
   ASSERT_TRUE(w.isOk()) << w.status().message();
-  ASSERT_EQ(w->report.warnings.size(), 1u);
+  ASSERT_EQ(w->report.warnings.size(), 6u);  // and the 5 known sections of kMedit it skips
   EXPECT_EQ(w->report.warnings[0], "skipped the unknown section 'Wonders' (line 19, 2 numbers up to the next keyword)");
   writeFile(p, replaced(kMedit, "Corners 1 1", "Corners 2 1"));
   expectError(importMedit(p, ImportOptions{}),
@@ -363,12 +419,14 @@ TEST(MeditImport, HexahedraAreSplitLikeVtkCells) {
     ASSERT_EQ(m.cell_fields.size(), 1u);
     EXPECT_EQ(m.cell_fields[0].name, "ref");
     for (size_t t = 0; t < m.numTets(); ++t) EXPECT_EQ(m.cell_fields[0].get(t, 0), t < 6 ? 3 : 4) << t;
-    if (split == 6) {
-      EXPECT_TRUE(r->report.warnings.empty());
-    } else {
-      ASSERT_EQ(r->report.warnings.size(), 1u);
-      EXPECT_NE(r->report.warnings[0].find("2 of 2 hexahedra split into 6"), std::string::npos)
-          << r->report.warnings[0];
+    // The boundary quadrilateral is skipped, with a word.
+    ASSERT_EQ(r->report.warnings.size(), split == 6 ? 1u : 2u);
+    EXPECT_EQ(r->report.warnings[0],
+              "skipped 1 Quadrilaterals (line 17): elements of lower dimension, with their references: only volume "
+              "elements become tetrahedra");
+    if (split == 5) {
+      EXPECT_NE(r->report.warnings[1].find("2 of 2 hexahedra split into 6"), std::string::npos)
+          << r->report.warnings[1];
     }
     ASSERT_NE(m.findMetadata("source.format"), nullptr);
     EXPECT_EQ(*m.findMetadata("source.format"), "medit");

@@ -176,6 +176,65 @@ TEST(MeshbErrors, BadInputs) {
   expectError(p, surface.end(), "no volume elements");
 }
 
+// Every keyword the reader skips is counted in a warning (boundary triangles, edges, corners, a
+// keyword it does not know), several records of one keyword together; single values become metadata.
+TEST(MeshbImport, EverySkippedKeywordIsCounted) {
+  const std::string dir = tempDir("meshb-left-out");
+  for (int version : {1, 4}) {
+    MeshbWriter w(version, false);
+    w.begin(3);
+    w.int32(3);
+    w.begin(4);
+    w.integer(5);
+    const double c[5][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+    for (const auto& p : c) {
+      for (double v : p) w.real(v);
+      w.integer(0);
+    }
+    const size_t triangles_at = w.size();
+    w.begin(6);  // Triangles
+    w.integer(2);
+    for (int v : {1, 2, 3, 5, 1, 2, 4, 6}) w.integer(v);
+    w.begin(5);  // Edges
+    w.integer(1);
+    for (int v : {1, 2, 0}) w.integer(v);
+    w.begin(6);  // a second Triangles record
+    w.integer(1);
+    for (int v : {2, 3, 4, 7}) w.integer(v);
+    w.begin(13);  // Corners
+    w.integer(3);
+    for (int v : {1, 2, 3}) w.integer(v);
+    w.begin(78);  // Time
+    w.real(0.5);
+    const size_t unknown_at = w.size();
+    w.begin(200);
+    w.int32(1);
+    w.begin(8);
+    w.integer(1);
+    for (int v : {1, 2, 3, 4, 9}) w.integer(v);
+    const std::string path = dir + "/v" + std::to_string(version) + ".meshb";
+    writeFile(path, w.end());
+    auto r = importMesh({path}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->mesh.numTets(), 1u);
+    const std::string lower = ": elements of lower dimension, with their references: only volume elements become tetrahedra";
+    const std::vector<std::string> want = {
+        "skipped 3 Triangles (byte offset " + std::to_string(triangles_at) + " and 1 more records)" + lower,
+        "skipped 1 Edges (byte offset " + std::to_string(triangles_at + (version >= 3 ? 12 : 8) + (version == 4 ? 8 * 9 : 4 * 9)) +
+            ")" + lower,
+        "skipped 3 Corners (byte offset ",
+        "skipped keyword 200 (byte offset " + std::to_string(unknown_at) + "): a keyword unknown to this reader, not read",
+    };
+    ASSERT_EQ(r->report.warnings.size(), 4u) << version;
+    EXPECT_EQ(r->report.warnings[0], want[0]);
+    EXPECT_EQ(r->report.warnings[1], want[1]);
+    EXPECT_EQ(r->report.warnings[2].rfind(want[2], 0), 0u) << r->report.warnings[2];
+    EXPECT_EQ(r->report.warnings[3], want[3]);
+    ASSERT_NE(r->mesh.findMetadata("medit.Time"), nullptr);
+    EXPECT_EQ(*r->mesh.findMetadata("medit.Time"), "0.5");
+  }
+}
+
 // Higher-order volume elements are skipped by position with a warning; the rest still reads.
 TEST(MeshbImport, QuadraticElementsAreSkippedWithAWarning) {
   const std::string dir = tempDir("meshb-p2");
@@ -359,8 +418,10 @@ TEST(MeditSolution, AsciiAndBinaryFilesBecomeFields) {
   EXPECT_EQ(r->mesh.point_fields[1].get(12, 0), 12.0);
   // Its hexahedra were split: element values do not follow the tetrahedra, and are left out.
   EXPECT_EQ(r->mesh.cell_fields.size(), 1u);
-  ASSERT_EQ(r->report.warnings.size(), 1u);
-  EXPECT_NE(r->report.warnings[0].find("SolAtTetrahedra skipped"), std::string::npos) << r->report.warnings[0];
+  ASSERT_EQ(r->report.warnings.size(), 3u);  // after the mesh's skipped triangle and unknown keyword
+  EXPECT_EQ(r->report.warnings[0].rfind("skipped 1 Triangles (byte offset ", 0), 0u) << r->report.warnings[0];
+  EXPECT_EQ(r->report.warnings[1].rfind("skipped keyword 200 (byte offset ", 0), 0u) << r->report.warnings[1];
+  EXPECT_NE(r->report.warnings[2].find("SolAtTetrahedra skipped"), std::string::npos) << r->report.warnings[2];
 }
 
 // A Medit hexahedron with a warped face is split around an added point (cell_split.h); the vertex

@@ -383,7 +383,10 @@ TEST(TetgenProgram, QuadraticTetsAndFaces) {
   const ImportResult r = mustImport(dir + "/boxes.1.ele");
   EXPECT_EQ(r.mesh.numTets(), std::stoul(readFile(dir + "/boxes.1.ele")));
   EXPECT_EQ(r.mesh.numPoints(), std::stoul(readFile(dir + "/boxes.1.node")));
-  ASSERT_EQ(r.report.warnings.size(), 1u);
+  // The corner-only tetrahedra, and the boundary edges TetGen writes beside them (not read).
+  ASSERT_EQ(r.report.warnings.size(), 2u);
+  EXPECT_EQ(r.report.warnings[1], dir + "/boxes.1.edge beside it (" +
+                                      std::to_string(std::stoul(readFile(dir + "/boxes.1.edge"))) + " edges) is not read");
   const MeshStats s = computeMeshStats(r.mesh);
   EXPECT_EQ(s.inverted, 0u);
   EXPECT_EQ(s.boundary_faces, std::stoul(readFile(dir + "/boxes.1.face")));
@@ -458,6 +461,30 @@ TEST(TetgenImport, OneBasedCommentsTabsAttributesMarkers) {
   EXPECT_EQ(v[3], 9);
   const Tet& t1 = r.mesh.tets[1];
   for (uint32_t k = 0; k < 4; ++k) EXPECT_EQ(v[4 + k], t1[k] == 4 ? 4 : 0) << k;
+}
+
+// Nothing is left out without a word: a .face without markers that lists a face inside the mesh (the
+// list is then kept nowhere), and the files of the mesh that are not read (.edge, .vol, .mtr).
+TEST(TetgenImport, WhatIsNotReadIsSaid) {
+  const std::string dir = tempDir("tetgen-not-read");
+  const std::string base = writeTetgen(dir, kNodes1, "2 4 0\n1 1 2 3 4\n2 2 4 3 5\n",
+                                       "2 0\n1 1 2 3\n2 2 3 4\n");
+  ImportResult r = mustImport(base);
+  EXPECT_EQ(r.report.warnings, std::vector<std::string>{
+                                   dir + "/m.face: 1 of its 2 faces lie inside the mesh; without markers, which faces "
+                                         "it lists is not kept"});
+  // Boundary faces alone without markers lose nothing: no warning.
+  writeFile(dir + "/m.face", "2 0\n1 1 2 3\n2 1 2 4\n");
+  EXPECT_TRUE(mustImport(base).report.warnings.empty());
+  writeFile(dir + "/m.edge", "# edges\n3 1\n1 1 2 5\n2 2 3 5\n3 1 3 0\n");
+  writeFile(dir + "/m.vol", "2\n1 0.1\n2 -1\n");
+  r = mustImport(base);
+  EXPECT_EQ(r.report.warnings, (std::vector<std::string>{dir + "/m.edge beside it (3 edges) is not read",
+                                                         dir + "/m.vol beside it (2 volume constraints) is not read"}));
+  // gtn info shows them.
+  const test::RunResult info = test::runGtn("info " + base);
+  EXPECT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.err.find("m.edge beside it (3 edges) is not read"), std::string::npos) << info.err;
 }
 
 TEST(TetgenImport, QuadraticTetsKeepCornersWithWarning) {

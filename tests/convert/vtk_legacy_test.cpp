@@ -255,6 +255,26 @@ void expectError(const std::string& path, const std::string& text, const std::st
   EXPECT_NE(r.status().message().find(part), std::string::npos) << r.status().message() << "\nlacks: " << part;
 }
 
+// What the reader passes over is said: METADATA blocks (component names, information keys) and
+// LOOKUP_TABLE definitions (colour tables).
+TEST(VtkLegacy, SkippedMetadataAndLookupTablesAreSaid) {
+  const std::string dir = tempDir("vtk-legacy-skipped");
+  writeFile(dir + "/m.vtk",
+            "# vtk DataFile Version 5.1\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+            "0 0 0 1 0 0 0 1 0 0 0 1\nMETADATA\nINFORMATION 0\n\n"
+            "CELLS 2 4\nOFFSETS vtktypeint64\n0 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\nCELL_TYPES 1\n10\n"
+            "POINT_DATA 4\nSCALARS s float 1\nLOOKUP_TABLE colours\n0 1 2 3\n"
+            "LOOKUP_TABLE colours 2\n0 0 0 1 1 1 1 1\n");
+  auto r = importMesh({dir + "/m.vtk"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 1u);
+  ASSERT_EQ(r->mesh.point_fields.size(), 1u);
+  EXPECT_EQ(r->report.warnings,
+            (std::vector<std::string>{
+                "skipped 1 METADATA block (line 7): component names and information keys of arrays, not read",
+                "skipped 1 LOOKUP_TABLE definition ('colours'): colour tables are not read"}));
+}
+
 TEST(VtkLegacy, TruncatedBinaryDataFailsCleanlyAtEveryCut) {
   const std::string dir = tempDir("vtk_legacy_cut");
   const std::string text = makeDataset(true, false).text;
@@ -500,11 +520,12 @@ TEST(VtkLegacy, BinaryMixedCellsWithMetadataKeepTheTetrahedra) {
   EXPECT_EQ(r->mesh.cell_fields[0].name, "medit:ref");
   EXPECT_EQ(r->mesh.cell_fields[0].data<int32_t>()[0], 1);
   EXPECT_EQ(r->mesh.cell_fields[0].data<int32_t>()[1], 2);
-  ASSERT_EQ(r->report.warnings.size(), 1u);
-  EXPECT_NE(r->report.warnings[0].find("skipped 3 cells of lower dimension (1 cell of type 3 (VTK_LINE), 2 cells of "
+  ASSERT_EQ(r->report.warnings.size(), 2u);
+  EXPECT_EQ(r->report.warnings[0].rfind("skipped 1 METADATA block (line ", 0), 0u) << r->report.warnings[0];
+  EXPECT_NE(r->report.warnings[1].find("skipped 3 cells of lower dimension (1 cell of type 3 (VTK_LINE), 2 cells of "
                                        "type 5 (VTK_TRIANGLE))"),
             std::string::npos)
-      << r->report.warnings[0];
+      << r->report.warnings[1];
 }
 
 // What VTK writes for data that came from Exodus: dataset FIELD data with char and string arrays,
