@@ -368,14 +368,14 @@ class LevelCoder {
       if (!bnd_->finishedCleanly()) return bad("boundary stream is corrupt, truncated or has trailing bytes");
       if (!con_->finishedCleanly()) return bad("connectivity stream is corrupt, truncated or has trailing bytes");
       if (geo_packed_) {
-        GTN_RETURN_IF_ERROR(geo_reader_->finish());
+        GTN_RETURN_IF_ERROR(packedEnd(*geo_reader_));
       } else if (!geo_->finishedCleanly()) {
         return bad("geometry stream is corrupt, truncated or has trailing bytes");
       }
       for (size_t f = 0; f < pf_.size(); ++f) {
         if (pf_skip_[f]) continue;
         if (pf_packed_[f]) {
-          GTN_RETURN_IF_ERROR(pf_readers_[f]->finish());
+          GTN_RETURN_IF_ERROR(packedEnd(*pf_readers_[f]));
         } else if (!pf_[f]->finishedCleanly()) {
           return bad("point field stream '" + header_.point_fields[f].name + "' is corrupt, truncated or has trailing bytes");
         }
@@ -383,7 +383,7 @@ class LevelCoder {
       for (size_t f = 0; f < cf_.size(); ++f) {
         if (cf_skip_[f]) continue;
         if (cf_packed_[f]) {
-          GTN_RETURN_IF_ERROR(cf_readers_[f]->finish());
+          GTN_RETURN_IF_ERROR(packedEnd(*cf_readers_[f]));
         } else if (!cf_[f]->finishedCleanly()) {
           return bad("cell field stream '" + header_.cell_fields[f].name + "' is corrupt, truncated or has trailing bytes");
         }
@@ -710,6 +710,11 @@ class LevelCoder {
     std::string where = " (after " + std::to_string(tets_done_) + " tetrahedra, " + std::to_string(next_id_) +
                         " vertices, " + std::to_string(btris_done_) + " boundary triangles)";
     return invalidData((what_ ? *what_ : std::string("level")) + ": " + reason + where);
+  }
+  // The end of a packed stream (its reader names the stream).
+  Status packedEnd(PackedReader& r) const {
+    const Status st = r.finish();
+    return st.isOk() ? st : bad(st.message());
   }
   Status internal(const std::string& reason) const {
     return invalidData("encodeLevel: inconsistent mesh: " + reason);
@@ -2608,7 +2613,7 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   auto by_vertex = [&](size_t v) { return size_t{out.vertex_order[v]}; };
   auto by_tet = [&](size_t t) { return static_cast<size_t>(out.tet_order[t]); };
   std::vector<uint8_t> geo;
-  if (enc.edge_points.empty() && np > 0) {
+  if (enc.edge_points.empty() && np > 0 && options.packed_streams) {
     const size_t cs = scalarSize(mesh.coord_type);
     std::vector<uint8_t> coords(np * 3 * cs);
     for (size_t i = 0; i < 3 * np; ++i) storeCoordinate(mesh.coord_type, mesh.coords[i], &coords[i * cs]);
@@ -2616,6 +2621,7 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   }
   std::vector<std::vector<uint8_t>> pfs(h.point_fields.size()), cfs(h.cell_fields.size());
   bool any = !geo.empty();
+  if (!options.packed_streams) return out;
   for (size_t f = 0; f < pfs.size(); ++f) {
     const Field& field = mesh.point_fields[f];
     pfs[f] = packed(field.bytes.data(), np, field.components * field.valueSize(), field.valueSize(), by_vertex, out.point_fields[f]);
@@ -2666,7 +2672,8 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
                   std::unique_ptr<PackedReader>* reader) -> Status {
     if (!isPackedStream(s)) return Status::ok();
     *reader = std::make_unique<PackedReader>();
-    return (*reader)->open(s, count, d.itemBytes(), scalarSize(d.type), what + ": " + name);
+    const Status st = (*reader)->open(s, count, d.itemBytes(), scalarSize(d.type), name);
+    return st.isOk() ? st : invalidData(what + ": " + st.message());
   };
   std::unique_ptr<PackedReader> geo_reader;
   std::vector<std::unique_ptr<PackedReader>> pf_readers(header.point_fields.size()), cf_readers(header.cell_fields.size());
