@@ -297,20 +297,27 @@ class LevelCoder {
     pf_last_rule_.assign(header.point_fields.size(), 0);
     pf_packed_.assign(header.point_fields.size(), 0);
     cf_packed_.assign(header.cell_fields.size(), 0);
+    cf_split_.assign(header.cell_fields.size(), 0);
   }
 
   // The streams in packed form (spec section 10.2.1): the encoder's choice, which codes nothing in
   // them (the caller stores the packed values), and the decoder's readers (null: not packed).
-  void setPacked(bool geo, std::vector<char> pf, std::vector<char> cf) {
+  // `cf_split`: cell-field streams in split form, whose escaped values the encoder collects in
+  // `escaped` (per field, the items in order).
+  void setPacked(bool geo, std::vector<char> pf, std::vector<char> cf, std::vector<char> cf_split,
+                 std::vector<std::vector<uint8_t>>* escaped) {
     geo_packed_ = geo;
     pf_packed_ = std::move(pf);
     cf_packed_ = std::move(cf);
+    cf_split_ = std::move(cf_split);
+    cf_escaped_ = escaped;
   }
   void setPackedReaders(std::unique_ptr<PackedReader> geo, std::vector<std::unique_ptr<PackedReader>> pf,
-                        std::vector<std::unique_ptr<PackedReader>> cf) {
+                        std::vector<std::unique_ptr<PackedReader>> cf, std::vector<char> cf_split) {
     geo_packed_ = geo != nullptr;
     for (size_t f = 0; f < pf.size(); ++f) pf_packed_[f] = pf[f] != nullptr;
-    for (size_t f = 0; f < cf.size(); ++f) cf_packed_[f] = cf[f] != nullptr;
+    for (size_t f = 0; f < cf.size(); ++f) cf_packed_[f] = cf[f] != nullptr && !cf_split[f];
+    cf_split_ = std::move(cf_split);
     geo_reader_ = std::move(geo);
     pf_readers_ = std::move(pf);
     cf_readers_ = std::move(cf);
@@ -382,11 +389,9 @@ class LevelCoder {
       }
       for (size_t f = 0; f < cf_.size(); ++f) {
         if (cf_skip_[f]) continue;
-        if (cf_packed_[f]) {
-          GTN_RETURN_IF_ERROR(packedEnd(*cf_readers_[f]));
-        } else if (!cf_[f]->finishedCleanly()) {
+        if (!cf_packed_[f] && !cf_[f]->finishedCleanly())
           return bad("cell field stream '" + header_.cell_fields[f].name + "' is corrupt, truncated or has trailing bytes");
-        }
+        if (cf_packed_[f] || cf_split_[f]) GTN_RETURN_IF_ERROR(packedEnd(*cf_readers_[f]));
       }
       GTN_RETURN_IF_ERROR(sink_->endLevel());
     }
@@ -693,7 +698,7 @@ class LevelCoder {
     }
     for (size_t f = 0; f < header_.cell_fields.size(); ++f) {
       const FieldDesc& d = header_.cell_fields[f];
-      for (uint32_t c = 0; c < d.components && !cf_packed_[f]; ++c) {
+      for (uint32_t c = 0; c < d.components && !cf_packed_[f] && !cf_split_[f]; ++c) {
         Form form;
         if constexpr (kEncode) {
           const Field& src = enc_->mesh->cell_fields[f];
@@ -1912,6 +1917,17 @@ class LevelCoder {
       uint64_t* keys = &cell_keys_[j];
       if (sym == 0) {
         std::copy(pred, pred + nc, keys);
+      } else if (sym == kSymEscape && cf_split_[f]) {
+        // Split form: the escaped values are the packed part's next item.
+        const uint8_t* item = nullptr;
+        if constexpr (kEncode) {
+          item = enc_->mesh->cell_fields[f].bytes.data() + size_t{src_tet} * d.itemBytes();
+          (*cf_escaped_)[f].insert((*cf_escaped_)[f].end(), item, item + d.itemBytes());
+        } else {
+          item = cf_readers_[f]->next();
+          if (!item) return bad(cf_readers_[f]->error());
+        }
+        for (uint32_t c = 0; c < nc; ++c) keys[c] = keyFromRaw(d.type, item + c * vs);
       } else if (sym == kSymEscape) {
         for (uint32_t c = 0; c < nc; ++c) keys[c] = cf_vc_[f].code(*cf_[f], c, pred[c], act[c]);
       } else if (sym >= kSymCellNeighbour) {
@@ -2301,7 +2317,8 @@ class LevelCoder {
   std::vector<ValueCoder> pf_vc_, cf_vc_;
   // Streams in packed form, and the decoder's readers of them.
   bool geo_packed_ = false;
-  std::vector<char> pf_packed_, cf_packed_;
+  std::vector<char> pf_packed_, cf_packed_, cf_split_;
+  std::vector<std::vector<uint8_t>>* cf_escaped_ = nullptr;  // the encoder's escaped items of split streams
   std::unique_ptr<PackedReader> geo_reader_;
   std::vector<std::unique_ptr<PackedReader>> pf_readers_, cf_readers_;
   std::vector<size_t> pf_offset_, cf_offset_;
@@ -2573,12 +2590,17 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
       }
   }
 
-  // One pass of the coder over a copy of the encoder's state, with the streams marked packed coding
-  // nothing (their bytes are set afterwards).
+  // One pass of the coder over a copy of the encoder's state. Streams marked packed code nothing
+  // (their bytes are set afterwards); split cell-field streams code their symbols, and their escaped
+  // values are collected in `escaped`, then packed behind them.
   using Enc = EntropyCoder<true>;
-  auto pass = [&](EncodedLevel* level, bool geo_packed, const std::vector<char>& pf_packed,
-                  const std::vector<char>& cf_packed) -> Status {
+  struct Forms {
+    bool geo = false;
+    std::vector<char> pf, cf, cf_split;
+  };
+  auto pass = [&](EncodedLevel* level, const Forms& forms) -> Status {
     EncoderSide side = enc;
+    level->header = h;
     level->boundary.clear();
     level->connectivity.clear();
     level->geometry.clear();
@@ -2589,15 +2611,25 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
     for (auto& s : level->cell_fields) cf.push_back(std::make_unique<Enc>(&s));
     LevelCoder<true> coder(h, std::make_unique<Enc>(&level->boundary), std::make_unique<Enc>(&level->connectivity),
                            std::make_unique<Enc>(&level->geometry), std::move(pf), std::move(cf));
+    std::vector<std::vector<uint8_t>> escaped(h.cell_fields.size());
     coder.setEncoder(&side);
-    coder.setPacked(geo_packed, pf_packed, cf_packed);
+    coder.setPacked(forms.geo, forms.pf, forms.cf, forms.cf_split, &escaped);
     GTN_RETURN_IF_ERROR(coder.run());
+    for (size_t f = 0; f < h.cell_fields.size(); ++f) {
+      if (!forms.cf_split[f]) continue;
+      const FieldDesc& d = h.cell_fields[f];
+      const std::vector<uint8_t> items = packValues(escaped[f].data(), escaped[f].size() / d.itemBytes(), d.itemBytes(),
+                                                    scalarSize(d.type), 0, true);
+      level->cell_fields[f] = splitStream(level->cell_fields[f], items);
+    }
     level->vertex_order = std::move(side.vertex_order);
     level->tet_order = std::move(side.tet_order);
     return Status::ok();
   };
-  std::vector<char> pf_packed(h.point_fields.size(), 0), cf_packed(h.cell_fields.size(), 0);
-  GTN_RETURN_IF_ERROR(pass(&out, false, pf_packed, cf_packed));
+  Forms predicted{false, std::vector<char>(h.point_fields.size(), 0), std::vector<char>(h.cell_fields.size(), 0),
+                  std::vector<char>(h.cell_fields.size(), 0)};
+  GTN_RETURN_IF_ERROR(pass(&out, predicted));
+  if (!options.packed_streams) return out;
 
   // The packed form (spec section 10.2.1) of each value stream, kept where it is smaller: the values
   // in decoding order (the same in every pass: the peeling does not depend on how values are coded).
@@ -2612,41 +2644,63 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   };
   auto by_vertex = [&](size_t v) { return size_t{out.vertex_order[v]}; };
   auto by_tet = [&](size_t t) { return static_cast<size_t>(out.tet_order[t]); };
+  Forms chosen = predicted;
   std::vector<uint8_t> geo;
-  if (enc.edge_points.empty() && np > 0 && options.packed_streams) {
+  if (enc.edge_points.empty() && np > 0) {
     const size_t cs = scalarSize(mesh.coord_type);
     std::vector<uint8_t> coords(np * 3 * cs);
     for (size_t i = 0; i < 3 * np; ++i) storeCoordinate(mesh.coord_type, mesh.coords[i], &coords[i * cs]);
     geo = packed(coords.data(), np, 3 * cs, cs, by_vertex, out.geometry);
+    chosen.geo = !geo.empty();
   }
   std::vector<std::vector<uint8_t>> pfs(h.point_fields.size()), cfs(h.cell_fields.size());
-  bool any = !geo.empty();
-  if (!options.packed_streams) return out;
   for (size_t f = 0; f < pfs.size(); ++f) {
     const Field& field = mesh.point_fields[f];
     pfs[f] = packed(field.bytes.data(), np, field.components * field.valueSize(), field.valueSize(), by_vertex, out.point_fields[f]);
-    pf_packed[f] = !pfs[f].empty();
-    any = any || pf_packed[f];
+    chosen.pf[f] = !pfs[f].empty();
   }
   for (size_t f = 0; f < cfs.size(); ++f) {
     const Field& field = mesh.cell_fields[f];
     cfs[f] = packed(field.bytes.data(), nt, field.components * field.valueSize(), field.valueSize(), by_tet, out.cell_fields[f]);
-    cf_packed[f] = !cfs[f].empty();
-    any = any || cf_packed[f];
+    chosen.cf[f] = !cfs[f].empty();
   }
-  if (any) {
-    // Again without the packed streams' symbols: the others share a few models with them.
-    EncodedLevel again;
-    again.header = out.header;
-    GTN_RETURN_IF_ERROR(pass(&again, !geo.empty(), pf_packed, cf_packed));
-    if (!geo.empty()) again.geometry = std::move(geo);
-    for (size_t f = 0; f < pfs.size(); ++f)
-      if (pf_packed[f]) again.point_fields[f] = std::move(pfs[f]);
-    for (size_t f = 0; f < cfs.size(); ++f)
-      if (cf_packed[f]) again.cell_fields[f] = std::move(cfs[f]);
-    out = std::move(again);
+  // Cell fields in split form: their symbols as predicted, the values they escape packed (the values
+  // new to a split cell, which a table of levels shared by many cells repeats). Tried in a pass
+  // of their own on the fields whose escapes cost more than a byte per 8 tetrahedra.
+  Forms trial = chosen;
+  bool try_split = false;
+  for (size_t f = 0; f < cfs.size(); ++f) {
+    trial.cf_split[f] = out.cell_fields[f].size() > nt / 8;
+    trial.cf[f] = chosen.cf[f] && !trial.cf_split[f];
+    try_split = try_split || trial.cf_split[f];
   }
-  return out;
+  EncodedLevel split;
+  if (try_split) {
+    GTN_RETURN_IF_ERROR(pass(&split, trial));
+    for (size_t f = 0; f < cfs.size(); ++f) {
+      if (!trial.cf_split[f]) continue;
+      const size_t best = cfs[f].empty() ? out.cell_fields[f].size() : cfs[f].size();
+      chosen.cf_split[f] = split.cell_fields[f].size() < best;
+      if (chosen.cf_split[f]) chosen.cf[f] = 0;
+    }
+  }
+  const bool any = chosen.geo || std::find(chosen.pf.begin(), chosen.pf.end(), 1) != chosen.pf.end() ||
+                   std::find(chosen.cf.begin(), chosen.cf.end(), 1) != chosen.cf.end() ||
+                   std::find(chosen.cf_split.begin(), chosen.cf_split.end(), 1) != chosen.cf_split.end();
+  if (!any) return out;
+  // Again with the chosen forms (the trial when it is that), since the streams share a few models.
+  EncodedLevel again;
+  if (try_split && chosen.cf == trial.cf && chosen.cf_split == trial.cf_split) {
+    again = std::move(split);
+  } else {
+    GTN_RETURN_IF_ERROR(pass(&again, chosen));
+  }
+  if (chosen.geo) again.geometry = std::move(geo);
+  for (size_t f = 0; f < pfs.size(); ++f)
+    if (chosen.pf[f]) again.point_fields[f] = std::move(pfs[f]);
+  for (size_t f = 0; f < cfs.size(); ++f)
+    if (chosen.cf[f]) again.cell_fields[f] = std::move(cfs[f]);
+  return again;
 }
 
 Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink, DecodeStats* stats,
@@ -2675,6 +2729,10 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
     const Status st = (*reader)->open(s, count, d.itemBytes(), scalarSize(d.type), name);
     return st.isOk() ? st : invalidData(what + ": " + st.message());
   };
+  // A split CFLD stream (section 10.2.1): its range-coded part, and its packed part as a packed stream.
+  std::vector<std::vector<uint8_t>> split_packed(header.cell_fields.size());
+  std::vector<std::span<const uint8_t>> cell_streams(payload.cell_fields.begin(), payload.cell_fields.end());
+  std::vector<char> cf_split(header.cell_fields.size(), 0);
   std::unique_ptr<PackedReader> geo_reader;
   std::vector<std::unique_ptr<PackedReader>> pf_readers(header.point_fields.size()), cf_readers(header.cell_fields.size());
   GTN_RETURN_IF_ERROR(open(payload.geometry, header.points, FieldDesc{"", 3, header.coord_type}, "the geometry stream",
@@ -2682,21 +2740,32 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
   for (size_t f = 0; f < pf_readers.size(); ++f)
     GTN_RETURN_IF_ERROR(open(payload.point_fields[f], header.points, header.point_fields[f],
                              "point field '" + header.point_fields[f].name + "'", &pf_readers[f]));
-  for (size_t f = 0; f < cf_readers.size(); ++f)
-    GTN_RETURN_IF_ERROR(open(payload.cell_fields[f], header.tets, header.cell_fields[f],
-                             "cell field '" + header.cell_fields[f].name + "'", &cf_readers[f]));
+  for (size_t f = 0; f < cf_readers.size(); ++f) {
+    const std::string name = "cell field '" + header.cell_fields[f].name + "'";
+    if (isSplitStream(payload.cell_fields[f])) {
+      if (!splitParts(payload.cell_fields[f], &cell_streams[f], &split_packed[f]))
+        return invalidData(what + ": " + name + ": split stream's range-coded part is cut off or its length malformed");
+      cf_split[f] = 1;
+      cf_readers[f] = std::make_unique<PackedReader>();
+      const Status st = cf_readers[f]->open(split_packed[f], header.tets, header.cell_fields[f].itemBytes(),
+                                            scalarSize(header.cell_fields[f].type), name, false);
+      if (!st.isOk()) return invalidData(what + ": " + st.message());
+      continue;
+    }
+    GTN_RETURN_IF_ERROR(open(payload.cell_fields[f], header.tets, header.cell_fields[f], name, &cf_readers[f]));
+  }
   auto symbols = [&](std::span<const uint8_t> s) {
     return std::make_unique<Dec>(isPackedStream(s) ? std::span<const uint8_t>(kNoSymbols) : s);
   };
   std::vector<std::unique_ptr<Dec>> pf, cf;
   for (auto s : payload.point_fields) pf.push_back(symbols(s));
-  for (auto s : payload.cell_fields) cf.push_back(symbols(s));
+  for (auto s : cell_streams) cf.push_back(symbols(s));
   GTN_RETURN_IF_ERROR(sink.beginLevel(header));
   LevelCoder<false> coder(header, std::make_unique<Dec>(payload.boundary), std::make_unique<Dec>(payload.connectivity),
                           symbols(payload.geometry), std::move(pf), std::move(cf));
   coder.setDecoder(&sink, &what);
   coder.setFields(fields);
-  coder.setPackedReaders(std::move(geo_reader), std::move(pf_readers), std::move(cf_readers));
+  coder.setPackedReaders(std::move(geo_reader), std::move(pf_readers), std::move(cf_readers), std::move(cf_split));
   const Status st = coder.run();
   if (stats) stats->peak_live_vertices = coder.peakLive();
   return st;

@@ -57,12 +57,41 @@ uint64_t lzma2DictSize(uint8_t property) {
   return property >= 40 ? 0xFFFFFFFFu : uint64_t{2u | (property & 1u)} << (property / 2 + 11);
 }
 
-std::vector<uint8_t> packValues(const uint8_t* items, size_t count, size_t item_bytes, size_t value_size, size_t limit) {
+std::vector<uint8_t> splitStream(const std::vector<uint8_t>& range_part, const std::vector<uint8_t>& packed_items) {
+  std::vector<uint8_t> out = {kSplitFormByte, packed_items[1], packed_items[2]};
+  for (uint64_t n = range_part.size(); ; n >>= 7) {
+    out.push_back(static_cast<uint8_t>((n & 0x7F) | (n >= 0x80 ? 0x80 : 0)));
+    if (n < 0x80) break;
+  }
+  out.insert(out.end(), range_part.begin(), range_part.end());
+  out.insert(out.end(), packed_items.begin() + kPackedHeaderBytes, packed_items.end());
+  return out;
+}
+
+bool splitParts(std::span<const uint8_t> stream, std::span<const uint8_t>* range_part, std::vector<uint8_t>* packed) {
+  if (stream.size() < kPackedHeaderBytes || stream[0] != kSplitFormByte) return false;
+  uint64_t length = 0;
+  size_t at = kPackedHeaderBytes;
+  for (int shift = 0;; shift += 7) {
+    if (at >= stream.size() || shift > 56) return false;
+    const uint8_t b = stream[at++];
+    length |= uint64_t{b & 0x7Fu} << shift;
+    if (!(b & 0x80)) break;
+  }
+  if (length > stream.size() - at) return false;
+  *range_part = stream.subspan(at, length);
+  packed->assign({kPackedFormByte, stream[1], stream[2]});
+  packed->insert(packed->end(), stream.begin() + at + length, stream.end());
+  return true;
+}
+
+std::vector<uint8_t> packValues(const uint8_t* items, size_t count, size_t item_bytes, size_t value_size, size_t limit,
+                                bool items_layout_only) {
   std::vector<uint8_t> best;
-  if (count == 0 || item_bytes == 0) return best;
+  if (item_bytes == 0) return best;
   const uint8_t dict = dictProperty(uint64_t{count} * item_bytes);
   for (const uint8_t layout : {kLayoutItems, kLayoutPlanes}) {
-    if (layout == kLayoutPlanes && value_size == 1) continue;  // the same bytes
+    if (layout == kLayoutPlanes && (value_size == 1 || items_layout_only)) continue;  // the same bytes
     const std::vector<uint8_t> data = arrange(items, count, item_bytes, value_size, layout);
     const size_t align = layout == kLayoutItems && item_bytes == value_size ? value_size : 0;
     // A quick pass first: preset 9e packs these arrays some 10 to 20% smaller than preset 1, so a
@@ -86,12 +115,13 @@ PackedReader::~PackedReader() {
 }
 
 Status PackedReader::open(std::span<const uint8_t> stream, uint64_t count, size_t item_bytes, size_t value_size,
-                          const std::string& what) {
+                          const std::string& what, bool exact) {
   what_ = what;
+  exact_ = exact;
   if (stream.size() < kPackedHeaderBytes || stream[0] != kPackedFormByte)
     return invalidData(what + ": packed stream shorter than its 3-byte header");
   layout_ = stream[1];
-  if (layout_ != kLayoutItems && layout_ != kLayoutPlanes)
+  if (layout_ != kLayoutItems && (layout_ != kLayoutPlanes || !exact))
     return invalidData(what + ": packed stream declares unknown layout " + std::to_string(layout_));
   const uint8_t dict = stream[2];
   // The dictionary bounds what the decoder allocates: at most 64 MiB, and no larger than the
@@ -125,6 +155,22 @@ bool PackedReader::fillBlock() {
   strm_.avail_out = want;
   while (strm_.avail_out > 0) {
     const lzma_ret r = lzma_code(&strm_, LZMA_RUN);
+    if (r == LZMA_STREAM_END) ended_ = true;
+    if (r == LZMA_STREAM_END && strm_.avail_out > 0 && !exact_) {
+      // At most `count` items: those that the stream holds, whole.
+      const size_t got = want - strm_.avail_out;
+      if (got % item_bytes_ != 0) {
+        error_ = what_ + ": packed stream ends inside a value";
+        return false;
+      }
+      if (got == 0) {
+        error_ = what_ + ": more values read than the packed stream holds";
+        return false;
+      }
+      in_block_ = got / item_bytes_;
+      at_ = 0;
+      return true;
+    }
     if (r == LZMA_STREAM_END && strm_.avail_out > 0) {
       error_ = what_ + ": packed stream ends after " + std::to_string(done_ * item_bytes_ + want - strm_.avail_out) +
                " of " + std::to_string(count_ * item_bytes_) + " bytes of values";
@@ -153,7 +199,10 @@ const uint8_t* PackedReader::next() {
     error_ = what_ + ": more values read than the packed stream holds";
     return nullptr;
   }
-  if (at_ == in_block_ && !fillBlock()) return nullptr;
+  if (at_ == in_block_ && (ended_ || !fillBlock())) {
+    if (error_.empty()) error_ = what_ + ": more values read than the packed stream holds";
+    return nullptr;
+  }
   const uint8_t* item = (layout_ == kLayoutPlanes ? items_.data() : block_.data()) + at_ * item_bytes_;
   ++at_;
   ++done_;
@@ -162,16 +211,21 @@ const uint8_t* PackedReader::next() {
 
 Status PackedReader::finish() {
   if (!error_.empty()) return invalidData(error_);
-  if (done_ != count_)
+  if (exact_ && done_ != count_)
     return invalidData(what_ + ": " + std::to_string(done_) + " of the packed stream's " + std::to_string(count_) +
                        " items were read");
-  // The LZMA2 end marker must follow the last value, and nothing after it.
-  uint8_t extra = 0;
-  strm_.next_out = &extra;
-  strm_.avail_out = 1;
-  const lzma_ret r = lzma_code(&strm_, LZMA_RUN);
-  if (r != LZMA_STREAM_END || strm_.avail_out == 0 || strm_.avail_in != 0)
-    return invalidData(what_ + ": packed stream has bytes after its values, or lacks its end marker");
+  if (at_ != in_block_) return invalidData(what_ + ": the packed stream holds more values than were read");
+  if (!ended_) {
+    // The LZMA2 end marker must follow the last value.
+    uint8_t extra = 0;
+    strm_.next_out = &extra;
+    strm_.avail_out = 1;
+    const lzma_ret r = lzma_code(&strm_, LZMA_RUN);
+    if (r != LZMA_STREAM_END || strm_.avail_out == 0)
+      return invalidData(what_ + ": the packed stream holds more values than were read, or lacks its end marker");
+    ended_ = true;
+  }
+  if (strm_.avail_in != 0) return invalidData(what_ + ": packed stream has bytes after its values");
   return Status::ok();
 }
 

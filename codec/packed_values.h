@@ -25,6 +25,8 @@
 namespace gtn {
 
 inline constexpr uint8_t kPackedFormByte = 1;
+// A CFLD stream in split form: its symbols range coded, the values it escapes packed (layout 0).
+inline constexpr uint8_t kSplitFormByte = 2;
 inline constexpr uint8_t kLayoutItems = 0;
 inline constexpr uint8_t kLayoutPlanes = 1;
 inline constexpr size_t kPackedHeaderBytes = 3;
@@ -36,14 +38,22 @@ uint64_t lzma2DictSize(uint8_t property);
 // Items per block: as many as fit in 64 KiB, at least one. A decoder holds one block.
 inline size_t packedBlockItems(size_t item_bytes) { return item_bytes >= 65536 ? 1 : 65536 / item_bytes; }
 
-// Whether `stream` is in packed form (its first byte says so).
+// Whether `stream` is in packed form, or in split form (its first byte says so).
 inline bool isPackedStream(std::span<const uint8_t> stream) { return !stream.empty() && stream[0] == kPackedFormByte; }
+inline bool isSplitStream(std::span<const uint8_t> stream) { return !stream.empty() && stream[0] == kSplitFormByte; }
+
+// A split-form stream: the header, the range-coded part's length as a varint, that part, then the
+// packed items (`packed_items`: packValues's output with layout 0, whose header is replaced).
+std::vector<uint8_t> splitStream(const std::vector<uint8_t>& range_part, const std::vector<uint8_t>& packed_items);
+// The range-coded part of a split stream and the stream that the PackedReader opens (the header
+// again, then the LZMA2 data); false when the length is malformed or beyond the stream.
+bool splitParts(std::span<const uint8_t> stream, std::span<const uint8_t>* range_part, std::vector<uint8_t>* packed);
 
 // `count` items of `item_bytes` bytes (values of `value_size` bytes) in packed form, in the layout that
 // packs smaller (LZMA2 at preset 9e). When `limit` is nonzero, a layout whose quick estimate (preset
 // 1) is far above `limit` is not tried at full strength; empty when neither layout is tried.
 std::vector<uint8_t> packValues(const uint8_t* items, size_t count, size_t item_bytes, size_t value_size,
-                                size_t limit = 0);
+                                size_t limit = 0, bool items_layout_only = false);
 
 // Reads the items of a packed stream one at a time, a block at a time, in bounded memory: the block
 // (64 KiB) and LZMA2's dictionary, which the stream declares and which must not exceed what its
@@ -55,9 +65,10 @@ class PackedReader {
   PackedReader& operator=(const PackedReader&) = delete;
   ~PackedReader();
 
-  // Checks the header; `what` names the stream in messages.
+  // Checks the header; `what` names the stream in messages. `exact`: the stream holds exactly `count`
+  // items; else at most `count`, as many as are read (the escaped values of a split stream).
   Status open(std::span<const uint8_t> stream, uint64_t count, size_t item_bytes, size_t value_size,
-              const std::string& what);
+              const std::string& what, bool exact = true);
   // The next item (item_bytes bytes), or null when the stream is corrupt or holds no more (error()
   // says why).
   const uint8_t* next();
@@ -70,7 +81,7 @@ class PackedReader {
   bool fillBlock();
   std::span<const uint8_t> in_;
   lzma_stream strm_ = LZMA_STREAM_INIT;
-  bool open_ = false;
+  bool open_ = false, exact_ = true, ended_ = false;
   uint8_t layout_ = 0;
   uint64_t count_ = 0, done_ = 0;
   size_t item_bytes_ = 0, value_size_ = 0, block_items_ = 0, at_ = 0, in_block_ = 0;

@@ -97,6 +97,9 @@ TEST(PackedValues, FeaHexMeshCodesNoValueStreamLargerThanXz) {
     EXPECT_LE(enc->cell_fields[f].size(), xz9(m.cell_fields[f].bytes)) << m.cell_fields[f].name;
   // The scattered levels are packed; the smooth fields stay predicted.
   EXPECT_TRUE(isPackedStream(enc->point_fields[2]));
+  // The per-cell levels: symbols say which tetrahedra share a hexahedron's value, the new values
+  // are packed.
+  EXPECT_TRUE(isSplitStream(enc->cell_fields[0]));
   EXPECT_FALSE(isPackedStream(enc->point_fields[0]));
   EXPECT_FALSE(isPackedStream(enc->geometry));
   expectLossless(m, *enc);
@@ -136,7 +139,7 @@ TEST(PackedValues, PackedFormKeepsEveryBitPattern) {
 
 // The packed form is taken only where it is smaller: against the predictions alone no stream grows
 // (those left predicted may differ by a byte or two: they share a few models with the packed ones),
-// and the coordinates and the smooth float64 field stay predicted.
+// and the smooth float64 field stays predicted.
 TEST(PackedValues, PackedOnlyWhereSmaller) {
   TetMesh m = test::gridMesh(12, 10, 8, 5);
   test::addFields(m);
@@ -146,7 +149,7 @@ TEST(PackedValues, PackedOnlyWhereSmaller) {
   ASSERT_TRUE(with.isOk()) << with.status().message();
   ASSERT_TRUE(without.isOk()) << without.status().message();
   auto check = [](const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, const std::string& name) {
-    if (isPackedStream(a)) {
+    if (isPackedStream(a) || isSplitStream(a)) {
       EXPECT_LT(a.size(), b.size()) << name;
     } else {
       EXPECT_LE(a.size(), b.size() + 2) << name;
@@ -163,7 +166,6 @@ TEST(PackedValues, PackedOnlyWhereSmaller) {
     total_with += with->cell_fields[f].size(), total_without += without->cell_fields[f].size();
   }
   EXPECT_LE(total_with, total_without);
-  EXPECT_FALSE(isPackedStream(with->geometry));
   EXPECT_FALSE(isPackedStream(with->point_fields[1]));  // velocity, smooth float64
   expectLossless(m, *with);
 }
@@ -198,6 +200,24 @@ TEST(PackedValues, DamagedPackedStreamsAreRejected) {
     ASSERT_FALSE(st.isOk());
     EXPECT_EQ(st.code(), StatusCode::kInvalidData);
     EXPECT_NE(st.message().find("damaged.gtn level 0: point field 'stress'"), std::string::npos) << st.message();
+  }
+  // The cell field in split form: a range-coded part cut off, its length beyond the stream, the
+  // packed part truncated or followed by a byte.
+  ASSERT_TRUE(isSplitStream(enc->cell_fields[0]));
+  const std::vector<uint8_t> cells = enc->cell_fields[0];
+  std::vector<std::vector<uint8_t>> bad_cells;
+  bad_cells.emplace_back(cells.begin(), cells.begin() + 5);
+  bad_cells.push_back({kSplitFormByte, 0, 0, 0xFF, 0xFF, 0xFF, 0x7F, 0});
+  bad_cells.emplace_back(cells.begin(), cells.end() - 1);
+  bad_cells.push_back(cells), bad_cells.back().push_back(0);
+  for (const auto& stream : bad_cells) {
+    EncodedLevel copy = *enc;
+    copy.cell_fields[0] = stream;
+    CountingSink sink;
+    const Status st = decodeLevel(copy.header, payloadOf(copy), sink, nullptr, "damaged.gtn level 0");
+    ASSERT_FALSE(st.isOk());
+    EXPECT_NE(st.message().find("damaged.gtn level 0: "), std::string::npos) << st.message();
+    EXPECT_NE(st.message().find("cell field"), std::string::npos) << st.message();
   }
   LevelHeader wider = enc->header;
   wider.point_fields[2].components = 2;
