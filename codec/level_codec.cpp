@@ -2666,11 +2666,24 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   }
   // Cell fields in split form: their symbols as predicted, the values they escape packed (the values
   // new to a split cell, which a table of levels shared by many cells repeats). Tried in a pass
-  // of their own on the fields whose escapes cost more than a byte per 8 tetrahedra.
+  // of their own on the fields that cost more than a byte per 8 tetrahedra and whose values repeat.
   Forms trial = chosen;
   bool try_split = false;
+  // Only where the values repeat: at most one distinct item (by a 64-bit hash) per 12 tetrahedra,
+  // two hexahedra's worth.
+  auto repeats = [&](const Field& field) {
+    const size_t ib = field.components * field.valueSize();
+    std::vector<uint64_t> hashes(nt);
+    for (size_t t = 0; t < nt; ++t) {
+      uint64_t hash = 0xCBF29CE484222325u;
+      for (size_t b = 0; b < ib; ++b) hash = (hash ^ field.bytes[t * ib + b]) * 0x100000001B3u;
+      hashes[t] = hash;
+    }
+    std::sort(hashes.begin(), hashes.end());
+    return static_cast<size_t>(std::unique(hashes.begin(), hashes.end()) - hashes.begin()) * 12 <= nt;
+  };
   for (size_t f = 0; f < cfs.size(); ++f) {
-    trial.cf_split[f] = out.cell_fields[f].size() > nt / 8;
+    trial.cf_split[f] = out.cell_fields[f].size() > nt / 8 && repeats(mesh.cell_fields[f]);
     trial.cf[f] = chosen.cf[f] && !trial.cf_split[f];
     try_split = try_split || trial.cf_split[f];
   }
