@@ -51,7 +51,7 @@ bool splitParts(std::span<const uint8_t> stream, std::span<const uint8_t>* range
 
 // `count` items of `item_bytes` bytes (values of `value_size` bytes) in packed form, in the layout that
 // packs smaller (LZMA2 at preset 9). When `limit` is nonzero, a layout whose quick estimate (preset
-// 1) is far above `limit` is not tried at full strength; empty when neither layout is tried.
+// 1) is not below `limit`, or is 3% above the other layout's, is not packed at full strength; empty when none is.
 std::vector<uint8_t> packValues(const uint8_t* items, size_t count, size_t item_bytes, size_t value_size,
                                 size_t limit = 0, bool items_layout_only = false);
 
