@@ -44,6 +44,7 @@
 #include "codec/edge_points.h"
 #include "codec/flat_maps.h"
 #include "codec/nearest_grid.h"
+#include "codec/packed_values.h"
 #include "codec/range_coder.h"
 #include "codec/value_coder.h"
 #include "mesh/faces.h"
@@ -294,6 +295,32 @@ class LevelCoder {
     for (size_t f = 0; f < header.point_fields.size(); ++f) field_coded_comps_[f] = header.point_fields[f].components;
     pf_rule_.resize(header.point_fields.size());
     pf_last_rule_.assign(header.point_fields.size(), 0);
+    pf_packed_.assign(header.point_fields.size(), 0);
+    cf_packed_.assign(header.cell_fields.size(), 0);
+    cf_split_.assign(header.cell_fields.size(), 0);
+  }
+
+  // The streams in packed form (spec section 10.2.1): the encoder's choice, which codes nothing in
+  // them (the caller stores the packed values), and the decoder's readers (null: not packed).
+  // `cf_split`: cell-field streams in split form, whose escaped values the encoder collects in
+  // `escaped` (per field, the items in order).
+  void setPacked(bool geo, std::vector<char> pf, std::vector<char> cf, std::vector<char> cf_split,
+                 std::vector<std::vector<uint8_t>>* escaped) {
+    geo_packed_ = geo;
+    pf_packed_ = std::move(pf);
+    cf_packed_ = std::move(cf);
+    cf_split_ = std::move(cf_split);
+    cf_escaped_ = escaped;
+  }
+  void setPackedReaders(std::unique_ptr<PackedReader> geo, std::vector<std::unique_ptr<PackedReader>> pf,
+                        std::vector<std::unique_ptr<PackedReader>> cf, std::vector<char> cf_split) {
+    geo_packed_ = geo != nullptr;
+    for (size_t f = 0; f < pf.size(); ++f) pf_packed_[f] = pf[f] != nullptr;
+    for (size_t f = 0; f < cf.size(); ++f) cf_packed_[f] = cf[f] != nullptr && !cf_split[f];
+    cf_split_ = std::move(cf_split);
+    geo_reader_ = std::move(geo);
+    pf_readers_ = std::move(pf);
+    cf_readers_ = std::move(cf);
   }
 
   void setEncoder(EncoderSide* enc) { enc_ = enc; }
@@ -325,7 +352,8 @@ class LevelCoder {
     if (fields_ && fields_->streams_done) fields_->streams_done(pf_skip_, cf_skip_);
     uint32_t edge_points = 0;
     if constexpr (kEncode) edge_points = !enc_->edge_points.empty();
-    edge_points_ = geo_->bit(edge_points_flag_, edge_points);
+    // A packed GEOM codes no symbol: its level has no edge points (the encoder packs only such).
+    edge_points_ = geo_packed_ ? 0 : geo_->bit(edge_points_flag_, edge_points);
     uint32_t delaunay_first = 0;
     if constexpr (kEncode) delaunay_first = enc_->delaunay_first;
     delaunay_first_ = con_->bit(delaunay_first_flag_, delaunay_first);
@@ -346,13 +374,25 @@ class LevelCoder {
       if (live_ != 0) return bad("vertices left unretired at the end of the level");
       if (!bnd_->finishedCleanly()) return bad("boundary stream is corrupt, truncated or has trailing bytes");
       if (!con_->finishedCleanly()) return bad("connectivity stream is corrupt, truncated or has trailing bytes");
-      if (!geo_->finishedCleanly()) return bad("geometry stream is corrupt, truncated or has trailing bytes");
-      for (size_t f = 0; f < pf_.size(); ++f)
-        if (!pf_skip_[f] && !pf_[f]->finishedCleanly())
+      if (geo_packed_) {
+        GTN_RETURN_IF_ERROR(packedEnd(*geo_reader_));
+      } else if (!geo_->finishedCleanly()) {
+        return bad("geometry stream is corrupt, truncated or has trailing bytes");
+      }
+      for (size_t f = 0; f < pf_.size(); ++f) {
+        if (pf_skip_[f]) continue;
+        if (pf_packed_[f]) {
+          GTN_RETURN_IF_ERROR(packedEnd(*pf_readers_[f]));
+        } else if (!pf_[f]->finishedCleanly()) {
           return bad("point field stream '" + header_.point_fields[f].name + "' is corrupt, truncated or has trailing bytes");
-      for (size_t f = 0; f < cf_.size(); ++f)
-        if (!cf_skip_[f] && !cf_[f]->finishedCleanly())
+        }
+      }
+      for (size_t f = 0; f < cf_.size(); ++f) {
+        if (cf_skip_[f]) continue;
+        if (!cf_packed_[f] && !cf_[f]->finishedCleanly())
           return bad("cell field stream '" + header_.cell_fields[f].name + "' is corrupt, truncated or has trailing bytes");
+        if (cf_packed_[f] || cf_split_[f]) GTN_RETURN_IF_ERROR(packedEnd(*cf_readers_[f]));
+      }
       GTN_RETURN_IF_ERROR(sink_->endLevel());
     }
     return Status::ok();
@@ -377,6 +417,10 @@ class LevelCoder {
   Status codeAliases() {
     size_t k = 0;
     for (size_t f = 0; f < header_.point_fields.size(); ++f) {
+      if (pf_packed_[f]) {  // a packed stream declares nothing
+        k += header_.point_fields[f].components;
+        continue;
+      }
       for (uint32_t c = 0; c < header_.point_fields[f].components; ++c, ++k) {
         uint32_t is_alias = 0, source = 0;
         if constexpr (kEncode) {
@@ -628,7 +672,7 @@ class LevelCoder {
       return form;
     };
     const ScalarType ct = header_.coord_type;
-    for (uint32_t i = 0; i < 3; ++i) {
+    for (uint32_t i = 0; i < 3 && !geo_packed_; ++i) {
       Form form;
       if constexpr (kEncode) {
         const std::vector<double>& xyz = enc_->mesh->coords;
@@ -643,7 +687,7 @@ class LevelCoder {
     for (size_t f = 0; f < header_.point_fields.size(); ++f) {
       const FieldDesc& d = header_.point_fields[f];
       for (uint32_t c = 0; c < d.components; ++c, ++k) {
-        if (alias_[k] != kNone32) continue;
+        if (alias_[k] != kNone32 || pf_packed_[f]) continue;
         Form form;
         if constexpr (kEncode) {
           const Field& src = enc_->mesh->point_fields[f];
@@ -654,7 +698,7 @@ class LevelCoder {
     }
     for (size_t f = 0; f < header_.cell_fields.size(); ++f) {
       const FieldDesc& d = header_.cell_fields[f];
-      for (uint32_t c = 0; c < d.components; ++c) {
+      for (uint32_t c = 0; c < d.components && !cf_packed_[f] && !cf_split_[f]; ++c) {
         Form form;
         if constexpr (kEncode) {
           const Field& src = enc_->mesh->cell_fields[f];
@@ -671,6 +715,11 @@ class LevelCoder {
     std::string where = " (after " + std::to_string(tets_done_) + " tetrahedra, " + std::to_string(next_id_) +
                         " vertices, " + std::to_string(btris_done_) + " boundary triangles)";
     return invalidData((what_ ? *what_ : std::string("level")) + ": " + reason + where);
+  }
+  // The end of a packed stream (its reader names the stream).
+  Status packedEnd(PackedReader& r) const {
+    const Status st = r.finish();
+    return st.isOk() ? st : bad(st.message());
   }
   Status internal(const std::string& reason) const {
     return invalidData("encodeLevel: inconsistent mesh: " + reason);
@@ -974,162 +1023,182 @@ class LevelCoder {
         actual[i] = keyFromRaw(ct, raw);
       }
     }
-    uint64_t pk[3];
-    for (int i = 0; i < 3; ++i) pk[i] = keyFromPrediction(ct, pred[i]);
-    // Copy sources: the stencil, then the apex candidates (front vertices around the gate), which
-    // on extruded and sheared grids hold the vertex's neighbours along a grid line.
-    uint32_t copy_src[4 + kMaxCandidates];
-    uint32_t ncopy = 0;
-    if (fp.kind != FieldPrediction::kLast) {
-      for (int m = 0; m < 4; ++m)
-        if (fp.s[m] != kNoSlot && (m < 3 || has_d)) copy_src[ncopy++] = fp.s[m];
-      if (fp.kind != FieldPrediction::kEdge)
-        for (int m = 0; m < n_near_; ++m) copy_src[ncopy++] = near_[m];
-    }
-    // The encoder's first copy source that has each axis's value, kNone32 if none does: a copied
-    // axis's residual does not count when the encoder chooses a prediction.
-    uint32_t first_copy[3] = {kNone32, kNone32, kNone32};
-    if constexpr (kEncode) {
-      for (int i = 0; i < 3; ++i)
-        for (uint32_t m = 0; m < ncopy && first_copy[i] == kNone32; ++m)
-          if (keyFromPrediction(ct, P(copy_src[m])[i]) == actual[i]) first_copy[i] = m;
-    }
-    double base[3] = {pred[0], pred[1], pred[2]};  // the prediction before any carry (err_)
-    if (choose) {
-      uint32_t rule = 0, carry = 0;
+    if (geo_packed_) {
+      // Packed form: the coordinates as stored, no rule, carry or copy.
+      const size_t cs = scalarSize(ct);
+      uint8_t item[24];
       if constexpr (kEncode) {
-        // The cheapest rule, the lowest among equals; the previous rule first, so that most others
-        // stop early.
-        const SymbolCosts<4> signal = symbolCosts(geo_rule_[geo_last_rule_]);
-        const SymbolCosts<3> carry_signal = symbolCosts(geo_carry_[geo_last_carry_]);
-        double predicted[3][kRules];  // every rule's prediction of each axis
-        for (int i = 0; i < 3; ++i) {
-          double stencil[4];
-          coordStencil(fp, i, stencil);
-          weightedRules(stencil, predicted[i], std::make_integer_sequence<uint32_t, kRules>());
-          predicted[i][0] = pred[i];
+        for (int i = 0; i < 3; ++i) rawFromKey(ct, actual[i], item + i * cs);
+      } else {
+        const uint8_t* in = geo_reader_->next();
+        if (!in) return bad(geo_reader_->error());
+        std::memcpy(item, in, 3 * cs);
+      }
+      for (int i = 0; i < 3; ++i) {
+        x[i] = doubleFromRaw(ct, item + i * cs);
+        if constexpr (!kEncode) {
+          if (!std::isfinite(x[i])) return bad("decoded a non-finite coordinate");
         }
-        // `type` is ct as a compile-time constant (coordinates are float32 or float64).
-        auto search = [&](auto type) {
-          int best = 1 << 30;
-          // Whether rule r with carry m at `cost` would not replace the best so far: among equals
-          // the lowest carry, then the lowest rule, wins.
-          auto loses = [&](int cost, uint32_t r, uint32_t m) {
-            return cost > best || (cost == best && (m > carry || (m == carry && r > rule)));
-          };
-          auto take = [&](int cost, uint32_t r, uint32_t m) {
-            best = cost;
-            rule = r;
-            carry = m;
-          };
-          // The rules without a carry, each stopped as soon as it cannot win.
-          for (uint32_t t = 0; t < kCoordRules; ++t) {
-            const uint32_t r = triedRule(t, geo_last_rule_);
-            if (!ruleAllowed(r, has_d, kCoordRules)) continue;
-            int cost = signal[r] + carry_signal[0];
-            for (int i = 0; i < 3 && !loses(cost, r, 0); ++i)
-              if (first_copy[i] == kNone32)
-                cost += 16 * residualBits(actual[i], keyFromPrediction(type, predicted[i][r]), cmask);
-            if (!loses(cost, r, 0)) take(cost, r, 0);
+        err_[3 * size_t{s} + i] = 0.0f;
+      }
+    } else {
+      uint64_t pk[3];
+      for (int i = 0; i < 3; ++i) pk[i] = keyFromPrediction(ct, pred[i]);
+      // Copy sources: the stencil, then the apex candidates (front vertices around the gate), which
+      // on extruded and sheared grids hold the vertex's neighbours along a grid line.
+      uint32_t copy_src[4 + kMaxCandidates];
+      uint32_t ncopy = 0;
+      if (fp.kind != FieldPrediction::kLast) {
+        for (int m = 0; m < 4; ++m)
+          if (fp.s[m] != kNoSlot && (m < 3 || has_d)) copy_src[ncopy++] = fp.s[m];
+        if (fp.kind != FieldPrediction::kEdge)
+          for (int m = 0; m < n_near_; ++m) copy_src[ncopy++] = near_[m];
+      }
+      // The encoder's first copy source that has each axis's value, kNone32 if none does: a copied
+      // axis's residual does not count when the encoder chooses a prediction.
+      uint32_t first_copy[3] = {kNone32, kNone32, kNone32};
+      if constexpr (kEncode) {
+        for (int i = 0; i < 3; ++i)
+          for (uint32_t m = 0; m < ncopy && first_copy[i] == kNone32; ++m)
+            if (keyFromPrediction(ct, P(copy_src[m])[i]) == actual[i]) first_copy[i] = m;
+      }
+      double base[3] = {pred[0], pred[1], pred[2]};  // the prediction before any carry (err_)
+      if (choose) {
+        uint32_t rule = 0, carry = 0;
+        if constexpr (kEncode) {
+          // The cheapest rule, the lowest among equals; the previous rule first, so that most others
+          // stop early.
+          const SymbolCosts<4> signal = symbolCosts(geo_rule_[geo_last_rule_]);
+          const SymbolCosts<3> carry_signal = symbolCosts(geo_carry_[geo_last_carry_]);
+          double predicted[3][kRules];  // every rule's prediction of each axis
+          for (int i = 0; i < 3; ++i) {
+            double stencil[4];
+            coordStencil(fp, i, stencil);
+            weightedRules(stencil, predicted[i], std::make_integer_sequence<uint32_t, kRules>());
+            predicted[i][0] = pred[i];
           }
-          // A carry costs at least the cheapest rule and carry symbols and the margin: when the best
-          // without one costs no more, no carry can win (most vertices of grids with copied axes).
-          int floor = 1 << 30;
-          for (uint32_t r = 0; r < kCoordRules; ++r)
-            if (ruleAllowed(r, has_d, kCoordRules)) floor = std::min(floor, signal[r]);
-          int cheapest_carry = 1 << 30;
-          for (uint32_t m = 1; m < kCarries; ++m) cheapest_carry = std::min(cheapest_carry, carry_signal[m]);
-          if (best <= floor + cheapest_carry + kCarryMargin) return;
-          // Each carry with every rule, four rules at a time (addRuleCosts), then taken in the same
-          // order and with the same ties.
-          constexpr uint32_t kPadded = (kCoordRules + 3) / 4 * 4;
-          for (uint32_t m = 1; m < kCarries; ++m) {
-            const uint32_t src = carrySource(m, fp, has_d);
-            if (src == kNoSlot) continue;
-            const float* e = &err_[3 * size_t{src}];
-            int cost[kPadded];
-            for (uint32_t r = 0; r < kPadded; ++r) cost[r] = r < kCoordRules ? signal[r] + carry_signal[m] + kCarryMargin : 0;
-            for (int i = 0; i < 3; ++i) {
-              if (first_copy[i] != kNone32) continue;
-              double v[kPadded] = {};
-              for (uint32_t r = 0; r < kCoordRules; ++r) v[r] = predicted[i][r] + static_cast<double>(e[i]);
-              addRuleCosts<kPadded>(type, actual[i], v, cost);
-            }
+          // `type` is ct as a compile-time constant (coordinates are float32 or float64).
+          auto search = [&](auto type) {
+            int best = 1 << 30;
+            // Whether rule r with carry m at `cost` would not replace the best so far: among equals
+            // the lowest carry, then the lowest rule, wins.
+            auto loses = [&](int cost, uint32_t r, uint32_t m) {
+              return cost > best || (cost == best && (m > carry || (m == carry && r > rule)));
+            };
+            auto take = [&](int cost, uint32_t r, uint32_t m) {
+              best = cost;
+              rule = r;
+              carry = m;
+            };
+            // The rules without a carry, each stopped as soon as it cannot win.
             for (uint32_t t = 0; t < kCoordRules; ++t) {
               const uint32_t r = triedRule(t, geo_last_rule_);
-              if (ruleAllowed(r, has_d, kCoordRules) && !loses(cost[r], r, m)) take(cost[r], r, m);
+              if (!ruleAllowed(r, has_d, kCoordRules)) continue;
+              int cost = signal[r] + carry_signal[0];
+              for (int i = 0; i < 3 && !loses(cost, r, 0); ++i)
+                if (first_copy[i] == kNone32)
+                  cost += 16 * residualBits(actual[i], keyFromPrediction(type, predicted[i][r]), cmask);
+              if (!loses(cost, r, 0)) take(cost, r, 0);
+            }
+            // A carry costs at least the cheapest rule and carry symbols and the margin: when the best
+            // without one costs no more, no carry can win (most vertices of grids with copied axes).
+            int floor = 1 << 30;
+            for (uint32_t r = 0; r < kCoordRules; ++r)
+              if (ruleAllowed(r, has_d, kCoordRules)) floor = std::min(floor, signal[r]);
+            int cheapest_carry = 1 << 30;
+            for (uint32_t m = 1; m < kCarries; ++m) cheapest_carry = std::min(cheapest_carry, carry_signal[m]);
+            if (best <= floor + cheapest_carry + kCarryMargin) return;
+            // Each carry with every rule, four rules at a time (addRuleCosts), then taken in the same
+            // order and with the same ties.
+            constexpr uint32_t kPadded = (kCoordRules + 3) / 4 * 4;
+            for (uint32_t m = 1; m < kCarries; ++m) {
+              const uint32_t src = carrySource(m, fp, has_d);
+              if (src == kNoSlot) continue;
+              const float* e = &err_[3 * size_t{src}];
+              int cost[kPadded];
+              for (uint32_t r = 0; r < kPadded; ++r) cost[r] = r < kCoordRules ? signal[r] + carry_signal[m] + kCarryMargin : 0;
+              for (int i = 0; i < 3; ++i) {
+                if (first_copy[i] != kNone32) continue;
+                double v[kPadded] = {};
+                for (uint32_t r = 0; r < kCoordRules; ++r) v[r] = predicted[i][r] + static_cast<double>(e[i]);
+                addRuleCosts<kPadded>(type, actual[i], v, cost);
+              }
+              for (uint32_t t = 0; t < kCoordRules; ++t) {
+                const uint32_t r = triedRule(t, geo_last_rule_);
+                if (ruleAllowed(r, has_d, kCoordRules) && !loses(cost[r], r, m)) take(cost[r], r, m);
+              }
+            }
+          };
+          if (ct == ScalarType::kFloat32) {
+            search(std::integral_constant<ScalarType, ScalarType::kFloat32>());
+          } else {
+            search(std::integral_constant<ScalarType, ScalarType::kFloat64>());
+          }
+        }
+        rule = geo_rule_[geo_last_rule_].code(*geo_, rule);
+        if (!ruleAllowed(rule, has_d, kCoordRules)) return bad("invalid coordinate prediction rule");
+        geo_last_rule_ = rule;
+        carry = geo_carry_[geo_last_carry_].code(*geo_, carry);
+        const uint32_t carry_src = carry == 0 ? kNoSlot : carrySource(carry, fp, has_d);
+        if (carry != 0 && carry_src == kNoSlot) return bad("coordinate error carried from an unknown vertex");
+        geo_last_carry_ = carry;
+        for (int i = 0; i < 3; ++i) {
+          if (rule != 0) {
+            double stencil[4];
+            coordStencil(fp, i, stencil);
+            base[i] = kWeightedRule[rule](stencil);
+          }
+          if (carry != 0) {
+            pk[i] = keyFromPrediction(ct, base[i] + static_cast<double>(err_[3 * size_t{carry_src} + i]));
+          } else if (rule != 0) {
+            pk[i] = keyFromPrediction(ct, base[i]);
+          }
+        }
+      }
+      uint32_t prev_which = kNone32;  // copy source of the previous coordinate of this vertex
+      for (uint32_t i = 0; i < 3; ++i) {
+        uint64_t key = 0;
+        uint32_t hit = 0;
+        if (ncopy > 0) {
+          uint32_t which = 0;
+          if constexpr (kEncode) {
+            // Prefer the source the previous coordinate was copied from: one bit says so.
+            if (prev_which != kNone32 && keyFromPrediction(ct, P(copy_src[prev_which])[i]) == actual[i]) {
+              hit = 1;
+              which = prev_which;
+            } else if (first_copy[i] != kNone32) {
+              hit = 1;
+              which = first_copy[i];
             }
           }
-        };
-        if (ct == ScalarType::kFloat32) {
-          search(std::integral_constant<ScalarType, ScalarType::kFloat32>());
-        } else {
-          search(std::integral_constant<ScalarType, ScalarType::kFloat64>());
-        }
-      }
-      rule = geo_rule_[geo_last_rule_].code(*geo_, rule);
-      if (!ruleAllowed(rule, has_d, kCoordRules)) return bad("invalid coordinate prediction rule");
-      geo_last_rule_ = rule;
-      carry = geo_carry_[geo_last_carry_].code(*geo_, carry);
-      const uint32_t carry_src = carry == 0 ? kNoSlot : carrySource(carry, fp, has_d);
-      if (carry != 0 && carry_src == kNoSlot) return bad("coordinate error carried from an unknown vertex");
-      geo_last_carry_ = carry;
-      for (int i = 0; i < 3; ++i) {
-        if (rule != 0) {
-          double stencil[4];
-          coordStencil(fp, i, stencil);
-          base[i] = kWeightedRule[rule](stencil);
-        }
-        if (carry != 0) {
-          pk[i] = keyFromPrediction(ct, base[i] + static_cast<double>(err_[3 * size_t{carry_src} + i]));
-        } else if (rule != 0) {
-          pk[i] = keyFromPrediction(ct, base[i]);
-        }
-      }
-    }
-    uint32_t prev_which = kNone32;  // copy source of the previous coordinate of this vertex
-    for (uint32_t i = 0; i < 3; ++i) {
-      uint64_t key = 0;
-      uint32_t hit = 0;
-      if (ncopy > 0) {
-        uint32_t which = 0;
-        if constexpr (kEncode) {
-          // Prefer the source the previous coordinate was copied from: one bit says so.
-          if (prev_which != kNone32 && keyFromPrediction(ct, P(copy_src[prev_which])[i]) == actual[i]) {
-            hit = 1;
-            which = prev_which;
-          } else if (first_copy[i] != kNone32) {
-            hit = 1;
-            which = first_copy[i];
-          }
-        }
-        hit = geo_->bit(copy_flag_[i][copy_last_[i] + 2 * (prev_which != kNone32)], hit);
-        copy_last_[i] = hit;
-        if (hit) {
-          uint32_t same = prev_which != kNone32 && which == prev_which;
-          if (prev_which != kNone32) same = geo_->bit(copy_same_[i], same);
-          if (same) {
-            which = prev_which;
+          hit = geo_->bit(copy_flag_[i][copy_last_[i] + 2 * (prev_which != kNone32)], hit);
+          copy_last_[i] = hit;
+          if (hit) {
+            uint32_t same = prev_which != kNone32 && which == prev_which;
+            if (prev_which != kNone32) same = geo_->bit(copy_same_[i], same);
+            if (same) {
+              which = prev_which;
+            } else {
+              which = copy_which_[i].code(*geo_, which);
+            }
+            if (which >= ncopy) return bad("coordinate copied from an unknown vertex");
+            key = keyFromPrediction(ct, P(copy_src[which])[i]);
+            prev_which = which;
           } else {
-            which = copy_which_[i].code(*geo_, which);
+            prev_which = kNone32;
           }
-          if (which >= ncopy) return bad("coordinate copied from an unknown vertex");
-          key = keyFromPrediction(ct, P(copy_src[which])[i]);
-          prev_which = which;
-        } else {
-          prev_which = kNone32;
+        }
+        if (!hit) key = coord_vc_.code(*geo_, i, pk[i], actual[i]);
+        uint8_t raw[8];
+        rawFromKey(ct, key, raw);
+        x[i] = doubleFromRaw(ct, raw);
+        if constexpr (!kEncode) {
+          if (!std::isfinite(x[i])) return bad("decoded a non-finite coordinate");
         }
       }
-      if (!hit) key = coord_vc_.code(*geo_, i, pk[i], actual[i]);
-      uint8_t raw[8];
-      rawFromKey(ct, key, raw);
-      x[i] = doubleFromRaw(ct, raw);
-      if constexpr (!kEncode) {
-        if (!std::isfinite(x[i])) return bad("decoded a non-finite coordinate");
-      }
+      for (int i = 0; i < 3; ++i)
+        err_[3 * size_t{s} + i] = fp.kind == FieldPrediction::kLast ? 0.0f : static_cast<float>(x[i] - base[i]);
     }
-    for (int i = 0; i < 3; ++i)
-      err_[3 * size_t{s} + i] = fp.kind == FieldPrediction::kLast ? 0.0f : static_cast<float>(x[i] - base[i]);
     if (slot_bytes_ > 0) {
       computeFieldPrediction(fp, x);
       uint8_t* out = &vals_[s * slot_bytes_];
@@ -1143,6 +1212,16 @@ class LevelCoder {
         }
         const uint8_t* src_item = nullptr;
         if constexpr (kEncode) src_item = enc_->mesh->point_fields[f].bytes.data() + size_t{src} * d.itemBytes();
+        if (pf_packed_[f]) {
+          // Packed form: the item as stored, every component (none repeats another).
+          if constexpr (!kEncode) {
+            src_item = pf_readers_[f]->next();
+            if (!src_item) return bad(pf_readers_[f]->error());
+          }
+          std::memcpy(out + slot_off_[f], src_item, d.itemBytes());
+          k += d.components;
+          continue;
+        }
         uint32_t rule = 0;
         if (choose_fields && field_coded_comps_[f] > 0) {
           if constexpr (kEncode) rule = chooseFieldRule(f, k, fp, has_d, src_item);
@@ -1775,6 +1854,22 @@ class LevelCoder {
         j += nc;
         continue;
       }
+      if (cf_packed_[f]) {
+        // Packed form: the item as stored.
+        const uint8_t* item = nullptr;
+        if constexpr (kEncode) {
+          item = enc_->mesh->cell_fields[f].bytes.data() + size_t{src_tet} * d.itemBytes();
+        } else {
+          item = cf_readers_[f]->next();
+          if (!item) return bad(cf_readers_[f]->error());
+        }
+        for (uint32_t c = 0; c < nc; ++c) {
+          cell_keys_[j + c] = last_cell_keys_[f][c] = keyFromRaw(d.type, item + c * vs);
+        }
+        std::memcpy(&cell_buf_[cf_offset_[f]], item, d.itemBytes());
+        j += nc;
+        continue;
+      }
       uint64_t* pred = &cell_pred_[0];
       uint64_t* act = &cell_act_[0];
       for (uint32_t c = 0; c < nc; ++c) {
@@ -1822,6 +1917,17 @@ class LevelCoder {
       uint64_t* keys = &cell_keys_[j];
       if (sym == 0) {
         std::copy(pred, pred + nc, keys);
+      } else if (sym == kSymEscape && cf_split_[f]) {
+        // Split form: the escaped values are the packed part's next item.
+        const uint8_t* item = nullptr;
+        if constexpr (kEncode) {
+          item = enc_->mesh->cell_fields[f].bytes.data() + size_t{src_tet} * d.itemBytes();
+          (*cf_escaped_)[f].insert((*cf_escaped_)[f].end(), item, item + d.itemBytes());
+        } else {
+          item = cf_readers_[f]->next();
+          if (!item) return bad(cf_readers_[f]->error());
+        }
+        for (uint32_t c = 0; c < nc; ++c) keys[c] = keyFromRaw(d.type, item + c * vs);
       } else if (sym == kSymEscape) {
         for (uint32_t c = 0; c < nc; ++c) keys[c] = cf_vc_[f].code(*cf_[f], c, pred[c], act[c]);
       } else if (sym >= kSymCellNeighbour) {
@@ -2209,6 +2315,12 @@ class LevelCoder {
   std::vector<std::unique_ptr<Coder>> pf_, cf_;
   ValueCoder coord_vc_;
   std::vector<ValueCoder> pf_vc_, cf_vc_;
+  // Streams in packed form, and the decoder's readers of them.
+  bool geo_packed_ = false;
+  std::vector<char> pf_packed_, cf_packed_, cf_split_;
+  std::vector<std::vector<uint8_t>>* cf_escaped_ = nullptr;  // the encoder's escaped items of split streams
+  std::unique_ptr<PackedReader> geo_reader_;
+  std::vector<std::unique_ptr<PackedReader>> pf_readers_, cf_readers_;
   std::vector<size_t> pf_offset_, cf_offset_;
   size_t item_bytes_ = 0, cell_bytes_ = 0;
   std::vector<size_t> slot_off_, comp_slot_off_;  // layOutSlotValues: offsets in a slot's values
@@ -2478,19 +2590,150 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
       }
   }
 
-  out.point_fields.resize(h.point_fields.size());
-  out.cell_fields.resize(h.cell_fields.size());
+  // One pass of the coder over a copy of the encoder's state. Streams marked packed code nothing
+  // (their bytes are set afterwards); split cell-field streams code their symbols, and their escaped
+  // values are collected in `escaped`, then packed behind them.
   using Enc = EntropyCoder<true>;
-  std::vector<std::unique_ptr<Enc>> pf, cf;
-  for (auto& s : out.point_fields) pf.push_back(std::make_unique<Enc>(&s));
-  for (auto& s : out.cell_fields) cf.push_back(std::make_unique<Enc>(&s));
-  LevelCoder<true> coder(h, std::make_unique<Enc>(&out.boundary), std::make_unique<Enc>(&out.connectivity),
-                         std::make_unique<Enc>(&out.geometry), std::move(pf), std::move(cf));
-  coder.setEncoder(&enc);
-  GTN_RETURN_IF_ERROR(coder.run());
-  out.vertex_order = std::move(enc.vertex_order);
-  out.tet_order = std::move(enc.tet_order);
-  return out;
+  struct Forms {
+    bool geo = false;
+    std::vector<char> pf, cf, cf_split;
+  };
+  auto pass = [&](EncodedLevel* level, const Forms& forms) -> Status {
+    EncoderSide side = enc;
+    level->header = h;
+    level->boundary.clear();
+    level->connectivity.clear();
+    level->geometry.clear();
+    level->point_fields.assign(h.point_fields.size(), {});
+    level->cell_fields.assign(h.cell_fields.size(), {});
+    std::vector<std::unique_ptr<Enc>> pf, cf;
+    for (auto& s : level->point_fields) pf.push_back(std::make_unique<Enc>(&s));
+    for (auto& s : level->cell_fields) cf.push_back(std::make_unique<Enc>(&s));
+    LevelCoder<true> coder(h, std::make_unique<Enc>(&level->boundary), std::make_unique<Enc>(&level->connectivity),
+                           std::make_unique<Enc>(&level->geometry), std::move(pf), std::move(cf));
+    std::vector<std::vector<uint8_t>> escaped(h.cell_fields.size());
+    coder.setEncoder(&side);
+    coder.setPacked(forms.geo, forms.pf, forms.cf, forms.cf_split, &escaped);
+    GTN_RETURN_IF_ERROR(coder.run());
+    for (size_t f = 0; f < h.cell_fields.size(); ++f) {
+      if (!forms.cf_split[f]) continue;
+      const FieldDesc& d = h.cell_fields[f];
+      const std::vector<uint8_t> items = packValues(escaped[f].data(), escaped[f].size() / d.itemBytes(), d.itemBytes(),
+                                                    scalarSize(d.type), 0, true);
+      level->cell_fields[f] = splitStream(level->cell_fields[f], items);
+    }
+    level->vertex_order = std::move(side.vertex_order);
+    level->tet_order = std::move(side.tet_order);
+    return Status::ok();
+  };
+  Forms predicted{false, std::vector<char>(h.point_fields.size(), 0), std::vector<char>(h.cell_fields.size(), 0),
+                  std::vector<char>(h.cell_fields.size(), 0)};
+  GTN_RETURN_IF_ERROR(pass(&out, predicted));
+  if (!options.packed_streams) return out;
+
+  // The packed form (spec section 10.2.1) of each value stream, kept where it is smaller: the values
+  // in decoding order (the same in every pass: the peeling does not depend on how values are coded).
+  // GEOM is packed only in a level without edge points, which a packed GEOM cannot code.
+  std::vector<uint8_t> items;
+  auto packed = [&](const uint8_t* src, size_t count, size_t item_bytes, size_t value_size, auto order,
+                    const std::vector<uint8_t>& coded) {
+    items.resize(count * item_bytes);
+    for (size_t i = 0; i < count; ++i) std::memcpy(&items[order(i) * item_bytes], src + i * item_bytes, item_bytes);
+    std::vector<uint8_t> p = packValues(items.data(), count, item_bytes, value_size, coded.size());
+    return !p.empty() && p.size() < coded.size() ? p : std::vector<uint8_t>{};
+  };
+  auto by_vertex = [&](size_t v) { return size_t{out.vertex_order[v]}; };
+  auto by_tet = [&](size_t t) { return static_cast<size_t>(out.tet_order[t]); };
+  Forms chosen = predicted;
+  std::vector<uint8_t> geo;
+  if (enc.edge_points.empty() && np > 0) {
+    const size_t cs = scalarSize(mesh.coord_type);
+    std::vector<uint8_t> coords(np * 3 * cs);
+    for (size_t i = 0; i < 3 * np; ++i) storeCoordinate(mesh.coord_type, mesh.coords[i], &coords[i * cs]);
+    geo = packed(coords.data(), np, 3 * cs, cs, by_vertex, out.geometry);
+    chosen.geo = !geo.empty();
+  }
+  std::vector<std::vector<uint8_t>> pfs(h.point_fields.size()), cfs(h.cell_fields.size());
+  for (size_t f = 0; f < pfs.size(); ++f) {
+    const Field& field = mesh.point_fields[f];
+    pfs[f] = packed(field.bytes.data(), np, field.components * field.valueSize(), field.valueSize(), by_vertex, out.point_fields[f]);
+    chosen.pf[f] = !pfs[f].empty();
+  }
+  for (size_t f = 0; f < cfs.size(); ++f) {
+    const Field& field = mesh.cell_fields[f];
+    cfs[f] = packed(field.bytes.data(), nt, field.components * field.valueSize(), field.valueSize(), by_tet, out.cell_fields[f]);
+    chosen.cf[f] = !cfs[f].empty();
+  }
+  // Cell fields in split form: their symbols as predicted, the values they escape packed (the values
+  // new to a split cell, which a table of levels shared by many cells repeats). Tried in a pass
+  // of their own on the fields that cost more than a byte per 8 tetrahedra and whose values repeat.
+  Forms trial = chosen;
+  bool try_split = false;
+  // Only where the values repeat: at most one distinct item (by a 64-bit hash) per 12 tetrahedra,
+  // two hexahedra's worth.
+  auto repeats = [&](const Field& field) {
+    const size_t ib = field.components * field.valueSize();
+    std::vector<uint64_t> hashes(nt);
+    for (size_t t = 0; t < nt; ++t) {
+      uint64_t hash = 0xCBF29CE484222325u;
+      for (size_t b = 0; b < ib; ++b) hash = (hash ^ field.bytes[t * ib + b]) * 0x100000001B3u;
+      hashes[t] = hash;
+    }
+    std::sort(hashes.begin(), hashes.end());
+    return static_cast<size_t>(std::unique(hashes.begin(), hashes.end()) - hashes.begin()) * 12 <= nt;
+  };
+  for (size_t f = 0; f < cfs.size(); ++f) {
+    trial.cf_split[f] = out.cell_fields[f].size() > nt / 8 && repeats(mesh.cell_fields[f]);
+    trial.cf[f] = chosen.cf[f] && !trial.cf_split[f];
+    try_split = try_split || trial.cf_split[f];
+  }
+  EncodedLevel split;
+  if (try_split) {
+    GTN_RETURN_IF_ERROR(pass(&split, trial));
+    for (size_t f = 0; f < cfs.size(); ++f) {
+      if (!trial.cf_split[f]) continue;
+      const size_t best = cfs[f].empty() ? out.cell_fields[f].size() : cfs[f].size();
+      chosen.cf_split[f] = split.cell_fields[f].size() < best;
+      if (chosen.cf_split[f]) chosen.cf[f] = 0;
+    }
+  }
+  const bool any = chosen.geo || std::find(chosen.pf.begin(), chosen.pf.end(), 1) != chosen.pf.end() ||
+                   std::find(chosen.cf.begin(), chosen.cf.end(), 1) != chosen.cf.end() ||
+                   std::find(chosen.cf_split.begin(), chosen.cf_split.end(), 1) != chosen.cf_split.end();
+  if (!any) return out;
+  // Another pass doubles the encoder's time: worth it when the other forms save a 64th of the
+  // level's bytes, or a quarter of one stream's.
+  size_t total = out.boundary.size() + out.connectivity.size() + out.geometry.size(), saved = 0;
+  bool quarter = false;
+  auto saving = [&](bool chosen_form, size_t form_size, size_t coded) {
+    if (!chosen_form) return;
+    saved += coded - std::min(coded, form_size);
+    quarter = quarter || 4 * form_size <= 3 * coded;
+  };
+  saving(chosen.geo, geo.size(), out.geometry.size());
+  for (size_t f = 0; f < pfs.size(); ++f) {
+    total += out.point_fields[f].size();
+    saving(chosen.pf[f], pfs[f].size(), out.point_fields[f].size());
+  }
+  for (size_t f = 0; f < cfs.size(); ++f) {
+    total += out.cell_fields[f].size();
+    saving(chosen.cf[f], cfs[f].size(), out.cell_fields[f].size());
+    saving(chosen.cf_split[f], split.cell_fields.size() > f ? split.cell_fields[f].size() : 0, out.cell_fields[f].size());
+  }
+  if (!quarter && saved * 64 < total) return out;
+  // Again with the chosen forms (the trial when it is that), since the streams share a few models.
+  EncodedLevel again;
+  if (try_split && chosen.cf == trial.cf && chosen.cf_split == trial.cf_split) {
+    again = std::move(split);
+  } else {
+    GTN_RETURN_IF_ERROR(pass(&again, chosen));
+  }
+  if (chosen.geo) again.geometry = std::move(geo);
+  for (size_t f = 0; f < pfs.size(); ++f)
+    if (chosen.pf[f]) again.point_fields[f] = std::move(pfs[f]);
+  for (size_t f = 0; f < cfs.size(); ++f)
+    if (chosen.cf[f]) again.cell_fields[f] = std::move(cfs[f]);
+  return again;
 }
 
 Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink, DecodeStats* stats,
@@ -2509,14 +2752,53 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
         return invalidData(what + ": field '" + d.name + "' has an invalid component count");
     }
   using Dec = EntropyCoder<false>;
+  // A packed stream (section 10.2.1) is read by its PackedReader; its range decoder gets an empty
+  // stream of its own, which nothing reads.
+  static constexpr uint8_t kNoSymbols[6] = {0, 0, 0, 0, 0, 0};
+  auto open = [&](std::span<const uint8_t> s, uint64_t count, const FieldDesc& d, const std::string& name,
+                  std::unique_ptr<PackedReader>* reader) -> Status {
+    if (!isPackedStream(s)) return Status::ok();
+    *reader = std::make_unique<PackedReader>();
+    const Status st = (*reader)->open(s, count, d.itemBytes(), scalarSize(d.type), name);
+    return st.isOk() ? st : invalidData(what + ": " + st.message());
+  };
+  // A split CFLD stream (section 10.2.1): its range-coded part, and its packed part as a packed stream.
+  std::vector<std::vector<uint8_t>> split_packed(header.cell_fields.size());
+  std::vector<std::span<const uint8_t>> cell_streams(payload.cell_fields.begin(), payload.cell_fields.end());
+  std::vector<char> cf_split(header.cell_fields.size(), 0);
+  std::unique_ptr<PackedReader> geo_reader;
+  std::vector<std::unique_ptr<PackedReader>> pf_readers(header.point_fields.size()), cf_readers(header.cell_fields.size());
+  GTN_RETURN_IF_ERROR(open(payload.geometry, header.points, FieldDesc{"", 3, header.coord_type}, "the geometry stream",
+                           &geo_reader));
+  for (size_t f = 0; f < pf_readers.size(); ++f)
+    GTN_RETURN_IF_ERROR(open(payload.point_fields[f], header.points, header.point_fields[f],
+                             "point field '" + header.point_fields[f].name + "'", &pf_readers[f]));
+  for (size_t f = 0; f < cf_readers.size(); ++f) {
+    const std::string name = "cell field '" + header.cell_fields[f].name + "'";
+    if (isSplitStream(payload.cell_fields[f])) {
+      if (!splitParts(payload.cell_fields[f], &cell_streams[f], &split_packed[f]))
+        return invalidData(what + ": " + name + ": split stream's range-coded part is cut off or its length malformed");
+      cf_split[f] = 1;
+      cf_readers[f] = std::make_unique<PackedReader>();
+      const Status st = cf_readers[f]->open(split_packed[f], header.tets, header.cell_fields[f].itemBytes(),
+                                            scalarSize(header.cell_fields[f].type), name, false);
+      if (!st.isOk()) return invalidData(what + ": " + st.message());
+      continue;
+    }
+    GTN_RETURN_IF_ERROR(open(payload.cell_fields[f], header.tets, header.cell_fields[f], name, &cf_readers[f]));
+  }
+  auto symbols = [&](std::span<const uint8_t> s) {
+    return std::make_unique<Dec>(isPackedStream(s) ? std::span<const uint8_t>(kNoSymbols) : s);
+  };
   std::vector<std::unique_ptr<Dec>> pf, cf;
-  for (auto s : payload.point_fields) pf.push_back(std::make_unique<Dec>(s));
-  for (auto s : payload.cell_fields) cf.push_back(std::make_unique<Dec>(s));
+  for (auto s : payload.point_fields) pf.push_back(symbols(s));
+  for (auto s : cell_streams) cf.push_back(symbols(s));
   GTN_RETURN_IF_ERROR(sink.beginLevel(header));
   LevelCoder<false> coder(header, std::make_unique<Dec>(payload.boundary), std::make_unique<Dec>(payload.connectivity),
-                          std::make_unique<Dec>(payload.geometry), std::move(pf), std::move(cf));
+                          symbols(payload.geometry), std::move(pf), std::move(cf));
   coder.setDecoder(&sink, &what);
   coder.setFields(fields);
+  coder.setPackedReaders(std::move(geo_reader), std::move(pf_readers), std::move(cf_readers), std::move(cf_split));
   const Status st = coder.run();
   if (stats) stats->peak_live_vertices = coder.peakLive();
   return st;

@@ -20,6 +20,9 @@ struct EncodeOptions {
   // Code the unused points that lie on an edge with that edge (spec section 10.5), not after the
   // level: the mid-edge nodes of quadratic cells. Off only to measure what it saves.
   bool edge_points = true;
+  // Keep a value stream's packed form (spec section 10.2.1) where it is smaller than the predicted
+  // stream. Off only to measure the predictions alone.
+  bool packed_streams = true;
 };
 
 // The coded streams of one level. `header` carries counts, field descriptions, bounding box and

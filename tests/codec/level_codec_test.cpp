@@ -128,7 +128,9 @@ TEST(LevelCodec, ValuesRepeatedFromTheNextLayerAreCopied) {
   Field noise("noise", 1, ScalarType::kFloat32, m.numPoints());
   for (size_t v = 0; v < m.numPoints(); ++v) noise.set<float>(v, 0, u(rng));
   m.point_fields = {noise};
-  const EncodedLevel independent = roundTrip(m);
+  EncodeOptions predicted;  // the field rules alone: random values would be packed (spec 10.2.1)
+  predicted.packed_streams = false;
+  const EncodedLevel independent = roundTrip(m, nullptr, predicted);
   auto id = [&](int i, int j, int k) { return static_cast<size_t>(i + nx * (j + ny * k)); };
   size_t repeated = 0;
   for (int k = 0; k < nz; ++k)
@@ -140,7 +142,7 @@ TEST(LevelCodec, ValuesRepeatedFromTheNextLayerAreCopied) {
         ++repeated;
       }
   m.point_fields = {noise};
-  const EncodedLevel copied = roundTrip(m);
+  const EncodedLevel copied = roundTrip(m, nullptr, predicted);
   const double per_value = 8.0 * independent.point_fields[0].size() / m.numPoints();
   const double saved = 8.0 * (double(independent.point_fields[0].size()) - double(copied.point_fields[0].size()));
   EXPECT_GT(per_value, 20.0);  // random float32 values: nothing to predict
@@ -168,7 +170,9 @@ TEST(LevelCodec, TrailingZeroBitsOfEveryValueAreNotCoded) {
     small.set<double>(v, 0, static_cast<double>(static_cast<int>(v % 11) - 5));
   }
   m.point_fields = {as32, as64, wide, counts, small};
-  const EncodedLevel e = roundTrip(m);
+  EncodeOptions predicted;  // the shifts alone: random values would be packed (spec 10.2.1)
+  predicted.packed_streams = false;
+  const EncodedLevel e = roundTrip(m, nullptr, predicted);
   ASSERT_EQ(e.point_fields.size(), 5u);
   const double n = static_cast<double>(m.numPoints());
   const double b32 = 8.0 * e.point_fields[0].size() / n, b64 = 8.0 * e.point_fields[1].size() / n;

@@ -18,6 +18,7 @@
 #include <set>
 
 #include "codec/codec_test_util.h"
+#include "codec/packed_values.h"
 #include "codec/value_coder.h"
 #include "format/gtn_file.h"
 #include "format/gtn_reader.h"
@@ -240,6 +241,36 @@ TetMesh valueTable() {
   return m;
 }
 
+// Values that no prediction helps (spec 10.2.1): the 8 x 8 x 8 cube grid (float32) with a float32
+// point field `stress` whose values are 300 levels scattered over the points (a solver's table,
+// std::mt19937_64 picks), a float64 point field `smooth` and a float32 cell field `damage` of 300
+// other levels, one per cube (its 6 tetrahedra share it). Only `stress` is packed.
+TetMesh packedValues() {
+  TetMesh m;
+  m.coord_type = ScalarType::kFloat32;
+  addCubeGrid(m, 8, 0.0, 1.0);
+  m = finish(m);
+  std::mt19937_64 rng(36);
+  std::vector<float> levels(300), damage_levels(300);
+  for (float& l : levels) l = static_cast<float>(rng() >> 40) * 1.1920929e-7f * 3.0e8f;
+  for (float& l : damage_levels) l = static_cast<float>(rng() >> 40) * 5.9604645e-8f;
+  Field stress("stress", 1, ScalarType::kFloat32, m.numPoints()), smooth("smooth", 1, ScalarType::kFloat64, m.numPoints());
+  for (size_t v = 0; v < m.numPoints(); ++v) {
+    stress.set<float>(v, 0, levels[rng() % levels.size()]);
+    const double* p = m.point(v);
+    smooth.set<double>(v, 0, std::sin(0.3 * p[0] + 0.2 * p[2]) * std::exp(0.1 * p[1]));
+  }
+  Field damage("damage", 1, ScalarType::kFloat32, m.numTets());
+  float value = 0;
+  for (size_t t = 0; t < m.numTets(); ++t) {
+    if (t % 6 == 0) value = damage_levels[rng() % damage_levels.size()];
+    damage.set<float>(t, 0, value);
+  }
+  m.point_fields = {stress, smooth};
+  m.cell_fields = {damage};
+  return m;
+}
+
 // A quadratic tetrahedral mesh as importers keep it (spec 10.5, edge points): the 2 x 2 x 2 cube grid,
 // float64, with a node on every edge of every tetrahedron that no tetrahedron uses, most at the edge's
 // midpoint, some off it (a curved cell's), and one point on no edge, coded after peeling.
@@ -358,9 +389,13 @@ GtnWriteOptions options(bool directory = true) {
   return o;
 }
 
+// `packed`: let the encoder keep packed and split streams (spec 10.2.1); the other samples pin the
+// range-coded forms they are named after.
 std::vector<uint8_t> encodeFile(const TetMesh& mesh, const GtnWriteOptions& o,
-                                const std::function<void(GtnStreamWriter&)>& extra = nullptr) {
-  auto e = encodeLevel(mesh, EncodeOptions{});
+                                const std::function<void(GtnStreamWriter&)>& extra = nullptr, bool packed = false) {
+  EncodeOptions eo;
+  eo.packed_streams = packed;
+  auto e = encodeLevel(mesh, eo);
   EXPECT_TRUE(e.isOk()) << e.status().message();
   std::vector<uint8_t> bytes;
   GtnStreamWriter w(
@@ -430,6 +465,7 @@ std::vector<Sample> samples() {
   s.push_back(valid("printed-singles.f64.dir.v1.0.gtn", printedSingles, [] { return encodeFile(printedSingles(), options()); }));
   s.push_back(valid("shift-exceptions.f64.dir.v1.0.gtn", shiftExceptions, [] { return encodeFile(shiftExceptions(), options()); }));
   s.push_back(valid("value-table.f32.dir.v1.0.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
+  s.push_back(valid("packed-values.f32.dir.v1.0.gtn", packedValues, [] { return encodeFile(packedValues(), options(), nullptr, true); }));
   s.push_back(valid("curvilinear.f32.dir.v1.0.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(valid("delaunay.f64.dir.v1.0.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
@@ -654,6 +690,17 @@ TEST(GtnConformance, LevelsAndMergeTreesAgree) {
     ASSERT_TRUE(want.isOk());
     EXPECT_TRUE(canonical(bn.mesh()) == canonical(*want)) << n << " merges, from level " << plan.level;
   }
+}
+
+// The packed-values file holds its `stress` stream in packed form (spec 10.2.1), the other streams
+// range coded (the split form of cell fields is exercised by tests/codec/packed_values_test.cpp).
+TEST(GtnConformance, PackedValuesFileHasAPackedStream) {
+  auto enc = encodeLevel(packedValues(), EncodeOptions{});
+  ASSERT_TRUE(enc.isOk()) << enc.status().message();
+  EXPECT_TRUE(isPackedStream(enc->point_fields[0]));
+  EXPECT_FALSE(isPackedStream(enc->point_fields[1]));
+  EXPECT_EQ(enc->cell_fields[0][0], 0);
+  EXPECT_EQ(enc->geometry[0], 0);
 }
 
 TEST(GtnConformance, GeneratorIsDeterministic) {
