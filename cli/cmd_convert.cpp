@@ -9,6 +9,7 @@
 #include "format/gtn_file.h"
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
+#include "validate/mesh_checks.h"
 
 namespace gtn::cli {
 
@@ -38,6 +39,8 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
   lo.levels = a.levels;
   lo.merge_tree = !a.no_merge_tree;
   GTN_ASSIGN_OR_RETURN(MipLevels levels, buildMipLevels(mesh, tree, lo));
+  // Part of the verification: every level the simplifier made is a valid mesh.
+  if (wo.verify) GTN_RETURN_IF_ERROR(checkLevelStructure(levels.levelMeshes(mesh), a.output));
   // Levels stop where the merge tree does (a small or flat mesh has few merges): say so rather than
   // write fewer levels than --levels asked for without a word.
   if (a.levels > 0 && levels.merges.size() - 1 < static_cast<size_t>(a.levels))
@@ -108,7 +111,7 @@ Command addConvertCommand(CLI::App& app) {
       ->check(finiteAtLeastZero());
   sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
   sub->add_flag("--no-verify", args->no_verify,
-                ".gtn: do not decode each level back and compare it with its mesh before the file is written (faster; the check guards against encoder bugs)");
+                ".gtn: do not decode each level back and compare it with its mesh, nor check that each mip level is a valid mesh, before the file is written (faster; the checks guard against encoder and simplifier bugs)");
   sub->add_option("--simplify-field", args->ranking.field,
                   ".gtn: point field whose first component is the density of the simplification error "
                   "(default: the first point field; 'none' = volume only)");

@@ -102,6 +102,9 @@ void finishImport(ImportResult& result) {
   size_t zero = 0;
   result.report.flipped += normalizeOrientation(result.mesh, &zero);
   result.report.zero_volume = zero;
+  // A flat tetrahedron's orientation is the file's arbitrary choice: give it its neighbours' (the
+  // simplifier relies on consistently oriented faces; nothing else changes).
+  if (zero > 0) orientFlatTets(result.mesh);
 }
 
 void weldPoints(TetMesh& mesh, ImportReport& report) {

@@ -109,4 +109,37 @@ size_t normalizeOrientation(TetMesh& mesh, size_t* zero_volume) {
   return flipped;
 }
 
+size_t orientFlatTets(TetMesh& mesh) {
+  const size_t nt = mesh.tets.size();
+  std::vector<uint8_t> done(nt, 0);  // orientation settled
+  std::vector<uint32_t> queue;
+  bool any_flat = false;
+  for (size_t t = 0; t < nt; ++t) {
+    const Tet& q = mesh.tets[t];
+    if (orient3d(mesh.point(q[0]), mesh.point(q[1]), mesh.point(q[2]), mesh.point(q[3])) != 0) {
+      done[t] = 1;
+      queue.push_back(static_cast<uint32_t>(t));
+    } else {
+      any_flat = true;
+    }
+  }
+  if (!any_flat) return 0;
+  const FaceAdjacency adj = computeFaceAdjacency(mesh);
+  size_t turned = 0;
+  for (size_t i = 0; i < queue.size(); ++i) {
+    const uint32_t t = queue[i];
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t n = adj.neighbor[4 * size_t{t} + k];
+      if (n >= nt || done[n]) continue;
+      done[n] = 1;
+      if (!facesOpposite(mesh.tets[t], k, mesh.tets[n])) {
+        std::swap(mesh.tets[n][2], mesh.tets[n][3]);
+        ++turned;
+      }
+      queue.push_back(n);
+    }
+  }
+  return turned;
+}
+
 }  // namespace gtn

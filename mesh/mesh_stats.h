@@ -34,4 +34,13 @@ MeshStats computeMeshStats(const TetMesh& mesh);
 // vertices; returns how many were flipped and counts zero-volume cells into *zero_volume.
 size_t normalizeOrientation(TetMesh& mesh, size_t* zero_volume);
 
+// Gives the zero-volume tetrahedra (exact predicate), whose orientation the geometry leaves open, the
+// orientation of their neighbours: spreading from the tetrahedra of positive volume across shared
+// faces, each flat tetrahedron reached is turned round (last two vertices swapped) when it lists the
+// shared face in the same direction as the neighbour it is reached from. Call it after
+// normalizeOrientation. Flat tetrahedra with no path to a tetrahedron of positive volume keep theirs,
+// and so do those whose neighbours disagree (the first one reached decides). Returns how many were
+// turned round.
+size_t orientFlatTets(TetMesh& mesh);
+
 }  // namespace gtn

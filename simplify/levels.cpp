@@ -57,6 +57,12 @@ std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source) const {
   return result;
 }
 
+std::vector<const TetMesh*> MipLevels::levelMeshes(const TetMesh& source) const {
+  std::vector<const TetMesh*> result = {&source};
+  for (size_t i = 1; i < meshes.size(); ++i) result.push_back(&meshes[i]);
+  return result;
+}
+
 size_t chooseLevel(const std::vector<uint64_t>& level_merges, uint64_t target_merges) {
   size_t best = 0;
   for (size_t i = 0; i < level_merges.size(); ++i) {

@@ -32,6 +32,8 @@ struct MipLevels {
 
   // The inputs for writeGtnFile; `source` is level 0 and must outlive the result, as must *this.
   std::vector<GtnLevelInput> inputs(const TetMesh& source) const;
+  // Every level's mesh, `source` (level 0) first.
+  std::vector<const TetMesh*> levelMeshes(const TetMesh& source) const;
 };
 
 // Builds the levels of `source` from its merge tree (level 0 included, with the whole tree).

@@ -212,6 +212,7 @@ class Ranker {
     }
   }
   std::vector<uint8_t> boundary_, frozen_, alive_;
+  std::vector<uint8_t> pinned_;  // never merged away (may be merged onto): next to a face oriented alike twice
   std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
   bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
   std::vector<uint32_t> version_;
@@ -249,6 +250,7 @@ void Ranker::init() {
   star_live_ = star_pool_.size();
   boundary_.assign(np, 0);
   frozen_.assign(np, 0);
+  pinned_.assign(np, 0);
   alive_.assign(np, 1);
   version_.assign(np, 0);
   {
@@ -257,7 +259,13 @@ void Ranker::init() {
     for (size_t t = 0; t < nt; ++t) {
       for (int k = 0; k < 4; ++k) {
         const uint32_t nb = adj.neighbor[4 * t + k];
-        if (nb != kNoNeighbor && nb != kNonManifold) continue;
+        if (nb < nt) {
+          // A face listed in the same direction by both its tetrahedra (a flat one whose orientation
+          // the file chose against its neighbours'): neither may change, see ranking.h.
+          if (!facesOpposite(tets_[t], k, tets_[nb]))
+            for (uint32_t x : tets_[t]) pinned_[x] = 1;
+          continue;
+        }
         const uint32_t a = tets_[t][kTetFace[k][0]], b = tets_[t][kTetFace[k][1]], c = tets_[t][kTetFace[k][2]];
         if (nb == kNonManifold) {
           frozen_[a] = frozen_[b] = frozen_[c] = 1;
@@ -357,7 +365,7 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
 
 void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) {
   out.clear();
-  if (!alive_[v] || frozen_[v] || crowded(v)) return;
+  if (!alive_[v] || frozen_[v] || pinned_[v] || crowded(v)) return;
   gatherStar(v, ws.corners, ws);
   if (ws.corners.empty()) return;
   const double* pv = pos(v);
@@ -500,7 +508,8 @@ void Ranker::linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std:
 }
 
 bool Ranker::validate(uint32_t v, uint32_t w) {
-  if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w] || crowded(v) || crowded(w)) return false;
+  if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w] || pinned_[v] || crowded(v) || crowded(w))
+    return false;
   if (boundary_[v] && !boundary_[w]) return false;
   gatherStar(v, corners_, *ws_);
   gatherStar(w, corners_w_, *ws_);

@@ -39,7 +39,13 @@
 //  - the link condition of Dey, Edelsbrunner, Guha and Nekhayev for the complex with the boundary
 //    coned to a virtual vertex: Lk(v) ∩ Lk(w) = Lk(vw). It keeps every intermediate mesh a
 //    manifold tetrahedral mesh of the same topology (no duplicate tetrahedron, no face in three);
-//  - vertices on faces shared by three or more tetrahedra (non-manifold input) are never merged.
+//  - vertices on faces shared by three or more tetrahedra (non-manifold input) are never merged;
+//  - the vertices of a tetrahedron that lists a shared face in the same direction as its neighbour
+//    does (a flat tetrahedron oriented against its neighbours; mesh_stats.h's orientFlatTets gives
+//    flat ones their neighbours' orientation where it can) are never merged away: every changed or
+//    collapsing tetrahedron then has consistently oriented faces, so the faces a collapse glues
+//    together run in opposite directions and the two tetrahedra on a face, both positive or flat, lie
+//    on its two sides. A collapse next to a flat tetrahedron is judged on the tetrahedra it produces.
 //
 // Candidates are kept per vertex (its best target) in a priority queue with lazy deletion (version
 // stamps); after a merge v -> w the candidates of w and of v's former neighbours are recomputed, and
