@@ -34,7 +34,15 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
     level0.mesh = &mesh;
     return writeGtnFile(a.output, {level0}, wo);
   }
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, nullptr));
+  RankingStats ranked;
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, &ranked));
+  if (!ranked.constant_fields.empty()) {
+    std::string names;
+    for (const std::string& n : ranked.constant_fields) names += (names.empty() ? "'" : ", '") + n + "'";
+    const std::string on = ranked.field.empty() ? "volume only" : "field '" + ranked.field + "'";
+    std::fprintf(stderr, "gtn: %s: the simplification ranks on %s (constant: %s; --simplify-field chooses another)\n",
+                 a.inputs[0].c_str(), on.c_str(), names.c_str());
+  }
   LevelOptions lo;
   lo.levels = a.levels;
   lo.merge_tree = !a.no_merge_tree;
@@ -114,7 +122,7 @@ Command addConvertCommand(CLI::App& app) {
                 ".gtn: do not decode each level back and compare it with its mesh, nor check that each mip level is a valid mesh, before the file is written (faster; the checks guard against encoder and simplifier bugs)");
   sub->add_option("--simplify-field", args->ranking.field,
                   ".gtn: point field whose first component is the density of the simplification error "
-                  "(default: the first point field; 'none' = volume only)");
+                  "(default: the first point field that is not constant; 'none' = volume only)");
   sub->add_option("--w-density", args->ranking.w_density, ".gtn: weight of the density (mass) error")
       ->check(finiteAtLeastZero());
   sub->add_option("--w-geometry", args->ranking.w_geometry, ".gtn: weight of the boundary geometry error")

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "mesh/faces.h"
+#include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
 
 namespace gtn {
@@ -720,8 +721,16 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
   if (mesh.numPoints() >= 0xFFFFFFF0u || mesh.numTets() >= 0x3FFFFFFFu)
     return unsupported("simplification: mesh too large for 32-bit vertex and corner ids");
   const Field* field = nullptr;
+  std::vector<std::string> constant_fields;
   if (options.field.empty()) {
-    if (!mesh.point_fields.empty()) field = &mesh.point_fields[0];
+    // A constant density makes the mass the volume times a constant: rank on a field that varies.
+    std::vector<bool> varies;
+    for (const Field& f : mesh.point_fields) {
+      varies.push_back(f.components > 0 && firstComponentVaries(f));
+      if (!varies.back()) constant_fields.push_back(f.name);
+    }
+    const size_t chosen = defaultPointField(varies);
+    if (chosen != SIZE_MAX) field = &mesh.point_fields[chosen];
   } else if (options.field != "none") {
     field = mesh.findPointField(options.field);
     if (!field) {
@@ -753,6 +762,7 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
     stats->merges = tree.merges;
     stats->boundary_merges = tree.boundaryMergesUpTo(tree.merges);
     stats->field = tree.field;
+    stats->constant_fields = std::move(constant_fields);
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   return tree;

@@ -21,7 +21,8 @@
 // collapsing triangles (v, w, x) / (v, w, y)); Error_geometry = sum over pairs |area(f') - area(g)|
 // * area(g) / A; boundary_area = total boundary area of the source (1 if 0).
 // The density is the chosen point field's first component (non-finite values count as 0); with no
-// point field (or field "none") the density is 1 and the mass is the volume.
+// point field (or field "none", or only constant ones by default) the density is 1 and the mass is the
+// volume.
 //
 // Constraints (a candidate violating one is never chosen):
 //  - a boundary vertex merges only into a boundary vertex along a boundary edge in exactly two
@@ -61,7 +62,8 @@
 namespace gtn {
 
 struct RankingOptions {
-  // Point field that gives the density: "" = the first point field, "none" = volume only.
+  // Point field that gives the density: "" = the first point field whose first component is not
+  // constant (mesh_stats.h's defaultPointField; volume only when every one is), "none" = volume only.
   std::string field;
   double w_density = 1.0;
   double w_geometry = 1.0;
@@ -75,6 +77,7 @@ struct RankingStats {
   uint64_t rejected = 0;           // popped candidates that failed the exact checks
   uint64_t evaluations = 0;        // candidate errors computed
   std::string field;               // density field used ("" = volume)
+  std::vector<std::string> constant_fields;  // the default skipped these point fields: constant
 };
 
 // Ranks the merges of `mesh` (tetrahedra positively oriented, zero-volume ones allowed). The tree's
