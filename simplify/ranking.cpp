@@ -9,6 +9,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "codec/edge_points.h"
 #include "mesh/faces.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
@@ -713,6 +714,25 @@ MergeTree Ranker::run(RankingStats* stats) {
   return std::move(tree_);
 }
 
+// The mid-edge points (codec/edge_points.h) merge into their edge's first end as merges 1..U, before
+// the ranked ones (see ranking.h).
+void mergeEdgePointsFirst(const TetMesh& mesh, MergeTree& tree) {
+  const std::vector<EdgePoint> points = findEdgePoints(mesh);
+  if (points.empty()) return;
+  const uint32_t u = static_cast<uint32_t>(points.size());
+  for (uint32_t& r : tree.rank)
+    if (r) r += u;
+  uint32_t rank = 0;
+  for (const EdgePoint& e : points) {
+    tree.parent[e.point] = e.a;
+    tree.rank[e.point] = ++rank;
+    tree.removed[e.point] = 0;
+    tree.boundary[e.point] = 0;
+    if (!tree.error.empty()) tree.error[e.point] = 0.0f;
+  }
+  tree.merges += u;
+}
+
 }  // namespace
 
 StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats) {
@@ -757,6 +777,7 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
   tree.w_density = options.w_density;
   tree.w_geometry = options.w_geometry;
   computeErrorQuantiles(tree);
+  if (options.max_merges > tree.merges) mergeEdgePointsFirst(mesh, tree);
   if (stats) {
     *stats = local;
     stats->merges = tree.merges;

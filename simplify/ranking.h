@@ -48,6 +48,11 @@
 //    together run in opposite directions and the two tetrahedra on a face, both positive or flat, lie
 //    on its two sides. A collapse next to a flat tetrahedron is judged on the tetrahedra it produces.
 //
+// Points no tetrahedron uses that sit at an edge's midpoint (the mid-edge nodes of quadratic cells,
+// codec/edge_points.h) are merged first, each into its edge's first end: merges 1..U remove nothing,
+// and every mip level and simplified mesh leaves them out (level 0 alone keeps them). Ratios and level
+// targets count the other merges against the referenced vertices (simplify/levels.h).
+//
 // Candidates are kept per vertex (its best target) in a priority queue with lazy deletion (version
 // stamps); after a merge v -> w the candidates of w and of v's former neighbours are recomputed, and
 // each popped candidate is checked exactly before it is applied.
