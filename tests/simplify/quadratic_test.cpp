@@ -133,6 +133,16 @@ TEST_F(Quadratic, LevelsAndRatiosCountReferencedVertices) {
       tets[q] = info(out)["tets"].get<uint64_t>();
     }
     EXPECT_EQ(tets[1], tets[0]);
+    // gtn render counts the same way.
+    uint64_t decoded[2];
+    for (int q = 0; q < 2; ++q) {
+      const RunResult r = runGtn("render " + dir_ + (q ? "/quadratic3.gtn" : "/linear3.gtn") + " -o " + dir_ +
+                                 "/r.png --size 16x16 --json --ratio " + ratio);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      const nlohmann::json j = nlohmann::json::parse(r.out);
+      decoded[q] = j["tets_rendered"].get<uint64_t>();
+    }
+    EXPECT_EQ(decoded[1], decoded[0]);
   }
 }
 
