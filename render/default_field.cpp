@@ -1,5 +1,6 @@
 #include "render/default_field.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "mesh/mesh_stats.h"
@@ -9,7 +10,7 @@ namespace gtn {
 
 namespace {
 // Whether each point field's first component (what the renderer reads of it by default) takes two
-// finite values; stops the decode once every field has.
+// finite values; stops the decode once the first field has (it is then the one).
 class VariesSink : public MeshSink {
  public:
   Status beginLevel(const LevelHeader& header) override {
@@ -25,7 +26,6 @@ class VariesSink : public MeshSink {
     return Status::ok();
   }
   Status vertex(uint32_t, const double*, const uint8_t* values) override {
-    bool all = true;
     for (size_t i = 0; i < readers_.size(); ++i) {
       if (varies[i]) continue;
       const double v = readers_[i].read(values);
@@ -37,11 +37,10 @@ class VariesSink : public MeshSink {
           varies[i] = true;
         }
       }
-      all &= varies[i];
     }
-    if (!all) return Status::ok();
+    if (!varies[0]) return Status::ok();
     stopped = true;
-    return Status(StatusCode::kUnsupported, "every field varies");  // stops the decode; not an error
+    return Status(StatusCode::kUnsupported, "the first field varies");  // stops the decode; not an error
   }
   Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
   Status endBoundary() override { return Status::ok(); }
@@ -72,9 +71,8 @@ StatusOr<RenderFieldChoice> chooseRenderField(RenderInput& input) {
   VariesSink sink;
   const Status st = input.stream(level, sink);
   if (!sink.stopped) GTN_RETURN_IF_ERROR(st);
-  for (size_t i = 0; i < sink.varies.size(); ++i)
-    if (!sink.varies[i]) choice.constant.push_back(h.point_fields[i].name);
   const size_t chosen = defaultPointField(sink.varies);
+  for (size_t i = 0; i < std::min(chosen, sink.varies.size()); ++i) choice.constant.push_back(h.point_fields[i].name);
   if (chosen != SIZE_MAX) choice.name = h.point_fields[chosen].name;
   return choice;
 }

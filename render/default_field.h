@@ -12,12 +12,12 @@ namespace gtn {
 
 struct RenderFieldChoice {
   std::string name;                    // the field chosen; "" = the first (nothing to choose from)
-  std::vector<std::string> constant;   // the point fields found constant (skipped, in order)
+  std::vector<std::string> constant;   // the point fields skipped as constant, in order
 };
 
 // Decides on the coarsest stored level (a field constant on level 0 is constant on every level, and
 // one that varies on level 0 almost surely varies on the coarsest, which is the cheapest to decode;
-// the decode stops as soon as every field has varied). With fewer than two point fields there is
+// the decode stops as soon as the first field has varied). With fewer than two point fields there is
 // nothing to choose and nothing is decoded.
 StatusOr<RenderFieldChoice> chooseRenderField(RenderInput& input);
 

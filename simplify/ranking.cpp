@@ -747,7 +747,8 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
     std::vector<bool> varies;
     for (const Field& f : mesh.point_fields) {
       varies.push_back(f.components > 0 && firstComponentVaries(f));
-      if (!varies.back()) constant_fields.push_back(f.name);
+      if (varies.back()) break;  // the first that varies is the one
+      constant_fields.push_back(f.name);
     }
     const size_t chosen = defaultPointField(varies);
     if (chosen != SIZE_MAX) field = &mesh.point_fields[chosen];

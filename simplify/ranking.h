@@ -82,7 +82,7 @@ struct RankingStats {
   uint64_t rejected = 0;           // popped candidates that failed the exact checks
   uint64_t evaluations = 0;        // candidate errors computed
   std::string field;               // density field used ("" = volume)
-  std::vector<std::string> constant_fields;  // the default skipped these point fields: constant
+  std::vector<std::string> constant_fields;  // the default skipped these point fields (constant)
 };
 
 // Ranks the merges of `mesh` (tetrahedra positively oriented, zero-volume ones allowed). The tree's
