@@ -21,8 +21,9 @@ void putFloat(std::string& out, double v) {
 }
 
 // A 9 x 7 x 6 box grid and its Q file (big-endian float32, whole layout, no record markers, as the
-// blunt-fin files): density 1.0 everywhere, momentum and energy varying.
-void writeUniformDensity(const std::string& dir) {
+// blunt-fin files): density 1.0 everywhere, momentum and energy varying; or (`swap`) density varying
+// and energy 1.0 everywhere.
+void writeUniformDensity(const std::string& dir, bool swap = false) {
   const int ni = 9, nj = 7, nk = 6;
   std::string xyz, q;
   for (int d : {ni, nj, nk}) {
@@ -35,10 +36,10 @@ void writeUniformDensity(const std::string& dir) {
         for (int i = 0; i < ni; ++i) putFloat(xyz, axis == 0 ? i * 0.5 : axis == 1 ? j * 0.5 + 0.05 * i : k * 0.5);
   for (double v : {0.5, 0.0, 1.0e5, 0.0}) putFloat(q, v);
   const int n = ni * nj * nk;
-  for (int p = 0; p < n; ++p) putFloat(q, 1.0);
+  for (int p = 0; p < n; ++p) putFloat(q, swap ? 2.5 + 0.02 * (p % 17) : 1.0);
   for (int c = 0; c < 3; ++c)
     for (int p = 0; p < n; ++p) putFloat(q, 0.1 * (c + 1) * (p % ni) + 0.01 * (p / ni));
-  for (int p = 0; p < n; ++p) putFloat(q, 2.5 + 0.02 * (p % 17));
+  for (int p = 0; p < n; ++p) putFloat(q, swap ? 1.0 : 2.5 + 0.02 * (p % 17));
   writeFile(dir + "/u.xyz", xyz);
   writeFile(dir + "/u.q", q);
 }
@@ -81,6 +82,21 @@ TEST(ConstantField, RenderSkipsTheConstantDensity) {
     EXPECT_EQ(named.err.find("showing"), std::string::npos) << named.err;
     EXPECT_EQ(nlohmann::json::parse(named.out)["view"]["transfer"]["field"], "density");
   }
+}
+
+// A constant field after the first one that varies changes nothing and is not mentioned.
+TEST(ConstantField, LaterConstantFieldsAreNotMentioned) {
+  const std::string dir = tempDir("constant-field-later");
+  writeUniformDensity(dir, true);
+  const RunResult c = runGtn("convert " + dir + "/u.xyz " + dir + "/u.q -o " + dir + "/u.gtn --levels 1");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ(c.err.find("constant"), std::string::npos) << c.err;
+  EXPECT_EQ(nlohmann::json::parse(runGtn("info " + dir + "/u.gtn --merge-tree --json").out)["merge_tree"]["field"],
+            "density");
+  const RunResult r = runGtn("render " + dir + "/u.gtn -o " + dir + "/u.png --size 16x16 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("constant"), std::string::npos) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["view"]["transfer"]["field"], "density");
 }
 
 }  // namespace
