@@ -207,7 +207,8 @@ class Replay {
     // changes nothing but the vertex count.
     const bool free = list.empty();
     const bool check = adjacent || free;
-    if (!adjacent && !free) report_.add(IssueCode::kMergeNotAdjacent, kScope, vertexPath(c), what + ": no edge joins them");
+    if (!adjacent && !free)
+      report_.add(IssueCode::kMergeNotAdjacent, kScope, vertexPath(c), what + ": no edge joins them");
     if (check && c < forest_.removed.size() && forest_.removed[c] != removed) {
       report_.add(IssueCode::kMergeAnnotationMismatch, kScope, vertexPath(c),
                   what + " removes " + std::to_string(removed) + " tetrahedra; the tree says " +

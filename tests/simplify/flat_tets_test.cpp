@@ -20,7 +20,8 @@ namespace {
 std::string errorsOf(const ValidationReport& report) {
   std::string out;
   for (const ReportedIssue& i : report.issues())
-    if (issueInfo(i.code).severity == Severity::kError) out += std::string(issueInfo(i.code).code) + ": " + i.message() + "\n";
+    if (issueInfo(i.code).severity == Severity::kError)
+      out += std::string(issueInfo(i.code).code) + ": " + i.message() + "\n";
   return out;
 }
 
