@@ -36,13 +36,8 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
   }
   RankingStats ranked;
   GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, &ranked));
-  if (!ranked.constant_fields.empty()) {
-    std::string names;
-    for (const std::string& n : ranked.constant_fields) names += (names.empty() ? "'" : ", '") + n + "'";
-    const std::string on = ranked.field.empty() ? "volume only" : "field '" + ranked.field + "'";
-    std::fprintf(stderr, "gtn: %s: the simplification ranks on %s (constant: %s; --simplify-field chooses another)\n",
-                 a.inputs[0].c_str(), on.c_str(), names.c_str());
-  }
+  if (const std::string note = defaultFieldNote(ranked); !note.empty())
+    std::fprintf(stderr, "gtn: %s: %s\n", a.inputs[0].c_str(), note.c_str());
   LevelOptions lo;
   lo.levels = a.levels;
   lo.merge_tree = !a.no_merge_tree;

@@ -735,6 +735,14 @@ void mergeEdgePointsFirst(const TetMesh& mesh, MergeTree& tree) {
 
 }  // namespace
 
+std::string defaultFieldNote(const RankingStats& stats) {
+  if (stats.constant_fields.empty()) return "";
+  std::string names;
+  for (const std::string& n : stats.constant_fields) names += (names.empty() ? "'" : ", '") + n + "'";
+  const std::string on = stats.field.empty() ? "volume only" : "field '" + stats.field + "'";
+  return "the simplification ranks on " + on + " (constant: " + names + "; --simplify-field chooses another)";
+}
+
 StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats) {
   const auto start = std::chrono::steady_clock::now();
   GTN_RETURN_IF_ERROR(mesh.checkConsistency("simplification input"));

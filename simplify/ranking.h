@@ -85,6 +85,10 @@ struct RankingStats {
   std::vector<std::string> constant_fields;  // the default skipped these point fields (constant)
 };
 
+// What `gtn convert` says when the default density skipped constant fields: "the simplification
+// ranks on field 'X' (constant: 'A', 'B'; --simplify-field chooses another)"; "" when none was skipped.
+std::string defaultFieldNote(const RankingStats& stats);
+
 // Ranks the merges of `mesh` (tetrahedra positively oriented, zero-volume ones allowed). The tree's
 // error vector and quantiles are filled. Fails with kUsage if `options.field` names no point field.
 StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats);
