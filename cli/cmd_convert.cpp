@@ -10,7 +10,7 @@
 #include "convert/import.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
-#include "simplify/write_gtn.h"
+#include "validate/write_gtn.h"
 
 namespace gtn::cli {
 
@@ -30,7 +30,7 @@ struct ConvertArgs {
   bool quiet = false;  // -q: no progress line, no summary
 };
 
-// Level 0, its mip levels and merge trees as the options ask (simplify/write_gtn.h).
+// Level 0, its mip levels and merge trees as the options ask (validate/write_gtn.h).
 Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWriteOptions& wo) {
   GtnConvertOptions o;
   o.levels = a.levels;
@@ -116,10 +116,10 @@ Command addConvertCommand(CLI::App& app) {
       ->check(finiteAtLeastZero());
   sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
   sub->add_flag("--no-verify", args->no_verify,
-                ".gtn: do not decode each level back and compare it with its mesh before the file is written (faster; the check guards against encoder bugs)");
+                ".gtn: do not decode each level back and compare it with its mesh, nor check that each mip level is a valid mesh, before the file is written (faster; the checks guard against encoder and simplifier bugs)");
   sub->add_option("--simplify-field", args->ranking.field,
                   ".gtn: point field whose first component is the density of the simplification error "
-                  "(default: the first point field; 'none' = volume only)");
+                  "(default: the first point field that is not constant; 'none' = volume only)");
   sub->add_option("--w-density", args->ranking.w_density, ".gtn: weight of the density (mass) error")
       ->check(finiteAtLeastZero());
   sub->add_option("--w-geometry", args->ranking.w_geometry, ".gtn: weight of the boundary geometry error")

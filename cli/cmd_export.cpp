@@ -61,8 +61,11 @@ int runExport(const ExportArgs& a) {
   MeshSink& sink = progress.active() ? static_cast<MeshSink&>(shown) : builder;
   Status st;
   if (a.ratio >= 0 || a.merges >= 0) {
-    const uint64_t target = a.merges >= 0 ? static_cast<uint64_t>(a.merges) : mergesForRatio(r, a.ratio);
-    st = streamSimplified(r, target, sink, nullptr, /*clamp=*/a.merges < 0, &fields);
+    StatusOr<uint64_t> target = uint64_t{0};
+    if (a.merges >= 0) target = static_cast<uint64_t>(a.merges);
+    else target = mergesForRatio(r, a.ratio);
+    st = target.status();
+    if (st.isOk()) st = streamSimplified(r, *target, sink, nullptr, /*clamp=*/a.merges < 0, &fields);
   } else {
     st = r.decodeLevel(a.level, sink, nullptr, &fields);
   }

@@ -11,6 +11,7 @@
 #include "cli/commands.h"
 #include "cli/progress_line.h"
 #include "format/file_io.h"
+#include "render/default_field.h"
 #include "render/generic_renderer.h"
 #include "render/render_input.h"
 #include "render/stream_renderer.h"
@@ -193,6 +194,19 @@ int runRender(const RenderArgs& a) {
   auto input = RenderInput::open(a.inputs);
   if (!input.isOk()) return reportError(input.status());
   for (const std::string& w : (*input)->warnings()) warn(w);
+  if (a.field.empty()) {  // the default skips constant fields, and says so
+    auto chosen = chooseRenderField(**input);
+    if (!chosen.isOk()) return reportError(chosen.status());
+    options.field.name = chosen->name;
+    if (!chosen->constant.empty()) {
+      std::string names;
+      for (const std::string& n : chosen->constant) names += (names.empty() ? "'" : ", '") + n + "'";
+      const std::string shown = chosen->name.empty() ? "the first field, though every point field is constant"
+                                                     : "field '" + chosen->name + "'";
+      std::fprintf(stderr, "gtn: render: showing %s (constant: %s; --field chooses another)\n", shown.c_str(),
+                   names.c_str());
+    }
+  }
   const bool generic = a.pipeline == "generic";
   nlohmann::json report;
   LevelChoice choice;
@@ -296,7 +310,7 @@ Command addRenderCommand(CLI::App& app) {
   sub->add_option("--azimuth", a->azimuth, "camera azimuth in degrees about +y (default 30)");
   sub->add_option("--elevation", a->elevation, "camera elevation in degrees (default 20)");
   sub->add_option("--zoom", a->zoom, "magnification; 1 frames the bounding box (default 1)");
-  sub->add_option("--field", a->field, "point field to render: NAME, NAME:COMPONENT or NAME:mag (default: the first)");
+  sub->add_option("--field", a->field, "point field to render: NAME, NAME:COMPONENT or NAME:mag (default: the first that is not constant)");
   sub->add_option("--transfer", a->transfer,
                   "transfer function: a preset (cool-warm, grey, hot) or a file of 'range LO HI' and 'point X R G B O' lines (README)");
   sub->add_option("--range", a->range, "scalar range LO HI of the transfer function (default: the boundary's)")

@@ -8,6 +8,17 @@ namespace gtn {
 const int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 const int kTetEdge[6][2] = {{0, 1}, {0, 2}, {1, 2}, {0, 3}, {1, 3}, {2, 3}};
 
+bool facesOpposite(const Tet& a, int k, const Tet& b) {
+  const uint32_t f0 = a[kTetFace[k][0]], f1 = a[kTetFace[k][1]], f2 = a[kTetFace[k][2]];
+  int kb = 0;  // b's vertex off the face
+  while (kb < 3 && (b[kb] == f0 || b[kb] == f1 || b[kb] == f2)) ++kb;
+  const int* g = kTetFace[kb];
+  // b's listing of the triangle, rotated to start at f0: opposite when f2 follows.
+  for (int i = 0; i < 3; ++i)
+    if (b[g[i]] == f0) return b[g[(i + 1) % 3]] == f2;
+  return false;
+}
+
 namespace {
 // The smallest vertex of each local face of t: t's smallest vertex, but for the face opposite it,
 // which has the second smallest.

@@ -32,6 +32,11 @@ struct FaceAdjacency {
 
 FaceAdjacency computeFaceAdjacency(const TetMesh& mesh);
 
+// Whether face k of tetrahedron a and the same triangle as a face of tetrahedron b run in opposite
+// directions (a's outward listing against b's), as they do in a consistently oriented mesh; b must
+// hold the face's three vertices.
+bool facesOpposite(const Tet& a, int k, const Tet& b);
+
 using Triangle = std::array<uint32_t, 3>;
 
 // Boundary triangles, outward oriented when the tetrahedra are positively oriented, in tetrahedron

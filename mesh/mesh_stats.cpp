@@ -94,6 +94,28 @@ MeshStats computeMeshStats(const TetMesh& mesh) {
   return s;
 }
 
+size_t defaultPointField(const std::vector<bool>& varies) {
+  for (size_t i = 0; i < varies.size(); ++i)
+    if (varies[i]) return i;
+  return SIZE_MAX;
+}
+
+bool firstComponentVaries(const Field& field) {
+  bool seen = false;
+  double first = 0;
+  for (size_t i = 0, n = field.itemCount(); i < n; ++i) {
+    const double v = field.get(i, 0);
+    if (!std::isfinite(v)) continue;
+    if (!seen) {
+      seen = true;
+      first = v;
+    } else if (v != first) {
+      return true;
+    }
+  }
+  return false;
+}
+
 size_t normalizeOrientation(TetMesh& mesh, size_t* zero_volume) {
   size_t flipped = 0, flat = 0;
   for (Tet& t : mesh.tets) {

@@ -30,6 +30,14 @@ struct MeshStats {
 
 MeshStats computeMeshStats(const TetMesh& mesh);
 
+// The point field a command takes when none is named (the field `gtn render` shows, the density of
+// the simplification): the first field whose first component varies; SIZE_MAX when every field is
+// constant (or there is none). `varies[i]`: field i's first component takes at least two finite values.
+size_t defaultPointField(const std::vector<bool>& varies);
+
+// Whether the first component of a field takes at least two finite values.
+bool firstComponentVaries(const Field& field);
+
 // Reorients every tetrahedron with negative volume (exact predicate) by swapping its last two
 // vertices; returns how many were flipped and counts zero-volume cells into *zero_volume.
 size_t normalizeOrientation(TetMesh& mesh, size_t* zero_volume);

@@ -71,7 +71,12 @@ StatusOr<ResolvedLevel> RenderInput::resolve(const LevelChoice& choice) const {
   int64_t target = choice.merges;
   if (choice.ratio >= 0) {
     if (!(choice.ratio <= 1)) return usageError("--ratio must lie in [0, 1]");
-    target = static_cast<int64_t>(std::llround(choice.ratio * static_cast<double>(levelZeroPoints())));
+    if (reader_) {  // counted over the points tetrahedra use (simplify/levels.h)
+      GTN_ASSIGN_OR_RETURN(const uint64_t merges, mergesForRatio(*reader_, choice.ratio));
+      target = static_cast<int64_t>(merges);
+    } else {
+      target = static_cast<int64_t>(std::llround(choice.ratio * static_cast<double>(levelZeroPoints())));
+    }
   }
   fill(0);
   r.exact_merges = choice.ratio < 0;

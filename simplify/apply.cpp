@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "simplify/levels.h"
+
 namespace gtn {
 
 std::vector<uint32_t> computeAncestors(const MergeTree& tree, uint64_t n) {
@@ -96,6 +98,14 @@ MergeTree remainingTree(const MergeTree& tree, uint64_t n, const std::vector<uin
 namespace gtn {
 
 MergeTreeStats computeMergeTreeStats(const MergeTree& tree) {
+  // Counted over the vertices tetrahedra use: the merges of the others, which come first, are left out.
+  if (const uint64_t free = unreferencedMerges(tree)) {
+    std::vector<uint32_t> index(tree.points(), MergeTree::kRoot);
+    uint32_t next = 0;
+    for (size_t v = 0; v < tree.points(); ++v)
+      if (tree.rank[v] == 0 || tree.rank[v] > free) index[v] = next++;
+    return computeMergeTreeStats(remainingTree(tree, free, index));
+  }
   MergeTreeStats s;
   const size_t np = tree.points();
   s.points = np;

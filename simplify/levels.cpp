@@ -16,6 +16,17 @@ uint64_t levelMerges(int level, uint64_t points, uint64_t merges) {
   return std::min<uint64_t>(static_cast<uint64_t>(n), merges);
 }
 
+uint64_t unreferencedMerges(const MergeTree& tree) {
+  std::vector<uint8_t> free(tree.merges, 0);
+  for (size_t v = 0; v < tree.points(); ++v) {
+    if (tree.rank[v] == 0 || tree.rank[v] > tree.merges) continue;
+    free[tree.rank[v] - 1] = tree.removed[v] == 0 && !tree.boundary[v];
+  }
+  uint64_t u = 0;
+  while (u < free.size() && free[u]) ++u;
+  return u;
+}
+
 StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree, const LevelOptions& options) {
   if (tree.points() != source.numPoints()) return invalidData("mip levels: merge tree does not match the mesh");
   GTN_RETURN_IF_ERROR(tree.check("mip levels: merge tree"));
@@ -24,19 +35,21 @@ StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree,
   out.trees.push_back(options.merge_tree ? std::make_shared<const MergeTree>(tree) : nullptr);
   out.merges.push_back(0);
   out.ratios.push_back(0.0);
-  const uint64_t points = source.numPoints();
+  // Counted over the vertices tetrahedra use: the merges of the others come first and count for nothing.
+  const uint64_t free = unreferencedMerges(tree);
+  const uint64_t points = source.numPoints() - free;
   const int max_levels = options.levels < 0 ? 62 : options.levels;
   for (int i = 1; i <= max_levels; ++i) {
-    const uint64_t n = levelMerges(i, points, tree.merges);
+    const uint64_t n = free + levelMerges(i, points, tree.merges - free);
     if (n <= out.merges.back()) break;  // the tree is exhausted
-    if (options.levels < 0 && points - n < options.min_points) break;
+    if (options.levels < 0 && points - (n - free) < options.min_points) break;
     std::vector<uint32_t> index;
     GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(source, tree, n, &index));
     if (options.merge_tree) out.trees.push_back(std::make_shared<const MergeTree>(remainingTree(tree, n, index)));
     else out.trees.push_back(nullptr);
     out.meshes.push_back(std::move(mesh));
     out.merges.push_back(n);
-    out.ratios.push_back(points ? static_cast<double>(n) / static_cast<double>(points) : 0.0);
+    out.ratios.push_back(points ? static_cast<double>(n - free) / static_cast<double>(points) : 0.0);
   }
   return out;
 }
@@ -54,6 +67,12 @@ std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source) const {
     }
     result.push_back(std::move(in));
   }
+  return result;
+}
+
+std::vector<const TetMesh*> MipLevels::levelMeshes(const TetMesh& source) const {
+  std::vector<const TetMesh*> result = {&source};
+  for (size_t i = 1; i < meshes.size(); ++i) result.push_back(&meshes[i]);
   return result;
 }
 
@@ -83,10 +102,18 @@ StatusOr<SimplifyPlan> planSimplification(const GtnReader& reader, uint64_t targ
   return plan;
 }
 
-uint64_t mergesForRatio(const GtnReader& reader, double ratio) {
-  if (reader.levels() == 0 || !(ratio > 0)) return 0;
-  const double points = static_cast<double>(reader.level(0).header.points);
-  return static_cast<uint64_t>(std::llround(std::min(1.0, ratio) * points));
+StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio) {
+  if (reader.levels() == 0 || !(ratio > 0)) return uint64_t{0};
+  const uint64_t points = reader.level(0).header.points;
+  uint64_t free = 0;
+  if (reader.level(0).has_merge_tree) {
+    GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(0));
+    if (payload) {
+      GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, points, reader.file().path + ", level 0"));
+      free = unreferencedMerges(tree);
+    }
+  }
+  return free + static_cast<uint64_t>(std::llround(std::min(1.0, ratio) * static_cast<double>(points - free)));
 }
 
 Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out,

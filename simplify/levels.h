@@ -1,5 +1,6 @@
 // Mip levels (paper section 5): level i is the mesh after the first N_i merges of the merge tree,
-// N_i = round((1 - 1/2^i) * points) capped at the tree's merge count, compacted, and stored with the
+// N_i = U + round((1 - 1/2^i) * (points - U)) capped at the tree's merge count (U: unreferencedMerges,
+// the merges of the points no tetrahedron uses, which come first), compacted, and stored with the
 // rest of the merge tree (ranks shifted down by N_i) in that level's own numbering, so that any level
 // can be read without the others and refined further on the fly.
 #pragma once
@@ -23,6 +24,12 @@ struct LevelOptions {
 // N_i for level i of a mesh with `points` vertices and a tree of `merges` merges.
 uint64_t levelMerges(int level, uint64_t points, uint64_t merges);
 
+// The merges a tree starts with that remove no tetrahedron and are no boundary merges: those of points
+// no tetrahedron uses (simplify/ranking.h merges mid-edge points first). The merges of a level, a ratio
+// or a target count on from there: N_i = U + levelMerges(i, points - U, merges - U), and a ratio is
+// (merges - U) / (points - U), over the vertices tetrahedra use.
+uint64_t unreferencedMerges(const MergeTree& tree);
+
 struct MipLevels {
   // meshes[0] is empty: level 0 is the source mesh, which the caller keeps.
   std::vector<TetMesh> meshes;
@@ -32,6 +39,8 @@ struct MipLevels {
 
   // The inputs for writeGtnFile; `source` is level 0 and must outlive the result, as must *this.
   std::vector<GtnLevelInput> inputs(const TetMesh& source) const;
+  // Every level's mesh, `source` (level 0) first.
+  std::vector<const TetMesh*> levelMeshes(const TetMesh& source) const;
 };
 
 // Builds the levels of `source` from its merge tree (level 0 included, with the whole tree).
@@ -55,8 +64,10 @@ struct SimplifyPlan {
 };
 StatusOr<SimplifyPlan> planSimplification(const GtnReader& reader, uint64_t target_merges);
 
-// Merges for a target simplification ratio (vertices merged away / vertices of level 0), rounded.
-uint64_t mergesForRatio(const GtnReader& reader, double ratio);
+// Merges for a target simplification ratio (vertices merged away / vertices of level 0, counting the
+// vertices tetrahedra use: U + ratio * (points - U), rounded, U read from level 0's merge tree when it
+// has one).
+StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio);
 
 // Streams the mesh after `target_merges` merges to `sink`: decodes the planned level and, when merges
 // remain, filters it through a StreamSimplifier with that level's merge tree. Fails with kUsage when

@@ -9,7 +9,9 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "codec/edge_points.h"
 #include "mesh/faces.h"
+#include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
 
 namespace gtn {
@@ -212,6 +214,7 @@ class Ranker {
     }
   }
   std::vector<uint8_t> boundary_, frozen_, alive_;
+  std::vector<uint8_t> pinned_;  // never merged away (may be merged onto): next to a face oriented alike twice
   std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
   bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
   std::vector<uint32_t> version_;
@@ -249,6 +252,7 @@ void Ranker::init() {
   star_live_ = star_pool_.size();
   boundary_.assign(np, 0);
   frozen_.assign(np, 0);
+  pinned_.assign(np, 0);
   alive_.assign(np, 1);
   version_.assign(np, 0);
   {
@@ -257,7 +261,13 @@ void Ranker::init() {
     for (size_t t = 0; t < nt; ++t) {
       for (int k = 0; k < 4; ++k) {
         const uint32_t nb = adj.neighbor[4 * t + k];
-        if (nb != kNoNeighbor && nb != kNonManifold) continue;
+        if (nb < nt) {
+          // A face listed in the same direction by both its tetrahedra (a flat one whose orientation
+          // the file chose against its neighbours'): neither may change, see ranking.h.
+          if (!facesOpposite(tets_[t], k, tets_[nb]))
+            for (uint32_t x : tets_[t]) pinned_[x] = 1;
+          continue;
+        }
         const uint32_t a = tets_[t][kTetFace[k][0]], b = tets_[t][kTetFace[k][1]], c = tets_[t][kTetFace[k][2]];
         if (nb == kNonManifold) {
           frozen_[a] = frozen_[b] = frozen_[c] = 1;
@@ -357,7 +367,7 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
 
 void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) {
   out.clear();
-  if (!alive_[v] || frozen_[v] || crowded(v)) return;
+  if (!alive_[v] || frozen_[v] || pinned_[v] || crowded(v)) return;
   gatherStar(v, ws.corners, ws);
   if (ws.corners.empty()) return;
   const double* pv = pos(v);
@@ -500,7 +510,8 @@ void Ranker::linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std:
 }
 
 bool Ranker::validate(uint32_t v, uint32_t w) {
-  if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w] || crowded(v) || crowded(w)) return false;
+  if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w] || pinned_[v] || crowded(v) || crowded(w))
+    return false;
   if (boundary_[v] && !boundary_[w]) return false;
   gatherStar(v, corners_, *ws_);
   gatherStar(w, corners_w_, *ws_);
@@ -705,7 +716,34 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   return std::move(tree_);
 }
 
+// The mid-edge points (codec/edge_points.h) merge into their edge's first end as merges 1..U, before
+// the ranked ones (see ranking.h).
+void mergeEdgePointsFirst(const TetMesh& mesh, MergeTree& tree) {
+  const std::vector<EdgePoint> points = findEdgePoints(mesh);
+  if (points.empty()) return;
+  const uint32_t u = static_cast<uint32_t>(points.size());
+  for (uint32_t& r : tree.rank)
+    if (r) r += u;
+  uint32_t rank = 0;
+  for (const EdgePoint& e : points) {
+    tree.parent[e.point] = e.a;
+    tree.rank[e.point] = ++rank;
+    tree.removed[e.point] = 0;
+    tree.boundary[e.point] = 0;
+    if (!tree.error.empty()) tree.error[e.point] = 0.0f;
+  }
+  tree.merges += u;
+}
+
 }  // namespace
+
+std::string defaultFieldNote(const RankingStats& stats) {
+  if (stats.constant_fields.empty()) return "";
+  std::string names;
+  for (const std::string& n : stats.constant_fields) names += (names.empty() ? "'" : ", '") + n + "'";
+  const std::string on = stats.field.empty() ? "volume only" : "field '" + stats.field + "'";
+  return "the simplification ranks on " + on + " (constant: " + names + "; --simplify-field chooses another)";
+}
 
 StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats,
                                const ProgressFn& progress) {
@@ -714,8 +752,17 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
   if (mesh.numPoints() >= 0xFFFFFFF0u || mesh.numTets() >= 0x3FFFFFFFu)
     return unsupported("simplification: mesh too large for 32-bit vertex and corner ids");
   const Field* field = nullptr;
+  std::vector<std::string> constant_fields;
   if (options.field.empty()) {
-    if (!mesh.point_fields.empty()) field = &mesh.point_fields[0];
+    // A constant density makes the mass the volume times a constant: rank on a field that varies.
+    std::vector<bool> varies;
+    for (const Field& f : mesh.point_fields) {
+      varies.push_back(f.components > 0 && firstComponentVaries(f));
+      if (varies.back()) break;  // the first that varies is the one
+      constant_fields.push_back(f.name);
+    }
+    const size_t chosen = defaultPointField(varies);
+    if (chosen != SIZE_MAX) field = &mesh.point_fields[chosen];
   } else if (options.field != "none") {
     field = mesh.findPointField(options.field);
     if (!field) {
@@ -742,11 +789,13 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
   tree.w_density = options.w_density;
   tree.w_geometry = options.w_geometry;
   computeErrorQuantiles(tree);
+  if (options.max_merges > tree.merges) mergeEdgePointsFirst(mesh, tree);
   if (stats) {
     *stats = local;
     stats->merges = tree.merges;
     stats->boundary_merges = tree.boundaryMergesUpTo(tree.merges);
     stats->field = tree.field;
+    stats->constant_fields = std::move(constant_fields);
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   return tree;

@@ -21,7 +21,8 @@
 // collapsing triangles (v, w, x) / (v, w, y)); Error_geometry = sum over pairs |area(f') - area(g)|
 // * area(g) / A; boundary_area = total boundary area of the source (1 if 0).
 // The density is the chosen point field's first component (non-finite values count as 0); with no
-// point field (or field "none") the density is 1 and the mass is the volume.
+// point field (or field "none", or only constant ones by default) the density is 1 and the mass is the
+// volume.
 //
 // Constraints (a candidate violating one is never chosen):
 //  - a boundary vertex merges only into a boundary vertex along a boundary edge in exactly two
@@ -39,7 +40,18 @@
 //  - the link condition of Dey, Edelsbrunner, Guha and Nekhayev for the complex with the boundary
 //    coned to a virtual vertex: Lk(v) ∩ Lk(w) = Lk(vw). It keeps every intermediate mesh a
 //    manifold tetrahedral mesh of the same topology (no duplicate tetrahedron, no face in three);
-//  - vertices on faces shared by three or more tetrahedra (non-manifold input) are never merged.
+//  - vertices on faces shared by three or more tetrahedra (non-manifold input) are never merged;
+//  - the vertices of a tetrahedron that lists a shared face in the same direction as its neighbour
+//    does (a flat tetrahedron oriented against its neighbours; mesh_stats.h's orientFlatTets gives
+//    flat ones their neighbours' orientation where it can) are never merged away: every changed or
+//    collapsing tetrahedron then has consistently oriented faces, so the faces a collapse glues
+//    together run in opposite directions and the two tetrahedra on a face, both positive or flat, lie
+//    on its two sides. A collapse next to a flat tetrahedron is judged on the tetrahedra it produces.
+//
+// Points no tetrahedron uses that sit at an edge's midpoint (the mid-edge nodes of quadratic cells,
+// codec/edge_points.h) are merged first, each into its edge's first end: merges 1..U remove nothing,
+// and every mip level and simplified mesh leaves them out (level 0 alone keeps them). Ratios and level
+// targets count the other merges against the referenced vertices (simplify/levels.h).
 //
 // Candidates are kept per vertex (its best target) in a priority queue with lazy deletion (version
 // stamps); after a merge v -> w the candidates of w and of v's former neighbours are recomputed, and
@@ -56,7 +68,8 @@
 namespace gtn {
 
 struct RankingOptions {
-  // Point field that gives the density: "" = the first point field, "none" = volume only.
+  // Point field that gives the density: "" = the first point field whose first component is not
+  // constant (mesh_stats.h's defaultPointField; volume only when every one is), "none" = volume only.
   std::string field;
   double w_density = 1.0;
   double w_geometry = 1.0;
@@ -70,7 +83,12 @@ struct RankingStats {
   uint64_t rejected = 0;           // popped candidates that failed the exact checks
   uint64_t evaluations = 0;        // candidate errors computed
   std::string field;               // density field used ("" = volume)
+  std::vector<std::string> constant_fields;  // the default skipped these point fields (constant)
 };
+
+// What `gtn convert` says when the default density skipped constant fields: "the simplification
+// ranks on field 'X' (constant: 'A', 'B'; --simplify-field chooses another)"; "" when none was skipped.
+std::string defaultFieldNote(const RankingStats& stats);
 
 // Ranks the merges of `mesh` (tetrahedra positively oriented, zero-volume ones allowed). The tree's
 // error vector and quantiles are filled. Fails with kUsage if `options.field` names no point field.

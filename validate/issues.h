@@ -80,7 +80,8 @@ const char* severityName(Severity severity);  // "error", "warning", "info"
   X(kMergeRanksNotPermutation, "MERGE_RANKS_NOT_PERMUTATION", kError, "merge-tree",                              \
     "merge ranks that are not a permutation of 1..M")                                                            \
   X(kMergeNotAdjacent, "MERGE_NOT_ADJACENT", kError, "merge-tree",                                               \
-    "merges joining vertices that share no edge when the merge applies")                                         \
+    "merges joining vertices that share no edge when the merge applies (one no tetrahedron uses may merge "      \
+    "into any)")                                                                                                 \
   X(kMergeBoundaryIntoInterior, "MERGE_BOUNDARY_INTO_INTERIOR", kError, "merge-tree",                            \
     "merges of a boundary vertex into an interior vertex or not along a boundary edge")                              \
   X(kMergeInvertsTet, "MERGE_INVERTS_TET", kError, "merge-tree", "merges that invert a tetrahedron")            \

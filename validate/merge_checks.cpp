@@ -202,9 +202,13 @@ class Replay {
         moved_.push_back(x);
       }
     }
-    // A merge across no edge is reported once; its other effects follow from it and are not.
-    const bool check = adjacent;
-    if (!adjacent) report_.add(IssueCode::kMergeNotAdjacent, kScope, vertexPath(c), what + ": no edge joins them");
+    // A merge across no edge is reported once; its other effects follow from it and are not. A vertex
+    // no tetrahedron uses (the mid-edge point of a quadratic cell) may merge into any vertex: that
+    // changes nothing but the vertex count.
+    const bool free = list.empty();
+    const bool check = adjacent || free;
+    if (!adjacent && !free)
+      report_.add(IssueCode::kMergeNotAdjacent, kScope, vertexPath(c), what + ": no edge joins them");
     if (check && c < forest_.removed.size() && forest_.removed[c] != removed) {
       report_.add(IssueCode::kMergeAnnotationMismatch, kScope, vertexPath(c),
                   what + " removes " + std::to_string(removed) + " tetrahedra; the tree says " +
@@ -394,6 +398,15 @@ void checkMergeTree(const TetMesh& level0, const MergeForest& forest, const std:
   std::vector<uint32_t> order;
   if (!checkForest(forest, np, report, &order, st)) return;
   const uint64_t m = order.size();
+  // The leading merges of points no tetrahedron of level 0 uses.
+  uint64_t free = 0;
+  {
+    std::vector<uint8_t> used(np, 0);
+    for (const Tet& t : level0.tets)
+      for (uint32_t v : t)
+        if (v < np) used[v] = 1;
+    while (free < m && !used[order[free]]) ++free;
+  }
 
   std::vector<StoredLevel> sorted;
   for (const StoredLevel& level : levels) {
@@ -404,12 +417,15 @@ void checkMergeTree(const TetMesh& level0, const MergeForest& forest, const std:
                      " merges; the merge tree holds " + std::to_string(m));
       continue;
     }
-    if (level.ratio >= 0 && np > 0 &&
-        !(std::fabs(level.ratio * static_cast<double>(np) - static_cast<double>(level.merges)) <= 1.0 + 1e-9 * np)) {
+    // The ratio counts the vertices tetrahedra use: the first `free` merges, of points no tetrahedron
+    // of level 0 uses, are left out of both sides (spec section 7.1).
+    const double counted = static_cast<double>(np - free), merged = static_cast<double>(level.merges) - free;
+    if (level.ratio >= 0 && np > free && level.merges >= free &&
+        !(std::fabs(level.ratio * counted - merged) <= 1.0 + 1e-9 * counted)) {
       report.add(IssueCode::kLevelRatioMismatch, scope, scope,
                  "level " + std::to_string(level.level) + " declares ratio " + std::to_string(level.ratio) + " but " +
-                     std::to_string(level.merges) + " merges of " + std::to_string(np) + " points is " +
-                     std::to_string(static_cast<double>(level.merges) / static_cast<double>(np)));
+                     std::to_string(level.merges - free) + " merges of " + std::to_string(np - free) +
+                     " referenced points is " + std::to_string(merged / counted));
     }
     if (level.mesh) sorted.push_back(level);
   }

@@ -394,6 +394,30 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
   return true;
 }
 
+Status checkLevelStructure(const std::vector<const TetMesh*>& levels, const std::string& what) {
+  if (levels.size() < 2) return Status::ok();
+  auto errorsOf = [](const TetMesh& mesh, const std::string& scope) {
+    ValidationReport report(16);
+    checkMesh(mesh, scope, report);
+    return report;
+  };
+  const ValidationReport level0 = errorsOf(*levels[0], "/levels/0");
+  for (size_t i = 1; i < levels.size(); ++i) {
+    const ValidationReport report = errorsOf(*levels[i], "/levels/" + std::to_string(i));
+    std::string errors;
+    for (const ReportedIssue& issue : report.issues()) {
+      const IssueInfo& info = issueInfo(issue.code);
+      if (info.severity != Severity::kError || level0.count(issue.code) > 0) continue;
+      errors += std::string(errors.empty() ? "" : "; ") + info.code + ": " + issue.message();
+    }
+    if (!errors.empty())
+      return invalidData(what + ": mip level " + std::to_string(i) + " is not a valid mesh (" + errors +
+                         "), so the file was not written; this is a bug in gtn's simplifier, please report it "
+                         "with the input");
+  }
+  return Status::ok();
+}
+
 void checkStoredBoundary(const TetMesh& mesh, const std::vector<Triangle>& stored, const std::string& scope,
                          ValidationReport& report) {
   // Where a face is in three or more tetrahedra the boundary is not defined (NON_MANIFOLD_FACE says

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "mesh/faces.h"
+#include "mesh/status.h"
 #include "mesh/tet_mesh.h"
 #include "validate/report.h"
 
@@ -30,6 +31,12 @@ struct MeshCheckStats {
 // tetrahedron is inverted (one code per defect).
 bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& report,
                MeshCheckStats* stats = nullptr);
+
+// The structural check `gtn convert` runs on the mip levels it made before their file is written:
+// every level (levels[0] is level 0, the source) passes checkMesh with no error that level 0 does not
+// have too (those are the source's own, not the simplifier's). A failure is kInvalidData naming
+// `what`, the level and its errors, and saying that it is a bug to report.
+Status checkLevelStructure(const std::vector<const TetMesh*>& levels, const std::string& what);
 
 // Checks that a boundary surface stored in the file (outward triangles) is closed (BOUNDARY_NOT_CLOSED)
 // and then that it equals the boundary faces of the level's tetrahedra, orientation included

@@ -18,7 +18,7 @@
 #include "format/gtn_reader.h"
 #include "mesh/box_filter.h"
 #include "simplify/levels.h"
-#include "simplify/write_gtn.h"
+#include "validate/write_gtn.h"
 #include "validate/info.h"
 #include "validate/validator.h"
 

@@ -1,6 +1,7 @@
-#include "simplify/write_gtn.h"
+#include "validate/write_gtn.h"
 
 #include "simplify/levels.h"
+#include "validate/mesh_checks.h"
 
 namespace gtn {
 
@@ -13,12 +14,17 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
     return writeGtnFile(path, {level0}, wo);
   }
   reportProgress(wo.progress, "rank merges", 0.0);
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, o.ranking, nullptr, wo.progress));
+  RankingStats ranked;
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, o.ranking, &ranked, wo.progress));
+  if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
+    warnings->push_back(source + ": " + note);
   reportProgress(wo.progress, "build levels");
   LevelOptions lo;
   lo.levels = o.levels;
   lo.merge_tree = o.merge_tree;
   GTN_ASSIGN_OR_RETURN(MipLevels levels, buildMipLevels(mesh, tree, lo));
+  // Part of the verification: every level the simplifier made is a valid mesh.
+  if (wo.verify) GTN_RETURN_IF_ERROR(checkLevelStructure(levels.levelMeshes(mesh), path));
   // Levels stop where the merge tree does (a small or flat mesh has few merges): say so rather than
   // write fewer levels than asked for without a word.
   if (o.levels > 0 && levels.merges.size() - 1 < static_cast<size_t>(o.levels) && warnings)
