@@ -7,8 +7,7 @@
 #include "convert/import.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
-#include "simplify/levels.h"
-#include "simplify/ranking.h"
+#include "simplify/write_gtn.h"
 
 namespace gtn::cli {
 
@@ -26,27 +25,17 @@ struct ConvertArgs {
   RankingOptions ranking;
 };
 
-// Level 0, its mip levels and merge trees as the options ask (simplify/levels.h).
+// Level 0, its mip levels and merge trees as the options ask (simplify/write_gtn.h).
 Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWriteOptions& wo) {
-  if (a.levels == 0 && a.no_merge_tree) {
-    GtnLevelInput level0;
-    level0.mesh = &mesh;
-    return writeGtnFile(a.output, {level0}, wo);
-  }
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, a.ranking, nullptr));
-  LevelOptions lo;
-  lo.levels = a.levels;
-  lo.merge_tree = !a.no_merge_tree;
-  GTN_ASSIGN_OR_RETURN(MipLevels levels, buildMipLevels(mesh, tree, lo));
-  // Levels stop where the merge tree does (a small or flat mesh has few merges): say so rather than
-  // write fewer levels than --levels asked for without a word.
-  if (a.levels > 0 && levels.merges.size() - 1 < static_cast<size_t>(a.levels))
-    warn(a.inputs[0] + ": --levels " + std::to_string(a.levels) + ": the merge tree has " +
-         std::to_string(tree.merges) + " merge(s) of " + std::to_string(mesh.numPoints()) + " points, enough for " +
-         std::to_string(levels.merges.size() - 1) + " level(s) beyond level 0");
-  GtnWriteOptions bounded = wo;
-  if (a.levels < 0) bounded.level_storage_limit = a.level_storage;
-  return writeGtnFile(a.output, levels.inputs(mesh), bounded);
+  GtnConvertOptions o;
+  o.levels = a.levels;
+  o.merge_tree = !a.no_merge_tree;
+  o.level_storage = a.level_storage;
+  o.ranking = a.ranking;
+  std::vector<std::string> warnings;
+  Status st = gtn::writeGtnWithLevels(a.output, mesh, o, wo, a.inputs[0], &warnings);
+  for (const std::string& w : warnings) warn(w);
+  return st;
 }
 
 int runConvert(const ConvertArgs& a) {
@@ -73,10 +62,9 @@ int runConvert(const ConvertArgs& a) {
       wo.command_line = commandLine();
       wo.verify = !a.no_verify;
       st = writeGtnWithLevels(a, mesh, wo);
-      // The encoder's refusals are about the mesh: name its input and where to see the details.
-      if (!st.isOk() && st.message().rfind("encodeLevel: ", 0) == 0)
-        st = Status(st.code(), a.inputs[0] + ": cannot be encoded: " + st.message().substr(13) + " (gtn validate " +
-                                   a.inputs[0] + " lists the problems)");
+      // The encoder's refusals are about the mesh: say where to see the details.
+      if (!st.isOk() && st.message().rfind(a.inputs[0] + ": cannot be encoded: ", 0) == 0)
+        st = Status(st.code(), st.message() + " (gtn validate " + a.inputs[0] + " lists the problems)");
       break;
     }
     default: {
@@ -93,7 +81,7 @@ int runConvert(const ConvertArgs& a) {
 Command addConvertCommand(CLI::App& app) {
   auto args = std::make_shared<ConvertArgs>();
   CLI::App* sub = app.add_subcommand("convert", "Import a mesh (PLOT3D, TetGen, VTK, Medit, OFF) and write .gtn, .vtu or TetGen");
-  sub->add_option("inputs", args->inputs, "Input files (PLOT3D: grid [Q] [function] or .p3d; TetGen: basename or .node/.ele; Medit: .mesh/.meshb [.sol/.solb ...]; VTK; OFF; gmsh .msh; .gtn: its level 0)")
+  sub->add_option("inputs", args->inputs, "Input files (PLOT3D: grid [Q] [function] or .p3d; TetGen: basename or .node/.ele; Medit: .mesh/.meshb [.sol/.solb ...]; VTK; OFF; .gtn: its level 0)")
       ->required();
   sub->add_option("-o,--output", args->output, "Output file: .gtn, .vtu (VTK XML), .vtk (legacy VTK) or .node/.ele (TetGen)")->required();
   sub->add_option("--split", args->split, "Hexahedra into 5 (alternating) or 6 (consistent diagonals) tetrahedra")

@@ -8,6 +8,7 @@
 #include "cli/commands.h"
 #include "convert/import.h"
 #include "convert/export.h"
+#include "format/decode_fields.h"
 #include "format/file_io.h"
 #include "format/gtn_reader.h"
 #include "simplify/levels.h"
@@ -24,40 +25,6 @@ struct ExportArgs {
   int64_t merges = -1;  // < 0: not given
   std::vector<std::string> fields;  // empty: all
 };
-
-// The point and cell fields named in `names` (a name may be both), as a decode selection; a usage
-// error names the fields the file has.
-StatusOr<DecodeFields> selectFields(const LevelHeader& h, const std::vector<std::string>& names, const std::string& input) {
-  DecodeFields d;
-  d.point.assign(h.point_fields.size(), false);
-  d.cell.assign(h.cell_fields.size(), false);
-  for (const std::string& name : names) {
-    bool found = false;
-    for (size_t f = 0; f < h.point_fields.size(); ++f)
-      if (h.point_fields[f].name == name) d.point[f] = found = true;
-    for (size_t f = 0; f < h.cell_fields.size(); ++f)
-      if (h.cell_fields[f].name == name) d.cell[f] = found = true;
-    if (found) continue;
-    std::string known;
-    for (const auto* list : {&h.point_fields, &h.cell_fields})
-      for (const FieldDesc& f : *list) known += (known.empty() ? "" : ", ") + f.name;
-    return usageError(input + ": --fields: no field named '" + name + "' (" +
-                      (known.empty() ? std::string("the file has no fields") : "fields: " + known) + ")");
-  }
-  return d;
-}
-
-// Drops from `mesh` the fields `keep` leaves out (their values were not decoded).
-void dropFields(TetMesh& mesh, const DecodeFields& keep) {
-  auto drop = [](std::vector<Field>& fields, const std::vector<bool>& kept) {
-    std::vector<Field> out;
-    for (size_t f = 0; f < fields.size(); ++f)
-      if (f < kept.size() && kept[f]) out.push_back(std::move(fields[f]));
-    fields = std::move(out);
-  };
-  drop(mesh.point_fields, keep.point);
-  drop(mesh.cell_fields, keep.cell);
-}
 
 int runExport(const ExportArgs& a) {
   const OutputFormat out_format = detectOutputFormat(a.output);
@@ -82,7 +49,7 @@ int runExport(const ExportArgs& a) {
                                   std::to_string(r.levels()) + " level(s), 0 to " + std::to_string(r.levels() - 1)));
   DecodeFields fields;  // every field unless --fields names some
   if (!a.fields.empty()) {
-    auto selected = selectFields(r.level(a.level).header, a.fields, a.input);
+    auto selected = selectDecodeFields(r.level(a.level).header, a.fields, a.input, "--fields");
     if (!selected.isOk()) return reportError(selected.status());
     fields = std::move(selected).value();
   }
@@ -95,7 +62,7 @@ int runExport(const ExportArgs& a) {
     st = r.decodeLevel(a.level, builder, nullptr, &fields);
   }
   if (!st.isOk()) return reportError(st);
-  if (!a.fields.empty()) dropFields(builder.mesh(), fields);
+  if (!a.fields.empty()) dropUndecodedFields(builder.mesh(), fields);
   ExportOptions eo;
   eo.compress = a.compress;
   st = exportMesh(builder.mesh(), a.output, eo);

@@ -1,0 +1,30 @@
+// Writing a mesh as .gtn the way `gtn convert` does: level 0, its mip levels and merge trees as the
+// options ask, every level decoded back and checked before the atomic rename (GtnWriteOptions::verify).
+// The CLI and the Python package both write through here, so that their files are the same.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "format/gtn_file.h"
+#include "mesh/tet_mesh.h"
+#include "simplify/ranking.h"
+
+namespace gtn {
+
+struct GtnConvertOptions {
+  int levels = -1;             // mip levels beyond level 0; -1 = automatic (down to a small mesh), 0 = none
+  bool merge_tree = true;      // store the merge trees (on-the-fly simplification)
+  double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes (0 = no bound)
+  RankingOptions ranking;
+};
+
+// Writes `mesh` (orientation normalised, e.g. by an importer) to `path`. `source` names the mesh in
+// messages (the input file). The encoder's refusals become "<source>: cannot be encoded: <reason>".
+// `warnings` (optional) receives what the user should hear about, e.g. fewer levels than asked for
+// because the merge tree stops early.
+Status writeGtnWithLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& options,
+                          const GtnWriteOptions& write_options, const std::string& source,
+                          std::vector<std::string>* warnings = nullptr);
+
+}  // namespace gtn
