@@ -54,11 +54,12 @@ void announceArrays(vtkDataArraySelection* selection, const std::vector<gtn::Fie
   }
 }
 
-// The tetrahedra of piece `piece` of `pieces`: centroid in slab `piece` of the points' bounding box
-// cut along its longest axis (the last slab closed).
+// The tetrahedra of piece `piece` of `pieces`: the bounding box of the points is cut across its
+// longest axis into `pieces` slabs holding equally many tetrahedra by centroid (the cuts are the
+// centroids' quantiles); a tetrahedron belongs to the slab of its centroid, so to exactly one piece.
 std::vector<uint32_t> tetsOfPiece(const gtn::TetMesh& mesh, int piece, int pieces) {
   std::vector<uint32_t> kept;
-  if (mesh.numPoints() == 0) return kept;
+  if (mesh.numPoints() == 0 || mesh.numTets() == 0) return kept;
   double lo[3], hi[3];
   for (int c = 0; c < 3; ++c) lo[c] = hi[c] = mesh.coords[c];
   for (size_t i = 1; i < mesh.numPoints(); ++i)
@@ -69,15 +70,22 @@ std::vector<uint32_t> tetsOfPiece(const gtn::TetMesh& mesh, int piece, int piece
   int axis = 0;
   for (int c = 1; c < 3; ++c)
     if (hi[c] - lo[c] > hi[axis] - lo[axis]) axis = c;
-  const double extent = hi[axis] - lo[axis];
+  std::vector<double> centroid(mesh.numTets());
   for (size_t t = 0; t < mesh.numTets(); ++t) {
     double sum = 0;
     for (uint32_t v : mesh.tets[t]) sum += mesh.coords[3 * static_cast<size_t>(v) + axis];
-    const double centroid = sum / 4;
-    int slab = extent > 0 ? static_cast<int>((centroid - lo[axis]) / extent * pieces) : 0;
-    slab = std::clamp(slab, 0, pieces - 1);
-    if (slab == piece) kept.push_back(static_cast<uint32_t>(t));
+    centroid[t] = sum / 4;
   }
+  std::vector<double> sorted = centroid, cuts;
+  for (int p = 1; p < pieces; ++p) {
+    auto kth = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() * p / pieces);
+    std::nth_element(sorted.begin(), kth, sorted.end());
+    cuts.push_back(*kth);
+  }
+  std::sort(cuts.begin(), cuts.end());
+  for (size_t t = 0; t < centroid.size(); ++t)
+    if (std::upper_bound(cuts.begin(), cuts.end(), centroid[t]) - cuts.begin() == piece)
+      kept.push_back(static_cast<uint32_t>(t));
   return kept;
 }
 

@@ -9,8 +9,9 @@
 //
 // Piece requests: the reader answers a request for piece p of n by a fixed spatial split. It decodes
 // the whole level (pieces of the format do not exist yet, so the decode itself is not split), cuts
-// the bounding box of the points into n equal slabs along its longest axis and keeps the
-// tetrahedra whose centroid falls in slab p (the last slab closed). Every tetrahedron lands in
+// the bounding box of the points into n slabs across its longest axis and keeps the
+// tetrahedra whose centroid falls in slab p, the cuts between slabs being the quantiles of the
+// centroids (about equally many tetrahedra per piece). Every tetrahedron lands in
 // exactly one piece. With n > 1 the output carries the file's point and tetrahedron numbers as the
 // GlobalIds of point and cell data ("GlobalPointIds", "GlobalCellIds", vtkIdTypeArray), which
 // vtkGTNWriter uses to put gathered pieces back together.

@@ -2,7 +2,7 @@
 array selection, stored precision), a volume rendering compared with `gtn render`'s image, and
 File > Save Data back to .gtn.
 
-Usage: pvbatch --force-offscreen-rendering plugin_test.py GTN PLUGIN DATA_DIR TMP_DIR"""
+Usage: xvfb-run -a pvbatch plugin_test.py GTN PLUGIN DATA_DIR TMP_DIR (GTN_DATA_DIR overrides DATA_DIR)"""
 import json
 import os
 import sys
@@ -14,6 +14,10 @@ from paraview import servermanager  # noqa: E402
 from paraview.simple import OpenDataFile, SaveData  # noqa: E402
 
 binary, plugin, data, tmp = sys.argv[1:5]
+data = os.environ.get("GTN_DATA_DIR", data)
+if not os.path.isfile(os.path.join(data, "plot3d/bluntfinxyz.bin")):
+    print("skipped: no %s/plot3d/bluntfinxyz.bin" % data)
+    sys.exit(77)
 os.makedirs(tmp, exist_ok=True)
 gtn_pv.load_plugin(plugin)
 src = os.path.join(tmp, "bluntfin.gtn")
