@@ -6,7 +6,7 @@ import subprocess
 import sys
 
 from paraview import servermanager
-from paraview.simple import (ColorBy, CreateView, GetColorTransferFunction, GetOpacityTransferFunction,
+from paraview.simple import (ColorBy, CreateView, Delete, GetColorTransferFunction, GetOpacityTransferFunction,
                              LoadPlugin, Render, SaveScreenshot, Show)
 from vtkmodules.util.numpy_support import vtk_to_numpy
 import numpy
@@ -55,9 +55,9 @@ def checksum(tets):
     return hashlib.sha256(numpy.ascontiguousarray(tets[order]).astype("<i8").tobytes()).hexdigest()
 
 
-def render_like_gtn(source, view_json, png):
+def render_like_gtn(source, view_json, png, mapper="Bunyk ray cast"):
     """Volume-renders `source` with the camera and transfer function `gtn render --dump-view` wrote,
-    with VTK's Bunyk ray caster (the mapper bench/render/vtk_compare.py uses), into `png`."""
+    with ParaView's `mapper` (default the Bunyk ray caster, as bench/render/vtk_compare.py), into `png`."""
     with open(view_json) as f:
         v = json.load(f)
     cam, tf = v["camera"], v["transfer"]
@@ -69,7 +69,7 @@ def render_like_gtn(source, view_json, png):
     view.Background = v.get("background", [0, 0, 0])
     display = Show(source, view)
     display.SetRepresentationType("Volume")
-    display.SelectMapper = "Bunyk ray cast"
+    display.SelectMapper = mapper
     ColorBy(display, ("POINTS", tf["field"]))
     lut = GetColorTransferFunction(tf["field"])
     lut.AutomaticRescaleRangeMode = "Never"
@@ -95,3 +95,6 @@ def render_like_gtn(source, view_json, png):
         view.GetActiveCamera().SetWindowCenter(1.0 / cam["width"], 1.0 / cam["height"])
     Render(view)
     SaveScreenshot(png, view, ImageResolution=[cam["width"], cam["height"]])
+    # The view goes before the process ends: a render window left to the interpreter's teardown
+    # outlives its X connection (GLXBadContext under xvfb-run).
+    Delete(view)

@@ -1,6 +1,6 @@
 """The plugin under MPI: `mpirun -np N pvbatch mpi_test.py ...` reads one .gtn, each rank the tetrahedra
 of its slab; the union of the ranks' pieces must equal the serial read (counts and the checksum of the
-sorted tetrahedra), and File > Save Data must write one .gtn equal to the source.
+sorted tetrahedra), the image ParaView composites must equal the serial one, and File > Save Data must\nwrite one .gtn equal to the source.
 
 Usage: pvbatch mpi_test.py GTN PLUGIN SOURCE.gtn TMP_DIR --serial OUT.json   (the serial reference)
        mpirun -np N pvbatch mpi_test.py GTN PLUGIN SOURCE.gtn TMP_DIR --against OUT.json"""
@@ -27,6 +27,10 @@ if mode == "--serial":
     check(ranks == 1, "serial reference on one rank")
     grid = servermanager.Fetch(reader)
     tets = gtn_pv.tets_of(grid)
+    # Projected tetrahedra: the volume mapper ParaView composites across ranks in depth order.
+    gtn(binary, "render", src, "-o", os.path.join(tmp, "gtn.png"), "--dump-view", os.path.join(tmp, "view.json"))
+    gtn_pv.render_like_gtn(reader, os.path.join(tmp, "view.json"), os.path.join(tmp, "paraview-serial.png"),
+                           "Projected tetra")
     with open(ref_json, "w") as f:
         json.dump({"points": grid.GetNumberOfPoints(), "tets": len(tets), "checksum": gtn_pv.checksum(tets)}, f)
     print("PASS")
@@ -50,6 +54,13 @@ check(len(tets) == ref["tets"], "union: %d tets as the serial read" % len(tets))
 check(len(numpy.unique(point_ids)) == ref["points"], "union: %d distinct points as the serial read" % ref["points"])
 check(gtn_pv.checksum(tets) == ref["checksum"], "union: sorted-tet checksum equals the serial read's")
 check(numpy.array_equal(cell_ids, numpy.arange(ref["tets"])), "every tetrahedron in exactly one piece")
+
+# The image ParaView composites from the ranks' pieces equals the serial one.
+mpi_png = os.path.join(tmp, "paraview-mpi.png")
+gtn_pv.render_like_gtn(reader, os.path.join(tmp, "view.json"), mpi_png, "Projected tetra")
+cmp = json.loads(gtn(binary, "compare", "--json", os.path.join(tmp, "paraview-serial.png"), mpi_png))
+print("compare:", cmp)
+check(cmp["rmse"] < 1.5, "composited image equals the serial image up to RMSE %.3f < 1.5" % cmp["rmse"])
 
 # Save Data under MPI: the pieces are gathered to rank 0, which writes one .gtn.
 out = os.path.join(tmp, "saved-mpi.gtn")
