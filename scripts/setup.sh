@@ -9,8 +9,9 @@ packages=(
   libcgal-dev libopenmesh-dev tetgen libzstd-dev zstd xz-utils libcli11-dev nlohmann-json3-dev
   libxxhash-dev libpng-dev libtbb-dev libpugixml-dev zlib1g-dev liblz4-dev liblzma-dev
   libgtest-dev libgmock-dev libbenchmark-dev libfpzip-dev
-  python3 python3-numpy python3-vtk9 python3-meshio xvfb xauth gnuplot-nox
+  python3 python3-numpy python3-meshio xvfb xauth gnuplot-nox
   libexodusii-dev python3-netcdf4 gmsh
+  paraview paraview-dev python3-paraview openmpi-bin
   pybind11-dev python3-dev python3-pytest python3-matplotlib python3-setuptools python3-pip
 )
 missing=()
