@@ -9,7 +9,7 @@
 #   5. peak memory (resident set) of both pipelines, on the datasets and on a large grid (the project's
 #      sample shape at 160 x 96 x 72 points, 5.4 million tetrahedra, made by gtn-make-sample);
 #   6. VTK's vtkUnstructuredGridVolumeRayCastMapper on the same mesh, camera and transfer function:
-#      its time per frame and the RMSE between its image and ours (needs Debian's python3-vtk9 and
+#      its time per frame and the RMSE between its image and ours (needs VTK's Python modules (python3-paraview) and
 #      xvfb-run; skipped otherwise);
 #   7. --budget-ms at a half, a quarter and a tenth of the full-resolution time.
 #
@@ -264,7 +264,7 @@ EOF
     echo "Images: ours_*.png and vtk_*.png beside this report." >>"$report"
     echo >>"$report"
   else
-    echo "## 6. VTK: skipped (python3-vtk9 or xvfb-run not installed)" >>"$report"
+    echo "## 6. VTK: skipped (VTK's Python modules or xvfb-run not installed)" >>"$report"
     echo >>"$report"
   fi
 fi

@@ -23,7 +23,7 @@ Conventions matched (see render/README.md, "Comparing with VTK"):
   pixel (vtkCamera::SetWindowCenter) so that the rays coincide.
 VTK's unstructured-grid integrators take the attenuation as opacity / unit distance, linear in the
 scalar between control points; `gtn render` uses the same convention (render/transfer_function.h).
-Needs Debian's python3-vtk9 (use /usr/bin/python3, not a virtual environment's).
+Needs VTK's Python modules (Debian's python3-paraview) (use /usr/bin/python3, not a virtual environment's).
 """
 import argparse
 import json

@@ -345,12 +345,12 @@ TEST(Vtu, RoundTripsBitForBit) {
   expectSameMesh(load(dir + "/odd.vtu").mesh, odd);
 }
 
-// ---- Real clients: VTK's reader and meshio (Debian python3-vtk9, python3-meshio). ----
+// ---- Real clients: VTK's reader and meshio (Debian python3-paraview, python3-meshio). ----
 
 bool pythonClientsAvailable(std::string* why) {
   const char* probe = "/usr/bin/python3 -c 'import vtkmodules.vtkIOXML, meshio' 2>&1";
   if (runShell(probe).exit_code == 0) return true;
-  *why = "/usr/bin/python3 cannot import vtk and meshio (scripts/setup.sh installs python3-vtk9 and python3-meshio)";
+  *why = "/usr/bin/python3 cannot import vtk and meshio (scripts/setup.sh installs python3-paraview and python3-meshio)";
   return false;
 }
 
@@ -1115,7 +1115,7 @@ std::string recompressed(const std::string& zlib_text, const std::string& codec,
 }
 
 // ParaView offers VTK's three compressors; files compressed by LZ4 or LZMA read as the zlib one does
-// (FilesWrittenByVtkAndMeshioInEveryEncoding reads VTK's own, where python3-vtk9 is installed; this
+// (FilesWrittenByVtkAndMeshioInEveryEncoding reads VTK's own, where VTK is installed; this
 // test needs no Python, and spoils blocks).
 TEST(Vtu, Lz4AndLzmaCompressedFilesReadLikeZlib) {
   const std::string dir = tempDir("vtu_codecs");
