@@ -12,6 +12,11 @@ packages=(
   python3 python3-numpy python3-meshio xvfb xauth gnuplot-nox
   libexodusii-dev python3-netcdf4 gmsh
   paraview paraview-dev python3-paraview openmpi-bin
+  # what ParaView's CMake package looks for but paraview-dev does not pull in
+  libopenmpi-dev libhdf5-openmpi-dev libhdf5-mpi-dev libnetcdf-dev libdouble-conversion-dev libexpat1-dev
+  libeigen3-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev libfreetype-dev libgdal-dev
+  libgl2ps-dev libglew-dev libjpeg-dev libxml2-dev libgl-dev libtheora-dev libtiff-dev libx11-dev
+  python3-mpi4py libutfcpp-dev
   pybind11-dev python3-dev python3-pytest python3-matplotlib python3-setuptools python3-pip
 )
 missing=()

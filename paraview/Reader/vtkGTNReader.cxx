@@ -191,9 +191,13 @@ int vtkGTNReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInform
   const gtn::DecodeFields fields = std::move(selected).value();
 
   gtn::TetMeshBuilder builder;
-  gtn::Status st = this->Ratio > 0
-                       ? gtn::streamSimplified(r, gtn::mergesForRatio(r, this->Ratio), builder, nullptr, /*clamp=*/true, &fields)
-                       : r.decodeLevel(level, builder, nullptr, &fields);
+  gtn::Status st;
+  if (this->Ratio > 0) {
+    gtn::StatusOr<uint64_t> merges = gtn::mergesForRatio(r, this->Ratio);
+    st = merges.isOk() ? gtn::streamSimplified(r, *merges, builder, nullptr, /*clamp=*/true, &fields) : merges.status();
+  } else {
+    st = r.decodeLevel(level, builder, nullptr, &fields);
+  }
   if (!st.isOk()) {
     vtkErrorMacro(<< st.message());
     return 0;
