@@ -18,13 +18,8 @@
 namespace gtn {
 namespace {
 
+using test::compareJson;
 using test::runGtn;
-
-nlohmann::json compareJson(const std::string& a, const std::string& b) {
-  const test::RunResult r = runGtn("compare " + a + " " + b + " --json");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  return nlohmann::json::parse(r.out, nullptr, false);
-}
 
 // A w x h RGBA PNG (colour type 6), every pixel `rgba`, written with zlib directly (writePng writes RGB).
 void writeRgbaPng(const std::string& path, int w, int h, const uint8_t rgba[4]) {
