@@ -142,7 +142,7 @@ py::dict readGtn(const std::string& path, std::optional<size_t> level, std::opti
     if (field_names) fields = valueOr(selectDecodeFields(r.level(level_read).header, *field_names, path, "fields"));
     if (ratio) {
       SimplifyPlan plan;
-      const uint64_t target = mergesForRatio(r, *ratio);
+      const uint64_t target = valueOr(mergesForRatio(r, *ratio));
       check(streamSimplified(r, target, builder, &plan, /*clamp=*/true, &fields));
       level_read = plan.level;
       merges = r.level(plan.level).header.merges + plan.extra_merges;
@@ -269,6 +269,7 @@ py::list writeGtn(const std::string& path, py::array points, py::array tets, py:
     if (imported.report.zero_volume)
       warnings.push_back(source + ": " + std::to_string(imported.report.zero_volume) +
                          " tetrahedra have zero volume (kept)");
+    for (const std::string& w : imported.report.warnings) warnings.push_back(source + ": " + w);
     GtnConvertOptions o;
     o.levels = levels;
     o.merge_tree = merge_tree;
