@@ -105,6 +105,9 @@ TEST_F(GtnDamage, EveryCommandChecksEveryChunk) {
       if (needed) {
         EXPECT_NE(r.exit_code, 0) << r.err;
         EXPECT_NE(r.err.find("gtn: error:"), std::string::npos) << r.err;
+        // Said once, by the error, not also by a warning before it.
+        const size_t first = r.err.find("checksum mismatch in chunk " + tag);
+        EXPECT_EQ(r.err.find("checksum mismatch in chunk " + tag, first + 1), std::string::npos) << r.err;
       } else {
         EXPECT_EQ(r.exit_code, 0) << r.err;
         EXPECT_NE(r.err.find("gtn: warning: "), std::string::npos) << r.err;
