@@ -532,5 +532,17 @@ TEST(JsonOutput, NamesThatAreNotUtf8DoNotAbort) {
   }
 }
 
+// Rendering a mesh file says what its importer left out, as convert, info and validate do.
+TEST(RenderCommand, SaysWhatTheImporterLeftOut) {
+  const std::string dir = test::tempDir("render-import-warnings");
+  test::writeFile(dir + "/t.vtk",
+                  "# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+                  "0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 2 9\n4 0 1 2 3\n3 0 1 3\nCELL_TYPES 2\n10\n5\n");
+  const test::RunResult r = runGtn("render " + dir + "/t.vtk -o " + dir + "/t.png --size 16x16");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("gtn: warning: " + dir + "/t.vtk: skipped 1 cells of lower dimension"), std::string::npos)
+      << r.err;
+}
+
 }  // namespace
 }  // namespace gtn
