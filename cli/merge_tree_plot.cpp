@@ -58,7 +58,8 @@ Status plotMergeTree(GtnReader& r, const std::string& png_path) {
   if (ec)
     return ioError(png_path + ": --plot: no folder for temporary files (" + ec.message() + "; TMPDIR names it)");
   std::string tmpl = (temp / "gtn-plot-XXXXXX").string();
-  if (!mkdtemp(tmpl.data())) return ioError(png_path + ": --plot: cannot create a temporary folder in " + temp.string());
+  if (!mkdtemp(tmpl.data()))
+    return ioError(png_path + ": --plot: cannot create a temporary folder in " + temp.string());
   TempDir dir{tmpl};
   const std::string curve = dir.path + "/curve.dat", levels = dir.path + "/levels.dat";
   const std::string script = dir.path + "/plot.gp", image = dir.path + "/plot.png", log = dir.path + "/gnuplot.log";

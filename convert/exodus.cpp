@@ -430,7 +430,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     return unsupported(path + ": " + std::to_string(init.num_nodes) + " nodes; at most 2^32-2 are supported");
   GTN_RETURN_IF_ERROR(fits(init.num_elem_blk, 1, "element blocks"));
   if (init.num_elem_blk > INT32_MAX)  // the Exodus API counts blocks in an int
-    return unsupported(path + ": " + std::to_string(init.num_elem_blk) + " element blocks; at most 2^31-1 are supported");
+    return unsupported(path + ": " + std::to_string(init.num_elem_blk) +
+                       " element blocks; at most 2^31-1 are supported");
 
   ImportResult result;
   TetMesh& mesh = result.mesh;

@@ -344,7 +344,8 @@ TEST(ExodusImport, TimeStepOnOtherFormatsIsIgnoredWithAWarning) {
   options.exodus_time_step = 2;
   auto r = importMesh({dir + "/t.vtk"}, options);
   ASSERT_TRUE(r.isOk()) << r.status().message();
-  EXPECT_TRUE(hasWarning(r->report, "--time-step 2 applies to Exodus II files only; ignored")) << allWarnings(r->report);
+  EXPECT_TRUE(hasWarning(r->report, "--time-step 2 applies to Exodus II files only; ignored"))
+      << allWarnings(r->report);
   const auto cli = runGtn("convert " + dir + "/t.vtk -o " + dir + "/t.gtn --time-step 2 -q");
   EXPECT_EQ(cli.exit_code, 0) << cli.err;
   EXPECT_NE(cli.err.find("--time-step 2 applies to Exodus II files only; ignored"), std::string::npos) << cli.err;

@@ -88,8 +88,9 @@ TEST(RenderBudget, TheCacheHonoursXdgCacheHome) {
 TEST(RenderBudget, NoHomeAndABadTmpdirStillRender) {
   const std::string dir = test::tempDir("render-budget-no-home");
   const std::string gtn = torusGtn(dir);
-  const test::RunResult r = test::runShell("unset HOME XDG_CACHE_HOME; TMPDIR=" + dir + "/missing " GTN_BINARY
-                                           " render " + gtn + " -o " + dir + "/x.png --size 32x32 --budget-ms 100000 --no-cache");
+  const test::RunResult r =
+      test::runShell("unset HOME XDG_CACHE_HOME; TMPDIR=" + dir + "/missing " GTN_BINARY " render " + gtn + " -o " +
+                     dir + "/x.png --size 32x32 --budget-ms 100000 --no-cache");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(test::fileExists(dir + "/x.png"));
 }
