@@ -97,8 +97,8 @@ int runConvert(const ConvertArgs& a) {
 
 Command addConvertCommand(CLI::App& app) {
   auto args = std::make_shared<ConvertArgs>();
-  CLI::App* sub = app.add_subcommand("convert", "Import a mesh (PLOT3D, TetGen, VTK, Medit, OFF) and write .gtn, .vtu or TetGen");
-  sub->add_option("inputs", args->inputs, "Input files (PLOT3D: grid [Q] [function] or .p3d; TetGen: basename or .node/.ele; Medit: .mesh/.meshb [.sol/.solb ...]; VTK; OFF; .gtn: its level 0)")
+  CLI::App* sub = app.add_subcommand("convert", "Import a mesh (PLOT3D, TetGen, VTK, Medit, OFF, gmsh, Exodus II) and write .gtn, .vtu or TetGen");
+  sub->add_option("inputs", args->inputs, "Input files (PLOT3D: grid [Q] [function] or .p3d; TetGen: basename or .node/.ele; Medit: .mesh/.meshb [.sol/.solb ...]; VTK; OFF; gmsh .msh; Exodus II .exo/.e/.ex2; .gtn: its level 0)")
       ->required();
   sub->add_option("-o,--output", args->output, "Output file: .gtn, .vtu (VTK XML), .vtk (legacy VTK) or .node/.ele (TetGen)")->required();
   sub->add_option("--split", args->split, "Hexahedra into 5 (alternating) or 6 (consistent diagonals) tetrahedra")

@@ -34,7 +34,8 @@ int runExport(const ExportArgs& a) {
   if (a.input == a.output || sameFile(a.input, a.output)) return reportError(usageError(a.output + ": the output would overwrite the input"));
   GtnOpenOptions oo;
   oo.verify = false;  // random access through the directory; every chunk read is still checksummed
-  auto reader = openGtnChecked(a.input, oo, warn);
+  HeldWarnings damage;  // said once the outcome is known: the error alone names a chunk export needed
+  auto reader = openGtnChecked(a.input, oo, damage.sink());
   if (!reader.isOk()) {
     // A mesh file given to export: say which command converts it.
     const InputFormat in_format = detectInputFormat(a.input);
@@ -45,13 +46,17 @@ int runExport(const ExportArgs& a) {
     return reportError(reader.status());
   }
   GtnReader& r = **reader;
+  auto fail = [&](const Status& st) {
+    damage.flush(st);
+    return reportError(st);
+  };
   if (a.level >= r.levels())
-    return reportError(usageError(a.input + ": --level " + std::to_string(a.level) + ": the file holds " +
-                                  std::to_string(r.levels()) + " level(s), 0 to " + std::to_string(r.levels() - 1)));
+    return fail(usageError(a.input + ": --level " + std::to_string(a.level) + ": the file holds " +
+                           std::to_string(r.levels()) + " level(s), 0 to " + std::to_string(r.levels() - 1)));
   DecodeFields fields;  // every field unless --fields names some
   if (!a.fields.empty()) {
     auto selected = selectDecodeFields(r.level(a.level).header, a.fields, a.input, "--fields");
-    if (!selected.isOk()) return reportError(selected.status());
+    if (!selected.isOk()) return fail(selected.status());
     fields = std::move(selected).value();
   }
   TetMeshBuilder builder;
@@ -69,7 +74,8 @@ int runExport(const ExportArgs& a) {
   } else {
     st = r.decodeLevel(a.level, sink, nullptr, &fields);
   }
-  if (!st.isOk()) return reportError(st);
+  if (!st.isOk()) return fail(st);
+  damage.flush();
   if (!a.fields.empty()) dropUndecodedFields(builder.mesh(), fields);
   progress.update("write " + a.output);
   ExportOptions eo;

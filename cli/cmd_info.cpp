@@ -68,15 +68,7 @@ int runGtnInfo(const InfoArgs& a) {
   const MeshStats stats = computeMeshStats(mesh);
   const GtnFileInfo& f = r.file();
 
-  // Level 0's share of the file: its chunks plus everything that is not another level's.
-  uint64_t connectivity = 0, geometry = 0, fields = 0, merge_tree = 0, total = f.bytes;
-  for (size_t i = 1; i < r.levels(); ++i) total -= r.level(i).bytes;
-  for (const GtnChunkInfo& c : r.level(0).chunks) {
-    if (c.tag == kTagBoundary || c.tag == kTagConnectivity) connectivity += c.bytes;
-    else if (c.tag == kTagGeometry) geometry += c.bytes;
-    else if (c.tag == kTagPointField || c.tag == kTagCellField) fields += c.bytes;
-    else if (c.tag == kTagMergeTree) merge_tree += c.bytes;
-  }
+  const LevelZeroBytes bytes = levelZeroBytes(r);
   const double tets = static_cast<double>(r.level(0).header.tets);
   const std::string version = std::to_string(f.major) + "." + std::to_string(f.minor);
 
@@ -87,7 +79,7 @@ int runGtnInfo(const InfoArgs& a) {
     if (!plotted.isOk()) return reportError(plotted);
   }
   if (a.json) {
-    auto j = gtnInfoJson(r, mesh, decode_stats, a.merge_tree);
+    auto j = gtnInfoJson(r, mesh, stats, decode_stats, a.merge_tree);
     if (!j.isOk()) return reportError(j.status());
     j.value()["input"] = a.inputs;
     std::printf("%s\n", jsonText(j.value()).c_str());
@@ -108,8 +100,8 @@ int runGtnInfo(const InfoArgs& a) {
     std::printf("  section %-22s %llu bytes\n", s.name.c_str(), static_cast<unsigned long long>(s.bytes));
   if (tets > 0)
     std::printf("  bits per tetrahedron connectivity %.3f, geometry %.3f, fields %.3f, merge tree %.3f, total %.3f\n",
-                8.0 * connectivity / tets, 8.0 * geometry / tets, 8.0 * fields / tets, 8.0 * merge_tree / tets,
-                8.0 * total / tets);
+                8.0 * bytes.connectivity / tets, 8.0 * bytes.geometry / tets, 8.0 * bytes.fields / tets,
+                8.0 * bytes.merge_tree / tets, 8.0 * bytes.total / tets);
   std::printf("  peak live vertices  %llu\n", static_cast<unsigned long long>(decode_stats.peak_live_vertices));
   if (a.merge_tree) {
     auto mt = mergeTreeReport(r);

@@ -193,10 +193,15 @@ int runRender(const RenderArgs& a) {
     return reportError(usageError(a.output + ": -o and --dump-view name the same file"));
   auto input = RenderInput::open(a.inputs);
   if (!input.isOk()) return reportError(input.status());
-  for (const std::string& w : (*input)->warnings()) warn(w);
+  HeldWarnings damage;  // said once the outcome is known: the error alone names a chunk the render needed
+  for (const std::string& w : (*input)->warnings()) damage.sink()(w);
+  auto fail = [&](const Status& st) {
+    damage.flush(st);
+    return reportError(st);
+  };
   if (a.field.empty()) {  // the default skips constant fields, and says so
     auto chosen = chooseRenderField(**input);
-    if (!chosen.isOk()) return reportError(chosen.status());
+    if (!chosen.isOk()) return fail(chosen.status());
     options.field.name = chosen->name;
     if (!chosen->constant.empty()) {
       std::string names;
@@ -220,7 +225,7 @@ int runRender(const RenderArgs& a) {
     budget_start_ms = msSince(start);
     auto budget = chooseForBudget(**input, a.inputs[0], a.budget_ms, options, generic, budget_start_ms, &explanation,
                                   &predicted_ms, &shortfall);
-    if (!budget.isOk()) return reportError(budget.status());
+    if (!budget.isOk()) return fail(budget.status());
     choice = budget.value();
     report["budget_ms"] = a.budget_ms;
     report["budget_choice"] = explanation;
@@ -231,16 +236,16 @@ int runRender(const RenderArgs& a) {
     if (!shortfall.empty()) warn(a.inputs[0] + ": " + shortfall);
   }
   auto level = (*input)->resolve(choice);
-  if (!level.isOk()) return reportError(level.status());
+  if (!level.isOk()) return fail(level.status());
   // The field asked for, checked against the file before anything is decoded.
   const LevelHeader& header = (*input)->levelHeader(level->level);
   if (auto field = ScalarReader::create(header.point_fields, options.field); !field.isOk()) {
     std::string why = field.status().message();
     for (const FieldDesc& c : header.cell_fields)
       if (c.name == options.field.name) why += "; '" + c.name + "' is a cell field, and render shows point fields";
-    return reportError(Status(field.status().code(), a.inputs[0] + ": " + why));
+    return fail(Status(field.status().code(), a.inputs[0] + ": " + why));
   }
-  if (Status st = (*input)->fixView(level.value(), &options); !st.isOk()) return reportError(st);
+  if (Status st = (*input)->fixView(level.value(), &options); !st.isOk()) return fail(st);
   // A step so small that the rays would take hours (1e-9 ran for minutes): at most kMaxSteps samples
   // across the box (the default takes 400).
   constexpr double kMaxSteps = 100000;
@@ -253,7 +258,7 @@ int runRender(const RenderArgs& a) {
                     "--step %g takes more than 100000 samples across the bounding box (diagonal %g); the default "
                     "is the diagonal / 400",
                     options.step, std::sqrt(d2));
-      return reportError(usageError(why));
+      return fail(usageError(why));
     }
     // The other end: samples so far apart that most rays take none (spx with --step 20: a blank image).
     if (options.sampling == Sampling::kVolume && std::sqrt(d2) < 4 * options.step) {
@@ -269,11 +274,12 @@ int runRender(const RenderArgs& a) {
   (*input)->setProgress(progress.callback());
   auto image = renderOnce(**input, level.value(), options, generic, report);
   progress.clear();
-  if (!image.isOk()) return reportError(image.status());
-  if (Status st = writePng(a.output, image.value()); !st.isOk()) return reportError(st);
+  if (!image.isOk()) return fail(image.status());
+  damage.flush();
+  if (Status st = writePng(a.output, image.value()); !st.isOk()) return fail(st);
   if (!a.dump_view.empty()) {
     const std::string text = jsonText(report["view"]) + "\n";
-    if (Status st = writeBytesAtomically(a.dump_view, text.data(), text.size()); !st.isOk()) return reportError(st);
+    if (Status st = writeBytesAtomically(a.dump_view, text.data(), text.size()); !st.isOk()) return fail(st);
   }
   const double total_ms = msSince(start);
   if (a.budget_ms >= 0 && !calibrated_now)

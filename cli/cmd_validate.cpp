@@ -72,7 +72,7 @@ Command addValidateCommand(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "validate", "Check a .gtn file (container, decoding, mesh, merge tree, levels) or the mesh that mesh files describe");
   sub->add_option("files", args->files,
-                  "The .gtn file to check, or mesh files as 'gtn convert' takes them (PLOT3D grid [Q], TetGen, VTK, Medit, OFF)");
+                  "The .gtn file to check, or mesh files as 'gtn convert' takes them (PLOT3D grid [Q], TetGen, VTK, Medit, OFF, gmsh, Exodus II)");
   sub->add_option("--against", args->against, "Source file(s) that level 0 must equal (up to renumbering)");
   CLI::Option* split =
       sub->add_option("--split", args->split,

@@ -51,6 +51,19 @@ void printImportReport(const std::string& input, const ImportReport& report);
 // An importer's warning about `input`, prefixed with the input's name unless it already names it
 // first (TetGen's name the .ele or .node file they are about).
 void warnAbout(const std::string& input, const std::string& warning);
+// Damage warnings (format/gtn_reader.h's openGtnChecked) held until the command knows its outcome:
+// the chunk a command fails on is said once, by the error, not also in a warning before it.
+class HeldWarnings {
+ public:
+  std::function<void(const std::string&)> sink() {
+    return [this](const std::string& w) { held_.push_back(w); };
+  }
+  // Prints the held warnings and forgets them, leaving out one about the chunk whose damage `outcome` reports.
+  void flush(const Status& outcome = Status::ok());
+
+ private:
+  std::vector<std::string> held_;
+};
 // JSON as text for standard output; strings that are not UTF-8 (names in files written by older
 // versions, file names) get U+FFFD where their bytes are invalid instead of aborting the program.
 std::string jsonText(const nlohmann::json& j, int indent = 2);

@@ -40,6 +40,18 @@ void warn(const std::string& message) {
   std::fprintf(stderr, "gtn: warning: %s\n", message.c_str());
 }
 
+void HeldWarnings::flush(const Status& outcome) {
+  static const std::string kDamage = "checksum mismatch in chunk '";
+  for (const std::string& w : held_) {
+    // "<file>: byte offset N: checksum mismatch in chunk 'TAG' (...)": the error on that chunk starts so.
+    const size_t at = w.find(kDamage);
+    const size_t end = at == std::string::npos ? at : w.find('\'', at + kDamage.size());
+    if (!outcome.isOk() && end != std::string::npos && outcome.message().rfind(w.substr(0, end + 1), 0) == 0) continue;
+    warn(w);
+  }
+  held_.clear();
+}
+
 void printImportReport(const std::string& input, const ImportReport& r) {
   ProgressLine::erase();
   if (r.flipped) std::fprintf(stderr, "gtn: %s: flipped %zu tetrahedra to positive orientation\n", input.c_str(), r.flipped);

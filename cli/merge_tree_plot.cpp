@@ -53,8 +53,13 @@ Status plotMergeTree(GtnReader& r, const std::string& png_path) {
   if (report->error_curve.empty())
     return usageError(input + ": --plot: the merge tree stores no error quantiles (no merges, or written without them)");
 
-  std::string tmpl = (std::filesystem::temp_directory_path() / "gtn-plot-XXXXXX").string();
-  if (!mkdtemp(tmpl.data())) return ioError(png_path + ": --plot: cannot create a temporary folder");
+  std::error_code ec;  // TMPDIR naming no folder: an error, not an exception that aborts the program
+  const std::filesystem::path temp = std::filesystem::temp_directory_path(ec);
+  if (ec)
+    return ioError(png_path + ": --plot: no folder for temporary files (" + ec.message() + "; TMPDIR names it)");
+  std::string tmpl = (temp / "gtn-plot-XXXXXX").string();
+  if (!mkdtemp(tmpl.data()))
+    return ioError(png_path + ": --plot: cannot create a temporary folder in " + temp.string());
   TempDir dir{tmpl};
   const std::string curve = dir.path + "/curve.dat", levels = dir.path + "/levels.dat";
   const std::string script = dir.path + "/plot.gp", image = dir.path + "/plot.png", log = dir.path + "/gnuplot.log";

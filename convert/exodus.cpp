@@ -266,7 +266,10 @@ class ClassicHeader {
       if (var.type_size == 0) return fail("unknown netCDF type " + std::to_string(type));
       GTN_ASSIGN_OR_RETURN(const uint64_t vsize, size(version_ == 5 ? 8 : 4));
       GTN_ASSIGN_OR_RETURN(var.begin, size(version_ == 1 ? 4 : 8));
-      if (var.record) record_size += vsize;
+      if (var.record) {
+        if (vsize > UINT64_MAX - record_size) return fail("records too large");
+        record_size += vsize;
+      }
       vars.push_back(var);
     }
     const auto record_vars = std::count_if(vars.begin(), vars.end(), [](const Var& x) { return x.record; });
@@ -426,6 +429,9 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
   if (init.num_nodes >= int64_t{UINT32_MAX} - 1)
     return unsupported(path + ": " + std::to_string(init.num_nodes) + " nodes; at most 2^32-2 are supported");
   GTN_RETURN_IF_ERROR(fits(init.num_elem_blk, 1, "element blocks"));
+  if (init.num_elem_blk > INT32_MAX)  // the Exodus API counts blocks in an int
+    return unsupported(path + ": " + std::to_string(init.num_elem_blk) +
+                       " element blocks; at most 2^31-1 are supported");
 
   ImportResult result;
   TetMesh& mesh = result.mesh;
@@ -486,6 +492,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
       return invalidData(path + ": " + where + " has " + std::to_string(blk.nodes_per_element) +
                          " nodes per element; a " + blk.type + " element has at least " +
                          std::to_string(blk.vt.corners));
+    // Nodes per element first, so that their product with 4 and with the element count cannot overflow.
+    GTN_RETURN_IF_ERROR(fits(blk.nodes_per_element, 4, where + " nodes per element"));
     GTN_RETURN_IF_ERROR(fits(blk.elements, static_cast<uint64_t>(blk.nodes_per_element) * 4, where + " elements"));
     if (cells.types.size() + static_cast<uint64_t>(blk.elements) >= UINT32_MAX)
       return unsupported(path + ": more than 2^32-2 volume elements");

@@ -281,6 +281,10 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
     if (options.split != 6) result->mesh.setMetadata(kMetadataSplit, std::to_string(options.split));
     if (options.weld) result->mesh.setMetadata(kMetadataWeld, "yes");
   }
+  if (result.isOk() && options.exodus_time_step != 0 && !inputs.empty() && inputs[0] != "-" &&
+      detectInputFormat(inputs[0]) != InputFormat::kExodus)
+    result->report.warnings.push_back("--time-step " + std::to_string(options.exodus_time_step) +
+                                      " applies to Exodus II files only; ignored");
   if (result.isOk()) {
     // Names and metadata become the .gtn format's UTF-8 strings (and JSON): a name in another
     // encoding (Latin-1 in older files) is transcoded.

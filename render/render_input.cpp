@@ -31,6 +31,7 @@ StatusOr<std::unique_ptr<RenderInput>> RenderInput::open(const std::vector<std::
     return in;
   }
   GTN_ASSIGN_OR_RETURN(ImportResult imported, importMesh(inputs, ImportOptions()));
+  for (const std::string& w : imported.report.warnings) in->warnings_.push_back(path + ": " + w);  // what it left out
   GTN_ASSIGN_OR_RETURN(EncodedLevel encoded, encodeLevel(imported.mesh, EncodeOptions()));
   in->encoded_ = std::make_unique<EncodedLevel>(std::move(encoded));
   return in;

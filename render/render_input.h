@@ -45,7 +45,8 @@ class RenderInput {
   // Optional: stream() reports "decode level I" with the share of its tetrahedra (mesh/progress.h).
   void setProgress(ProgressFn fn) { progress_ = std::move(fn); }
 
-  // What open() found and the caller should say (damaged chunks of a .gtn file that may not be needed).
+  // What open() found and the caller should say: damaged chunks of a .gtn file that may not be needed,
+  // or what the importer of a mesh file left out or changed ("<file>: <warning>").
   const std::vector<std::string>& warnings() const { return warnings_; }
 
   size_t levels() const;

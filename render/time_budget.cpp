@@ -30,7 +30,11 @@ std::string cachePath() {
   std::string base;
   if (xdg && *xdg == '/') base = xdg;
   else if (const char* home = std::getenv("HOME"); home && *home) base = std::string(home) + "/.cache";
-  else base = std::filesystem::temp_directory_path().string();
+  else {
+    std::error_code ec;  // TMPDIR naming no folder: /tmp, rather than an exception that aborts the program
+    const std::filesystem::path temp = std::filesystem::temp_directory_path(ec);
+    base = ec ? std::string("/tmp") : temp.string();
+  }
   return base + "/gatun/render-calibration.json";
 }
 

@@ -102,17 +102,19 @@ StatusOr<SimplifyPlan> planSimplification(const GtnReader& reader, uint64_t targ
   return plan;
 }
 
+StatusOr<uint64_t> levelZeroUnreferencedMerges(GtnReader& reader) {
+  if (reader.levels() == 0 || !reader.level(0).has_merge_tree) return uint64_t{0};
+  GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(0));
+  if (!payload) return uint64_t{0};
+  GTN_ASSIGN_OR_RETURN(MergeTree tree,
+                       decodeMergeTree(*payload, reader.level(0).header.points, reader.file().path + ", level 0"));
+  return unreferencedMerges(tree);
+}
+
 StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio) {
   if (reader.levels() == 0 || !(ratio > 0)) return uint64_t{0};
   const uint64_t points = reader.level(0).header.points;
-  uint64_t free = 0;
-  if (reader.level(0).has_merge_tree) {
-    GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(0));
-    if (payload) {
-      GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, points, reader.file().path + ", level 0"));
-      free = unreferencedMerges(tree);
-    }
-  }
+  GTN_ASSIGN_OR_RETURN(const uint64_t free, levelZeroUnreferencedMerges(reader));
   return free + static_cast<uint64_t>(std::llround(std::min(1.0, ratio) * static_cast<double>(points - free)));
 }
 

@@ -68,6 +68,9 @@ StatusOr<SimplifyPlan> planSimplification(const GtnReader& reader, uint64_t targ
 // vertices tetrahedra use: U + ratio * (points - U), rounded, U read from level 0's merge tree when it
 // has one).
 StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio);
+// U of level 0's merge tree (unreferencedMerges); 0 when level 0 stores none. The ratio of N merges
+// is (N - U) / (points - U).
+StatusOr<uint64_t> levelZeroUnreferencedMerges(GtnReader& reader);
 
 // Streams the mesh after `target_merges` merges to `sink`: decodes the planned level and, when merges
 // remain, filters it through a StreamSimplifier with that level's merge tree. Fails with kUsage when

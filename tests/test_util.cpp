@@ -4,6 +4,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <gtest/gtest.h>
+
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -78,6 +81,71 @@ void writeFile(const std::string& path, const std::string& data) {
 bool fileExists(const std::string& path) {
   struct stat sb;
   return ::stat(path.c_str(), &sb) == 0;
+}
+
+nlohmann::json compareJson(const std::string& a, const std::string& b) {
+  const RunResult r = runGtn("compare " + a + " " + b + " --json");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return nlohmann::json::parse(r.out, nullptr, false);
+}
+
+std::string shearedHexGridVtk(int n, bool mirrored, bool block_field) {
+  std::string s = "# vtk DataFile Version 3.0\nsheared hexahedral grid\nASCII\nDATASET UNSTRUCTURED_GRID\n";
+  const int np = n + 1;
+  s += "POINTS " + std::to_string(np * np * np) + " double\n";
+  char buf[128];
+  for (int k = 0; k < np; ++k)
+    for (int j = 0; j < np; ++j)
+      for (int i = 0; i < np; ++i) {
+        std::snprintf(buf, sizeof buf, "%g %g %g\n", i + 0.125 * j, j + 0.25 * k, k + 0.0625 * i);
+        s += buf;
+      }
+  auto id = [np](int i, int j, int k) { return i + np * (j + np * k); };
+  const int cells = n * n * n;
+  s += "CELLS " + std::to_string(cells) + " " + std::to_string(9 * cells) + "\n";
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int lo = mirrored ? k + 1 : k, hi = mirrored ? k : k + 1;
+        const int v[8] = {id(i, j, lo), id(i + 1, j, lo), id(i + 1, j + 1, lo), id(i, j + 1, lo),
+                          id(i, j, hi), id(i + 1, j, hi), id(i + 1, j + 1, hi), id(i, j + 1, hi)};
+        s += "8";
+        for (int c : v) {
+          s += ' ';
+          s += std::to_string(c);
+        }
+        s += "\n";
+      }
+  s += "CELL_TYPES " + std::to_string(cells) + "\n";
+  for (int c = 0; c < cells; ++c) s += "12\n";
+  s += "POINT_DATA " + std::to_string(np * np * np) + "\nSCALARS density double 1\nLOOKUP_TABLE default\n";
+  for (int p = 0; p < np * np * np; ++p) {
+    std::snprintf(buf, sizeof buf, "%g\n", std::sin(0.37 * p) + 0.01 * p);
+    s += buf;
+  }
+  if (block_field) {
+    s += "CELL_DATA " + std::to_string(cells) + "\nSCALARS block int 1\nLOOKUP_TABLE default\n";
+    for (int c = 0; c < cells; ++c) s += std::to_string(c % 7) + "\n";
+  }
+  return s;
+}
+
+const Field* findField(const std::vector<Field>& fields, const std::string& name) {
+  for (const Field& f : fields)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
+bool hasWarning(const ImportReport& report, const std::string& part) {
+  for (const std::string& w : report.warnings)
+    if (w.find(part) != std::string::npos) return true;
+  return false;
+}
+
+std::string allWarnings(const ImportReport& report) {
+  std::string s;
+  for (const std::string& w : report.warnings) s += w + "\n";
+  return s;
 }
 
 }  // namespace gtn::test

@@ -2,6 +2,11 @@
 #pragma once
 
 #include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "convert/import.h"
 
 namespace gtn::test {
 
@@ -22,5 +27,20 @@ RunResult runShell(const std::string& command);
 std::string readFile(const std::string& path);
 void writeFile(const std::string& path, const std::string& data);
 bool fileExists(const std::string& path);
+
+// `gtn compare A B --json`, parsed (a failed run is a test failure; its JSON is then discarded).
+nlohmann::json compareJson(const std::string& a, const std::string& b);
+
+// A sheared n x n x n grid of hexahedra as legacy VTK with the point field "density" (varying);
+// `mirrored` lists each hexahedron's top face first, so that every cell is stored with negative
+// orientation; `block_field` adds the cell field "block" (the cell's index mod 7).
+std::string shearedHexGridVtk(int n, bool mirrored = false, bool block_field = false);
+
+// The field named `name` in `fields`, or null.
+const Field* findField(const std::vector<Field>& fields, const std::string& name);
+// Whether one of the importer's warnings contains `part`.
+bool hasWarning(const ImportReport& report, const std::string& part);
+// Every warning of the import, one a line (for failure messages).
+std::string allWarnings(const ImportReport& report);
 
 }  // namespace gtn::test

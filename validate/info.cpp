@@ -186,24 +186,29 @@ nlohmann::json meshInfoJson(const MeshStats& s, const ImportReport& r, const Tet
   return j;
 }
 
-StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const DecodeStats& decode_stats,
-                                     bool merge_tree) {
-  const GtnFileInfo& f = r.file();
-  // Level 0's share of the file: its chunks plus everything that is not another level's.
-  uint64_t connectivity = 0, geometry = 0, fields = 0, merge_tree_bytes = 0, total = f.bytes;
-  for (size_t i = 1; i < r.levels(); ++i) total -= r.level(i).bytes;
+LevelZeroBytes levelZeroBytes(const GtnReader& r) {
+  LevelZeroBytes b;
+  b.total = r.file().bytes;
+  for (size_t i = 1; i < r.levels(); ++i) b.total -= r.level(i).bytes;
   for (const GtnChunkInfo& c : r.level(0).chunks) {
-    if (c.tag == kTagBoundary || c.tag == kTagConnectivity) connectivity += c.bytes;
-    else if (c.tag == kTagGeometry) geometry += c.bytes;
-    else if (c.tag == kTagPointField || c.tag == kTagCellField) fields += c.bytes;
-    else if (c.tag == kTagMergeTree) merge_tree_bytes += c.bytes;
+    if (c.tag == kTagBoundary || c.tag == kTagConnectivity) b.connectivity += c.bytes;
+    else if (c.tag == kTagGeometry) b.geometry += c.bytes;
+    else if (c.tag == kTagPointField || c.tag == kTagCellField) b.fields += c.bytes;
+    else if (c.tag == kTagMergeTree) b.merge_tree += c.bytes;
   }
+  return b;
+}
+
+StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const MeshStats& stats,
+                                     const DecodeStats& decode_stats, bool merge_tree) {
+  const GtnFileInfo& f = r.file();
+  const LevelZeroBytes bytes = levelZeroBytes(r);
   const double tets = static_cast<double>(r.level(0).header.tets);
   auto bpt = [&](uint64_t bytes) -> nlohmann::json {
     if (tets == 0) return nullptr;
     return 8.0 * static_cast<double>(bytes) / tets;
   };
-  nlohmann::json j = meshInfoJson(computeMeshStats(mesh), ImportReport{}, mesh);
+  nlohmann::json j = meshInfoJson(stats, ImportReport{}, mesh);
   j.erase("import");
   j["format"] = "gtn";
   j["format_version"] = std::to_string(f.major) + "." + std::to_string(f.minor);
@@ -213,11 +218,11 @@ StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const De
   nlohmann::json sections = nlohmann::json::array();
   for (const GtnSection& s : r.sections()) sections.push_back({{"name", s.name}, {"bytes", s.bytes}});
   j["sections"] = sections;
-  j["bits_per_tet"] = {{"connectivity", bpt(connectivity)},
-                       {"geometry", bpt(geometry)},
-                       {"fields", bpt(fields)},
-                       {"merge_tree", bpt(merge_tree_bytes)},
-                       {"total", bpt(total)}};
+  j["bits_per_tet"] = {{"connectivity", bpt(bytes.connectivity)},
+                       {"geometry", bpt(bytes.geometry)},
+                       {"fields", bpt(bytes.fields)},
+                       {"merge_tree", bpt(bytes.merge_tree)},
+                       {"total", bpt(bytes.total)}};
   j["peak_live_vertices"] = decode_stats.peak_live_vertices;
   nlohmann::json levels = nlohmann::json::array();
   for (size_t i = 0; i < r.levels(); ++i) {
@@ -257,7 +262,8 @@ StatusOr<nlohmann::json> infoJson(const std::vector<std::string>& inputs, const 
     TetMeshBuilder builder;
     DecodeStats decode_stats;
     GTN_RETURN_IF_ERROR(reader->decodeLevel(0, builder, &decode_stats));
-    GTN_ASSIGN_OR_RETURN(nlohmann::json j, gtnInfoJson(*reader, builder.mesh(), decode_stats, merge_tree));
+    GTN_ASSIGN_OR_RETURN(nlohmann::json j, gtnInfoJson(*reader, builder.mesh(), computeMeshStats(builder.mesh()),
+                                                       decode_stats, merge_tree));
     j["input"] = inputs;
     return j;
   }

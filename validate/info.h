@@ -66,11 +66,19 @@ std::string mergeTreeReportText(const MergeTreeReport& report, const std::string
 // `gtn info --json` for mesh files: statistics, metadata and what the import changed.
 nlohmann::json meshInfoJson(const MeshStats& stats, const ImportReport& report, const TetMesh& mesh);
 
+// Level 0's share of a .gtn file in bytes, by kind of chunk; `total` is level 0's chunks plus
+// everything that is not another level's (header, directory, trailer).
+struct LevelZeroBytes {
+  uint64_t connectivity = 0, geometry = 0, fields = 0, merge_tree = 0, total = 0;
+};
+LevelZeroBytes levelZeroBytes(const GtnReader& reader);
+
 // `gtn info --json` for a .gtn file whose level 0 `reader` decoded into `level0` (with
-// `decode_stats`): container, provenance, sections, bits per tetrahedron, levels and level 0's
-// statistics; with `merge_tree`, "merge_tree" too (null when the file stores none). No "input" key.
-StatusOr<nlohmann::json> gtnInfoJson(GtnReader& reader, const TetMesh& level0, const DecodeStats& decode_stats,
-                                     bool merge_tree);
+// `decode_stats`; `stats` = computeMeshStats(level0)): container, provenance, sections, bits per
+// tetrahedron, levels and level 0's statistics; with `merge_tree`, "merge_tree" too (null when the
+// file stores none). No "input" key.
+StatusOr<nlohmann::json> gtnInfoJson(GtnReader& reader, const TetMesh& level0, const MeshStats& stats,
+                                     const DecodeStats& decode_stats, bool merge_tree);
 
 // `gtn info --json [--merge-tree] INPUTS...` whole: one .gtn file (fully verified) or mesh files as
 // `gtn convert` reads them. `warnings` (optional) receives the importer's warnings.

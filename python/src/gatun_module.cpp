@@ -146,7 +146,9 @@ py::dict readGtn(const std::string& path, std::optional<size_t> level, std::opti
       check(streamSimplified(r, target, builder, &plan, /*clamp=*/true, &fields));
       level_read = plan.level;
       merges = r.level(plan.level).header.merges + plan.extra_merges;
-      level_ratio = r.level(0).header.points ? double(merges) / double(r.level(0).header.points) : 0.0;
+      // Over the vertices tetrahedra use, as the stored levels' ratios and mergesForRatio count.
+      const uint64_t free = valueOr(levelZeroUnreferencedMerges(r)), points = r.level(0).header.points;
+      level_ratio = points > free && merges > free ? double(merges - free) / double(points - free) : 0.0;
     } else {
       check(r.decodeLevel(level_read, builder, nullptr, &fields));
       merges = r.level(level_read).header.merges;
@@ -269,6 +271,7 @@ py::list writeGtn(const std::string& path, py::array points, py::array tets, py:
     if (imported.report.zero_volume)
       warnings.push_back(source + ": " + std::to_string(imported.report.zero_volume) +
                          " tetrahedra have zero volume (kept)");
+    for (const std::string& w : imported.report.warnings) warnings.push_back(source + ": " + w);
     GtnConvertOptions o;
     o.levels = levels;
     o.merge_tree = merge_tree;

@@ -1,5 +1,7 @@
 """gatun.read against `gtn export` (the same decode, bit for bit) on the real datasets."""
 
+import warnings
+
 import meshio
 import numpy as np
 import pytest
@@ -155,3 +157,29 @@ def test_bad_arguments_and_files(gtn, converted, data_dir, tmp_path):
         gatun.read(bad)
     assert r.stderr.strip() == "gtn: error: " + str(e.value)
     assert isinstance(e.value, ValueError) and isinstance(e.value, RuntimeError)
+
+
+def test_ratio_counts_the_points_tetrahedra_use(tmp_path):
+    # A grid of cubes in six tetrahedra each, with the midpoint of every edge as an unreferenced
+    # point (a quadratic mesh's mid-edge nodes): read at a ratio reports that ratio, counted over the
+    # corner points as the stored levels count it (it counted every point).
+    n = 6
+    ids = np.arange((n + 1) ** 3).reshape(n + 1, n + 1, n + 1)
+    grid = np.stack(np.meshgrid(*[np.arange(n + 1.0)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
+    kuhn = [(0, 1, 3, 7), (0, 3, 2, 7), (0, 2, 6, 7), (0, 6, 4, 7), (0, 4, 5, 7), (0, 5, 1, 7)]
+    tets = []
+    for i in range(n):
+        for j in range(n):
+            for k in range(n):
+                c = [ids[i + (b & 1), j + (b >> 1 & 1), k + (b >> 2 & 1)] for b in range(8)]
+                tets += [[c[a] for a in t] for t in kuhn]
+    tets = np.array(tets, dtype=np.int64)
+    edges = {tuple(sorted((t[a], t[b]))) for t in tets.tolist() for a in range(4) for b in range(a + 1, 4)}
+    mids = np.array([(grid[a] + grid[b]) / 2 for a, b in sorted(edges)])
+    points = np.vstack([grid, mids])
+    path = tmp_path / "quadratic.gtn"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        gatun.write(path, points, tets, levels=2)
+    mesh = gatun.read(path, ratio=0.3)
+    assert mesh.ratio == pytest.approx(0.3, abs=2.0 / len(grid))

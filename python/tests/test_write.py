@@ -99,3 +99,17 @@ def test_bad_input_is_refused_and_nothing_written(tmp_path):
     with pytest.raises(gatun.IoError):
         gatun.write(tmp_path / "no" / "such" / "dir.gtn", points, [[0, 1, 2, 3]])
     assert list(tmp_path.iterdir()) == []
+
+
+def test_what_the_import_step_changes_is_said(tmp_path):
+    # A flat tetrahedron on a face of a solid one: listed one way it agrees with its neighbour, the
+    # other way it is turned around, and write says so as `gtn convert` does (the note was dropped).
+    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0]], dtype=np.float64)
+    said = []
+    for flat in ([0, 1, 2, 4], [0, 2, 1, 4]):
+        tets = np.array([[0, 1, 2, 3], flat], dtype=np.int64)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            gatun.write(tmp_path / "flat.gtn", points, tets, levels=0, merge_tree=False)
+        said.append([str(w.message) for w in caught if "reoriented to agree with their neighbours" in str(w.message)])
+    assert sorted(len(s) for s in said) == [0, 1], said

@@ -16,6 +16,9 @@
 namespace gtn {
 namespace {
 
+using test::allWarnings;
+using test::findField;
+using test::hasWarning;
 using test::runGtn;
 using test::runShell;
 using test::tempDir;
@@ -157,12 +160,6 @@ StatusOr<ImportResult> load(const std::string& path, int step = 0) {
   return importMesh({path}, o);
 }
 
-const Field* findField(const std::vector<Field>& fields, const std::string& name) {
-  for (const Field& f : fields)
-    if (f.name == name) return &f;
-  return nullptr;
-}
-
 // The per-cell values of a per-tetrahedron field: runs of equal values merged (every element's value
 // differs from the next one's here), in tetrahedron order, which follows the elements.
 std::vector<double> runs(const Field& f, uint32_t c = 0) {
@@ -172,18 +169,6 @@ std::vector<double> runs(const Field& f, uint32_t c = 0) {
     if (out.empty() || !(out.back() == v || (std::isnan(out.back()) && std::isnan(v)))) out.push_back(v);
   }
   return out;
-}
-
-bool hasWarning(const ImportReport& r, const std::string& part) {
-  for (const std::string& w : r.warnings)
-    if (w.find(part) != std::string::npos) return true;
-  return false;
-}
-
-std::string allWarnings(const ImportReport& r) {
-  std::string s;
-  for (const std::string& w : r.warnings) s += w + "\n";
-  return s;
 }
 
 void expectMesh(const ImportResult& r, int step, ScalarType value_type, const std::string& what) {
@@ -347,6 +332,26 @@ TEST(ExodusImport, CommandLine) {
   auto bad = runGtn("convert " + dir + "/m.exo -o " + dir + "/n.gtn --time-step 9");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("--time-step 9: the file has time steps 1 to 3"), std::string::npos) << bad.err;
+}
+
+// --time-step given for a file that is not Exodus II is said to be ignored, not dropped in silence.
+TEST(ExodusImport, TimeStepOnOtherFormatsIsIgnoredWithAWarning) {
+  const std::string dir = tempDir("exodus-time-step-other");
+  writeFile(dir + "/t.vtk",
+            "# vtk DataFile Version 3.0\none tetrahedron\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+            "0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n");
+  ImportOptions options;
+  options.exodus_time_step = 2;
+  auto r = importMesh({dir + "/t.vtk"}, options);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_TRUE(hasWarning(r->report, "--time-step 2 applies to Exodus II files only; ignored"))
+      << allWarnings(r->report);
+  const auto cli = runGtn("convert " + dir + "/t.vtk -o " + dir + "/t.gtn --time-step 2 -q");
+  EXPECT_EQ(cli.exit_code, 0) << cli.err;
+  EXPECT_NE(cli.err.find("--time-step 2 applies to Exodus II files only; ignored"), std::string::npos) << cli.err;
+  auto plain = importMesh({dir + "/t.vtk"}, ImportOptions{});
+  ASSERT_TRUE(plain.isOk());
+  EXPECT_FALSE(hasWarning(plain->report, "--time-step")) << allWarnings(plain->report);
 }
 
 // ---- VTK's Exodus reader and meshio read the same files. ----

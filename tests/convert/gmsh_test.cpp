@@ -21,6 +21,9 @@
 namespace gtn {
 namespace {
 
+using test::allWarnings;
+using test::findField;
+using test::hasWarning;
 using test::runGtn;
 using test::runShell;
 using test::tempDir;
@@ -135,24 +138,6 @@ bool meshioAvailable(std::string* why) {
 
 uLong crcOf(const void* data, size_t bytes) {
   return crc32(0, static_cast<const Bytef*>(data), static_cast<uInt>(bytes));
-}
-
-const Field* findField(const std::vector<Field>& fields, const std::string& name) {
-  for (const Field& f : fields)
-    if (f.name == name) return &f;
-  return nullptr;
-}
-
-bool hasWarning(const ImportReport& report, const std::string& part) {
-  for (const std::string& w : report.warnings)
-    if (w.find(part) != std::string::npos) return true;
-  return false;
-}
-
-std::string allWarnings(const ImportReport& report) {
-  std::string s;
-  for (const std::string& w : report.warnings) s += w + "\n";
-  return s;
 }
 
 // Compares our import of `path` (a pure tetrahedral mesh) with meshio's.

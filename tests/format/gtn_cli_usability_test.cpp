@@ -21,45 +21,6 @@ namespace {
 using test::RunResult;
 using test::runGtn;
 
-// A sheared n x n x n grid of hexahedra as legacy VTK with a point field; `mirrored` lists each
-// hexahedron's top face first, so that every cell is stored with negative orientation.
-std::string hexGridVtk(int n, bool mirrored = false) {
-  std::string s = "# vtk DataFile Version 3.0\nusability test grid\nASCII\nDATASET UNSTRUCTURED_GRID\n";
-  const int np = n + 1;
-  s += "POINTS " + std::to_string(np * np * np) + " double\n";
-  char buf[128];
-  for (int k = 0; k < np; ++k)
-    for (int j = 0; j < np; ++j)
-      for (int i = 0; i < np; ++i) {
-        std::snprintf(buf, sizeof buf, "%g %g %g\n", i + 0.125 * j, j + 0.25 * k, k + 0.0625 * i);
-        s += buf;
-      }
-  auto id = [np](int i, int j, int k) { return i + np * (j + np * k); };
-  const int cells = n * n * n;
-  s += "CELLS " + std::to_string(cells) + " " + std::to_string(9 * cells) + "\n";
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const int lo = mirrored ? k + 1 : k, hi = mirrored ? k : k + 1;
-        const int v[8] = {id(i, j, lo), id(i + 1, j, lo), id(i + 1, j + 1, lo), id(i, j + 1, lo),
-                          id(i, j, hi), id(i + 1, j, hi), id(i + 1, j + 1, hi), id(i, j + 1, hi)};
-        s += "8";
-        for (int c : v) {
-          s += ' ';
-          s += std::to_string(c);
-        }
-        s += "\n";
-      }
-  s += "CELL_TYPES " + std::to_string(cells) + "\n";
-  for (int c = 0; c < cells; ++c) s += "12\n";
-  s += "POINT_DATA " + std::to_string(np * np * np) + "\nSCALARS density double 1\nLOOKUP_TABLE default\n";
-  for (int p = 0; p < np * np * np; ++p) {
-    std::snprintf(buf, sizeof buf, "%g\n", std::sin(0.37 * p) + 0.01 * p);
-    s += buf;
-  }
-  return s;
-}
-
 // A PLOT3D multi-grid file (big-endian, no record markers, float32): blocks of ni x nj x nk points
 // side by side along x, each sharing its last i-plane with the next block's first, bit for bit.
 std::string plot3dBlocks(int blocks, int ni, int nj, int nk) {
@@ -93,7 +54,7 @@ class UsabilityCli : public ::testing::Test {
   void SetUp() override {
     dir_ = test::tempDir("gtn-usability-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     vtk_ = dir_ + "/grid.vtk";
-    test::writeFile(vtk_, hexGridVtk(6));
+    test::writeFile(vtk_, test::shearedHexGridVtk(6));
   }
   std::string dir_, vtk_;
 };
@@ -248,7 +209,7 @@ TEST_F(UsabilityCli, ValidateAgainstTakesSplitAndWeldFromTheFile) {
 
 TEST_F(UsabilityCli, ValidatingAMeshFileGivesOneLinePerKind) {
   const std::string mirrored = dir_ + "/mirrored.vtk";
-  test::writeFile(mirrored, hexGridVtk(5, /*mirrored=*/true));
+  test::writeFile(mirrored, test::shearedHexGridVtk(5, /*mirrored=*/true));
   const RunResult v = runGtn("validate " + mirrored);
   EXPECT_EQ(v.exit_code, 0) << v.out << v.err;
   // 125 hexahedra stored inside out (750 tetrahedra once split): one line for them all, and the summary

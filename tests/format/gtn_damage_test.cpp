@@ -18,46 +18,6 @@
 namespace gtn {
 namespace {
 
-// A sheared n x n x n grid of hexahedra as legacy VTK, with a point field and a cell field.
-std::string hexGridVtk(int n) {
-  std::string s = "# vtk DataFile Version 3.0\ndamage test grid\nASCII\nDATASET UNSTRUCTURED_GRID\n";
-  const int np = n + 1;
-  s += "POINTS " + std::to_string(np * np * np) + " double\n";
-  char buf[128];
-  for (int k = 0; k < np; ++k)
-    for (int j = 0; j < np; ++j)
-      for (int i = 0; i < np; ++i) {
-        std::snprintf(buf, sizeof buf, "%g %g %g\n", i + 0.125 * j, j + 0.25 * k, k + 0.0625 * i);
-        s += buf;
-      }
-  auto id = [np](int i, int j, int k) { return i + np * (j + np * k); };
-  const int cells = n * n * n;
-  s += "CELLS " + std::to_string(cells) + " " + std::to_string(9 * cells) + "\n";
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const int v[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
-                          id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
-                          id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
-        s += "8";
-        for (int c : v) {
-          s += ' ';
-          s += std::to_string(c);
-        }
-        s += "\n";
-      }
-  s += "CELL_TYPES " + std::to_string(cells) + "\n";
-  for (int c = 0; c < cells; ++c) s += "12\n";
-  s += "POINT_DATA " + std::to_string(np * np * np) + "\nSCALARS density double 1\nLOOKUP_TABLE default\n";
-  for (int p = 0; p < np * np * np; ++p) {
-    std::snprintf(buf, sizeof buf, "%g\n", std::sin(0.37 * p) + 0.01 * p);
-    s += buf;
-  }
-  s += "CELL_DATA " + std::to_string(cells) + "\nSCALARS block int 1\nLOOKUP_TABLE default\n";
-  for (int c = 0; c < cells; ++c) s += std::to_string(c % 7) + "\n";
-  return s;
-}
-
 struct Chunk {
   GtnChunkInfo info;
   int level = -1;
@@ -92,7 +52,7 @@ class GtnDamage : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = test::tempDir("gtn-damage");
-    test::writeFile(dir_ + "/grid.vtk", hexGridVtk(7));
+    test::writeFile(dir_ + "/grid.vtk", test::shearedHexGridVtk(7, /*mirrored=*/false, /*block_field=*/true));
     const test::RunResult r = test::runGtn("convert " + dir_ + "/grid.vtk -o " + dir_ + "/grid.gtn --levels 1");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     bytes_ = test::readFile(dir_ + "/grid.gtn");
@@ -145,6 +105,9 @@ TEST_F(GtnDamage, EveryCommandChecksEveryChunk) {
       if (needed) {
         EXPECT_NE(r.exit_code, 0) << r.err;
         EXPECT_NE(r.err.find("gtn: error:"), std::string::npos) << r.err;
+        // Said once, by the error, not also by a warning before it.
+        const size_t first = r.err.find("checksum mismatch in chunk " + tag);
+        EXPECT_EQ(r.err.find("checksum mismatch in chunk " + tag, first + 1), std::string::npos) << r.err;
       } else {
         EXPECT_EQ(r.exit_code, 0) << r.err;
         EXPECT_NE(r.err.find("gtn: warning: "), std::string::npos) << r.err;

@@ -83,6 +83,18 @@ TEST(RenderBudget, TheCacheHonoursXdgCacheHome) {
   EXPECT_TRUE(test::fileExists(dir + "/home2/.cache" + file));
 }
 
+// Without HOME and XDG_CACHE_HOME, and with a TMPDIR that names no folder, a budgeted render still
+// runs (it aborted on an uncaught filesystem exception while looking for the cache's place).
+TEST(RenderBudget, NoHomeAndABadTmpdirStillRender) {
+  const std::string dir = test::tempDir("render-budget-no-home");
+  const std::string gtn = torusGtn(dir);
+  const test::RunResult r =
+      test::runShell("unset HOME XDG_CACHE_HOME; TMPDIR=" + dir + "/missing " GTN_BINARY " render " + gtn + " -o " +
+                     dir + "/x.png --size 32x32 --budget-ms 100000 --no-cache");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::fileExists(dir + "/x.png"));
+}
+
 // --no-cache neither reads nor writes the cache: budgets calibrate every time, colour ranges are
 // read from level 0 again, and a cache already there is left as it is.
 TEST(RenderBudget, NoCacheSkipsTheCache) {

@@ -18,13 +18,8 @@
 namespace gtn {
 namespace {
 
+using test::compareJson;
 using test::runGtn;
-
-nlohmann::json compareJson(const std::string& a, const std::string& b) {
-  const test::RunResult r = runGtn("compare " + a + " " + b + " --json");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  return nlohmann::json::parse(r.out, nullptr, false);
-}
 
 // A w x h RGBA PNG (colour type 6), every pixel `rgba`, written with zlib directly (writePng writes RGB).
 void writeRgbaPng(const std::string& path, int w, int h, const uint8_t rgba[4]) {
@@ -535,6 +530,18 @@ TEST(JsonOutput, NamesThatAreNotUtf8DoNotAbort) {
     EXPECT_NE(r.out.find("caf\xEF\xBF\xBD"), std::string::npos) << command << r.out.substr(0, 400);
     EXPECT_TRUE(nlohmann::json::accept(r.out)) << command;
   }
+}
+
+// Rendering a mesh file says what its importer left out, as convert, info and validate do.
+TEST(RenderCommand, SaysWhatTheImporterLeftOut) {
+  const std::string dir = test::tempDir("render-import-warnings");
+  test::writeFile(dir + "/t.vtk",
+                  "# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+                  "0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 2 9\n4 0 1 2 3\n3 0 1 3\nCELL_TYPES 2\n10\n5\n");
+  const test::RunResult r = runGtn("render " + dir + "/t.vtk -o " + dir + "/t.png --size 16x16");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("gtn: warning: " + dir + "/t.vtk: skipped 1 cells of lower dimension"), std::string::npos)
+      << r.err;
 }
 
 }  // namespace

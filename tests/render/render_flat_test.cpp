@@ -14,13 +14,8 @@
 namespace gtn {
 namespace {
 
+using test::compareJson;
 using test::runGtn;
-
-nlohmann::json compareJson(const std::string& a, const std::string& b) {
-  const test::RunResult r = runGtn("compare " + a + " " + b + " --json");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  return nlohmann::json::parse(r.out, nullptr, false);
-}
 
 nlohmann::json renderJson(const std::string& input, const std::string& png, const std::string& options) {
   const test::RunResult r = runGtn("render " + input + " -o " + png + " --json " + options);

@@ -81,6 +81,15 @@ TEST_F(InfoMergeTree, TableAgreesWithJson) {
   EXPECT_EQ(mt["levels"][2]["points"], 724);
 }
 
+// A TMPDIR that names no folder is an error that says so (it aborted on an uncaught exception).
+TEST_F(InfoMergeTree, PlotWithABadTmpdirIsAnError) {
+  const std::string png = dir_ + "/tmpdir.png";
+  const RunResult r = runShell("TMPDIR=" + dir_ + "/missing " GTN_BINARY " info " + dir_ + "/spx.gtn --plot " + png);
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find(png + ": --plot: no folder for temporary files"), std::string::npos) << r.err;
+  EXPECT_FALSE(fileExists(png));
+}
+
 TEST_F(InfoMergeTree, PlotDrawsTheCurve) {
   const std::string png = dir_ + "/errors.png";
   const RunResult r = runGtn("info " + dir_ + "/spx.gtn --plot " + png);
