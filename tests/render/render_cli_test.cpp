@@ -177,7 +177,7 @@ TEST(RenderCommand, AgreesWithVtkOnSpx) {
   ASSERT_EQ(runGtn("render " + dir + "/spx.gtn -o " + dir + "/ours.png --size 256x256 --dump-view " + dir +
                    "/view.json").exit_code, 0);
   const test::RunResult r = test::runShell(
-      "xvfb-run -a /usr/bin/python3 " GTN_SOURCE_DIR "/bench/render/vtk_compare.py " + dir + "/spx.vtu " + dir +
+      "xvfb-run -a -n 160 /usr/bin/python3 " GTN_SOURCE_DIR "/bench/render/vtk_compare.py " + dir + "/spx.vtu " + dir +
       "/view.json " + dir + "/vtk.png --frames 1 --json --ours " + dir + "/ours.png --gtn " GTN_BINARY);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out.substr(r.out.find('{')));

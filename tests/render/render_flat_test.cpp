@@ -163,7 +163,7 @@ TEST(RenderFlat, AgreesWithVtk) {
                                         "--size 256x256 --dump-view " + dir + "/view.json");
     EXPECT_EQ(j["lost_rays"], 0);
     const test::RunResult r = test::runShell(
-        "xvfb-run -a /usr/bin/python3 " GTN_SOURCE_DIR "/bench/render/vtk_compare.py " + dir + "/plain.vtu " + dir +
+        "xvfb-run -a -n 180 /usr/bin/python3 " GTN_SOURCE_DIR "/bench/render/vtk_compare.py " + dir + "/plain.vtu " + dir +
         "/view.json " + dir + "/vtk.png --frames 1 --json --ours " + dir + "/ours.png --gtn " GTN_BINARY);
     EXPECT_EQ(r.exit_code, 0) << r.err;
     const nlohmann::json c = nlohmann::json::parse(r.out.substr(r.out.find('{')), nullptr, false);
