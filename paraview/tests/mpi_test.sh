@@ -8,6 +8,6 @@ here=$(dirname "$0")
 if [ ! -f "$data/plot3d/bluntfinxyz.bin" ]; then echo "skipped: no $data/plot3d/bluntfinxyz.bin"; exit 77; fi
 mkdir -p "$tmp"
 "$gtn" convert "$data/plot3d/bluntfinxyz.bin" "$data/plot3d/bluntfinq.bin" -o "$tmp/bluntfin.gtn"
-xvfb-run -a -n 140 pvbatch "$here/mpi_test.py" "$gtn" "$plugin" "$tmp/bluntfin.gtn" "$tmp" --serial "$tmp/serial.json"
-xvfb-run -a -n 150 mpirun --allow-run-as-root --oversubscribe -np 2 \
+sh "$here/xrun.sh" 140 pvbatch "$here/mpi_test.py" "$gtn" "$plugin" "$tmp/bluntfin.gtn" "$tmp" --serial "$tmp/serial.json"
+sh "$here/xrun.sh" 150 mpirun --allow-run-as-root --oversubscribe -np 2 \
   pvbatch "$here/mpi_test.py" "$gtn" "$plugin" "$tmp/bluntfin.gtn" "$tmp" --against "$tmp/serial.json"
