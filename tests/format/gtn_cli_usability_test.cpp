@@ -121,6 +121,9 @@ TEST_F(UsabilityCli, ConvertEndsWithASummaryLineWhoseFiguresAreTheFiles) {
 // standard error: stages with a percentage, redrawn in place; -q draws nothing.
 TEST_F(UsabilityCli, ProgressShowsOnATerminalOnly) {
   if (test::runShell("command -v script").exit_code != 0) GTEST_SKIP() << "script(1) (util-linux) is not installed";
+  // A chroot without /dev/pts has no pseudo-terminal to give a program: nothing can be a terminal there.
+  if (test::runShell("script -qec true /dev/null").exit_code != 0)
+    GTEST_SKIP() << "this system cannot create a pseudo-terminal (no /dev/pts)";
   const std::string cmd = std::string(GTN_BINARY) + " convert " + vtk_ + " -o " + dir_ + "/p.gtn --levels 2";
   const RunResult tty = test::runShell("script -qec '" + cmd + "' /dev/null");
   ASSERT_EQ(tty.exit_code, 0) << tty.out << tty.err;
