@@ -1,5 +1,6 @@
 // gtn render INPUT -o IMAGE.png [options]: the streaming renderer (integrated decompression,
 // simplification and ray casting), or the generic in-memory baseline.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -290,9 +291,12 @@ int runRender(const RenderArgs& a) {
   report["level"] = level->level;
   report["stored_merges"] = level->stored_merges;
   report["extra_merges"] = level->extra_merges;
-  report["ratio"] = (*input)->levelZeroPoints()
-                        ? static_cast<double>(level->total_merges()) / static_cast<double>((*input)->levelZeroPoints())
-                        : 0.0;
+  // As --ratio and the stored levels count it: over the points that tetrahedra use.
+  auto unused = (*input)->unreferencedMerges();
+  if (!unused.isOk()) return reportError(unused.status());
+  const uint64_t used_points = (*input)->levelZeroPoints() - std::min(*unused, (*input)->levelZeroPoints());
+  const uint64_t ratio_merges = level->total_merges() - std::min(*unused, level->total_merges());
+  report["ratio"] = used_points ? static_cast<double>(ratio_merges) / static_cast<double>(used_points) : 0.0;
   report["tets_decoded"] = level->tets;
   report["total_ms"] = total_ms;
   if (a.json) {

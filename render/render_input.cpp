@@ -43,6 +43,11 @@ const LevelHeader& RenderInput::levelHeader(size_t i) const {
   return reader_ ? reader_->level(i).header : encoded_->header;
 }
 
+StatusOr<uint64_t> RenderInput::unreferencedMerges() {
+  if (!reader_) return uint64_t{0};
+  return levelZeroUnreferencedMerges(*reader_);
+}
+
 bool RenderInput::hasMergeTree(size_t i) const { return reader_ && reader_->level(i).has_merge_tree; }
 
 StatusOr<uint64_t> RenderInput::mergeTreeMerges(size_t i) {

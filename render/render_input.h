@@ -55,6 +55,9 @@ class RenderInput {
   // The merges level i's merge tree holds (what can be applied on the fly on top of it); 0 without.
   StatusOr<uint64_t> mergeTreeMerges(size_t i);
   uint64_t levelZeroPoints() const { return levelHeader(0).points; }
+  // Merges of level 0's unused points (simplify/levels.h, levelZeroUnreferencedMerges): ratios count
+  // the other points. 0 for a mesh file rendered directly.
+  StatusOr<uint64_t> unreferencedMerges();
 
   // Fails with kUsage for a level that does not exist, a ratio outside [0, 1], or simplification of
   // an input without a merge tree.

@@ -135,14 +135,19 @@ TEST_F(Quadratic, LevelsAndRatiosCountReferencedVertices) {
     EXPECT_EQ(tets[1], tets[0]);
     // gtn render counts the same way.
     uint64_t decoded[2];
+    double reported[2];
     for (int q = 0; q < 2; ++q) {
       const RunResult r = runGtn("render " + dir_ + (q ? "/quadratic3.gtn" : "/linear3.gtn") + " -o " + dir_ +
                                  "/r.png --size 16x16 --json --ratio " + ratio);
       ASSERT_EQ(r.exit_code, 0) << r.err;
       const nlohmann::json j = nlohmann::json::parse(r.out);
       decoded[q] = j["tets_rendered"].get<uint64_t>();
+      reported[q] = j["ratio"].get<double>();
     }
     EXPECT_EQ(decoded[1], decoded[0]);
+    // The ratio it reports is over the referenced vertices too: the one asked for, both files alike.
+    EXPECT_DOUBLE_EQ(reported[1], reported[0]);
+    EXPECT_NEAR(reported[1], std::stod(ratio), 0.01);
   }
 }
 
