@@ -292,10 +292,13 @@ int runRender(const RenderArgs& a) {
   report["stored_merges"] = level->stored_merges;
   report["extra_merges"] = level->extra_merges;
   // As --ratio and the stored levels count it: over the points that tetrahedra use.
-  auto unused = (*input)->unreferencedMerges();
-  if (!unused.isOk()) return reportError(unused.status());
-  const uint64_t used_points = (*input)->levelZeroPoints() - std::min(*unused, (*input)->levelZeroPoints());
-  const uint64_t ratio_merges = level->total_merges() - std::min(*unused, level->total_merges());
+  // Level 0's merge tree says how many; without merges, or where that tree cannot be read (the
+  // render did not need it), every point counts.
+  uint64_t unused = 0;
+  if (level->total_merges() > 0)
+    if (auto u = (*input)->unreferencedMerges(); u.isOk()) unused = *u;
+  const uint64_t used_points = (*input)->levelZeroPoints() - std::min(unused, (*input)->levelZeroPoints());
+  const uint64_t ratio_merges = level->total_merges() - std::min(unused, level->total_merges());
   report["ratio"] = used_points ? static_cast<double>(ratio_merges) / static_cast<double>(used_points) : 0.0;
   report["tets_decoded"] = level->tets;
   report["total_ms"] = total_ms;
