@@ -77,7 +77,7 @@ constexpr uint32_t kEscapeRankBits = 12;     // ranks below 2^12
 constexpr int kTetContexts = 10 * 3 * 3;
 constexpr int kBoundaryContexts = 2 * 4 * 4 * 2;
 constexpr double kMaxKey = 1.7976931348623157e308;  // candidate distances beyond this (inf, NaN) tie here
-constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d), CODEC-NOTES.md
+constexpr double kPredictK = 0.6;  // new vertex at g + k (g - d) (spec section 10.5)
 // Prediction rules for a vertex x behind the front face (a, b, c) whose decoded tetrahedron has
 // fourth vertex d: weights of (a, b, c, d). Rule 0 is the default (coordinates: g + k (g - d);
 // fields: the interpolant of (a, b, c, d) at x). Rules 1-8 are the parallelograms a structured

@@ -13,7 +13,7 @@
 // that no binary interpretation fits is read as ASCII PLOT3D, its layout decided the same way by its
 // value count.
 //
-// Policies (ARCHITECTURE.md / FORMATS.md):
+// Policies (README.md, "Inputs"):
 // - Points keep grid order (i fastest, then j, then k), blocks concatenated, in source precision.
 // - IBLANK: a cell with any hole vertex (IBLANK 0) is dropped and counted; fringe (negative) and wall
 //   (2) points are ordinary points. All points are kept and IBLANK becomes the int32 field "iblank".

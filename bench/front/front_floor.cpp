@@ -14,7 +14,7 @@
 // tetrahedron closes).
 //
 // The figures bound what the format's connectivity design allows: a decoder cannot be faster than
-// its bookkeeping. Issue 4 asks for 5 million tetrahedra per second (200 ns a tetrahedron), geometry
+// its bookkeeping. The goal is 5 million tetrahedra per second (200 ns a tetrahedron), geometry
 // and fields included.
 #include <algorithm>
 #include <array>
