@@ -142,14 +142,6 @@ size_t orientFlatTets(TetMesh& mesh) {
   }
   if (!any) return 0;
   FaceAdjacency adj = computeFaceAdjacency(mesh);
-  // Whether face k of a and face j of b list their (shared) vertices in the same cyclic order.
-  auto sameOrder = [&](const Tet& a, int k, const Tet& b, int j) {
-    const uint32_t x[3] = {a[kTetFace[k][0]], a[kTetFace[k][1]], a[kTetFace[k][2]]};
-    const uint32_t y[3] = {b[kTetFace[j][0]], b[kTetFace[j][1]], b[kTetFace[j][2]]};
-    for (int r = 0; r < 3; ++r)
-      if (x[0] == y[r] && x[1] == y[(r + 1) % 3] && x[2] == y[(r + 2) % 3]) return true;
-    return false;
-  };
   // Breadth first from the oriented (solid) tetrahedra into the flat ones.
   std::vector<uint32_t> queue;
   for (size_t t = 0; t < n; ++t)
@@ -164,7 +156,7 @@ size_t orientFlatTets(TetMesh& mesh) {
       while (j < 4 && adj.neighbor[4 * static_cast<size_t>(f) + j] != t) ++j;
       if (j == 4) continue;
       flat[f] = 0;  // oriented from here on
-      if (sameOrder(mesh.tets[t], k, mesh.tets[f], j)) {
+      if (!facesOpposite(mesh.tets[t], k, mesh.tets[f])) {
         // Swapping corners 2 and 3 reverses every face and exchanges local faces 2 and 3.
         std::swap(mesh.tets[f][2], mesh.tets[f][3]);
         std::swap(adj.neighbor[4 * static_cast<size_t>(f) + 2], adj.neighbor[4 * static_cast<size_t>(f) + 3]);
