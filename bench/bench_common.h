@@ -1,6 +1,7 @@
 // What the benchmarks share: this thread's CPU time, and the datasets of ../shared/data.
 #pragma once
 
+#include <stdlib.h>
 #include <time.h>
 
 #include <cstdlib>
@@ -46,6 +47,40 @@ inline std::vector<Dataset> sharedDatasets(const std::string& dir) {
       {"Ossicles", {dir + "/vtu/Ossicles.vtu"}, 6},
       {"fire_ug/6", {dir + "/vtu/fire_ug.vtu"}, 6},
   };
+}
+
+}  // namespace gtn::bench
+
+// Running the `gtn` program and VTK's Python helper (bench/vtk_vtu.py) from a benchmark.
+namespace gtn::bench {
+
+// `s` quoted for /bin/sh.
+inline std::string shellQuote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// Runs `command` with /bin/sh, its standard output and error appended to `log`; true when it exits 0.
+inline bool runLogged(const std::string& command, const std::string& log) {
+  const std::string cmd = "(" + command + ") >> " + shellQuote(log) + " 2>&1";
+  return std::system(cmd.c_str()) == 0;
+}
+
+// A new empty directory under $TMPDIR (or /tmp), or "" when it cannot be made.
+inline std::string makeTempDir(const char* stem) {
+  const char* tmp = std::getenv("TMPDIR");
+  std::string path = std::string(tmp && *tmp ? tmp : "/tmp") + "/" + stem + "-XXXXXX";
+  std::vector<char> buf(path.begin(), path.end());
+  buf.push_back('\0');
+  return mkdtemp(buf.data()) ? std::string(buf.data()) : std::string();
+}
+
+// The `gtn convert` arguments that import dataset `d` as the benchmarks import it.
+inline std::string convertInputs(const Dataset& d) {
+  std::string args;
+  for (const std::string& in : d.inputs) args += shellQuote(in) + " ";
+  return args + "--split " + std::to_string(d.split);
 }
 
 }  // namespace gtn::bench
