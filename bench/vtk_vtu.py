@@ -67,15 +67,19 @@ def write(src, prefix):
 
 
 def serve():
-    for line in sys.stdin:
+    # The process's own streams: pvpython replaces sys.stdin and sys.stdout with its console's.
+    stdin, stdout = sys.__stdin__, sys.__stdout__
+    for line in iter(stdin.readline, ""):
         path = line.rstrip("\n")
         if not path:
             continue
         try:
             grid, wall, cpu, arrays = read(path)
-            print(f"{wall:.6f} {cpu:.6f} {grid.GetNumberOfPoints()} {grid.GetNumberOfCells()} {arrays}", flush=True)
+            answer = f"{wall:.6f} {cpu:.6f} {grid.GetNumberOfPoints()} {grid.GetNumberOfCells()} {arrays}"
         except Exception as e:  # the bench reports the message and goes on
-            print(f"error {e}", flush=True)
+            answer = f"error {e}"
+        stdout.write(answer + "\n")
+        stdout.flush()
 
 
 def main(argv):
