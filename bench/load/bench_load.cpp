@@ -30,7 +30,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -213,6 +215,7 @@ int main(int argc, char** argv) {
     sets.push_back(*it);
   }
 
+  std::signal(SIGPIPE, SIG_IGN);  // a reader process that ended is reported by load(), not a signal
   VtkReaderProcess vtk;
   if (!vtk.start(python, script)) {
     std::fprintf(stderr, "bench-load: cannot start %s %s serve\n", python.c_str(), script.c_str());
