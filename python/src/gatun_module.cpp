@@ -180,6 +180,21 @@ py::dict readGtn(const std::string& path, std::optional<size_t> level, std::opti
   return out;
 }
 
+// The library's decode of a stored level into a mesh in memory, as `gtn export` does before it
+// writes (bench/python compares gatun.read with it): no Python objects, only the counts come back.
+py::tuple decodeOnly(const std::string& path, size_t level) {
+  TetMeshBuilder builder;
+  {
+    py::gil_scoped_release release;
+    GtnOpenOptions oo;
+    oo.verify = false;
+    std::unique_ptr<GtnReader> reader = valueOr(GtnReader::open(path, oo));
+    if (level >= reader->levels()) raise(usageError(path + ": level " + std::to_string(level) + " does not exist"));
+    check(reader->decodeLevel(level, builder));
+  }
+  return py::make_tuple(builder.mesh().numPoints(), builder.mesh().numTets());
+}
+
 ScalarType scalarTypeOf(const py::array& a, const std::string& what) {
   const py::dtype dt = a.dtype();
   const char kind = dt.kind();
@@ -344,6 +359,7 @@ PYBIND11_MODULE(_gatun, m) {
   m.attr("__version__") = GTN_VERSION_STRING;
   m.def("read", &readGtn, py::arg("path"), py::arg("level") = py::none(), py::arg("ratio") = py::none(),
         py::arg("fields") = py::none(), py::arg("box") = py::none(), py::arg("threads") = py::none());
+  m.def("decode", &decodeOnly, py::arg("path"), py::arg("level") = 0);
   m.def("write", &writeGtn, py::arg("path"), py::arg("points"), py::arg("tets"), py::arg("point_data"),
         py::arg("cell_data"), py::arg("metadata"), py::arg("levels"), py::arg("merge_tree"), py::arg("level_storage"),
         py::arg("verify"), py::arg("simplify_field"), py::arg("w_density"), py::arg("w_geometry"));
