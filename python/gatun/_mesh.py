@@ -52,7 +52,9 @@ def read(path, level=None, ratio=None, fields=None, box=None, threads=None):
     box     (xmin, ymin, zmin, xmax, ymax, zmax): only the tetrahedra that meet this box, with the
             points they use. The file is decoded whole and then filtered (files are not yet cut into
             pieces that could be read alone).
-    threads accepted for the future; the decoder runs on one thread.
+    threads the most threads the library's parallel parts (TBB) may use during the call (default: every
+            core). A level decodes on one thread (until files are cut into pieces), so today this
+            bounds nothing a read does; gatun.write's threads bounds the ranking and the check.
 
     The arrays are handed over from the decoder without a copy (float32 coordinates are narrowed from
     the decoder's doubles once). Raises a gatun.Error subclass with the message `gtn` would print.
@@ -89,6 +91,7 @@ def write(
     simplify_field="",
     w_density=1.0,
     w_geometry=1.0,
+    threads=None,
 ):
     """Writes a .gtn file as `gtn convert` does, with the same defaults.
 
@@ -100,6 +103,7 @@ def write(
     merge_tree  store the merge trees (on-the-fly simplification); False = --no-merge-tree
     verify      decode every level back and compare before the file is renamed into place
     simplify_field, w_density, w_geometry: the ranking's density field and weights (--simplify-field ...)
+    threads     the most threads the ranking and the check may use (default: every core)
 
     The file appears atomically, only when everything succeeded.
     """
@@ -122,6 +126,7 @@ def write(
         str(simplify_field),
         float(w_density),
         float(w_geometry),
+        None if threads is None else int(threads),
     )
     for message in found:
         warnings.warn(message, stacklevel=2)
