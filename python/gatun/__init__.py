@@ -13,6 +13,7 @@ mesh) work for tetrahedral meshes.
 
 from . import _gatun
 from ._errors import (
+    DamagedChunkWarning,
     Error,
     InvalidDataError,
     IoError,
@@ -26,6 +27,7 @@ from ._mesh import Mesh, info, merge_tree_stats, plot_merge_tree, read, validate
 __version__ = _gatun.__version__
 
 __all__ = [
+    "DamagedChunkWarning",
     "Error",
     "InvalidDataError",
     "IoError",

@@ -6,6 +6,7 @@ import warnings
 import numpy as np
 
 from . import _gatun
+from ._errors import DamagedChunkWarning
 
 
 class Mesh:
@@ -58,6 +59,8 @@ def read(path, level=None, ratio=None, fields=None, box=None, threads=None):
 
     The arrays are handed over from the decoder without a copy (float32 coordinates are narrowed from
     the decoder's doubles once). Raises a gatun.Error subclass with the message `gtn` would print.
+    Every chunk's checksum is checked, as `gtn export` does: damage in a chunk the read does not need
+    (another level, the merge tree) is a gatun.DamagedChunkWarning with gtn's warning text.
     """
     if level is not None and ratio is not None:
         raise _usage(f"{os.fspath(path)}: level and ratio exclude each other")
@@ -71,6 +74,8 @@ def read(path, level=None, ratio=None, fields=None, box=None, threads=None):
         box=None if box is None else [float(v) for v in box],
         threads=None if threads is None else int(threads),
     )
+    for message in d["warnings"]:
+        warnings.warn(DamagedChunkWarning(message), stacklevel=2)
     return Mesh(
         d["points"], d["tets"], d["point_data"], d["cell_data"], d["metadata"], d["level"], d["merges"], d["ratio"]
     )

@@ -134,6 +134,7 @@ py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::opt
     }
   }
   TetMeshBuilder builder;
+  std::vector<std::string> damage;
   size_t level_read = 0;
   uint64_t merges = 0;
   double level_ratio = 0;
@@ -142,7 +143,9 @@ py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::opt
     const ThreadLimit limit(threads);
     GtnOpenOptions oo;
     oo.verify = false;  // random access through the directory; every chunk read is still checksummed
-    auto opened = GtnReader::open(path, oo);
+    // As `gtn export`: every chunk's checksum is checked; damage in a chunk this read does not need
+    // comes back as a warning, in one it needs as the error.
+    auto opened = openGtnChecked(path, oo, [&damage](const std::string& w) { damage.push_back(w); });
     if (!opened.isOk()) {
       // A mesh file given to read: say what reads it.
       const InputFormat in_format = detectInputFormat(path);
@@ -196,6 +199,7 @@ py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::opt
   out["level"] = level_read;
   out["merges"] = merges;
   out["ratio"] = level_ratio;
+  out["warnings"] = damage;
   return out;
 }
 
@@ -207,7 +211,7 @@ py::tuple decodeOnly(const std::string& path, size_t level) {
     py::gil_scoped_release release;
     GtnOpenOptions oo;
     oo.verify = false;
-    std::unique_ptr<GtnReader> reader = valueOr(GtnReader::open(path, oo));
+    std::unique_ptr<GtnReader> reader = valueOr(openGtnChecked(path, oo, nullptr));
     if (level >= reader->levels()) raise(usageError(path + ": level " + std::to_string(level) + " does not exist"));
     check(reader->decodeLevel(level, builder));
   }

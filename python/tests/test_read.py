@@ -212,3 +212,30 @@ def test_library_decode_counts(converted, level):
     assert _gatun.decode(str(converted["bluntfin"]), level) == (len(mesh.points), len(mesh.tets))
     with pytest.raises(gatun.UsageError, match="level 9 does not exist"):
         _gatun.decode(str(converted["bluntfin"]), 9)
+
+
+def test_damage_elsewhere_is_a_warning_as_in_gtn_export(gtn, converted, tmp_path):
+    # A byte flipped inside level 3: reading level 0 warns as `gtn export` does and decodes; reading
+    # level 3 fails with gtn's error.
+    path = converted["bluntfin"]
+    info = gatun.info(path)
+    head = sum(s["bytes"] for s in info["sections"] if s["name"] in ("prefix", "header"))
+    start = head + sum(l["bytes"] for l in info["levels"][:3])
+    data = bytearray(path.read_bytes())
+    data[start + info["levels"][3]["bytes"] // 2] ^= 0x5A
+    bad = tmp_path / "damaged.gtn"
+    bad.write_bytes(bytes(data))
+    r = gtn.run("export", bad, "-o", tmp_path / "level0.vtu")
+    said = [line[len("gtn: warning: "):] for line in r.stderr.splitlines() if line.startswith("gtn: warning: ")]
+    assert len(said) == 1 and "checksum mismatch" in said[0]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mesh = gatun.read(bad)
+    assert [str(w.message) for w in caught] == said
+    assert all(w.category is gatun.DamagedChunkWarning for w in caught)
+    assert_matches_export(mesh, meshio.read(tmp_path / "level0.vtu"))
+    r = gtn.run("export", bad, "--level", 3, "-o", tmp_path / "level3.vtu", check=False)
+    assert r.returncode == 1
+    with pytest.raises(gatun.InvalidDataError) as e:
+        gatun.read(bad, level=3)
+    assert r.stderr.strip() == "gtn: error: " + str(e.value)
