@@ -3,14 +3,15 @@
 
 Usage (from a build with -DGTN_BUILD_PYTHON=ON):
   PYTHONPATH=build/python /usr/bin/python3 bench/python/bench_read.py [--gtn build/gtn]
-      [--data ../shared/data] [--split 5] [--reps 7] [--level 0] [--work DIR] [--json]
+      [--data DIR (default $GTN_DATA_DIR, else ../shared/data)] [--split 5] [--reps 7] [--level 0] [--work DIR] [--json]
 
 The blunt fin (PLOT3D, hexahedra split in --split tetrahedra) is converted once with `gtn convert`
 (default options) and exported once with `gtn export`; meshio writes that export as a zlib-compressed
 .vtu. Then, --reps times, interleaved (the order rotates each round):
   gatun.read        gatun.read(path, level=L): the numpy arrays a user gets
-  library decode    gatun._gatun.decode(path, L): open and decode the level into a mesh in memory,
-                    what `gtn export` does before it writes; no Python objects are made
+  library decode    gatun._gatun.decode(path, L): open the file (every chunk's checksum checked) and
+                    decode the level into a mesh in memory, what `gtn export` does before it writes;
+                    no Python objects are made
   meshio.read       meshio.read of the zlib .vtu
   import gatun      a fresh interpreter's `import gatun` (subprocess), less a bare interpreter's
 Each is timed by the wall clock and by the process's CPU time (the decode runs on one thread, so
@@ -49,7 +50,7 @@ def interpreter_seconds(code):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--gtn", default=str(ROOT / "build" / "gtn"))
-    ap.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
+    ap.add_argument("--data", default=os.environ.get("GTN_DATA_DIR", str(ROOT.parent / "shared" / "data")))
     ap.add_argument("--split", type=int, default=5, choices=[5, 6])
     ap.add_argument("--reps", type=int, default=7)
     ap.add_argument("--level", type=int, default=0)
