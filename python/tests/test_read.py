@@ -89,10 +89,14 @@ def test_fields_selection_equals_export(gtn, converted, tmp_path):
     assert_matches_export(mesh, exported(gtn, converted["bluntfin"], tmp_path, "--fields", "momentum"))
 
 
-def test_box_keeps_the_tetrahedra_meeting_it(converted):
-    full = gatun.read(converted["bluntfin"])
+@pytest.mark.parametrize("how", [{}, {"level": 2}, {"ratio": 0.6, "fields": ["density"]}])
+def test_box_keeps_the_tetrahedra_meeting_it(converted, how):
+    # The box applies to whatever level, ratio and fields the read decodes.
+    full = gatun.read(converted["bluntfin"], **how)
     box = np.array([0.0, 1.0, 0.5, 3.0, 3.0, 2.0])
-    part = gatun.read(converted["bluntfin"], box=box)
+    part = gatun.read(converted["bluntfin"], box=box, **how)
+    assert (part.level, part.merges, part.ratio) == (full.level, full.merges, full.ratio)
+    assert sorted(part.point_data) == sorted(full.point_data)
     lo, hi = box[:3], box[3:]
     assert 0 < len(part.tets) < len(full.tets)
     # Points are those the kept tetrahedra use, each with its values.
