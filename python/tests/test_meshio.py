@@ -92,3 +92,19 @@ def test_other_cells_are_refused(tmp_path):
     with pytest.raises(gatun.UsageError, match=r"tetrahedra only; the mesh has other cells \(2 triangle\)"):
         meshio.write(path, mesh)
     assert not path.exists()
+
+
+def test_meshio_write_takes_gatun_write_options(converted, tmp_path):
+    # meshio.write passes its keyword arguments on to gatun.write.
+    source = gatun.read(converted["bluntfin"], level=3)
+    mesh = meshio.Mesh(source.points, [("tetra", source.tets)], point_data=source.point_data)
+    path = tmp_path / "one-level.gtn"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        meshio.write(path, mesh, levels=0, merge_tree=False)
+    info = gatun.info(path, merge_tree=True)
+    assert len(info["levels"]) == 1 and info["merge_tree"] is None
+    assert info["levels"][0]["tets"] == len(source.tets)
+    back = meshio.read(path)
+    assert back.points.dtype == np.float32
+    assert np.array_equal(np.sort(back.point_data["density"]), np.sort(source.point_data["density"]))
