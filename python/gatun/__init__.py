@@ -6,12 +6,14 @@
     gatun.write("out.gtn", mesh.points, mesh.tets, point_data=mesh.point_data)
     gatun.info("out.gtn")["levels"]; gatun.validate("out.gtn")["ok"]
 
-Importing gatun registers ".gtn" with meshio (when meshio is installed): meshio.read("x.gtn") and
-meshio.write("x.gtn", mesh) work for tetrahedral meshes.
+Importing gatun registers ".gtn" with meshio (when meshio is installed; at meshio's own import if it
+comes later, so that gatun alone does not import it): meshio.read("x.gtn") and meshio.write("x.gtn",
+mesh) work for tetrahedral meshes.
 """
 
 from . import _gatun
 from ._errors import (
+    DamagedChunkWarning,
     Error,
     InvalidDataError,
     IoError,
@@ -25,6 +27,7 @@ from ._mesh import Mesh, info, merge_tree_stats, plot_merge_tree, read, validate
 __version__ = _gatun.__version__
 
 __all__ = [
+    "DamagedChunkWarning",
     "Error",
     "InvalidDataError",
     "IoError",
@@ -41,11 +44,43 @@ __all__ = [
     "write",
 ]
 
-try:
-    import meshio as _meshio_module  # noqa: F401
-except ImportError:  # meshio is optional
-    pass
-else:
-    from . import _meshio
+def _register_with_meshio():
+    """Registers .gtn with meshio now if meshio is imported, else when it is: meshio's import (about
+    as long as numpy's) is not paid by a program that never uses it."""
+    import sys
 
-    _meshio.register()
+    if "meshio" in sys.modules:
+        from . import _meshio
+
+        _meshio.register()
+        return
+    import importlib.abc
+    import importlib.util
+
+    class _Loader(importlib.abc.Loader):
+        def __init__(self, loader):
+            self._loader = loader
+
+        def create_module(self, spec):
+            return self._loader.create_module(spec)
+
+        def exec_module(self, module):
+            self._loader.exec_module(module)
+            from . import _meshio
+
+            _meshio.register()
+
+    class _Finder(importlib.abc.MetaPathFinder):
+        def find_spec(self, name, path=None, target=None):
+            if name != "meshio":
+                return None
+            sys.meta_path.remove(self)  # once; the search below goes to the other finders
+            spec = importlib.util.find_spec(name)
+            if spec is not None and spec.loader is not None and hasattr(spec.loader, "exec_module"):
+                spec.loader = _Loader(spec.loader)
+            return spec
+
+    sys.meta_path.insert(0, _Finder())
+
+
+_register_with_meshio()

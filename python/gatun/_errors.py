@@ -30,3 +30,7 @@ class UsageError(Error, ValueError):
 
 class IoError(Error, OSError):
     """A file could not be opened, read or written (gtn exit code 3)."""
+
+
+class DamagedChunkWarning(UserWarning):
+    """A chunk that a read did not need fails its checksum (the text `gtn` prints after "gtn: warning: ")."""

@@ -6,6 +6,7 @@ import warnings
 import numpy as np
 
 from . import _gatun
+from ._errors import DamagedChunkWarning
 
 
 class Mesh:
@@ -52,10 +53,14 @@ def read(path, level=None, ratio=None, fields=None, box=None, threads=None):
     box     (xmin, ymin, zmin, xmax, ymax, zmax): only the tetrahedra that meet this box, with the
             points they use. The file is decoded whole and then filtered (files are not yet cut into
             pieces that could be read alone).
-    threads accepted for the future; the decoder runs on one thread.
+    threads the most threads the library's parallel parts (TBB) may use during the call (default: every
+            core). A level decodes on one thread (until files are cut into pieces), so today this
+            bounds nothing a read does; gatun.write's threads bounds the ranking and the check.
 
     The arrays are handed over from the decoder without a copy (float32 coordinates are narrowed from
     the decoder's doubles once). Raises a gatun.Error subclass with the message `gtn` would print.
+    Every chunk's checksum is checked, as `gtn export` does: damage in a chunk the read does not need
+    (another level, the merge tree) is a gatun.DamagedChunkWarning with gtn's warning text.
     """
     if level is not None and ratio is not None:
         raise _usage(f"{os.fspath(path)}: level and ratio exclude each other")
@@ -69,6 +74,8 @@ def read(path, level=None, ratio=None, fields=None, box=None, threads=None):
         box=None if box is None else [float(v) for v in box],
         threads=None if threads is None else int(threads),
     )
+    for message in d["warnings"]:
+        warnings.warn(DamagedChunkWarning(message), stacklevel=2)
     return Mesh(
         d["points"], d["tets"], d["point_data"], d["cell_data"], d["metadata"], d["level"], d["merges"], d["ratio"]
     )
@@ -89,6 +96,7 @@ def write(
     simplify_field="",
     w_density=1.0,
     w_geometry=1.0,
+    threads=None,
 ):
     """Writes a .gtn file as `gtn convert` does, with the same defaults.
 
@@ -100,6 +108,7 @@ def write(
     merge_tree  store the merge trees (on-the-fly simplification); False = --no-merge-tree
     verify      decode every level back and compare before the file is renamed into place
     simplify_field, w_density, w_geometry: the ranking's density field and weights (--simplify-field ...)
+    threads     the most threads the ranking and the check may use (default: every core)
 
     The file appears atomically, only when everything succeeded.
     """
@@ -122,6 +131,7 @@ def write(
         str(simplify_field),
         float(w_density),
         float(w_geometry),
+        None if threads is None else int(threads),
     )
     for message in found:
         warnings.warn(message, stacklevel=2)

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
 
 #include "convert/import.h"
 #include "format/decode_fields.h"
@@ -92,22 +93,39 @@ py::dict fieldArrays(std::vector<Field>& fields) {
   return d;
 }
 
+// `threads`: the most threads TBB may use while a call runs (tbb::global_control; process-wide, and
+// calls that overlap get the smallest of their values). Unset: TBB's default (every core).
+struct ThreadLimit {
+  explicit ThreadLimit(std::optional<int> threads) {
+    if (threads) limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(*threads));
+  }
+  std::optional<tbb::global_control> limit;
+};
+
+void checkThreads(const std::string& what, std::optional<int> threads) {
+  if (threads && *threads < 1)
+    raise(usageError(what + ": threads " + std::to_string(*threads) + " must be 1 or more"));
+}
+
 py::object jsonToPython(const nlohmann::json& j) {
   // Through Python's json module, so that numbers, nulls and nesting come out as json.loads gives them.
   const std::string text = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   return py::module_::import("json").attr("loads")(text);
 }
 
-py::dict readGtn(const std::string& path, std::optional<size_t> level, std::optional<double> ratio,
+py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::optional<double> ratio,
                  std::optional<std::vector<std::string>> field_names, std::optional<std::vector<double>> box,
                  std::optional<int> threads) {
   if (level && ratio) raise(usageError(path + ": level and ratio exclude each other"));
   if (ratio && !(*ratio >= 0 && *ratio <= 1))
     raise(usageError(path + ": ratio " + std::to_string(*ratio) + " is not between 0 and 1"));
-  if (threads && *threads < 1) raise(usageError(path + ": threads must be 1 or more"));
+  checkThreads(path, threads);
+  if (level && *level < 0) raise(usageError(path + ": level " + std::to_string(*level) + " is negative"));
   double lo[3], hi[3];
   if (box) {
-    if (box->size() != 6) raise(usageError(path + ": box is (xmin, ymin, zmin, xmax, ymax, zmax)"));
+    if (box->size() != 6)
+      raise(usageError(path + ": box has " + std::to_string(box->size()) +
+                       " values, not 6 (xmin, ymin, zmin, xmax, ymax, zmax)"));
     for (int k = 0; k < 3; ++k) {
       lo[k] = (*box)[k];
       hi[k] = (*box)[k + 3];
@@ -116,14 +134,18 @@ py::dict readGtn(const std::string& path, std::optional<size_t> level, std::opti
     }
   }
   TetMeshBuilder builder;
+  std::vector<std::string> damage;
   size_t level_read = 0;
   uint64_t merges = 0;
   double level_ratio = 0;
   {
     py::gil_scoped_release release;
+    const ThreadLimit limit(threads);
     GtnOpenOptions oo;
     oo.verify = false;  // random access through the directory; every chunk read is still checksummed
-    auto opened = GtnReader::open(path, oo);
+    // As `gtn export`: every chunk's checksum is checked; damage in a chunk this read does not need
+    // comes back as a warning, in one it needs as the error.
+    auto opened = openGtnChecked(path, oo, [&damage](const std::string& w) { damage.push_back(w); });
     if (!opened.isOk()) {
       // A mesh file given to read: say what reads it.
       const InputFormat in_format = detectInputFormat(path);
@@ -134,7 +156,7 @@ py::dict readGtn(const std::string& path, std::optional<size_t> level, std::opti
     }
     std::unique_ptr<GtnReader> reader = valueOr(std::move(opened));
     GtnReader& r = *reader;
-    level_read = level.value_or(0);
+    level_read = static_cast<size_t>(level.value_or(0));
     if (level_read >= r.levels())
       raise(usageError(path + ": level " + std::to_string(level_read) + ": the file holds " +
                        std::to_string(r.levels()) + " level(s), 0 to " + std::to_string(r.levels() - 1)));
@@ -177,7 +199,23 @@ py::dict readGtn(const std::string& path, std::optional<size_t> level, std::opti
   out["level"] = level_read;
   out["merges"] = merges;
   out["ratio"] = level_ratio;
+  out["warnings"] = damage;
   return out;
+}
+
+// The library's decode of a stored level into a mesh in memory, as `gtn export` does before it
+// writes (bench/python compares gatun.read with it): no Python objects, only the counts come back.
+py::tuple decodeOnly(const std::string& path, size_t level) {
+  TetMeshBuilder builder;
+  {
+    py::gil_scoped_release release;
+    GtnOpenOptions oo;
+    oo.verify = false;
+    std::unique_ptr<GtnReader> reader = valueOr(openGtnChecked(path, oo, nullptr));
+    if (level >= reader->levels()) raise(usageError(path + ": level " + std::to_string(level) + " does not exist"));
+    check(reader->decodeLevel(level, builder));
+  }
+  return py::make_tuple(builder.mesh().numPoints(), builder.mesh().numTets());
 }
 
 ScalarType scalarTypeOf(const py::array& a, const std::string& what) {
@@ -221,8 +259,9 @@ std::vector<Field> fieldsFrom(const py::dict& data, size_t items, const std::str
 
 py::list writeGtn(const std::string& path, py::array points, py::array tets, py::dict point_data, py::dict cell_data,
                   py::dict metadata, int levels, bool merge_tree, double level_storage, bool verify,
-                  const std::string& simplify_field, double w_density, double w_geometry) {
+                  const std::string& simplify_field, double w_density, double w_geometry, std::optional<int> threads) {
   const std::string source = "gatun.write(" + path + ")";
+  checkThreads(source, threads);
   TetMesh mesh;
   {
     py::array p = py::array::ensure(points, py::array::c_style);
@@ -261,6 +300,7 @@ py::list writeGtn(const std::string& path, py::array points, py::array tets, py:
   std::vector<std::string> warnings;
   {
     py::gil_scoped_release release;
+    const ThreadLimit limit(threads);
     check(mesh.checkConsistency(source));
     // What an importer does last (orientation by exact predicates), as `gtn convert` has it done.
     ImportResult imported{std::move(mesh), {}};
@@ -344,9 +384,11 @@ PYBIND11_MODULE(_gatun, m) {
   m.attr("__version__") = GTN_VERSION_STRING;
   m.def("read", &readGtn, py::arg("path"), py::arg("level") = py::none(), py::arg("ratio") = py::none(),
         py::arg("fields") = py::none(), py::arg("box") = py::none(), py::arg("threads") = py::none());
+  m.def("decode", &decodeOnly, py::arg("path"), py::arg("level") = 0);
   m.def("write", &writeGtn, py::arg("path"), py::arg("points"), py::arg("tets"), py::arg("point_data"),
         py::arg("cell_data"), py::arg("metadata"), py::arg("levels"), py::arg("merge_tree"), py::arg("level_storage"),
-        py::arg("verify"), py::arg("simplify_field"), py::arg("w_density"), py::arg("w_geometry"));
+        py::arg("verify"), py::arg("simplify_field"), py::arg("w_density"), py::arg("w_geometry"),
+        py::arg("threads") = py::none());
   m.def("info", &info, py::arg("inputs"), py::arg("merge_tree"));
   m.def("validate", &validate, py::arg("path"), py::arg("against"), py::arg("quick"), py::arg("max_issues"));
   m.def("merge_tree", &mergeTree, py::arg("path"));

@@ -1,5 +1,7 @@
 """`import gatun` registers .gtn with meshio: meshio -> .gtn -> meshio keeps the mesh (up to renumbering)."""
 
+import subprocess
+import sys
 import warnings
 
 import meshio
@@ -31,6 +33,24 @@ def assert_same(a, b):
 
 def test_registered():
     assert "gatun" in meshio._helpers.extension_to_filetypes[".gtn"]
+
+
+def test_meshio_imported_after_gatun(converted):
+    # import gatun does not import meshio (its import costs as much as numpy's); meshio imported
+    # afterwards knows .gtn, and reads the same mesh as gatun.read.
+    code = (
+        "import sys, gatun\n"
+        "assert 'meshio' not in sys.modules\n"
+        "import meshio\n"
+        f"m = meshio.read({str(converted['bluntfin'])!r})\n"
+        f"g = gatun.read({str(converted['bluntfin'])!r})\n"
+        "assert (m.points == g.points).all() and (m.cells[0].data == g.tets).all()\n"
+        "assert sorted(m.point_data) == sorted(g.point_data)\n"
+        "print(len(m.cells[0].data))\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == [str(len(gatun.read(converted["bluntfin"]).tets))]
 
 
 def test_round_trip_medit_bunny(data_dir, tmp_path):
@@ -72,3 +92,19 @@ def test_other_cells_are_refused(tmp_path):
     with pytest.raises(gatun.UsageError, match=r"tetrahedra only; the mesh has other cells \(2 triangle\)"):
         meshio.write(path, mesh)
     assert not path.exists()
+
+
+def test_meshio_write_takes_gatun_write_options(converted, tmp_path):
+    # meshio.write passes its keyword arguments on to gatun.write.
+    source = gatun.read(converted["bluntfin"], level=3)
+    mesh = meshio.Mesh(source.points, [("tetra", source.tets)], point_data=source.point_data)
+    path = tmp_path / "one-level.gtn"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        meshio.write(path, mesh, levels=0, merge_tree=False)
+    info = gatun.info(path, merge_tree=True)
+    assert len(info["levels"]) == 1 and info["merge_tree"] is None
+    assert info["levels"][0]["tets"] == len(source.tets)
+    back = meshio.read(path)
+    assert back.points.dtype == np.float32
+    assert np.array_equal(np.sort(back.point_data["density"]), np.sort(source.point_data["density"]))

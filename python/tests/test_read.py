@@ -89,10 +89,14 @@ def test_fields_selection_equals_export(gtn, converted, tmp_path):
     assert_matches_export(mesh, exported(gtn, converted["bluntfin"], tmp_path, "--fields", "momentum"))
 
 
-def test_box_keeps_the_tetrahedra_meeting_it(converted):
-    full = gatun.read(converted["bluntfin"])
+@pytest.mark.parametrize("how", [{}, {"level": 2}, {"ratio": 0.6, "fields": ["density"]}])
+def test_box_keeps_the_tetrahedra_meeting_it(converted, how):
+    # The box applies to whatever level, ratio and fields the read decodes.
+    full = gatun.read(converted["bluntfin"], **how)
     box = np.array([0.0, 1.0, 0.5, 3.0, 3.0, 2.0])
-    part = gatun.read(converted["bluntfin"], box=box)
+    part = gatun.read(converted["bluntfin"], box=box, **how)
+    assert (part.level, part.merges, part.ratio) == (full.level, full.merges, full.ratio)
+    assert sorted(part.point_data) == sorted(full.point_data)
     lo, hi = box[:3], box[3:]
     assert 0 < len(part.tets) < len(full.tets)
     # Points are those the kept tetrahedra use, each with its values.
@@ -134,16 +138,23 @@ def test_bad_arguments_and_files(gtn, converted, data_dir, tmp_path):
         gatun.read(converted["bunny"], level=9)
     with pytest.raises(gatun.UsageError, match="no field named 'nope'"):
         gatun.read(converted["bunny"], fields=["nope"])
-    with pytest.raises(gatun.UsageError, match="box"):
+    with pytest.raises(gatun.UsageError, match="level -1 is negative"):
+        gatun.read(converted["bunny"], level=-1)
+    with pytest.raises(gatun.UsageError, match="box: its minimum must not exceed its maximum"):
         gatun.read(converted["bunny"], box=(1, 1, 1, 0, 0, 0))
-    with pytest.raises(gatun.UsageError, match="threads"):
+    with pytest.raises(gatun.UsageError, match=r"box has 5 values, not 6 \(xmin, ymin, zmin, xmax, ymax, zmax\)"):
+        gatun.read(converted["bunny"], box=(0, 0, 0, 1, 1))
+    with pytest.raises(gatun.UsageError, match="threads 0 must be 1 or more"):
         gatun.read(converted["bunny"], threads=0)
     with pytest.raises(gatun.UsageError, match="bunny.mesh: a Medit file, not .gtn: gatun.read reads .gtn files"):
         gatun.read(data_dir / "medit" / "bunny.mesh")
-    missing = tmp_path / "missing.gtn"
-    with pytest.raises(OSError) as e:
-        gatun.read(missing)
-    assert isinstance(e.value, gatun.IoError) and isinstance(e.value, gatun.Error)
+    # A missing file and a directory: the message `gtn export` prints.
+    for missing in (tmp_path / "missing.gtn", tmp_path):
+        with pytest.raises(OSError) as e:
+            gatun.read(missing)
+        assert isinstance(e.value, gatun.IoError) and isinstance(e.value, gatun.Error)
+        r = gtn.run("export", missing, "-o", tmp_path / "out.vtu", check=False)
+        assert r.returncode == 3 and r.stderr.strip() == "gtn: error: " + str(e.value)
     # A damaged file: the exception carries the message gtn prints.
     data = bytearray(converted["bunny"].read_bytes())
     info = gatun.info(converted["bunny"])
@@ -183,3 +194,52 @@ def test_ratio_counts_the_points_tetrahedra_use(tmp_path):
         gatun.write(path, points, tets, levels=2)
     mesh = gatun.read(path, ratio=0.3)
     assert mesh.ratio == pytest.approx(0.3, abs=2.0 / len(grid))
+
+
+def test_threads_bound_the_call_and_change_nothing(converted):
+    # A level decodes on one thread; threads bounds TBB for the call and leaves the result alone.
+    one = gatun.read(converted["bluntfin"], threads=1, box=(0.0, 1.0, 0.5, 3.0, 3.0, 2.0))
+    many = gatun.read(converted["bluntfin"], threads=4, box=(0.0, 1.0, 0.5, 3.0, 3.0, 2.0))
+    assert_same_array(one.points, many.points)
+    assert_same_array(one.tets, many.tets)
+    assert sorted(one.point_data) == sorted(many.point_data)
+    for name in one.point_data:
+        assert_same_array(one.point_data[name], many.point_data[name])
+
+
+@pytest.mark.parametrize("level", [0, 2])
+def test_library_decode_counts(converted, level):
+    # gatun._gatun.decode, bench/python's baseline, decodes the same level as gatun.read.
+    from gatun import _gatun
+
+    mesh = gatun.read(converted["bluntfin"], level=level)
+    assert _gatun.decode(str(converted["bluntfin"]), level) == (len(mesh.points), len(mesh.tets))
+    with pytest.raises(gatun.UsageError, match="level 9 does not exist"):
+        _gatun.decode(str(converted["bluntfin"]), 9)
+
+
+def test_damage_elsewhere_is_a_warning_as_in_gtn_export(gtn, converted, tmp_path):
+    # A byte flipped inside level 3: reading level 0 warns as `gtn export` does and decodes; reading
+    # level 3 fails with gtn's error.
+    path = converted["bluntfin"]
+    info = gatun.info(path)
+    head = sum(s["bytes"] for s in info["sections"] if s["name"] in ("prefix", "header"))
+    start = head + sum(l["bytes"] for l in info["levels"][:3])
+    data = bytearray(path.read_bytes())
+    data[start + info["levels"][3]["bytes"] // 2] ^= 0x5A
+    bad = tmp_path / "damaged.gtn"
+    bad.write_bytes(bytes(data))
+    r = gtn.run("export", bad, "-o", tmp_path / "level0.vtu")
+    said = [line[len("gtn: warning: "):] for line in r.stderr.splitlines() if line.startswith("gtn: warning: ")]
+    assert len(said) == 1 and "checksum mismatch" in said[0]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mesh = gatun.read(bad)
+    assert [str(w.message) for w in caught] == said
+    assert all(w.category is gatun.DamagedChunkWarning for w in caught)
+    assert_matches_export(mesh, meshio.read(tmp_path / "level0.vtu"))
+    r = gtn.run("export", bad, "--level", 3, "-o", tmp_path / "level3.vtu", check=False)
+    assert r.returncode == 1
+    with pytest.raises(gatun.InvalidDataError) as e:
+        gatun.read(bad, level=3)
+    assert r.stderr.strip() == "gtn: error: " + str(e.value)

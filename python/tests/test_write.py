@@ -1,5 +1,7 @@
 """gatun.write against `gtn convert`: the same encoder, levels, verification and atomic output."""
 
+import os
+import threading
 import warnings
 
 import numpy as np
@@ -113,3 +115,47 @@ def test_what_the_import_step_changes_is_said(tmp_path):
             gatun.write(tmp_path / "flat.gtn", points, tets, levels=0, merge_tree=False)
         said.append([str(w.message) for w in caught if "reoriented to agree with their neighbours" in str(w.message)])
     assert sorted(len(s) for s in said) == [0, 1], said
+
+
+def cpu_ticks_by_thread():
+    ticks = {}
+    for tid in os.listdir("/proc/self/task"):
+        try:
+            with open(f"/proc/self/task/{tid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except FileNotFoundError:  # a thread that ended meanwhile
+            continue
+        ticks[int(tid)] = int(fields[11]) + int(fields[12])  # utime + stime
+    return ticks
+
+
+def other_threads_ticks(fn):
+    """CPU clock ticks that threads other than the calling one spent while fn ran."""
+    me = threading.get_native_id()
+    before = cpu_ticks_by_thread()
+    fn()
+    after = cpu_ticks_by_thread()
+    return sum(t - before.get(tid, 0) for tid, t in after.items() if tid != me)
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task") or len(os.sched_getaffinity(0)) < 2,
+                    reason="needs Linux's per-thread CPU times and two cores")
+def test_threads_bounds_tbb_for_the_call(converted, tmp_path):
+    # The ranking runs in parallel (TBB): threads=1 keeps all of it on the calling thread, and the
+    # limit ends with the call.
+    mesh = gatun.read(converted["bluntfin"], level=2)
+
+    def write(threads):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            gatun.write(tmp_path / f"t{threads}.gtn", mesh.points, mesh.tets, point_data=mesh.point_data,
+                        levels=1, threads=threads)
+
+    assert other_threads_ticks(lambda: write(1)) == 0
+    assert other_threads_ticks(lambda: write(None)) > 0
+    # The same file whatever the threads (the provenance names the output, so compare levels).
+    a, b = gatun.info(tmp_path / "t1.gtn"), gatun.info(tmp_path / "tNone.gtn")
+    assert sections(a) == sections(b)
+    assert gatun.read(tmp_path / "t1.gtn").tets.tobytes() == gatun.read(tmp_path / "tNone.gtn").tets.tobytes()
+    with pytest.raises(gatun.UsageError, match="threads 0 must be 1 or more"):
+        gatun.write(tmp_path / "t0.gtn", mesh.points, mesh.tets, threads=0)
