@@ -298,6 +298,54 @@ struct Scan {
   return lorenzo(p, i, j, k, si, sj, sk);
 }
 
+// Walks a value stream's values in coding order (section 11.3): the nodes in node order (aliases
+// take their target's values), component by component, each predicted by its component's predictor
+// from the decoded values d (per node and component), then the extra points, each predicted by the
+// mean of its cell's corners. codeOne(component, vertex, prediction, &value) codes one value; `ok()`
+// is asked after each k-plane and at the end, and false stops the walk (returned).
+template <class F, class Ok>
+bool scanValues(const Scan& scan, uint32_t comps, const std::vector<Form>& forms, std::vector<double>& d, F&& codeOne, Ok&& ok) {
+  const uint64_t nodes = uint64_t{scan.ni} * scan.nj * scan.nk;
+  d.resize(nodes * comps);
+  uint8_t predictors[64];
+  const bool uniform_lorenzo = std::all_of(forms.begin(), forms.end(), [](const Form& f) { return f.predictor == 0; });
+  for (uint32_t cc = 0; cc < comps && cc < 64; ++cc) predictors[cc] = forms[cc].predictor;
+  const size_t si = comps, sj = si * scan.ni, sk = sj * scan.nj;
+  uint64_t v = 0, n = 0;
+  for (uint32_t k = 0; k < scan.nk; ++k) {
+    for (uint32_t j = 0; j < scan.nj; ++j) {
+      for (uint32_t i = 0; i < scan.ni; ++i, ++n) {
+        double* p = &d[n * comps];
+        if (scan.alias_target) {
+          const uint32_t t = (*scan.alias_target)[n];
+          if (t != kNoIndex) {
+            std::memcpy(p, &d[uint64_t{t} * comps], comps * sizeof(double));
+            continue;
+          }
+        }
+        if (uniform_lorenzo) {
+          for (uint32_t cc = 0; cc < comps; ++cc) codeOne(cc, v, lorenzo(p + cc, i, j, k, si, sj, sk), p + cc);
+        } else {
+          for (uint32_t cc = 0; cc < comps; ++cc)
+            codeOne(cc, v, predict(cc < 64 ? predictors[cc] : forms[cc].predictor, p + cc, i, j, k, si, sj, sk), p + cc);
+        }
+        ++v;
+      }
+    }
+    if (!ok()) return false;
+  }
+  for (uint64_t base : scan.extra_cell_base) {
+    for (uint32_t cc = 0; cc < comps; ++cc) {
+      double sum = d[(base + scan.corner_offset[0]) * comps + cc];
+      for (int q = 1; q < 8; ++q) sum += d[(base + scan.corner_offset[q]) * comps + cc];
+      double value;
+      codeOne(cc, v, sum / 8.0, &value);
+    }
+    ++v;
+  }
+  return ok();
+}
+
 // One value stream (GEOM or a PFLD): the form declarations of its `comps` components, then every
 // vertex's values, component by component (section 11.3). Encoder: `src` holds vertex v's component
 // c at src + v * src_stride + c * size; decoder: `dst` gets them at dst + (v * comps + c) * size.
@@ -313,15 +361,8 @@ Status codeValueStream(C& c, ScalarType type, uint32_t comps, const Scan& scan, 
     GTN_RETURN_IF_ERROR(declareForm(c, dm, vc, type, cc, forms[cc], scan.vertices, what));
   if (!c.ok()) return invalidData(what + " is truncated or corrupt in its declarations");
   const size_t size = scalarSize(type);
-  const uint64_t nodes = uint64_t{scan.ni} * scan.nj * scan.nk;
-  d.resize(nodes * comps);
-  uint8_t predictors[64];
-  const bool uniform_lorenzo = std::all_of(forms.begin(), forms.end(), [](const Form& f) { return f.predictor == 0; });
-  for (uint32_t cc = 0; cc < comps && cc < 64; ++cc) predictors[cc] = forms[cc].predictor;
-  const size_t si = comps, sj = si * scan.ni, sk = sj * scan.nj;
-  uint64_t v = 0, n = 0;
   uint8_t tmp[8];
-  auto codeOne = [&](uint32_t cc, double pred, double* out) [[gnu::always_inline]] {
+  auto codeOne = [&](uint32_t cc, uint64_t v, double pred, double* out) {
     const uint64_t pk = keyFromPrediction(type, pred);
     uint64_t actual = 0;
     if constexpr (C::kEncoding) actual = keyFromRaw(type, src + v * src_stride + cc * size);
@@ -330,39 +371,471 @@ Status codeValueStream(C& c, ScalarType type, uint32_t comps, const Scan& scan, 
     rawFromKey(type, key, raw);
     *out = doubleFromRaw(type, raw);
   };
-  for (uint32_t k = 0; k < scan.nk; ++k) {
-    for (uint32_t j = 0; j < scan.nj; ++j) {
-      for (uint32_t i = 0; i < scan.ni; ++i, ++n) {
-        double* p = &d[n * comps];
-        if (scan.alias_target) {
-          const uint32_t t = (*scan.alias_target)[n];
-          if (t != kNoIndex) {
-            std::memcpy(p, &d[uint64_t{t} * comps], comps * sizeof(double));
-            continue;
-          }
-        }
-        if (uniform_lorenzo) {
-          for (uint32_t cc = 0; cc < comps; ++cc) codeOne(cc, lorenzo(p + cc, i, j, k, si, sj, sk), p + cc);
-        } else {
-          for (uint32_t cc = 0; cc < comps; ++cc)
-            codeOne(cc, predict(cc < 64 ? predictors[cc] : forms[cc].predictor, p + cc, i, j, k, si, sj, sk), p + cc);
-        }
-        ++v;
+  if (!scanValues(scan, comps, forms, d, codeOne, [&] { return c.ok(); })) return invalidData(what + " is truncated or corrupt");
+  return Status::ok();
+}
+
+// ---- Form 1: static canonical prefix codes (section 12.2) --------------------------------------------
+
+// Bits least significant first, in 64-bit little-endian words (the stream is padded with zero bits
+// to a whole word).
+class BitWriter {
+ public:
+  explicit BitWriter(std::vector<uint8_t>* out) : out_(out) {}
+  // n <= 64 bits of v.
+  void put(uint64_t v, int n) {
+    if (n > 32) {
+      put(v & 0xFFFFFFFFu, 32);
+      put(v >> 32, n - 32);
+      return;
+    }
+    if (n == 0) return;
+    acc_ |= (v & ((uint64_t{1} << n) - 1)) << fill_;
+    fill_ += n;
+    while (fill_ >= 8) {
+      out_->push_back(static_cast<uint8_t>(acc_));
+      acc_ >>= 8;
+      fill_ -= 8;
+    }
+  }
+  void finish() {
+    if (fill_ > 0) out_->push_back(static_cast<uint8_t>(acc_));
+    acc_ = 0;
+    fill_ = 0;
+    while (out_->size() % 8 != start_ % 8) out_->push_back(0);
+  }
+
+ private:
+  std::vector<uint8_t>* out_;
+  size_t start_ = out_->size();
+  uint64_t acc_ = 0;
+  int fill_ = 0;
+};
+
+class BitReader {
+ public:
+  explicit BitReader(std::span<const uint8_t> in) : p_(in.data()), size_(in.size()) {}
+  // At least 56 bits in the buffer (zeros past the end, counted as an overrun).
+  [[gnu::always_inline]] void refill() {
+    if (pos_ + 8 <= size_) [[likely]] {
+      uint64_t w;
+      std::memcpy(&w, p_ + pos_, 8);
+      buf_ |= w << avail_;
+      pos_ += (63 - avail_) >> 3;
+      avail_ |= 56;
+      return;
+    }
+    while (avail_ <= 56) {
+      const uint64_t b = pos_ < size_ ? p_[pos_] : 0;
+      ++pos_;
+      buf_ |= b << avail_;
+      avail_ += 8;
+    }
+  }
+  uint64_t peek() const { return buf_; }
+  void skip(int n) {
+    buf_ >>= n;
+    avail_ -= n;
+  }
+  // n <= 56 bits (after a refill).
+  [[gnu::always_inline]] uint64_t take(int n) {
+    const uint64_t v = buf_ & ((uint64_t{1} << n) - 1);
+    skip(n);
+    return v;
+  }
+  uint64_t get(int n) {
+    if (n > 32) {
+      const uint64_t lo = get(32);
+      return lo | (get(n - 32) << 32);
+    }
+    refill();
+    return take(n);
+  }
+  // Bits consumed so far.
+  uint64_t consumed() const { return uint64_t{pos_} * 8 - static_cast<uint64_t>(avail_); }
+  // Every value read inside the stream, and what is left a zero padding of less than a word.
+  bool finishedCleanly() {
+    const uint64_t used = consumed(), total = uint64_t{size_} * 8;
+    if (used > total || total - used >= 64 || size_ % 8 != 0) return false;
+    const int rest = static_cast<int>(total - used);
+    refill();
+    return take(rest) == 0;
+  }
+  bool overrun() const { return consumed() > uint64_t{size_} * 8; }
+
+ private:
+  const uint8_t* p_;
+  size_t size_, pos_ = 0;
+  uint64_t buf_ = 0;
+  int avail_ = 0;
+};
+
+constexpr int kMaxCodeLength = 15;
+constexpr int kTableBits = 11;
+constexpr int kForm1Classes = 4;
+
+// Huffman code lengths (at most kMaxCodeLength) of the symbols with nonzero frequency.
+std::vector<uint8_t> codeLengths(std::vector<uint64_t> freq) {
+  const size_t n = freq.size();
+  std::vector<uint8_t> len(n, 0);
+  std::vector<size_t> used;
+  for (size_t s = 0; s < n; ++s)
+    if (freq[s]) used.push_back(s);
+  if (used.size() == 1) len[used[0]] = 1;
+  if (used.size() <= 1) return len;
+  for (;;) {
+    // Two-queue Huffman over the used symbols sorted by frequency.
+    std::vector<size_t> order = used;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return freq[a] < freq[b]; });
+    struct Node {
+      uint64_t w;
+      int32_t left, right;  // children (node indices), or -1 - symbol for leaves
+    };
+    std::vector<Node> nodes;
+    for (size_t s : order) nodes.push_back({freq[s], -1 - static_cast<int32_t>(s), 0});
+    size_t leaf = 0, inner = order.size();
+    auto take = [&]() {
+      if (leaf < order.size() && (inner >= nodes.size() || nodes[leaf].w <= nodes[inner].w)) return leaf++;
+      return inner++;
+    };
+    while ((order.size() - leaf) + (nodes.size() - inner) > 1) {
+      const size_t a = take(), b = take();
+      nodes.push_back({nodes[a].w + nodes[b].w, static_cast<int32_t>(a), static_cast<int32_t>(b)});
+    }
+    // Depths from the root (the last node).
+    std::vector<uint8_t> depth(nodes.size(), 0);
+    int deepest = 0;
+    for (size_t x = nodes.size(); x-- > order.size();) {
+      for (int32_t child : {nodes[x].left, nodes[x].right}) {
+        depth[static_cast<size_t>(child)] = static_cast<uint8_t>(depth[x] + 1);
+        deepest = std::max<int>(deepest, depth[x] + 1);
       }
     }
-    if (!c.ok()) return invalidData(what + " is truncated or corrupt");
-  }
-  // The extra points, each predicted by the mean of its cell's corners.
-  for (uint64_t base : scan.extra_cell_base) {
-    for (uint32_t cc = 0; cc < comps; ++cc) {
-      double sum = d[(base + scan.corner_offset[0]) * comps + cc];
-      for (int q = 1; q < 8; ++q) sum += d[(base + scan.corner_offset[q]) * comps + cc];
-      double value;
-      codeOne(cc, sum / 8.0, &value);
+    if (deepest <= kMaxCodeLength) {
+      for (size_t x = 0; x < order.size(); ++x) len[static_cast<size_t>(-1 - nodes[x].left)] = depth[x];
+      return len;
     }
-    ++v;
+    for (size_t s : used) freq[s] = (freq[s] + 1) / 2;  // flatten and retry
   }
-  if (!c.ok()) return invalidData(what + " is truncated or corrupt");
+}
+
+// A canonical prefix code: codes (bit-reversed, for least-significant-first reading) and the
+// decoder's table of kTableBits bits with a slow path for longer codes.
+struct PrefixCode {
+  std::vector<uint8_t> len;
+  std::vector<uint32_t> code;  // reversed
+  int single = -1;             // the only symbol, coded in no bits
+  std::vector<uint16_t> table;  // entry: symbol << 4 | length, 0 = longer than kTableBits
+  uint16_t count[kMaxCodeLength + 1] = {};
+  std::vector<uint16_t> sorted;  // symbols by (length, symbol)
+
+  // False for lengths that are not a complete code (or a single symbol).
+  bool build(bool decoder) {
+    const size_t n = len.size();
+    std::fill(std::begin(count), std::end(count), 0);
+    size_t used = 0;
+    for (size_t s = 0; s < n; ++s) {
+      if (len[s] > kMaxCodeLength) return false;
+      if (len[s]) ++count[len[s]], ++used, single = static_cast<int>(s);
+    }
+    if (used == 0) return false;
+    if (used == 1) return true;
+    single = -1;
+    uint64_t kraft = 0;
+    for (int l = 1; l <= kMaxCodeLength; ++l) kraft += uint64_t{count[l]} << (kMaxCodeLength - l);
+    if (kraft != (uint64_t{1} << kMaxCodeLength)) return false;
+    uint32_t next[kMaxCodeLength + 2] = {};
+    for (int l = 1; l <= kMaxCodeLength; ++l) next[l + 1] = (next[l] + count[l]) << 1;
+    code.assign(n, 0);
+    sorted.clear();
+    for (int l = 1; l <= kMaxCodeLength; ++l)
+      for (size_t s = 0; s < n; ++s)
+        if (len[s] == l) sorted.push_back(static_cast<uint16_t>(s));
+    for (size_t s = 0; s < n; ++s) {
+      if (!len[s]) continue;
+      const uint32_t c = next[len[s]]++;
+      uint32_t r = 0;
+      for (int b = 0; b < len[s]; ++b) r |= ((c >> b) & 1) << (len[s] - 1 - b);
+      code[s] = r;
+    }
+    if (decoder) {
+      table.assign(size_t{1} << kTableBits, 0);
+      for (size_t s = 0; s < n; ++s) {
+        if (!len[s] || len[s] > kTableBits) continue;
+        const uint16_t entry = static_cast<uint16_t>(s << 4 | len[s]);
+        for (uint32_t x = code[s]; x < table.size(); x += 1u << len[s]) table[x] = entry;
+      }
+    }
+    return true;
+  }
+  // Reads one symbol (the reader refilled).
+  [[gnu::always_inline]] uint32_t read(BitReader& r) const {
+    if (single >= 0) return static_cast<uint32_t>(single);
+    const uint16_t e = table[r.peek() & ((1u << kTableBits) - 1)];
+    if (e) [[likely]] {
+      r.skip(e & 15);
+      return e >> 4;
+    }
+    // Canonical decoding, one bit at a time (codes longer than the table).
+    uint32_t c = 0, first = 0, index = 0;
+    for (int l = 1; l <= kMaxCodeLength; ++l) {
+      c |= static_cast<uint32_t>(r.take(1));
+      if (c - first < count[l]) return sorted[index + (c - first)];
+      index += count[l];
+      first = (first + count[l]) << 1;
+      c <<= 1;
+    }
+    return 0;  // unreachable for a complete code
+  }
+};
+
+// A component's coding domain in form 1: the width of its residuals and how keys map to it.
+struct Form1Domain {
+  int w = 0;             // residual width
+  int shift = 0;
+  bool escape = false;   // decimal: an escape symbol 2w + 1, then the value's key raw
+  size_t symbols() const { return 2 * static_cast<size_t>(w) + 1 + (escape ? 1 : 0); }
+};
+
+// Whether form 1 can code `f` (it has no per-value escape bit for printed-single values or a shift
+// with exceptions), and its domain.
+bool form1Domain(ScalarType type, const Form& f, Form1Domain* d) {
+  if (f.printed > 0 || f.exceptions) return false;
+  if (!f.table.empty()) {
+    d->w = std::max(1, bitLength(f.table.size() - 1));
+  } else if (f.decimals >= 0) {
+    d->w = 64;
+    d->escape = true;
+  } else {
+    d->shift = static_cast<int>(f.shift);
+    d->w = scalarBits(type) - d->shift;
+  }
+  return true;
+}
+
+[[gnu::always_inline]] inline uint32_t form1Class(uint32_t prev_symbol) { return std::min(prev_symbol >> 4, 3u); }
+
+// The residual of key `k` against `p` (both w bits wide) as its symbol and raw bits.
+[[gnu::always_inline]] inline uint32_t residualSymbol(uint64_t k, uint64_t p, int w, uint64_t* mag_out) {
+  const uint64_t mask = w == 64 ? ~uint64_t{0} : (uint64_t{1} << w) - 1;
+  const uint64_t r = (k - p) & mask;
+  if (r == 0) return *mag_out = 0, 0;
+  const uint64_t half = uint64_t{1} << (w - 1);
+  const bool negative = r >= half;
+  const uint64_t mag = negative ? ((~r + 1) & mask) : r;
+  *mag_out = mag;
+  const uint32_t b = static_cast<uint32_t>(bitLength(mag == 0 ? half : mag));
+  return 2 * b - (negative ? 0 : 1);
+}
+
+// The prediction in a component's form-1 domain.
+[[gnu::always_inline]] inline uint64_t domainPrediction(ScalarType type, const Form& f, const Form1Domain& dom, uint64_t pred_key) {
+  if (!f.table.empty()) {
+    const std::vector<uint64_t>& t = f.table;
+    size_t at = static_cast<size_t>(std::lower_bound(t.begin(), t.end(), pred_key) - t.begin());
+    if (at == t.size() || (at > 0 && pred_key - t[at - 1] <= t[at] - pred_key)) --at;
+    return at;
+  }
+  if (f.decimals >= 0) {
+    uint8_t raw[8];
+    rawFromKey(type, pred_key, raw);
+    const double np = value_detail::clampRound(doubleFromRaw(type, raw) * kPowersOfTen[f.decimals], -kDecimalLimit, kDecimalLimit);
+    return static_cast<uint64_t>(static_cast<int64_t>(np)) ^ (uint64_t{1} << 63);
+  }
+  return pred_key >> dom.shift;
+}
+
+// Form 1's value stream: declarations, code lengths and values (see encodeForm1 / decodeForm1).
+// False when a component's form has no form-1 coding.
+bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::vector<Form>& forms, const uint8_t* src,
+                 size_t stride, std::vector<double>& d, std::vector<uint8_t>* out) {
+  const size_t size = scalarSize(type);
+  const int width = scalarBits(type);
+  std::vector<Form1Domain> dom(comps);
+  for (uint32_t cc = 0; cc < comps; ++cc)
+    if (!form1Domain(type, forms[cc], &dom[cc])) return false;
+  // The value of component cc of vertex v in its domain: its symbol and raw bits.
+  auto symbolOf = [&](uint32_t cc, uint64_t v, double pred, uint64_t* mag, uint64_t* key_out) {
+    const Form& f = forms[cc];
+    const uint64_t key = keyFromRaw(type, src + v * stride + cc * size);
+    *key_out = key;
+    const uint64_t p = domainPrediction(type, f, dom[cc], keyFromPrediction(type, pred));
+    uint64_t k;
+    if (!f.table.empty()) {
+      k = static_cast<uint64_t>(std::lower_bound(f.table.begin(), f.table.end(), key) - f.table.begin());
+    } else if (f.decimals >= 0) {
+      int64_t n = 0;
+      if (!decimalInteger(type, key, f.decimals, &n)) return static_cast<uint32_t>(2 * dom[cc].w + 1);  // escape
+      k = static_cast<uint64_t>(n) ^ (uint64_t{1} << 63);
+    } else {
+      k = key >> dom[cc].shift;
+    }
+    return residualSymbol(k, p, dom[cc].w, mag);
+  };
+  // Pass 1: symbol frequencies per component and class.
+  std::vector<std::vector<uint64_t>> freq(size_t{comps} * kForm1Classes);
+  for (uint32_t cc = 0; cc < comps; ++cc)
+    for (int k = 0; k < kForm1Classes; ++k) freq[cc * kForm1Classes + k].assign(dom[cc].symbols(), 0);
+  std::vector<uint32_t> prev(comps, 0);
+  auto count = [&](uint32_t cc, uint64_t v, double pred, double* value) {
+    uint64_t mag, key;
+    const uint32_t s = symbolOf(cc, v, pred, &mag, &key);
+    ++freq[cc * kForm1Classes + form1Class(prev[cc])][s];
+    prev[cc] = s;
+    *value = doubleFromRaw(type, src + v * stride + cc * size);
+  };
+  scanValues(scan, comps, forms, d, count, [] { return true; });
+  std::vector<PrefixCode> codes(freq.size());
+  for (size_t x = 0; x < freq.size(); ++x) {
+    codes[x].len = codeLengths(freq[x]);
+    if (std::any_of(codes[x].len.begin(), codes[x].len.end(), [](uint8_t l) { return l != 0; })) codes[x].build(false);
+  }
+  // Pass 2: the stream.
+  BitWriter w(out);
+  for (uint32_t cc = 0; cc < comps; ++cc) {
+    const Form& f = forms[cc];
+    w.put(f.predictor, 2);
+    w.put(!f.table.empty(), 1);
+    if (!f.table.empty()) {
+      const uint64_t last = f.table.size() - 1;
+      w.put(static_cast<uint64_t>(bitLength(last)), 6);
+      w.put(last, bitLength(last));
+      for (uint64_t key : f.table) w.put(key, width);
+    } else {
+      if (isFloatType(type)) {
+        w.put(f.decimals >= 0, 1);
+        if (f.decimals >= 0) w.put(static_cast<uint64_t>(f.decimals), 5);
+        if (type == ScalarType::kFloat64 && f.decimals < 0) w.put(0, 1);  // printed: never in form 1
+      }
+      if (f.decimals < 0) {
+        w.put(f.shift > 0, 1);
+        if (f.shift > 0) w.put(f.shift, 6), w.put(0, 1);  // no exceptions in form 1
+      }
+    }
+    for (int k = 0; k < kForm1Classes; ++k) {
+      const PrefixCode& pc = codes[cc * kForm1Classes + k];
+      const bool used = std::any_of(pc.len.begin(), pc.len.end(), [](uint8_t l) { return l != 0; });
+      w.put(used, 1);
+      if (used)
+        for (uint8_t l : pc.len) w.put(l, 4);
+    }
+  }
+  std::fill(prev.begin(), prev.end(), 0);
+  auto write = [&](uint32_t cc, uint64_t v, double pred, double* value) {
+    uint64_t mag, key;
+    const uint32_t s = symbolOf(cc, v, pred, &mag, &key);
+    const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(prev[cc])];
+    prev[cc] = s;
+    if (pc.single < 0) w.put(pc.code[s], pc.len[s]);
+    if (s == 2 * static_cast<uint32_t>(dom[cc].w) + 1) {
+      w.put(key, width);
+    } else if (s > 0) {
+      const int b = static_cast<int>((s + 1) >> 1);
+      w.put(mag, b - 1);  // below the leading one (put masks it off)
+    }
+    *value = doubleFromRaw(type, src + v * stride + cc * size);
+  };
+  scanValues(scan, comps, forms, d, write, [] { return true; });
+  w.finish();
+  return true;
+}
+
+Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps, const Scan& scan, uint8_t* dst,
+                   std::vector<double>& d, const std::string& what) {
+  BitReader r(in);
+  const size_t size = scalarSize(type);
+  const int width = scalarBits(type);
+  std::vector<Form> forms(comps);
+  std::vector<Form1Domain> dom(comps);
+  std::vector<PrefixCode> codes(size_t{comps} * kForm1Classes);
+  auto bad = [&](const std::string& reason) { return invalidData(what + " (form 1): " + reason); };
+  for (uint32_t cc = 0; cc < comps; ++cc) {
+    Form& f = forms[cc];
+    const std::string comp = "component " + std::to_string(cc);
+    f.predictor = static_cast<uint8_t>(r.get(2));
+    if (f.predictor > 2) return bad(comp + " declares the reserved predictor 3");
+    if (r.get(1)) {
+      const int length = static_cast<int>(r.get(6));
+      if (length > 32) return bad(comp + " declares a table of more than 2^32 values");
+      const uint64_t entries = r.get(length) + 1;
+      if (entries > scan.vertices || entries * static_cast<uint64_t>(width) > in.size() * 8)
+        return bad(comp + " declares a value table longer than its values or its stream");
+      f.table.resize(entries);
+      for (uint64_t x = 0; x < entries; ++x) {
+        f.table[x] = r.get(width);
+        if (x > 0 && f.table[x] <= f.table[x - 1]) return bad(comp + " declares a value table that is not ascending");
+      }
+    } else {
+      if (isFloatType(type)) {
+        if (r.get(1)) {
+          f.decimals = static_cast<int>(r.get(5));
+          if (f.decimals > ValueCoder::kMaxDecimals) return bad(comp + " declares more than 22 decimal places");
+        } else if (type == ScalarType::kFloat64 && r.get(1)) {
+          return bad(comp + " declares the printed-single form, which form 1 does not code");
+        }
+      }
+      if (f.decimals < 0 && r.get(1)) {
+        f.shift = static_cast<uint32_t>(r.get(6));
+        if (f.shift == 0 || f.shift >= static_cast<uint32_t>(width)) return bad(comp + " declares an invalid shift");
+        if (r.get(1)) return bad(comp + " declares a shift with exceptions, which form 1 does not code");
+      }
+    }
+    form1Domain(type, f, &dom[cc]);
+    for (int k = 0; k < kForm1Classes; ++k) {
+      PrefixCode& pc = codes[cc * kForm1Classes + k];
+      if (!r.get(1)) continue;
+      pc.len.resize(dom[cc].symbols());
+      for (uint8_t& l : pc.len) l = static_cast<uint8_t>(r.get(4));
+      if (!pc.build(true)) return bad(comp + " declares code lengths that are not a complete prefix code");
+    }
+    if (r.overrun()) return bad("truncated in its declarations");
+  }
+  std::vector<uint32_t> prev(comps, 0);
+  bool corrupt = false;
+  auto decodeOne = [&](uint32_t cc, uint64_t v, double pred, double* value) {
+    const Form& f = forms[cc];
+    const Form1Domain& dm = dom[cc];
+    const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(prev[cc])];
+    uint8_t* raw = dst + (v * comps + cc) * size;
+    r.refill();
+    if (pc.len.empty()) [[unlikely]] {
+      corrupt = true;
+      std::memset(raw, 0, size);
+      *value = 0;
+      return;
+    }
+    const uint32_t s = pc.read(r);
+    prev[cc] = s;
+    uint64_t key;
+    if (s == 2 * static_cast<uint32_t>(dm.w) + 1) {
+      key = r.get(width);
+    } else {
+      const uint64_t p = domainPrediction(type, f, dm, keyFromPrediction(type, pred));
+      uint64_t k = p;
+      if (s > 0) {
+        const int b = static_cast<int>((s + 1) >> 1);
+        const uint64_t mag = (uint64_t{1} << (b - 1)) | (b - 1 <= 40 ? r.take(b - 1) : r.get(b - 1));
+        k = (s & 1) ? p + mag : p - mag;
+        if (dm.w < 64) k &= (uint64_t{1} << dm.w) - 1;
+      }
+      if (!f.table.empty()) {
+        if (k >= f.table.size()) corrupt = true, k = 0;
+        key = f.table[k];
+      } else if (f.decimals >= 0) {
+        decimalValue(type, static_cast<int64_t>(k ^ (uint64_t{1} << 63)), f.decimals, raw);
+        key = keyFromRaw(type, raw);
+      } else {
+        const int z = dm.shift;
+        const bool ones = z > 0 && isFloatType(type) && ((k >> (dm.w - 1)) & 1) == 0;
+        key = (k << z) | (ones ? (uint64_t{1} << z) - 1 : 0);
+      }
+    }
+    rawFromKey(type, key, raw);
+    *value = doubleFromRaw(type, raw);
+  };
+  if (!scanValues(scan, comps, forms, d, decodeOne, [&] { return !corrupt && !r.overrun(); }))
+    return bad("truncated or corrupt (a value beyond its code or its table, or past the end)");
+  if (!r.finishedCleanly()) return bad("corrupt, truncated or has trailing bytes");
   return Status::ok();
 }
 
@@ -858,7 +1331,7 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
   // alone, but for the declarations' models).
   std::vector<double> scratch;
   auto valueStream = [&](ScalarType type, uint32_t comps, const uint8_t* src, size_t stride,
-                         const std::string& name) -> StatusOr<std::vector<uint8_t>> {
+                         const std::string& name) -> StatusOr<std::pair<uint8_t, std::vector<uint8_t>>> {
     std::vector<Form> chosen(comps);
     const size_t size = scalarSize(type);
     for (uint32_t cc = 0; cc < comps; ++cc) {
@@ -893,17 +1366,33 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
     EntropyCoder<true> c(&out);
     GTN_RETURN_IF_ERROR(codeValueStream(c, type, comps, scan, chosen, src, stride, nullptr, scratch, name));
     c.finish();
-    return out;
+    // Form 1 (static prefix codes, faster to decode) where it applies: kept when asked for, or by
+    // default when at most 2% larger (section 12).
+    uint8_t form = 0;
+    if (options.value_form != 0) {
+      std::vector<uint8_t> fast;
+      if (encodeForm1(type, comps, scan, chosen, src, stride, scratch, &fast) &&
+          (options.value_form == 1 || fast.size() * 100 <= out.size() * 102)) {
+        out = std::move(fast);
+        form = 1;
+      }
+    }
+    rep.stream_forms.push_back(form);
+    return std::make_pair(form, std::move(out));
   };
 
   std::vector<uint8_t> coords(V * 3 * scalarSize(mesh.coord_type));
   for (uint64_t i = 0; i < V * 3; ++i) storeCoordinate(mesh.coord_type, mesh.coords[i], &coords[i * scalarSize(mesh.coord_type)]);
-  GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> geom, valueStream(mesh.coord_type, 3, coords.data(), 3 * scalarSize(mesh.coord_type), "GEOM"));
+  GTN_ASSIGN_OR_RETURN(auto geom_stream, valueStream(mesh.coord_type, 3, coords.data(), 3 * scalarSize(mesh.coord_type), "GEOM"));
+  std::vector<uint8_t> geom = std::move(geom_stream.second);
+  std::vector<uint8_t> forms{0, 0, geom_stream.first};  // EXCP, GRID, GEOM, then the fields'
   std::vector<std::vector<uint8_t>> pfld, cfld;
   for (const Field& f : mesh.point_fields) {
-    GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> s, valueStream(f.type, f.components, f.bytes.data(), (f.components * f.valueSize()), "PFLD"));
-    pfld.push_back(std::move(s));
+    GTN_ASSIGN_OR_RETURN(auto s, valueStream(f.type, f.components, f.bytes.data(), (f.components * f.valueSize()), "PFLD"));
+    forms.push_back(s.first);
+    pfld.push_back(std::move(s.second));
   }
+  forms.resize(3 + pfld.size() + mesh.cell_fields.size(), 0);
   for (const Field& f : mesh.cell_fields) {
     std::vector<Form> forms(f.components);
     for (uint32_t cc = 0; cc < f.components; ++cc) {
@@ -938,9 +1427,9 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
   for (const auto& s : pfld) streams.push_back(&s);
   for (const auto& s : cfld) streams.push_back(&s);
   putVarint(piece, streams.size());
-  for (const auto* s : streams) {
-    piece.push_back(0);  // form 0 (section 12)
-    putVarint(piece, s->size());
+  for (size_t x = 0; x < streams.size(); ++x) {
+    piece.push_back(forms[x]);  // section 12
+    putVarint(piece, streams[x]->size());
   }
   rep.header = piece.size();
   for (const auto* s : streams) piece.insert(piece.end(), s->begin(), s->end());
@@ -995,11 +1484,15 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   if (n_streams != want_streams)
     return r.fail("n_streams", std::to_string(n_streams) + " streams, the schema has " + std::to_string(want_streams));
   std::vector<uint64_t> sizes(n_streams);
+  std::vector<uint8_t> forms(n_streams);
   uint64_t total = 0;
   for (uint64_t s = 0; s < n_streams; ++s) {
-    uint8_t form = 0;
+    uint8_t& form = forms[s];
     GTN_RETURN_IF_ERROR(r.u8(&form, "stream form"));
-    if (form != 0) return r.fail("stream form", "form " + std::to_string(form) + " (a structured piece's streams use form 0 here)");
+    const bool values = s >= 2 && s < 3 + schema.point_fields.size();
+    if (form > (values ? 1 : 0))
+      return r.fail("stream form", "form " + std::to_string(form) + " for stream " + std::to_string(s) +
+                                       (values ? " (GEOM and PFLD use form 0 or 1 here)" : " (EXCP, GRID and CFLD use form 0)"));
     GTN_RETURN_IF_ERROR(r.varint(&sizes[s], "stream size"));
     if (sizes[s] > r.remaining()) return r.fail("stream size", "a stream larger than the piece");
     total += sizes[s];
@@ -1036,10 +1529,14 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   {
     const size_t cs = scalarSize(m.coord_type);
     std::vector<uint8_t> raw(V * 3 * cs);
-    EntropyCoder<false> c(streams[2]);
-    std::vector<Form> forms;
-    GTN_RETURN_IF_ERROR(codeValueStream(c, m.coord_type, 3, scan, forms, nullptr, 0, raw.data(), d, what + ": GEOM stream"));
-    if (!c.finishedCleanly()) return invalidData(what + ": GEOM stream is corrupt, truncated or has trailing bytes");
+    if (forms[2] == 1) {
+      GTN_RETURN_IF_ERROR(decodeForm1(streams[2], m.coord_type, 3, scan, raw.data(), d, what + ": GEOM stream"));
+    } else {
+      EntropyCoder<false> c(streams[2]);
+      std::vector<Form> declared;
+      GTN_RETURN_IF_ERROR(codeValueStream(c, m.coord_type, 3, scan, declared, nullptr, 0, raw.data(), d, what + ": GEOM stream"));
+      if (!c.finishedCleanly()) return invalidData(what + ": GEOM stream is corrupt, truncated or has trailing bytes");
+    }
     m.coords.resize(V * 3);
     for (uint64_t i = 0; i < V * 3; ++i) m.coords[i] = doubleFromRaw(m.coord_type, &raw[i * cs]);
   }
@@ -1047,11 +1544,15 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     const FieldDesc& desc = schema.point_fields[f];
     if (desc.components == 0 || desc.components > 64) return usageError(what + ": point field '" + desc.name + "' of 0 or more than 64 components");
     Field field(desc.name, desc.components, desc.type, V);
-    EntropyCoder<false> c(streams[3 + f]);
-    std::vector<Form> forms;
     const std::string name = what + ": PFLD stream '" + desc.name + "'";
-    GTN_RETURN_IF_ERROR(codeValueStream(c, desc.type, desc.components, scan, forms, nullptr, 0, field.bytes.data(), d, name));
-    if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
+    if (forms[3 + f] == 1) {
+      GTN_RETURN_IF_ERROR(decodeForm1(streams[3 + f], desc.type, desc.components, scan, field.bytes.data(), d, name));
+    } else {
+      EntropyCoder<false> c(streams[3 + f]);
+      std::vector<Form> declared;
+      GTN_RETURN_IF_ERROR(codeValueStream(c, desc.type, desc.components, scan, declared, nullptr, 0, field.bytes.data(), d, name));
+      if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
+    }
     m.point_fields.push_back(std::move(field));
   }
   m.tets = gridTets(l);
@@ -1063,8 +1564,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
       Field field(desc.name, desc.components, desc.type, m.tets.size());
       const std::string name = what + ": CFLD stream '" + desc.name + "'";
       EntropyCoder<false> c(streams[3 + schema.point_fields.size() + f]);
-      std::vector<Form> forms;
-      GTN_RETURN_IF_ERROR(codeCellField(c, desc, cscan, nullptr, field.bytes.data(), forms, name));
+      std::vector<Form> declared;
+      GTN_RETURN_IF_ERROR(codeCellField(c, desc, cscan, nullptr, field.bytes.data(), declared, name));
       if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
       m.cell_fields.push_back(std::move(field));
     }

@@ -82,6 +82,10 @@ enum class GridPredictor : uint8_t { kLorenzo = 0, kPreviousI = 1, kLinearI = 2 
 struct GridEncodeOptions {
   // -1: each component's predictor chosen by measurement; 0..2: that predictor for every component.
   int predictor = -1;
+  // GEOM and PFLD streams: -1 form 1 (static prefix codes, faster to decode) where it is at most 2%
+  // larger than form 0 (adaptive range coding), else form 0 (section 12); 0 or 1: that form (1 where
+  // every component's value form allows it: not printed-single, no shift with exceptions).
+  int value_form = -1;
 };
 
 // What the encoder chose and how large each part came out, in bytes.
@@ -93,6 +97,7 @@ struct GridEncodeReport {
   // ("plain", "shift s", "decimal e", "printed p", "table D").
   std::vector<uint8_t> predictors;
   std::vector<std::string> forms;
+  std::vector<uint8_t> stream_forms;  // GEOM, then each PFLD: 0 or 1
 };
 
 // What the decoder must be told (in the format, the file header holds it).
