@@ -472,7 +472,7 @@ class BitReader {
 
 constexpr int kMaxCodeLength = 15;
 constexpr int kTableBits = 11;
-constexpr int kForm1Classes = 4;
+constexpr int kForm1Classes = 8;
 
 // Huffman code lengths (at most kMaxCodeLength) of the symbols with nonzero frequency.
 std::vector<uint8_t> codeLengths(std::vector<uint64_t> freq) {
@@ -613,7 +613,7 @@ bool form1Domain(ScalarType type, const Form& f, Form1Domain* d) {
   return true;
 }
 
-[[gnu::always_inline]] inline uint32_t form1Class(uint32_t prev_symbol) { return std::min(prev_symbol >> 4, 3u); }
+[[gnu::always_inline]] inline uint32_t form1Class(uint32_t prev_symbol) { return std::min(prev_symbol >> 3, 7u); }
 
 // The residual of key `k` against `p` (both w bits wide) as its symbol and raw bits.
 [[gnu::always_inline]] inline uint32_t residualSymbol(uint64_t k, uint64_t p, int w, uint64_t* mag_out) {
