@@ -539,7 +539,7 @@ struct PrefixCode {
       if (len[s]) ++count[len[s]], ++used, single = static_cast<int>(s);
     }
     if (used == 0) return false;
-    if (used == 1) return true;
+    if (used == 1) return len[static_cast<size_t>(single)] == 1;  // a single symbol: length 1, coded in no bits
     single = -1;
     uint64_t kraft = 0;
     for (int l = 1; l <= kMaxCodeLength; ++l) kraft += uint64_t{count[l]} << (kMaxCodeLength - l);
