@@ -1,0 +1,131 @@
+// bench-grid: the structured-piece coder (codec/grid_coder.h) on the PLOT3D datasets: bits per
+// tetrahedron in all and per stream, the predictor and form each component took, the same with one
+// predictor forced on every component, and the decode speed (best of several runs, one thread).
+//
+//   bench-grid [data_dir] [--split 5|6] [--runs N]
+#include <chrono>
+#include <ctime>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "codec/grid_coder.h"
+#include "convert/import.h"
+#include "format/file_io.h"
+
+using namespace gtn;
+
+namespace {
+
+bool plot3dDims(const std::string& path, uint32_t dims[3]) {
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  unsigned char b[12];
+  const bool ok = std::fread(b, 1, 12, f) == 12;
+  std::fclose(f);
+  for (int a = 0; a < 3; ++a) dims[a] = (uint32_t{b[4 * a]} << 24) | (uint32_t{b[4 * a + 1]} << 16) | (uint32_t{b[4 * a + 2]} << 8) | b[4 * a + 3];
+  return ok;
+}
+
+// This thread's CPU time in seconds: the machine may be shared, and wall time then counts others' work.
+double threadSeconds() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+double bits(size_t bytes, size_t tets) { return 8.0 * static_cast<double>(bytes) / static_cast<double>(tets); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string dir = GTN_DEFAULT_DATA_DIR;
+  int split = 5, runs = 10;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--split" && i + 1 < argc) split = std::atoi(argv[++i]);
+    else if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
+    else dir = a;
+  }
+  const struct {
+    const char* name;
+    const char* xyz;
+    const char* q;
+  } sets[] = {{"bluntfin", "plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, {"combustion", "plot3d/combxyz.bin", "plot3d/combq.bin"}};
+  int status = 0;
+  for (const auto& s : sets) {
+    ImportOptions options;
+    options.split = split;
+    const std::string xyz = dir + "/" + s.xyz, q = dir + "/" + s.q;
+    auto imported = importPlot3d({xyz, q}, options);
+    uint32_t dims[3];
+    if (!imported.isOk() || !plot3dDims(xyz, dims)) {
+      std::fprintf(stderr, "%s: %s\n", s.name, imported.isOk() ? "cannot read its dimensions" : imported.status().message().c_str());
+      status = 1;
+      continue;
+    }
+    const TetMesh& mesh = imported->mesh;
+    auto layout = matchGridLayout(mesh, dims);
+    if (!layout.isOk()) {
+      std::fprintf(stderr, "%s: %s\n", s.name, layout.status().message().c_str());
+      status = 1;
+      continue;
+    }
+    const size_t T = mesh.numTets();
+    std::printf("%s /%d: %u x %u x %u nodes, %zu tetrahedra, %zu exceptions, %llu extra points\n", s.name, split, dims[0], dims[1],
+                dims[2], T, layout->exceptions.size(), static_cast<unsigned long long>(layout->extras()));
+    // Runs: the default (predictors and forms by measurement), each predictor forced, each value
+    // stream form forced.
+    const struct {
+      const char* label;
+      int predictor, value_form;
+      bool timed;
+    } configs[] = {{"default", -1, -1, true},          {"all Lorenzo", 0, -1, false}, {"all previous-i", 1, -1, false},
+                   {"all linear-i", 2, -1, false},     {"all form 0", -1, 0, true},   {"all form 1", -1, 1, true}};
+    for (const auto& config : configs) {
+      GridEncodeOptions eo;
+      eo.predictor = config.predictor;
+      eo.value_form = config.value_form;
+      GridEncodeReport r;
+      auto piece = encodeGridPiece(*layout, mesh, eo, &r);
+      if (!piece.isOk()) {
+        std::fprintf(stderr, "%s: %s\n", s.name, piece.status().message().c_str());
+        status = 1;
+        break;
+      }
+      const char* label = config.label;
+      std::printf("  %-15s total %7.3f bits/tet (%zu bytes): header %.4f, EXCP %.4f, GEOM %.3f", label, bits(piece->size(), T),
+                  piece->size(), bits(r.header, T), bits(r.excp, T), bits(r.geom, T));
+      for (size_t f = 0; f < r.point_fields.size(); ++f) std::printf(", %s %.3f", mesh.point_fields[f].name.c_str(), bits(r.point_fields[f], T));
+      std::printf("; stream forms (GEOM, PFLD...):");
+      for (uint8_t f : r.stream_forms) std::printf(" %d", f);
+      std::printf("\n");
+      if (config.predictor < 0 && config.value_form < 0) {
+        std::printf("  components (predictor: 0 Lorenzo, 1 previous i, 2 linear i; form):");
+        for (size_t c = 0; c < r.predictors.size(); ++c) std::printf(" [%d %s]", r.predictors[c], r.forms[c].c_str());
+        std::printf("\n");
+      }
+      if (config.timed) {
+        const GridSchema schema = gridSchemaOf(mesh);
+        double best = 1e300, best_cpu = 1e300;
+        for (int run = 0; run < runs; ++run) {
+          const auto t0 = std::chrono::steady_clock::now();
+          const double c0 = threadSeconds();
+          auto back = decodeGridPiece(*piece, schema, s.name);
+          best_cpu = std::min(best_cpu, threadSeconds() - c0);
+          const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          if (!back.isOk() || back->mesh.tets != mesh.tets) {
+            std::fprintf(stderr, "%s: the decode differs: %s\n", s.name, back.isOk() ? "tetrahedra" : back.status().message().c_str());
+            status = 1;
+            break;
+          }
+          best = std::min(best, sec);
+        }
+        std::printf("  decode: %.2f ms wall, %.2f ms thread CPU time: %.1f (wall), %.1f (CPU) million tetrahedra per second on one core (best of %d)\n",
+                    best * 1e3, best_cpu * 1e3, T / best / 1e6, T / best_cpu / 1e6, runs);
+      }
+    }
+  }
+  return status;
+}
