@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "mesh/faces.h"
+#include "mesh/index.h"
 #include "render/flat_hash.h"
 #include "render/traversal.h"
 
@@ -26,8 +27,7 @@ using render_internal::SegmentCursors;
 
 namespace {
 
-constexpr uint32_t kNone = 0xFFFFFFFFu;
-constexpr uint32_t kOpenFace = 0xFFFFFFFFu;      // neighbour not arrived (or never will)
+constexpr uint32_t kOpenFace = kNoIndex;         // neighbour not arrived (or never will)
 constexpr uint32_t kReleasedFace = 0xFFFFFFFEu;  // neighbour arrived and was released
 // Tetrahedra are processed in batches of this size range: large enough to feed the threads, small
 // relative to the mesh so that holding a batch does not dominate the memory.
@@ -64,9 +64,9 @@ uint32_t heldFace(uint32_t slot, int face) { return slot << 2 | static_cast<uint
 // through State::cursor_word. The tetrahedron's slot and local face share one word (20-byte map
 // entries).
 struct FaceEntry {
-  uint32_t held = kNone;     // heldFace, or kNone
-  uint32_t waiters = kNone;  // the first waiting cursor, or kNone
-  bool hasTet() const { return held != kNone; }
+  uint32_t held = kNoIndex;     // heldFace, or kNoIndex
+  uint32_t waiters = kNoIndex;  // the first waiting cursor, or kNoIndex
+  bool hasTet() const { return held != kNoIndex; }
   uint32_t tet() const { return held >> 2; }
   int face() const { return static_cast<int>(held & 3); }
   void setTet(uint32_t slot, int face) { held = heldFace(slot, face); }
@@ -149,7 +149,7 @@ class SlotPool {
   uint32_t size() const { return size_; }  // indices handed out, freed ones included
   // A freed index, else a new, default-constructed entry at the end.
   uint32_t allocate() {
-    if (free_ != kNoFree) {
+    if (free_ != kNoIndex) {
       const uint32_t i = free_;
       free_ = (*this)[i].nextFree();
       return i;
@@ -163,9 +163,9 @@ class SlotPool {
   }
 
  private:
-  static constexpr uint32_t kChunk = 1u << kShift, kMask = kChunk - 1, kNoFree = 0xFFFFFFFFu;
+  static constexpr uint32_t kChunk = 1u << kShift, kMask = kChunk - 1;
   std::vector<std::unique_ptr<T[]>> chunks_;
-  uint32_t free_ = kNoFree;  // the last freed index
+  uint32_t free_ = kNoIndex;  // the last freed index
   uint32_t size_ = 0;
 };
 
@@ -186,7 +186,7 @@ struct StoredRgba {
 // nothing but transparent samples.
 struct StreamSegment : SegmentCursors {
   StoredRgba front;
-  uint32_t back = kNone;  // index into State::backs; none while the back colour is blank (zero)
+  uint32_t back = kNoIndex;  // index into State::backs; none while the back colour is blank (zero)
   uint32_t pixel = 0;     // whose ray
 };
 static_assert(sizeof(StreamSegment) == 48);
@@ -262,7 +262,7 @@ struct StreamRenderer::State {
   // The first segment of every kPixelBlock-th pixel. Segments are stored in pixel order and know
   // their pixel, so any pixel's are found by a short walk from its block's first: an eighth of
   // castBoundary's offset per pixel (256 KB at 256x256). The walks stop at a last, empty segment of
-  // no pixel (kNone), which they need not test for.
+  // no pixel (kNoIndex), which they need not test for.
   static constexpr uint32_t kPixelBlock = 8;
   std::vector<uint32_t> block_start;
   // Each pixel's number of segments, 255 for 255 or more: counting a tetrahedron's rays reads these
@@ -310,12 +310,12 @@ struct StreamRenderer::State {
   // Calls f(cursor) for each waiter of e and empties its list (f may set the cursor's word).
   template <class F>
   void takeWaiters(FaceEntry& e, F&& f) {
-    for (uint32_t c = e.waiters; c != kNone;) {
+    for (uint32_t c = e.waiters; c != kNoIndex;) {
       const uint32_t next = cursor_word[c];
       f(c);
       c = next;
     }
-    e.waiters = kNone;
+    e.waiters = kNoIndex;
   }
   SlotPool<HeldTet, 9> tets;
   uint64_t held = 0;
@@ -396,9 +396,9 @@ class SegmentBuilder : public SegmentSink {
   explicit SegmentBuilder(StreamRenderer::State& st) : st_(st) {}
   void begin(size_t segments) override {
     st_.segs.resize(segments + 1);
-    st_.segs.back().pixel = kNone;  // State::block_start's walks end there
+    st_.segs.back().pixel = kNoIndex;  // State::block_start's walks end there
     st_.backs.reserve(segments);
-    st_.cursor_word.assign(2 * segments, kNone);
+    st_.cursor_word.assign(2 * segments, kNoIndex);
     st_.triggered.assign(segments, 0);
     st_.at_boundary.assign(segments, 0);
   }
@@ -434,10 +434,10 @@ void StreamRenderer::State::release(uint32_t slot) {
       const FaceKey key = t.key(k);
       FaceEntry* e = faces.find(key);
       if (e && e->hasTet() && e->tet() == slot) {
-        if (e->waiters == kNone) {
+        if (e->waiters == kNoIndex) {
           faces.erase(key);
         } else {
-          e->held = kNone;
+          e->held = kNoIndex;
         }
       }
     } else if (n != kReleasedFace) {
@@ -704,7 +704,7 @@ bool tetNeeded(const StreamRenderer::State& st, const ArrivedTet& a, FaceKey key
     keys[k] = makeKey(a.vertex(kTetFace[k][0])->id, a.vertex(kTetFace[k][1])->id, a.vertex(kTetFace[k][2])->id);
     if (!needed) {
       const FaceEntry* e = st.faces.find(keys[k]);
-      if (e && e->waiters != kNone) needed = true;
+      if (e && e->waiters != kNoIndex) needed = true;
     }
   }
   return needed;
@@ -775,7 +775,7 @@ void advanceSegment(StreamRenderer::State& st, const RenderSetup& setup, HeldMes
   const PreparedRay ray = st.pixelRay(seg.pixel, setup.camera);
   // The colours in double while the segment's cursors advance.
   Rgba front_colour = seg.front.get();
-  Rgba back_colour = seg.back != kNone ? st.backs[seg.back].get() : Rgba();
+  Rgba back_colour = seg.back != kNoIndex ? st.backs[seg.back].get() : Rgba();
   // A cursor that stopped (met, boundary, lost) waits nowhere, so only waiting cursors come here;
   // the back one may find its segment done by the front meanwhile.
   for (uint32_t end = 0; end < 2; ++end) {
@@ -799,11 +799,11 @@ void advanceSegment(StreamRenderer::State& st, const RenderSetup& setup, HeldMes
   }
   if (seg.done()) {
     seg.front = StoredRgba(over(front_colour, back_colour));
-    if (seg.back != kNone) st.backs.free(seg.back);
-    seg.back = kNone;
+    if (seg.back != kNoIndex) st.backs.free(seg.back);
+    seg.back = kNoIndex;
   } else {
     seg.front = StoredRgba(front_colour);
-    if (seg.back != kNone) {
+    if (seg.back != kNoIndex) {
       st.backs[seg.back] = StoredRgba(back_colour);
     } else if (!isBlank(back_colour)) {
       seg.back = st.backs.allocate(StoredRgba(back_colour));
@@ -880,7 +880,7 @@ Status StreamRenderer::endLevel() {
     next_unpaired += lost;
     for (; st.segs[s].pixel == p; ++s) {
       const StreamSegment& seg = st.segs[s];
-      acc = over(acc, over(seg.front.get(), seg.back != kNone ? st.backs[seg.back].get() : Rgba()));
+      acc = over(acc, over(seg.front.get(), seg.back != kNoIndex ? st.backs[seg.back].get() : Rgba()));
       lost |= !seg.done() && st.at_boundary[s] != 3;
     }
     stats_.lost_rays += lost;
