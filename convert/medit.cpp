@@ -140,7 +140,8 @@ class MeditReader {
   int64_t dimension_ = 0;
   MeditCells cells_;
   bool have_vertices_ = false, seen_keyword_ = false;
-  std::string skipped_volume_;           // higher-order volume sections skipped, for the error when nothing else is left
+  // Higher-order volume sections skipped, for the error when nothing else is left.
+  std::string skipped_volume_;
   std::vector<SkippedEntries> skipped_;  // the other skipped sections, per keyword in file order
   std::string_view pending_;             // a keyword already read (it ended a skipped section)
 };
@@ -353,15 +354,18 @@ Status MeditReader::skipSection(const SkippedSection& section) {
 void MeditReader::noteSkipped(const SkippedSection& section, int64_t count, size_t line) {
   if (count <= 0) return;
   if (!section.volume) {
-    auto it = std::find_if(skipped_.begin(), skipped_.end(), [&](const SkippedEntries& e) { return e.section == &section; });
+    auto it = std::find_if(skipped_.begin(), skipped_.end(),
+                           [&](const SkippedEntries& e) { return e.section == &section; });
     if (it == skipped_.end()) it = skipped_.insert(skipped_.end(), SkippedEntries{&section, 0, line, 0});
     it->entries += count;
     ++it->sections;
     return;
   }
-  const std::string what = std::to_string(count) + " " + section.keyword + " elements (line " + std::to_string(line) + ")";
+  const std::string what =
+      std::to_string(count) + " " + section.keyword + " elements (line " + std::to_string(line) + ")";
   skipped_volume_ += (skipped_volume_.empty() ? "" : ", ") + what;
-  result_.report.warnings.push_back("skipped " + what + ": higher-order elements are not read, so their volume is missing");
+  result_.report.warnings.push_back("skipped " + what +
+                                    ": higher-order elements are not read, so their volume is missing");
 }
 
 // After the last section: vertices and volume elements present and consistent, the warnings of the
@@ -375,11 +379,11 @@ Status MeditReader::finish(const ImportOptions& options) {
                        " refers to vertex " + std::to_string(cells_.late_vertex) + "; vertices are numbered 1 to " +
                        std::to_string(mesh.numPoints()));
   cells_.warnAboutSections(&result_);
-  for (const SkippedEntries& e : skipped_)
+  for (const SkippedEntries& e : skipped_) {
+    const std::string more = e.sections > 1 ? " and " + std::to_string(e.sections - 1) + " more sections" : "";
     result_.report.warnings.push_back("skipped " + std::to_string(e.entries) + " " + e.section->keyword + " (line " +
-                                      std::to_string(e.line) +
-                                      (e.sections > 1 ? " and " + std::to_string(e.sections - 1) + " more sections" : "") +
-                                      "): " + skippedWhat(*e.section));
+                                      std::to_string(e.line) + more + "): " + skippedWhat(*e.section));
+  }
   return finishMeditImport(path_, "medit", &cells_, options, &result_);
 }
 }  // namespace

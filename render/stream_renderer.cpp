@@ -690,7 +690,8 @@ void countRays(StreamRenderer::State& st, const Camera& cam) {
       a.visible = true;
       // Orthographic: the corners' sheared positions (the pool's, computed once per vertex).
       const TetCorners g{a.corner, a.order, st.shared_frame};
-      a.rays = st.shared_frame ? orthographicRayCount(st, cam, a, g, box, sx, sy) : perspectiveRayCount(st, cam, a, g, box);
+      a.rays = st.shared_frame ? orthographicRayCount(st, cam, a, g, box, sx, sy)
+                               : perspectiveRayCount(st, cam, a, g, box);
       if (a.rays > 0) a.computeOrder();
     }
   });

@@ -584,7 +584,9 @@ std::vector<std::string> all(const Expected& e, const std::string& key) {
   for (auto [it, end] = e.equal_range(key); it != end; ++it) out.push_back(it->second);
   return out;
 }
-std::string expectedPath(const std::string& gtn_name) { return kDir + gtn_name.substr(0, gtn_name.size() - 4) + ".expected"; }
+std::string expectedPath(const std::string& gtn_name) {
+  return kDir + gtn_name.substr(0, gtn_name.size() - 4) + ".expected";
+}
 
 // A status as the .expected files name it.
 std::string statusName(StatusCode code) {
