@@ -478,9 +478,19 @@ class Splitter {
 
 }  // namespace
 
-Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, const double* coords, int split,
-                     std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report,
-                     SteinerPoints* steiner, bool float32) {
+namespace {
+
+// What the first pass of splitVtkCells finds: every cell checked and counted, so that an unsupported
+// type is reported with the number of cells that have it, before any work.
+struct CellCensus {
+  std::map<int, size_t> rejected, skipped;  // per type: unsupported volume cells, lower-dimensional cells
+  std::vector<const int64_t*> streams;      // each polyhedron's face stream, in faces or in connectivity
+  size_t out_tets = 0;                      // tetrahedra the split will make (at most)
+  size_t quadratic = 0, higher_order = 0, hexes = 0;
+};
+
+// The cell arrays agree with each other and fit 32-bit indices.
+Status checkCellArrays(const std::string& path, const VtkCells& cells, size_t num_points) {
   const size_t num_cells = cells.types.size();
   if (cells.offsets.size() != num_cells + 1 || cells.offsets[0] != 0 ||
       cells.offsets.back() != static_cast<int64_t>(cells.connectivity.size()))
@@ -489,168 +499,196 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
                        std::to_string(cells.connectivity.size()) + " indices)");
   if (num_cells >= UINT32_MAX) return unsupported(path + ": more than 2^32-1 cells");
   if (num_points >= UINT32_MAX) return unsupported(path + ": more than 2^32-1 points");
-
-  const bool separate_faces = !cells.face_offsets.empty();
-  if (separate_faces && cells.face_offsets.size() != num_cells)
+  if (!cells.face_offsets.empty() && cells.face_offsets.size() != num_cells)
     return invalidData(path + ": " + std::to_string(cells.face_offsets.size()) + " face offsets for " +
                        std::to_string(num_cells) + " cells");
-  // Each polyhedron's face stream: where it starts in faces or in connectivity.
-  std::vector<const int64_t*> streams;
+  return Status::ok();
+}
 
-  // First pass: check everything and count, so that an unsupported type is reported with the number
-  // of cells that have it, before any work.
-  std::map<int, size_t> rejected, skipped;
-  size_t out_tets = 0, quadratic = 0, higher_order = 0, hexes = 0;
+// Polyhedron c's face stream: in faces from *face_pos to its face offset (moving *face_pos there),
+// or its connectivity (the legacy layout). `at` names the cell in errors.
+Status locateFaceStream(const std::string& at, const VtkCells& cells, size_t c, int64_t* face_pos, const int64_t** f,
+                        int64_t* len) {
+  if (cells.face_offsets.empty()) {
+    *f = cells.connectivity.data() + cells.offsets[c];
+    *len = cells.offsets[c + 1] - cells.offsets[c];
+    return Status::ok();
+  }
+  const int64_t end = cells.face_offsets[c];
+  if (end < *face_pos || end > static_cast<int64_t>(cells.faces.size()))
+    return invalidData(at + ": its face offset " + std::to_string(end) + " is not between " +
+                       std::to_string(*face_pos) + " and the " + std::to_string(cells.faces.size()) + " face entries");
+  *f = cells.faces.data() + *face_pos;
+  *len = end - *face_pos;
+  *face_pos = end;
+  return Status::ok();
+}
+
+// A face stream of `len` entries: the face count (at least 4), then each face's point count (at
+// least 3) and points (each < num_points), and nothing after. Adds the tetrahedra its faces make to
+// *out_tets.
+Status checkFaceStream(const std::string& at, const int64_t* f, int64_t len, size_t num_points, size_t* out_tets) {
+  if (len < 1 || f[0] < 4 || f[0] > len)
+    return invalidData(at + ": a face stream must start with a face count of at least 4 (" +
+                       std::to_string(len < 1 ? 0 : f[0]) + " in " + std::to_string(len) + " entries)");
+  int64_t at_entry = 1;
+  for (int64_t k = 0; k < f[0]; ++k) {
+    if (at_entry >= len) return invalidData(at + ": the face stream ends at face " + std::to_string(k));
+    const int64_t n = f[at_entry];
+    if (n < 3 || n > len - at_entry - 1)
+      return invalidData(at + ": face " + std::to_string(k) + " has " + std::to_string(n) +
+                         " points (at least 3, within the stream)");
+    for (int64_t i = 0; i < n; ++i) {
+      const int64_t v = f[at_entry + 1 + i];
+      if (v < 0 || static_cast<uint64_t>(v) >= num_points)
+        return invalidData(at + " refers to point " + std::to_string(v) + " but there are " +
+                           std::to_string(num_points) + " points");
+    }
+    *out_tets += static_cast<size_t>(n - 2);
+    at_entry += 1 + n;
+  }
+  if (at_entry != len)
+    return invalidData(at + ": " + std::to_string(len - at_entry) + " entries left after its " + std::to_string(f[0]) +
+                       " faces");
+  return Status::ok();
+}
+
+// Cell c of a supported fixed-size or arbitrary-order type: its number of points and its indices.
+Status checkCellPoints(const std::string& path, const VtkCells& cells, size_t c, size_t num_points) {
+  const int type = cells.types[c];
+  const int want = expectedPoints(type);
+  const int at_least = arbitraryOrderCorners(type);
+  const int64_t begin = cells.offsets[c], end = cells.offsets[c + 1];
+  if (end < begin || (want >= 0 && end - begin != want))
+    return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) + ") has " +
+                       std::to_string(end - begin) + " points, expected " + std::to_string(want));
+  if (at_least > 0 && end - begin < at_least)
+    return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) + ") has " +
+                       std::to_string(end - begin) + " points, fewer than its " + std::to_string(at_least) +
+                       " corners");
+  for (int64_t k = begin; k < end; ++k) {
+    const int64_t v = cells.connectivity[k];
+    if (v < 0 || static_cast<uint64_t>(v) >= num_points)
+      return invalidData(path + ": cell " + std::to_string(c) + " refers to point " + std::to_string(v) +
+                         " but there are " + std::to_string(num_points) + " points");
+  }
+  return Status::ok();
+}
+
+// The tetrahedra a cell of linear type `linear` splits into (at most).
+size_t tetsPerCell(int linear) {
+  switch (linear) {
+    case kVtkTetra: return 1;
+    case kVtkVoxel:
+    case kVtkHexahedron: return 6;
+    case kVtkWedge: return 3;
+    case kVtkPyramid: return 2;
+    case kVtkPentagonalPrism: return 9;
+    case kVtkHexagonalPrism: return 12;
+  }
+  return 0;
+}
+
+// The first pass: checks every cell and counts what the split will meet.
+Status surveyCells(const std::string& path, const VtkCells& cells, size_t num_points, CellCensus* census) {
+  const bool separate_faces = !cells.face_offsets.empty();
   int64_t face_pos = 0;  // where the next polyhedron's stream starts in faces
-  for (size_t c = 0; c < num_cells; ++c) {
+  for (size_t c = 0; c < cells.types.size(); ++c) {
     const int type = cells.types[c];
     if (isLowerDimensional(type)) {
-      ++skipped[type];
+      ++census->skipped[type];
       continue;
     }
     if (type == kVtkPolyhedron) {
       const std::string at = path + ": cell " + std::to_string(c) + " (VTK_POLYHEDRON)";
       const int64_t* f = nullptr;
       int64_t len = 0;
-      if (separate_faces) {
-        const int64_t end = cells.face_offsets[c];
-        if (end < face_pos || end > static_cast<int64_t>(cells.faces.size()))
-          return invalidData(at + ": its face offset " + std::to_string(end) + " is not between " +
-                             std::to_string(face_pos) + " and the " + std::to_string(cells.faces.size()) +
-                             " face entries");
-        f = cells.faces.data() + face_pos;
-        len = end - face_pos;
-        face_pos = end;
-      } else {
-        f = cells.connectivity.data() + cells.offsets[c];
-        len = cells.offsets[c + 1] - cells.offsets[c];
-      }
-      // The stream: the face count, then each face's point count and points.
-      if (len < 1 || f[0] < 4 || f[0] > len)
-        return invalidData(at + ": a face stream must start with a face count of at least 4 (" +
-                           std::to_string(len < 1 ? 0 : f[0]) + " in " + std::to_string(len) + " entries)");
-      int64_t at_entry = 1;
-      for (int64_t k = 0; k < f[0]; ++k) {
-        if (at_entry >= len) return invalidData(at + ": the face stream ends at face " + std::to_string(k));
-        const int64_t n = f[at_entry];
-        if (n < 3 || n > len - at_entry - 1)
-          return invalidData(at + ": face " + std::to_string(k) + " has " + std::to_string(n) +
-                             " points (at least 3, within the stream)");
-        for (int64_t i = 0; i < n; ++i) {
-          const int64_t v = f[at_entry + 1 + i];
-          if (v < 0 || static_cast<uint64_t>(v) >= num_points)
-            return invalidData(at + " refers to point " + std::to_string(v) + " but there are " +
-                               std::to_string(num_points) + " points");
-        }
-        out_tets += static_cast<size_t>(n - 2);
-        at_entry += 1 + n;
-      }
-      if (at_entry != len)
-        return invalidData(at + ": " + std::to_string(len - at_entry) + " entries left after its " +
-                           std::to_string(f[0]) + " faces");
-      streams.push_back(f);
+      GTN_RETURN_IF_ERROR(locateFaceStream(at, cells, c, &face_pos, &f, &len));
+      GTN_RETURN_IF_ERROR(checkFaceStream(at, f, len, num_points, &census->out_tets));
+      census->streams.push_back(f);
       continue;
     }
-    if (separate_faces && cells.face_offsets[c] >= 0) {
-      // VTK writes -1 for the cells that are not polyhedra; an offset is an error only if it moves.
-      if (cells.face_offsets[c] != face_pos)
-        return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) +
-                           ") is not a polyhedron but has face offset " + std::to_string(cells.face_offsets[c]));
-    }
-    const int want = expectedPoints(type);
-    const int at_least = arbitraryOrderCorners(type);
-    if (want < 0 && at_least == 0) {
-      ++rejected[type];
+    // VTK writes -1 for the cells that are not polyhedra; an offset is an error only if it moves.
+    if (separate_faces && cells.face_offsets[c] >= 0 && cells.face_offsets[c] != face_pos)
+      return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) +
+                         ") is not a polyhedron but has face offset " + std::to_string(cells.face_offsets[c]));
+    if (expectedPoints(type) < 0 && arbitraryOrderCorners(type) == 0) {
+      ++census->rejected[type];
       continue;
     }
-    const int64_t begin = cells.offsets[c], end = cells.offsets[c + 1];
-    if (end < begin || (want >= 0 && end - begin != want))
-      return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) + ") has " +
-                         std::to_string(end - begin) + " points, expected " + std::to_string(want));
-    if (at_least > 0 && end - begin < at_least)
-      return invalidData(path + ": cell " + std::to_string(c) + " (" + vtkCellTypeName(type) + ") has " +
-                         std::to_string(end - begin) + " points, fewer than its " + std::to_string(at_least) +
-                         " corners");
-    for (int64_t k = begin; k < end; ++k) {
-      const int64_t v = cells.connectivity[k];
-      if (v < 0 || static_cast<uint64_t>(v) >= num_points)
-        return invalidData(path + ": cell " + std::to_string(c) + " refers to point " + std::to_string(v) +
-                           " but there are " + std::to_string(num_points) + " points");
-    }
-    if (type == kVtkQuadraticTetra) ++quadratic;
-    else if (linearType(type) != type) ++higher_order;
-    switch (linearType(type)) {
-      case kVtkTetra: out_tets += 1; break;
-      case kVtkVoxel:
-      case kVtkHexahedron: out_tets += 6; ++hexes; break;
-      case kVtkWedge: out_tets += 3; break;
-      case kVtkPyramid: out_tets += 2; break;
-      case kVtkPentagonalPrism: out_tets += 9; break;
-      case kVtkHexagonalPrism: out_tets += 12; break;
-    }
+    GTN_RETURN_IF_ERROR(checkCellPoints(path, cells, c, num_points));
+    if (type == kVtkQuadraticTetra) ++census->quadratic;
+    else if (linearType(type) != type) ++census->higher_order;
+    const int linear = linearType(type);
+    census->out_tets += tetsPerCell(linear);
+    census->hexes += linear == kVtkVoxel || linear == kVtkHexahedron;
   }
-  if (!rejected.empty()) {
-    return unsupported(path + ": unsupported cell types: " + typeCounts(rejected) +
+  return Status::ok();
+}
+
+// Fails on unsupported volume cells, or when no cell is a volume cell; warns of the cells skipped.
+Status checkCellTypes(const std::string& path, const CellCensus& census, size_t num_cells, ImportReport* report) {
+  if (!census.rejected.empty()) {
+    return unsupported(path + ": unsupported cell types: " + typeCounts(census.rejected) +
                        "; only tetrahedra (10, 24, 64, 71, 78), hexahedra (11, 12, 25, 29, 33, 67, 72, 79), wedges "
                        "(13, 26, 31, 32, 65, 73, 80), pyramids (14, 27, 37, 74, 81), pentagonal and hexagonal prisms (15, 16) "
                        "and polyhedra (42) become tetrahedra");
   }
-  if (!skipped.empty()) {
+  if (!census.skipped.empty()) {
     size_t total = 0;
-    for (const auto& entry : skipped) total += entry.second;
+    for (const auto& entry : census.skipped) total += entry.second;
     if (total == num_cells)
-      return unsupported(path + ": no volume cells, only " + typeCounts(skipped) +
+      return unsupported(path + ": no volume cells, only " + typeCounts(census.skipped) +
                          ": a surface, line or point set is not a volume mesh");
     report->warnings.push_back("skipped " + std::to_string(total) + " cells of lower dimension (" +
-                               typeCounts(skipped) + "): only volume cells become tetrahedra");
+                               typeCounts(census.skipped) + "): only volume cells become tetrahedra");
   }
+  return Status::ok();
+}
 
-  tets->reserve(tets->size() + out_tets);
-  tet_cell->reserve(tet_cell->size() + out_tets);
-  Splitter splitter(tets, tet_cell, coords, num_points, coords ? steiner : nullptr, float32);
+// The second pass for cell c (checked, not a polyhedron, not lower-dimensional): its tetrahedra.
+void splitCell(const VtkCells& cells, size_t c, int split, Splitter& splitter, std::vector<Tet>* tets,
+               std::vector<uint32_t>* tet_cell) {
   uint32_t g[27];
-  size_t next_stream = 0;
-  for (size_t c = 0; c < num_cells; ++c) {
-    const int type = cells.types[c];
-    if (isLowerDimensional(type)) continue;
-    if (type == kVtkPolyhedron) {
-      splitter.polyhedron(streams[next_stream++], static_cast<uint32_t>(c));
-      continue;
+  const int64_t begin = cells.offsets[c];
+  // Corners come first: an arbitrary-order cell's further points (beyond 27) are not needed.
+  const int n = static_cast<int>(std::min<int64_t>(cells.offsets[c + 1] - begin, 27));
+  for (int k = 0; k < n; ++k) g[k] = static_cast<uint32_t>(cells.connectivity[begin + k]);
+  const uint32_t cell = static_cast<uint32_t>(c);
+  switch (linearType(cells.types[c])) {
+    case kVtkTetra:
+      // An input tetrahedron is kept as it is: finishImport reports a flat one and drops one that
+      // repeats an index, as the split drops the pieces of other cells that a repeated index flattens.
+      tets->push_back({g[0], g[1], g[2], g[3]});
+      tet_cell->push_back(cell);
+      break;
+    case kVtkVoxel: {
+      // A voxel numbers its corners x fastest, then y, then z; a hexahedron goes round each face.
+      const uint32_t h[8] = {g[0], g[1], g[3], g[2], g[4], g[5], g[7], g[6]};
+      splitter.hex(h, split, cell);
+      break;
     }
-    const int64_t begin = cells.offsets[c];
-    // Corners come first: an arbitrary-order cell's further points (beyond 27) are not needed.
-    const int n = static_cast<int>(std::min<int64_t>(cells.offsets[c + 1] - begin, 27));
-    for (int k = 0; k < n; ++k) g[k] = static_cast<uint32_t>(cells.connectivity[begin + k]);
-    const uint32_t cell = static_cast<uint32_t>(c);
-    switch (linearType(type)) {
-      case kVtkTetra:
-        // An input tetrahedron is kept as it is: finishImport reports a flat one and drops one that
-        // repeats an index, as the split drops the pieces of other cells that a repeated index flattens.
-        tets->push_back({g[0], g[1], g[2], g[3]});
-        tet_cell->push_back(cell);
-        break;
-      case kVtkVoxel: {
-        // A voxel numbers its corners x fastest, then y, then z; a hexahedron goes round each face.
-        const uint32_t h[8] = {g[0], g[1], g[3], g[2], g[4], g[5], g[7], g[6]};
-        splitter.hex(h, split, cell);
-        break;
-      }
-      case kVtkHexahedron: splitter.hex(g, split, cell); break;
-      case kVtkWedge: splitter.cone(kWedgeFaces, g, 6, cell); break;
-      case kVtkPyramid: splitter.cone(kPyramidFaces, g, 5, cell); break;
-      case kVtkPentagonalPrism: splitter.cone(kPentagonalPrismFaces, g, 10, cell); break;
-      case kVtkHexagonalPrism: splitter.cone(kHexagonalPrismFaces, g, 12, cell); break;
-    }
+    case kVtkHexahedron: splitter.hex(g, split, cell); break;
+    case kVtkWedge: splitter.cone(kWedgeFaces, g, 6, cell); break;
+    case kVtkPyramid: splitter.cone(kPyramidFaces, g, 5, cell); break;
+    case kVtkPentagonalPrism: splitter.cone(kPentagonalPrismFaces, g, 10, cell); break;
+    case kVtkHexagonalPrism: splitter.cone(kHexagonalPrismFaces, g, 12, cell); break;
   }
-  if (quadratic)
-    report->warnings.push_back(std::to_string(quadratic) +
+}
+
+// The warnings of the split: cells reduced to their corners, hexahedra split into 6 rather than 5,
+// cells coned from another vertex or around an added point, pieces dropped as flat.
+void reportSplit(const CellCensus& census, const Splitter& splitter, int split, ImportReport* report) {
+  if (census.quadratic)
+    report->warnings.push_back(std::to_string(census.quadratic) +
                                " quadratic tetrahedra (VTK_QUADRATIC_TETRA) reduced to their 4 corners; their "
                                "mid-edge points are kept as unreferenced points");
-  if (higher_order)
-    report->warnings.push_back(std::to_string(higher_order) +
+  if (census.higher_order)
+    report->warnings.push_back(std::to_string(census.higher_order) +
                                " higher-order cells (quadratic hexahedra, wedges or pyramids; Lagrange or Bezier "
                                "cells) reduced to their corners and split as linear cells; their other points are "
                                "kept as unreferenced points");
+  const size_t hexes = census.hexes;
   if (hexes && split == 5 && splitter.hex_five_ + splitter.five_inverted_ < hexes)
     report->warnings.push_back(std::to_string(hexes - splitter.hex_five_ - splitter.five_inverted_) + " of " +
                                std::to_string(hexes) + " hexahedra split into 6 tetrahedra: their face diagonals do not allow 5");
@@ -667,6 +705,28 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
     report->warnings.push_back(std::to_string(splitter.collapsed_) +
                                " tetrahedra of degenerate cells (repeated point indices) dropped");
   }
+}
+
+}  // namespace
+
+Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_points, const double* coords, int split,
+                     std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, ImportReport* report,
+                     SteinerPoints* steiner, bool float32) {
+  GTN_RETURN_IF_ERROR(checkCellArrays(path, cells, num_points));
+  CellCensus census;
+  GTN_RETURN_IF_ERROR(surveyCells(path, cells, num_points, &census));
+  GTN_RETURN_IF_ERROR(checkCellTypes(path, census, cells.types.size(), report));
+  tets->reserve(tets->size() + census.out_tets);
+  tet_cell->reserve(tet_cell->size() + census.out_tets);
+  Splitter splitter(tets, tet_cell, coords, num_points, coords ? steiner : nullptr, float32);
+  size_t next_stream = 0;
+  for (size_t c = 0; c < cells.types.size(); ++c) {
+    const int type = cells.types[c];
+    if (isLowerDimensional(type)) continue;
+    if (type == kVtkPolyhedron) splitter.polyhedron(census.streams[next_stream++], static_cast<uint32_t>(c));
+    else splitCell(cells, c, split, splitter, tets, tet_cell);
+  }
+  reportSplit(census, splitter, split, report);
   return Status::ok();
 }
 

@@ -33,6 +33,7 @@
 #include "convert/text_reader.h"
 #include "convert/vtk_common.h"
 #include "format/file_io.h"
+#include "mesh/index.h"
 
 namespace gtn {
 
@@ -97,7 +98,6 @@ int corners(uint8_t vtk) {
 // dense enough, else a sorted list.
 class TagMap {
  public:
-  static constexpr uint32_t kNone = UINT32_MAX;
   std::vector<int64_t> tags;  // in index order
 
   // Builds the lookup; false when a tag occurs twice (*duplicate gets it).
@@ -110,10 +110,10 @@ class TagMap {
     }
     dense_ = nonneg && static_cast<uint64_t>(max_tag) <= 4 * static_cast<uint64_t>(tags.size()) + 1024;
     if (dense_) {
-      table_.assign(static_cast<size_t>(max_tag) + 1, kNone);
+      table_.assign(static_cast<size_t>(max_tag) + 1, kNoIndex);
       for (size_t i = 0; i < tags.size(); ++i) {
         uint32_t& slot = table_[static_cast<size_t>(tags[i])];
-        if (slot != kNone) {
+        if (slot != kNoIndex) {
           *duplicate = tags[i];
           return false;
         }
@@ -134,9 +134,9 @@ class TagMap {
   }
 
   uint32_t find(int64_t tag) const {
-    if (dense_) return tag >= 0 && static_cast<uint64_t>(tag) < table_.size() ? table_[static_cast<size_t>(tag)] : kNone;
+    if (dense_) return tag >= 0 && static_cast<uint64_t>(tag) < table_.size() ? table_[static_cast<size_t>(tag)] : kNoIndex;
     auto it = std::lower_bound(sorted_.begin(), sorted_.end(), std::pair<int64_t, uint32_t>{tag, 0});
-    return it != sorted_.end() && it->first == tag ? it->second : kNone;
+    return it != sorted_.end() && it->first == tag ? it->second : kNoIndex;
   }
 
  private:
@@ -321,7 +321,7 @@ class MshReader {
   std::vector<double> coords_;
   TagMap node_map_;
   TagMap element_map_;                 // all elements, in file order
-  std::vector<uint32_t> element_cell_;  // per element: its volume cell, or TagMap::kNone when skipped
+  std::vector<uint32_t> element_cell_;  // per element: its volume cell, or kNoIndex when skipped
   VtkCells cells_;
   std::vector<int32_t> physical_, geometrical_;
   bool any_physical_ = false, any_geometrical_ = false;
@@ -484,7 +484,7 @@ Status MshReader::addElement(int64_t tag, const GmshType& type, const int64_t* n
   element_map_.tags.push_back(tag);
   if (type.dim < 3) {
     ++skipped_[type.type];
-    element_cell_.push_back(TagMap::kNone);
+    element_cell_.push_back(kNoIndex);
     return Status::ok();
   }
   if (cells_.types.size() >= static_cast<size_t>(kMaxItems))
@@ -492,7 +492,7 @@ Status MshReader::addElement(int64_t tag, const GmshType& type, const int64_t* n
   const int c = corners(type.vtk);
   for (int k = 0; k < type.nodes; ++k) {
     const uint32_t p = node_map_.find(nodes[k]);
-    if (p == TagMap::kNone)
+    if (p == kNoIndex)
       return invalidData(where(at) + "element " + std::to_string(tag) + " (" + type.name + ") refers to node " +
                          std::to_string(nodes[k]) + ", which $Nodes does not define");
     if (k < c) cells_.connectivity.push_back(p);
@@ -656,7 +656,7 @@ void MshReader::dropRepeatedElements() {
   physical_.resize(out);
   geometrical_.resize(out);
   for (uint32_t& c : element_cell_)
-    if (c != TagMap::kNone) c = new_index[c];
+    if (c != kNoIndex) c = new_index[c];
 }
 
 Status MshReader::readData(const std::string& section) {
@@ -754,16 +754,16 @@ Status MshReader::buildFields(ImportResult* result, std::vector<Field>* cell_fie
         uint32_t item;
         if (nodes) {
           item = node_map_.find(d.tags[i]);
-          if (item == TagMap::kNone)
+          if (item == kNoIndex)
             return errorAt(d.offset, kind + " '" + name + "' gives a value to node " + std::to_string(d.tags[i]) +
                                          ", which $Nodes does not define");
         } else {
           const uint32_t e = element_map_.find(d.tags[i]);
-          if (e == TagMap::kNone)
+          if (e == kNoIndex)
             return errorAt(d.offset, kind + " '" + name + "' gives a value to element " +
                                          std::to_string(d.tags[i]) + ", which $Elements does not define");
           item = element_cell_[e];
-          if (item == TagMap::kNone) {
+          if (item == kNoIndex) {
             ++skipped_values;
             continue;
           }

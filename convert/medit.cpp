@@ -112,203 +112,286 @@ const MeditVolumeKeyword* volumeKeyword(std::string_view tok) {
   }
   return nullptr;
 }
+
+// The reader of one .mesh file: a loop over its keywords, one method per kind of section.
+class MeditReader {
+ public:
+  MeditReader(const std::string& path, const std::string& text) : path_(path), reader_(path, text) {}
+  StatusOr<ImportResult> read(const ImportOptions& options);
+
+ private:
+  // The next keyword: one already read (that ended a skipped section), else the next token.
+  bool nextKeyword(std::string_view* tok);
+  Status readSection(std::string_view tok);
+  Status readVersion();
+  Status readDimension();
+  Status skipQuotedString(std::string_view keyword);
+  Status readVertices();
+  Status readVertexRef(size_t i, size_t n, Field* ref, std::vector<double>* real_refs);
+  Status readVolumeSection(const MeditVolumeKeyword& kw);
+  Status skipUnknownSection(std::string_view keyword);
+  Status skipSection(const SkippedSection& section);
+  void noteSkipped(const SkippedSection& section, int64_t count, size_t line);
+  Status finish(const ImportOptions& options);
+
+  const std::string& path_;
+  TextReader reader_;
+  ImportResult result_;
+  int64_t dimension_ = 0;
+  MeditCells cells_;
+  bool have_vertices_ = false, seen_keyword_ = false;
+  // Higher-order volume sections skipped, for the error when nothing else is left.
+  std::string skipped_volume_;
+  std::vector<SkippedEntries> skipped_;  // the other skipped sections, per keyword in file order
+  std::string_view pending_;             // a keyword already read (it ended a skipped section)
+};
+
+StatusOr<ImportResult> MeditReader::read(const ImportOptions& options) {
+  std::string_view tok;
+  while (nextKeyword(&tok)) {
+    if (sameKeyword(tok, "End")) break;
+    GTN_RETURN_IF_ERROR(readSection(tok));
+    seen_keyword_ = true;
+  }
+  GTN_RETURN_IF_ERROR(finish(options));
+  return std::move(result_);
+}
+
+bool MeditReader::nextKeyword(std::string_view* tok) {
+  if (pending_.empty()) return reader_.next(tok);
+  *tok = pending_;
+  pending_ = {};
+  return true;
+}
+
+Status MeditReader::readSection(std::string_view tok) {
+  if (sameKeyword(tok, "MeshVersionFormatted")) return readVersion();
+  if (sameKeyword(tok, "Dimension")) return readDimension();
+  if (sameKeyword(tok, "Geometry") || sameKeyword(tok, "Identifier")) return skipQuotedString(tok);
+  if (sameKeyword(tok, "Vertices")) return readVertices();
+  if (const MeditVolumeKeyword* kw = volumeKeyword(tok)) return readVolumeSection(*kw);
+  for (const SkippedSection& s : kSkipped) {
+    if (sameKeyword(tok, s.keyword)) return skipSection(s);
+  }
+  return skipUnknownSection(tok);
+}
+
+Status MeditReader::readVersion() {
+  GTN_ASSIGN_OR_RETURN(const int64_t version, reader_.readInt("mesh version"));
+  if (version < 1 || version > 4) return reader_.error("unknown MeshVersionFormatted " + std::to_string(version));
+  return Status::ok();
+}
+
+Status MeditReader::readDimension() {
+  GTN_ASSIGN_OR_RETURN(dimension_, reader_.readInt("dimension"));
+  if (dimension_ != 3) {
+    return reader_.error("dimension " + std::to_string(dimension_) +
+                         ": only 3-dimensional (tetrahedral) Medit meshes are supported");
+  }
+  return Status::ok();
+}
+
+// A quoted string (a file name, a title), possibly with spaces.
+Status MeditReader::skipQuotedString(std::string_view keyword) {
+  std::string_view value;
+  if (!reader_.next(&value)) return reader_.errorAtEnd("a quoted string");
+  const size_t line = reader_.line();
+  bool open = value.front() == '"' && (value.size() < 2 || value.back() != '"');
+  while (open) {
+    if (!reader_.next(&value) || reader_.line() != line)
+      return invalidData(reader_.path() + ":" + std::to_string(line) + ": " + std::string(keyword) +
+                         ": the quoted string is not closed on its line");
+    open = value.back() != '"';
+  }
+  return Status::ok();
+}
+
+Status MeditReader::readVertices() {
+  if (dimension_ != 3) return reader_.error("Vertices before a 'Dimension 3' line");
+  if (have_vertices_) return reader_.error("a second Vertices section");
+  GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader_, 4, "vertices"));
+  const size_t n = static_cast<size_t>(count);
+  TetMesh& mesh = result_.mesh;
+  mesh.coords.resize(3 * n);
+  // References are integers, but TetGen -g writes a point attribute there, a real number: then they
+  // are all kept as float64 (`real_refs` holds them once the first one is not an integer).
+  Field ref("ref", 1, ScalarType::kInt32, n);
+  std::vector<double> real_refs;
+  for (size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      GTN_ASSIGN_OR_RETURN(mesh.coords[3 * i + c], reader_.readDouble("a vertex coordinate"));
+      if (!std::isfinite(mesh.coords[3 * i + c]))
+        return reader_.error("vertex " + std::to_string(i + 1) + " has a non-finite " + "xyz"[c] + " coordinate");
+    }
+    GTN_RETURN_IF_ERROR(readVertexRef(i, n, &ref, &real_refs));
+  }
+  if (!real_refs.empty()) {
+    ref = Field("ref", 1, ScalarType::kFloat64, n);
+    for (size_t i = 0; i < n; ++i) ref.set<double>(i, 0, real_refs[i]);
+  }
+  mesh.point_fields.push_back(std::move(ref));
+  have_vertices_ = true;
+  return Status::ok();
+}
+
+// Vertex i's reference (of n): into `ref` while all are 32-bit integers, else into `real_refs`
+// (with those before it, and a warning the first time).
+Status MeditReader::readVertexRef(size_t i, size_t n, Field* ref, std::vector<double>* real_refs) {
+  std::string_view r_tok;
+  if (!reader_.next(&r_tok)) return reader_.errorAtEnd("a reference number");
+  int64_t r = 0;
+  double x = 0;
+  if (real_refs->empty() && parseInt(r_tok, &r) && r >= INT32_MIN && r <= INT32_MAX) {
+    ref->set<int32_t>(i, 0, static_cast<int32_t>(r));
+    return Status::ok();
+  }
+  if (!parseDouble(r_tok, &x))
+    return reader_.error("expected vertex " + std::to_string(i + 1) + "'s reference (a number), found " +
+                         quotedToken(r_tok));
+  if (real_refs->empty()) {
+    real_refs->reserve(n);
+    for (size_t j = 0; j < i; ++j) real_refs->push_back(ref->get(j, 0));
+    result_.report.warnings.push_back("vertex " + std::to_string(i + 1) + " (line " + std::to_string(reader_.line()) +
+                                      ") has the reference " + std::string(r_tok) +
+                                      ", not a 32-bit integer (TetGen -g writes a point attribute there): the "
+                                      "vertex references are kept as float64");
+  }
+  real_refs->push_back(x);
+  return Status::ok();
+}
+
+Status MeditReader::readVolumeSection(const MeditVolumeKeyword& kw) {
+  TetMesh& mesh = result_.mesh;
+  cells_.addSection(kw, "line " + std::to_string(reader_.line()));
+  GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader_, kw.corners + 1, kw.name));
+  const size_t n = static_cast<size_t>(count);
+  const int64_t np = have_vertices_ ? static_cast<int64_t>(mesh.numPoints()) : kMaxItems;
+  cells_.reserve(kw, n, &mesh);
+  for (size_t e = 0; e < n; ++e) {
+    uint32_t corners[8];
+    for (int k = 0; k < kw.corners; ++k) {
+      GTN_ASSIGN_OR_RETURN(const int64_t v, reader_.readInt("a vertex number"));
+      if (v < 1 || v > np) {
+        return reader_.error(std::string(kw.singular) + " " + std::to_string(e + 1) + " refers to vertex " +
+                             std::to_string(v) + "; vertices are numbered 1 to " + std::to_string(np));
+      }
+      if (!have_vertices_)
+        cells_.noteLateVertex(v, std::string(kw.singular) + " " + std::to_string(e + 1), reader_.line());
+      corners[k] = static_cast<uint32_t>(v - 1);
+    }
+    GTN_ASSIGN_OR_RETURN(const int32_t r, readRef(reader_));
+    cells_.add(kw, corners, r, &mesh);
+  }
+  return Status::ok();
+}
+
+// A keyword of no known section: the first keyword of a file that is not a Medit file, else a
+// section of another program (ParMmg's ParallelTriangleCommunicators, whose entries follow in a
+// second section without a count; libMeshb's ISolAtTetrahedra ...). Every entry of every section is
+// numbers, so an unknown one ends at the next word.
+Status MeditReader::skipUnknownSection(std::string_view keyword) {
+  if (!seen_keyword_)
+    return Status(StatusCode::kNotOurFile,
+                  reader_.error("not a Medit .mesh file: it starts with " + quotedToken(keyword)).message());
+  if (!isKeyword(keyword))
+    return reader_.error("expected a section keyword, found " + quotedToken(keyword) +
+                         " (the section before holds more values than its count says)");
+  const std::string name(keyword);
+  const size_t line = reader_.line();
+  uint64_t numbers = 0;
+  std::string_view t;
+  while (reader_.next(&t)) {
+    if (isKeyword(t)) {
+      pending_ = t;
+      break;
+    }
+    ++numbers;
+  }
+  result_.report.warnings.push_back("skipped the unknown section '" + name + "' (line " + std::to_string(line) + ", " +
+                                    std::to_string(numbers) + " numbers up to the next keyword)");
+  return Status::ok();
+}
+
+// A known section that is not read: its single values become metadata; a counted section is skipped
+// by its values or by its lines, and noted for its warning.
+Status MeditReader::skipSection(const SkippedSection& section) {
+  if (dimension_ != 3) return reader_.error(std::string(section.keyword) + " before a 'Dimension 3' line");
+  const int64_t values = section.values < 0 ? dimension_ : section.values;
+  const size_t line = reader_.line();
+  const std::string entries = std::string(section.keyword) + " entries";
+  std::string_view tok;
+  if (section.skip == Skip::kSingle) {
+    std::string text;
+    for (int64_t i = 0; i < values; ++i) {
+      if (!reader_.next(&tok)) return reader_.errorAtEnd(entries.c_str());
+      if (i) text += ' ';
+      text += tok;
+    }
+    result_.mesh.setMetadata(std::string("medit.") + section.keyword, text);
+    return Status::ok();
+  }
+  GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader_, std::max<int64_t>(values, 1), section.keyword));
+  if (section.skip == Skip::kLines) {
+    reader_.skipLine();  // the rest of the count's line
+    for (int64_t i = 0; i < count; ++i) {
+      if (!reader_.next(&tok)) return reader_.errorAtEnd(entries.c_str());
+      reader_.skipLine();
+    }
+  }
+  for (int64_t i = 0; section.skip == Skip::kValues && i < count * values; ++i) {
+    if (!reader_.next(&tok)) return reader_.errorAtEnd(entries.c_str());
+    if (isKeyword(tok))
+      return reader_.error(std::string(section.keyword) + " (line " + std::to_string(line) + ") announces " +
+                           std::to_string(count) + " entries of " + std::to_string(values) + " values; found " +
+                           quotedToken(tok) + " after " + std::to_string(i) + " values");
+  }
+  noteSkipped(section, count, line);
+  return Status::ok();
+}
+
+// A skipped section of `count` entries at `line`: counted per keyword for one warning at the end, or,
+// higher-order volume elements, warned of now (their volume is missing).
+void MeditReader::noteSkipped(const SkippedSection& section, int64_t count, size_t line) {
+  if (count <= 0) return;
+  if (!section.volume) {
+    auto it = std::find_if(skipped_.begin(), skipped_.end(),
+                           [&](const SkippedEntries& e) { return e.section == &section; });
+    if (it == skipped_.end()) it = skipped_.insert(skipped_.end(), SkippedEntries{&section, 0, line, 0});
+    it->entries += count;
+    ++it->sections;
+    return;
+  }
+  const std::string what =
+      std::to_string(count) + " " + section.keyword + " elements (line " + std::to_string(line) + ")";
+  skipped_volume_ += (skipped_volume_.empty() ? "" : ", ") + what;
+  result_.report.warnings.push_back("skipped " + what +
+                                    ": higher-order elements are not read, so their volume is missing");
+}
+
+// After the last section: vertices and volume elements present and consistent, the warnings of the
+// skipped sections, and the cells split into tetrahedra.
+Status MeditReader::finish(const ImportOptions& options) {
+  const TetMesh& mesh = result_.mesh;
+  if (!have_vertices_) return reader_.error("no Vertices section");
+  if (cells_.empty()) return reader_.error(noVolumeElements(skipped_volume_));
+  if (cells_.late_vertex > static_cast<int64_t>(mesh.numPoints()))
+    return invalidData(path_ + ":" + std::to_string(cells_.late_place) + ": " + cells_.late_element +
+                       " refers to vertex " + std::to_string(cells_.late_vertex) + "; vertices are numbered 1 to " +
+                       std::to_string(mesh.numPoints()));
+  cells_.warnAboutSections(&result_);
+  for (const SkippedEntries& e : skipped_) {
+    const std::string more = e.sections > 1 ? " and " + std::to_string(e.sections - 1) + " more sections" : "";
+    result_.report.warnings.push_back("skipped " + std::to_string(e.entries) + " " + e.section->keyword + " (line " +
+                                      std::to_string(e.line) + more + "): " + skippedWhat(*e.section));
+  }
+  return finishMeditImport(path_, "medit", &cells_, options, &result_);
+}
 }  // namespace
 
 StatusOr<ImportResult> importMedit(const std::string& path, const ImportOptions& options) {
   GTN_ASSIGN_OR_RETURN(const std::string text, readWholeFile(path));
-  TextReader reader(path, text);
-  ImportResult result;
-  TetMesh& mesh = result.mesh;
-  int64_t dimension = 0;
-  MeditCells cells;
-  bool have_vertices = false, seen_keyword = false;
-  std::string skipped_volume;  // higher-order volume sections skipped, for the error when nothing else is left
-  std::vector<SkippedEntries> skipped;  // the other skipped sections, per keyword in file order
-  std::string_view tok, pending;  // pending: a keyword already read (it ended a skipped section)
-  while (true) {
-    if (!pending.empty()) {
-      tok = pending;
-      pending = {};
-    } else if (!reader.next(&tok)) {
-      break;
-    }
-    if (sameKeyword(tok, "End")) break;
-    if (sameKeyword(tok, "MeshVersionFormatted")) {
-      GTN_ASSIGN_OR_RETURN(const int64_t version, reader.readInt("mesh version"));
-      if (version < 1 || version > 4) return reader.error("unknown MeshVersionFormatted " + std::to_string(version));
-    } else if (sameKeyword(tok, "Dimension")) {
-      GTN_ASSIGN_OR_RETURN(dimension, reader.readInt("dimension"));
-      if (dimension != 3) {
-        return reader.error("dimension " + std::to_string(dimension) +
-                            ": only 3-dimensional (tetrahedral) Medit meshes are supported");
-      }
-    } else if (sameKeyword(tok, "Geometry") || sameKeyword(tok, "Identifier")) {
-      // A quoted string (a file name, a title), possibly with spaces.
-      std::string_view value;
-      if (!reader.next(&value)) return reader.errorAtEnd("a quoted string");
-      const size_t line = reader.line();
-      bool open = value.front() == '"' && (value.size() < 2 || value.back() != '"');
-      while (open) {
-        if (!reader.next(&value) || reader.line() != line)
-          return invalidData(reader.path() + ":" + std::to_string(line) + ": " + std::string(tok) +
-                             ": the quoted string is not closed on its line");
-        open = value.back() != '"';
-      }
-    } else if (sameKeyword(tok, "Vertices")) {
-      if (dimension != 3) return reader.error("Vertices before a 'Dimension 3' line");
-      if (have_vertices) return reader.error("a second Vertices section");
-      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, 4, "vertices"));
-      const size_t n = static_cast<size_t>(count);
-      mesh.coords.resize(3 * n);
-      // References are integers, but TetGen -g writes a point attribute there, a real number: then
-      // they are all kept as float64 (`real_refs` holds them once the first one is not an integer).
-      Field ref("ref", 1, ScalarType::kInt32, n);
-      std::vector<double> real_refs;
-      for (size_t i = 0; i < n; ++i) {
-        for (int c = 0; c < 3; ++c) {
-          GTN_ASSIGN_OR_RETURN(mesh.coords[3 * i + c], reader.readDouble("a vertex coordinate"));
-          if (!std::isfinite(mesh.coords[3 * i + c]))
-            return reader.error("vertex " + std::to_string(i + 1) + " has a non-finite " + "xyz"[c] + " coordinate");
-        }
-        std::string_view r_tok;
-        if (!reader.next(&r_tok)) return reader.errorAtEnd("a reference number");
-        int64_t r = 0;
-        double x = 0;
-        if (real_refs.empty() && parseInt(r_tok, &r) && r >= INT32_MIN && r <= INT32_MAX) {
-          ref.set<int32_t>(i, 0, static_cast<int32_t>(r));
-          continue;
-        }
-        if (!parseDouble(r_tok, &x))
-          return reader.error("expected vertex " + std::to_string(i + 1) + "'s reference (a number), found " +
-                              quotedToken(r_tok));
-        if (real_refs.empty()) {
-          real_refs.reserve(n);
-          for (size_t j = 0; j < i; ++j) real_refs.push_back(ref.get(j, 0));
-          result.report.warnings.push_back("vertex " + std::to_string(i + 1) + " (line " + std::to_string(reader.line()) +
-                                           ") has the reference " + std::string(r_tok) +
-                                           ", not a 32-bit integer (TetGen -g writes a point attribute there): the "
-                                           "vertex references are kept as float64");
-        }
-        real_refs.push_back(x);
-      }
-      if (!real_refs.empty()) {
-        ref = Field("ref", 1, ScalarType::kFloat64, n);
-        for (size_t i = 0; i < n; ++i) ref.set<double>(i, 0, real_refs[i]);
-      }
-      mesh.point_fields.push_back(std::move(ref));
-      have_vertices = true;
-    } else if (const MeditVolumeKeyword* kw = volumeKeyword(tok)) {
-      cells.addSection(*kw, "line " + std::to_string(reader.line()));
-      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, kw->corners + 1, kw->name));
-      const size_t n = static_cast<size_t>(count);
-      const int64_t np = have_vertices ? static_cast<int64_t>(mesh.numPoints()) : kMaxItems;
-      cells.reserve(*kw, n, &mesh);
-      for (size_t e = 0; e < n; ++e) {
-        uint32_t corners[8];
-        for (int k = 0; k < kw->corners; ++k) {
-          GTN_ASSIGN_OR_RETURN(const int64_t v, reader.readInt("a vertex number"));
-          if (v < 1 || v > np) {
-            return reader.error(std::string(kw->singular) + " " + std::to_string(e + 1) + " refers to vertex " +
-                                std::to_string(v) + "; vertices are numbered 1 to " + std::to_string(np));
-          }
-          if (!have_vertices) cells.noteLateVertex(v, std::string(kw->singular) + " " + std::to_string(e + 1), reader.line());
-          corners[k] = static_cast<uint32_t>(v - 1);
-        }
-        GTN_ASSIGN_OR_RETURN(const int32_t r, readRef(reader));
-        cells.add(*kw, corners, r, &mesh);
-      }
-    } else {
-      const SkippedSection* section = nullptr;
-      for (const SkippedSection& s : kSkipped) {
-        if (sameKeyword(tok, s.keyword)) section = &s;
-      }
-      if (!section) {
-        if (!seen_keyword)
-          return Status(StatusCode::kNotOurFile, reader.error("not a Medit .mesh file: it starts with " +
-                                                              quotedToken(tok)).message());
-        if (!isKeyword(tok))
-          return reader.error("expected a section keyword, found " + quotedToken(tok) +
-                              " (the section before holds more values than its count says)");
-        // Other programs add their own sections (ParMmg's ParallelTriangleCommunicators, whose
-        // entries follow in a second section without a count; libMeshb's ISolAtTetrahedra ...).
-        // Every entry of every section is numbers, so an unknown one ends at the next word.
-        const std::string name(tok);
-        const size_t line = reader.line();
-        uint64_t numbers = 0;
-        std::string_view t;
-        while (reader.next(&t)) {
-          if (isKeyword(t)) {
-            pending = t;
-            break;
-          }
-          ++numbers;
-        }
-        result.report.warnings.push_back("skipped the unknown section '" + name + "' (line " + std::to_string(line) +
-                                         ", " + std::to_string(numbers) + " numbers up to the next keyword)");
-        seen_keyword = true;
-        continue;
-      }
-      if (dimension != 3) return reader.error(std::string(section->keyword) + " before a 'Dimension 3' line");
-      const int64_t values = section->values < 0 ? dimension : section->values;
-      const size_t line = reader.line();
-      const std::string entries = std::string(section->keyword) + " entries";
-      if (section->skip == Skip::kSingle) {
-        std::string text;
-        for (int64_t i = 0; i < values; ++i) {
-          if (!reader.next(&tok)) return reader.errorAtEnd(entries.c_str());
-          if (i) text += ' ';
-          text += tok;
-        }
-        mesh.setMetadata(std::string("medit.") + section->keyword, text);
-        seen_keyword = true;
-        continue;
-      }
-      GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader, std::max<int64_t>(values, 1), section->keyword));
-      if (section->skip == Skip::kLines) {
-        reader.skipLine();  // the rest of the count's line
-        for (int64_t i = 0; i < count; ++i) {
-          if (!reader.next(&tok)) return reader.errorAtEnd(entries.c_str());
-          reader.skipLine();
-        }
-      }
-      for (int64_t i = 0; section->skip == Skip::kValues && i < count * values; ++i) {
-        if (!reader.next(&tok)) return reader.errorAtEnd(entries.c_str());
-        if (isKeyword(tok))
-          return reader.error(std::string(section->keyword) + " (line " + std::to_string(line) + ") announces " +
-                              std::to_string(count) + " entries of " + std::to_string(values) + " values; found " +
-                              quotedToken(tok) + " after " + std::to_string(i) + " values");
-      }
-      if (!section->volume && count > 0) {
-        auto it = std::find_if(skipped.begin(), skipped.end(),
-                               [&](const SkippedEntries& e) { return e.section == section; });
-        if (it == skipped.end()) it = skipped.insert(skipped.end(), SkippedEntries{section, 0, line, 0});
-        it->entries += count;
-        ++it->sections;
-      }
-      if (section->volume && count > 0) {
-        const std::string what = std::to_string(count) + " " + section->keyword + " elements (line " +
-                                 std::to_string(line) + ")";
-        skipped_volume += (skipped_volume.empty() ? "" : ", ") + what;
-        result.report.warnings.push_back("skipped " + what +
-                                         ": higher-order elements are not read, so their volume is missing");
-      }
-    }
-    seen_keyword = true;
-  }
-  if (!have_vertices) return reader.error("no Vertices section");
-  if (cells.empty()) return reader.error(noVolumeElements(skipped_volume));
-  if (cells.late_vertex > static_cast<int64_t>(mesh.numPoints()))
-    return invalidData(path + ":" + std::to_string(cells.late_place) + ": " + cells.late_element + " refers to vertex " +
-                       std::to_string(cells.late_vertex) + "; vertices are numbered 1 to " +
-                       std::to_string(mesh.numPoints()));
-  cells.warnAboutSections(&result);
-  for (const SkippedEntries& e : skipped)
-    result.report.warnings.push_back("skipped " + std::to_string(e.entries) + " " + e.section->keyword + " (line " +
-                                     std::to_string(e.line) + (e.sections > 1 ? " and " + std::to_string(e.sections - 1) +
-                                                                                   " more sections" : "") +
-                                     "): " + skippedWhat(*e.section));
-  GTN_RETURN_IF_ERROR(finishMeditImport(path, "medit", &cells, options, &result));
-  return result;
+  MeditReader reader(path, text);
+  return reader.read(options);
 }
 
 }  // namespace gtn

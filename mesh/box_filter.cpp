@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "mesh/index.h"
+
 namespace gtn {
 
 namespace {
@@ -63,11 +65,10 @@ bool tetMeetsBox(const double* const p[4], const double lo[3], const double hi[3
 }
 
 TetMesh cropToBox(const TetMesh& mesh, const double lo[3], const double hi[3]) {
-  constexpr uint32_t kUnused = 0xFFFFFFFFu;
   TetMesh out;
   out.coord_type = mesh.coord_type;
   out.metadata = mesh.metadata;
-  std::vector<uint32_t> index(mesh.numPoints(), kUnused);
+  std::vector<uint32_t> index(mesh.numPoints(), kNoIndex);
   std::vector<size_t> kept_tets;
   for (size_t t = 0; t < mesh.numTets(); ++t) {
     const Tet& tet = mesh.tets[t];
@@ -78,7 +79,7 @@ TetMesh cropToBox(const TetMesh& mesh, const double lo[3], const double hi[3]) {
   }
   std::vector<size_t> kept_points;
   for (size_t v = 0; v < index.size(); ++v) {
-    if (index[v] == kUnused) continue;
+    if (index[v] == kNoIndex) continue;
     index[v] = static_cast<uint32_t>(kept_points.size());
     kept_points.push_back(v);
   }

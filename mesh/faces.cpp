@@ -69,15 +69,14 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
       for (int k = 0; k < 4; ++k) slots[next[groupOf(m[k])]++] = static_cast<uint32_t>(4 * t + k);
     }
   }
-  constexpr uint32_t kEmpty = 0xFFFFFFFFu;
   std::vector<GroupFace> faces;
-  std::vector<uint32_t> table;    // open addressing, at most half full: index in faces, or kEmpty
+  std::vector<uint32_t> table;    // open addressing, at most half full: index in faces, or kNoIndex
   std::vector<uint32_t> face_of;  // per slot of the group: its index in faces
   for (size_t g = 0; g < groups; ++g) {
     const uint32_t n = start[g + 1] - start[g];
     if (n == 0) continue;
     const int bits = std::max(4, static_cast<int>(std::bit_width(2 * n - 1)));
-    table.assign(size_t{1} << bits, kEmpty);
+    table.assign(size_t{1} << bits, kNoIndex);
     faces.clear();
     face_of.resize(n);
     bool non_manifold = false;
@@ -91,8 +90,8 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
       if (a > b) std::swap(a, b);
       const uint64_t bc = (uint64_t{b} << 32) | c;
       size_t h = ((bc ^ a) * 0x9E3779B97F4A7C15u) >> (64 - bits);
-      while (table[h] != kEmpty && !(faces[table[h]].bc == bc && faces[table[h]].a == a)) h = (h + 1) & (table.size() - 1);
-      if (table[h] == kEmpty) {
+      while (table[h] != kNoIndex && !(faces[table[h]].bc == bc && faces[table[h]].a == a)) h = (h + 1) & (table.size() - 1);
+      if (table[h] == kNoIndex) {
         table[h] = static_cast<uint32_t>(faces.size());
         faces.push_back({a, bc, slot, 0, 1});
       } else {

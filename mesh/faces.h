@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "mesh/index.h"
 #include "mesh/tet_mesh.h"
 
 namespace gtn {
@@ -18,7 +19,7 @@ extern const int kTetFace[4][3];
 // (the order in which the level codec codes edge points, spec section 10.5).
 extern const int kTetEdge[6][2];
 
-constexpr uint32_t kNoNeighbor = 0xFFFFFFFFu;   // boundary face
+inline constexpr uint32_t kNoNeighbor = kNoIndex;  // boundary face
 constexpr uint32_t kNonManifold = 0xFFFFFFFEu;  // face shared by three or more tetrahedra
 
 struct FaceAdjacency {

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "codec/level_codec.h"
+#include "mesh/index.h"
 #include "mesh/mesh_stream.h"
 #include "render/camera.h"
 #include "render/image.h"
@@ -220,7 +221,7 @@ struct BoundarySurface {
   std::vector<std::array<uint32_t, 3>> triangles;  // indices into points
 };
 
-constexpr uint32_t kNoTriangle = 0xFFFFFFFFu;
+inline constexpr uint32_t kNoTriangle = kNoIndex;
 
 // A part of a pixel's ray inside the volume: from the near crossing (entering through triangle
 // `entry_tri`) to the far crossing (leaving through `exit_tri`, kNoTriangle when the ray's crossings

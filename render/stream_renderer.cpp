@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "mesh/faces.h"
+#include "mesh/index.h"
 #include "render/flat_hash.h"
 #include "render/traversal.h"
 
@@ -26,8 +27,7 @@ using render_internal::SegmentCursors;
 
 namespace {
 
-constexpr uint32_t kNone = 0xFFFFFFFFu;
-constexpr uint32_t kOpenFace = 0xFFFFFFFFu;      // neighbour not arrived (or never will)
+constexpr uint32_t kOpenFace = kNoIndex;         // neighbour not arrived (or never will)
 constexpr uint32_t kReleasedFace = 0xFFFFFFFEu;  // neighbour arrived and was released
 // Tetrahedra are processed in batches of this size range: large enough to feed the threads, small
 // relative to the mesh so that holding a batch does not dominate the memory.
@@ -64,9 +64,9 @@ uint32_t heldFace(uint32_t slot, int face) { return slot << 2 | static_cast<uint
 // through State::cursor_word. The tetrahedron's slot and local face share one word (20-byte map
 // entries).
 struct FaceEntry {
-  uint32_t held = kNone;     // heldFace, or kNone
-  uint32_t waiters = kNone;  // the first waiting cursor, or kNone
-  bool hasTet() const { return held != kNone; }
+  uint32_t held = kNoIndex;     // heldFace, or kNoIndex
+  uint32_t waiters = kNoIndex;  // the first waiting cursor, or kNoIndex
+  bool hasTet() const { return held != kNoIndex; }
   uint32_t tet() const { return held >> 2; }
   int face() const { return static_cast<int>(held & 3); }
   void setTet(uint32_t slot, int face) { held = heldFace(slot, face); }
@@ -149,7 +149,7 @@ class SlotPool {
   uint32_t size() const { return size_; }  // indices handed out, freed ones included
   // A freed index, else a new, default-constructed entry at the end.
   uint32_t allocate() {
-    if (free_ != kNoFree) {
+    if (free_ != kNoIndex) {
       const uint32_t i = free_;
       free_ = (*this)[i].nextFree();
       return i;
@@ -163,9 +163,9 @@ class SlotPool {
   }
 
  private:
-  static constexpr uint32_t kChunk = 1u << kShift, kMask = kChunk - 1, kNoFree = 0xFFFFFFFFu;
+  static constexpr uint32_t kChunk = 1u << kShift, kMask = kChunk - 1;
   std::vector<std::unique_ptr<T[]>> chunks_;
-  uint32_t free_ = kNoFree;  // the last freed index
+  uint32_t free_ = kNoIndex;  // the last freed index
   uint32_t size_ = 0;
 };
 
@@ -186,7 +186,7 @@ struct StoredRgba {
 // nothing but transparent samples.
 struct StreamSegment : SegmentCursors {
   StoredRgba front;
-  uint32_t back = kNone;  // index into State::backs; none while the back colour is blank (zero)
+  uint32_t back = kNoIndex;  // index into State::backs; none while the back colour is blank (zero)
   uint32_t pixel = 0;     // whose ray
 };
 static_assert(sizeof(StreamSegment) == 48);
@@ -262,7 +262,7 @@ struct StreamRenderer::State {
   // The first segment of every kPixelBlock-th pixel. Segments are stored in pixel order and know
   // their pixel, so any pixel's are found by a short walk from its block's first: an eighth of
   // castBoundary's offset per pixel (256 KB at 256x256). The walks stop at a last, empty segment of
-  // no pixel (kNone), which they need not test for.
+  // no pixel (kNoIndex), which they need not test for.
   static constexpr uint32_t kPixelBlock = 8;
   std::vector<uint32_t> block_start;
   // Each pixel's number of segments, 255 for 255 or more: counting a tetrahedron's rays reads these
@@ -310,12 +310,12 @@ struct StreamRenderer::State {
   // Calls f(cursor) for each waiter of e and empties its list (f may set the cursor's word).
   template <class F>
   void takeWaiters(FaceEntry& e, F&& f) {
-    for (uint32_t c = e.waiters; c != kNone;) {
+    for (uint32_t c = e.waiters; c != kNoIndex;) {
       const uint32_t next = cursor_word[c];
       f(c);
       c = next;
     }
-    e.waiters = kNone;
+    e.waiters = kNoIndex;
   }
   SlotPool<HeldTet, 9> tets;
   uint64_t held = 0;
@@ -396,9 +396,9 @@ class SegmentBuilder : public SegmentSink {
   explicit SegmentBuilder(StreamRenderer::State& st) : st_(st) {}
   void begin(size_t segments) override {
     st_.segs.resize(segments + 1);
-    st_.segs.back().pixel = kNone;  // State::block_start's walks end there
+    st_.segs.back().pixel = kNoIndex;  // State::block_start's walks end there
     st_.backs.reserve(segments);
-    st_.cursor_word.assign(2 * segments, kNone);
+    st_.cursor_word.assign(2 * segments, kNoIndex);
     st_.triggered.assign(segments, 0);
     st_.at_boundary.assign(segments, 0);
   }
@@ -434,10 +434,10 @@ void StreamRenderer::State::release(uint32_t slot) {
       const FaceKey key = t.key(k);
       FaceEntry* e = faces.find(key);
       if (e && e->hasTet() && e->tet() == slot) {
-        if (e->waiters == kNone) {
+        if (e->waiters == kNoIndex) {
           faces.erase(key);
         } else {
-          e->held = kNone;
+          e->held = kNoIndex;
         }
       }
     } else if (n != kReleasedFace) {
@@ -593,13 +593,88 @@ Status StreamRenderer::retireVertex(uint32_t id) {
   return Status::ok();
 }
 
-Status StreamRenderer::flushBatch() {
-  State& st = *state_;
-  if (st.flushing.empty()) return Status::ok();
-  const Camera& cam = setup_.camera;
-  const int w = cam.width();
+namespace {
+// The rays of pixel p (segments s0 to s1) whose uncovered part overlaps arrived tetrahedron `a`, by
+// the exact crossings.
+int32_t exactRayCount(const StreamRenderer::State& st, const Camera& cam, ArrivedTet& a, const TetCorners& g, size_t p,
+                      uint32_t s0, uint32_t s1) {
+  const PreparedRay ray = st.pixelRay(p, cam);
+  double tmin = 1e300, tmax = -1e300;
+  Crossing x[4];
+  a.computeOrder();
+  crossTetFaces(ray, g, -1, x);
+  for (int k = 0; k < 4; ++k) {
+    if (!x[k].hit) continue;
+    tmin = std::min(tmin, x[k].t);
+    tmax = std::max(tmax, x[k].t);
+  }
+  int32_t n = 0;
+  if (tmin > tmax) return n;
+  for (uint32_t s = s0; s < s1; ++s) {
+    const StreamSegment& seg = st.segs[s];
+    if (!seg.done() && seg.tf <= tmax && tmin <= seg.tb) ++n;
+  }
+  return n;
+}
 
-  // 1. How many rays still need each arrived tetrahedron (parallel; segments are read only).
+// Perspective: the rays of every pixel of the footprint's box, by the exact crossings.
+int32_t perspectiveRayCount(const StreamRenderer::State& st, const Camera& cam, ArrivedTet& a, const TetCorners& g,
+                            const int box[4]) {
+  const int w = cam.width();
+  int32_t count = 0;
+  for (int py = box[1]; py <= box[3]; ++py) {
+    const uint32_t row = static_cast<uint32_t>(py) * w;
+    uint32_t s1 = st.firstSegmentFrom(row + box[0]);
+    for (int px = box[0]; px <= box[2]; ++px) {
+      const uint32_t p = row + px, s0 = s1;
+      s1 = st.pixelSegmentsEnd(p, s0);
+      if (s0 != s1) count += exactRayCount(st, cam, a, g, p, s0, s1);
+    }
+  }
+  return count;
+}
+
+// Orthographic: rasterize the projected tetrahedron row by row. Pixels whose centre lies in its
+// projection by a clear margin are hit (the crossing test is watertight), pixels clearly outside are
+// not; only those near its outline need the exact crossings. A hit pixel with one segment needs the
+// tetrahedron: its cursors cannot have passed a tetrahedron that has not arrived, nor met before it.
+// (In an invalid mesh where they did, the tetrahedron is held until the level ends: memory, not the
+// image.) Only the pixels' segment counts are read.
+int32_t orthographicRayCount(const StreamRenderer::State& st, const Camera& cam, ArrivedTet& a, const TetCorners& g,
+                             const int box[4], const double sx[4], const double sy[4]) {
+  constexpr double kSure = ScreenHull::kSure;  // rounding differences are about 1e-10 pixels
+  const int w = cam.width();
+  const ScreenHull hull(sx, sy, 4);
+  const uint8_t* nseg = st.pixel_segments.data();
+  int32_t count = 0;
+  for (int py = box[1]; py <= box[3]; ++py) {
+    const double yc = py + 0.5;
+    // The projection's span on this row. Only the pixels within kSure of it can fail the "clearly
+    // outside" test below: two thirds of a footprint's box are skipped unread.
+    double xl, xr;
+    const bool row_inside = hull.span(yc, kSure, &xl, &xr);
+    int px0 = box[0], px1 = box[2];
+    if (row_inside) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
+    const uint32_t row = static_cast<uint32_t>(py) * w;
+    for (int px = px0; px <= px1; ++px) {
+      const uint32_t p = row + px;
+      const uint8_t n = nseg[p];
+      if (n == 0) continue;
+      const double xc = px + 0.5;
+      if (row_inside && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
+      if (row_inside && n == 1 && xc > xl + kSure && xc < xr - kSure) {  // clearly inside
+        ++count;
+        continue;
+      }
+      const uint32_t s0 = st.firstSegmentFrom(p);
+      count += exactRayCount(st, cam, a, g, p, s0, st.pixelSegmentsEnd(p, s0));
+    }
+  }
+  return count;
+}
+
+// Step 1: how many rays still need each arrived tetrahedron (parallel; segments are read only).
+void countRays(StreamRenderer::State& st, const Camera& cam) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, st.flushing.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ArrivedTet& a = st.flushing[i];
@@ -615,187 +690,143 @@ Status StreamRenderer::flushBatch() {
       a.visible = true;
       // Orthographic: the corners' sheared positions (the pool's, computed once per vertex).
       const TetCorners g{a.corner, a.order, st.shared_frame};
-      // The rays of pixel p whose uncovered part overlaps the tetrahedron, by the exact crossings.
-      auto exactCount = [&](size_t p, uint32_t s0, uint32_t s1) {
-        const PreparedRay ray = st.pixelRay(p, cam);
-        double tmin = 1e300, tmax = -1e300;
-        Crossing x[4];
-        a.computeOrder();
-        crossTetFaces(ray, g, -1, x);
-        for (int k = 0; k < 4; ++k) {
-          if (!x[k].hit) continue;
-          tmin = std::min(tmin, x[k].t);
-          tmax = std::max(tmax, x[k].t);
-        }
-        int32_t n = 0;
-        if (tmin > tmax) return n;
-        for (uint32_t s = s0; s < s1; ++s) {
-          const StreamSegment& seg = st.segs[s];
-          if (!seg.done() && seg.tf <= tmax && tmin <= seg.tb) ++n;
-        }
-        return n;
-      };
-      int32_t count = 0;
-      if (!st.shared_frame) {
-        for (int py = box[1]; py <= box[3]; ++py) {
-          const uint32_t row = static_cast<uint32_t>(py) * w;
-          uint32_t s1 = st.firstSegmentFrom(row + box[0]);
-          for (int px = box[0]; px <= box[2]; ++px) {
-            const uint32_t p = row + px, s0 = s1;
-            s1 = st.pixelSegmentsEnd(p, s0);
-            if (s0 != s1) count += exactCount(p, s0, s1);
-          }
-        }
-        a.rays = count;
-        if (count > 0) a.computeOrder();
-        continue;
-      }
-      // Orthographic: rasterize the projected tetrahedron row by row. Pixels whose centre lies in
-      // its projection by a clear margin are hit (the crossing test is watertight), pixels clearly
-      // outside are not; only those near its outline need the exact crossings. A hit pixel with one
-      // segment needs the tetrahedron: its cursors cannot have passed a tetrahedron that has not
-      // arrived, nor met before it. (In an invalid mesh where they did, the tetrahedron is held
-      // until the level ends: memory, not the image.) Only the pixels' segment counts are read.
-      constexpr double kSure = ScreenHull::kSure;  // rounding differences are about 1e-10 pixels
-      const ScreenHull hull(sx, sy, 4);
-      const uint8_t* nseg = st.pixel_segments.data();
-      for (int py = box[1]; py <= box[3]; ++py) {
-        const double yc = py + 0.5;
-        // The projection's span on this row. Only the pixels within kSure of it can fail the
-        // "clearly outside" test below: two thirds of a footprint's box are skipped unread.
-        double xl, xr;
-        const bool row_inside = hull.span(yc, kSure, &xl, &xr);
-        int px0 = box[0], px1 = box[2];
-        if (row_inside) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
-        const uint32_t row = static_cast<uint32_t>(py) * w;
-        for (int px = px0; px <= px1; ++px) {
-          const uint32_t p = row + px;
-          const uint8_t n = nseg[p];
-          if (n == 0) continue;
-          const double xc = px + 0.5;
-          if (row_inside && (xc < xl - kSure || xc > xr + kSure)) continue;  // clearly outside
-          if (row_inside && n == 1 && xc > xl + kSure && xc < xr - kSure) {  // clearly inside
-            ++count;
-            continue;
-          }
-          const uint32_t s0 = st.firstSegmentFrom(p);
-          count += exactCount(p, s0, st.pixelSegmentsEnd(p, s0));
-        }
-      }
-      a.rays = count;
-      if (count > 0) a.computeOrder();
+      a.rays = st.shared_frame ? orthographicRayCount(st, cam, a, g, box, sx, sy)
+                               : perspectiveRayCount(st, cam, a, g, box);
+      if (a.rays > 0) a.computeOrder();
     }
   });
+}
 
-  // 2. Hold the tetrahedra some ray needs, link them to held neighbours, collect the cursors waiting
-  //    at their faces (sequential: the face map).
-  std::vector<uint32_t>& arrived_slots = st.arrived_slots;
+// Whether arrived tetrahedron `a` must be held: a ray needs it, or a cursor waits at one of its
+// faces (`keys`, filled).
+bool tetNeeded(const StreamRenderer::State& st, const ArrivedTet& a, FaceKey keys[4]) {
+  bool needed = a.rays > 0;
+  for (int k = 0; k < 4; ++k) {
+    keys[k] = makeKey(a.vertex(kTetFace[k][0])->id, a.vertex(kTetFace[k][1])->id, a.vertex(kTetFace[k][2])->id);
+    if (!needed) {
+      const FaceEntry* e = st.faces.find(keys[k]);
+      if (e && e->waiters != kNoIndex) needed = true;
+    }
+  }
+  return needed;
+}
+
+// Holds `a` in a new slot, links it to the held neighbours found at its faces `keys`, and triggers
+// the cursors waiting there. Returns the slot.
+uint32_t holdTet(StreamRenderer::State& st, ArrivedTet& a, const FaceKey keys[4]) {
+  const uint32_t slot = st.tets.allocate();
+  HeldTet& t = st.tets[slot];
+  for (int k = 0; k < 4; ++k) {
+    t.corner[k] = a.corner[k];
+    ++a.vertex(k)->refs;
+    t.nbr[k] = kOpenFace;
+  }
+  a.computeOrder();  // held for its waiters alone
+  std::memcpy(t.order, a.order, sizeof(t.order));
+  t.pending.store(a.rays, std::memory_order_relaxed);
+  ++st.held;
+  for (int k = 0; k < 4; ++k) {
+    const auto [entry, inserted] = st.faces.tryEmplace(keys[k]);
+    FaceEntry& e = *entry;
+    if (inserted) {
+      e.setTet(slot, k);
+      continue;
+    }
+    st.takeWaiters(e, [&](uint32_t c) {
+      st.cursor_word[c] = heldFace(slot, k);
+      st.trigger(c);
+    });
+    if (e.hasTet() && e.tet() != slot) {
+      st.tets[e.tet()].nbr[e.face()] = heldFace(slot, k);
+      t.nbr[k] = e.held;
+      st.faces.erase(keys[k]);
+    } else {
+      e.setTet(slot, k);
+    }
+  }
+  return slot;
+}
+
+// Step 2: hold the tetrahedra some ray needs, link them to held neighbours, collect the cursors
+// waiting at their faces (sequential: the face map). The slots held go to st.arrived_slots.
+Status holdNeededTets(StreamRenderer::State& st, StreamRenderStats& stats) {
   st.trigger_segs.clear();
-  arrived_slots.clear();
+  st.arrived_slots.clear();
   for (ArrivedTet& a : st.flushing) {
     // Most tetrahedra of a large mesh lie between pixel centres: nothing to look up for them.
     if (!a.visible) continue;
     FaceKey keys[4];
-    bool needed = a.rays > 0;
-    for (int k = 0; k < 4; ++k) {
-      keys[k] = makeKey(a.vertex(kTetFace[k][0])->id, a.vertex(kTetFace[k][1])->id, a.vertex(kTetFace[k][2])->id);
-      if (!needed) {
-        const FaceEntry* e = st.faces.find(keys[k]);
-        if (e && e->waiters != kNone) needed = true;
-      }
-    }
-    if (!needed) continue;
+    if (!tetNeeded(st, a, keys)) continue;
     if (st.held >= kMaxHeldSlots)
       return invalidData("renderer: more than " + std::to_string(kMaxHeldSlots) + " tetrahedra held at once");
-    const uint32_t slot = st.tets.allocate();
-    HeldTet& t = st.tets[slot];
-    for (int k = 0; k < 4; ++k) {
-      t.corner[k] = a.corner[k];
-      ++a.vertex(k)->refs;
-      t.nbr[k] = kOpenFace;
-    }
-    a.computeOrder();  // held for its waiters alone
-    std::memcpy(t.order, a.order, sizeof(t.order));
-    t.pending.store(a.rays, std::memory_order_relaxed);
-    ++st.held;
-    ++stats_.tets_held;
-    arrived_slots.push_back(slot);
-    for (int k = 0; k < 4; ++k) {
-      const auto [entry, inserted] = st.faces.tryEmplace(keys[k]);
-      FaceEntry& e = *entry;
-      if (inserted) {
-        e.setTet(slot, k);
-        continue;
-      }
-      st.takeWaiters(e, [&](uint32_t c) {
-        st.cursor_word[c] = heldFace(slot, k);
-        st.trigger(c);
-      });
-      if (e.hasTet() && e.tet() != slot) {
-        st.tets[e.tet()].nbr[e.face()] = heldFace(slot, k);
-        t.nbr[k] = e.held;
-        st.faces.erase(keys[k]);
-      } else {
-        e.setTet(slot, k);
-      }
+    st.arrived_slots.push_back(holdTet(st, a, keys));
+    ++stats.tets_held;
+  }
+  stats.peak_tets_held = std::max(stats.peak_tets_held, st.held);
+  return Status::ok();
+}
+
+// Advances the triggered cursors of segment `si` (the front first) through the held tetrahedra,
+// then stores the segment's colours; cursors that stop at an open face go to `waits`.
+void advanceSegment(StreamRenderer::State& st, const RenderSetup& setup, HeldMesh& mesh, uint32_t si,
+                    std::vector<uint32_t>& waits) {
+  const uint8_t which = st.triggered[si];
+  st.triggered[si] = 0;
+  StreamSegment& seg = st.segs[si];
+  const PreparedRay ray = st.pixelRay(seg.pixel, setup.camera);
+  // The colours in double while the segment's cursors advance.
+  Rgba front_colour = seg.front.get();
+  Rgba back_colour = seg.back != kNoIndex ? st.backs[seg.back].get() : Rgba();
+  // A cursor that stopped (met, boundary, lost) waits nowhere, so only waiting cursors come here;
+  // the back one may find its segment done by the front meanwhile.
+  for (uint32_t end = 0; end < 2; ++end) {
+    if (!(which >> end & 1) || seg.done()) continue;
+    const uint32_t cursor = 2 * si + end;
+    const uint32_t enter = st.cursor_word[cursor];
+    const bool front = end == 0;
+    uint32_t wait_tet = 0;
+    int wait_face = 0;
+    Rgba& colour = front ? front_colour : back_colour;
+    const CursorEnd end_state = advanceCursor(setup, ray, seg, front, colour, enter >> 2, static_cast<int>(enter & 3),
+                                              mesh, &wait_tet, &wait_face);
+    if (end_state == CursorEnd::kWait) {
+      st.cursor_word[cursor] = heldFace(wait_tet, wait_face);
+      waits.push_back(cursor);
+    } else if (end_state == CursorEnd::kLost) {
+      st.lost.fetch_add(1, std::memory_order_relaxed);
+    } else if (end_state == CursorEnd::kBoundary) {
+      st.at_boundary[si] |= static_cast<uint8_t>(1u << end);
     }
   }
-  stats_.peak_tets_held = std::max(stats_.peak_tets_held, st.held);
+  if (seg.done()) {
+    seg.front = StoredRgba(over(front_colour, back_colour));
+    if (seg.back != kNoIndex) st.backs.free(seg.back);
+    seg.back = kNoIndex;
+  } else {
+    seg.front = StoredRgba(front_colour);
+    if (seg.back != kNoIndex) {
+      st.backs[seg.back] = StoredRgba(back_colour);
+    } else if (!isBlank(back_colour)) {
+      seg.back = st.backs.allocate(StoredRgba(back_colour));
+    }
+  }
+}
 
-  // 3. Advance the triggered cursors (parallel over segments; a segment's cursors in one task, the
-  //    front first). Segments do not interact within a batch (nothing is released before step 5), so
-  //    the order of the segments does not matter.
+// Step 3: advance the triggered cursors (parallel over segments; a segment's cursors in one task).
+// Segments do not interact within a batch (nothing is released before step 5), so the order of the
+// segments does not matter.
+void advanceTriggered(StreamRenderer::State& st, const RenderSetup& setup) {
   for (auto& list : st.zeroed) list.clear();
   for (auto& list : st.waits) list.clear();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, st.trigger_segs.size(), 8), [&](const tbb::blocked_range<size_t>& r) {
     HeldMesh mesh{st, st.zeroed};
     std::vector<uint32_t>& my_waits = st.waits.local();
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const uint32_t si = st.trigger_segs[i];
-      const uint8_t which = st.triggered[si];
-      st.triggered[si] = 0;
-      StreamSegment& seg = st.segs[si];
-      const PreparedRay ray = st.pixelRay(seg.pixel, setup_.camera);
-      // The colours in double while the segment's cursors advance.
-      Rgba front_colour = seg.front.get();
-      Rgba back_colour = seg.back != kNone ? st.backs[seg.back].get() : Rgba();
-      // A cursor that stopped (met, boundary, lost) waits nowhere, so only waiting cursors come here;
-      // the back one may find its segment done by the front meanwhile.
-      for (uint32_t end = 0; end < 2; ++end) {
-        if (!(which >> end & 1) || seg.done()) continue;
-        const uint32_t cursor = 2 * si + end;
-        const uint32_t enter = st.cursor_word[cursor];
-        const bool front = end == 0;
-        uint32_t wait_tet = 0;
-        int wait_face = 0;
-        Rgba& colour = front ? front_colour : back_colour;
-        const CursorEnd end_state = advanceCursor(setup_, ray, seg, front, colour, enter >> 2,
-                                                  static_cast<int>(enter & 3), mesh, &wait_tet, &wait_face);
-        if (end_state == CursorEnd::kWait) {
-          st.cursor_word[cursor] = heldFace(wait_tet, wait_face);
-          my_waits.push_back(cursor);
-        } else if (end_state == CursorEnd::kLost) {
-          st.lost.fetch_add(1, std::memory_order_relaxed);
-        } else if (end_state == CursorEnd::kBoundary) {
-          st.at_boundary[si] |= static_cast<uint8_t>(1u << end);
-        }
-      }
-      if (seg.done()) {
-        seg.front = StoredRgba(over(front_colour, back_colour));
-        if (seg.back != kNone) st.backs.free(seg.back);
-        seg.back = kNone;
-      } else {
-        seg.front = StoredRgba(front_colour);
-        if (seg.back != kNone) {
-          st.backs[seg.back] = StoredRgba(back_colour);
-        } else if (!isBlank(back_colour)) {
-          seg.back = st.backs.allocate(StoredRgba(back_colour));
-        }
-      }
-    }
+    for (size_t i = r.begin(); i < r.end(); ++i) advanceSegment(st, setup, mesh, st.trigger_segs[i], my_waits);
   });
+}
 
-  // 4. Cursors now waiting at open faces of held tetrahedra.
+// Step 4: the cursors now waiting at open faces of held tetrahedra join those faces' waiter lists.
+void parkWaitingCursors(StreamRenderer::State& st, StreamRenderStats& stats) {
   for (const std::vector<uint32_t>& list : st.waits) {
     for (const uint32_t cursor : list) {
       const uint32_t slot = st.cursor_word[cursor] >> 2;
@@ -805,14 +836,29 @@ Status StreamRenderer::flushBatch() {
       st.addWaiter(*e, cursor);
     }
   }
-  stats_.peak_face_entries = std::max<uint64_t>(stats_.peak_face_entries, st.faces.size());
+  stats.peak_face_entries = std::max<uint64_t>(stats.peak_face_entries, st.faces.size());
+}
 
-  // 5. Release what no ray needs any more.
+// Step 5: release what no ray needs any more.
+void releaseUnneeded(StreamRenderer::State& st) {
   for (const std::vector<uint32_t>& list : st.zeroed)
     for (uint32_t slot : list)
       if (st.tets[slot].pending.load(std::memory_order_relaxed) <= 0) st.release(slot);
-  for (uint32_t slot : arrived_slots)
+  for (uint32_t slot : st.arrived_slots)
     if (st.tets[slot].alive() && st.tets[slot].pending.load(std::memory_order_relaxed) <= 0) st.release(slot);
+}
+}  // namespace
+
+// Renders the batch `flushing` in five steps: count the rays each tetrahedron meets, hold those
+// needed, advance the cursors they trigger, park the cursors that wait, release what no ray needs.
+Status StreamRenderer::flushBatch() {
+  State& st = *state_;
+  if (st.flushing.empty()) return Status::ok();
+  countRays(st, setup_.camera);
+  GTN_RETURN_IF_ERROR(holdNeededTets(st, stats_));
+  advanceTriggered(st, setup_);
+  parkWaitingCursors(st, stats_);
+  releaseUnneeded(st);
   return Status::ok();
 }
 
@@ -835,7 +881,7 @@ Status StreamRenderer::endLevel() {
     next_unpaired += lost;
     for (; st.segs[s].pixel == p; ++s) {
       const StreamSegment& seg = st.segs[s];
-      acc = over(acc, over(seg.front.get(), seg.back != kNone ? st.backs[seg.back].get() : Rgba()));
+      acc = over(acc, over(seg.front.get(), seg.back != kNoIndex ? st.backs[seg.back].get() : Rgba()));
       lost |= !seg.done() && st.at_boundary[s] != 3;
     }
     stats_.lost_rays += lost;

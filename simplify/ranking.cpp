@@ -11,6 +11,7 @@
 
 #include "codec/edge_points.h"
 #include "mesh/faces.h"
+#include "mesh/index.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
 
@@ -18,8 +19,7 @@ namespace gtn {
 
 namespace {
 
-constexpr uint32_t kNil = 0xFFFFFFFFu;
-constexpr uint32_t kDead = 0xFFFFFFFFu;   // tets_[t][0] of a collapsed tetrahedron
+constexpr uint32_t kDead = kNoIndex;     // tets_[t][0] of a collapsed tetrahedron
 constexpr uint32_t kOmega = 0xFFFFFFFEu;  // the virtual vertex coning the boundary
 constexpr double kFlipMargin = 1e-3;
 constexpr double kLocalWeight = 1.0 / 16;  // see ranking.h
@@ -578,13 +578,13 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
         }
         if (has_x && has_y) return r;
       }
-      return kNil;
+      return kNoIndex;
     };
     const uint32_t nv = across(corners_), nw = across(corners_w_);
-    if (nv != kNil && nw != kNil) continue;
+    if (nv != kNoIndex && nw != kNoIndex) continue;
     if (orient3d(pos(q[0]), pos(q[1]), pos(q[2]), pos(q[3])) <= 0) return false;
-    const uint32_t n = nv != kNil ? nv : nw;
-    if (n != kNil) {
+    const uint32_t n = nv != kNoIndex ? nv : nw;
+    if (n != kNoIndex) {
       const Tet& p = tets_[n];
       if (orient3d(pos(p[0]), pos(p[1]), pos(p[2]), pos(p[3])) <= 0) return false;
     }
@@ -652,9 +652,9 @@ void Ranker::recompute(const std::vector<uint32_t>& list) {
   best_.resize(n);
   auto evaluate = [&](size_t i, Workspace& ws) {
     candidates(list[i], ws.cands, ws);
-    Candidate best{0, kNil};
+    Candidate best{0, kNoIndex};
     for (const Candidate& c : ws.cands)
-      if (best.w == kNil || c.error < best.error || (c.error == best.error && c.w < best.w)) best = c;
+      if (best.w == kNoIndex || c.error < best.error || (c.error == best.error && c.w < best.w)) best = c;
     best_[i] = best;
   };
   if (n < kParallelEvaluations) {
@@ -667,7 +667,7 @@ void Ranker::recompute(const std::vector<uint32_t>& list) {
   }
   for (size_t i = 0; i < n; ++i) {
     ++version_[list[i]];
-    if (best_[i].w != kNil) push(list[i], best_[i]);
+    if (best_[i].w != kNoIndex) push(list[i], best_[i]);
   }
 }
 

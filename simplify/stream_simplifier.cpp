@@ -3,12 +3,9 @@
 #include <algorithm>
 #include <cstring>
 
+#include "mesh/index.h"
 
 namespace gtn {
-
-namespace {
-constexpr uint32_t kUnset = 0xFFFFFFFFu;
-}
 
 StreamSimplifier::StreamSimplifier(const MergeTree& tree, uint64_t n, MeshSink& out)
     : tree_(tree), n_(std::min<uint64_t>(n, tree.merges)), out_(out) {}
@@ -58,8 +55,8 @@ Status StreamSimplifier::beginLevel(const LevelHeader& header) {
   held_.clear();
   held_values_.clear();
   free_slots_.clear();
-  wait_head_.assign(survivors, kUnset);
-  wait_tail_.assign(survivors, kUnset);
+  wait_head_.assign(survivors, kNoIndex);
+  wait_tail_.assign(survivors, kNoIndex);
   held_count_ = peak_held_ = 0;
   in_boundary_ = true;
   out_header_ = header;
@@ -80,8 +77,8 @@ Status StreamSimplifier::vertex(uint32_t id, const double xyz[3], const uint8_t*
   const uint32_t o = emitted_++;
   GTN_RETURN_IF_ERROR(out_.vertex(o, xyz, values));
   uint32_t slot = wait_head_[o];
-  wait_head_[o] = wait_tail_[o] = kUnset;
-  while (slot != kUnset) {
+  wait_head_[o] = wait_tail_[o] = kNoIndex;
+  while (slot != kNoIndex) {
     const uint32_t next = held_[slot].next;
     GTN_RETURN_IF_ERROR(emitHeld(slot));
     slot = next;
@@ -101,15 +98,15 @@ Status StreamSimplifier::hold(const uint32_t* o, int count, bool triangle, const
   }
   Held& h = held_[slot];
   h.triangle = triangle;
-  h.next = kUnset;
-  h.o[3] = kUnset;
+  h.next = kNoIndex;
+  h.o[3] = kNoIndex;
   uint32_t last = 0;
   for (int i = 0; i < count; ++i) {
     h.o[i] = o[i];
     ++refs_[o[i]];
     last = std::max(last, o[i]);
   }
-  if (wait_tail_[last] == kUnset) {
+  if (wait_tail_[last] == kNoIndex) {
     wait_head_[last] = slot;
   } else {
     held_[wait_tail_[last]].next = slot;

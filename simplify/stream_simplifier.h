@@ -42,7 +42,7 @@ class StreamSimplifier : public MeshSink {
   // its largest output id: the others are emitted before it.
   struct Held {
     uint32_t o[4];  // output ids of the ancestors; o[3] unused for triangles
-    uint32_t next;  // the next element waiting for the same vertex, or kNone
+    uint32_t next;  // the next element waiting for the same vertex, or kNoIndex
     bool triangle;
   };
   Status emitHeld(uint32_t slot);

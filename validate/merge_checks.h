@@ -9,12 +9,13 @@
 #include <vector>
 
 #include "codec/merge_tree_coder.h"
+#include "mesh/index.h"
 #include "mesh/tet_mesh.h"
 #include "validate/report.h"
 
 namespace gtn {
 
-constexpr uint32_t kMergeRoot = 0xFFFFFFFFu;
+inline constexpr uint32_t kMergeRoot = kNoIndex;
 
 // One merge per non-root vertex v: v merges into parent[v] (or into whatever parent[v] has merged
 // into by then) as the rank[v]-th merge. Roots have parent kMergeRoot and rank 0. Indices are level 0's

@@ -27,6 +27,7 @@
 #include "codec/level_codec.h"
 #include "convert/import.h"
 #include "mesh/faces.h"
+#include "mesh/index.h"
 
 namespace {
 
@@ -94,7 +95,7 @@ double replay(const std::vector<std::array<uint32_t, 4>>& tets, uint32_t pool, s
         gtn::FrontFace g{};
         for (int j = 0; j < 3; ++j) g.v[j] = f[j];
         g.d = e[k];
-        g.cell = ~0u;
+        g.cell = gtn::kNoIndex;
         faces.insert(g);
         if constexpr (kEdges) {
           for (int j = 0; j < 3; ++j) edges.put(f[j], f[(j + 1) % 3], f[(j + 2) % 3]);

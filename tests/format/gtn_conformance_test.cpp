@@ -1,7 +1,10 @@
 // The conformance files in samples/conformance/: valid files that must decode to known meshes and
-// malformed files that must fail with a known reason. The files are committed; this test generates
-// them procedurally and rewrites them only when GTN_UPDATE_GOLDEN=1 is set. Without it, it decodes the
-// committed files (they are decode-compatibility vectors: a later codec must still read them).
+// malformed files that must fail with a known reason. Beside each NAME.gtn, NAME.expected says what a
+// reader must make of it (outcome, counts, fields and levels, or the status and message of the
+// failure); this test reads those files and holds the reference reader to them. The .gtn files are
+// committed; this test generates them procedurally and rewrites them only when GTN_UPDATE_GOLDEN=1 is
+// set. Without it, it decodes the committed files (they are decode-compatibility vectors: a later
+// codec must still read them) and compares them with the generated meshes too.
 #include <gtest/gtest.h>
 
 #include <CGAL/Delaunay_triangulation_3.h>
@@ -13,7 +16,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <functional>
+#include <map>
 #include <random>
 #include <set>
 
@@ -437,10 +443,8 @@ uint64_t chunkOffset(const std::vector<uint8_t>& bytes, ChunkTag tag) {
 
 struct Sample {
   std::string name;
-  std::function<TetMesh()> mesh;        // valid samples: the mesh it holds
+  std::function<TetMesh()> mesh;  // valid samples: the mesh it holds; must-fail samples: none
   std::function<std::vector<uint8_t>()> make;
-  StatusCode code = StatusCode::kOk;    // must-fail samples: the expected code and reason
-  std::string reason;
 };
 
 Sample valid(std::string name, std::function<TetMesh()> mesh, std::function<std::vector<uint8_t>()> make) {
@@ -490,44 +494,38 @@ std::vector<Sample> samples() {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.erase(b.begin() + 4);  // CR LF -> LF, as a text-mode transfer does
                  return b;
-               },
-               StatusCode::kInvalidData, "bad magic"});
+               }});
   s.push_back({"fail.bad-checksum.gtn", nullptr,
                [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b[chunkOffset(b, kTagGeometry) + 40] ^= 0x04;  // past the header, in the payload
                  return b;
-               },
-               StatusCode::kInvalidData, "checksum mismatch in chunk 'GEOM'"});
+               }});
   s.push_back({"fail.truncated.gtn", nullptr,
                [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.resize(chunkOffset(b, kTagConnectivity) + 20);
                  return b;
-               },
-               StatusCode::kInvalidData, "truncated"});
+               }});
   s.push_back({"fail.unknown-critical-chunk.gtn", nullptr,
                [] {
                  const std::vector<uint8_t> payload = {1, 2, 3};
                  return encodeFile(cubeF32(), options(false),
                                    [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("XTRA"), payload, false).isOk()); });
-               },
-               StatusCode::kInvalidData, "unknown critical chunk 'XTRA'"});
+               }});
   s.push_back({"fail.newer-major.v2.0.gtn", nullptr,
                [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  const auto p = encodeGtnPrefix(2, 0);
                  std::copy(p.begin(), p.end(), b.begin());
                  return b;
-               },
-               StatusCode::kVersionTooNew, "newer than this reader supports"});
+               }});
   s.push_back({"fail.trailing-bytes.gtn", nullptr,
                [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.push_back('\n');
                  return b;
-               },
-               StatusCode::kInvalidData, "1 trailing bytes"});
+               }});
   return s;
 }
 
@@ -559,10 +557,108 @@ std::multiset<std::string> canonical(const TetMesh& m) {
   return out;
 }
 
-TEST(GtnConformance, CommittedFilesDecodeOrFailAsListed) {
+// NAME.expected beside NAME.gtn: "key: value" lines (a key may repeat, as "point field" does),
+// blank lines and "#" comments.
+using Expected = std::multimap<std::string, std::string>;
+Expected readExpected(const std::string& path) {
+  Expected out;
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << path << ": missing";
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (line.empty() || line[0] == '#') continue;
+    const size_t colon = line.find(": ");
+    EXPECT_NE(colon, std::string::npos) << path << " line " << n << ": not \"key: value\"";
+    if (colon != std::string::npos) out.emplace(line.substr(0, colon), line.substr(colon + 2));
+  }
+  return out;
+}
+// The value of `key`, which must appear once.
+std::string one(const Expected& e, const std::string& key) {
+  EXPECT_EQ(e.count(key), 1u) << "key \"" << key << "\"";
+  const auto it = e.find(key);
+  return it == e.end() ? std::string() : it->second;
+}
+std::vector<std::string> all(const Expected& e, const std::string& key) {
+  std::vector<std::string> out;
+  for (auto [it, end] = e.equal_range(key); it != end; ++it) out.push_back(it->second);
+  return out;
+}
+std::string expectedPath(const std::string& gtn_name) {
+  return kDir + gtn_name.substr(0, gtn_name.size() - 4) + ".expected";
+}
+
+// A status as the .expected files name it.
+std::string statusName(StatusCode code) {
+  switch (code) {
+    case StatusCode::kOk: return "ok";
+    case StatusCode::kInvalidData: return "invalid data";
+    case StatusCode::kUnsupported: return "unsupported";
+    case StatusCode::kNotOurFile: return "not our file";
+    case StatusCode::kVersionTooNew: return "version too new";
+    case StatusCode::kUsage: return "usage";
+    case StatusCode::kIo: return "io";
+  }
+  return "?";
+}
+
+// The fields as the .expected files list them: "NAME TYPE COMPONENTS".
+std::vector<std::string> fieldLines(const std::vector<Field>& fields) {
+  std::vector<std::string> out;
+  for (const Field& f : fields)
+    out.push_back(f.name + " " + scalarTypeName(f.type) + " " + std::to_string(f.components));
+  return out;
+}
+
+// A must-fail file: the reader rejects it with the status and message its .expected file gives,
+// naming the file.
+void checkRejected(const std::string& path, const Expected& expected) {
+  auto r = GtnReader::open(path);
+  ASSERT_FALSE(r.isOk()) << "opened, but must fail with: " << one(expected, "message");
+  EXPECT_EQ(statusName(r.status().code()), one(expected, "status")) << r.status().message();
+  EXPECT_NE(r.status().message().find(one(expected, "message")), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find(path), std::string::npos) << r.status().message();
+}
+
+// A valid file: what the reader says of it and of its level 0 (`got`, decoded) is what its .expected
+// file gives (whether it is opened by its directory is checked where it is opened without verifying).
+void checkAsExpected(const GtnReader& reader, const TetMesh& got, const Expected& expected) {
+  EXPECT_EQ(std::to_string(reader.file().major) + "." + std::to_string(reader.file().minor),
+            one(expected, "format version"));
+  EXPECT_EQ(reader.file().has_directory, one(expected, "directory") == "yes");
+  EXPECT_EQ(scalarTypeName(got.coord_type), one(expected, "coordinates"));
+  EXPECT_EQ(std::to_string(got.numPoints()), one(expected, "points"));
+  EXPECT_EQ(std::to_string(got.numTets()), one(expected, "tetrahedra"));
+  EXPECT_EQ(fieldLines(got.point_fields), all(expected, "point field"));
+  EXPECT_EQ(fieldLines(got.cell_fields), all(expected, "cell field"));
+  EXPECT_EQ(std::to_string(reader.levels()), one(expected, "levels"));
+  for (size_t i = 0; i < reader.levels(); ++i) {
+    const LevelHeader& h = reader.level(i).header;
+    EXPECT_EQ(std::to_string(h.points) + " points, " + std::to_string(h.tets) + " tetrahedra, " +
+                  std::to_string(h.merges) + " merges",
+              one(expected, "level " + std::to_string(i)));
+  }
+}
+
+// Every .gtn file has its .expected file and every .expected file its .gtn file.
+TEST(GtnConformance, EveryFileHasItsExpectedOutcome) {
+  std::set<std::string> gtn, expected;
+  for (const auto& entry : std::filesystem::directory_iterator(kDir)) {
+    const std::string name = entry.path().filename().string();
+    const std::string ext = entry.path().extension().string();
+    if (ext == ".gtn") gtn.insert(name.substr(0, name.size() - 4));
+    if (ext == ".expected") expected.insert(name.substr(0, name.size() - 9));
+  }
+  EXPECT_FALSE(gtn.empty());
+  EXPECT_EQ(gtn, expected);
+  std::set<std::string> generated;
+  for (const Sample& s : samples()) generated.insert(s.name.substr(0, s.name.size() - 4));
+  EXPECT_EQ(gtn, generated);
+}
+
+TEST(GtnConformance, CommittedFilesDecodeOrFailAsExpected) {
   const char* update = std::getenv("GTN_UPDATE_GOLDEN");
   const bool regenerate = update && std::string(update) == "1";
-  const std::string readme = test::readFile(kDir + "README.md");
   for (const Sample& s : samples()) {
     SCOPED_TRACE(s.name);
     const std::string path = kDir + s.name;
@@ -571,15 +667,13 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsListed) {
       test::writeFile(path, std::string(b.begin(), b.end()));
     }
     ASSERT_TRUE(test::fileExists(path)) << "missing; regenerate with GTN_UPDATE_GOLDEN=1";
-    EXPECT_NE(readme.find(s.name), std::string::npos) << "not listed in samples/conformance/README.md";
-    auto r = GtnReader::open(path);
+    const Expected expected = readExpected(expectedPath(s.name));
+    ASSERT_EQ(one(expected, "outcome"), s.mesh ? "valid" : "invalid") << expectedPath(s.name);
     if (!s.mesh) {
-      ASSERT_FALSE(r.isOk());
-      EXPECT_EQ(r.status().code(), s.code) << r.status().message();
-      EXPECT_NE(r.status().message().find(s.reason), std::string::npos) << r.status().message();
-      EXPECT_NE(r.status().message().find(path), std::string::npos) << r.status().message();
+      checkRejected(path, expected);
       continue;
     }
+    auto r = GtnReader::open(path);
     ASSERT_TRUE(r.isOk()) << r.status().message();
     const TetMesh want = s.mesh();
     TetMeshBuilder b;
@@ -599,12 +693,13 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsListed) {
     }
     EXPECT_TRUE(canonical(got) == canonical(want)) << "decoded mesh differs from the generated one";
     EXPECT_GT(stats.peak_live_vertices, 0u);
+    checkAsExpected(**r, got, expected);
     // Opened through the directory (when there is one), the same level decodes the same.
     GtnOpenOptions fast;
     fast.verify = false;
     auto lazy = GtnReader::open(path, fast);
     ASSERT_TRUE(lazy.isOk());
-    EXPECT_EQ((*lazy)->openedByDirectory(), s.name.find(".dir.") != std::string::npos);
+    EXPECT_EQ((*lazy)->openedByDirectory(), one(expected, "directory") == "yes");
     TetMeshBuilder b2;
     ASSERT_TRUE((*lazy)->decodeLevel(0, b2).isOk());
     EXPECT_EQ(b2.mesh().tets, got.tets);

@@ -12,6 +12,7 @@
 #include "convert/import.h"
 #include "mesh/faces.h"
 #include "mesh/hex_split.h"
+#include "mesh/index.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/mesh_stream.h"
 #include "render/generic_renderer.h"
@@ -43,12 +44,12 @@ Status streamMesh(const TetMesh& mesh, MeshSink& sink, uint64_t* peak_live = nul
   std::vector<uint32_t> remaining(mesh.numPoints(), 0);
   for (const Tet& t : mesh.tets)
     for (uint32_t v : t) ++remaining[v];
-  std::vector<uint32_t> new_id(mesh.numPoints(), UINT32_MAX);
+  std::vector<uint32_t> new_id(mesh.numPoints(), kNoIndex);
   uint32_t next = 0;
   uint64_t live = 0, peak = 0;
   std::vector<uint8_t> values;
   auto emit = [&](uint32_t v) -> Status {
-    if (new_id[v] != UINT32_MAX) return Status::ok();
+    if (new_id[v] != kNoIndex) return Status::ok();
     new_id[v] = next++;
     values.clear();
     for (const Field& f : mesh.point_fields) {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "mesh/hex_split.h"
+#include "mesh/index.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/tet_mesh.h"
 
@@ -121,7 +122,7 @@ inline TetMesh makeFlatTetMesh(FlatShape shape, int n, uint32_t seed, size_t* fl
         for (int a = 0; a < 3; ++a) m.coords[3 * size_t{v} + a] += jitter(rng);
       }
   // Drop the grid points no cube uses (the ring's and the ell's holes).
-  std::vector<uint32_t> index(np, 0xFFFFFFFFu);
+  std::vector<uint32_t> index(np, kNoIndex);
   for (const Tet& t : m.tets)
     for (uint32_t v : t) index[v] = 0;
   std::vector<double> coords;
