@@ -4,11 +4,17 @@
 # PNG, and the text reports of info and validate. Prints one line per output and exits 1 when any
 # output differs.
 #   scripts/outputs-identical.sh OLD_GTN NEW_GTN [DATA_DIR]
+# OLD_GTN and NEW_GTN may be relative paths and may have any name: each is run as `gtn` from a folder
+# of its own (a .gtn file records the command line that wrote it, program name included).
 set -u
-old=$1 new=$2
-data=${3:-${GTN_DATA_DIR:-$(cd "$(dirname "$0")/.." && pwd)/../shared/data}}
+if [ $# -lt 2 ]; then echo "usage: $0 OLD_GTN NEW_GTN [DATA_DIR]" >&2; exit 2; fi
+for b in "$1" "$2"; do [ -x "$b" ] || { echo "$0: $b: not an executable" >&2; exit 2; }; done
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+mkdir -p "$work/bin-old" "$work/bin-new"
+ln -s "$(realpath "$1")" "$work/bin-old/gtn"
+ln -s "$(realpath "$2")" "$work/bin-new/gtn"
+data=${3:-${GTN_DATA_DIR:-$(cd "$(dirname "$0")/.." && pwd)/../shared/data}}
 inputs=(
   "plot3d/bluntfinxyz.bin plot3d/bluntfinq.bin"
   "plot3d/combxyz.bin plot3d/combq.bin"
@@ -25,7 +31,7 @@ inputs=(
 run() {
   local side=$1 name=$2; shift 2
   mkdir -p "$work/$side"
-  (cd "$work/$side" && "${!side}" "$@" >"$name.out" 2>&1; echo "exit $?" >>"$name.out")
+  (cd "$work/$side" && PATH="$work/bin-$side:$PATH" gtn "$@" >"$name.out" 2>&1; echo "exit $?" >>"$name.out")
 }
 differ=0
 compare() {
