@@ -1,0 +1,63 @@
+# Installs the build (components Runtime and Development) into WORK_DIR/prefix, checks what was
+# installed (the public headers only; libgatun exporting namespace gatun only), then configures,
+# builds and runs consumer/ against the prefix with find_package(gatun).
+# cmake -DBUILD_DIR=... -DWORK_DIR=... -DCONSUMER_DIR=... -DCXX=... -DGENERATOR=... [-DNM=...] -P install_test.cmake
+function(run what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}")
+  endif()
+  set(run_output "${out}" PARENT_SCOPE)
+endfunction()
+
+file(REMOVE_RECURSE ${WORK_DIR})
+set(prefix ${WORK_DIR}/prefix)
+foreach(component Runtime Development)
+  run("cmake --install (${component})" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix} --component ${component})
+endforeach()
+
+# Headers: include/gatun/*.h and nothing else.
+file(GLOB_RECURSE headers RELATIVE ${prefix}/include ${prefix}/include/*)
+list(LENGTH headers count)
+if(count LESS 2 OR NOT "gatun/gatun.h" IN_LIST headers)
+  message(FATAL_ERROR "installed headers: <gatun/gatun.h> missing (found: ${headers})")
+endif()
+foreach(h IN LISTS headers)
+  if(NOT h MATCHES "^gatun/[a-z_]+\\.h$")
+    message(FATAL_ERROR "installed a header outside the public API: include/${h}")
+  endif()
+endforeach()
+message(STATUS "installed headers: ${headers}")
+file(GLOB libs ${prefix}/lib*/libgatun.so ${prefix}/lib/*/libgatun.so)
+if(NOT libs OR NOT EXISTS ${prefix}/bin/gtn)
+  message(FATAL_ERROR "libgatun.so or bin/gtn not installed under ${prefix}")
+endif()
+
+# The library's dynamic symbols: the API's (namespace gatun) only.
+if(NM)
+  run("nm -D" ${NM} -D -C --defined-only ${libs})
+  string(REPLACE "\n" ";" lines "${run_output}")
+  set(exported 0)
+  foreach(line IN LISTS lines)
+    if(line MATCHES "^[0-9a-f]+ [A-Za-z] (.*)$")
+      set(symbol "${CMAKE_MATCH_1}")
+      if(symbol MATCHES "^GATUN_|^_init$|^_fini$")
+        continue()
+      endif()
+      if(NOT symbol MATCHES "^((typeinfo|typeinfo name|vtable) for )?gatun::")
+        message(FATAL_ERROR "libgatun exports a symbol outside namespace gatun: ${symbol}")
+      endif()
+      math(EXPR exported "${exported} + 1")
+    endif()
+  endforeach()
+  if(exported EQUAL 0)
+    message(FATAL_ERROR "libgatun exports no symbol of namespace gatun:\n${run_output}")
+  endif()
+  message(STATUS "libgatun exports ${exported} symbols, all of namespace gatun")
+endif()
+
+run("configuring consumer/ with find_package(gatun)" ${CMAKE_COMMAND} -S ${CONSUMER_DIR} -B ${WORK_DIR}/build
+    -G ${GENERATOR} -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${prefix})
+run("building consumer/" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run("gatun_consumer" ${WORK_DIR}/build/gatun_consumer ${WORK_DIR}/run ${prefix}/bin/gtn)
+message(STATUS "gatun_consumer:\n${run_output}")
