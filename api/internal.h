@@ -1,4 +1,5 @@
 // Conversions between the public API's types (include/gatun/) and the layers' own, for api/*.cpp only.
+// In namespace gtn, so that libgatun does not export them (api/gatun.map).
 #pragma once
 
 #include <string>
@@ -11,19 +12,19 @@
 #include "mesh/status.h"
 #include "mesh/tet_mesh.h"
 
-namespace gatun::internal {
+namespace gtn::api {
 
 // A failed Status as an Error (the same code and message); an ok one as an ok Error.
-Error toError(const gtn::Status& status);
+gatun::Error toError(const Status& status);
 
 // The library's mesh from the API's (fields and metadata copied) and back (moved).
-gtn::TetMesh toTetMesh(const Mesh& mesh);
-Mesh fromTetMesh(gtn::TetMesh&& mesh);
+TetMesh toTetMesh(const gatun::Mesh& mesh);
+gatun::Mesh fromTetMesh(TetMesh&& mesh);
 
-gtn::ImportOptions toImportOptions(const ImportOptions& options);
+ImportOptions toImportOptions(const gatun::ImportOptions& options);
 
 // What an importer changed, as `gtn convert` says it: one line per kind of change, each naming `input`.
-void appendImportWarnings(const std::string& input, const gtn::ImportReport& report,
+void appendImportWarnings(const std::string& input, const ImportReport& report,
                           std::vector<std::string>* warnings);
 
-}  // namespace gatun::internal
+}  // namespace gtn::api

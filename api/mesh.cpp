@@ -66,36 +66,38 @@ const Field* findField(const std::vector<Field>& fields, const std::string& name
 const Field* Mesh::pointField(const std::string& name) const { return findField(point_fields, name); }
 const Field* Mesh::cellField(const std::string& name) const { return findField(cell_fields, name); }
 
-namespace internal {
+}  // namespace gatun
 
-Error toError(const gtn::Status& status) {
-  if (status.isOk()) return Error();
-  return Error(static_cast<ErrorCode>(status.code()), status.message());
+namespace gtn::api {
+
+gatun::Error toError(const Status& status) {
+  if (status.isOk()) return gatun::Error();
+  return gatun::Error(static_cast<gatun::ErrorCode>(status.code()), status.message());
 }
 
 namespace {
-std::vector<gtn::Field> toFields(const std::vector<Field>& fields) {
-  std::vector<gtn::Field> out;
+std::vector<Field> toFields(const std::vector<gatun::Field>& fields) {
+  std::vector<Field> out;
   out.reserve(fields.size());
-  for (const Field& f : fields) {
-    gtn::Field g;
+  for (const gatun::Field& f : fields) {
+    Field g;
     g.name = f.name;
     g.components = f.components;
-    g.type = static_cast<gtn::ScalarType>(f.type);
+    g.type = static_cast<ScalarType>(f.type);
     g.bytes = f.bytes;
     out.push_back(std::move(g));
   }
   return out;
 }
 
-std::vector<Field> fromFields(std::vector<gtn::Field>&& fields) {
-  std::vector<Field> out;
+std::vector<gatun::Field> fromFields(std::vector<Field>&& fields) {
+  std::vector<gatun::Field> out;
   out.reserve(fields.size());
-  for (gtn::Field& g : fields) {
-    Field f;
+  for (Field& g : fields) {
+    gatun::Field f;
     f.name = std::move(g.name);
     f.components = g.components;
-    f.type = static_cast<ScalarType>(g.type);
+    f.type = static_cast<gatun::ScalarType>(g.type);
     f.bytes = std::move(g.bytes);
     out.push_back(std::move(f));
   }
@@ -103,9 +105,9 @@ std::vector<Field> fromFields(std::vector<gtn::Field>&& fields) {
 }
 }  // namespace
 
-gtn::TetMesh toTetMesh(const Mesh& mesh) {
-  gtn::TetMesh t;
-  t.coord_type = static_cast<gtn::ScalarType>(mesh.coord_type);
+TetMesh toTetMesh(const gatun::Mesh& mesh) {
+  TetMesh t;
+  t.coord_type = static_cast<ScalarType>(mesh.coord_type);
   t.coords = mesh.points;
   t.tets = mesh.tets;
   t.point_fields = toFields(mesh.point_fields);
@@ -114,9 +116,9 @@ gtn::TetMesh toTetMesh(const Mesh& mesh) {
   return t;
 }
 
-Mesh fromTetMesh(gtn::TetMesh&& t) {
-  Mesh mesh;
-  mesh.coord_type = static_cast<ScalarType>(t.coord_type);
+gatun::Mesh fromTetMesh(TetMesh&& t) {
+  gatun::Mesh mesh;
+  mesh.coord_type = static_cast<gatun::ScalarType>(t.coord_type);
   mesh.points = std::move(t.coords);
   mesh.tets = std::move(t.tets);
   mesh.point_fields = fromFields(std::move(t.point_fields));
@@ -125,15 +127,15 @@ Mesh fromTetMesh(gtn::TetMesh&& t) {
   return mesh;
 }
 
-gtn::ImportOptions toImportOptions(const ImportOptions& options) {
-  gtn::ImportOptions o;
+ImportOptions toImportOptions(const gatun::ImportOptions& options) {
+  ImportOptions o;
   o.split = options.split;
   o.weld = options.weld;
   o.exodus_time_step = options.exodus_time_step;
   return o;
 }
 
-void appendImportWarnings(const std::string& input, const gtn::ImportReport& r, std::vector<std::string>* warnings) {
+void appendImportWarnings(const std::string& input, const ImportReport& r, std::vector<std::string>* warnings) {
   if (!warnings) return;
   auto add = [&](const std::string& what) { warnings->push_back(input + ": " + what); };
   if (r.flipped) add("flipped " + std::to_string(r.flipped) + " tetrahedra to positive orientation");
@@ -152,5 +154,4 @@ void appendImportWarnings(const std::string& input, const gtn::ImportReport& r, 
   }
 }
 
-}  // namespace internal
-}  // namespace gatun
+}  // namespace gtn::api

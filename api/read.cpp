@@ -73,7 +73,7 @@ Result<Reader> Reader::open(const std::string& path) {
       return Error(ErrorCode::kUsage, path + ": a " + gtn::inputFormatName(format) +
                                           " file, not .gtn: gatun::Reader reads .gtn files; gatun::importMesh reads "
                                           "this one, gatun::convert converts it");
-    return internal::toError(opened.status());
+    return gtn::api::toError(opened.status());
   }
   auto impl = std::make_unique<Impl>();
   impl->reader = std::move(opened).value();
@@ -96,33 +96,33 @@ Result<Mesh> Reader::read(const ReadOptions& options, ReadReport* report) {
   gtn::DecodeFields fields;  // every field unless options.fields names some
   if (!options.fields.empty()) {
     auto selected = gtn::selectDecodeFields(r.level(level).header, options.fields, path, "fields");
-    if (!selected.isOk()) return internal::toError(selected.status());
+    if (!selected.isOk()) return gtn::api::toError(selected.status());
     fields = std::move(selected).value();
   }
   gtn::TetMeshBuilder builder;
   ReadReport done;
   if (options.ratio) {
     auto target = gtn::mergesForRatio(r, *options.ratio);
-    if (!target.isOk()) return internal::toError(target.status());
+    if (!target.isOk()) return gtn::api::toError(target.status());
     gtn::SimplifyPlan plan;
     if (gtn::Status st = gtn::streamSimplified(r, *target, builder, &plan, /*clamp=*/true, &fields); !st.isOk())
-      return internal::toError(st);
+      return gtn::api::toError(st);
     done.level = plan.level;
     done.merges = r.level(plan.level).header.merges + plan.extra_merges;
     // Over the vertices tetrahedra use, as the stored levels' ratios and mergesForRatio count.
     auto free = gtn::levelZeroUnreferencedMerges(r);
-    if (!free.isOk()) return internal::toError(free.status());
+    if (!free.isOk()) return gtn::api::toError(free.status());
     const uint64_t points = r.level(0).header.points;
     done.ratio = points > *free && done.merges > *free ? double(done.merges - *free) / double(points - *free) : 0.0;
   } else {
-    if (gtn::Status st = r.decodeLevel(level, builder, nullptr, &fields); !st.isOk()) return internal::toError(st);
+    if (gtn::Status st = r.decodeLevel(level, builder, nullptr, &fields); !st.isOk()) return gtn::api::toError(st);
     done.level = level;
     done.merges = r.level(level).header.merges;
     done.ratio = r.level(level).ratio;
   }
   if (!options.fields.empty()) gtn::dropUndecodedFields(builder.mesh(), fields);
   if (report) *report = done;
-  return internal::fromTetMesh(std::move(builder.mesh()));
+  return gtn::api::fromTetMesh(std::move(builder.mesh()));
 }
 
 Result<FileInfo> readInfo(const std::string& path) {

@@ -108,7 +108,7 @@ gtn::StatusOr<gtn::Image> renderImage(const std::vector<std::string>& inputs, co
 
 Result<Image> render(const std::vector<std::string>& inputs, const RenderOptions& options) {
   auto image = renderImage(inputs, options);
-  if (!image.isOk()) return internal::toError(image.status());
+  if (!image.isOk()) return gtn::api::toError(image.status());
   Image out;
   out.width = image->width;
   out.height = image->height;
@@ -124,7 +124,7 @@ Error writePng(const std::string& path, const Image& image) {
                                         std::to_string(image.height));
   gtn::Image png(image.width, image.height);
   png.rgb = image.rgb;
-  return internal::toError(gtn::writePng(path, png));
+  return gtn::api::toError(gtn::writePng(path, png));
 }
 
 }  // namespace gatun

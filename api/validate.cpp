@@ -19,7 +19,7 @@ Result<ValidationReport> validate(const std::vector<std::string>& files, const V
   o.quick = options.quick;
   o.max_issues = options.max_issues;
   o.against = options.against;
-  o.import_options = internal::toImportOptions(options.import);
+  o.import_options = gtn::api::toImportOptions(options.import);
   // As the command without --split and --weld: the source's split and weld as the .gtn file records them.
   o.split_from_file = options.import.split == ImportOptions{}.split;
   o.weld_from_file = !options.import.weld;
@@ -32,7 +32,7 @@ Result<ValidationReport> validate(const std::vector<std::string>& files, const V
     return Error(ErrorCode::kUsage, "validate: " + files.front() + ": quick and against apply to .gtn files, not to a " +
                                         gtn::inputFormatName(format) + " file");
   auto checked = gtn_file ? gtn::validateGtnFile(files.front(), o) : gtn::validateMeshFiles(files, o);
-  if (!checked.isOk()) return internal::toError(checked.status());
+  if (!checked.isOk()) return gtn::api::toError(checked.status());
   const gtn::ValidationReport& r = checked.value();
   std::string name = files.front();
   for (size_t i = 1; i < files.size(); ++i) name += " + " + files[i];

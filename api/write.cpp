@@ -30,7 +30,7 @@ Error writeImported(const std::string& path, const gtn::TetMesh& mesh, const Wri
   wo.tool_version = GTN_VERSION_STRING;
   wo.command_line = options.command_line.empty() ? default_command_line : options.command_line;
   wo.verify = options.verify;
-  return internal::toError(gtn::writeGtnWithLevels(path, mesh, o, wo, source, warnings));
+  return gtn::api::toError(gtn::writeGtnWithLevels(path, mesh, o, wo, source, warnings));
 }
 
 // The provenance of an API call: the file name only, as `gtn convert` stores no directories.
@@ -41,13 +41,13 @@ std::string callName(const char* function, const std::string& path) {
 
 Error write(const std::string& path, const Mesh& mesh, const WriteOptions& options, std::vector<std::string>* warnings) {
   const std::string source = "gatun::write(" + path + ")";
-  gtn::ImportResult imported{internal::toTetMesh(mesh), {}};
+  gtn::ImportResult imported{gtn::api::toTetMesh(mesh), {}};
   if (gtn::Status st = imported.mesh.checkConsistency(source); !st.isOk())
     return Error(ErrorCode::kUsage, st.message());
   // What an importer does last (orientation by exact predicates), as `gtn convert` has it done.
   gtn::finishImport(imported);
   std::vector<std::string> said;
-  internal::appendImportWarnings(source, imported.report, &said);
+  gtn::api::appendImportWarnings(source, imported.report, &said);
   Error error = writeImported(path, imported.mesh, options, source, callName("gatun::write", path), &said);
   if (warnings) warnings->insert(warnings->end(), said.begin(), said.end());
   return error;
@@ -56,10 +56,10 @@ Error write(const std::string& path, const Mesh& mesh, const WriteOptions& optio
 Result<Mesh> importMesh(const std::vector<std::string>& inputs, const ImportOptions& options,
                         std::vector<std::string>* warnings) {
   if (inputs.empty()) return Error(ErrorCode::kUsage, "gatun::importMesh: no input file");
-  auto imported = gtn::importMesh(inputs, internal::toImportOptions(options));
-  if (!imported.isOk()) return internal::toError(imported.status());
-  internal::appendImportWarnings(inputs[0], imported->report, warnings);
-  return internal::fromTetMesh(std::move(imported->mesh));
+  auto imported = gtn::importMesh(inputs, gtn::api::toImportOptions(options));
+  if (!imported.isOk()) return gtn::api::toError(imported.status());
+  gtn::api::appendImportWarnings(inputs[0], imported->report, warnings);
+  return gtn::api::fromTetMesh(std::move(imported->mesh));
 }
 
 Error convert(const std::vector<std::string>& inputs, const std::string& output, const ConvertOptions& options,
@@ -71,13 +71,13 @@ Error convert(const std::vector<std::string>& inputs, const std::string& output,
   for (const std::string& in : inputs)
     if (in == output || gtn::sameFile(in, output))
       return Error(ErrorCode::kUsage, output + ": the output would overwrite an input");
-  auto imported = gtn::importMesh(inputs, internal::toImportOptions(options.import));
-  if (!imported.isOk()) return internal::toError(imported.status());
-  internal::appendImportWarnings(inputs[0], imported->report, warnings);
+  auto imported = gtn::importMesh(inputs, gtn::api::toImportOptions(options.import));
+  if (!imported.isOk()) return gtn::api::toError(imported.status());
+  gtn::api::appendImportWarnings(inputs[0], imported->report, warnings);
   if (format != gtn::OutputFormat::kGtn) {
     gtn::ExportOptions eo;
     eo.compress = options.compress;
-    return internal::toError(gtn::exportMesh(imported->mesh, output, eo));
+    return gtn::api::toError(gtn::exportMesh(imported->mesh, output, eo));
   }
   Error error = writeImported(output, imported->mesh, options.write, inputs[0], callName("gatun::convert", output),
                               warnings);

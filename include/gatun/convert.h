@@ -39,8 +39,8 @@ Result<Mesh> importMesh(const std::vector<std::string>& inputs, const ImportOpti
 
 /*! ConvertOptions : importing, writing .gtn (`write`) and, for .vtu, zlib compression. */
 struct ConvertOptions {
-  ImportOptions import;
-  WriteOptions write;
+  ImportOptions import{};
+  WriteOptions write{};
   bool compress = false;
 };
 

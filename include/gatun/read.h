@@ -61,9 +61,9 @@ struct FileInfo {
  *  `fields`: the point and cell fields to decode, by name; empty = all. The others are not decoded
  *     and are absent from the mesh. A name the file lacks is a kUsage error listing the fields. */
 struct ReadOptions {
-  std::optional<size_t> level;
-  std::optional<double> ratio;
-  std::vector<std::string> fields;
+  std::optional<size_t> level{};
+  std::optional<double> ratio{};
+  std::vector<std::string> fields{};
 };
 
 /*! ReadReport : what a read decoded. */

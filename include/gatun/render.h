@@ -41,11 +41,11 @@ struct RenderOptions {
   int width = 256, height = 256;
   bool perspective = false;
   double azimuth = 30, elevation = 20, zoom = 1;
-  std::string field;
+  std::string field{};
   std::string transfer = "cool-warm";
-  std::optional<std::pair<double, double>> range;
-  std::optional<size_t> level;
-  std::optional<double> ratio;
+  std::optional<std::pair<double, double>> range{};
+  std::optional<size_t> level{};
+  std::optional<double> ratio{};
   bool face_sampling = false;
   double step = 0;
   double opacity_unit_distance = 0;

@@ -54,8 +54,8 @@ struct ValidationReport {
 struct ValidateOptions {
   bool quick = false;
   size_t max_issues = 100;
-  std::vector<std::string> against;
-  ImportOptions import;
+  std::vector<std::string> against{};
+  ImportOptions import{};
 };
 
 /*! validate() : `gtn validate FILES...`: one .gtn file (container, decoding, mesh, merge tree, levels,

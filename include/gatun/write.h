@@ -33,10 +33,10 @@ struct WriteOptions {
   bool merge_tree = true;
   double level_storage = 2.0;
   bool verify = true;
-  std::string simplify_field;
+  std::string simplify_field{};
   double w_density = 1.0;
   double w_geometry = 1.0;
-  std::string command_line;
+  std::string command_line{};
 };
 
 /*! write() : writes `mesh` to `path` as a .gtn file: level 0 (lossless), its mip levels and merge

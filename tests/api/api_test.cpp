@@ -19,9 +19,9 @@ using gtn::test::runGtn;
 using gtn::test::tempDir;
 using gtn::test::writeFile;
 
-// An n x n x n grid of cubes, each split into six tetrahedra around its main diagonal, with the point
-// field "density" (float32, varying), the 3-component point field "velocity" (float64) and the cell
-// field "region" (int32).
+// An n x n x n grid of cubes, each split into six tetrahedra around its main diagonal (all positively
+// oriented, then every other one inverted), with the point field "density" (float32, varying), the
+// 3-component point field "velocity" (float64) and the cell field "region" (int32).
 gatun::Mesh gridMesh(int n) {
   gatun::Mesh m;
   const int p = n + 1;
@@ -45,7 +45,8 @@ gatun::Mesh gridMesh(int n) {
         // Six tetrahedra sharing the diagonal c0-c6; orientation is the library's business.
         const int paths[6][2] = {{1, 2}, {2, 3}, {3, 7}, {7, 4}, {4, 5}, {5, 1}};
         for (const auto& q : paths) {
-          m.tets.push_back({c[0], c[q[0]], c[q[1]], c[6]});
+          if (m.tets.size() % 2 == 0) m.tets.push_back({c[0], c[q[0]], c[q[1]], c[6]});
+          else m.tets.push_back({c[0], c[q[1]], c[q[0]], c[6]});
           region.push_back((i + j + k) % 3);
         }
       }
@@ -97,18 +98,22 @@ double signedVolume(const gatun::Mesh& m, const gatun::Tet& t) {
 TEST(Api, WriteThenReadGivesTheMeshBackBitForBit) {
   const std::string dir = tempDir("api_roundtrip");
   const gatun::Mesh mesh = gridMesh(5);
+  ASSERT_GT(signedVolume(mesh, mesh.tets[0]), 0);
+  ASSERT_LT(signedVolume(mesh, mesh.tets[1]), 0);
   std::vector<std::string> warnings;
-  const gatun::Error written = gatun::write(dir + "/grid.gtn", mesh, {}, &warnings);
+  gatun::WriteOptions options;
+  options.levels = 2;
+  const gatun::Error written = gatun::write(dir + "/grid.gtn", mesh, options, &warnings);
   ASSERT_TRUE(written.ok()) << written.message();
   // Half of the tetrahedra of gridMesh are inverted: write() turns them around and says so.
   ASSERT_FALSE(warnings.empty());
-  EXPECT_NE(warnings[0].find("flipped"), std::string::npos) << warnings[0];
+  EXPECT_EQ(warnings[0], "gatun::write(" + dir + "/grid.gtn): flipped 375 tetrahedra to positive orientation");
 
   auto info = gatun::readInfo(dir + "/grid.gtn");
   ASSERT_TRUE(info.ok()) << info.error().message();
   EXPECT_EQ(info.value().levels.at(0).points, mesh.pointCount());
   EXPECT_EQ(info.value().levels.at(0).tets, mesh.tetCount());
-  EXPECT_GT(info.value().levels.size(), 1u);  // automatic mip levels
+  EXPECT_EQ(info.value().levels.size(), 3u);
   EXPECT_TRUE(info.value().levels[0].has_merge_tree);
   ASSERT_EQ(info.value().point_fields.size(), 2u);
   EXPECT_EQ(info.value().point_fields[1].name, "velocity");
@@ -137,12 +142,14 @@ TEST(Api, WriteThenReadGivesTheMeshBackBitForBit) {
 TEST(Api, ReaderReadsLevelsRatiosAndSomeFields) {
   const std::string dir = tempDir("api_levels");
   const gatun::Mesh mesh = gridMesh(6);
-  ASSERT_TRUE(gatun::write(dir + "/grid.gtn", mesh).ok());
+  gatun::WriteOptions options;
+  options.levels = 2;
+  ASSERT_TRUE(gatun::write(dir + "/grid.gtn", mesh, options).ok());
   auto opened = gatun::Reader::open(dir + "/grid.gtn");
   ASSERT_TRUE(opened.ok()) << opened.error().message();
   gatun::Reader reader = std::move(opened).value();
   const gatun::FileInfo& info = reader.info();
-  ASSERT_GE(info.levels.size(), 2u);
+  ASSERT_EQ(info.levels.size(), 3u);
 
   gatun::ReadReport report;
   auto level1 = reader.read({.level = 1}, &report);
