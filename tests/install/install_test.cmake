@@ -2,6 +2,7 @@
 # installed (the public headers only; libgatun exporting namespace gatun only), then configures,
 # builds and runs consumer/ against the prefix with find_package(gatun).
 # cmake -DBUILD_DIR=... -DWORK_DIR=... -DCONSUMER_DIR=... -DCXX=... -DGENERATOR=... [-DNM=...] -P install_test.cmake
+cmake_minimum_required(VERSION 3.20)
 function(run what)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
   if(NOT rc EQUAL 0)

@@ -1,6 +1,7 @@
 # Builds the layer probes (tests/layers/CMakeLists.txt): every control must compile; every probe that
 # includes a header of a layer above must fail, with the compiler saying that header is not found.
 # cmake -DBUILD_DIR=... -DCONTROLS=a;b -DFORBIDDEN=c;d -DEXPECT=c=header;d=header -DKEEP_GOING=-k -P check_layers.cmake
+cmake_minimum_required(VERSION 3.20)
 execute_process(COMMAND ${CMAKE_COMMAND} --build ${BUILD_DIR} --target ${CONTROLS}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
 if(NOT rc EQUAL 0)

@@ -62,13 +62,15 @@ int main(int argc, char** argv) {
   const gatun::Mesh mesh = grid(6);
   const std::string gtn = dir + "/grid.gtn";
   std::vector<std::string> warnings;
-  gatun::Error error = gatun::write(gtn, mesh, gatun::WriteOptions(), &warnings);
+  gatun::WriteOptions options;
+  options.levels = 2;
+  gatun::Error error = gatun::write(gtn, mesh, options, &warnings);
   check(error.ok(), "write " + gtn + (error.ok() ? "" : ": " + error.message()));
 
   gatun::Result<gatun::FileInfo> info = gatun::readInfo(gtn);
-  check(info.ok() && info.value().levels.size() > 1 && info.value().levels[0].points == mesh.pointCount() &&
+  check(info.ok() && info.value().levels.size() == 3 && info.value().levels[0].points == mesh.pointCount() &&
             info.value().levels[0].tets == mesh.tetCount(),
-        "readInfo: level 0 has the mesh's counts, and mip levels follow");
+        "readInfo: level 0 has the mesh's counts, and two mip levels follow");
 
   gatun::Result<gatun::Mesh> back = gatun::read(gtn);
   bool same_values = back.ok() && back.value().pointCount() == mesh.pointCount() &&
