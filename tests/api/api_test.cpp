@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <thread>
 #include <tuple>
 
 #include "gatun/gatun.h"
@@ -319,6 +320,41 @@ TEST(Api, RenderDrawsThePixelsOfGtnRender) {
   wrong.height = 4;
   wrong.rgb.resize(10);
   EXPECT_EQ(gatun::writePng(dir + "/wrong.png", wrong).code(), gatun::ErrorCode::kUsage);
+}
+
+// The header's promise: calls on different files may run at once. Four threads each write, read and
+// render their own file; every result equals the one made alone.
+TEST(Api, ThreadsWorkOnTheirOwnFiles) {
+  const std::string dir = tempDir("api_threads");
+  const gatun::Mesh mesh = gridMesh(4);
+  ASSERT_TRUE(gatun::write(dir + "/alone.gtn", mesh).ok());
+  const std::string alone = readFile(dir + "/alone.gtn");
+  gatun::RenderOptions view;
+  view.width = 48;
+  view.height = 48;
+  auto alone_image = gatun::render({dir + "/alone.gtn"}, view);
+  ASSERT_TRUE(alone_image.ok());
+  std::vector<std::string> bytes(4);
+  std::vector<bool> same_mesh(4, false), same_image(4, false);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      const std::string path = dir + "/t" + std::to_string(t) + ".gtn";
+      gatun::WriteOptions options;
+      options.command_line = "gatun::write(alone.gtn)";
+      if (!gatun::write(path, mesh, options).ok()) return;
+      bytes[t] = readFile(path);
+      auto back = gatun::read(path);
+      same_mesh[t] = back.ok() && canonical(back.value()) == canonical(mesh);
+      auto image = gatun::render({path}, view);
+      same_image[t] = image.ok() && image.value().rgb == alone_image.value().rgb;
+    });
+  for (std::thread& t : threads) t.join();
+  for (int t = 0; t < 4; ++t) {
+    EXPECT_EQ(bytes[t], alone) << "thread " << t;
+    EXPECT_TRUE(same_mesh[t]) << "thread " << t;
+    EXPECT_TRUE(same_image[t]) << "thread " << t;
+  }
 }
 
 TEST(Api, VersionIsTheCommands) {
