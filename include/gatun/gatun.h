@@ -11,7 +11,7 @@
  *   <gatun/validate.h>  validate()
  *   <gatun/render.h>    render(), writePng()
  *
- * What it does, in the order of this header:
+ * What it does, part by part:
  *   - reading:    open a .gtn file, describe it (FileInfo), decode a stored level or any
  *                 simplification ratio into a Mesh (points, tetrahedra, point and cell fields), all
  *                 fields or only some (Reader, readInfo, read);
