@@ -1,0 +1,54 @@
+// <gatun/write.h>: writing a Mesh as a .gtn file with mip levels and merge trees.
+// Part of the Gatun API; <gatun/gatun.h> includes every part and says how errors, ownership and
+// threads work for all of them.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "gatun/mesh.h"
+#include "gatun/result.h"
+
+namespace gatun {
+
+/*-************************************
+ *  Writing .gtn files
+ **************************************/
+
+/*! WriteOptions : how write() and convert() store a .gtn file (the options of `gtn convert`).
+ *  `levels`: mip levels beyond level 0; -1 = automatic (down to a small mesh, within level_storage),
+ *     0 = none.
+ *  `merge_tree`: store the merge trees (simplification to any ratio on the fly).
+ *  `level_storage`: automatic levels stop before all levels together would take more than this
+ *     multiple of level 0's bytes; 0 = no bound.
+ *  `verify`: decode every written level back and check it (and each mip level's validity) before the
+ *     file is committed; false is faster and skips the guard against encoder or simplifier bugs.
+ *  `simplify_field`, `w_density`, `w_geometry`: the ranking of merges: the point field whose first
+ *     component is the density ("" = the first that is not constant, "none" = volume only) and the
+ *     weights of the density and boundary geometry errors.
+ *  `command_line`: the provenance stored in the file header; "" stores "gatun::write(NAME)" or
+ *     "gatun::convert(NAME)", NAME the output's file name without its directory. */
+struct WriteOptions {
+  int levels = -1;
+  bool merge_tree = true;
+  double level_storage = 2.0;
+  bool verify = true;
+  std::string simplify_field{};
+  double w_density = 1.0;
+  double w_geometry = 1.0;
+  std::string command_line{};
+};
+
+/*! write() : writes `mesh` to `path` as a .gtn file: level 0 (lossless), its mip levels and merge
+ *  trees as `options` asks, exactly as `gtn convert` writes an imported mesh (the same meshes and
+ *  options give the same bytes, up to the provenance). Tetrahedra are first turned to positive
+ *  orientation by exact predicates, as the importers do.
+ *  `warnings` (optional) receives what a user should hear about, e.g. "flipped 3 tetrahedra to
+ *  positive orientation", or fewer levels than asked because the merge tree stops early.
+ *  Errors: kUsage (a tetrahedron referring to a missing point, a field of the wrong size, coordinates
+ *  that are not finite or not representable in coord_type), kInvalidData (a mesh the encoder refuses,
+ *  "...: cannot be encoded: <reason>"), kIo. On failure `path` is left as it was. */
+Error write(const std::string& path, const Mesh& mesh, const WriteOptions& options = {},
+            std::vector<std::string>* warnings = nullptr);
+
+}  // namespace gatun

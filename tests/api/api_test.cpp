@@ -1,0 +1,365 @@
+// The public API (include/gatun/gatun.h) on meshes the test builds: write, read back bit for bit,
+// read a level, a ratio and some fields, convert, validate and render as the gtn command does.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <thread>
+#include <tuple>
+
+#include "gatun/gatun.h"
+#include "render/image.h"
+#include "test_util.h"
+
+namespace {
+
+using gtn::test::readFile;
+using gtn::test::runGtn;
+using gtn::test::tempDir;
+using gtn::test::writeFile;
+
+// An n x n x n grid of cubes, each split into six tetrahedra around its main diagonal (all positively
+// oriented, then every other one inverted), with the point field "density" (float32, varying), the
+// 3-component point field "velocity" (float64) and the cell field "region" (int32).
+gatun::Mesh gridMesh(int n) {
+  gatun::Mesh m;
+  const int p = n + 1;
+  auto id = [&](int i, int j, int k) { return static_cast<uint32_t>((k * p + j) * p + i); };
+  std::vector<float> density;
+  std::vector<double> velocity;
+  for (int k = 0; k < p; ++k)
+    for (int j = 0; j < p; ++j)
+      for (int i = 0; i < p; ++i) {
+        m.points.insert(m.points.end(), {double(i), double(j) * 1.25, double(k) * 0.75});
+        density.push_back(static_cast<float>(std::sin(i * 0.7) + j * j * 0.1 + k * 0.3));
+        velocity.insert(velocity.end(), {double(i) - j, double(k) * 0.5, double(i * j * k)});
+      }
+  std::vector<int32_t> region;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const uint32_t c[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
+                               id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
+                               id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        // Six tetrahedra sharing the diagonal c0-c6; orientation is the library's business.
+        const int paths[6][2] = {{1, 2}, {2, 3}, {3, 7}, {7, 4}, {4, 5}, {5, 1}};
+        for (const auto& q : paths) {
+          if (m.tets.size() % 2 == 0) m.tets.push_back({c[0], c[q[0]], c[q[1]], c[6]});
+          else m.tets.push_back({c[0], c[q[1]], c[q[0]], c[6]});
+          region.push_back((i + j + k) % 3);
+        }
+      }
+  m.coord_type = gatun::ScalarType::kFloat64;
+  m.point_fields.push_back(gatun::Field::of("density", 1, density));
+  m.point_fields.push_back(gatun::Field::of("velocity", 3, velocity));
+  m.cell_fields.push_back(gatun::Field::of("region", 1, region));
+  m.metadata.push_back({"made.by", "api_test"});
+  return m;
+}
+
+using Point = std::tuple<double, double, double>;
+Point pointOf(const gatun::Mesh& m, uint32_t i) { return {m.points[3 * i], m.points[3 * i + 1], m.points[3 * i + 2]}; }
+
+// Point -> its point field values; tetrahedron (as its sorted corner points) -> its cell field values.
+// Equal for two meshes that differ only by the numbering of points and tetrahedra.
+struct Canonical {
+  std::map<Point, std::vector<double>> points;
+  std::map<std::vector<Point>, std::vector<double>> tets;
+  bool operator==(const Canonical&) const = default;
+};
+Canonical canonical(const gatun::Mesh& m) {
+  Canonical c;
+  for (uint32_t i = 0; i < m.pointCount(); ++i) {
+    std::vector<double>& v = c.points[pointOf(m, i)];
+    for (const gatun::Field& f : m.point_fields)
+      for (uint32_t k = 0; k < f.components; ++k) v.push_back(f.value(i, k));
+  }
+  for (size_t t = 0; t < m.tetCount(); ++t) {
+    std::vector<Point> corners;
+    for (uint32_t v : m.tets[t]) corners.push_back(pointOf(m, v));
+    std::sort(corners.begin(), corners.end());
+    std::vector<double>& v = c.tets[corners];
+    for (const gatun::Field& f : m.cell_fields)
+      for (uint32_t k = 0; k < f.components; ++k) v.push_back(f.value(t, k));
+  }
+  return c;
+}
+
+double signedVolume(const gatun::Mesh& m, const gatun::Tet& t) {
+  const double* a = &m.points[3 * t[0]];
+  double e[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) e[r][k] = m.points[3 * t[r + 1] + k] - a[k];
+  return e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+         e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+}
+
+TEST(Api, WriteThenReadGivesTheMeshBackBitForBit) {
+  const std::string dir = tempDir("api_roundtrip");
+  const gatun::Mesh mesh = gridMesh(5);
+  ASSERT_GT(signedVolume(mesh, mesh.tets[0]), 0);
+  ASSERT_LT(signedVolume(mesh, mesh.tets[1]), 0);
+  std::vector<std::string> warnings;
+  gatun::WriteOptions options;
+  options.levels = 2;
+  const gatun::Error written = gatun::write(dir + "/grid.gtn", mesh, options, &warnings);
+  ASSERT_TRUE(written.ok()) << written.message();
+  // Half of the tetrahedra of gridMesh are inverted: write() turns them around and says so.
+  ASSERT_FALSE(warnings.empty());
+  EXPECT_EQ(warnings[0], "gatun::write(" + dir + "/grid.gtn): flipped 375 tetrahedra to positive orientation");
+
+  auto info = gatun::readInfo(dir + "/grid.gtn");
+  ASSERT_TRUE(info.ok()) << info.error().message();
+  EXPECT_EQ(info.value().levels.at(0).points, mesh.pointCount());
+  EXPECT_EQ(info.value().levels.at(0).tets, mesh.tetCount());
+  EXPECT_EQ(info.value().levels.size(), 3u);
+  EXPECT_TRUE(info.value().levels[0].has_merge_tree);
+  ASSERT_EQ(info.value().point_fields.size(), 2u);
+  EXPECT_EQ(info.value().point_fields[1].name, "velocity");
+  EXPECT_EQ(info.value().point_fields[1].components, 3u);
+  EXPECT_EQ(info.value().cell_fields.at(0).type, gatun::ScalarType::kInt32);
+  EXPECT_EQ(info.value().command_line, "gatun::write(grid.gtn)");
+  EXPECT_EQ(info.value().bbox_max[1], 6.25);
+
+  gatun::ReadReport report;
+  auto back = gatun::read(dir + "/grid.gtn", {}, &report);
+  ASSERT_TRUE(back.ok()) << back.error().message();
+  const gatun::Mesh& m = back.value();
+  EXPECT_EQ(m.pointCount(), mesh.pointCount());
+  EXPECT_EQ(m.tetCount(), mesh.tetCount());
+  EXPECT_EQ(report.level, 0u);
+  EXPECT_EQ(report.merges, 0u);
+  EXPECT_TRUE(canonical(m) == canonical(mesh));
+  for (const gatun::Tet& t : m.tets) EXPECT_GT(signedVolume(m, t), 0);
+  ASSERT_NE(m.pointField("density"), nullptr);
+  EXPECT_EQ(m.pointField("density")->type, gatun::ScalarType::kFloat32);
+  bool has_meta = false;
+  for (const auto& [k, v] : m.metadata) has_meta |= k == "made.by" && v == "api_test";
+  EXPECT_TRUE(has_meta);
+}
+
+TEST(Api, ReaderReadsLevelsRatiosAndSomeFields) {
+  const std::string dir = tempDir("api_levels");
+  const gatun::Mesh mesh = gridMesh(6);
+  gatun::WriteOptions options;
+  options.levels = 2;
+  ASSERT_TRUE(gatun::write(dir + "/grid.gtn", mesh, options).ok());
+  auto opened = gatun::Reader::open(dir + "/grid.gtn");
+  ASSERT_TRUE(opened.ok()) << opened.error().message();
+  gatun::Reader reader = std::move(opened).value();
+  const gatun::FileInfo& info = reader.info();
+  ASSERT_EQ(info.levels.size(), 3u);
+
+  gatun::ReadReport report;
+  auto level1 = reader.read({.level = 1}, &report);
+  ASSERT_TRUE(level1.ok()) << level1.error().message();
+  EXPECT_EQ(level1.value().pointCount(), info.levels[1].points);
+  EXPECT_EQ(level1.value().tetCount(), info.levels[1].tets);
+  EXPECT_LT(level1.value().tetCount(), mesh.tetCount());
+  EXPECT_EQ(report.level, 1u);
+  EXPECT_EQ(report.merges, info.levels[1].merges);
+
+  auto half = reader.read({.ratio = 0.3}, &report);
+  ASSERT_TRUE(half.ok()) << half.error().message();
+  EXPECT_LT(half.value().pointCount(), mesh.pointCount());
+  EXPECT_NEAR(report.ratio, 0.3, 0.02);
+  for (const gatun::Tet& t : half.value().tets) EXPECT_GT(signedVolume(half.value(), t), 0);
+
+  auto some = reader.read({.fields = {"velocity"}});
+  ASSERT_TRUE(some.ok()) << some.error().message();
+  ASSERT_EQ(some.value().point_fields.size(), 1u);
+  EXPECT_EQ(some.value().point_fields[0].name, "velocity");
+  EXPECT_TRUE(some.value().cell_fields.empty());
+
+  auto missing_field = reader.read({.fields = {"pressure"}});
+  ASSERT_FALSE(missing_field.ok());
+  EXPECT_EQ(missing_field.error().code(), gatun::ErrorCode::kUsage);
+  EXPECT_NE(missing_field.error().message().find("no field named 'pressure'"), std::string::npos)
+      << missing_field.error().message();
+  EXPECT_THROW(missing_field.value(), std::bad_optional_access);
+
+  auto no_level = reader.read({.level = 40});
+  ASSERT_FALSE(no_level.ok());
+  EXPECT_EQ(no_level.error().exitCode(), 2);
+  EXPECT_NE(no_level.error().message().find("level 40: the file holds"), std::string::npos);
+  auto bad_ratio = reader.read({.ratio = 1.5});
+  ASSERT_FALSE(bad_ratio.ok());
+  EXPECT_EQ(bad_ratio.error().code(), gatun::ErrorCode::kUsage);
+}
+
+TEST(Api, ErrorsCarryTheCommandsMessages) {
+  const std::string dir = tempDir("api_errors");
+  auto none = gatun::read(dir + "/absent.gtn");
+  ASSERT_FALSE(none.ok());
+  EXPECT_EQ(none.error().code(), gatun::ErrorCode::kIo);
+  EXPECT_EQ(none.error().exitCode(), 3);
+  EXPECT_NE(none.error().message().find(dir + "/absent.gtn"), std::string::npos);
+
+  writeFile(dir + "/junk.gtn", std::string(200, 'x'));
+  auto junk = gatun::readInfo(dir + "/junk.gtn");
+  ASSERT_FALSE(junk.ok());
+  EXPECT_EQ(junk.error().code(), gatun::ErrorCode::kNotOurFile);
+  EXPECT_NE(junk.error().message().find("junk.gtn: byte offset 0: bad magic"), std::string::npos)
+      << junk.error().message();
+
+  gatun::Mesh bad = gridMesh(1);
+  bad.tets[2][3] = 99;
+  const gatun::Error refused = gatun::write(dir + "/bad.gtn", bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.code(), gatun::ErrorCode::kUsage);
+  EXPECT_NE(refused.message().find("99"), std::string::npos) << refused.message();
+  EXPECT_FALSE(gtn::test::fileExists(dir + "/bad.gtn"));
+}
+
+TEST(Api, ConvertWritesTheBytesOfGtnConvert) {
+  const std::string dir = tempDir("api_convert");
+  writeFile(dir + "/hex.vtk", gtn::test::shearedHexGridVtk(4, false, true));
+  ASSERT_EQ(runGtn("convert -q " + dir + "/hex.vtk -o " + dir + "/cli.gtn").exit_code, 0);
+  auto cli_info = gatun::readInfo(dir + "/cli.gtn");
+  ASSERT_TRUE(cli_info.ok()) << cli_info.error().message();
+
+  gatun::ConvertOptions options;
+  options.write.command_line = cli_info.value().command_line;  // the same provenance
+  const gatun::Error converted = gatun::convert({dir + "/hex.vtk"}, dir + "/api.gtn", options);
+  ASSERT_TRUE(converted.ok()) << converted.message();
+  EXPECT_EQ(readFile(dir + "/api.gtn"), readFile(dir + "/cli.gtn"));
+
+  // Back to VTK and in again: the same mesh.
+  ASSERT_TRUE(gatun::convert({dir + "/api.gtn"}, dir + "/back.vtu").ok());
+  auto imported = gatun::importMesh({dir + "/back.vtu"});
+  ASSERT_TRUE(imported.ok()) << imported.error().message();
+  auto level0 = gatun::read(dir + "/api.gtn");
+  ASSERT_TRUE(level0.ok());
+  EXPECT_TRUE(canonical(imported.value()) == canonical(level0.value()));
+  EXPECT_EQ(imported.value().tetCount(), 4u * 4u * 4u * 6u);
+
+  const gatun::Error onto_input = gatun::convert({dir + "/hex.vtk"}, dir + "/hex.vtk");
+  EXPECT_EQ(onto_input.code(), gatun::ErrorCode::kUsage);
+  EXPECT_EQ(gatun::convert({dir + "/hex.vtk"}, dir + "/x.obj").code(), gatun::ErrorCode::kUsage);
+  auto not_gtn = gatun::Reader::open(dir + "/hex.vtk");
+  ASSERT_FALSE(not_gtn.ok());
+  EXPECT_NE(not_gtn.error().message().find("not .gtn"), std::string::npos) << not_gtn.error().message();
+}
+
+TEST(Api, ValidateReportsWhatGtnValidateReports) {
+  const std::string dir = tempDir("api_validate");
+  ASSERT_TRUE(gatun::write(dir + "/grid.gtn", gridMesh(3)).ok());
+  auto good = gatun::validate({dir + "/grid.gtn"});
+  ASSERT_TRUE(good.ok()) << good.error().message();
+  EXPECT_TRUE(good.value().ok()) << good.value().text;
+  EXPECT_EQ(good.value().errors, 0u);
+  const auto cli = runGtn("validate " + dir + "/grid.gtn");
+  EXPECT_EQ(cli.exit_code, 0);
+  EXPECT_EQ(good.value().text, cli.out);
+  const auto cli_json = runGtn("validate --json " + dir + "/grid.gtn");
+  EXPECT_EQ(good.value().json, cli_json.out);
+
+  std::string bytes = readFile(dir + "/grid.gtn");
+  writeFile(dir + "/cut.gtn", bytes.substr(0, bytes.size() / 2));
+  auto cut = gatun::validate({dir + "/cut.gtn"});
+  ASSERT_TRUE(cut.ok()) << cut.error().message();
+  EXPECT_FALSE(cut.value().ok());
+  ASSERT_FALSE(cut.value().issues.empty());
+  EXPECT_EQ(cut.value().issues[0].severity, gatun::Severity::kError);
+  EXPECT_EQ(cut.value().text, runGtn("validate " + dir + "/cut.gtn").out);
+
+  // A mesh file: the import's and the mesh's checks.
+  writeFile(dir + "/hex.vtk", gtn::test::shearedHexGridVtk(3, /*mirrored=*/true));
+  auto mesh_file = gatun::validate({dir + "/hex.vtk"});
+  ASSERT_TRUE(mesh_file.ok()) << mesh_file.error().message();
+  EXPECT_EQ(mesh_file.value().text, runGtn("validate " + dir + "/hex.vtk").out);
+  EXPECT_FALSE(mesh_file.value().issues.empty());  // the mirrored cells were turned around
+
+  auto absent = gatun::validate({dir + "/absent.gtn"});
+  ASSERT_FALSE(absent.ok());
+  EXPECT_EQ(absent.error().code(), gatun::ErrorCode::kIo);
+}
+
+TEST(Api, RenderDrawsThePixelsOfGtnRender) {
+  const std::string dir = tempDir("api_render");
+  ASSERT_TRUE(gatun::write(dir + "/grid.gtn", gridMesh(4)).ok());
+  gatun::RenderOptions options;
+  options.width = 80;
+  options.height = 60;
+  options.azimuth = 40;
+  auto image = gatun::render({dir + "/grid.gtn"}, options);
+  ASSERT_TRUE(image.ok()) << image.error().message();
+  ASSERT_EQ(image.value().rgb.size(), 80u * 60u * 3u);
+  size_t lit = 0;
+  for (uint8_t c : image.value().rgb) lit += c != 0;
+  EXPECT_GT(lit, 1000u);
+  ASSERT_TRUE(gatun::writePng(dir + "/api.png", image.value()).ok());
+
+  ASSERT_EQ(runGtn("render " + dir + "/grid.gtn -o " + dir + "/cli.png --size 80x60 --azimuth 40 --no-cache").exit_code, 0);
+  auto cli = gtn::readPng(dir + "/cli.png");
+  ASSERT_TRUE(cli.isOk()) << cli.status().message();
+  EXPECT_EQ(cli->rgb, image.value().rgb);
+  auto png = gtn::readPng(dir + "/api.png");
+  ASSERT_TRUE(png.isOk());
+  EXPECT_EQ(png->rgb, image.value().rgb);
+
+  options.ratio = 0.5;
+  auto coarse = gatun::render({dir + "/grid.gtn"}, options);
+  ASSERT_TRUE(coarse.ok()) << coarse.error().message();
+  ASSERT_EQ(runGtn("render " + dir + "/grid.gtn -o " + dir + "/cli-half.png --size 80x60 --azimuth 40 --ratio 0.5 --no-cache")
+                .exit_code,
+            0);
+  EXPECT_EQ(gtn::readPng(dir + "/cli-half.png")->rgb, coarse.value().rgb);
+
+  options.ratio.reset();
+  options.field = "region";
+  auto cell = gatun::render({dir + "/grid.gtn"}, options);
+  ASSERT_FALSE(cell.ok());
+  EXPECT_EQ(cell.error().code(), gatun::ErrorCode::kUsage);
+  EXPECT_NE(cell.error().message().find("'region' is a cell field"), std::string::npos) << cell.error().message();
+
+  gatun::Image wrong;
+  wrong.width = 4;
+  wrong.height = 4;
+  wrong.rgb.resize(10);
+  EXPECT_EQ(gatun::writePng(dir + "/wrong.png", wrong).code(), gatun::ErrorCode::kUsage);
+}
+
+// The header's promise: calls on different files may run at once. Four threads each write, read and
+// render their own file; every result equals the one made alone.
+TEST(Api, ThreadsWorkOnTheirOwnFiles) {
+  const std::string dir = tempDir("api_threads");
+  const gatun::Mesh mesh = gridMesh(4);
+  ASSERT_TRUE(gatun::write(dir + "/alone.gtn", mesh).ok());
+  const std::string alone = readFile(dir + "/alone.gtn");
+  gatun::RenderOptions view;
+  view.width = 48;
+  view.height = 48;
+  auto alone_image = gatun::render({dir + "/alone.gtn"}, view);
+  ASSERT_TRUE(alone_image.ok());
+  std::vector<std::string> bytes(4);
+  std::vector<bool> same_mesh(4, false), same_image(4, false);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      const std::string path = dir + "/t" + std::to_string(t) + ".gtn";
+      gatun::WriteOptions options;
+      options.command_line = "gatun::write(alone.gtn)";
+      if (!gatun::write(path, mesh, options).ok()) return;
+      bytes[t] = readFile(path);
+      auto back = gatun::read(path);
+      same_mesh[t] = back.ok() && canonical(back.value()) == canonical(mesh);
+      auto image = gatun::render({path}, view);
+      same_image[t] = image.ok() && image.value().rgb == alone_image.value().rgb;
+    });
+  for (std::thread& t : threads) t.join();
+  for (int t = 0; t < 4; ++t) {
+    EXPECT_EQ(bytes[t], alone) << "thread " << t;
+    EXPECT_TRUE(same_mesh[t]) << "thread " << t;
+    EXPECT_TRUE(same_image[t]) << "thread " << t;
+  }
+}
+
+TEST(Api, VersionIsTheCommands) {
+  EXPECT_EQ(std::string(gatun::version()), GTN_VERSION_STRING);
+  EXPECT_NE(runGtn("--version").out.find(gatun::version()), std::string::npos);
+}
+
+}  // namespace
