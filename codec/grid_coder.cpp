@@ -589,13 +589,15 @@ struct PrefixCode {
 };
 
 // A component's coding domain in form 1: the width of its residuals, how keys map to it, and its
-// alphabet: the 2w + 1 bucket symbols, an escape (decimal form), then kRunSymbols run symbols.
+// alphabet: the 4w − 1 value symbols (valueSymbol), an escape (decimal form), then kRunSymbols run
+// symbols.
 constexpr int kRunSymbols = 31;  // runs of 2^(b - 1) .. 2^b - 1 zero residuals, b = 2..32
 struct Form1Domain {
   int w = 0;             // residual width
   int shift = 0;
   bool escape = false;   // decimal: an escape symbol 2w + 1, then the value's residual at the full width
-  uint32_t runBase() const { return 2 * static_cast<uint32_t>(w) + 1 + (escape ? 1 : 0); }
+  uint32_t escapeSymbol() const { return 4 * static_cast<uint32_t>(w) - 1; }
+  uint32_t runBase() const { return escapeSymbol() + (escape ? 1 : 0); }
   size_t symbols() const { return runBase() + kRunSymbols; }
 };
 
@@ -615,11 +617,23 @@ bool form1Domain(ScalarType type, const Form& f, Form1Domain* d) {
   return true;
 }
 
-// The context class of a component's next value: ⌊b′ / 8⌋ capped at 7 for the previous value's
-// bucket or escape symbol b′, kRunClass after a run (and 0 before the first value).
+// A residual's value symbol, from its bucket s of 12.1 and magnitude: s for s <= 2 (zero, +1, −1),
+// else 3 + 4 (b − 2) + 2 (1 if negative) + the bit below the leading one, b = bitlen(|r|) >= 2.
+[[gnu::always_inline]] inline uint32_t valueSymbol(uint32_t s, uint64_t mag) {
+  if (s <= 2) return s;
+  const uint32_t b = (s + 1) >> 1, negative = (s & 1) ^ 1;
+  return 3 + 4 * (b - 2) + 2 * negative + static_cast<uint32_t>((mag >> (b - 2)) & 1);
+}
+
+// The context class of a component's next value: ⌊b′ / 4⌋ capped at 7, b′ the bit length of the
+// previous value's residual (w + 1 after an escape), kRunClass after a run (and 0 before the first
+// value).
 constexpr uint32_t kRunClass = 8;
 constexpr int kForm1Classes = 9;
-[[gnu::always_inline]] inline uint32_t form1Class(uint32_t prev_symbol) { return std::min(prev_symbol >> 3, 7u); }
+[[gnu::always_inline]] inline uint32_t form1Class(uint32_t prev_symbol) {
+  const uint32_t b = prev_symbol < 3 ? (prev_symbol + 1) >> 1 : ((prev_symbol - 3) >> 2) + 2;
+  return std::min(b >> 2, 7u);
+}
 
 // The residual of key `k` against `p` (both w bits wide) as its symbol and raw bits.
 [[gnu::always_inline]] inline uint32_t residualSymbol(uint64_t k, uint64_t p, int w, uint64_t* mag_out) {
@@ -655,7 +669,7 @@ constexpr int kForm1Classes = 9;
 // magnitude; for an escape, the full-width residual's bucket and magnitude).
 struct Form1Token {
   uint64_t mag = 0;
-  uint8_t symbol = 0;
+  uint16_t symbol = 0;
   uint8_t escape_symbol = 0;
 };
 
@@ -706,7 +720,8 @@ uint64_t form1CodeBits(const std::vector<std::vector<uint64_t>>& freq, uint64_t 
     size_t listed = len.size();
     while (listed > 0 && len[listed - 1] == 0) --listed;
     if (listed == 0) continue;
-    total += 8 + 4 * listed;
+    total += 9 + listed;
+    for (size_t s = 0; s < listed; ++s) total += len[s] ? 4 : 0;
     size_t used = 0;
     for (size_t s = 0; s < f.size(); ++s) used += f[s] != 0;
     if (used > 1)
@@ -739,7 +754,7 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
     } else if (f.decimals >= 0) {
       int64_t n = 0;
       if (!decimalInteger(type, key, f.decimals, &n)) {
-        t.symbol = static_cast<uint8_t>(2 * dom[cc].w + 1);
+        t.symbol = static_cast<uint16_t>(dom[cc].escapeSymbol());
         t.escape_symbol = static_cast<uint8_t>(residualSymbol(key, pk, width, &t.mag));
         tokens[cc].push_back(t);
         *value = doubleFromRaw(type, src + v * stride + cc * size);
@@ -749,7 +764,8 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
     } else {
       k = key >> dom[cc].shift;
     }
-    t.symbol = static_cast<uint8_t>(residualSymbol(k, p, dom[cc].w, &t.mag));
+    const uint32_t bucket = residualSymbol(k, p, dom[cc].w, &t.mag);
+    t.symbol = static_cast<uint16_t>(valueSymbol(bucket, t.mag));
     tokens[cc].push_back(t);
     *value = doubleFromRaw(type, src + v * stride + cc * size);
   };
@@ -802,8 +818,11 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
       while (listed > 0 && pc.len[listed - 1] == 0) --listed;
       w.put(listed > 0, 1);
       if (listed == 0) continue;
-      w.put(listed, 8);
-      for (size_t s = 0; s < listed; ++s) w.put(pc.len[s], 4);
+      w.put(listed, 9);
+      for (size_t s = 0; s < listed; ++s) {
+        w.put(pc.len[s] != 0, 1);
+        if (pc.len[s]) w.put(pc.len[s], 4);
+      }
     }
   }
   std::vector<uint32_t> cls(comps, 0);
@@ -828,9 +847,12 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
     const uint32_t s = t.symbol;
     if (pc.single < 0) w.put(pc.code[s], pc.len[s]);
     cls[cc] = form1Class(s);
-    const uint32_t bucket = s == 2 * static_cast<uint32_t>(dom[cc].w) + 1 ? t.escape_symbol : s;
-    if (s != bucket) w.put(bucket, 8);
-    if (bucket > 0) w.put(t.mag, static_cast<int>((bucket + 1) >> 1) - 1);  // below the leading one (put masks it off)
+    if (dom[cc].escape && s == dom[cc].escapeSymbol()) {
+      w.put(t.escape_symbol, 8);
+      if (t.escape_symbol > 0) w.put(t.mag, static_cast<int>((t.escape_symbol + 1) >> 1) - 1);  // below the leading one
+    } else if (s >= 3) {
+      w.put(t.mag, static_cast<int>((s - 3) >> 2));  // below the leading one and the next (put masks them off)
+    }
   };
   scanValues(scan, comps, forms, d, write, [] { return true; });
   w.finish();
@@ -882,12 +904,16 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
     for (int k = 0; k < kForm1Classes; ++k) {
       PrefixCode& pc = codes[cc * kForm1Classes + k];
       if (!r.get(1)) continue;
-      const size_t listed = static_cast<size_t>(r.get(8));
+      const size_t listed = static_cast<size_t>(r.get(9));
       if (listed == 0 || listed > dom[cc].symbols())
         return bad(comp + " lists " + std::to_string(listed) + " code lengths in class " + std::to_string(k) + " (1 to " +
                    std::to_string(dom[cc].symbols()) + ")");
       pc.len.assign(dom[cc].symbols(), 0);
-      for (size_t s = 0; s < listed; ++s) pc.len[s] = static_cast<uint8_t>(r.get(4));
+      for (size_t s = 0; s < listed; ++s) {
+        if (!r.get(1)) continue;
+        pc.len[s] = static_cast<uint8_t>(r.get(4));
+        if (pc.len[s] == 0) return bad(comp + " gives a used symbol the code length 0 in class " + std::to_string(k));
+      }
       if (pc.len[listed - 1] == 0) return bad(comp + " lists code lengths in class " + std::to_string(k) + " that end with an unused symbol");
       if (!pc.build(true)) return bad(comp + " declares code lengths that are not a complete prefix code");
     }
@@ -922,7 +948,7 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
         cls[cc] = kRunClass;
       } else {
         cls[cc] = form1Class(s);
-        if (dm.escape && s == 2 * static_cast<uint32_t>(dm.w) + 1) {
+        if (dm.escape && s == dm.escapeSymbol()) {
           // The value's key as a residual against the prediction's at the full width.
           const uint32_t e = static_cast<uint32_t>(r.get(8));
           uint64_t key = pk;
@@ -938,9 +964,15 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
           return;
         }
         if (s > 0) {
-          const int b = static_cast<int>((s + 1) >> 1);
-          const uint64_t mag = (uint64_t{1} << (b - 1)) | (b - 1 <= 40 ? r.take(b - 1) : r.get(b - 1));
-          k = (s & 1) ? k + mag : k - mag;
+          uint64_t mag = 1;
+          bool negative = s == 2;
+          if (s >= 3) {
+            const uint32_t x = s - 3;
+            const int below = static_cast<int>(x >> 2);  // b − 2 raw bits
+            negative = (x >> 1) & 1;
+            mag = (uint64_t{2 | (x & 1)} << below) | (below <= 40 ? r.take(below) : r.get(below));
+          }
+          k = negative ? k - mag : k + mag;
           if (dm.w < 64) k &= (uint64_t{1} << dm.w) - 1;
         }
       }
