@@ -625,14 +625,19 @@ bool form1Domain(ScalarType type, const Form& f, Form1Domain* d) {
   return 3 + 4 * (b - 2) + 2 * negative + static_cast<uint32_t>((mag >> (b - 2)) & 1);
 }
 
-// The context class of a component's next value: ⌊b′ / 4⌋ capped at 7, b′ the bit length of the
-// previous value's residual (w + 1 after an escape), kRunClass after a run (and 0 before the first
-// value).
-constexpr uint32_t kRunClass = 8;
-constexpr int kForm1Classes = 9;
-[[gnu::always_inline]] inline uint32_t form1Class(uint32_t prev_symbol) {
-  const uint32_t b = prev_symbol < 3 ? (prev_symbol + 1) >> 1 : ((prev_symbol - 3) >> 2) + 2;
-  return std::min(b >> 2, 7u);
+// The bit length of the residual a value symbol codes (w + 1 for the escape).
+[[gnu::always_inline]] inline uint32_t symbolBits(uint32_t symbol) {
+  return symbol < 3 ? (symbol + 1) >> 1 : ((symbol - 3) >> 2) + 2;
+}
+
+// The context class of a component's next value: ⌊(b′ + b″) / 4⌋ capped at 15, b′ the bit length of
+// the previous value's residual and b″ that of the value ni values before it in the component's
+// order (0 where there is none or it was in a run), or kRunClass right after a run.
+constexpr uint32_t kAfterRun = 0xFF;  // `last` after a run
+constexpr uint32_t kRunClass = 16;
+constexpr int kForm1Classes = 17;
+[[gnu::always_inline]] inline uint32_t form1Class(uint32_t last, uint32_t up) {
+  return last == kAfterRun ? kRunClass : std::min((last + up) >> 2, 15u);
 }
 
 // The residual of key `k` against `p` (both w bits wide) as its symbol and raw bits.
@@ -691,21 +696,21 @@ void markRuns(const std::vector<Form1Token>& tokens, uint64_t min_run, std::vect
 
 // The symbol frequencies per class of a component's tokens with `runs`.
 std::vector<std::vector<uint64_t>> form1Frequencies(const std::vector<Form1Token>& tokens, const std::vector<uint32_t>& runs,
-                                                    const Form1Domain& dom, uint64_t* run_bits) {
+                                                    const Form1Domain& dom, size_t ni, uint64_t* run_bits) {
   std::vector<std::vector<uint64_t>> freq(kForm1Classes, std::vector<uint64_t>(dom.symbols(), 0));
-  uint32_t cls = 0;
+  uint32_t last = 0;
   *run_bits = 0;
   for (size_t v = 0; v < tokens.size();) {
     if (runs[v]) {
       const int b = bitLength(runs[v]);
-      ++freq[cls][dom.runBase() + static_cast<uint32_t>(b - 2)];
+      ++freq[form1Class(last, v >= ni ? symbolBits(tokens[v - ni].symbol) : 0)][dom.runBase() + static_cast<uint32_t>(b - 2)];
       *run_bits += static_cast<uint64_t>(b - 1);
-      cls = kRunClass;
+      last = kAfterRun;
       v += runs[v];
       continue;
     }
-    ++freq[cls][tokens[v].symbol];
-    cls = form1Class(tokens[v].symbol);
+    ++freq[form1Class(last, v >= ni ? symbolBits(tokens[v - ni].symbol) : 0)][tokens[v].symbol];
+    last = symbolBits(tokens[v].symbol);
     ++v;
   }
   return freq;
@@ -779,11 +784,11 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
     for (uint64_t min_run : {uint64_t{2}, uint64_t{3}, uint64_t{4}, uint64_t{8}, uint64_t{16}, uint64_t{32}, uint64_t{1} << 32}) {
       markRuns(tokens[cc], min_run, &trial);
       uint64_t run_bits = 0;
-      const uint64_t bits = form1CodeBits(form1Frequencies(tokens[cc], trial, dom[cc], &run_bits), run_bits);
+      const uint64_t bits = form1CodeBits(form1Frequencies(tokens[cc], trial, dom[cc], scan.ni, &run_bits), run_bits);
       if (bits < best) best = bits, runs[cc] = trial;
     }
     uint64_t run_bits = 0;
-    const auto freq = form1Frequencies(tokens[cc], runs[cc], dom[cc], &run_bits);
+    const auto freq = form1Frequencies(tokens[cc], runs[cc], dom[cc], scan.ni, &run_bits);
     for (int k = 0; k < kForm1Classes; ++k) {
       PrefixCode& pc = codes[cc * kForm1Classes + k];
       pc.len = codeLengths(freq[k]);
@@ -825,7 +830,7 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
       }
     }
   }
-  std::vector<uint32_t> cls(comps, 0);
+  std::vector<uint32_t> last(comps, 0);
   std::vector<uint64_t> skip(comps, 0);
   auto write = [&](uint32_t cc, uint64_t v, double, double* value) {
     *value = doubleFromRaw(type, src + v * stride + cc * size);
@@ -833,20 +838,21 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
       --skip[cc];
       return;
     }
-    const PrefixCode& pc = codes[cc * kForm1Classes + cls[cc]];
+    const uint32_t up = v >= scan.ni ? symbolBits(tokens[cc][v - scan.ni].symbol) : 0;
+    const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(last[cc], up)];
     if (const uint32_t run = runs[cc][v]) {
       const int b = bitLength(run);
       const uint32_t s = dom[cc].runBase() + static_cast<uint32_t>(b - 2);
       if (pc.single < 0) w.put(pc.code[s], pc.len[s]);
       w.put(run, b - 1);  // below the leading one
       skip[cc] = run - 1;
-      cls[cc] = kRunClass;
+      last[cc] = kAfterRun;
       return;
     }
     const Form1Token& t = tokens[cc][v];
     const uint32_t s = t.symbol;
     if (pc.single < 0) w.put(pc.code[s], pc.len[s]);
-    cls[cc] = form1Class(s);
+    last[cc] = symbolBits(s);
     if (dom[cc].escape && s == dom[cc].escapeSymbol()) {
       w.put(t.escape_symbol, 8);
       if (t.escape_symbol > 0) w.put(t.mag, static_cast<int>((t.escape_symbol + 1) >> 1) - 1);  // below the leading one
@@ -919,19 +925,26 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
     }
     if (r.overrun()) return bad("truncated in its declarations");
   }
-  std::vector<uint32_t> cls(comps, 0);
+  std::vector<uint32_t> last(comps, 0);
   std::vector<uint64_t> run(comps, 0);  // zero residuals still to come in the current run
+  // Per component, the bit lengths of its last ni residuals (a ring; `at` the oldest).
+  const size_t ni = scan.ni;
+  std::vector<uint8_t> ring(size_t{comps} * ni, 0);
+  std::vector<size_t> at(comps, 0);
   bool corrupt = false;
   auto decodeOne = [&](uint32_t cc, uint64_t v, double pred, double* value) {
     const Form& f = forms[cc];
     const Form1Domain& dm = dom[cc];
     uint8_t* raw = dst + (v * comps + cc) * size;
     uint64_t k;
+    uint8_t& up = ring[cc * ni + at[cc]];
+    at[cc] = at[cc] + 1 == ni ? 0 : at[cc] + 1;
     if (run[cc] > 0) {
       --run[cc];
+      up = 0;
       k = domainPrediction(type, f, dm, keyFromPrediction(type, pred));
     } else {
-      const PrefixCode& pc = codes[cc * kForm1Classes + cls[cc]];
+      const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(last[cc], up)];
       r.refill();
       if (pc.len.empty()) [[unlikely]] {
         corrupt = true;
@@ -945,9 +958,11 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
       if (s >= dm.runBase()) {
         const int b = static_cast<int>(s - dm.runBase()) + 2;
         run[cc] = ((uint64_t{1} << (b - 1)) | r.take(b - 1)) - 1;
-        cls[cc] = kRunClass;
+        last[cc] = kAfterRun;
+        up = 0;
       } else {
-        cls[cc] = form1Class(s);
+        last[cc] = symbolBits(s);
+        up = static_cast<uint8_t>(last[cc]);
         if (dm.escape && s == dm.escapeSymbol()) {
           // The value's key as a residual against the prediction's at the full width.
           const uint32_t e = static_cast<uint32_t>(r.get(8));
