@@ -725,8 +725,14 @@ uint64_t form1CodeBits(const std::vector<std::vector<uint64_t>>& freq, uint64_t 
     size_t listed = len.size();
     while (listed > 0 && len[listed - 1] == 0) --listed;
     if (listed == 0) continue;
-    total += 9 + listed;
-    for (size_t s = 0; s < listed; ++s) total += len[s] ? 4 : 0;
+    total += 9;
+    for (size_t s = 0; s < listed;) {
+      size_t step = 1;
+      if (!len[s])
+        while (s + step < listed && !len[s + step] && step < 32) ++step;
+      total += len[s] ? 5 : 6;
+      s += step;
+    }
     size_t used = 0;
     for (size_t s = 0; s < f.size(); ++s) used += f[s] != 0;
     if (used > 1)
@@ -824,9 +830,16 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
       w.put(listed > 0, 1);
       if (listed == 0) continue;
       w.put(listed, 9);
-      for (size_t s = 0; s < listed; ++s) {
+      for (size_t s = 0; s < listed;) {
         w.put(pc.len[s] != 0, 1);
-        if (pc.len[s]) w.put(pc.len[s], 4);
+        if (pc.len[s]) {
+          w.put(pc.len[s++], 4);
+          continue;
+        }
+        size_t unused = 1;  // up to 32 unused symbols in 5 bits
+        while (s + unused < listed && !pc.len[s + unused] && unused < 32) ++unused;
+        w.put(unused - 1, 5);
+        s += unused;
       }
     }
   }
@@ -915,10 +928,15 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
         return bad(comp + " lists " + std::to_string(listed) + " code lengths in class " + std::to_string(k) + " (1 to " +
                    std::to_string(dom[cc].symbols()) + ")");
       pc.len.assign(dom[cc].symbols(), 0);
-      for (size_t s = 0; s < listed; ++s) {
-        if (!r.get(1)) continue;
+      for (size_t s = 0; s < listed;) {
+        if (!r.get(1)) {
+          s += static_cast<size_t>(r.get(5)) + 1;  // unused symbols
+          if (s >= listed) return bad(comp + " lists code lengths in class " + std::to_string(k) + " that end with an unused symbol");
+          continue;
+        }
         pc.len[s] = static_cast<uint8_t>(r.get(4));
         if (pc.len[s] == 0) return bad(comp + " gives a used symbol the code length 0 in class " + std::to_string(k));
+        ++s;
       }
       if (pc.len[listed - 1] == 0) return bad(comp + " lists code lengths in class " + std::to_string(k) + " that end with an unused symbol");
       if (!pc.build(true)) return bad(comp + " declares code lengths that are not a complete prefix code");
