@@ -635,7 +635,8 @@ bool form1Domain(ScalarType type, const Form& f, Form1Domain* d) {
 // order (0 where there is none or it was in a run), or kRunClass right after a run.
 constexpr uint32_t kAfterRun = 0xFF;  // `last` after a run
 constexpr uint32_t kRunClass = 16;
-constexpr int kForm1Classes = 17;
+constexpr uint32_t kEscapeClass = 17;  // the code of an escaped value's full-width residual
+constexpr int kForm1Classes = 18;
 [[gnu::always_inline]] inline uint32_t form1Class(uint32_t last, uint32_t up) {
   return last == kAfterRun ? kRunClass : std::min((last + up) >> 2, 15u);
 }
@@ -675,7 +676,7 @@ constexpr int kForm1Classes = 17;
 struct Form1Token {
   uint64_t mag = 0;
   uint16_t symbol = 0;
-  uint8_t escape_symbol = 0;
+  uint16_t escape_symbol = 0;  // the value symbol of an escaped value's residual at the full width
 };
 
 // The runs of a component's tokens (per value: the length of the run of zero residuals that starts
@@ -710,6 +711,7 @@ std::vector<std::vector<uint64_t>> form1Frequencies(const std::vector<Form1Token
       continue;
     }
     ++freq[form1Class(last, v >= ni ? symbolBits(tokens[v - ni].symbol) : 0)][tokens[v].symbol];
+    if (dom.escape && tokens[v].symbol == dom.escapeSymbol()) ++freq[kEscapeClass][tokens[v].escape_symbol];
     last = symbolBits(tokens[v].symbol);
     ++v;
   }
@@ -766,7 +768,8 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
       int64_t n = 0;
       if (!decimalInteger(type, key, f.decimals, &n)) {
         t.symbol = static_cast<uint16_t>(dom[cc].escapeSymbol());
-        t.escape_symbol = static_cast<uint8_t>(residualSymbol(key, pk, width, &t.mag));
+        const uint32_t bucket = residualSymbol(key, pk, width, &t.mag);
+        t.escape_symbol = static_cast<uint16_t>(valueSymbol(bucket, t.mag));
         tokens[cc].push_back(t);
         *value = doubleFromRaw(type, src + v * stride + cc * size);
         return;
@@ -866,12 +869,13 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
     const uint32_t s = t.symbol;
     if (pc.single < 0) w.put(pc.code[s], pc.len[s]);
     last[cc] = symbolBits(s);
+    uint32_t raw_symbol = s;
     if (dom[cc].escape && s == dom[cc].escapeSymbol()) {
-      w.put(t.escape_symbol, 8);
-      if (t.escape_symbol > 0) w.put(t.mag, static_cast<int>((t.escape_symbol + 1) >> 1) - 1);  // below the leading one
-    } else if (s >= 3) {
-      w.put(t.mag, static_cast<int>((s - 3) >> 2));  // below the leading one and the next (put masks them off)
+      const PrefixCode& ec = codes[cc * kForm1Classes + kEscapeClass];
+      raw_symbol = t.escape_symbol;
+      if (ec.single < 0) w.put(ec.code[raw_symbol], ec.len[raw_symbol]);
     }
+    if (raw_symbol >= 3) w.put(t.mag, static_cast<int>((raw_symbol - 3) >> 2));  // below the leading one and the next (put masks them off)
   };
   scanValues(scan, comps, forms, d, write, [] { return true; });
   w.finish();
@@ -982,15 +986,23 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
         last[cc] = symbolBits(s);
         up = static_cast<uint8_t>(last[cc]);
         if (dm.escape && s == dm.escapeSymbol()) {
-          // The value's key as a residual against the prediction's at the full width.
-          const uint32_t e = static_cast<uint32_t>(r.get(8));
+          // The value's key as a residual against the prediction's at the full width, its value
+          // symbol in the escape class's code.
+          const PrefixCode& ec = codes[cc * kForm1Classes + kEscapeClass];
           uint64_t key = pk;
-          if (e > 2 * static_cast<uint32_t>(width)) {
+          r.refill();
+          const uint32_t e = ec.len.empty() ? 0 : ec.read(r);
+          if (ec.len.empty() || e >= 4 * static_cast<uint32_t>(width) - 1) {
             corrupt = true;
           } else if (e > 0) {
-            const int b = static_cast<int>((e + 1) >> 1);
-            const uint64_t mag = (uint64_t{1} << (b - 1)) | r.get(b - 1);
-            key = ((e & 1) ? pk + mag : pk - mag) & width_mask;
+            uint64_t mag = 1;
+            bool negative = e == 2;
+            if (e >= 3) {
+              const int below = static_cast<int>((e - 3) >> 2);
+              negative = ((e - 3) >> 1) & 1;
+              mag = (uint64_t{2 | ((e - 3) & 1)} << below) | r.get(below);
+            }
+            key = (negative ? pk - mag : pk + mag) & width_mask;
           }
           rawFromKey(type, key, raw);
           *value = doubleFromRaw(type, raw);
