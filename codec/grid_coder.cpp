@@ -942,7 +942,6 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
         if (pc.len[s] == 0) return bad(comp + " gives a used symbol the code length 0 in class " + std::to_string(k));
         ++s;
       }
-      if (pc.len[listed - 1] == 0) return bad(comp + " lists code lengths in class " + std::to_string(k) + " that end with an unused symbol");
       if (!pc.build(true)) return bad(comp + " declares code lengths that are not a complete prefix code");
     }
     if (r.overrun()) return bad("truncated in its declarations");
