@@ -472,7 +472,6 @@ class BitReader {
 
 constexpr int kMaxCodeLength = 15;
 constexpr int kTableBits = 11;
-constexpr int kForm1Classes = 8;
 
 // Huffman code lengths (at most kMaxCodeLength) of the symbols with nonzero frequency.
 std::vector<uint8_t> codeLengths(std::vector<uint64_t> freq) {
@@ -589,12 +588,17 @@ struct PrefixCode {
   }
 };
 
-// A component's coding domain in form 1: the width of its residuals and how keys map to it.
+// A component's coding domain in form 1: the width of its residuals, how keys map to it, and its
+// alphabet: the 4w − 1 value symbols (valueSymbol), an escape (decimal form), then kRunSymbols run
+// symbols.
+constexpr int kRunSymbols = 31;  // runs of 2^(b - 1) .. 2^b - 1 zero residuals, b = 2..32
 struct Form1Domain {
   int w = 0;             // residual width
   int shift = 0;
-  bool escape = false;   // decimal: an escape symbol 2w + 1, then the value's key raw
-  size_t symbols() const { return 2 * static_cast<size_t>(w) + 1 + (escape ? 1 : 0); }
+  bool escape = false;   // decimal: an escape symbol 2w + 1, then the value's residual at the full width
+  uint32_t escapeSymbol() const { return 4 * static_cast<uint32_t>(w) - 1; }
+  uint32_t runBase() const { return escapeSymbol() + (escape ? 1 : 0); }
+  size_t symbols() const { return runBase() + kRunSymbols; }
 };
 
 // Whether form 1 can code `f` (it has no per-value escape bit for printed-single values or a shift
@@ -613,7 +617,29 @@ bool form1Domain(ScalarType type, const Form& f, Form1Domain* d) {
   return true;
 }
 
-[[gnu::always_inline]] inline uint32_t form1Class(uint32_t prev_symbol) { return std::min(prev_symbol >> 3, 7u); }
+// A residual's value symbol, from its bucket s of 12.1 and magnitude: s for s <= 2 (zero, +1, −1),
+// else 3 + 4 (b − 2) + 2 (1 if negative) + the bit below the leading one, b = bitlen(|r|) >= 2.
+[[gnu::always_inline]] inline uint32_t valueSymbol(uint32_t s, uint64_t mag) {
+  if (s <= 2) return s;
+  const uint32_t b = (s + 1) >> 1, negative = (s & 1) ^ 1;
+  return 3 + 4 * (b - 2) + 2 * negative + static_cast<uint32_t>((mag >> (b - 2)) & 1);
+}
+
+// The bit length of the residual a value symbol codes (w + 1 for the escape).
+[[gnu::always_inline]] inline uint32_t symbolBits(uint32_t symbol) {
+  return symbol < 3 ? (symbol + 1) >> 1 : ((symbol - 3) >> 2) + 2;
+}
+
+// The context class of a component's next value: ⌊(b′ + b″) / 4⌋ capped at 15, b′ the bit length of
+// the previous value's residual and b″ that of the value ni values before it in the component's
+// order (0 where there is none or it was in a run), or kRunClass right after a run.
+constexpr uint32_t kAfterRun = 0xFF;  // `last` after a run
+constexpr uint32_t kRunClass = 16;
+constexpr uint32_t kEscapeClass = 17;  // the code of an escaped value's full-width residual
+constexpr int kForm1Classes = 18;
+[[gnu::always_inline]] inline uint32_t form1Class(uint32_t last, uint32_t up) {
+  return last == kAfterRun ? kRunClass : std::min((last + up) >> 2, 15u);
+}
 
 // The residual of key `k` against `p` (both w bits wide) as its symbol and raw bits.
 [[gnu::always_inline]] inline uint32_t residualSymbol(uint64_t k, uint64_t p, int w, uint64_t* mag_out) {
@@ -645,6 +671,78 @@ bool form1Domain(ScalarType type, const Form& f, Form1Domain* d) {
   return pred_key >> dom.shift;
 }
 
+// One value of a component as the encoder sees it: its symbol (bucket or escape) and raw bits (the
+// magnitude; for an escape, the full-width residual's bucket and magnitude).
+struct Form1Token {
+  uint64_t mag = 0;
+  uint16_t symbol = 0;
+  uint16_t escape_symbol = 0;  // the value symbol of an escaped value's residual at the full width
+};
+
+// The runs of a component's tokens (per value: the length of the run of zero residuals that starts
+// there and is coded as one run symbol, else 0) when every run of at least `min_run` zeros is one.
+void markRuns(const std::vector<Form1Token>& tokens, uint64_t min_run, std::vector<uint32_t>* runs) {
+  runs->assign(tokens.size(), 0);
+  for (size_t v = 0; v < tokens.size();) {
+    if (tokens[v].symbol != 0) {
+      ++v;
+      continue;
+    }
+    size_t end = v;
+    while (end < tokens.size() && tokens[end].symbol == 0 && end - v < 0xFFFFFFFFu) ++end;
+    if (end - v >= min_run) (*runs)[v] = static_cast<uint32_t>(end - v);
+    v = end;
+  }
+}
+
+// The symbol frequencies per class of a component's tokens with `runs`.
+std::vector<std::vector<uint64_t>> form1Frequencies(const std::vector<Form1Token>& tokens, const std::vector<uint32_t>& runs,
+                                                    const Form1Domain& dom, size_t ni, uint64_t* run_bits) {
+  std::vector<std::vector<uint64_t>> freq(kForm1Classes, std::vector<uint64_t>(dom.symbols(), 0));
+  uint32_t last = 0;
+  *run_bits = 0;
+  for (size_t v = 0; v < tokens.size();) {
+    if (runs[v]) {
+      const int b = bitLength(runs[v]);
+      ++freq[form1Class(last, v >= ni ? symbolBits(tokens[v - ni].symbol) : 0)][dom.runBase() + static_cast<uint32_t>(b - 2)];
+      *run_bits += static_cast<uint64_t>(b - 1);
+      last = kAfterRun;
+      v += runs[v];
+      continue;
+    }
+    ++freq[form1Class(last, v >= ni ? symbolBits(tokens[v - ni].symbol) : 0)][tokens[v].symbol];
+    if (dom.escape && tokens[v].symbol == dom.escapeSymbol()) ++freq[kEscapeClass][tokens[v].escape_symbol];
+    last = symbolBits(tokens[v].symbol);
+    ++v;
+  }
+  return freq;
+}
+
+// The bits of a component's code length lists and symbol codes (raw bits of the buckets aside).
+uint64_t form1CodeBits(const std::vector<std::vector<uint64_t>>& freq, uint64_t run_bits) {
+  uint64_t total = run_bits;
+  for (const auto& f : freq) {
+    total += 1;
+    const std::vector<uint8_t> len = codeLengths(f);
+    size_t listed = len.size();
+    while (listed > 0 && len[listed - 1] == 0) --listed;
+    if (listed == 0) continue;
+    total += 9;
+    for (size_t s = 0; s < listed;) {
+      size_t step = 1;
+      if (!len[s])
+        while (s + step < listed && !len[s + step] && step < 32) ++step;
+      total += len[s] ? 5 : 6;
+      s += step;
+    }
+    size_t used = 0;
+    for (size_t s = 0; s < f.size(); ++s) used += f[s] != 0;
+    if (used > 1)
+      for (size_t s = 0; s < f.size(); ++s) total += f[s] * len[s];
+  }
+  return total;
+}
+
 // Form 1's value stream: declarations, code lengths and values (see encodeForm1 / decodeForm1).
 // False when a component's form has no form-1 coding.
 bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::vector<Form>& forms, const uint8_t* src,
@@ -654,41 +752,57 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
   std::vector<Form1Domain> dom(comps);
   for (uint32_t cc = 0; cc < comps; ++cc)
     if (!form1Domain(type, forms[cc], &dom[cc])) return false;
-  // The value of component cc of vertex v in its domain: its symbol and raw bits.
-  auto symbolOf = [&](uint32_t cc, uint64_t v, double pred, uint64_t* mag, uint64_t* key_out) {
+  // Pass 1: every value's token, per component in value order.
+  std::vector<std::vector<Form1Token>> tokens(comps);
+  for (auto& t : tokens) t.reserve(scan.vertices);
+  auto tokenize = [&](uint32_t cc, uint64_t v, double pred, double* value) {
     const Form& f = forms[cc];
     const uint64_t key = keyFromRaw(type, src + v * stride + cc * size);
-    *key_out = key;
-    const uint64_t p = domainPrediction(type, f, dom[cc], keyFromPrediction(type, pred));
+    const uint64_t pk = keyFromPrediction(type, pred);
+    const uint64_t p = domainPrediction(type, f, dom[cc], pk);
+    Form1Token t;
     uint64_t k;
     if (!f.table.empty()) {
       k = static_cast<uint64_t>(std::lower_bound(f.table.begin(), f.table.end(), key) - f.table.begin());
     } else if (f.decimals >= 0) {
       int64_t n = 0;
-      if (!decimalInteger(type, key, f.decimals, &n)) return static_cast<uint32_t>(2 * dom[cc].w + 1);  // escape
+      if (!decimalInteger(type, key, f.decimals, &n)) {
+        t.symbol = static_cast<uint16_t>(dom[cc].escapeSymbol());
+        const uint32_t bucket = residualSymbol(key, pk, width, &t.mag);
+        t.escape_symbol = static_cast<uint16_t>(valueSymbol(bucket, t.mag));
+        tokens[cc].push_back(t);
+        *value = doubleFromRaw(type, src + v * stride + cc * size);
+        return;
+      }
       k = static_cast<uint64_t>(n) ^ (uint64_t{1} << 63);
     } else {
       k = key >> dom[cc].shift;
     }
-    return residualSymbol(k, p, dom[cc].w, mag);
-  };
-  // Pass 1: symbol frequencies per component and class.
-  std::vector<std::vector<uint64_t>> freq(size_t{comps} * kForm1Classes);
-  for (uint32_t cc = 0; cc < comps; ++cc)
-    for (int k = 0; k < kForm1Classes; ++k) freq[cc * kForm1Classes + k].assign(dom[cc].symbols(), 0);
-  std::vector<uint32_t> prev(comps, 0);
-  auto count = [&](uint32_t cc, uint64_t v, double pred, double* value) {
-    uint64_t mag, key;
-    const uint32_t s = symbolOf(cc, v, pred, &mag, &key);
-    ++freq[cc * kForm1Classes + form1Class(prev[cc])][s];
-    prev[cc] = s;
+    const uint32_t bucket = residualSymbol(k, p, dom[cc].w, &t.mag);
+    t.symbol = static_cast<uint16_t>(valueSymbol(bucket, t.mag));
+    tokens[cc].push_back(t);
     *value = doubleFromRaw(type, src + v * stride + cc * size);
   };
-  scanValues(scan, comps, forms, d, count, [] { return true; });
-  std::vector<PrefixCode> codes(freq.size());
-  for (size_t x = 0; x < freq.size(); ++x) {
-    codes[x].len = codeLengths(freq[x]);
-    if (std::any_of(codes[x].len.begin(), codes[x].len.end(), [](uint8_t l) { return l != 0; })) codes[x].build(false);
+  scanValues(scan, comps, forms, d, tokenize, [] { return true; });
+  // Per component, the shortest run threshold by measurement (none: no run symbol).
+  std::vector<std::vector<uint32_t>> runs(comps);
+  std::vector<PrefixCode> codes(size_t{comps} * kForm1Classes);
+  for (uint32_t cc = 0; cc < comps; ++cc) {
+    uint64_t best = std::numeric_limits<uint64_t>::max();
+    std::vector<uint32_t> trial;
+    for (uint64_t min_run : {uint64_t{2}, uint64_t{3}, uint64_t{4}, uint64_t{8}, uint64_t{16}, uint64_t{32}, uint64_t{1} << 32}) {
+      markRuns(tokens[cc], min_run, &trial);
+      uint64_t run_bits = 0;
+      const uint64_t bits = form1CodeBits(form1Frequencies(tokens[cc], trial, dom[cc], scan.ni, &run_bits), run_bits);
+      if (bits < best) best = bits, runs[cc] = trial;
+    }
+    uint64_t run_bits = 0;
+    const auto freq = form1Frequencies(tokens[cc], runs[cc], dom[cc], scan.ni, &run_bits);
+    for (int k = 0; k < kForm1Classes; ++k) {
+      PrefixCode& pc = codes[cc * kForm1Classes + k];
+      pc.len = codeLengths(freq[k]);
+      if (std::any_of(pc.len.begin(), pc.len.end(), [](uint8_t l) { return l != 0; })) pc.build(false);
+    }
   }
   // Pass 2: the stream.
   BitWriter w(out);
@@ -714,26 +828,54 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
     }
     for (int k = 0; k < kForm1Classes; ++k) {
       const PrefixCode& pc = codes[cc * kForm1Classes + k];
-      const bool used = std::any_of(pc.len.begin(), pc.len.end(), [](uint8_t l) { return l != 0; });
-      w.put(used, 1);
-      if (used)
-        for (uint8_t l : pc.len) w.put(l, 4);
+      size_t listed = pc.len.size();
+      while (listed > 0 && pc.len[listed - 1] == 0) --listed;
+      w.put(listed > 0, 1);
+      if (listed == 0) continue;
+      w.put(listed, 9);
+      for (size_t s = 0; s < listed;) {
+        w.put(pc.len[s] != 0, 1);
+        if (pc.len[s]) {
+          w.put(pc.len[s++], 4);
+          continue;
+        }
+        size_t unused = 1;  // up to 32 unused symbols in 5 bits
+        while (s + unused < listed && !pc.len[s + unused] && unused < 32) ++unused;
+        w.put(unused - 1, 5);
+        s += unused;
+      }
     }
   }
-  std::fill(prev.begin(), prev.end(), 0);
-  auto write = [&](uint32_t cc, uint64_t v, double pred, double* value) {
-    uint64_t mag, key;
-    const uint32_t s = symbolOf(cc, v, pred, &mag, &key);
-    const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(prev[cc])];
-    prev[cc] = s;
-    if (pc.single < 0) w.put(pc.code[s], pc.len[s]);
-    if (s == 2 * static_cast<uint32_t>(dom[cc].w) + 1) {
-      w.put(key, width);
-    } else if (s > 0) {
-      const int b = static_cast<int>((s + 1) >> 1);
-      w.put(mag, b - 1);  // below the leading one (put masks it off)
-    }
+  std::vector<uint32_t> last(comps, 0);
+  std::vector<uint64_t> skip(comps, 0);
+  auto write = [&](uint32_t cc, uint64_t v, double, double* value) {
     *value = doubleFromRaw(type, src + v * stride + cc * size);
+    if (skip[cc] > 0) {
+      --skip[cc];
+      return;
+    }
+    const uint32_t up = v >= scan.ni ? symbolBits(tokens[cc][v - scan.ni].symbol) : 0;
+    const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(last[cc], up)];
+    if (const uint32_t run = runs[cc][v]) {
+      const int b = bitLength(run);
+      const uint32_t s = dom[cc].runBase() + static_cast<uint32_t>(b - 2);
+      if (pc.single < 0) w.put(pc.code[s], pc.len[s]);
+      w.put(run, b - 1);  // below the leading one
+      skip[cc] = run - 1;
+      last[cc] = kAfterRun;
+      return;
+    }
+    const Form1Token& t = tokens[cc][v];
+    const uint32_t s = t.symbol;
+    if (pc.single < 0) w.put(pc.code[s], pc.len[s]);
+    last[cc] = symbolBits(s);
+    uint32_t raw_symbol = s;
+    if (dom[cc].escape && s == dom[cc].escapeSymbol()) {
+      const PrefixCode& ec = codes[cc * kForm1Classes + kEscapeClass];
+      raw_symbol = t.escape_symbol;
+      if (ec.single < 0) w.put(ec.code[raw_symbol], ec.len[raw_symbol]);
+    }
+    if (raw_symbol >= 3) w.put(t.mag, static_cast<int>((raw_symbol - 3) >> 2));  // below the leading one and the next (put masks them off)
   };
   scanValues(scan, comps, forms, d, write, [] { return true; });
   w.finish();
@@ -745,6 +887,7 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
   BitReader r(in);
   const size_t size = scalarSize(type);
   const int width = scalarBits(type);
+  const uint64_t width_mask = width == 64 ? ~uint64_t{0} : (uint64_t{1} << width) - 1;
   std::vector<Form> forms(comps);
   std::vector<Form1Domain> dom(comps);
   std::vector<PrefixCode> codes(size_t{comps} * kForm1Classes);
@@ -784,57 +927,121 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
     for (int k = 0; k < kForm1Classes; ++k) {
       PrefixCode& pc = codes[cc * kForm1Classes + k];
       if (!r.get(1)) continue;
-      pc.len.resize(dom[cc].symbols());
-      for (uint8_t& l : pc.len) l = static_cast<uint8_t>(r.get(4));
+      const size_t listed = static_cast<size_t>(r.get(9));
+      if (listed == 0 || listed > dom[cc].symbols())
+        return bad(comp + " lists " + std::to_string(listed) + " code lengths in class " + std::to_string(k) + " (1 to " +
+                   std::to_string(dom[cc].symbols()) + ")");
+      pc.len.assign(dom[cc].symbols(), 0);
+      for (size_t s = 0; s < listed;) {
+        if (!r.get(1)) {
+          s += static_cast<size_t>(r.get(5)) + 1;  // unused symbols
+          if (s >= listed) return bad(comp + " lists code lengths in class " + std::to_string(k) + " that end with an unused symbol");
+          continue;
+        }
+        pc.len[s] = static_cast<uint8_t>(r.get(4));
+        if (pc.len[s] == 0) return bad(comp + " gives a used symbol the code length 0 in class " + std::to_string(k));
+        ++s;
+      }
       if (!pc.build(true)) return bad(comp + " declares code lengths that are not a complete prefix code");
     }
     if (r.overrun()) return bad("truncated in its declarations");
   }
-  std::vector<uint32_t> prev(comps, 0);
+  std::vector<uint32_t> last(comps, 0);
+  std::vector<uint64_t> run(comps, 0);  // zero residuals still to come in the current run
+  // Per component, the bit lengths of its last ni residuals (a ring; `at` the oldest).
+  const size_t ni = scan.ni;
+  std::vector<uint8_t> ring(size_t{comps} * ni, 0);
+  std::vector<size_t> at(comps, 0);
   bool corrupt = false;
   auto decodeOne = [&](uint32_t cc, uint64_t v, double pred, double* value) {
     const Form& f = forms[cc];
     const Form1Domain& dm = dom[cc];
-    const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(prev[cc])];
     uint8_t* raw = dst + (v * comps + cc) * size;
-    r.refill();
-    if (pc.len.empty()) [[unlikely]] {
-      corrupt = true;
-      std::memset(raw, 0, size);
-      *value = 0;
-      return;
-    }
-    const uint32_t s = pc.read(r);
-    prev[cc] = s;
-    uint64_t key;
-    if (s == 2 * static_cast<uint32_t>(dm.w) + 1) {
-      key = r.get(width);
+    uint64_t k;
+    uint8_t& up = ring[cc * ni + at[cc]];
+    at[cc] = at[cc] + 1 == ni ? 0 : at[cc] + 1;
+    if (run[cc] > 0) {
+      --run[cc];
+      up = 0;
+      k = domainPrediction(type, f, dm, keyFromPrediction(type, pred));
     } else {
-      const uint64_t p = domainPrediction(type, f, dm, keyFromPrediction(type, pred));
-      uint64_t k = p;
-      if (s > 0) {
-        const int b = static_cast<int>((s + 1) >> 1);
-        const uint64_t mag = (uint64_t{1} << (b - 1)) | (b - 1 <= 40 ? r.take(b - 1) : r.get(b - 1));
-        k = (s & 1) ? p + mag : p - mag;
-        if (dm.w < 64) k &= (uint64_t{1} << dm.w) - 1;
+      const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(last[cc], up)];
+      r.refill();
+      if (pc.len.empty()) [[unlikely]] {
+        corrupt = true;
+        std::memset(raw, 0, size);
+        *value = 0;
+        return;
       }
-      if (!f.table.empty()) {
-        if (k >= f.table.size()) corrupt = true, k = 0;
-        key = f.table[k];
-      } else if (f.decimals >= 0) {
-        decimalValue(type, static_cast<int64_t>(k ^ (uint64_t{1} << 63)), f.decimals, raw);
-        key = keyFromRaw(type, raw);
+      const uint32_t s = pc.read(r);
+      const uint64_t pk = keyFromPrediction(type, pred);
+      k = domainPrediction(type, f, dm, pk);
+      if (s >= dm.runBase()) {
+        const int b = static_cast<int>(s - dm.runBase()) + 2;
+        run[cc] = ((uint64_t{1} << (b - 1)) | r.take(b - 1)) - 1;
+        last[cc] = kAfterRun;
+        up = 0;
       } else {
-        const int z = dm.shift;
-        const bool ones = z > 0 && isFloatType(type) && ((k >> (dm.w - 1)) & 1) == 0;
-        key = (k << z) | (ones ? (uint64_t{1} << z) - 1 : 0);
+        last[cc] = symbolBits(s);
+        up = static_cast<uint8_t>(last[cc]);
+        if (dm.escape && s == dm.escapeSymbol()) {
+          // The value's key as a residual against the prediction's at the full width, its value
+          // symbol in the escape class's code.
+          const PrefixCode& ec = codes[cc * kForm1Classes + kEscapeClass];
+          uint64_t key = pk;
+          r.refill();
+          const uint32_t e = ec.len.empty() ? 0 : ec.read(r);
+          if (ec.len.empty() || e >= 4 * static_cast<uint32_t>(width) - 1) {
+            corrupt = true;
+          } else if (e > 0) {
+            uint64_t mag = 1;
+            bool negative = e == 2;
+            if (e >= 3) {
+              const int below = static_cast<int>((e - 3) >> 2);
+              negative = ((e - 3) >> 1) & 1;
+              mag = (uint64_t{2 | ((e - 3) & 1)} << below) | r.get(below);
+            }
+            key = (negative ? pk - mag : pk + mag) & width_mask;
+          }
+          rawFromKey(type, key, raw);
+          *value = doubleFromRaw(type, raw);
+          return;
+        }
+        if (s > 0) {
+          uint64_t mag = 1;
+          bool negative = s == 2;
+          if (s >= 3) {
+            const uint32_t x = s - 3;
+            const int below = static_cast<int>(x >> 2);  // b − 2 raw bits
+            negative = (x >> 1) & 1;
+            mag = (uint64_t{2 | (x & 1)} << below) | (below <= 40 ? r.take(below) : r.get(below));
+          }
+          k = negative ? k - mag : k + mag;
+          if (dm.w < 64) k &= (uint64_t{1} << dm.w) - 1;
+        }
       }
+    }
+    uint64_t key;
+    if (!f.table.empty()) {
+      if (k >= f.table.size()) corrupt = true, k = 0;
+      key = f.table[k];
+    } else if (f.decimals >= 0) {
+      decimalValue(type, static_cast<int64_t>(k ^ (uint64_t{1} << 63)), f.decimals, raw);
+      key = keyFromRaw(type, raw);
+    } else {
+      const int z = dm.shift;
+      const bool ones = z > 0 && isFloatType(type) && ((k >> (dm.w - 1)) & 1) == 0;
+      key = (k << z) | (ones ? (uint64_t{1} << z) - 1 : 0);
     }
     rawFromKey(type, key, raw);
     *value = doubleFromRaw(type, raw);
   };
   if (!scanValues(scan, comps, forms, d, decodeOne, [&] { return !corrupt && !r.overrun(); }))
     return bad("truncated or corrupt (a value beyond its code or its table, or past the end)");
+  for (uint32_t cc = 0; cc < comps; ++cc)
+    if (run[cc] > 0)
+      return bad("component " + std::to_string(cc) + " has a run of zero residuals " + std::to_string(run[cc]) +
+                 " values longer than its values");
   if (!r.finishedCleanly()) return bad("corrupt, truncated or has trailing bytes");
   return Status::ok();
 }

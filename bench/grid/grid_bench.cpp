@@ -115,8 +115,11 @@ int main(int argc, char** argv) {
           auto back = decodeGridPiece(*piece, schema, s.name);
           best_cpu = std::min(best_cpu, threadSeconds() - c0);
           const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          if (!back.isOk() || back->mesh.tets != mesh.tets) {
-            std::fprintf(stderr, "%s: the decode differs: %s\n", s.name, back.isOk() ? "tetrahedra" : back.status().message().c_str());
+          bool same = back.isOk() && back->mesh.tets == mesh.tets && back->mesh.coords == mesh.coords &&
+                      back->mesh.point_fields.size() == mesh.point_fields.size();
+          for (size_t f = 0; same && f < mesh.point_fields.size(); ++f) same = back->mesh.point_fields[f].bytes == mesh.point_fields[f].bytes;
+          if (!same) {
+            std::fprintf(stderr, "%s: the decode differs: %s\n", s.name, back.isOk() ? "tetrahedra or values" : back.status().message().c_str());
             status = 1;
             break;
           }

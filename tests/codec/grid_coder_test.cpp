@@ -416,6 +416,148 @@ TEST(GridCoder, FormOneDeclinesFormsItCannotCode) {
   EXPECT_EQ(report.stream_forms[1], 0);
 }
 
+// Point fields with long runs of exactly predicted values: `linear` is linear along i, predicted
+// exactly but on the first row (one run from there to the stream's end), `bumps` is linear in i, j
+// and k but for isolated bumps, the last one at node `last_bump` (runs between them, and a run to
+// the stream's end when it is not the last node), `decimal` is n / 1000 but for a few values that
+// are not (form 1's escapes).
+TetMesh runsMesh(const GridLayout& l, uint64_t last_bump) {
+  TetMesh m = meshOf(l, ScalarType::kFloat32);
+  const uint64_t n = m.numPoints();
+  Field linear("linear", 1, ScalarType::kInt32, n), bumps("bumps", 2, ScalarType::kInt32, n),
+      decimal("decimal", 1, ScalarType::kFloat64, n);
+  for (uint64_t v = 0; v < n; ++v) {
+    const uint64_t i = v % l.dims[0], j = (v / l.dims[0]) % l.dims[1], k = v / (uint64_t{l.dims[0]} * l.dims[1]);
+    linear.set<int32_t>(v, 0, static_cast<int32_t>(3 * i) - 7);
+    const bool bump = v == last_bump || (v < last_bump && v % 397 == 5);
+    bumps.set<int32_t>(v, 0, static_cast<int32_t>(2 * (i + 2 * j - 3 * k) + (bump ? 6 : 0)));
+    bumps.set<int32_t>(v, 1, bump ? 3 : 1);
+    decimal.set<double>(v, 0, v % 211 == 7 ? 1.0 / 3.0 + v : std::round(1000.0 * std::sin(0.01 * v)) / 1000.0);
+  }
+  m.point_fields = {linear, bumps, decimal};
+  return m;
+}
+
+TEST(GridCoder, FormOneCodesRunsOfZeroResidualsAsOneSymbol) {
+  const GridLayout l = grid(24, 19, 13, 5);
+  const uint64_t n = l.nodes();
+  for (uint64_t last_bump : {n - 1, n - 2, n - 300, uint64_t{0}}) {
+    SCOPED_TRACE("last bump at node " + std::to_string(last_bump));
+    const TetMesh m = runsMesh(l, last_bump);
+    GridEncodeOptions fast;
+    fast.value_form = 1;
+    GridEncodeReport report;
+    roundTripOnce(l, m, &report, fast);
+    ASSERT_EQ(report.stream_forms.size(), 4u);
+    EXPECT_EQ(report.stream_forms, (std::vector<uint8_t>{1, 1, 1, 1}));
+    EXPECT_EQ(report.forms.back(), "decimal 3");
+    // Runs code `linear` and `bumps` in well under one bit per value (a prefix code alone takes at
+    // least one), and `linear` within a few words of form 0.
+    GridEncodeOptions adaptive;
+    adaptive.value_form = 0;
+    GridEncodeReport slow;
+    roundTripOnce(l, m, &slow, adaptive);
+    EXPECT_LT(report.point_fields[0] * 8, n / 4);
+    EXPECT_LT(report.point_fields[1] * 8, 2 * n / 4);
+    EXPECT_LT(report.point_fields[0], slow.point_fields[0] + 64);
+  }
+}
+
+// The piece's streams: the byte offset and size of each (the header of section 11.1 parsed).
+struct PieceStreams {
+  size_t table = 0;  // where the stream count starts
+  std::vector<uint8_t> forms;
+  std::vector<size_t> offsets, sizes;
+};
+
+uint64_t readVarint(const std::vector<uint8_t>& b, size_t* at) {
+  uint64_t v = 0;
+  for (int shift = 0;; shift += 7) {
+    const uint8_t x = b.at((*at)++);
+    v |= uint64_t{x & 0x7Fu} << shift;
+    if (!(x & 0x80)) return v;
+  }
+}
+
+PieceStreams pieceStreams(const std::vector<uint8_t>& piece) {
+  PieceStreams s;
+  size_t at = 0;
+  for (int x = 0; x < 7; ++x) readVarint(piece, &at);  // block, origin, dims
+  at += 2;                                             // split, flags
+  for (int x = 0; x < 3; ++x) readVarint(piece, &at);  // exceptions, extra points, aliases
+  s.table = at;
+  const uint64_t n = readVarint(piece, &at);
+  for (uint64_t x = 0; x < n; ++x) {
+    s.forms.push_back(piece.at(at++));
+    s.sizes.push_back(readVarint(piece, &at));
+  }
+  for (size_t size : s.sizes) {
+    s.offsets.push_back(at);
+    at += size;
+  }
+  return s;
+}
+
+void putTestVarint(std::vector<uint8_t>& out, uint64_t v) {
+  while (v >= 0x80) out.push_back(static_cast<uint8_t>(v | 0x80)), v >>= 7;
+  out.push_back(static_cast<uint8_t>(v));
+}
+
+// `piece` with stream `index` replaced by `stream` (the stream table rewritten).
+std::vector<uint8_t> withStream(const std::vector<uint8_t>& piece, size_t index, const std::vector<uint8_t>& stream) {
+  const PieceStreams s = pieceStreams(piece);
+  std::vector<uint8_t> out(piece.begin(), piece.begin() + static_cast<std::ptrdiff_t>(s.table));
+  putTestVarint(out, s.sizes.size());
+  for (size_t x = 0; x < s.sizes.size(); ++x) {
+    out.push_back(s.forms[x]);
+    putTestVarint(out, x == index ? stream.size() : s.sizes[x]);
+  }
+  for (size_t x = 0; x < s.sizes.size(); ++x) {
+    if (x == index) {
+      out.insert(out.end(), stream.begin(), stream.end());
+    } else {
+      const auto begin = piece.begin() + static_cast<std::ptrdiff_t>(s.offsets[x]);
+      out.insert(out.end(), begin, begin + static_cast<std::ptrdiff_t>(s.sizes[x]));
+    }
+  }
+  return out;
+}
+
+TEST(GridCoder, FormOneRejectsRunsBeyondTheLastValue) {
+  // `linear` ends in one run over all values after the first row: its stream from a larger grid declares a run longer than
+  // the smaller grid's values, and one from a smaller grid a run that ends before them (the value
+  // after it has no code in the class that follows a run).
+  const GridLayout small = grid(9, 7, 5, 5), large = grid(9, 7, 6, 5), smaller = grid(9, 7, 4, 5);
+  GridEncodeOptions fast;
+  fast.value_form = 1;
+  auto encode = [&](const GridLayout& l) {
+    auto piece = encodeGridPiece(l, runsMesh(l, 0), fast);
+    EXPECT_TRUE(piece.isOk()) << piece.status().message();
+    return piece.isOk() ? *piece : std::vector<uint8_t>{};
+  };
+  const std::vector<uint8_t> piece = encode(small), longer = encode(large), shorter = encode(smaller);
+  ASSERT_FALSE(piece.empty() || longer.empty() || shorter.empty());
+  const GridSchema schema = gridSchemaOf(runsMesh(small, 0));
+  ASSERT_TRUE(decodeGridPiece(piece, schema, "piece").isOk());
+  auto streamOf = [](const std::vector<uint8_t>& p, size_t index) {
+    const PieceStreams s = pieceStreams(p);
+    EXPECT_EQ(s.forms.at(index), 1);
+    return std::vector<uint8_t>(p.begin() + static_cast<std::ptrdiff_t>(s.offsets[index]),
+                                p.begin() + static_cast<std::ptrdiff_t>(s.offsets[index] + s.sizes[index]));
+  };
+  const size_t linear = 3;  // EXCP, GRID, GEOM, then the point fields
+  auto r = decodeGridPiece(withStream(piece, linear, streamOf(longer, linear)), schema, "long run");
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidData);
+  EXPECT_NE(r.status().message().find("long run"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("run of zero residuals"), std::string::npos) << r.status().message();
+  r = decodeGridPiece(withStream(piece, linear, streamOf(shorter, linear)), schema, "short run");
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidData);
+  EXPECT_NE(r.status().message().find("short run"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("PFLD stream 'linear' (form 1)"), std::string::npos) << r.status().message();
+}
+
 // ---- The real PLOT3D datasets ----------------------------------------------------------------------
 
 // The node counts of a single-grid big-endian PLOT3D file without record markers (the datasets').
