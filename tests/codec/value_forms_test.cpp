@@ -137,10 +137,19 @@ TEST(ChooseValueForm, MultiplesOfEightShiftByThree) {
   EXPECT_FALSE(form.exceptions);
   EXPECT_EQ(form.decimals, -1);
   expectRoundTrip(ScalarType::kInt32, raw, form);
-  // One odd value: no shift at all.
+  // One odd value among 300: the shift of 3 stays, with exceptions (a bit per value says which).
   v[100] = 7;
   const std::vector<uint8_t> odd = bytesOf(v);
-  EXPECT_EQ(chooseValueForm(ScalarType::kInt32, odd.data(), v.size(), 4).shift, 0u);
+  const ValueForm with_odd = chooseValueForm(ScalarType::kInt32, odd.data(), v.size(), 4);
+  EXPECT_EQ(with_odd.shift, 3u);
+  EXPECT_TRUE(with_odd.exceptions);
+  expectRoundTrip(ScalarType::kInt32, odd, with_odd);
+  // Below 64 values the exceptions do not pay: no shift.
+  const std::vector<uint8_t> few(odd.begin(), odd.begin() + 4 * 40);
+  std::vector<uint8_t> few_odd = few;
+  const int32_t seven = 7;
+  std::memcpy(&few_odd[4 * 5], &seven, 4);
+  EXPECT_EQ(chooseValueForm(ScalarType::kInt32, few_odd.data(), 40, 4).shift, 0u);
 }
 
 TEST(ChooseValueForm, MostlyFloat32SumsTakeAShiftWithExceptions) {
@@ -187,7 +196,7 @@ TEST(ChooseValueForm, AStrideReadsOneComponent) {
 TEST(ChooseValueForm, OneValueHasOnlyItsShift) {
   const float one = 2.0f;
   const ValueForm form = chooseValueForm(ScalarType::kFloat32, reinterpret_cast<const uint8_t*>(&one), 1, 4);
-  EXPECT_EQ(form.shift, 23u);  // 2.0f is 0x40000000
+  EXPECT_EQ(form.shift, 30u);  // 2.0f is 0x40000000
   EXPECT_EQ(form.decimals, -1);
 }
 
