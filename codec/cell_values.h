@@ -18,6 +18,7 @@
 #include "codec/symbols.h"
 #include "codec/value_coder.h"
 #include "mesh/index.h"
+#include "mesh/mesh_stream.h"
 #include "mesh/status.h"
 #include "mesh/tet_mesh.h"
 
