@@ -82,6 +82,7 @@ class ApexCandidates {
       if (n < kMaxGather) {
         gather_mark_[s] = tag | static_cast<uint32_t>(n);
         c[n++] = {s, 1};
+        __builtin_prefetch(P(s));  // read when the candidate is evaluated
       }
     };
     for (int j = 0; j < 3; ++j) {

@@ -252,6 +252,18 @@ class FaceMap {
     return -1;
   }
   const FrontFace& at(long i) const { return pool_[static_cast<size_t>(i)]; }
+  // Whether record i is the open face with sorted key k, which is then what find(k) returns (at most
+  // one open face has a key): one record read, no walk along the chain, where a face inserted
+  // earlier lies behind the later ones.
+  bool holds(uint32_t i, const uint32_t k[3]) const {
+    if (i >= pool_.size()) return false;
+    const FrontFace& f = pool_[i];
+    return f.v[0] != kEmptyFace && f.key12[0] == k[1] && f.key12[1] == k[2] && smallest(f) == k[0];
+  }
+  // Starts loading record i.
+  void prefetchAt(uint32_t i) const {
+    if (i < pool_.size()) __builtin_prefetch(&pool_[i]);
+  }
   // Inserts a face whose key is absent; returns its index.
   long insert(const FrontFace& f) {
     uint32_t i;
@@ -313,6 +325,12 @@ class RingQueue {
   bool empty() const { return size_ == 0; }
   size_t size() const { return size_; }
   const T& front() const { return buf_[head_]; }
+  // The k-th entry from the front (k < size()).
+  const T& at(size_t k) const {
+    size_t i = head_ + k;
+    if (i >= buf_.size()) i -= buf_.size();
+    return buf_[i];
+  }
   void pop_front() {
     if (++head_ == buf_.size()) head_ = 0;
     --size_;

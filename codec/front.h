@@ -32,6 +32,7 @@ class Front {
     if (d != kNoIndex) pool.pin(d);
     QueuedFace q;
     FaceMap::sortedKey(v, q.key);
+    q.face = face;
     queue_.push_back(q);
     return face;
   }
@@ -75,33 +76,39 @@ class Front {
     while (!queue_.empty()) {
       const QueuedFace q = queue_.front();
       queue_.pop_front();
-      const long idx = faces.find(q.key);
+      const long idx = gateOf(q);
       if (idx >= 0) return idx;
     }
     return -1;
   }
   // The face of the next queue entry if it is still open, else -1 (nothing is popped).
-  long peekGate() const { return queue_.empty() ? -1 : faces.find(queue_.front().key); }
+  long peekGate() const { return queue_.empty() ? -1 : gateOf(queue_.front()); }
 
   // Starts loading the front data of the likely next gate face (and the positions of its vertices
-  // in `pool`) while this one is coded.
+  // in `pool`) while this one is coded: the record of the face opened with the next queue entry,
+  // the head of the chain that finds it otherwise, its vertices' edge buckets and positions.
   void prefetchNext(const SlotPool& pool) const {
     if (queue_.empty()) return;
-    const uint32_t* key = queue_.front().key;
-    faces.prefetch(key);
+    const QueuedFace& q = queue_.front();
+    faces.prefetchAt(q.face);
+    faces.prefetch(q.key);
     for (int i = 0; i < 3; ++i) {
-      edges.prefetch(key[i]);
-      if (key[i] < pool.size()) __builtin_prefetch(pool.position(key[i]));
+      edges.prefetch(q.key[i]);
+      if (q.key[i] < pool.size()) __builtin_prefetch(pool.position(q.key[i]));
     }
   }
 
  private:
   // The sorted key of a face when it was opened: the face is found again by its key (at most one
   // open face has it), which is also how a face opened later on the same vertices is taken at this
-  // entry. 12 bytes: the queue keeps the entries of faces closed since (23332 at once on blunt fin).
+  // entry. 16 bytes: the queue keeps the entries of faces closed since (23332 at once on blunt fin).
   struct QueuedFace {
     uint32_t key[3];
+    uint32_t face;  // the index of the face opened with the entry: found again without a search
   };
+  // The entry's face: the one opened with it if it is still open, else find's answer.
+  long gateOf(const QueuedFace& q) const { return faces.holds(q.face, q.key) ? q.face : faces.find(q.key); }
+
   RingQueue<QueuedFace> queue_;
 };
 

@@ -83,5 +83,28 @@ TEST(Front, ARetiredVertexKeepsItsSlotWhileAFacePredictsFromIt) {
   EXPECT_EQ(front.nextGate(), -1);
 }
 
+
+TEST(Front, AQueueEntryTakesAFaceReopenedOnItsVerticesNotTheRecordItHad) {
+  SlotPool pool;
+  for (int i = 0; i < 8; ++i) pool.alloc();
+  Front front;
+  const uint32_t f[3] = {0, 2, 1}, other[3] = {5, 6, 7}, again[3] = {1, 0, 2};
+  const long a = front.open(f, 3, kNoIndex, pool);
+  const uint32_t e[4] = {0, 1, 2, 4};
+  const long closes[4] = {-1, -1, -1, a};
+  front.close(a, 3, e, closes, pool);
+  const long b = front.open(other, kNoIndex, kNoIndex, pool);
+  EXPECT_EQ(b, a);  // the freed record is taken first
+  const long c = front.open(again, 4, kNoIndex, pool);  // the same vertices, reopened
+  EXPECT_NE(c, a);
+  // The first entry (opened with record a, now another face's) takes the reopened face; so does the
+  // third, whose own face it is, once more; the second is b's.
+  EXPECT_EQ(front.peekGate(), c);
+  EXPECT_EQ(front.nextGate(), c);
+  EXPECT_EQ(front.nextGate(), b);
+  EXPECT_EQ(front.nextGate(), c);
+  EXPECT_EQ(front.nextGate(), -1);
+}
+
 }  // namespace
 }  // namespace gtn::level
