@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "mesh/index.h"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -62,20 +64,22 @@ class ChunkedArray {
   size_t size_ = 0;
 };
 
+// The 64-bit key of the directed edge (a, b): a in the high half.
+inline uint64_t edgeKey(uint32_t a, uint32_t b) { return (uint64_t{a} << 32) | b; }
+
 // Map from a directed edge (a, b) of slots (never ~0) to a 32-bit value, stored with a. Slot a's
 // entries sit in its bucket, one cache line, chained to overflow buckets when it holds more; keys
 // and values in separate arrays, so that a lookup compares all of a bucket's keys at once, without
-// a data-dependent branch per entry. A bucket's key lanes past its entries hold kNil, which no key
+// a data-dependent branch per entry. A bucket's key lanes past its entries hold kNoIndex, which no key
 // equals, so that a lookup needs no count. Removing an entry moves the slot's last entry into its
 // place.
 class EdgeMap {
-  static constexpr uint32_t kNil = 0xFFFFFFFFu;
   static constexpr uint32_t kCap = 7;
   struct alignas(64) Bucket {
-    uint32_t key[kCap] = {kNil, kNil, kNil, kNil, kNil, kNil, kNil};
+    uint32_t key[kCap] = {kNoIndex, kNoIndex, kNoIndex, kNoIndex, kNoIndex, kNoIndex, kNoIndex};
     uint32_t value[kCap] = {};
     uint32_t n = 0;
-    uint32_t next = kNil;
+    uint32_t next = kNoIndex;
   };
   static_assert(sizeof(Bucket) == 64);
 
@@ -106,13 +110,13 @@ class EdgeMap {
   [[gnu::always_inline]] void put(uint32_t a, uint32_t b, uint32_t value) {
     if (a >= head_.size()) head_.grow(size_t{a} + 1);
     Bucket* k = &head_[a];
-    uint32_t ref = kNil;  // k's index in extra_, kNil for the head bucket
+    uint32_t ref = kNoIndex;  // k's index in extra_, kNoIndex for the head bucket
     while (true) {
       if (const uint32_t m = lanes(*k, b)) {
         k->value[__builtin_ctz(m)] = value;
         return;
       }
-      if (k->next == kNil) break;
+      if (k->next == kNoIndex) break;
       ref = k->next;
       k = &extra_[ref];
     }
@@ -130,7 +134,7 @@ class EdgeMap {
     Bucket* k = head;
     uint32_t m;
     while (!(m = lanes(*k, b))) {
-      if (k->next == kNil) return;
+      if (k->next == kNoIndex) return;
       k = &extra_[k->next];
     }
     const uint32_t i = __builtin_ctz(m);
@@ -139,8 +143,8 @@ class EdgeMap {
     // The slot's last entry fills the hole.
     Bucket* prev = nullptr;
     Bucket* last = head;
-    uint32_t last_ref = kNil;
-    while (last->next != kNil) {
+    uint32_t last_ref = kNoIndex;
+    while (last->next != kNoIndex) {
       prev = last;
       last_ref = last->next;
       last = &extra_[last_ref];
@@ -148,9 +152,9 @@ class EdgeMap {
     const uint32_t l = --last->n;
     k->key[i] = last->key[l];
     k->value[i] = last->value[l];
-    last->key[l] = kNil;
+    last->key[l] = kNoIndex;
     if (last->n == 0 && prev) {
-      prev->next = kNil;
+      prev->next = kNoIndex;
       free_.push_back(last_ref);
     }
   }
@@ -178,12 +182,12 @@ class EdgeMap {
   uint32_t findIn(const Bucket* k, uint32_t b, uint32_t none) const {
     while (true) {
       if (const uint32_t m = lanes(*k, b)) return k->value[__builtin_ctz(m)];
-      if (k->next == kNil) return none;
+      if (k->next == kNoIndex) return none;
       k = &extra_[k->next];
     }
   }
   // A new empty bucket chained after slot a's full last bucket (extra_[ref], or its head bucket for
-  // kNil).
+  // kNoIndex).
   [[gnu::noinline]] Bucket* chainBucket(uint32_t a, uint32_t ref) {
     uint32_t fresh;
     if (!free_.empty()) {
@@ -193,9 +197,9 @@ class EdgeMap {
       fresh = static_cast<uint32_t>(extra_.size());
       extra_.grow(size_t{fresh} + 1);
     }
-    (ref == kNil ? head_[a] : extra_[ref]).next = fresh;
+    (ref == kNoIndex ? head_[a] : extra_[ref]).next = fresh;
     Bucket* k = &extra_[fresh];
-    k->next = kNil;
+    k->next = kNoIndex;
     return k;
   }
 
@@ -227,7 +231,7 @@ struct FrontFace {
 // is 32 bytes: the key's smallest slot is the chain's, and the encoder keeps its own data apart.
 class FaceMap {
  public:
-  static constexpr uint32_t kEmptyFace = 0xFFFFFFFFu;
+  static constexpr uint32_t kEmptyFace = kNoIndex;
 
   static void sortedKey(const uint32_t v[3], uint32_t k[3]) {
     uint32_t a = v[0], b = v[1], c = v[2];
@@ -241,17 +245,29 @@ class FaceMap {
   // Index of the face with sorted key `k`, or -1.
   long find(const uint32_t k[3]) const {
     if (k[0] >= head_.size()) return -1;
-    for (uint32_t i = head_[k[0]]; i != kNil; i = pool_[i].next) {
+    for (uint32_t i = head_[k[0]]; i != kNoIndex; i = pool_[i].next) {
       const FrontFace& f = pool_[i];
       if (f.key12[0] == k[1] && f.key12[1] == k[2]) return i;
     }
     return -1;
   }
   const FrontFace& at(long i) const { return pool_[static_cast<size_t>(i)]; }
+  // Whether record i is the open face with sorted key k, which is then what find(k) returns (at most
+  // one open face has a key): one record read, no walk along the chain, where a face inserted
+  // earlier lies behind the later ones.
+  bool holds(uint32_t i, const uint32_t k[3]) const {
+    if (i >= pool_.size()) return false;
+    const FrontFace& f = pool_[i];
+    return f.v[0] != kEmptyFace && f.key12[0] == k[1] && f.key12[1] == k[2] && smallest(f) == k[0];
+  }
+  // Starts loading record i.
+  void prefetchAt(uint32_t i) const {
+    if (i < pool_.size()) __builtin_prefetch(&pool_[i]);
+  }
   // Inserts a face whose key is absent; returns its index.
   long insert(const FrontFace& f) {
     uint32_t i;
-    if (free_ != kNil) {
+    if (free_ != kNoIndex) {
       i = free_;
       free_ = pool_[i].next;
       pool_[i] = f;
@@ -266,7 +282,7 @@ class FaceMap {
     FrontFace& g = pool_[i];
     g.key12[0] = k[1];
     g.key12[1] = k[2];
-    if (k[0] >= head_.size()) head_.resize(size_t{k[0]} + 1, kNil);
+    if (k[0] >= head_.size()) head_.resize(size_t{k[0]} + 1, kNoIndex);
     g.next = head_[k[0]];
     head_[k[0]] = i;
     ++size_;
@@ -291,13 +307,12 @@ class FaceMap {
   }
 
  private:
-  static constexpr uint32_t kNil = 0xFFFFFFFFu;
 
   static uint32_t smallest(const FrontFace& f) { return std::min(f.v[0], std::min(f.v[1], f.v[2])); }
 
-  std::vector<uint32_t> head_;  // [smallest slot] -> first face of its chain, or kNil
+  std::vector<uint32_t> head_;  // [smallest slot] -> first face of its chain, or kNoIndex
   std::vector<FrontFace> pool_;
-  uint32_t free_ = kNil;  // the last freed record, whose `next` is the one freed before, and so on
+  uint32_t free_ = kNoIndex;  // the last freed record, whose `next` is the one freed before, and so on
   size_t size_ = 0;
 };
 
@@ -310,6 +325,12 @@ class RingQueue {
   bool empty() const { return size_ == 0; }
   size_t size() const { return size_; }
   const T& front() const { return buf_[head_]; }
+  // The k-th entry from the front (k < size()).
+  const T& at(size_t k) const {
+    size_t i = head_ + k;
+    if (i >= buf_.size()) i -= buf_.size();
+    return buf_[i];
+  }
   void pop_front() {
     if (++head_ == buf_.size()) head_ = 0;
     --size_;

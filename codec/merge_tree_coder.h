@@ -54,12 +54,13 @@
 #include <string>
 #include <vector>
 
+#include "mesh/index.h"
 #include "mesh/status.h"
 
 namespace gtn {
 
 struct MergeTree {
-  static constexpr uint32_t kRoot = 0xFFFFFFFFu;
+  static constexpr uint32_t kRoot = kNoIndex;
   std::vector<uint32_t> parent;   // per vertex: the vertex it merges into, or kRoot
   std::vector<uint32_t> rank;     // per vertex: 1..M for merged vertices, 0 for roots
   std::vector<uint32_t> removed;  // per vertex: tetrahedra its merge removes (0 for roots)

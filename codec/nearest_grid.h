@@ -16,11 +16,12 @@
 #include <utility>
 #include <vector>
 
+#include "mesh/index.h"
+
 namespace gtn {
 
 class NearestGrid {
  public:
-  static constexpr uint32_t kNone = 0xFFFFFFFFu;
   // A point's key: ordered by k, then by d (then by slot).
   struct Key {
     double k, d;
@@ -44,7 +45,7 @@ class NearestGrid {
       h_[i] = e > 0 && std::isfinite(e) ? e / n_ : 1.0;
       if (!(h_[i] > 0)) h_[i] = 1.0;  // an extent so small that its cells underflow
     }
-    head_.assign(static_cast<size_t>(n_) * n_ * n_ + 1, kNone);  // the last: non-finite points
+    head_.assign(static_cast<size_t>(n_) * n_ * n_ + 1, kNoIndex);  // the last: non-finite points
   }
 
   // Room for slots below n without reallocating (insert grows by doubling otherwise).
@@ -55,29 +56,29 @@ class NearestGrid {
   }
   void insert(uint32_t s, const double* q) {
     if (s >= cell_.size()) {
-      cell_.resize(s + 1, kNone);
-      next_.resize(s + 1, kNone);
-      prev_.resize(s + 1, kNone);
+      cell_.resize(s + 1, kNoIndex);
+      next_.resize(s + 1, kNoIndex);
+      prev_.resize(s + 1, kNoIndex);
     }
     const uint32_t c = cellOf(q);
     cell_[s] = c;
-    prev_[s] = kNone;
+    prev_[s] = kNoIndex;
     next_[s] = head_[c];
-    if (head_[c] != kNone) prev_[head_[c]] = s;
+    if (head_[c] != kNoIndex) prev_[head_[c]] = s;
     head_[c] = s;
     ++count_;
   }
 
   void erase(uint32_t s) {
-    if (s >= cell_.size() || cell_[s] == kNone) return;
-    if (prev_[s] != kNone) next_[prev_[s]] = next_[s];
+    if (s >= cell_.size() || cell_[s] == kNoIndex) return;
+    if (prev_[s] != kNoIndex) next_[prev_[s]] = next_[s];
     else head_[cell_[s]] = next_[s];
-    if (next_[s] != kNone) prev_[next_[s]] = prev_[s];
-    cell_[s] = kNone;
+    if (next_[s] != kNoIndex) prev_[next_[s]] = prev_[s];
+    cell_[s] = kNoIndex;
     --count_;
   }
 
-  // The point of rank r (0 = first) in (dist(s), s) order among those with ok(s), or kNone when
+  // The point of rank r (0 = first) in (dist(s), s) order among those with ok(s), or kNoIndex when
   // fewer qualify. `all(fn)` calls fn(s) for every point (the fallback scan).
   template <class Dist, class Ok, class All>
   uint32_t kth(const double p[3], uint64_t r, Dist dist, Ok ok, All all) {
@@ -116,7 +117,7 @@ class NearestGrid {
       buf_.clear();
       all(each);
     }
-    return buf_.size() > r ? buf_.front().slot : kNone;
+    return buf_.size() > r ? buf_.front().slot : kNoIndex;
   }
   template <class KeyOf, class Bound, class Ok, class All>
   uint64_t rankOfBy(const double centre[3], Key kx, uint32_t x, KeyOf key, Bound bound, Ok ok, All all) {
@@ -159,7 +160,7 @@ class NearestGrid {
   template <class Each, class Stop>
   bool visit(const double p[3], Each each, Stop stop) {
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return false;
-    for (uint32_t s = head_.back(); s != kNone; s = next_[s]) each(s);
+    for (uint32_t s = head_.back(); s != kNoIndex; s = next_[s]) each(s);
     int c[3];
     for (int i = 0; i < 3; ++i) c[i] = static_cast<int>(cellIndex(i, p[i]));
     const uint64_t max_cells = 4 * count_ + 64;
@@ -176,7 +177,7 @@ class NearestGrid {
               continue;
             }
             ++cells;
-            for (uint32_t s = head_[(static_cast<uint32_t>(z) * n_ + y) * n_ + x]; s != kNone; s = next_[s]) each(s);
+            for (uint32_t s = head_[(static_cast<uint32_t>(z) * n_ + y) * n_ + x]; s != kNoIndex; s = next_[s]) each(s);
           }
         }
       }

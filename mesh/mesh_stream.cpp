@@ -4,6 +4,28 @@
 
 namespace gtn {
 
+namespace {
+
+// Appends one item of a field (n bytes, usually one 4- or 8-byte value): copies of a constant size
+// compile to a single move, where vector::insert calls memmove for every item.
+inline void appendBytes(std::vector<uint8_t>& bytes, const uint8_t* p, size_t n) {
+  const size_t at = bytes.size();
+  bytes.resize(at + n);
+  uint8_t* out = bytes.data() + at;
+  switch (n) {
+    case 4:
+      std::memcpy(out, p, 4);
+      break;
+    case 8:
+      std::memcpy(out, p, 8);
+      break;
+    default:
+      std::memcpy(out, p, n);
+  }
+}
+
+}  // namespace
+
 Status TetMeshBuilder::beginLevel(const LevelHeader& header) {
   header_ = header;
   mesh_ = TetMesh();
@@ -16,9 +38,11 @@ Status TetMeshBuilder::beginLevel(const LevelHeader& header) {
   mesh_.tets.reserve(std::min<uint64_t>(header.tets, kReserveCap));
   for (const FieldDesc& d : header.point_fields) {
     mesh_.point_fields.emplace_back(d.name, d.components, d.type, 0);
+    mesh_.point_fields.back().bytes.reserve(d.itemBytes() * std::min<uint64_t>(header.points, kReserveCap));
   }
   for (const FieldDesc& d : header.cell_fields) {
     mesh_.cell_fields.emplace_back(d.name, d.components, d.type, 0);
+    mesh_.cell_fields.back().bytes.reserve(d.itemBytes() * std::min<uint64_t>(header.tets, kReserveCap));
   }
   return Status::ok();
 }
@@ -28,7 +52,7 @@ Status TetMeshBuilder::vertex(uint32_t id, const double xyz[3], const uint8_t* v
   mesh_.coords.insert(mesh_.coords.end(), xyz, xyz + 3);
   for (Field& f : mesh_.point_fields) {
     const size_t n = f.components * f.valueSize();
-    f.bytes.insert(f.bytes.end(), values, values + n);
+    appendBytes(f.bytes, values, n);
     values += n;
   }
   return Status::ok();
@@ -43,7 +67,7 @@ Status TetMeshBuilder::tet(const uint32_t v[4], const uint8_t* cell_values) {
   mesh_.tets.push_back({v[0], v[1], v[2], v[3]});
   for (Field& f : mesh_.cell_fields) {
     const size_t n = f.components * f.valueSize();
-    f.bytes.insert(f.bytes.end(), cell_values, cell_values + n);
+    appendBytes(f.bytes, cell_values, n);
     cell_values += n;
   }
   return Status::ok();

@@ -83,7 +83,7 @@ void runScenario(uint32_t seed, bool clustered) {
     std::sort(order.begin(), order.end());
     const uint64_t r = rng() % (order.size() + 3);
     const uint32_t got = grid.kth(p, r, d, ok, all);
-    ASSERT_EQ(got, r < order.size() ? order[r].second : NearestGrid::kNone) << "seed " << seed << " step " << step << " rank " << r;
+    ASSERT_EQ(got, r < order.size() ? order[r].second : kNoIndex) << "seed " << seed << " step " << step << " rank " << r;
     if (!order.empty()) {
       const size_t i = rng() % order.size();
       ASSERT_EQ(grid.rankOf(p, order[i].first, order[i].second, d, ok, all), i) << "seed " << seed << " step " << step;
@@ -130,7 +130,7 @@ TEST(NearestGrid, KeyedRanksEqualAScanOfEveryPoint) {
     std::sort(order.begin(), order.end());
     const uint64_t r = query % 4 == 0 ? rng() % order.size() : rng() % 4;
     ASSERT_EQ(grid.kthBy(c, r, key, bound, ok, all), order[r].second) << "query " << query << " rank " << r;
-    ASSERT_EQ(grid.kthBy(c, order.size(), key, bound, ok, all), NearestGrid::kNone);
+    ASSERT_EQ(grid.kthBy(c, order.size(), key, bound, ok, all), kNoIndex);
     const size_t i = rng() % order.size();
     ASSERT_EQ(grid.rankOfBy(c, key(order[i].second), order[i].second, key, bound, ok, all), i) << "query " << query;
   }
@@ -186,7 +186,7 @@ TEST(NearestGrid, BoxTooSmallForItsCells) {
     for (uint32_t s = 0; s < 6; ++s) fn(s);
   };
   for (uint32_t r = 0; r < 6; ++r) EXPECT_EQ(grid.kth(p, r, d, ok, all), r);  // equal distances: by slot
-  EXPECT_EQ(grid.kth(p, 6, d, ok, all), NearestGrid::kNone);
+  EXPECT_EQ(grid.kth(p, 6, d, ok, all), kNoIndex);
 }
 
 TEST(NearestGrid, BoxNearTheDoubleRange) {
