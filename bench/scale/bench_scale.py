@@ -77,7 +77,9 @@ def main():
             xyz, q = os.path.join(grid, "sample.xyz"), os.path.join(grid, "sample.q")
             files = []
             for t in thread_counts:
-                out = os.path.join(work, "grid%d-t%d.gtn" % (n, t))
+                # One name in a directory per thread count: the file records its name.
+                os.makedirs(os.path.join(work, "t%d" % t), exist_ok=True)
+                out = os.path.join(work, "t%d" % t, "grid%d.gtn" % n)
                 print("bench-scale: %d^3 nodes: convert, %d thread(s)" % (n, t), file=sys.stderr)
                 cw, cc, cm, _ = run([gtn, "convert", xyz, q, "-o", out, "-q", "--threads", str(t)])
                 print("bench-scale: %d^3 nodes: decode, %d thread(s)" % (n, t), file=sys.stderr)
@@ -97,6 +99,7 @@ def main():
                     r["same_bytes_all_threads"] = same
             for f in files:
                 os.remove(f)
+                os.rmdir(os.path.dirname(f))
             shutil.rmtree(grid)
     finally:
         if not a.work:
