@@ -27,6 +27,7 @@ Command addExportCommand(CLI::App& app);
 Command addValidateCommand(CLI::App& app);
 Command addRenderCommand(CLI::App& app);
 Command addCompareCommand(CLI::App& app);
+Command addDecodeCommand(CLI::App& app);
 
 // An option's number: finite and at least 0 (`positive`: above 0), with a short message otherwise
 // (CLI11's NonNegativeNumber prints the largest double as its bound).
@@ -71,7 +72,8 @@ std::string jsonText(const nlohmann::json& j, int indent = 2);
 const std::string& commandLine();
 void setCommandLine(int argc, char** argv);
 // The command line for provenance (.gtn headers): the program and each argument that is one of
-// `paths` (or an option's value that is) reduced to its file name, without directories.
+// `paths` (or an option's value that is) reduced to its file name, without directories; --threads N
+// is left out (a file's bytes do not depend on the thread count).
 std::string commandLineWithFileNames(const std::vector<std::string>& paths);
 
 }  // namespace gtn::cli

@@ -1,4 +1,4 @@
-// gtn: convert, inspect, validate, export and render irregular-grid volume data.
+// gtn: convert, inspect, validate, export, decode and render irregular-grid volume data.
 #include <algorithm>
 #include <cstdio>
 #include <vector>
@@ -9,6 +9,7 @@
 
 #include "cli/commands.h"
 #include "cli/progress_line.h"
+#include "cli/threads.h"
 
 namespace gtn::cli {
 
@@ -92,6 +93,11 @@ std::string commandLineWithFileNames(const std::vector<std::string>& paths) {
   std::string out;
   for (size_t i = 0; i < g_arguments.size(); ++i) {
     const std::string& arg = g_arguments[i];
+    // --threads changes how fast, not what: left out, so that a file is the same whatever it was.
+    if (i > 0 && arg.rfind("--threads", 0) == 0) {
+      if (arg == "--threads") ++i;  // and its value
+      if (arg == "--threads" || arg[9] == '=') continue;
+    }
     std::string shown = arg;
     if (i == 0 || isPath(arg)) {
       shown = fileName(arg);
@@ -138,13 +144,19 @@ int main(int argc, char** argv) {
   commands.push_back(addValidateCommand(app));
   commands.push_back(addRenderCommand(app));
   commands.push_back(addCompareCommand(app));
+  commands.push_back(addDecodeCommand(app));
+  std::vector<ThreadLimit> threads(commands.size());  // sized once: each option holds its element's address
+  for (size_t i = 0; i < commands.size(); ++i) threads[i].addOption(commands[i].app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int rc = app.exit(e);
     return rc == 0 ? 0 : 2;
   }
-  for (Command& c : commands)
-    if (c.app->parsed()) return c.run();
+  for (size_t i = 0; i < commands.size(); ++i) {
+    if (!commands[i].app->parsed()) continue;
+    threads[i].apply();
+    return commands[i].run();
+  }
   return 2;
 }
