@@ -49,8 +49,9 @@ struct GtnWriteOptions {
 // GHDR, per level LHDR BNDY CONN GEOM PFLD... CFLD... [MTRE], then [DIRC] and GEND. All levels must
 // share level 0's coordinate type and field descriptions. Deterministic: the same meshes and options
 // give the same bytes. Fails with kUsage for an empty level list or a null mesh. With
-// options.level_storage_limit set, every level is encoded before the first byte is written, so that
-// the bound can be applied to the exact bytes.
+// options.level_storage_limit set, the levels are encoded, finest first, before the first byte is
+// written, so that the bound can be applied to the exact bytes; the encoding stops at the first level
+// beyond the bound (the coarser ones are neither encoded nor verified).
 Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels,
                     const GtnWriteOptions& options);
 

@@ -1,6 +1,10 @@
 // Ranking, in-memory application, on-the-fly simplification and mip levels on synthetic meshes.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
+#include "format/gtn_reader.h"
+
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
 #include "simplify_test_util.h"
@@ -293,6 +297,33 @@ TEST(Levels, EachLevelIsThePrefixAndRefinesFurther) {
   EXPECT_EQ(inputs[0].mesh, &g.mesh);
   EXPECT_DOUBLE_EQ(inputs[1].ratio, 0.5 * 0 + double(two->merges[1]) / double(points));
   EXPECT_FALSE(inputs[1].merge_tree);
+}
+
+TEST(Levels, ABoundedWriteEncodesNoLevelBeyondTheBound) {
+  const Ranked& g = grid();
+  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{-1, 32, true});
+  ASSERT_TRUE(levels.isOk()) << levels.status().message();
+  ASSERT_GE(levels->merges.size(), 4u);
+  const std::string path = ::testing::TempDir() + "/bounded_levels.gtn";
+  for (const double bound : {1.01, 1.6}) {
+    SCOPED_TRACE("bound " + std::to_string(bound));
+    std::vector<std::string> stages;
+    GtnWriteOptions wo;
+    wo.level_storage_limit = bound;
+    wo.progress = [&](const std::string& stage, double) { stages.push_back(stage); };
+    ASSERT_TRUE(writeGtnFile(path, levels->inputs(g.mesh), wo).isOk());
+    auto r = GtnReader::open(path);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const size_t kept = (*r)->levels();
+    ASSERT_LT(kept, levels->merges.size());
+    // The kept levels and the first one past the bound are encoded (its bytes decide); no coarser one.
+    std::vector<std::string> want;
+    for (size_t i = 0; i <= kept; ++i)
+      want.push_back("encode and verify level " + std::to_string(i) + " (" +
+                     std::to_string(levels->merges.size()) + " levels)");
+    EXPECT_EQ(stages, want);
+  }
+  std::filesystem::remove(path);
 }
 
 }  // namespace
