@@ -272,6 +272,16 @@ TEST(Levels, EachLevelIsThePrefixAndRefinesFurther) {
     ASSERT_TRUE(want.isOk());
     EXPECT_EQ(lm.coords, want->coords);
     EXPECT_EQ(lm.tets, want->tets);
+    // Each level is made from the one above it: its tree is the one the source's gives.
+    std::vector<uint32_t> index;
+    ASSERT_TRUE(applyMerges(g.mesh, g.tree, levels->merges[i], &index).isOk());
+    const MergeTree rest = remainingTree(g.tree, levels->merges[i], index);
+    EXPECT_EQ(lt.parent, rest.parent);
+    EXPECT_EQ(lt.rank, rest.rank);
+    EXPECT_EQ(lt.removed, rest.removed);
+    EXPECT_EQ(lt.boundary, rest.boundary);
+    EXPECT_EQ(lt.error, rest.error);
+    EXPECT_EQ(lt.error_quantiles, rest.error_quantiles);
     // Applying m more merges of the level's own tree equals applying N_i + m to the source.
     for (uint64_t m : {uint64_t{1}, lt.merges / 2, lt.merges}) {
       auto a = applyMerges(lm, lt, m);
