@@ -53,9 +53,9 @@
 // and every mip level and simplified mesh leaves them out (level 0 alone keeps them). Ratios and level
 // targets count the other merges against the referenced vertices (simplify/levels.h).
 //
-// Candidates are kept per vertex (its best target) in a priority queue with lazy deletion (version
-// stamps); after a merge v -> w the candidates of w and of v's former neighbours are recomputed, and
-// each popped candidate is checked exactly before it is applied.
+// Candidates are kept per vertex (its best target) in an indexed priority queue ordered by (error, v,
+// w), one entry per vertex, replaced in place; after a merge v -> w the candidates of w and of v's
+// former neighbours are recomputed, and each popped candidate is checked exactly before it is applied.
 #pragma once
 
 #include <cstdint>

@@ -3,6 +3,8 @@
 
 #include <filesystem>
 
+#include <tbb/global_control.h>
+
 #include "format/gtn_reader.h"
 
 #include "simplify/levels.h"
@@ -108,6 +110,24 @@ TEST(Ranking, IsDeterministic) {
   ASSERT_TRUE(a.isOk() && b.isOk());
   EXPECT_EQ(a->parent, b->parent);
   EXPECT_EQ(a->rank, b->rank);
+}
+
+TEST(Ranking, TheTreeIsTheSameForAnyThreadCount) {
+  // The evaluations around a merge run in parallel; their results are queued in the list's order.
+  const TetMesh mesh = makeGrid(7, 6, 5);
+  std::vector<MergeTree> trees;
+  for (const size_t threads : {1, 2, 3}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    auto t = rankMerges(mesh, RankingOptions{}, nullptr);
+    ASSERT_TRUE(t.isOk()) << t.status().message();
+    trees.push_back(std::move(t).value());
+  }
+  for (size_t i = 1; i < trees.size(); ++i) {
+    EXPECT_EQ(trees[i].merges, trees[0].merges);
+    EXPECT_EQ(trees[i].parent, trees[0].parent);
+    EXPECT_EQ(trees[i].rank, trees[0].rank);
+    EXPECT_EQ(trees[i].error, trees[0].error);
+  }
 }
 
 TEST(Ranking, OptionsSelectFieldAndWeights) {
