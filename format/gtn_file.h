@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -25,6 +26,10 @@ struct GtnLevelInput {
   uint64_t merges = 0;
   double ratio = 0.0;  // vertices merged away / all vertices of level 0
   std::function<StatusOr<std::vector<uint8_t>>(const std::vector<uint32_t>& vertex_order)> merge_tree;
+  // Optional: `mesh` already encoded by encodeLevel with the default options (while the merge tree
+  // was ranked, say); the writer then uses it instead of encoding the mesh (it sets the header's level
+  // and merges, and verifies it as it would its own).
+  std::shared_ptr<const EncodedLevel> encoded;
 };
 
 struct GtnWriteOptions {

@@ -161,7 +161,11 @@ struct EncodedInput {
 
 StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, size_t i) {
   EncodedInput out;
-  GTN_ASSIGN_OR_RETURN(out.level, encodeLevel(*levels[i].mesh, EncodeOptions{}));
+  if (levels[i].encoded) {
+    out.level = *levels[i].encoded;
+  } else {
+    GTN_ASSIGN_OR_RETURN(out.level, encodeLevel(*levels[i].mesh, EncodeOptions{}));
+  }
   out.level.header.level = static_cast<uint32_t>(i);
   out.level.header.merges = levels[i].merges;
   if (levels[i].merge_tree) {

@@ -7,6 +7,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "codec/edge_points.h"
 #include "mesh/faces.h"
@@ -736,9 +737,13 @@ void Ranker::recompute(const std::vector<uint32_t>& list) {
   if (n < kParallelEvaluations) {
     for (size_t i = 0; i < n; ++i) evaluate(i, *ws_);
   } else {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2), [&](const tbb::blocked_range<size_t>& r) {
-      Workspace& ws = thread_ws_.local();
-      for (size_t i = r.begin(); i < r.end(); ++i) evaluate(i, ws);
+    // Isolated: while it waits for its share, this thread takes no task from outside the ranking (a
+    // level being encoded beside it, say), which would hold up every merge after this one.
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2), [&](const tbb::blocked_range<size_t>& r) {
+        Workspace& ws = thread_ws_.local();
+        for (size_t i = r.begin(); i < r.end(); ++i) evaluate(i, ws);
+      });
     });
   }
   for (size_t i = 0; i < n; ++i) {
@@ -819,12 +824,26 @@ std::string defaultFieldNote(const RankingStats& stats) {
   return "the simplification ranks on " + on + " (constant: " + names + "; --simplify-field chooses another)";
 }
 
+Status checkRankingOptions(const TetMesh& mesh, const RankingOptions& options) {
+  if (mesh.numPoints() >= 0xFFFFFFF0u || mesh.numTets() >= 0x3FFFFFFFu)
+    return unsupported("simplification: mesh too large for 32-bit vertex and corner ids");
+  if (!options.field.empty() && options.field != "none" && !mesh.findPointField(options.field)) {
+    std::string names;
+    for (const Field& f : mesh.point_fields) names += (names.empty() ? "" : ", ") + f.name;
+    return usageError("simplification field '" + options.field + "' not found (point fields: " +
+                      (names.empty() ? "none" : names) + ")");
+  }
+  if (!(options.w_density >= 0) || !(options.w_geometry >= 0) || !std::isfinite(options.w_density) ||
+      !std::isfinite(options.w_geometry))
+    return usageError("simplification weights must be finite and non-negative");
+  return Status::ok();
+}
+
 StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats,
                                const ProgressFn& progress) {
   const auto start = std::chrono::steady_clock::now();
   GTN_RETURN_IF_ERROR(mesh.checkConsistency("simplification input"));
-  if (mesh.numPoints() >= 0xFFFFFFF0u || mesh.numTets() >= 0x3FFFFFFFu)
-    return unsupported("simplification: mesh too large for 32-bit vertex and corner ids");
+  GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, options));
   const Field* field = nullptr;
   std::vector<std::string> constant_fields;
   if (options.field.empty()) {
@@ -839,16 +858,7 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
     if (chosen != SIZE_MAX) field = &mesh.point_fields[chosen];
   } else if (options.field != "none") {
     field = mesh.findPointField(options.field);
-    if (!field) {
-      std::string names;
-      for (const Field& f : mesh.point_fields) names += (names.empty() ? "" : ", ") + f.name;
-      return usageError("simplification field '" + options.field + "' not found (point fields: " +
-                        (names.empty() ? "none" : names) + ")");
-    }
   }
-  if (!(options.w_density >= 0) || !(options.w_geometry >= 0) || !std::isfinite(options.w_density) ||
-      !std::isfinite(options.w_geometry))
-    return usageError("simplification weights must be finite and non-negative");
   std::vector<double> density(mesh.numPoints(), 1.0);
   if (field && field->components > 0) {
     for (size_t i = 0; i < density.size(); ++i) {

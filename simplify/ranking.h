@@ -90,6 +90,10 @@ struct RankingStats {
 // ranks on field 'X' (constant: 'A', 'B'; --simplify-field chooses another)"; "" when none was skipped.
 std::string defaultFieldNote(const RankingStats& stats);
 
+// The usage errors rankMerges returns before any work: a mesh too large for 32-bit ids, a field
+// that is not a point field of `mesh`, weights that are negative or not finite.
+Status checkRankingOptions(const TetMesh& mesh, const RankingOptions& options);
+
 // Ranks the merges of `mesh` (tetrahedra positively oriented, zero-volume ones allowed). The tree's
 // error vector and quantiles are filled. Fails with kUsage if `options.field` names no point field.
 // `progress` (optional) is told "rank merges" with the share of the points merged so far.

@@ -5,12 +5,14 @@
 
 #include <tbb/global_control.h>
 
+#include "format/file_io.h"
 #include "format/gtn_reader.h"
 
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
 #include "simplify_test_util.h"
 #include "validate/merge_checks.h"
+#include "validate/write_gtn.h"
 
 namespace gtn::test {
 namespace {
@@ -352,6 +354,39 @@ TEST(Levels, ABoundedWriteEncodesNoLevelBeyondTheBound) {
       want.push_back("encode and verify level " + std::to_string(i) + " (" +
                      std::to_string(levels->merges.size()) + " levels)");
     EXPECT_EQ(stages, want);
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(Levels, ConvertWritesTheSameBytesForAnyThreadCount) {
+  // writeGtnWithLevels encodes level 0 while the merges are ranked (on another thread where there is
+  // one); the file is the one the levels give encoded one after the other, for any thread count.
+  const Ranked& g = grid();
+  const std::string path = ::testing::TempDir() + "/threads.gtn";
+  auto bytesOf = [&](const std::string& p) {
+    auto b = readWholeFile(p);
+    EXPECT_TRUE(b.isOk()) << b.status().message();
+    return b.isOk() ? *b : std::string();
+  };
+  GtnWriteOptions wo;
+  wo.level_storage_limit = 2.0;
+  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{});
+  ASSERT_TRUE(levels.isOk()) << levels.status().message();
+  ASSERT_TRUE(writeGtnFile(path, levels->inputs(g.mesh), wo).isOk());
+  const std::string sequential = bytesOf(path);
+  ASSERT_FALSE(sequential.empty());
+  // A level given already encoded is written as the writer would have encoded it.
+  auto encoded = encodeLevel(g.mesh, EncodeOptions{});
+  ASSERT_TRUE(encoded.isOk()) << encoded.status().message();
+  std::vector<GtnLevelInput> inputs = levels->inputs(g.mesh);
+  inputs[0].encoded = std::make_shared<const EncodedLevel>(std::move(encoded).value());
+  ASSERT_TRUE(writeGtnFile(path, inputs, wo).isOk());
+  EXPECT_EQ(bytesOf(path), sequential);
+  for (const size_t threads : {1, 2}) {
+    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    ASSERT_TRUE(writeGtnWithLevels(path, g.mesh, GtnConvertOptions{}, GtnWriteOptions{}, "grid").isOk());
+    EXPECT_EQ(bytesOf(path), sequential);
   }
   std::filesystem::remove(path);
 }
