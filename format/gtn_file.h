@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -25,6 +26,10 @@ struct GtnLevelInput {
   uint64_t merges = 0;
   double ratio = 0.0;  // vertices merged away / all vertices of level 0
   std::function<StatusOr<std::vector<uint8_t>>(const std::vector<uint32_t>& vertex_order)> merge_tree;
+  // Optional: `mesh` already encoded by encodeLevel with the default options (while the merge tree
+  // was ranked, say); the writer then uses it instead of encoding the mesh (it sets the header's level
+  // and merges, and verifies it as it would its own).
+  std::shared_ptr<const EncodedLevel> encoded;
 };
 
 struct GtnWriteOptions {
@@ -49,8 +54,9 @@ struct GtnWriteOptions {
 // GHDR, per level LHDR BNDY CONN GEOM PFLD... CFLD... [MTRE], then [DIRC] and GEND. All levels must
 // share level 0's coordinate type and field descriptions. Deterministic: the same meshes and options
 // give the same bytes. Fails with kUsage for an empty level list or a null mesh. With
-// options.level_storage_limit set, every level is encoded before the first byte is written, so that
-// the bound can be applied to the exact bytes.
+// options.level_storage_limit set, the levels are encoded, finest first, before the first byte is
+// written, so that the bound can be applied to the exact bytes; the encoding stops at the first level
+// beyond the bound (the coarser ones are neither encoded nor verified).
 Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels,
                     const GtnWriteOptions& options);
 

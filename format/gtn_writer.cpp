@@ -161,7 +161,11 @@ struct EncodedInput {
 
 StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, size_t i) {
   EncodedInput out;
-  GTN_ASSIGN_OR_RETURN(out.level, encodeLevel(*levels[i].mesh, EncodeOptions{}));
+  if (levels[i].encoded) {
+    out.level = *levels[i].encoded;
+  } else {
+    GTN_ASSIGN_OR_RETURN(out.level, encodeLevel(*levels[i].mesh, EncodeOptions{}));
+  }
   out.level.header.level = static_cast<uint32_t>(i);
   out.level.header.merges = levels[i].merges;
   if (levels[i].merge_tree) {
@@ -181,24 +185,6 @@ Status checkDecodesBack(const std::string& path, const std::vector<GtnLevelInput
   if (why.empty()) return Status::ok();
   return invalidData(path + ": level " + std::to_string(i) + " would not decode back to its mesh (" + why +
                      "), so the file was not written; this is a bug in gtn's encoder, please report it with the input");
-}
-
-// How many of `encoded` (level 0 first) fit the storage bound: the bytes each level takes in the
-// file, measured by writing them to a counter with the same options.
-StatusOr<size_t> levelsWithinBound(const std::vector<EncodedInput>& encoded, const std::vector<GtnLevelInput>& levels,
-                                   const GtnWriteOptions& options) {
-  GtnStreamWriter counter([](std::span<const uint8_t>) { return Status::ok(); }, options);
-  GTN_RETURN_IF_ERROR(counter.begin(encoded[0].level.header, encoded.size()));
-  uint64_t level0 = 0, total = 0;
-  for (size_t i = 0; i < encoded.size(); ++i) {
-    const uint64_t before = counter.offset();
-    GTN_RETURN_IF_ERROR(counter.addLevel(encoded[i].level, levels[i].ratio, encoded[i].tree));
-    const uint64_t bytes = counter.offset() - before;
-    if (i == 0) level0 = bytes;
-    total += bytes;
-    if (i > 0 && static_cast<double>(total) > options.level_storage_limit * static_cast<double>(level0)) return i;
-  }
-  return encoded.size();
 }
 
 }  // namespace
@@ -224,12 +210,17 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
   size_t count = levels.size();
   if (bounded) {
     // Each level is checked on another thread while the next one is encoded: one encoder's memory
-    // at a time, as before, and the check's time hidden behind the encoding. (The levels beyond the
-    // bound are checked too, but they are the smallest.) Failures are reported in level order.
+    // at a time, and the check's time hidden behind the encoding. The bytes each level takes in the
+    // file are measured as it is encoded, by writing it to a counter with the same options: the
+    // first level that passes the bound ends the encoding (neither it nor a coarser one is kept, so
+    // none of them is encoded or checked). Failures are reported in level order.
     encoded.reserve(levels.size());  // the checks read encoded[i] while later levels are added
     std::vector<Status> checks(levels.size());
     tbb::task_group checking;
     Status failed;
+    GtnStreamWriter counter([](std::span<const uint8_t>) { return Status::ok(); }, options);
+    uint64_t level0 = 0, total = 0;
+    count = 0;
     for (size_t i = 0; i < levels.size(); ++i) {
       progress(options.verify ? "encode and verify" : "encode", i);
       auto e = encodeInput(levels, i);
@@ -237,14 +228,23 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
         failed = e.status();
         break;
       }
+      if (i == 0) failed = counter.begin(e->level.header, levels.size());
+      const uint64_t offset = counter.offset();
+      if (failed.isOk()) failed = counter.addLevel(e->level, levels[i].ratio, e->tree);
+      if (!failed.isOk()) {
+        failed = Status(failed.code(), path + ": " + failed.message());
+        break;
+      }
+      const uint64_t bytes = counter.offset() - offset;
+      if (i == 0) level0 = bytes;
+      total += bytes;
+      if (i > 0 && static_cast<double>(total) > options.level_storage_limit * static_cast<double>(level0)) break;
       encoded.push_back(std::move(e).value());
+      ++count;
       checking.run([&, i] { checks[i] = checkDecodesBack(path, levels, i, encoded[i].level, options); });
     }
     checking.wait();
     GTN_RETURN_IF_ERROR(failed);
-    auto n = levelsWithinBound(encoded, levels, options);
-    if (!n.isOk()) return Status(n.status().code(), path + ": " + n.status().message());
-    count = *n;
     for (size_t i = 0; i < count; ++i) GTN_RETURN_IF_ERROR(checks[i]);
   }
   return writeFileAtomically(path, [&](std::FILE* f) -> Status {

@@ -39,15 +39,22 @@ StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree,
   const uint64_t free = unreferencedMerges(tree);
   const uint64_t points = source.numPoints() - free;
   const int max_levels = options.levels < 0 ? 62 : options.levels;
+  // Level i is made from level i - 1 and its tree (the rest of the merges, in its numbering): the same
+  // mesh and tree as from the source (compaction keeps the vertex and tetrahedron order), in time that
+  // shrinks with the levels instead of a pass over the source for each.
+  const TetMesh* finer = &source;
+  std::shared_ptr<const MergeTree> finer_tree(std::shared_ptr<const MergeTree>(), &tree);
   for (int i = 1; i <= max_levels; ++i) {
     const uint64_t n = free + levelMerges(i, points, tree.merges - free);
     if (n <= out.merges.back()) break;  // the tree is exhausted
     if (options.levels < 0 && points - (n - free) < options.min_points) break;
+    const uint64_t step = n - out.merges.back();
     std::vector<uint32_t> index;
-    GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(source, tree, n, &index));
-    if (options.merge_tree) out.trees.push_back(std::make_shared<const MergeTree>(remainingTree(tree, n, index)));
-    else out.trees.push_back(nullptr);
+    GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(*finer, *finer_tree, step, &index));
+    finer_tree = std::make_shared<const MergeTree>(remainingTree(*finer_tree, step, index));
+    out.trees.push_back(options.merge_tree ? finer_tree : nullptr);
     out.meshes.push_back(std::move(mesh));
+    finer = &out.meshes.back();
     out.merges.push_back(n);
     out.ratios.push_back(points ? static_cast<double>(n - free) / static_cast<double>(points) : 0.0);
   }

@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <queue>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "codec/edge_points.h"
 #include "mesh/faces.h"
@@ -74,12 +74,85 @@ struct Candidate {
 
 struct QueueEntry {
   float error;
-  uint32_t v, w, version;
-  bool operator>(const QueueEntry& o) const {
-    if (error != o.error) return error > o.error;
-    if (v != o.v) return v > o.v;
-    return w > o.w;
+  uint32_t v, w;
+  bool operator<(const QueueEntry& o) const {
+    if (error != o.error) return error < o.error;
+    if (v != o.v) return v < o.v;
+    return w < o.w;
   }
+};
+
+// The candidates, one per vertex at most, in a binary min-heap by (error, v, w) that knows where each
+// vertex's entry is, so that a vertex evaluated again replaces its entry in place. The order is a
+// total one over distinct vertices, so the entries come out in the same order as from any other
+// priority queue of the same entries; the heap holds at most one entry per vertex (12 bytes, and 4
+// for its position), where a queue with stale entries grows with every evaluation.
+class CandidateHeap {
+ public:
+  explicit CandidateHeap(size_t points) : at_(points, kNoIndex) {}
+  bool empty() const { return heap_.empty(); }
+  const QueueEntry& top() const { return heap_.front(); }
+  // Sets v's entry (adds it, or replaces the one it has).
+  void set(const QueueEntry& e) {
+    uint32_t i = at_[e.v];
+    if (i == kNoIndex) {
+      i = static_cast<uint32_t>(heap_.size());
+      heap_.push_back(e);
+      at_[e.v] = i;
+      up(i);
+      return;
+    }
+    const bool smaller = e < heap_[i];
+    heap_[i] = e;
+    if (smaller) up(i);
+    else down(i);
+  }
+  // Removes v's entry, if it has one.
+  void erase(uint32_t v) {
+    const uint32_t i = at_[v];
+    if (i == kNoIndex) return;
+    at_[v] = kNoIndex;
+    const QueueEntry last = heap_.back();
+    heap_.pop_back();
+    if (i == heap_.size()) return;
+    const bool smaller = last < heap_[i];
+    heap_[i] = last;
+    at_[last.v] = i;
+    if (smaller) up(i);
+    else down(i);
+  }
+  void pop() { erase(heap_.front().v); }
+
+ private:
+  void place(uint32_t i, const QueueEntry& e) {
+    heap_[i] = e;
+    at_[e.v] = i;
+  }
+  void up(uint32_t i) {
+    const QueueEntry e = heap_[i];
+    while (i > 0) {
+      const uint32_t parent = (i - 1) / 2;
+      if (!(e < heap_[parent])) break;
+      place(i, heap_[parent]);
+      i = parent;
+    }
+    place(i, e);
+  }
+  void down(uint32_t i) {
+    const QueueEntry e = heap_[i];
+    const size_t n = heap_.size();
+    for (;;) {
+      size_t c = 2 * size_t{i} + 1;
+      if (c >= n) break;
+      if (c + 1 < n && heap_[c + 1] < heap_[c]) ++c;
+      if (!(heap_[c] < e)) break;
+      place(i, heap_[c]);
+      i = static_cast<uint32_t>(c);
+    }
+    place(i, e);
+  }
+  std::vector<QueueEntry> heap_;
+  std::vector<uint32_t> at_;  // per vertex: its entry's index in heap_, kNoIndex for none
 };
 
 using Tri = std::array<uint32_t, 3>;
@@ -150,9 +223,14 @@ struct Workspace {
   std::vector<BoundaryFace> faces;
   std::vector<StarFace> face_keys;
   std::vector<Candidate> cands;
+  std::vector<double> density_error;  // per target: its density error, where target_ok
+  std::vector<uint8_t> target_ok;     // per target: 1 when every changed tetrahedron stays positive
   uint64_t evaluations = 0;  // candidate errors computed
   uint64_t dropped = 0;      // dead corners dropped from the stars' runs
 };
+
+// Targets whose density errors are computed together (Ranker::densityErrors).
+constexpr size_t kLanes = 4;
 
 // Below this many vertices to evaluate, the evaluations run on the calling thread.
 constexpr size_t kParallelEvaluations = 8;
@@ -163,6 +241,7 @@ class Ranker {
       : mesh_(mesh),
         density_(std::move(density)),
         options_(options),
+        heap_(mesh.numPoints()),
         thread_ws_([points = mesh.numPoints()] { return Workspace(points); }) {}
 
   MergeTree run(RankingStats* stats, const ProgressFn& progress);
@@ -179,15 +258,14 @@ class Ranker {
   void gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
                            Workspace& ws) const;
   void candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws);
+  void densityErrors(const size_t* targets, size_t count, bool same, Workspace& ws) const;
   bool validate(uint32_t v, uint32_t w);
   void linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces,
               std::vector<Tri>& tris, std::vector<Edge>& edges, std::vector<uint32_t>& verts);
   void merge(uint32_t v, uint32_t w, float error);
   // Evaluates the vertices of `list` again (distinct) and queues each one's best target.
   void recompute(const std::vector<uint32_t>& list);
-  void push(uint32_t v, const Candidate& c) {
-    heap_.push(QueueEntry{static_cast<float>(c.error), v, c.w, version_[v]});
-  }
+  void push(uint32_t v, const Candidate& c) { heap_.set(QueueEntry{static_cast<float>(c.error), v, c.w}); }
 
   const TetMesh& mesh_;
   std::vector<double> density_;
@@ -217,8 +295,7 @@ class Ranker {
   std::vector<uint8_t> pinned_;  // never merged away (may be merged onto): next to a face oriented alike twice
   std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
   bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
-  std::vector<uint32_t> version_;
-  std::priority_queue<QueueEntry, std::vector<QueueEntry>, std::greater<QueueEntry>> heap_;
+  CandidateHeap heap_;
   MergeTree tree_;
 
   tbb::enumerable_thread_specific<Workspace> thread_ws_;
@@ -254,7 +331,6 @@ void Ranker::init() {
   frozen_.assign(np, 0);
   pinned_.assign(np, 0);
   alive_.assign(np, 1);
-  version_.assign(np, 0);
   {
     const FaceAdjacency adj = computeFaceAdjacency(mesh_);
     double area = 0;
@@ -635,7 +711,7 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
     if (star_pool_.size() > 2 * star_live_ + 4096) compactStars();
   }
   alive_[v] = 0;
-  ++version_[v];
+  heap_.erase(v);
   tree_.parent[v] = w;
   tree_.rank[v] = static_cast<uint32_t>(++tree_.merges);
   tree_.removed[v] = removed;
@@ -660,14 +736,18 @@ void Ranker::recompute(const std::vector<uint32_t>& list) {
   if (n < kParallelEvaluations) {
     for (size_t i = 0; i < n; ++i) evaluate(i, *ws_);
   } else {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2), [&](const tbb::blocked_range<size_t>& r) {
-      Workspace& ws = thread_ws_.local();
-      for (size_t i = r.begin(); i < r.end(); ++i) evaluate(i, ws);
+    // Isolated: while it waits for its share, this thread takes no task from outside the ranking (a
+    // level being encoded beside it, say), which would hold up every merge after this one.
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2), [&](const tbb::blocked_range<size_t>& r) {
+        Workspace& ws = thread_ws_.local();
+        for (size_t i = r.begin(); i < r.end(); ++i) evaluate(i, ws);
+      });
     });
   }
   for (size_t i = 0; i < n; ++i) {
-    ++version_[list[i]];
     if (best_[i].w != kNoIndex) push(list[i], best_[i]);
+    else heap_.erase(list[i]);
   }
 }
 
@@ -685,7 +765,6 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   while (!heap_.empty() && tree_.merges < options_.max_merges) {
     const QueueEntry e = heap_.top();
     heap_.pop();
-    if (!alive_[e.v] || version_[e.v] != e.version) continue;
     ++popped;
     if (validate(e.v, e.w)) {
       merge(e.v, e.w, e.error);
@@ -695,7 +774,6 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     }
     ++rejected;
     // The cheap filter let an invalid target through: take the best target that passes every check.
-    ++version_[e.v];
     candidates(e.v, sorted, *ws_);
     std::sort(sorted.begin(), sorted.end(), [](const Candidate& a, const Candidate& b) {
       return a.error < b.error || (a.error == b.error && a.w < b.w);
@@ -745,12 +823,26 @@ std::string defaultFieldNote(const RankingStats& stats) {
   return "the simplification ranks on " + on + " (constant: " + names + "; --simplify-field chooses another)";
 }
 
+Status checkRankingOptions(const TetMesh& mesh, const RankingOptions& options) {
+  if (mesh.numPoints() >= 0xFFFFFFF0u || mesh.numTets() >= 0x3FFFFFFFu)
+    return unsupported("simplification: mesh too large for 32-bit vertex and corner ids");
+  if (!options.field.empty() && options.field != "none" && !mesh.findPointField(options.field)) {
+    std::string names;
+    for (const Field& f : mesh.point_fields) names += (names.empty() ? "" : ", ") + f.name;
+    return usageError("simplification field '" + options.field + "' not found (point fields: " +
+                      (names.empty() ? "none" : names) + ")");
+  }
+  if (!(options.w_density >= 0) || !(options.w_geometry >= 0) || !std::isfinite(options.w_density) ||
+      !std::isfinite(options.w_geometry))
+    return usageError("simplification weights must be finite and non-negative");
+  return Status::ok();
+}
+
 StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats,
                                const ProgressFn& progress) {
   const auto start = std::chrono::steady_clock::now();
   GTN_RETURN_IF_ERROR(mesh.checkConsistency("simplification input"));
-  if (mesh.numPoints() >= 0xFFFFFFF0u || mesh.numTets() >= 0x3FFFFFFFu)
-    return unsupported("simplification: mesh too large for 32-bit vertex and corner ids");
+  GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, options));
   const Field* field = nullptr;
   std::vector<std::string> constant_fields;
   if (options.field.empty()) {
@@ -765,16 +857,7 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
     if (chosen != SIZE_MAX) field = &mesh.point_fields[chosen];
   } else if (options.field != "none") {
     field = mesh.findPointField(options.field);
-    if (!field) {
-      std::string names;
-      for (const Field& f : mesh.point_fields) names += (names.empty() ? "" : ", ") + f.name;
-      return usageError("simplification field '" + options.field + "' not found (point fields: " +
-                        (names.empty() ? "none" : names) + ")");
-    }
   }
-  if (!(options.w_density >= 0) || !(options.w_geometry >= 0) || !std::isfinite(options.w_density) ||
-      !std::isfinite(options.w_geometry))
-    return usageError("simplification weights must be finite and non-negative");
   std::vector<double> density(mesh.numPoints(), 1.0);
   if (field && field->components > 0) {
     for (size_t i = 0; i < density.size(); ++i) {

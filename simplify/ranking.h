@@ -53,9 +53,9 @@
 // and every mip level and simplified mesh leaves them out (level 0 alone keeps them). Ratios and level
 // targets count the other merges against the referenced vertices (simplify/levels.h).
 //
-// Candidates are kept per vertex (its best target) in a priority queue with lazy deletion (version
-// stamps); after a merge v -> w the candidates of w and of v's former neighbours are recomputed, and
-// each popped candidate is checked exactly before it is applied.
+// Candidates are kept per vertex (its best target) in an indexed priority queue ordered by (error, v,
+// w), one entry per vertex, replaced in place; after a merge v -> w the candidates of w and of v's
+// former neighbours are recomputed, and each popped candidate is checked exactly before it is applied.
 #pragma once
 
 #include <cstdint>
@@ -89,6 +89,10 @@ struct RankingStats {
 // What `gtn convert` says when the default density skipped constant fields: "the simplification
 // ranks on field 'X' (constant: 'A', 'B'; --simplify-field chooses another)"; "" when none was skipped.
 std::string defaultFieldNote(const RankingStats& stats);
+
+// The usage errors rankMerges returns before any work: a mesh too large for 32-bit ids, a field
+// that is not a point field of `mesh`, weights that are negative or not finite.
+Status checkRankingOptions(const TetMesh& mesh, const RankingOptions& options);
 
 // Ranks the merges of `mesh` (tetrahedra positively oriented, zero-volume ones allowed). The tree's
 // error vector and quantiles are filled. Fails with kUsage if `options.field` names no point field.

@@ -1,5 +1,7 @@
 #include "validate/write_gtn.h"
 
+#include <tbb/task_group.h>
+
 #include "simplify/levels.h"
 #include "validate/mesh_checks.h"
 
@@ -14,8 +16,21 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
     return writeGtnFile(path, {level0}, wo);
   }
   reportProgress(wo.progress, "rank merges", 0.0);
+  GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
+  // Level 0 is encoded while the merges are ranked: on another thread where TBB has one, after the
+  // ranking where it has not. A level 0 that fails to encode is left to the writer, which fails on it
+  // where it always has (after the level checks).
+  std::shared_ptr<EncodedLevel> level0;
+  tbb::task_group encoding;
+  encoding.run([&] {
+    auto e = encodeLevel(mesh, EncodeOptions{});
+    if (e.isOk()) level0 = std::make_shared<EncodedLevel>(std::move(e).value());
+  });
   RankingStats ranked;
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, rankMerges(mesh, o.ranking, &ranked, wo.progress));
+  StatusOr<MergeTree> ranking = rankMerges(mesh, o.ranking, &ranked, wo.progress);
+  encoding.wait();
+  if (!ranking.isOk()) return ranking.status();
+  MergeTree tree = std::move(ranking).value();
   if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
     warnings->push_back(source + ": " + note);
   reportProgress(wo.progress, "build levels");
@@ -34,7 +49,9 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
                         " level(s) beyond level 0");
   GtnWriteOptions bounded = wo;
   if (o.levels < 0) bounded.level_storage_limit = o.level_storage;
-  return writeGtnFile(path, levels.inputs(mesh), bounded);
+  std::vector<GtnLevelInput> inputs = levels.inputs(mesh);
+  inputs[0].encoded = std::move(level0);
+  return writeGtnFile(path, inputs, bounded);
 }
 }  // namespace
 

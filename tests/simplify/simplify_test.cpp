@@ -1,10 +1,18 @@
 // Ranking, in-memory application, on-the-fly simplification and mip levels on synthetic meshes.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
+#include <tbb/global_control.h>
+
+#include "format/file_io.h"
+#include "format/gtn_reader.h"
+
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
 #include "simplify_test_util.h"
 #include "validate/merge_checks.h"
+#include "validate/write_gtn.h"
 
 namespace gtn::test {
 namespace {
@@ -104,6 +112,24 @@ TEST(Ranking, IsDeterministic) {
   ASSERT_TRUE(a.isOk() && b.isOk());
   EXPECT_EQ(a->parent, b->parent);
   EXPECT_EQ(a->rank, b->rank);
+}
+
+TEST(Ranking, TheTreeIsTheSameForAnyThreadCount) {
+  // The evaluations around a merge run in parallel; their results are queued in the list's order.
+  const TetMesh mesh = makeGrid(7, 6, 5);
+  std::vector<MergeTree> trees;
+  for (const size_t threads : {1, 2, 3}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    auto t = rankMerges(mesh, RankingOptions{}, nullptr);
+    ASSERT_TRUE(t.isOk()) << t.status().message();
+    trees.push_back(std::move(t).value());
+  }
+  for (size_t i = 1; i < trees.size(); ++i) {
+    EXPECT_EQ(trees[i].merges, trees[0].merges);
+    EXPECT_EQ(trees[i].parent, trees[0].parent);
+    EXPECT_EQ(trees[i].rank, trees[0].rank);
+    EXPECT_EQ(trees[i].error, trees[0].error);
+  }
 }
 
 TEST(Ranking, OptionsSelectFieldAndWeights) {
@@ -268,6 +294,16 @@ TEST(Levels, EachLevelIsThePrefixAndRefinesFurther) {
     ASSERT_TRUE(want.isOk());
     EXPECT_EQ(lm.coords, want->coords);
     EXPECT_EQ(lm.tets, want->tets);
+    // Each level is made from the one above it: its tree is the one the source's gives.
+    std::vector<uint32_t> index;
+    ASSERT_TRUE(applyMerges(g.mesh, g.tree, levels->merges[i], &index).isOk());
+    const MergeTree rest = remainingTree(g.tree, levels->merges[i], index);
+    EXPECT_EQ(lt.parent, rest.parent);
+    EXPECT_EQ(lt.rank, rest.rank);
+    EXPECT_EQ(lt.removed, rest.removed);
+    EXPECT_EQ(lt.boundary, rest.boundary);
+    EXPECT_EQ(lt.error, rest.error);
+    EXPECT_EQ(lt.error_quantiles, rest.error_quantiles);
     // Applying m more merges of the level's own tree equals applying N_i + m to the source.
     for (uint64_t m : {uint64_t{1}, lt.merges / 2, lt.merges}) {
       auto a = applyMerges(lm, lt, m);
@@ -293,6 +329,66 @@ TEST(Levels, EachLevelIsThePrefixAndRefinesFurther) {
   EXPECT_EQ(inputs[0].mesh, &g.mesh);
   EXPECT_DOUBLE_EQ(inputs[1].ratio, 0.5 * 0 + double(two->merges[1]) / double(points));
   EXPECT_FALSE(inputs[1].merge_tree);
+}
+
+TEST(Levels, ABoundedWriteEncodesNoLevelBeyondTheBound) {
+  const Ranked& g = grid();
+  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{-1, 32, true});
+  ASSERT_TRUE(levels.isOk()) << levels.status().message();
+  ASSERT_GE(levels->merges.size(), 4u);
+  const std::string path = ::testing::TempDir() + "/bounded_levels.gtn";
+  for (const double bound : {1.01, 1.6}) {
+    SCOPED_TRACE("bound " + std::to_string(bound));
+    std::vector<std::string> stages;
+    GtnWriteOptions wo;
+    wo.level_storage_limit = bound;
+    wo.progress = [&](const std::string& stage, double) { stages.push_back(stage); };
+    ASSERT_TRUE(writeGtnFile(path, levels->inputs(g.mesh), wo).isOk());
+    auto r = GtnReader::open(path);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const size_t kept = (*r)->levels();
+    ASSERT_LT(kept, levels->merges.size());
+    // The kept levels and the first one past the bound are encoded (its bytes decide); no coarser one.
+    std::vector<std::string> want;
+    for (size_t i = 0; i <= kept; ++i)
+      want.push_back("encode and verify level " + std::to_string(i) + " (" +
+                     std::to_string(levels->merges.size()) + " levels)");
+    EXPECT_EQ(stages, want);
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(Levels, ConvertWritesTheSameBytesForAnyThreadCount) {
+  // writeGtnWithLevels encodes level 0 while the merges are ranked (on another thread where there is
+  // one); the file is the one the levels give encoded one after the other, for any thread count.
+  const Ranked& g = grid();
+  const std::string path = ::testing::TempDir() + "/threads.gtn";
+  auto bytesOf = [&](const std::string& p) {
+    auto b = readWholeFile(p);
+    EXPECT_TRUE(b.isOk()) << b.status().message();
+    return b.isOk() ? *b : std::string();
+  };
+  GtnWriteOptions wo;
+  wo.level_storage_limit = 2.0;
+  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{});
+  ASSERT_TRUE(levels.isOk()) << levels.status().message();
+  ASSERT_TRUE(writeGtnFile(path, levels->inputs(g.mesh), wo).isOk());
+  const std::string sequential = bytesOf(path);
+  ASSERT_FALSE(sequential.empty());
+  // A level given already encoded is written as the writer would have encoded it.
+  auto encoded = encodeLevel(g.mesh, EncodeOptions{});
+  ASSERT_TRUE(encoded.isOk()) << encoded.status().message();
+  std::vector<GtnLevelInput> inputs = levels->inputs(g.mesh);
+  inputs[0].encoded = std::make_shared<const EncodedLevel>(std::move(encoded).value());
+  ASSERT_TRUE(writeGtnFile(path, inputs, wo).isOk());
+  EXPECT_EQ(bytesOf(path), sequential);
+  for (const size_t threads : {1, 2}) {
+    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    ASSERT_TRUE(writeGtnWithLevels(path, g.mesh, GtnConvertOptions{}, GtnWriteOptions{}, "grid").isOk());
+    EXPECT_EQ(bytesOf(path), sequential);
+  }
+  std::filesystem::remove(path);
 }
 
 }  // namespace
