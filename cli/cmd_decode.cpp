@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "cli/level_view.h"
 #include "cli/threads.h"
 #include "convert/import.h"
 #include "format/decode_fields.h"
@@ -51,51 +52,25 @@ nlohmann::json fieldsJson(const std::vector<Field>& fields, const char* location
 
 int runDecode(const DecodeArgs& a) {
   const Clock::time_point start = Clock::now();
-  // Opened and decoded as `gtn export` does: random access through the directory, every chunk read
-  // checksummed, damage elsewhere in the file a warning.
-  GtnOpenOptions oo;
-  oo.verify = false;
+  // Opened and decoded as `gtn export` does (cli/level_view.h).
   HeldWarnings damage;
-  auto reader = openGtnChecked(a.input, oo, damage.sink());
-  if (!reader.isOk()) {
-    const InputFormat in_format = detectInputFormat(a.input);
-    if (in_format != InputFormat::kGtn && in_format != InputFormat::kUnknown)
-      return reportError(usageError(a.input + ": a " + inputFormatName(in_format) +
-                                    " file, not .gtn: 'gtn decode' reads .gtn files; use 'gtn convert " + a.input +
-                                    " -o FILE.gtn' to convert it first"));
-    return reportError(reader.status());
-  }
+  auto reader =
+      openForView(a.input, "decode", "use 'gtn convert " + a.input + " -o FILE.gtn' to convert it first", damage);
+  if (!reader.isOk()) return reportError(reader.status());
   GtnReader& r = **reader;
-  auto fail = [&](const Status& st) {
-    damage.flush(st);
-    return reportError(st);
-  };
-  if (a.level >= r.levels())
-    return fail(usageError(a.input + ": --level " + std::to_string(a.level) + ": the file holds " +
-                           std::to_string(r.levels()) + " level(s), 0 to " + std::to_string(r.levels() - 1)));
-  DecodeFields fields;  // every field unless --fields names some
-  if (!a.fields.empty()) {
-    auto selected = selectDecodeFields(r.level(a.level).header, a.fields, a.input, "--fields");
-    if (!selected.isOk()) return fail(selected.status());
-    fields = std::move(selected).value();
-  }
   TetMeshBuilder builder;
   SimplifyPlan plan;
-  plan.level = a.level;
-  uint64_t merges = 0;
+  ViewRequest view;
+  view.level = a.level;
+  view.ratio = a.ratio;
+  view.fields = a.fields;
+  DecodeFields fields;
   const Clock::time_point decode_start = Clock::now();
-  Status st;
-  if (a.ratio >= 0) {
-    StatusOr<uint64_t> target = mergesForRatio(r, a.ratio);
-    st = target.status();
-    if (st.isOk()) {
-      merges = *target;
-      st = streamSimplified(r, merges, builder, &plan, /*clamp=*/true, &fields);
-    }
-  } else {
-    st = r.decodeLevel(a.level, builder, nullptr, &fields);
+  const Status st = decodeView(r, a.input, view, builder, &fields, &plan);
+  if (!st.isOk()) {
+    damage.flush(st);
+    return reportError(st);
   }
-  if (!st.isOk()) return fail(st);
   if (!a.fields.empty()) dropUndecodedFields(builder.mesh(), fields);
   const double decode_s = secondsSince(decode_start);
   const double wall_s = secondsSince(start);

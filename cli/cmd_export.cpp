@@ -6,9 +6,10 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/level_view.h"
 #include "cli/progress_line.h"
-#include "convert/import.h"
 #include "convert/export.h"
+#include "convert/import.h"
 #include "format/decode_fields.h"
 #include "format/file_io.h"
 #include "format/gtn_reader.h"
@@ -22,8 +23,8 @@ struct ExportArgs {
   std::string output;
   size_t level = 0;
   bool compress = false;
-  double ratio = -1;    // < 0: not given
-  int64_t merges = -1;  // < 0: not given
+  double ratio = -1;                // < 0: not given
+  int64_t merges = -1;              // < 0: not given
   std::vector<std::string> fields;  // empty: all
 };
 
@@ -31,66 +32,48 @@ int runExport(const ExportArgs& a) {
   const OutputFormat out_format = detectOutputFormat(a.output);
   if (out_format != OutputFormat::kVtu && out_format != OutputFormat::kVtkLegacy && out_format != OutputFormat::kTetgen)
     return reportError(usageError(a.output + ": unknown output format for export (use .vtu, .vtk, .node or .ele)"));
-  if (a.input == a.output || sameFile(a.input, a.output)) return reportError(usageError(a.output + ": the output would overwrite the input"));
-  GtnOpenOptions oo;
-  oo.verify = false;  // random access through the directory; every chunk read is still checksummed
+  if (a.input == a.output || sameFile(a.input, a.output))
+    return reportError(usageError(a.output + ": the output would overwrite the input"));
   HeldWarnings damage;  // said once the outcome is known: the error alone names a chunk export needed
-  auto reader = openGtnChecked(a.input, oo, damage.sink());
-  if (!reader.isOk()) {
-    // A mesh file given to export: say which command converts it.
-    const InputFormat in_format = detectInputFormat(a.input);
-    if (in_format != InputFormat::kGtn && in_format != InputFormat::kUnknown)
-      return reportError(usageError(a.input + ": a " + inputFormatName(in_format) +
-                                    " file, not .gtn: 'gtn export' reads .gtn files; use 'gtn convert " + a.input +
-                                    " -o " + a.output + "' to convert a mesh file"));
-    return reportError(reader.status());
-  }
+  auto reader = openForView(a.input, "export",
+                            "use 'gtn convert " + a.input + " -o " + a.output + "' to convert a mesh file", damage);
+  if (!reader.isOk()) return reportError(reader.status());
   GtnReader& r = **reader;
   auto fail = [&](const Status& st) {
     damage.flush(st);
     return reportError(st);
   };
-  if (a.level >= r.levels())
-    return fail(usageError(a.input + ": --level " + std::to_string(a.level) + ": the file holds " +
-                           std::to_string(r.levels()) + " level(s), 0 to " + std::to_string(r.levels() - 1)));
-  DecodeFields fields;  // every field unless --fields names some
-  if (!a.fields.empty()) {
-    auto selected = selectDecodeFields(r.level(a.level).header, a.fields, a.input, "--fields");
-    if (!selected.isOk()) return fail(selected.status());
-    fields = std::move(selected).value();
-  }
   TetMeshBuilder builder;
   // On a terminal, the share of the level decoded, then the write.
   ProgressLine progress("gtn export", true);
   ProgressMeshSink shown(builder, progress.callback(), "decode");
   MeshSink& sink = progress.active() ? static_cast<MeshSink&>(shown) : builder;
-  Status st;
-  if (a.ratio >= 0 || a.merges >= 0) {
-    StatusOr<uint64_t> target = uint64_t{0};
-    if (a.merges >= 0) target = static_cast<uint64_t>(a.merges);
-    else target = mergesForRatio(r, a.ratio);
-    st = target.status();
-    if (st.isOk()) st = streamSimplified(r, *target, sink, nullptr, /*clamp=*/a.merges < 0, &fields);
-  } else {
-    st = r.decodeLevel(a.level, sink, nullptr, &fields);
-  }
+  ViewRequest view;
+  view.level = a.level;
+  view.ratio = a.ratio;
+  view.merges = a.merges;
+  view.fields = a.fields;
+  DecodeFields fields;
+  const Status st = decodeView(r, a.input, view, sink, &fields, nullptr);
   if (!st.isOk()) return fail(st);
   damage.flush();
   if (!a.fields.empty()) dropUndecodedFields(builder.mesh(), fields);
   progress.update("write " + a.output);
   ExportOptions eo;
   eo.compress = a.compress;
-  st = exportMesh(builder.mesh(), a.output, eo);
-  if (!st.isOk()) return reportError(st);
+  const Status written = exportMesh(builder.mesh(), a.output, eo);
+  if (!written.isOk()) return reportError(written);
   return 0;
 }
 }  // namespace
 
 Command addExportCommand(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
-  CLI::App* sub = app.add_subcommand("export", "Decode a level of a .gtn file and write it as .vtu, .vtk or TetGen .node/.ele");
+  CLI::App* sub =
+      app.add_subcommand("export", "Decode a level of a .gtn file and write it as .vtu, .vtk or TetGen .node/.ele");
   sub->add_option("input", args->input, "Input .gtn file ('-' for standard input)")->required();
-  sub->add_option("-o,--output", args->output, "Output file: .vtu (VTK XML), .vtk (legacy VTK) or .node/.ele (TetGen)")->required();
+  sub->add_option("-o,--output", args->output, "Output file: .vtu (VTK XML), .vtk (legacy VTK) or .node/.ele (TetGen)")
+      ->required();
   CLI::Option* level = sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)");
   CLI::Option* ratio = sub->add_option("--ratio", args->ratio,
                                        "Simplification ratio: vertices merged away / vertices of level 0 (0 to 1)")
