@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
+#include "convert/import.h"
 #include "gatun/convert.h"
 #include "gatun/mesh.h"
 #include "gatun/result.h"
-#include "convert/import.h"
 #include "mesh/status.h"
 #include "mesh/tet_mesh.h"
 
@@ -24,7 +24,6 @@ gatun::Mesh fromTetMesh(TetMesh&& mesh);
 ImportOptions toImportOptions(const gatun::ImportOptions& options);
 
 // What an importer changed, as `gtn convert` says it: one line per kind of change, each naming `input`.
-void appendImportWarnings(const std::string& input, const ImportReport& report,
-                          std::vector<std::string>* warnings);
+void appendImportWarnings(const std::string& input, const ImportReport& report, std::vector<std::string>* warnings);
 
 }  // namespace gtn::api

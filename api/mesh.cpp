@@ -3,9 +3,9 @@
 #include <cstring>
 #include <utility>
 
-#include "internal.h"
 #include "gatun/mesh.h"
 #include "gatun/result.h"
+#include "internal.h"
 
 namespace gatun {
 
@@ -144,7 +144,8 @@ void appendImportWarnings(const std::string& input, const ImportReport& r, std::
   if (r.welded_points)
     add("welded " + std::to_string(r.welded_points) + " points, dropped " + std::to_string(r.collapsed_tets) +
         " collapsed tetrahedra");
-  if (r.steiner_points) add("added " + std::to_string(r.steiner_points) + " Steiner points to split cells conformingly");
+  if (r.steiner_points)
+    add("added " + std::to_string(r.steiner_points) + " Steiner points to split cells conformingly");
   for (const std::string& w : r.warnings) {
     // A warning that already names the input or one of its files, as is (as `gtn convert` prints it).
     const bool named = w.rfind(input, 0) == 0 && w.size() > input.size() &&

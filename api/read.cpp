@@ -3,11 +3,11 @@
 #include <memory>
 #include <utility>
 
-#include "internal.h"
-#include "gatun/read.h"
 #include "convert/import.h"
 #include "format/decode_fields.h"
 #include "format/gtn_reader.h"
+#include "gatun/read.h"
+#include "internal.h"
 #include "simplify/levels.h"
 
 namespace gatun {
@@ -92,7 +92,8 @@ Result<Mesh> Reader::read(const ReadOptions& options, ReadReport* report) {
   size_t level = options.level.value_or(0);
   if (level >= r.levels())
     return Error(ErrorCode::kUsage, path + ": level " + std::to_string(level) + ": the file holds " +
-                                        std::to_string(r.levels()) + " level(s), 0 to " + std::to_string(r.levels() - 1));
+                                        std::to_string(r.levels()) + " level(s), 0 to " +
+                                        std::to_string(r.levels() - 1));
   gtn::DecodeFields fields;  // every field unless options.fields names some
   if (!options.fields.empty()) {
     auto selected = gtn::selectDecodeFields(r.level(level).header, options.fields, path, "fields");

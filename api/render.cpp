@@ -4,9 +4,9 @@
 #include <cstdio>
 #include <utility>
 
-#include "internal.h"
-#include "gatun/render.h"
 #include "format/file_io.h"
+#include "gatun/render.h"
+#include "internal.h"
 #include "render/default_field.h"
 #include "render/image.h"
 #include "render/render_input.h"

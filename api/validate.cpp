@@ -3,9 +3,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "internal.h"
-#include "gatun/validate.h"
 #include "convert/import.h"
+#include "gatun/validate.h"
+#include "internal.h"
 #include "validate/issues.h"
 #include "validate/validator.h"
 
@@ -29,7 +29,8 @@ Result<ValidationReport> validate(const std::vector<std::string>& files, const V
   if (gtn_file && files.size() > 1)
     return Error(ErrorCode::kUsage, "validate: one .gtn file at a time (" + std::to_string(files.size()) + " given)");
   if (!gtn_file && (options.quick || !options.against.empty()))
-    return Error(ErrorCode::kUsage, "validate: " + files.front() + ": quick and against apply to .gtn files, not to a " +
+    return Error(ErrorCode::kUsage, "validate: " + files.front() +
+                                        ": quick and against apply to .gtn files, not to a " +
                                         gtn::inputFormatName(format) + " file");
   auto checked = gtn_file ? gtn::validateGtnFile(files.front(), o) : gtn::validateMeshFiles(files, o);
   if (!checked.isOk()) return gtn::api::toError(checked.status());

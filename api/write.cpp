@@ -3,13 +3,13 @@
 #include <filesystem>
 #include <utility>
 
-#include "internal.h"
-#include "gatun/convert.h"
-#include "gatun/write.h"
 #include "convert/export.h"
 #include "convert/import.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
+#include "gatun/convert.h"
+#include "gatun/write.h"
+#include "internal.h"
 #include "validate/write_gtn.h"
 
 namespace gatun {
@@ -39,7 +39,8 @@ std::string callName(const char* function, const std::string& path) {
 }
 }  // namespace
 
-Error write(const std::string& path, const Mesh& mesh, const WriteOptions& options, std::vector<std::string>* warnings) {
+Error write(const std::string& path, const Mesh& mesh, const WriteOptions& options,
+            std::vector<std::string>* warnings) {
   const std::string source = "gatun::write(" + path + ")";
   gtn::ImportResult imported{gtn::api::toTetMesh(mesh), {}};
   if (gtn::Status st = imported.mesh.checkConsistency(source); !st.isOk())
@@ -79,8 +80,8 @@ Error convert(const std::vector<std::string>& inputs, const std::string& output,
     eo.compress = options.compress;
     return gtn::api::toError(gtn::exportMesh(imported->mesh, output, eo));
   }
-  Error error = writeImported(output, imported->mesh, options.write, inputs[0], callName("gatun::convert", output),
-                              warnings);
+  Error error =
+      writeImported(output, imported->mesh, options.write, inputs[0], callName("gatun::convert", output), warnings);
   // The encoder's refusals are about the mesh: say where to see the details.
   if (!error.ok() && error.message().rfind(inputs[0] + ": cannot be encoded: ", 0) == 0)
     return Error(error.code(), error.message() + " (gatun::validate of " + inputs[0] + " lists the problems)");

@@ -24,7 +24,7 @@ struct ConvertArgs {
   bool compress = false;
   int levels = -1;  // mip levels beyond level 0, -1 = automatic
   bool no_merge_tree = false;
-  bool no_verify = false;  // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
+  bool no_verify = false;      // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
   double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes
   RankingOptions ranking;
   bool quiet = false;  // -q: no progress line, no summary
@@ -49,7 +49,8 @@ int runConvert(const ConvertArgs& a) {
   if (out_format == OutputFormat::kUnknown)
     return reportError(usageError(a.output + ": unknown output format (use .gtn, .vtu, .vtk, .node or .ele)"));
   for (const std::string& in : a.inputs) {
-    if (in == a.output || sameFile(in, a.output)) return reportError(usageError(a.output + ": the output would overwrite an input"));
+    if (in == a.output || sameFile(in, a.output))
+      return reportError(usageError(a.output + ": the output would overwrite an input"));
   }
   if (a.compress && out_format != OutputFormat::kVtu)
     warn(a.output + ": --compress applies to .vtu outputs only; ignored");
@@ -97,13 +98,19 @@ int runConvert(const ConvertArgs& a) {
 
 Command addConvertCommand(CLI::App& app) {
   auto args = std::make_shared<ConvertArgs>();
-  CLI::App* sub = app.add_subcommand("convert", "Import a mesh (PLOT3D, TetGen, VTK, Medit, OFF, gmsh, Exodus II) and write .gtn, .vtu or TetGen");
-  sub->add_option("inputs", args->inputs, "Input files (PLOT3D: grid [Q] [function] or .p3d; TetGen: basename or .node/.ele; Medit: .mesh/.meshb [.sol/.solb ...]; VTK; OFF; gmsh .msh; Exodus II .exo/.e/.ex2; .gtn: its level 0)")
+  CLI::App* sub = app.add_subcommand(
+      "convert", "Import a mesh (PLOT3D, TetGen, VTK, Medit, OFF, gmsh, Exodus II) and write .gtn, .vtu or TetGen");
+  sub->add_option("inputs", args->inputs,
+                  "Input files (PLOT3D: grid [Q] [function] or .p3d; TetGen: basename or .node/.ele; Medit: "
+                  ".mesh/.meshb [.sol/.solb ...]; VTK; OFF; gmsh .msh; Exodus II .exo/.e/.ex2; .gtn: its level 0)")
       ->required();
-  sub->add_option("-o,--output", args->output, "Output file: .gtn, .vtu (VTK XML), .vtk (legacy VTK) or .node/.ele (TetGen)")->required();
+  sub->add_option("-o,--output", args->output,
+                  "Output file: .gtn, .vtu (VTK XML), .vtk (legacy VTK) or .node/.ele (TetGen)")
+      ->required();
   sub->add_option("--split", args->split, "Hexahedra into 5 (alternating) or 6 (consistent diagonals) tetrahedra")
       ->check(CLI::IsMember({5, 6}));
-  sub->add_flag("--weld", args->weld, "merge bit-identical points (seams between PLOT3D blocks or VTK pieces) and drop collapsed tetrahedra");
+  sub->add_flag("--weld", args->weld,
+                "merge bit-identical points (seams between PLOT3D blocks or VTK pieces) and drop collapsed tetrahedra");
   sub->add_option("--time-step", args->time_step,
                   "Exodus II: the time step (1, 2, ...) whose variables become fields (default: the last)")
       ->check(CLI::PositiveNumber);
@@ -115,8 +122,10 @@ Command addConvertCommand(CLI::App& app) {
                   "of level 0's bytes (default 2, the paper's bound; 0 = no bound)")
       ->check(finiteAtLeastZero());
   sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
-  sub->add_flag("--no-verify", args->no_verify,
-                ".gtn: do not decode each level back and compare it with its mesh, nor check that each mip level is a valid mesh, before the file is written (faster; the checks guard against encoder and simplifier bugs)");
+  sub->add_flag(
+      "--no-verify", args->no_verify,
+      ".gtn: do not decode each level back and compare it with its mesh, nor check that each mip level is a valid "
+      "mesh, before the file is written (faster; the checks guard against encoder and simplifier bugs)");
   sub->add_option("--simplify-field", args->ranking.field,
                   ".gtn: point field whose first component is the density of the simplification error "
                   "(default: the first point field that is not constant; 'none' = volume only)");

@@ -5,11 +5,11 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "cli/merge_tree_plot.h"
 #include "convert/import.h"
 #include "format/file_io.h"
 #include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
-#include "cli/merge_tree_plot.h"
 #include "validate/info.h"
 
 namespace gtn::cli {
@@ -48,7 +48,8 @@ void printText(const std::string& name, const MeshStats& s, const ImportReport& 
   for (const auto& [k, v] : mesh.metadata) std::printf("  metadata %s = %s\n", k.c_str(), v.c_str());
   if (r.flipped) std::printf("  flipped on import   %zu\n", r.flipped);
   if (r.dropped_cells) std::printf("  dropped on import   %zu\n", r.dropped_cells);
-  if (r.welded_points) std::printf("  welded points       %zu (collapsed tetrahedra %zu)\n", r.welded_points, r.collapsed_tets);
+  if (r.welded_points)
+    std::printf("  welded points       %zu (collapsed tetrahedra %zu)\n", r.welded_points, r.collapsed_tets);
   if (r.steiner_points) std::printf("  Steiner points      %zu\n", r.steiner_points);
 }
 
@@ -117,7 +118,8 @@ int runInfo(const InfoArgs& a) {
   for (const std::string& in : a.inputs)
     // Standard input cannot be sniffed without consuming it: only a .gtn file is read from a pipe.
     if (in == "-" || detectInputFormat(in) == InputFormat::kGtn) return runGtnInfo(a);
-  if (!a.plot.empty()) return reportError(usageError(a.inputs[0] + ": --plot draws the merge tree of a .gtn file; a mesh has none"));
+  if (!a.plot.empty())
+    return reportError(usageError(a.inputs[0] + ": --plot draws the merge tree of a .gtn file; a mesh has none"));
   ImportOptions options;
   options.split = a.split;
   options.weld = a.weld;

@@ -51,9 +51,7 @@ bool samePathToBe(const std::string& a, const std::string& b) {
 }
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   int w = 0, h = 0;
@@ -68,9 +66,12 @@ Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   else return usageError("--projection must be ortho or persp");
   // Every number must be finite: a NaN or infinite camera angle left the rays undefined, and the
   // boundary's crossings were never sorted out (the render hung).
-  const std::pair<const char*, double> numbers[] = {
-      {"--azimuth", a.azimuth}, {"--elevation", a.elevation}, {"--zoom", a.zoom}, {"--step", a.step},
-      {"--opacity-unit-distance", a.unit_distance}, {"--ratio", a.ratio}};  // (--budget-ms: its validator)
+  const std::pair<const char*, double> numbers[] = {{"--azimuth", a.azimuth},
+                                                    {"--elevation", a.elevation},
+                                                    {"--zoom", a.zoom},
+                                                    {"--step", a.step},
+                                                    {"--opacity-unit-distance", a.unit_distance},
+                                                    {"--ratio", a.ratio}};  // (--budget-ms: its validator)
   for (const auto& [name, value] : numbers)
     if (!std::isfinite(value)) return usageError(std::string(name) + " must be a finite number");
   for (double v : a.range)
@@ -124,14 +125,14 @@ nlohmann::json describeSetup(const RenderSetup& s) {
   nlohmann::json points = nlohmann::json::array();
   const TransferFunction& tf = s.transfer;
   for (const TransferPoint& p : tf.points) {
-    points.push_back({{"x", p.x},
-                      {"value", tf.valueAt(p.x)},
-                      {"rgb", {p.rgb[0], p.rgb[1], p.rgb[2]}},
-                      {"opacity", p.opacity}});
+    points.push_back(
+        {{"x", p.x}, {"value", tf.valueAt(p.x)}, {"rgb", {p.rgb[0], p.rgb[1], p.rgb[2]}}, {"opacity", p.opacity}});
   }
   return {{"camera", cam},
           {"transfer",
-           {{"field", s.field}, {"range", {tf.lo, tf.hi}}, {"points", points},
+           {{"field", s.field},
+            {"range", {tf.lo, tf.hi}},
+            {"points", points},
             {"opacity_unit_distance", 1.0 / s.inv_unit_distance}}},
           {"sampling", s.sampling == Sampling::kFace ? "face" : "volume"},
           {"step", s.step},
@@ -140,8 +141,8 @@ nlohmann::json describeSetup(const RenderSetup& s) {
 
 // One render of the resolved level; fills `report` with what happened (and `report["view"]` with the
 // resolved camera and transfer function).
-StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const RenderOptions& options,
-                           bool generic, nlohmann::json& report) {
+StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const RenderOptions& options, bool generic,
+                           nlohmann::json& report) {
   if (generic) {
     TetMeshBuilder builder;
     const Clock::time_point t0 = Clock::now();
@@ -149,7 +150,8 @@ StatusOr<Image> renderOnce(RenderInput& input, ResolvedLevel& level, const Rende
     report["decode_ms"] = msSince(t0);
     GenericRenderStats stats;
     const Clock::time_point t1 = Clock::now();
-    GTN_ASSIGN_OR_RETURN(Image image, renderGeneric(builder.header(), builder.mesh(), builder.boundary(), options, &stats));
+    GTN_ASSIGN_OR_RETURN(Image image,
+                         renderGeneric(builder.header(), builder.mesh(), builder.boundary(), options, &stats));
     report["render_ms"] = msSince(t1);
     report["tets_rendered"] = stats.tets;
     report["segments"] = stats.segments;
@@ -189,8 +191,8 @@ int runRender(const RenderArgs& a) {
   const int to_stdout = (a.output == "-") + (a.dump_view == "-") + a.json;
   if (to_stdout > 1)
     return reportError(usageError("only one of -o -, --dump-view - and --json can write to standard output"));
-  if (!a.dump_view.empty() && (a.dump_view == a.output || sameFile(a.dump_view, a.output) ||
-                               samePathToBe(a.dump_view, a.output)))
+  if (!a.dump_view.empty() &&
+      (a.dump_view == a.output || sameFile(a.dump_view, a.output) || samePathToBe(a.dump_view, a.output)))
     return reportError(usageError(a.output + ": -o and --dump-view name the same file"));
   auto input = RenderInput::open(a.inputs);
   if (!input.isOk()) return reportError(input.status());
@@ -252,7 +254,8 @@ int runRender(const RenderArgs& a) {
   constexpr double kMaxSteps = 100000;
   if (options.step > 0 && options.has_scene_box) {
     double d2 = 0;
-    for (int i = 0; i < 3; ++i) d2 += (options.scene_max[i] - options.scene_min[i]) * (options.scene_max[i] - options.scene_min[i]);
+    for (int i = 0; i < 3; ++i)
+      d2 += (options.scene_max[i] - options.scene_min[i]) * (options.scene_max[i] - options.scene_min[i]);
     if (std::sqrt(d2) / options.step > kMaxSteps) {
       char why[200];
       std::snprintf(why, sizeof why,
@@ -323,9 +326,11 @@ Command addRenderCommand(CLI::App& app) {
   sub->add_option("--azimuth", a->azimuth, "camera azimuth in degrees about +y (default 30)");
   sub->add_option("--elevation", a->elevation, "camera elevation in degrees (default 20)");
   sub->add_option("--zoom", a->zoom, "magnification; 1 frames the bounding box (default 1)");
-  sub->add_option("--field", a->field, "point field to render: NAME, NAME:COMPONENT or NAME:mag (default: the first that is not constant)");
+  sub->add_option("--field", a->field,
+                  "point field to render: NAME, NAME:COMPONENT or NAME:mag (default: the first that is not constant)");
   sub->add_option("--transfer", a->transfer,
-                  "transfer function: a preset (cool-warm, grey, hot) or a file of 'range LO HI' and 'point X R G B O' lines (README)");
+                  "transfer function: a preset (cool-warm, grey, hot) or a file of 'range LO HI' and 'point X R G B O' "
+                  "lines (README)");
   sub->add_option("--range", a->range, "scalar range LO HI of the transfer function (default: the boundary's)")
       ->expected(2);
   sub->add_option("--opacity-unit-distance", a->unit_distance,

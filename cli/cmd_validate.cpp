@@ -36,7 +36,8 @@ int runValidate(const ValidateArgs& a) {
     return 0;
   }
   if (a.files.empty()) return reportError(usageError("validate: a FILE to validate is required"));
-  if (a.quick && !a.against.empty()) return reportError(usageError("validate: --quick and --against exclude each other"));
+  if (a.quick && !a.against.empty())
+    return reportError(usageError("validate: --quick and --against exclude each other"));
   ValidateOptions options;
   options.quick = a.quick;
   options.max_issues = a.max_issues;
@@ -52,9 +53,11 @@ int runValidate(const ValidateArgs& a) {
   if (gtn && a.files.size() > 1)
     return reportError(usageError("validate: one .gtn file at a time (" + std::to_string(a.files.size()) + " given)"));
   if (!gtn && (a.quick || !a.against.empty()))
-    return reportError(usageError("validate: " + a.files.front() + ": --quick and --against apply to .gtn files, not to a " +
-                                  inputFormatName(format) + " file"));
-  StatusOr<ValidationReport> report = gtn ? validateGtnFile(a.files.front(), options) : validateMeshFiles(a.files, options);
+    return reportError(usageError("validate: " + a.files.front() +
+                                  ": --quick and --against apply to .gtn files, not to a " + inputFormatName(format) +
+                                  " file"));
+  StatusOr<ValidationReport> report =
+      gtn ? validateGtnFile(a.files.front(), options) : validateMeshFiles(a.files, options);
   if (!report.isOk()) return reportError(report.status());
   std::string name = a.files.front();
   for (size_t i = 1; i < a.files.size(); ++i) name += " + " + a.files[i];
@@ -70,9 +73,11 @@ int runValidate(const ValidateArgs& a) {
 Command addValidateCommand(CLI::App& app) {
   auto args = std::make_shared<ValidateArgs>();
   CLI::App* sub = app.add_subcommand(
-      "validate", "Check a .gtn file (container, decoding, mesh, merge tree, levels) or the mesh that mesh files describe");
+      "validate",
+      "Check a .gtn file (container, decoding, mesh, merge tree, levels) or the mesh that mesh files describe");
   sub->add_option("files", args->files,
-                  "The .gtn file to check, or mesh files as 'gtn convert' takes them (PLOT3D grid [Q], TetGen, VTK, Medit, OFF, gmsh, Exodus II)");
+                  "The .gtn file to check, or mesh files as 'gtn convert' takes them (PLOT3D grid [Q], TetGen, VTK, "
+                  "Medit, OFF, gmsh, Exodus II)");
   sub->add_option("--against", args->against, "Source file(s) that level 0 must equal (up to renumbering)");
   CLI::Option* split =
       sub->add_option("--split", args->split,

@@ -67,12 +67,13 @@ void printConvertSummary(const std::vector<std::string>& input_paths, const std:
   if (out_bytes >= 0) line += " (" + std::to_string(out_bytes) + " bytes)";
   char buf[160];
   if (in_bytes > 0 && out_bytes >= 0) {
-    std::snprintf(buf, sizeof buf, ": %.2f%% of the input", 100.0 * static_cast<double>(out_bytes) / static_cast<double>(in_bytes));
+    std::snprintf(buf, sizeof buf, ": %.2f%% of the input",
+                  100.0 * static_cast<double>(out_bytes) / static_cast<double>(in_bytes));
     line += buf;
   }
   if (tets > 0 && out_bytes >= 0) {
-    std::snprintf(buf, sizeof buf, ", %.2f bits/tet (%zu tetrahedra)", 8.0 * static_cast<double>(out_bytes) / static_cast<double>(tets),
-                  tets);
+    std::snprintf(buf, sizeof buf, ", %.2f bits/tet (%zu tetrahedra)",
+                  8.0 * static_cast<double>(out_bytes) / static_cast<double>(tets), tets);
     line += buf;
   }
   std::snprintf(buf, sizeof buf, ", %.2f s", seconds);

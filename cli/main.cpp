@@ -55,7 +55,8 @@ void HeldWarnings::flush(const Status& outcome) {
 
 void printImportReport(const std::string& input, const ImportReport& r) {
   ProgressLine::erase();
-  if (r.flipped) std::fprintf(stderr, "gtn: %s: flipped %zu tetrahedra to positive orientation\n", input.c_str(), r.flipped);
+  if (r.flipped)
+    std::fprintf(stderr, "gtn: %s: flipped %zu tetrahedra to positive orientation\n", input.c_str(), r.flipped);
   if (r.zero_volume)
     std::fprintf(stderr, "gtn: %s: %zu tetrahedra have zero volume (kept)\n", input.c_str(), r.zero_volume);
   if (r.dropped_cells) std::fprintf(stderr, "gtn: %s: dropped %zu cells\n", input.c_str(), r.dropped_cells);
@@ -70,9 +71,10 @@ void printImportReport(const std::string& input, const ImportReport& r) {
 
 void warnAbout(const std::string& input, const std::string& warning) {
   // A warning that already names the input, or one of its files ("m.1" for "m.1.ele: ..."), as is.
-  const bool named = warning.rfind(input, 0) == 0 && warning.size() > input.size() &&
-                     (warning.compare(input.size(), 2, ": ") == 0 ||
-                      (warning[input.size()] == '.' && warning.find(": ", input.size()) < warning.find(' ', input.size())));
+  const bool named =
+      warning.rfind(input, 0) == 0 && warning.size() > input.size() &&
+      (warning.compare(input.size(), 2, ": ") == 0 ||
+       (warning[input.size()] == '.' && warning.find(": ", input.size()) < warning.find(' ', input.size())));
   warn(named ? warning : input + ": " + warning);
 }
 
@@ -104,7 +106,8 @@ std::string commandLineWithFileNames(const std::vector<std::string>& paths) {
     } else if (arg.size() > 2 && arg[0] == '-') {
       // --output=PATH, or -oPATH (a short option with its value attached).
       const size_t eq = arg.rfind("--", 0) == 0 ? arg.find('=') : std::string::npos;
-      if (eq != std::string::npos && isPath(arg.substr(eq + 1))) shown = arg.substr(0, eq + 1) + fileName(arg.substr(eq + 1));
+      if (eq != std::string::npos && isPath(arg.substr(eq + 1)))
+        shown = arg.substr(0, eq + 1) + fileName(arg.substr(eq + 1));
       else if (arg[1] != '-' && isPath(arg.substr(2))) shown = arg.substr(0, 2) + fileName(arg.substr(2));
     }
     if (i) out += ' ';

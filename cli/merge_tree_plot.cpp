@@ -51,12 +51,12 @@ Status plotMergeTree(GtnReader& r, const std::string& png_path) {
   GTN_ASSIGN_OR_RETURN(std::optional<MergeTreeReport> report, mergeTreeReport(r));
   if (!report) return usageError(input + ": --plot: the file stores no merge tree (written with --no-merge-tree)");
   if (report->error_curve.empty())
-    return usageError(input + ": --plot: the merge tree stores no error quantiles (no merges, or written without them)");
+    return usageError(input +
+                      ": --plot: the merge tree stores no error quantiles (no merges, or written without them)");
 
   std::error_code ec;  // TMPDIR naming no folder: an error, not an exception that aborts the program
   const std::filesystem::path temp = std::filesystem::temp_directory_path(ec);
-  if (ec)
-    return ioError(png_path + ": --plot: no folder for temporary files (" + ec.message() + "; TMPDIR names it)");
+  if (ec) return ioError(png_path + ": --plot: no folder for temporary files (" + ec.message() + "; TMPDIR names it)");
   std::string tmpl = (temp / "gtn-plot-XXXXXX").string();
   if (!mkdtemp(tmpl.data()))
     return ioError(png_path + ": --plot: cannot create a temporary folder in " + temp.string());
@@ -92,8 +92,9 @@ Status plotMergeTree(GtnReader& r, const std::string& png_path) {
         << "set label " << quoted("level " + std::to_string(row.level)) << " at " << row.ratio
         << ", graph 0.03 rotate by 90 offset -0.6,0 textcolor rgb '#555555'\n";
     }
-    g << "plot " << quoted(curve) << " using 1:3 with steps lw 2 lc rgb '#1f77b4' title 'largest merge error up to the ratio', "
-      << quoted(curve) << " using 1:2 with points pt 7 ps 0.5 lc rgb '#9ecae1' "
+    g << "plot " << quoted(curve)
+      << " using 1:3 with steps lw 2 lc rgb '#1f77b4' title 'largest merge error up to the ratio', " << quoted(curve)
+      << " using 1:2 with points pt 7 ps 0.5 lc rgb '#9ecae1' "
       << "title 'error quantiles of each stored level''s merge tree'";
     bool any_level = false;
     for (const MergeTreeLevelRow& row : report->levels) any_level |= row.largest_error.has_value();
@@ -107,8 +108,7 @@ Status plotMergeTree(GtnReader& r, const std::string& png_path) {
   const int rc = std::system(command.c_str());
   if (rc == -1 || !WIFEXITED(rc) || WEXITSTATUS(rc) != 0) {
     std::string why = readText(log);
-    if (WIFEXITED(rc) && WEXITSTATUS(rc) == 127)
-      why = "gnuplot is not installed (Debian package gnuplot-nox)";
+    if (WIFEXITED(rc) && WEXITSTATUS(rc) == 127) why = "gnuplot is not installed (Debian package gnuplot-nox)";
     return ioError(png_path + ": --plot: gnuplot failed" + (why.empty() ? std::string() : ": " + why));
   }
   GTN_ASSIGN_OR_RETURN(std::string png, readWholeFile(image));

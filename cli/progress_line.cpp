@@ -13,7 +13,8 @@ ProgressLine* g_alive = nullptr;  // the one progress line drawing now
 }  // namespace
 
 ProgressLine::ProgressLine(std::string command, bool enabled)
-    : command_(std::move(command)), active_(enabled && ::isatty(STDERR_FILENO) == 1),
+    : command_(std::move(command)),
+      active_(enabled && ::isatty(STDERR_FILENO) == 1),
       start_(std::chrono::steady_clock::now()) {
   if (!active_) return;
   {
@@ -74,8 +75,7 @@ void ProgressLine::draw() {
   if (fraction_ >= 0)
     std::snprintf(tail, sizeof tail, " %3d%%  %.1f s", static_cast<int>(std::floor(std::min(fraction_, 1.0) * 100)),
                   seconds);
-  else
-    std::snprintf(tail, sizeof tail, "  %.1f s", seconds);
+  else std::snprintf(tail, sizeof tail, "  %.1f s", seconds);
   const std::string line = command_ + ": " + stage_ + tail;
   const size_t pad = drawn_ > line.size() ? drawn_ - line.size() : 0;
   std::fprintf(stderr, "\r%s%*s", line.c_str(), static_cast<int>(pad), "");

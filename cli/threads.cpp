@@ -12,8 +12,7 @@ constexpr long kMaxThreads = 4096;
 }  // namespace
 
 void ThreadLimit::addOption(CLI::App* command) {
-  command
-      ->add_option("--threads", threads_, "Threads to use, 1 or more (default: every core)")
+  command->add_option("--threads", threads_, "Threads to use, 1 or more (default: every core)")
       ->type_name("N")
       ->check(CLI::Validator(
           [](std::string& text) -> std::string {

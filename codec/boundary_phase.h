@@ -241,8 +241,8 @@ class BoundaryPhase {
       if constexpr (kEncode) has = h_.enc()->partnerTriangle(p, q, &tri, &x_src);
       has = bnd.bit(partner_, has);
       if (!has) continue;
-      const BoundaryLoop::Candidates c = loop_.candidates(p, q, w, [&](uint32_t s) { return h_.P(s); },
-                                                          [&](uint32_t s) { return h_.isLive(s); });
+      const BoundaryLoop::Candidates c = loop_.candidates(
+          p, q, w, [&](uint32_t s) { return h_.P(s); }, [&](uint32_t s) { return h_.isLive(s); });
       uint32_t sym = 0;
       if constexpr (kEncode) sym = candidateSymbol(h_.enc()->src_slot[x_src], c.slot, c.n);
       sym = sym_[c.context].code(bnd, sym);

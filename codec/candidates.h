@@ -66,7 +66,8 @@ class ApexCandidates {
     if (gather_mark_.size() < pool_.size()) gather_mark_.resize(pool_.size(), 0);
     RawCandidate* c = raw_;
     int n = 0;
-    uint32_t across[3] = {kNoIndex, kNoIndex, kNoIndex};  // the apex of the front face across each gate edge (c, a), (a, b), (b, c)
+    uint32_t across[3] = {kNoIndex, kNoIndex,
+                          kNoIndex};  // the apex of the front face across each gate edge (c, a), (a, b), (b, c)
     if (++gather_epoch_ == kGatherEpochs) {
       std::fill(gather_mark_.begin(), gather_mark_.end(), 0);
       gather_epoch_ = 1;
@@ -205,6 +206,7 @@ class ApexCandidates {
       x.key = sweepKey(q);
     }
   }
+
  public:
   // The Delaunay order's key of q (prepareSweep first): the sweep parameter at which q is met, in
   // units of 1/64 of the face's circumradius, so that nearly cospherical candidates (every cell of
@@ -216,6 +218,7 @@ class ApexCandidates {
     const double y = t * key_scale_;
     return y < 1e18 ? floorKey(y) : 1e18;  // NaN too
   }
+
  private:
   // The circumcentre and radius of the gate face and its normal into the undecoded side.
   void prepareSweep() {
@@ -283,6 +286,7 @@ class ApexCandidates {
       evaluateGroups(cand_n_ + 1);
     }
   }
+
  public:
   // The coded symbol of `slot` (kNoIndex: a new vertex): new, 1 + its place in the chosen order among
   // the first kMaxCandidates, or escape.
@@ -300,6 +304,7 @@ class ApexCandidates {
     if (place == 0) return cand_[firstIndex()].s;
     return by_key_chosen_ ? candidateAt(place, ByKey{delaunay_first_}) : candidateAt(place, ByDistance());
   }
+
  private:
   // Index in cand_ of the first candidate of the chosen order (cand_ not empty), found once per
   // gate: the groups evaluated later have smaller multiplicities and come after it in both orders.
@@ -321,6 +326,7 @@ class ApexCandidates {
     std::nth_element(tmp, tmp + place, tmp + cand_n_, before);
     return tmp[place].s;
   }
+
  public:
   // The first kMaxCandidates candidates in the chosen order; returns their count.
   int orderedCandidates(uint32_t* out) {
@@ -328,6 +334,7 @@ class ApexCandidates {
     if (by_key_chosen_) return orderedCandidates(out, ByKey{delaunay_first_});
     return orderedCandidates(out, ByDistance());
   }
+
  private:
   template <class Before>
   int orderedCandidates(uint32_t* out, Before before) const {
@@ -353,14 +360,13 @@ class ApexCandidates {
     if (rd < rk && order_score_ > -kOrderScoreLimit) --order_score_;
   }
 
-
   const double* P(uint32_t s) const { return pool_.position(s); }
 
   const SlotPool& pool_;
   const EdgeMap& edges_;
   bool delaunay_first_ = false;  // the level's "Delaunay first" bit: rank by key before count
-  int wrong_ = 0;  // the gate's wrong side (gather)
-  int64_t apex_votes_ = 0;  // sum of orient3dCertain(a, b, c, apex) over the tetrahedra decoded so far
+  int wrong_ = 0;                // the gate's wrong side (gather)
+  int64_t apex_votes_ = 0;       // sum of orient3dCertain(a, b, c, apex) over the tetrahedra decoded so far
   // Apex candidates in both orders (section 10.4 of the spec) and which order has ranked better.
   static constexpr int kOrderScoreLimit = 32;
   struct RawCandidate {
@@ -380,8 +386,8 @@ class ApexCandidates {
   int raw_n_ = 0;
   Candidate cand_[kMaxGather];  // the evaluated ones (whole groups, best multiplicities), unordered
   int cand_n_ = 0;
-  int first_ = -1;  // firstIndex(), -1 until found
-  const FrontFace* gate_ = nullptr;  // the gate face, its side filter and predicted apex, while
+  int first_ = -1;                        // firstIndex(), -1 until found
+  const FrontFace* gate_ = nullptr;       // the gate face, its side filter and predicted apex, while
   const Orient3dFilter* side_ = nullptr;  // its candidates are evaluated
   const double* pred_ = nullptr;
   bool delaunay_ = false, swept_ready_ = false, by_key_chosen_ = false;

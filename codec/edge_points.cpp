@@ -40,7 +40,8 @@ std::vector<EdgePoint> findEdgePoints(const TetMesh& mesh) {
   for (int i = 0; i < 3; ++i) {
     box_lo[i] = std::numeric_limits<double>::infinity();
     box_hi[i] = -std::numeric_limits<double>::infinity();
-    for (uint32_t v : unused) box_lo[i] = std::min(box_lo[i], mesh.point(v)[i]), box_hi[i] = std::max(box_hi[i], mesh.point(v)[i]);
+    for (uint32_t v : unused)
+      box_lo[i] = std::min(box_lo[i], mesh.point(v)[i]), box_hi[i] = std::max(box_hi[i], mesh.point(v)[i]);
   }
   auto reachesBox = [&](uint32_t a, uint32_t b) {
     const double *p = mesh.point(a), *q = mesh.point(b);

@@ -307,7 +307,6 @@ class FaceMap {
   }
 
  private:
-
   static uint32_t smallest(const FrontFace& f) { return std::min(f.v[0], std::min(f.v[1], f.v[2])); }
 
   std::vector<uint32_t> head_;  // [smallest slot] -> first face of its chain, or kNoIndex

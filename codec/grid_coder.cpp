@@ -20,7 +20,8 @@ constexpr uint8_t kCornerDy[8] = {0, 0, 1, 1, 0, 0, 1, 1};
 constexpr uint8_t kCornerDz[8] = {0, 0, 0, 0, 1, 1, 1, 1};
 
 // The tables of mesh/hex_split.cpp (the importers' grid splitter), as section 11.1 gives them.
-constexpr std::array<uint8_t, 4> kSix[6] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+constexpr std::array<uint8_t, 4> kSix[6] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6},
+                                            {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
 constexpr std::array<uint8_t, 4> kFiveEven[5] = {{0, 2, 7, 5}, {1, 0, 5, 2}, {3, 0, 2, 7}, {4, 0, 7, 5}, {6, 2, 5, 7}};
 constexpr std::array<uint8_t, 4> kFiveOdd[5] = {{1, 3, 4, 6}, {0, 1, 3, 4}, {2, 1, 6, 3}, {5, 1, 4, 6}, {7, 3, 6, 4}};
 
@@ -172,7 +173,8 @@ Status codeExceptions(C& c, GridLayout& layout, uint64_t n_aliases, uint64_t n_e
     x.kind = static_cast<uint8_t>(m.kind.code(c, x.kind));
     if constexpr (!C::kEncoding) {
       if (!c.ok() || cell >= cells) return bad("exception " + std::to_string(r) + " names a cell beyond the piece");
-      if (x.kind > GridException::kExplicit) return bad("exception " + std::to_string(r) + " has the reserved kind " + std::to_string(x.kind));
+      if (x.kind > GridException::kExplicit)
+        return bad("exception " + std::to_string(r) + " has the reserved kind " + std::to_string(x.kind));
       x.cell = static_cast<uint32_t>(cell);
     }
     prev = cell;
@@ -180,7 +182,8 @@ Status codeExceptions(C& c, GridLayout& layout, uint64_t n_aliases, uint64_t n_e
       x.extras = static_cast<uint8_t>(m.extras.code(c, x.extras));
       const uint32_t count = m.count.code(c, static_cast<uint32_t>(x.tets.size()));
       if constexpr (!C::kEncoding) {
-        if (x.extras > kMaxExtras) return bad("exception " + std::to_string(r) + " adds " + std::to_string(x.extras) + " points (at most 8)");
+        if (x.extras > kMaxExtras)
+          return bad("exception " + std::to_string(r) + " adds " + std::to_string(x.extras) + " points (at most 8)");
         if (count == 0) return bad("explicit cell " + std::to_string(cell) + " has no tetrahedron");
         x.tets.resize(count);
       }
@@ -188,9 +191,12 @@ Status codeExceptions(C& c, GridLayout& layout, uint64_t n_aliases, uint64_t n_e
         for (int q = 0; q < 4; ++q) t[q] = static_cast<uint8_t>(m.corner[q].code(c, t[q]));
         if constexpr (!C::kEncoding) {
           for (int q = 0; q < 4; ++q) {
-            if (t[q] >= 8 + x.extras) return bad("explicit cell " + std::to_string(cell) + " names corner " + std::to_string(t[q]) + " beyond its points");
+            if (t[q] >= 8 + x.extras)
+              return bad("explicit cell " + std::to_string(cell) + " names corner " + std::to_string(t[q]) +
+                         " beyond its points");
             for (int p = 0; p < q; ++p)
-              if (t[p] == t[q]) return bad("explicit cell " + std::to_string(cell) + " has a tetrahedron that repeats a corner");
+              if (t[p] == t[q])
+                return bad("explicit cell " + std::to_string(cell) + " has a tetrahedron that repeats a corner");
           }
         }
       }
@@ -247,7 +253,8 @@ Status declareForm(C& c, DeclarationModels& dm, ValueCoder& vc, ScalarType type,
   if (isFloatType(type)) {
     if (c.bit(dm.decimal, form.decimals >= 0)) {
       const uint32_t e = c.direct(static_cast<uint32_t>(std::max(form.decimals, 0)), 5);
-      if (e > ValueCoder::kMaxDecimals) return invalidData(what + " declares " + std::to_string(e) + " decimal places (at most 22)");
+      if (e > ValueCoder::kMaxDecimals)
+        return invalidData(what + " declares " + std::to_string(e) + " decimal places (at most 22)");
       vc.setDecimals(comp, static_cast<int>(e));
       return Status::ok();
     }
@@ -272,7 +279,7 @@ Status declareForm(C& c, DeclarationModels& dm, ValueCoder& vc, ScalarType type,
 struct Scan {
   uint32_t ni, nj, nk;
   const std::vector<uint32_t>* alias_target;  // per node: the node it is, or kNoIndex; null: no alias
-  std::vector<uint64_t> extra_cell_base;        // per extra point: corner 0's node of its cell
+  std::vector<uint64_t> extra_cell_base;      // per extra point: corner 0's node of its cell
   uint64_t corner_offset[8];
   uint64_t vertices;
 };
@@ -304,7 +311,8 @@ struct Scan {
 // mean of its cell's corners. codeOne(component, vertex, prediction, &value) codes one value; `ok()`
 // is asked after each k-plane and at the end, and false stops the walk (returned).
 template <class F, class Ok>
-bool scanValues(const Scan& scan, uint32_t comps, const std::vector<Form>& forms, std::vector<double>& d, F&& codeOne, Ok&& ok) {
+bool scanValues(const Scan& scan, uint32_t comps, const std::vector<Form>& forms, std::vector<double>& d, F&& codeOne,
+                Ok&& ok) {
   const uint64_t nodes = uint64_t{scan.ni} * scan.nj * scan.nk;
   d.resize(nodes * comps);
   uint8_t predictors[64];
@@ -327,7 +335,8 @@ bool scanValues(const Scan& scan, uint32_t comps, const std::vector<Form>& forms
           for (uint32_t cc = 0; cc < comps; ++cc) codeOne(cc, v, lorenzo(p + cc, i, j, k, si, sj, sk), p + cc);
         } else {
           for (uint32_t cc = 0; cc < comps; ++cc)
-            codeOne(cc, v, predict(cc < 64 ? predictors[cc] : forms[cc].predictor, p + cc, i, j, k, si, sj, sk), p + cc);
+            codeOne(cc, v, predict(cc < 64 ? predictors[cc] : forms[cc].predictor, p + cc, i, j, k, si, sj, sk),
+                    p + cc);
         }
         ++v;
       }
@@ -371,7 +380,8 @@ Status codeValueStream(C& c, ScalarType type, uint32_t comps, const Scan& scan, 
     rawFromKey(type, key, raw);
     *out = doubleFromRaw(type, raw);
   };
-  if (!scanValues(scan, comps, forms, d, codeOne, [&] { return c.ok(); })) return invalidData(what + " is truncated or corrupt");
+  if (!scanValues(scan, comps, forms, d, codeOne, [&] { return c.ok(); }))
+    return invalidData(what + " is truncated or corrupt");
   return Status::ok();
 }
 
@@ -522,8 +532,8 @@ std::vector<uint8_t> codeLengths(std::vector<uint64_t> freq) {
 // decoder's table of kTableBits bits with a slow path for longer codes.
 struct PrefixCode {
   std::vector<uint8_t> len;
-  std::vector<uint32_t> code;  // reversed
-  int single = -1;             // the only symbol, coded in no bits
+  std::vector<uint32_t> code;   // reversed
+  int single = -1;              // the only symbol, coded in no bits
   std::vector<uint16_t> table;  // entry: symbol << 4 | length, 0 = longer than kTableBits
   uint16_t count[kMaxCodeLength + 1] = {};
   std::vector<uint16_t> sorted;  // symbols by (length, symbol)
@@ -593,9 +603,9 @@ struct PrefixCode {
 // symbols.
 constexpr int kRunSymbols = 31;  // runs of 2^(b - 1) .. 2^b - 1 zero residuals, b = 2..32
 struct Form1Domain {
-  int w = 0;             // residual width
+  int w = 0;  // residual width
   int shift = 0;
-  bool escape = false;   // decimal: an escape symbol 2w + 1, then the value's residual at the full width
+  bool escape = false;  // decimal: an escape symbol 2w + 1, then the value's residual at the full width
   uint32_t escapeSymbol() const { return 4 * static_cast<uint32_t>(w) - 1; }
   uint32_t runBase() const { return escapeSymbol() + (escape ? 1 : 0); }
   size_t symbols() const { return runBase() + kRunSymbols; }
@@ -655,7 +665,8 @@ constexpr int kForm1Classes = 18;
 }
 
 // The prediction in a component's form-1 domain.
-[[gnu::always_inline]] inline uint64_t domainPrediction(ScalarType type, const Form& f, const Form1Domain& dom, uint64_t pred_key) {
+[[gnu::always_inline]] inline uint64_t domainPrediction(ScalarType type, const Form& f, const Form1Domain& dom,
+                                                        uint64_t pred_key) {
   if (!f.table.empty()) {
     const std::vector<uint64_t>& t = f.table;
     size_t at = static_cast<size_t>(std::lower_bound(t.begin(), t.end(), pred_key) - t.begin());
@@ -665,7 +676,8 @@ constexpr int kForm1Classes = 18;
   if (f.decimals >= 0) {
     uint8_t raw[8];
     rawFromKey(type, pred_key, raw);
-    const double np = value_detail::clampRound(doubleFromRaw(type, raw) * kPowersOfTen[f.decimals], -kDecimalLimit, kDecimalLimit);
+    const double np =
+        value_detail::clampRound(doubleFromRaw(type, raw) * kPowersOfTen[f.decimals], -kDecimalLimit, kDecimalLimit);
     return static_cast<uint64_t>(static_cast<int64_t>(np)) ^ (uint64_t{1} << 63);
   }
   return pred_key >> dom.shift;
@@ -696,15 +708,17 @@ void markRuns(const std::vector<Form1Token>& tokens, uint64_t min_run, std::vect
 }
 
 // The symbol frequencies per class of a component's tokens with `runs`.
-std::vector<std::vector<uint64_t>> form1Frequencies(const std::vector<Form1Token>& tokens, const std::vector<uint32_t>& runs,
-                                                    const Form1Domain& dom, size_t ni, uint64_t* run_bits) {
+std::vector<std::vector<uint64_t>> form1Frequencies(const std::vector<Form1Token>& tokens,
+                                                    const std::vector<uint32_t>& runs, const Form1Domain& dom,
+                                                    size_t ni, uint64_t* run_bits) {
   std::vector<std::vector<uint64_t>> freq(kForm1Classes, std::vector<uint64_t>(dom.symbols(), 0));
   uint32_t last = 0;
   *run_bits = 0;
   for (size_t v = 0; v < tokens.size();) {
     if (runs[v]) {
       const int b = bitLength(runs[v]);
-      ++freq[form1Class(last, v >= ni ? symbolBits(tokens[v - ni].symbol) : 0)][dom.runBase() + static_cast<uint32_t>(b - 2)];
+      ++freq[form1Class(last, v >= ni ? symbolBits(tokens[v - ni].symbol) : 0)]
+            [dom.runBase() + static_cast<uint32_t>(b - 2)];
       *run_bits += static_cast<uint64_t>(b - 1);
       last = kAfterRun;
       v += runs[v];
@@ -790,7 +804,8 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
   for (uint32_t cc = 0; cc < comps; ++cc) {
     uint64_t best = std::numeric_limits<uint64_t>::max();
     std::vector<uint32_t> trial;
-    for (uint64_t min_run : {uint64_t{2}, uint64_t{3}, uint64_t{4}, uint64_t{8}, uint64_t{16}, uint64_t{32}, uint64_t{1} << 32}) {
+    for (uint64_t min_run :
+         {uint64_t{2}, uint64_t{3}, uint64_t{4}, uint64_t{8}, uint64_t{16}, uint64_t{32}, uint64_t{1} << 32}) {
       markRuns(tokens[cc], min_run, &trial);
       uint64_t run_bits = 0;
       const uint64_t bits = form1CodeBits(form1Frequencies(tokens[cc], trial, dom[cc], scan.ni, &run_bits), run_bits);
@@ -875,7 +890,8 @@ bool encodeForm1(ScalarType type, uint32_t comps, const Scan& scan, const std::v
       raw_symbol = t.escape_symbol;
       if (ec.single < 0) w.put(ec.code[raw_symbol], ec.len[raw_symbol]);
     }
-    if (raw_symbol >= 3) w.put(t.mag, static_cast<int>((raw_symbol - 3) >> 2));  // below the leading one and the next (put masks them off)
+    if (raw_symbol >= 3)
+      w.put(t.mag, static_cast<int>((raw_symbol - 3) >> 2));  // below the leading one and the next (put masks them off)
   };
   scanValues(scan, comps, forms, d, write, [] { return true; });
   w.finish();
@@ -929,13 +945,14 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
       if (!r.get(1)) continue;
       const size_t listed = static_cast<size_t>(r.get(9));
       if (listed == 0 || listed > dom[cc].symbols())
-        return bad(comp + " lists " + std::to_string(listed) + " code lengths in class " + std::to_string(k) + " (1 to " +
-                   std::to_string(dom[cc].symbols()) + ")");
+        return bad(comp + " lists " + std::to_string(listed) + " code lengths in class " + std::to_string(k) +
+                   " (1 to " + std::to_string(dom[cc].symbols()) + ")");
       pc.len.assign(dom[cc].symbols(), 0);
       for (size_t s = 0; s < listed;) {
         if (!r.get(1)) {
           s += static_cast<size_t>(r.get(5)) + 1;  // unused symbols
-          if (s >= listed) return bad(comp + " lists code lengths in class " + std::to_string(k) + " that end with an unused symbol");
+          if (s >= listed)
+            return bad(comp + " lists code lengths in class " + std::to_string(k) + " that end with an unused symbol");
           continue;
         }
         pc.len[s] = static_cast<uint8_t>(r.get(4));
@@ -1210,11 +1227,13 @@ Status codeCellField(C& c, const FieldDesc& desc, const CellScan& scan, const ui
       uint8_t* out = C::kEncoding ? nullptr : dst + t * item;
       uint8_t value_buf[64];
       uint8_t* value = C::kEncoding ? value_buf : out;
-      if (item > sizeof value_buf && C::kEncoding) return invalidData(what + ": a cell field item of more than 64 bytes");
+      if (item > sizeof value_buf && C::kEncoding)
+        return invalidData(what + ": a cell field item of more than 64 bytes");
       if (s == 0) {
         std::memcpy(value, P, item);
       } else if (s <= 8) {
-        if (s > mtf_size) return invalidData(what + " names entry " + std::to_string(s) + " of a shorter recent-value list");
+        if (s > mtf_size)
+          return invalidData(what + " names entry " + std::to_string(s) + " of a shorter recent-value list");
         std::memcpy(value, &mtf[(s - 1) * item], item);
       } else if (s <= 11) {
         if (s - 9 >= n_nb) return invalidData(what + " names a grid neighbour the cell does not have");
@@ -1288,7 +1307,8 @@ std::vector<uint32_t> aliasTargets(const GridLayout& layout) {
 }
 
 uint8_t flagsOf(const GridLayout& l) {
-  return static_cast<uint8_t>((l.split == 5 ? (l.parity & 1) : 0) | (l.left_handed ? 2 : 0) | (l.cell_values_per_cell ? 4 : 0));
+  return static_cast<uint8_t>((l.split == 5 ? (l.parity & 1) : 0) | (l.left_handed ? 2 : 0) |
+                              (l.cell_values_per_cell ? 4 : 0));
 }
 
 void storeCoordinate(ScalarType type, double v, uint8_t* out) {
@@ -1336,17 +1356,21 @@ Status checkGridLayout(const GridLayout& l, const std::string& what) {
     if (e.cell >= l.cells() || (x > 0 && e.cell <= l.exceptions[x - 1].cell))
       return bad("exception " + std::to_string(x) + " is not in increasing cell order inside the block");
     if (e.kind == GridException::kBlanked) {
-      if (!e.tets.empty() || e.extras) return bad("blanked cell " + std::to_string(e.cell) + " lists tetrahedra or points");
+      if (!e.tets.empty() || e.extras)
+        return bad("blanked cell " + std::to_string(e.cell) + " lists tetrahedra or points");
       continue;
     }
     if (e.kind != GridException::kExplicit) return bad("exception " + std::to_string(x) + " of an unknown kind");
-    if (e.tets.empty() || e.tets.size() > kMaxExplicitTets) return bad("explicit cell " + std::to_string(e.cell) + " with 0 or more than 31 tetrahedra");
+    if (e.tets.empty() || e.tets.size() > kMaxExplicitTets)
+      return bad("explicit cell " + std::to_string(e.cell) + " with 0 or more than 31 tetrahedra");
     if (e.extras > kMaxExtras) return bad("explicit cell " + std::to_string(e.cell) + " adds more than 8 points");
     for (const auto& t : e.tets)
       for (int q = 0; q < 4; ++q) {
-        if (t[q] >= 8 + e.extras) return bad("explicit cell " + std::to_string(e.cell) + " names a corner beyond its points");
+        if (t[q] >= 8 + e.extras)
+          return bad("explicit cell " + std::to_string(e.cell) + " names a corner beyond its points");
         for (int p = 0; p < q; ++p)
-          if (t[p] == t[q]) return bad("explicit cell " + std::to_string(e.cell) + " has a tetrahedron that repeats a corner");
+          if (t[p] == t[q])
+            return bad("explicit cell " + std::to_string(e.cell) + " has a tetrahedron that repeats a corner");
       }
   }
   if (l.tets() >= kPieceLimit) return bad("2^32 tetrahedra or more");
@@ -1377,7 +1401,8 @@ std::vector<Tet> gridTets(const GridLayout& l) {
           continue;
         }
         const bool odd = ((i + j + k + l.parity) & 1) != 0;
-        for (const auto& t : gridRuleTets(l.split, odd)) out.push_back({corner[t[0]], corner[t[1]], corner[t[a2]], corner[t[a3]]});
+        for (const auto& t : gridRuleTets(l.split, odd))
+          out.push_back({corner[t[0]], corner[t[1]], corner[t[a2]], corner[t[a3]]});
       }
   return out;
 }
@@ -1388,7 +1413,8 @@ StatusOr<GridLayout> matchGridLayout(const TetMesh& mesh, const uint32_t dims[3]
   for (int a = 0; a < 3; ++a)
     if (dims[a] < 2) return invalidData("a grid dimension below 2");
   if (probe.nodes() > mesh.numPoints()) return invalidData("the mesh has fewer points than the grid has nodes");
-  if (probe.nodes() >= kPieceLimit || mesh.numPoints() >= kPieceLimit) return invalidData("a piece of 2^32 points or more");
+  if (probe.nodes() >= kPieceLimit || mesh.numPoints() >= kPieceLimit)
+    return invalidData("a piece of 2^32 points or more");
   const CellGeometry g(probe);
   const uint64_t nodes = probe.nodes(), points = mesh.numPoints(), T = mesh.tets.size();
   uint64_t off[8];
@@ -1397,7 +1423,8 @@ StatusOr<GridLayout> matchGridLayout(const TetMesh& mesh, const uint32_t dims[3]
     uint8_t split, parity;
     bool left;
   };
-  const Candidate candidates[6] = {{5, 0, false}, {5, 1, false}, {6, 0, false}, {5, 0, true}, {5, 1, true}, {6, 0, true}};
+  const Candidate candidates[6] = {{5, 0, false}, {5, 1, false}, {6, 0, false},
+                                   {5, 0, true},  {5, 1, true},  {6, 0, true}};
   std::optional<GridLayout> best;
   std::string failure = "the tetrahedra do not come cell by cell";
   for (const Candidate& cand : candidates) {
@@ -1481,8 +1508,9 @@ StatusOr<GridLayout> matchGridLayout(const TetMesh& mesh, const uint32_t dims[3]
     }
     best = std::move(l);
   }
-  if (!best) return invalidData("the mesh is not this " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
-                                    std::to_string(dims[2]) + " grid: " + failure);
+  if (!best)
+    return invalidData("the mesh is not this " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
+                       std::to_string(dims[2]) + " grid: " + failure);
   return std::move(*best);
 }
 
@@ -1494,30 +1522,36 @@ GridSchema gridSchemaOf(const TetMesh& mesh) {
   return s;
 }
 
-StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const TetMesh& mesh, const GridEncodeOptions& options,
-                                               GridEncodeReport* report) {
+StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const TetMesh& mesh,
+                                               const GridEncodeOptions& options, GridEncodeReport* report) {
   GTN_RETURN_IF_ERROR(checkGridLayout(layout, "structured piece"));
-  if (options.predictor > 2) return usageError("structured piece: predictor " + std::to_string(options.predictor) + " (0 to 2)");
+  if (options.predictor > 2)
+    return usageError("structured piece: predictor " + std::to_string(options.predictor) + " (0 to 2)");
   const uint64_t V = layout.vertices();
   if (mesh.numPoints() != V)
-    return usageError("structured piece: the mesh has " + std::to_string(mesh.numPoints()) + " points, the layout " + std::to_string(V));
+    return usageError("structured piece: the mesh has " + std::to_string(mesh.numPoints()) + " points, the layout " +
+                      std::to_string(V));
   if (mesh.tets != gridTets(layout)) return usageError("structured piece: the mesh's tetrahedra are not the layout's");
   if (mesh.coord_type != ScalarType::kFloat32 && mesh.coord_type != ScalarType::kFloat64)
     return usageError("structured piece: coordinates must be float32 or float64");
   for (const Field& f : mesh.point_fields)
     if (f.itemCount() != V || f.components == 0 || f.components > 64)
-      return usageError("structured piece: point field '" + f.name + "' has not one item per point (of 1..64 components)");
+      return usageError("structured piece: point field '" + f.name +
+                        "' has not one item per point (of 1..64 components)");
   for (const Field& f : mesh.cell_fields)
     if (f.itemCount() != mesh.tets.size() || f.components == 0 || (f.components * f.valueSize()) > 64)
-      return usageError("structured piece: cell field '" + f.name + "' has not one item per tetrahedron (of at most 64 bytes)");
+      return usageError("structured piece: cell field '" + f.name +
+                        "' has not one item per tetrahedron (of at most 64 bytes)");
   const CellScan cscan = cellScan(layout);
   if (layout.cell_values_per_cell) {
     for (const Field& f : mesh.cell_fields)
       for (uint64_t cell = 0; cell + 1 < cscan.first.size(); ++cell)
         for (uint32_t t = cscan.first[cell] + 1; t < cscan.first[cell + 1]; ++t)
-          if (std::memcmp(&f.bytes[t * (f.components * f.valueSize())], &f.bytes[cscan.first[cell] * (f.components * f.valueSize())], (f.components * f.valueSize())) != 0)
-            return usageError("structured piece: cell field '" + f.name + "' differs within cell " + std::to_string(cell) +
-                                   ", but the layout codes cell values per cell");
+          if (std::memcmp(&f.bytes[t * (f.components * f.valueSize())],
+                          &f.bytes[cscan.first[cell] * (f.components * f.valueSize())],
+                          (f.components * f.valueSize())) != 0)
+            return usageError("structured piece: cell field '" + f.name + "' differs within cell " +
+                              std::to_string(cell) + ", but the layout codes cell values per cell");
   }
   const std::vector<uint32_t> targets = aliasTargets(layout);
   const Scan scan = valueScan(layout, targets.empty() ? nullptr : &targets);
@@ -1529,7 +1563,8 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
   if (!layout.aliases.empty() || !layout.exceptions.empty()) {
     EntropyCoder<true> c(&excp);
     GridLayout copy = layout;
-    GTN_RETURN_IF_ERROR(codeExceptions(c, copy, layout.aliases.size(), layout.exceptions.size(), layout.extras(), what));
+    GTN_RETURN_IF_ERROR(
+        codeExceptions(c, copy, layout.aliases.size(), layout.exceptions.size(), layout.extras(), what));
     c.finish();
   }
 
@@ -1589,13 +1624,16 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
   };
 
   std::vector<uint8_t> coords(V * 3 * scalarSize(mesh.coord_type));
-  for (uint64_t i = 0; i < V * 3; ++i) storeCoordinate(mesh.coord_type, mesh.coords[i], &coords[i * scalarSize(mesh.coord_type)]);
-  GTN_ASSIGN_OR_RETURN(auto geom_stream, valueStream(mesh.coord_type, 3, coords.data(), 3 * scalarSize(mesh.coord_type), "GEOM"));
+  for (uint64_t i = 0; i < V * 3; ++i)
+    storeCoordinate(mesh.coord_type, mesh.coords[i], &coords[i * scalarSize(mesh.coord_type)]);
+  GTN_ASSIGN_OR_RETURN(auto geom_stream,
+                       valueStream(mesh.coord_type, 3, coords.data(), 3 * scalarSize(mesh.coord_type), "GEOM"));
   std::vector<uint8_t> geom = std::move(geom_stream.second);
   std::vector<uint8_t> forms{0, 0, geom_stream.first};  // EXCP, GRID, GEOM, then the fields'
   std::vector<std::vector<uint8_t>> pfld, cfld;
   for (const Field& f : mesh.point_fields) {
-    GTN_ASSIGN_OR_RETURN(auto s, valueStream(f.type, f.components, f.bytes.data(), (f.components * f.valueSize()), "PFLD"));
+    GTN_ASSIGN_OR_RETURN(auto s,
+                         valueStream(f.type, f.components, f.bytes.data(), (f.components * f.valueSize()), "PFLD"));
     forms.push_back(s.first);
     pfld.push_back(std::move(s.second));
   }
@@ -1605,7 +1643,8 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
     for (uint32_t cc = 0; cc < f.components; ++cc) {
       int z = scalarBits(f.type) - 1;
       for (size_t t = 0; t < mesh.tets.size() && z > 0; ++t)
-        z = std::min(z, ValueCoder::trailingZeros(f.type, &f.bytes[t * (f.components * f.valueSize()) + cc * f.valueSize()]));
+        z = std::min(
+            z, ValueCoder::trailingZeros(f.type, &f.bytes[t * (f.components * f.valueSize()) + cc * f.valueSize()]));
       forms[cc].shift = mesh.tets.empty() ? 0 : static_cast<uint32_t>(z);
     }
     std::vector<uint8_t> out;
@@ -1618,7 +1657,7 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
 
   // The piece: structured header, stream table, streams.
   std::vector<uint8_t> piece;
-  putVarint(piece, 0);  // block
+  putVarint(piece, 0);                              // block
   for (int a = 0; a < 3; ++a) putVarint(piece, 0);  // origin
   for (int a = 0; a < 3; ++a) putVarint(piece, layout.dims[a]);
   piece.push_back(layout.split);
@@ -1649,7 +1688,8 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
   return piece;
 }
 
-StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const GridSchema& schema, const std::string& what) {
+StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const GridSchema& schema,
+                                           const std::string& what) {
   Reader r(bytes, what);
   DecodedGridPiece out;
   GridLayout& l = out.layout;
@@ -1667,7 +1707,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   }
   if (l.nodes() >= kPieceLimit) return r.fail("dims", "2^32 nodes or more");
   if (l.nodes() > kMaxNodesPerByte * bytes.size())
-    return r.fail("dims", std::to_string(l.nodes()) + " nodes in a piece of " + std::to_string(bytes.size()) + " bytes");
+    return r.fail("dims",
+                  std::to_string(l.nodes()) + " nodes in a piece of " + std::to_string(bytes.size()) + " bytes");
   uint8_t split = 0, flags = 0;
   GTN_RETURN_IF_ERROR(r.u8(&split, "split"));
   if (split != 5 && split != 6) return r.fail("split", "split " + std::to_string(split) + " (5 or 6)");
@@ -1680,11 +1721,16 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   l.cell_values_per_cell = (flags & 4) != 0;
   uint64_t n_exceptions = 0, n_extra = 0, n_aliases = 0;
   GTN_RETURN_IF_ERROR(r.varint(&n_exceptions, "n_exceptions"));
-  if (n_exceptions > l.cells()) return r.fail("n_exceptions", std::to_string(n_exceptions) + " exceptions in " + std::to_string(l.cells()) + " cells");
+  if (n_exceptions > l.cells())
+    return r.fail("n_exceptions",
+                  std::to_string(n_exceptions) + " exceptions in " + std::to_string(l.cells()) + " cells");
   GTN_RETURN_IF_ERROR(r.varint(&n_extra, "n_extra"));
-  if (n_extra > kMaxExtras * n_exceptions) return r.fail("n_extra", std::to_string(n_extra) + " extra points in " + std::to_string(n_exceptions) + " exceptions");
+  if (n_extra > kMaxExtras * n_exceptions)
+    return r.fail("n_extra",
+                  std::to_string(n_extra) + " extra points in " + std::to_string(n_exceptions) + " exceptions");
   GTN_RETURN_IF_ERROR(r.varint(&n_aliases, "n_aliases"));
-  if (n_aliases >= l.nodes()) return r.fail("n_aliases", std::to_string(n_aliases) + " aliases of " + std::to_string(l.nodes()) + " nodes");
+  if (n_aliases >= l.nodes())
+    return r.fail("n_aliases", std::to_string(n_aliases) + " aliases of " + std::to_string(l.nodes()) + " nodes");
   uint64_t n_streams = 0;
   const uint64_t want_streams = 3 + schema.point_fields.size() + schema.cell_fields.size();
   GTN_RETURN_IF_ERROR(r.varint(&n_streams, "n_streams"));
@@ -1698,14 +1744,16 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     GTN_RETURN_IF_ERROR(r.u8(&form, "stream form"));
     const bool values = s >= 2 && s < 3 + schema.point_fields.size();
     if (form > (values ? 1 : 0))
-      return r.fail("stream form", "form " + std::to_string(form) + " for stream " + std::to_string(s) +
-                                       (values ? " (GEOM and PFLD use form 0 or 1 here)" : " (EXCP, GRID and CFLD use form 0)"));
+      return r.fail("stream form",
+                    "form " + std::to_string(form) + " for stream " + std::to_string(s) +
+                        (values ? " (GEOM and PFLD use form 0 or 1 here)" : " (EXCP, GRID and CFLD use form 0)"));
     GTN_RETURN_IF_ERROR(r.varint(&sizes[s], "stream size"));
     if (sizes[s] > r.remaining()) return r.fail("stream size", "a stream larger than the piece");
     total += sizes[s];
   }
   if (total != r.remaining())
-    return r.fail("stream table", "the streams add up to " + std::to_string(total) + " bytes, the piece holds " + std::to_string(r.remaining()));
+    return r.fail("stream table", "the streams add up to " + std::to_string(total) + " bytes, the piece holds " +
+                                      std::to_string(r.remaining()));
   std::vector<std::span<const uint8_t>> streams;
   size_t at = r.position();
   for (uint64_t s = 0; s < n_streams; ++s) {
@@ -1741,7 +1789,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     } else {
       EntropyCoder<false> c(streams[2]);
       std::vector<Form> declared;
-      GTN_RETURN_IF_ERROR(codeValueStream(c, m.coord_type, 3, scan, declared, nullptr, 0, raw.data(), d, what + ": GEOM stream"));
+      GTN_RETURN_IF_ERROR(
+          codeValueStream(c, m.coord_type, 3, scan, declared, nullptr, 0, raw.data(), d, what + ": GEOM stream"));
       if (!c.finishedCleanly()) return invalidData(what + ": GEOM stream is corrupt, truncated or has trailing bytes");
     }
     m.coords.resize(V * 3);
@@ -1749,7 +1798,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   }
   for (size_t f = 0; f < schema.point_fields.size(); ++f) {
     const FieldDesc& desc = schema.point_fields[f];
-    if (desc.components == 0 || desc.components > 64) return usageError(what + ": point field '" + desc.name + "' of 0 or more than 64 components");
+    if (desc.components == 0 || desc.components > 64)
+      return usageError(what + ": point field '" + desc.name + "' of 0 or more than 64 components");
     Field field(desc.name, desc.components, desc.type, V);
     const std::string name = what + ": PFLD stream '" + desc.name + "'";
     if (forms[3 + f] == 1) {
@@ -1757,7 +1807,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     } else {
       EntropyCoder<false> c(streams[3 + f]);
       std::vector<Form> declared;
-      GTN_RETURN_IF_ERROR(codeValueStream(c, desc.type, desc.components, scan, declared, nullptr, 0, field.bytes.data(), d, name));
+      GTN_RETURN_IF_ERROR(
+          codeValueStream(c, desc.type, desc.components, scan, declared, nullptr, 0, field.bytes.data(), d, name));
       if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
     }
     m.point_fields.push_back(std::move(field));
@@ -1767,7 +1818,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     const CellScan cscan = cellScan(l);
     for (size_t f = 0; f < schema.cell_fields.size(); ++f) {
       const FieldDesc& desc = schema.cell_fields[f];
-      if (desc.components == 0 || desc.itemBytes() > 64) return usageError(what + ": cell field '" + desc.name + "' of 0 components or more than 64 bytes");
+      if (desc.components == 0 || desc.itemBytes() > 64)
+        return usageError(what + ": cell field '" + desc.name + "' of 0 components or more than 64 bytes");
       Field field(desc.name, desc.components, desc.type, m.tets.size());
       const std::string name = what + ": CFLD stream '" + desc.name + "'";
       EntropyCoder<false> c(streams[3 + schema.point_fields.size() + f]);

@@ -41,10 +41,10 @@ struct GridException {
 // and the exceptions. Its vertices are the nodes that are not aliases, in node order, then the extra
 // points of the exceptions in record order; its tetrahedra those of gridTets.
 struct GridLayout {
-  uint32_t dims[3] = {2, 2, 2};  // node counts ni, nj, nk, each >= 2
-  uint8_t split = 5;             // 5 or 6
-  uint8_t parity = 0;            // 5-split: cell (i, j, k) is odd when (i + j + k + parity) is
-  bool left_handed = false;      // every rule tetrahedron has its last two corners exchanged
+  uint32_t dims[3] = {2, 2, 2};       // node counts ni, nj, nk, each >= 2
+  uint8_t split = 5;                  // 5 or 6
+  uint8_t parity = 0;                 // 5-split: cell (i, j, k) is odd when (i + j + k + parity) is
+  bool left_handed = false;           // every rule tetrahedron has its last two corners exchanged
   bool cell_values_per_cell = false;  // cell fields coded once per cell (every tetrahedron of a cell alike)
   std::vector<std::pair<uint32_t, uint32_t>> aliases;  // (node a, node t it is), t < a, a increasing
   std::vector<GridException> exceptions;               // in increasing cell order
@@ -112,7 +112,8 @@ GridSchema gridSchemaOf(const TetMesh& mesh);
 // gridTets(layout), its cell fields one value per tetrahedron. Fails (kUsage; kInvalidData for a layout
 // that fails checkGridLayout) otherwise.
 StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const TetMesh& mesh,
-                                               const GridEncodeOptions& options = {}, GridEncodeReport* report = nullptr);
+                                               const GridEncodeOptions& options = {},
+                                               GridEncodeReport* report = nullptr);
 
 struct DecodedGridPiece {
   GridLayout layout;

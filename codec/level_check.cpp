@@ -51,7 +51,8 @@ class LosslessCheckSink : public MeshSink {
     return Status::ok();
   }
   Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) override {
-    if (id != vertices_ || id >= vertex_src_.size()) return mismatch("vertex " + std::to_string(id) + " is not expected");
+    if (id != vertices_ || id >= vertex_src_.size())
+      return mismatch("vertex " + std::to_string(id) + " is not expected");
     ++vertices_;
     const uint32_t v = vertex_src_[id];
     const std::string which = "source point " + std::to_string(v) + " (decoded " + std::to_string(id) + ")";

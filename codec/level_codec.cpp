@@ -66,18 +66,13 @@ namespace {
 
 using namespace level;
 
-
-
-
-
-
 // What the encoder knows and the decoder does not.
 struct EncoderSide {
   const TetMesh* mesh = nullptr;
   bool delaunay_first = false;  // the level's "Delaunay first" bit (looksDelaunay)
   const std::vector<uint32_t>* neighbor = nullptr;
-  std::vector<uint32_t> src_slot;  // source vertex -> live slot
-  std::vector<uint32_t> slot_src;  // slot -> source vertex
+  std::vector<uint32_t> src_slot;   // source vertex -> live slot
+  std::vector<uint32_t> slot_src;   // slot -> source vertex
   std::vector<uint32_t> remaining;  // tetrahedra of each source vertex not yet coded
   std::vector<uint8_t> tet_done;
   struct BoundaryTri {
@@ -173,7 +168,8 @@ class LevelCoder {
     for (const FieldDesc& d : header.cell_fields) cf_vc_.emplace_back(d.type, d.components);
     pred_vals_.resize(std::max<size_t>(1, item_bytes_));
     for (size_t f = 0; f < header.point_fields.size(); ++f)
-      for (uint32_t c = 0; c < header.point_fields[f].components; ++c) comp_type_.push_back(header.point_fields[f].type);
+      for (uint32_t c = 0; c < header.point_fields[f].components; ++c)
+        comp_type_.push_back(header.point_fields[f].type);
     alias_.assign(comp_type_.size(), kNoIndex);
     field_coded_comps_.resize(header.point_fields.size());
     for (size_t f = 0; f < header.point_fields.size(); ++f) field_coded_comps_[f] = header.point_fields[f].components;
@@ -268,13 +264,15 @@ class LevelCoder {
         if (pf_packed_[f]) {
           GTN_RETURN_IF_ERROR(packedEnd(*pf_readers_[f]));
         } else if (!pf_[f]->finishedCleanly()) {
-          return bad("point field stream '" + header_.point_fields[f].name + "' is corrupt, truncated or has trailing bytes");
+          return bad("point field stream '" + header_.point_fields[f].name +
+                     "' is corrupt, truncated or has trailing bytes");
         }
       }
       for (size_t f = 0; f < cf_.size(); ++f) {
         if (cf_skip_[f]) continue;
         if (!cf_packed_[f] && !cf_[f]->finishedCleanly())
-          return bad("cell field stream '" + header_.cell_fields[f].name + "' is corrupt, truncated or has trailing bytes");
+          return bad("cell field stream '" + header_.cell_fields[f].name +
+                     "' is corrupt, truncated or has trailing bytes");
         if (cf_packed_[f] || cf_split_[f]) GTN_RETURN_IF_ERROR(packedEnd(*cf_readers_[f]));
       }
       GTN_RETURN_IF_ERROR(sink_->endLevel());
@@ -290,7 +288,8 @@ class LevelCoder {
     if (pool_.slot_bytes == item_bytes_) return &pool_.vals[s * pool_.slot_bytes];
     for (size_t f = 0; f < header_.point_fields.size(); ++f)
       if (!pf_skip_[f])
-        std::memcpy(&sink_vals_[pf_offset_[f]], &pool_.vals[s * pool_.slot_bytes + slot_off_[f]], header_.point_fields[f].itemBytes());
+        std::memcpy(&sink_vals_[pf_offset_[f]], &pool_.vals[s * pool_.slot_bytes + slot_off_[f]],
+                    header_.point_fields[f].itemBytes());
     return sink_vals_.data();
   }
 
@@ -349,7 +348,8 @@ class LevelCoder {
   // repeats of repeats along.
   void keepRepeatedFields() {
     std::vector<size_t> field_of;
-    for (size_t f = 0; f < header_.point_fields.size(); ++f) field_of.insert(field_of.end(), header_.point_fields[f].components, f);
+    for (size_t f = 0; f < header_.point_fields.size(); ++f)
+      field_of.insert(field_of.end(), header_.point_fields[f].components, f);
     for (size_t k = field_of.size(); k-- > 0;)
       if (!pf_skip_[field_of[k]] && alias_[k] != kNoIndex) pf_skip_[field_of[alias_[k]]] = 0;
   }
@@ -383,7 +383,8 @@ class LevelCoder {
           const Field& src = enc_->mesh->point_fields[f];
           form = chooseValueForm(d.type, src.bytes.data() + c * scalarSize(d.type), src.itemCount(), d.itemBytes());
         }
-        const std::string error = codeValueForm(*pf_[f], form_models_, pf_vc_[f], d.type, c, std::move(form), header_.points);
+        const std::string error =
+            codeValueForm(*pf_[f], form_models_, pf_vc_[f], d.type, c, std::move(form), header_.points);
         if (!error.empty()) return bad("point field '" + d.name + "'" + error);
       }
     }
@@ -395,7 +396,8 @@ class LevelCoder {
           const Field& src = enc_->mesh->cell_fields[f];
           form = chooseValueForm(d.type, src.bytes.data() + c * scalarSize(d.type), src.itemCount(), d.itemBytes());
         }
-        const std::string error = codeValueForm(*cf_[f], form_models_, cf_vc_[f], d.type, c, std::move(form), header_.tets);
+        const std::string error =
+            codeValueForm(*cf_[f], form_models_, cf_vc_[f], d.type, c, std::move(form), header_.tets);
         if (!error.empty()) return bad("cell field '" + d.name + "'" + error);
       }
     }
@@ -421,9 +423,7 @@ class LevelCoder {
     const Status st = r.finish();
     return st.isOk() ? st : bad(st.message());
   }
-  Status internal(const std::string& reason) const {
-    return invalidData("encodeLevel: inconsistent mesh: " + reason);
-  }
+  Status internal(const std::string& reason) const { return invalidData("encodeLevel: inconsistent mesh: " + reason); }
 
   // ---- slot pool -------------------------------------------------------------------------------
   // A slot for a new vertex; the per-slot arrays of the other parts grow with the pool's.
@@ -468,7 +468,8 @@ class LevelCoder {
   double fieldRule(uint32_t r, const FieldPrediction& fp, ScalarType type, size_t off) const {
     if (r >= kRules) return doubleFromRaw(type, &pool_.vals[near_[r - kRules] * pool_.slot_bytes + off]);
     double x[4];
-    for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoIndex ? doubleFromRaw(type, &pool_.vals[fp.s[j] * pool_.slot_bytes + off]) : 0.0;
+    for (int j = 0; j < 4; ++j)
+      x[j] = fp.s[j] != kNoIndex ? doubleFromRaw(type, &pool_.vals[fp.s[j] * pool_.slot_bytes + off]) : 0.0;
     return kWeightedRule[r](x);
   }
 
@@ -493,7 +494,8 @@ class LevelCoder {
           continue;
         }
         double v = 0;
-        for (int i = 0; i < n; ++i) v += lambda[i] * doubleFromRaw(d.type, &pool_.vals[fp.s[i] * pool_.slot_bytes + off]);
+        for (int i = 0; i < n; ++i)
+          v += lambda[i] * doubleFromRaw(d.type, &pool_.vals[fp.s[i] * pool_.slot_bytes + off]);
         pred_vals_[k] = v;
       }
     }
@@ -518,10 +520,12 @@ class LevelCoder {
         const size_t off = slot_off_[f] + c * vs;
         const uint64_t actual = keyFromRaw(type, src_item + c * vs);
         double x[4], v[kFieldRules] = {};
-        for (int j = 0; j < 4; ++j) x[j] = fp.s[j] != kNoIndex ? doubleFromRaw(type, &pool_.vals[fp.s[j] * pool_.slot_bytes + off]) : 0.0;
+        for (int j = 0; j < 4; ++j)
+          x[j] = fp.s[j] != kNoIndex ? doubleFromRaw(type, &pool_.vals[fp.s[j] * pool_.slot_bytes + off]) : 0.0;
         weightedRules(x, v, std::make_integer_sequence<uint32_t, kRules>());
         v[0] = pred_vals_[k + c];
-        for (uint32_t j = 0; j < n_cand; ++j) v[kRules + j] = doubleFromRaw(type, &pool_.vals[near_[j] * pool_.slot_bytes + off]);
+        for (uint32_t j = 0; j < n_cand; ++j)
+          v[kRules + j] = doubleFromRaw(type, &pool_.vals[near_[j] * pool_.slot_bytes + off]);
         addRuleCosts<kFieldRules>(type, actual, v, cost);
       }
     };
@@ -734,7 +738,8 @@ class LevelCoder {
         if (src == kNoIndex) continue;
         const float* e = &pool_.err[3 * size_t{src}];
         int cost[kPadded];
-        for (uint32_t r = 0; r < kPadded; ++r) cost[r] = r < kCoordRules ? signal[r] + carry_signal[m] + kCarryMargin : 0;
+        for (uint32_t r = 0; r < kPadded; ++r)
+          cost[r] = r < kCoordRules ? signal[r] + carry_signal[m] + kCarryMargin : 0;
         for (int i = 0; i < 3; ++i) {
           if (first_copy[i] != kNoIndex) continue;
           double v[kPadded] = {};
@@ -759,8 +764,8 @@ class LevelCoder {
   // Each axis: a bit whether it copies a copy source's coordinate (which one: the previous axis's
   // source, one bit, else its index), else its residual against the prediction pk. Writes x.
   // first_copy: the encoder's first copy source of each axis (codeCoordinates).
-  Status codeCoordinateAxes(const uint32_t* copy_src, uint32_t ncopy, const uint32_t first_copy[3], const uint64_t actual[3],
-                            const uint64_t pk[3], double x[3]) {
+  Status codeCoordinateAxes(const uint32_t* copy_src, uint32_t ncopy, const uint32_t first_copy[3],
+                            const uint64_t actual[3], const uint64_t pk[3], double x[3]) {
     const ScalarType ct = header_.coord_type;
     uint32_t prev_which = kNoIndex;  // copy source of the previous coordinate of this vertex
     for (uint32_t i = 0; i < 3; ++i) {
@@ -969,7 +974,7 @@ class LevelCoder {
   size_t item_bytes_ = 0;
   std::vector<size_t> slot_off_, comp_slot_off_;  // layOutSlotValues: offsets in a slot's values
   std::vector<uint8_t> sink_vals_;                // sinkValues' buffer, when fields are left out
-  std::vector<char> pf_skip_, cf_skip_;  // fields whose values the decoder leaves out (setFields)
+  std::vector<char> pf_skip_, cf_skip_;           // fields whose values the decoder leaves out (setFields)
   const DecodeFields* fields_ = nullptr;
 
   EncoderSide* enc_ = nullptr;
@@ -1001,8 +1006,8 @@ class LevelCoder {
   std::vector<ScalarType> comp_type_;
   std::vector<uint32_t> alias_;
   std::vector<uint32_t> field_coded_comps_;  // per field: components not aliased
-  BitModel alias_flag_;     // a point-field component repeats an earlier one (codeAliases)
-  ValueFormModels form_models_;  // the components' form declarations (codeValueForms)
+  BitModel alias_flag_;                      // a point-field component repeats an earlier one (codeAliases)
+  ValueFormModels form_models_;              // the components' form declarations (codeValueForms)
   BitTree<5> copy_which_[3];
   const uint32_t* near_ = nullptr;  // apex candidates of the gate being decoded (copy sources)
   int n_near_ = 0;
@@ -1048,8 +1053,8 @@ bool looksDelaunay(const TetMesh& mesh, const FaceAdjacency& adj) {
         }
         scale = std::max(scale, l[i]);
       }
-      const double ins = -l[0] * det3(m[1], m[2], m[3]) + l[1] * det3(m[0], m[2], m[3]) - l[2] * det3(m[0], m[1], m[3]) +
-                         l[3] * det3(m[0], m[1], m[2]);
+      const double ins = -l[0] * det3(m[1], m[2], m[3]) + l[1] * det3(m[0], m[2], m[3]) -
+                         l[2] * det3(m[0], m[1], m[3]) + l[3] * det3(m[0], m[1], m[2]);
       const double o = signedVolume(mesh.point(a[0]), mesh.point(a[1]), mesh.point(a[2]), mesh.point(a[3]));
       if (!(o != 0) || !std::isfinite(ins)) continue;
       ++tested;
@@ -1144,7 +1149,8 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
     std::vector<Comp> comps;
     for (const Field& f : mesh.point_fields)
       for (uint32_t c = 0; c < f.components; ++c)
-        comps.push_back({f.bytes.data() + c * scalarSize(f.type), f.components * scalarSize(f.type), scalarSize(f.type), f.type});
+        comps.push_back(
+            {f.bytes.data() + c * scalarSize(f.type), f.components * scalarSize(f.type), scalarSize(f.type), f.type});
     enc.alias.assign(comps.size(), kNoIndex);
     constexpr size_t kMaxAliasScan = 64;  // components compared pairwise (quadratic)
     for (size_t k = 1; k < comps.size() && k < kMaxAliasScan; ++k)
@@ -1152,7 +1158,8 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
         if (enc.alias[j] != kNoIndex || comps[j].type != comps[k].type) continue;
         bool same = true;
         for (size_t v = 0; v < np && same; ++v)
-          same = std::memcmp(comps[j].base + v * comps[j].stride, comps[k].base + v * comps[k].stride, comps[k].size) == 0;
+          same =
+              std::memcmp(comps[j].base + v * comps[j].stride, comps[k].base + v * comps[k].stride, comps[k].size) == 0;
         if (same && np > 0) {
           enc.alias[k] = static_cast<uint32_t>(j);
           break;
@@ -1188,8 +1195,8 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
     for (size_t f = 0; f < h.cell_fields.size(); ++f) {
       if (!forms.cf_split[f]) continue;
       const FieldDesc& d = h.cell_fields[f];
-      const std::vector<uint8_t> items = packValues(escaped[f].data(), escaped[f].size() / d.itemBytes(), d.itemBytes(),
-                                                    scalarSize(d.type), 0, true);
+      const std::vector<uint8_t> items =
+          packValues(escaped[f].data(), escaped[f].size() / d.itemBytes(), d.itemBytes(), scalarSize(d.type), 0, true);
       level->cell_fields[f] = splitStream(level->cell_fields[f], items);
     }
     level->vertex_order = std::move(side.vertex_order);
@@ -1226,12 +1233,14 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   std::vector<std::vector<uint8_t>> pfs(h.point_fields.size()), cfs(h.cell_fields.size());
   for (size_t f = 0; f < pfs.size(); ++f) {
     const Field& field = mesh.point_fields[f];
-    pfs[f] = packed(field.bytes.data(), np, field.components * field.valueSize(), field.valueSize(), by_vertex, out.point_fields[f]);
+    pfs[f] = packed(field.bytes.data(), np, field.components * field.valueSize(), field.valueSize(), by_vertex,
+                    out.point_fields[f]);
     chosen.pf[f] = !pfs[f].empty();
   }
   for (size_t f = 0; f < cfs.size(); ++f) {
     const Field& field = mesh.cell_fields[f];
-    cfs[f] = packed(field.bytes.data(), nt, field.components * field.valueSize(), field.valueSize(), by_tet, out.cell_fields[f]);
+    cfs[f] = packed(field.bytes.data(), nt, field.components * field.valueSize(), field.valueSize(), by_tet,
+                    out.cell_fields[f]);
     chosen.cf[f] = !cfs[f].empty();
   }
   // Cell fields in split form: their symbols as predicted, the values they escape packed (the values
@@ -1288,7 +1297,8 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   for (size_t f = 0; f < cfs.size(); ++f) {
     total += out.cell_fields[f].size();
     saving(chosen.cf[f], cfs[f].size(), out.cell_fields[f].size());
-    saving(chosen.cf_split[f], split.cell_fields.size() > f ? split.cell_fields[f].size() : 0, out.cell_fields[f].size());
+    saving(chosen.cf_split[f], split.cell_fields.size() > f ? split.cell_fields[f].size() : 0,
+           out.cell_fields[f].size());
   }
   if (!quarter && saved * 64 < total) return out;
   // Again with the chosen forms (the trial when it is that), since the streams share a few models.
@@ -1317,7 +1327,8 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
     return invalidData(what + ": field streams do not match the header's field list");
   for (const auto* list : {&header.point_fields, &header.cell_fields})
     for (const FieldDesc& d : *list) {
-      if (static_cast<int>(d.type) >= kNumScalarTypes) return invalidData(what + ": field '" + d.name + "' has an unknown type");
+      if (static_cast<int>(d.type) >= kNumScalarTypes)
+        return invalidData(what + ": field '" + d.name + "' has an unknown type");
       if (d.components == 0 || d.components > 4096)
         return invalidData(what + ": field '" + d.name + "' has an invalid component count");
     }
@@ -1337,9 +1348,10 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
   std::vector<std::span<const uint8_t>> cell_streams(payload.cell_fields.begin(), payload.cell_fields.end());
   std::vector<char> cf_split(header.cell_fields.size(), 0);
   std::unique_ptr<PackedReader> geo_reader;
-  std::vector<std::unique_ptr<PackedReader>> pf_readers(header.point_fields.size()), cf_readers(header.cell_fields.size());
-  GTN_RETURN_IF_ERROR(open(payload.geometry, header.points, FieldDesc{"", 3, header.coord_type}, "the geometry stream",
-                           &geo_reader));
+  std::vector<std::unique_ptr<PackedReader>> pf_readers(header.point_fields.size()),
+      cf_readers(header.cell_fields.size());
+  GTN_RETURN_IF_ERROR(
+      open(payload.geometry, header.points, FieldDesc{"", 3, header.coord_type}, "the geometry stream", &geo_reader));
   for (size_t f = 0; f < pf_readers.size(); ++f)
     GTN_RETURN_IF_ERROR(open(payload.point_fields[f], header.points, header.point_fields[f],
                              "point field '" + header.point_fields[f].name + "'", &pf_readers[f]));

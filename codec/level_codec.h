@@ -29,9 +29,9 @@ struct EncodeOptions {
 // metadata; format/ serialises it in the level's header chunk.
 struct EncodedLevel {
   LevelHeader header;
-  std::vector<uint8_t> boundary;      // the boundary surface (a triangle mesh), coded compactly
-  std::vector<uint8_t> connectivity;  // the surface-peeling code of every tetrahedron
-  std::vector<uint8_t> geometry;      // coordinates, predicted in decoding order
+  std::vector<uint8_t> boundary;                   // the boundary surface (a triangle mesh), coded compactly
+  std::vector<uint8_t> connectivity;               // the surface-peeling code of every tetrahedron
+  std::vector<uint8_t> geometry;                   // coordinates, predicted in decoding order
   std::vector<std::vector<uint8_t>> point_fields;  // one stream per header.point_fields entry
   std::vector<std::vector<uint8_t>> cell_fields;   // one stream per header.cell_fields entry
   // vertex_order[source vertex index] = the id the decoder gives that vertex (its emission order);
@@ -74,7 +74,7 @@ LevelPayload payloadOf(const EncodedLevel& encoded);
 // Decodes one level and emits its events (mesh_stream.h order) to `sink`. Fails with kInvalidData,
 // never crashes, on any corrupt payload; `what` names the source in messages (file and level).
 // `fields`: which fields to decode (null: all).
-Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink,
-                   DecodeStats* stats, const std::string& what, const DecodeFields* fields = nullptr);
+Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink, DecodeStats* stats,
+                   const std::string& what, const DecodeFields* fields = nullptr);
 
 }  // namespace gtn

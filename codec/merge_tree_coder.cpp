@@ -74,10 +74,10 @@ namespace {
 // Adaptive models of the body (one instance per encoder or decoder).
 struct Models {
   BitModel boundary;
-  BitModel exact[2];     // per boundary bit: the parent delta equals one of its predictions
-  BitTree<3> hit;        // which one
-  BitTree<4> choice;     // otherwise: which prediction the residual is taken from (0 = none)
-  BitModel sign[2];      // per context (choice == 0 or not)
+  BitModel exact[2];  // per boundary bit: the parent delta equals one of its predictions
+  BitTree<3> hit;     // which one
+  BitTree<4> choice;  // otherwise: which prediction the residual is taken from (0 = none)
+  BitModel sign[2];   // per context (choice == 0 or not)
   BitTree<6> len[2];
   BitTree<4> removed[2];
 };
@@ -326,7 +326,7 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   std::vector<uint8_t> body;
   EntropyCoder<true> rc(&body);
   Models m;
-  FreeRanks unmerged(static_cast<uint32_t>(n));  // decoding ids + 1 of the vertices not merged yet
+  FreeRanks unmerged(static_cast<uint32_t>(n));             // decoding ids + 1 of the vertices not merged yet
   std::vector<uint32_t> coded_parent(n, MergeTree::kRoot);  // decoding ids, merges coded so far
   for (uint64_t r = 0; r < tree.merges; ++r) {
     const uint32_t id = by_rank[r];
@@ -365,8 +365,8 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   return out;
 }
 
-StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points,
-                                    const std::string& what, uint64_t max_merges) {
+StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,
+                                    uint64_t max_merges) {
   Reader r(payload, what);
   uint8_t version = 0;
   GTN_RETURN_IF_ERROR(r.u8(&version, "version"));
@@ -448,9 +448,10 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     got_boundary += code.boundary;
     got_removed += code.removed;
   }
-  tree.checked = true;  // every record was checked as it was decoded
+  tree.checked = true;               // every record was checked as it was decoded
   if (decode < merges) return tree;  // a prefix: the rest of the body is not read
-  if (!rc.finishedCleanly()) return invalidData(what + ": merge tree payload body truncated, corrupt or followed by trailing bytes");
+  if (!rc.finishedCleanly())
+    return invalidData(what + ": merge tree payload body truncated, corrupt or followed by trailing bytes");
   if (got_boundary != boundary_merges || got_removed != tets_removed)
     return invalidData(what + ": merge tree payload counts disagree with its header");
   return tree;

@@ -66,7 +66,7 @@ struct MergeTree {
   std::vector<uint32_t> removed;  // per vertex: tetrahedra its merge removes (0 for roots)
   std::vector<uint8_t> boundary;  // per vertex: 1 if v is a boundary vertex (its merge is a boundary merge)
   std::vector<float> error;       // per vertex: error of its merge when chosen (not coded; may be empty)
-  uint64_t merges = 0;  // ranks 1..merges
+  uint64_t merges = 0;            // ranks 1..merges
   // Set by decodeMergeTree, whose trees satisfy check() by construction, so that the stream filter
   // need not check them again; whoever changes such a tree must clear it.
   bool checked = false;
@@ -99,7 +99,7 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
 // decoded (the tree of a prefix of the ranking is itself a merge tree, with the later merges' children
 // as roots); the checks that need the whole body (header counts, trailing bytes) run only when the
 // whole body is read.
-StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points,
-                                    const std::string& what, uint64_t max_merges = UINT64_MAX);
+StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,
+                                    uint64_t max_merges = UINT64_MAX);
 
 }  // namespace gtn

@@ -82,12 +82,22 @@ class NearestGrid {
   // fewer qualify. `all(fn)` calls fn(s) for every point (the fallback scan).
   template <class Dist, class Ok, class All>
   uint32_t kth(const double p[3], uint64_t r, Dist dist, Ok ok, All all) {
-    return kthBy(p, r, [&](uint32_t s) { return Key{dist(s), 0.0}; }, [](double safe2) { return safe2; }, ok, all);
+    return kthBy(
+        p, r,
+        [&](uint32_t s) {
+          return Key{dist(s), 0.0};
+        },
+        [](double safe2) { return safe2; }, ok, all);
   }
   // How many points with ok(s) come before (d, x) in (dist(s), s) order (x itself not counted).
   template <class Dist, class Ok, class All>
   uint64_t rankOf(const double p[3], double d, uint32_t x, Dist dist, Ok ok, All all) {
-    return rankOfBy(p, Key{d, 0.0}, x, [&](uint32_t s) { return Key{dist(s), 0.0}; }, [](double safe2) { return safe2; }, ok, all);
+    return rankOfBy(
+        p, Key{d, 0.0}, x,
+        [&](uint32_t s) {
+          return Key{dist(s), 0.0};
+        },
+        [](double safe2) { return safe2; }, ok, all);
   }
 
   // The same in (key(s), s) order. `bound(safe2)`: a b such that every point with key.k < b
@@ -143,7 +153,8 @@ class NearestGrid {
     return f >= n_ - 1 ? static_cast<uint32_t>(n_ - 1) : static_cast<uint32_t>(f);
   }
   uint32_t cellOf(const double* q) const {
-    if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) return static_cast<uint32_t>(head_.size() - 1);
+    if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2]))
+      return static_cast<uint32_t>(head_.size() - 1);
     return (cellIndex(2, q[2]) * n_ + cellIndex(1, q[1])) * n_ + cellIndex(0, q[0]);
   }
 

@@ -43,9 +43,11 @@ std::vector<uint8_t> lzma2(const std::vector<uint8_t>& data, uint32_t preset, ui
     opt.pb = opt.lp;
   }
   lzma_filter filters[2] = {{LZMA_FILTER_LZMA2, &opt}, {LZMA_VLI_UNKNOWN, nullptr}};
-  std::vector<uint8_t> out(lzma_raw_encoder_memusage(filters) == UINT64_MAX ? 0 : data.size() + data.size() / 16 + 4096);
+  std::vector<uint8_t> out(lzma_raw_encoder_memusage(filters) == UINT64_MAX ? 0
+                                                                            : data.size() + data.size() / 16 + 4096);
   size_t pos = 0;
-  if (out.empty() || lzma_raw_buffer_encode(filters, nullptr, data.data(), data.size(), out.data(), &pos, out.size()) != LZMA_OK)
+  if (out.empty() ||
+      lzma_raw_buffer_encode(filters, nullptr, data.data(), data.size(), out.data(), &pos, out.size()) != LZMA_OK)
     return {};
   out.resize(pos);
   return out;
@@ -59,7 +61,7 @@ uint64_t lzma2DictSize(uint8_t property) {
 
 std::vector<uint8_t> splitStream(const std::vector<uint8_t>& range_part, const std::vector<uint8_t>& packed_items) {
   std::vector<uint8_t> out = {kSplitFormByte, packed_items[1], packed_items[2]};
-  for (uint64_t n = range_part.size(); ; n >>= 7) {
+  for (uint64_t n = range_part.size();; n >>= 7) {
     out.push_back(static_cast<uint8_t>((n & 0x7F) | (n >= 0x80 ? 0x80 : 0)));
     if (n < 0x80) break;
   }
@@ -110,13 +112,15 @@ std::vector<uint8_t> packValues(const uint8_t* items, size_t count, size_t item_
       const std::vector<uint8_t> quick = lzma2(
           std::vector<uint8_t>(c.data.begin(), c.data.begin() + static_cast<std::ptrdiff_t>(prefix)), 1, dict, c.align);
       if (quick.empty()) continue;
-      c.estimate = static_cast<double>(quick.size()) * static_cast<double>(c.data.size()) / static_cast<double>(std::max<size_t>(prefix, 1));
+      c.estimate = static_cast<double>(quick.size()) * static_cast<double>(c.data.size()) /
+                   static_cast<double>(std::max<size_t>(prefix, 1));
       if (c.estimate > static_cast<double>(limit)) continue;
     }
     candidates.push_back(std::move(c));
   }
   double lowest = 0;
-  for (size_t i = 0; i < candidates.size(); ++i) lowest = i == 0 ? candidates[i].estimate : std::min(lowest, candidates[i].estimate);
+  for (size_t i = 0; i < candidates.size(); ++i)
+    lowest = i == 0 ? candidates[i].estimate : std::min(lowest, candidates[i].estimate);
   for (const Candidate& c : candidates) {
     if (c.estimate > 1.03 * lowest) continue;
     std::vector<uint8_t> packed = lzma2(c.data, 9, dict, c.align);
@@ -196,7 +200,8 @@ bool PackedReader::fillBlock() {
       return false;
     }
     if (r != LZMA_OK && r != LZMA_STREAM_END) {
-      error_ = what_ + (r == LZMA_BUF_ERROR ? ": packed stream is truncated" : ": packed stream is corrupt (LZMA2 data error)");
+      error_ = what_ +
+               (r == LZMA_BUF_ERROR ? ": packed stream is truncated" : ": packed stream is corrupt (LZMA2 data error)");
       return false;
     }
   }

@@ -26,8 +26,9 @@
 
 namespace gtn::level {
 
-inline constexpr uint64_t kEscapeScanBudget = 256;  // live vertices scanned per decoded element, at most, for ranked escapes
-inline constexpr uint32_t kEscapeRankBits = 12;     // ranks below 2^12
+inline constexpr uint64_t kEscapeScanBudget =
+    256;  // live vertices scanned per decoded element, at most, for ranked escapes
+inline constexpr uint32_t kEscapeRankBits = 12;  // ranks below 2^12
 
 template <class Host>
 class Peeling {
@@ -40,6 +41,7 @@ class Peeling {
   NearestGrid& grid() { return grid_; }
   // Whether the level codes the points on edges (section 10.5).
   void setEdgePoints(bool on) { edge_points_ = on; }
+
  private:
   void predictApex(const FrontFace& g, double p[3]) const {
     gtn::level::predictApex(h_.P(g.v[0]), h_.P(g.v[1]), h_.P(g.v[2]), g.d != kNoIndex ? h_.P(g.d) : nullptr, p);
@@ -95,7 +97,8 @@ class Peeling {
         while (j < 4 && t[j] != sv) ++j;
         if (j == 4) return h_.internal("tetrahedron vertex lost");
         nb = (*h_.enc_->neighbor)[4 * size_t{src_tet} + j];
-        if (nb == kNoNeighbor || nb == kNonManifold || h_.enc_->tet_done[nb]) return h_.internal("front face without a tetrahedron behind it");
+        if (nb == kNoNeighbor || nb == kNonManifold || h_.enc_->tet_done[nb])
+          return h_.internal("front face without a tetrahedron behind it");
       }
       h_.openFace(f, e[k], nb, rec);
     }
@@ -186,7 +189,8 @@ class Peeling {
     const int wrong = cands_.wrongSide();
     uint64_t rank = 0;
     auto eligible = [&](uint32_t t) {
-      return h_.pool_.state[t] == kLive && t != g.v[0] && t != g.v[1] && t != g.v[2] && !(wrong != 0 && side.sign(h_.P(t)) == wrong);
+      return h_.pool_.state[t] == kLive && t != g.v[0] && t != g.v[1] && t != g.v[2] &&
+             !(wrong != 0 && side.sign(h_.P(t)) == wrong);
     };
     auto dist = [&](uint32_t t) { return apexDistance(h_.P(t), p); };
     auto all = [&](auto fn) {
@@ -197,8 +201,8 @@ class Peeling {
     if (by_key) cands_.ensureSweep();
     const double* cc0 = cands_.sweepCentre();
     const double r2 = cands_.sweepRadius2(), key_scale = cands_.sweepScale();
-    const bool swept = by_key && key_scale > 0 && std::isfinite(key_scale) &&
-                       std::isfinite(r2) && std::isfinite(cc0[0]) && std::isfinite(cc0[1]) && std::isfinite(cc0[2]);
+    const bool swept = by_key && key_scale > 0 && std::isfinite(key_scale) && std::isfinite(r2) &&
+                       std::isfinite(cc0[0]) && std::isfinite(cc0[1]) && std::isfinite(cc0[2]);
     auto key = [&](uint32_t t) { return NearestGrid::Key{cands_.sweepKey(h_.P(t)), apexDistance(h_.P(t), p)}; };
     // Every vertex with a key below the bound lies within sqrt(safe2) of the circumcentre C: one
     // at sweep parameter tau (a length along the normal) lies in the sphere of centre C + tau n
@@ -229,7 +233,10 @@ class Peeling {
     // Rank: its bit length b (BitTree<4>), then the b - 1 bits below the leading one.
     const uint32_t b = esc_bits_.code(*h_.con_, kEncode ? static_cast<uint32_t>(bitLength(rank)) : 0);
     if (b > kEscapeRankBits) return h_.bad("escape rank out of range");
-    if (b > 1) rank = (uint64_t{1} << (b - 1)) | h_.con_->direct(kEncode ? static_cast<uint32_t>(rank) & ((1u << (b - 1)) - 1) : 0, static_cast<int>(b) - 1);
+    if (b > 1)
+      rank =
+          (uint64_t{1} << (b - 1)) |
+          h_.con_->direct(kEncode ? static_cast<uint32_t>(rank) & ((1u << (b - 1)) - 1) : 0, static_cast<int>(b) - 1);
     else rank = b;
     if constexpr (kEncode) {
       *x = xs;
@@ -273,7 +280,8 @@ class Peeling {
       if (idx < 0) {
         uint32_t more = 0;
         if constexpr (kEncode) {
-          while (h_.enc_->next_seed_tet < h_.enc_->tet_done.size() && h_.enc_->tet_done[h_.enc_->next_seed_tet]) ++h_.enc_->next_seed_tet;
+          while (h_.enc_->next_seed_tet < h_.enc_->tet_done.size() && h_.enc_->tet_done[h_.enc_->next_seed_tet])
+            ++h_.enc_->next_seed_tet;
           more = h_.enc_->next_seed_tet < h_.enc_->tet_done.size();
         }
         more = h_.con_->bit(seed_more_, more);
@@ -334,7 +342,6 @@ class Peeling {
     }
     return Status::ok();
   }
-
 
  private:
   Host& h_;

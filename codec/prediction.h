@@ -52,9 +52,11 @@ constexpr uint32_t kCarries = 8;
 // without grid structure a carry wins by chance; 3 bits keeps those files within 0.3%).
 constexpr int kCarryMargin = 48;
 constexpr double kRuleWeights[kRules][4] = {
-    {0, 0, 0, 0},  {1, 1, 0, -1}, {0, 1, 1, -1}, {1, 0, 1, -1}, {1, 1, -1, 0},
-    {-1, 1, 1, 0}, {1, -1, 1, 0}, {1, 1, 1, -2}, {2.0 / 3, 2.0 / 3, 2.0 / 3, -1},
-    {1, 0, 0, 0},  {0, 1, 0, 0},  {0, 0, 1, 0},  {0, 0, 0, 1},
+    {0, 0, 0, 0},  {1, 1, 0, -1}, {0, 1, 1, -1},
+    {1, 0, 1, -1}, {1, 1, -1, 0}, {-1, 1, 1, 0},
+    {1, -1, 1, 0}, {1, 1, 1, -2}, {2.0 / 3, 2.0 / 3, 2.0 / 3, -1},
+    {1, 0, 0, 0},  {0, 1, 0, 0},  {0, 0, 1, 0},
+    {0, 0, 0, 1},
 };
 
 // The prediction of rule r (r < kRules) from the stencil values x = (a, b, c, d): the sum of
@@ -130,7 +132,8 @@ template <int kBits>
 SymbolCosts<kBits> symbolCosts(const BitTree<kBits>& tree) {
   static const std::array<uint16_t, 4096> kCost = [] {
     std::array<uint16_t, 4096> t{};
-    for (size_t i = 0; i < t.size(); ++i) t[i] = static_cast<uint16_t>(std::lround(-16.0 * std::log2((i + 0.5) / 4096.0)));
+    for (size_t i = 0; i < t.size(); ++i)
+      t[i] = static_cast<uint16_t>(std::lround(-16.0 * std::log2((i + 0.5) / 4096.0)));
     return t;
   }();
   SymbolCosts<kBits> c;
@@ -179,11 +182,13 @@ inline void addRuleCosts(Type type, uint64_t actual, const double* v, int* cost)
       const __m128i mag = _mm_or_si128(_mm_and_si128(less, res), _mm_andnot_si128(less, neg));
       // As int32 the largest magnitude, 2^31, is -2^31: the exponent is the same.
       auto lengths = [&](__m128i two) {
-        const __m128i e = _mm_and_si128(_mm_srli_epi64(_mm_castpd_si128(_mm_cvtepi32_pd(two)), 52), _mm_set1_epi64x(0x7FF));
+        const __m128i e =
+            _mm_and_si128(_mm_srli_epi64(_mm_castpd_si128(_mm_cvtepi32_pd(two)), 52), _mm_set1_epi64x(0x7FF));
         return _mm_subs_epu16(e, _mm_set1_epi16(1022));  // 0 (exponent 0) stays 0
       };
       const __m128i lo = lengths(mag), hi = lengths(_mm_shuffle_epi32(mag, _MM_SHUFFLE(3, 2, 3, 2)));
-      const __m128i len = _mm_castps_si128(_mm_shuffle_ps(_mm_castsi128_ps(lo), _mm_castsi128_ps(hi), _MM_SHUFFLE(2, 0, 2, 0)));
+      const __m128i len =
+          _mm_castps_si128(_mm_shuffle_ps(_mm_castsi128_ps(lo), _mm_castsi128_ps(hi), _MM_SHUFFLE(2, 0, 2, 0)));
       __m128i* c = reinterpret_cast<__m128i*>(cost + r);
       _mm_storeu_si128(c, _mm_add_epi32(_mm_loadu_si128(c), _mm_slli_epi32(len, 4)));
     }

@@ -20,7 +20,8 @@ namespace gtn {
 inline constexpr int kModelWarmup = 126;  // updates after which both rates are final
 constexpr std::array<uint16_t, kModelWarmup + 1> modelRates(uint32_t final_div) {
   std::array<uint16_t, kModelWarmup + 1> r{};
-  for (uint32_t n = 0; n <= kModelWarmup; ++n) r[n] = static_cast<uint16_t>(65536u / (n + 2 < final_div ? n + 2 : final_div));
+  for (uint32_t n = 0; n <= kModelWarmup; ++n)
+    r[n] = static_cast<uint16_t>(65536u / (n + 2 < final_div ? n + 2 : final_div));
   return r;
 }
 inline constexpr auto kFastRate = modelRates(16);
@@ -30,7 +31,7 @@ inline constexpr auto kSlowRate = modelRates(128);
 // one slowly (final rate 1/128), both warming up as kFastRate and kSlowRate say.
 struct BitModel {
   uint16_t fast = 32768, slow = 32768;
-  uint8_t seen = 0;  // updates so far, saturating at kModelWarmup
+  uint8_t seen = 0;                                             // updates so far, saturating at kModelWarmup
   uint32_t p0() const { return (uint32_t{fast} + slow) >> 1; }  // in [1, 65535]: never 0 or 65536
   void update(uint32_t bit) {
     if (seen < kModelWarmup) [[unlikely]] {
@@ -73,7 +74,8 @@ class RangeEncoder {
       range_ = bound;
     }
     m.update(bit);
-    if (range_ < (1u << 24)) [[unlikely]] normalize();
+    if (range_ < (1u << 24)) [[unlikely]]
+      normalize();
   }
   // `n` (1..16) raw bits of `value`, each equally likely.
   void encodeDirect(uint32_t value, int n) {
@@ -125,7 +127,8 @@ class RangeDecoder {
 
   [[gnu::always_inline]] uint32_t decodeBit(BitModel& m) {
     const uint32_t bit = decide(range_, code_, m);
-    if (range_ < (1u << 24)) [[unlikely]] normalize();
+    if (range_ < (1u << 24)) [[unlikely]]
+      normalize();
     return bit;
   }
   // The symbol of a BitTree<kBits> (its models m), the bits decoded as decodeBit does with the

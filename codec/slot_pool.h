@@ -24,7 +24,7 @@ struct SlotPool {
   // prediction rule's, or the boundary's or edge's prediction; 0 for seeds), which later vertices
   // may carry over (spec section 10.5).
   std::vector<float> err;
-  std::vector<uint8_t> vals;  // slot_bytes per slot: the values of the decoded point fields
+  std::vector<uint8_t> vals;   // slot_bytes per slot: the values of the decoded point fields
   std::vector<uint32_t> open;  // open front faces on the vertex
   std::vector<uint32_t> pins;  // open front faces whose vertex d it is
   std::vector<uint32_t> ids;   // the vertex's id (its emission order)

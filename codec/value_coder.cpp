@@ -50,9 +50,10 @@ int ValueCoder::decimalPlaces(ScalarType type, uint64_t key, int64_t* n) {
   // The shortest decimal that reads back as the value has the fewest places, but for the float
   // rounding of n / 10^e at the edges: it only proposes, decimalInteger decides.
   char text[64];
-  const auto r = type == ScalarType::kFloat32
-                     ? std::to_chars(text, text + sizeof text, value_detail::loadRaw<float>(raw), std::chars_format::scientific)
-                     : std::to_chars(text, text + sizeof text, value_detail::loadRaw<double>(raw), std::chars_format::scientific);
+  const auto r =
+      type == ScalarType::kFloat32
+          ? std::to_chars(text, text + sizeof text, value_detail::loadRaw<float>(raw), std::chars_format::scientific)
+          : std::to_chars(text, text + sizeof text, value_detail::loadRaw<double>(raw), std::chars_format::scientific);
   if (r.ec != std::errc()) return -1;
   const char* begin = text;
   const char* e_at = std::find(begin, static_cast<const char*>(r.ptr), 'e');

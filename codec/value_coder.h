@@ -159,7 +159,6 @@ inline int scalarBits(ScalarType type) { return static_cast<int>(8 * scalarSize(
   return 0.0;
 }
 
-
 class ValueCoder {
  public:
   ValueCoder(ScalarType type, uint32_t components);
@@ -198,8 +197,8 @@ class ValueCoder {
   static constexpr int kMaxPrintedDigits = 17;
 
  private:
-  static constexpr int kTreeBits = 7;      // bucket 0..64
-  static constexpr int kContexts = 17;     // previous bucket / 4
+  static constexpr int kTreeBits = 7;   // bucket 0..64
+  static constexpr int kContexts = 17;  // previous bucket / 4
 
   struct Component {
     std::vector<BitTree<kTreeBits>> bucket;  // [context]
@@ -212,7 +211,7 @@ class ValueCoder {
     int printed = 0;
     std::vector<uint64_t> table;  // the distinct keys, ascending, of a component in table form
     int table_bits = 0;           // the width of a place in it
-    BitModel not_decimal[2];  // context: the previous value's bit (decimal, printed-single or shift form)
+    BitModel not_decimal[2];      // context: the previous value's bit (decimal, printed-single or shift form)
     uint32_t last_not_decimal = 0;
   };
   // Gives a component in decimal or printed-single form its float models, after the others.
@@ -232,9 +231,9 @@ class ValueCoder {
 inline constexpr double kDecimalLimit = 9007199254740992.0;
 
 // 10^e for e = 0..22, each exactly a double.
-inline constexpr double kPowersOfTen[ValueCoder::kMaxDecimals + 1] = {
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19,
-    1e20, 1e21, 1e22};
+inline constexpr double kPowersOfTen[ValueCoder::kMaxDecimals + 1] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
 // The value n / 10^e of a decimal-form component, in `type` (float32 or float64), as raw bytes.
 inline void decimalValue(ScalarType type, int64_t n, int e, uint8_t* raw) {
@@ -281,7 +280,8 @@ inline int shortestDigits(uint64_t key) {
   uint8_t raw[8];
   rawFromKey(ScalarType::kFloat64, key, raw);
   char text[64];
-  const auto r = std::to_chars(text, text + sizeof text, value_detail::loadRaw<double>(raw), std::chars_format::scientific);
+  const auto r =
+      std::to_chars(text, text + sizeof text, value_detail::loadRaw<double>(raw), std::chars_format::scientific);
   int digits = 0;
   for (const char* c = text; c < r.ptr && *c != 'e'; ++c) digits += *c >= '0' && *c <= '9';
   return digits;
@@ -343,7 +343,8 @@ uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actua
     size_t at = static_cast<size_t>(std::lower_bound(t.begin(), t.end(), pred_key) - t.begin());
     if (at == t.size() || (at > 0 && pred_key - t[at - 1] <= t[at] - pred_key)) --at;
     uint64_t place = 0;
-    if constexpr (C::kEncoding) place = static_cast<uint64_t>(std::lower_bound(t.begin(), t.end(), actual_key) - t.begin());
+    if constexpr (C::kEncoding)
+      place = static_cast<uint64_t>(std::lower_bound(t.begin(), t.end(), actual_key) - t.begin());
     const int w = m.table_bits;
     place = codeKey(c, m, w, (uint64_t{1} << w) - 1, at, place);
     if (place >= t.size()) {
@@ -362,7 +363,8 @@ uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actua
     // The float32 keys: the prediction rounded to float32, the value's float32.
     uint8_t raw[8];
     rawFromKey(type_, pred_key, raw);
-    const uint64_t k = codeKey(c, m, 32, 0xFFFFFFFFu, keyFromPrediction(ScalarType::kFloat32, doubleFromRaw(type_, raw)), single);
+    const uint64_t k =
+        codeKey(c, m, 32, 0xFFFFFFFFu, keyFromPrediction(ScalarType::kFloat32, doubleFromRaw(type_, raw)), single);
     rawFromKey(ScalarType::kFloat32, k, raw);
     value_detail::storeRaw<double>(raw, printedSingle(value_detail::loadRaw<float>(raw), m.printed));
     return keyFromRaw(type_, raw);
@@ -378,8 +380,8 @@ uint64_t ValueCoder::code(C& c, uint32_t comp, uint64_t pred_key, uint64_t actua
     const uint64_t sign = uint64_t{1} << 63;
     uint8_t raw[8];
     rawFromKey(type_, pred_key, raw);
-    const double np = value_detail::clampRound(doubleFromRaw(type_, raw) * kPowersOfTen[m.decimals],
-                                               -kDecimalLimit, kDecimalLimit);
+    const double np =
+        value_detail::clampRound(doubleFromRaw(type_, raw) * kPowersOfTen[m.decimals], -kDecimalLimit, kDecimalLimit);
     const uint64_t k = codeKey(c, m, 64, ~uint64_t{0}, static_cast<uint64_t>(static_cast<int64_t>(np)) ^ sign,
                                static_cast<uint64_t>(n) ^ sign);
     decimalValue(type_, static_cast<int64_t>(k ^ sign), m.decimals, raw);

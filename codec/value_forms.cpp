@@ -30,7 +30,8 @@ std::vector<Pair> samplePairs(ScalarType type, const uint8_t* p, size_t n, size_
   };
   *lo = ValueCoder::kMaxDecimals + 1, *hi = -1;
   auto valueAt = [&](size_t i) {
-    Value v{keyFromRaw(type, p + i * stride), -1, 0, std::min(ValueCoder::trailingZeros(type, p + i * stride), scalarBits(type) - 1)};
+    Value v{keyFromRaw(type, p + i * stride), -1, 0,
+            std::min(ValueCoder::trailingZeros(type, p + i * stride), scalarBits(type) - 1)};
     int64_t integer = 0;
     v.places = ValueCoder::decimalPlaces(type, v.key, &integer);
     v.integer = static_cast<double>(integer);
@@ -64,7 +65,8 @@ void tryDecimals(const std::vector<Pair>& pairs, int lo, int hi, double* best, V
     for (const Pair& pair : pairs) {
       double at_e[2];
       for (int j = 0; j < 2; ++j)
-        at_e[j] = pair.places[j] >= 0 && pair.places[j] <= e ? pair.integer[j] * kPowersOfTen[e - pair.places[j]] : 1e300;
+        at_e[j] =
+            pair.places[j] >= 0 && pair.places[j] <= e ? pair.integer[j] * kPowersOfTen[e - pair.places[j]] : 1e300;
       const bool both = std::fabs(at_e[0]) < kDecimalLimit && std::fabs(at_e[1]) < kDecimalLimit;
       cost += both ? std::log2(std::fabs(at_e[1] - at_e[0]) + 1) + 1 : pair.float_bits + 4;
     }
@@ -89,7 +91,8 @@ void tryPrintedSingle(const std::vector<Pair>& pairs, double* best, ValueForm* f
   double cost = 0;
   for (const Pair& pair : pairs) {
     uint64_t k32[2];
-    const bool both = printedSingleKey(pair.keys[0], digits, &k32[0]) && printedSingleKey(pair.keys[1], digits, &k32[1]);
+    const bool both =
+        printedSingleKey(pair.keys[0], digits, &k32[0]) && printedSingleKey(pair.keys[1], digits, &k32[1]);
     cost += both ? bitLength(k32[1] > k32[0] ? k32[1] - k32[0] : k32[0] - k32[1]) + 1 : pair.float_bits + 4;
   }
   if (cost < *best) *best = cost, *form = {-1, digits, 0};
@@ -141,7 +144,8 @@ void tryTable(ScalarType type, const uint8_t* p, size_t n, size_t stride, const 
   }
   double cost = table_bits * static_cast<double>(pairs.size()) / static_cast<double>(n - 1);
   for (const Pair& pair : pairs) {
-    const auto a = std::lower_bound(keys.begin(), keys.end(), pair.keys[0]), b = std::lower_bound(keys.begin(), keys.end(), pair.keys[1]);
+    const auto a = std::lower_bound(keys.begin(), keys.end(), pair.keys[0]),
+               b = std::lower_bound(keys.begin(), keys.end(), pair.keys[1]);
     cost += bitLength(static_cast<uint64_t>(a < b ? b - a : a - b)) + 1;
   }
   if (cost < best) *form = {-1, 0, 0, false, std::move(keys)};

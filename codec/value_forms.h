@@ -19,10 +19,10 @@
 namespace gtn::level {
 
 struct ValueForm {
-  int decimals = -1;     // decimal form with this many places (0 to 22), -1 if not
-  int printed = 0;       // printed-single form with this many digits (1 to 17), 0 if not
-  uint32_t shift = 0;    // plain form: the low bits dropped
-  bool exceptions = false;  // of the shift: some values keep their low bits
+  int decimals = -1;                 // decimal form with this many places (0 to 22), -1 if not
+  int printed = 0;                   // printed-single form with this many digits (1 to 17), 0 if not
+  uint32_t shift = 0;                // plain form: the low bits dropped
+  bool exceptions = false;           // of the shift: some values keep their low bits
   std::vector<uint64_t> table = {};  // table form: the distinct keys, ascending (empty: not)
 };
 

@@ -39,7 +39,8 @@ Status checkRestFits(const TextReader& reader, int64_t announced, int64_t tokens
   return Status::ok();
 }
 
-Status truncatedError(const TextReader& reader, size_t last_line, int64_t done, int64_t total, const std::string& what) {
+Status truncatedError(const TextReader& reader, size_t last_line, int64_t done, int64_t total,
+                      const std::string& what) {
   return invalidData(reader.path() + ":" + std::to_string(last_line) + ": the file ends after " + std::to_string(done) +
                      " of the " + std::to_string(total) + " " + what + " its header announces");
 }

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <memory>
 #include <map>
+#include <memory>
 #include <string>
 
 #include "convert/vtk_common.h"
@@ -28,10 +28,10 @@ struct Face {
 
 constexpr Face kHexFaces[] = {{4, {0, 3, 2, 1}}, {4, {4, 5, 6, 7}}, {4, {0, 1, 5, 4}},
                               {4, {1, 2, 6, 5}}, {4, {2, 3, 7, 6}}, {4, {3, 0, 4, 7}}};
-constexpr Face kWedgeFaces[] = {{3, {0, 1, 2, 0}}, {3, {3, 5, 4, 0}}, {4, {0, 3, 4, 1}}, {4, {1, 4, 5, 2}},
-                                {4, {2, 5, 3, 0}}};
-constexpr Face kPyramidFaces[] = {{4, {0, 3, 2, 1}}, {3, {0, 1, 4, 0}}, {3, {1, 2, 4, 0}}, {3, {2, 3, 4, 0}},
-                                  {3, {3, 0, 4, 0}}};
+constexpr Face kWedgeFaces[] = {
+    {3, {0, 1, 2, 0}}, {3, {3, 5, 4, 0}}, {4, {0, 3, 4, 1}}, {4, {1, 4, 5, 2}}, {4, {2, 5, 3, 0}}};
+constexpr Face kPyramidFaces[] = {
+    {4, {0, 3, 2, 1}}, {3, {0, 1, 4, 0}}, {3, {1, 2, 4, 0}}, {3, {2, 3, 4, 0}}, {3, {3, 0, 4, 0}}};
 // Prisms over a pentagon (points 0-4 the bottom, 5-9 the top, i + 5 above i) and over a hexagon
 // (0-5, 6-11).
 constexpr Face kPentagonalPrismFaces[] = {{5, {0, 4, 3, 2, 1}}, {5, {5, 6, 7, 8, 9}}, {4, {0, 1, 6, 5}},
@@ -68,11 +68,35 @@ int expectedPoints(int type) {
 // write them so); they bound no volume and are skipped.
 bool isLowerDimensional(int type) {
   switch (type) {
-    case 0: case 1: case 2: case 3: case 4: case 5: case 6: case 7: case 8: case 9:  // linear
-    case 21: case 22: case 23: case 28: case 30: case 34: case 35: case 36:          // quadratic, cubic
-    case 51:                                                                        // parametric curve
-    case 60: case 61: case 62: case 63:                                              // higher order
-    case 68: case 69: case 70: case 75: case 76: case 77:                            // Lagrange, Bezier
+    case 0:
+    case 1:
+    case 2:
+    case 3:
+    case 4:
+    case 5:
+    case 6:
+    case 7:
+    case 8:
+    case 9:  // linear
+    case 21:
+    case 22:
+    case 23:
+    case 28:
+    case 30:
+    case 34:
+    case 35:
+    case 36:  // quadratic, cubic
+    case 51:  // parametric curve
+    case 60:
+    case 61:
+    case 62:
+    case 63:  // higher order
+    case 68:
+    case 69:
+    case 70:
+    case 75:
+    case 76:
+    case 77:  // Lagrange, Bezier
       return true;
     default: return false;
   }
@@ -82,17 +106,25 @@ bool isLowerDimensional(int type) {
 int linearType(int type) {
   switch (type) {
     case kVtkQuadraticTetra:
-    case 64: case 71: case 78: return kVtkTetra;  // higher-order, Lagrange, Bezier tetrahedra
+    case 64:
+    case 71:
+    case 78: return kVtkTetra;  // higher-order, Lagrange, Bezier tetrahedra
     case kVtkQuadraticHexahedron:
     case kVtkTriquadraticHexahedron:
     case 33:
-    case 67: case 72: case 79: return kVtkHexahedron;
+    case 67:
+    case 72:
+    case 79: return kVtkHexahedron;
     case kVtkQuadraticWedge:
-    case 31: case 32:
-    case 65: case 73: case 80: return kVtkWedge;
+    case 31:
+    case 32:
+    case 65:
+    case 73:
+    case 80: return kVtkWedge;
     case kVtkQuadraticPyramid:
     case 37:
-    case 74: case 81: return kVtkPyramid;
+    case 74:
+    case 81: return kVtkPyramid;
     default: return type;
   }
 }
@@ -101,10 +133,17 @@ int linearType(int type) {
 // order asks for, corners first: at least those of their linear cell. 0 for other types.
 int arbitraryOrderCorners(int type) {
   switch (type) {
-    case 64: case 71: case 78: return 4;
-    case 67: case 72: case 79: return 8;
-    case 65: case 73: case 80: return 6;
-    case 74: case 81: return 5;
+    case 64:
+    case 71:
+    case 78: return 4;
+    case 67:
+    case 72:
+    case 79: return 8;
+    case 65:
+    case 73:
+    case 80: return 6;
+    case 74:
+    case 81: return 5;
     default: return 0;
   }
 }
@@ -142,7 +181,11 @@ class Splitter {
   // nullptr to add none; `float32`: whether its coordinates must be float32 values.
   Splitter(std::vector<Tet>* tets, std::vector<uint32_t>* tet_cell, const double* coords, size_t num_points,
            SteinerPoints* steiner, bool float32)
-      : tets_(tets), tet_cell_(tet_cell), coords_(coords), num_points_(num_points), steiner_(steiner),
+      : tets_(tets),
+        tet_cell_(tet_cell),
+        coords_(coords),
+        num_points_(num_points),
+        steiner_(steiner),
         float32_(float32) {}
 
   void emit(const Tet& t, uint32_t cell) {
@@ -280,8 +323,8 @@ class Splitter {
   }
 
   size_t collapsed_ = 0;
-  size_t resplit_ = 0;  // cells split from another vertex than their smallest (cone)
-  size_t mixed_ = 0;    // cells whose every allowed cone mixes orientations, even from a Steiner point
+  size_t resplit_ = 0;        // cells split from another vertex than their smallest (cone)
+  size_t mixed_ = 0;          // cells whose every allowed cone mixes orientations, even from a Steiner point
   size_t steiner_cells_ = 0;  // cells split from an added point
   size_t hex_five_ = 0;
   size_t five_inverted_ = 0;  // hexahedra whose diagonals allow 5 tetrahedra, of which some come out inverted
@@ -415,13 +458,16 @@ class Splitter {
     out->clear();
     for (const Face& f : faces) {
       if (std::find(f.v, f.v + f.n, skip) != f.v + f.n) continue;
-      fan(apex, f.n, [&](int64_t k) { return g[f.v[k]]; }, out);
+      fan(
+          apex, f.n, [&](int64_t k) { return g[f.v[k]]; }, out);
     }
   }
   // Whether the face rule (fan from the smallest corner, at place m) cuts a face of n corners
   // through its corner at place `at`: a triangle always, a quadrilateral when `at` ends the diagonal
   // from m, a larger face when `at` is m.
-  static bool cutThrough(int64_t n, int64_t at, int64_t m) { return n == 3 || at == m || (n == 4 && at == (m + 2) % 4); }
+  static bool cutThrough(int64_t n, int64_t at, int64_t m) {
+    return n == 3 || at == m || (n == 4 && at == (m + 2) % 4);
+  }
   // True when every face through local vertex v is cut through v by the face rule: a triangle, a
   // quadrilateral whose diagonal (from its smallest corner) ends at v, or a larger face fanned from v.
   template <size_t N>
@@ -439,7 +485,8 @@ class Splitter {
       const int64_t n = f[at];
       const int64_t* v = f + at + 1;
       if (std::find(v, v + n, int64_t{apex}) != v + n) continue;
-      fan(apex, n, [&](int64_t i) { return static_cast<uint32_t>(v[i]); }, out);
+      fan(
+          apex, n, [&](int64_t i) { return static_cast<uint32_t>(v[i]); }, out);
     }
   }
   // allowedApex for a polyhedron: every face through `apex` is a triangle, a quadrilateral whose
@@ -629,10 +676,11 @@ Status surveyCells(const std::string& path, const VtkCells& cells, size_t num_po
 // Fails on unsupported volume cells, or when no cell is a volume cell; warns of the cells skipped.
 Status checkCellTypes(const std::string& path, const CellCensus& census, size_t num_cells, ImportReport* report) {
   if (!census.rejected.empty()) {
-    return unsupported(path + ": unsupported cell types: " + typeCounts(census.rejected) +
-                       "; only tetrahedra (10, 24, 64, 71, 78), hexahedra (11, 12, 25, 29, 33, 67, 72, 79), wedges "
-                       "(13, 26, 31, 32, 65, 73, 80), pyramids (14, 27, 37, 74, 81), pentagonal and hexagonal prisms (15, 16) "
-                       "and polyhedra (42) become tetrahedra");
+    return unsupported(
+        path + ": unsupported cell types: " + typeCounts(census.rejected) +
+        "; only tetrahedra (10, 24, 64, 71, 78), hexahedra (11, 12, 25, 29, 33, 67, 72, 79), wedges "
+        "(13, 26, 31, 32, 65, 73, 80), pyramids (14, 27, 37, 74, 81), pentagonal and hexagonal prisms (15, 16) "
+        "and polyhedra (42) become tetrahedra");
   }
   if (!census.skipped.empty()) {
     size_t total = 0;
@@ -691,7 +739,8 @@ void reportSplit(const CellCensus& census, const Splitter& splitter, int split, 
   const size_t hexes = census.hexes;
   if (hexes && split == 5 && splitter.hex_five_ + splitter.five_inverted_ < hexes)
     report->warnings.push_back(std::to_string(hexes - splitter.hex_five_ - splitter.five_inverted_) + " of " +
-                               std::to_string(hexes) + " hexahedra split into 6 tetrahedra: their face diagonals do not allow 5");
+                               std::to_string(hexes) +
+                               " hexahedra split into 6 tetrahedra: their face diagonals do not allow 5");
   if (splitter.five_inverted_)
     report->warnings.push_back(std::to_string(splitter.five_inverted_) + " of " + std::to_string(hexes) +
                                " hexahedra split into 6 tetrahedra: not convex, 5 would invert some");
@@ -844,7 +893,8 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
         const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
                                id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
         if ((cell_ghost && (cell_ghost[cell] & kVtkHiddenCell)) ||
-            (point_ghost && std::any_of(h, h + 8, [&](uint32_t v) { return (point_ghost[v] & kVtkHiddenPoint) != 0; }))) {
+            (point_ghost &&
+             std::any_of(h, h + 8, [&](uint32_t v) { return (point_ghost[v] & kVtkHiddenPoint) != 0; }))) {
           ++hidden;
           continue;
         }
@@ -854,7 +904,8 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
   for (const Field& f : cell_fields) mesh.cell_fields.push_back(expandCellField(f, tet_cell));
   if (hidden > 0) {
     result->report.dropped_cells += hidden;
-    result->report.warnings.push_back(std::to_string(hidden) + " cells blanked by VTK (vtkGhostType HIDDENCELL, or a "
+    result->report.warnings.push_back(std::to_string(hidden) +
+                                      " cells blanked by VTK (vtkGhostType HIDDENCELL, or a "
                                       "HIDDENPOINT corner) dropped");
   }
   finishImport(*result);
@@ -971,8 +1022,8 @@ Status finishVtkImport(const std::string& path, const VtkCells& cells, const std
   }
   for (const Field& f : cell_fields) {
     if (f.itemCount() != cells.types.size())
-      return invalidData(path + ": cell field '" + f.name + "' has " + std::to_string(f.itemCount()) +
-                         " values for " + std::to_string(cells.types.size()) + " cells");
+      return invalidData(path + ": cell field '" + f.name + "' has " + std::to_string(f.itemCount()) + " values for " +
+                         std::to_string(cells.types.size()) + " cells");
     result->mesh.cell_fields.push_back(expandCellField(f, tet_cell));
   }
   finishImport(*result);

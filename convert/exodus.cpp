@@ -158,8 +158,8 @@ bool volumeType(const std::string& type, VolumeType* out) {
 }
 
 // Reads `names` (count names of `type`) with the database's name length.
-StatusOr<std::vector<std::string>> readNames(const ExodusApi& api, const std::string& path, int exoid, ex_entity_type type, int count,
-                                             size_t name_length, const char* what) {
+StatusOr<std::vector<std::string>> readNames(const ExodusApi& api, const std::string& path, int exoid,
+                                             ex_entity_type type, int count, size_t name_length, const char* what) {
   std::vector<std::vector<char>> buffers(static_cast<size_t>(count), std::vector<char>(name_length + 1, '\0'));
   std::vector<char*> pointers;
   for (auto& b : buffers) pointers.push_back(b.data());
@@ -251,8 +251,8 @@ class ClassicHeader {
       Var var{1, 0, 0, false};
       for (uint64_t d = 0; d < rank; ++d) {
         GTN_ASSIGN_OR_RETURN(const uint64_t id, count());
-        if (id >= dims.size()) return fail("a variable names dimension " + std::to_string(id) + " of " +
-                                           std::to_string(dims.size()));
+        if (id >= dims.size())
+          return fail("a variable names dimension " + std::to_string(id) + " of " + std::to_string(dims.size()));
         if (d == 0 && dims[id] == 0) {
           var.record = true;
           continue;
@@ -340,10 +340,17 @@ class ClassicHeader {
   }
   uint64_t typeSize(uint64_t type) const {
     switch (type) {
-      case 1: case 2: case 7: return 1;  // byte, char, ubyte
-      case 3: case 8: return 2;          // short, ushort
-      case 4: case 5: case 9: return 4;  // int, float, uint
-      case 6: case 10: case 11: return 8;  // double, int64, uint64
+      case 1:
+      case 2:
+      case 7: return 1;  // byte, char, ubyte
+      case 3:
+      case 8: return 2;  // short, ushort
+      case 4:
+      case 5:
+      case 9: return 4;  // int, float, uint
+      case 6:
+      case 10:
+      case 11: return 8;  // double, int64, uint64
       default: return 0;
     }
   }
@@ -371,8 +378,10 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
   std::string why;
   const ExodusApi* loaded = exodusApi(&why);
   if (!loaded)
-    return unsupported(path + ": an Exodus II file, but the Exodus library (libexoIIv2c, Debian's libexodusii5) "
-                       "cannot be loaded: " + why);
+    return unsupported(path +
+                       ": an Exodus II file, but the Exodus library (libexoIIv2c, Debian's libexodusii5) "
+                       "cannot be loaded: " +
+                       why);
   const ExodusApi& api = *loaded;
   struct stat sb;
   if (::stat(path.c_str(), &sb) != 0) return ioError(path + ": cannot read it");
@@ -472,8 +481,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     param.id = blk.id;
     param.type = EX_ELEM_BLOCK;
     if (api.ex_get_block_param(exoid, &param) < 0)
-      return invalidData(path + ": cannot read element block " + std::to_string(blk.id) + " (ex_get_block_param: " +
-                         exodusError(api) + ")");
+      return invalidData(path + ": cannot read element block " + std::to_string(blk.id) +
+                         " (ex_get_block_param: " + exodusError(api) + ")");
     param.topology[MAX_STR_LENGTH] = '\0';
     blk.type = trimmed(param.topology);
     blk.elements = param.num_entry;
@@ -538,7 +547,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
                        "): only TETRA, HEX, WEDGE and PYRAMID blocks become tetrahedra");
   }
   for (const auto& [type, n] : higher_order)
-    warnings.push_back(std::to_string(n) + " " + type + " elements: only their corners are kept; their other nodes "
+    warnings.push_back(std::to_string(n) + " " + type +
+                       " elements: only their corners are kept; their other nodes "
                        "stay as points that no tetrahedron uses");
 
   // The time step.
@@ -573,8 +583,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
   if (step > 0) {
     double time = 0;
     if (api.ex_get_time(exoid, step, &time) < 0)
-      return invalidData(path + ": cannot read the time of step " + std::to_string(step) + " (ex_get_time: " +
-                         exodusError(api) + ")");
+      return invalidData(path + ": cannot read the time of step " + std::to_string(step) +
+                         " (ex_get_time: " + exodusError(api) + ")");
     char text[64];
     std::snprintf(text, sizeof text, "%.17g", time);
     mesh.setMetadata("exodus.time", text);
@@ -591,7 +601,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
       Field f(g.name, static_cast<uint32_t>(g.variables.size()), value_type, num_nodes);
       for (size_t c = 0; c < g.variables.size(); ++c) {
         values.assign(num_nodes, 0.0);
-        if (num_nodes > 0 && api.ex_get_var(exoid, step, EX_NODAL, g.variables[c] + 1, 1, init.num_nodes, values.data()) < 0)
+        if (num_nodes > 0 &&
+            api.ex_get_var(exoid, step, EX_NODAL, g.variables[c] + 1, 1, init.num_nodes, values.data()) < 0)
           return invalidData(path + ": cannot read nodal variable '" + node_names[g.variables[c]] + "' at time step " +
                              std::to_string(step) + " (ex_get_var: " + exodusError(api) + ")");
         for (size_t i = 0; i < num_nodes; ++i) putValue(f, i, static_cast<uint32_t>(c), values[i]);
@@ -605,8 +616,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     std::vector<int> truth(static_cast<size_t>(num_blocks) * static_cast<size_t>(num_elem_vars), 1);
     if (num_blocks > 0 && num_elem_vars > 0 &&
         api.ex_get_truth_table(exoid, EX_ELEM_BLOCK, num_blocks, num_elem_vars, truth.data()) < 0)
-      return invalidData(path + ": cannot read the element variable truth table (ex_get_truth_table: " +
-                         exodusError(api) + ")");
+      return invalidData(
+          path + ": cannot read the element variable truth table (ex_get_truth_table: " + exodusError(api) + ")");
     for (const VariableGroup& g : groupVariables(elem_names)) {
       Field f(g.name, static_cast<uint32_t>(g.variables.size()), value_type, num_cells);
       std::vector<int64_t> undefined_blocks;
@@ -625,8 +636,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
           values.assign(n, 0.0);
           if (api.ex_get_var(exoid, step, EX_ELEM_BLOCK, var + 1, blk.id, blk.elements, values.data()) < 0)
             return invalidData(path + ": cannot read element variable '" + elem_names[var] + "' of element block " +
-                               std::to_string(blk.id) + " at time step " + std::to_string(step) + " (ex_get_var: " +
-                               exodusError(api) + ")");
+                               std::to_string(blk.id) + " at time step " + std::to_string(step) +
+                               " (ex_get_var: " + exodusError(api) + ")");
           for (size_t e = 0; e < n; ++e) putValue(f, blk.first_cell + e, static_cast<uint32_t>(c), values[e]);
         }
       }
@@ -662,8 +673,8 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
       warnings.push_back("skipped " + plural(attributes, "element attribute", "element attributes") +
                          " of the volume blocks (not read)");
     const std::pair<int64_t, const char*> others[] = {
-        {init.num_node_sets, "node sets"}, {init.num_side_sets, "side sets"},   {init.num_elem_sets, "element sets"},
-        {init.num_edge_sets, "edge sets"}, {init.num_face_sets, "face sets"},   {init.num_edge_blk, "edge blocks"},
+        {init.num_node_sets, "node sets"},  {init.num_side_sets, "side sets"}, {init.num_elem_sets, "element sets"},
+        {init.num_edge_sets, "edge sets"},  {init.num_face_sets, "face sets"}, {init.num_edge_blk, "edge blocks"},
         {init.num_face_blk, "face blocks"},
     };
     for (const auto& [n, what] : others)

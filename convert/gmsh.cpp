@@ -52,30 +52,73 @@ struct GmshType {
 };
 
 constexpr GmshType kGmshTypes[] = {
-    {1, 2, 1, 0, "line"},           {2, 3, 2, 0, "triangle"},        {3, 4, 2, 0, "quadrangle"},
-    {4, 4, 3, kVtkTetra, "tetrahedron"}, {5, 8, 3, kVtkHexahedron, "hexahedron"}, {6, 6, 3, kVtkWedge, "prism"},
-    {7, 5, 3, kVtkPyramid, "pyramid"},   {8, 3, 1, 0, "line3"},      {9, 6, 2, 0, "triangle6"},
-    {10, 9, 2, 0, "quadrangle9"},   {11, 10, 3, kVtkTetra, "tetrahedron10"}, {12, 27, 3, kVtkHexahedron, "hexahedron27"},
-    {13, 18, 3, kVtkWedge, "prism18"}, {14, 14, 3, kVtkPyramid, "pyramid14"}, {15, 1, 0, 0, "point"},
-    {16, 8, 2, 0, "quadrangle8"},   {17, 20, 3, kVtkHexahedron, "hexahedron20"}, {18, 15, 3, kVtkWedge, "prism15"},
-    {19, 13, 3, kVtkPyramid, "pyramid13"}, {20, 9, 2, 0, "triangle9"}, {21, 10, 2, 0, "triangle10"},
-    {22, 12, 2, 0, "triangle12"},   {23, 15, 2, 0, "triangle15"},     {24, 15, 2, 0, "triangle15i"},
-    {25, 21, 2, 0, "triangle21"},   {26, 4, 1, 0, "line4"},           {27, 5, 1, 0, "line5"},
-    {28, 6, 1, 0, "line6"},         {29, 20, 3, kVtkTetra, "tetrahedron20"}, {30, 35, 3, kVtkTetra, "tetrahedron35"},
-    {31, 56, 3, kVtkTetra, "tetrahedron56"}, {36, 16, 2, 0, "quadrangle16"}, {37, 25, 2, 0, "quadrangle25"},
-    {38, 36, 2, 0, "quadrangle36"}, {42, 28, 2, 0, "triangle28"},     {43, 36, 2, 0, "triangle36"},
-    {44, 45, 2, 0, "triangle45"},   {45, 55, 2, 0, "triangle55"},     {46, 66, 2, 0, "triangle66"},
-    {47, 49, 2, 0, "quadrangle49"}, {48, 64, 2, 0, "quadrangle64"},   {49, 81, 2, 0, "quadrangle81"},
-    {50, 100, 2, 0, "quadrangle100"}, {51, 121, 2, 0, "quadrangle121"}, {62, 7, 1, 0, "line7"},
-    {63, 8, 1, 0, "line8"},         {64, 9, 1, 0, "line9"},           {65, 10, 1, 0, "line10"},
-    {66, 11, 1, 0, "line11"},       {71, 84, 3, kVtkTetra, "tetrahedron84"}, {72, 120, 3, kVtkTetra, "tetrahedron120"},
-    {73, 165, 3, kVtkTetra, "tetrahedron165"}, {74, 220, 3, kVtkTetra, "tetrahedron220"},
-    {75, 286, 3, kVtkTetra, "tetrahedron286"}, {90, 40, 3, kVtkWedge, "prism40"}, {91, 75, 3, kVtkWedge, "prism75"},
-    {92, 64, 3, kVtkHexahedron, "hexahedron64"}, {93, 125, 3, kVtkHexahedron, "hexahedron125"},
-    {94, 216, 3, kVtkHexahedron, "hexahedron216"}, {95, 343, 3, kVtkHexahedron, "hexahedron343"},
-    {96, 512, 3, kVtkHexahedron, "hexahedron512"}, {97, 729, 3, kVtkHexahedron, "hexahedron729"},
-    {98, 1000, 3, kVtkHexahedron, "hexahedron1000"}, {106, 126, 3, kVtkWedge, "prism126"},
-    {107, 196, 3, kVtkWedge, "prism196"}, {108, 288, 3, kVtkWedge, "prism288"}, {109, 405, 3, kVtkWedge, "prism405"},
+    {1, 2, 1, 0, "line"},
+    {2, 3, 2, 0, "triangle"},
+    {3, 4, 2, 0, "quadrangle"},
+    {4, 4, 3, kVtkTetra, "tetrahedron"},
+    {5, 8, 3, kVtkHexahedron, "hexahedron"},
+    {6, 6, 3, kVtkWedge, "prism"},
+    {7, 5, 3, kVtkPyramid, "pyramid"},
+    {8, 3, 1, 0, "line3"},
+    {9, 6, 2, 0, "triangle6"},
+    {10, 9, 2, 0, "quadrangle9"},
+    {11, 10, 3, kVtkTetra, "tetrahedron10"},
+    {12, 27, 3, kVtkHexahedron, "hexahedron27"},
+    {13, 18, 3, kVtkWedge, "prism18"},
+    {14, 14, 3, kVtkPyramid, "pyramid14"},
+    {15, 1, 0, 0, "point"},
+    {16, 8, 2, 0, "quadrangle8"},
+    {17, 20, 3, kVtkHexahedron, "hexahedron20"},
+    {18, 15, 3, kVtkWedge, "prism15"},
+    {19, 13, 3, kVtkPyramid, "pyramid13"},
+    {20, 9, 2, 0, "triangle9"},
+    {21, 10, 2, 0, "triangle10"},
+    {22, 12, 2, 0, "triangle12"},
+    {23, 15, 2, 0, "triangle15"},
+    {24, 15, 2, 0, "triangle15i"},
+    {25, 21, 2, 0, "triangle21"},
+    {26, 4, 1, 0, "line4"},
+    {27, 5, 1, 0, "line5"},
+    {28, 6, 1, 0, "line6"},
+    {29, 20, 3, kVtkTetra, "tetrahedron20"},
+    {30, 35, 3, kVtkTetra, "tetrahedron35"},
+    {31, 56, 3, kVtkTetra, "tetrahedron56"},
+    {36, 16, 2, 0, "quadrangle16"},
+    {37, 25, 2, 0, "quadrangle25"},
+    {38, 36, 2, 0, "quadrangle36"},
+    {42, 28, 2, 0, "triangle28"},
+    {43, 36, 2, 0, "triangle36"},
+    {44, 45, 2, 0, "triangle45"},
+    {45, 55, 2, 0, "triangle55"},
+    {46, 66, 2, 0, "triangle66"},
+    {47, 49, 2, 0, "quadrangle49"},
+    {48, 64, 2, 0, "quadrangle64"},
+    {49, 81, 2, 0, "quadrangle81"},
+    {50, 100, 2, 0, "quadrangle100"},
+    {51, 121, 2, 0, "quadrangle121"},
+    {62, 7, 1, 0, "line7"},
+    {63, 8, 1, 0, "line8"},
+    {64, 9, 1, 0, "line9"},
+    {65, 10, 1, 0, "line10"},
+    {66, 11, 1, 0, "line11"},
+    {71, 84, 3, kVtkTetra, "tetrahedron84"},
+    {72, 120, 3, kVtkTetra, "tetrahedron120"},
+    {73, 165, 3, kVtkTetra, "tetrahedron165"},
+    {74, 220, 3, kVtkTetra, "tetrahedron220"},
+    {75, 286, 3, kVtkTetra, "tetrahedron286"},
+    {90, 40, 3, kVtkWedge, "prism40"},
+    {91, 75, 3, kVtkWedge, "prism75"},
+    {92, 64, 3, kVtkHexahedron, "hexahedron64"},
+    {93, 125, 3, kVtkHexahedron, "hexahedron125"},
+    {94, 216, 3, kVtkHexahedron, "hexahedron216"},
+    {95, 343, 3, kVtkHexahedron, "hexahedron343"},
+    {96, 512, 3, kVtkHexahedron, "hexahedron512"},
+    {97, 729, 3, kVtkHexahedron, "hexahedron729"},
+    {98, 1000, 3, kVtkHexahedron, "hexahedron1000"},
+    {106, 126, 3, kVtkWedge, "prism126"},
+    {107, 196, 3, kVtkWedge, "prism196"},
+    {108, 288, 3, kVtkWedge, "prism288"},
+    {109, 405, 3, kVtkWedge, "prism405"},
     {110, 550, 3, kVtkWedge, "prism550"},
 };
 
@@ -134,7 +177,8 @@ class TagMap {
   }
 
   uint32_t find(int64_t tag) const {
-    if (dense_) return tag >= 0 && static_cast<uint64_t>(tag) < table_.size() ? table_[static_cast<size_t>(tag)] : kNoIndex;
+    if (dense_)
+      return tag >= 0 && static_cast<uint64_t>(tag) < table_.size() ? table_[static_cast<size_t>(tag)] : kNoIndex;
     auto it = std::lower_bound(sorted_.begin(), sorted_.end(), std::pair<int64_t, uint32_t>{tag, 0});
     return it != sorted_.end() && it->first == tag ? it->second : kNoIndex;
   }
@@ -279,7 +323,8 @@ class MshReader {
     }
     uint64_t v;
     if (!rawBytes(&v, 8)) return endError(what);
-    if (v > static_cast<uint64_t>(INT64_MAX)) return binaryErrorAt(at, what + " " + std::to_string(v) + " is too large");
+    if (v > static_cast<uint64_t>(INT64_MAX))
+      return binaryErrorAt(at, what + " " + std::to_string(v) + " is too large");
     return static_cast<int64_t>(v);
   }
   StatusOr<double> readDouble(const std::string& what) {
@@ -320,13 +365,13 @@ class MshReader {
 
   std::vector<double> coords_;
   TagMap node_map_;
-  TagMap element_map_;                 // all elements, in file order
+  TagMap element_map_;                  // all elements, in file order
   std::vector<uint32_t> element_cell_;  // per element: its volume cell, or kNoIndex when skipped
   VtkCells cells_;
   std::vector<int32_t> physical_, geometrical_;
   bool any_physical_ = false, any_geometrical_ = false;
-  std::map<int, size_t> skipped_;       // lower-dimension elements by gmsh type
-  std::map<int, size_t> higher_order_;  // volume elements with more nodes than corners, by gmsh type
+  std::map<int, size_t> skipped_;               // lower-dimension elements by gmsh type
+  std::map<int, size_t> higher_order_;          // volume elements with more nodes than corners, by gmsh type
   std::map<int64_t, int32_t> volume_physical_;  // MSH 4.1: volume entity -> its first physical tag
   size_t multi_physical_ = 0;
   std::vector<std::pair<int64_t, std::string>> volume_names_;
@@ -370,8 +415,9 @@ Status MshReader::readFormat() {
     } else if (one[0] == 0 && one[1] == 0 && one[2] == 0 && one[3] == 1) {
       swap_ = true;
     } else {
-      return binaryErrorAt(at, "the binary integer 1 after the format line reads neither little- nor big-endian "
-                               "(a binary file transferred as text?)");
+      return binaryErrorAt(at,
+                           "the binary integer 1 after the format line reads neither little- nor big-endian "
+                           "(a binary file transferred as text?)");
     }
   }
   return expectEnd("MeshFormat");
@@ -391,7 +437,9 @@ Status MshReader::readPhysicalNames() {
 Status MshReader::readEntities() {
   int64_t counts[4];
   const char* kinds[4] = {"point entity count", "curve entity count", "surface entity count", "volume entity count"};
-  for (int d = 0; d < 4; ++d) { GTN_ASSIGN_OR_RETURN(counts[d], readCount(kinds[d], binary_ ? 4 + 24 + sizeBytes() : 8)); }
+  for (int d = 0; d < 4; ++d) {
+    GTN_ASSIGN_OR_RETURN(counts[d], readCount(kinds[d], binary_ ? 4 + 24 + sizeBytes() : 8));
+  }
   for (int d = 0; d < 4; ++d) {
     for (int64_t e = 0; e < counts[d]; ++e) {
       GTN_ASSIGN_OR_RETURN(const int64_t tag, readInt("entity tag"));
@@ -432,7 +480,9 @@ Status MshReader::readNodes() {
       const size_t at = pos_;
       GTN_ASSIGN_OR_RETURN(const int64_t tag, readInt("node tag"));
       double xyz[3];
-      for (double& c : xyz) { GTN_ASSIGN_OR_RETURN(c, readDouble("node coordinate")); }
+      for (double& c : xyz) {
+        GTN_ASSIGN_OR_RETURN(c, readDouble("node coordinate"));
+      }
       tags.push_back(tag);
       GTN_RETURN_IF_ERROR(addNode(tag, xyz, binary_ ? at : token_at_));
     }
@@ -465,17 +515,20 @@ Status MshReader::readNodes() {
       for (int64_t i = 0; i < count; ++i) {
         const size_t at = pos_;
         double xyz[3];
-        for (double& c : xyz) { GTN_ASSIGN_OR_RETURN(c, readDouble("node coordinate")); }
+        for (double& c : xyz) {
+          GTN_ASSIGN_OR_RETURN(c, readDouble("node coordinate"));
+        }
         for (int k = 0; k < extra; ++k) GTN_RETURN_IF_ERROR(readDouble("parametric coordinate").status());
         GTN_RETURN_IF_ERROR(addNode(tags[first + static_cast<size_t>(i)], xyz, binary_ ? at : token_at_));
       }
     }
     if (static_cast<int64_t>(tags.size()) != n)
-      return errorAt(pos_, "the node blocks hold " + std::to_string(tags.size()) + " nodes, the $Nodes header announces " +
-                               std::to_string(n));
+      return errorAt(pos_, "the node blocks hold " + std::to_string(tags.size()) +
+                               " nodes, the $Nodes header announces " + std::to_string(n));
   }
   int64_t duplicate = 0;
-  if (!node_map_.build(&duplicate)) return errorAt(pos_, "node tag " + std::to_string(duplicate) + " occurs twice in $Nodes");
+  if (!node_map_.build(&duplicate))
+    return errorAt(pos_, "node tag " + std::to_string(duplicate) + " occurs twice in $Nodes");
   return expectEnd("Nodes");
 }
 
@@ -530,7 +583,9 @@ Status MshReader::readElements() {
       // elements that follow, ntags), then those elements as "tag tags... nodes..." int32 values.
       const size_t header_at = pos_;
       int64_t tag = 0, follow = 1;
-      if (!binary_) { GTN_ASSIGN_OR_RETURN(tag, textInt("element tag")); }
+      if (!binary_) {
+        GTN_ASSIGN_OR_RETURN(tag, textInt("element tag"));
+      }
       const size_t type_at = binary_ ? pos_ : 0;
       GTN_ASSIGN_OR_RETURN(const int64_t type_number, readInt("element type"));
       GTN_ASSIGN_OR_RETURN(const GmshType* type, typeOf(type_number, binary_ ? type_at : token_at_));
@@ -554,11 +609,17 @@ Status MshReader::readElements() {
       }
       for (int64_t e = 0; e < follow; ++e) {
         const size_t at = binary_ ? pos_ : token_at_;
-        if (binary_) { GTN_ASSIGN_OR_RETURN(tag, readInt("element tag")); }
+        if (binary_) {
+          GTN_ASSIGN_OR_RETURN(tag, readInt("element tag"));
+        }
         tags.resize(static_cast<size_t>(num_tags));
-        for (int64_t& t : tags) { GTN_ASSIGN_OR_RETURN(t, readInt("element tag")); }
+        for (int64_t& t : tags) {
+          GTN_ASSIGN_OR_RETURN(t, readInt("element tag"));
+        }
         nodes.resize(static_cast<size_t>(type->nodes));
-        for (int64_t& v : nodes) { GTN_ASSIGN_OR_RETURN(v, readInt("element node")); }
+        for (int64_t& v : nodes) {
+          GTN_ASSIGN_OR_RETURN(v, readInt("element node"));
+        }
         if (num_tags >= 1) any_physical_ = true;
         if (num_tags >= 2) any_geometrical_ = true;
         GTN_RETURN_IF_ERROR(addElement(tag, *type, nodes.data(), num_tags >= 1 ? static_cast<int32_t>(tags[0]) : 0,
@@ -597,7 +658,9 @@ Status MshReader::readElements() {
         const size_t at = pos_;
         GTN_ASSIGN_OR_RETURN(const int64_t tag, readSize("element tag"));
         const size_t line_at = binary_ ? at : token_at_;
-        for (int64_t& v : nodes) { GTN_ASSIGN_OR_RETURN(v, readSize("element node")); }
+        for (int64_t& v : nodes) {
+          GTN_ASSIGN_OR_RETURN(v, readSize("element node"));
+        }
         GTN_RETURN_IF_ERROR(addElement(tag, *type, nodes.data(), physical, static_cast<int32_t>(entity), line_at));
       }
     }
@@ -760,8 +823,8 @@ Status MshReader::buildFields(ImportResult* result, std::vector<Field>* cell_fie
         } else {
           const uint32_t e = element_map_.find(d.tags[i]);
           if (e == kNoIndex)
-            return errorAt(d.offset, kind + " '" + name + "' gives a value to element " +
-                                         std::to_string(d.tags[i]) + ", which $Elements does not define");
+            return errorAt(d.offset, kind + " '" + name + "' gives a value to element " + std::to_string(d.tags[i]) +
+                                         ", which $Elements does not define");
           item = element_cell_[e];
           if (item == kNoIndex) {
             ++skipped_values;
@@ -794,8 +857,9 @@ StatusOr<ImportResult> MshReader::read(const ImportOptions& options) {
   std::string_view t;
   if (!token(&t) || t != "$MeshFormat") {
     if (text_.substr(0, 4) == "$NOD")
-      return unsupported(path_ + ": MSH format version 1 ($NOD) is not read; only 2.x and 4.1 are: save it "
-                                 "again from gmsh with -format msh41 or msh22");
+      return unsupported(path_ +
+                         ": MSH format version 1 ($NOD) is not read; only 2.x and 4.1 are: save it "
+                         "again from gmsh with -format msh41 or msh22");
     return Status(StatusCode::kNotOurFile, path_ + ": not a gmsh .msh file (it does not start with $MeshFormat)");
   }
   skipLineEnd();
@@ -834,7 +898,8 @@ StatusOr<ImportResult> MshReader::read(const ImportOptions& options) {
   auto typeCounts = [](const std::map<int, size_t>& counts) {
     std::string s;
     for (const auto& [type, n] : counts)
-      s += (s.empty() ? "" : ", ") + std::to_string(n) + " " + findType(type)->name + " (type " + std::to_string(type) + ")";
+      s += (s.empty() ? "" : ", ") + std::to_string(n) + " " + findType(type)->name + " (type " + std::to_string(type) +
+           ")";
     return s;
   };
   if (cells_.types.empty()) {
@@ -884,8 +949,8 @@ StatusOr<ImportResult> MshReader::read(const ImportOptions& options) {
   if (!unread_sections_.empty()) warnings.push_back("sections not read: " + joinNames(unread_sections_));
   for (const auto& [tag, name] : volume_names_) mesh.setMetadata("gmsh.physical_name." + std::to_string(tag), name);
   GTN_RETURN_IF_ERROR(finishVtkImport(path_, cells_, cell_fields, options, &result));
-  mesh.setMetadata("source.format", std::string("gmsh ") + (version_ == 2 ? "2.2" : "4.1") +
-                                        (binary_ ? " binary" : " ASCII"));
+  mesh.setMetadata("source.format",
+                   std::string("gmsh ") + (version_ == 2 ? "2.2" : "4.1") + (binary_ ? " binary" : " ASCII"));
   return result;
 }
 

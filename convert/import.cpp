@@ -193,8 +193,9 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
   if (inputs.size() == 1 && inputs[0] == "-") {
     StatusOr<ImportResult> r = importGtn("-");
     if (!r.isOk() && r.status().code() == StatusCode::kNotOurFile)
-      return Status(r.status().code(), r.status().message() + "; standard input is read as a .gtn stream: name a "
-                                                              "mesh file instead");
+      return Status(r.status().code(), r.status().message() +
+                                           "; standard input is read as a .gtn stream: name a "
+                                           "mesh file instead");
     return r;
   }
   // A repository cloned without Git LFS holds a short text pointer in place of each large file; every
@@ -204,8 +205,10 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
       return Status(StatusCode::kNotOurFile, p + ": a Git LFS pointer (the placeholder a clone without Git LFS "
                                                  "holds), not the file itself: fetch it, e.g. with 'git lfs pull'");
   if (const std::string ext = lowerExtension(inputs[0]); ext == "sol" || ext == "solb")
-    return usageError(inputs[0] + ": a Medit solution file holds values, not a mesh: give it after its mesh "
-                                  "(gtn convert u.mesh " + inputs[0] + " ...)");
+    return usageError(inputs[0] +
+                      ": a Medit solution file holds values, not a mesh: give it after its mesh "
+                      "(gtn convert u.mesh " +
+                      inputs[0] + " ...)");
   const InputFormat first = detectInputFormat(inputs[0]);
   if (first == InputFormat::kPlot3d) return importPlot3d(inputs, options);
   ImportOptions opts = options;
@@ -252,18 +255,22 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
     case InputFormat::kExodus: result = importExodus(path, opts); break;
     default:
       return Status(StatusCode::kNotOurFile,
-                    path + ": cannot tell its format from the extension or content (known: PLOT3D .xyz/.q/.bin/.p3d, "
-                           "TetGen .node/.ele, VTK .vtk/.vtu/.vts/.vtr/.vti and parallel .pvtu/.pvts/.pvtr/.pvti, Medit .mesh/.meshb, tetrahedral .off, gmsh .msh, Exodus II .exo/.e/.ex2)");
+                    path +
+                        ": cannot tell its format from the extension or content (known: PLOT3D .xyz/.q/.bin/.p3d, "
+                        "TetGen .node/.ele, VTK .vtk/.vtu/.vts/.vtr/.vti and parallel .pvtu/.pvts/.pvtr/.pvti, Medit "
+                        ".mesh/.meshb, tetrahedral .off, gmsh .msh, Exodus II .exo/.e/.ex2)");
   }
   if (result.isOk() && (first == InputFormat::kMedit || first == InputFormat::kMeshb) && opts.medit_solutions.empty()) {
     // Medit and MMG load u.sol or u.solb beside u.mesh by themselves; say so rather than guess.
     const size_t dot = path.find_last_of('.');
-    const std::string base = dot == std::string::npos || path.find('/', dot) != std::string::npos ? path : path.substr(0, dot);
+    const std::string base =
+        dot == std::string::npos || path.find('/', dot) != std::string::npos ? path : path.substr(0, dot);
     for (const char* ext : {".sol", ".solb"})
       if (isRegularFile(base + ext))
-        result->report.warnings.push_back(base + ext + " beside it holds solution values that were not read; name it "
-                                          "after the mesh to import them as fields (gtn convert " + path + " " +
-                                          base + ext + " ...)");
+        result->report.warnings.push_back(base + ext +
+                                          " beside it holds solution values that were not read; name it "
+                                          "after the mesh to import them as fields (gtn convert " +
+                                          path + " " + base + ext + " ...)");
   }
   if (result.isOk() && options.weld) {
     weldPoints(result->mesh, result->report);

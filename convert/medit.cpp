@@ -35,30 +35,52 @@ struct SkippedSection {
   Skip skip = Skip::kValues;
 };
 constexpr SkippedSection kSkipped[] = {
-    {"Edges", 3},           {"Triangles", 4},          {"Quadrilaterals", 5},
-    {"EdgesP2", 4},         {"TrianglesP2", 7},        {"QuadrilateralsQ2", 10},
-    {"TetrahedraP2", 11, true}, {"HexahedraQ2", 28, true},
-    {"Corners", 1},         {"Ridges", 1},             {"RequiredVertices", 1},
-    {"RequiredEdges", 1},   {"RequiredTriangles", 1},  {"RequiredQuadrilaterals", 1},
-    {"RequiredTetrahedra", 1}, {"RequiredHexahedra", 1}, {"Normals", -1},
-    {"Tangents", -1},       {"NormalAtVertices", 2},   {"NormalAtTriangleVertices", 3},
-    {"NormalAtQuadrilateralVertices", 3}, {"TangentAtEdgeVertices", 3}, {"TangentAtVertices", 2},
+    {"Edges", 3},
+    {"Triangles", 4},
+    {"Quadrilaterals", 5},
+    {"EdgesP2", 4},
+    {"TrianglesP2", 7},
+    {"QuadrilateralsQ2", 10},
+    {"TetrahedraP2", 11, true},
+    {"HexahedraQ2", 28, true},
+    {"Corners", 1},
+    {"Ridges", 1},
+    {"RequiredVertices", 1},
+    {"RequiredEdges", 1},
+    {"RequiredTriangles", 1},
+    {"RequiredQuadrilaterals", 1},
+    {"RequiredTetrahedra", 1},
+    {"RequiredHexahedra", 1},
+    {"Normals", -1},
+    {"Tangents", -1},
+    {"NormalAtVertices", 2},
+    {"NormalAtTriangleVertices", 3},
+    {"NormalAtQuadrilateralVertices", 3},
+    {"TangentAtEdgeVertices", 3},
+    {"TangentAtVertices", 2},
     {"Crack", 2},
     // Links of the mesh to a geometry (libMeshb's GmfVertexOnGeometricVertex and its kin); the
     // singular and plural spellings of the two libMeshb generations.
-    {"VertexOnGeometricVertex", 0, false, Skip::kLines}, {"VertexOnGeometricEdge", 0, false, Skip::kLines},
-    {"VertexOnGeometricTriangle", 0, false, Skip::kLines}, {"VertexOnGeometricQuadrilateral", 0, false, Skip::kLines},
-    {"EdgeOnGeometricEdge", 0, false, Skip::kLines}, {"TriangleOnGeometricTriangle", 0, false, Skip::kLines},
+    {"VertexOnGeometricVertex", 0, false, Skip::kLines},
+    {"VertexOnGeometricEdge", 0, false, Skip::kLines},
+    {"VertexOnGeometricTriangle", 0, false, Skip::kLines},
+    {"VertexOnGeometricQuadrilateral", 0, false, Skip::kLines},
+    {"EdgeOnGeometricEdge", 0, false, Skip::kLines},
+    {"TriangleOnGeometricTriangle", 0, false, Skip::kLines},
     {"TriangleOnGeometricQuadrilateral", 0, false, Skip::kLines},
     {"QuadrilateralOnGeometricTriangle", 0, false, Skip::kLines},
     {"QuadrilateralOnGeometricQuadrilateral", 0, false, Skip::kLines},
-    {"VerticesOnGeometricVertices", 0, false, Skip::kLines}, {"VerticesOnGeometricEdges", 0, false, Skip::kLines},
+    {"VerticesOnGeometricVertices", 0, false, Skip::kLines},
+    {"VerticesOnGeometricEdges", 0, false, Skip::kLines},
     {"VerticesOnGeometricTriangles", 0, false, Skip::kLines},
     {"VerticesOnGeometricQuadrilaterals", 0, false, Skip::kLines},
-    {"EdgesOnGeometricEdges", 0, false, Skip::kLines}, {"SubDomainFromGeom", 0, false, Skip::kLines},
+    {"EdgesOnGeometricEdges", 0, false, Skip::kLines},
+    {"SubDomainFromGeom", 0, false, Skip::kLines},
     {"SubDomainFromMesh", 0, false, Skip::kLines},
-    {"Iterations", 1, false, Skip::kSingle}, {"Time", 1, false, Skip::kSingle},
-    {"AngleOfCornerBound", 1, false, Skip::kSingle}, {"BoundingBox", 6, false, Skip::kSingle},
+    {"Iterations", 1, false, Skip::kSingle},
+    {"Time", 1, false, Skip::kSingle},
+    {"AngleOfCornerBound", 1, false, Skip::kSingle},
+    {"BoundingBox", 6, false, Skip::kSingle},
 };
 
 // What a skipped section held, for its warning.
@@ -354,8 +376,8 @@ Status MeditReader::skipSection(const SkippedSection& section) {
 void MeditReader::noteSkipped(const SkippedSection& section, int64_t count, size_t line) {
   if (count <= 0) return;
   if (!section.volume) {
-    auto it = std::find_if(skipped_.begin(), skipped_.end(),
-                           [&](const SkippedEntries& e) { return e.section == &section; });
+    auto it =
+        std::find_if(skipped_.begin(), skipped_.end(), [&](const SkippedEntries& e) { return e.section == &section; });
     if (it == skipped_.end()) it = skipped_.insert(skipped_.end(), SkippedEntries{&section, 0, line, 0});
     it->entries += count;
     ++it->sections;

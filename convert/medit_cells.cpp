@@ -56,8 +56,8 @@ std::string noVolumeElements(const std::string& skipped) {
                                ", which are not read";
 }
 
-Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells,
-                         const ImportOptions& options, ImportResult* result) {
+Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells, const ImportOptions& options,
+                         ImportResult* result) {
   TetMesh& mesh = result->mesh;
   const bool tets_only = cells->other_refs.empty();
   if (!tets_only) GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, result));

@@ -76,8 +76,8 @@ std::string noVolumeElements(const std::string& skipped);
 // that vertex values count the file's vertices and are averaged onto any point the split adds;
 // after it for tetrahedra alone, whose element values are kept). `format` names the source
 // ("medit", "meshb") in the metadata.
-Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells,
-                         const ImportOptions& options, ImportResult* result);
+Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells, const ImportOptions& options,
+                         ImportResult* result);
 
 // Reads Medit solution files (.sol ASCII or .solb binary, told apart by their first bytes) into
 // result->mesh (called by finishMeditImport): SolAtVertices sections become point fields and, when the

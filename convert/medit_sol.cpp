@@ -96,8 +96,9 @@ class SolutionReader {
     }
     *items = cells ? result_->mesh.numTets() : result_->mesh.numPoints();
     if (count != static_cast<int64_t>(*items))
-      return Status(invalidData(path_ + ": " + section + " has " + std::to_string(count) + " entries but the mesh has " +
-                                std::to_string(*items) + (cells ? " tetrahedra" : " vertices")));
+      return Status(invalidData(path_ + ": " + section + " has " + std::to_string(count) +
+                                " entries but the mesh has " + std::to_string(*items) +
+                                (cells ? " tetrahedra" : " vertices")));
     return true;
   }
   // Keeps the fields of one section (`types`, in order). A symmetric matrix (type 3) is stored by
@@ -150,7 +151,8 @@ Status SolutionReader::readAscii(const std::string& text) {
                     reader.error("not a Medit solution file: it starts with " + quotedToken(tok)).message());
     if (sameKeyword(tok, "Dimension")) {
       GTN_ASSIGN_OR_RETURN(dimension, reader.readInt("dimension"));
-      if (dimension != 3) return reader.error("dimension " + std::to_string(dimension) + ": only 3D solutions are read");
+      if (dimension != 3)
+        return reader.error("dimension " + std::to_string(dimension) + ": only 3D solutions are read");
       continue;
     }
     const bool vertices = sameKeyword(tok, "SolAtVertices"), tets = sameKeyword(tok, "SolAtTetrahedra");
@@ -159,7 +161,8 @@ Status SolutionReader::readAscii(const std::string& text) {
       if (!reader.next(&tok)) return reader.errorAtEnd("a value");
       continue;
     }
-    if (!vertices && !tets && !other) return reader.error("unknown section " + quotedToken(tok) + " in a solution file");
+    if (!vertices && !tets && !other)
+      return reader.error("unknown section " + quotedToken(tok) + " in a solution file");
     if (dimension != 3) return reader.error(std::string(tok) + " before a 'Dimension 3' line");
     const std::string section(tok);
     const size_t line = reader.line();
@@ -278,7 +281,8 @@ Status readMeditSolutions(const std::vector<std::string>& paths, bool tets_only,
                                               std::memcmp(bytes.data(), "\0\0\0\x01", 4) == 0);
     GTN_RETURN_IF_ERROR(binary ? reader.readBinary(bytes) : reader.readAscii(bytes));
     if (!reader.sawSolution())
-      result->report.warnings.push_back(path + ": no solution section (SolAtVertices, SolAtTetrahedra, ...): no field read");
+      result->report.warnings.push_back(path +
+                                        ": no solution section (SolAtVertices, SolAtTetrahedra, ...): no field read");
   }
   return Status::ok();
 }

@@ -35,39 +35,123 @@ struct SkippedVolume {
   const char* name;
 };
 constexpr SkippedVolume kSkippedVolumes[] = {
-    {30, "TetrahedraP2"}, {33, "HexahedraQ2"},  {46, "Polyhedra"},    {86, "PrismsP2"},    {87, "PyramidsP2"},
-    {96, "TetrahedraP3"}, {97, "TetrahedraP4"}, {98, "HexahedraQ3"},  {99, "HexahedraQ4"}, {100, "PyramidsP3"},
+    {30, "TetrahedraP2"}, {33, "HexahedraQ2"},  {46, "Polyhedra"},   {86, "PrismsP2"},    {87, "PyramidsP2"},
+    {96, "TetrahedraP3"}, {97, "TetrahedraP4"}, {98, "HexahedraQ3"}, {99, "HexahedraQ4"}, {100, "PyramidsP3"},
     {101, "PyramidsP4"},  {102, "PrismsP3"},    {103, "PrismsP4"},
 };
 
 // libMeshb's keyword names by code (GmfKwdCod; "" for the codes it reserves).
 constexpr const char* kKeywordNames[] = {
-    "", "MeshVersionFormatted", "", "Dimension", "Vertices", "Edges", "Triangles", "Quadrilaterals", "Tetrahedra",
-    "Prisms", "Hexahedra", "IterationsAll", "TimesAll", "Corners", "Ridges", "RequiredVertices", "RequiredEdges",
-    "RequiredTriangles", "RequiredQuadrilaterals", "TangentAtEdgeVertices", "NormalAtVertices",
-    "NormalAtTriangleVertices", "NormalAtQuadrilateralVertices", "AngleOfCornerBound", "TrianglesP2", "EdgesP2",
-    "SolAtPyramids", "QuadrilateralsQ2", "ISolAtPyramids", "SubDomainFromGeom", "TetrahedraP2", "Fault_NearTri",
-    "Fault_Inter", "HexahedraQ2", "ExtraVerticesAtEdges", "ExtraVerticesAtTriangles",
-    "ExtraVerticesAtQuadrilaterals", "ExtraVerticesAtTetrahedra", "ExtraVerticesAtPrisms",
-    "ExtraVerticesAtHexahedra", "VerticesOnGeometricVertices", "VerticesOnGeometricEdges",
-    "VerticesOnGeometricTriangles", "VerticesOnGeometricQuadrilaterals", "EdgesOnGeometricEdges", "Fault_FreeEdge",
-    "Polyhedra", "Polygons", "Fault_Overlap", "Pyramids", "BoundingBox", "Body", "PrivateTable", "Fault_BadShape",
-    "End", "TrianglesOnGeometricTriangles", "TrianglesOnGeometricQuadrilaterals",
-    "QuadrilateralsOnGeometricTriangles", "QuadrilateralsOnGeometricQuadrilaterals", "Tangents", "Normals",
-    "TangentAtVertices", "SolAtVertices", "SolAtEdges", "SolAtTriangles", "SolAtQuadrilaterals", "SolAtTetrahedra",
-    "SolAtPrisms", "SolAtHexahedra", "DSolAtVertices", "ISolAtVertices", "ISolAtEdges", "ISolAtTriangles",
-    "ISolAtQuadrilaterals", "ISolAtTetrahedra", "ISolAtPrisms", "ISolAtHexahedra", "Iterations", "Time",
-    "Fault_SmallTri", "CoarseHexahedra", "Comments", "PeriodicVertices", "PeriodicEdges", "PeriodicTriangles",
-    "PeriodicQuadrilaterals", "PrismsP2", "PyramidsP2", "QuadrilateralsQ3", "QuadrilateralsQ4", "TrianglesP3",
-    "TrianglesP4", "EdgesP3", "EdgesP4", "IRefGroups", "DRefGroups", "TetrahedraP3", "TetrahedraP4", "HexahedraQ3",
-    "HexahedraQ4", "PyramidsP3", "PyramidsP4", "PrismsP3", "PrismsP4",
+    "",
+    "MeshVersionFormatted",
+    "",
+    "Dimension",
+    "Vertices",
+    "Edges",
+    "Triangles",
+    "Quadrilaterals",
+    "Tetrahedra",
+    "Prisms",
+    "Hexahedra",
+    "IterationsAll",
+    "TimesAll",
+    "Corners",
+    "Ridges",
+    "RequiredVertices",
+    "RequiredEdges",
+    "RequiredTriangles",
+    "RequiredQuadrilaterals",
+    "TangentAtEdgeVertices",
+    "NormalAtVertices",
+    "NormalAtTriangleVertices",
+    "NormalAtQuadrilateralVertices",
+    "AngleOfCornerBound",
+    "TrianglesP2",
+    "EdgesP2",
+    "SolAtPyramids",
+    "QuadrilateralsQ2",
+    "ISolAtPyramids",
+    "SubDomainFromGeom",
+    "TetrahedraP2",
+    "Fault_NearTri",
+    "Fault_Inter",
+    "HexahedraQ2",
+    "ExtraVerticesAtEdges",
+    "ExtraVerticesAtTriangles",
+    "ExtraVerticesAtQuadrilaterals",
+    "ExtraVerticesAtTetrahedra",
+    "ExtraVerticesAtPrisms",
+    "ExtraVerticesAtHexahedra",
+    "VerticesOnGeometricVertices",
+    "VerticesOnGeometricEdges",
+    "VerticesOnGeometricTriangles",
+    "VerticesOnGeometricQuadrilaterals",
+    "EdgesOnGeometricEdges",
+    "Fault_FreeEdge",
+    "Polyhedra",
+    "Polygons",
+    "Fault_Overlap",
+    "Pyramids",
+    "BoundingBox",
+    "Body",
+    "PrivateTable",
+    "Fault_BadShape",
+    "End",
+    "TrianglesOnGeometricTriangles",
+    "TrianglesOnGeometricQuadrilaterals",
+    "QuadrilateralsOnGeometricTriangles",
+    "QuadrilateralsOnGeometricQuadrilaterals",
+    "Tangents",
+    "Normals",
+    "TangentAtVertices",
+    "SolAtVertices",
+    "SolAtEdges",
+    "SolAtTriangles",
+    "SolAtQuadrilaterals",
+    "SolAtTetrahedra",
+    "SolAtPrisms",
+    "SolAtHexahedra",
+    "DSolAtVertices",
+    "ISolAtVertices",
+    "ISolAtEdges",
+    "ISolAtTriangles",
+    "ISolAtQuadrilaterals",
+    "ISolAtTetrahedra",
+    "ISolAtPrisms",
+    "ISolAtHexahedra",
+    "Iterations",
+    "Time",
+    "Fault_SmallTri",
+    "CoarseHexahedra",
+    "Comments",
+    "PeriodicVertices",
+    "PeriodicEdges",
+    "PeriodicTriangles",
+    "PeriodicQuadrilaterals",
+    "PrismsP2",
+    "PyramidsP2",
+    "QuadrilateralsQ3",
+    "QuadrilateralsQ4",
+    "TrianglesP3",
+    "TrianglesP4",
+    "EdgesP3",
+    "EdgesP4",
+    "IRefGroups",
+    "DRefGroups",
+    "TetrahedraP3",
+    "TetrahedraP4",
+    "HexahedraQ3",
+    "HexahedraQ4",
+    "PyramidsP3",
+    "PyramidsP4",
+    "PrismsP3",
+    "PrismsP4",
 };
 constexpr uint32_t kAngleOfCornerBound = 23, kBoundingBox = 50, kIterations = 77, kTime = 78;
 
 // What a skipped keyword held, for its warning.
 std::string skippedWhat(const std::string& k) {
-  if (k.rfind("Edges", 0) == 0 || k.rfind("Triangles", 0) == 0 || k.rfind("Quadrilaterals", 0) == 0 ||
-      k == "Polygons")
+  if (k.rfind("Edges", 0) == 0 || k.rfind("Triangles", 0) == 0 || k.rfind("Quadrilaterals", 0) == 0 || k == "Polygons")
     return "elements of lower dimension, with their references: only volume elements become tetrahedra";
   if (k == "Corners" || k == "Ridges" || k.rfind("Required", 0) == 0) return "marks on vertices and elements, not read";
   if (k.find("Sol") != std::string::npos) return "solution values inside the mesh file, not read";
@@ -238,8 +322,8 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
       for (const SkippedVolume& v : kSkippedVolumes) {
         if (v.code != keyword) continue;
         volume = true;
-        skipped_volume_ += (skipped_volume_.empty() ? "" : ", ") + std::string(v.name) + " (byte offset " +
-                           std::to_string(at) + ")";
+        skipped_volume_ +=
+            (skipped_volume_.empty() ? "" : ", ") + std::string(v.name) + " (byte offset " + std::to_string(at) + ")";
         result_.report.warnings.push_back("skipped " + std::string(v.name) + " at byte offset " + std::to_string(at) +
                                           ": higher-order and polyhedral elements are not read, so their volume is "
                                           "missing");
@@ -258,7 +342,8 @@ StatusOr<ImportResult> MeshbReader::read(const ImportOptions& options) {
                               (s.records > 1 ? " and " + std::to_string(s.records - 1) + " more records" : "");
     result_.report.warnings.push_back(
         "skipped " + (s.entries >= 0 ? std::to_string(s.entries) + " " + s.name : s.name) + " (" + where + "): " +
-        (s.name.rfind("keyword ", 0) == 0 ? std::string("a keyword unknown to this reader, not read") : skippedWhat(s.name)));
+        (s.name.rfind("keyword ", 0) == 0 ? std::string("a keyword unknown to this reader, not read")
+                                          : skippedWhat(s.name)));
   }
   GTN_RETURN_IF_ERROR(finishMeditImport(path_, "meshb", &cells_, options, &result_));
   return std::move(result_);

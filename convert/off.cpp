@@ -51,9 +51,10 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
     // Geomview's binary OFF ("OFF BINARY", then big-endian counts and arrays) is a surface format.
     if (row.size() > 1 && sameKeyword(row[1], "BINARY")) {
       return Status(StatusCode::kUnsupported,
-                    reader.error("binary OFF ('" + std::string(row[0]) +
-                                 " BINARY', Geomview's) holds a surface of polygons, which has no volume; only the "
-                                 "ASCII tetrahedral OFF of ZSweep and HAVS is read")
+                    reader
+                        .error("binary OFF ('" + std::string(row[0]) +
+                               " BINARY', Geomview's) holds a surface of polygons, which has no volume; only the "
+                               "ASCII tetrahedral OFF of ZSweep and HAVS is read")
                         .message());
     }
   }
@@ -129,8 +130,8 @@ StatusOr<ImportResult> importOff(const std::string& path, const ImportOptions&) 
       GTN_RETURN_IF_ERROR(parseIntToken(reader, row[0], 4, 4, "vertex count of a tetrahedron").status());
     }
     for (int k = 0; k < 4; ++k) {
-      GTN_ASSIGN_OR_RETURN(const int64_t v, parseIntToken(reader, row[tet_width - 4 + k], INT64_MIN, INT64_MAX,
-                                                          "a point index"));
+      GTN_ASSIGN_OR_RETURN(const int64_t v,
+                           parseIntToken(reader, row[tet_width - 4 + k], INT64_MIN, INT64_MAX, "a point index"));
       if (v < 0 || v >= np) {
         return reader.error("tetrahedron " + std::to_string(t) + " refers to point " + std::to_string(v) +
                             "; points are numbered 0 to " + std::to_string(np - 1));

@@ -86,8 +86,8 @@ struct Layout {
   int int_bytes = 4;  // bytes per integer (dimensions, counts, IBLANK): 8 from 64-bit default integers
                       // (gfortran -fdefault-integer-8), tried with record markers only
   bool iblank = false;
-  bool overflow = false;  // Q files: OVERFLOW's layout (NQ variables, a longer freestream record)
-  bool planes = false;    // one record per k-plane (all components of the plane) instead of one per grid
+  bool overflow = false;       // Q files: OVERFLOW's layout (NQ variables, a longer freestream record)
+  bool planes = false;         // one record per k-plane (all components of the plane) instead of one per grid
   bool dims_per_grid = false;  // multi-grid: each grid's dimensions in a record of its own (found, not tried)
   // One record per component (x, y, z and IBLANK; each Q or function variable) instead of one per
   // grid, as Fortran writes `write(u) x` / `write(u) y` / ...; the records, in order, are the whole
@@ -252,16 +252,16 @@ class RecordCursor {
       const int64_t head = loadSigned(bytes_.data() + p, layout_.marker, layout_.big_endian);
       const uint64_t len = head < 0 ? uint64_t{0} - static_cast<uint64_t>(head) : static_cast<uint64_t>(head);
       if (len > size - p - m || size - p - m - len < m) {
-        *why = std::string(what) + ": the record marker at byte " + std::to_string(p) + " says " +
-               std::to_string(len) + " bytes, past the end of the file";
+        *why = std::string(what) + ": the record marker at byte " + std::to_string(p) + " says " + std::to_string(len) +
+               " bytes, past the end of the file";
         return false;
       }
       const int64_t tail = loadSigned(bytes_.data() + p + m + len, layout_.marker, layout_.big_endian);
       const uint64_t tail_len = tail < 0 ? uint64_t{0} - static_cast<uint64_t>(tail) : static_cast<uint64_t>(tail);
       if (tail_len != len) {
-        *why = std::string(what) + ": the record marker at byte " + std::to_string(p) + " says " +
-               std::to_string(len) + " bytes but the closing marker at byte " + std::to_string(p + m + len) +
-               " says " + std::to_string(tail_len);
+        *why = std::string(what) + ": the record marker at byte " + std::to_string(p) + " says " + std::to_string(len) +
+               " bytes but the closing marker at byte " + std::to_string(p + m + len) + " says " +
+               std::to_string(tail_len);
         return false;
       }
       if (len) out->push_back({p + m, len});
@@ -300,8 +300,8 @@ std::string_view recordBytes(std::string_view bytes, const Record& rec, std::str
 // The bytes of block `g` in the whole layout: each component for all points (i fastest, then j, then
 // k), component after component. A planes file holds all components of k-plane 0, then of plane 1,
 // ...; they are reordered into `*reordered`. `component_bytes` gives each component's value size.
-std::string_view blockBytes(std::string_view bytes, const Fit& fit, size_t g, const std::vector<size_t>& component_bytes,
-                            std::string* scratch, std::string* reordered) {
+std::string_view blockBytes(std::string_view bytes, const Fit& fit, size_t g,
+                            const std::vector<size_t>& component_bytes, std::string* scratch, std::string* reordered) {
   const std::string_view v = recordBytes(bytes, fit.data[g], scratch);
   if (!fit.layout.planes) return v;
   const BlockDims& b = fit.blocks[g];
@@ -329,7 +329,8 @@ std::vector<size_t> componentBytes(const Fit& fit, size_t g, Kind kind) {
     if (l.iblank) c.push_back(static_cast<size_t>(l.int_bytes));
     return c;
   }
-  return std::vector<size_t>(kind == Kind::kQ ? static_cast<size_t>(fit.nq) : static_cast<size_t>(fit.blocks[g].nvar), vb);
+  return std::vector<size_t>(kind == Kind::kQ ? static_cast<size_t>(fit.nq) : static_cast<size_t>(fit.blocks[g].nvar),
+                             vb);
 }
 
 // Tries one interpretation. On failure `*why` says what did not fit, `*header_ok` whether the grid
@@ -460,8 +461,8 @@ bool tryLayout(std::string_view bytes, const Layout& l, Kind kind, Fit* fit, std
       per_point = static_cast<uint64_t>(b.nvar) * value_bytes;
     }
     // n * per_point cannot overflow: n and nvar were bounded by the file size above.
-    const std::string block_name = "grid " + std::to_string(g + 1) + " (" +
-                                   dimsText(b, kind == Kind::kGrid ? l.ndim : 3) + ") data";
+    const std::string block_name =
+        "grid " + std::to_string(g + 1) + " (" + dimsText(b, kind == Kind::kGrid ? l.ndim : 3) + ") data";
     if (kind == Kind::kQ) {
       // OVERFLOW: 13 + max(2, NQC) reals and the integer IGAM (see the top of the file).
       const uint64_t header_bytes =
@@ -508,10 +509,10 @@ struct Attempt {
 };
 
 struct Detection {
-  std::vector<Fit> exact;      // sizes match the file exactly
-  std::vector<Fit> zero_tail;  // data followed by zero bytes only
-  std::vector<Attempt> plausible;       // failed after a sensible header, or left non-zero trailing bytes
-  size_t header_failures = 0;           // failed at the grid count, dimensions or record markers
+  std::vector<Fit> exact;          // sizes match the file exactly
+  std::vector<Fit> zero_tail;      // data followed by zero bytes only
+  std::vector<Attempt> plausible;  // failed after a sensible header, or left non-zero trailing bytes
+  size_t header_failures = 0;      // failed at the grid count, dimensions or record markers
 };
 
 bool allZero(std::string_view s) {
@@ -527,49 +528,50 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
           if (ndim == 2 && kind != Kind::kGrid) continue;
           for (int precision : {4, 8}) {
             for (int int_bytes : {4, 8}) {
-            if (int_bytes == 8 && marker == 0) continue;  // sizes alone cannot vouch for it
-            for (int variant = 0; variant < 8; ++variant) {
-              // Bit 0: with IBLANK for grids, OVERFLOW's layout for Q files; bit 1: written plane
-              // by plane (told apart by record markers only, 3D only); bit 2: one record per
-              // variable (record markers only).
-              if ((variant & 1) && kind == Kind::kFunction) continue;
-              if ((variant & 2) && ndim != 3) continue;
-              if ((variant & 4) && (marker == 0 || (variant & 2))) continue;
-              Layout l;
-              l.big_endian = be != 0;
-              l.marker = marker;
-              l.multi_grid = multi != 0;
-              l.ndim = ndim;
-              l.precision = precision;
-              l.iblank = (variant & 1) != 0 && kind == Kind::kGrid;
-              l.overflow = (variant & 1) != 0 && kind == Kind::kQ;
-              l.planes = (variant & 2) != 0;
-              l.components = (variant & 4) != 0;
-              l.int_bytes = int_bytes;
-              if (!constraints.allows(l, kind)) continue;
-              Fit fit;
-              std::string why;
-              bool header_ok = false;
-              uint64_t progress = 0;
-              if (!tryLayout(bytes, l, kind, &fit, &why, &header_ok, &progress)) {
-                if (header_ok) {
-                  d.plausible.push_back({l, why, progress});
-                } else {
-                  ++d.header_failures;
+              if (int_bytes == 8 && marker == 0) continue;  // sizes alone cannot vouch for it
+              for (int variant = 0; variant < 8; ++variant) {
+                // Bit 0: with IBLANK for grids, OVERFLOW's layout for Q files; bit 1: written plane
+                // by plane (told apart by record markers only, 3D only); bit 2: one record per
+                // variable (record markers only).
+                if ((variant & 1) && kind == Kind::kFunction) continue;
+                if ((variant & 2) && ndim != 3) continue;
+                if ((variant & 4) && (marker == 0 || (variant & 2))) continue;
+                Layout l;
+                l.big_endian = be != 0;
+                l.marker = marker;
+                l.multi_grid = multi != 0;
+                l.ndim = ndim;
+                l.precision = precision;
+                l.iblank = (variant & 1) != 0 && kind == Kind::kGrid;
+                l.overflow = (variant & 1) != 0 && kind == Kind::kQ;
+                l.planes = (variant & 2) != 0;
+                l.components = (variant & 4) != 0;
+                l.int_bytes = int_bytes;
+                if (!constraints.allows(l, kind)) continue;
+                Fit fit;
+                std::string why;
+                bool header_ok = false;
+                uint64_t progress = 0;
+                if (!tryLayout(bytes, l, kind, &fit, &why, &header_ok, &progress)) {
+                  if (header_ok) {
+                    d.plausible.push_back({l, why, progress});
+                  } else {
+                    ++d.header_failures;
+                  }
+                  continue;
                 }
-                continue;
+                if (fit.end == bytes.size()) {
+                  d.exact.push_back(std::move(fit));
+                } else if (allZero(bytes.substr(fit.end))) {
+                  d.zero_tail.push_back(std::move(fit));
+                } else {
+                  d.plausible.push_back({l,
+                                         "grids " + blocksText(fit.blocks) + " end at byte " + std::to_string(fit.end) +
+                                             ", followed by " + std::to_string(bytes.size() - fit.end) +
+                                             " bytes that are not all zero",
+                                         fit.end});
+                }
               }
-              if (fit.end == bytes.size()) {
-                d.exact.push_back(std::move(fit));
-              } else if (allZero(bytes.substr(fit.end))) {
-                d.zero_tail.push_back(std::move(fit));
-              } else {
-                d.plausible.push_back({l, "grids " + blocksText(fit.blocks) + " end at byte " + std::to_string(fit.end) +
-                                              ", followed by " + std::to_string(bytes.size() - fit.end) +
-                                              " bytes that are not all zero",
-                                          fit.end});
-              }
-            }
             }  // int_bytes
           }
         }
@@ -591,11 +593,13 @@ Detection detect(std::string_view bytes, Kind kind, const Constraints& constrain
 }
 
 std::string triedText(const Detection& d, Kind kind) {
-  std::string s = "tried big- and little-endian, no/4-byte/8-byte record markers, whole, planes and one record per "
-                  "variable, single and multi-grid, ";
+  std::string s =
+      "tried big- and little-endian, no/4-byte/8-byte record markers, whole, planes and one record per "
+      "variable, single and multi-grid, ";
   s += "32-bit integers (and 64-bit ones with record markers), ";
-  s += kind == Kind::kGrid ? "2D and 3D, float32 and float64, with and without IBLANK"
-                           : (kind == Kind::kQ ? "float32 and float64, classic and OVERFLOW layouts" : "float32 and float64");
+  s += kind == Kind::kGrid
+           ? "2D and 3D, float32 and float64, with and without IBLANK"
+           : (kind == Kind::kQ ? "float32 and float64, classic and OVERFLOW layouts" : "float32 and float64");
   s += " (binary; text files are read as ASCII PLOT3D)";
   const size_t shown = std::min<size_t>(d.plausible.size(), 8);
   for (size_t i = 0; i < shown; ++i)
@@ -765,8 +769,8 @@ StatusOr<std::optional<Fit>> pickOne(const std::string& path, std::string_view b
   if (ok.size() > 1) {
     // Readings alike but for their records: the data decides.
     auto alike = [](const Layout& a, const Layout& b) {
-      return a.big_endian == b.big_endian && a.marker == b.marker && a.multi_grid == b.multi_grid &&
-             a.ndim == b.ndim && a.precision == b.precision && a.iblank == b.iblank && a.overflow == b.overflow;
+      return a.big_endian == b.big_endian && a.marker == b.marker && a.multi_grid == b.multi_grid && a.ndim == b.ndim &&
+             a.precision == b.precision && a.iblank == b.iblank && a.overflow == b.overflow;
     };
     std::vector<uint64_t> consistent(ok.size(), 0);
     std::vector<double> rough(ok.size(), 0.0);
@@ -794,7 +798,8 @@ StatusOr<std::optional<Fit>> pickOne(const std::string& path, std::string_view b
     std::vector<Fit> kept;
     for (size_t i = 0; i < ok.size(); ++i) {
       bool beaten = false;
-      for (size_t j = 0; j < ok.size() && !beaten; ++j) beaten = j != i && alike(ok[i].layout, ok[j].layout) && beats(j, i);
+      for (size_t j = 0; j < ok.size() && !beaten; ++j)
+        beaten = j != i && alike(ok[i].layout, ok[j].layout) && beats(j, i);
       if (!beaten) kept.push_back(ok[i]);
     }
     ok = std::move(kept);
@@ -814,8 +819,8 @@ StatusOr<std::optional<Fit>> pickOne(const std::string& path, std::string_view b
                     "\"multi-grid\", \"blanking\", \"language\", and gtn's \"records\": \"whole\", \"planes\" or "
                     "\"variables\"):";
   for (size_t i = 0; i < ok.size(); ++i)
-    msg += " [" + std::to_string(i + 1) + "] " + describeLayout(ok[i].layout, kind) + ": grids " + blocksText(ok[i].blocks) +
-           (i + 1 < ok.size() ? ";" : "");
+    msg += " [" + std::to_string(i + 1) + "] " + describeLayout(ok[i].layout, kind) + ": grids " +
+           blocksText(ok[i].blocks) + (i + 1 < ok.size() ? ";" : "");
   return invalidData(msg);
 }
 
@@ -827,8 +832,8 @@ struct Selected {
 // Chooses the interpretation of one file: exact fits first, then fits followed by zero bytes
 // (with a warning). `accept` filters (Q and function files must match the grid).
 StatusOr<Selected> selectFit(const std::string& path, std::string_view bytes, Kind kind, const Detection& d,
-                          const std::function<bool(const Fit&)>& accept, const Layout* prefer,
-                          std::vector<std::string>* warnings) {
+                             const std::function<bool(const Fit&)>& accept, const Layout* prefer,
+                             std::vector<std::string>* warnings) {
   Selected s;
   GTN_ASSIGN_OR_RETURN(std::optional<Fit> exact, pickOne(path, bytes, kind, d.exact, accept, prefer));
   if (exact) {
@@ -880,14 +885,16 @@ std::string gridLayoutReading(std::string_view bytes, Kind kind, const Layout& g
 // Why no interpretation of a Q or function file goes with the grid: its dimensions disagree with
 // the grid's, or nothing fits at all.
 Status noMatchError(const std::string& path, std::string_view bytes, Kind kind, const Detection& d,
-                    const std::vector<BlockDims>& grid_blocks, const std::string& grid_path, const Layout& grid_layout) {
+                    const std::vector<BlockDims>& grid_blocks, const std::string& grid_path,
+                    const Layout& grid_layout) {
   const std::vector<Fit>& fits = d.exact.empty() ? d.zero_tail : d.exact;
   if (fits.empty()) {
     const std::string likely = gridLayoutReading(bytes, kind, grid_layout);
     if (likely.empty()) return noFitError(path, bytes, kind, d);
     const Status all = noFitError(path, bytes, kind, d);
     const std::string prefix = path + ": ";
-    return invalidData(prefix + likely + "; " + all.message().substr(all.message().rfind(prefix, 0) == 0 ? prefix.size() : 0));
+    return invalidData(prefix + likely + "; " +
+                       all.message().substr(all.message().rfind(prefix, 0) == 0 ? prefix.size() : 0));
   }
   return invalidData(path + ": PLOT3D " + kindName(kind) + " file dimensions " + blocksText(fits[0].blocks) + " (" +
                      describeLayout(fits[0].layout, kind) + ") disagree with the grid's " + blocksText(grid_blocks) +
@@ -997,8 +1004,8 @@ bool transcodeAscii(const AsciiValues& a, const Layout& l, Kind kind, ByteWriter
   // The value count must match exactly (checked before transcoding the bulk of the file).
   uint64_t need = pos;
   for (int64_t g = 0; g < ngrid; ++g) {
-    uint64_t per_point = kind == Kind::kGrid ? static_cast<uint64_t>(l.ndim + (l.iblank ? 1 : 0))
-                                             : (kind == Kind::kQ ? 5 : nvar[g]);
+    uint64_t per_point =
+        kind == Kind::kGrid ? static_cast<uint64_t>(l.ndim + (l.iblank ? 1 : 0)) : (kind == Kind::kQ ? 5 : nvar[g]);
     if (per_point != 0 && points[g] > (n + 4) / per_point) {
       *why = "grid " + std::to_string(g + 1) + " needs more values than the text has";
       return false;
@@ -1030,7 +1037,8 @@ bool transcodeAscii(const AsciiValues& a, const Layout& l, Kind kind, ByteWriter
 StatusOr<std::string> asciiAsBinary(const std::string& path, std::string_view text, Kind kind,
                                     const Constraints& constraints, Layout* layout) {
   GTN_ASSIGN_OR_RETURN(const AsciiValues values, readAsciiValues(path, text));
-  if (values.v.empty()) return invalidData(path + ": ASCII PLOT3D " + std::string(kindName(kind)) + " file holds no values");
+  if (values.v.empty())
+    return invalidData(path + ": ASCII PLOT3D " + std::string(kindName(kind)) + " file holds no values");
   std::vector<std::pair<Layout, std::string>> fits;
   std::string tried;
   for (int multi = 0; multi < 2; ++multi) {
@@ -1060,14 +1068,15 @@ StatusOr<std::string> asciiAsBinary(const std::string& path, std::string_view te
     }
   }
   if (fits.empty())
-    return invalidData(path + ": not a PLOT3D " + std::string(kindName(kind)) + " file this reader understands: it is text (" +
-                       std::to_string(values.v.size()) + " values) and no ASCII PLOT3D layout fits its value count" +
-                       tried);
+    return invalidData(path + ": not a PLOT3D " + std::string(kindName(kind)) +
+                       " file this reader understands: it is text (" + std::to_string(values.v.size()) +
+                       " values) and no ASCII PLOT3D layout fits its value count" + tried);
   if (fits.size() > 1) {
-    std::string msg = path + ": ambiguous ASCII PLOT3D " + std::string(kindName(kind)) + " file: " +
-                      std::to_string(fits.size()) + " layouts fit its " + std::to_string(values.v.size()) +
+    std::string msg = path + ": ambiguous ASCII PLOT3D " + std::string(kindName(kind)) +
+                      " file: " + std::to_string(fits.size()) + " layouts fit its " + std::to_string(values.v.size()) +
                       " values; name the layout in a .p3d meta-file:";
-    for (size_t i = 0; i < fits.size(); ++i) msg += " [" + std::to_string(i + 1) + "] " + describeLayout(fits[i].first, kind);
+    for (size_t i = 0; i < fits.size(); ++i)
+      msg += " [" + std::to_string(i + 1) + "] " + describeLayout(fits[i].first, kind);
     return invalidData(msg);
   }
   *layout = fits[0].first;
@@ -1176,8 +1185,7 @@ StatusOr<P3dFiles> readP3dMeta(const std::string& path) {
       if (!auto_detect) out.constraints.iblank = v.get<bool>();
     } else if (key == "language") {
       // ParaView's reader spells them "C" and "fortran" (and nothing else); "Fortran" is read too.
-      if (!v.is_string() || (v != "C" && v != "fortran" && v != "Fortran"))
-        return bad(key, "\"C\" or \"fortran\"");
+      if (!v.is_string() || (v != "C" && v != "fortran" && v != "Fortran")) return bad(key, "\"C\" or \"fortran\"");
       if (!auto_detect) out.constraints.fortran = v != "C";
     } else if (key == "records") {
       // gtn's own key (ParaView has none for this): how the data records are cut. Always obeyed.
@@ -1210,15 +1218,18 @@ StatusOr<P3dFiles> readP3dMeta(const std::string& path) {
   size_t chosen = 0;
   for (size_t i = 0; i < files.size(); ++i) {
     const nlohmann::json& e = files[i];
-    if (!e.is_object() && !e.is_string()) return invalidData(path + ": \"filenames\"[" + std::to_string(i) + "] must be an object");
+    if (!e.is_object() && !e.is_string())
+      return invalidData(path + ": \"filenames\"[" + std::to_string(i) + "] must be an object");
     if (e.is_object() && e.contains("time") && !e["time"].is_number())
       return invalidData(path + ": \"filenames\"[" + std::to_string(i) + "].time must be a number");
-    auto time_of = [](const nlohmann::json& x) { return x.is_object() && x.contains("time") ? x["time"].get<double>() : 0.0; };
+    auto time_of = [](const nlohmann::json& x) {
+      return x.is_object() && x.contains("time") ? x["time"].get<double>() : 0.0;
+    };
     if (time_of(e) < time_of(files[chosen])) chosen = i;
   }
   if (files.size() > 1)
-    out.warnings.push_back(path + ": " + std::to_string(files.size()) + " time steps listed; imported only the first (entry " +
-                           std::to_string(chosen + 1) + ")");
+    out.warnings.push_back(path + ": " + std::to_string(files.size()) +
+                           " time steps listed; imported only the first (entry " + std::to_string(chosen + 1) + ")");
   const nlohmann::json& e = files[chosen];
   auto resolve = [&](const std::string& name) { return !name.empty() && name[0] == '/' ? name : dir + name; };
   if (e.is_string()) {
@@ -1234,7 +1245,8 @@ StatusOr<P3dFiles> readP3dMeta(const std::string& path) {
     if (std::string(key) == "q") out.q = p;
     if (std::string(key) == "function") out.function = p;
   }
-  if (out.xyz.empty()) return invalidData(path + ": \"filenames\"[" + std::to_string(chosen) + "] names no \"xyz\" grid file");
+  if (out.xyz.empty())
+    return invalidData(path + ": \"filenames\"[" + std::to_string(chosen) + "] names no \"xyz\" grid file");
   return out;
 }
 
@@ -1260,7 +1272,8 @@ Status addGrid(const std::string& path, std::string_view bytes, const Fit& fit, 
   const Layout& l = fit.layout;
   uint64_t total = 0;
   for (const BlockDims& b : fit.blocks) total += b.points();
-  if (total > UINT32_MAX) return unsupported(path + ": " + std::to_string(total) + " points exceed the 2^32 limit of a mesh");
+  if (total > UINT32_MAX)
+    return unsupported(path + ": " + std::to_string(total) + " points exceed the 2^32 limit of a mesh");
   mesh.coord_type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
   mesh.coords.resize(3 * total);
   if (l.iblank) iblank->resize(total);
@@ -1359,7 +1372,8 @@ Status addFunction(const std::string& path, std::string_view bytes, const Fit& f
   for (size_t g = 1; g < fit.blocks.size(); ++g) {
     if (fit.blocks[g].nvar != nvar)
       return unsupported(path + ": grid " + std::to_string(g + 1) + " has " + std::to_string(fit.blocks[g].nvar) +
-                         " function variables, grid 1 has " + std::to_string(nvar) + ": fields need the same on every grid");
+                         " function variables, grid 1 has " + std::to_string(nvar) +
+                         ": fields need the same on every grid");
   }
   const size_t total = mesh.numPoints();
   const ScalarType type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
@@ -1368,7 +1382,8 @@ Status addFunction(const std::string& path, std::string_view bytes, const Fit& f
     const std::string name = static_cast<size_t>(k) < names.size() ? names[k] : "function_" + std::to_string(k);
     for (const Field& f : mesh.point_fields) {
       if (f.name == name)
-        return invalidData(meta + ": key \"function-names\": \"" + name + "\" names a field of the Q file or another "
+        return invalidData(meta + ": key \"function-names\": \"" + name +
+                           "\" names a field of the Q file or another "
                            "function variable already");
     }
     mesh.point_fields.emplace_back(name, 1, type, total);
@@ -1560,10 +1575,9 @@ std::vector<uint8_t> seamParities(const std::vector<BlockDims>& blocks, const st
       continue;
     }
     ++told;
-    const std::string who = pair.first == pair.second
-                                ? "grid " + std::to_string(pair.first + 1) + " meets itself"
-                                : "grids " + std::to_string(pair.first + 1) + " and " + std::to_string(pair.second + 1) +
-                                      " meet";
+    const std::string who = pair.first == pair.second ? "grid " + std::to_string(pair.first + 1) + " meets itself"
+                                                      : "grids " + std::to_string(pair.first + 1) + " and " +
+                                                            std::to_string(pair.second + 1) + " meet";
     warnings->push_back("--weld: " + who + " at " + std::to_string(d.same + d.differ + d.twisted) + " cell faces, " +
                         std::to_string(bad) + " of which --split " + std::to_string(split) +
                         " cuts along different diagonals on the two sides " + how +
@@ -1646,8 +1660,9 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
   GTN_ASSIGN_OR_RETURN(std::string grid_bytes, readInput(grid_path, Kind::kGrid));
   Detection grid_detection = detect(grid_bytes, Kind::kGrid, constraints);
   GTN_RETURN_IF_ERROR(asciiFallback(grid_path, Kind::kGrid, constraints, &grid_bytes, &grid_detection));
-  GTN_ASSIGN_OR_RETURN(Selected grid, selectFit(grid_path, grid_bytes, Kind::kGrid, grid_detection,
-                                             [](const Fit&) { return true; }, nullptr, &warnings));
+  GTN_ASSIGN_OR_RETURN(Selected grid, selectFit(
+                                          grid_path, grid_bytes, Kind::kGrid, grid_detection,
+                                          [](const Fit&) { return true; }, nullptr, &warnings));
   if (!grid.found) {
     const Status st = noFitError(grid_path, grid_bytes, Kind::kGrid, grid_detection);
     const std::string fixed = meta ? describeConstraints(constraints) : "";
@@ -1669,9 +1684,10 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
       if (b.n[0] < 2 || b.n[1] < 2 || b.n[2] < 2) flat.push_back(g);
     }
     if (flat.size() == grid.fit.blocks.size())
-      return unsupported(grid_path + ": grid " + std::to_string(flat[0] + 1) + " is " + dimsText(grid.fit.blocks[flat[0]]) +
-                         ": a dimension below 2 makes it a 2D (or 1D) grid, which has no cells to split into tetrahedra" +
-                         (flat.size() > 1 ? " (and so are the other " + std::to_string(flat.size() - 1) + " grids)" : ""));
+      return unsupported(
+          grid_path + ": grid " + std::to_string(flat[0] + 1) + " is " + dimsText(grid.fit.blocks[flat[0]]) +
+          ": a dimension below 2 makes it a 2D (or 1D) grid, which has no cells to split into tetrahedra" +
+          (flat.size() > 1 ? " (and so are the other " + std::to_string(flat.size() - 1) + " grids)" : ""));
     for (size_t i = 0; i < flat.size() && i < 20; ++i) {
       const BlockDims& b = grid.fit.blocks[flat[i]];
       warnings.push_back(grid_path + ": grid " + std::to_string(flat[i] + 1) + " is " + dimsText(b) +
@@ -1726,8 +1742,8 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
         return invalidData(second_path + ": neither a PLOT3D Q file nor a function file for the grid " + grid_path +
                            " (" + blocksText(blocks) + ")" +
                            (looksLikeText(raw) ? "; it looks like text, but not like ASCII PLOT3D either" : "") +
-                           (likely.empty() ? "" : "; as a Q file " + likely) + "; as a Q file: " + triedText(dq, Kind::kQ) +
-                           (likely_f.empty() ? "" : "; as a function file " + likely_f) +
+                           (likely.empty() ? "" : "; as a Q file " + likely) + "; as a Q file: " +
+                           triedText(dq, Kind::kQ) + (likely_f.empty() ? "" : "; as a function file " + likely_f) +
                            "; as a function file: " + triedText(df, Kind::kFunction));
       }
       GTN_RETURN_IF_ERROR(addFunction(second_path, fbytes, f.fit, mesh));
@@ -1744,8 +1760,8 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
     const size_t nvar = static_cast<size_t>(f.fit.blocks[0].nvar);
     if (function_names.size() > nvar)
       warnings.push_back(inputs[0] + ": \"function-names\" lists " + std::to_string(function_names.size()) +
-                         " names for the " + std::to_string(nvar) + " variables of " + function_path +
-                         "; the last " + std::to_string(function_names.size() - nvar) + " name nothing");
+                         " names for the " + std::to_string(nvar) + " variables of " + function_path + "; the last " +
+                         std::to_string(function_names.size() - nvar) + " name nothing");
   }
 
   if (!iblank.empty()) {

@@ -83,7 +83,8 @@ bool collectFaces(const TetMesh& mesh, const Field* markers, std::vector<FaceRow
   for (size_t t = 0; t < mesh.numTets(); ++t) {
     const Tet& tet = mesh.tets[t];
     for (int k = 0; k < 4; ++k)
-      faces[4 * t + k] = {tetgen::sortedTriangle(tet[kTetFace[k][0]], tet[kTetFace[k][1]], tet[kTetFace[k][2]]), 4 * t + k};
+      faces[4 * t + k] = {tetgen::sortedTriangle(tet[kTetFace[k][0]], tet[kTetFace[k][1]], tet[kTetFace[k][2]]),
+                          4 * t + k};
   }
   std::sort(faces.begin(), faces.end());
   auto markerOf = [&](const TetFace& f) { return cellMarker(*markers, f.slot / 4, static_cast<int>(f.slot % 4)); };

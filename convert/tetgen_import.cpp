@@ -105,7 +105,8 @@ StatusOr<ColumnMap> mapColumns(const std::string& path, const Layout& layout, st
     const uint32_t index = static_cast<uint32_t>(map.fields.size());
     if (f.tagged) {
       if (map.tagged >= 0) return fail("two fields are tagged to be held in " + std::string(tagged_place));
-      if (!allow_tagged) return fail("field '" + f.name + "' is said to be held in " + tagged_place + ", which is absent");
+      if (!allow_tagged)
+        return fail("field '" + f.name + "' is said to be held in " + tagged_place + ", which is absent");
       if (f.type != ScalarType::kInt32 || f.components != tagged_components)
         return fail("field '" + f.name + "' held in " + tagged_place + " must be int32 with " +
                     std::to_string(tagged_components) + " component(s)");
@@ -122,8 +123,8 @@ StatusOr<ColumnMap> mapColumns(const std::string& path, const Layout& layout, st
 }
 
 // Parses row[first + j] into the attribute columns of item `item`.
-Status readAttributes(const TextReader& reader, const std::vector<std::string_view>& row, size_t first,
-                      ColumnMap& map, size_t item) {
+Status readAttributes(const TextReader& reader, const std::vector<std::string_view>& row, size_t first, ColumnMap& map,
+                      size_t item) {
   for (size_t j = 0; j < map.column.size(); ++j) {
     Field& f = map.fields[map.column[j].first];
     uint8_t* dst = f.bytes.data() + (item * f.components + map.column[j].second) * f.valueSize();
@@ -146,8 +147,8 @@ Status readHeader(TextReader& reader, std::vector<std::string_view>* row, size_t
 }
 
 Status wrongWidth(const TextReader& reader, size_t found, int64_t expected, const std::string& layout) {
-  return reader.error("row has " + std::to_string(found) + " values; the header announces " +
-                      std::to_string(expected) + " (" + layout + ")");
+  return reader.error("row has " + std::to_string(found) + " values; the header announces " + std::to_string(expected) +
+                      " (" + layout + ")");
 }
 
 struct Nodes {
@@ -179,11 +180,15 @@ StatusOr<Nodes> readNodes(const std::string& path, std::string_view text, TetMes
   GTN_RETURN_IF_ERROR(readHeader(reader, &row, 4, "the .node header (node count)"));
   GTN_ASSIGN_OR_RETURN(const int64_t count, parseIntToken(reader, row[0], 0, kMaxItems, "node count"));
   int64_t dimension = 3, attributes = 0, markers = 0;
-  if (row.size() > 1) { GTN_ASSIGN_OR_RETURN(dimension, parseIntToken(reader, row[1], 0, 1 << 20, "dimension")); }
+  if (row.size() > 1) {
+    GTN_ASSIGN_OR_RETURN(dimension, parseIntToken(reader, row[1], 0, 1 << 20, "dimension"));
+  }
   if (row.size() > 2) {
     GTN_ASSIGN_OR_RETURN(attributes, parseIntToken(reader, row[2], 0, kMaxAttributes, "attribute count"));
   }
-  if (row.size() > 3) { GTN_ASSIGN_OR_RETURN(markers, parseIntToken(reader, row[3], 0, 1, "boundary marker flag")); }
+  if (row.size() > 3) {
+    GTN_ASSIGN_OR_RETURN(markers, parseIntToken(reader, row[3], 0, 1, "boundary marker flag"));
+  }
   if (dimension != 3)
     return reader.error("dimension " + std::to_string(dimension) + ": only 3-dimensional TetGen meshes are supported");
   if (count == 0)
@@ -191,17 +196,16 @@ StatusOr<Nodes> readNodes(const std::string& path, std::string_view text, TetMes
   const int64_t width = 4 + attributes + markers;
   GTN_RETURN_IF_ERROR(checkCountFits(reader, count, width, "nodes"));
   const size_t n = static_cast<size_t>(count);
-  GTN_ASSIGN_OR_RETURN(ColumnMap map,
-                       mapColumns(path, nodes.layout, tetgen::kPointFieldsKey, attributes, n, 1, markers == 1,
-                                  "the boundary-marker column",
-                                  [](int64_t j) { return "attribute_" + std::to_string(j); }));
+  GTN_ASSIGN_OR_RETURN(ColumnMap map, mapColumns(path, nodes.layout, tetgen::kPointFieldsKey, attributes, n, 1,
+                                                 markers == 1, "the boundary-marker column",
+                                                 [](int64_t j) { return "attribute_" + std::to_string(j); }));
   const bool plain_marker = markers == 1 && map.tagged < 0;  // not a field the layout comment names
   if (plain_marker) {
     map.tagged = static_cast<int>(map.fields.size());
     map.fields.emplace_back(tetgen::kBoundaryMarkerName, 1, ScalarType::kInt32, n);
   }
-  const std::string layout_text = "number, x, y, z, " + std::to_string(attributes) + " attribute(s)" +
-                                  (markers ? ", boundary marker" : "");
+  const std::string layout_text =
+      "number, x, y, z, " + std::to_string(attributes) + " attribute(s)" + (markers ? ", boundary marker" : "");
   mesh.coord_type = nodes.layout.float32_coords ? ScalarType::kFloat32 : ScalarType::kFloat64;
   mesh.coords.resize(3 * n);
   size_t last_line = reader.line();
@@ -247,11 +251,14 @@ StatusOr<Nodes> readNodes(const std::string& path, std::string_view text, TetMes
         Field real(name.empty() ? tetgen::kBoundaryMarkerName : name, 1, ScalarType::kFloat64, n);
         for (size_t j = 0; j < i; ++j) real.set<double>(j, 0, static_cast<double>(f.data<int32_t>()[j]));
         f = std::move(real);
-        nodes.warning = "the boundary-marker column holds reals (a point field, as meshio writes one there): read "
-                        "as the float64 field '" + f.name + "'";
+        nodes.warning =
+            "the boundary-marker column holds reals (a point field, as meshio writes one there): read "
+            "as the float64 field '" +
+            f.name + "'";
       }
       if (f.type == ScalarType::kFloat64) {
-        if (!parseDouble(tok, &v)) return reader.error("expected a number in the marker column, found " + quotedToken(tok));
+        if (!parseDouble(tok, &v))
+          return reader.error("expected a number in the marker column, found " + quotedToken(tok));
         f.set<double>(i, 0, v);
       }
     }
@@ -286,19 +293,20 @@ StatusOr<Tets> readTets(const std::string& path, std::string_view text, int64_t 
                         " nodes per tetrahedron: only 4 (linear) and 10 (quadratic) are supported");
   }
   if (per_tet == 10) {
-    result.report.warnings.push_back(path + ": 10-node (quadratic) tetrahedra: only the 4 corner nodes are kept; "
-                                            "the 6 edge nodes remain as unreferenced points");
+    result.report.warnings.push_back(path +
+                                     ": 10-node (quadratic) tetrahedra: only the 4 corner nodes are kept; "
+                                     "the 6 edge nodes remain as unreferenced points");
   }
   const int64_t width = 1 + per_tet + attributes;
   GTN_RETURN_IF_ERROR(checkCountFits(reader, count, width, "tetrahedra"));
   const size_t nt = static_cast<size_t>(count);
-  GTN_ASSIGN_OR_RETURN(ColumnMap map,
-                       mapColumns(path, layout, tetgen::kCellFieldsKey, attributes, nt, 4, true, "the .face markers",
-                                  [](int64_t j) {
-                                    return j == 0 ? std::string(tetgen::kRegionName) : "attribute_" + std::to_string(j);
-                                  }));
-  const std::string layout_text = "number, " + std::to_string(per_tet) + " node numbers, " +
-                                  std::to_string(attributes) + " attribute(s)";
+  GTN_ASSIGN_OR_RETURN(
+      ColumnMap map,
+      mapColumns(path, layout, tetgen::kCellFieldsKey, attributes, nt, 4, true, "the .face markers", [](int64_t j) {
+        return j == 0 ? std::string(tetgen::kRegionName) : "attribute_" + std::to_string(j);
+      }));
+  const std::string layout_text =
+      "number, " + std::to_string(per_tet) + " node numbers, " + std::to_string(attributes) + " attribute(s)";
   const int64_t np = static_cast<int64_t>(mesh.numPoints());
   mesh.tets.resize(nt);
   size_t last_line = reader.line();
@@ -306,7 +314,8 @@ StatusOr<Tets> readTets(const std::string& path, std::string_view text, int64_t 
     if (!readRow(reader, &row)) return truncatedError(reader, last_line, t, count, "tetrahedra");
     last_line = reader.line();
     if (row.size() != static_cast<size_t>(width)) return wrongWidth(reader, row.size(), width, layout_text);
-    GTN_ASSIGN_OR_RETURN(const int64_t number, parseIntToken(reader, row[0], INT64_MIN, INT64_MAX, "tetrahedron number"));
+    GTN_ASSIGN_OR_RETURN(const int64_t number,
+                         parseIntToken(reader, row[0], INT64_MIN, INT64_MAX, "tetrahedron number"));
     const std::string which = "tetrahedron " + std::to_string(number);  // as the file numbers it
     for (int k = 0; k < 4; ++k) {
       int64_t v;
@@ -315,8 +324,8 @@ StatusOr<Tets> readTets(const std::string& path, std::string_view text, int64_t 
       }
       if (v < base || v - base >= np) {
         return reader.error(which + " refers to node " + std::to_string(v) +
-                            ", which the .node does not have (its nodes are numbered " + std::to_string(base) +
-                            " to " + std::to_string(base + np - 1) + ")");
+                            ", which the .node does not have (its nodes are numbered " + std::to_string(base) + " to " +
+                            std::to_string(base + np - 1) + ")");
       }
       mesh.tets[t][k] = static_cast<uint32_t>(v - base);
     }
@@ -350,7 +359,9 @@ StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_
   GTN_RETURN_IF_ERROR(readHeader(reader, &row, 2, "the .face header (face count)"));
   GTN_ASSIGN_OR_RETURN(const int64_t count, parseIntToken(reader, row[0], 0, INT64_MAX, "face count"));
   int64_t markers = 0;
-  if (row.size() > 1) { GTN_ASSIGN_OR_RETURN(markers, parseIntToken(reader, row[1], 0, 1, "boundary marker flag")); }
+  if (row.size() > 1) {
+    GTN_ASSIGN_OR_RETURN(markers, parseIntToken(reader, row[1], 0, 1, "boundary marker flag"));
+  }
   *has_markers = markers == 1;
   int64_t edge_nodes = quadratic ? -1 : 0;  // -1: not known before the first row
   GTN_RETURN_IF_ERROR(checkCountFits(reader, count, 4 + markers, "faces"));
@@ -369,7 +380,8 @@ StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_
     if (row.size() != static_cast<size_t>(width) && row.size() != static_cast<size_t>(width + 2)) {
       std::string edges;
       if (quadratic && i == 0) edges = " [, 3 edge nodes]";
-      if (quadratic && i > 0) edges = edge_nodes ? ", 3 edge nodes (as on the first row)" : " (no edge nodes, as on the first row)";
+      if (quadratic && i > 0)
+        edges = edge_nodes ? ", 3 edge nodes (as on the first row)" : " (no edge nodes, as on the first row)";
       return wrongWidth(reader, row.size(), width,
                         "number, 3 node numbers" + edges + (markers ? ", marker" : "") + " [, 2 adjacent tetrahedra]");
     }
@@ -395,9 +407,8 @@ StatusOr<std::vector<FaceEntry>> readFaces(const std::string& path, std::string_
   }
   if (readRow(reader, &row))
     return reader.error("more rows than the " + std::to_string(count) + " faces the header announces");
-  std::sort(faces.begin(), faces.end(), [](const FaceEntry& a, const FaceEntry& b) {
-    return a.v != b.v ? a.v < b.v : a.line < b.line;
-  });
+  std::sort(faces.begin(), faces.end(),
+            [](const FaceEntry& a, const FaceEntry& b) { return a.v != b.v ? a.v < b.v : a.line < b.line; });
   size_t out = 0;
   for (size_t i = 0; i < faces.size(); ++i) {
     if (out > 0 && faces[out - 1].v == faces[i].v) {
@@ -453,7 +464,9 @@ StatusOr<ImportResult> importTetgen(const std::string& path, const ImportOptions
   GTN_ASSIGN_OR_RETURN(const std::string ele_text, readWholeFile(ele_path));
   std::string face_text;
   const bool has_face_file = pathExists(face_path);
-  if (has_face_file) { GTN_ASSIGN_OR_RETURN(face_text, readWholeFile(face_path)); }
+  if (has_face_file) {
+    GTN_ASSIGN_OR_RETURN(face_text, readWholeFile(face_path));
+  }
 
   ImportResult result;
   TetMesh& mesh = result.mesh;
@@ -496,8 +509,8 @@ StatusOr<ImportResult> importTetgen(const std::string& path, const ImportOptions
   }
   // Files of the mesh that are not read, each named: TetGen's edges (-e, boundary edges with their
   // markers), volume constraints (-a) and metric (-m). Adjacency (.neigh) is recomputed.
-  for (const auto& [ext, what] : {std::pair{".edge", "edges"}, std::pair{".vol", "volume constraints"},
-                                  std::pair{".mtr", "metric values"}}) {
+  for (const auto& [ext, what] :
+       {std::pair{".edge", "edges"}, std::pair{".vol", "volume constraints"}, std::pair{".mtr", "metric values"}}) {
     const std::string p = base_path + ext;
     if (!pathExists(p)) continue;
     std::string count;

@@ -150,9 +150,9 @@ bool parseFieldList(std::string_view text, std::string_view tag, std::vector<Col
     }
     ColumnField f;
     int64_t components = 0;
-    if (parts.size() < 3 || parts.size() > 4 || !unescapeText(parts[0], &f.name) ||
-        !parseInt(parts[1], &components) || components < 1 || components > (1 << 20) ||
-        !scalarTypeFromName(std::string(parts[2]), &f.type) || (parts.size() == 4 && parts[3] != tag)) {
+    if (parts.size() < 3 || parts.size() > 4 || !unescapeText(parts[0], &f.name) || !parseInt(parts[1], &components) ||
+        components < 1 || components > (1 << 20) || !scalarTypeFromName(std::string(parts[2]), &f.type) ||
+        (parts.size() == 4 && parts[3] != tag)) {
       *why = "malformed field description '" + std::string(item.substr(0, 80)) + "' (expected NAME:COMPONENTS:TYPE" +
              (tag.empty() ? "" : "[:" + std::string(tag) + "]") + ")";
       return false;

@@ -11,7 +11,6 @@ namespace gtn {
 namespace {
 bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 
-
 // Whether `token` (a decimal beyond T's range) is T's largest finite value, in magnitude, rounded to
 // the token's own number of significant digits: a writer that prints doubles with fewer than 17
 // digits turns DBL_MAX into a decimal above it (VTK's legacy ASCII writer, %.11lg, prints

@@ -126,8 +126,8 @@ StatusOr<ScalarType> LegacyReader::dataType(const std::string& what) {
     return ScalarType::kUInt8;
   }
   if (!vtkLegacyTypeFromName(name, &t))
-    return Status(StatusCode::kUnsupported, path_ + ":" + std::to_string(tr_.line()) + ": " + what +
-                                                ": data type " + quotedToken(name) + " is not supported");
+    return Status(StatusCode::kUnsupported, path_ + ":" + std::to_string(tr_.line()) + ": " + what + ": data type " +
+                                                quotedToken(name) + " is not supported");
   return t;
 }
 
@@ -159,8 +159,7 @@ Status LegacyReader::readValues(ScalarType type, uint64_t n, const std::string& 
                            what + " (" + std::to_string(n) + " bits need " + std::to_string(bytes) + " bytes, " +
                            std::to_string(left) + " left)");
       out->resize(n);
-      for (uint64_t i = 0; i < n; ++i)
-        (*out)[i] = (static_cast<uint8_t>(text_[at + i / 8]) >> (7 - i % 8)) & 1;
+      for (uint64_t i = 0; i < n; ++i) (*out)[i] = (static_cast<uint8_t>(text_[at + i / 8]) >> (7 - i % 8)) & 1;
       tr_.seek(at + bytes);
       return Status::ok();
     }
@@ -261,8 +260,8 @@ Status LegacyReader::readCells() {
       cells_.offsets.push_back(static_cast<int64_t>(cells_.connectivity.size()));
     }
     if (pos != list.size())
-      return tr_.error("CELLS: " + std::to_string(list.size() - pos) + " numbers left over after " +
-                       std::to_string(a) + " cells");
+      return tr_.error("CELLS: " + std::to_string(list.size() - pos) + " numbers left over after " + std::to_string(a) +
+                       " cells");
   }
   have_cells_ = true;
   return Status::ok();
@@ -312,7 +311,7 @@ void LegacyReader::warnAboutSkipped() {
 
 Status LegacyReader::readFieldData(std::vector<Field>* into) {
   std::vector<std::string> dataset_arrays;  // into == nullptr: the names of what is read past
-  const size_t field_line = tr_.line();       // of the FIELD keyword
+  const size_t field_line = tr_.line();     // of the FIELD keyword
   GTN_ASSIGN_OR_RETURN(std::string field_name, token("field name"));
   GTN_ASSIGN_OR_RETURN(uint64_t arrays, count("array count"));
   for (uint64_t a = 0; a < arrays; ++a) {
@@ -551,8 +550,8 @@ Status LegacyReader::finishStructured(const ImportOptions& options) {
       if (!have_axis_[a]) return invalidData(path_ + ": RECTILINEAR_GRID without " + what);
       // (An axis read before DIMENSIONS was not checked against it.)
       if (axis_[a].size() != dims_[a])
-        return invalidData(path_ + ": " + what + " has " + std::to_string(axis_[a].size()) +
-                           " values but DIMENSIONS " + std::to_string(dims_[a]) + " along this axis");
+        return invalidData(path_ + ": " + what + " has " + std::to_string(axis_[a].size()) + " values but DIMENSIONS " +
+                           std::to_string(dims_[a]) + " along this axis");
     }
     rectilinearPoints(axis_, &mesh.coords);
     mesh.coord_type = axis_f32_[0] && axis_f32_[1] && axis_f32_[2] ? ScalarType::kFloat32 : ScalarType::kFloat64;
@@ -613,8 +612,8 @@ StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
         expected = section_ == 1 ? structuredPoints() : structuredCells();
       }
       if (section_items_ != expected)
-        return tr_.error(kw + " " + std::to_string(section_items_) + " does not match the " +
-                         std::to_string(expected) + (section_ == 1 ? " points" : " cells"));
+        return tr_.error(kw + " " + std::to_string(section_items_) + " does not match the " + std::to_string(expected) +
+                         (section_ == 1 ? " points" : " cells"));
     } else if (kw == "METADATA") {
       skipMetadata();
     } else if (kw == "FIELD" && section_ == 0) {
@@ -634,7 +633,8 @@ StatusOr<ImportResult> LegacyReader::read(const ImportOptions& options) {
   if (!have_points_) return invalidData(path_ + ": no POINTS section");
   // VTK's writer leaves both out for a grid without cells (read as such, like a .vtu of 0 cells).
   if (have_cells_ != have_types_)
-    return invalidData(path_ + (have_cells_ ? ": CELLS without a CELL_TYPES section" : ": CELL_TYPES without a CELLS section"));
+    return invalidData(path_ +
+                       (have_cells_ ? ": CELLS without a CELL_TYPES section" : ": CELL_TYPES without a CELLS section"));
   if (cells_.types.size() + 1 != cells_.offsets.size())
     return invalidData(path_ + ": CELL_TYPES lists " + std::to_string(cells_.types.size()) + " cells but CELLS " +
                        std::to_string(cells_.offsets.size() - 1));

@@ -47,11 +47,13 @@ class LegacyWriter {
   }
   void fields(const char* section, const std::vector<Field>& fields, size_t items) {
     if (fields.empty()) return;
-    put(std::string(section) + " " + std::to_string(items) + "\nFIELD FieldData " + std::to_string(fields.size()) + "\n");
+    put(std::string(section) + " " + std::to_string(items) + "\nFIELD FieldData " + std::to_string(fields.size()) +
+        "\n");
     for (size_t i = 0; i < fields.size(); ++i) {
       const Field& f = fields[i];
       const std::string name = f.name.empty() ? "field_" + std::to_string(i) : encodeName(f.name);
-      put(name + " " + std::to_string(f.components) + " " + std::to_string(items) + " " + vtkLegacyTypeName(f.type) + "\n");
+      put(name + " " + std::to_string(f.components) + " " + std::to_string(items) + " " + vtkLegacyTypeName(f.type) +
+          "\n");
       bigEndian(f.bytes.data(), items * f.components, f.valueSize());
       put("\n");
     }

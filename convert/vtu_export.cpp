@@ -40,8 +40,8 @@ class VtuWriter {
  public:
   VtuWriter(std::FILE* f, bool compress, const std::string& path) : f_(f), compress_(compress), path_(path) {}
 
-  Status array(const char* indent, const std::string& name, ScalarType type, uint32_t components,
-               const uint8_t* data, size_t size) {
+  Status array(const char* indent, const std::string& name, ScalarType type, uint32_t components, const uint8_t* data,
+               size_t size) {
     put(std::string(indent) + "<DataArray type=\"" + vtkXmlTypeName(type) + "\" Name=\"" + xmlEscape(name) +
         "\" NumberOfComponents=\"" + std::to_string(components) + "\" format=\"binary\">\n" + indent + "  ");
     if (compress_) {
@@ -81,11 +81,12 @@ Status exportVtu(const TetMesh& mesh, const std::string& path, const ExportOptio
   GTN_RETURN_IF_ERROR(mesh.checkConsistency(path));
   return writeFileAtomically(path, [&](std::FILE* f) -> Status {
     VtuWriter w(f, options.compress, path);
-    w.put("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-          "header_type=\"UInt64\"" +
-          std::string(options.compress ? " compressor=\"vtkZLibDataCompressor\"" : "") +
-          ">\n  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"" + std::to_string(mesh.numPoints()) +
-          "\" NumberOfCells=\"" + std::to_string(mesh.numTets()) + "\">\n");
+    w.put(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+        "header_type=\"UInt64\"" +
+        std::string(options.compress ? " compressor=\"vtkZLibDataCompressor\"" : "") +
+        ">\n  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"" + std::to_string(mesh.numPoints()) +
+        "\" NumberOfCells=\"" + std::to_string(mesh.numTets()) + "\">\n");
     const char* indent = "        ";
     w.put("      <PointData>\n");
     for (const Field& fd : mesh.point_fields)

@@ -4,8 +4,8 @@
 // of VTK's compressors (zlib, LZ4, LZMA), UInt32 or UInt64 headers, either byte order, several pieces.
 #include <lz4.h>
 #include <lzma.h>
-#include <pugixml.hpp>
 #include <zlib.h>
+#include <pugixml.hpp>
 
 #include <algorithm>
 #include <cctype>
@@ -113,8 +113,9 @@ std::string parentDirectory(const std::string& path) {
 // The ghost marks are VTK's bookkeeping, not data: a mesh made of several pieces does not keep them.
 void dropGhostArrays(TetMesh& mesh) {
   for (std::vector<Field>* fields : {&mesh.point_fields, &mesh.cell_fields})
-    fields->erase(std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kVtkGhostArray; }),
-                  fields->end());
+    fields->erase(
+        std::remove_if(fields->begin(), fields->end(), [](const Field& f) { return f.name == kVtkGhostArray; }),
+        fields->end());
 }
 
 // What reading several unstructured pieces into one mesh did (a .pvtu's files, or the <Piece>s of one
@@ -150,8 +151,8 @@ class VtuReader {
                    bool at_least = false);
   // A DataArray of integers (one component) as int64 values: exactly `count`, or with `at_least` at
   // least that many.
-  Status readIndices(const pugi::xml_node& node, uint64_t count, const std::string& where,
-                     std::vector<int64_t>* out, bool at_least = false);
+  Status readIndices(const pugi::xml_node& node, uint64_t count, const std::string& where, std::vector<int64_t>* out,
+                     bool at_least = false);
   // Polyhedra in VTK 9.4's layout, made into the face streams of the earlier layout (VtkCells).
   Status readPolyhedronTables(const pugi::xml_node* nodes, const std::vector<int64_t>& types, int64_t np,
                               size_t point_base, size_t cell_base, const std::string& at);
@@ -199,8 +200,8 @@ class VtuReader {
   bool big_endian_ = false;
   int header_bytes_ = 4;
   bool compressed_ = false;
-  bool in_parallel_ = false;  // a piece of a .pvtu, which must not be one itself
-  size_t duplicate_tets_ = 0;  // tetrahedra of a piece's ghost cells (copies of other pieces'), dropped
+  bool in_parallel_ = false;              // a piece of a .pvtu, which must not be one itself
+  size_t duplicate_tets_ = 0;             // tetrahedra of a piece's ghost cells (copies of other pieces'), dropped
   std::set<std::string> skipped_arrays_;  // "PointData/name" of the non-numeric arrays warned about
   Compressor compressor_ = Compressor::kNone;
   bool appended_base64_ = false;
@@ -249,12 +250,13 @@ Status VtuReader::inflateBlock(const uint8_t* in, uint64_t in_size, uint8_t* out
     case Compressor::kLzma: {
       uint64_t memlimit = kLzmaMemLimit;
       size_t in_pos = 0, out_pos = 0;
-      const lzma_ret rc = lzma_stream_buffer_decode(&memlimit, 0, nullptr, in, &in_pos, in_size, out, &out_pos,
-                                                    out_size);
+      const lzma_ret rc =
+          lzma_stream_buffer_decode(&memlimit, 0, nullptr, in, &in_pos, in_size, out, &out_pos, out_size);
       if (rc == LZMA_MEMLIMIT_ERROR)
         return corrupt("LZMA", "its decoder would need more than " + std::to_string(kLzmaMemLimit >> 20) + " MiB");
-      if (rc == LZMA_BUF_ERROR) return corrupt("LZMA", "it holds more than the " + std::to_string(out_size) +
-                                                           " bytes its header says, or is cut short");
+      if (rc == LZMA_BUF_ERROR)
+        return corrupt(
+            "LZMA", "it holds more than the " + std::to_string(out_size) + " bytes its header says, or is cut short");
       if (rc != LZMA_OK) return corrupt("LZMA", "liblzma error " + std::to_string(static_cast<int>(rc)));
       if (out_pos != out_size) return corrupt("LZMA", sizes(out_pos));
       return Status::ok();
@@ -282,8 +284,8 @@ Status VtuReader::inflateBlocks(const uint8_t* header, const uint8_t* blocks, si
       return fail(where, "compressed block " + std::to_string(b) + " runs past the end of the data (" +
                              std::to_string(available) + " bytes)");
     if (u > maxRatio(compressor_) * c + 64)
-      return fail(where, "compressed block " + std::to_string(b) + " claims " + std::to_string(u) +
-                             " bytes from " + std::to_string(c));
+      return fail(where, "compressed block " + std::to_string(b) + " claims " + std::to_string(u) + " bytes from " +
+                             std::to_string(c));
     compressed_total += c;
     total += u;
   }
@@ -390,7 +392,8 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
   } else if (!vtkXmlTypeFromName(type_name, &out->type)) {
     return Status(StatusCode::kUnsupported, path_ + ": " + where + ": data type '" + type_name + "' is not supported");
   }
-  const int comps = static_cast<int>(std::clamp<long long>(integerAttribute(node, "NumberOfComponents", 1), -1, 1 << 20));
+  const int comps =
+      static_cast<int>(std::clamp<long long>(integerAttribute(node, "NumberOfComponents", 1), -1, 1 << 20));
   if (comps < 1 || comps > 4096) return fail(where, "bad NumberOfComponents " + std::to_string(comps));
   out->components = static_cast<uint32_t>(comps);
   const size_t size = scalarSize(out->type);
@@ -461,9 +464,10 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
   if (at_least && out->bytes.size() >= count * size && out->bytes.size() % (comps * size) == 0) {
     // as many tuples as it holds
   } else if (out->bytes.size() != count * size) {
-    return fail(where, "holds " + std::to_string(out->bytes.size()) + " bytes, expected " + (at_least ? "at least " : "") +
-                           std::to_string(count * size) + " (" + std::to_string(tuples) + " tuples of " +
-                           std::to_string(comps) + " " + vtkXmlTypeName(out->type) + ")");
+    return fail(where, "holds " + std::to_string(out->bytes.size()) + " bytes, expected " +
+                           (at_least ? "at least " : "") + std::to_string(count * size) + " (" +
+                           std::to_string(tuples) + " tuples of " + std::to_string(comps) + " " +
+                           vtkXmlTypeName(out->type) + ")");
   }
   if (big_endian_) swapByteOrder(out->bytes.data(), out->bytes.size(), size);
   return Status::ok();
@@ -543,9 +547,10 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
 
   if (!face_offs_node && !tables &&
       std::find(type_values.begin(), type_values.end(), int64_t{kVtkPolyhedron}) != type_values.end())
-    return fail(at + " Cells", "VTK_POLYHEDRON cells without the faces and faceoffsets arrays (or VTK 9.4's "
-                               "polyhedron_offsets, polyhedron_to_faces, face_offsets and face_connectivity) that "
-                               "describe them");
+    return fail(at + " Cells",
+                "VTK_POLYHEDRON cells without the faces and faceoffsets arrays (or VTK 9.4's "
+                "polyhedron_offsets, polyhedron_to_faces, face_offsets and face_connectivity) that "
+                "describe them");
   if (tables && (faces_node || face_offs_node))
     return fail(at + " Cells", "both polyhedron layouts (faces/faceoffsets and VTK 9.4's tables)");
   if (nc > 0 && tables) {
@@ -580,7 +585,8 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
         for (int64_t k = faces[e++]; k > 0 && e < stop; --k) {
           const int64_t n = faces[e];
           cells_.faces.push_back(faces[e++]);
-          for (int64_t i = 0; i < n && e < stop; ++i, ++e) cells_.faces.push_back(faces[e] + static_cast<int64_t>(point_base));
+          for (int64_t i = 0; i < n && e < stop; ++i, ++e)
+            cells_.faces.push_back(faces[e] + static_cast<int64_t>(point_base));
         }
       }
       for (; e < stop; ++e) cells_.faces.push_back(faces[e]);
@@ -664,8 +670,8 @@ Status VtuReader::readPolyhedronTables(const pugi::xml_node* nodes, const std::v
   if (num_faces > 0) {
     GTN_RETURN_IF_ERROR(readIndices(nodes[2], static_cast<uint64_t>(num_faces), where[2], &face_ends, true));
     GTN_RETURN_IF_ERROR(checkEnds(face_ends, static_cast<size_t>(num_faces), where[2]));
-    GTN_RETURN_IF_ERROR(readIndices(nodes[3], static_cast<uint64_t>(face_ends[num_faces - 1]), where[3],
-                                    &face_points, true));
+    GTN_RETURN_IF_ERROR(
+        readIndices(nodes[3], static_cast<uint64_t>(face_ends[num_faces - 1]), where[3], &face_points, true));
   }
   // A face bounds two cells at most: so the streams cannot grow much longer than the tables.
   std::vector<uint8_t> uses(static_cast<size_t>(num_faces), 0);
@@ -778,7 +784,8 @@ Status VtuReader::structuredWhole(const pugi::xml_node& grid, const std::string&
     if (whole[2 * a + 1] < whole[2 * a] || span >= UINT32_MAX) return fail(element, "bad WholeExtent");
     dims[a] = span + 1;
   }
-  const std::string dims_text = std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " + std::to_string(dims[2]);
+  const std::string dims_text =
+      std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " + std::to_string(dims[2]);
   if (dims[0] < 2 || dims[1] < 2 || dims[2] < 2)
     return unsupported(path_ + ": a " + dims_text +
                        " grid has fewer than 2 points along an axis, hence no volume cells; only 3D grids can be "
@@ -926,8 +933,9 @@ StatusOr<ImportResult> VtuReader::readParallelStructured(const pugi::xml_node& r
   StatusOr<ImportResult> result = assembleStructured(grid, type, whole, dims, pieces, image, options);
   if (result.isOk() && ghost_arrays > 0) {
     dropGhostArrays(result->mesh);
-    result->report.warnings.push_back("the pieces' vtkGhostType arrays (VTK's marks of shared points and cells) "
-                                      "were not kept");
+    result->report.warnings.push_back(
+        "the pieces' vtkGhostType arrays (VTK's marks of shared points and cells) "
+        "were not kept");
   }
   return result;
 }
@@ -1020,8 +1028,8 @@ StatusOr<ImportResult> VtuReader::assembleStructured(const pugi::xml_node& grid,
   } else {
     // ImageData: point (i, j, k) of the extent at Origin + Direction (i Sx, j Sy, k Sz), in double.
     const double* dir = image.dir;
-    const bool axis_aligned = dir[0] == 1 && dir[1] == 0 && dir[2] == 0 && dir[3] == 0 && dir[4] == 1 &&
-                              dir[5] == 0 && dir[6] == 0 && dir[7] == 0 && dir[8] == 1;
+    const bool axis_aligned = dir[0] == 1 && dir[1] == 0 && dir[2] == 0 && dir[3] == 0 && dir[4] == 1 && dir[5] == 0 &&
+                              dir[6] == 0 && dir[7] == 0 && dir[8] == 1;
     const int64_t lower[3] = {whole[0], whole[2], whole[4]};
     imagePoints(dims, lower, image.origin, image.spacing, axis_aligned ? nullptr : dir, &mesh.coords);
     mesh.coord_type = ScalarType::kFloat64;
@@ -1146,7 +1154,8 @@ StatusOr<pugi::xml_node> VtuReader::parse() {
     xml_text += "</AppendedData></VTKFile>";
     xml = xml_text;
   }
-  const pugi::xml_parse_result parsed = doc_.load_buffer(xml.data(), xml.size(), pugi::parse_default, pugi::encoding_utf8);
+  const pugi::xml_parse_result parsed =
+      doc_.load_buffer(xml.data(), xml.size(), pugi::parse_default, pugi::encoding_utf8);
   if (!parsed)
     return invalidData(path_ + ": byte offset " + std::to_string(parsed.offset) + ": not well-formed XML (" +
                        parsed.description() + ")");
@@ -1233,11 +1242,13 @@ StatusOr<ImportResult> VtuReader::readParsed(const pugi::xml_node& root, const I
   } else if (!in_parallel_) {
     if (const uint8_t* marks = vtkGhostMarks(cell_fields_, cells_.types.size())) {
       size_t copies = 0;
-      for (size_t c = 0; c < cells_.types.size(); ++c) copies += (marks[c] & kVtkDuplicateCell) && !(marks[c] & kVtkHiddenCell);
+      for (size_t c = 0; c < cells_.types.size(); ++c)
+        copies += (marks[c] & kVtkDuplicateCell) && !(marks[c] & kVtkHiddenCell);
       if (copies > 0)
-        result_.report.warnings.push_back(std::to_string(copies) +
-                                          " cells are ghost copies of another piece's cells (vtkGhostType DUPLICATECELL); "
-                                          "kept, as the file holds no other piece");
+        result_.report.warnings.push_back(
+            std::to_string(copies) +
+            " cells are ghost copies of another piece's cells (vtkGhostType DUPLICATECELL); "
+            "kept, as the file holds no other piece");
     }
   }
   return std::move(result_);

@@ -43,8 +43,8 @@ Status openTemporary(const std::string& path, std::string* tmp_name, std::FILE**
   return Status::ok();
 }
 
-Status writeTemporary(const std::string& path, const std::function<Status(std::FILE*)>& write,
-                      std::string* tmp_name, bool sync = true) {
+Status writeTemporary(const std::string& path, const std::function<Status(std::FILE*)>& write, std::string* tmp_name,
+                      bool sync = true) {
   std::FILE* f = nullptr;
   GTN_RETURN_IF_ERROR(openTemporary(path, tmp_name, &f));
   Status st = write(f);
@@ -115,7 +115,9 @@ Target outputTarget(const std::string& path, std::string* target, std::string* w
     }
     if (S_ISREG(sb.st_mode)) return Target::kRegular;
     if (S_ISCHR(sb.st_mode) || S_ISFIFO(sb.st_mode)) return Target::kInPlace;
-    *why = S_ISDIR(sb.st_mode) ? "is a directory" : S_ISBLK(sb.st_mode) ? "is a block device, not written" : "is not a file";
+    *why = S_ISDIR(sb.st_mode)   ? "is a directory"
+           : S_ISBLK(sb.st_mode) ? "is a block device, not written"
+                                 : "is not a file";
     return Target::kRefused;
   }
   *why = "is a chain of symbolic links that does not end";

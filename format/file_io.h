@@ -28,8 +28,7 @@ bool sameFile(const std::string& a, const std::string& b);
 // replaced, the link stays). An existing character device or FIFO (/dev/null, /dev/stdout, a pipe)
 // is written in place, as it cannot be replaced without destroying it; a directory, block device or
 // socket is refused.
-Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write,
-                           bool sync = true);
+Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write, bool sync = true);
 
 // Convenience for writing one buffer atomically.
 Status writeBytesAtomically(const std::string& path, const void* data, size_t size, bool sync = true);

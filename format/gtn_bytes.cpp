@@ -93,8 +93,8 @@ Status ByteReader::varintAtMost(uint64_t* v, uint64_t max, const char* name) {
   const uint64_t start = offset();
   GTN_RETURN_IF_ERROR(varint(v, name));
   if (*v > max)
-    return errorAt(start, std::string(name) + " " + std::to_string(*v) + " exceeds the limit of " +
-                              std::to_string(max));
+    return errorAt(start,
+                   std::string(name) + " " + std::to_string(*v) + " exceeds the limit of " + std::to_string(max));
   return Status::ok();
 }
 

@@ -20,9 +20,7 @@ void storeU64(uint8_t* p, uint64_t v) {
 std::string at(const std::string& what, uint64_t offset) {
   return what + ": byte offset " + std::to_string(offset) + ": ";
 }
-bool validTagChar(char ch) {
-  return (ch >= 'A' && ch <= 'Z') || (ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9');
-}
+bool validTagChar(char ch) { return (ch >= 'A' && ch <= 'Z') || (ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9'); }
 std::string printableTag(const ChunkTag& tag) {
   std::string s;
   for (char ch : tag.c) {
@@ -57,12 +55,14 @@ Status checkGtnPrefix(std::span<const uint8_t> b, const std::string& what, uint1
   if (!std::equal(b.begin(), b.begin() + n, kGtnMagic.begin())) {
     if (b.size() >= 4 && b[0] == 0x0E && b[1] == 'G' && b[2] == 'T' && b[3] == 'N')
       return Status(StatusCode::kNotOurFile,
-                    what + ": byte offset 0: bad magic: the first byte lost its high bit (0x0E instead of 0x8E); "
-                           "the file went through a 7-bit channel");
+                    what +
+                        ": byte offset 0: bad magic: the first byte lost its high bit (0x0E instead of 0x8E); "
+                        "the file went through a 7-bit channel");
     if (b.size() >= 4 && b[0] == 0x8E && b[1] == 'G' && b[2] == 'T' && b[3] == 'N')
       return Status(StatusCode::kInvalidData,
-                    what + ": byte offset 4: bad magic: the CR LF ^Z LF bytes after \"GTN\" were altered; "
-                           "the file was probably transferred in text mode");
+                    what +
+                        ": byte offset 4: bad magic: the CR LF ^Z LF bytes after \"GTN\" were altered; "
+                        "the file was probably transferred in text mode");
     return Status(StatusCode::kNotOurFile,
                   what + ": byte offset 0: bad magic: not a .gtn file (expected 8E 47 54 4E 0D 0A 1A 0A)");
   }
@@ -72,10 +72,9 @@ Status checkGtnPrefix(std::span<const uint8_t> b, const std::string& what, uint1
   *major = static_cast<uint16_t>(b[8] | (b[9] << 8));
   *minor = static_cast<uint16_t>(b[10] | (b[11] << 8));
   if (*major > kGtnMajorVersion)
-    return Status(StatusCode::kVersionTooNew,
-                  at(what, 8) + "format version " + std::to_string(*major) + "." + std::to_string(*minor) +
-                      " is newer than this reader supports (" + std::to_string(kGtnMajorVersion) +
-                      ".x); use a newer gtn to read it");
+    return Status(StatusCode::kVersionTooNew, at(what, 8) + "format version " + std::to_string(*major) + "." +
+                                                  std::to_string(*minor) + " is newer than this reader supports (" +
+                                                  std::to_string(kGtnMajorVersion) + ".x); use a newer gtn to read it");
   if (*major == 0) return invalidData(at(what, 8) + "format major version 0 does not exist");
   const uint32_t check = static_cast<uint32_t>(XXH3_64bits(b.data(), 12));
   uint32_t stored = 0;
@@ -131,13 +130,11 @@ Status parseGtnChunkHeader(std::span<const uint8_t> b, uint64_t offset, uint64_t
                          "' (types are four ASCII letters or digits): corrupt data");
   h->flags = b[4];
   if (h->flags & kChunkReservedMask)
-    return invalidData(at(what, offset + 4) + "chunk '" + h->tag.str() + "' sets reserved flag bits (flags 0x" +
-                       [&] {
-                         char buf[4];
-                         std::snprintf(buf, sizeof buf, "%02X", h->flags);
-                         return std::string(buf);
-                       }() +
-                       ")");
+    return invalidData(at(what, offset + 4) + "chunk '" + h->tag.str() + "' sets reserved flag bits (flags 0x" + [&] {
+      char buf[4];
+      std::snprintf(buf, sizeof buf, "%02X", h->flags);
+      return std::string(buf);
+    }() + ")");
   h->stored_size = loadU64(b.data() + 5);
   h->header_size = kChunkFixedHeaderSize;
   if (h->zstd()) {
@@ -170,8 +167,7 @@ bool gtnChunkChecksumMatches(const ChunkHeader& h, std::span<const uint8_t> chun
 
 StatusOr<std::vector<uint8_t>> openGtnChunk(const ChunkHeader& h, std::span<const uint8_t> chunk,
                                             const std::string& what) {
-  if (chunk.size() != h.totalSize())
-    return invalidData(at(what, h.offset) + "internal: chunk buffer size mismatch");
+  if (chunk.size() != h.totalSize()) return invalidData(at(what, h.offset) + "internal: chunk buffer size mismatch");
   const size_t body = h.header_size + h.stored_size;
   const uint64_t expected = loadU64(chunk.data() + body);
   if (XXH3_64bits(chunk.data(), body) != expected)

@@ -59,11 +59,10 @@ inline constexpr size_t kGtnTrailerSize = kChunkFixedHeaderSize + kGtnEndPayload
 // The 16-byte prefix: magic, major and minor version (u16 each), low 32 bits of the XXH3-64 of the
 // first 12 bytes.
 std::array<uint8_t, kGtnPrefixSize> encodeGtnPrefix(uint16_t major = kGtnMajorVersion,
-                                                   uint16_t minor = kGtnMinorVersion);
+                                                    uint16_t minor = kGtnMinorVersion);
 // Checks a prefix: magic (with diagnoses of byte-swapped, text-mode-damaged or foreign files), then the
 // major version (kVersionTooNew when newer), then the prefix checksum. `what` names the file.
-Status checkGtnPrefix(std::span<const uint8_t> bytes, const std::string& what, uint16_t* major,
-                      uint16_t* minor);
+Status checkGtnPrefix(std::span<const uint8_t> bytes, const std::string& what, uint16_t* major, uint16_t* minor);
 
 // XXH3-64 (seed 0) of the bytes, as the chunk checksum uses it.
 uint64_t gtnChecksum(std::span<const uint8_t> bytes);
@@ -91,8 +90,8 @@ struct ChunkHeader {
 // set; *needed tells how many were required when fewer are given). `remaining` is the number of file
 // bytes from the chunk's offset to the end of the file, when known (UINT64_MAX otherwise): sizes
 // beyond it are reported as truncation before anything is allocated.
-Status parseGtnChunkHeader(std::span<const uint8_t> bytes, uint64_t offset, uint64_t remaining,
-                           const std::string& what, ChunkHeader* header, size_t* needed);
+Status parseGtnChunkHeader(std::span<const uint8_t> bytes, uint64_t offset, uint64_t remaining, const std::string& what,
+                           ChunkHeader* header, size_t* needed);
 
 // Whether a whole chunk's stored checksum matches its bytes (`chunk` as for openGtnChunk).
 bool gtnChunkChecksumMatches(const ChunkHeader& header, std::span<const uint8_t> chunk);

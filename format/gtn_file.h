@@ -57,8 +57,7 @@ struct GtnWriteOptions {
 // options.level_storage_limit set, the levels are encoded, finest first, before the first byte is
 // written, so that the bound can be applied to the exact bytes; the encoding stops at the first level
 // beyond the bound (the coarser ones are neither encoded nor verified).
-Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels,
-                    const GtnWriteOptions& options);
+Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels, const GtnWriteOptions& options);
 
 // Zstd level the writer uses for chunks (fixed: part of what makes the output deterministic).
 inline constexpr int kGtnZstdLevel = 9;

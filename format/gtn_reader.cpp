@@ -69,8 +69,8 @@ std::string at(const std::string& what, uint64_t offset) {
 }
 
 bool isLevelTag(const ChunkTag& t) {
-  return t == kTagBoundary || t == kTagConnectivity || t == kTagGeometry || t == kTagPointField ||
-         t == kTagCellField || t == kTagMergeTree;
+  return t == kTagBoundary || t == kTagConnectivity || t == kTagGeometry || t == kTagPointField || t == kTagCellField ||
+         t == kTagMergeTree;
 }
 bool isKnownTag(const ChunkTag& t) {
   return isLevelTag(t) || t == kTagFileHeader || t == kTagLevelHeader || t == kTagDirectory || t == kTagEnd;
@@ -132,8 +132,8 @@ class CheckingSink : public MeshSink {
     return inner_.vertex(id, xyz, values);
   }
   Status boundaryTriangle(const uint32_t v[3]) override {
-    if (tris_ >= h_.boundary_triangles) return fail("more boundary triangles than the declared " +
-                                                    std::to_string(h_.boundary_triangles));
+    if (tris_ >= h_.boundary_triangles)
+      return fail("more boundary triangles than the declared " + std::to_string(h_.boundary_triangles));
     for (int i = 0; i < 3; ++i)
       if (v[i] >= vertices_) return fail("boundary triangle refers to a vertex not yet emitted");
     ++tris_;
@@ -348,10 +348,10 @@ Status GtnReader::scan() {
     level_open = false;
     const size_t required = 3 + file_.header.point_fields.size() + file_.header.cell_fields.size();
     if (known_in_level < required)
-      return invalidData(at(what, offset) + "level " + std::to_string(levels_.size() - 1) + " ends without its '" +
-                         expectedLevelTag(known_in_level, file_.header.point_fields.size(),
-                                          file_.header.cell_fields.size()).str() +
-                         "' chunk");
+      return invalidData(
+          at(what, offset) + "level " + std::to_string(levels_.size() - 1) + " ends without its '" +
+          expectedLevelTag(known_in_level, file_.header.point_fields.size(), file_.header.cell_fields.size()).str() +
+          "' chunk");
     return Status::ok();
   };
   auto checkLevelCount = [&](uint64_t offset) -> Status {
@@ -362,8 +362,7 @@ Status GtnReader::scan() {
   };
 
   for (;;) {
-    if (pos == size)
-      return invalidData(at(what, pos) + "truncated: the file ends without its end chunk (GEND)");
+    if (pos == size) return invalidData(at(what, pos) + "truncated: the file ends without its end chunk (GEND)");
     GtnChunkInfo c;
     c.offset = pos;
     ChunkHeader h;
@@ -476,8 +475,8 @@ Status GtnReader::scan() {
       const auto& chunks = levels_[i].chunks;
       bool same = chunks.size() == dir[i].size();
       for (size_t k = 0; same && k < chunks.size(); ++k)
-        same = chunks[k].tag == dir[i][k].tag && chunks[k].offset == dir[i][k].offset &&
-               chunks[k].bytes == dir[i][k].size;
+        same =
+            chunks[k].tag == dir[i][k].tag && chunks[k].offset == dir[i][k].offset && chunks[k].bytes == dir[i][k].size;
       if (!same)
         return invalidData(at(what, dir_offset) + "the directory's entries for level " + std::to_string(i) +
                            " do not match the chunks in the file");
@@ -503,8 +502,8 @@ Status GtnReader::openByDirectory() {
   hc = {h.tag, "header", hc.offset, h.totalSize(), h.stored_size, h.raw_size, h.zstd()};
   const uint64_t levels_begin = hc.offset + hc.bytes;
 
-  GtnChunkInfo ec{kTagEnd, "trailer", size - kGtnTrailerSize, kGtnTrailerSize, kGtnEndPayloadSize,
-                  kGtnEndPayloadSize, false};
+  GtnChunkInfo ec{kTagEnd, "trailer", size - kGtnTrailerSize, kGtnTrailerSize, kGtnEndPayloadSize, kGtnEndPayloadSize,
+                  false};
   GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> ep, readChunk(ec, &h));
   if (h.zstd() || h.ancillary()) return invalidData(what + ": malformed end chunk");
   GtnTrailer t;

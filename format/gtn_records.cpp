@@ -109,7 +109,8 @@ std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& l) {
   return std::move(w.bytes());
 }
 
-Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnLevelRecord* l) {
+Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, const std::string& what,
+                         GtnLevelRecord* l) {
   ByteReader r(payload, offset, what + ": LHDR");
   GTN_RETURN_IF_ERROR(r.varint(&l->level, "level index"));
   GTN_RETURN_IF_ERROR(r.varint(&l->merges, "merge count"));
@@ -137,15 +138,15 @@ std::vector<uint8_t> encodeDirectory(const GtnDirectory& d) {
   return std::move(w.bytes());
 }
 
-Status decodeDirectory(std::span<const uint8_t> payload, uint64_t offset, const std::string& what,
-                       uint64_t level_count, GtnDirectory* d) {
+Status decodeDirectory(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, uint64_t level_count,
+                       GtnDirectory* d) {
   ByteReader r(payload, offset, what + ": DIRC");
   uint64_t n;
   const uint64_t at = r.offset();
   GTN_RETURN_IF_ERROR(r.varint(&n, "directory level count"));
   if (n != level_count)
-    return r.errorAt(at, "directory lists " + std::to_string(n) + " levels, the header declares " +
-                             std::to_string(level_count));
+    return r.errorAt(
+        at, "directory lists " + std::to_string(n) + " levels, the header declares " + std::to_string(level_count));
   d->assign(n, {});
   for (auto& level : *d) {
     uint64_t m;

@@ -59,12 +59,10 @@ std::vector<uint8_t> encodeTrailer(const GtnTrailer& t);
 
 // Decoders: `payload` is the chunk's (decompressed) payload, `offset` the file offset of its first byte
 // (for messages; for zstd chunks, offsets point into the decompressed payload and say so).
-Status decodeFileHeader(std::span<const uint8_t> payload, uint64_t offset, const std::string& what,
-                        GtnFileHeader* h);
-Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, const std::string& what,
-                         GtnLevelRecord* r);
-Status decodeDirectory(std::span<const uint8_t> payload, uint64_t offset, const std::string& what,
-                       uint64_t level_count, GtnDirectory* d);
+Status decodeFileHeader(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnFileHeader* h);
+Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnLevelRecord* r);
+Status decodeDirectory(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, uint64_t level_count,
+                       GtnDirectory* d);
 Status decodeTrailer(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnTrailer* t);
 
 }  // namespace gtn

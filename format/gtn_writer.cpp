@@ -189,8 +189,7 @@ Status checkDecodesBack(const std::string& path, const std::vector<GtnLevelInput
 
 }  // namespace
 
-Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels,
-                    const GtnWriteOptions& options) {
+Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels, const GtnWriteOptions& options) {
   if (levels.empty()) return usageError(path + ": no level to write");
   for (size_t i = 0; i < levels.size(); ++i)
     if (!levels[i].mesh) return usageError(path + ": level " + std::to_string(i) + " has no mesh");
@@ -199,12 +198,12 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
   const bool bounded = options.level_storage_limit > 0.0 && levels.size() > 1;
   // Progress: the share of all levels' tetrahedra before level i (level 0 takes most of the time).
   std::vector<double> before(levels.size() + 1, 0.0);
-  for (size_t i = 0; i < levels.size(); ++i)
-    before[i + 1] = before[i] + static_cast<double>(levels[i].mesh->numTets());
+  for (size_t i = 0; i < levels.size(); ++i) before[i + 1] = before[i] + static_cast<double>(levels[i].mesh->numTets());
   auto progress = [&](const char* what, size_t i) {
-    reportProgress(options.progress, std::string(what) + " level " + std::to_string(i) + " (" +
-                                         std::to_string(levels.size()) + " levels)",
-                   before.back() > 0 ? before[i] / before.back() : 0.0);
+    reportProgress(
+        options.progress,
+        std::string(what) + " level " + std::to_string(i) + " (" + std::to_string(levels.size()) + " levels)",
+        before.back() > 0 ? before[i] / before.back() : 0.0);
   };
   std::vector<EncodedInput> encoded;
   size_t count = levels.size();
@@ -250,8 +249,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
   return writeFileAtomically(path, [&](std::FILE* f) -> Status {
     GtnStreamWriter w(
         [&](std::span<const uint8_t> b) -> Status {
-          if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size())
-            return ioError(path + ": write failed");
+          if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size()) return ioError(path + ": write failed");
           return Status::ok();
         },
         options);

@@ -90,7 +90,8 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
       if (a > b) std::swap(a, b);
       const uint64_t bc = (uint64_t{b} << 32) | c;
       size_t h = ((bc ^ a) * 0x9E3779B97F4A7C15u) >> (64 - bits);
-      while (table[h] != kNoIndex && !(faces[table[h]].bc == bc && faces[table[h]].a == a)) h = (h + 1) & (table.size() - 1);
+      while (table[h] != kNoIndex && !(faces[table[h]].bc == bc && faces[table[h]].a == a))
+        h = (h + 1) & (table.size() - 1);
       if (table[h] == kNoIndex) {
         table[h] = static_cast<uint32_t>(faces.size());
         faces.push_back({a, bc, slot, 0, 1});

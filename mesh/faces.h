@@ -20,7 +20,7 @@ extern const int kTetFace[4][3];
 extern const int kTetEdge[6][2];
 
 inline constexpr uint32_t kNoNeighbor = kNoIndex;  // boundary face
-constexpr uint32_t kNonManifold = 0xFFFFFFFEu;  // face shared by three or more tetrahedra
+constexpr uint32_t kNonManifold = 0xFFFFFFFEu;     // face shared by three or more tetrahedra
 
 struct FaceAdjacency {
   // neighbor[4 * t + k]: the tetrahedron across face k of tetrahedron t, kNoNeighbor on the boundary,

@@ -13,14 +13,9 @@ inline void appendBytes(std::vector<uint8_t>& bytes, const uint8_t* p, size_t n)
   bytes.resize(at + n);
   uint8_t* out = bytes.data() + at;
   switch (n) {
-    case 4:
-      std::memcpy(out, p, 4);
-      break;
-    case 8:
-      std::memcpy(out, p, 8);
-      break;
-    default:
-      std::memcpy(out, p, n);
+    case 4: std::memcpy(out, p, 4); break;
+    case 8: std::memcpy(out, p, 8); break;
+    default: std::memcpy(out, p, n);
   }
 }
 

@@ -23,10 +23,10 @@ struct FieldDesc {
 };
 
 struct LevelHeader {
-  uint32_t level = 0;          // 0 = the lossless mesh, i = stored mip level i
-  uint64_t merges = 0;         // merges of the merge tree already applied to this level
-  uint64_t points = 0;         // vertex events that will follow
-  uint64_t tets = 0;           // tet events that will follow
+  uint32_t level = 0;   // 0 = the lossless mesh, i = stored mip level i
+  uint64_t merges = 0;  // merges of the merge tree already applied to this level
+  uint64_t points = 0;  // vertex events that will follow
+  uint64_t tets = 0;    // tet events that will follow
   uint64_t boundary_triangles = 0;
   ScalarType coord_type = ScalarType::kFloat64;
   std::vector<FieldDesc> point_fields;  // values of a vertex event: these fields' items, concatenated

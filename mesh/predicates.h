@@ -20,18 +20,28 @@ int orient3dCertain(const double* a, const double* b, const double* c, const dou
 class Orient3dFilter {
  public:
   Orient3dFilter(const double* a, const double* b, const double* c)
-      : ax_(a[0]), ay_(a[1]), az_(a[2]),
-        ux_(b[0] - a[0]), uy_(b[1] - a[1]), uz_(b[2] - a[2]),
-        vx_(c[0] - a[0]), vy_(c[1] - a[1]), vz_(c[2] - a[2]),
-        uxvy_(ux_ * vy_), uyvx_(uy_ * vx_), fuz_(std::fabs(uz_)), fvz_(std::fabs(vz_)),
-        fuv_(std::fabs(uxvy_) + std::fabs(uyvx_)), cross_(uxvy_ - uyvx_) {}
+      : ax_(a[0]),
+        ay_(a[1]),
+        az_(a[2]),
+        ux_(b[0] - a[0]),
+        uy_(b[1] - a[1]),
+        uz_(b[2] - a[2]),
+        vx_(c[0] - a[0]),
+        vy_(c[1] - a[1]),
+        vz_(c[2] - a[2]),
+        uxvy_(ux_ * vy_),
+        uyvx_(uy_ * vx_),
+        fuz_(std::fabs(uz_)),
+        fvz_(std::fabs(vz_)),
+        fuv_(std::fabs(uxvy_) + std::fabs(uyvx_)),
+        cross_(uxvy_ - uyvx_) {}
 
   int sign(const double* d) const {
     const double wx = d[0] - ax_, wy = d[1] - ay_, wz = d[2] - az_;
     const double vxwy = vx_ * wy, vywx = vy_ * wx, wxuy = wx * uy_, wyux = wy * ux_;
     const double det = uz_ * (vxwy - vywx) + vz_ * (wxuy - wyux) + wz * cross_;
-    const double permanent = (std::fabs(vxwy) + std::fabs(vywx)) * fuz_ + (std::fabs(wxuy) + std::fabs(wyux)) * fvz_ +
-                             fuv_ * std::fabs(wz);
+    const double permanent =
+        (std::fabs(vxwy) + std::fabs(vywx)) * fuz_ + (std::fabs(wxuy) + std::fabs(wyux)) * fvz_ + fuv_ * std::fabs(wz);
     constexpr double kEps = 0x1p-53;
     constexpr double kBound = (7.0 + 56.0 * kEps) * kEps;
     const double err = kBound * permanent;

@@ -63,9 +63,9 @@ class [[nodiscard]] StatusOr {
 #define GTN_CONCAT_INNER(a, b) a##b
 #define GTN_CONCAT(a, b) GTN_CONCAT_INNER(a, b)
 
-#define GTN_RETURN_IF_ERROR(expr)             \
-  do {                                        \
-    ::gtn::Status gtn_status_ = (expr);       \
+#define GTN_RETURN_IF_ERROR(expr)                \
+  do {                                           \
+    ::gtn::Status gtn_status_ = (expr);          \
     if (!gtn_status_.isOk()) return gtn_status_; \
   } while (0)
 
@@ -74,7 +74,6 @@ class [[nodiscard]] StatusOr {
   if (!tmp.isOk()) return tmp.status();           \
   lhs = std::move(tmp).value()
 
-#define GTN_ASSIGN_OR_RETURN(lhs, expr) \
-  GTN_ASSIGN_OR_RETURN_IMPL(GTN_CONCAT(gtn_statusor_, __LINE__), lhs, expr)
+#define GTN_ASSIGN_OR_RETURN(lhs, expr) GTN_ASSIGN_OR_RETURN_IMPL(GTN_CONCAT(gtn_statusor_, __LINE__), lhs, expr)
 
 }  // namespace gtn

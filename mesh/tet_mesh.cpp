@@ -5,7 +5,7 @@
 namespace gtn {
 
 namespace {
-constexpr const char* kTypeNames[kNumScalarTypes] = {"int8",  "uint8",  "int16",   "uint16",  "int32",
+constexpr const char* kTypeNames[kNumScalarTypes] = {"int8",   "uint8", "int16",  "uint16",  "int32",
                                                      "uint32", "int64", "uint64", "float32", "float64"};
 constexpr size_t kTypeSizes[kNumScalarTypes] = {1, 1, 2, 2, 4, 4, 8, 8, 4, 8};
 

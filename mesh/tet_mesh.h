@@ -15,8 +15,16 @@
 namespace gtn {
 
 enum class ScalarType : uint8_t {
-  kInt8 = 0, kUInt8 = 1, kInt16 = 2, kUInt16 = 3, kInt32 = 4, kUInt32 = 5,
-  kInt64 = 6, kUInt64 = 7, kFloat32 = 8, kFloat64 = 9,
+  kInt8 = 0,
+  kUInt8 = 1,
+  kInt16 = 2,
+  kUInt16 = 3,
+  kInt32 = 4,
+  kUInt32 = 5,
+  kInt64 = 6,
+  kUInt64 = 7,
+  kFloat32 = 8,
+  kFloat64 = 9,
 };
 constexpr int kNumScalarTypes = 10;
 
@@ -42,9 +50,16 @@ struct Field {
   size_t itemCount() const { return components == 0 ? 0 : bytes.size() / (components * valueSize()); }
   // Value of component c of item i converted to double (for statistics and interpolation only).
   double get(size_t i, uint32_t c) const;
-  template <class T> T* data() { return reinterpret_cast<T*>(bytes.data()); }
-  template <class T> const T* data() const { return reinterpret_cast<const T*>(bytes.data()); }
-  template <class T> void set(size_t i, uint32_t c, T v) {
+  template <class T>
+  T* data() {
+    return reinterpret_cast<T*>(bytes.data());
+  }
+  template <class T>
+  const T* data() const {
+    return reinterpret_cast<const T*>(bytes.data());
+  }
+  template <class T>
+  void set(size_t i, uint32_t c, T v) {
     std::memcpy(bytes.data() + (i * components + c) * sizeof(T), &v, sizeof(T));
   }
   // Copies item `from` of `src` (same type and components) to item `to` of this field.
@@ -78,12 +93,12 @@ struct TetMesh {
 
 // What an importer did to the data on the way in, for the user to see.
 struct ImportReport {
-  size_t flipped = 0;           // cells reoriented to positive volume
-  size_t zero_volume = 0;       // cells with zero volume (kept, reported)
-  size_t dropped_cells = 0;     // cells removed (e.g. touching an IBLANK hole)
-  size_t welded_points = 0;     // points merged by --weld
-  size_t collapsed_tets = 0;    // tetrahedra dropped because welding collapsed them
-  size_t steiner_points = 0;    // points added to split cells conformingly
+  size_t flipped = 0;         // cells reoriented to positive volume
+  size_t zero_volume = 0;     // cells with zero volume (kept, reported)
+  size_t dropped_cells = 0;   // cells removed (e.g. touching an IBLANK hole)
+  size_t welded_points = 0;   // points merged by --weld
+  size_t collapsed_tets = 0;  // tetrahedra dropped because welding collapsed them
+  size_t steiner_points = 0;  // points added to split cells conformingly
   std::vector<std::string> warnings;
 };
 

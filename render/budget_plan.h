@@ -93,10 +93,10 @@ class BudgetCostModel {
 std::optional<uint64_t> fewestMergesFitting(uint64_t span, double aim, const std::function<double(double)>& at);
 
 struct BudgetPlan {
-  LevelChoice choice;     // what to render
-  size_t level = 0;       // the stored level decoded
-  uint64_t extra = 0;     // merges on the fly on top of it
-  double predicted = 0;   // ms
+  LevelChoice choice;    // what to render
+  size_t level = 0;      // the stored level decoded
+  uint64_t extra = 0;    // merges on the fly on top of it
+  double predicted = 0;  // ms
 };
 
 // The finest plan predicted to fit `available_ms`, aiming at 80% of it (and 1.5 spreads below it): a

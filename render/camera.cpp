@@ -22,8 +22,7 @@ void cross(const double a[3], const double b[3], double out[3]) {
 double dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 }  // namespace
 
-Camera::Camera(const double bbox_min[3], const double bbox_max[3], const CameraOptions& options)
-    : options_(options) {
+Camera::Camera(const double bbox_min[3], const double bbox_max[3], const CameraOptions& options) : options_(options) {
   options_.width = std::max(1, options_.width);
   options_.height = std::max(1, options_.height);
   if (!(options_.zoom > 0)) options_.zoom = 1;

@@ -63,7 +63,7 @@ class Camera {
   double centre_[3] = {0, 0, 0};
   double radius_ = 1;
   double forward_[3] = {0, 0, -1}, right_[3] = {1, 0, 0}, up_[3] = {0, 1, 0};
-  double eye_[3] = {0, 0, 0};  // perspective eye, or the orthographic rays' plane centre
+  double eye_[3] = {0, 0, 0};       // perspective eye, or the orthographic rays' plane centre
   double half_w_ = 1, half_h_ = 1;  // orthographic: world units; perspective: tangents
   // Orthographic: pixel x = screen_x_ . (p, 1), y = screen_y_ . (p, 1). Perspective: the same before
   // the division by depth, relative to the eye and without the offset (screen_x_[3], screen_y_[3]

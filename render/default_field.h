@@ -11,8 +11,8 @@
 namespace gtn {
 
 struct RenderFieldChoice {
-  std::string name;                    // the field chosen; "" = the first (nothing to choose from)
-  std::vector<std::string> constant;   // the point fields skipped as constant, in order
+  std::string name;                   // the field chosen; "" = the first (nothing to choose from)
+  std::vector<std::string> constant;  // the point fields skipped as constant, in order
 };
 
 // Decides on the coarsest stored level (a field constant on level 0 is constant on every level, and

@@ -74,8 +74,9 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
   const size_t np = mesh.numPoints();
   for (const auto& tri : boundary)
     for (uint32_t v : tri)
-      if (v >= np) return invalidData("generic renderer: boundary triangle refers to vertex " + std::to_string(v) +
-                                      " of " + std::to_string(np));
+      if (v >= np)
+        return invalidData("generic renderer: boundary triangle refers to vertex " + std::to_string(v) + " of " +
+                           std::to_string(np));
   for (const Tet& t : mesh.tets)
     for (uint32_t v : t)
       if (v >= np) return invalidData("generic renderer: tetrahedron refers to vertex " + std::to_string(v));
@@ -96,7 +97,8 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
 
   BoundarySurface surface;
   surface.points.resize(np);
-  for (size_t i = 0; i < np; ++i) surface.points[i] = {mesh.coords[3 * i], mesh.coords[3 * i + 1], mesh.coords[3 * i + 2]};
+  for (size_t i = 0; i < np; ++i)
+    surface.points[i] = {mesh.coords[3 * i], mesh.coords[3 * i + 1], mesh.coords[3 * i + 2]};
   surface.scalars = scalars;
   surface.triangles = boundary;
 
@@ -150,7 +152,8 @@ StatusOr<Image> renderGeneric(const LevelHeader& header, const TetMesh& mesh,
       for (uint32_t si = s0; si < s1; ++si) {
         const RaySegment& rs = rays.segments[si];
         SegmentState seg;
-        seg.tf = rs.t_near, seg.sf = static_cast<float>(rs.s_near), seg.tb = rs.t_far, seg.sb = static_cast<float>(rs.s_far);
+        seg.tf = rs.t_near, seg.sf = static_cast<float>(rs.s_near), seg.tb = rs.t_far,
+        seg.sb = static_cast<float>(rs.s_far);
         uint32_t tet, wait_tet;
         int face, wait_face;
         if (seg.tf >= seg.tb) continue;

@@ -19,7 +19,7 @@ struct GenericRenderStats {
   // Pixels whose ray has a part inside the volume that was not integrated: a segment whose cursors
   // neither met nor both stopped at the boundary. None in a valid mesh.
   uint64_t lost_rays = 0;
-  RenderSetup setup;          // the resolved camera and transfer function (range fixed)
+  RenderSetup setup;  // the resolved camera and transfer function (range fixed)
 };
 
 // Renders `mesh` (vertex ids as in the stream that built it), whose boundary surface is `boundary`

@@ -63,8 +63,7 @@ Status writePngStream(std::FILE* file, const Image& image, const std::string& pa
 }  // namespace
 
 Status writePng(const std::string& path, const Image& image) {
-  if (image.width <= 0 || image.height <= 0 ||
-      image.rgb.size() != static_cast<size_t>(image.width) * image.height * 3)
+  if (image.width <= 0 || image.height <= 0 || image.rgb.size() != static_cast<size_t>(image.width) * image.height * 3)
     return usageError(path + ": image has no pixels or an inconsistent size");
   return writeFileAtomically(path, [&](std::FILE* f) { return writePngStream(f, image, path); });
 }
@@ -117,8 +116,8 @@ StatusOr<Image> readPng(const std::string& path) {
 
 StatusOr<ImageDifference> compareImages(const Image& a, const Image& b) {
   if (a.width != b.width || a.height != b.height)
-    return usageError("images differ in size: " + std::to_string(a.width) + "x" + std::to_string(a.height) +
-                      " and " + std::to_string(b.width) + "x" + std::to_string(b.height));
+    return usageError("images differ in size: " + std::to_string(a.width) + "x" + std::to_string(a.height) + " and " +
+                      std::to_string(b.width) + "x" + std::to_string(b.height));
   ImageDifference d;
   double sum = 0;
   const size_t n = static_cast<size_t>(a.width) * a.height;

@@ -351,9 +351,9 @@ int exitFaceOf(const PreparedRay& r, const Tet& g, int entry, bool forward, Cros
     const uint8_t* o = g.order[best];
     out->hit = true;
     out->t = best_t;
-    out->s = (best_terms[0] * scalarOf(g, o[0]) + best_terms[1] * scalarOf(g, o[1]) +
-              best_terms[2] * scalarOf(g, o[2])) /
-             best_det;
+    out->s =
+        (best_terms[0] * scalarOf(g, o[0]) + best_terms[1] * scalarOf(g, o[1]) + best_terms[2] * scalarOf(g, o[2])) /
+        best_det;
   }
   return best;
 }
@@ -403,8 +403,8 @@ int64_t firstSampleAtOrAfter(double t, double step) {
   return firstSampleFrom(k, t, step);
 }
 
-void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, double lo,
-                   double hi, bool front_to_back, Rgba* acc) {
+void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, double lo, double hi,
+                   bool front_to_back, Rgba* acc) {
   if (!(hi > lo)) return;
   if (setup.sampling == Sampling::kFace) {
     double rgb_in[3], rgb_out[3], e_in, e_out;
@@ -413,8 +413,8 @@ void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_
     const double e = 0.5 * (e_in + e_out);
     double rgb[3];
     for (int c = 0; c < 3; ++c)
-      rgb[c] = e_in + e_out > 0 ? (e_in * rgb_in[c] + e_out * rgb_out[c]) / (e_in + e_out)
-                                : 0.5 * (rgb_in[c] + rgb_out[c]);
+      rgb[c] =
+          e_in + e_out > 0 ? (e_in * rgb_in[c] + e_out * rgb_out[c]) / (e_in + e_out) : 0.5 * (rgb_in[c] + rgb_out[c]);
     const double alpha = -std::expm1(-e * setup.inv_unit_distance * (hi - lo));
     addSample(alpha, rgb, front_to_back, acc);
     return;
@@ -566,31 +566,33 @@ PixelHits crossBoundary(const Camera& camera, const BoundarySurface& surface) {
     uint32_t tri, pixel;
   };
   tbb::enumerable_thread_specific<std::vector<Pair>> pairs;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.triangles.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-    std::vector<Pair>& mine = pairs.local();
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const BoundaryTriangle tri(camera, frame, surface, static_cast<uint32_t>(i));
-      int box[4];
-      double sx[3], sy[3];
-      if (!pixelFootprint(camera, tri.corners(), 3, box, sx, sy)) continue;
-      const ScreenHull hull(sx, sy, 3);
-      for (int py = box[1]; py <= box[3]; ++py) {
-        // Orthographic: the pixels clearly outside the projected triangle are not tested (the
-        // crossing test agrees with the projection to about 1e-10 pixels).
-        constexpr double kSure = ScreenHull::kSure;
-        int px0 = box[0], px1 = box[2];
-        double xl, xr;
-        if (tri.ortho() && hull.span(py + 0.5, kSure, &xl, &xr)) ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
-        for (int px = px0; px <= px1; ++px) {
-          Crossing x;
-          bool leaving;
-          if (tri.cross(px, py, &x, &leaving))
-            mine.push_back({static_cast<uint32_t>(i), static_cast<uint32_t>(py) * static_cast<uint32_t>(w) +
-                                                          static_cast<uint32_t>(px)});
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, surface.triangles.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<Pair>& mine = pairs.local();
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const BoundaryTriangle tri(camera, frame, surface, static_cast<uint32_t>(i));
+          int box[4];
+          double sx[3], sy[3];
+          if (!pixelFootprint(camera, tri.corners(), 3, box, sx, sy)) continue;
+          const ScreenHull hull(sx, sy, 3);
+          for (int py = box[1]; py <= box[3]; ++py) {
+            // Orthographic: the pixels clearly outside the projected triangle are not tested (the
+            // crossing test agrees with the projection to about 1e-10 pixels).
+            constexpr double kSure = ScreenHull::kSure;
+            int px0 = box[0], px1 = box[2];
+            double xl, xr;
+            if (tri.ortho() && hull.span(py + 0.5, kSure, &xl, &xr))
+              ScreenHull::columns(xl, xr, kSure, box, &px0, &px1);
+            for (int px = px0; px <= px1; ++px) {
+              Crossing x;
+              bool leaving;
+              if (tri.cross(px, py, &x, &leaving))
+                mine.push_back({static_cast<uint32_t>(i),
+                                static_cast<uint32_t>(py) * static_cast<uint32_t>(w) + static_cast<uint32_t>(px)});
+            }
+          }
         }
-      }
-    }
-  });
+      });
   PixelHits out;
   out.start.assign(num_pixels + 1, 0);
   for (const std::vector<Pair>& list : pairs)
@@ -610,8 +612,8 @@ PixelHits crossBoundary(const Camera& camera, const BoundarySurface& surface) {
             const uint32_t pixel = list[j].pixel;
             Crossing x;
             bool leaving = false;
-            tri.cross(static_cast<int>(pixel % static_cast<uint32_t>(w)), static_cast<int>(pixel / static_cast<uint32_t>(w)),
-                      &x, &leaving);
+            tri.cross(static_cast<int>(pixel % static_cast<uint32_t>(w)),
+                      static_cast<int>(pixel / static_cast<uint32_t>(w)), &x, &leaving);
             out.hits[fill[pixel].fetch_add(1, std::memory_order_relaxed)] = {x.t, x.s, t, leaving};
           }
         }
@@ -690,8 +692,8 @@ std::vector<uint32_t> segmentStarts(const PixelHits& ph, double eps, std::vector
     for (size_t p = r.begin(); p < r.end(); ++p) {
       const Hit* hits = ph.hits.data();
       bool bad = false;
-      start[p + 1] = pairCrossings(hits + ph.start[p], hits + ph.start[p + 1], static_cast<uint32_t>(p), eps,
-                                   [](const RaySegment&) {}, &bad);
+      start[p + 1] = pairCrossings(
+          hits + ph.start[p], hits + ph.start[p + 1], static_cast<uint32_t>(p), eps, [](const RaySegment&) {}, &bad);
       // The top bit marks the pixel (counts stay far below it: a pixel has at most its crossings).
       if (bad) start[p + 1] |= 0x80000000u;
     }

@@ -105,8 +105,8 @@ struct RenderSetup {
   // exact evaluation by far less than one grey level.
   static constexpr int kSampleTableSize = 4096;
   std::vector<std::array<double, 4>> sample_table;  // rgb, alpha per step
-  double table_scale = 0;  // (kSampleTableSize - 1) / (pre hi - pre lo), pre = table_pre
-  double table_pre = 1;    // 1, or 0.5 when hi - lo overflows: entry (pre s - pre lo) * table_scale
+  double table_scale = 0;                           // (kSampleTableSize - 1) / (pre hi - pre lo), pre = table_pre
+  double table_pre = 1;  // 1, or 0.5 when hi - lo overflows: entry (pre s - pre lo) * table_scale
 };
 RenderSetup resolveSetup(const RenderOptions& options, const double bbox_min[3], const double bbox_max[3]);
 // Fills setup.sample_table for the transfer function's final range (volume sampling only).
@@ -151,7 +151,7 @@ Crossing crossTriangle(const PreparedRay& r, const double* a, const double* b, c
 // positions in the one frame all rays share (orthographic cameras), and then `frame` must be the
 // rays' frame.
 struct TetGeom {
-  double p[4][3];       // corners; after shearTetGeom, their shearPoint positions
+  double p[4][3];  // corners; after shearTetGeom, their shearPoint positions
   double s[4];
   uint8_t order[4][3];  // face k: local corners of kTetFace[k] in canonical (lexicographic) order
   bool sheared = false;
@@ -197,8 +197,8 @@ Rgba over(const Rgba& front, const Rgba& back);
 
 // Adds the part [lo, hi) of a tetrahedron's interval [t_in, t_out] (scalars s_in, s_out at its ends)
 // to `acc`: behind what `acc` holds when `front_to_back`, in front of it otherwise.
-void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, double lo,
-                   double hi, bool front_to_back, Rgba* acc);
+void shadeInterval(const RenderSetup& setup, double t_in, double s_in, double t_out, double s_out, double lo, double hi,
+                   bool front_to_back, Rgba* acc);
 
 // Volume sampling's samples are t = k * step; [lo, hi) holds samples [first(lo), first(hi)), where
 // first(t) is the least k with k * step >= t, exactly (k * step is monotonic in k).

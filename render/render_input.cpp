@@ -24,9 +24,8 @@ StatusOr<std::unique_ptr<RenderInput>> RenderInput::open(const std::vector<std::
     GtnOpenOptions options;
     options.verify = false;  // chunks are still checksummed as they are read
     RenderInput* self = in.get();
-    GTN_ASSIGN_OR_RETURN(in->reader_, openGtnChecked(path, options, [self](const std::string& w) {
-                           self->warnings_.push_back(w);
-                         }));
+    GTN_ASSIGN_OR_RETURN(in->reader_,
+                         openGtnChecked(path, options, [self](const std::string& w) { self->warnings_.push_back(w); }));
     if (in->reader_->levels() == 0) return invalidData(path + ": the file holds no level");
     return in;
   }
@@ -54,8 +53,8 @@ StatusOr<uint64_t> RenderInput::mergeTreeMerges(size_t i) {
   if (!hasMergeTree(i)) return uint64_t{0};
   GTN_ASSIGN_OR_RETURN(auto payload, reader_->mergeTreePayload(i));
   if (!payload) return uint64_t{0};
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, levelHeader(i).points,
-                                                       path_ + ": level " + std::to_string(i)));
+  GTN_ASSIGN_OR_RETURN(MergeTree tree,
+                       decodeMergeTree(*payload, levelHeader(i).points, path_ + ": level " + std::to_string(i)));
   return tree.merges;
 }
 
@@ -113,14 +112,13 @@ Status RenderInput::stream(ResolvedLevel& level, MeshSink& out, const FieldSelec
   if (level.extra_merges == 0) return reader_->decodeLevel(level.level, sink, nullptr, &fields);
   GTN_ASSIGN_OR_RETURN(auto payload, reader_->mergeTreePayload(level.level));
   if (!payload) return usageError(path_ + ": level " + std::to_string(level.level) + " has no merge tree");
-  GTN_ASSIGN_OR_RETURN(MergeTree tree,
-                       decodeMergeTree(*payload, level.points, path_ + ": level " + std::to_string(level.level),
-                                       level.extra_merges));
+  GTN_ASSIGN_OR_RETURN(
+      MergeTree tree,
+      decodeMergeTree(*payload, level.points, path_ + ": level " + std::to_string(level.level), level.extra_merges));
   if (tree.merges < level.extra_merges) {
     if (level.exact_merges)
-      return usageError(path_ + ", level " + std::to_string(level.level) + ": " +
-                        std::to_string(level.total_merges()) + " merges requested, the merge tree has " +
-                        std::to_string(level.stored_merges + tree.merges));
+      return usageError(path_ + ", level " + std::to_string(level.level) + ": " + std::to_string(level.total_merges()) +
+                        " merges requested, the merge tree has " + std::to_string(level.stored_merges + tree.merges));
     level.extra_merges = tree.merges;
   }
   StreamSimplifier simplifier(tree, level.extra_merges, sink);

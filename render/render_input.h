@@ -12,8 +12,8 @@
 
 #include "codec/level_codec.h"
 #include "format/gtn_reader.h"
-#include "mesh/progress.h"
 #include "mesh/mesh_stream.h"
+#include "mesh/progress.h"
 #include "render/ray_cast.h"
 
 namespace gtn {
@@ -26,9 +26,9 @@ struct LevelChoice {
 };
 
 struct ResolvedLevel {
-  size_t level = 0;            // stored level decoded
-  uint64_t stored_merges = 0;  // merges already applied in that level
-  uint64_t extra_merges = 0;   // merges applied on the fly
+  size_t level = 0;               // stored level decoded
+  uint64_t stored_merges = 0;     // merges already applied in that level
+  uint64_t extra_merges = 0;      // merges applied on the fly
   uint64_t points = 0, tets = 0;  // of the stored level (what is decoded)
   // Asked for by number (--merges): more than the merge tree holds is an error. Merges from a ratio
   // stop where the tree ends (stream lowers extra_merges to what it applied).
@@ -79,7 +79,7 @@ class RenderInput {
   std::string path_;
   std::vector<std::string> warnings_;
   ProgressFn progress_;
-  std::unique_ptr<GtnReader> reader_;    // .gtn input
+  std::unique_ptr<GtnReader> reader_;      // .gtn input
   std::unique_ptr<EncodedLevel> encoded_;  // any other input, encoded in memory
 };
 

@@ -114,7 +114,7 @@ class VertexPool {
  private:
   static constexpr size_t kChunk = 1024;  // 64 KiB
   std::vector<std::unique_ptr<PooledVertex[]>> chunks_;
-  size_t used_ = 0;  // entries of the last chunk handed out
+  size_t used_ = 0;               // entries of the last chunk handed out
   PooledVertex* free_ = nullptr;  // the last freed record
 };
 
@@ -175,7 +175,10 @@ struct StoredRgba {
   float r = 0, g = 0, b = 0, a = 0;
   StoredRgba() = default;
   explicit StoredRgba(const Rgba& c)
-      : r(static_cast<float>(c.r)), g(static_cast<float>(c.g)), b(static_cast<float>(c.b)), a(static_cast<float>(c.a)) {}
+      : r(static_cast<float>(c.r)),
+        g(static_cast<float>(c.g)),
+        b(static_cast<float>(c.b)),
+        a(static_cast<float>(c.a)) {}
   Rgba get() const { return {r, g, b, a}; }
 };
 
@@ -187,7 +190,7 @@ struct StoredRgba {
 struct StreamSegment : SegmentCursors {
   StoredRgba front;
   uint32_t back = kNoIndex;  // index into State::backs; none while the back colour is blank (zero)
-  uint32_t pixel = 0;     // whose ray
+  uint32_t pixel = 0;        // whose ray
 };
 static_assert(sizeof(StreamSegment) == 48);
 
@@ -255,9 +258,9 @@ struct StreamRenderer::State {
   ScalarReader reader;
   VertexPool pool;
   FlatHashMap<uint32_t, PooledVertex*, IdHash> ids;  // the live vertices (decoder's thread)
-  std::vector<PooledVertex*> retired;           // retired while `batch` was filled
-  std::vector<PooledVertex*> retired_flushing;  // retired while `flushing` was filled
-  std::vector<PooledVertex*> unheld;  // counts that reached zero in the rendering thread, to free
+  std::vector<PooledVertex*> retired;                // retired while `batch` was filled
+  std::vector<PooledVertex*> retired_flushing;       // retired while `flushing` was filled
+  std::vector<PooledVertex*> unheld;                 // counts that reached zero in the rendering thread, to free
   std::vector<std::array<uint32_t, 3>> boundary;
   // The first segment of every kPixelBlock-th pixel. Segments are stored in pixel order and know
   // their pixel, so any pixel's are found by a short walk from its block's first: an eighth of
@@ -293,7 +296,7 @@ struct StreamRenderer::State {
     shearPoint(frame, r.o, ray.origin);
     return ray;
   }
-  bool shared_frame = false;            // orthographic: every ray has `frame`
+  bool shared_frame = false;  // orthographic: every ray has `frame`
   ShearFrame frame;
   std::vector<StreamSegment> segs;
   BackColours backs;
@@ -405,7 +408,8 @@ class SegmentBuilder : public SegmentSink {
   void segment(const RaySegment& rs) override {
     const size_t i = next_++;
     StreamSegment& seg = st_.segs[i];
-    seg.tf = rs.t_near, seg.sf = static_cast<float>(rs.s_near), seg.tb = rs.t_far, seg.sb = static_cast<float>(rs.s_far);
+    seg.tf = rs.t_near, seg.sf = static_cast<float>(rs.s_near), seg.tb = rs.t_far,
+    seg.sb = static_cast<float>(rs.s_far);
     seg.pixel = rs.pixel;
     if (seg.done()) return;
     const auto& in = st_.boundary[rs.entry_tri];
@@ -494,8 +498,8 @@ Status StreamRenderer::boundaryTriangle(const uint32_t v[3]) {
   if (st.phase != State::Phase::kBoundary) return invalidData("renderer: boundary triangle after the boundary ended");
   for (int i = 0; i < 3; ++i)
     if (!st.ids.find(v[i]))
-      return invalidData("renderer: boundary triangle " + std::to_string(st.boundary.size()) +
-                         " refers to vertex " + std::to_string(v[i]) + " not yet emitted");
+      return invalidData("renderer: boundary triangle " + std::to_string(st.boundary.size()) + " refers to vertex " +
+                         std::to_string(v[i]) + " not yet emitted");
   st.boundary.push_back({v[0], v[1], v[2]});
   return Status::ok();
 }
@@ -690,8 +694,8 @@ void countRays(StreamRenderer::State& st, const Camera& cam) {
       a.visible = true;
       // Orthographic: the corners' sheared positions (the pool's, computed once per vertex).
       const TetCorners g{a.corner, a.order, st.shared_frame};
-      a.rays = st.shared_frame ? orthographicRayCount(st, cam, a, g, box, sx, sy)
-                               : perspectiveRayCount(st, cam, a, g, box);
+      a.rays =
+          st.shared_frame ? orthographicRayCount(st, cam, a, g, box, sx, sy) : perspectiveRayCount(st, cam, a, g, box);
       if (a.rays > 0) a.computeOrder();
     }
   });

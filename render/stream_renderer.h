@@ -32,13 +32,13 @@
 namespace gtn {
 
 struct StreamRenderStats {
-  uint64_t tets = 0;                 // tetrahedra received
-  uint64_t tets_held = 0;            // tetrahedra that were held at all (some ray needed them)
-  uint64_t peak_tets_held = 0;       // largest number held at once
-  uint64_t peak_vertices = 0;        // largest number of live (emitted, not retired) vertices
-  uint64_t peak_face_entries = 0;    // largest size of the face map
-  uint64_t segments = 0;             // ray segments
-  uint64_t lost_cursors = 0;         // cursors that lost their way (numerical degeneracies)
+  uint64_t tets = 0;               // tetrahedra received
+  uint64_t tets_held = 0;          // tetrahedra that were held at all (some ray needed them)
+  uint64_t peak_tets_held = 0;     // largest number held at once
+  uint64_t peak_vertices = 0;      // largest number of live (emitted, not retired) vertices
+  uint64_t peak_face_entries = 0;  // largest size of the face map
+  uint64_t segments = 0;           // ray segments
+  uint64_t lost_cursors = 0;       // cursors that lost their way (numerical degeneracies)
   // Pixels whose ray has a part inside the volume that was not integrated: a segment whose cursors
   // neither met nor both stopped at the boundary (a cursor lost, or waiting for a tetrahedron that
   // never came). None in a valid mesh.

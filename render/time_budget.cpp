@@ -69,8 +69,8 @@ StatusOr<uint64_t> floorMerges(RenderInput& input) {
 // The field is part of the key: a run decodes the values of the rendered field alone.
 std::string cacheKey(const std::string& path, const RenderOptions& o, bool generic) {
   return fileKey(path) + "|" + std::to_string(o.camera.width) + "x" + std::to_string(o.camera.height) + "|" +
-         (o.sampling == Sampling::kFace ? "face" : "volume") + "|" + (generic ? "generic" : "integrated") +
-         "|field " + o.field.name + "|" + o.field.whole;
+         (o.sampling == Sampling::kFace ? "face" : "volume") + "|" + (generic ? "generic" : "integrated") + "|field " +
+         o.field.name + "|" + o.field.whole;
 }
 
 // Time of one end-to-end render of `choice` (decode + render; the image is kept in `image` when
@@ -219,7 +219,8 @@ std::string explainPlan(const std::string& source, const BudgetCostModel& model,
   const BudgetLevel& level = model.levels()[plan.level];
   char buf[1024];
   std::snprintf(buf, sizeof buf,
-                "%s; measured %s, learnt offset %+.1f ms, spread %.1f ms; level %zu (%llu tetrahedra, %llu merges) + %llu merges on the fly "
+                "%s; measured %s, learnt offset %+.1f ms, spread %.1f ms; level %zu (%llu tetrahedra, %llu merges) + "
+                "%llu merges on the fly "
                 "predicted %.1f ms + %.1f ms already spent for a budget of %.1f ms%s",
                 source.c_str(), describeBudgetModel(model).c_str(), model.calibration().offset,
                 model.calibration().spread, plan.level, static_cast<unsigned long long>(level.tets),
@@ -285,9 +286,11 @@ void recordBudgetRun(const std::string& path, const RenderOptions& options, bool
   nlohmann::json cache = readCache(cache_file);
   if (!cache.contains(key) || !cache[key].is_object()) return;
   nlohmann::json& entry = cache[key];
-  double offset = entry.contains("offset_ms") && entry["offset_ms"].is_number() ? entry["offset_ms"].get<double>() : 0.0;
+  double offset =
+      entry.contains("offset_ms") && entry["offset_ms"].is_number() ? entry["offset_ms"].get<double>() : 0.0;
   if (!(std::fabs(offset) <= kMaxBudgetOffsetMs)) offset = 0;
-  double spread = entry.contains("spread_ms") && entry["spread_ms"].is_number() ? entry["spread_ms"].get<double>() : 0.0;
+  double spread =
+      entry.contains("spread_ms") && entry["spread_ms"].is_number() ? entry["spread_ms"].get<double>() : 0.0;
   if (!(spread >= 0 && spread <= kMaxBudgetOffsetMs)) spread = 0;
   // Half way towards what this run says, so that one outlier does not swing it; the spread follows
   // the misses more slowly.

@@ -24,7 +24,7 @@
 namespace gtn {
 
 struct TransferPoint {
-  double x = 0;        // position in [0, 1] of the scalar range
+  double x = 0;  // position in [0, 1] of the scalar range
   double rgb[3] = {0, 0, 0};
   double opacity = 0;  // per opacity unit distance, in [0, 1]
 };

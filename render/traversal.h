@@ -110,10 +110,8 @@ CursorEnd advanceCursor(const RenderSetup& setup, const PreparedRay& ray, Segmen
         *wait_tet = tet;
         *wait_face = exit;
         return CursorEnd::kWait;
-      case Link::kBoundary:
-        return CursorEnd::kBoundary;
-      case Link::kReleased:
-        return CursorEnd::kLost;
+      case Link::kBoundary: return CursorEnd::kBoundary;
+      case Link::kReleased: return CursorEnd::kLost;
     }
   }
 }

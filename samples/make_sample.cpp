@@ -88,7 +88,8 @@ int main(int argc, char** argv) {
       char* end = nullptr;
       const long d = std::strtol(argv[2 + a], &end, 10);
       if (*argv[2 + a] == '\0' || *end != '\0' || d < 2 || d > 1024) {
-        std::fprintf(stderr, "gtn-make-sample: error: dimension '%s': expected an integer from 2 to 1024\n", argv[2 + a]);
+        std::fprintf(stderr, "gtn-make-sample: error: dimension '%s': expected an integer from 2 to 1024\n",
+                     argv[2 + a]);
         return 2;
       }
       *dims[a] = static_cast<int>(d);
@@ -102,7 +103,8 @@ int main(int argc, char** argv) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) {
-    std::fprintf(stderr, "gtn-make-sample: error: %s: cannot create directory: %s\n", dir.c_str(), ec.message().c_str());
+    std::fprintf(stderr, "gtn-make-sample: error: %s: cannot create directory: %s\n", dir.c_str(),
+                 ec.message().c_str());
     return 3;
   }
 
@@ -132,11 +134,14 @@ int main(int argc, char** argv) {
   for (int k = 0; k + 1 < kNk; ++k) {
     for (int j = 0; j + 1 < kNj; ++j) {
       for (int i = 0; i + 1 < kNi; ++i) {
-        const uint32_t h[8] = {
-            static_cast<uint32_t>(index(i, j, k)),         static_cast<uint32_t>(index(i + 1, j, k)),
-            static_cast<uint32_t>(index(i + 1, j + 1, k)), static_cast<uint32_t>(index(i, j + 1, k)),
-            static_cast<uint32_t>(index(i, j, k + 1)),     static_cast<uint32_t>(index(i + 1, j, k + 1)),
-            static_cast<uint32_t>(index(i + 1, j + 1, k + 1)), static_cast<uint32_t>(index(i, j + 1, k + 1))};
+        const uint32_t h[8] = {static_cast<uint32_t>(index(i, j, k)),
+                               static_cast<uint32_t>(index(i + 1, j, k)),
+                               static_cast<uint32_t>(index(i + 1, j + 1, k)),
+                               static_cast<uint32_t>(index(i, j + 1, k)),
+                               static_cast<uint32_t>(index(i, j, k + 1)),
+                               static_cast<uint32_t>(index(i + 1, j, k + 1)),
+                               static_cast<uint32_t>(index(i + 1, j + 1, k + 1)),
+                               static_cast<uint32_t>(index(i, j + 1, k + 1))};
         const std::vector<gtn::Tet> tets = splitAll(h);
         for (size_t t = 0; t < tets.size(); ++t) {
           const gtn::Tet& a = tets[t];

@@ -45,7 +45,8 @@ StatusOr<TetMesh> applyMerges(const TetMesh& mesh, const MergeTree& tree, uint64
   for (size_t v = 0; v < np; ++v) {
     if (index[v] == MergeTree::kRoot) continue;
     std::copy_n(mesh.point(v), 3, out.coords.data() + 3 * size_t{index[v]});
-    for (size_t i = 0; i < mesh.point_fields.size(); ++i) out.point_fields[i].copyItem(mesh.point_fields[i], v, index[v]);
+    for (size_t i = 0; i < mesh.point_fields.size(); ++i)
+      out.point_fields[i].copyItem(mesh.point_fields[i], v, index[v]);
   }
   std::vector<size_t> kept_tets;
   for (size_t t = 0; t < mesh.numTets(); ++t) {

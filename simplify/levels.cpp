@@ -125,8 +125,8 @@ StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio) {
   return free + static_cast<uint64_t>(std::llround(std::min(1.0, ratio) * static_cast<double>(points - free)));
 }
 
-Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out,
-                        bool clamp, const DecodeFields* fields) {
+Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out, bool clamp,
+                        const DecodeFields* fields) {
   GTN_ASSIGN_OR_RETURN(SimplifyPlan plan, planSimplification(reader, target_merges));
   if (plan_out) *plan_out = plan;
   if (plan.extra_merges == 0) return reader.decodeLevel(plan.level, sink, nullptr, fields);
@@ -135,8 +135,8 @@ Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sin
   const std::optional<std::vector<uint8_t>>& payload = payload_or.value();
   const std::string what = reader.file().path + ", level " + std::to_string(plan.level);
   if (!payload.has_value()) return usageError(what + " stores no merge tree: cannot simplify beyond the stored levels");
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, reader.level(plan.level).header.points, what,
-                                                          plan.extra_merges));
+  GTN_ASSIGN_OR_RETURN(MergeTree tree,
+                       decodeMergeTree(*payload, reader.level(plan.level).header.points, what, plan.extra_merges));
   if (plan.extra_merges > tree.merges && clamp) {
     plan.extra_merges = tree.merges;
     if (plan_out) *plan_out = plan;

@@ -16,9 +16,9 @@
 namespace gtn {
 
 struct LevelOptions {
-  int levels = -1;                  // mip levels beyond level 0; -1 = down to a small mesh
-  uint64_t min_points = 256;        // automatic levels stop before a level would have fewer points
-  bool merge_tree = true;           // store each level's merge tree
+  int levels = -1;            // mip levels beyond level 0; -1 = down to a small mesh
+  uint64_t min_points = 256;  // automatic levels stop before a level would have fewer points
+  bool merge_tree = true;     // store each level's merge tree
 };
 
 // N_i for level i of a mesh with `points` vertices and a tree of `merges` merges.

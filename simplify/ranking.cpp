@@ -19,7 +19,7 @@ namespace gtn {
 
 namespace {
 
-constexpr uint32_t kDead = kNoIndex;     // tets_[t][0] of a collapsed tetrahedron
+constexpr uint32_t kDead = kNoIndex;      // tets_[t][0] of a collapsed tetrahedron
 constexpr uint32_t kOmega = 0xFFFFFFFEu;  // the virtual vertex coning the boundary
 constexpr double kFlipMargin = 1e-3;
 constexpr double kLocalWeight = 1.0 / 16;  // see ranking.h
@@ -225,8 +225,8 @@ struct Workspace {
   std::vector<Candidate> cands;
   std::vector<double> density_error;  // per target: its density error, where target_ok
   std::vector<uint8_t> target_ok;     // per target: 1 when every changed tetrahedron stays positive
-  uint64_t evaluations = 0;  // candidate errors computed
-  uint64_t dropped = 0;      // dead corners dropped from the stars' runs
+  uint64_t evaluations = 0;           // candidate errors computed
+  uint64_t dropped = 0;               // dead corners dropped from the stars' runs
 };
 
 // Targets whose density errors are computed together (Ranker::densityErrors).
@@ -292,15 +292,15 @@ class Ranker {
     }
   }
   std::vector<uint8_t> boundary_, frozen_, alive_;
-  std::vector<uint8_t> pinned_;  // never merged away (may be merged onto): next to a face oriented alike twice
+  std::vector<uint8_t> pinned_;      // never merged away (may be merged onto): next to a face oriented alike twice
   std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
   bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
   CandidateHeap heap_;
   MergeTree tree_;
 
   tbb::enumerable_thread_specific<Workspace> thread_ws_;
-  Workspace* ws_ = nullptr;  // the calling thread's (also its own in the parallel evaluations)
-  std::vector<Candidate> best_;      // recompute's results, per listed vertex
+  Workspace* ws_ = nullptr;      // the calling thread's (also its own in the parallel evaluations)
+  std::vector<Candidate> best_;  // recompute's results, per listed vertex
   // Scratch buffers of validate and merge.
   std::vector<uint32_t> corners_, corners_w_, recompute_;
   std::vector<BoundaryFace> faces_, faces_w_;
@@ -450,8 +450,7 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) 
   const double rho_v = density_[v];
   const size_t ns = ws.corners.size();
   ws.star_o.resize(ns);
-  for (auto* a : {&ws.nx, &ws.ny, &ws.nz, &ws.d, &ws.od, &ws.vol, &ws.mass, &ws.vol_w})
-    a->resize(ns);
+  for (auto* a : {&ws.nx, &ws.ny, &ws.nz, &ws.d, &ws.od, &ws.vol, &ws.mass, &ws.vol_w}) a->resize(ns);
   ws.targets.clear();
   for (size_t i = 0; i < ns; ++i) {
     const uint32_t c = ws.corners[i];
@@ -494,8 +493,8 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) 
     for (uint32_t x : ws.star_o[i])
       if (ws.mark[x] == ws.stamp) ws.holds[ws.holds_start[ws.target_index[x]]++] = static_cast<uint32_t>(i);
   // holds_start[j] now ends target j's list; target 0's begins at 0, target j's at the end of j - 1.
-  const double *nx = ws.nx.data(), *ny = ws.ny.data(), *nz = ws.nz.data(), *sd = ws.d.data(),
-               *od = ws.od.data(), *mass = ws.mass.data(), *vol_v = ws.vol.data();
+  const double *nx = ws.nx.data(), *ny = ws.ny.data(), *nz = ws.nz.data(), *sd = ws.d.data(), *od = ws.od.data(),
+               *mass = ws.mass.data(), *vol_v = ws.vol.data();
   double* vol_w = ws.vol_w.data();
   for (size_t j = 0; j < num_targets; ++j) {
     const uint32_t w = ws.targets[j];
@@ -768,8 +767,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     ++popped;
     if (validate(e.v, e.w)) {
       merge(e.v, e.w, e.error);
-      if (tree_.merges % 16384 == 0)
-        reportProgress(progress, "rank merges", static_cast<double>(tree_.merges) / np);
+      if (tree_.merges % 16384 == 0) reportProgress(progress, "rank merges", static_cast<double>(tree_.merges) / np);
       continue;
     }
     ++rejected;
@@ -829,8 +827,8 @@ Status checkRankingOptions(const TetMesh& mesh, const RankingOptions& options) {
   if (!options.field.empty() && options.field != "none" && !mesh.findPointField(options.field)) {
     std::string names;
     for (const Field& f : mesh.point_fields) names += (names.empty() ? "" : ", ") + f.name;
-    return usageError("simplification field '" + options.field + "' not found (point fields: " +
-                      (names.empty() ? "none" : names) + ")");
+    return usageError("simplification field '" + options.field +
+                      "' not found (point fields: " + (names.empty() ? "none" : names) + ")");
   }
   if (!(options.w_density >= 0) || !(options.w_geometry >= 0) || !std::isfinite(options.w_density) ||
       !std::isfinite(options.w_geometry))

@@ -79,10 +79,10 @@ struct RankingOptions {
 struct RankingStats {
   double seconds = 0;
   uint64_t merges = 0, boundary_merges = 0;
-  uint64_t popped = 0;             // queue entries examined
-  uint64_t rejected = 0;           // popped candidates that failed the exact checks
-  uint64_t evaluations = 0;        // candidate errors computed
-  std::string field;               // density field used ("" = volume)
+  uint64_t popped = 0;                       // queue entries examined
+  uint64_t rejected = 0;                     // popped candidates that failed the exact checks
+  uint64_t evaluations = 0;                  // candidate errors computed
+  std::string field;                         // density field used ("" = volume)
   std::vector<std::string> constant_fields;  // the default skipped these point fields (constant)
 };
 

@@ -12,8 +12,8 @@ StreamSimplifier::StreamSimplifier(const MergeTree& tree, uint64_t n, MeshSink& 
 
 Status StreamSimplifier::beginLevel(const LevelHeader& header) {
   if (header.points != tree_.points())
-    return invalidData("simplification: the level has " + std::to_string(header.points) +
-                       " vertices, its merge tree " + std::to_string(tree_.points()));
+    return invalidData("simplification: the level has " + std::to_string(header.points) + " vertices, its merge tree " +
+                       std::to_string(tree_.points()));
   if (!tree_.checked) GTN_RETURN_IF_ERROR(tree_.check("simplification: merge tree"));
   in_header_ = header;
   cell_bytes_ = 0;
@@ -156,8 +156,8 @@ Status StreamSimplifier::endBoundary() {
   if (held_count_ != 0)
     return invalidData("simplification: the merge tree maps a boundary vertex to a vertex emitted after the boundary");
   if (out_triangles_ != out_header_.boundary_triangles)
-    return invalidData("simplification: " + std::to_string(out_triangles_) + " boundary triangles, the merge tree implies " +
-                       std::to_string(out_header_.boundary_triangles));
+    return invalidData("simplification: " + std::to_string(out_triangles_) +
+                       " boundary triangles, the merge tree implies " + std::to_string(out_header_.boundary_triangles));
   return out_.endBoundary();
 }
 

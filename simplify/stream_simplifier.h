@@ -54,9 +54,9 @@ class StreamSimplifier : public MeshSink {
   MeshSink& out_;
   LevelHeader in_header_, out_header_;
   size_t cell_bytes_ = 0;
-  std::vector<uint32_t> out_of_;  // per input vertex: output id of its ancestor
+  std::vector<uint32_t> out_of_;   // per input vertex: output id of its ancestor
   std::vector<uint8_t> survives_;  // per input vertex: 1 if it is its own ancestor
-  std::vector<uint32_t> refs_;    // per output vertex: unretired cluster members + held elements
+  std::vector<uint32_t> refs_;     // per output vertex: unretired cluster members + held elements
   uint32_t received_ = 0, emitted_ = 0;
   uint64_t out_tets_ = 0, out_triangles_ = 0, dropped_tets_ = 0;
   std::vector<Held> held_;

@@ -24,8 +24,8 @@ std::string dataDir() {
 std::string dataPath(const std::string& relative) { return dataDir() + "/" + relative; }
 
 std::string tempDir(const std::string& name) {
-  std::filesystem::path p = std::filesystem::temp_directory_path() /
-                            ("gtn-test-" + std::to_string(getpid()) + "-" + name);
+  std::filesystem::path p =
+      std::filesystem::temp_directory_path() / ("gtn-test-" + std::to_string(getpid()) + "-" + name);
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
   return p.string();
@@ -48,7 +48,8 @@ RunResult runShell(const std::string& command) {
   static int counter = 0;
   const std::string base = std::filesystem::temp_directory_path() /
                            ("gtn-run-" + std::to_string(getpid()) + "-" + std::to_string(counter++));
-  const std::string full = std::string(kSanitizerEnv) + "(" + command + ") >" + base + ".out 2>" + base + ".err </dev/null";
+  const std::string full =
+      std::string(kSanitizerEnv) + "(" + command + ") >" + base + ".out 2>" + base + ".err </dev/null";
   const int status = std::system(full.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -62,7 +63,8 @@ RunResult runShell(const std::string& command) {
 // The binary's caches (gtn render keeps calibrations and colour ranges under XDG_CACHE_HOME) go to a
 // directory of this test process, never to the user's ~/.cache.
 RunResult runGtn(const std::string& args) {
-  static const std::string cache = std::filesystem::temp_directory_path() / ("gtn-test-cache-" + std::to_string(getpid()));
+  static const std::string cache =
+      std::filesystem::temp_directory_path() / ("gtn-test-cache-" + std::to_string(getpid()));
   return runShell("XDG_CACHE_HOME=" + cache + " " + std::string(GTN_BINARY) + " " + args);
 }
 

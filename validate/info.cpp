@@ -16,8 +16,12 @@ std::string format(const char* fmt, double v) {
 }
 std::string number(uint64_t v) { return std::to_string(v); }
 std::string general(double v) { return format("%.6g", v); }
-std::string padRight(const std::string& s, size_t width) { return s.size() >= width ? s : s + std::string(width - s.size(), ' '); }
-std::string padLeft(const std::string& s, size_t width) { return s.size() >= width ? s : std::string(width - s.size(), ' ') + s; }
+std::string padRight(const std::string& s, size_t width) {
+  return s.size() >= width ? s : s + std::string(width - s.size(), ' ');
+}
+std::string padLeft(const std::string& s, size_t width) {
+  return s.size() >= width ? s : std::string(width - s.size(), ' ') + s;
+}
 
 // Adds the points of one level's error quantiles to the curve: the tree after `level_merges` merges,
 // holding `merges` of them.
@@ -26,7 +30,8 @@ void addCurvePoints(std::vector<MergeErrorPoint>& curve, size_t level, uint64_t 
   if (quantiles.size() != 9 || merges == 0 || points0 == 0) return;
   for (size_t k = 0; k < 9; ++k) {
     // computeErrorQuantiles takes the (i+1)-th smallest error, i = round(q * (merges - 1)).
-    const uint64_t i = std::min<uint64_t>(merges - 1, static_cast<uint64_t>(std::llround(kMergeErrorQuantiles[k] * double(merges - 1))));
+    const uint64_t i = std::min<uint64_t>(
+        merges - 1, static_cast<uint64_t>(std::llround(kMergeErrorQuantiles[k] * double(merges - 1))));
     MergeErrorPoint p;
     p.merges = level_merges + i + 1;
     p.ratio = double(p.merges) / double(points0);
@@ -98,8 +103,12 @@ nlohmann::json mergeTreeReportJson(const MergeTreeReport& rep) {
                       {"largest_error", l.largest_error ? nlohmann::json(*l.largest_error) : nlohmann::json(nullptr)}});
   nlohmann::json curve = nlohmann::json::array();
   for (const MergeErrorPoint& p : rep.error_curve)
-    curve.push_back({{"ratio", p.ratio}, {"merges", p.merges}, {"error", p.error}, {"largest_error", p.largest_error},
-                     {"level", p.level}, {"quantile", p.quantile}});
+    curve.push_back({{"ratio", p.ratio},
+                     {"merges", p.merges},
+                     {"error", p.error},
+                     {"largest_error", p.largest_error},
+                     {"level", p.level},
+                     {"quantile", p.quantile}});
   const MergeTreeStats& s = rep.stats;
   return nlohmann::json{{"merges", s.merges},
                         {"roots", s.roots},
@@ -119,8 +128,8 @@ std::string mergeTreeReportText(const MergeTreeReport& rep, const std::string& i
   const MergeTreeStats& s = rep.stats;
   std::string t;
   auto line = [&](const std::string& label, const std::string& value) { t += in + padRight(label, 20) + value + "\n"; };
-  line("ranking", (rep.field.empty() ? std::string("volume only (no density field)") : "density field " + rep.field) + ", w_density " +
-                      general(rep.w_density) + ", w_geometry " + general(rep.w_geometry));
+  line("ranking", (rep.field.empty() ? std::string("volume only (no density field)") : "density field " + rep.field) +
+                      ", w_density " + general(rep.w_density) + ", w_geometry " + general(rep.w_geometry));
   line("merges", number(s.merges) + " of " + number(s.points) + " vertices (boundary " + number(s.boundary_merges) +
                      "), " + number(s.tets_removed) + " tetrahedra removed");
   line("roots", number(s.roots));
@@ -229,8 +238,11 @@ StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const Me
     const GtnLevelInfo& l = r.level(i);
     nlohmann::json chunks = nlohmann::json::array();
     for (const GtnChunkInfo& c : l.chunks)
-      chunks.push_back({{"type", c.tag.str()}, {"section", c.section}, {"bytes", c.bytes},
-                        {"raw_bytes", c.raw_bytes}, {"zstd", c.zstd}});
+      chunks.push_back({{"type", c.tag.str()},
+                        {"section", c.section},
+                        {"bytes", c.bytes},
+                        {"raw_bytes", c.raw_bytes},
+                        {"zstd", c.zstd}});
     levels.push_back({{"level", i},
                       {"points", l.header.points},
                       {"tets", l.header.tets},
@@ -249,8 +261,8 @@ StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const Me
   return j;
 }
 
-StatusOr<nlohmann::json> infoJson(const std::vector<std::string>& inputs, const ImportOptions& options,
-                                  bool merge_tree, std::vector<std::string>* warnings) {
+StatusOr<nlohmann::json> infoJson(const std::vector<std::string>& inputs, const ImportOptions& options, bool merge_tree,
+                                  std::vector<std::string>* warnings) {
   if (inputs.empty()) return usageError("info: no input");
   bool gtn = false;
   for (const std::string& in : inputs)
@@ -270,7 +282,8 @@ StatusOr<nlohmann::json> infoJson(const std::vector<std::string>& inputs, const 
   GTN_ASSIGN_OR_RETURN(ImportResult imported, importMesh(inputs, options));
   if (warnings) {
     for (const std::string& w : imported.report.warnings) warnings->push_back(w);
-    if (merge_tree) warnings->push_back(inputs[0] + ": --merge-tree describes the merge tree of a .gtn file; a mesh has none");
+    if (merge_tree)
+      warnings->push_back(inputs[0] + ": --merge-tree describes the merge tree of a .gtn file; a mesh has none");
   }
   nlohmann::json j = meshInfoJson(computeMeshStats(imported.mesh), imported.report, imported.mesh);
   j["input"] = inputs;

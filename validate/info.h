@@ -82,7 +82,7 @@ StatusOr<nlohmann::json> gtnInfoJson(GtnReader& reader, const TetMesh& level0, c
 
 // `gtn info --json [--merge-tree] INPUTS...` whole: one .gtn file (fully verified) or mesh files as
 // `gtn convert` reads them. `warnings` (optional) receives the importer's warnings.
-StatusOr<nlohmann::json> infoJson(const std::vector<std::string>& inputs, const ImportOptions& options,
-                                  bool merge_tree, std::vector<std::string>* warnings = nullptr);
+StatusOr<nlohmann::json> infoJson(const std::vector<std::string>& inputs, const ImportOptions& options, bool merge_tree,
+                                  std::vector<std::string>* warnings = nullptr);
 
 }  // namespace gtn

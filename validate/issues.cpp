@@ -56,8 +56,7 @@ std::string issueListText(bool markdown) {
         layer = info.layer;
         out += std::string("\n## ") + layer + "\n\n| code | severity | what it reports |\n|---|---|---|\n";
       }
-      out += std::string("| `") + info.code + "` | " + severityName(info.severity) + " | " + info.description +
-             " |\n";
+      out += std::string("| `") + info.code + "` | " + severityName(info.severity) + " | " + info.description + " |\n";
     }
   } else {
     for (const IssueInfo& info : kIssues) {

@@ -28,7 +28,8 @@ int normalDotSign(const double* a, const double* b, const double* c, const doubl
     n[0] = u[1] * v[2] - u[2] * v[1];
     n[1] = u[2] * v[0] - u[0] * v[2];
     n[2] = u[0] * v[1] - u[1] * v[0];
-    *mag = (std::fabs(u[0]) + std::fabs(u[1]) + std::fabs(u[2])) * (std::fabs(v[0]) + std::fabs(v[1]) + std::fabs(v[2]));
+    *mag =
+        (std::fabs(u[0]) + std::fabs(u[1]) + std::fabs(u[2])) * (std::fabs(v[0]) + std::fabs(v[1]) + std::fabs(v[2]));
   };
   double n1[3], n2[3], m1, m2;
   cross(a, b, c, n1, &m1);
@@ -125,8 +126,9 @@ bool checkForest(const MergeForest& forest, size_t np, ValidationReport& report,
       continue;
     }
     if (r < 1 || r > m) {
-      report.add(IssueCode::kMergeRanksNotPermutation, kScope, vertexPath(static_cast<uint32_t>(v)),
-                 "vertex " + std::to_string(v) + " has rank " + std::to_string(r) + ", outside 1.." + std::to_string(m));
+      report.add(
+          IssueCode::kMergeRanksNotPermutation, kScope, vertexPath(static_cast<uint32_t>(v)),
+          "vertex " + std::to_string(v) + " has rank " + std::to_string(r) + ", outside 1.." + std::to_string(m));
       ok = false;
     } else if ((*order)[r - 1] != kMergeRoot) {
       report.add(IssueCode::kMergeRanksNotPermutation, kScope, vertexPath(static_cast<uint32_t>(v)),
@@ -185,8 +187,8 @@ class Replay {
 
   void apply(uint64_t rank, uint32_t c, uint32_t target_parent) {
     const uint32_t t = find(target_parent);
-    const std::string what = "merge " + std::to_string(rank) + " (vertex " + std::to_string(c) + " into " +
-                             std::to_string(t) + ")";
+    const std::string what =
+        "merge " + std::to_string(rank) + " (vertex " + std::to_string(c) + " into " + std::to_string(t) + ")";
     // Tetrahedra around c: those with t collapse, the others move to t.
     std::vector<uint32_t>& list = inc_[c];
     list.erase(std::remove_if(list.begin(), list.end(), [&](uint32_t x) { return !alive_[x]; }), list.end());
@@ -279,9 +281,9 @@ class Replay {
       // (a non-manifold boundary) makes every simplification past it disagree with its header. (None
       // removed: not along a boundary edge, reported above.)
       if (check && is_boundary_[t] && boundary_removed != 0 && boundary_removed != 2) {
-        report_.add(IssueCode::kMergeAnnotationMismatch, kScope, vertexPath(c),
-                    what + " removes " + std::to_string(boundary_removed) +
-                        " boundary triangles; a boundary merge removes 2");
+        report_.add(
+            IssueCode::kMergeAnnotationMismatch, kScope, vertexPath(c),
+            what + " removes " + std::to_string(boundary_removed) + " boundary triangles; a boundary merge removes 2");
       }
     }
     list.clear();

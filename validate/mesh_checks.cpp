@@ -90,7 +90,8 @@ bool checkBoundaryEdges(std::vector<DirEdge>& dir_edges, const std::string& scop
       ++j;
     }
     ++boundary_edges;
-    const std::string edge = std::to_string(dir_edges[i].key >> 32) + "-" + std::to_string(dir_edges[i].key & 0xFFFFFFFFu);
+    const std::string edge =
+        std::to_string(dir_edges[i].key >> 32) + "-" + std::to_string(dir_edges[i].key & 0xFFFFFFFFu);
     const std::string path = scope + "/boundary/edges/" + edge;
     if ((j - i) % 2 != 0) {
       closed = false;
@@ -125,8 +126,8 @@ constexpr size_t kMaxEdgeTriangles = 16;
 // which a valid mesh may have.) Each pair of triangles on one boundary edge, facing the same way, is
 // a candidate: its other diagonal's two triangles are looked up by vertex set, so the cost is linear
 // in the boundary. Signs are exact (orient3d, orient2dProjected). Returns the triangles found.
-uint64_t checkInterfaces(const TetMesh& mesh, const std::vector<BoundaryFace>& faces, const std::vector<uint8_t>& finite,
-                         const std::string& scope, ValidationReport& report) {
+uint64_t checkInterfaces(const TetMesh& mesh, const std::vector<BoundaryFace>& faces,
+                         const std::vector<uint8_t>& finite, const std::string& scope, ValidationReport& report) {
   auto sorted3 = [](Triangle t) {
     std::sort(t.begin(), t.end());
     return t;
@@ -211,7 +212,8 @@ uint64_t checkInterfaces(const TetMesh& mesh, const std::vector<BoundaryFace>& f
           detail = "the quadrilateral " + std::to_string(a) + "-" + std::to_string(b) + "-" + std::to_string(c) + "-" +
                    std::to_string(d) + " is covered by boundary triangles along its diagonal " + std::to_string(a) +
                    "-" + std::to_string(c) + " facing one way and along " + std::to_string(b) + "-" +
-                   std::to_string(d) + " facing the other: the parts of the volume on its two sides share its "
+                   std::to_string(d) +
+                   " facing the other: the parts of the volume on its two sides share its "
                    "points but not its faces";
         flag(f1);
         flag(f2);
@@ -352,7 +354,8 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
   if (adj.non_manifold_faces > 0) {
     std::vector<std::string> paths;
     for (size_t slot = 0; slot < adj.neighbor.size() && paths.size() < ValidationReport::kMaxPaths; ++slot) {
-      if (adj.neighbor[slot] == kNonManifold) paths.push_back(tetPath(scope, slot / 4) + "/faces/" + std::to_string(slot % 4));
+      if (adj.neighbor[slot] == kNonManifold)
+        paths.push_back(tetPath(scope, slot / 4) + "/faces/" + std::to_string(slot % 4));
     }
     report.addMany(IssueCode::kNonManifoldFace, scope, adj.non_manifold_faces, paths);
   }
@@ -439,9 +442,8 @@ void checkStoredBoundary(const TetMesh& mesh, const std::vector<Triangle>& store
   if (extra || missing) {
     report.add(IssueCode::kBoundaryMismatch, scope, scope + "/boundary",
                "the stored boundary surface has " + std::to_string(got.size()) + " triangles, " +
-                   std::to_string(extra) + " of them not boundary faces of the tetrahedra; " +
-                   std::to_string(missing) + " of the " + std::to_string(expected.size()) +
-                   " boundary faces are missing");
+                   std::to_string(extra) + " of them not boundary faces of the tetrahedra; " + std::to_string(missing) +
+                   " of the " + std::to_string(expected.size()) + " boundary faces are missing");
   }
 }
 
@@ -453,15 +455,15 @@ std::vector<uint64_t> pointKeys(const TetMesh& mesh) {
     buf.assign(reinterpret_cast<const uint8_t*>(mesh.point(p)), reinterpret_cast<const uint8_t*>(mesh.point(p) + 3));
     for (const Field& f : mesh.point_fields) {
       const size_t item = static_cast<size_t>(f.components) * f.valueSize();
-      if ((p + 1) * item <= f.bytes.size()) buf.insert(buf.end(), f.bytes.begin() + p * item, f.bytes.begin() + (p + 1) * item);
+      if ((p + 1) * item <= f.bytes.size())
+        buf.insert(buf.end(), f.bytes.begin() + p * item, f.bytes.begin() + (p + 1) * item);
     }
     keys[p] = XXH3_64bits(buf.data(), buf.size());
   }
   return keys;
 }
 
-std::array<uint64_t, 2> tetKey(const uint64_t vertex_keys[4], bool flat, const uint8_t* cell_bytes,
-                               size_t cell_size) {
+std::array<uint64_t, 2> tetKey(const uint64_t vertex_keys[4], bool flat, const uint8_t* cell_bytes, size_t cell_size) {
   uint64_t k[5];
   if (flat) {
     std::copy(vertex_keys, vertex_keys + 4, k);
@@ -490,7 +492,8 @@ void cellBytes(const TetMesh& mesh, size_t t, std::vector<uint8_t>& out) {
   out.clear();
   for (const Field& f : mesh.cell_fields) {
     const size_t item = static_cast<size_t>(f.components) * f.valueSize();
-    if ((t + 1) * item <= f.bytes.size()) out.insert(out.end(), f.bytes.begin() + t * item, f.bytes.begin() + (t + 1) * item);
+    if ((t + 1) * item <= f.bytes.size())
+      out.insert(out.end(), f.bytes.begin() + t * item, f.bytes.begin() + (t + 1) * item);
   }
 }
 

@@ -52,8 +52,7 @@ std::vector<uint64_t> pointKeys(const TetMesh& mesh);
 // A 128-bit key of one tetrahedron from its vertices' keys and its cell-field bytes, invariant under
 // the even permutations of its vertices (orientation-preserving renumbering); for a flat tetrahedron
 // (zero volume, whose orientation is not defined) invariant under all permutations.
-std::array<uint64_t, 2> tetKey(const uint64_t vertex_keys[4], bool flat, const uint8_t* cell_bytes,
-                               size_t cell_size);
+std::array<uint64_t, 2> tetKey(const uint64_t vertex_keys[4], bool flat, const uint8_t* cell_bytes, size_t cell_size);
 
 // Sorted keys of every tetrahedron of `mesh` given its point keys (tetrahedra with an index out of
 // range are skipped).
@@ -65,9 +64,16 @@ std::pair<uint64_t, uint64_t> multisetDifference(const std::vector<T>& a, const 
   uint64_t only_a = 0, only_b = 0;
   size_t i = 0, j = 0;
   while (i < a.size() && j < b.size()) {
-    if (a[i] < b[j]) { ++only_a; ++i; }
-    else if (b[j] < a[i]) { ++only_b; ++j; }
-    else { ++i; ++j; }
+    if (a[i] < b[j]) {
+      ++only_a;
+      ++i;
+    } else if (b[j] < a[i]) {
+      ++only_b;
+      ++j;
+    } else {
+      ++i;
+      ++j;
+    }
   }
   return {only_a + (a.size() - i), only_b + (b.size() - j)};
 }

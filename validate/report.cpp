@@ -33,8 +33,8 @@ ReportedIssue* ValidationReport::find(IssueCode code, const std::string& scope, 
   return &issues_.back();
 }
 
-void ValidationReport::add(IssueCode code, const std::string& scope, const std::string& path,
-                           const std::string& detail, std::optional<uint64_t> offset) {
+void ValidationReport::add(IssueCode code, const std::string& scope, const std::string& path, const std::string& detail,
+                           std::optional<uint64_t> offset) {
   ++counts_[static_cast<int>(issueInfo(code).severity)];
   ++per_code_[code];
   ReportedIssue* issue = find(code, scope, true);
@@ -143,9 +143,8 @@ nlohmann::json ValidationReport::toJson(const std::string& file) const {
   nlohmann::json j;
   j["file"] = file;
   j["valid"] = !hasErrors();
-  j["counts"] = {{"error", count(Severity::kError)},
-                 {"warning", count(Severity::kWarning)},
-                 {"info", count(Severity::kInfo)}};
+  j["counts"] = {
+      {"error", count(Severity::kError)}, {"warning", count(Severity::kWarning)}, {"info", count(Severity::kInfo)}};
   j["truncated"] = truncated();
   nlohmann::json messages = nlohmann::json::array();
   for (const ReportedIssue& issue : issues()) {

@@ -21,10 +21,10 @@ namespace gtn {
 
 struct ReportedIssue {
   IssueCode code;
-  std::string scope;        // the logical path that groups occurrences (e.g. "/levels/0")
-  std::string detail;       // what the first occurrence says beyond the registry's description
-  uint64_t count = 0;       // occurrences
-  uint64_t total = 0;       // "out of" this many items checked; 0 when not meaningful
+  std::string scope;               // the logical path that groups occurrences (e.g. "/levels/0")
+  std::string detail;              // what the first occurrence says beyond the registry's description
+  uint64_t count = 0;              // occurrences
+  uint64_t total = 0;              // "out of" this many items checked; 0 when not meaningful
   std::vector<std::string> paths;  // logical paths of the first occurrences (at most kMaxPaths)
   std::optional<uint64_t> offset;  // byte offset in the file of the first occurrence, where known
 

@@ -54,9 +54,9 @@ void compareWithSource(const TetMesh& level0, const TetMesh& source, ValidationR
   bool comparable = true;
   if (level0.numPoints() != source.numPoints() || level0.numTets() != source.numTets()) {
     report.add(IssueCode::kSourceCountMismatch, scope, scope,
-               "level 0 has " + std::to_string(level0.numPoints()) + " points and " +
-                   std::to_string(level0.numTets()) + " tetrahedra, the source " + std::to_string(source.numPoints()) +
-                   " and " + std::to_string(source.numTets()) + hint);
+               "level 0 has " + std::to_string(level0.numPoints()) + " points and " + std::to_string(level0.numTets()) +
+                   " tetrahedra, the source " + std::to_string(source.numPoints()) + " and " +
+                   std::to_string(source.numTets()) + hint);
   }
   std::string why;
   if (level0.coord_type != source.coord_type) {
@@ -83,7 +83,8 @@ void compareWithSource(const TetMesh& level0, const TetMesh& source, ValidationR
     report.add(IssueCode::kSourceMeshMismatch, scope, scope,
                std::to_string(extra_t) + " tetrahedra and " + std::to_string(extra_p) +
                    " points of level 0 are not in the source; " + std::to_string(missing_t) + " tetrahedra and " +
-                   std::to_string(missing_p) + " points of the source are missing (positions and values compared "
+                   std::to_string(missing_p) +
+                   " points of the source are missing (positions and values compared "
                    "bit for bit, up to renumbering)");
   }
 }
@@ -263,7 +264,8 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
     for (const GtnChunkInfo& c : reader.level(i).chunks) {
       if (c.section.rfind("unknown:", 0) == 0) {
         report.add(IssueCode::kUnknownChunk, "/container", "/levels/" + std::to_string(i) + "/" + c.section,
-                   "level " + std::to_string(i) + " holds an ancillary chunk '" + c.tag.str() + "' (skipped)", c.offset);
+                   "level " + std::to_string(i) + " holds an ancillary chunk '" + c.tag.str() + "' (skipped)",
+                   c.offset);
       }
     }
   }

@@ -19,10 +19,10 @@
 namespace gtn {
 
 struct ValidateOptions {
-  bool quick = false;              // container and checksums only
-  size_t max_issues = 100;         // messages kept in the report (counts stay exact)
+  bool quick = false;                // container and checksums only
+  size_t max_issues = 100;           // messages kept in the report (counts stay exact)
   std::vector<std::string> against;  // source files: level 0 must equal the imported source
-  ImportOptions import_options;    // how to import `against` (e.g. --split 5 for PLOT3D)
+  ImportOptions import_options;      // how to import `against` (e.g. --split 5 for PLOT3D)
   // Take the split and --weld for `against` from level 0's metadata (import.split, import.weld, as
   // `gtn convert` records them) instead of import_options (the CLI: when --split, --weld are not given).
   bool split_from_file = false;
@@ -35,7 +35,7 @@ struct DecodedLevel {
   LevelHeader header;
   TetMesh mesh;
   std::vector<Triangle> boundary;  // the boundary surface as stored (decoded) in the file
-  double ratio = -1.0;              // declared ratio, negative when none
+  double ratio = -1.0;             // declared ratio, negative when none
 };
 
 // What the file holds once decoded (the input of the mesh, merge-tree and levels layers).

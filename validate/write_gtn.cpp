@@ -8,8 +8,8 @@
 namespace gtn {
 
 namespace {
-Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& o,
-                   const GtnWriteOptions& wo, const std::string& source, std::vector<std::string>* warnings) {
+Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& o, const GtnWriteOptions& wo,
+                   const std::string& source, std::vector<std::string>* warnings) {
   if (o.levels == 0 && !o.merge_tree) {
     GtnLevelInput level0;
     level0.mesh = &mesh;
@@ -45,8 +45,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   if (o.levels > 0 && levels.merges.size() - 1 < static_cast<size_t>(o.levels) && warnings)
     warnings->push_back(source + ": --levels " + std::to_string(o.levels) + ": the merge tree has " +
                         std::to_string(tree.merges) + " merge(s) of " + std::to_string(mesh.numPoints()) +
-                        " points, enough for " + std::to_string(levels.merges.size() - 1) +
-                        " level(s) beyond level 0");
+                        " points, enough for " + std::to_string(levels.merges.size() - 1) + " level(s) beyond level 0");
   GtnWriteOptions bounded = wo;
   if (o.levels < 0) bounded.level_storage_limit = o.level_storage;
   std::vector<GtnLevelInput> inputs = levels.inputs(mesh);

@@ -53,17 +53,17 @@
 // (nothing measured); 1 when a dataset fails to import, encode, decode losslessly, convert, export or
 // be written by VTK (the other datasets are still measured); else 3 when a value stream is larger than
 // xz -9 of its raw array; else 4 when a file target is missed; else 0.
+#include <malloc.h>
 #include <algorithm>
 #include <atomic>
-#include <malloc.h>
-#include <new>
-#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -240,7 +240,8 @@ uint64_t mortonKey(const double p[3], const double lo[3], const double hi[3]) {
 gtn::TetMesh mortonOrdered(const gtn::TetMesh& m) {
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
   for (size_t v = 0; v < m.numPoints(); ++v)
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], m.coords[3 * v + a]), hi[a] = std::max(hi[a], m.coords[3 * v + a]);
+    for (int a = 0; a < 3; ++a)
+      lo[a] = std::min(lo[a], m.coords[3 * v + a]), hi[a] = std::max(hi[a], m.coords[3 * v + a]);
   const auto order = [&](size_t n, auto position) {
     std::vector<std::pair<uint64_t, uint32_t>> keys(n);
     for (size_t i = 0; i < n; ++i) {
@@ -251,7 +252,8 @@ gtn::TetMesh mortonOrdered(const gtn::TetMesh& m) {
     std::sort(keys.begin(), keys.end());
     return keys;
   };
-  const auto points = order(m.numPoints(), [&](size_t v, double p[3]) { std::memcpy(p, m.point(v), 3 * sizeof(double)); });
+  const auto points =
+      order(m.numPoints(), [&](size_t v, double p[3]) { std::memcpy(p, m.point(v), 3 * sizeof(double)); });
   const auto cells = order(m.numTets(), [&](size_t t, double p[3]) {
     p[0] = p[1] = p[2] = 0;
     for (uint32_t v : m.tets[t])
@@ -260,9 +262,10 @@ gtn::TetMesh mortonOrdered(const gtn::TetMesh& m) {
   gtn::TetMesh out;
   out.coord_type = m.coord_type;
   out.coords.resize(m.coords.size());
-  for (size_t i = 0; i < points.size(); ++i) std::memcpy(&out.coords[3 * i], m.point(points[i].second), 3 * sizeof(double));
-  for (const auto& [src, dst, keys] : {std::tie(m.point_fields, out.point_fields, points),
-                                        std::tie(m.cell_fields, out.cell_fields, cells)})
+  for (size_t i = 0; i < points.size(); ++i)
+    std::memcpy(&out.coords[3 * i], m.point(points[i].second), 3 * sizeof(double));
+  for (const auto& [src, dst, keys] :
+       {std::tie(m.point_fields, out.point_fields, points), std::tie(m.cell_fields, out.cell_fields, cells)})
     for (const gtn::Field& f : src) {
       gtn::Field g(f.name, f.components, f.type, f.itemCount());
       for (size_t i = 0; i < keys.size(); ++i) g.copyItem(f, keys[i].second, i);
@@ -344,7 +347,8 @@ std::string measureFiles(const Dataset& d, const Tools& tools, const std::string
     const gtn::GtnLevelInfo& info = (*reader)->level(i);
     FileSizes::Level level;
     level.tets = info.header.tets;
-    for (const gtn::GtnChunkInfo& c : info.chunks) (c.section == "merge_tree" ? level.merge_tree : level.bytes) += c.bytes;
+    for (const gtn::GtnChunkInfo& c : info.chunks)
+      (c.section == "merge_tree" ? level.merge_tree : level.bytes) += c.bytes;
     in_levels += level.bytes + level.merge_tree;
     out.levels.push_back(level);
   }
@@ -403,14 +407,15 @@ std::vector<std::string> printFileTable(const std::vector<FileRow>& rows, int w,
   if (rows.empty()) return missed;
   std::printf(
       "\nfiles, bytes: default = `gtn convert` with its defaults; L0 = `gtn convert --levels 0 --no-merge-tree`;\n"
-      "zlib, lz4, lzma, raw = level 0 as .vtu written by VTK (appended binary; raw: uncompressed); xz = xz -9 of the raw\n"
+      "zlib, lz4, lzma, raw = level 0 as .vtu written by VTK (appended binary; raw: uncompressed); xz = xz -9 of the "
+      "raw\n"
       "connectivity, coordinate and field arrays; fpzip = coordinates and fields (non-float fields at xz -9) in the\n"
       "smallest of the orders tried (source; grid i, j, k for PLOT3D; decode: level 0's decoded order; morton)\n");
-  std::printf("%-*s %8s | %10s %10s | %10s %10s %10s %10s | %10s %10s %-6s | %6s %6s %6s %6s %6s | %s\n", w,
-              "dataset", "tets", "L0", "default", "zlib.vtu", "lz4.vtu", "lzma.vtu", "raw.vtu", "xz", "fpzip", "order",
-              "L0", "def/", "zlib/", "zlib/", "def/", "targets");
-  std::printf("%-*s %8s | %10s %10s | %10s %10s %10s %10s | %10s %10s %-6s | %6s %6s %6s %6s %6s | %s\n", w, "", "",
-              "", "", "", "", "", "", "", "", "", "b/t", "L0", "L0", "def", "lzma",
+  std::printf("%-*s %8s | %10s %10s | %10s %10s %10s %10s | %10s %10s %-6s | %6s %6s %6s %6s %6s | %s\n", w, "dataset",
+              "tets", "L0", "default", "zlib.vtu", "lz4.vtu", "lzma.vtu", "raw.vtu", "xz", "fpzip", "order", "L0",
+              "def/", "zlib/", "zlib/", "def/", "targets");
+  std::printf("%-*s %8s | %10s %10s | %10s %10s %10s %10s | %10s %10s %-6s | %6s %6s %6s %6s %6s | %s\n", w, "", "", "",
+              "", "", "", "", "", "", "", "", "b/t", "L0", "L0", "def", "lzma",
               "def<=1.3 L0, def<=zlib/3, def<lzma, L0 b/t");
   const auto cell = [](uint64_t n) { return n ? withCommas(n) : std::string("-"); };
   for (const FileRow& r : rows) {
@@ -437,12 +442,19 @@ std::vector<std::string> printFileTable(const std::vector<FileRow>& rows, int w,
                 cell(z.vtu[0]).c_str(), cell(z.vtu[1]).c_str(), cell(z.vtu[2]).c_str(), cell(z.vtu[3]).c_str(),
                 cell(r.xz).c_str(), best == r.fpzip.end() ? "-" : withCommas(best->second).c_str(),
                 best == r.fpzip.end() ? "-" : best->first.c_str(), l0_bits, ratio[0], ratio[1], ratio[2], ratio[3],
-                levels_ok ? "ok" : "MISS", !has_vtu ? "-" : zlib_ok ? "ok" : "MISS", !has_vtu ? "-" : lzma_ok ? "ok" : "MISS",
+                levels_ok ? "ok" : "MISS",
+                !has_vtu  ? "-"
+                : zlib_ok ? "ok"
+                          : "MISS",
+                !has_vtu  ? "-"
+                : lzma_ok ? "ok"
+                          : "MISS",
                 bits_target);
     std::printf("  %-*s default file:", w - 2, "");
     uint64_t trees = 0;
     for (size_t i = 0; i < z.levels.size(); ++i) {
-      std::printf(" L%zu %s (%s tets);", i, withCommas(z.levels[i].bytes).c_str(), withCommas(z.levels[i].tets).c_str());
+      std::printf(" L%zu %s (%s tets);", i, withCommas(z.levels[i].bytes).c_str(),
+                  withCommas(z.levels[i].tets).c_str());
       trees += z.levels[i].merge_tree;
     }
     std::printf(" merge tree%s %s; header, directory, trailer %s\n", z.levels.size() > 1 ? "s" : "",
@@ -474,12 +486,13 @@ std::vector<std::string> printFileTable(const std::vector<FileRow>& rows, int w,
     }
     if (!misses.empty()) missed.push_back(r.name + " (" + misses + ")");
   }
-  std::printf("\nfile targets: default <= %.1f x level 0%s; level 0 <= %.1f b/t on bluntfin/5, <= %.1f b/t on "
-              "combustion/5; %zu missed%s\n",
-              kMaxDefaultOverLevel0,
-              skip_baselines ? " (against the .vtu files not judged: --no-baselines)"
-                             : ", <= 1/3 of the zlib .vtu, < the lzma .vtu",
-              kMaxBluntFinBits, kMaxCombustionBits, missed.size(), missed.empty() ? "" : ":");
+  std::printf(
+      "\nfile targets: default <= %.1f x level 0%s; level 0 <= %.1f b/t on bluntfin/5, <= %.1f b/t on "
+      "combustion/5; %zu missed%s\n",
+      kMaxDefaultOverLevel0,
+      skip_baselines ? " (against the .vtu files not judged: --no-baselines)"
+                     : ", <= 1/3 of the zlib .vtu, < the lzma .vtu",
+      kMaxBluntFinBits, kMaxCombustionBits, missed.size(), missed.empty() ? "" : ":");
   for (const std::string& m : missed) std::printf("  %s\n", m.c_str());
   return missed;
 }
@@ -539,7 +552,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, usage, argv[0], argv[0]);
       return 2;
     }
-    sets = gtn::bench::sharedDatasets(gtn::bench::dataDir(args.empty() ? nullptr : args[0].c_str(), GTN_DEFAULT_DATA_DIR));
+    sets =
+        gtn::bench::sharedDatasets(gtn::bench::dataDir(args.empty() ? nullptr : args[0].c_str(), GTN_DEFAULT_DATA_DIR));
     if (args.size() > 1) filter = args[1];
   }
   tools.vtk = !skip_baselines;
@@ -552,15 +566,15 @@ int main(int argc, char** argv) {
               " (built without fpzip)"
 #endif
   );
-  std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s %6s | %s\n", w, "dataset",
-              "points", "tets", "conn", "geom", "fields", "total", "zstd.c", "xz.c", "zstd.gf", "xz.gf", "fpzip", "enc",
-              "dec", "peak", "peak", "targets");
+  std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s %6s | %s\n", w, "dataset", "points",
+              "tets", "conn", "geom", "fields", "total", "zstd.c", "xz.c", "zstd.gf", "xz.gf", "fpzip", "enc", "dec",
+              "peak", "peak", "targets");
   std::printf("%-*s %8s %8s | %6s %6s %6s %7s | %7s %7s | %7s %7s %7s | %6s %6s %7s %6s | %s\n", w, "", "", "", "b/t",
               "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "b/t", "Mt/s", "Mt/s", "live", "MiB",
               "conn, gf<xz, each<=xz");
   std::vector<std::string> failed, missed;  // datasets that failed to run; datasets that miss a target
-  bool stream_missed = false;  // a value stream larger than xz -9 of its raw array
-  std::vector<FileRow> files;  // the file table, printed after the codec table
+  bool stream_missed = false;               // a value stream larger than xz -9 of its raw array
+  std::vector<FileRow> files;               // the file table, printed after the codec table
   for (const Dataset& d : sets) {
     if (!filter.empty() && d.name.find(filter) == std::string::npos) continue;
     const auto fail = [&](const char* what, const std::string& why) {
@@ -698,12 +712,17 @@ int main(int argc, char** argv) {
         stream_misses += why;
       }
     std::printf(
-        "%-*s %8zu %8zu | %6.3f %6.2f %6.2f %7.2f | %7.2f %7.2f | %7.2f %7.2f %7.2f | %6.2f %6.2f %7llu %6.2f | %s %s %s\n",
+        "%-*s %8zu %8zu | %6.3f %6.2f %6.2f %7.2f | %7.2f %7.2f | %7.2f %7.2f %7.2f | %6.2f %6.2f %7llu %6.2f | %s %s "
+        "%s\n",
         w, d.name.c_str(), m.numPoints(), m.numTets(), conn, geom, fields, conn + geom + fields, zc, xc, zgf, xgf, fp,
         nt / enc_s / 1e6, nt / dec_s / 1e6, static_cast<unsigned long long>(stats.peak_live_vertices),
-        heap_peak / 1048576.0,
-        conn_ok ? "ok" : "MISS", !judge_gf ? "-" : gf_ok ? "ok" : "MISS",
-        streams.empty() ? "-" : stream_misses.empty() ? "ok" : "MISS");
+        heap_peak / 1048576.0, conn_ok ? "ok" : "MISS",
+        !judge_gf ? "-"
+        : gf_ok   ? "ok"
+                  : "MISS",
+        streams.empty()         ? "-"
+        : stream_misses.empty() ? "ok"
+                                : "MISS");
     if (!streams.empty()) {
       std::printf("  %-*s bytes coded / xz -9 of the raw array:", w - 2, "");
       for (const StreamSize& s : streams) std::printf(" %s %zu/%zu;", s.name.c_str(), s.coded, s.xz);
@@ -748,7 +767,8 @@ int main(int argc, char** argv) {
       row.fpzip.push_back({"source", fpzipMeshBytes(m, nullptr, nonfloat_xz)});
       if (dims[0] > 0 && size_t(dims[0]) * dims[1] * dims[2] <= m.numPoints())
         row.fpzip.push_back({"grid", fpzipMeshBytes(m, dims, nonfloat_xz)});
-      row.fpzip.push_back({"decode", fpzipMeshBytes(decoded, nullptr, externalSize(nonFloatBytes(decoded), "xz -9 -c"))});
+      row.fpzip.push_back(
+          {"decode", fpzipMeshBytes(decoded, nullptr, externalSize(nonFloatBytes(decoded), "xz -9 -c"))});
       const gtn::TetMesh morton = mortonOrdered(m);
       row.fpzip.push_back({"morton", fpzipMeshBytes(morton, nullptr, externalSize(nonFloatBytes(morton), "xz -9 -c"))});
 #endif
@@ -759,9 +779,10 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
   }
   std::printf("\ntargets: conn <= %.1f b/t%s; %zu missed%s\n", kMaxConnectivityBits,
-              skip_baselines ? " (geom + fields and each value stream against xz -9 not judged: --no-baselines)"
-                             : ", geom + fields < xz -9 of the raw coordinate + field arrays, each value stream <= xz -9 "
-                               "of its raw array",
+              skip_baselines
+                  ? " (geom + fields and each value stream against xz -9 not judged: --no-baselines)"
+                  : ", geom + fields < xz -9 of the raw coordinate + field arrays, each value stream <= xz -9 "
+                    "of its raw array",
               missed.size(), missed.empty() ? "" : ":");
   for (const std::string& m : missed) std::printf("  %s\n", m.c_str());
   const std::vector<std::string> file_missed = printFileTable(files, w, skip_baselines);

@@ -64,8 +64,8 @@ int main(int argc, char** argv) {
     }
     std::sort(ms.begin(), ms.end());
     const double median = ms[ms.size() / 2];
-    std::printf("%-40s %9zu tets  min %8.2f ms  median %8.2f ms  %6.1f ns/tet\n", path.c_str(), tets, ms.front(), median,
-                tets ? 1e6 * median / static_cast<double>(tets) : 0.0);
+    std::printf("%-40s %9zu tets  min %8.2f ms  median %8.2f ms  %6.1f ns/tet\n", path.c_str(), tets, ms.front(),
+                median, tets ? 1e6 * median / static_cast<double>(tets) : 0.0);
   }
   return 0;
 }

@@ -127,8 +127,8 @@ int main(int argc, char** argv) {
   const std::string dir = gtn::bench::dataDir(argc > 1 ? argv[1] : nullptr, GTN_DEFAULT_DATA_DIR);
   const std::string filter = argc > 2 ? argv[2] : "";
   std::printf("ns per tetrahedron (thread CPU time, fastest run); Mt/s = million tetrahedra per second\n");
-  std::printf("%-16s %8s | %8s %6s | %10s %6s %6s | %10s %6s %6s\n", "dataset", "tets", "decode", "Mt/s",
-              "faces+edg", "Mt/s", "share", "faces", "Mt/s", "share");
+  std::printf("%-16s %8s | %8s %6s | %10s %6s %6s | %10s %6s %6s\n", "dataset", "tets", "decode", "Mt/s", "faces+edg",
+              "Mt/s", "share", "faces", "Mt/s", "share");
   int status = 0;
   for (const gtn::bench::Dataset& ds : gtn::bench::sharedDatasets(dir)) {
     if (!filter.empty() && ds.name.find(filter) == std::string::npos) continue;
@@ -179,9 +179,9 @@ int main(int argc, char** argv) {
       continue;
     }
     const double nt = static_cast<double>(tets.size());
-    std::printf("%-16s %8zu | %8.0f %6.2f | %10.0f %6.2f %5.0f%% | %10.0f %6.2f %5.0f%%\n", ds.name.c_str(), tets.size(),
-                1e9 * dec / nt, nt / dec / 1e6, 1e9 * both / nt, nt / both / 1e6, 100 * both / dec, 1e9 * faces / nt,
-                nt / faces / 1e6, 100 * faces / dec);
+    std::printf("%-16s %8zu | %8.0f %6.2f | %10.0f %6.2f %5.0f%% | %10.0f %6.2f %5.0f%%\n", ds.name.c_str(),
+                tets.size(), 1e9 * dec / nt, nt / dec / 1e6, 1e9 * both / nt, nt / both / 1e6, 100 * both / dec,
+                1e9 * faces / nt, nt / faces / 1e6, 100 * faces / dec);
     std::fflush(stdout);
   }
   return status;

@@ -4,9 +4,9 @@
 //
 //   bench-grid [data_dir] [--split 5|6] [--runs N]
 #include <chrono>
-#include <ctime>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -24,7 +24,9 @@ bool plot3dDims(const std::string& path, uint32_t dims[3]) {
   unsigned char b[12];
   const bool ok = std::fread(b, 1, 12, f) == 12;
   std::fclose(f);
-  for (int a = 0; a < 3; ++a) dims[a] = (uint32_t{b[4 * a]} << 24) | (uint32_t{b[4 * a + 1]} << 16) | (uint32_t{b[4 * a + 2]} << 8) | b[4 * a + 3];
+  for (int a = 0; a < 3; ++a)
+    dims[a] =
+        (uint32_t{b[4 * a]} << 24) | (uint32_t{b[4 * a + 1]} << 16) | (uint32_t{b[4 * a + 2]} << 8) | b[4 * a + 3];
   return ok;
 }
 
@@ -52,7 +54,8 @@ int main(int argc, char** argv) {
     const char* name;
     const char* xyz;
     const char* q;
-  } sets[] = {{"bluntfin", "plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, {"combustion", "plot3d/combxyz.bin", "plot3d/combq.bin"}};
+  } sets[] = {{"bluntfin", "plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"},
+              {"combustion", "plot3d/combxyz.bin", "plot3d/combq.bin"}};
   int status = 0;
   for (const auto& s : sets) {
     ImportOptions options;
@@ -61,7 +64,8 @@ int main(int argc, char** argv) {
     auto imported = importPlot3d({xyz, q}, options);
     uint32_t dims[3];
     if (!imported.isOk() || !plot3dDims(xyz, dims)) {
-      std::fprintf(stderr, "%s: %s\n", s.name, imported.isOk() ? "cannot read its dimensions" : imported.status().message().c_str());
+      std::fprintf(stderr, "%s: %s\n", s.name,
+                   imported.isOk() ? "cannot read its dimensions" : imported.status().message().c_str());
       status = 1;
       continue;
     }
@@ -73,16 +77,17 @@ int main(int argc, char** argv) {
       continue;
     }
     const size_t T = mesh.numTets();
-    std::printf("%s /%d: %u x %u x %u nodes, %zu tetrahedra, %zu exceptions, %llu extra points\n", s.name, split, dims[0], dims[1],
-                dims[2], T, layout->exceptions.size(), static_cast<unsigned long long>(layout->extras()));
+    std::printf("%s /%d: %u x %u x %u nodes, %zu tetrahedra, %zu exceptions, %llu extra points\n", s.name, split,
+                dims[0], dims[1], dims[2], T, layout->exceptions.size(),
+                static_cast<unsigned long long>(layout->extras()));
     // Runs: the default (predictors and forms by measurement), each predictor forced, each value
     // stream form forced.
     const struct {
       const char* label;
       int predictor, value_form;
       bool timed;
-    } configs[] = {{"default", -1, -1, true},          {"all Lorenzo", 0, -1, false}, {"all previous-i", 1, -1, false},
-                   {"all linear-i", 2, -1, false},     {"all form 0", -1, 0, true},   {"all form 1", -1, 1, true}};
+    } configs[] = {{"default", -1, -1, true},      {"all Lorenzo", 0, -1, false}, {"all previous-i", 1, -1, false},
+                   {"all linear-i", 2, -1, false}, {"all form 0", -1, 0, true},   {"all form 1", -1, 1, true}};
     for (const auto& config : configs) {
       GridEncodeOptions eo;
       eo.predictor = config.predictor;
@@ -95,9 +100,10 @@ int main(int argc, char** argv) {
         break;
       }
       const char* label = config.label;
-      std::printf("  %-15s total %7.3f bits/tet (%zu bytes): header %.4f, EXCP %.4f, GEOM %.3f", label, bits(piece->size(), T),
-                  piece->size(), bits(r.header, T), bits(r.excp, T), bits(r.geom, T));
-      for (size_t f = 0; f < r.point_fields.size(); ++f) std::printf(", %s %.3f", mesh.point_fields[f].name.c_str(), bits(r.point_fields[f], T));
+      std::printf("  %-15s total %7.3f bits/tet (%zu bytes): header %.4f, EXCP %.4f, GEOM %.3f", label,
+                  bits(piece->size(), T), piece->size(), bits(r.header, T), bits(r.excp, T), bits(r.geom, T));
+      for (size_t f = 0; f < r.point_fields.size(); ++f)
+        std::printf(", %s %.3f", mesh.point_fields[f].name.c_str(), bits(r.point_fields[f], T));
       std::printf("; stream forms (GEOM, PFLD...):");
       for (uint8_t f : r.stream_forms) std::printf(" %d", f);
       std::printf("\n");
@@ -117,16 +123,20 @@ int main(int argc, char** argv) {
           const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           bool same = back.isOk() && back->mesh.tets == mesh.tets && back->mesh.coords == mesh.coords &&
                       back->mesh.point_fields.size() == mesh.point_fields.size();
-          for (size_t f = 0; same && f < mesh.point_fields.size(); ++f) same = back->mesh.point_fields[f].bytes == mesh.point_fields[f].bytes;
+          for (size_t f = 0; same && f < mesh.point_fields.size(); ++f)
+            same = back->mesh.point_fields[f].bytes == mesh.point_fields[f].bytes;
           if (!same) {
-            std::fprintf(stderr, "%s: the decode differs: %s\n", s.name, back.isOk() ? "tetrahedra or values" : back.status().message().c_str());
+            std::fprintf(stderr, "%s: the decode differs: %s\n", s.name,
+                         back.isOk() ? "tetrahedra or values" : back.status().message().c_str());
             status = 1;
             break;
           }
           best = std::min(best, sec);
         }
-        std::printf("  decode: %.2f ms wall, %.2f ms thread CPU time: %.1f (wall), %.1f (CPU) million tetrahedra per second on one core (best of %d)\n",
-                    best * 1e3, best_cpu * 1e3, T / best / 1e6, T / best_cpu / 1e6, runs);
+        std::printf(
+            "  decode: %.2f ms wall, %.2f ms thread CPU time: %.1f (wall), %.1f (CPU) million tetrahedra per second on "
+            "one core (best of %d)\n",
+            best * 1e3, best_cpu * 1e3, T / best / 1e6, T / best_cpu / 1e6, runs);
       }
     }
   }

@@ -49,8 +49,8 @@ namespace {
 
 using gtn::bench::Dataset;
 
-constexpr double kMaxGtnOverZlib = 1.0;        // load time, gtn / zlib .vtu
-constexpr double kMinZlibOverGtnBytes = 3.5;   // zlib .vtu bytes / level-0 .gtn bytes
+constexpr double kMaxGtnOverZlib = 1.0;       // load time, gtn / zlib .vtu
+constexpr double kMinZlibOverGtnBytes = 3.5;  // zlib .vtu bytes / level-0 .gtn bytes
 constexpr const char* kVtuKinds[3] = {"zlib", "lz4", "raw"};
 
 double processCpuSeconds() {
@@ -202,8 +202,8 @@ int main(int argc, char** argv) {
       data_arg = a;
     }
   }
-  const std::vector<Dataset> shared =
-      gtn::bench::sharedDatasets(gtn::bench::dataDir(data_arg.empty() ? nullptr : data_arg.c_str(), GTN_DEFAULT_DATA_DIR));
+  const std::vector<Dataset> shared = gtn::bench::sharedDatasets(
+      gtn::bench::dataDir(data_arg.empty() ? nullptr : data_arg.c_str(), GTN_DEFAULT_DATA_DIR));
   std::vector<Dataset> sets;
   for (const std::string& n : names) {
     const auto it = std::find_if(shared.begin(), shared.end(), [&](const Dataset& d) { return d.name == n; });
@@ -221,9 +221,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench-load: cannot start %s %s serve\n", python.c_str(), script.c_str());
     return 1;
   }
-  std::printf("load of level 0 into memory (points, tetrahedra, all fields), in process; wall ms: median [min-max] of "
-              "%d interleaved rounds after a warm-up\n",
-              reps);
+  std::printf(
+      "load of level 0 into memory (points, tetrahedra, all fields), in process; wall ms: median [min-max] of "
+      "%d interleaved rounds after a warm-up\n",
+      reps);
   std::printf("%-13s %8s | %-24s %-24s %-24s %-24s | %6s %6s | %10s %10s %7s | %s\n", "dataset", "tets", "gtn",
               "zlib.vtu", "lz4.vtu", "raw.vtu", "gtn/", "gtn/", "L0.gtn", "zlib.vtu", "zlib/", "targets");
   std::printf("%-13s %8s | %-24s %-24s %-24s %-24s | %6s %6s | %10s %10s %7s | %s\n", "", "", "", "", "", "", "zlib",
@@ -290,7 +291,8 @@ int main(int argc, char** argv) {
       continue;
     }
     std::error_code ec;
-    const uint64_t gtn_bytes = std::filesystem::file_size(files[0], ec), zlib_bytes = std::filesystem::file_size(files[1], ec);
+    const uint64_t gtn_bytes = std::filesystem::file_size(files[0], ec),
+                   zlib_bytes = std::filesystem::file_size(files[1], ec);
     const double over_zlib = times[0].wallMedian() / times[1].wallMedian();
     const double over_lz4 = times[0].wallMedian() / times[2].wallMedian();
     const double smaller = static_cast<double>(zlib_bytes) / static_cast<double>(gtn_bytes);
@@ -300,11 +302,12 @@ int main(int argc, char** argv) {
                 msRange(times[2]).c_str(), msRange(times[3]).c_str(), over_zlib, over_lz4,
                 static_cast<unsigned long long>(gtn_bytes), static_cast<unsigned long long>(zlib_bytes), smaller,
                 time_ok ? "ok" : "MISS", size_ok ? "ok" : "MISS");
-    std::printf("%-13s %8s   CPU ms, medians: gtn %.1f, zlib.vtu %.1f, lz4.vtu %.1f, raw.vtu %.1f; gtn/zlib %.2f, "
-                "gtn/lz4 %.2f\n",
-                "", "", 1e3 * times[0].cpuMedian(), 1e3 * times[1].cpuMedian(), 1e3 * times[2].cpuMedian(),
-                1e3 * times[3].cpuMedian(), times[0].cpuMedian() / times[1].cpuMedian(),
-                times[0].cpuMedian() / times[2].cpuMedian());
+    std::printf(
+        "%-13s %8s   CPU ms, medians: gtn %.1f, zlib.vtu %.1f, lz4.vtu %.1f, raw.vtu %.1f; gtn/zlib %.2f, "
+        "gtn/lz4 %.2f\n",
+        "", "", 1e3 * times[0].cpuMedian(), 1e3 * times[1].cpuMedian(), 1e3 * times[2].cpuMedian(),
+        1e3 * times[3].cpuMedian(), times[0].cpuMedian() / times[1].cpuMedian(),
+        times[0].cpuMedian() / times[2].cpuMedian());
     std::fflush(stdout);
     std::string misses;
     char buf[120];
@@ -321,9 +324,10 @@ int main(int argc, char** argv) {
     else std::filesystem::remove_all(dir);
   }
   vtk.stop();
-  std::printf("\ntargets: gtn load <= %.1f x the zlib .vtu's, level 0 .gtn >= %.1f x smaller than the zlib .vtu; %zu "
-              "missed%s\n",
-              kMaxGtnOverZlib, kMinZlibOverGtnBytes, missed.size(), missed.empty() ? "" : ":");
+  std::printf(
+      "\ntargets: gtn load <= %.1f x the zlib .vtu's, level 0 .gtn >= %.1f x smaller than the zlib .vtu; %zu "
+      "missed%s\n",
+      kMaxGtnOverZlib, kMinZlibOverGtnBytes, missed.size(), missed.empty() ? "" : ":");
   for (const std::string& m : missed) std::printf("  %s\n", m.c_str());
   if (!failed.empty()) {
     std::printf("%zu failed:\n", failed.size());

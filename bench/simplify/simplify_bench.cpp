@@ -5,12 +5,12 @@
 //
 // Usage: bench-simplify [--data DIR] [--repeat R] [DATASET...]   (datasets: spx, cornell, bluntfin,
 // combustion, bluntfin5, combustion5; default all)
+#include <time.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
-#include <time.h>
 #include <cstdlib>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -80,19 +80,13 @@ class RecordingSink : public MeshSink {
           (void)out.vertex(e.v[0], &coords[3 * nv], item_bytes ? &values_[item_bytes * nv] : nullptr);
           ++nv;
           break;
-        case kTriangle:
-          (void)out.boundaryTriangle(e.v);
-          break;
-        case kEndBoundary:
-          (void)out.endBoundary();
-          break;
+        case kTriangle: (void)out.boundaryTriangle(e.v); break;
+        case kEndBoundary: (void)out.endBoundary(); break;
         case kTet:
           (void)out.tet(e.v, cell_bytes ? &cells[cell_bytes * nt] : nullptr);
           ++nt;
           break;
-        case kRetire:
-          (void)out.retireVertex(e.v[0]);
-          break;
+        case kRetire: (void)out.retireVertex(e.v[0]); break;
       }
     }
     (void)out.endLevel();
@@ -152,10 +146,12 @@ int run(const Dataset& d, int repeat) {
   }
   std::printf("\n== %s (split %d): %zu points, %zu tets, field '%s'\n", d.name.c_str(), d.split, mesh.numPoints(),
               mesh.numTets(), stats.field.c_str());
-  std::printf("ranking: %.3f s wall, %.3f s CPU, %.0f tets/s (CPU), %llu merges (%llu boundary), %llu popped, %llu rejected, %llu evaluations\n",
-              stats.seconds, cpu, mesh.numTets() / cpu, (unsigned long long)stats.merges,
-              (unsigned long long)stats.boundary_merges, (unsigned long long)stats.popped,
-              (unsigned long long)stats.rejected, (unsigned long long)stats.evaluations);
+  std::printf(
+      "ranking: %.3f s wall, %.3f s CPU, %.0f tets/s (CPU), %llu merges (%llu boundary), %llu popped, %llu rejected, "
+      "%llu evaluations\n",
+      stats.seconds, cpu, mesh.numTets() / cpu, (unsigned long long)stats.merges,
+      (unsigned long long)stats.boundary_merges, (unsigned long long)stats.popped, (unsigned long long)stats.rejected,
+      (unsigned long long)stats.evaluations);
 
   // On-the-fly cost: decode level 0 to a null sink, then through the filter at several ratios.
   auto enc = encodeLevel(mesh, EncodeOptions{});
@@ -218,8 +214,8 @@ int run(const Dataset& d, int repeat) {
     double plain, t;
     uint64_t out = 0;
     compare(enc->header, lp, *stream_tree, *payload, n, &plain, &t, &out);
-    std::printf("%8.2f %10llu %10.4f %10.4f %10.4f %8.1f%%\n", ratio, (unsigned long long)out, plain, t, last_tree_decode,
-                100.0 * t / plain);
+    std::printf("%8.2f %10llu %10.4f %10.4f %10.4f %8.1f%%\n", ratio, (unsigned long long)out, plain, t,
+                last_tree_decode, 100.0 * t / plain);
   }
 
   auto levels = buildMipLevels(mesh, *tree, LevelOptions{});
@@ -275,8 +271,8 @@ int run(const Dataset& d, int repeat) {
   uint64_t file_total = 0;
   for (size_t i = 0; i < (*reader)->levels(); ++i) file_total += (*reader)->level(i).bytes;
   std::printf("stored by default (bound 2 x level 0): levels 0..%zu, %llu bytes = %.3f x level 0 (file: %llu bytes)\n",
-              (*reader)->levels() - 1, (unsigned long long)file_total,
-              double(file_total) / (*reader)->level(0).bytes, (unsigned long long)(*reader)->file().bytes);
+              (*reader)->levels() - 1, (unsigned long long)file_total, double(file_total) / (*reader)->level(0).bytes,
+              (unsigned long long)(*reader)->file().bytes);
   std::remove(path.c_str());
   return 0;
 }

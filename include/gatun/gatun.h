@@ -45,10 +45,10 @@
  */
 #pragma once
 
-#include "gatun/result.h"
+#include "gatun/convert.h"
 #include "gatun/mesh.h"
 #include "gatun/read.h"
-#include "gatun/write.h"
-#include "gatun/convert.h"
-#include "gatun/validate.h"
 #include "gatun/render.h"
+#include "gatun/result.h"
+#include "gatun/validate.h"
+#include "gatun/write.h"

@@ -19,8 +19,16 @@ namespace gatun {
 
 /*! ScalarType : the type of coordinates and field values, kept as the source had it. */
 enum class ScalarType : uint8_t {
-  kInt8 = 0, kUInt8 = 1, kInt16 = 2, kUInt16 = 3, kInt32 = 4, kUInt32 = 5,
-  kInt64 = 6, kUInt64 = 7, kFloat32 = 8, kFloat64 = 9,
+  kInt8 = 0,
+  kUInt8 = 1,
+  kInt16 = 2,
+  kUInt16 = 3,
+  kInt32 = 4,
+  kUInt32 = 5,
+  kInt64 = 6,
+  kUInt64 = 7,
+  kFloat32 = 8,
+  kFloat64 = 9,
 };
 
 /*! scalarSize() : bytes per value of `type` (1 to 8). */
@@ -29,17 +37,48 @@ size_t scalarSize(ScalarType type);
 const char* scalarTypeName(ScalarType type);
 
 /*! ScalarTypeOf<T>::value : the ScalarType of the C++ arithmetic type T (int8_t ... double). */
-template <class T> struct ScalarTypeOf;
-template <> struct ScalarTypeOf<int8_t> { static constexpr ScalarType value = ScalarType::kInt8; };
-template <> struct ScalarTypeOf<uint8_t> { static constexpr ScalarType value = ScalarType::kUInt8; };
-template <> struct ScalarTypeOf<int16_t> { static constexpr ScalarType value = ScalarType::kInt16; };
-template <> struct ScalarTypeOf<uint16_t> { static constexpr ScalarType value = ScalarType::kUInt16; };
-template <> struct ScalarTypeOf<int32_t> { static constexpr ScalarType value = ScalarType::kInt32; };
-template <> struct ScalarTypeOf<uint32_t> { static constexpr ScalarType value = ScalarType::kUInt32; };
-template <> struct ScalarTypeOf<int64_t> { static constexpr ScalarType value = ScalarType::kInt64; };
-template <> struct ScalarTypeOf<uint64_t> { static constexpr ScalarType value = ScalarType::kUInt64; };
-template <> struct ScalarTypeOf<float> { static constexpr ScalarType value = ScalarType::kFloat32; };
-template <> struct ScalarTypeOf<double> { static constexpr ScalarType value = ScalarType::kFloat64; };
+template <class T>
+struct ScalarTypeOf;
+template <>
+struct ScalarTypeOf<int8_t> {
+  static constexpr ScalarType value = ScalarType::kInt8;
+};
+template <>
+struct ScalarTypeOf<uint8_t> {
+  static constexpr ScalarType value = ScalarType::kUInt8;
+};
+template <>
+struct ScalarTypeOf<int16_t> {
+  static constexpr ScalarType value = ScalarType::kInt16;
+};
+template <>
+struct ScalarTypeOf<uint16_t> {
+  static constexpr ScalarType value = ScalarType::kUInt16;
+};
+template <>
+struct ScalarTypeOf<int32_t> {
+  static constexpr ScalarType value = ScalarType::kInt32;
+};
+template <>
+struct ScalarTypeOf<uint32_t> {
+  static constexpr ScalarType value = ScalarType::kUInt32;
+};
+template <>
+struct ScalarTypeOf<int64_t> {
+  static constexpr ScalarType value = ScalarType::kInt64;
+};
+template <>
+struct ScalarTypeOf<uint64_t> {
+  static constexpr ScalarType value = ScalarType::kUInt64;
+};
+template <>
+struct ScalarTypeOf<float> {
+  static constexpr ScalarType value = ScalarType::kFloat32;
+};
+template <>
+struct ScalarTypeOf<double> {
+  static constexpr ScalarType value = ScalarType::kFloat64;
+};
 
 /*! Field : a named array of `components` values per item (per point, or per tetrahedron), stored as
  *  raw little-endian bytes in `type`, so that every value survives bit for bit (NaN payloads too).

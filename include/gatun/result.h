@@ -24,13 +24,13 @@ const char* version();
 
 /*! ErrorCode : the kind of a failure. Each maps to the exit code of the `gtn` command (exitCode()). */
 enum class ErrorCode {
-  kOk = 0,         /* no error */
-  kInvalidData,    /* the input is malformed or violates an invariant (exit code 1) */
-  kUnsupported,    /* a valid input uses a feature Gatun rejects (exit code 1) */
-  kNotOurFile,     /* the content is not the format it was read as, e.g. no .gtn magic (exit code 1) */
-  kVersionTooNew,  /* a newer major version of the .gtn format (exit code 1) */
-  kUsage,          /* the caller asked for something impossible: a missing level, a bad option (exit code 2) */
-  kIo,             /* a file could not be opened, read or written (exit code 3) */
+  kOk = 0,        /* no error */
+  kInvalidData,   /* the input is malformed or violates an invariant (exit code 1) */
+  kUnsupported,   /* a valid input uses a feature Gatun rejects (exit code 1) */
+  kNotOurFile,    /* the content is not the format it was read as, e.g. no .gtn magic (exit code 1) */
+  kVersionTooNew, /* a newer major version of the .gtn format (exit code 1) */
+  kUsage,         /* the caller asked for something impossible: a missing level, a bad option (exit code 2) */
+  kIo,            /* a file could not be opened, read or written (exit code 3) */
 };
 
 /*! Error : the outcome of an operation that returns no value.

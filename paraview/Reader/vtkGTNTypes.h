@@ -34,7 +34,8 @@ inline int vtkTypeOf(gtn::ScalarType t) {
 inline std::optional<gtn::ScalarType> scalarTypeOf(int vtk_type) {
   switch (vtk_type) {
     case VTK_SIGNED_CHAR: return gtn::ScalarType::kInt8;
-    case VTK_CHAR: return sizeof(char) == 1 && static_cast<char>(-1) < 0 ? gtn::ScalarType::kInt8 : gtn::ScalarType::kUInt8;
+    case VTK_CHAR:
+      return sizeof(char) == 1 && static_cast<char>(-1) < 0 ? gtn::ScalarType::kInt8 : gtn::ScalarType::kUInt8;
     case VTK_UNSIGNED_CHAR: return gtn::ScalarType::kUInt8;
     case VTK_SHORT: return gtn::ScalarType::kInt16;
     case VTK_UNSIGNED_SHORT: return gtn::ScalarType::kUInt16;

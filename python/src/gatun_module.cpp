@@ -11,17 +11,17 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
+#include <nlohmann/json.hpp>
 
 #include "convert/import.h"
 #include "format/decode_fields.h"
 #include "format/gtn_reader.h"
 #include "mesh/box_filter.h"
 #include "simplify/levels.h"
-#include "validate/write_gtn.h"
 #include "validate/info.h"
 #include "validate/validator.h"
+#include "validate/write_gtn.h"
 
 namespace py = pybind11;
 using namespace gtn;
@@ -103,8 +103,7 @@ struct ThreadLimit {
 };
 
 void checkThreads(const std::string& what, std::optional<int> threads) {
-  if (threads && *threads < 1)
-    raise(usageError(what + ": threads " + std::to_string(*threads) + " must be 1 or more"));
+  if (threads && *threads < 1) raise(usageError(what + ": threads " + std::to_string(*threads) + " must be 1 or more"));
 }
 
 py::object jsonToPython(const nlohmann::json& j) {

@@ -40,9 +40,8 @@ gatun::Mesh gridMesh(int n) {
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
-        const uint32_t c[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
-                               id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
-                               id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        const uint32_t c[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+                               id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
         // Six tetrahedra sharing the diagonal c0-c6; orientation is the library's business.
         const int paths[6][2] = {{1, 2}, {2, 3}, {3, 7}, {7, 4}, {4, 5}, {5, 1}};
         for (const auto& q : paths) {
@@ -292,7 +291,8 @@ TEST(Api, RenderDrawsThePixelsOfGtnRender) {
   EXPECT_GT(lit, 1000u);
   ASSERT_TRUE(gatun::writePng(dir + "/api.png", image.value()).ok());
 
-  ASSERT_EQ(runGtn("render " + dir + "/grid.gtn -o " + dir + "/cli.png --size 80x60 --azimuth 40 --no-cache").exit_code, 0);
+  ASSERT_EQ(runGtn("render " + dir + "/grid.gtn -o " + dir + "/cli.png --size 80x60 --azimuth 40 --no-cache").exit_code,
+            0);
   auto cli = gtn::readPng(dir + "/cli.png");
   ASSERT_TRUE(cli.isOk()) << cli.status().message();
   EXPECT_EQ(cli->rgb, image.value().rgb);
@@ -303,9 +303,10 @@ TEST(Api, RenderDrawsThePixelsOfGtnRender) {
   options.ratio = 0.5;
   auto coarse = gatun::render({dir + "/grid.gtn"}, options);
   ASSERT_TRUE(coarse.ok()) << coarse.error().message();
-  ASSERT_EQ(runGtn("render " + dir + "/grid.gtn -o " + dir + "/cli-half.png --size 80x60 --azimuth 40 --ratio 0.5 --no-cache")
-                .exit_code,
-            0);
+  ASSERT_EQ(
+      runGtn("render " + dir + "/grid.gtn -o " + dir + "/cli-half.png --size 80x60 --azimuth 40 --ratio 0.5 --no-cache")
+          .exit_code,
+      0);
   EXPECT_EQ(gtn::readPng(dir + "/cli-half.png")->rgb, coarse.value().rgb);
 
   options.ratio.reset();

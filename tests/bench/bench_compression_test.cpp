@@ -31,8 +31,8 @@ std::string hexGridVtk(int n) {
   for (int k = 0; k + 1 < n; ++k)
     for (int j = 0; j + 1 < n; ++j)
       for (int i = 0; i + 1 < n; ++i)
-        s << "8 " << id(i, j, k) << ' ' << id(i + 1, j, k) << ' ' << id(i + 1, j + 1, k) << ' ' << id(i, j + 1, k) << ' '
-          << id(i, j, k + 1) << ' ' << id(i + 1, j, k + 1) << ' ' << id(i + 1, j + 1, k + 1) << ' '
+        s << "8 " << id(i, j, k) << ' ' << id(i + 1, j, k) << ' ' << id(i + 1, j + 1, k) << ' ' << id(i, j + 1, k)
+          << ' ' << id(i, j, k + 1) << ' ' << id(i + 1, j, k + 1) << ' ' << id(i + 1, j + 1, k + 1) << ' '
           << id(i, j + 1, k + 1) << '\n';
   s << "CELL_TYPES " << cells << '\n';
   for (int c = 0; c < cells; ++c) s << "12\n";

@@ -21,7 +21,8 @@ std::string benchCommand(const std::string& args) {
 TEST(BenchScale, TinyGrids) {
   const std::string dir = test::tempDir("gtn-bench-scale");
   const std::string json_path = dir + "/scale.json";
-  const test::RunResult r = test::runShell(benchCommand("--sizes 6,9 --threads 2 --work " + dir + "/work --json " + json_path));
+  const test::RunResult r =
+      test::runShell(benchCommand("--sizes 6,9 --threads 2 --work " + dir + "/work --json " + json_path));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(test::readFile(json_path));
   EXPECT_EQ(j.at("all_threads"), 2);
@@ -36,10 +37,12 @@ TEST(BenchScale, TinyGrids) {
       EXPECT_EQ(x.at("points"), n * n * n);
       EXPECT_EQ(x.at("same_bytes_all_threads"), true);
       EXPECT_GT(x.at("file_bytes").get<double>(), 0.0);
-      for (const char* k : {"convert_wall_s", "convert_peak_rss_bytes", "decode_wall_s", "decode_s", "decode_peak_rss_bytes"})
+      for (const char* k :
+           {"convert_wall_s", "convert_peak_rss_bytes", "decode_wall_s", "decode_s", "decode_peak_rss_bytes"})
         EXPECT_GT(x.at(k).get<double>(), 0.0) << k;
       // The table: one line per row, after the header and the rule.
-      const std::string cells = "| " + std::to_string(n) + "^3 | " + x.at("tets").dump() + " | " + std::to_string(threads) + " | ";
+      const std::string cells =
+          "| " + std::to_string(n) + "^3 | " + x.at("tets").dump() + " | " + std::to_string(threads) + " | ";
       EXPECT_NE(r.out.find(cells), std::string::npos) << r.out;
     }
   }

@@ -123,9 +123,8 @@ TEST_F(DecodeCli, JsonKeysAndText) {
   ASSERT_TRUE(d.is_object());
   std::set<std::string> keys;
   for (auto it = d.begin(); it != d.end(); ++it) keys.insert(it.key());
-  EXPECT_EQ(keys, (std::set<std::string>{"input", "bytes", "level", "ratio", "extra_merges", "points", "tets",
-                                         "fields", "threads", "wall_s", "decode_s", "tets_per_second",
-                                         "peak_rss_bytes"}));
+  EXPECT_EQ(keys, (std::set<std::string>{"input", "bytes", "level", "ratio", "extra_merges", "points", "tets", "fields",
+                                         "threads", "wall_s", "decode_s", "tets_per_second", "peak_rss_bytes"}));
   EXPECT_EQ(d.at("input"), gtn);
   EXPECT_EQ(d.at("bytes").get<uint64_t>(), test::readFile(gtn).size());
   EXPECT_GT(d.at("decode_s").get<double>(), 0.0);

@@ -54,9 +54,11 @@ TEST_F(ThreadsCli, RenderByteIdentical) {
   for (const std::string& input : {gtn, spx}) {
     for (const std::string& extra : {std::string(), std::string(" --pipeline generic"), std::string(" --ratio 0.5")}) {
       if (input == spx && extra == " --ratio 0.5") continue;  // a mesh file has no merge tree
-      const std::string p1 = dir_ + "/r" + std::to_string(n) + "-1.png", p2 = dir_ + "/r" + std::to_string(n) + "-2.png";
+      const std::string p1 = dir_ + "/r" + std::to_string(n) + "-1.png",
+                        p2 = dir_ + "/r" + std::to_string(n) + "-2.png";
       ++n;
-      test::RunResult r = test::runGtn("render " + input + " -o " + p1 + " --no-cache --size 96x80" + extra + " --threads 1");
+      test::RunResult r =
+          test::runGtn("render " + input + " -o " + p1 + " --no-cache --size 96x80" + extra + " --threads 1");
       ASSERT_EQ(r.exit_code, 0) << r.err;
       r = test::runGtn("render " + input + " -o " + p2 + " --no-cache --size 96x80" + extra + " --threads 2");
       ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -17,7 +17,7 @@ TEST(BoundaryGeometry, CornerAnglesAndTheirClasses) {
   EXPECT_NEAR(cornerAngle(o, x, y), M_PI / 2, 1e-4);
   EXPECT_NEAR(cornerAngle(o, x, xy), M_PI / 4, 1e-4);
   EXPECT_NEAR(cornerAngle(o, x, minus_x), M_PI, 1e-4);
-  EXPECT_EQ(cornerAngle(o, o, x), 0.0);  // degenerate
+  EXPECT_EQ(cornerAngle(o, o, x), 0.0);   // degenerate
   EXPECT_EQ(openingClass(o, x, xy), 0u);  // 45 degrees
   EXPECT_EQ(openingClass(o, x, y), 2u);   // 90: not below
   const double sixty_five[3] = {std::cos(65 * M_PI / 180), std::sin(65 * M_PI / 180), 0};

@@ -20,7 +20,8 @@ struct Scene {
   Front front;
   long gate = -1;
   explicit Scene(double z3, uint32_t d) {
-    const double pos[7][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, -0.5, z3}, {0.7, 0.7, 0.2}, {-0.5, 0.5, 0.9}, {0.3, 0.3, -1}};
+    const double pos[7][3] = {{0, 0, 0},       {1, 0, 0},        {0, 1, 0},     {0.5, -0.5, z3},
+                              {0.7, 0.7, 0.2}, {-0.5, 0.5, 0.9}, {0.3, 0.3, -1}};
     for (int s = 0; s < 7; ++s) {
       pool.alloc();
       for (int i = 0; i < 3; ++i) pool.position(s)[i] = pos[s][i];
@@ -84,7 +85,7 @@ TEST(ApexCandidates, CandidatesOnTheSideOfTheDecodedTetrahedronAreDropped) {
   const double up1[3] = {0.5, 0.5, 1}, up2[3] = {0.5, 0.5, 2}, below[3] = {0.5, 0.5, -1};
   EXPECT_EQ(cands.sweepKey(up1), std::floor(0.25 * 64 / std::sqrt(0.5)));   // 22
   EXPECT_EQ(cands.sweepKey(up2), std::floor(0.875 * 64 / std::sqrt(0.5)));  // 79
-  EXPECT_EQ(cands.sweepKey(below), 1e18);  // never met
+  EXPECT_EQ(cands.sweepKey(below), 1e18);                                   // never met
 }
 
 }  // namespace

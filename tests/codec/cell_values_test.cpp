@@ -93,7 +93,7 @@ TEST(CellValues, RoundTripAndRepeatsCostASymbol) {
   std::vector<int32_t> varied, repeating;
   for (int i = 0; i < 400; ++i) {
     varied.push_back(static_cast<int32_t>((static_cast<uint32_t>(i) * 2654435761u) >> 8));  // 24 bits, scattered
-    repeating.push_back(i % 3 == 0 ? 123456 : (i % 3 == 1 ? -77 : 5000000));  // three recent values
+    repeating.push_back(i % 3 == 0 ? 123456 : (i % 3 == 1 ? -77 : 5000000));                // three recent values
   }
   size_t varied_bytes = 0, repeating_bytes = 0;
   EXPECT_EQ(roundTrip(withValues(varied), &varied_bytes), varied);

@@ -22,8 +22,7 @@ namespace gtn::test {
 // An nx x ny x nz grid of points (i fastest) whose cells are split with `split` (5 or 6); `keep`
 // selects cells (all when empty). Coordinates get a smooth deformation so that predictions are not
 // trivially exact.
-inline TetMesh gridMesh(int nx, int ny, int nz, int split, bool (*keep)(int, int, int) = nullptr,
-                        double ox = 0.0) {
+inline TetMesh gridMesh(int nx, int ny, int nz, int split, bool (*keep)(int, int, int) = nullptr, double ox = 0.0) {
   TetMesh m;
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
@@ -39,10 +38,8 @@ inline TetMesh gridMesh(int nx, int ny, int nz, int split, bool (*keep)(int, int
         if (keep && !keep(i, j, k)) continue;
         const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
                                id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
-        if (split == 6)
-          splitHexSix(h, m.tets);
-        else
-          splitHexFive(h, (i + j + k) % 2 == 1, m.tets);
+        if (split == 6) splitHexSix(h, m.tets);
+        else splitHexFive(h, (i + j + k) % 2 == 1, m.tets);
       }
   size_t zero = 0;
   normalizeOrientation(m, &zero);
@@ -130,7 +127,6 @@ class CheckingSink : public MeshSink {
  private:
   LevelHeader header_;
 };
-
 
 inline std::array<uint32_t, 3> canonicalTriangle(std::array<uint32_t, 3> t) {
   while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};

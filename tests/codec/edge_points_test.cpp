@@ -29,7 +29,7 @@ TEST(EdgePoints, MidpointsAndNearbyPointsGoToTheirEdge) {
   TetMesh m = twoTets();
   const uint32_t mid01 = addPoint(m, 1, 0, 0);
   const uint32_t bent23 = addPoint(m, 0, 1.1, 1.2);  // 0.08 of the edge's length off its midpoint
-  const uint32_t far = addPoint(m, 0.4, 0, 0);        // 0.3 of (0, 1)'s length off its midpoint
+  const uint32_t far = addPoint(m, 0.4, 0, 0);       // 0.3 of (0, 1)'s length off its midpoint
   const uint32_t outside = addPoint(m, 9, 9, 9);
   const uint32_t mid14 = addPoint(m, 2, 1, 1);
   const std::vector<EdgePoint> found = findEdgePoints(m);

@@ -83,7 +83,6 @@ TEST(Front, ARetiredVertexKeepsItsSlotWhileAFacePredictsFromIt) {
   EXPECT_EQ(front.nextGate(), -1);
 }
 
-
 TEST(Front, AQueueEntryTakesAFaceReopenedOnItsVerticesNotTheRecordItHad) {
   SlotPool pool;
   for (int i = 0; i < 8; ++i) pool.alloc();
@@ -94,7 +93,7 @@ TEST(Front, AQueueEntryTakesAFaceReopenedOnItsVerticesNotTheRecordItHad) {
   const long closes[4] = {-1, -1, -1, a};
   front.close(a, 3, e, closes, pool);
   const long b = front.open(other, kNoIndex, kNoIndex, pool);
-  EXPECT_EQ(b, a);  // the freed record is taken first
+  EXPECT_EQ(b, a);                                      // the freed record is taken first
   const long c = front.open(again, 4, kNoIndex, pool);  // the same vertices, reopened
   EXPECT_NE(c, a);
   // The first entry (opened with record a, now another face's) takes the reopened face; so does the

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "codec/grid_coder.h"
 #include "codec/codec_test_util.h"
+#include "codec/grid_coder.h"
 #include "codec/value_coder.h"
 #include "convert/import.h"
 #include "mesh/hex_split.h"
@@ -80,7 +80,8 @@ TetMesh meshOf(const GridLayout& layout, ScalarType coord_type, bool cell_fields
   }
   m.point_fields = {pressure, velocity, label, flags, zero, big};
   if (cell_fields) {
-    Field region("region", 1, ScalarType::kInt32, m.numTets()), quality("quality", 2, ScalarType::kFloat64, m.numTets());
+    Field region("region", 1, ScalarType::kInt32, m.numTets()),
+        quality("quality", 2, ScalarType::kFloat64, m.numTets());
     for (size_t t = 0; t < m.numTets(); ++t) {
       region.set<int32_t>(t, 0, m.point(m.tets[t][0])[0] < 3 ? 1 : 2);
       quality.set<double>(t, 0, 1.0 / (1.0 + t));
@@ -149,7 +150,8 @@ std::vector<uint8_t> roundTrip(const GridLayout& layout, const TetMesh& mesh, Gr
   fast.value_form = 1;
   GridEncodeReport fast_report;
   roundTripOnce(layout, mesh, &fast_report, fast);
-  EXPECT_TRUE(std::count(fast_report.stream_forms.begin(), fast_report.stream_forms.end(), 1) > 0) << "no stream took form 1";
+  EXPECT_TRUE(std::count(fast_report.stream_forms.begin(), fast_report.stream_forms.end(), 1) > 0)
+      << "no stream took form 1";
   return roundTripOnce(layout, mesh, report, options);
 }
 
@@ -216,7 +218,8 @@ TEST(GridCoder, Float64CoordinatesAndConstantFields) {
 
 TEST(GridCoder, BlankedCells) {
   GridLayout l = grid(7, 6, 5, 5);
-  for (uint32_t c : {0u, 7u, 8u, 9u, 40u, static_cast<uint32_t>(l.cells() - 1)}) l.exceptions.push_back({c, GridException::kBlanked, 0, {}});
+  for (uint32_t c : {0u, 7u, 8u, 9u, 40u, static_cast<uint32_t>(l.cells() - 1)})
+    l.exceptions.push_back({c, GridException::kBlanked, 0, {}});
   const TetMesh m = meshOf(l, ScalarType::kFloat32, true);
   EXPECT_EQ(m.numTets(), (l.cells() - 6) * 5);
   GridEncodeReport report;
@@ -309,11 +312,12 @@ TEST(GridCoder, PredictorChosenByMeasurement) {
 TEST(GridCoder, DecimalAndTableForms) {
   const GridLayout l = grid(20, 12, 10, 6);
   TetMesh m = meshOf(l, ScalarType::kFloat64);
-  Field dec("printed", 1, ScalarType::kFloat64, m.numPoints()), levels("levels", 1, ScalarType::kFloat64, m.numPoints());
+  Field dec("printed", 1, ScalarType::kFloat64, m.numPoints()),
+      levels("levels", 1, ScalarType::kFloat64, m.numPoints());
   std::mt19937 rng(3);
   for (size_t v = 0; v < m.numPoints(); ++v) {
     dec.set<double>(v, 0, std::round(std::sin(0.05 * v) * 1e4 + rng() % 7) / 1e4);  // 4 decimal places
-    levels.set<double>(v, 0, std::exp(static_cast<double>(rng() % 5)));  // 5 distinct values, no pattern
+    levels.set<double>(v, 0, std::exp(static_cast<double>(rng() % 5)));             // 5 distinct values, no pattern
   }
   m.point_fields = {dec, levels};
   GridEncodeReport report;
@@ -405,7 +409,8 @@ TEST(GridCoder, FormOneDeclinesFormsItCannotCode) {
   const GridLayout l = grid(14, 10, 9, 6);
   TetMesh m = meshOf(l, ScalarType::kFloat32);
   Field printed("printed", 1, ScalarType::kFloat64, m.numPoints());
-  for (size_t v = 0; v < m.numPoints(); ++v) printed.set<double>(v, 0, printedSingle(static_cast<float>(std::sin(0.01 * v)), 9));
+  for (size_t v = 0; v < m.numPoints(); ++v)
+    printed.set<double>(v, 0, printedSingle(static_cast<float>(std::sin(0.01 * v)), 9));
   m.point_fields = {printed};
   GridEncodeOptions fast;
   fast.value_form = 1;

@@ -48,8 +48,8 @@ TEST(LosslessMismatch, NamesTheFirstDifference) {
 
   TetMesh reversed = e.mesh;
   std::swap(reversed.tets[5][0], reversed.tets[5][1]);
-  EXPECT_EQ(losslessMismatch(reversed, e.level), "source tetrahedron 5 (decoded " +
-                                                     std::to_string(e.level.tet_order[5]) + ") is reversed");
+  EXPECT_EQ(losslessMismatch(reversed, e.level),
+            "source tetrahedron 5 (decoded " + std::to_string(e.level.tet_order[5]) + ") is reversed");
 
   TetMesh renamed = e.mesh;
   renamed.point_fields[0].name = "pressure";
@@ -65,7 +65,8 @@ TEST(LosslessMismatch, BrokenStreamsAndOrders) {
   EncodedLevel bad_order = e.level;
   std::swap(bad_order.vertex_order[0], bad_order.vertex_order[1]);
   const std::string swapped = losslessMismatch(e.mesh, bad_order);
-  EXPECT_TRUE(swapped.find("source point") != std::string::npos || swapped.find("source tetrahedron") != std::string::npos)
+  EXPECT_TRUE(swapped.find("source point") != std::string::npos ||
+              swapped.find("source tetrahedron") != std::string::npos)
       << swapped;
   bad_order.vertex_order[1] = bad_order.vertex_order[0];
   EXPECT_EQ(losslessMismatch(e.mesh, bad_order), "the encoder's vertex order is not a permutation");

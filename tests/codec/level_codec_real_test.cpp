@@ -118,8 +118,11 @@ TEST(LevelCodecReal, MidEdgeNodesAreCodedOnTheirEdges) {
   for (const auto& [a, b] : edges) {
     const double bend = k % 7 == 0 ? 0.01 : 0.0;
     for (int i = 0; i < 3; ++i)
-      m.coords.push_back(static_cast<float>((m.point(a)[i] + m.point(b)[i]) * 0.5 + bend * (m.point(b)[(i + 1) % 3] - m.point(a)[(i + 1) % 3])));
-    scalars.set<float>(k, 0, static_cast<float>(0.5 * (scalars.get(a, 0) + scalars.get(b, 0)) * (1.0 + 0.001 * static_cast<double>(k % 5))));
+      m.coords.push_back(static_cast<float>((m.point(a)[i] + m.point(b)[i]) * 0.5 +
+                                            bend * (m.point(b)[(i + 1) % 3] - m.point(a)[(i + 1) % 3])));
+    scalars.set<float>(
+        k, 0,
+        static_cast<float>(0.5 * (scalars.get(a, 0) + scalars.get(b, 0)) * (1.0 + 0.001 * static_cast<double>(k % 5))));
     ++k;
   }
   m.point_fields[0] = scalars;

@@ -9,8 +9,8 @@
 
 #include "codec/level_codec.h"
 #include "codec/value_coder.h"
-#include "mesh/mesh_stats.h"
 #include "codec_test_util.h"
+#include "mesh/mesh_stats.h"
 
 namespace gtn {
 namespace {
@@ -72,9 +72,9 @@ TEST(LevelCodec, ComponentsRepeatedAsOtherFieldsCostAlmostNothing) {
   only.point[n - 3] = true;
   const TetMesh full = test::decodeToMesh(e), got = test::decodeToMesh(e, &only);
   EXPECT_TRUE(got.point_fields[1].bytes == full.point_fields[1].bytes) << "velocity decoded for vy";
-  EXPECT_TRUE(std::all_of(got.point_fields[0].bytes.begin(), got.point_fields[0].bytes.end(),
-                          [](uint8_t b) { return b == 0; }))
-      << "pressure left out";
+  EXPECT_TRUE(std::all_of(got.point_fields[0].bytes.begin(), got.point_fields[0].bytes.end(), [](uint8_t b) {
+    return b == 0;
+  })) << "pressure left out";
 
   // Once the declarations are read, the decode says which streams it reads no further (velocity is
   // not among them: vy repeats it), and those may be freed: here their pages are made unreadable,
@@ -112,7 +112,8 @@ TEST(LevelCodec, ComponentsRepeatedAsOtherFieldsCostAlmostNothing) {
   const TetMesh& after = sink.builder.mesh();
   EXPECT_TRUE(after.point_fields[5].bytes == full.point_fields[5].bytes);
   EXPECT_TRUE(after.point_fields[1].bytes == full.point_fields[1].bytes);
-  for (size_t f = 0; f < m.cell_fields.size(); ++f) EXPECT_TRUE(after.cell_fields[f].bytes == full.cell_fields[f].bytes);
+  for (size_t f = 0; f < m.cell_fields.size(); ++f)
+    EXPECT_TRUE(after.cell_fields[f].bytes == full.cell_fields[f].bytes);
   EXPECT_TRUE(after.tets == full.tets);
   for (const Mapped& map : maps) munmap(map.base, map.size);
 }
@@ -199,7 +200,9 @@ TEST(LevelCodec, TrailingZeroBitsOfEveryValueAreNotCoded) {
 TEST(LevelCodec, DecimalValuesAreCodedAsIntegers) {
   TetMesh m = gridMesh(12, 10, 9, 6);
   const size_t n = m.numPoints();
-  auto decimal = [](double x, int places) { return std::nearbyint(x * std::pow(10.0, places)) / std::pow(10.0, places); };
+  auto decimal = [](double x, int places) {
+    return std::nearbyint(x * std::pow(10.0, places)) / std::pow(10.0, places);
+  };
   std::mt19937 rng(9);
   std::uniform_real_distribution<double> u(-50.0, 50.0);
   Field printed("printed", 1, ScalarType::kFloat64, n), full("full", 1, ScalarType::kFloat64, n);
@@ -269,13 +272,15 @@ TEST(LevelCodec, ShiftWithExceptionsSkipsTheZeroBitsOfMostValues) {
   Field sums("stress", 1, ScalarType::kFloat64, n);
   for (size_t v = 0; v < n; ++v) {
     const double* p = pure.point(v);
-    sums.set<double>(v, 0, static_cast<double>(static_cast<float>(std::sin(0.3 * p[0]) * 1e3)) +
-                               static_cast<double>(static_cast<float>(std::cos(0.2 * p[1] + p[2]) * 37.0)));
+    sums.set<double>(v, 0,
+                     static_cast<double>(static_cast<float>(std::sin(0.3 * p[0]) * 1e3)) +
+                         static_cast<double>(static_cast<float>(std::cos(0.2 * p[1] + p[2]) * 37.0)));
   }
   pure.point_fields = {sums};
   TetMesh mixed = pure;
   size_t exceptions = 0;
-  for (size_t v = 0; v < n; v += 10, ++exceptions) mixed.point_fields[0].set<double>(v, 0, std::sqrt(2.0 + static_cast<double>(v)));
+  for (size_t v = 0; v < n; v += 10, ++exceptions)
+    mixed.point_fields[0].set<double>(v, 0, std::sqrt(2.0 + static_cast<double>(v)));
   for (size_t v = 5; v < n; v += 40) mixed.point_fields[0].set<double>(v, 0, 0.0);  // zeros have every low bit zero
 
   const EncodedLevel a = roundTrip(pure), b = roundTrip(mixed);
@@ -297,7 +302,8 @@ TEST(LevelCodec, CarriedErrorsPredictCurvilinearGrids) {
     // A thick cylindrical shell, twisted along its axis: every grid line is curved. (Float
     // arithmetic for the stores: see FewDistinctValuesAreCodedAsPlacesInATable.)
     for (size_t v = 0; v < n; ++v) {
-      const float i = static_cast<float>(v % nx), j = static_cast<float>(v / nx % ny), k = static_cast<float>(v / (nx * ny));
+      const float i = static_cast<float>(v % nx), j = static_cast<float>(v / nx % ny),
+                  k = static_cast<float>(v / (nx * ny));
       const float r = 2.0f + 0.15f * i + 0.01f * i * i, theta = 0.09f * j + 0.02f * k;
       m.coords[3 * v] = r * std::cos(theta);
       m.coords[3 * v + 1] = r * std::sin(theta);
@@ -381,9 +387,11 @@ TEST(LevelCodec, SplitHexahedraTakeTheirCellValuesFromTheirSiblings) {
   for (const Case c : {Case{6, 10.0, 0.3}, Case{5, 17.5, 0.4}}) {
     SCOPED_TRACE(c.split);
     TetMesh m = gridMesh(nx, ny, nz, c.split);  // each hexahedron's tetrahedra one after another
-    Field strain("strain", 1, ScalarType::kFloat64, m.numTets()), material("material", 1, ScalarType::kInt32, m.numTets());
+    Field strain("strain", 1, ScalarType::kFloat64, m.numTets()),
+        material("material", 1, ScalarType::kInt32, m.numTets());
     for (size_t t = 0; t < m.numTets(); ++t) {
-      const int h = static_cast<int>(t) / c.split, i = h % (nx - 1), j = h / (nx - 1) % (ny - 1), k = h / ((nx - 1) * (ny - 1));
+      const int h = static_cast<int>(t) / c.split, i = h % (nx - 1), j = h / (nx - 1) % (ny - 1),
+                k = h / ((nx - 1) * (ny - 1));
       // Smooth, and distinct in every hexahedron; a label constant over blocks of 4 x 4 x 4.
       strain.set<double>(t, 0, std::sin(0.3 * i) * std::cos(0.2 * j) + 0.05 * k + 1e-3 * std::sin(i * j + k));
       material.set<int32_t>(t, 0, 1 + (i / 4 + 3 * (j / 4) + 7 * (k / 4)) % 5);
@@ -421,9 +429,8 @@ TEST(LevelCodec, CoincidentPointsAndZeroVolumeTets) {
 }
 
 TEST(LevelCodec, InternalCavity) {
-  TetMesh m = gridMesh(8, 8, 8, 6, [](int i, int j, int k) {
-    return !(i >= 3 && i <= 4 && j >= 3 && j <= 4 && k >= 3 && k <= 4);
-  });
+  TetMesh m = gridMesh(8, 8, 8, 6,
+                       [](int i, int j, int k) { return !(i >= 3 && i <= 4 && j >= 3 && j <= 4 && k >= 3 && k <= 4); });
   roundTrip(m);
 }
 
@@ -500,12 +507,11 @@ TEST(LevelCodec, EscapesRankedOverABoxNearTheDoubleRange) {
   // rings only and wrote a file the decoder refused ("escape rank beyond the live vertices").
   TetMesh m;
   m.coord_type = ScalarType::kFloat64;
-  m.coords = {10, 0, 0, 10, 10, 0, 9007199254740993.0, 0, 10, 10, 0, 10, 4, 4, 4, 6, 4, 4,
-              6, 6, 4, 4, 6, 4, 4, 4, 6, 6, 4, 6, 1.7976931348623157e308, 6, 6, 4, 6, 6,
-              2, 2, 1, 1, 1, 2, 2, 1, 2, 1, 2, 2};
+  m.coords = {10, 0, 0, 10, 10, 0, 9007199254740993.0,     0, 10, 10, 0, 10, 4, 4, 4, 6, 4, 4, 6, 6, 4, 4, 6, 4,
+              4,  4, 6, 6,  4,  6, 1.7976931348623157e308, 6, 6,  4,  6, 6,  2, 2, 1, 1, 1, 2, 2, 1, 2, 1, 2, 2};
   const uint32_t tets[14][4] = {{14, 15, 9, 3}, {10, 5, 11, 6}, {15, 9, 3, 10}, {12, 16, 9, 3}, {10, 3, 4, 11},
-                                {9, 3, 10, 11}, {9, 12, 3, 11},  {5, 13, 7, 6}, {5, 12, 9, 11},  {5, 9, 10, 11},
-                                {5, 8, 12, 7},  {4, 10, 11, 1},  {11, 10, 6, 1}, {11, 7, 2, 1}};
+                                {9, 3, 10, 11}, {9, 12, 3, 11}, {5, 13, 7, 6},  {5, 12, 9, 11}, {5, 9, 10, 11},
+                                {5, 8, 12, 7},  {4, 10, 11, 1}, {11, 10, 6, 1}, {11, 7, 2, 1}};
   for (const auto& t : tets) m.tets.push_back({t[0] - 1, t[1] - 1, t[2] - 1, t[3] - 1});
   size_t zero = 0;
   normalizeOrientation(m, &zero);

@@ -42,8 +42,8 @@ void runScenario(uint32_t seed, bool clustered) {
     for (int i = 0; i < 3; ++i) m.pos[3 * s + i] = clustered ? 0.01 * std::round(u(rng) * 20) : u(rng);
     if (kind == 0) m.pos[3 * s] = std::numeric_limits<double>::quiet_NaN();
     if (kind == 1) m.pos[3 * s + 1] = std::numeric_limits<double>::infinity();
-    if (kind == 2) m.pos[3 * s + 2] = 1e200;   // far outside the box, squared distance overflows
-    if (kind == 3) m.pos[3 * s] = 5.0;         // outside the box the grid was built for
+    if (kind == 2) m.pos[3 * s + 2] = 1e200;  // far outside the box, squared distance overflows
+    if (kind == 3) m.pos[3 * s] = 5.0;        // outside the box the grid was built for
     if (kind == 4 && s > 0) std::copy_n(&m.pos[3 * (s - 1)], 3, &m.pos[3 * s]);  // coincident
   };
   for (uint32_t s = 0; s < slots / 2; ++s) {
@@ -83,7 +83,8 @@ void runScenario(uint32_t seed, bool clustered) {
     std::sort(order.begin(), order.end());
     const uint64_t r = rng() % (order.size() + 3);
     const uint32_t got = grid.kth(p, r, d, ok, all);
-    ASSERT_EQ(got, r < order.size() ? order[r].second : kNoIndex) << "seed " << seed << " step " << step << " rank " << r;
+    ASSERT_EQ(got, r < order.size() ? order[r].second : kNoIndex)
+        << "seed " << seed << " step " << step << " rank " << r;
     if (!order.empty()) {
       const size_t i = rng() % order.size();
       ASSERT_EQ(grid.rankOf(p, order[i].first, order[i].second, d, ok, all), i) << "seed " << seed << " step " << step;
@@ -114,7 +115,8 @@ TEST(NearestGrid, KeyedRanksEqualAScanOfEveryPoint) {
       q[i] = c[i] + 0.3 * u(rng);
       p[i] = u(rng);
     }
-    const double off = std::sqrt((q[0] - c[0]) * (q[0] - c[0]) + (q[1] - c[1]) * (q[1] - c[1]) + (q[2] - c[2]) * (q[2] - c[2]));
+    const double off =
+        std::sqrt((q[0] - c[0]) * (q[0] - c[0]) + (q[1] - c[1]) * (q[1] - c[1]) + (q[2] - c[2]) * (q[2] - c[2]));
     auto key = [&](uint32_t s) { return NearestGrid::Key{dist(m, s, q), dist(m, s, p)}; };
     auto bound = [&](double safe2) {
       const double s = std::sqrt(safe2) * (1 - 1e-12) - off;

@@ -20,8 +20,9 @@ namespace {
 size_t xz9(const std::vector<uint8_t>& data) {
   std::vector<uint8_t> out(lzma_stream_buffer_bound(data.size()));
   size_t pos = 0;
-  EXPECT_EQ(lzma_easy_buffer_encode(9, LZMA_CHECK_CRC64, nullptr, data.data(), data.size(), out.data(), &pos, out.size()),
-            LZMA_OK);
+  EXPECT_EQ(
+      lzma_easy_buffer_encode(9, LZMA_CHECK_CRC64, nullptr, data.data(), data.size(), out.data(), &pos, out.size()),
+      LZMA_OK);
   return pos;
 }
 
@@ -45,11 +46,12 @@ TetMesh feaMesh() {
   Random rng;
   std::vector<float> levels(2000);
   for (float& l : levels) l = static_cast<float>(2.0e8 * (rng.unit() - 0.3));
-  Field temperature("temperature", 1, ScalarType::kFloat32, np), displacement("displacement", 3, ScalarType::kFloat32, np),
-      stress("stress", 1, ScalarType::kFloat32, np);
+  Field temperature("temperature", 1, ScalarType::kFloat32, np),
+      displacement("displacement", 3, ScalarType::kFloat32, np), stress("stress", 1, ScalarType::kFloat32, np);
   for (size_t v = 0; v < np; ++v) {
     const double* p = m.point(v);
-    temperature.set<float>(v, 0, static_cast<float>(300 + 40 * std::sin(0.2 * p[0]) * std::cos(0.3 * p[1]) + 0.01 * rng.unit()));
+    temperature.set<float>(
+        v, 0, static_cast<float>(300 + 40 * std::sin(0.2 * p[0]) * std::cos(0.3 * p[1]) + 0.01 * rng.unit()));
     for (uint32_t c = 0; c < 3; ++c)
       displacement.set<float>(v, c, static_cast<float>(1e-3 * p[c] * p[(c + 1) % 3] + 1e-7 * rng.unit()));
     stress.set<float>(v, 0, levels[rng.next() % levels.size()]);
@@ -113,8 +115,13 @@ TEST(PackedValues, PackedFormKeepsEveryBitPattern) {
   Random rng;
   std::vector<uint64_t> set64(1500);
   for (uint64_t& b : set64) b = rng.next();
-  const uint64_t specials[] = {0x7FF8000000000123u, 0xFFF0000000000001u, 0x8000000000000000u, 0x7FF0000000000000u,
-                               0xFFF0000000000000u, 0x0000000000000001u, 0};
+  const uint64_t specials[] = {0x7FF8000000000123u,
+                               0xFFF0000000000001u,
+                               0x8000000000000000u,
+                               0x7FF0000000000000u,
+                               0xFFF0000000000000u,
+                               0x0000000000000001u,
+                               0};
   for (size_t i = 0; i < std::size(specials); ++i) set64[i] = specials[i];
   std::vector<uint32_t> set32(1500);
   for (uint32_t& b : set32) b = static_cast<uint32_t>(rng.next());
@@ -125,7 +132,8 @@ TEST(PackedValues, PackedFormKeepsEveryBitPattern) {
     for (uint32_t c = 0; c < 2; ++c) std::memcpy(&f64.bytes[(2 * v + c) * 8], &set64[rng.next() % set64.size()], 8);
     std::memcpy(&f32.bytes[v * 4], &set32[rng.next() % set32.size()], 4);
   }
-  for (size_t i = 0; i < std::size(specials); ++i) std::memcpy(&f64.bytes[i * 16], &specials[i], 8);  // each one present
+  for (size_t i = 0; i < std::size(specials); ++i)
+    std::memcpy(&f64.bytes[i * 16], &specials[i], 8);  // each one present
   Field c64("c64", 1, ScalarType::kFloat64, nt);
   for (size_t t = 0; t < nt; ++t) std::memcpy(&c64.bytes[t * 8], &set64[rng.next() % 40], 8);
   m.point_fields = {f64, f32};
@@ -188,13 +196,13 @@ TEST(PackedValues, DamagedPackedStreamsAreRejected) {
   const std::vector<uint8_t> good = enc->point_fields[2];
   ASSERT_TRUE(decodeWith(good, enc->header).isOk());
   std::vector<std::vector<uint8_t>> bad;
-  bad.emplace_back(good.begin(), good.end() - 1);             // truncated
+  bad.emplace_back(good.begin(), good.end() - 1);  // truncated
   bad.emplace_back(good.begin(), good.begin() + good.size() / 2);
-  bad.push_back(good), bad.back().push_back(0);               // a byte after the end marker
-  bad.push_back(good), bad.back()[1] = 7;                     // unknown layout
-  bad.push_back(good), bad.back()[2] = 40;                    // 4 GiB dictionary
+  bad.push_back(good), bad.back().push_back(0);                 // a byte after the end marker
+  bad.push_back(good), bad.back()[1] = 7;                       // unknown layout
+  bad.push_back(good), bad.back()[2] = 40;                      // 4 GiB dictionary
   bad.push_back(good), bad.back()[2] = kMaxPackedDictProperty;  // 64 MiB for 27 KiB of values
-  bad.push_back({kPackedFormByte, 0});                         // no header
+  bad.push_back({kPackedFormByte, 0});                          // no header
   for (const auto& stream : bad) {
     const Status st = decodeWith(stream, enc->header);
     ASSERT_FALSE(st.isOk());

@@ -15,8 +15,8 @@ namespace {
 TEST(Prediction, RulesWeighTheStencilAsTheSpecSays) {
   const double x[4] = {1.5, 10.0, 100.0, 1000.0};  // a, b, c, d
   EXPECT_EQ(kWeightedRule[0](x), 0.0);
-  EXPECT_EQ(kWeightedRule[1](x), 1.5 + 10 - 1000);   // a + b - d
-  EXPECT_EQ(kWeightedRule[4](x), 1.5 + 10 - 100);    // a + b - c
+  EXPECT_EQ(kWeightedRule[1](x), 1.5 + 10 - 1000);  // a + b - d
+  EXPECT_EQ(kWeightedRule[4](x), 1.5 + 10 - 100);   // a + b - c
   EXPECT_EQ(kWeightedRule[7](x), 1.5 + 10 + 100 - 2000);
   EXPECT_EQ(kWeightedRule[12](x), 1000.0);  // copies d
   double all[kRules];

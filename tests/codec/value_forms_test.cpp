@@ -61,7 +61,8 @@ std::vector<double> printedSingles(size_t n) {
 // Writes `form` for component 0 of `type`, reads it back, then codes `values` (predicted by the
 // previous value) with each side's ValueCoder: returns the decoded values' bytes, or the decoder's
 // complaint about the declaration.
-std::string roundTrip(ScalarType type, const std::vector<uint8_t>& raw, const ValueForm& form, std::vector<uint8_t>* out) {
+std::string roundTrip(ScalarType type, const std::vector<uint8_t>& raw, const ValueForm& form,
+                      std::vector<uint8_t>* out) {
   const size_t vs = scalarSize(type), n = raw.size() / vs;
   std::vector<uint8_t> stream;
   {

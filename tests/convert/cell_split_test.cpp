@@ -46,9 +46,8 @@ Grid makeGrid(int nx, int ny, int nz, uint32_t seed) {
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        const uint32_t h[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
-                               id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
-                               id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+                               id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
         g.cells.types.push_back(kVtkHexahedron);
         g.cells.connectivity.insert(g.cells.connectivity.end(), h, h + 8);
         g.cells.offsets.push_back(static_cast<int64_t>(g.cells.connectivity.size()));
@@ -199,8 +198,11 @@ TEST(CellSplit, PentagonalAndHexagonalPrismsConform) {
   for (int i = 0; i < 6; ++i) hexagon.push_back({std::cos(i * M_PI / 3), std::sin(i * M_PI / 3)});
   // On the side (hexagon[0], hexagon[1]), outward: a rectangle of depth 0.8 with a roof of 0.5.
   const double nx = r3 / 2, ny = 0.5, mx = 0.75, my = r3 / 4;
-  pentagon = {hexagon[0], hexagon[1], {hexagon[1][0] + 0.8 * nx, hexagon[1][1] + 0.8 * ny},
-              {mx + 1.3 * nx, my + 1.3 * ny}, {hexagon[0][0] + 0.8 * nx, hexagon[0][1] + 0.8 * ny}};
+  pentagon = {hexagon[0],
+              hexagon[1],
+              {hexagon[1][0] + 0.8 * nx, hexagon[1][1] + 0.8 * ny},
+              {mx + 1.3 * nx, my + 1.3 * ny},
+              {hexagon[0][0] + 0.8 * nx, hexagon[0][1] + 0.8 * ny}};
   for (uint32_t seed = 0; seed < 20; ++seed) {
     // Points: the hexagon at z = 0, 1, 2 (0-17), the pentagon's 3 outer points at z = 0, 1 (18-23).
     std::vector<std::array<double, 3>> pts;
@@ -284,8 +286,8 @@ TEST(CellSplit, PolyhedraSplitFromTheirFacesAndConform) {
       add(kVtkPolyhedron, {a, b, c, d, e, f, g, h},
           {{a, d, c, b}, {e, f, g, h}, {b, c, g, f}, {a, e, h, d}, {a, b, f, e}, {d, h, g, c}});
       // The right cube [1,2] x [0,1]^2 as a hexahedron.
-      add(kVtkHexahedron, {P(1, 0, 0), P(2, 0, 0), P(2, 1, 0), P(1, 1, 0), P(1, 0, 1), P(2, 0, 1), P(2, 1, 1), P(1, 1, 1)},
-          {});
+      add(kVtkHexahedron,
+          {P(1, 0, 0), P(2, 0, 0), P(2, 1, 0), P(1, 1, 0), P(1, 0, 1), P(2, 0, 1), P(2, 1, 1), P(1, 1, 1)}, {});
       // On the left cube's top: a wedge with its ridge above x = 0, as a polyhedron of 5 faces.
       const int64_t r0 = perm[12], r1 = perm[13];
       add(kVtkPolyhedron, {e, f, g, h, r0, r1}, {{e, f, g, h}, {e, r0, f}, {h, g, r1}, {e, h, r1, r0}, {f, r0, r1, g}});
@@ -529,13 +531,17 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
   cells.offsets.push_back(8);
   const double dent[3] = {0.75, 0.5, 0.5};  // local corner 1, global point 5
   std::copy(dent, dent + 3, &mesh.coords[3 * 5]);
-  auto volume = [&](const Tet& t) { return signedVolume(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]), mesh.point(t[3])); };
+  auto volume = [&](const Tet& t) {
+    return signedVolume(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]), mesh.point(t[3]));
+  };
   double hex_volume = 0;
   for (const bool with_coords : {false, true}) {
     std::vector<Tet> tets;
     std::vector<uint32_t> tet_cell;
     ImportReport report;
-    ASSERT_TRUE(splitVtkCells("h.vtu", cells, 8, with_coords ? mesh.coords.data() : nullptr, 6, &tets, &tet_cell, &report).isOk());
+    ASSERT_TRUE(
+        splitVtkCells("h.vtu", cells, 8, with_coords ? mesh.coords.data() : nullptr, 6, &tets, &tet_cell, &report)
+            .isOk());
     // Asked for 5 (its diagonals allow it only when they form an inscribed tetrahedron), the split
     // never inverts a piece either.
     std::vector<Tet> five;
@@ -553,9 +559,11 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
     }
     EXPECT_EQ(negative, 0u);
     for (const Tet& t : tets) hex_volume += volume(t);
-    for (const Tet& t : tets) EXPECT_TRUE(std::find(t.begin(), t.end(), 4u) != t.end()) << "coned from global 4 (local 7)";
+    for (const Tet& t : tets)
+      EXPECT_TRUE(std::find(t.begin(), t.end(), 4u) != t.end()) << "coned from global 4 (local 7)";
     ASSERT_EQ(report.warnings.size(), 1u);
-    EXPECT_NE(report.warnings[0].find("1 cells that are not convex split from another vertex"), std::string::npos) << report.warnings[0];
+    EXPECT_NE(report.warnings[0].find("1 cells that are not convex split from another vertex"), std::string::npos)
+        << report.warnings[0];
     // The pieces tile the cell: their boundary is the cell's 12 face triangles, each once.
     const std::map<std::array<uint32_t, 3>, int> faces = faceCounts(tets);
     size_t once = 0;
@@ -579,7 +587,9 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
     std::vector<Tet> tets;
     std::vector<uint32_t> tet_cell;
     ImportReport report;
-    ASSERT_TRUE(splitVtkCells("p.vtk", poly, 8, with_coords ? mesh.coords.data() : nullptr, 6, &tets, &tet_cell, &report).isOk());
+    ASSERT_TRUE(
+        splitVtkCells("p.vtk", poly, 8, with_coords ? mesh.coords.data() : nullptr, 6, &tets, &tet_cell, &report)
+            .isOk());
     ASSERT_EQ(tets.size(), 6u);
     size_t negative = 0;
     double total = 0;
@@ -604,7 +614,7 @@ TEST(CellSplit, NonConvexHexahedronIsConedFromAnAllowedVertexWithoutInversions) 
 // corners' floating-point fields and its smallest corner's integer ones. With float32 points the
 // added point is a float32 value too (the check that caught GCC 12's dropped rounding).
 TEST(CellSplit, WarpedHexahedronIsSplitAroundASteinerPoint) {
-  const double corner[8][3] = {{0, 0, -1},      {1, 0, -1},      {1, 1, -1},      {0, 1, -1},
+  const double corner[8][3] = {{0, 0, -1},       {1, 0, -1},       {1, 1, -1},       {0, 1, -1},
                                {0.3, 0.3, -1.3}, {0.7, 0.3, -2.0}, {0.7, 0.7, -2.0}, {0.3, 0.7, -2.0}};
   const int local_to_global[8] = {4, 5, 6, 7, 0, 1, 2, 3};  // the file's "8 12 13 14 15 8 9 10 11", renumbered
   for (const bool float32 : {false, true}) {
@@ -673,7 +683,8 @@ TEST(CellSplit, WarpedHexahedronIsSplitAroundASteinerPoint) {
     EXPECT_EQ(r.mesh.point_fields[0].get(8, 1), 0.5 * 140.0 / 8.0);
     EXPECT_EQ(r.mesh.point_fields[1].get(8, 0), 100.0);
     bool warned = false;
-    for (const std::string& w : r.report.warnings) warned |= w.find("1 cells that are not convex split around a point added") != std::string::npos;
+    for (const std::string& w : r.report.warnings)
+      warned |= w.find("1 cells that are not convex split around a point added") != std::string::npos;
     EXPECT_TRUE(warned) << where;
   }
 }
@@ -698,7 +709,8 @@ TEST(CellSplit, WarpedStructuredCellIsSplitAroundASteinerPointAlongItsGridDiagon
     else splitHexSix(h, plain);
     auto signs = [&](const std::vector<Tet>& tets) {
       std::set<int> s;
-      for (const Tet& t : tets) s.insert(orient3d(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]), mesh.point(t[3])));
+      for (const Tet& t : tets)
+        s.insert(orient3d(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]), mesh.point(t[3])));
       return s;
     };
     const bool mixed = signs(plain).count(1) && signs(plain).count(-1);

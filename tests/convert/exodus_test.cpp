@@ -44,19 +44,32 @@ struct Block {
 std::vector<Block> blocks() {
   auto g = gridNode;
   std::vector<Block> b;
-  b.push_back({10, "HEX8", 8, {g(0, 0, 0), g(1, 0, 0), g(1, 1, 0), g(0, 1, 0), g(0, 0, 1), g(1, 0, 1), g(1, 1, 1), g(0, 1, 1)}});
-  b.push_back({20, "WEDGE", 6,
+  b.push_back({10,
+               "HEX8",
+               8,
+               {g(0, 0, 0), g(1, 0, 0), g(1, 1, 0), g(0, 1, 0), g(0, 0, 1), g(1, 0, 1), g(1, 1, 1), g(0, 1, 1)}});
+  b.push_back({20,
+               "WEDGE",
+               6,
                {g(1, 0, 0), g(2, 0, 0), g(2, 1, 0), g(1, 0, 1), g(2, 0, 1), g(2, 1, 1),  //
                 g(1, 0, 0), g(2, 1, 0), g(1, 1, 0), g(1, 0, 1), g(2, 1, 1), g(1, 1, 1)}});
   // Apex (3,0,0); bases: the face x = 2 and the face y = 1.
-  b.push_back({30, "PYRAMID", 5,
+  b.push_back({30,
+               "PYRAMID",
+               5,
                {g(2, 0, 0), g(2, 1, 0), g(2, 1, 1), g(2, 0, 1), g(3, 0, 0),  //
                 g(2, 1, 0), g(3, 1, 0), g(3, 1, 1), g(2, 1, 1), g(3, 0, 0)}});
   // The third pyramid, base z = 1, as two tetrahedra.
-  b.push_back({40, "TETRA", 4, {g(2, 0, 1), g(3, 0, 1), g(3, 1, 1), g(3, 0, 0), g(2, 0, 1), g(3, 1, 1), g(2, 1, 1), g(3, 0, 0)}});
+  b.push_back({40,
+               "TETRA",
+               4,
+               {g(2, 0, 1), g(3, 0, 1), g(3, 1, 1), g(3, 0, 0), g(2, 0, 1), g(3, 1, 1), g(2, 1, 1), g(3, 0, 0)}});
   const int apex = kGridNodes + 1, m = kGridNodes + 2;
   b.push_back({50, "TETRA10", 10, {g(0, 0, 0), g(1, 0, 0), g(1, 1, 0), apex, m, m + 1, m + 2, m + 3, m + 4, m + 5}});
-  b.push_back({60, "QUAD4", 4, {g(0, 0, 0), g(1, 0, 0), g(1, 0, 1), g(0, 0, 1), g(1, 0, 0), g(2, 0, 0), g(2, 0, 1), g(1, 0, 1)}});
+  b.push_back({60,
+               "QUAD4",
+               4,
+               {g(0, 0, 0), g(1, 0, 0), g(1, 0, 1), g(0, 0, 1), g(1, 0, 0), g(2, 0, 0), g(2, 0, 1), g(1, 0, 1)}});
   b.push_back({70, "BAR2", 2, {g(0, 0, 0), g(1, 0, 0), g(1, 0, 0), g(2, 0, 0), g(2, 0, 0), g(3, 0, 0)}});
   b.push_back({80, "TRI3", 3, {g(0, 0, 1), g(1, 0, 1), g(1, 1, 1)}});
   b.push_back({90, "NULL", 0, {}});
@@ -66,14 +79,16 @@ std::vector<Block> blocks() {
 // Values: nodal temperature 1000 t + node, velocity (node, -node, t); element stress 100 t + 10 b +
 // e (block index b, element e), pressure only on the HEX and WEDGE blocks; global energy 7 t.
 double temperature(int t, int node) { return 1000.0 * t + node + 0.5; }
-double stress(int t, size_t b, size_t e) { return 100.0 * t + 10.0 * static_cast<double>(b) + static_cast<double>(e) + 0.25; }
+double stress(int t, size_t b, size_t e) {
+  return 100.0 * t + 10.0 * static_cast<double>(b) + static_cast<double>(e) + 0.25;
+}
 double pressure(int t, size_t b, size_t e) { return -stress(t, b, e); }
 
 struct WriteOptions {
   int mode = EX_CLOBBER;  // | EX_NETCDF4, EX_NORMAL_MODEL ...
   int word_size = 8;
   int steps = 3;
-  bool sets = true;  // a node set and a side set
+  bool sets = true;                  // a node set and a side set
   bool pressure_everywhere = false;  // else only on the HEX and WEDGE blocks
 };
 
@@ -86,8 +101,8 @@ void writeExodus(const std::string& path, const WriteOptions& o) {
   const std::vector<Block> bl = blocks();
   size_t num_elem = 0;
   for (const Block& b : bl) num_elem += b.elements();
-  check(ex_put_init(exoid, "a mixed test mesh", 3, kNodes, static_cast<int64_t>(num_elem), static_cast<int64_t>(bl.size()),
-                    o.sets ? 1 : 0, o.sets ? 1 : 0),
+  check(ex_put_init(exoid, "a mixed test mesh", 3, kNodes, static_cast<int64_t>(num_elem),
+                    static_cast<int64_t>(bl.size()), o.sets ? 1 : 0, o.sets ? 1 : 0),
         "ex_put_init");
   std::vector<double> x(kNodes), y(kNodes), z(kNodes);
   for (int k = 0; k < kGridNodes; ++k) x[k] = k % 4, y[k] = k / 4 % 2, z[k] = k / 8;
@@ -102,7 +117,8 @@ void writeExodus(const std::string& path, const WriteOptions& o) {
   }
   check(ex_put_coord(exoid, x.data(), y.data(), z.data()), "ex_put_coord");
   for (const Block& b : bl) {
-    check(ex_put_elem_block(exoid, b.id, b.type, static_cast<int64_t>(b.elements()), b.nodes_per, 0), "ex_put_elem_block");
+    check(ex_put_elem_block(exoid, b.id, b.type, static_cast<int64_t>(b.elements()), b.nodes_per, 0),
+          "ex_put_elem_block");
     if (b.elements() == 0) continue;
     std::vector<int> conn(b.conn.begin(), b.conn.end());
     check(ex_put_elem_conn(exoid, b.id, conn.data()), "ex_put_elem_conn");
@@ -146,7 +162,8 @@ void writeExodus(const std::string& path, const WriteOptions& o) {
       std::vector<double> s(n), p(n);
       for (size_t e = 0; e < n; ++e) s[e] = stress(t, b, e), p[e] = pressure(t, b, e);
       check(ex_put_var(exoid, t, EX_ELEM_BLOCK, 1, bl[b].id, static_cast<int64_t>(n), s.data()), "stress");
-      if (b < 2 || o.pressure_everywhere) check(ex_put_var(exoid, t, EX_ELEM_BLOCK, 2, bl[b].id, static_cast<int64_t>(n), p.data()), "pressure");
+      if (b < 2 || o.pressure_everywhere)
+        check(ex_put_var(exoid, t, EX_ELEM_BLOCK, 2, bl[b].id, static_cast<int64_t>(n), p.data()), "pressure");
     }
     const double energy = 7.0 * t;
     check(ex_put_var(exoid, t, EX_GLOBAL, 1, 0, 1, &energy), "energy");
@@ -232,10 +249,12 @@ void expectMesh(const ImportResult& r, int step, ScalarType value_type, const st
   EXPECT_EQ(*m.findMetadata("exodus.title"), "a mixed test mesh");
   // What was left out, each said.
   const std::string all = allWarnings(r.report);
-  EXPECT_TRUE(hasWarning(r.report, "skipped 6 elements of 14 that are not linear volume elements (3 BAR2, 2 QUAD4, 1 TRI3)"))
+  EXPECT_TRUE(
+      hasWarning(r.report, "skipped 6 elements of 14 that are not linear volume elements (3 BAR2, 2 QUAD4, 1 TRI3)"))
       << all;
   EXPECT_TRUE(hasWarning(r.report, "1 TETRA10 elements: only their corners are kept")) << all;
-  EXPECT_TRUE(hasWarning(r.report, "element variable 'pressure' is not defined on element blocks 30, 40, 50: NaN there"))
+  EXPECT_TRUE(
+      hasWarning(r.report, "element variable 'pressure' is not defined on element blocks 30, 40, 50: NaN there"))
       << all;
   EXPECT_TRUE(hasWarning(r.report, "skipped 1 node sets")) << all;
   EXPECT_TRUE(hasWarning(r.report, "skipped 1 side sets")) << all;
@@ -281,7 +300,9 @@ TEST(ExodusImport, MixedBlocksVariablesAndTimeSteps) {
   }
   // Content, not the name, tells the format: an Exodus file named .bin (a PLOT3D extension) or
   // without an extension.
-  ASSERT_EQ(runShell("cp " + dir + "/classic.exo " + dir + "/x.bin && cp " + dir + "/hdf5.exo " + dir + "/noext").exit_code, 0);
+  ASSERT_EQ(
+      runShell("cp " + dir + "/classic.exo " + dir + "/x.bin && cp " + dir + "/hdf5.exo " + dir + "/noext").exit_code,
+      0);
   for (const char* name : {"x.bin", "noext"}) {
     auto r = load(dir + "/" + name);
     ASSERT_TRUE(r.isOk()) << name << ": " << r.status().message();
@@ -568,7 +589,8 @@ TEST(ExodusErrors, NoVolume) {
   ASSERT_GE(ex_close(id), 0);
   auto r = load(dir + "/flat.exo");
   ASSERT_FALSE(r.isOk());
-  EXPECT_EQ(r.status().message(), dir + "/flat.exo: a 2-dimensional Exodus II mesh; only 3-dimensional meshes hold tetrahedra");
+  EXPECT_EQ(r.status().message(),
+            dir + "/flat.exo: a 2-dimensional Exodus II mesh; only 3-dimensional meshes hold tetrahedra");
 
   id = ex_create((dir + "/shell.exo").c_str(), EX_CLOBBER, &comp_ws, &io_ws);
   ASSERT_GE(id, 0);

@@ -2,8 +2,8 @@
 // binary), checked against meshio's reading of the same files; second-order and mixed meshes; data
 // sections; byte order; sparse tags; damaged files.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <zlib.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <array>
@@ -298,8 +298,9 @@ TEST(GmshImport, VolumeInTwoPhysicalGroups) {
   if (!gmshAvailable(&why)) GTEST_SKIP() << why;
   const std::string dir = tempDir("gmsh_two_groups");
   const std::string geo = dir + "/two.geo";
-  writeFile(geo, "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1, 1};\nMesh.MeshSizeMax = 0.5;\n"
-                 "Physical Volume(\"a\", 1) = {1};\nPhysical Volume(\"b\", 2) = {1};\n");
+  writeFile(geo,
+            "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1, 1};\nMesh.MeshSizeMax = 0.5;\n"
+            "Physical Volume(\"a\", 1) = {1};\nPhysical Volume(\"b\", 2) = {1};\n");
   size_t tets = 0;
   for (const auto& v : kVariants) {
     const std::string path = dir + "/two_" + v[0] + v[1] + ".msh";
@@ -461,8 +462,8 @@ TEST(GmshImport, BinaryBothByteOrdersAndSizes) {
     for (bool big : {false, true}) {
       for (int size_bytes : {4, 8}) {
         if (version == 2 && size_bytes == 4) continue;
-        const std::string path = dir + "/b" + std::to_string(version) + (big ? "be" : "le") +
-                                 std::to_string(size_bytes) + ".msh";
+        const std::string path =
+            dir + "/b" + std::to_string(version) + (big ? "be" : "le") + std::to_string(size_bytes) + ".msh";
         writeFile(path, binaryFile(big, version, size_bytes));
         SCOPED_TRACE(path);
         auto r = importMesh({path}, ImportOptions{});

@@ -50,14 +50,15 @@ TEST(ImportDispatch, OneFileFormatsNameTheExtraInput) {
 TEST(ImportDispatch, FormatFromTheExtension) {
   const std::string dir = test::tempDir("import_ext");
   const std::pair<const char*, InputFormat> cases[] = {
-      {"a.vtu", InputFormat::kVtu},     {"a.vts", InputFormat::kVtu},      {"a.vtr", InputFormat::kVtu},
-      {"a.vti", InputFormat::kVtu},     {"a.pvtu", InputFormat::kVtu},     {"a.pvts", InputFormat::kVtu},
-      {"a.pvtr", InputFormat::kVtu},    {"a.pvti", InputFormat::kVtu},     {"a.VTK", InputFormat::kVtkLegacy},
-      {"a.mesh", InputFormat::kMedit},  {"a.meshb", InputFormat::kMeshb},  {"a.off", InputFormat::kOff},
-      {"a.node", InputFormat::kTetgen}, {"a.ele", InputFormat::kTetgen},   {"a.xyz", InputFormat::kPlot3d},
-      {"a.q", InputFormat::kPlot3d},    {"a.gtn", InputFormat::kGtn},      {"a.stl", InputFormat::kUnknown}};
+      {"a.vtu", InputFormat::kVtu},     {"a.vts", InputFormat::kVtu},     {"a.vtr", InputFormat::kVtu},
+      {"a.vti", InputFormat::kVtu},     {"a.pvtu", InputFormat::kVtu},    {"a.pvts", InputFormat::kVtu},
+      {"a.pvtr", InputFormat::kVtu},    {"a.pvti", InputFormat::kVtu},    {"a.VTK", InputFormat::kVtkLegacy},
+      {"a.mesh", InputFormat::kMedit},  {"a.meshb", InputFormat::kMeshb}, {"a.off", InputFormat::kOff},
+      {"a.node", InputFormat::kTetgen}, {"a.ele", InputFormat::kTetgen},  {"a.xyz", InputFormat::kPlot3d},
+      {"a.q", InputFormat::kPlot3d},    {"a.gtn", InputFormat::kGtn},     {"a.stl", InputFormat::kUnknown}};
   for (const auto& [name, format] : cases)
-    EXPECT_EQ(detectInputFormat(dir + "/" + name), format) << name << ": " << inputFormatName(detectInputFormat(dir + "/" + name));
+    EXPECT_EQ(detectInputFormat(dir + "/" + name), format)
+        << name << ": " << inputFormatName(detectInputFormat(dir + "/" + name));
 }
 
 // A tetrahedron that lists a point twice is no tetrahedron: dropped with its cell value and a warning
@@ -65,9 +66,10 @@ TEST(ImportDispatch, FormatFromTheExtension) {
 TEST(ImportDispatch, TetrahedraListingAPointTwiceAreDropped) {
   const std::string dir = test::tempDir("import-repeated");
   const std::string path = dir + "/r.vtk";
-  test::writeFile(path, "# vtk DataFile Version 3.0\nr\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 double\n"
-                        "0 0 0 1 0 0 0 1 0 0 0 1 1 1 1\nCELLS 3 15\n4 0 1 2 3\n4 1 1 2 4\n4 1 3 2 4\n"
-                        "CELL_TYPES 3\n10 10 10\nCELL_DATA 3\nSCALARS id int 1\nLOOKUP_TABLE default\n7 8 9\n");
+  test::writeFile(path,
+                  "# vtk DataFile Version 3.0\nr\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 double\n"
+                  "0 0 0 1 0 0 0 1 0 0 0 1 1 1 1\nCELLS 3 15\n4 0 1 2 3\n4 1 1 2 4\n4 1 3 2 4\n"
+                  "CELL_TYPES 3\n10 10 10\nCELL_DATA 3\nSCALARS id int 1\nLOOKUP_TABLE default\n7 8 9\n");
   auto r = importMesh({path}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ(r->mesh.numTets(), 2u);

@@ -216,13 +216,12 @@ TEST(MeditImport, SkipsTheSectionsMmgWrites) {
 // BoundingBox by their values.
 TEST(MeditImport, AnyKeywordOrderSeveralSectionsAndGeometryLinks) {
   const std::string dir = tempDir("medit-order");
-  const std::string moved =
-      replaced(replaced(kMedit, "2 4 3 5 8\n", ""), "Tetrahedra\n2\n", "Tetrahedra\n1\n");
-  const std::string text = replaced(
-      moved, "Vertices\n",
-      "Tetrahedra 1\n2 4 3 5 8\nIterations 12\nTime\n0.25\nAngleOfCornerBound 45.0\nBoundingBox\n0 1 0 1 0 1\n"
-      "VertexOnGeometricEdge\n2\n1 3 0.5\n2 3 0.25\nVerticesOnGeometricVertices 1\n4 1 0.0\n"
-      "SubDomainFromMesh 1\n3 1 1 2\nEdgeOnGeometricEdge\n1\n1 1\nVertices\n");
+  const std::string moved = replaced(replaced(kMedit, "2 4 3 5 8\n", ""), "Tetrahedra\n2\n", "Tetrahedra\n1\n");
+  const std::string text =
+      replaced(moved, "Vertices\n",
+               "Tetrahedra 1\n2 4 3 5 8\nIterations 12\nTime\n0.25\nAngleOfCornerBound 45.0\nBoundingBox\n0 1 0 1 0 1\n"
+               "VertexOnGeometricEdge\n2\n1 3 0.5\n2 3 0.25\nVerticesOnGeometricVertices 1\n4 1 0.0\n"
+               "SubDomainFromMesh 1\n3 1 1 2\nEdgeOnGeometricEdge\n1\n1 1\nVertices\n");
   writeFile(dir + "/o.mesh", text);
   auto r = importMedit(dir + "/o.mesh", ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
@@ -267,7 +266,8 @@ TEST(MeditImport, SkipsSectionsOfOtherProgramsToTheNextKeyword) {
             "skipped the unknown section 'ParallelTriangleCommunicators' (line 24, 3 numbers up to the next keyword)");
   EXPECT_EQ(r->report.warnings[1],
             "skipped the unknown section 'ParallelCommunicatorTriangles' (line 27, 6 numbers up to the next keyword)");
-  EXPECT_EQ(r->report.warnings[2], "skipped the unknown section 'MyValues' (line 30, 4 numbers up to the next keyword)");
+  EXPECT_EQ(r->report.warnings[2],
+            "skipped the unknown section 'MyValues' (line 30, 4 numbers up to the next keyword)");
   EXPECT_NE(r->report.warnings[3].find("'ISolAtTetrahedra'"), std::string::npos) << r->report.warnings[3];
   // A file that starts with an unknown word is still no Medit file.
   writeFile(dir + "/q.mesh", "Foo 1\n" + text);
@@ -281,15 +281,16 @@ TEST(MeditImport, SkipsSectionsOfOtherProgramsToTheNextKeyword) {
 // sections of a keyword; gtn info and gtn validate show it.
 TEST(MeditImport, EverySkippedSectionIsCountedAndShown) {
   const std::string dir = tempDir("medit-left-out");
-  const std::string text = replaced(
-      kMedit, "Corners 1 1\n",
-      "Corners 1 1\nQuadrilaterals 1\n1 2 5 3 9\nTriangles 1\n1 3 4 6\nRequiredVertices 2\n1 2\n"
-      "RequiredTriangles 1 2\nTangents 1\n1 0 0\nTangentAtVertices 1\n2 1\nTrianglesP2 0\n");
+  const std::string text =
+      replaced(kMedit, "Corners 1 1\n",
+               "Corners 1 1\nQuadrilaterals 1\n1 2 5 3 9\nTriangles 1\n1 3 4 6\nRequiredVertices 2\n1 2\n"
+               "RequiredTriangles 1 2\nTangents 1\n1 0 0\nTangentAtVertices 1\n2 1\nTrianglesP2 0\n");
   writeFile(dir + "/b.mesh", text);
   auto r = importMesh({dir + "/b.mesh"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ(r->mesh.numTets(), 2u);
-  const std::string lower = ": elements of lower dimension, with their references: only volume elements become tetrahedra";
+  const std::string lower =
+      ": elements of lower dimension, with their references: only volume elements become tetrahedra";
   const std::vector<std::string> want = {
       "skipped 2 Edges (line 12)" + lower,
       "skipped 3 Triangles (line 15 and 1 more sections)" + lower,
@@ -353,8 +354,9 @@ TEST(MeditErrors, BadInputs) {
   expectError(importMedit(p, ImportOptions{}),
               p + ":20: Corners (line 19) announces 2 entries of 1 values; found 'Ridges' after 1 values");
   writeFile(p, replaced(kMedit, "Corners 1 1", "Corners 1 1 4"));
-  expectError(importMedit(p, ImportOptions{}),
-              p + ":19: expected a section keyword, found '4' (the section before holds more values than its count says)");
+  expectError(
+      importMedit(p, ImportOptions{}),
+      p + ":19: expected a section keyword, found '4' (the section before holds more values than its count says)");
   writeFile(p, replaced(kMedit, "Tetrahedra\n2\n", "Tetrahedra\n3\n"));
   expectError(importMedit(p, ImportOptions{}), "b.mesh:");
   writeFile(p, std::string(kMedit).substr(0, std::string(kMedit).find("2 4 3 5 8")));
@@ -432,9 +434,10 @@ TEST(MeditImport, HexahedraAreSplitLikeVtkCells) {
     EXPECT_EQ(*m.findMetadata("source.format"), "medit");
   }
   // One unit cube whose corners 1, 3, 6, 8 have the smallest numbers: --split 5 gives 5 tetrahedra.
-  writeFile(dir + "/five.mesh", "MeshVersionFormatted 2\nDimension 3\nVertices\n8\n"
-                                "0 0 0 1\n1 1 0 1\n1 0 1 1\n0 1 1 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n1 1 1 1\n"
-                                "Hexahedra\n1\n1 5 2 6 7 3 8 4 9\nEnd\n");
+  writeFile(dir + "/five.mesh",
+            "MeshVersionFormatted 2\nDimension 3\nVertices\n8\n"
+            "0 0 0 1\n1 1 0 1\n1 0 1 1\n0 1 1 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n1 1 1 1\n"
+            "Hexahedra\n1\n1 5 2 6 7 3 8 4 9\nEnd\n");
   ImportOptions five;
   five.split = 5;
   auto r = importMesh({dir + "/five.mesh"}, five);
@@ -498,9 +501,10 @@ End
 // their volume is missing (an error when nothing else is left).
 TEST(MeditImport, PentahedraAndQuadraticVolumeElements) {
   const std::string dir = tempDir("medit-pentahedra");
-  const std::string prism = "MeshVersionFormatted 2\nDimension 3\nVertices\n10\n"
-                            "0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n1 0 1 0\n0 1 1 0\n"
-                            "5 0 0 0\n6 0 0 0\n5 1 0 0\n5 0 1 0\n";
+  const std::string prism =
+      "MeshVersionFormatted 2\nDimension 3\nVertices\n10\n"
+      "0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n1 0 1 0\n0 1 1 0\n"
+      "5 0 0 0\n6 0 0 0\n5 1 0 0\n5 0 1 0\n";
   const std::string p2 = "TetrahedraP2\n1\n7 8 9 10 7 8 9 10 7 8 1\n";
   writeFile(dir + "/p.mesh", prism + "Pentahedra\n1\n1 2 3 4 5 6 2\n" + p2 + "End\n");
   auto r = importMedit(dir + "/p.mesh", ImportOptions{});
@@ -521,7 +525,8 @@ TEST(MeditErrors, BadHexahedra) {
   const std::string dir = tempDir("medit-hex-errors");
   const std::string p = dir + "/h.mesh";
   writeFile(p, replaced(kMeditHexes, "2 3 6 5 8 9 12 11 4", "2 3 6 5 8 9 13 11 4"));
-  expectError(importMedit(p, ImportOptions{}), p + ":23: hexahedron 2 refers to vertex 13; vertices are numbered 1 to 12");
+  expectError(importMedit(p, ImportOptions{}),
+              p + ":23: hexahedron 2 refers to vertex 13; vertices are numbered 1 to 12");
   writeFile(p, replaced(kMeditHexes, "2 3 6 5 8 9 12 11 4\n", ""));
   expectError(importMedit(p, ImportOptions{}), p + ":");
   writeFile(p, replaced(kMeditHexes, "Hexahedra\n2\n", "Hexahedra\n3000000000\n"));
@@ -626,7 +631,8 @@ TEST(OffErrors, BadInputs) {
   writeFile(p, replaced(kOff, "0 1 0 3", "0 one 0 3"));
   expectError(importOff(p, ImportOptions{}), p + ":5:");
   writeFile(p, replaced(kOff, "4 1 3 2 4\n", ""));
-  expectError(importOff(p, ImportOptions{}), p + ":2: the header announces 2 tetrahedra, rows of 5 values like the first (line 8)");
+  expectError(importOff(p, ImportOptions{}),
+              p + ":2: the header announces 2 tetrahedra, rows of 5 values like the first (line 8)");
   writeFile(p, replaced(kOff, "5 2", "5000000000000 2"));
   expectError(importOff(p, ImportOptions{}), p + ":2:");
   writeFile(p, replaced(kOff, "5 2", "500000 2"));
@@ -639,7 +645,8 @@ TEST(OffErrors, BadInputs) {
   expectError(importOff(p, ImportOptions{}), p + ":5: point 2 has a non-finite y coordinate 'nan'");
   // More rows announced than can follow the first: the header's count, at the header's line.
   writeFile(p, replaced(kOff, "5 2", "5 40"));
-  expectError(importOff(p, ImportOptions{}), p + ":2: the header announces 40 tetrahedra, rows of 5 values like the first (line 8)");
+  expectError(importOff(p, ImportOptions{}),
+              p + ":2: the header announces 40 tetrahedra, rows of 5 values like the first (line 8)");
   writeFile(p, replaced(replaced(kOff, "5 2", "900 2"), "1 1 1 5\n4 0 1 2 3\n4 1 3 2 4\n", ""));
   expectError(importOff(p, ImportOptions{}), p + ":2: the header announces 900 points");
 }
@@ -659,8 +666,9 @@ TEST(OffErrors, SurfaceOffIsNotReadAsTetrahedra) {
             std::string::npos)
       << r.status().message();
   const std::string quads = dir + "/quads.off";
-  writeFile(quads, "OFF\n8 6 12\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
-                   "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n");
+  writeFile(quads,
+            "OFF\n8 6 12\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+            "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n");
   r = importOff(quads, ImportOptions{});
   ASSERT_FALSE(r.isOk());
   EXPECT_NE(r.status().message().find(quads + ":11: all 6 tetrahedra are flat (their 4 points are coplanar): this "

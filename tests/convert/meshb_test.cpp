@@ -78,7 +78,7 @@ std::string twoCubesAndATet(int version, bool swap) {
   w.begin(3);
   w.int32(3);
   w.begin(4);
-  const double c[13][3] = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 1, 0},     {0, 0, 1},
+  const double c[13][3] = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 1, 0},      {0, 0, 1},
                            {1, 0, 1}, {2, 0, 1}, {0, 1, 1}, {1, 1, 1}, {2, 1, 1}, {0.5, 0.25, -1}};
   w.integer(13);
   for (int i = 0; i < 13; ++i) {
@@ -163,8 +163,9 @@ TEST(MeshbErrors, BadInputs) {
   // A hexahedron corner out of range, located at its own bytes.
   const size_t hexes = good.find(std::string("\x0A\0\0\0", 4), 200);
   ASSERT_NE(hexes, std::string::npos);
-  expectError(p, withWord32(good, hexes + 12, 14), "byte offset " + std::to_string(hexes + 12) +
-                                                        ": hexahedron 1 refers to vertex 14; vertices are numbered 1 to 13");
+  expectError(p, withWord32(good, hexes + 12, 14),
+              "byte offset " + std::to_string(hexes + 12) +
+                  ": hexahedron 1 refers to vertex 14; vertices are numbered 1 to 13");
   // No volume elements.
   MeshbWriter surface(3, false);
   surface.begin(3);
@@ -217,13 +218,15 @@ TEST(MeshbImport, EverySkippedKeywordIsCounted) {
     auto r = importMesh({path}, ImportOptions{});
     ASSERT_TRUE(r.isOk()) << r.status().message();
     EXPECT_EQ(r->mesh.numTets(), 1u);
-    const std::string lower = ": elements of lower dimension, with their references: only volume elements become tetrahedra";
+    const std::string lower =
+        ": elements of lower dimension, with their references: only volume elements become tetrahedra";
     const std::vector<std::string> want = {
         "skipped 3 Triangles (byte offset " + std::to_string(triangles_at) + " and 1 more records)" + lower,
-        "skipped 1 Edges (byte offset " + std::to_string(triangles_at + (version >= 3 ? 12 : 8) + (version == 4 ? 8 * 9 : 4 * 9)) +
-            ")" + lower,
+        "skipped 1 Edges (byte offset " +
+            std::to_string(triangles_at + (version >= 3 ? 12 : 8) + (version == 4 ? 8 * 9 : 4 * 9)) + ")" + lower,
         "skipped 3 Corners (byte offset ",
-        "skipped keyword 200 (byte offset " + std::to_string(unknown_at) + "): a keyword unknown to this reader, not read",
+        "skipped keyword 200 (byte offset " + std::to_string(unknown_at) +
+            "): a keyword unknown to this reader, not read",
     };
     ASSERT_EQ(r->report.warnings.size(), 4u) << version;
     EXPECT_EQ(r->report.warnings[0], want[0]);
@@ -270,8 +273,9 @@ TEST(MeshbImport, QuadraticElementsAreSkippedWithAWarning) {
   writeFile(dir + "/only.meshb", only);
   auto e = importMesh({dir + "/only.meshb"}, ImportOptions{});
   ASSERT_FALSE(e.isOk());
-  EXPECT_NE(e.status().message().find("only TetrahedraP2 (byte offset " + std::to_string(p2_at) + "), which are not read"),
-            std::string::npos)
+  EXPECT_NE(
+      e.status().message().find("only TetrahedraP2 (byte offset " + std::to_string(p2_at) + "), which are not read"),
+      std::string::npos)
       << e.status().message();
 }
 
@@ -310,7 +314,8 @@ double vertexValue(int v, int c) { return 0.25 * v - c + (c == 2 ? 1e-7 : 0.0); 
 double tetValue(int t, int c) { return 10.0 * t + c + 0.5; }
 
 std::string asciiSolution(int version) {
-  std::string s = "MeshVersionFormatted " + std::to_string(version) + "\n# a comment\nDimension 3\nSolAtVertices\n5\n2 1 2\n";
+  std::string s =
+      "MeshVersionFormatted " + std::to_string(version) + "\n# a comment\nDimension 3\nSolAtVertices\n5\n2 1 2\n";
   char buf[64];
   for (int v = 0; v < 5; ++v) {
     for (int c = 0; c < 4; ++c) {
@@ -371,7 +376,8 @@ void expectSolutionFields(const TetMesh& m, int version, const std::string& wher
   auto expected = [&](double v) { return version == 1 ? static_cast<double>(static_cast<float>(v)) : v; };
   for (int v = 0; v < 5; ++v) {
     EXPECT_EQ(scalar.get(v, 0), expected(vertexValue(v, 0))) << where << " vertex " << v;
-    for (int c = 0; c < 3; ++c) EXPECT_EQ(vector.get(v, c), expected(vertexValue(v, c + 1))) << where << " vertex " << v;
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(vector.get(v, c), expected(vertexValue(v, c + 1))) << where << " vertex " << v;
   }
   // The symmetric matrix, m11 m21 m22 m31 m32 m33 in the file, in VTK's order XX YY ZZ XY YZ XZ.
   constexpr int kFromMedit[6] = {0, 2, 5, 1, 4, 3};
@@ -380,8 +386,9 @@ void expectSolutionFields(const TetMesh& m, int version, const std::string& wher
 }
 
 bool saysMatrixOrder(const std::string& warning) {
-  return warning.find("the symmetric matrix 'u' is stored in VTK's component order (XX YY ZZ XY YZ XZ), not Medit's "
-                      "(m11 m21 m22 m31 m32 m33)") != std::string::npos;
+  return warning.find(
+             "the symmetric matrix 'u' is stored in VTK's component order (XX YY ZZ XY YZ XZ), not Medit's "
+             "(m11 m21 m22 m31 m32 m33)") != std::string::npos;
 }
 
 TEST(MeditSolution, AsciiAndBinaryFilesBecomeFields) {
@@ -409,8 +416,9 @@ TEST(MeditSolution, AsciiAndBinaryFilesBecomeFields) {
     }
   // A binary mesh takes them too.
   writeFile(dir + "/m.meshb", twoCubesAndATet(2, false));
-  writeFile(dir + "/c.sol", "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n13\n1 1\n"
-                            "0 1 2 3 4 5 6 7 8 9 10 11 12\nSolAtTetrahedra\n1\n1 1\n7\nEnd\n");
+  writeFile(dir + "/c.sol",
+            "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n13\n1 1\n"
+            "0 1 2 3 4 5 6 7 8 9 10 11 12\nSolAtTetrahedra\n1\n1 1\n7\nEnd\n");
   auto r = importMesh({dir + "/m.meshb", dir + "/c.sol"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ(r->mesh.point_fields.size(), 2u);
@@ -432,7 +440,8 @@ TEST(MeditSolution, VertexValuesFollowAPointAddedInAWarpedHexahedron) {
   writeFile(dir + "/w.mesh",
             "MeshVersionFormatted 2\nDimension 3\nVertices\n8\n0 0 -1 0\n1 0 -1 0\n1 1 -1 0\n0 1 -1 0\n"
             "0.3 0.3 -1.3 0\n0.7 0.3 -2 0\n0.7 0.7 -2 0\n0.3 0.7 -2 0\nHexahedra\n1\n5 6 7 8 1 2 3 4 3\nEnd\n");
-  writeFile(dir + "/w.sol", "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n8\n1 1\n1\n2\n3\n4\n5\n6\n7\n9\nEnd\n");
+  writeFile(dir + "/w.sol",
+            "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n8\n1 1\n1\n2\n3\n4\n5\n6\n7\n9\nEnd\n");
   auto r = importMesh({dir + "/w.mesh", dir + "/w.sol"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
   EXPECT_EQ(r->report.steiner_points, 1u);
@@ -462,9 +471,9 @@ TEST(MeditSolution, MismatchedOrMalformedFilesAreRejected) {
               "solution type 7");
   expectError("short.sol", "MeshVersionFormatted 2\nDimension 3\nSolAtVertices\n5\n1 2\n0 1 2 3 4\nEnd\n",
               "SolAtVertices values");
-  expectError("dim.sol", "MeshVersionFormatted 2\nDimension 2\nSolAtVertices\n5\n1 1\n0 1 2 3 4\nEnd\n",
-              "dimension 2");
-  expectError("words.sol", "MeshVersionFormatted 2\nDimension 3\nVertices\n5\nEnd\n", "unknown section 'Vertices' in a solution file");
+  expectError("dim.sol", "MeshVersionFormatted 2\nDimension 2\nSolAtVertices\n5\n1 1\n0 1 2 3 4\nEnd\n", "dimension 2");
+  expectError("words.sol", "MeshVersionFormatted 2\nDimension 3\nVertices\n5\nEnd\n",
+              "unknown section 'Vertices' in a solution file");
   std::string cut = binarySolution(2, false);
   cut.resize(cut.size() - 40);
   expectError("cut.solb", cut, "byte offset");

@@ -83,7 +83,8 @@ void expectBitExact(const ImportResult& r, const std::string& xyz_path, const st
   size_t q_mismatch = 0;
   for (size_t p = 0; p < n; ++p) {
     q_mismatch += fieldBits32(*density, p, 0) != be32(q, data + 4 * p);
-    for (uint32_t c = 0; c < 3; ++c) q_mismatch += fieldBits32(*momentum, p, c) != be32(q, data + 4 * ((1 + c) * n + p));
+    for (uint32_t c = 0; c < 3; ++c)
+      q_mismatch += fieldBits32(*momentum, p, c) != be32(q, data + 4 * ((1 + c) * n + p));
     q_mismatch += fieldBits32(*energy, p, 0) != be32(q, data + 4 * (4 * n + p));
   }
   EXPECT_EQ(q_mismatch, 0u);
@@ -226,7 +227,7 @@ struct RecordWriter {
   void subrecords(const std::string& payload, size_t chunk) {
     for (size_t at = 0; at < payload.size(); at += chunk) {
       const size_t len = std::min(chunk, payload.size() - at);
-      const bool more = at + len < payload.size(), continued = at > 0;
+      const bool more = at + len<payload.size(), continued = at> 0;
       Bytes head{big_endian, ""}, tail{big_endian, ""};
       head.i32(more ? -static_cast<int32_t>(len) : static_cast<int32_t>(len));
       tail.i32(continued ? -static_cast<int32_t>(len) : static_cast<int32_t>(len));
@@ -608,8 +609,8 @@ TEST_F(Plot3dSynthetic, PlanesLayoutWithRecordMarkers) {
     const Field* iblank = m.findPointField("iblank");
     ASSERT_TRUE(density && momentum && iblank);
     // Point 37 of the first grid lies in its fourth k-plane (12 points a plane).
-    EXPECT_EQ(density->get(37, 0), static_cast<double>(o.precision == 4 ? static_cast<float>(1 + 37.0 / 1000)
-                                                                         : 1 + 37.0 / 1000));
+    EXPECT_EQ(density->get(37, 0),
+              static_cast<double>(o.precision == 4 ? static_cast<float>(1 + 37.0 / 1000) : 1 + 37.0 / 1000));
     EXPECT_EQ(momentum->get(37, 2), 74.0);
     EXPECT_EQ(m.findPointField("stagnation_energy")->get(60 + 10, 0), 13.0);  // point 10 of the second grid
     EXPECT_EQ(iblank->get(0, 0), 0);
@@ -648,9 +649,11 @@ TEST_F(Plot3dSynthetic, OneRecordPerVariable) {
     const std::string tag = std::to_string(marker);
     GridOptions vo = o;
     vo.per_variable = true;
-    auto v = importFiles({write("var" + tag + ".xyz", gridFile(blocks, vo)), write("var" + tag + ".q", qFile(blocks, vo))}, 6);
+    auto v = importFiles(
+        {write("var" + tag + ".xyz", gridFile(blocks, vo)), write("var" + tag + ".q", qFile(blocks, vo))}, 6);
     ASSERT_TRUE(v.isOk()) << tag << ": " << v.status().message();
-    auto w = importFiles({write("whole" + tag + ".xyz", gridFile(blocks, o)), write("whole" + tag + ".q", qFile(blocks, o))}, 6);
+    auto w = importFiles(
+        {write("whole" + tag + ".xyz", gridFile(blocks, o)), write("whole" + tag + ".q", qFile(blocks, o))}, 6);
     ASSERT_TRUE(w.isOk()) << w.status().message();
     expectCoords(v->mesh, blocks, o.precision);
     EXPECT_EQ(v->mesh.coords, w->mesh.coords);
@@ -714,7 +717,8 @@ TEST_F(Plot3dSynthetic, GridAndQFileCutDifferently) {
   write("wrong.p3d", R"({"records": "whole", "byte-order": "big", "filenames": [{"xyz": "three.xyz"}]})");
   auto wrong = importFiles({dir_ + "/wrong.p3d"});
   ASSERT_FALSE(wrong.isOk());
-  EXPECT_NE(wrong.status().message().find("only readings that the meta-file " + dir_ + "/wrong.p3d allows were tried (big-endian)"),
+  EXPECT_NE(wrong.status().message().find("only readings that the meta-file " + dir_ +
+                                          "/wrong.p3d allows were tried (big-endian)"),
             std::string::npos)
       << wrong.status().message();
   write("bad.p3d", R"({"records": "rows", "filenames": [{"xyz": "three.xyz"}]})");
@@ -738,14 +742,16 @@ TEST_F(Plot3dSynthetic, PlanesWithoutRecordMarkers) {
     GridOptions po = o;
     po.planes = true;
     const std::string tag = std::to_string(iblank);
-    auto p = importFiles({write("sp" + tag + ".xyz", gridFile(blocks, po)), write("sp" + tag + ".q", qFile(blocks, po))}, 6);
+    auto p =
+        importFiles({write("sp" + tag + ".xyz", gridFile(blocks, po)), write("sp" + tag + ".q", qFile(blocks, po))}, 6);
     ASSERT_TRUE(p.isOk()) << p.status().message();
     expectCoords(p->mesh, blocks, o.precision);
     EXPECT_NE(p->mesh.findMetadata("plot3d.layout")->find("no record markers"), std::string::npos);
     EXPECT_NE(p->mesh.findMetadata("plot3d.layout")->find(", planes"), std::string::npos);
     EXPECT_EQ(p->mesh.findPointField("momentum")->get(37, 2), 74.0);
     EXPECT_EQ(p->report.flipped, 0u);
-    auto w = importFiles({write("sw" + tag + ".xyz", gridFile(blocks, o)), write("sw" + tag + ".q", qFile(blocks, o))}, 6);
+    auto w =
+        importFiles({write("sw" + tag + ".xyz", gridFile(blocks, o)), write("sw" + tag + ".q", qFile(blocks, o))}, 6);
     ASSERT_TRUE(w.isOk()) << w.status().message();
     EXPECT_EQ(w->mesh.findMetadata("plot3d.layout")->find(", planes"), std::string::npos);
     EXPECT_EQ(w->mesh.coords, p->mesh.coords);
@@ -788,8 +794,10 @@ TEST_F(Plot3dSynthetic, DimensionsPerGridAndFlatBlocks) {
   o.multi = true;
   auto flat = importFiles({write("flat2.xyz", gridFile({boxBlock(3, 3, 1), boxBlock(1, 3, 3)}, o))}, 6);
   ASSERT_FALSE(flat.isOk());
-  EXPECT_NE(flat.status().message().find("grid 1 is 3x3x1: a dimension below 2"), std::string::npos) << flat.status().message();
-  EXPECT_NE(flat.status().message().find("(and so are the other 1 grids)"), std::string::npos) << flat.status().message();
+  EXPECT_NE(flat.status().message().find("grid 1 is 3x3x1: a dimension below 2"), std::string::npos)
+      << flat.status().message();
+  EXPECT_NE(flat.status().message().find("(and so are the other 1 grids)"), std::string::npos)
+      << flat.status().message();
 }
 
 // Fortran compiled with 64-bit default integers (gfortran -fdefault-integer-8) writes the grid count,
@@ -825,8 +833,9 @@ TEST_F(Plot3dSynthetic, SixtyFourBitIntegersAndOverflowedFields) {
   write("ovf.xyz", "3 3 2\n" + std::string("0.0 ") + "**********\n");
   auto a = importFiles({dir_ + "/ovf.xyz"}, 6);
   ASSERT_FALSE(a.isOk());
-  EXPECT_NE(a.status().message().find("ovf.xyz:2: ASCII PLOT3D: '**********' is a Fortran field that overflowed its format"),
-            std::string::npos)
+  EXPECT_NE(
+      a.status().message().find("ovf.xyz:2: ASCII PLOT3D: '**********' is a Fortran field that overflowed its format"),
+      std::string::npos)
       << a.status().message();
 }
 
@@ -1199,7 +1208,8 @@ TEST_F(Plot3dSynthetic, MetaFileNamesTheFunctionVariables) {
   write("fn.xyz", gridFile(blocks, o));
   write("fn.q", qFile(blocks, o));
   write("fn.f", functionFile(blocks, o, 3));
-  const std::string plain = write("plain.p3d", R"({"filenames": [{"xyz": "fn.xyz", "q": "fn.q", "function": "fn.f"}]})");
+  const std::string plain =
+      write("plain.p3d", R"({"filenames": [{"xyz": "fn.xyz", "q": "fn.q", "function": "fn.f"}]})");
   auto unnamed = importFiles({plain});
   ASSERT_TRUE(unnamed.isOk()) << unnamed.status().message();
   const std::string named = write("named.p3d", R"({"function-names": ["pressure", "temperature"],
@@ -1218,18 +1228,21 @@ TEST_F(Plot3dSynthetic, MetaFileNamesTheFunctionVariables) {
   for (const std::string& w : r->report.warnings) EXPECT_EQ(w.find("function-names"), std::string::npos) << w;
 
   // More names than variables: a warning; a name twice, a name of a Q field, or not a list: errors.
-  write("more.p3d", R"({"function-names": ["a", "b", "c", "d"], "filenames": [{"xyz": "fn.xyz", "function": "fn.f"}]})");
+  write("more.p3d",
+        R"({"function-names": ["a", "b", "c", "d"], "filenames": [{"xyz": "fn.xyz", "function": "fn.f"}]})");
   auto more = importFiles({dir_ + "/more.p3d"});
   ASSERT_TRUE(more.isOk()) << more.status().message();
   EXPECT_TRUE(more->mesh.findPointField("c"));
   bool warned = false;
-  for (const std::string& w : more->report.warnings) warned |= w.find("lists 4 names for the 3 variables") != std::string::npos;
+  for (const std::string& w : more->report.warnings)
+    warned |= w.find("lists 4 names for the 3 variables") != std::string::npos;
   EXPECT_TRUE(warned);
   write("twice.p3d", R"({"function-names": ["a", "a"], "filenames": [{"xyz": "fn.xyz", "function": "fn.f"}]})");
   auto twice = importFiles({dir_ + "/twice.p3d"});
   ASSERT_FALSE(twice.isOk());
   EXPECT_NE(twice.status().message().find("lists \"a\" twice"), std::string::npos) << twice.status().message();
-  write("clash.p3d", R"({"function-names": ["density"], "filenames": [{"xyz": "fn.xyz", "q": "fn.q", "function": "fn.f"}]})");
+  write("clash.p3d",
+        R"({"function-names": ["density"], "filenames": [{"xyz": "fn.xyz", "q": "fn.q", "function": "fn.f"}]})");
   auto clash = importFiles({dir_ + "/clash.p3d"});
   ASSERT_FALSE(clash.isOk());
   EXPECT_NE(clash.status().message().find("clash.p3d: key \"function-names\": \"density\""), std::string::npos)
@@ -1370,7 +1383,8 @@ TEST_F(Plot3dSynthetic, WeldedBlocksOfOppositeParityConformWithSplitFive) {
   const std::string xyz = write("turned.xyz", gridFile({first, turned}, o));
   auto six = importFiles({xyz}, 6, true);
   ASSERT_TRUE(six.isOk()) << six.status().message();
-  EXPECT_EQ(computeMeshStats(six->mesh).boundary_faces, computeMeshStats(importFiles({one}, 6)->mesh).boundary_faces + 16);
+  EXPECT_EQ(computeMeshStats(six->mesh).boundary_faces,
+            computeMeshStats(importFiles({one}, 6)->mesh).boundary_faces + 16);
   EXPECT_EQ(nonconforming(six->mesh), 16u);
   const std::vector<std::string> w = seamWarnings(six->report);
   ASSERT_EQ(w.size(), 1u);
@@ -1409,8 +1423,8 @@ TEST_F(Plot3dSynthetic, WeldedRingsConformWhereTheirParitiesAllowIt) {
   // An odd ring of seams that each ask for different parities, and one block around with an odd number
   // of cells (meeting itself): one seam cannot conform. The convert warns naming its grids, and the
   // validator finds its 4 quadrilaterals covered from both sides (16 triangles).
-  for (const auto& [blocks, cells, who] : std::vector<std::tuple<int, int, std::string>>{
-           {3, 3, "grids 2 and 3 meet"}, {1, 9, "grid 1 meets itself"}}) {
+  for (const auto& [blocks, cells, who] :
+       std::vector<std::tuple<int, int, std::string>>{{3, 3, "grids 2 and 3 meet"}, {1, 9, "grid 1 meets itself"}}) {
     SCOPED_TRACE(who);
     const std::string xyz = write("odd.xyz", gridFile(ringBlocks(blocks, cells), o));
     auto r = importFiles({xyz}, 5, true);
@@ -1556,7 +1570,8 @@ std::string asciiGrid(const std::vector<Block>& blocks, bool multi, bool iblank)
   std::string s;
   char buf[64];
   if (multi) s += std::to_string(blocks.size()) + "\n";
-  for (const Block& b : blocks) s += std::to_string(b.n[0]) + " " + std::to_string(b.n[1]) + " " + std::to_string(b.n[2]) + "\n";
+  for (const Block& b : blocks)
+    s += std::to_string(b.n[0]) + " " + std::to_string(b.n[1]) + " " + std::to_string(b.n[2]) + "\n";
   for (const Block& b : blocks) {
     size_t col = 0;
     for (const std::vector<double>* axis : {&b.x, &b.y, &b.z})
@@ -1568,7 +1583,8 @@ std::string asciiGrid(const std::vector<Block>& blocks, bool multi, bool iblank)
       }
     s += "\n";
     if (iblank)
-      for (size_t i = 0; i < b.points(); ++i) s += std::to_string(b.iblank.empty() ? 1 : b.iblank[i]) + (i % 10 == 9 ? "\n" : " ");
+      for (size_t i = 0; i < b.points(); ++i)
+        s += std::to_string(b.iblank.empty() ? 1 : b.iblank[i]) + (i % 10 == 9 ? "\n" : " ");
     s += "\n";
   }
   return s;
@@ -1607,7 +1623,7 @@ TEST_F(Plot3dSynthetic, AsciiMultiGridWithIblankAndQ) {
   }
   ASSERT_NE(density, nullptr);
   ASSERT_NE(blank, nullptr);
-  EXPECT_EQ(density->get(13, 0), 1.0);   // grid 2, point 1
+  EXPECT_EQ(density->get(13, 0), 1.0);  // grid 2, point 1
   EXPECT_EQ(blank->get(0, 0), 0.0);
   EXPECT_EQ(blank->get(12, 0), -1.0);
 

@@ -183,13 +183,13 @@ TetMesh synthetic() {
   m.point_fields.push_back(makeField<float>("density", 1, ScalarType::kFloat32,
                                             {bitsTo<float>(0x7fc00123u), -inf, -0.0f, 1e-45f, 3.4028235e38f}));
   m.point_fields.push_back(makeField<int32_t>("boundary_marker", 1, ScalarType::kInt32, {1, -2, 0, 2147483647, -7}));
-  m.point_fields.push_back(makeField<double>(
-      "velocity vec: m/s", 3, ScalarType::kFloat64,
-      {0.1, 1.0 / 3, 5e-324, -1e308, bitsTo<double>(0xfff0000000000001ull), 2.0, 0, -0.0, 1e-300, 7, 8, 9, 10, 11,
-       std::numeric_limits<double>::max()}));
+  m.point_fields.push_back(makeField<double>("velocity vec: m/s", 3, ScalarType::kFloat64,
+                                             {0.1, 1.0 / 3, 5e-324, -1e308, bitsTo<double>(0xfff0000000000001ull), 2.0,
+                                              0, -0.0, 1e-300, 7, 8, 9, 10, 11, std::numeric_limits<double>::max()}));
   m.point_fields.push_back(makeField<uint8_t>("flags#%", 1, ScalarType::kUInt8, {0, 1, 128, 255, 7}));
-  m.point_fields.push_back(makeField<int64_t>(
-      "id", 1, ScalarType::kInt64, {std::numeric_limits<int64_t>::min(), -1, 0, 1, std::numeric_limits<int64_t>::max()}));
+  m.point_fields.push_back(
+      makeField<int64_t>("id", 1, ScalarType::kInt64,
+                         {std::numeric_limits<int64_t>::min(), -1, 0, 1, std::numeric_limits<int64_t>::max()}));
   m.point_fields.push_back(makeField<uint64_t>("big", 1, ScalarType::kUInt64, {~0ull, 0, 1, 1ull << 63, 42}));
   m.cell_fields.push_back(makeField<int16_t>("level", 1, ScalarType::kInt16, {-32768, 32767}));
   // Local face 0 of tet 0 and local face 3 of tet 1 are the shared face (1,2,3): same marker.
@@ -386,7 +386,8 @@ TEST(TetgenProgram, QuadraticTetsAndFaces) {
   // The corner-only tetrahedra, and the boundary edges TetGen writes beside them (not read).
   ASSERT_EQ(r.report.warnings.size(), 2u);
   EXPECT_EQ(r.report.warnings[1], dir + "/boxes.1.edge beside it (" +
-                                      std::to_string(std::stoul(readFile(dir + "/boxes.1.edge"))) + " edges) is not read");
+                                      std::to_string(std::stoul(readFile(dir + "/boxes.1.edge"))) +
+                                      " edges) is not read");
   const MeshStats s = computeMeshStats(r.mesh);
   EXPECT_EQ(s.inverted, 0u);
   EXPECT_EQ(s.boundary_faces, std::stoul(readFile(dir + "/boxes.1.face")));
@@ -433,14 +434,15 @@ std::string writeTetgen(const std::string& dir, const std::string& node, const s
   return dir + "/m";
 }
 
-const char* kNodes1 = "# one-based\n5\t3 1 1\n\n1 0 0 0  0.5 3\n2 1 0 0 1.5 3 # a comment\n3 0 1 0 2.5 3\n"
-                      "   4 0 0 1 3.5 0\n5 1 1 1 4.5 0\n";
+const char* kNodes1 =
+    "# one-based\n5\t3 1 1\n\n1 0 0 0  0.5 3\n2 1 0 0 1.5 3 # a comment\n3 0 1 0 2.5 3\n"
+    "   4 0 0 1 3.5 0\n5 1 1 1 4.5 0\n";
 
 TEST(TetgenImport, OneBasedCommentsTabsAttributesMarkers) {
   const std::string dir = tempDir("tetgen-onebased");
   // Tet 2 is negatively oriented: it gets flipped, and its face markers follow the flip.
-  const std::string base = writeTetgen(dir, kNodes1, "2 4 0\n1 1 2 3 4\n2 2 4 3 5\n",
-                                       "# faces\n2 1\n1 1 2 3 9\n2 2 3 4 4\n");
+  const std::string base =
+      writeTetgen(dir, kNodes1, "2 4 0\n1 1 2 3 4\n2 2 4 3 5\n", "# faces\n2 1\n1 1 2 3 9\n2 2 3 4 4\n");
   const ImportResult r = mustImport(base);
   EXPECT_EQ(r.mesh.numPoints(), 5u);
   EXPECT_EQ(r.report.flipped, 1u);
@@ -467,8 +469,7 @@ TEST(TetgenImport, OneBasedCommentsTabsAttributesMarkers) {
 // list is then kept nowhere), and the files of the mesh that are not read (.edge, .vol, .mtr).
 TEST(TetgenImport, WhatIsNotReadIsSaid) {
   const std::string dir = tempDir("tetgen-not-read");
-  const std::string base = writeTetgen(dir, kNodes1, "2 4 0\n1 1 2 3 4\n2 2 4 3 5\n",
-                                       "2 0\n1 1 2 3\n2 2 3 4\n");
+  const std::string base = writeTetgen(dir, kNodes1, "2 4 0\n1 1 2 3 4\n2 2 4 3 5\n", "2 0\n1 1 2 3\n2 2 3 4\n");
   ImportResult r = mustImport(base);
   EXPECT_EQ(r.report.warnings, std::vector<std::string>{
                                    dir + "/m.face: 1 of its 2 faces lie inside the mesh; without markers, which faces "
@@ -489,8 +490,8 @@ TEST(TetgenImport, WhatIsNotReadIsSaid) {
 
 TEST(TetgenImport, QuadraticTetsKeepCornersWithWarning) {
   const std::string dir = tempDir("tetgen-quadratic");
-  const std::string base = writeTetgen(dir, "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 .5 0 0\n",
-                                       "1 10 0\n0 0 1 2 3 4 4 4 4 4 4\n");
+  const std::string base =
+      writeTetgen(dir, "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 .5 0 0\n", "1 10 0\n0 0 1 2 3 4 4 4 4 4 4\n");
   const ImportResult r = mustImport(base);
   ASSERT_EQ(r.mesh.numTets(), 1u);
   EXPECT_TRUE(r.mesh.tets[0] == (Tet{0, 1, 2, 3}));
@@ -514,21 +515,22 @@ TEST(TetgenErrors, EleNamesMissingNode) {
   EXPECT_NE(r.status().message().find("node 7"), std::string::npos) << r.status().message();
   // The tetrahedron as the file numbers it (the second row, numbered 1), not by its place.
   EXPECT_NE(r.status().message().find("tetrahedron 1 refers"), std::string::npos) << r.status().message();
-  expectError(writeTetgen(dir, kNodes0, "2 4 0\n10 0 1 2 3\n20 1 2 3 7\n"), dir + "/m.ele", ":3: tetrahedron 20 refers");
+  expectError(writeTetgen(dir, kNodes0, "2 4 0\n10 0 1 2 3\n20 1 2 3 7\n"), dir + "/m.ele",
+              ":3: tetrahedron 20 refers");
   // One-based nodes: 0 is missing.
   expectError(writeTetgen(dir, kNodes1, "1 4 0\n1 0 1 2 3\n"), dir + "/m.ele", ":2:");
 }
 
 TEST(TetgenErrors, NonNumericToken) {
   const std::string dir = tempDir("tetgen-nonnumeric");
-  expectError(writeTetgen(dir, "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 x1 0\n3 0 0 1\n4 1 1 1\n", "0 4 0\n"),
-              dir + "/m.node", ":4:");
+  expectError(writeTetgen(dir, "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 x1 0\n3 0 0 1\n4 1 1 1\n", "0 4 0\n"), dir + "/m.node",
+              ":4:");
   auto r = importTetgen(dir + "/m", ImportOptions{});
   EXPECT_NE(r.status().message().find("'x1'"), std::string::npos) << r.status().message();
   expectError(writeTetgen(dir, kNodes0, "1 4 0\n0 0 1 2 3.5\n"), dir + "/m.ele", ":2:");
   // A coordinate that is a number but not a finite one: its line, node and axis.
-  expectError(writeTetgen(dir, "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 -inf 0\n3 0 0 1\n4 1 1 1\n", "0 4 0\n"),
-              dir + "/m.node", ":4: node 2 has a non-finite y coordinate '-inf'");
+  expectError(writeTetgen(dir, "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 -inf 0\n3 0 0 1\n4 1 1 1\n", "0 4 0\n"), dir + "/m.node",
+              ":4: node 2 has a non-finite y coordinate '-inf'");
 }
 
 TEST(TetgenErrors, EmptyFile) {
@@ -557,8 +559,8 @@ TEST(TetgenErrors, TruncatedFiles) {
   // The header announces more rows than there are: caught before allocating when the bytes left
   // cannot hold them (header line), and after the last row otherwise (its line).
   expectError(writeTetgen(dir, "1000000000 3 0 0\n0 0 0 0\n", "0 4 0\n"), dir + "/m.node", ":1:");
-  expectError(writeTetgen(dir, "6 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 1\n", "0 4 0\n"),
-              dir + "/m.node", ":1:");
+  expectError(writeTetgen(dir, "6 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 1\n", "0 4 0\n"), dir + "/m.node",
+              ":1:");
   const std::string padding = "# a long comment that keeps the byte count plausible\n";
   expectError(writeTetgen(dir, "6 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 1\n" + padding, "0 4 0\n"),
               dir + "/m.node", ":6:");
@@ -566,8 +568,7 @@ TEST(TetgenErrors, TruncatedFiles) {
   EXPECT_NE(r.status().message().find("after 5 of the 6 nodes"), std::string::npos) << r.status().message();
   expectError(writeTetgen(dir, kNodes0, "3 4 0\n0 0 1 2 3\n1 1 2 3 4\n" + padding), dir + "/m.ele", ":3:");
   expectError(writeTetgen(dir, kNodes0, "1 4 0\n0 0 1 2\n" + padding), dir + "/m.ele", ":2:");
-  expectError(writeTetgen(dir, kNodes0, "1 4 0\n0 0 1 2 3\n", "2 0\n0 0 1 2\n" + padding), dir + "/m.face",
-              ":2:");
+  expectError(writeTetgen(dir, kNodes0, "1 4 0\n0 0 1 2 3\n", "2 0\n0 0 1 2\n" + padding), dir + "/m.face", ":2:");
 }
 
 TEST(TetgenErrors, DimensionTwoAndOtherHeaders) {
@@ -582,8 +583,7 @@ TEST(TetgenErrors, DimensionTwoAndOtherHeaders) {
 
 TEST(TetgenErrors, FaceNotOfAnyTet) {
   const std::string dir = tempDir("tetgen-face");
-  expectError(writeTetgen(dir, kNodes0, "1 4 0\n0 0 1 2 3\n", "2 1\n0 0 1 2 5\n1 0 1 4 5\n"), dir + "/m.face",
-              ":3:");
+  expectError(writeTetgen(dir, kNodes0, "1 4 0\n0 0 1 2 3\n", "2 1\n0 0 1 2 5\n1 0 1 4 5\n"), dir + "/m.face", ":3:");
 }
 
 // --- The CLI --------------------------------------------------------------------------------------
@@ -651,8 +651,9 @@ TEST(TetgenImport, WeldAppliesWhenTheMeshIsNamedByItsFiles) {
 // comment: a column of reals is read as that field.
 TEST(TetgenImport, MeshioPointFieldInTheMarkerColumn) {
   const std::string dir = tempDir("tetgen_meshio");
-  writeFile(dir + "/m.node", "# This file was created by meshio v5.0.0\n# attribute and marker names: temp\n5 3 0 1\n"
-                             "0 0 0 0 1\n1 1 0 0 -0.5\n2 0 1 0 2.25\n3 0 0 1 3\n4 1 1 1 4e-3\n");
+  writeFile(dir + "/m.node",
+            "# This file was created by meshio v5.0.0\n# attribute and marker names: temp\n5 3 0 1\n"
+            "0 0 0 0 1\n1 1 0 0 -0.5\n2 0 1 0 2.25\n3 0 0 1 3\n4 1 1 1 4e-3\n");
   writeFile(dir + "/m.ele", "2 4 0\n0 0 1 2 3\n1 1 2 3 4\n");
   auto r = importMesh({dir + "/m.node"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();

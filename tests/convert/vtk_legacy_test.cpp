@@ -71,16 +71,55 @@ void putBigEndian(std::string& out, ScalarType type, double v) {
   uint8_t b[8];
   size_t n = scalarSize(type);
   switch (type) {
-    case ScalarType::kInt8: { int8_t x = int8_t(v); std::memcpy(b, &x, 1); break; }
-    case ScalarType::kUInt8: { uint8_t x = uint8_t(v); std::memcpy(b, &x, 1); break; }
-    case ScalarType::kInt16: { int16_t x = int16_t(v); std::memcpy(b, &x, 2); break; }
-    case ScalarType::kUInt16: { uint16_t x = uint16_t(v); std::memcpy(b, &x, 2); break; }
-    case ScalarType::kInt32: { int32_t x = int32_t(v); std::memcpy(b, &x, 4); break; }
-    case ScalarType::kUInt32: { uint32_t x = uint32_t(v); std::memcpy(b, &x, 4); break; }
-    case ScalarType::kInt64: { int64_t x = int64_t(v); std::memcpy(b, &x, 8); break; }
-    case ScalarType::kUInt64: { uint64_t x = uint64_t(v); std::memcpy(b, &x, 8); break; }
-    case ScalarType::kFloat32: { float x = float(v); std::memcpy(b, &x, 4); break; }
-    case ScalarType::kFloat64: { std::memcpy(b, &v, 8); break; }
+    case ScalarType::kInt8: {
+      int8_t x = int8_t(v);
+      std::memcpy(b, &x, 1);
+      break;
+    }
+    case ScalarType::kUInt8: {
+      uint8_t x = uint8_t(v);
+      std::memcpy(b, &x, 1);
+      break;
+    }
+    case ScalarType::kInt16: {
+      int16_t x = int16_t(v);
+      std::memcpy(b, &x, 2);
+      break;
+    }
+    case ScalarType::kUInt16: {
+      uint16_t x = uint16_t(v);
+      std::memcpy(b, &x, 2);
+      break;
+    }
+    case ScalarType::kInt32: {
+      int32_t x = int32_t(v);
+      std::memcpy(b, &x, 4);
+      break;
+    }
+    case ScalarType::kUInt32: {
+      uint32_t x = uint32_t(v);
+      std::memcpy(b, &x, 4);
+      break;
+    }
+    case ScalarType::kInt64: {
+      int64_t x = int64_t(v);
+      std::memcpy(b, &x, 8);
+      break;
+    }
+    case ScalarType::kUInt64: {
+      uint64_t x = uint64_t(v);
+      std::memcpy(b, &x, 8);
+      break;
+    }
+    case ScalarType::kFloat32: {
+      float x = float(v);
+      std::memcpy(b, &x, 4);
+      break;
+    }
+    case ScalarType::kFloat64: {
+      std::memcpy(b, &v, 8);
+      break;
+    }
   }
   for (size_t i = 0; i < n; ++i) out += static_cast<char>(b[n - 1 - i]);
 }
@@ -97,12 +136,10 @@ std::string block(bool binary, const Array& a) {
     char buf[64];
     for (size_t i = 0; i < a.values.size(); ++i) {
       const char sep = (i + 1) % 6 == 0 ? '\n' : ' ';
-      if (isFloatType(a.type))
-        std::snprintf(buf, sizeof buf, "%.17g%c", a.values[i], sep);
+      if (isFloatType(a.type)) std::snprintf(buf, sizeof buf, "%.17g%c", a.values[i], sep);
       else if (a.type == ScalarType::kUInt64)
         std::snprintf(buf, sizeof buf, "%llu%c", static_cast<unsigned long long>(a.values[i]), sep);
-      else
-        std::snprintf(buf, sizeof buf, "%lld%c", static_cast<long long>(a.values[i]), sep);
+      else std::snprintf(buf, sizeof buf, "%lld%c", static_cast<long long>(a.values[i]), sep);
       s += buf;
     }
     s += "\n";
@@ -135,8 +172,8 @@ Dataset makeDataset(bool binary, bool v51) {
   auto id = [](int i, int j, int k) { return double((k * 2 + j) * 3 + i); };
   std::vector<double> conn;
   for (int i = 0; i < 2; ++i)
-    conn.insert(conn.end(), {id(i, 0, 0), id(i + 1, 0, 0), id(i + 1, 1, 0), id(i, 1, 0), id(i, 0, 1),
-                             id(i + 1, 0, 1), id(i + 1, 1, 1), id(i, 1, 1)});
+    conn.insert(conn.end(), {id(i, 0, 0), id(i + 1, 0, 0), id(i + 1, 1, 0), id(i, 1, 0), id(i, 0, 1), id(i + 1, 0, 1),
+                             id(i + 1, 1, 1), id(i, 1, 1)});
   if (v51) {
     s += "CELLS 3 16\n";
     s += block(binary, {"OFFSETS %T", "vtktypeint64", ScalarType::kInt64, 1, {0, 8, 16}});
@@ -319,22 +356,26 @@ TEST(VtkLegacy, RejectsOtherDatasetsCellTypesAndBadIndices) {
   const std::string dir = tempDir("vtk_legacy_bad");
   expectError(dir + "/poly.vtk", "# vtk DataFile Version 3.0\nsurface\nASCII\nDATASET POLYDATA\nPOINTS 0 float\n",
               "DATASET POLYDATA is not supported (it holds no volume cells");
-  const std::string head = "# vtk DataFile Version 3.0\ntri\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
-                           "0 0 0 1 0 0 0 1 0 0 0 1\n";
+  const std::string head =
+      "# vtk DataFile Version 3.0\ntri\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+      "0 0 0 1 0 0 0 1 0 0 0 1\n";
   expectError(dir + "/convex.vtk", head + "CELLS 2 10\n4 0 1 2 3\n4 0 1 2 3\nCELL_TYPES 2\n41 10\n",
               "1 cell of type 41 (VTK_CONVEX_POINT_SET)");
   expectError(dir + "/half.vtk", head + "CELLS 1 5\n4 0 1 2 3\n", "CELLS without a CELL_TYPES section");
   // The dataset's own FIELD arrays (VTK writes TIME there) are read past with a warning that names them.
-  writeFile(dir + "/time.vtk", "# vtk DataFile Version 3.0\ntime\nASCII\nDATASET UNSTRUCTURED_GRID\nFIELD FieldData 2\n"
-                               "TIME 1 1 double\n1.5\nCYCLE 1 1 int\n7\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\n"
-                               "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n");
+  writeFile(dir + "/time.vtk",
+            "# vtk DataFile Version 3.0\ntime\nASCII\nDATASET UNSTRUCTURED_GRID\nFIELD FieldData 2\n"
+            "TIME 1 1 double\n1.5\nCYCLE 1 1 int\n7\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\n"
+            "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n");
   auto timed = importMesh({dir + "/time.vtk"}, ImportOptions{});
   ASSERT_TRUE(timed.isOk()) << timed.status().message();
   EXPECT_EQ(timed->mesh.numTets(), 1u);
   EXPECT_EQ(timed->report.warnings,
-            std::vector<std::string>{"line 5: the dataset's FIELD arrays ('TIME', 'CYCLE') are not kept: they belong to no point or cell"});
+            std::vector<std::string>{
+                "line 5: the dataset's FIELD arrays ('TIME', 'CYCLE') are not kept: they belong to no point or cell"});
   // No cells at all (VTK's writer then leaves out CELLS and CELL_TYPES): an empty mesh, as from a .vtu.
-  writeFile(dir + "/none.vtk", "# vtk DataFile Version 5.1\nnone\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 2 float\n0 0 0 1 0 0\n");
+  writeFile(dir + "/none.vtk",
+            "# vtk DataFile Version 5.1\nnone\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 2 float\n0 0 0 1 0 0\n");
   auto none = importMesh({dir + "/none.vtk"}, ImportOptions{});
   ASSERT_TRUE(none.isOk()) << none.status().message();
   EXPECT_EQ(none->mesh.numPoints(), 2u);
@@ -364,11 +405,13 @@ TEST(VtkLegacy, StructuredDatasetsBecomeSplitHexahedra) {
     options.split = split;
     {
       // 3 x 3 x 2 points, sheared in x by z: 4 cells of volume 1 each.
-      std::string s = "# vtk DataFile Version 3.0\ncurvilinear\nASCII\nDATASET STRUCTURED_GRID\nDIMENSIONS 3 3 2\n"
-                      "POINTS 18 double\n";
+      std::string s =
+          "# vtk DataFile Version 3.0\ncurvilinear\nASCII\nDATASET STRUCTURED_GRID\nDIMENSIONS 3 3 2\n"
+          "POINTS 18 double\n";
       for (int k = 0; k < 2; ++k)
         for (int j = 0; j < 3; ++j)
-          for (int i = 0; i < 3; ++i) s += std::to_string(i + 0.5 * k) + " " + std::to_string(j) + " " + std::to_string(k) + "\n";
+          for (int i = 0; i < 3; ++i)
+            s += std::to_string(i + 0.5 * k) + " " + std::to_string(j) + " " + std::to_string(k) + "\n";
       s += "CELL_DATA 4\nSCALARS zone int 1\nLOOKUP_TABLE default\n10 11 12 13\n";
       s += "POINT_DATA 18\nSCALARS t float\nLOOKUP_TABLE default\n";
       for (int v = 0; v < 18; ++v) s += std::to_string(v) + ".5\n";
@@ -379,7 +422,7 @@ TEST(VtkLegacy, StructuredDatasetsBecomeSplitHexahedra) {
       EXPECT_EQ(m.numPoints(), 18u);
       EXPECT_EQ(m.numTets(), 4u * split);
       EXPECT_EQ(m.coord_type, ScalarType::kFloat64);
-      EXPECT_DOUBLE_EQ(m.point(7)[0], 1.0);  // (i, j, k) = (1, 2, 0)
+      EXPECT_DOUBLE_EQ(m.point(7)[0], 1.0);   // (i, j, k) = (1, 2, 0)
       EXPECT_DOUBLE_EQ(m.point(10)[0], 1.5);  // (1, 0, 1)
       const MeshStats st = computeMeshStats(m);
       EXPECT_NEAR(st.total_volume, 4.0, 1e-12);
@@ -560,8 +603,9 @@ TEST(VtkLegacy, IdsAndStringArraysAsVtkWritesThem) {
   EXPECT_EQ(m.cell_fields[1].name, "GlobalElementId");
   EXPECT_EQ(m.cell_fields[1].type, ScalarType::kInt32);  // VTK's reader and writer: vtkIdType as int
   ASSERT_EQ(r->report.warnings.size(), 3u);
-  EXPECT_EQ(r->report.warnings[0], "line 5: the dataset's FIELD arrays ('QA_Records', 'Info Records') are not kept: "
-                                   "they belong to no point or cell");
+  EXPECT_EQ(r->report.warnings[0],
+            "line 5: the dataset's FIELD arrays ('QA_Records', 'Info Records') are not kept: "
+            "they belong to no point or cell");
   EXPECT_NE(r->report.warnings[1].find("skipped FIELD array Names (string)"), std::string::npos)
       << r->report.warnings[1];
   EXPECT_NE(r->report.warnings[2].find("skipped PEDIGREE_IDS NodeNames (string)"), std::string::npos)
@@ -620,12 +664,12 @@ TEST(VtkLegacy, BinaryStringArraysAreSkippedByTheirLengths) {
                                binaryString(std::string(300, 'z'), 2);
   const std::string text =
       "# vtk DataFile Version 3.0\nvtk output\nBINARY\nDATASET UNSTRUCTURED_GRID\n"
-      "FIELD FieldData 1\nInfo%20Records 1 2 string\n" + binaryString("first", 1) + binaryString("second", 1) + "\n" +
-      "POINTS 4 float\n" + bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) + "\n" +
-      "CELLS 1 5\n" + bigEndianInts({4, 0, 1, 2, 3}) + "\nCELL_TYPES 1\n" + bigEndianInts({10}) + "\n" +
-      "POINT_DATA 4\nFIELD FieldData 2\nNames 1 4 string\n" + names + "\nTemp 1 4 float\n" +
-      bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\nPEDIGREE_IDS NodeNames string\n" + pedigree + "\n" +
-      "SCALARS after float 1\nLOOKUP_TABLE default\n" + bigEndianFloats({-1, -2, -3, -4}) + "\n";
+      "FIELD FieldData 1\nInfo%20Records 1 2 string\n" +
+      binaryString("first", 1) + binaryString("second", 1) + "\n" + "POINTS 4 float\n" +
+      bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) + "\n" + "CELLS 1 5\n" + bigEndianInts({4, 0, 1, 2, 3}) +
+      "\nCELL_TYPES 1\n" + bigEndianInts({10}) + "\n" + "POINT_DATA 4\nFIELD FieldData 2\nNames 1 4 string\n" + names +
+      "\nTemp 1 4 float\n" + bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\nPEDIGREE_IDS NodeNames string\n" + pedigree +
+      "\n" + "SCALARS after float 1\nLOOKUP_TABLE default\n" + bigEndianFloats({-1, -2, -3, -4}) + "\n";
   writeFile(dir + "/strings.vtk", text);
   auto r = importMesh({dir + "/strings.vtk"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
@@ -678,12 +722,15 @@ TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
   };
   const std::string text =
       "# vtk DataFile Version 5.1\nvtk output\nBINARY\nDATASET UNSTRUCTURED_GRID\n"
-      "POINTS 4 float\n" + bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) +
-      "\nCELLS 2 4\nOFFSETS vtktypeint64\n" + be64({0, 4}) + "\nCONNECTIVITY vtktypeint64\n" + be64({0, 1, 2, 3}) +
-      "\nCELL_TYPES 1\n" + bigEndianInts({10}) +
+      "POINTS 4 float\n" +
+      bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) + "\nCELLS 2 4\nOFFSETS vtktypeint64\n" + be64({0, 4}) +
+      "\nCONNECTIVITY vtktypeint64\n" + be64({0, 1, 2, 3}) + "\nCELL_TYPES 1\n" + bigEndianInts({10}) +
       "\n\nPOINT_DATA 4\nFIELD FieldData 5\nflags 1 4 bit\n\x50\nMETADATA\nINFORMATION 0\n\n"
-      "ids 1 4 vtkIdType\n" + bigEndianInts({7, -1, 9, 100000}) + "\nMETADATA\nINFORMATION 0\n\n"
-      "Temp 1 4 float\n" + bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\nsc 1 4 signed_char\n\xFF\x02\xFD\x04\nw 1 4 vtktypeuint16\n" +
+      "ids 1 4 vtkIdType\n" +
+      bigEndianInts({7, -1, 9, 100000}) +
+      "\nMETADATA\nINFORMATION 0\n\n"
+      "Temp 1 4 float\n" +
+      bigEndianFloats({0.5, 1.5, 2.5, 3.5}) + "\nsc 1 4 signed_char\n\xFF\x02\xFD\x04\nw 1 4 vtktypeuint16\n" +
       std::string("\x01\x00\x00\x02\xFF\xFF\x00\x04\n", 9);
   writeFile(dir + "/ids.vtk", text);
   auto r = importMesh({dir + "/ids.vtk"}, ImportOptions{});
@@ -719,9 +766,11 @@ TEST(VtkLegacy, IdTypeArraysAreThirtyTwoBitsAndBitsArePacked) {
 TEST(VtkLegacy, ColorScalarsAreBytesInBothDialects) {
   const std::string dir = tempDir("vtk_legacy_colors");
   const std::string head = "# vtk DataFile Version 4.2\nc\n";
-  const std::string mesh_ascii = "ASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\n"
-                                 "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n";
-  writeFile(dir + "/a.vtk", head + mesh_ascii + "POINT_DATA 4\nCOLOR_SCALARS rgb 3\n0 0.5 1 0.2 0.4 0.6 0.001 0.999 0.25 1 1 1\n");
+  const std::string mesh_ascii =
+      "ASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\n"
+      "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n";
+  writeFile(dir + "/a.vtk",
+            head + mesh_ascii + "POINT_DATA 4\nCOLOR_SCALARS rgb 3\n0 0.5 1 0.2 0.4 0.6 0.001 0.999 0.25 1 1 1\n");
   const std::string mesh_binary = "BINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n" +
                                   bigEndianFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}) + "\nCELLS 1 5\n" +
                                   bigEndianInts({4, 0, 1, 2, 3}) + "\nCELL_TYPES 1\n" + bigEndianInts({10}) + "\n";

@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <zlib.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <array>
 #include <cstring>
@@ -15,7 +16,6 @@
 #include <nlohmann/json.hpp>
 #include <random>
 #include <set>
-#include <unistd.h>
 
 #include "convert/export.h"
 #include "convert/import.h"
@@ -62,7 +62,8 @@ struct Oracle {
 
   explicit Oracle(const std::string& path) : text(readFile(path)) {
     const size_t a = text.find("<AppendedData");
-    base64 = text.find("encoding=\"base64\"", a) != std::string::npos && text.find("encoding=\"base64\"", a) < text.find('>', a);
+    base64 = text.find("encoding=\"base64\"", a) != std::string::npos &&
+             text.find("encoding=\"base64\"", a) < text.find('>', a);
     data_start = text.find('_', text.find('>', a)) + 1;
     compressed = text.find("vtkZLibDataCompressor") < a;
     header = text.find("header_type=\"UInt64\"") < a ? 8 : 4;
@@ -89,8 +90,7 @@ struct Oracle {
       size_t payload = 0;
       if (compressed)
         for (size_t b = 0; b < nblocks; ++b) payload += word(head, 3 + b);
-      else
-        payload = word(head, 0);
+      else payload = word(head, 0);
       body = fromBase64(text.substr(data_start + offset + header_chars, (payload + 2) / 3 * 4));
     } else {
       const uint8_t* p = reinterpret_cast<const uint8_t*>(text.data()) + data_start + offset;
@@ -100,8 +100,7 @@ struct Oracle {
       size_t payload = 0;
       if (compressed)
         for (size_t b = 0; b < nblocks; ++b) payload += word(head, 3 + b);
-      else
-        payload = word(head, 0);
+      else payload = word(head, 0);
       body.assign(p + header_bytes, p + header_bytes + payload);
     }
     if (!compressed) return body;
@@ -158,8 +157,8 @@ TEST(Vtu, LvGuccioneEveryArrayBitExact) {
     EXPECT_EQ(m.tets[t][3], conn[4 * t + 2]);
   }
   const std::vector<std::pair<std::string, uint32_t>> expected = {
-      {"Displacement", 3}, {"VonMises_stress", 1}, {"Stress", 6}, {"Cauchy_stress", 6}, {"Strain", 6},
-      {"Jacobian", 1},     {"Def_grad", 9},        {"Velocity", 3}, {"Pressure", 1},    {"Acceleration", 3}};
+      {"Displacement", 3}, {"VonMises_stress", 1}, {"Stress", 6},   {"Cauchy_stress", 6}, {"Strain", 6},
+      {"Jacobian", 1},     {"Def_grad", 9},        {"Velocity", 3}, {"Pressure", 1},      {"Acceleration", 3}};
   ASSERT_EQ(m.point_fields.size(), expected.size());
   for (size_t i = 0; i < expected.size(); ++i) {
     const Field& f = m.point_fields[i];
@@ -266,16 +265,17 @@ TetMesh makeTypedMesh() {
   for (int k = 0; k <= n; ++k)
     for (int j = 0; j <= n; ++j)
       for (int i = 0; i <= n; ++i)
-        m.coords.insert(m.coords.end(), {double(float(i * 0.1f)), double(float(j * 0.3f)), double(float(k * 0.7f + 0.01f))});
+        m.coords.insert(m.coords.end(),
+                        {double(float(i * 0.1f)), double(float(j * 0.3f)), double(float(k * 0.7f + 0.01f))});
   auto id = [&](int i, int j, int k) { return static_cast<uint32_t>((k * (n + 1) + j) * (n + 1) + i); };
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
         // Six tetrahedra around the 0-6 diagonal, positively oriented for this cell shape.
-        const uint32_t h[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
-                               id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
-                               id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
-        static const int kSix[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+        const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+                               id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        static const int kSix[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6},
+                                       {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
         for (const auto& t : kSix) m.tets.push_back({h[t[0]], h[t[1]], h[t[2]], h[t[3]]});
       }
   const size_t np = m.numPoints(), nt = m.numTets();
@@ -350,7 +350,8 @@ TEST(Vtu, RoundTripsBitForBit) {
 bool pythonClientsAvailable(std::string* why) {
   const char* probe = "/usr/bin/python3 -c 'import vtkmodules.vtkIOXML, meshio' 2>&1";
   if (runShell(probe).exit_code == 0) return true;
-  *why = "/usr/bin/python3 cannot import vtk and meshio (scripts/setup.sh installs python3-paraview and python3-meshio)";
+  *why =
+      "/usr/bin/python3 cannot import vtk and meshio (scripts/setup.sh installs python3-paraview and python3-meshio)";
   return false;
 }
 
@@ -603,14 +604,18 @@ TEST(Vtu, SeveralPiecesAreConcatenated) {
   ASSERT_EQ(g.mesh.point_fields.size(), 1u);
   EXPECT_EQ(g.mesh.point_fields[0].data<int32_t>()[5], 21);
   ASSERT_EQ(g.mesh.cell_fields.size(), 1u);
-  EXPECT_EQ(r.report.warnings, std::vector<std::string>{"2 pieces read; the points they share are kept once per piece (--weld merges them)"});
+  EXPECT_EQ(
+      r.report.warnings,
+      std::vector<std::string>{"2 pieces read; the points they share are kept once per piece (--weld merges them)"});
 
   // What is not mesh data goes with a warning, once: VTK's string arrays (<Array type="String">, in
   // every piece) and the dataset's own FieldData.
   std::string text = twoPieces("0 1 2 3", "10");
   for (size_t at = text.find("<PointData>"); at != std::string::npos; at = text.find("<PointData>", at + 1))
     text.insert(at + 11, R"(<Array type="String" Name="label" format="ascii">97 0 98 0 99 0 100 0</Array>)");
-  text.insert(text.find("<Piece"), R"(<FieldData><DataArray type="Float64" Name="TIME" NumberOfTuples="1" format="ascii">1.5</DataArray></FieldData>)");
+  text.insert(
+      text.find("<Piece"),
+      R"(<FieldData><DataArray type="Float64" Name="TIME" NumberOfTuples="1" format="ascii">1.5</DataArray></FieldData>)");
   const std::string text_path = tempDir("vtu_text_arrays") + "/text.vtu";
   writeFile(text_path, text);
   ImportResult t = load(text_path);
@@ -739,8 +744,8 @@ TEST(Vtu, StructuredFilesBecomeSplitHexahedra) {
   withExtent("huge2.vti", "0 2000 0 2000 0 2000", "more than a file of");
   withExtent("wide.vti", "-9000000000000000000 9000000000000000000 0 1 0 1", "bad WholeExtent");
   withExtent("flat2.vti", "1 3 0 1 0 0", "fewer than 2 points along an axis");
-  expectFails("axes.vtr", readFile(dir + "/g.vtr"), "<DataArray type=\"Float32\" format=\"ascii\">0 0.5</DataArray>", "",
-              "<Coordinates> needs three DataArrays");
+  expectFails("axes.vtr", readFile(dir + "/g.vtr"), "<DataArray type=\"Float32\" format=\"ascii\">0 0.5</DataArray>",
+              "", "<Coordinates> needs three DataArrays");
   expectFails("poly.vtp", readFile(dir + "/g.vtr"), "type=\"RectilinearGrid\"", "type=\"PolyData\"",
               "VTKFile type \"PolyData\" is not supported (it holds no volume cells");
 }
@@ -772,9 +777,10 @@ TEST(Vtu, StructuredFilesOfSeveralPieces) {
   const std::string b_xyz = "1 0 0  2 0 0  1 1 0  2 1 0  1.5 0 1  2.5 0 1  1.5 1 1  2.5 1 1";
   const std::string piece_a = vtsPiece("0 1 0 1 0 1", "0 1 3 4 6 7 9 10", "5", a_xyz);
   const std::string piece_b = vtsPiece("1 2 0 1 0 1", "1 2 4 5 7 8 10 11.5", "6", b_xyz);
-  const std::string whole_vts = vtsPiece("0 2 0 1 0 1", "0 1 2 3 4 5 6 7 8 9 10 11.5", "5 6",
-                                         "0 0 0  1 0 0  2 0 0  0 1 0  1 1 0  2 1 0  0.5 0 1  1.5 0 1  2.5 0 1  0.5 1 1  "
-                                         "1.5 1 1  2.5 1 1");
+  const std::string whole_vts =
+      vtsPiece("0 2 0 1 0 1", "0 1 2 3 4 5 6 7 8 9 10 11.5", "5 6",
+               "0 0 0  1 0 0  2 0 0  0 1 0  1 1 0  2 1 0  0.5 0 1  1.5 0 1  2.5 0 1  0.5 1 1  "
+               "1.5 1 1  2.5 1 1");
   auto rect = [](const std::string& extent, const std::string& x) {
     return "<Piece Extent=\"" + extent + "\"><Coordinates><DataArray type=\"Float32\" format=\"ascii\">" + x +
            "</DataArray><DataArray type=\"Float32\" format=\"ascii\">0 2</DataArray>"
@@ -786,7 +792,8 @@ TEST(Vtu, StructuredFilesOfSeveralPieces) {
   };
   const std::string spacing = " Origin=\"10 0 0\" Spacing=\"0.5 1 2\"";
   const std::vector<std::pair<std::string, std::string>> pairs = {
-      {file("StructuredGrid", "0 2 0 1 0 1", "", whole_vts), file("StructuredGrid", "0 2 0 1 0 1", "", piece_b + piece_a)},
+      {file("StructuredGrid", "0 2 0 1 0 1", "", whole_vts),
+       file("StructuredGrid", "0 2 0 1 0 1", "", piece_b + piece_a)},
       {file("RectilinearGrid", "0 2 0 1 0 1", "", rect("0 2 0 1 0 1", "0 1 3")),
        file("RectilinearGrid", "0 2 0 1 0 1", "", rect("0 1 0 1 0 1", "0 1") + rect("1 2 0 1 0 1", "1 3"))},
       {file("ImageData", "1 3 0 1 0 1", spacing, image("1 3 0 1 0 1", "0 1 1 0 0 1 1 1 0 0 0 1")),
@@ -822,18 +829,17 @@ TEST(Vtu, StructuredFilesOfSeveralPieces) {
   struct Split {
     std::string type, whole, attrs, extent[2], piece[2];
   };
-  const Split splits[3] = {
-      {"StructuredGrid", "0 2 0 1 0 1", "", {"0 1 0 1 0 1", "1 2 0 1 0 1"}, {piece_a, piece_b}},
-      {"RectilinearGrid",
-       "0 2 0 1 0 1",
-       "",
-       {"0 1 0 1 0 1", "1 2 0 1 0 1"},
-       {rect("0 1 0 1 0 1", "0 1"), rect("1 2 0 1 0 1", "1 3")}},
-      {"ImageData",
-       "1 3 0 1 0 1",
-       spacing,
-       {"1 2 0 1 0 1", "2 3 0 1 0 1"},
-       {image("1 2 0 1 0 1", "0 1 0 0 1 1 0 0"), image("2 3 0 1 0 1", "1 1 0 1 1 0 0 1")}}};
+  const Split splits[3] = {{"StructuredGrid", "0 2 0 1 0 1", "", {"0 1 0 1 0 1", "1 2 0 1 0 1"}, {piece_a, piece_b}},
+                           {"RectilinearGrid",
+                            "0 2 0 1 0 1",
+                            "",
+                            {"0 1 0 1 0 1", "1 2 0 1 0 1"},
+                            {rect("0 1 0 1 0 1", "0 1"), rect("1 2 0 1 0 1", "1 3")}},
+                           {"ImageData",
+                            "1 3 0 1 0 1",
+                            spacing,
+                            {"1 2 0 1 0 1", "2 3 0 1 0 1"},
+                            {image("1 2 0 1 0 1", "0 1 0 0 1 1 0 0"), image("2 3 0 1 0 1", "1 1 0 1 1 0 0 1")}}};
   auto parallel = [&](const Split& sp, const std::string& name, const std::string& sources) {
     std::string text = "<?xml version=\"1.0\"?>\n<VTKFile type=\"P" + sp.type + "\" version=\"0.1\">\n<P" + sp.type +
                        " WholeExtent=\"" + sp.whole + "\" GhostLevel=\"0\"" + sp.attrs + ">\n" + sources + "</P" +
@@ -871,8 +877,9 @@ TEST(Vtu, StructuredFilesOfSeveralPieces) {
     };
     writeFile(dir + "/g0.vts", file("StructuredGrid", "0 1 0 1 0 1", "", ghost(piece_a, "0 0 0 0 0 0 0 0")));
     writeFile(dir + "/g1.vts", file("StructuredGrid", "1 2 0 1 0 1", "", ghost(piece_b, "1 0 1 0 1 0 1 0")));
-    auto par = importMesh({parallel(splits[0], "ghost.pvts", source("0 1 0 1 0 1", "g0.vts") + source("1 2 0 1 0 1", "g1.vts"))},
-                          ImportOptions{});
+    auto par = importMesh(
+        {parallel(splits[0], "ghost.pvts", source("0 1 0 1 0 1", "g0.vts") + source("1 2 0 1 0 1", "g1.vts"))},
+        ImportOptions{});
     auto one = importMesh({dir + "/one.vts"}, ImportOptions{});
     ASSERT_TRUE(par.isOk()) << par.status().message();
     ASSERT_TRUE(one.isOk()) << one.status().message();
@@ -896,15 +903,18 @@ TEST(Vtu, StructuredFilesOfSeveralPieces) {
               "piece 1: " + dir + "/part1.vtr: a VTKFile of type \"RectilinearGrid\", not StructuredGrid");
   expectError(parallel(sg, "nested.pvts", source("0 1 0 1 0 1", "part0.vts") + source("1 2 0 1 0 1", "nested.pvts")),
               "a piece of a parallel file is itself a parallel file");
-  writeFile(dir + "/wide.vts", file("StructuredGrid", "1 3 0 1 0 1", "", vtsPiece("1 3 0 1 0 1", "1 2 4 5 7 8 10 11 1 1 1 1", "6 6",
-                                                                                 b_xyz + " 3 0 0  3 1 0  3 0 1  3 1 1")));
-  expectError(parallel(sg, "wide.pvts", source("0 1 0 1 0 1", "part0.vts") + source("1 3 0 1 0 1", "wide.vts")),
-              "piece 1: " + dir + "/wide.vts: Piece 0: Extent \"1 3 0 1 0 1\" is not a 3D block within the WholeExtent");
+  writeFile(dir + "/wide.vts",
+            file("StructuredGrid", "1 3 0 1 0 1", "",
+                 vtsPiece("1 3 0 1 0 1", "1 2 4 5 7 8 10 11 1 1 1 1", "6 6", b_xyz + " 3 0 0  3 1 0  3 0 1  3 1 1")));
+  expectError(
+      parallel(sg, "wide.pvts", source("0 1 0 1 0 1", "part0.vts") + source("1 3 0 1 0 1", "wide.vts")),
+      "piece 1: " + dir + "/wide.vts: Piece 0: Extent \"1 3 0 1 0 1\" is not a 3D block within the WholeExtent");
   expectError(parallel(sg, "gap.pvts", source("0 1 0 1 0 1", "part0.vts") + source("0 1 0 1 0 1", "part0.vts")),
               "gap.pvts: <PStructuredGrid>: its pieces leave out points of the WholeExtent");
   writeFile(dir + "/other.vts", file("StructuredGrid", "1 2 0 1 0 1", "", other));
   expectError(parallel(sg, "arrays.pvts", source("0 1 0 1 0 1", "part0.vts") + source("1 2 0 1 0 1", "other.vts")),
-              "arrays.pvts: piece 1: " + dir + "/other.vts: Piece 0: does not carry the same point and cell arrays as " + dir +
+              "arrays.pvts: piece 1: " + dir +
+                  "/other.vts: Piece 0: does not carry the same point and cell arrays as " + dir +
                   "/part0.vts: Piece 0");
   expectError(parallel(sg, "none.pvts", ""), "none.pvts: <PStructuredGrid> names no <Piece> file");
 }
@@ -915,7 +925,7 @@ TEST(Vtu, PolyhedraInSeveralPieces) {
   const std::string dir = tempDir("vtu_polyhedra");
   // The cube of a piece spans x in [x0, x0 + 1]; its pyramid's apex is at height 1.5.
   auto make = [](double x0, int part) {
-    const double xyz[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
+    const double xyz[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},      {0, 0, 1},
                               {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 0.5, 1.5}};
     std::string points;
     for (const auto& p : xyz)
@@ -936,7 +946,8 @@ TEST(Vtu, PolyhedraInSeveralPieces) {
   };
   const std::string text = std::string(R"(<?xml version="1.0"?>
 <VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian"><UnstructuredGrid>
-)") + make(0, 1) + make(3, 2) + "</UnstructuredGrid></VTKFile>\n";
+)") + make(0, 1) + make(3, 2) +
+                           "</UnstructuredGrid></VTKFile>\n";
   writeFile(dir + "/poly.vtu", text);
   auto r = importMesh({dir + "/poly.vtu"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
@@ -958,7 +969,7 @@ TEST(Vtu, PolyhedraInSeveralPieces) {
 // the earlier layout gives the same tetrahedra.
 TEST(Vtu, PolyhedraInVtk94Tables) {
   const std::string dir = tempDir("vtu_polyhedra94");
-  const int quads[11][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5},  {2, 3, 7, 6},  {3, 0, 4, 7},
+  const int quads[11][4] = {{0, 3, 2, 1},   {4, 5, 6, 7}, {0, 1, 5, 4},  {1, 2, 6, 5},   {2, 3, 7, 6}, {3, 0, 4, 7},
                             {8, 9, 10, 11}, {4, 5, 9, 8}, {5, 6, 10, 9}, {6, 7, 11, 10}, {7, 4, 8, 11}};
   const int cube_faces[2][6] = {{0, 1, 2, 3, 4, 5}, {1, 6, 7, 8, 9, 10}};
   // tables: "94" (VTK 9.4; `binary` puts the face table in base64 with one unused face at its end),
@@ -983,7 +994,9 @@ TEST(Vtu, PolyhedraInVtk94Tables) {
       return out;
     };
     auto array = [&](const char* name, std::vector<int64_t> v, bool base64) {
-      if (!base64) return std::string("<DataArray type=\"Int64\" Name=\"") + name + "\" format=\"ascii\">" + join(v) + "</DataArray>\n";
+      if (!base64)
+        return std::string("<DataArray type=\"Int64\" Name=\"") + name + "\" format=\"ascii\">" + join(v) +
+               "</DataArray>\n";
       std::vector<uint8_t> bytes(4 + 8 * v.size());
       const uint32_t size = static_cast<uint32_t>(8 * v.size());
       std::memcpy(bytes.data(), &size, 4);
@@ -1021,7 +1034,8 @@ TEST(Vtu, PolyhedraInVtk94Tables) {
   auto file = [&](const std::string& name, const std::string& tables, bool binary, const std::string& body_edit = "") {
     std::string text = std::string(R"(<?xml version="1.0"?>
 <VTKFile type="UnstructuredGrid" version="2.3" byte_order="LittleEndian" header_type="UInt32"><UnstructuredGrid>
-)") + piece(0, tables, binary) + piece(3, tables, binary) + "</UnstructuredGrid></VTKFile>\n";
+)") + piece(0, tables, binary) +
+                       piece(3, tables, binary) + "</UnstructuredGrid></VTKFile>\n";
     if (!body_edit.empty()) {
       const size_t bar = body_edit.find('|');
       const std::string from = body_edit.substr(0, bar), to = body_edit.substr(bar + 1);
@@ -1056,7 +1070,8 @@ TEST(Vtu, PolyhedraInVtk94Tables) {
   // A face named again and again: more than two polyhedra cannot share it.
   expectError(file("shared.vtu", "94", false, ">0 1 2 3 4 5 1 6 7 8 9 10 |>1 1 1 1 1 1 1 1 1 1 1 1 "),
               "more than two polyhedra");
-  expectError(file("both.vtu", "94", false, "</Cells>|<DataArray type=\"Int64\" Name=\"faces\" format=\"ascii\">0</DataArray></Cells>"),
+  expectError(file("both.vtu", "94", false,
+                   "</Cells>|<DataArray type=\"Int64\" Name=\"faces\" format=\"ascii\">0</DataArray></Cells>"),
               "both polyhedron layouts");
 }
 
@@ -1096,9 +1111,9 @@ std::string recompressed(const std::string& zlib_text, const std::string& codec,
                                                      reinterpret_cast<char*>(packed.data()), static_cast<int>(usize),
                                                      static_cast<int>(packed.size())));
       } else {
-        EXPECT_EQ(lzma_easy_buffer_encode(6, LZMA_CHECK_CRC32, nullptr, raw.data(), usize, packed.data(), &n,
-                                          packed.size()),
-                  LZMA_OK);
+        EXPECT_EQ(
+            lzma_easy_buffer_encode(6, LZMA_CHECK_CRC32, nullptr, raw.data(), usize, packed.data(), &n, packed.size()),
+            LZMA_OK);
       }
       EXPECT_GT(n, 0u);
       if (spoil && b == 0)
@@ -1149,7 +1164,8 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
     std::string pts;
     for (int k = 0; k < 2; ++k)
       for (int j = 0; j < 2; ++j)
-        for (int i = 0; i < 2; ++i) pts += std::to_string(x0 + i) + " " + std::to_string(j) + " " + std::to_string(k) + " ";
+        for (int i = 0; i < 2; ++i)
+          pts += std::to_string(x0 + i) + " " + std::to_string(j) + " " + std::to_string(k) + " ";
     return pts;
   };
   // Hexahedron corners of the 8 points above starting at `b` (VTK order).
@@ -1164,13 +1180,20 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
     for (int c = 1; c <= n_cells; ++c) offsets += std::to_string(8 * c) + " ", types += "12 ";
     return R"(<?xml version="1.0"?>
 <VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian"><UnstructuredGrid>
-<Piece NumberOfPoints=")" + std::to_string(n_points) + "\" NumberOfCells=\"" + std::to_string(n_cells) + R"(">
-<CellData><DataArray type="UInt8" Name="vtkGhostType" format="ascii">)" + ghost + R"(</DataArray>
-<DataArray type=")" + ids_type + R"(" Name="id" format="ascii">)" + ids + R"(</DataArray></CellData>
-<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" + points + R"(</DataArray></Points>
-<Cells><DataArray type="Int32" Name="connectivity" format="ascii">)" + conn + R"(</DataArray>
-<DataArray type="Int32" Name="offsets" format="ascii">)" + offsets + R"(</DataArray>
-<DataArray type="UInt8" Name="types" format="ascii">)" + types + R"(</DataArray></Cells>
+<Piece NumberOfPoints=")" +
+           std::to_string(n_points) + "\" NumberOfCells=\"" + std::to_string(n_cells) + R"(">
+<CellData><DataArray type="UInt8" Name="vtkGhostType" format="ascii">)" +
+           ghost + R"(</DataArray>
+<DataArray type=")" +
+           ids_type + R"(" Name="id" format="ascii">)" + ids + R"(</DataArray></CellData>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" +
+           points + R"(</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">)" +
+           conn + R"(</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">)" +
+           offsets + R"(</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">)" +
+           types + R"(</DataArray></Cells>
 </Piece></UnstructuredGrid></VTKFile>
 )";
   };
@@ -1210,7 +1233,8 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
     EXPECT_EQ(x > 1, ids[t] == 1) << t;
   }
   const auto& w = r->report.warnings;
-  EXPECT_TRUE(std::any_of(w.begin(), w.end(), [](const std::string& m) { return m.find("6 tetrahedra of ghost") == 0; }));
+  EXPECT_TRUE(
+      std::any_of(w.begin(), w.end(), [](const std::string& m) { return m.find("6 tetrahedra of ghost") == 0; }));
 
   // Welded, the pieces make one conforming block of two cubes: 12 points, the shared square inside.
   ImportOptions weld;
@@ -1234,7 +1258,8 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
   writeFile(dir + "/img.vti", R"(<?xml version="1.0"?>
 <VTKFile type="ImageData" version="0.1"><ImageData WholeExtent="0 1 0 1 0 1"><Piece Extent="0 1 0 1 0 1"/></ImageData></VTKFile>
 )");
-  expectError(withSecond("kind.pvtu", "img.vti"), "piece 1: " + dir + "/img.vti: a VTKFile of type \"ImageData\", not UnstructuredGrid");
+  expectError(withSecond("kind.pvtu", "img.vti"),
+              "piece 1: " + dir + "/img.vti: a VTKFile of type \"ImageData\", not UnstructuredGrid");
   ASSERT_EQ(mkfifo((dir + "/fifo.vtu").c_str(), 0600), 0);
   expectError(withSecond("fifo.pvtu", "fifo.vtu"), "piece 1: " + dir + "/fifo.vtu: not a regular file");
 
@@ -1252,7 +1277,8 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
   EXPECT_NEAR(computeMeshStats(one->mesh).total_volume, 2.0, 1e-12);
   ASSERT_EQ(one->mesh.cell_fields.size(), 1u);
   const auto& ow = one->report.warnings;
-  EXPECT_TRUE(std::any_of(ow.begin(), ow.end(), [](const std::string& m) { return m.find("6 tetrahedra of ghost") == 0; }));
+  EXPECT_TRUE(
+      std::any_of(ow.begin(), ow.end(), [](const std::string& m) { return m.find("6 tetrahedra of ghost") == 0; }));
   EXPECT_TRUE(std::any_of(ow.begin(), ow.end(), [](const std::string& m) { return m.find("2 pieces read") == 0; }));
   // A piece alone keeps its ghost copy (no other piece owns it here), and says so.
   auto alone = importMesh({dir + "/p_0.vtu"}, ImportOptions{});
@@ -1274,8 +1300,10 @@ std::string hexPiece(const std::vector<std::array<double, 3>>& corners, const st
   }
   for (int c = 0; c < 8; ++c) conn += std::to_string(stored_at[c]) + " ";
   return R"(<Piece NumberOfPoints="8" NumberOfCells="1">
-<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" + points + R"(</DataArray></Points>
-<Cells><DataArray type="Int32" Name="connectivity" format="ascii">)" + conn + R"(</DataArray>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" +
+         points + R"(</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">)" +
+         conn + R"(</DataArray>
 <DataArray type="Int32" Name="offsets" format="ascii">8</DataArray>
 <DataArray type="UInt8" Name="types" format="ascii">12</DataArray></Cells>
 </Piece>
@@ -1298,8 +1326,8 @@ TEST(Vtu, WeldedPiecesCutTheFacesTheyShareAlike) {
   // sits elsewhere than in the first piece, at (1, 0, 0).
   writeFile(dir + "/p.vtu", R"(<?xml version="1.0"?>
 <VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian"><UnstructuredGrid>
-)" + hexPiece(cube(0), {0, 1, 2, 3, 4, 5, 6, 7}) + hexPiece(cube(1), {3, 0, 1, 2, 4, 5, 6, 7}) +
-                                  "</UnstructuredGrid></VTKFile>\n");
+)" + hexPiece(cube(0), {0, 1, 2, 3, 4, 5, 6, 7}) +
+                                hexPiece(cube(1), {3, 0, 1, 2, 4, 5, 6, 7}) + "</UnstructuredGrid></VTKFile>\n");
   for (int split : {5, 6}) {
     SCOPED_TRACE(split);
     ImportOptions weld;
@@ -1377,7 +1405,8 @@ TEST(Vtu, MalformedFilesFailWithTheFileNamed) {
 <DataSet index="0" file="blocks/blocks_0.vtu"/><DataSet index="1" file="blocks/blocks_1.vti"/>
 </vtkMultiBlockDataSet></VTKFile>
 )");
-  expectError(dir + "/blocks.vtm", "is a collection of other files (blocks/blocks_0.vtu, blocks/blocks_1.vti): convert one");
+  expectError(dir + "/blocks.vtm",
+              "is a collection of other files (blocks/blocks_0.vtu, blocks/blocks_1.vti): convert one");
 
   const TetMesh mesh = makeTypedMesh();
   ASSERT_TRUE(exportVtu(mesh, dir + "/plain.vtu", ExportOptions{}).isOk());
@@ -1484,7 +1513,8 @@ TEST(Vtu, BitArraysReadAsBytes) {
     return std::string(R"(<?xml version="1.0"?>
 <VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian" header_type="UInt32">
 <UnstructuredGrid><Piece NumberOfPoints="5" NumberOfCells="2">
-<PointData>)") + bits_array + R"(</PointData>
+<PointData>)") +
+           bits_array + R"(</PointData>
 <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0 0 0 1 1 1 1</DataArray></Points>
 <Cells><DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 1 2 3 4</DataArray>
 <DataArray type="Int32" Name="offsets" format="ascii">4 8</DataArray>
@@ -1494,10 +1524,9 @@ TEST(Vtu, BitArraysReadAsBytes) {
   };
   // 1 0 1 1 0 packed: 0xB0; the UInt32 size 1 and the byte, base64-encoded apart as VTK does.
   const uint8_t header[4] = {1, 0, 0, 0}, packed[1] = {0xB0};
-  const std::string forms[2] = {
-      R"(<DataArray type="Bit" Name="f" format="ascii">1 0 1 1 0</DataArray>)",
-      R"(<DataArray type="Bit" Name="f" format="binary">)" + base64Encode(header, 4) + base64Encode(packed, 1) +
-          "</DataArray>"};
+  const std::string forms[2] = {R"(<DataArray type="Bit" Name="f" format="ascii">1 0 1 1 0</DataArray>)",
+                                R"(<DataArray type="Bit" Name="f" format="binary">)" + base64Encode(header, 4) +
+                                    base64Encode(packed, 1) + "</DataArray>"};
   for (const std::string& form : forms) {
     writeFile(dir + "/bits.vtu", file(form));
     auto r = importMesh({dir + "/bits.vtu"}, ImportOptions{});
@@ -1532,7 +1561,8 @@ TEST(Vtu, BlankedStructuredCellsAreDropped) {
 <PointData><DataArray type="UInt8" Name="vtkGhostType" format="ascii">0 0 0 0 0 0 0 0 2 0 0 0 0 0 0 0 0 0</DataArray></PointData>
 <CellData><DataArray type="UInt8" Name="vtkGhostType" format="ascii">32 0 0 0</DataArray>
 <DataArray type="Int32" Name="zone" format="ascii">10 11 12 13</DataArray></CellData>
-<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" + xyz + R"(</DataArray></Points>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" +
+                           xyz + R"(</DataArray></Points>
 </Piece></StructuredGrid></VTKFile>
 )";
   writeFile(dir + "/b.vts", text);

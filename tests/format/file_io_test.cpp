@@ -73,7 +73,10 @@ TEST(FileIo, OutputsKeepModesAndTheUmask) {
   EXPECT_EQ(test::readFile(dir + "/new.txt"), "bb");
   EXPECT_EQ(mode(dir + "/new.txt"), 0600u);
   AtomicFileGroup g;
-  ASSERT_TRUE(g.add(dir + "/open.txt", [](std::FILE* f) { std::fputs("g", f); return Status::ok(); }).isOk());
+  ASSERT_TRUE(g.add(dir + "/open.txt", [](std::FILE* f) {
+                 std::fputs("g", f);
+                 return Status::ok();
+               }).isOk());
   ASSERT_TRUE(g.commit().isOk());
   EXPECT_EQ(mode(dir + "/open.txt"), 0666u);
   ASSERT_EQ(::chmod((dir + "/new.txt").c_str(), 0444), 0);
@@ -96,13 +99,19 @@ TEST(FileIo, GroupCommitsAllOrNothing) {
   const std::string dir = test::tempDir("fileio-group");
   {
     AtomicFileGroup g;
-    ASSERT_TRUE(g.add(dir + "/a.node", [](std::FILE* f) { std::fputs("a", f); return Status::ok(); }).isOk());
+    ASSERT_TRUE(g.add(dir + "/a.node", [](std::FILE* f) {
+                   std::fputs("a", f);
+                   return Status::ok();
+                 }).isOk());
     ASSERT_FALSE(g.add(dir + "/a.ele", [](std::FILE*) { return invalidData("no"); }).isOk());
   }
   EXPECT_FALSE(test::fileExists(dir + "/a.node"));
   EXPECT_TRUE(std::filesystem::is_empty(dir));
   AtomicFileGroup g;
-  ASSERT_TRUE(g.add(dir + "/b.node", [](std::FILE* f) { std::fputs("b", f); return Status::ok(); }).isOk());
+  ASSERT_TRUE(g.add(dir + "/b.node", [](std::FILE* f) {
+                 std::fputs("b", f);
+                 return Status::ok();
+               }).isOk());
   ASSERT_TRUE(g.commit().isOk());
   EXPECT_EQ(test::readFile(dir + "/b.node"), "b");
 }
@@ -183,7 +192,10 @@ TEST(TextReader, TokensNumbersCommentsAndLines) {
 TEST(TextReader, ByteOrderMarkAndEveryLineEnding) {
   for (const char* eol : {"\n", "\r\n", "\r"}) {
     const std::string e = eol;
-    const std::string text = "\xEF\xBB\xBF" "2 1 # count" + e + e + "7 8" + e + "9";  // outlives the reader
+    const std::string text =
+        "\xEF\xBB\xBF"
+        "2 1 # count" +
+        e + e + "7 8" + e + "9";  // outlives the reader
     TextReader r("m.node", text);
     std::string_view tok;
     ASSERT_TRUE(r.next(&tok));

@@ -258,8 +258,10 @@ TEST_F(GtnCli, WarningsNameTheirFileOnce) {
   {
     std::FILE* f = std::fopen((base + ".node").c_str(), "w");
     ASSERT_TRUE(f);
-    std::fputs("10 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0.5 0 0\n6 0.5 0.5 0\n7 0 0.5 0\n"
-               "8 0 0 0.5\n9 0.5 0 0.5\n10 0 0.5 0.5\n", f);
+    std::fputs(
+        "10 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0.5 0 0\n6 0.5 0.5 0\n7 0 0.5 0\n"
+        "8 0 0 0.5\n9 0.5 0 0.5\n10 0 0.5 0.5\n",
+        f);
     std::fclose(f);
     f = std::fopen((base + ".ele").c_str(), "w");
     ASSERT_TRUE(f);
@@ -278,12 +280,14 @@ TEST_F(GtnCli, WarningsNameTheirFileOnce) {
   // Options that do nothing for these inputs or outputs say so (they were ignored without a word).
   r = test::runGtn("convert " + base + " -o " + dir_ + "/quad.vtk --compress");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find(dir_ + "/quad.vtk: --compress applies to .vtu outputs only; ignored"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(dir_ + "/quad.vtk: --compress applies to .vtu outputs only; ignored"), std::string::npos)
+      << r.err;
   r = test::runGtn("convert " + base + " -o " + dir_ + "/quad.vtu --compress");
   EXPECT_EQ(r.err.find("--compress"), std::string::npos) << r.err;
   r = test::runGtn("info " + base + ".ele --merge-tree");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("--merge-tree describes the merge tree of a .gtn file; a mesh has none"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--merge-tree describes the merge tree of a .gtn file; a mesh has none"), std::string::npos)
+      << r.err;
 }
 
 // A mesh file given to export is a usage error that names the command that converts it.

@@ -18,8 +18,8 @@
 namespace gtn {
 namespace {
 
-using test::RunResult;
 using test::runGtn;
+using test::RunResult;
 
 // A PLOT3D multi-grid file (big-endian, no record markers, float32): blocks of ni x nj x nk points
 // side by side along x, each sharing its last i-plane with the next block's first, bit for bit.
@@ -52,7 +52,8 @@ uint64_t fileSize(const std::string& path) { return test::readFile(path).size();
 class UsabilityCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = test::tempDir("gtn-usability-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    dir_ =
+        test::tempDir("gtn-usability-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     vtk_ = dir_ + "/grid.vtk";
     test::writeFile(vtk_, test::shearedHexGridVtk(6));
   }
@@ -71,8 +72,9 @@ TEST_F(UsabilityCli, ConvertEndsWithASummaryLineWhoseFiguresAreTheFiles) {
     EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
     ASSERT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     std::smatch m;
-    const std::regex line("^gtn: (.*) \\(([0-9]+) bytes\\) -> (.*) \\(([0-9]+) bytes\\): ([0-9.]+)% of the input, "
-                          "([0-9.]+) bits/tet \\(([0-9]+) tetrahedra\\), ([0-9.]+) s\n$");
+    const std::regex line(
+        "^gtn: (.*) \\(([0-9]+) bytes\\) -> (.*) \\(([0-9]+) bytes\\): ([0-9.]+)% of the input, "
+        "([0-9.]+) bits/tet \\(([0-9]+) tetrahedra\\), ([0-9.]+) s\n$");
     ASSERT_TRUE(std::regex_match(r.err, m, line)) << r.err;
     EXPECT_EQ(m[1], vtk_);
     EXPECT_EQ(std::stoull(m[2]), fileSize(vtk_));
@@ -80,7 +82,8 @@ TEST_F(UsabilityCli, ConvertEndsWithASummaryLineWhoseFiguresAreTheFiles) {
     const uint64_t out_bytes = fileSize(out);
     EXPECT_EQ(std::stoull(m[4]), out_bytes);
     char want[64];
-    std::snprintf(want, sizeof want, "%.2f", 100.0 * static_cast<double>(out_bytes) / static_cast<double>(fileSize(vtk_)));
+    std::snprintf(want, sizeof want, "%.2f",
+                  100.0 * static_cast<double>(out_bytes) / static_cast<double>(fileSize(vtk_)));
     EXPECT_EQ(m[5], want);
     const uint64_t tets = std::stoull(m[7]);
     EXPECT_EQ(tets, 6u * 6 * 6 * 6);  // 216 hexahedra, 6 tetrahedra each

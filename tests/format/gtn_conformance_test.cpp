@@ -142,7 +142,8 @@ TetMesh repeatedComponents() {
   // repeats of the vector's components (spec section 10.6).
   TetMesh m = cubeF64Fields();
   const Field& velocity = m.point_fields[1];
-  Field vx("velocity_x", 1, ScalarType::kFloat32, m.numPoints()), vz("velocity_z", 1, ScalarType::kFloat32, m.numPoints());
+  Field vx("velocity_x", 1, ScalarType::kFloat32, m.numPoints()),
+      vz("velocity_z", 1, ScalarType::kFloat32, m.numPoints());
   for (size_t v = 0; v < m.numPoints(); ++v) {
     vx.set<float>(v, 0, static_cast<float>(velocity.get(v, 0)));
     vz.set<float>(v, 0, static_cast<float>(velocity.get(v, 2)));
@@ -163,7 +164,8 @@ TetMesh decimals() {
   for (size_t i = 0; i < m.coords.size(); ++i) m.coords[i] = std::nearbyint(m.coords[i] * 1e4 + 0.3 * (i % 7)) / 1e4;
   m.coords[3 * 5] += 1e-13;  // a generator's own point among the printed ones
   Field t("temperature", 1, ScalarType::kFloat64, np);
-  for (size_t v = 0; v < np; ++v) t.set<double>(v, 0, std::nearbyint(300000.0 + 37.0 * static_cast<double>(v % 11)) / 1000.0);
+  for (size_t v = 0; v < np; ++v)
+    t.set<double>(v, 0, std::nearbyint(300000.0 + 37.0 * static_cast<double>(v % 11)) / 1000.0);
   t.set<double>(7, 0, -0.0);
   t.set<double>(8, 0, 1.0 / 3.0);
   m.point_fields = {t};
@@ -181,7 +183,8 @@ TetMesh printedSingles() {
   m.coords[3 * 4 + 1] = 1.0 / 3.0;
   const size_t np = m.numPoints();
   Field t("temperature", 1, ScalarType::kFloat64, np);
-  for (size_t v = 0; v < np; ++v) t.set<double>(v, 0, printedSingle(static_cast<float>(280.0 + 0.37 * static_cast<double>(v % 13)), 15));
+  for (size_t v = 0; v < np; ++v)
+    t.set<double>(v, 0, printedSingle(static_cast<float>(280.0 + 0.37 * static_cast<double>(v % 13)), 15));
   t.set<double>(9, 0, 1e300);
   m.point_fields = {t};
   return finish(m);
@@ -194,13 +197,15 @@ TetMesh shiftExceptions() {
   TetMesh m;
   m.coord_type = ScalarType::kFloat64;
   addCubeGrid(m, 3, 0.0, 0.37);
-  for (double& c : m.coords) c = static_cast<double>(static_cast<float>(c * 1.7)) + static_cast<double>(static_cast<float>(c * 0.013));
+  for (double& c : m.coords)
+    c = static_cast<double>(static_cast<float>(c * 1.7)) + static_cast<double>(static_cast<float>(c * 0.013));
   m.coords[3 * 4 + 1] = 1.0 / 3.0;
   const size_t np = m.numPoints();
   Field s("stress", 1, ScalarType::kFloat64, np);
   for (size_t v = 0; v < np; ++v)
-    s.set<double>(v, 0, static_cast<double>(static_cast<float>(4.1e6 + 977.3 * static_cast<double>(v % 13))) +
-                            static_cast<double>(static_cast<float>(3100.7 * static_cast<double>(v % 7))));
+    s.set<double>(v, 0,
+                  static_cast<double>(static_cast<float>(4.1e6 + 977.3 * static_cast<double>(v % 13))) +
+                      static_cast<double>(static_cast<float>(3100.7 * static_cast<double>(v % 7))));
   s.set<double>(9, 0, std::sqrt(2.0));
   s.set<double>(10, 0, 0.0);
   s.set<double>(20, 0, 1e300 / 3.0);
@@ -260,7 +265,8 @@ TetMesh packedValues() {
   std::vector<float> levels(300), damage_levels(300);
   for (float& l : levels) l = static_cast<float>(rng() >> 40) * 1.1920929e-7f * 3.0e8f;
   for (float& l : damage_levels) l = static_cast<float>(rng() >> 40) * 5.9604645e-8f;
-  Field stress("stress", 1, ScalarType::kFloat32, m.numPoints()), smooth("smooth", 1, ScalarType::kFloat64, m.numPoints());
+  Field stress("stress", 1, ScalarType::kFloat32, m.numPoints()),
+      smooth("smooth", 1, ScalarType::kFloat64, m.numPoints());
   for (size_t v = 0; v < m.numPoints(); ++v) {
     stress.set<float>(v, 0, levels[rng() % levels.size()]);
     const double* p = m.point(v);
@@ -358,7 +364,8 @@ TetMesh degenerateSweep() {
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 3; ++j)
         for (int i = 0; i < 3; ++i) {
-          const double x = i * 0.37 + 0.013 * i * i, y = j * 1.1 + 0.2 * (j % 3), z = k * 0.71 + 0.05 * (k % 2) + 0.3 * y;
+          const double x = i * 0.37 + 0.013 * i * i, y = j * 1.1 + 0.2 * (j % 3),
+                       z = k * 0.71 + 0.05 * (k % 2) + 0.3 * y;
           m.coords.insert(m.coords.end(), {x + 3000.0 * copy, y * squash, z - 2000.0});
         }
     static const int kKuhn[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
@@ -458,70 +465,72 @@ Sample valid(std::string name, std::function<TetMesh()> mesh, std::function<std:
 std::vector<Sample> samples() {
   std::vector<Sample> s;
   s.push_back(valid("cube.f32.dir.v1.0.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
-  s.push_back(valid("cube.f64.fields.dir.v1.0.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
+  s.push_back(
+      valid("cube.f64.fields.dir.v1.0.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
   s.push_back(valid("cube.f64.fields.nodir.v1.0.gtn", cubeF64Fields,
-               [] { return encodeFile(cubeF64Fields(), options(false)); }));
-  s.push_back(valid("unused-points.f32.dir.v1.0.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
-  s.push_back(valid("two-components.f32.dir.v1.0.gtn", twoComponents, [] { return encodeFile(twoComponents(), options()); }));
+                    [] { return encodeFile(cubeF64Fields(), options(false)); }));
+  s.push_back(
+      valid("unused-points.f32.dir.v1.0.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
+  s.push_back(
+      valid("two-components.f32.dir.v1.0.gtn", twoComponents, [] { return encodeFile(twoComponents(), options()); }));
   s.push_back(valid("repeated-components.f64.dir.v1.0.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
   s.push_back(valid("decimals.f64.dir.v1.0.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
-  s.push_back(valid("printed-singles.f64.dir.v1.0.gtn", printedSingles, [] { return encodeFile(printedSingles(), options()); }));
-  s.push_back(valid("shift-exceptions.f64.dir.v1.0.gtn", shiftExceptions, [] { return encodeFile(shiftExceptions(), options()); }));
+  s.push_back(valid("printed-singles.f64.dir.v1.0.gtn", printedSingles,
+                    [] { return encodeFile(printedSingles(), options()); }));
+  s.push_back(valid("shift-exceptions.f64.dir.v1.0.gtn", shiftExceptions,
+                    [] { return encodeFile(shiftExceptions(), options()); }));
   s.push_back(valid("value-table.f32.dir.v1.0.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
-  s.push_back(valid("packed-values.f32.dir.v1.0.gtn", packedValues, [] { return encodeFile(packedValues(), options(), nullptr, true); }));
+  s.push_back(valid("packed-values.f32.dir.v1.0.gtn", packedValues,
+                    [] { return encodeFile(packedValues(), options(), nullptr, true); }));
   s.push_back(valid("curvilinear.f32.dir.v1.0.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(valid("delaunay.f64.dir.v1.0.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
   s.push_back(valid("degenerate-sweep.f64.dir.v1.0.gtn", degenerateSweep,
                     [] { return encodeFile(degenerateSweep(), options()); }));
   s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
-  s.push_back(valid("wide-merge-tree.f32.dir.v1.0.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
+  s.push_back(
+      valid("wide-merge-tree.f32.dir.v1.0.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
-                 const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
-                 return encodeFile(cubeF32(), options(false),
-                                   [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("xNOT"), note, true).isOk()); });
-               }));
+    const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
+    return encodeFile(cubeF32(), options(false),
+                      [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("xNOT"), note, true).isOk()); });
+  }));
   s.push_back(valid("newer-minor.f32.dir.v1.9.gtn", cubeF32, [] {
-                 std::vector<uint8_t> b = encodeFile(cubeF32(), options());
-                 const auto p = encodeGtnPrefix(1, 9);
-                 std::copy(p.begin(), p.end(), b.begin());
-                 return b;
-               }));
+    std::vector<uint8_t> b = encodeFile(cubeF32(), options());
+    const auto p = encodeGtnPrefix(1, 9);
+    std::copy(p.begin(), p.end(), b.begin());
+    return b;
+  }));
   // Must fail.
-  s.push_back({"fail.bad-magic-text-mode.gtn", nullptr,
-               [] {
+  s.push_back({"fail.bad-magic-text-mode.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.erase(b.begin() + 4);  // CR LF -> LF, as a text-mode transfer does
                  return b;
                }});
-  s.push_back({"fail.bad-checksum.gtn", nullptr,
-               [] {
+  s.push_back({"fail.bad-checksum.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b[chunkOffset(b, kTagGeometry) + 40] ^= 0x04;  // past the header, in the payload
                  return b;
                }});
-  s.push_back({"fail.truncated.gtn", nullptr,
-               [] {
+  s.push_back({"fail.truncated.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.resize(chunkOffset(b, kTagConnectivity) + 20);
                  return b;
                }});
-  s.push_back({"fail.unknown-critical-chunk.gtn", nullptr,
-               [] {
+  s.push_back({"fail.unknown-critical-chunk.gtn", nullptr, [] {
                  const std::vector<uint8_t> payload = {1, 2, 3};
-                 return encodeFile(cubeF32(), options(false),
-                                   [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("XTRA"), payload, false).isOk()); });
+                 return encodeFile(cubeF32(), options(false), [&](GtnStreamWriter& w) {
+                   EXPECT_TRUE(w.addChunk(ChunkTag("XTRA"), payload, false).isOk());
+                 });
                }});
-  s.push_back({"fail.newer-major.v2.0.gtn", nullptr,
-               [] {
+  s.push_back({"fail.newer-major.v2.0.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  const auto p = encodeGtnPrefix(2, 0);
                  std::copy(p.begin(), p.end(), b.begin());
                  return b;
                }});
-  s.push_back({"fail.trailing-bytes.gtn", nullptr,
-               [] {
+  s.push_back({"fail.trailing-bytes.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.push_back('\n');
                  return b;

@@ -9,8 +9,8 @@
 #include "format/gtn_bytes.h"
 #include "format/gtn_chunk.h"
 #include "format/gtn_file.h"
-#include "format/gtn_records.h"
 #include "format/gtn_reader.h"
+#include "format/gtn_records.h"
 #include "test_util.h"
 
 namespace gtn {
@@ -407,7 +407,8 @@ TEST(GtnContainer, ReadsFromAPipe) {
 }
 
 // Re-frames the chunk at `offset` of `file` (a valid file) with a new payload and a valid checksum.
-std::vector<uint8_t> reframe(const std::vector<uint8_t>& file, const GtnChunkInfo& c, const std::vector<uint8_t>& payload) {
+std::vector<uint8_t> reframe(const std::vector<uint8_t>& file, const GtnChunkInfo& c,
+                             const std::vector<uint8_t>& payload) {
   std::vector<uint8_t> out(file.begin(), file.begin() + c.offset);
   appendGtnChunk(out, c.tag, payload, false, false, 1);
   out.insert(out.end(), file.begin() + c.offset + c.bytes, file.end());

@@ -17,7 +17,6 @@
 
 namespace gtn::fuzz {
 
-
 // Runs one input through the level decoder or the merge-tree decoder; any outcome but a crash, a
 // sanitizer report or a hang is fine. Returns whether the decoder accepted the input.
 inline bool decodeFuzzInput(const uint8_t* data, size_t size) {

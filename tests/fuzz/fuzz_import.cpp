@@ -40,8 +40,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (data[0] == 0xF7 || data[0] == 0xF8) {
     static const std::string mesh = [] {
       const std::string path = scratch() + "/fixed.mesh";
-      const char text[] = "MeshVersionFormatted 2\nDimension 3\nVertices\n5\n0 0 0 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n"
-                          "1 1 1 1\nTetrahedra\n2\n1 2 3 4 7\n2 3 4 5 8\nEnd\n";
+      const char text[] =
+          "MeshVersionFormatted 2\nDimension 3\nVertices\n5\n0 0 0 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n"
+          "1 1 1 1\nTetrahedra\n2\n1 2 3 4 7\n2 3 4 5 8\nEnd\n";
       put(path, reinterpret_cast<const uint8_t*>(text), sizeof text - 1);
       return path;
     }();
@@ -51,8 +52,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;
   }
   static const char* const kExtensions[] = {"vtk", "vtu", "mesh", "meshb", "off", "node", "xyz"};
-  const std::string ext =
-      data[0] == 0xF6 ? "msh" : kExtensions[data[0] % (sizeof kExtensions / sizeof kExtensions[0])];
+  const std::string ext = data[0] == 0xF6 ? "msh" : kExtensions[data[0] % (sizeof kExtensions / sizeof kExtensions[0])];
   const uint8_t* body = data + 1;
   const size_t n = size - 1;
   const std::string base = scratch() + "/in";

@@ -29,10 +29,8 @@ TetMesh structuredGrid(int n, int split, double jitter_seed = 0.0) {
       for (int i = 0; i + 1 < n; ++i) {
         const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
                                id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
-        if (split == 6)
-          splitHexSix(h, m.tets);
-        else
-          splitHexFive(h, (i + j + k) % 2 == 1, m.tets);
+        if (split == 6) splitHexSix(h, m.tets);
+        else splitHexFive(h, (i + j + k) % 2 == 1, m.tets);
       }
   return m;
 }

@@ -124,7 +124,7 @@ TEST(BudgetPlan, TheCostModelPredictsStoredMergedAndFloorPlans) {
 TEST(BudgetPlan, FewestMergesFittingIsTheFirstCountThatFits) {
   auto line = [](double f) { return 100 - 80 * f; };  // fits 50 from f = 0.625
   EXPECT_EQ(fewestMergesFitting(8, 50, line), 5u);
-  EXPECT_EQ(fewestMergesFitting(7, 50, line), 5u);   // ceil(0.625 * 7)
+  EXPECT_EQ(fewestMergesFitting(7, 50, line), 5u);  // ceil(0.625 * 7)
   EXPECT_EQ(fewestMergesFitting(8, 10, line), std::nullopt);
   EXPECT_EQ(fewestMergesFitting(0, 50, line), std::nullopt);
   EXPECT_EQ(fewestMergesFitting(8, 200, line), 1u);  // at least one merge

@@ -85,7 +85,8 @@ inline FlatTorus makeFlatTorus(uint32_t seed, bool with_flats = true, int nu = 2
         if (k + 1 < nz && hex(i, j, k + 1) != mir)
           flats.push_back({vid(i, j, k + 1), vid(i + 1, j, k + 1), vid(i + 1, j + 1, k + 1), vid(i, j + 1, k + 1)});
         // Boundary quads with a flat tetrahedron on top.
-        if (j == 0 && chance(0.15)) flats.push_back({vid(i, 0, k), vid(i + 1, 0, k), vid(i + 1, 0, k + 1), vid(i, 0, k + 1)});
+        if (j == 0 && chance(0.15))
+          flats.push_back({vid(i, 0, k), vid(i + 1, 0, k), vid(i + 1, 0, k + 1), vid(i, 0, k + 1)});
         if (k == nz - 1 && chance(0.15))
           flats.push_back({vid(i, j, nz), vid(i + 1, j, nz), vid(i + 1, j + 1, nz), vid(i, j + 1, nz)});
       }

@@ -26,7 +26,8 @@ std::vector<bool> litPixels(const std::string& png) {
   EXPECT_TRUE(image.isOk()) << png;
   std::vector<bool> lit;
   if (!image.isOk()) return lit;
-  for (size_t i = 0; i < image->rgb.size(); i += 3) lit.push_back(image->rgb[i] || image->rgb[i + 1] || image->rgb[i + 2]);
+  for (size_t i = 0; i < image->rgb.size(); i += 3)
+    lit.push_back(image->rgb[i] || image->rgb[i + 1] || image->rgb[i + 2]);
   return lit;
 }
 
@@ -45,8 +46,9 @@ TEST(RenderBudget, ABudgetNothingMeetsIsSaidAndTheImageStillShowsTheMesh) {
   for (const std::string pipeline : {"integrated", "generic"}) {
     SCOPED_TRACE(pipeline);
     for (int run = 0; run < 2; ++run) {  // calibrating, then from the cache
-      const test::RunResult r = test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir +
-                                               "/floor.png --size 96x96 --json --budget-ms 0.001 --pipeline " + pipeline);
+      const test::RunResult r =
+          test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir +
+                         "/floor.png --size 96x96 --json --budget-ms 0.001 --pipeline " + pipeline);
       ASSERT_EQ(r.exit_code, 0) << r.err;
       EXPECT_NE(r.err.find(gtn + ": --budget-ms 0.001 cannot be met: the cheapest plan"), std::string::npos) << r.err;
       const nlohmann::json j = nlohmann::json::parse(r.out);
@@ -72,7 +74,8 @@ TEST(RenderBudget, TheCacheHonoursXdgCacheHome) {
   const std::string dir = test::tempDir("render-budget-xdg");
   const std::string gtn = torusGtn(dir);
   const std::string file = "/gatun/render-calibration.json";
-  const std::string render = std::string(GTN_BINARY) + " render " + gtn + " -o " + dir + "/x.png --size 32x32 --budget-ms 100000";
+  const std::string render =
+      std::string(GTN_BINARY) + " render " + gtn + " -o " + dir + "/x.png --size 32x32 --budget-ms 100000";
   ASSERT_EQ(test::runShell("HOME=" + dir + "/home XDG_CACHE_HOME=" + dir + "/xdg " + render).exit_code, 0);
   EXPECT_TRUE(test::fileExists(dir + "/xdg" + file));
   EXPECT_FALSE(test::fileExists(dir + "/home/.cache" + file));

@@ -159,7 +159,9 @@ TEST(RenderCommand, DumpViewDescribesTheCameraAndTransferFunction) {
   EXPECT_NEAR(tf["opacity_unit_distance"].get<double>(), 2 * scale / 40, 1e-9 * scale);
   // A perspective view reports its vertical view angle (30 degrees at zoom 1, narrower zoomed in).
   ASSERT_EQ(runGtn("render " + spx + " -o " + dir + "/p.png --size 32x32 --projection persp --zoom 2 --dump-view " +
-                   dir + "/p.json").exit_code, 0);
+                   dir + "/p.json")
+                .exit_code,
+            0);
   const nlohmann::json p = nlohmann::json::parse(test::readFile(dir + "/p.json"));
   EXPECT_NEAR(p["camera"]["view_angle"].get<double>(), 2 * std::atan(std::tan(15 * kPi / 180) / 2) * 180 / kPi, 1e-9);
 }
@@ -169,13 +171,16 @@ TEST(RenderCommand, DumpViewDescribesTheCameraAndTransferFunction) {
 // python3-paraview (its vtkmodules), run under xvfb-run.
 TEST(RenderCommand, AgreesWithVtkOnSpx) {
   if (test::runShell("/usr/bin/python3 -c 'import vtk' 2>/dev/null && command -v xvfb-run >/dev/null").exit_code != 0)
-    GTEST_FAIL() << "/usr/bin/python3 cannot import vtk, or xvfb-run is missing (scripts/setup.sh installs python3-paraview and xvfb)";
+    GTEST_FAIL() << "/usr/bin/python3 cannot import vtk, or xvfb-run is missing (scripts/setup.sh installs "
+                    "python3-paraview and xvfb)";
   const std::string dir = test::tempDir("render-vtk");
   const std::string spx = test::dataPath("vtk/spx.vtk");
   ASSERT_EQ(runGtn("convert " + spx + " -o " + dir + "/spx.gtn").exit_code, 0);
   ASSERT_EQ(runGtn("export " + dir + "/spx.gtn -o " + dir + "/spx.vtu").exit_code, 0);
-  ASSERT_EQ(runGtn("render " + dir + "/spx.gtn -o " + dir + "/ours.png --size 256x256 --dump-view " + dir +
-                   "/view.json").exit_code, 0);
+  ASSERT_EQ(
+      runGtn("render " + dir + "/spx.gtn -o " + dir + "/ours.png --size 256x256 --dump-view " + dir + "/view.json")
+          .exit_code,
+      0);
   const test::RunResult r = test::runShell(
       "xvfb-run -a -n 160 /usr/bin/python3 " GTN_SOURCE_DIR "/bench/render/vtk_compare.py " + dir + "/spx.vtu " + dir +
       "/view.json " + dir + "/vtk.png --frames 1 --json --ours " + dir + "/ours.png --gtn " GTN_BINARY);
@@ -193,7 +198,9 @@ TEST(RenderCommand, BluntFinAtRatioNineTenthsStaysClose) {
   const std::string dir = test::tempDir("render-blunt");
   const std::string gtn = dir + "/blunt.gtn";
   ASSERT_EQ(runGtn("convert " + test::dataPath("plot3d/bluntfinxyz.bin") + " " +
-                   test::dataPath("plot3d/bluntfinq.bin") + " --split 5 -o " + gtn).exit_code, 0);
+                   test::dataPath("plot3d/bluntfinq.bin") + " --split 5 -o " + gtn)
+                .exit_code,
+            0);
   ASSERT_EQ(runGtn("render " + gtn + " -o " + dir + "/full.png --field density").exit_code, 0);
   ASSERT_EQ(runGtn("render " + gtn + " -o " + dir + "/r.png --field density --ratio 0.9").exit_code, 0);
   const nlohmann::json d = compareJson(dir + "/full.png", dir + "/r.png");
@@ -222,26 +229,28 @@ TEST(RenderCommand, RejectsBadArguments) {
   // Values that were ignored or ran away: negative selections (-1 meant "not given"), a step of
   // a billion samples, a transfer file that is not there (reported as an unknown preset), a field on
   // a mesh without point fields.
-  for (const char* option : {"--ratio -0.5", "--merges -5", "--level -2", "--budget-ms -50", "--budget-ms 0",
-                             "--step 1e-9"})
+  for (const char* option :
+       {"--ratio -0.5", "--merges -5", "--level -2", "--budget-ms -50", "--budget-ms 0", "--step 1e-9"})
     EXPECT_EQ(runGtn("render " + spx + " -o " + dir + "/x.png " + option).exit_code, 2) << option;
   const test::RunResult tf = runGtn("render " + spx + " -o " + dir + "/x.png --transfer " + dir + "/none.tf");
   EXPECT_EQ(tf.exit_code, 3) << tf.err;
-  EXPECT_NE(tf.err.find(dir + "/none.tf: cannot open the transfer function file (no such file)"), std::string::npos) << tf.err;
+  EXPECT_NE(tf.err.find(dir + "/none.tf: cannot open the transfer function file (no such file)"), std::string::npos)
+      << tf.err;
   const std::string spheres = test::dataPath("tetgen/cornell_spheres.1");
   const test::RunResult nofield = runGtn("render " + spheres + " -o " + dir + "/x.png --field face_marker");
   EXPECT_EQ(nofield.exit_code, 2) << nofield.err;
   EXPECT_NE(nofield.err.find(spheres + ": no point field named 'face_marker' (the mesh has no point fields); "
-                             "'face_marker' is a cell field, and render shows point fields"),
+                                       "'face_marker' is a cell field, and render shows point fields"),
             std::string::npos)
       << nofield.err;
   EXPECT_FALSE(test::fileExists(dir + "/x.png"));
   // Coordinates beyond what the crossing arithmetic holds are refused (the image came out blank).
   for (const char* scale : {"1e120", "1e-120"}) {
     const std::string big = dir + "/scaled.vtk";
-    test::writeFile(big, std::string("# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n") +
-                             "0 0 0 " + scale + " 0 0 0 " + scale + " 0 0 0 " + scale +
-                             "\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n");
+    test::writeFile(big,
+                    std::string("# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n") +
+                        "0 0 0 " + scale + " 0 0 0 " + scale + " 0 0 0 " + scale +
+                        "\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n");
     const test::RunResult r = runGtn("render " + big + " -o " + dir + "/x.png --size 8x8");
     EXPECT_EQ(r.exit_code, 1) << scale << ": " << r.err;
     EXPECT_NE(r.err.find("cannot be rendered"), std::string::npos) << r.err;
@@ -269,7 +278,8 @@ TEST(RenderCommand, RejectsBadArguments) {
   ASSERT_EQ(sparse.exit_code, 0) << sparse.err;
   EXPECT_NE(sparse.err.find("--step 20 takes fewer than 4 samples across the bounding box"), std::string::npos)
       << sparse.err;
-  const test::RunResult faces = runGtn("render " + spx + " -o " + dir + "/sparse.png --size 16x16 --step 20 --sampling face");
+  const test::RunResult faces =
+      runGtn("render " + spx + " -o " + dir + "/sparse.png --size 16x16 --step 20 --sampling face");
   EXPECT_EQ(faces.err.find("--step"), std::string::npos) << faces.err;  // face sampling takes no steps
   // A --range wider than the largest double (HI - LO overflows) put every sample at LO: a blank
   // image. spx's scalars lie at the middle of it, as they do of a narrower range around 0.
@@ -392,8 +402,9 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   EXPECT_EQ(calibrations, 1u);
   EXPECT_EQ(ranges, 1u);
   // The cached range gives the same image as decoding level 0's boundary again.
-  ASSERT_EQ(test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir + "/cached.png --size 64x64 --level 3").exit_code,
-            0);
+  ASSERT_EQ(
+      test::runShell(env + GTN_BINARY " render " + gtn + " -o " + dir + "/cached.png --size 64x64 --level 3").exit_code,
+      0);
   ASSERT_EQ(test::runShell("XDG_CACHE_HOME=" + dir + "/fresh-cache " GTN_BINARY " render " + gtn + " -o " + dir +
                            "/fresh.png --size 64x64 --level 3")
                 .exit_code,
@@ -502,7 +513,9 @@ TEST(RenderCommand, SimplifiedViewsOfAGtnFile) {
   const double n2 = levels[2]["tets"].get<double>();
   for (auto& [key, entry] : dense.items())
     if (key.rfind("range|", 0) != 0)
-      entry = {{"tets", {n3, n2, n0}}, {"ms", {100.0, 300.0, 1000.0}}, {"decode_ms", {10.0, 100.0, 400.0}},
+      entry = {{"tets", {n3, n2, n0}},
+               {"ms", {100.0, 300.0, 1000.0}},
+               {"decode_ms", {10.0, 100.0, 400.0}},
                {"offset_ms", 0.0}};
   const nlohmann::json stepped = planWith(dense, 300);  // aims at 240 ms: level 2 (300) misses, level 3 fits
   EXPECT_EQ(stepped["level"], 3) << stepped.dump();

@@ -153,7 +153,8 @@ TEST(RenderFlat, EitherOrientationOfAFlatTetrahedron) {
 // mesh has a fine pixel pattern that ours has not; 1.4-2.9 on the shared datasets).
 TEST(RenderFlat, AgreesWithVtk) {
   if (test::runShell("/usr/bin/python3 -c 'import vtk' 2>/dev/null && command -v xvfb-run >/dev/null").exit_code != 0)
-    GTEST_FAIL() << "/usr/bin/python3 cannot import vtk, or xvfb-run is missing (scripts/setup.sh installs python3-paraview and xvfb)";
+    GTEST_FAIL() << "/usr/bin/python3 cannot import vtk, or xvfb-run is missing (scripts/setup.sh installs "
+                    "python3-paraview and xvfb)";
   const std::string dir = test::tempDir("render-flat-vtk");
   ExportOptions options;
   ASSERT_TRUE(exportVtu(test::makeFlatTorus(5).mesh, dir + "/flat.vtu", options).isOk());
@@ -163,8 +164,8 @@ TEST(RenderFlat, AgreesWithVtk) {
                                         "--size 256x256 --dump-view " + dir + "/view.json");
     EXPECT_EQ(j["lost_rays"], 0);
     const test::RunResult r = test::runShell(
-        "xvfb-run -a -n 180 /usr/bin/python3 " GTN_SOURCE_DIR "/bench/render/vtk_compare.py " + dir + "/plain.vtu " + dir +
-        "/view.json " + dir + "/vtk.png --frames 1 --json --ours " + dir + "/ours.png --gtn " GTN_BINARY);
+        "xvfb-run -a -n 180 /usr/bin/python3 " GTN_SOURCE_DIR "/bench/render/vtk_compare.py " + dir + "/plain.vtu " +
+        dir + "/view.json " + dir + "/vtk.png --frames 1 --json --ours " + dir + "/ours.png --gtn " GTN_BINARY);
     EXPECT_EQ(r.exit_code, 0) << r.err;
     const nlohmann::json c = nlohmann::json::parse(r.out.substr(r.out.find('{')), nullptr, false);
     EXPECT_GT(c["pixels_compared"].get<int>(), 15000);
@@ -179,11 +180,16 @@ TEST(RenderFlat, AgreesWithVtk) {
 TEST(RenderFlat, NoRayIsLostOnTheSharedDatasets) {
   const std::string dir = test::tempDir("render-lost");
   const std::vector<std::string> inputs = {
-      test::dataPath("vtk/spx.vtk"), test::dataPath("tetgen/cornell_spheres.1"), test::dataPath("medit/bunny.mesh"),
+      test::dataPath("vtk/spx.vtk"),
+      test::dataPath("tetgen/cornell_spheres.1"),
+      test::dataPath("medit/bunny.mesh"),
       test::dataPath("plot3d/bluntfinxyz.bin") + " " + test::dataPath("plot3d/bluntfinq.bin"),
       test::dataPath("plot3d/combxyz.bin") + " " + test::dataPath("plot3d/combq.bin"),
-      test::dataPath("tetgen/cornellbox_orig.1"), test::dataPath("vtu/Ossicles.vtu"), test::dataPath("vtu/fire_ug.vtu"),
-      test::dataPath("vtu/lv_guccione.vtu"), test::dataPath("vtu/raptorTetra_19409.vtu")};
+      test::dataPath("tetgen/cornellbox_orig.1"),
+      test::dataPath("vtu/Ossicles.vtu"),
+      test::dataPath("vtu/fire_ug.vtu"),
+      test::dataPath("vtu/lv_guccione.vtu"),
+      test::dataPath("vtu/raptorTetra_19409.vtu")};
   for (const std::string& input : inputs)
     for (const std::string pipeline : {"integrated", "generic"})
       for (const std::string sampling : {"volume", "face"}) {

@@ -119,9 +119,8 @@ TetMesh gridMesh(int nx, int ny, int nz, const std::function<std::array<double, 
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        const uint32_t h[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
-                               id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
-                               id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        const uint32_t h[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+                               id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
         splitHexSix(h, mesh.tets);
       }
   Field f("f", 1, ScalarType::kFloat32, mesh.numPoints());
@@ -134,13 +133,15 @@ TetMesh gridMesh(int nx, int ny, int nz, const std::function<std::array<double, 
 }
 
 TetMesh unitGrid(int n, const std::function<double(const std::array<double, 3>&)>& field) {
-  return gridMesh(n, n, n, [n](int i, int j, int k) { return std::array<double, 3>{1.0 * i / n, 1.0 * j / n, 1.0 * k / n}; },
-                  field);
+  return gridMesh(
+      n, n, n,
+      [n](int i, int j, int k) {
+        return std::array<double, 3>{1.0 * i / n, 1.0 * j / n, 1.0 * k / n};
+      },
+      field);
 }
 
-double smoothField(const std::array<double, 3>& p) {
-  return std::sin(3 * p[0]) + p[1] * p[1] + 0.5 * p[2];
-}
+double smoothField(const std::array<double, 3>& p) { return std::sin(3 * p[0]) + p[1] * p[1] + 0.5 * p[2]; }
 
 RenderOptions smallOptions(Sampling sampling, Projection projection = Projection::kOrthographic) {
   RenderOptions o;
@@ -250,10 +251,18 @@ TEST(StreamRenderer, ConstantCubeMatchesAnalyticOpacity) {
 TEST(StreamRenderer, ZeroVolumeLayerLeavesNoArtefact) {
   // The same cube with one layer of cells collapsed to zero thickness (duplicated plane z = 0.5).
   auto field = [](const std::array<double, 3>& p) { return p[0] + 2 * p[1] + 3 * p[2]; };
-  const TetMesh plain = gridMesh(4, 4, 4, [](int i, int j, int k) {
-    return std::array<double, 3>{i / 4.0, j / 4.0, k / 4.0}; }, field);
-  const TetMesh collapsed = gridMesh(4, 4, 5, [](int i, int j, int k) {
-    return std::array<double, 3>{i / 4.0, j / 4.0, (k <= 2 ? k : k - 1) / 4.0}; }, field);
+  const TetMesh plain = gridMesh(
+      4, 4, 4,
+      [](int i, int j, int k) {
+        return std::array<double, 3>{i / 4.0, j / 4.0, k / 4.0};
+      },
+      field);
+  const TetMesh collapsed = gridMesh(
+      4, 4, 5,
+      [](int i, int j, int k) {
+        return std::array<double, 3>{i / 4.0, j / 4.0, (k <= 2 ? k : k - 1) / 4.0};
+      },
+      field);
   for (Sampling sampling : {Sampling::kVolume, Sampling::kFace}) {
     RenderOptions o = smallOptions(sampling);
     o.camera.azimuth = 20;
@@ -271,7 +280,8 @@ TEST(StreamRenderer, UnweldedSeamLeavesNoArtefact) {
   auto place = [](int i, int j, int k) { return std::array<double, 3>{i / 4.0, j / 4.0, k / 4.0}; };
   const TetMesh whole = gridMesh(8, 4, 4, place, field);
   TetMesh left = gridMesh(4, 4, 4, place, field);
-  const TetMesh right = gridMesh(4, 4, 4, [&](int i, int j, int k) { return place(i + 4, j, k); }, field);
+  const TetMesh right = gridMesh(
+      4, 4, 4, [&](int i, int j, int k) { return place(i + 4, j, k); }, field);
   const uint32_t offset = static_cast<uint32_t>(left.numPoints());
   left.coords.insert(left.coords.end(), right.coords.begin(), right.coords.end());
   for (Tet t : right.tets) {
@@ -344,8 +354,8 @@ TEST(StreamRenderer, RealDecodeStreamOfSpx) {
 }
 
 TEST(StreamRenderer, RealDecodeStreamOfBluntFin) {
-  auto imported = importMesh({test::dataPath("plot3d/bluntfinxyz.bin"), test::dataPath("plot3d/bluntfinq.bin")},
-                             ImportOptions());
+  auto imported =
+      importMesh({test::dataPath("plot3d/bluntfinxyz.bin"), test::dataPath("plot3d/bluntfinq.bin")}, ImportOptions());
   ASSERT_TRUE(imported.isOk()) << imported.status().message();
   RenderOptions o = smallOptions(Sampling::kVolume);
   o.camera.width = o.camera.height = 64;
@@ -408,8 +418,8 @@ TEST(FieldSelector, ComponentsAndMagnitude) {
   EXPECT_FALSE(parseFieldSelector(":2").isOk());
   // A field whose name holds a colon is selected by that name, first ("a:b" was refused, and "v:2"
   // would be v's component 2 were there no field of that name).
-  std::vector<FieldDesc> colons = {{"v", 3, ScalarType::kFloat32}, {"a:b", 1, ScalarType::kFloat64},
-                                   {"v:2", 1, ScalarType::kFloat64}};
+  std::vector<FieldDesc> colons = {
+      {"v", 3, ScalarType::kFloat32}, {"a:b", 1, ScalarType::kFloat64}, {"v:2", 1, ScalarType::kFloat64}};
   std::vector<uint8_t> vals(12 + 8 + 8);
   const double ab = 7.25, v2 = -3.5;
   std::memcpy(vals.data(), v, 12);

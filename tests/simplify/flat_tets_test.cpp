@@ -6,12 +6,12 @@
 #include <nlohmann/json.hpp>
 
 #include "convert/export.h"
+#include "flat_tets_util.h"
 #include "mesh/predicates.h"
 #include "simplify/apply.h"
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
 #include "test_util.h"
-#include "flat_tets_util.h"
 #include "validate/mesh_checks.h"
 
 namespace gtn::test {

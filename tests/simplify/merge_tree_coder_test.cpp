@@ -65,7 +65,8 @@ TEST(MergeTreeCoder, DecodesAPrefixOfTheRanking) {
   const Fixture& f = fixture();
   auto full = decodeMergeTree(f.payload, f.mesh.numPoints(), "t");
   ASSERT_TRUE(full.isOk());
-  for (uint64_t n : {uint64_t{0}, uint64_t{1}, f.tree.merges / 3, f.tree.merges - 1, f.tree.merges, f.tree.merges + 5}) {
+  for (uint64_t n :
+       {uint64_t{0}, uint64_t{1}, f.tree.merges / 3, f.tree.merges - 1, f.tree.merges, f.tree.merges + 5}) {
     SCOPED_TRACE(n);
     auto part = decodeMergeTree(f.payload, f.mesh.numPoints(), "t", n);
     ASSERT_TRUE(part.isOk()) << part.status().message();

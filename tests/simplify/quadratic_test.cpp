@@ -127,8 +127,8 @@ TEST_F(Quadratic, LevelsAndRatiosCountReferencedVertices) {
     uint64_t tets[2];
     for (int q = 0; q < 2; ++q) {
       const std::string out = dir_ + "/r" + std::to_string(q) + ".vtu";
-      const RunResult r = runGtn("export " + dir_ + (q ? "/quadratic3.gtn" : "/linear3.gtn") + " -o " + out +
-                                 " --ratio " + ratio);
+      const RunResult r =
+          runGtn("export " + dir_ + (q ? "/quadratic3.gtn" : "/linear3.gtn") + " -o " + out + " --ratio " + ratio);
       ASSERT_EQ(r.exit_code, 0) << r.err;
       tets[q] = info(out)["tets"].get<uint64_t>();
     }

@@ -15,7 +15,8 @@ class SimplifyCli : public ::testing::Test {
     dir_ = tempDir("simplify-cli");
     const RunResult r = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/spx.gtn");
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const RunResult l0 = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/l0.gtn --levels 0 --no-merge-tree");
+    const RunResult l0 =
+        runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/l0.gtn --levels 0 --no-merge-tree");
     ASSERT_EQ(l0.exit_code, 0) << l0.err;
   }
   static nlohmann::json info(const std::string& args) {
@@ -49,8 +50,11 @@ TEST_F(SimplifyCli, ConvertOptionsTurnLevelsOff) {
   nlohmann::json j = info(dir_ + "/l0.gtn --merge-tree");
   EXPECT_EQ(j["levels"].size(), 1u);
   EXPECT_TRUE(j["merge_tree"].is_null());
-  ASSERT_EQ(runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/l2.gtn --levels 2 --simplify-field none "
-                   "--w-density 2 --w-geometry 0.5").exit_code, 0);
+  ASSERT_EQ(runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ +
+                   "/l2.gtn --levels 2 --simplify-field none "
+                   "--w-density 2 --w-geometry 0.5")
+                .exit_code,
+            0);
   j = info(dir_ + "/l2.gtn --merge-tree");
   EXPECT_EQ(j["levels"].size(), 3u);
   EXPECT_EQ(j["merge_tree"]["field"], "");

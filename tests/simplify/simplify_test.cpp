@@ -83,13 +83,12 @@ TEST(Ranking, CrowdedStarsAreLeftAlone) {
   constexpr int kPages = 600;
   TetMesh m;
   m.coord_type = ScalarType::kFloat64;
-  m.coords = {0, 0, -1, 0, 0, 1};  // the hubs, points 0 and 1
+  m.coords = {0, 0, -1, 0, 0, 1};      // the hubs, points 0 and 1
   for (int i = 0; i <= kPages; ++i) {  // an open book: pages from angle 0 to 3/2 pi
     const double a = 1.5 * M_PI * i / kPages;
     m.coords.insert(m.coords.end(), {std::cos(a), std::sin(a), 0.0});
   }
-  for (int i = 0; i < kPages; ++i)
-    m.tets.push_back({0, 1, static_cast<uint32_t>(2 + i), static_cast<uint32_t>(3 + i)});
+  for (int i = 0; i < kPages; ++i) m.tets.push_back({0, 1, static_cast<uint32_t>(2 + i), static_cast<uint32_t>(3 + i)});
   size_t zero = 0;
   normalizeOrientation(m, &zero);
   RankingStats stats;
@@ -351,8 +350,8 @@ TEST(Levels, ABoundedWriteEncodesNoLevelBeyondTheBound) {
     // The kept levels and the first one past the bound are encoded (its bytes decide); no coarser one.
     std::vector<std::string> want;
     for (size_t i = 0; i <= kept; ++i)
-      want.push_back("encode and verify level " + std::to_string(i) + " (" +
-                     std::to_string(levels->merges.size()) + " levels)");
+      want.push_back("encode and verify level " + std::to_string(i) + " (" + std::to_string(levels->merges.size()) +
+                     " levels)");
     EXPECT_EQ(stages, want);
   }
   std::filesystem::remove(path);

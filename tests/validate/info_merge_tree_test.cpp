@@ -107,7 +107,8 @@ TEST_F(InfoMergeTree, PlotDrawsTheCurve) {
   EXPECT_GT(ink, 800u * 500u / 50);
   EXPECT_GT(blue, 300u);
 
-  const RunResult none = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/flat.gtn --levels 0 --no-merge-tree");
+  const RunResult none =
+      runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir_ + "/flat.gtn --levels 0 --no-merge-tree");
   ASSERT_EQ(none.exit_code, 0) << none.err;
   const RunResult refused = runGtn("info " + dir_ + "/flat.gtn --plot " + dir_ + "/flat.png");
   EXPECT_EQ(refused.exit_code, 2);

@@ -154,7 +154,7 @@ ValidationReport reportOf(const DecodedFile& f) {
 }
 
 struct Case {
-  std::function<Bytes()> file;              // a malformed file, or
+  std::function<Bytes()> file;                // a malformed file, or
   std::function<ValidationReport()> decoded;  // a report from decoded content
 };
 
@@ -162,7 +162,11 @@ std::map<std::string, Case> cases() {
   std::map<std::string, Case> c;
   // Container.
   c["FILE_TOO_SMALL"].file = [] { return Bytes(base().bytes.begin(), base().bytes.begin() + 10); };
-  c["BAD_MAGIC"].file = [] { Bytes b = base().bytes; b[1] = 'X'; return b; };
+  c["BAD_MAGIC"].file = [] {
+    Bytes b = base().bytes;
+    b[1] = 'X';
+    return b;
+  };
   c["UNSUPPORTED_VERSION"].file = [] {
     Bytes b = base().bytes;
     const auto p = encodeGtnPrefix(kGtnMajorVersion + 1, 0);
@@ -174,9 +178,21 @@ std::map<std::string, Case> cases() {
     b[chunkOffset(0, kTagConnectivity) + kChunkFixedHeaderSize + 2] ^= 0x04;
     return b;
   };
-  c["RESERVED_BITS_SET"].file = [] { Bytes b = base().bytes; b[kGtnPrefixSize + 4] |= 0x80; return b; };
-  c["TRAILING_BYTES"].file = [] { Bytes b = base().bytes; b.push_back(0); return b; };
-  c["CHUNK_FRAMING"].file = [] { Bytes b = base().bytes; b.resize(b.size() - 20); return b; };
+  c["RESERVED_BITS_SET"].file = [] {
+    Bytes b = base().bytes;
+    b[kGtnPrefixSize + 4] |= 0x80;
+    return b;
+  };
+  c["TRAILING_BYTES"].file = [] {
+    Bytes b = base().bytes;
+    b.push_back(0);
+    return b;
+  };
+  c["CHUNK_FRAMING"].file = [] {
+    Bytes b = base().bytes;
+    b.resize(b.size() - 20);
+    return b;
+  };
   c["DIRECTORY_MISMATCH"].file = [] {
     Bytes b = base().bytes;
     const size_t end = b.size() - kGtnTrailerSize;
@@ -328,8 +344,8 @@ std::map<std::string, Case> cases() {
     // next to t through (c, t, x, y). Merging c = 0 into t = 1 puts (t, a, b) in three tetrahedra.
     // Level 0 itself touches along the edge (a, b), so only the merge-tree layer is run.
     TetMesh m;
-    m.coords = {0, 0, 0.05, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.3, 0.3, 0.5, 0.3, 0.3, 1, 0.3, 0.3, -1,
-                -1, 0, 0.1, 0, -1, 0.1};
+    m.coords = {0,   0,   0.05, 0, 0,   0,   1,  0,  0, 0,   1, 0,  0.3, 0.3,
+                0.5, 0.3, 0.3,  1, 0.3, 0.3, -1, -1, 0, 0.1, 0, -1, 0.1};
     m.tets = {{0, 1, 7, 8}, {0, 2, 3, 4}, {1, 2, 3, 5}, {1, 2, 3, 6}};
     size_t zero = 0;
     normalizeOrientation(m, &zero);
@@ -372,8 +388,9 @@ std::map<std::string, Case> cases() {
   // Mesh files: a legacy VTK file whose CELLS list stops short.
   c["IMPORT_FAILED"].decoded = [] {
     const std::string path = base().dir + "/short-cells.vtk";
-    writeFile(path, "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
-                    "0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2\n");
+    writeFile(path,
+              "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+              "0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2\n");
     StatusOr<ValidationReport> r = validateMeshFiles({path}, {});
     return r.isOk() ? std::move(r).value() : ValidationReport(100);
   };
@@ -470,8 +487,8 @@ TEST(MustFail, MergeDefectsAsFiles) {
   }
   {
     TetMesh m;  // as in cases(): level 0 touches along an edge, the merge puts a face in three tetrahedra
-    m.coords = {0, 0, 0.05, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.3, 0.3, 0.5, 0.3, 0.3, 1, 0.3, 0.3, -1,
-                -1, 0, 0.1, 0, -1, 0.1};
+    m.coords = {0,   0,   0.05, 0, 0,   0,   1,  0,  0, 0,   1, 0,  0.3, 0.3,
+                0.5, 0.3, 0.3,  1, 0.3, 0.3, -1, -1, 0, 0.1, 0, -1, 0.1};
     m.tets = {{0, 1, 7, 8}, {0, 2, 3, 4}, {1, 2, 3, 5}, {1, 2, 3, 6}};
     size_t zero = 0;
     normalizeOrientation(m, &zero);
@@ -551,7 +568,8 @@ TetMesh twoCubes(bool odd_first, bool odd_second, double lift = 0) {
   TetMesh m;
   for (int k = 0; k < 2; ++k)
     for (int j = 0; j < 2; ++j)
-      for (int i = 0; i < 3; ++i) m.coords.insert(m.coords.end(), {i + lift * (i == 1 && j == 1 && k == 1), double(j), double(k)});
+      for (int i = 0; i < 3; ++i)
+        m.coords.insert(m.coords.end(), {i + lift * (i == 1 && j == 1 && k == 1), double(j), double(k)});
   auto id = [](int i, int j, int k) { return static_cast<uint32_t>(i + 3 * (j + 2 * k)); };
   for (int c = 0; c < 2; ++c) {
     const uint32_t h[8] = {id(c, 0, 0), id(c + 1, 0, 0), id(c + 1, 1, 0), id(c, 1, 0),

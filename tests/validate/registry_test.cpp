@@ -31,7 +31,8 @@ TEST(IssueRegistry, CodesAreUniqueScreamingCaseAndIndexed) {
 
 TEST(IssueRegistry, DocsPageEqualsGeneratedText) {
   const std::string doc = readFile(std::string(GTN_SOURCE_DIR) + "/docs/validation-issues.md");
-  EXPECT_EQ(doc, issueListText(true)) << "regenerate with: gtn validate --list-issues --markdown > docs/validation-issues.md";
+  EXPECT_EQ(doc, issueListText(true))
+      << "regenerate with: gtn validate --list-issues --markdown > docs/validation-issues.md";
   const RunResult r = runGtn("validate --list-issues --markdown");
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_EQ(r.out, doc);

@@ -101,20 +101,18 @@ TEST_P(ValidateDatasets, ConvertedFileIsCleanAndEqualsItsSource) {
 
 INSTANTIATE_TEST_SUITE_P(
     RealData, ValidateDatasets,
-    ::testing::Values(DatasetCase{"spx", {"vtk/spx.vtk"}, "", ""},
-                      DatasetCase{"spx_compressed", {"vtk/spx.vtk"}, "--compress", ""},
-                      DatasetCase{"spx_level0_only", {"vtk/spx.vtk"}, "--levels 0 --no-merge-tree", ""},
-                      DatasetCase{"cornell_spheres", {"tetgen/cornell_spheres.1.ele"}, "", ""},
-                      DatasetCase{"cornellbox", {"tetgen/cornellbox_orig.1.ele"}, "", ""},
-                      DatasetCase{"bunny", {"medit/bunny.mesh"}, "", ""},
-                      DatasetCase{"lv_guccione", {"vtu/lv_guccione.vtu"}, "", ""},
-                      DatasetCase{"raptor", {"vtu/raptorTetra_19409.vtu"}, "", ""},
-                      DatasetCase{"ossicles", {"vtu/Ossicles.vtu"}, "", ""},
-                      DatasetCase{"fire_hexahedra", {"vtu/fire_ug.vtu"}, "", "--split 5"},
-                      DatasetCase{"bluntfin", {"plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, "", ""},
-                      DatasetCase{"bluntfin_split5", {"plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, "",
-                                  "--split 5"},
-                      DatasetCase{"combustion", {"plot3d/combxyz.bin", "plot3d/combq.bin"}, "", ""}),
+    ::testing::Values(
+        DatasetCase{"spx", {"vtk/spx.vtk"}, "", ""}, DatasetCase{"spx_compressed", {"vtk/spx.vtk"}, "--compress", ""},
+        DatasetCase{"spx_level0_only", {"vtk/spx.vtk"}, "--levels 0 --no-merge-tree", ""},
+        DatasetCase{"cornell_spheres", {"tetgen/cornell_spheres.1.ele"}, "", ""},
+        DatasetCase{"cornellbox", {"tetgen/cornellbox_orig.1.ele"}, "", ""},
+        DatasetCase{"bunny", {"medit/bunny.mesh"}, "", ""}, DatasetCase{"lv_guccione", {"vtu/lv_guccione.vtu"}, "", ""},
+        DatasetCase{"raptor", {"vtu/raptorTetra_19409.vtu"}, "", ""},
+        DatasetCase{"ossicles", {"vtu/Ossicles.vtu"}, "", ""},
+        DatasetCase{"fire_hexahedra", {"vtu/fire_ug.vtu"}, "", "--split 5"},
+        DatasetCase{"bluntfin", {"plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, "", ""},
+        DatasetCase{"bluntfin_split5", {"plot3d/bluntfinxyz.bin", "plot3d/bluntfinq.bin"}, "", "--split 5"},
+        DatasetCase{"combustion", {"plot3d/combxyz.bin", "plot3d/combq.bin"}, "", ""}),
     [](const ::testing::TestParamInfo<DatasetCase>& info) { return std::string(info.param.name); });
 
 // The CLI contract on damaged real files: a bit flip or a truncation is exit code 1 (invalid data),

@@ -231,8 +231,9 @@ TEST(ValidateMeshFiles, DefectsImportFailuresAndUsage) {
   const std::string dir = tempDir("validate-mesh-files");
   // Tetrahedron 1 repeats tetrahedron 0 with the opposite orientation, and the face (0, 1, 2) has a
   // third tetrahedron, below it: tetrahedra 1 and 2 are stored negatively oriented.
-  const std::string head = "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 float\n"
-                           "0 0 0 1 0 0 0 1 0 0 0 1 1 1 -1\n";
+  const std::string head =
+      "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 float\n"
+      "0 0 0 1 0 0 0 1 0 0 0 1 1 1 -1\n";
   writeFile(dir + "/dup.vtk", head + "CELLS 3 15\n4 0 1 2 3\n4 0 2 1 3\n4 0 1 2 4\nCELL_TYPES 3\n10 10 10\n");
   RunResult dup = runGtn("validate --json " + dir + "/dup.vtk");
   EXPECT_EQ(dup.exit_code, 1) << dup.err;

@@ -91,8 +91,8 @@ int main(int argc, char** argv) {
   gatun::ReadReport report;
   gatun::Result<gatun::Mesh> coarse = gatun::read(gtn, half, &report);
   check(coarse.ok() && coarse.value().pointCount() < mesh.pointCount() && std::fabs(report.ratio - 0.5) < 0.05,
-        "read at ratio 0.5: " + (coarse.ok() ? std::to_string(coarse.value().pointCount()) + " points"
-                                             : coarse.error().message()));
+        "read at ratio 0.5: " +
+            (coarse.ok() ? std::to_string(coarse.value().pointCount()) + " points" : coarse.error().message()));
 
   gatun::ReadOptions missing;
   missing.level = 99;
