@@ -1,7 +1,8 @@
 // bench-compression --files, through the built binary, on meshes written here: a named file is one
 // dataset, PLOT3D files joined by '+' are one, the targets column and summary name the misses, and
-// the exit status tells import failures (1), usage errors (2) and a value stream larger than xz -9 of
-// its raw array (3) from success.
+// the exit status tells import failures (1), usage errors (2), a value stream larger than xz -9 of
+// its raw array (3) and a file that misses a size target (4) from success. The codec table's tests
+// leave the file table out (--no-files); one test judges the file table alone.
 #include <gtest/gtest.h>
 
 #include <sstream>
@@ -63,7 +64,7 @@ class BenchCompressionFiles : public ::testing::Test {
 };
 
 TEST_F(BenchCompressionFiles, JudgesEachFileAndNamesTheMisses) {
-  const test::RunResult r = runBench("--files " + dir_ + "/grid.vtk " + dir_ + "/one.vtk --no-baselines");
+  const test::RunResult r = runBench("--files " + dir_ + "/grid.vtk " + dir_ + "/one.vtk --no-baselines --no-files");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const std::string grid = rowOf(r.out, "grid.vtk"), one = rowOf(r.out, "one.vtk");
   ASSERT_NE(grid, "") << r.out;
@@ -77,7 +78,7 @@ TEST_F(BenchCompressionFiles, JudgesEachFileAndNamesTheMisses) {
 }
 
 TEST_F(BenchCompressionFiles, BaselinesJudgeCoordinatesAndFieldsAgainstXz) {
-  const test::RunResult r = runBench("--files " + dir_ + "/grid.vtk");
+  const test::RunResult r = runBench("--files " + dir_ + "/grid.vtk --no-files");
   const std::string grid = rowOf(r.out, "grid.vtk");
   EXPECT_TRUE(grid.find("| ok ok ") != std::string::npos || grid.find("| ok MISS ") != std::string::npos) << grid;
   // Each value stream against xz -9 of its own raw array, listed under the row; a stream above it
@@ -95,15 +96,34 @@ TEST_F(BenchCompressionFiles, BaselinesJudgeCoordinatesAndFieldsAgainstXz) {
 // 356 bytes), which the bench reports as a miss with exit status 3; the single tetrahedron's 4
 // points are far below xz's own overhead.
 TEST_F(BenchCompressionFiles, AValueStreamAboveXzExitsThree) {
-  const test::RunResult one = runBench("--files " + dir_ + "/one.vtk");
+  const test::RunResult one = runBench("--files " + dir_ + "/one.vtk --no-files");
   EXPECT_EQ(one.exit_code, 0) << one.out << one.err;
   const std::string row = rowOf(one.out, "one.vtk");
   EXPECT_EQ(row.substr(row.size() - 3), " ok") << row;
-  const test::RunResult grid = runBench("--files " + dir_ + "/grid.vtk " + dir_ + "/one.vtk");
+  const test::RunResult grid = runBench("--files " + dir_ + "/grid.vtk " + dir_ + "/one.vtk --no-files");
   EXPECT_EQ(grid.exit_code, 3) << grid.out << grid.err;
   EXPECT_NE(grid.out.find("  grid.vtk (geom + fields"), std::string::npos) << grid.out;
   EXPECT_NE(grid.out.find("coordinates "), std::string::npos) << grid.out;
   EXPECT_NE(grid.out.find(" B > xz -9 "), std::string::npos) << grid.out;
+}
+
+// The file table: `gtn convert` with defaults against level 0 alone. The small lattice's default file
+// holds a second level and merge trees that cost more than level 0 (over 1.3 times it): a miss, named
+// in the summary, exit status 4; the single tetrahedron has no level to add and is within it.
+TEST_F(BenchCompressionFiles, AFileAboveItsTargetExitsFour) {
+  const test::RunResult r = runBench("--files " + dir_ + "/grid.vtk " + dir_ + "/one.vtk --no-baselines");
+  EXPECT_EQ(r.exit_code, 4) << r.out << r.err;
+  const size_t files = r.out.find("files, bytes:");
+  ASSERT_NE(files, std::string::npos) << r.out;
+  const std::string table = r.out.substr(files);
+  const std::string grid = rowOf(table, "grid.vtk"), one = rowOf(table, "one.vtk");
+  EXPECT_NE(grid.find("| MISS "), std::string::npos) << grid;
+  EXPECT_NE(one.find("| ok "), std::string::npos) << one;
+  EXPECT_NE(table.find("default file: L0 "), std::string::npos) << table;
+  EXPECT_NE(table.find("1 missed:\n  grid.vtk (default "), std::string::npos) << table;
+  EXPECT_NE(table.find(" x level 0 > 1.3)"), std::string::npos) << table;
+  // Without the file table the same files meet every codec target the run judges.
+  EXPECT_EQ(runBench("--files " + dir_ + "/grid.vtk --no-baselines --no-files").exit_code, 0);
 }
 
 TEST_F(BenchCompressionFiles, Plot3dGridAndQJoinedByPlusAreOneDataset) {
@@ -117,7 +137,7 @@ TEST_F(BenchCompressionFiles, Plot3dGridAndQJoinedByPlusAreOneDataset) {
     for (int p = 0; p < np; ++p) q << 1 + v + 0.01 * p << ' ';
   test::writeFile(dir_ + "/g.xyz", xyz.str());
   test::writeFile(dir_ + "/g.q", q.str());
-  const test::RunResult r = runBench("--files " + dir_ + "/g.xyz+" + dir_ + "/g.q --no-baselines");
+  const test::RunResult r = runBench("--files " + dir_ + "/g.xyz+" + dir_ + "/g.q --no-baselines --no-files");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const std::string row = rowOf(r.out, "g.xyz+g.q");
   ASSERT_NE(row, "") << r.out;
@@ -126,7 +146,8 @@ TEST_F(BenchCompressionFiles, Plot3dGridAndQJoinedByPlusAreOneDataset) {
 
 TEST_F(BenchCompressionFiles, ImportFailureIsReportedAndExitsOne) {
   test::writeFile(dir_ + "/surface.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
-  const test::RunResult r = runBench("--files " + dir_ + "/surface.off " + dir_ + "/grid.vtk --no-baselines");
+  const test::RunResult r =
+      runBench("--files " + dir_ + "/surface.off " + dir_ + "/grid.vtk --no-baselines --no-files");
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
   EXPECT_NE(rowOf(r.out, "surface.off").find("import failed: " + dir_ + "/surface.off"), std::string::npos) << r.out;
   EXPECT_NE(rowOf(r.out, "grid.vtk").find("| ok -"), std::string::npos) << r.out;  // the others still run
