@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <utility>
 
-#include "format/file_io.h"
 #include "gatun/render.h"
 #include "internal.h"
 #include "render/default_field.h"
@@ -47,16 +46,7 @@ gtn::Status buildOptions(const RenderOptions& a, gtn::RenderOptions* o) {
   o->opacity_unit_distance = a.opacity_unit_distance;
   o->use_cache = a.use_cache;
   GTN_ASSIGN_OR_RETURN(o->field, gtn::parseFieldSelector(a.field));
-  if (gtn::isRegularFile(a.transfer)) {
-    GTN_ASSIGN_OR_RETURN(std::string text, gtn::readWholeFile(a.transfer, 1 << 20));
-    GTN_ASSIGN_OR_RETURN(o->transfer, gtn::parseTransferFunction(text, a.transfer));
-  } else {
-    auto preset = gtn::transferPreset(a.transfer);
-    // A name with a dot or a slash was meant as a file.
-    if (!preset.isOk() && a.transfer.find_first_of("./") != std::string::npos)
-      return gtn::ioError(a.transfer + ": cannot open the transfer function file");
-    GTN_ASSIGN_OR_RETURN(o->transfer, std::move(preset));
-  }
+  GTN_ASSIGN_OR_RETURN(o->transfer, gtn::loadTransferFunction(a.transfer));
   if (a.range) {
     o->transfer.has_range = true;
     o->transfer.lo = a.range->first;
@@ -79,13 +69,7 @@ gtn::StatusOr<gtn::Image> renderImage(const std::vector<std::string>& inputs, co
   if (a.ratio) choice.ratio = *a.ratio;
   GTN_ASSIGN_OR_RETURN(gtn::ResolvedLevel level, input->resolve(choice));
   // The field asked for, checked against the file before anything is decoded.
-  const gtn::LevelHeader& header = input->levelHeader(level.level);
-  if (auto field = gtn::ScalarReader::create(header.point_fields, options.field); !field.isOk()) {
-    std::string why = field.status().message();
-    for (const gtn::FieldDesc& c : header.cell_fields)
-      if (c.name == options.field.name) why += "; '" + c.name + "' is a cell field, and render shows point fields";
-    return gtn::Status(field.status().code(), inputs[0] + ": " + why);
-  }
+  GTN_RETURN_IF_ERROR(input->checkPointField(level, options.field, inputs[0]));
   GTN_RETURN_IF_ERROR(input->fixView(level, &options));
   // A step so small that the rays would take hours: at most 100000 samples across the box.
   if (options.step > 0 && options.has_scene_box) {

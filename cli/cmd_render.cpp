@@ -88,17 +88,7 @@ Status buildOptions(const RenderArgs& a, RenderOptions* o) {
   o->opacity_unit_distance = a.unit_distance;
   o->use_cache = !a.no_cache;
   GTN_ASSIGN_OR_RETURN(o->field, parseFieldSelector(a.field));
-  if (isRegularFile(a.transfer)) {
-    GTN_ASSIGN_OR_RETURN(std::string text, readWholeFile(a.transfer, 1 << 20));
-    GTN_ASSIGN_OR_RETURN(o->transfer, parseTransferFunction(text, a.transfer));
-  } else {
-    auto preset = transferPreset(a.transfer);
-    // A name with a dot or a slash was meant as a file.
-    if (!preset.isOk() && a.transfer.find_first_of("./") != std::string::npos)
-      return ioError(a.transfer + ": cannot open the transfer function file (" +
-                     (access(a.transfer.c_str(), F_OK) == 0 ? "not a regular file" : "no such file") + ")");
-    GTN_ASSIGN_OR_RETURN(o->transfer, std::move(preset));
-  }
+  GTN_ASSIGN_OR_RETURN(o->transfer, loadTransferFunction(a.transfer));
   if (!a.range.empty()) {
     if (a.range.size() != 2 || !(a.range[0] < a.range[1])) return usageError("--range needs LO HI with LO < HI");
     o->transfer.has_range = true;
@@ -241,13 +231,7 @@ int runRender(const RenderArgs& a) {
   auto level = (*input)->resolve(choice);
   if (!level.isOk()) return fail(level.status());
   // The field asked for, checked against the file before anything is decoded.
-  const LevelHeader& header = (*input)->levelHeader(level->level);
-  if (auto field = ScalarReader::create(header.point_fields, options.field); !field.isOk()) {
-    std::string why = field.status().message();
-    for (const FieldDesc& c : header.cell_fields)
-      if (c.name == options.field.name) why += "; '" + c.name + "' is a cell field, and render shows point fields";
-    return fail(Status(field.status().code(), a.inputs[0] + ": " + why));
-  }
+  if (Status st = (*input)->checkPointField(*level, options.field, a.inputs[0]); !st.isOk()) return fail(st);
   if (Status st = (*input)->fixView(level.value(), &options); !st.isOk()) return fail(st);
   // A step so small that the rays would take hours (1e-9 ran for minutes): at most kMaxSteps samples
   // across the box (the default takes 400).

@@ -231,4 +231,15 @@ Status RenderInput::fixView(const ResolvedLevel& level, RenderOptions* options) 
   return Status::ok();
 }
 
+Status RenderInput::checkPointField(const ResolvedLevel& level, const FieldSelector& field,
+                                    const std::string& input) const {
+  const LevelHeader& header = levelHeader(level.level);
+  auto reader = ScalarReader::create(header.point_fields, field);
+  if (reader.isOk()) return Status::ok();
+  std::string why = reader.status().message();
+  for (const FieldDesc& c : header.cell_fields)
+    if (c.name == field.name) why += "; '" + c.name + "' is a cell field, and render shows point fields";
+  return Status(reader.status().code(), input + ": " + why);
+}
+
 }  // namespace gtn

@@ -73,6 +73,9 @@ class RenderInput {
   // the renderer computes the same range). Simplification moves and merges boundary vertices, so
   // without this a simplified view would shift its colours and its framing against the full one.
   Status fixView(const ResolvedLevel& level, RenderOptions* options);
+  // Fails (naming `input`) when `field` selects none of the level's point fields, and says so when it
+  // names a cell field: checked before anything is decoded.
+  Status checkPointField(const ResolvedLevel& level, const FieldSelector& field, const std::string& input) const;
 
  private:
   RenderInput() = default;

@@ -1,11 +1,14 @@
 #include "render/transfer_function.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <sstream>
 
 #include "convert/text_reader.h"
+#include "format/file_io.h"
 
 namespace gtn {
 
@@ -109,6 +112,18 @@ StatusOr<TransferFunction> parseTransferFunction(const std::string& text, const 
   }
   if (tf.points.size() < 2) return invalidData(what + ": a transfer function needs at least two points");
   return tf;
+}
+
+StatusOr<TransferFunction> loadTransferFunction(const std::string& spec) {
+  if (isRegularFile(spec)) {
+    GTN_ASSIGN_OR_RETURN(std::string text, readWholeFile(spec, 1 << 20));
+    return parseTransferFunction(text, spec);
+  }
+  auto preset = transferPreset(spec);
+  if (!preset.isOk() && spec.find_first_of("./") != std::string::npos)
+    return ioError(spec + ": cannot open the transfer function file (" +
+                   (access(spec.c_str(), F_OK) == 0 ? "not a regular file" : "no such file") + ")");
+  return preset;
 }
 
 }  // namespace gtn

@@ -49,5 +49,9 @@ const std::vector<std::string>& transferPresetNames();
 StatusOr<TransferFunction> transferPreset(const std::string& name);
 // Parses the text format above; `what` names the source in messages (file:line).
 StatusOr<TransferFunction> parseTransferFunction(const std::string& text, const std::string& what);
+// What `gtn render --transfer SPEC` and the API take: a file in the text format above when `spec` names a
+// regular file (at most 1 MiB), else a preset's name. A name with a dot or a slash that is neither was
+// meant as a file: an I/O error says whether it is missing or not a regular file.
+StatusOr<TransferFunction> loadTransferFunction(const std::string& spec);
 
 }  // namespace gtn

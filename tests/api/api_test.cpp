@@ -316,6 +316,15 @@ TEST(Api, RenderDrawsThePixelsOfGtnRender) {
   EXPECT_EQ(cell.error().code(), gatun::ErrorCode::kUsage);
   EXPECT_NE(cell.error().message().find("'region' is a cell field"), std::string::npos) << cell.error().message();
 
+  // A transfer function file that is not there: the CLI's message (render/transfer_function.h).
+  options.field.clear();
+  options.transfer = dir + "/none.tf";
+  auto no_tf = gatun::render({dir + "/grid.gtn"}, options);
+  ASSERT_FALSE(no_tf.ok());
+  EXPECT_NE(no_tf.error().message().find(dir + "/none.tf: cannot open the transfer function file (no such file)"),
+            std::string::npos)
+      << no_tf.error().message();
+
   gatun::Image wrong;
   wrong.width = 4;
   wrong.height = 4;
