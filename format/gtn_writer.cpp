@@ -176,8 +176,8 @@ StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, siz
   return out;
 }
 
-// With options.verify: level i passes its own check_mesh and decodes back to its mesh (otherwise the encoder has a bug, and the file
-// must not replace anything).
+// With options.verify: level i passes its own check_mesh and decodes back to its mesh (otherwise the
+// simplifier or the encoder has a bug, and the file must not replace anything).
 Status checkDecodesBack(const std::string& path, const GtnLevelInput& level, const TetMesh& mesh, size_t i,
                         const EncodedLevel& e, const GtnWriteOptions& options) {
   if (!options.verify) return Status::ok();
