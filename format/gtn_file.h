@@ -30,6 +30,16 @@ struct GtnLevelInput {
   // was ranked, say); the writer then uses it instead of encoding the mesh (it sets the header's level
   // and merges, and verifies it as it would its own).
   std::shared_ptr<const EncodedLevel> encoded;
+  // Instead of `mesh`: makes the level's mesh when the writer comes to it (in level order, just before
+  // encoding it), so that a level the writer never reaches (past a storage bound) is never made. The
+  // mesh must stay valid until writeGtnFile returns; a failure fails the write. `expected_tets` stands
+  // for its tetrahedron count in the progress fractions until then.
+  std::function<StatusOr<const TetMesh*>()> make_mesh;
+  uint64_t expected_tets = 0;
+  // Optional, with options.verify: a further check of the level's mesh, run where the writer checks
+  // that the level decodes back (before that check; only for the levels it writes, perhaps on another
+  // thread while the next level is encoded). A failure fails the write.
+  std::function<Status(const TetMesh&)> check_mesh;
 };
 
 struct GtnWriteOptions {
@@ -53,7 +63,8 @@ struct GtnWriteOptions {
 // Encodes every level (encodeLevel), then writes the file atomically (format/file_io.h): prefix,
 // GHDR, per level LHDR BNDY CONN GEOM PFLD... CFLD... [MTRE], then [DIRC] and GEND. All levels must
 // share level 0's coordinate type and field descriptions. Deterministic: the same meshes and options
-// give the same bytes. Fails with kUsage for an empty level list or a null mesh. With
+// give the same bytes. Fails with kUsage for an empty level list or a level with neither mesh nor
+// make_mesh. With
 // options.level_storage_limit set, the levels are encoded, finest first, before the first byte is
 // written, so that the bound can be applied to the exact bytes; the encoding stops at the first level
 // beyond the bound (the coarser ones are neither encoded nor verified).

@@ -159,12 +159,12 @@ struct EncodedInput {
   std::optional<std::vector<uint8_t>> tree;
 };
 
-StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, size_t i) {
+StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, size_t i, const TetMesh& mesh) {
   EncodedInput out;
   if (levels[i].encoded) {
     out.level = *levels[i].encoded;
   } else {
-    GTN_ASSIGN_OR_RETURN(out.level, encodeLevel(*levels[i].mesh, EncodeOptions{}));
+    GTN_ASSIGN_OR_RETURN(out.level, encodeLevel(mesh, EncodeOptions{}));
   }
   out.level.header.level = static_cast<uint32_t>(i);
   out.level.header.merges = levels[i].merges;
@@ -176,12 +176,13 @@ StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, siz
   return out;
 }
 
-// With options.verify: level i decodes back to its mesh (otherwise the encoder has a bug, and the file
-// must not replace anything).
-Status checkDecodesBack(const std::string& path, const std::vector<GtnLevelInput>& levels, size_t i,
+// With options.verify: level i passes its own check_mesh and decodes back to its mesh (otherwise the
+// simplifier or the encoder has a bug, and the file must not replace anything).
+Status checkDecodesBack(const std::string& path, const GtnLevelInput& level, const TetMesh& mesh, size_t i,
                         const EncodedLevel& e, const GtnWriteOptions& options) {
   if (!options.verify) return Status::ok();
-  const std::string why = losslessMismatch(*levels[i].mesh, e);
+  if (level.check_mesh) GTN_RETURN_IF_ERROR(level.check_mesh(mesh));
+  const std::string why = losslessMismatch(mesh, e);
   if (why.empty()) return Status::ok();
   return invalidData(path + ": level " + std::to_string(i) + " would not decode back to its mesh (" + why +
                      "), so the file was not written; this is a bug in gtn's encoder, please report it with the input");
@@ -192,18 +193,34 @@ Status checkDecodesBack(const std::string& path, const std::vector<GtnLevelInput
 Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels, const GtnWriteOptions& options) {
   if (levels.empty()) return usageError(path + ": no level to write");
   for (size_t i = 0; i < levels.size(); ++i)
-    if (!levels[i].mesh) return usageError(path + ": level " + std::to_string(i) + " has no mesh");
+    if (!levels[i].mesh && !levels[i].make_mesh)
+      return usageError(path + ": level " + std::to_string(i) + " has no mesh");
   // With a storage bound every level is encoded first (the encoded streams are small); without one,
   // one level is encoded at a time, so the encoder's memory is released before the next level.
   const bool bounded = options.level_storage_limit > 0.0 && levels.size() > 1;
   // Progress: the share of all levels' tetrahedra before level i (level 0 takes most of the time).
   std::vector<double> before(levels.size() + 1, 0.0);
-  for (size_t i = 0; i < levels.size(); ++i) before[i + 1] = before[i] + static_cast<double>(levels[i].mesh->numTets());
+  for (size_t i = 0; i < levels.size(); ++i)
+    before[i + 1] =
+        before[i] + static_cast<double>(levels[i].mesh ? levels[i].mesh->numTets() : levels[i].expected_tets);
   auto progress = [&](const char* what, size_t i) {
     reportProgress(
         options.progress,
         std::string(what) + " level " + std::to_string(i) + " (" + std::to_string(levels.size()) + " levels)",
         before.back() > 0 ? before[i] / before.back() : 0.0);
+  };
+  // Each level's mesh, made (make_mesh) when the level is first reached.
+  std::vector<const TetMesh*> meshes(levels.size(), nullptr);
+  auto meshOf = [&](size_t i) -> StatusOr<const TetMesh*> {
+    if (!meshes[i]) {
+      if (levels[i].mesh) {
+        meshes[i] = levels[i].mesh;
+      } else {
+        GTN_ASSIGN_OR_RETURN(meshes[i], levels[i].make_mesh());
+        if (!meshes[i]) return usageError(path + ": level " + std::to_string(i) + " has no mesh");
+      }
+    }
+    return meshes[i];
   };
   std::vector<EncodedInput> encoded;
   size_t count = levels.size();
@@ -221,8 +238,13 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     uint64_t level0 = 0, total = 0;
     count = 0;
     for (size_t i = 0; i < levels.size(); ++i) {
+      auto mesh = meshOf(i);
+      if (!mesh.isOk()) {
+        failed = mesh.status();
+        break;
+      }
       progress(options.verify ? "encode and verify" : "encode", i);
-      auto e = encodeInput(levels, i);
+      auto e = encodeInput(levels, i, **mesh);
       if (!e.isOk()) {
         failed = e.status();
         break;
@@ -240,7 +262,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
       if (i > 0 && static_cast<double>(total) > options.level_storage_limit * static_cast<double>(level0)) break;
       encoded.push_back(std::move(e).value());
       ++count;
-      checking.run([&, i] { checks[i] = checkDecodesBack(path, levels, i, encoded[i].level, options); });
+      checking.run([&, i] { checks[i] = checkDecodesBack(path, levels[i], *meshes[i], i, encoded[i].level, options); });
     }
     checking.wait();
     GTN_RETURN_IF_ERROR(failed);
@@ -256,12 +278,13 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     for (size_t i = 0; i < count; ++i) {
       EncodedInput one;
       if (!bounded) {
+        GTN_ASSIGN_OR_RETURN(const TetMesh* mesh, meshOf(i));
         progress("encode", i);
-        auto e = encodeInput(levels, i);
+        auto e = encodeInput(levels, i, *mesh);
         if (!e.isOk()) return e.status();
         one = std::move(e).value();
         if (options.verify) progress("verify", i);
-        GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels, i, one.level, options));
+        GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels[i], *mesh, i, one.level, options));
       }
       const EncodedInput& e = bounded ? encoded[i] : one;
       if (i == 0) GTN_RETURN_IF_ERROR(w.begin(e.level.header, count));

@@ -27,36 +27,65 @@ uint64_t unreferencedMerges(const MergeTree& tree) {
   return u;
 }
 
-StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree, const LevelOptions& options) {
+MipLevelBuilder::MipLevelBuilder(const TetMesh& source, const MergeTree& tree, bool keep_trees)
+    : source_(&source), keep_trees_(keep_trees) {
+  meshes_.emplace_back();
+  // Level 0's tree is the caller's: not copied.
+  finest_tree_ = std::shared_ptr<const MergeTree>(std::shared_ptr<const MergeTree>(), &tree);
+  trees_.push_back(keep_trees ? finest_tree_ : nullptr);
+}
+
+StatusOr<MipLevelBuilder> MipLevelBuilder::create(const TetMesh& source, const MergeTree& tree,
+                                                  const LevelOptions& options) {
   if (tree.points() != source.numPoints()) return invalidData("mip levels: merge tree does not match the mesh");
   GTN_RETURN_IF_ERROR(tree.check("mip levels: merge tree"));
-  MipLevels out;
-  out.meshes.emplace_back();
-  out.trees.push_back(options.merge_tree ? std::make_shared<const MergeTree>(tree) : nullptr);
-  out.merges.push_back(0);
-  out.ratios.push_back(0.0);
+  MipLevelBuilder out(source, tree, options.merge_tree);
+  out.merges_.push_back(0);
+  out.ratios_.push_back(0.0);
   // Counted over the vertices tetrahedra use: the merges of the others come first and count for nothing.
   const uint64_t free = unreferencedMerges(tree);
   const uint64_t points = source.numPoints() - free;
   const int max_levels = options.levels < 0 ? 62 : options.levels;
+  for (int i = 1; i <= max_levels; ++i) {
+    const uint64_t n = free + levelMerges(i, points, tree.merges - free);
+    if (n <= out.merges_.back()) break;  // the tree is exhausted
+    if (options.levels < 0 && points - (n - free) < options.min_points) break;
+    out.merges_.push_back(n);
+    out.ratios_.push_back(points ? static_cast<double>(n - free) / static_cast<double>(points) : 0.0);
+  }
+  return out;
+}
+
+StatusOr<const TetMesh*> MipLevelBuilder::level(size_t i) {
+  if (i >= count())
+    return usageError("mip level " + std::to_string(i) + " asked for, of " + std::to_string(count()) + " levels");
   // Level i is made from level i - 1 and its tree (the rest of the merges, in its numbering): the same
   // mesh and tree as from the source (compaction keeps the vertex and tetrahedron order), in time that
   // shrinks with the levels instead of a pass over the source for each.
-  const TetMesh* finer = &source;
-  std::shared_ptr<const MergeTree> finer_tree(std::shared_ptr<const MergeTree>(), &tree);
-  for (int i = 1; i <= max_levels; ++i) {
-    const uint64_t n = free + levelMerges(i, points, tree.merges - free);
-    if (n <= out.merges.back()) break;  // the tree is exhausted
-    if (options.levels < 0 && points - (n - free) < options.min_points) break;
-    const uint64_t step = n - out.merges.back();
+  while (meshes_.size() <= i) {
+    const size_t next = meshes_.size();
+    const TetMesh& finer = next == 1 ? *source_ : *meshes_.back();
+    const uint64_t step = merges_[next] - merges_[next - 1];
     std::vector<uint32_t> index;
-    GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(*finer, *finer_tree, step, &index));
-    finer_tree = std::make_shared<const MergeTree>(remainingTree(*finer_tree, step, index));
-    out.trees.push_back(options.merge_tree ? finer_tree : nullptr);
-    out.meshes.push_back(std::move(mesh));
-    finer = &out.meshes.back();
-    out.merges.push_back(n);
-    out.ratios.push_back(points ? static_cast<double>(n - free) / static_cast<double>(points) : 0.0);
+    GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(finer, *finest_tree_, step, &index));
+    finest_tree_ = std::make_shared<const MergeTree>(remainingTree(*finest_tree_, step, index));
+    trees_.push_back(keep_trees_ ? finest_tree_ : nullptr);
+    meshes_.push_back(std::make_unique<TetMesh>(std::move(mesh)));
+  }
+  return i == 0 ? source_ : meshes_[i].get();
+}
+
+StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree, const LevelOptions& options) {
+  GTN_ASSIGN_OR_RETURN(MipLevelBuilder builder, MipLevelBuilder::create(source, tree, options));
+  MipLevels out;
+  out.merges = builder.merges();
+  out.ratios = builder.ratios();
+  out.meshes.emplace_back();
+  out.trees.push_back(options.merge_tree ? std::make_shared<const MergeTree>(tree) : nullptr);
+  GTN_RETURN_IF_ERROR(builder.level(builder.count() - 1).status());
+  for (size_t i = 1; i < builder.count(); ++i) {
+    out.meshes.push_back(std::move(*builder.meshes_[i]));
+    out.trees.push_back(builder.tree(i));
   }
   return out;
 }

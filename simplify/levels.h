@@ -46,6 +46,37 @@ struct MipLevels {
 // Builds the levels of `source` from its merge tree (level 0 included, with the whole tree).
 StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree, const LevelOptions& options);
 
+// The levels of buildMipLevels, built on demand: how many there are, and each one's merges and ratio,
+// are known from the start (they depend on counts only); level i's mesh and tree are made when it is
+// first asked for, from level i - 1's, so that a writer that stops early (a storage bound) builds no
+// level it does not store. `source` and `tree` must outlive the builder. Not thread-safe; the meshes
+// and trees it returns stay valid (and unchanged) while it lives, whatever is built after them.
+class MipLevelBuilder {
+ public:
+  static StatusOr<MipLevelBuilder> create(const TetMesh& source, const MergeTree& tree, const LevelOptions& options);
+
+  size_t count() const { return merges_.size(); }                  // levels, level 0 included
+  const std::vector<uint64_t>& merges() const { return merges_; }  // N_i
+  const std::vector<double>& ratios() const { return ratios_; }    // N_i / points of level 0
+  size_t built() const { return meshes_.size(); }                  // levels made so far, level 0 included
+  // Level i's mesh (level 0: the source), building the levels up to it first.
+  StatusOr<const TetMesh*> level(size_t i);
+  // Level i's merge tree in its numbering, once level i is built; null where options.merge_tree is off.
+  std::shared_ptr<const MergeTree> tree(size_t i) const { return i < trees_.size() ? trees_[i] : nullptr; }
+
+ private:
+  friend StatusOr<MipLevels> buildMipLevels(const TetMesh&, const MergeTree&, const LevelOptions&);
+  MipLevelBuilder(const TetMesh& source, const MergeTree& tree, bool keep_trees);
+
+  const TetMesh* source_;
+  bool keep_trees_;
+  std::vector<uint64_t> merges_;
+  std::vector<double> ratios_;
+  std::vector<std::unique_ptr<TetMesh>> meshes_;         // meshes_[0] is null: the source
+  std::vector<std::shared_ptr<const MergeTree>> trees_;  // kept where keep_trees_
+  std::shared_ptr<const MergeTree> finest_tree_;         // the newest level's tree, to build the next
+};
+
 // The finest stored level to start from for a target of `target_merges` merges: the index of the
 // largest level_merges[i] <= target_merges (level_merges ascending, level_merges[0] = 0).
 size_t chooseLevel(const std::vector<uint64_t>& level_merges, uint64_t target_merges);

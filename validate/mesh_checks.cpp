@@ -397,27 +397,33 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
   return true;
 }
 
+namespace {
+ValidationReport errorsOf(const TetMesh& mesh, const std::string& scope) {
+  ValidationReport report(16);
+  checkMesh(mesh, scope, report);
+  return report;
+}
+}  // namespace
+
+Status LevelStructureCheck::check(const TetMesh& level, size_t index) {
+  std::call_once(level0_once_, [&] { level0_report_.emplace(errorsOf(*level0_, "/levels/0")); });
+  const ValidationReport report = errorsOf(level, "/levels/" + std::to_string(index));
+  std::string errors;
+  for (const ReportedIssue& issue : report.issues()) {
+    const IssueInfo& info = issueInfo(issue.code);
+    if (info.severity != Severity::kError || level0_report_->count(issue.code) > 0) continue;
+    errors += std::string(errors.empty() ? "" : "; ") + info.code + ": " + issue.message();
+  }
+  if (errors.empty()) return Status::ok();
+  return invalidData(what_ + ": mip level " + std::to_string(index) + " is not a valid mesh (" + errors +
+                     "), so the file was not written; this is a bug in gtn's simplifier, please report it "
+                     "with the input");
+}
+
 Status checkLevelStructure(const std::vector<const TetMesh*>& levels, const std::string& what) {
   if (levels.size() < 2) return Status::ok();
-  auto errorsOf = [](const TetMesh& mesh, const std::string& scope) {
-    ValidationReport report(16);
-    checkMesh(mesh, scope, report);
-    return report;
-  };
-  const ValidationReport level0 = errorsOf(*levels[0], "/levels/0");
-  for (size_t i = 1; i < levels.size(); ++i) {
-    const ValidationReport report = errorsOf(*levels[i], "/levels/" + std::to_string(i));
-    std::string errors;
-    for (const ReportedIssue& issue : report.issues()) {
-      const IssueInfo& info = issueInfo(issue.code);
-      if (info.severity != Severity::kError || level0.count(issue.code) > 0) continue;
-      errors += std::string(errors.empty() ? "" : "; ") + info.code + ": " + issue.message();
-    }
-    if (!errors.empty())
-      return invalidData(what + ": mip level " + std::to_string(i) + " is not a valid mesh (" + errors +
-                         "), so the file was not written; this is a bug in gtn's simplifier, please report it "
-                         "with the input");
-  }
+  LevelStructureCheck check(*levels[0], what);
+  for (size_t i = 1; i < levels.size(); ++i) GTN_RETURN_IF_ERROR(check.check(*levels[i], i));
   return Status::ok();
 }
 

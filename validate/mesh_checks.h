@@ -4,6 +4,8 @@
 
 #include <array>
 #include <cstdint>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +39,21 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
 // have too (those are the source's own, not the simplifier's). A failure is kInvalidData naming
 // `what`, the level and its errors, and saying that it is a bug to report.
 Status checkLevelStructure(const std::vector<const TetMesh*>& levels, const std::string& what);
+
+// checkLevelStructure one level at a time, as the levels are made: level 0 is checked once, when the
+// first mip level is. check() may be called from several threads at once.
+class LevelStructureCheck {
+ public:
+  LevelStructureCheck(const TetMesh& level0, std::string what) : level0_(&level0), what_(std::move(what)) {}
+  // Mip level `index` (>= 1).
+  Status check(const TetMesh& level, size_t index);
+
+ private:
+  const TetMesh* level0_;
+  std::string what_;
+  std::once_flag level0_once_;
+  std::optional<ValidationReport> level0_report_;
+};
 
 // Checks that a boundary surface stored in the file (outward triangles) is closed (BOUNDARY_NOT_CLOSED)
 // and then that it equals the boundary faces of the level's tetrahedra, orientation included

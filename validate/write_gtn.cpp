@@ -19,7 +19,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
   // Level 0 is encoded while the merges are ranked: on another thread where TBB has one, after the
   // ranking where it has not. A level 0 that fails to encode is left to the writer, which fails on it
-  // where it always has (after the level checks).
+  // before any mip level is made.
   std::shared_ptr<EncodedLevel> level0;
   tbb::task_group encoding;
   encoding.run([&] {
@@ -33,23 +33,55 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   MergeTree tree = std::move(ranking).value();
   if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
     warnings->push_back(source + ": " + note);
-  reportProgress(wo.progress, "build levels");
   LevelOptions lo;
   lo.levels = o.levels;
   lo.merge_tree = o.merge_tree;
-  GTN_ASSIGN_OR_RETURN(MipLevels levels, buildMipLevels(mesh, tree, lo));
-  // Part of the verification: every level the simplifier made is a valid mesh.
-  if (wo.verify) GTN_RETURN_IF_ERROR(checkLevelStructure(levels.levelMeshes(mesh), path));
+  // The levels are made one at a time as the writer comes to them (a level past the first one beyond
+  // the storage bound is never made), and each level written is checked where the writer verifies it
+  // (part of the verification: every level the simplifier made and the file stores is a valid mesh).
+  // The first level past the bound is made and encoded (its bytes decide) but not checked.
+  GTN_ASSIGN_OR_RETURN(MipLevelBuilder levels, MipLevelBuilder::create(mesh, tree, lo));
+  const size_t count = levels.count();
   // Levels stop where the merge tree does (a small or flat mesh has few merges): say so rather than
   // write fewer levels than asked for without a word.
-  if (o.levels > 0 && levels.merges.size() - 1 < static_cast<size_t>(o.levels) && warnings)
+  if (o.levels > 0 && count - 1 < static_cast<size_t>(o.levels) && warnings)
     warnings->push_back(source + ": --levels " + std::to_string(o.levels) + ": the merge tree has " +
                         std::to_string(tree.merges) + " merge(s) of " + std::to_string(mesh.numPoints()) +
-                        " points, enough for " + std::to_string(levels.merges.size() - 1) + " level(s) beyond level 0");
+                        " points, enough for " + std::to_string(count - 1) + " level(s) beyond level 0");
   GtnWriteOptions bounded = wo;
   if (o.levels < 0) bounded.level_storage_limit = o.level_storage;
-  std::vector<GtnLevelInput> inputs = levels.inputs(mesh);
-  inputs[0].encoded = std::move(level0);
+  LevelStructureCheck structure(mesh, path);
+  std::vector<GtnLevelInput> inputs(count);
+  for (size_t i = 0; i < count; ++i) {
+    GtnLevelInput& in = inputs[i];
+    in.merges = levels.merges()[i];
+    in.ratio = levels.ratios()[i];
+    if (i == 0) {
+      in.mesh = &mesh;
+      in.encoded = std::move(level0);
+    } else {
+      // A level keeps about as many tetrahedra per point as level 0 (progress only).
+      in.expected_tets = mesh.numPoints() == 0
+                             ? 0
+                             : static_cast<uint64_t>(static_cast<double>(mesh.numTets()) *
+                                                     static_cast<double>(mesh.numPoints() - in.merges) /
+                                                     static_cast<double>(mesh.numPoints()));
+      in.make_mesh = [&, i]() -> StatusOr<const TetMesh*> {
+        reportProgress(wo.progress, "build level " + std::to_string(i) + " (" + std::to_string(count) + " levels)");
+        return levels.level(i);
+      };
+      in.check_mesh = [&, i](const TetMesh& level) {
+        reportProgress(wo.progress, "check level " + std::to_string(i) + " (" + std::to_string(count) + " levels)");
+        return structure.check(level, i);
+      };
+    }
+    if (o.merge_tree)
+      in.merge_tree = [&, i](const std::vector<uint32_t>& vertex_order) -> StatusOr<std::vector<uint8_t>> {
+        const std::shared_ptr<const MergeTree> t = levels.tree(i);
+        if (!t) return usageError(path + ": level " + std::to_string(i) + "'s merge tree asked for before the level");
+        return encodeMergeTree(*t, vertex_order);
+      };
+  }
   return writeGtnFile(path, inputs, bounded);
 }
 }  // namespace

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <mutex>
 
 #include <tbb/global_control.h>
 
@@ -353,6 +354,95 @@ TEST(Levels, ABoundedWriteEncodesNoLevelBeyondTheBound) {
       want.push_back("encode and verify level " + std::to_string(i) + " (" + std::to_string(levels->merges.size()) +
                      " levels)");
     EXPECT_EQ(stages, want);
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(Levels, TheBuilderMakesEachLevelWhenAskedFor) {
+  const Ranked& g = grid();
+  const LevelOptions lo{-1, 32, true};
+  auto all = buildMipLevels(g.mesh, g.tree, lo);
+  ASSERT_TRUE(all.isOk()) << all.status().message();
+  ASSERT_GE(all->merges.size(), 4u);
+  auto builder = MipLevelBuilder::create(g.mesh, g.tree, lo);
+  ASSERT_TRUE(builder.isOk()) << builder.status().message();
+  // The plan is known before any level is made.
+  EXPECT_EQ(builder->count(), all->merges.size());
+  EXPECT_EQ(builder->merges(), all->merges);
+  EXPECT_EQ(builder->ratios(), all->ratios);
+  EXPECT_EQ(builder->built(), 1u);
+  auto zero = builder->level(0);
+  ASSERT_TRUE(zero.isOk());
+  EXPECT_EQ(*zero, &g.mesh);
+  EXPECT_EQ(builder->built(), 1u);
+  // Asking for level 2 makes levels 1 and 2 and no more; each is buildMipLevels's.
+  auto two = builder->level(2);
+  ASSERT_TRUE(two.isOk()) << two.status().message();
+  EXPECT_EQ(builder->built(), 3u);
+  EXPECT_EQ((*two)->tets, all->meshes[2].tets);
+  EXPECT_EQ((*two)->coords, all->meshes[2].coords);
+  ASSERT_TRUE(builder->tree(2));
+  EXPECT_EQ(builder->tree(2)->rank, all->trees[2]->rank);
+  EXPECT_FALSE(builder->tree(3));
+  auto one = builder->level(1);
+  ASSERT_TRUE(one.isOk());
+  EXPECT_EQ((*one)->tets, all->meshes[1].tets);
+  EXPECT_EQ(builder->built(), 3u);
+  const size_t last = builder->count() - 1;
+  auto coarsest = builder->level(last);
+  ASSERT_TRUE(coarsest.isOk());
+  EXPECT_EQ((*coarsest)->tets, all->meshes[last].tets);
+  EXPECT_EQ(builder->level(last + 1).status().code(), StatusCode::kUsage);
+}
+
+// Convert makes only the mip levels the storage bound lets the file keep and the first one past it
+// (its encoded bytes decide), and checks the structure of the kept ones only; the file is the one the
+// levels made up front give.
+TEST(Levels, ConvertMakesAndChecksOnlyTheLevelsItStores) {
+  TetMesh mesh = makeGrid(20, 20, 20);
+  RankingStats stats;
+  auto tree = rankMerges(mesh, RankingOptions{}, &stats);
+  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  auto all = buildMipLevels(mesh, *tree, LevelOptions{});
+  ASSERT_TRUE(all.isOk()) << all.status().message();
+  const size_t count = all->merges.size();
+  const std::string path = ::testing::TempDir() + "/lazy_levels.gtn";
+  GtnConvertOptions convert;
+  convert.level_storage = 1.6;
+  GtnWriteOptions eager;
+  eager.level_storage_limit = convert.level_storage;
+  ASSERT_TRUE(writeGtnFile(path, all->inputs(mesh), eager).isOk());
+  auto want = readWholeFile(path);
+  ASSERT_TRUE(want.isOk()) << want.status().message();
+  for (const bool verify : {true, false}) {
+    SCOPED_TRACE(verify ? "verify" : "no verify");
+    std::mutex lock;
+    std::vector<std::string> built, checked;
+    GtnWriteOptions wo;
+    wo.verify = verify;
+    wo.progress = [&](const std::string& stage, double) {
+      std::lock_guard<std::mutex> hold(lock);
+      if (stage.rfind("build level ", 0) == 0) built.push_back(stage);
+      if (stage.rfind("check level ", 0) == 0) checked.push_back(stage);
+    };
+    ASSERT_TRUE(writeGtnWithLevels(path, mesh, convert, wo, "grid").isOk());
+    auto r = GtnReader::open(path);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const size_t kept = (*r)->levels();
+    ASSERT_GE(kept, 2u);
+    ASSERT_LT(kept + 1, count) << "the bound must leave levels out for the test to mean anything";
+    std::vector<std::string> want_built, want_checked;
+    for (size_t i = 1; i <= kept; ++i)
+      want_built.push_back("build level " + std::to_string(i) + " (" + std::to_string(count) + " levels)");
+    for (size_t i = 1; verify && i < kept; ++i)
+      want_checked.push_back("check level " + std::to_string(i) + " (" + std::to_string(count) + " levels)");
+    std::sort(checked.begin(), checked.end());  // checks may run on other threads
+    EXPECT_EQ(built, want_built);
+    EXPECT_EQ(checked, want_checked);
+    auto got = readWholeFile(path);
+    ASSERT_TRUE(got.isOk()) << got.status().message();
+    // The provenance is the same (empty) in both, so the whole files compare.
+    EXPECT_TRUE(*got == *want);
   }
   std::filesystem::remove(path);
 }
