@@ -29,30 +29,9 @@ size_t Field::itemCount() const {
   return item == 0 ? 0 : bytes.size() / item;
 }
 
-namespace {
-template <class T>
-double load(const uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return static_cast<double>(v);
-}
-}  // namespace
-
 double Field::value(size_t item, uint32_t component) const {
-  const uint8_t* p = bytes.data() + (item * components + component) * scalarSize(type);
-  switch (type) {
-    case ScalarType::kInt8: return load<int8_t>(p);
-    case ScalarType::kUInt8: return load<uint8_t>(p);
-    case ScalarType::kInt16: return load<int16_t>(p);
-    case ScalarType::kUInt16: return load<uint16_t>(p);
-    case ScalarType::kInt32: return load<int32_t>(p);
-    case ScalarType::kUInt32: return load<uint32_t>(p);
-    case ScalarType::kInt64: return load<int64_t>(p);
-    case ScalarType::kUInt64: return load<uint64_t>(p);
-    case ScalarType::kFloat32: return load<float>(p);
-    case ScalarType::kFloat64: return load<double>(p);
-  }
-  return 0.0;
+  return gtn::scalarAsDouble(static_cast<gtn::ScalarType>(type),
+                             bytes.data() + (item * components + component) * scalarSize(type));
 }
 
 namespace {

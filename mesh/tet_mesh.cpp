@@ -30,8 +30,7 @@ bool scalarTypeFromName(const std::string& name, ScalarType* out) {
   return false;
 }
 
-double Field::get(size_t i, uint32_t c) const {
-  const uint8_t* p = bytes.data() + (i * components + c) * valueSize();
+double scalarAsDouble(ScalarType type, const uint8_t* p) {
   switch (type) {
     case ScalarType::kInt8: return load<int8_t>(p);
     case ScalarType::kUInt8: return load<uint8_t>(p);
@@ -45,6 +44,10 @@ double Field::get(size_t i, uint32_t c) const {
     case ScalarType::kFloat64: return load<double>(p);
   }
   return 0.0;
+}
+
+double Field::get(size_t i, uint32_t c) const {
+  return scalarAsDouble(type, bytes.data() + (i * components + c) * valueSize());
 }
 
 void Field::copyItem(const Field& src, size_t from, size_t to) {

@@ -33,6 +33,8 @@ size_t scalarSize(ScalarType type);
 const char* scalarTypeName(ScalarType type);
 bool scalarTypeFromName(const std::string& name, ScalarType* out);
 inline bool isFloatType(ScalarType t) { return t == ScalarType::kFloat32 || t == ScalarType::kFloat64; }
+// The value of `type` stored at `p` (unaligned), as a double.
+double scalarAsDouble(ScalarType type, const uint8_t* p);
 
 // A named array with `components` values per item, stored as raw little-endian bytes in the source
 // type so that every value survives bit for bit (NaN payloads included).
