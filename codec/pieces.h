@@ -1,0 +1,108 @@
+// A level as pieces (spec/gtn-format.md, "Pieces"): spatially coherent sets of tetrahedra, each
+// coded on its own by the level codec, so that pieces encode and decode in parallel and a reader
+// decodes only the pieces it needs. Vertices used by several pieces (seam vertices) are stored once,
+// in their seam class (the set of pieces that use them); a piece names them by their index in its
+// seam list and codes only its own vertices.
+//
+// Global vertex ids of a decoded level (what the merge tree's records refer to, and what a MeshSink
+// sees): first every seam vertex (classes in class order, each class's vertices in stream order),
+// then each piece's own vertices introduced while coding its boundary (piece order), then each
+// piece's other own vertices (piece order). With one piece this is the level codec's own order.
+// Tetrahedra come piece by piece, each piece's in its decoding order.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "codec/level_codec.h"
+#include "mesh/mesh_stream.h"
+#include "mesh/tet_mesh.h"
+
+namespace gtn {
+
+// The default bound on a piece's tetrahedra (gtn convert --piece-tets), and the smallest allowed.
+inline constexpr uint64_t kDefaultPieceTets = uint64_t{1} << 18;
+inline constexpr uint64_t kMinPieceTets = uint64_t{1} << 12;
+
+// What the level header records of one piece.
+struct PieceInfo {
+  uint8_t kind = 0;                    // 0: unstructured (the level codec)
+  uint64_t points = 0;                 // vertices the piece's streams introduce (own and seam)
+  uint64_t own_points = 0;             // of them, those no other piece uses (stored in the piece)
+  uint64_t own_boundary_points = 0;    // of the own ones, those introduced while coding the boundary
+  uint64_t tets = 0;                   // the piece's tetrahedra
+  uint64_t boundary_triangles = 0;     // triangles of the piece's boundary surface (cut faces included)
+  double bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};  // of the vertices the piece uses
+};
+
+// One seam class: the vertices used by exactly the pieces `pieces` (at least two, increasing).
+struct SeamClass {
+  std::vector<uint32_t> pieces;
+  uint64_t points = 0;
+};
+
+// A level coded as pieces.
+struct PiecedLevel {
+  LevelHeader header;                             // the whole level (counts, bbox, fields)
+  std::vector<PieceInfo> pieces;                  // in piece order
+  std::vector<EncodedLevel> encoded;              // one per piece (its own header: the piece's counts)
+  std::vector<SeamClass> classes;                 // in class order (by piece list, lexicographic)
+  std::vector<std::vector<uint8_t>> seam_streams;  // one per class: its vertices' coordinates and values
+  // vertex_order[source vertex] = its global id; tet_order[source tetrahedron] = its global position.
+  std::vector<uint32_t> vertex_order;
+  std::vector<uint64_t> tet_order;
+};
+
+// Cuts `mesh` into pieces of at most `piece_tets` tetrahedra (recursive bisection at the median of
+// the tetrahedra's centroids; deterministic, whatever the thread count) and codes each piece, in
+// parallel. A mesh of at most `piece_tets` tetrahedra is one piece with no seam, coded exactly as
+// encodeLevel codes it.
+StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets);
+
+// The streams of one piece as read back from a file.
+struct PiecePayload {
+  LevelHeader header;  // the piece's header (the level's fields; the piece's counts and bbox)
+  LevelPayload streams;
+};
+
+// Everything the decoder needs of one level coded as pieces.
+struct PiecedLevelView {
+  const LevelHeader* header = nullptr;           // the level
+  std::span<const PieceInfo> pieces;             // every piece of the level
+  std::span<const SeamClass> classes;            // every class of the level
+  std::vector<std::span<const uint8_t>> seam_streams;  // per class (may be empty for a class no chosen piece needs)
+  std::vector<PiecePayload> payloads;            // per piece (only the chosen pieces' are read)
+};
+
+// A decoded level (or part of one): the mesh and its boundary triangles (outward, by vertex index).
+struct DecodedPieces {
+  TetMesh mesh;
+  std::vector<std::array<uint32_t, 3>> boundary;
+  // For a subset of pieces: mesh vertex -> the level's global id, and mesh tetrahedron -> the level's
+  // global tetrahedron position. Empty when every piece was decoded (the ids are the global ones).
+  std::vector<uint32_t> global_vertex;
+  std::vector<uint64_t> global_tet;
+};
+
+// Decodes the pieces `chosen` (increasing piece indices; empty: all) in parallel, stitched into one
+// mesh: shared vertices once, cut faces between two decoded pieces not on the boundary. `what` names
+// the source in messages. `fields` as decodeLevel.
+StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vector<uint32_t>& chosen,
+                                     const std::string& what, const DecodeFields* fields = nullptr);
+
+// The indices of the pieces whose bounding boxes meet the box [lo, hi] (closed).
+std::vector<uint32_t> piecesInBox(std::span<const PieceInfo> pieces, const double lo[3], const double hi[3]);
+
+// The seam vertices each piece uses, in the order its seam indices count them: the classes that
+// contain the piece, in class order, each class's vertices in stream order, as global ids.
+std::vector<std::vector<uint32_t>> pieceSeamLists(std::span<const SeamClass> classes, size_t pieces);
+
+// Emits a decoded level as a mesh stream (mesh_stream.h order): every vertex a boundary triangle uses
+// first with the boundary, then the tetrahedra in order with their other vertices, each vertex retired
+// after its last tetrahedron. Vertex ids are the mesh's indices, which must put the boundary's vertices
+// first (decodePieces' do).
+Status emitDecoded(const LevelHeader& header, const DecodedPieces& decoded, MeshSink& sink);
+
+}  // namespace gtn
