@@ -609,8 +609,31 @@ class LevelCoder {
     if constexpr (kEncode) index = (*enc_->seam)[src];
     *is_seam = con_->bit(seam_flag_, index != kNoIndex) != 0;
     if (!*is_seam) return Status::ok();
-    index = con_->direct(index, seam_bits_);
-    if (index >= seam_count_) return bad("a seam vertex index beyond the piece's seam list");
+    // The index as its difference from the one after the previous seam vertex's (zigzag): its bit
+    // length in an adaptive tree, then the bits below the leading one.
+    const uint32_t expected = seam_last_ + 1;
+    uint64_t z = 0;
+    if constexpr (kEncode) {
+      const int64_t d = int64_t{index} - int64_t{expected};
+      z = d >= 0 ? uint64_t(d) * 2 : uint64_t(-d) * 2 - 1;
+    }
+    const uint32_t length = seam_length_.code(*con_, static_cast<uint32_t>(bitLength(z)));
+    if (length > 33) return bad("a seam vertex index beyond the piece's seam list");
+    if (length >= 1) {
+      const int low_bits = static_cast<int>(length) - 1;
+      const uint64_t low = z - (uint64_t{1} << low_bits);
+      uint64_t got = low_bits > 32 ? 0 : con_->direct(static_cast<uint32_t>(low & 0xFFFFFFFFu), std::min(low_bits, 32));
+      if (low_bits > 32) got = (uint64_t{con_->direct(static_cast<uint32_t>(low >> 32), low_bits - 32)} << 32) |
+                               con_->direct(static_cast<uint32_t>(low & 0xFFFFFFFFu), 32);
+      z = (uint64_t{1} << low_bits) + got;
+    } else {
+      z = 0;
+    }
+    const int64_t d = (z & 1) ? -int64_t((z + 1) / 2) : int64_t(z / 2);
+    const int64_t at = int64_t{expected} + d;
+    if (at < 0 || at >= int64_t{seam_count_}) return bad("a seam vertex index beyond the piece's seam list");
+    index = static_cast<uint32_t>(at);
+    seam_last_ = index;
     if (seam_seen_[index]) return bad("a seam vertex introduced twice");
     seam_seen_[index] = 1;
     ++seams_introduced_;
@@ -1082,7 +1105,9 @@ class LevelCoder {
   int seam_bits_ = 0;
   std::vector<char> seam_seen_;
   uint32_t seams_introduced_ = 0;
+  uint32_t seam_last_ = kNoIndex;  // the previous seam vertex's index (kNoIndex + 1 = 0 before the first)
   BitModel seam_flag_;
+  BitTree<6> seam_length_;
   uint32_t copy_last_[3] = {0, 0, 0};
   std::vector<double> pred_vals_;
 };
