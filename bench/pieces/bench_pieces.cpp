@@ -119,7 +119,15 @@ int main(int argc, char** argv) {
         if (all == 1) break;
       }
     }
-    uint64_t seam = 0, seam_bytes = 0, conn = 0;
+    uint64_t seam = 0, seam_bytes = 0, conn = 0, bnd = 0, geo = 0, pf = 0, cf = 0;
+    for (const gtn::EncodedLevel& e : level.encoded) {
+      bnd += e.boundary.size();
+      geo += e.geometry.size();
+      for (const auto& s : e.point_fields) pf += s.size();
+      for (const auto& s : e.cell_fields) cf += s.size();
+    }
+    std::fprintf(stderr, "streams: boundary %llu, geometry %llu, point fields %llu, cell fields %llu\n",
+                 (unsigned long long)bnd, (unsigned long long)geo, (unsigned long long)pf, (unsigned long long)cf);
     for (const gtn::SeamClass& c : level.classes) seam += c.points;
     for (const auto& s : level.seam_streams) seam_bytes += s.size();
     for (const gtn::EncodedLevel& e : level.encoded) conn += e.boundary.size() + e.connectivity.size();
