@@ -1835,14 +1835,14 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     }
     m.point_fields.push_back(std::move(field));
   }
-  m.tets = gridTets(l);
+  if (!fields || fields->tets) m.tets = gridTets(l);
   if (!schema.cell_fields.empty()) {
     const CellScan cscan = cellScan(l);
     for (size_t f = 0; f < schema.cell_fields.size(); ++f) {
       const FieldDesc& desc = schema.cell_fields[f];
       if (desc.components == 0 || desc.itemBytes() > 64)
         return usageError(what + ": cell field '" + desc.name + "' of 0 components or more than 64 bytes");
-      Field field(desc.name, desc.components, desc.type, m.tets.size());
+      Field field(desc.name, desc.components, desc.type, cscan.first.back());
       const std::string name = what + ": CFLD stream '" + desc.name + "'";
       if (!wanted(fields ? &fields->cell : nullptr, f)) {
         m.cell_fields.push_back(std::move(field));  // left out: zero values

@@ -125,8 +125,10 @@ struct DecodedGridPiece {
 
 // Which fields decodeGridPiece decodes: point[f], cell[f] false leaves schema field f out (its
 // stream is not read; its values come out zero). Empty vectors (or no selection) decode every field.
+// `tets` false leaves DecodedGridPiece::mesh.tets empty (for a caller that makes them from the layout).
 struct GridFieldSelection {
   std::vector<bool> point, cell;
+  bool tets = true;
 };
 
 // Decodes a piece written by encodeGridPiece. Fails with kInvalidData, naming `what`, the part and

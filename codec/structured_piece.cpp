@@ -40,23 +40,74 @@ void addCandidate(const Tet& t, int k, std::vector<Candidate>& out) {
   out.push_back(c);
 }
 
-// The rule's tetrahedra of a cell as corner symbols (the layout's handedness applied), and which of
-// their faces lie on which cell face: faces[variant][f] lists (tetrahedron, local face).
-struct RuleFaces {
-  std::vector<std::array<uint8_t, 2>> faces[2][6];
-  explicit RuleFaces(const GridLayout& l) {
+// The tetrahedra of a layout, cell by cell, made from the layout alone (as gridTets makes them,
+// without holding them all): the rule's (with its handedness) in rule cells, an explicit cell's list.
+class CellTets {
+ public:
+  explicit CellTets(const GridLayout& l)
+      : l_(l), ni_(l.dims[0]), nj_(l.dims[1]), nv_(nodeVertexMap(l)) {
+    for (int q = 0; q < 8; ++q) off_[q] = kDx[q] + ni_ * (kDy[q] + nj_ * kDz[q]);
+    uint64_t next = l.nodes() - l.aliases.size();
+    for (const GridException& x : l.exceptions) {
+      first_extra_.push_back(static_cast<uint32_t>(next));
+      next += x.extras;
+    }
     for (int odd = 0; odd < 2; ++odd) {
       const auto rule = gridRuleTets(l.split, odd != 0);
       for (size_t r = 0; r < rule.size(); ++r) {
-        std::array<uint8_t, 4> s = rule[r];
-        if (l.left_handed) std::swap(s[2], s[3]);
+        rule_[odd][r] = rule[r];
+        if (l.left_handed) std::swap(rule_[odd][r][2], rule_[odd][r][3]);
         for (int k = 0; k < 4; ++k) {
+          const auto& s = rule_[odd][r];
           const int f = cellFaceOf(s[kTetFace[k][0]], s[kTetFace[k][1]], s[kTetFace[k][2]]);
-          if (f >= 0) faces[odd][f].push_back({static_cast<uint8_t>(r), static_cast<uint8_t>(k)});
+          if (f >= 0) faces_[odd][f].push_back({static_cast<uint8_t>(r), static_cast<uint8_t>(k)});
         }
       }
     }
   }
+  // The tetrahedra of cell (i, j, k) (`x`: its exception's index, or exceptions().size() for a rule
+  // cell) into out[0 .. 31); returns how many.
+  [[gnu::always_inline]] uint32_t tets(uint64_t i, uint64_t j, uint64_t k, size_t x, Tet* out) const {
+    const uint64_t base = i + ni_ * (j + nj_ * k);
+    uint32_t c[16];
+    if (nv_.empty()) {
+      for (int q = 0; q < 8; ++q) c[q] = static_cast<uint32_t>(base + off_[q]);
+    } else {
+      for (int q = 0; q < 8; ++q) c[q] = nv_[base + off_[q]];
+    }
+    if (x < l_.exceptions.size()) {
+      const GridException& e = l_.exceptions[x];
+      for (int q = 0; q < e.extras; ++q) c[8 + q] = first_extra_[x] + static_cast<uint32_t>(q);
+      uint32_t n = 0;
+      for (const auto& t : e.tets) out[n++] = {c[t[0]], c[t[1]], c[t[2]], c[t[3]]};
+      return n;
+    }
+    const auto& rule = rule_[(i + j + k + l_.parity) & 1];
+    for (uint32_t r = 0; r < l_.split; ++r) out[r] = {c[rule[r][0]], c[rule[r][1]], c[rule[r][2]], c[rule[r][3]]};
+    return l_.split;
+  }
+  // Of a rule cell (odd: its parity class), the (tetrahedron, local face) pairs on cell face f.
+  const std::vector<std::array<uint8_t, 2>>& ruleFaces(int odd, int f) const { return faces_[odd][f]; }
+
+ private:
+  static std::vector<uint32_t> nodeVertexMap(const GridLayout& l) {
+    if (l.aliases.empty()) return {};
+    std::vector<uint32_t> v(l.nodes());
+    uint32_t next = 0;
+    size_t a = 0;
+    for (uint64_t n = 0; n < v.size(); ++n) {
+      if (a < l.aliases.size() && l.aliases[a].first == n) v[n] = v[l.aliases[a++].second];
+      else v[n] = next++;
+    }
+    return v;
+  }
+  const GridLayout& l_;
+  uint64_t ni_, nj_;
+  std::vector<uint32_t> nv_;
+  uint64_t off_[8];
+  std::vector<uint32_t> first_extra_;
+  std::array<uint8_t, 4> rule_[2][6] = {};
+  std::vector<std::array<uint8_t, 2>> faces_[2][6];
 };
 
 // Copies the items of `fields` (item `index`) one after another into `out`.
@@ -85,41 +136,22 @@ struct ItemGather {
 
 }  // namespace
 
-StatusOr<std::vector<std::array<uint32_t, 3>>> gridBoundary(const GridLayout& l, std::span<const Tet> tets,
-                                                            const std::string& what) {
-  const uint64_t ci = l.dims[0] - 1, cj = l.dims[1] - 1, ck = l.dims[2] - 1, cells = l.cells();
-  if (tets.size() != l.tets()) return invalidData(what + ": the tetrahedra are not the structured layout's");
-  const RuleFaces rule(l);
-  const uint32_t split = l.split;
-  // Each exception's first tetrahedron; a rule cell's is found from the nearest exception before it.
+StatusOr<std::vector<std::array<uint32_t, 3>>> gridBoundary(const GridLayout& l, const std::string& what) {
+  const uint64_t ci = l.dims[0] - 1, cj = l.dims[1] - 1, ck = l.dims[2] - 1;
+  const CellTets gen(l);
   const size_t nx = l.exceptions.size();
-  std::vector<uint64_t> ex_first(nx);
-  {
-    uint64_t shift = 0;  // tetrahedra the exceptions so far have less than rule cells (mod 2^64)
-    for (size_t x = 0; x < nx; ++x) {
-      ex_first[x] = l.exceptions[x].cell * uint64_t{split} - shift;
-      shift += split - l.exceptions[x].tets.size();
-    }
-  }
   auto exceptionAt = [&](uint64_t cell) -> size_t {  // its index, or nx
     auto it = std::lower_bound(l.exceptions.begin(), l.exceptions.end(), cell,
                                [](const GridException& e, uint64_t c) { return e.cell < c; });
     return it != l.exceptions.end() && it->cell == cell ? static_cast<size_t>(it - l.exceptions.begin()) : nx;
   };
-  auto firstTet = [&](uint64_t cell) -> uint64_t {  // of a rule cell
-    auto it = std::lower_bound(l.exceptions.begin(), l.exceptions.end(), cell,
-                               [](const GridException& e, uint64_t c) { return e.cell < c; });
-    if (it == l.exceptions.begin()) return cell * split;
-    const size_t x = static_cast<size_t>(it - l.exceptions.begin()) - 1;
-    return ex_first[x] + l.exceptions[x].tets.size() + (cell - l.exceptions[x].cell - 1) * split;
-  };
-  auto oddOf = [&](uint64_t i, uint64_t j, uint64_t k) { return static_cast<int>((i + j + k + l.parity) & 1); };
   std::vector<Candidate> cand;
+  Tet tets[32];
   // A rule cell's triangles on its face f.
   auto ruleFace = [&](uint64_t i, uint64_t j, uint64_t k, int f) {
-    const uint64_t cell = i + ci * (j + cj * k);
-    const uint64_t t0 = firstTet(cell);
-    for (const auto& [r, face] : rule.faces[oddOf(i, j, k)][f]) addCandidate(tets[t0 + r], face, cand);
+    gen.tets(i, j, k, nx, tets);
+    for (const auto& [r, face] : gen.ruleFaces(static_cast<int>((i + j + k + l.parity) & 1), f))
+      addCandidate(tets[r], face, cand);
   };
   // The outer box: each side's rule cells (exception cells give all their faces below).
   for (int f = 0; f < 6; ++f) {
@@ -138,9 +170,10 @@ StatusOr<std::vector<std::array<uint32_t, 3>>> gridBoundary(const GridLayout& l,
   // Each exception: every face of its tetrahedra, and the faces its rule neighbours turn to it.
   for (size_t x = 0; x < nx; ++x) {
     const GridException& e = l.exceptions[x];
-    for (uint64_t t = ex_first[x]; t < ex_first[x] + e.tets.size(); ++t)
-      for (int k = 0; k < 4; ++k) addCandidate(tets[t], k, cand);
     const uint64_t i = e.cell % ci, j = (e.cell / ci) % cj, k = e.cell / (ci * cj);
+    const uint32_t count = gen.tets(i, j, k, x, tets);
+    for (uint32_t t = 0; t < count; ++t)
+      for (int q = 0; q < 4; ++q) addCandidate(tets[t], q, cand);
     const uint64_t c[3] = {i, j, k}, n[3] = {ci, cj, ck};
     const uint64_t stride[3] = {1, ci, ci * cj};
     for (int f = 0; f < 6; ++f) {
@@ -167,7 +200,6 @@ StatusOr<std::vector<std::array<uint32_t, 3>>> gridBoundary(const GridLayout& l,
     if (b - a == 1) out.push_back(cand[a].tri);
     a = b;
   }
-  (void)cells;
   return out;
 }
 
@@ -214,7 +246,7 @@ StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const Structur
   if (adj.non_manifold_faces > 0)
     return unsupported(what + ": " + std::to_string(adj.non_manifold_faces) +
                        " faces are shared by three or more tetrahedra (non-manifold)");
-  GTN_ASSIGN_OR_RETURN(auto boundary, gridBoundary(layout, mesh.tets, what));
+  GTN_ASSIGN_OR_RETURN(auto boundary, gridBoundary(layout, what));
   {
     std::vector<Triangle> generic = boundaryTriangles(mesh, adj);
     auto canonical = [](std::vector<Triangle>& v) {
@@ -266,6 +298,7 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   schema.point_fields = header.point_fields;
   schema.cell_fields = header.cell_fields;
   GridFieldSelection selection;
+  selection.tets = false;  // made cell by cell below
   std::vector<char> point_out(header.point_fields.size(), 0), cell_out(header.cell_fields.size(), 0);
   if (fields) {
     selection.point = fields->point;
@@ -279,27 +312,41 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   if (fields && fields->streams_done) fields->streams_done(point_out, cell_out);
   const GridLayout& l = piece.layout;
   const TetMesh& m = piece.mesh;
-  const uint64_t V = m.numPoints(), T = m.tets.size();
+  const uint64_t V = m.numPoints(), T = l.tets();
   if (V != header.points || T != header.tets)
     return invalidData(what + ": the structured piece has " + std::to_string(V) + " vertices and " +
                        std::to_string(T) + " tetrahedra, the header says " + std::to_string(header.points) + " and " +
                        std::to_string(header.tets));
-  // Rule tetrahedra of distinct nodes repeat none; aliases and explicit cells may.
-  if (!l.aliases.empty() || !l.exceptions.empty()) {
-    for (uint64_t t = 0; t < T; ++t) {
-      const Tet& v = m.tets[t];
-      if (v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] || v[2] == v[3])
-        return invalidData(what + ": structured piece: tetrahedron " + std::to_string(t) + " repeats a vertex");
-    }
-  }
-  GTN_ASSIGN_OR_RETURN(const auto boundary, gridBoundary(l, m.tets, what + ": structured piece"));
+  GTN_ASSIGN_OR_RETURN(const auto boundary, gridBoundary(l, what + ": structured piece"));
   if (boundary.size() != header.boundary_triangles)
     return invalidData(what + ": the structured piece has " + std::to_string(boundary.size()) +
                        " boundary triangles, the header says " + std::to_string(header.boundary_triangles));
-  // Each vertex's last tetrahedron (kNoIndex: none).
+  const CellTets gen(l);
+  const uint64_t ci = l.dims[0] - 1, cj = l.dims[1] - 1, ck = l.dims[2] - 1;
+  const size_t nx = l.exceptions.size();
+  Tet tets[32];
+  // Each vertex's last tetrahedron (kNoIndex: none). Rule tetrahedra of distinct nodes repeat no
+  // vertex; with aliases or explicit cells, one that does is refused.
   std::vector<uint32_t> last(V, kNoIndex);
-  for (uint64_t t = 0; t < T; ++t)
-    for (uint32_t v : m.tets[t]) last[v] = static_cast<uint32_t>(t);
+  {
+    const bool check = !l.aliases.empty() || nx > 0;
+    uint32_t t = 0;
+    size_t x = 0;
+    uint64_t cell = 0;
+    for (uint64_t k = 0; k < ck; ++k)
+      for (uint64_t j = 0; j < cj; ++j)
+        for (uint64_t i = 0; i < ci; ++i, ++cell) {
+          const bool exception = x < nx && l.exceptions[x].cell == cell;
+          const uint32_t n = gen.tets(i, j, k, exception ? x : nx, tets);
+          x += exception;
+          for (uint32_t q = 0; q < n; ++q, ++t) {
+            const Tet& v = tets[q];
+            if (check && (v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] || v[2] == v[3]))
+              return invalidData(what + ": structured piece: tetrahedron " + std::to_string(t) + " repeats a vertex");
+            last[v[0]] = last[v[1]] = last[v[2]] = last[v[3]] = t;
+          }
+        }
+  }
 
   GTN_RETURN_IF_ERROR(sink.beginLevel(header));
   {
@@ -315,12 +362,22 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   {
     ItemGather values(m.cell_fields);
     const bool none = m.cell_fields.empty();
-    for (uint64_t t = 0; t < T; ++t) {
-      const Tet& tet = m.tets[t];
-      GTN_RETURN_IF_ERROR(sink.tet(tet.data(), none ? nullptr : values.item(t)));
-      for (uint32_t v : tet)
-        if (last[v] == t) GTN_RETURN_IF_ERROR(sink.retireVertex(v));
-    }
+    uint32_t t = 0;
+    size_t x = 0;
+    uint64_t cell = 0;
+    for (uint64_t k = 0; k < ck; ++k)
+      for (uint64_t j = 0; j < cj; ++j)
+        for (uint64_t i = 0; i < ci; ++i, ++cell) {
+          const bool exception = x < nx && l.exceptions[x].cell == cell;
+          const uint32_t n = gen.tets(i, j, k, exception ? x : nx, tets);
+          x += exception;
+          for (uint32_t q = 0; q < n; ++q, ++t) {
+            const Tet& tet = tets[q];
+            GTN_RETURN_IF_ERROR(sink.tet(tet.data(), none ? nullptr : values.item(t)));
+            for (uint32_t v : tet)
+              if (last[v] == t) GTN_RETURN_IF_ERROR(sink.retireVertex(v));
+          }
+        }
   }
   return sink.endLevel();
 }

@@ -43,12 +43,11 @@ StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const Structur
 Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t> bytes, MeshSink& sink,
                              const std::string& what, const DecodeFields* fields = nullptr);
 
-// The boundary triangles of the structured piece `layout` whose tetrahedra are `tets` (gridTets),
+// The boundary triangles of the structured piece `layout` (a layout that passes checkGridLayout),
 // outward for positively oriented tetrahedra, in increasing order of their sorted vertex triples:
 // the faces of the block's outer box and those around and inside its exceptions that belong to one
 // tetrahedron only (a rule cell's inner faces, and the faces two rule cells share, belong to two).
 // Fails (kInvalidData naming `what`) where a face belongs to three tetrahedra or more.
-StatusOr<std::vector<std::array<uint32_t, 3>>> gridBoundary(const GridLayout& layout, std::span<const Tet> tets,
-                                                            const std::string& what);
+StatusOr<std::vector<std::array<uint32_t, 3>>> gridBoundary(const GridLayout& layout, const std::string& what);
 
 }  // namespace gtn

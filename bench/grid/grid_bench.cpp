@@ -4,7 +4,8 @@
 // the level as a structured piece (codec/structured_piece.h, the importer's block): its bits per
 // tetrahedron and its decode with the mesh stream's events into TetMeshBuilder.
 //
-//   bench-grid [data_dir] [--split 5|6] [--runs N]
+//   bench-grid [data_dir] [--split 5|6] [--runs N] [--piece-only]
+// (--piece-only: the structured piece's size and decode alone)
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -47,10 +48,12 @@ double bits(size_t bytes, size_t tets) { return 8.0 * static_cast<double>(bytes)
 int main(int argc, char** argv) {
   std::string dir = GTN_DEFAULT_DATA_DIR;
   int split = 5, runs = 10;
+  bool piece_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--split" && i + 1 < argc) split = std::atoi(argv[++i]);
     else if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
+    else if (a == "--piece-only") piece_only = true;
     else dir = a;
   }
   const struct {
@@ -129,6 +132,7 @@ int main(int argc, char** argv) {
     } configs[] = {{"default", -1, -1, true},      {"all Lorenzo", 0, -1, false}, {"all previous-i", 1, -1, false},
                    {"all linear-i", 2, -1, false}, {"all form 0", -1, 0, true},   {"all form 1", -1, 1, true}};
     for (const auto& config : configs) {
+      if (piece_only) break;
       GridEncodeOptions eo;
       eo.predictor = config.predictor;
       eo.value_form = config.value_form;
