@@ -429,7 +429,18 @@ TEST(StructuredPieceImport, VtkStructuredOffersItsBlockUnstructuredNone) {
     test::writeFile(sgrid, s);
   }
   test::writeFile(unstructured, test::shearedHexGridVtk(3));
-  for (const std::string& path : {points, rect, sgrid}) {
+  // An XML StructuredGrid with a cell field (one value per cell: coded once per cell).
+  const std::string vts = dir + "/g.vts";
+  test::writeFile(vts, R"(<?xml version="1.0"?>
+<VTKFile type="StructuredGrid" version="0.1" byte_order="LittleEndian">
+<StructuredGrid WholeExtent="0 2 0 1 0 1"><Piece Extent="0 2 0 1 0 1">
+<PointData><DataArray type="Float32" Name="t" format="ascii">0 1 2 3 4 5 6 7 8 9 10 11.5</DataArray></PointData>
+<CellData><DataArray type="Int32" Name="zone" format="ascii">5 6</DataArray></CellData>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">
+0 0 0  1 0 0  2 0 0  0 1 0  1 1 0  2 1 0  0.5 0 1  1.5 0 1  2.5 0 1  0.5 1 1  1.5 1 1  2.5 1 1</DataArray></Points>
+</Piece></StructuredGrid></VTKFile>
+)");
+  for (const std::string& path : {points, rect, sgrid, vts}) {
     SCOPED_TRACE(path);
     auto r = importMesh({path}, ImportOptions{});
     ASSERT_TRUE(r.isOk()) << r.status().message();
