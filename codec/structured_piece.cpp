@@ -1,6 +1,7 @@
 #include "codec/structured_piece.h"
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
 
 #include "mesh/faces.h"
@@ -57,6 +58,7 @@ class CellTets {
       for (size_t r = 0; r < rule.size(); ++r) {
         rule_[odd][r] = rule[r];
         if (l.left_handed) std::swap(rule_[odd][r][2], rule_[odd][r][3]);
+        for (int q = 0; q < 4; ++q) last_in_rule_[odd][rule_[odd][r][q]] = static_cast<uint8_t>(r);
         for (int k = 0; k < 4; ++k) {
           const auto& s = rule_[odd][r];
           const int f = cellFaceOf(s[kTetFace[k][0]], s[kTetFace[k][1]], s[kTetFace[k][2]]);
@@ -88,6 +90,13 @@ class CellTets {
   }
   // Of a rule cell (odd: its parity class), the (tetrahedron, local face) pairs on cell face f.
   const std::vector<std::array<uint8_t, 2>>& ruleFaces(int odd, int f) const { return faces_[odd][f]; }
+  // Of a rule cell, the corners whose last rule tetrahedron is r (a bit per corner).
+  uint8_t lastInRule(int odd, uint32_t r) const {
+    uint8_t m = 0;
+    for (int q = 0; q < 8; ++q) m |= static_cast<uint8_t>((last_in_rule_[odd][q] == r) << q);
+    return m;
+  }
+  uint64_t cornerOffset(int q) const { return off_[q]; }
 
  private:
   static std::vector<uint32_t> nodeVertexMap(const GridLayout& l) {
@@ -107,6 +116,7 @@ class CellTets {
   uint64_t off_[8];
   std::vector<uint32_t> first_extra_;
   std::array<uint8_t, 4> rule_[2][6] = {};
+  uint8_t last_in_rule_[2][8] = {};
   std::vector<std::array<uint8_t, 2>> faces_[2][6];
 };
 
@@ -187,7 +197,13 @@ StatusOr<std::vector<std::array<uint32_t, 3>>> gridBoundary(const GridLayout& l,
       ruleFace(o[0], o[1], o[2], f ^ 1);
     }
   }
-  // The faces met once.
+  // The faces met once. Without aliases and exceptions every candidate is a face of the outer box,
+  // each met once.
+  if (l.aliases.empty() && nx == 0) {
+    std::vector<std::array<uint32_t, 3>> out(cand.size());
+    for (size_t a = 0; a < cand.size(); ++a) out[a] = cand[a].tri;
+    return out;
+  }
   std::sort(cand.begin(), cand.end());
   std::vector<std::array<uint32_t, 3>> out;
   for (size_t a = 0; a < cand.size();) {
@@ -326,9 +342,12 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   const size_t nx = l.exceptions.size();
   Tet tets[32];
   // Each vertex's last tetrahedron (kNoIndex: none). Rule tetrahedra of distinct nodes repeat no
-  // vertex; with aliases or explicit cells, one that does is refused.
-  std::vector<uint32_t> last(V, kNoIndex);
-  {
+  // vertex; with aliases or explicit cells, one that does is refused. A block of rule cells alone
+  // needs no table: a node's last cell is the last of the (up to) eight around it, and in that cell
+  // its last rule tetrahedron.
+  const bool rule_only = l.aliases.empty() && nx == 0;
+  std::vector<uint32_t> last(rule_only ? 0 : V, kNoIndex);
+  if (!rule_only) {
     const bool check = !l.aliases.empty() || nx > 0;
     uint32_t t = 0;
     size_t x = 0;
@@ -357,9 +376,38 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   }
   for (const auto& tri : boundary) GTN_RETURN_IF_ERROR(sink.boundaryTriangle(tri.data()));
   GTN_RETURN_IF_ERROR(sink.endBoundary());
-  for (uint64_t v = 0; v < V; ++v)
+  for (uint64_t v = 0; v < last.size(); ++v)
     if (last[v] == kNoIndex) GTN_RETURN_IF_ERROR(sink.retireVertex(static_cast<uint32_t>(v)));
-  {
+  if (rule_only) {
+    ItemGather values(m.cell_fields);
+    const bool none = m.cell_fields.empty();
+    uint8_t retire[2][6];
+    for (int odd = 0; odd < 2; ++odd)
+      for (uint32_t r = 0; r < l.split; ++r) retire[odd][r] = gen.lastInRule(odd, r);
+    // Corners whose node has no later cell along an axis: offset 0 along it, or the last cell.
+    constexpr uint8_t kLowI = 0x99, kLowJ = 0x33, kLowK = 0x0F;  // corners with dx, dy, dz = 0
+    uint64_t off[8];
+    for (int q = 0; q < 8; ++q) off[q] = gen.cornerOffset(q);
+    const uint64_t ni = l.dims[0], nj = l.dims[1];
+    uint32_t t = 0;
+    for (uint64_t k = 0; k < ck; ++k) {
+      const uint8_t mk = k + 1 == ck ? 0xFF : kLowK;
+      for (uint64_t j = 0; j < cj; ++j) {
+        const uint8_t mjk = mk & (j + 1 == cj ? 0xFF : kLowJ);
+        for (uint64_t i = 0; i < ci; ++i) {
+          const uint8_t allowed = mjk & (i + 1 == ci ? 0xFF : kLowI);
+          const uint64_t base = i + ni * (j + nj * k);
+          const int odd = static_cast<int>((i + j + k + l.parity) & 1);
+          const uint32_t n = gen.tets(i, j, k, nx, tets);
+          for (uint32_t q = 0; q < n; ++q, ++t) {
+            GTN_RETURN_IF_ERROR(sink.tet(tets[q].data(), none ? nullptr : values.item(t)));
+            for (unsigned bits = retire[odd][q] & allowed; bits; bits &= bits - 1)
+              GTN_RETURN_IF_ERROR(sink.retireVertex(static_cast<uint32_t>(base + off[std::countr_zero(bits)])));
+          }
+        }
+      }
+    }
+  } else {
     ItemGather values(m.cell_fields);
     const bool none = m.cell_fields.empty();
     uint32_t t = 0;

@@ -44,7 +44,7 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
                              const std::string& what, const DecodeFields* fields = nullptr);
 
 // The boundary triangles of the structured piece `layout` (a layout that passes checkGridLayout),
-// outward for positively oriented tetrahedra, in increasing order of their sorted vertex triples:
+// outward for positively oriented tetrahedra, in an order that depends on the layout alone:
 // the faces of the block's outer box and those around and inside its exceptions that belong to one
 // tetrahedron only (a rule cell's inner faces, and the faces two rule cells share, belong to two).
 // Fails (kInvalidData naming `what`) where a face belongs to three tetrahedra or more.
