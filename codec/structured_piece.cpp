@@ -97,6 +97,8 @@ class CellTets {
     return m;
   }
   uint64_t cornerOffset(int q) const { return off_[q]; }
+  // The vertex of exception x's first extra point.
+  uint32_t firstExtra(size_t x) const { return first_extra_[x]; }
 
  private:
   static std::vector<uint32_t> nodeVertexMap(const GridLayout& l) {
@@ -341,14 +343,94 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   const uint64_t ci = l.dims[0] - 1, cj = l.dims[1] - 1, ck = l.dims[2] - 1;
   const size_t nx = l.exceptions.size();
   Tet tets[32];
-  // Each vertex's last tetrahedron (kNoIndex: none). Rule tetrahedra of distinct nodes repeat no
-  // vertex; with aliases or explicit cells, one that does is refused. A block of rule cells alone
-  // needs no table: a node's last cell is the last of the (up to) eight around it, and in that cell
-  // its last rule tetrahedron.
-  const bool rule_only = l.aliases.empty() && nx == 0;
-  std::vector<uint32_t> last(rule_only ? 0 : V, kNoIndex);
-  if (!rule_only) {
-    const bool check = !l.aliases.empty() || nx > 0;
+  // When each vertex retires. Without aliases: a node retires in its last cell, the last of the (up
+  // to) eight around it; when that is a rule cell, after its last rule tetrahedron there (no table
+  // needed), else (an exception) after the last tetrahedron that uses it, found among its cells, as
+  // do the extra points: those few go to `special`, (tetrahedron, vertex) in order, or to `unused`.
+  // With aliases: every vertex's last tetrahedron in `last` (kNoIndex: none), from a pass over all
+  // tetrahedra that also refuses a tetrahedron that repeats a vertex (distinct nodes and corners
+  // never do).
+  const bool structural = l.aliases.empty();
+  std::vector<uint32_t> last(structural ? 0 : V, kNoIndex);
+  std::vector<std::pair<uint32_t, uint32_t>> special;
+  std::vector<uint32_t> unused;
+  // Corners whose node has no later cell along an axis: offset 0 along it, or the last cell.
+  constexpr uint8_t kLowI = 0x99, kLowJ = 0x33, kLowK = 0x0F;  // corners with dx, dy, dz = 0
+  auto lastCellCorners = [&](uint64_t i, uint64_t j, uint64_t k) {
+    return static_cast<uint8_t>((k + 1 == ck ? 0xFF : kLowK) & (j + 1 == cj ? 0xFF : kLowJ) &
+                                (i + 1 == ci ? 0xFF : kLowI));
+  };
+  const uint64_t ni = l.dims[0], nj = l.dims[1];
+  uint64_t off[8];
+  for (int q = 0; q < 8; ++q) off[q] = gen.cornerOffset(q);
+  if (structural && nx > 0) {
+    std::vector<uint32_t> ex_first(nx);  // each exception's first tetrahedron
+    {
+      uint64_t shift = 0;  // tetrahedra the exceptions so far have less than rule cells (mod 2^64)
+      for (size_t x = 0; x < nx; ++x) {
+        ex_first[x] = static_cast<uint32_t>(l.exceptions[x].cell * uint64_t{l.split} - shift);
+        shift += l.split - l.exceptions[x].tets.size();
+      }
+    }
+    auto exceptionBefore = [&](uint64_t cell) {  // exceptions at cells below `cell`
+      return static_cast<size_t>(std::lower_bound(l.exceptions.begin(), l.exceptions.end(), cell,
+                                                  [](const GridException& e, uint64_t c) { return e.cell < c; }) -
+                                 l.exceptions.begin());
+    };
+    // The last tetrahedron of cell (a, b, c) that uses vertex v (corner q of a rule cell), or kNoIndex.
+    auto lastUse = [&](uint64_t a, uint64_t b, uint64_t c, int q, uint32_t v) -> uint32_t {
+      const uint64_t cell = a + ci * (b + cj * c);
+      const size_t x = exceptionBefore(cell);
+      if (x < nx && l.exceptions[x].cell == cell) {
+        const uint32_t n = gen.tets(a, b, c, x, tets);
+        for (uint32_t r = n; r-- > 0;)
+          if (tets[r][0] == v || tets[r][1] == v || tets[r][2] == v || tets[r][3] == v) return ex_first[x] + r;
+        return kNoIndex;
+      }
+      const uint64_t first = x == 0 ? cell * l.split
+                                    : ex_first[x - 1] + l.exceptions[x - 1].tets.size() +
+                                          (cell - l.exceptions[x - 1].cell - 1) * l.split;
+      for (uint32_t r = l.split; r-- > 0;)
+        if (gen.lastInRule(static_cast<int>((a + b + c + l.parity) & 1), r) & (1u << q))
+          return static_cast<uint32_t>(first + r);
+      return kNoIndex;
+    };
+    for (size_t x = 0; x < nx; ++x) {
+      const GridException& e = l.exceptions[x];
+      const uint64_t i = e.cell % ci, j = (e.cell / ci) % cj, k = e.cell / (ci * cj);
+      for (unsigned bits = lastCellCorners(i, j, k); bits; bits &= bits - 1) {
+        const int q = std::countr_zero(bits);
+        const uint64_t node[3] = {i + kDx[q], j + kDy[q], k + kDz[q]};
+        const uint32_t v = static_cast<uint32_t>(node[0] + ni * (node[1] + nj * node[2]));
+        // Its cells, last first: (node - 1 or node) along each axis, inside the box.
+        uint32_t found = kNoIndex;
+        for (int cc = 1; cc >= 0 && found == kNoIndex; --cc)
+          for (int bb = 1; bb >= 0 && found == kNoIndex; --bb)
+            for (int aa = 1; aa >= 0 && found == kNoIndex; --aa) {
+              if (node[0] + aa < 1 || node[1] + bb < 1 || node[2] + cc < 1) continue;
+              const uint64_t a = node[0] + aa - 1, b = node[1] + bb - 1, c = node[2] + cc - 1;
+              if (a >= ci || b >= cj || c >= ck) continue;
+              const int corner = (1 - cc) * 4 + ((1 - bb) ? ((1 - aa) ? 2 : 3) : ((1 - aa) ? 1 : 0));
+              found = lastUse(a, b, c, corner, v);
+            }
+        if (found == kNoIndex) unused.push_back(v);
+        else special.emplace_back(found, v);
+      }
+      // Its extra points, used by its tetrahedra alone.
+      if (e.extras) {
+        const uint32_t n = gen.tets(i, j, k, x, tets);
+        for (uint32_t v = gen.firstExtra(x); v < gen.firstExtra(x) + e.extras; ++v) {
+          uint32_t found = kNoIndex;
+          for (uint32_t r = n; r-- > 0 && found == kNoIndex;)
+            if (tets[r][0] == v || tets[r][1] == v || tets[r][2] == v || tets[r][3] == v) found = ex_first[x] + r;
+          if (found == kNoIndex) unused.push_back(v);
+          else special.emplace_back(found, v);
+        }
+      }
+    }
+    std::sort(special.begin(), special.end());
+  }
+  if (!structural) {
     uint32_t t = 0;
     size_t x = 0;
     uint64_t cell = 0;
@@ -360,11 +442,13 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
           x += exception;
           for (uint32_t q = 0; q < n; ++q, ++t) {
             const Tet& v = tets[q];
-            if (check && (v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] || v[2] == v[3]))
+            if (v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] || v[2] == v[3])
               return invalidData(what + ": structured piece: tetrahedron " + std::to_string(t) + " repeats a vertex");
             last[v[0]] = last[v[1]] = last[v[2]] = last[v[3]] = t;
           }
         }
+    for (uint64_t v = 0; v < V; ++v)
+      if (last[v] == kNoIndex) unused.push_back(static_cast<uint32_t>(v));
   }
 
   GTN_RETURN_IF_ERROR(sink.beginLevel(header));
@@ -376,41 +460,34 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   }
   for (const auto& tri : boundary) GTN_RETURN_IF_ERROR(sink.boundaryTriangle(tri.data()));
   GTN_RETURN_IF_ERROR(sink.endBoundary());
-  for (uint64_t v = 0; v < last.size(); ++v)
-    if (last[v] == kNoIndex) GTN_RETURN_IF_ERROR(sink.retireVertex(static_cast<uint32_t>(v)));
-  if (rule_only) {
-    ItemGather values(m.cell_fields);
-    const bool none = m.cell_fields.empty();
+  for (uint32_t v : unused) GTN_RETURN_IF_ERROR(sink.retireVertex(v));
+  ItemGather values(m.cell_fields);
+  const bool none = m.cell_fields.empty();
+  uint32_t t = 0;
+  if (structural) {
     uint8_t retire[2][6];
     for (int odd = 0; odd < 2; ++odd)
       for (uint32_t r = 0; r < l.split; ++r) retire[odd][r] = gen.lastInRule(odd, r);
-    // Corners whose node has no later cell along an axis: offset 0 along it, or the last cell.
-    constexpr uint8_t kLowI = 0x99, kLowJ = 0x33, kLowK = 0x0F;  // corners with dx, dy, dz = 0
-    uint64_t off[8];
-    for (int q = 0; q < 8; ++q) off[q] = gen.cornerOffset(q);
-    const uint64_t ni = l.dims[0], nj = l.dims[1];
-    uint32_t t = 0;
-    for (uint64_t k = 0; k < ck; ++k) {
-      const uint8_t mk = k + 1 == ck ? 0xFF : kLowK;
-      for (uint64_t j = 0; j < cj; ++j) {
-        const uint8_t mjk = mk & (j + 1 == cj ? 0xFF : kLowJ);
-        for (uint64_t i = 0; i < ci; ++i) {
-          const uint8_t allowed = mjk & (i + 1 == ci ? 0xFF : kLowI);
+    size_t x = 0, at = 0;
+    uint64_t cell = 0;
+    for (uint64_t k = 0; k < ck; ++k)
+      for (uint64_t j = 0; j < cj; ++j)
+        for (uint64_t i = 0; i < ci; ++i, ++cell) {
+          const bool exception = x < nx && l.exceptions[x].cell == cell;
           const uint64_t base = i + ni * (j + nj * k);
           const int odd = static_cast<int>((i + j + k + l.parity) & 1);
-          const uint32_t n = gen.tets(i, j, k, nx, tets);
+          const uint8_t allowed = exception ? 0 : lastCellCorners(i, j, k);
+          const uint32_t n = gen.tets(i, j, k, exception ? x : nx, tets);
+          x += exception;
           for (uint32_t q = 0; q < n; ++q, ++t) {
             GTN_RETURN_IF_ERROR(sink.tet(tets[q].data(), none ? nullptr : values.item(t)));
             for (unsigned bits = retire[odd][q] & allowed; bits; bits &= bits - 1)
               GTN_RETURN_IF_ERROR(sink.retireVertex(static_cast<uint32_t>(base + off[std::countr_zero(bits)])));
+            for (; at < special.size() && special[at].first == t; ++at)
+              GTN_RETURN_IF_ERROR(sink.retireVertex(special[at].second));
           }
         }
-      }
-    }
   } else {
-    ItemGather values(m.cell_fields);
-    const bool none = m.cell_fields.empty();
-    uint32_t t = 0;
     size_t x = 0;
     uint64_t cell = 0;
     for (uint64_t k = 0; k < ck; ++k)
