@@ -84,7 +84,12 @@ int main(int argc, char** argv) {
         status = 1;
         continue;
       }
+      const double e0 = threadSeconds();
       auto level = encodeStructuredPiece(mesh, mesh.blocks[0]);
+      const double encode_cpu = threadSeconds() - e0;
+      const double m0 = threadSeconds();
+      const bool matched = matchGridLayout(mesh, mesh.blocks[0].dims, mesh.blocks[0].aliases).isOk();
+      const double match_cpu = threadSeconds() - m0;
       if (!level.isOk()) {
         std::fprintf(stderr, "%s: %s\n", s.name, level.status().message().c_str());
         status = 1;
@@ -118,10 +123,11 @@ int main(int argc, char** argv) {
       std::printf(
           "%s /%d as a structured piece: %.3f bits/tet (%zu bytes), %llu boundary triangles; decode into "
           "TetMeshBuilder: %.2f ms wall, %.2f ms thread CPU: %.1f (wall), %.1f (CPU) million tetrahedra per second; "
-          "into a counting sink %.1f (CPU) (best of %d)\n",
+          "into a counting sink %.1f (CPU) (best of %d); encode %.0f ms CPU, of which matching the block %.1f ms%s\n",
           s.name, split, bits(level->connectivity.size(), T), level->connectivity.size(),
           static_cast<unsigned long long>(level->header.boundary_triangles), best * 1e3, best_cpu * 1e3,
-          T / best / 1e6, T / best_cpu / 1e6, T / count_cpu / 1e6, runs);
+          T / best / 1e6, T / best_cpu / 1e6, T / count_cpu / 1e6, runs, encode_cpu * 1e3, match_cpu * 1e3,
+          matched ? "" : " (no match)");
     }
     if (!layout.isOk()) {
       std::fprintf(stderr, "%s: %s\n", s.name, layout.status().message().c_str());
