@@ -69,12 +69,15 @@ std::vector<Tet> gridTets(const GridLayout& layout);
 // odd cells), before the left-handed exchange.
 std::span<const std::array<uint8_t, 4>> gridRuleTets(int split, bool odd);
 
-// The layout of a mesh whose first ni x nj x nk points are a block's nodes in node order (i fastest)
+// The layout of a mesh whose first points are a block's ni x nj x nk nodes in node order (i fastest)
 // followed only by extra points, with tetrahedra in cell order as a structured importer writes them
 // (PLOT3D, VTK structured datasets): the split, parity and handedness that leave the fewest cells
 // as exceptions, and those cells (blanked, or explicit: flipped, split around a Steiner point, or
-// otherwise not the rule's). Fails when the tetrahedra do not come cell by cell.
-StatusOr<GridLayout> matchGridLayout(const TetMesh& mesh, const uint32_t dims[3]);
+// otherwise not the rule's). `aliases` (the layout's: (node, earlier node it is), node increasing)
+// are nodes that have no point of their own (welded into an earlier node): the nodes' points are
+// then those of the other nodes, in node order. Fails when the tetrahedra do not come cell by cell.
+StatusOr<GridLayout> matchGridLayout(const TetMesh& mesh, const uint32_t dims[3],
+                                     std::span<const std::pair<uint32_t, uint32_t>> aliases = {});
 
 // The predictors of section 11.3.
 enum class GridPredictor : uint8_t { kLorenzo = 0, kPreviousI = 1, kLinearI = 2 };
@@ -120,9 +123,17 @@ struct DecodedGridPiece {
   TetMesh mesh;  // vertices and tetrahedra in the layout's order, values bit for bit
 };
 
+// Which fields decodeGridPiece decodes: point[f], cell[f] false leaves schema field f out (its
+// stream is not read; its values come out zero). Empty vectors (or no selection) decode every field.
+// `tets` false leaves DecodedGridPiece::mesh.tets empty (for a caller that makes them from the layout).
+struct GridFieldSelection {
+  std::vector<bool> point, cell;
+  bool tets = true;
+};
+
 // Decodes a piece written by encodeGridPiece. Fails with kInvalidData, naming `what`, the part and
 // the reason, on any corrupt or truncated input; allocations are bounded by the input's size.
 StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const GridSchema& schema,
-                                           const std::string& what);
+                                           const std::string& what, const GridFieldSelection* fields = nullptr);
 
 }  // namespace gtn

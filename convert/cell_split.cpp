@@ -9,6 +9,7 @@
 
 #include "convert/vtk_common.h"
 #include "mesh/hex_split.h"
+#include "mesh/index.h"
 #include "mesh/predicates.h"
 
 namespace gtn {
@@ -878,6 +879,12 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
   // VTK's blanking (vtkStructuredGrid::BlankCell, BlankPoint): a cell marked HIDDENCELL in the cell
   // ghost array, or with a corner marked HIDDENPOINT in the point one, is not part of the grid (an
   // overset hole, like a PLOT3D IBLANK of 0). Such cells are dropped, as IBLANK holes are.
+  // The block, for the structured encoder (importMesh keeps it when the mesh is it).
+  if (nx >= 2 && ny >= 2 && nz >= 2 && nx * ny * nz < kNoIndex) {
+    StructuredBlock block;
+    for (int a = 0; a < 3; ++a) block.dims[a] = static_cast<uint32_t>(dims[a]);
+    mesh.blocks = {block};
+  }
   const uint8_t* cell_ghost = vtkGhostMarks(cell_fields, num_cells);
   const uint8_t* point_ghost = vtkGhostMarks(mesh.point_fields, mesh.numPoints());
   std::vector<uint32_t> tet_cell;

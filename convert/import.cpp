@@ -7,6 +7,7 @@
 #include <cstring>
 #include <numeric>
 
+#include "codec/grid_coder.h"
 #include "format/file_io.h"
 #include "format/gtn_reader.h"
 #include "mesh/mesh_stats.h"
@@ -154,6 +155,15 @@ void weldPoints(TetMesh& mesh, ImportReport& report) {
   }
   report.welded_points += n - kept;
   if (kept == n) return;
+  // A block's nodes welded into earlier ones become its aliases (the other nodes keep their order).
+  if (mesh.blocks.size() == 1 && mesh.blocks[0].first_point == 0 && mesh.blocks[0].aliases.empty()) {
+    StructuredBlock& b = mesh.blocks[0];
+    const uint64_t nodes = uint64_t{b.dims[0]} * b.dims[1] * b.dims[2];
+    for (uint64_t p = 0; p < nodes && p < n; ++p)
+      if (rep[p] != p) b.aliases.emplace_back(static_cast<uint32_t>(p), rep[p]);
+  } else {
+    mesh.blocks.clear();
+  }
   mesh.coords.resize(3 * static_cast<size_t>(kept));
   for (Field& f : mesh.point_fields) f.bytes.resize(static_cast<size_t>(kept) * f.components * f.valueSize());
   for (Tet& q : mesh.tets)
@@ -302,6 +312,13 @@ StatusOr<ImportResult> importMesh(const std::vector<std::string>& inputs, const 
       kv.first = toUtf8(kv.first);
       kv.second = toUtf8(kv.second);
     }
+  }
+  if (result.isOk() && !result->mesh.blocks.empty()) {
+    // The structured block an importer read: offered only when the mesh is exactly that one block.
+    TetMesh& m = result->mesh;
+    if (m.blocks.size() != 1 || m.blocks[0].first_point != 0 ||
+        !matchGridLayout(m, m.blocks[0].dims, m.blocks[0].aliases).isOk())
+      m.blocks.clear();
   }
   if (result.isOk() && result->mesh.tets.empty()) {
     const ImportReport& r = result->report;

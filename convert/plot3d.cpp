@@ -57,6 +57,7 @@
 #include "convert/text_reader.h"
 #include "format/file_io.h"
 #include "format/gtn_bytes.h"
+#include "mesh/index.h"
 #include "mesh/predicates.h"
 
 static_assert(std::endian::native == std::endian::little,
@@ -1774,6 +1775,13 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
   const std::vector<uint8_t> parity = options.weld ? seamParities(blocks, iblank, options.split, mesh, &warnings)
                                                    : std::vector<uint8_t>(blocks.size(), 0);
   splitCells(blocks, iblank, options.split, parity, mesh, result.report);
+  // One block: the structured encoder may code it as such (importMesh keeps it when the mesh is it).
+  if (blocks.size() == 1 && blocks[0].n[0] >= 2 && blocks[0].n[1] >= 2 && blocks[0].n[2] >= 2 &&
+      blocks[0].points() < kNoIndex) {
+    StructuredBlock b;
+    for (int a = 0; a < 3; ++a) b.dims[a] = static_cast<uint32_t>(blocks[0].n[a]);
+    mesh.blocks.push_back(std::move(b));
+  }
   if (options.weld) weldPoints(mesh, result.report);
 
   mesh.setMetadata("source.format", "plot3d");

@@ -70,6 +70,18 @@ struct Field {
 
 using Tet = std::array<uint32_t, 4>;
 
+// A structured block a mesh is (PLOT3D, VTK's structured datasets): its dims[0] x dims[1] x dims[2]
+// nodes, i fastest, are the mesh's points from `first_point` on in node order, but for the nodes in
+// `aliases` (welded: they are an earlier node's point and have none of their own); the points after
+// the nodes are the Steiner points of its cells, and its tetrahedra come cell by cell. The structured
+// encoder (codec/structured_piece.h) codes such a mesh by the block's dimensions, split rule and
+// exceptions instead of its connectivity.
+struct StructuredBlock {
+  uint64_t first_point = 0;
+  uint32_t dims[3] = {0, 0, 0};
+  std::vector<std::pair<uint32_t, uint32_t>> aliases;  // (node, earlier node it is), node increasing
+};
+
 struct TetMesh {
   // Precision of the source coordinates. Coordinates are held as double; when coord_type is
   // kFloat32 every coordinate is exactly a float32 value and is written back as float32.
@@ -79,6 +91,11 @@ struct TetMesh {
   std::vector<Field> point_fields;
   std::vector<Field> cell_fields;  // one item per tetrahedron (region attributes, references)
   std::vector<std::pair<std::string, std::string>> metadata;
+  // The structured block the mesh is, where an importer read it as one (importMesh keeps it only
+  // when the mesh is exactly that block, as codec/grid_coder.h's matchGridLayout finds it); empty
+  // otherwise. Not stored in .gtn files. A hint only: the structured encoder checks the mesh against
+  // it and refuses a mesh that is not the block (after a change to its points or tetrahedra).
+  std::vector<StructuredBlock> blocks;
 
   size_t numPoints() const { return coords.size() / 3; }
   size_t numTets() const { return tets.size(); }

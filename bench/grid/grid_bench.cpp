@@ -1,8 +1,11 @@
 // bench-grid: the structured-piece coder (codec/grid_coder.h) on the PLOT3D datasets: bits per
 // tetrahedron in all and per stream, the predictor and form each component took, the same with one
-// predictor forced on every component, and the decode speed (best of several runs, one thread).
+// predictor forced on every component, and the decode speed (best of several runs, one thread); then
+// the level as a structured piece (codec/structured_piece.h, the importer's block): its bits per
+// tetrahedron and its decode with the mesh stream's events into TetMeshBuilder.
 //
-//   bench-grid [data_dir] [--split 5|6] [--runs N]
+//   bench-grid [data_dir] [--split 5|6] [--runs N] [--piece-only]
+// (--piece-only: the structured piece's size and decode alone)
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -11,6 +14,7 @@
 #include <vector>
 
 #include "codec/grid_coder.h"
+#include "codec/structured_piece.h"
 #include "convert/import.h"
 #include "format/file_io.h"
 
@@ -44,10 +48,12 @@ double bits(size_t bytes, size_t tets) { return 8.0 * static_cast<double>(bytes)
 int main(int argc, char** argv) {
   std::string dir = GTN_DEFAULT_DATA_DIR;
   int split = 5, runs = 10;
+  bool piece_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--split" && i + 1 < argc) split = std::atoi(argv[++i]);
     else if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
+    else if (a == "--piece-only") piece_only = true;
     else dir = a;
   }
   const struct {
@@ -71,6 +77,58 @@ int main(int argc, char** argv) {
     }
     const TetMesh& mesh = imported->mesh;
     auto layout = matchGridLayout(mesh, dims);
+    if (layout.isOk()) {
+      // The level as a structured piece, decoded into TetMeshBuilder (every event of the mesh stream).
+      if (mesh.blocks.size() != 1) {
+        std::fprintf(stderr, "%s: the importer offers no block\n", s.name);
+        status = 1;
+        continue;
+      }
+      const double e0 = threadSeconds();
+      auto level = encodeStructuredPiece(mesh, mesh.blocks[0]);
+      const double encode_cpu = threadSeconds() - e0;
+      const double m0 = threadSeconds();
+      const bool matched = matchGridLayout(mesh, mesh.blocks[0].dims, mesh.blocks[0].aliases).isOk();
+      const double match_cpu = threadSeconds() - m0;
+      if (!level.isOk()) {
+        std::fprintf(stderr, "%s: %s\n", s.name, level.status().message().c_str());
+        status = 1;
+        continue;
+      }
+      double best = 1e300, best_cpu = 1e300;
+      for (int run = 0; run < runs; ++run) {
+        TetMeshBuilder builder;
+        const auto t0 = std::chrono::steady_clock::now();
+        const double c0 = threadSeconds();
+        const Status st = decodeStructuredPiece(level->header, level->connectivity, builder, s.name);
+        best_cpu = std::min(best_cpu, threadSeconds() - c0);
+        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        if (!st.isOk() || builder.mesh().tets != mesh.tets || builder.mesh().coords != mesh.coords) {
+          std::fprintf(stderr, "%s: the structured piece decodes wrong: %s\n", s.name,
+                       st.isOk() ? "tetrahedra or coordinates differ" : st.message().c_str());
+          status = 1;
+          break;
+        }
+      }
+      // The same into a sink that only counts (the decoder's own part).
+      double count_cpu = 1e300;
+      for (int run = 0; run < runs; ++run) {
+        CountingSink counter;
+        const double c0 = threadSeconds();
+        const Status st = decodeStructuredPiece(level->header, level->connectivity, counter, s.name);
+        count_cpu = std::min(count_cpu, threadSeconds() - c0);
+        if (!st.isOk() || counter.tets != mesh.numTets()) status = 1;
+      }
+      const size_t T = mesh.numTets();
+      std::printf(
+          "%s /%d as a structured piece: %.3f bits/tet (%zu bytes), %llu boundary triangles; decode into "
+          "TetMeshBuilder: %.2f ms wall, %.2f ms thread CPU: %.1f (wall), %.1f (CPU) million tetrahedra per second; "
+          "into a counting sink %.1f (CPU) (best of %d); encode %.0f ms CPU, of which matching the block %.1f ms%s\n",
+          s.name, split, bits(level->connectivity.size(), T), level->connectivity.size(),
+          static_cast<unsigned long long>(level->header.boundary_triangles), best * 1e3, best_cpu * 1e3,
+          T / best / 1e6, T / best_cpu / 1e6, T / count_cpu / 1e6, runs, encode_cpu * 1e3, match_cpu * 1e3,
+          matched ? "" : " (no match)");
+    }
     if (!layout.isOk()) {
       std::fprintf(stderr, "%s: %s\n", s.name, layout.status().message().c_str());
       status = 1;
@@ -89,6 +147,7 @@ int main(int argc, char** argv) {
     } configs[] = {{"default", -1, -1, true},      {"all Lorenzo", 0, -1, false}, {"all previous-i", 1, -1, false},
                    {"all linear-i", 2, -1, false}, {"all form 0", -1, 0, true},   {"all form 1", -1, 1, true}};
     for (const auto& config : configs) {
+      if (piece_only) break;
       GridEncodeOptions eo;
       eo.predictor = config.predictor;
       eo.value_form = config.value_form;
