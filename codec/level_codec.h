@@ -28,6 +28,9 @@ struct EncodeOptions {
   // index must name exactly one vertex, and every seam vertex must be used by a tetrahedron.
   std::vector<uint32_t> seam;
   uint32_t seam_count = 0;
+  // encodePieces: a level that is one structured block (TetMesh::blocks) may be coded as a
+  // structured piece (codec/structured_piece.h) where that is smaller. Off only to measure.
+  bool structured = true;
 };
 
 // The coded streams of one level. `header` carries counts, field descriptions, bounding box and

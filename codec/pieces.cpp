@@ -18,6 +18,7 @@
 #include "codec/packed_values.h"
 #include "codec/prediction.h"
 #include "codec/range_coder.h"
+#include "codec/structured_piece.h"
 #include "codec/value_coder.h"
 #include "mesh/faces.h"
 #include "mesh/index.h"
@@ -261,9 +262,27 @@ StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& opt
   if (nt <= piece_tets) {
     StatusOr<EncodedLevel> e = encodeLevel(mesh, options);
     if (!e.isOk()) return e.status();
+    uint8_t kind = 0;
+    uint64_t own_boundary = e->boundary_points;
+    // A level that is one structured block: a structured piece where that is smaller.
+    if (mesh.blocks.size() == 1 && options.structured) {
+      StatusOr<EncodedLevel> grid = encodeStructuredPiece(mesh, mesh.blocks[0]);
+      auto bytes = [](const EncodedLevel& x) {
+        size_t n = x.boundary.size() + x.connectivity.size() + x.geometry.size();
+        for (const auto& f : x.point_fields) n += f.size();
+        for (const auto& f : x.cell_fields) n += f.size();
+        return n;
+      };
+      if (grid.isOk() && bytes(*grid) < bytes(*e)) {
+        e = std::move(grid);
+        kind = 1;
+        own_boundary = e->header.points;  // every vertex comes before the boundary triangles
+      }
+    }
     out.header = e->header;
     out.pieces.push_back(infoOf(*e, 0));
-    out.pieces[0].own_boundary_points = e->boundary_points;
+    out.pieces[0].kind = kind;
+    out.pieces[0].own_boundary_points = own_boundary;
     out.vertex_order = e->vertex_order;
     out.tet_order = e->tet_order;
     out.encoded.push_back(std::move(*e));
@@ -602,7 +621,7 @@ StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vec
     std::vector<std::array<uint32_t, 3>> boundary;
     Status beginLevel(const LevelHeader&) override { return Status::ok(); }
     Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) override {
-      if (id != map_.size() || seam_of_id.size() != map_.size() + 1) return invalidData("vertex ids out of order");
+      if (id != map_.size() || seam_of_id.size() <= map_.size()) return invalidData("vertex ids out of order");
       const uint32_t s = seam_of_id[id];
       uint64_t out;
       if (s != kNoIndex) {
@@ -692,12 +711,25 @@ StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vec
       if (value_bytes > 0)
         std::memcpy(&values[k * value_bytes], &seam_values[r.cls][r.k * value_bytes], value_bytes);
     }
-    SeamValues seams;
-    seams.count = static_cast<uint32_t>(ns);
-    seams.coords = coords.data();
-    seams.values = values.data();
-    seams.seam_of_id = &sink.seam_of_id;
-    const Status st = decodeLevel(ph, view.payloads[p].streams, sink, nullptr, piece_what, fields, &seams);
+    Status st = Status::ok();
+    if (info.kind == 1) {
+      // A structured piece: a level of one piece, no seam vertex.
+      if (n_pieces != 1) {
+        piece_status[p] = invalidData(piece_what + ": a structured piece in a level of several pieces");
+        return;
+      }
+      sink.seam_of_id.assign(info.points, kNoIndex);
+      st = decodeStructuredPiece(ph, view.payloads[p].streams.connectivity, sink, piece_what, fields);
+    } else if (info.kind != 0) {
+      st = invalidData(piece_what + ": unknown piece kind " + std::to_string(info.kind));
+    } else {
+      SeamValues seams;
+      seams.count = static_cast<uint32_t>(ns);
+      seams.coords = coords.data();
+      seams.values = values.data();
+      seams.seam_of_id = &sink.seam_of_id;
+      st = decodeLevel(ph, view.payloads[p].streams, sink, nullptr, piece_what, fields, &seams);
+    }
     if (!st.isOk()) {
       piece_status[p] = st.code() == StatusCode::kInvalidData && st.message().rfind(piece_what, 0) != 0
                             ? invalidData(piece_what + ": " + st.message())

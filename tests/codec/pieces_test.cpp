@@ -85,6 +85,43 @@ TEST(Pieces, OnePieceIsTheLevelCodecsOwnCoding) {
   EXPECT_EQ(decoded->mesh.tets, via_codec.tets);
 }
 
+TEST(Pieces, AStructuredBlockIsOneStructuredPieceWhenThatIsSmaller) {
+  TetMesh m = fieldGrid(12);
+  StructuredBlock block;
+  block.first_point = 0;
+  block.dims[0] = block.dims[1] = block.dims[2] = 12;
+  m.blocks.push_back(block);
+  StatusOr<PiecedLevel> level = encodePieces(m, {}, kDefaultPieceTets);
+  ASSERT_TRUE(level.isOk()) << level.status().message();
+  ASSERT_EQ(level->pieces.size(), 1u);
+  EXPECT_EQ(level->pieces[0].kind, 1);
+  EXPECT_EQ(level->pieces[0].own_boundary_points, m.numPoints());
+  EncodeOptions unstructured;
+  unstructured.structured = false;
+  StatusOr<PiecedLevel> plain = encodePieces(m, unstructured, kDefaultPieceTets);
+  ASSERT_TRUE(plain.isOk());
+  EXPECT_EQ(plain->pieces[0].kind, 0);
+  auto bytes = [](const EncodedLevel& e) {
+    size_t n = e.boundary.size() + e.connectivity.size() + e.geometry.size();
+    for (const auto& f : e.point_fields) n += f.size();
+    for (const auto& f : e.cell_fields) n += f.size();
+    return n;
+  };
+  EXPECT_LT(bytes(level->encoded[0]), bytes(plain->encoded[0]));
+  StatusOr<DecodedPieces> decoded = decodePieces(viewOf(*level), {}, "block");
+  ASSERT_TRUE(decoded.isOk()) << decoded.status().message();
+  expectSameMesh(m, ordersOf(*level), decoded->mesh, decoded->boundary);
+  TetMeshBuilder builder;
+  ASSERT_TRUE(emitDecoded(level->header, *decoded, builder).isOk());
+  expectSameMesh(m, ordersOf(*level), builder.mesh(), builder.boundary());
+  // A mesh that is not the block it claims stays unstructured.
+  TetMesh other = m;
+  other.blocks[0].dims[2] = 11;
+  StatusOr<PiecedLevel> fallback = encodePieces(other, {}, kDefaultPieceTets);
+  ASSERT_TRUE(fallback.isOk());
+  EXPECT_EQ(fallback->pieces[0].kind, 0);
+}
+
 TEST(Pieces, TheMeshStreamOfAStitchedLevelFollowsTheStreamOrder) {
   const TetMesh m = fieldGrid(18);
   StatusOr<PiecedLevel> level = encodePieces(m, {}, 4096);
