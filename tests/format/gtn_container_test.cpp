@@ -94,8 +94,9 @@ TEST(GtnContainer, RoundTripStreamsHeadersAndSections) {
     ASSERT_TRUE(opened.isOk()) << opened.status().message();
     GtnReader& r = **opened;
     EXPECT_EQ(r.openedByDirectory(), !verify);
-    EXPECT_EQ(r.file().major, 1);
+    EXPECT_EQ(r.file().major, 2);
     EXPECT_EQ(r.file().minor, 0);
+    EXPECT_EQ(r.file().header.draft, kGtnDraftRevision);
     EXPECT_TRUE(r.file().has_directory);
     EXPECT_EQ(r.file().header.tool_version, "test 1.0");
     EXPECT_EQ(r.file().header.command_line, "gtn convert in.vtk -o out.gtn");
@@ -304,15 +305,22 @@ TEST(GtnContainer, UnknownCriticalChunkRejected) {
 TEST(GtnContainer, VersionsMajorRejectedMinorAccepted) {
   const std::string dir = test::tempDir("container-version");
   std::vector<uint8_t> bytes = twoLevelFile();
-  const auto newer_major = encodeGtnPrefix(2, 0);
+  const auto newer_major = encodeGtnPrefix(3, 0);
   std::copy(newer_major.begin(), newer_major.end(), bytes.begin());
-  const Status st = openStatus(writeTemp(dir, "v2.gtn", bytes));
+  Status st = openStatus(writeTemp(dir, "v3.gtn", bytes));
   EXPECT_EQ(st.code(), StatusCode::kVersionTooNew);
-  EXPECT_NE(st.message().find("format version 2.0 is newer"), std::string::npos) << st.message();
-  const auto newer_minor = encodeGtnPrefix(1, 7);
+  EXPECT_NE(st.message().find("format version 3.0 is newer"), std::string::npos) << st.message();
+  // 1.x was never released: refused, naming its version.
+  const auto older_major = encodeGtnPrefix(1, 0);
+  std::copy(older_major.begin(), older_major.end(), bytes.begin());
+  st = openStatus(writeTemp(dir, "v1.gtn", bytes));
+  EXPECT_EQ(st.code(), StatusCode::kUnsupported);
+  EXPECT_NE(st.message().find("format version 1.0 is not read"), std::string::npos) << st.message();
+  const auto newer_minor = encodeGtnPrefix(2, 7);
   std::copy(newer_minor.begin(), newer_minor.end(), bytes.begin());
-  auto r = GtnReader::open(writeTemp(dir, "v17.gtn", bytes));
+  auto r = GtnReader::open(writeTemp(dir, "v27.gtn", bytes));
   ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ((*r)->file().major, 2);
   EXPECT_EQ((*r)->file().minor, 7);
 }
 
