@@ -97,6 +97,7 @@ struct EncoderSide {
   std::vector<EdgePoint> edge_points;
   std::vector<uint32_t> edge_point_start;
   std::vector<uint32_t> face_tet;  // FaceMap index of an open face -> the undecoded tetrahedron behind it
+  const std::vector<uint32_t>* seam = nullptr;  // EncodeOptions::seam (null: no seam vertex)
 
   // The boundary triangle not coded yet on the open half-edge (p, q) (slots), if any: its index and
   // its third vertex.
@@ -204,6 +205,16 @@ class LevelCoder {
   }
 
   void setEncoder(EncoderSide* enc) { enc_ = enc; }
+  // The piece's seam vertices (EncodeOptions::seam_count; the decoder's SeamValues).
+  void setSeamCount(uint32_t count) {
+    seam_count_ = count;
+    seam_bits_ = bitLength(count > 0 ? count - 1 : 0);
+    seam_seen_.assign(count, 0);
+  }
+  void setSeams(const SeamValues* seams) {
+    seams_ = seams;
+    setSeamCount(seams ? seams->count : 0);
+  }
   void setDecoder(MeshSink* sink, const std::string* what) {
     sink_ = sink;
     what_ = what;
@@ -238,6 +249,7 @@ class LevelCoder {
     if constexpr (kEncode) delaunay_first = enc_->delaunay_first;
     peeling_.candidates().setDelaunayFirst(con_->bit(delaunay_first_flag_, delaunay_first));
     GTN_RETURN_IF_ERROR(boundary_.run());
+    boundary_points_ = next_id_;
     if constexpr (!kEncode) GTN_RETURN_IF_ERROR(sink_->endBoundary());
     GTN_RETURN_IF_ERROR(peeling_.run());
     GTN_RETURN_IF_ERROR(unusedPoints());
@@ -251,6 +263,7 @@ class LevelCoder {
       if (tets_done_ != header_.tets) return bad("fewer tetrahedra than the header announces");
       if (btris_done_ != header_.boundary_triangles) return bad("boundary triangle count differs from the header");
       if (next_id_ != header_.points) return bad("point count differs from the header");
+      if (seams_introduced_ != seam_count_) return bad("the streams do not name every seam vertex of the piece");
       if (live_ != 0) return bad("vertices left unretired at the end of the level");
       if (!bnd_->finishedCleanly()) return bad("boundary stream is corrupt, truncated or has trailing bytes");
       if (!con_->finishedCleanly()) return bad("connectivity stream is corrupt, truncated or has trailing bytes");
@@ -281,6 +294,7 @@ class LevelCoder {
   }
 
   uint64_t peakLive() const { return peak_live_; }
+  uint64_t boundaryPoints() const { return boundary_points_; }
 
   // Slot s's values as the sink takes them: every field at its offset, those left out zero.
   const uint8_t* sinkValues(uint32_t s) {
@@ -568,6 +582,15 @@ class LevelCoder {
       if (next_id_ >= header_.points) return bad("more vertices than the header announces");
     }
     const uint32_t s = allocSlot();
+    if (seam_count_ > 0) {
+      bool is_seam = false;
+      GTN_RETURN_IF_ERROR(codeSeamVertex(src, s, &is_seam));
+      if (is_seam) {
+        *slot_out = s;
+        return Status::ok();
+      }
+    }
+    if (seams_ && seams_->seam_of_id) seams_->seam_of_id->push_back(kNoIndex);
     if (geo_packed_) {
       GTN_RETURN_IF_ERROR(codePackedCoordinates(src, s));
     } else {
@@ -577,6 +600,46 @@ class LevelCoder {
     GTN_RETURN_IF_ERROR(emitVertex(src, s));
     *slot_out = s;
     return Status::ok();
+  }
+
+  // Whether the vertex is one of the piece's seam vertices (a bit in CONN), then its index in the
+  // piece's seam list (direct bits); a seam vertex's values are the seam list's, not coded here.
+  Status codeSeamVertex(uint32_t src, uint32_t s, bool* is_seam) {
+    uint32_t index = kNoIndex;
+    if constexpr (kEncode) index = (*enc_->seam)[src];
+    *is_seam = con_->bit(seam_flag_, index != kNoIndex) != 0;
+    if (!*is_seam) return Status::ok();
+    index = con_->direct(index, seam_bits_);
+    if (index >= seam_count_) return bad("a seam vertex index beyond the piece's seam list");
+    if (seam_seen_[index]) return bad("a seam vertex introduced twice");
+    seam_seen_[index] = 1;
+    ++seams_introduced_;
+    double* x = pool_.position(s);
+    uint8_t* out = pool_.slot_bytes > 0 ? pool_.values(s) : nullptr;
+    if constexpr (kEncode) {
+      uint64_t actual[3];
+      sourceCoordinateKeys(src, actual);
+      const ScalarType ct = header_.coord_type;
+      for (int i = 0; i < 3; ++i) {
+        uint8_t raw[8];
+        rawFromKey(ct, actual[i], raw);
+        x[i] = doubleFromRaw(ct, raw);
+      }
+      for (size_t f = 0; f < header_.point_fields.size(); ++f) {
+        const size_t ib = header_.point_fields[f].itemBytes();
+        std::memcpy(out + slot_off_[f], enc_->mesh->point_fields[f].bytes.data() + size_t{src} * ib, ib);
+      }
+    } else {
+      for (int i = 0; i < 3; ++i) x[i] = seams_->coords[3 * size_t{index} + i];
+      const uint8_t* in = seams_->values ? seams_->values + size_t{index} * item_bytes_ : nullptr;
+      if (!in && pool_.slot_bytes > 0) return bad("the seam vertices' values are missing");
+      for (size_t f = 0; f < header_.point_fields.size(); ++f)
+        if (!pf_skip_[f]) std::memcpy(out + slot_off_[f], in + pf_offset_[f], header_.point_fields[f].itemBytes());
+      if (seams_->seam_of_id) seams_->seam_of_id->push_back(index);
+    }
+    for (int i = 0; i < 3; ++i) pool_.err[3 * size_t{s} + i] = 0.0f;
+    if (pool_.slot_bytes > 0) std::memcpy(last_vals_.data(), out, pool_.slot_bytes);
+    return emitVertex(src, s);
   }
 
   // The encoder's keys of source vertex src's coordinates, as stored in the file's coordinate type.
@@ -996,7 +1059,7 @@ class LevelCoder {
   std::vector<uint32_t> pf_last_rule_;
   BitModel seed_existing_;
 
-  uint64_t next_id_ = 0, tets_done_ = 0, btris_done_ = 0, live_ = 0, peak_live_ = 0;
+  uint64_t next_id_ = 0, tets_done_ = 0, btris_done_ = 0, live_ = 0, peak_live_ = 0, boundary_points_ = 0;
   double last_pos_[3] = {0, 0, 0};
   std::vector<uint8_t> last_vals_;
   // Coordinates equal to a component of a stencil vertex (axis-aligned geometry).
@@ -1013,6 +1076,13 @@ class LevelCoder {
   int n_near_ = 0;
   BitModel edge_points_flag_;
   BitModel delaunay_first_flag_;
+  // Seam vertices (codeSeamVertex).
+  const SeamValues* seams_ = nullptr;
+  uint32_t seam_count_ = 0;
+  int seam_bits_ = 0;
+  std::vector<char> seam_seen_;
+  uint32_t seams_introduced_ = 0;
+  BitModel seam_flag_;
   uint32_t copy_last_[3] = {0, 0, 0};
   std::vector<double> pred_vals_;
 };
@@ -1100,8 +1170,22 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
       }
   }
 
+  if (!options.seam.empty() && options.seam.size() != np)
+    return invalidData("encodeLevel: the seam list does not have one entry per point");
+  {
+    std::vector<char> named(options.seam_count, 0);
+    uint32_t n = 0;
+    for (uint32_t k : options.seam) {
+      if (k == kNoIndex) continue;
+      if (k >= options.seam_count || named[k]) return invalidData("encodeLevel: invalid or repeated seam index");
+      named[k] = 1;
+      ++n;
+    }
+    if (n != options.seam_count) return invalidData("encodeLevel: a seam index names no point");
+  }
   EncoderSide enc;
   enc.mesh = &mesh;
+  if (options.seam_count > 0) enc.seam = &options.seam;
   enc.delaunay_first = looksDelaunay(mesh, adj);
   enc.neighbor = &adj.neighbor;
   enc.src_slot.assign(np, kNoIndex);
@@ -1190,6 +1274,7 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
                            std::make_unique<Enc>(&level->geometry), std::move(pf), std::move(cf));
     std::vector<std::vector<uint8_t>> escaped(h.cell_fields.size());
     coder.setEncoder(&side);
+    coder.setSeamCount(options.seam_count);
     coder.setPacked(forms.geo, forms.pf, forms.cf, forms.cf_split, &escaped);
     GTN_RETURN_IF_ERROR(coder.run());
     for (size_t f = 0; f < h.cell_fields.size(); ++f) {
@@ -1199,6 +1284,7 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
           packValues(escaped[f].data(), escaped[f].size() / d.itemBytes(), d.itemBytes(), scalarSize(d.type), 0, true);
       level->cell_fields[f] = splitStream(level->cell_fields[f], items);
     }
+    level->boundary_points = coder.boundaryPoints();
     level->vertex_order = std::move(side.vertex_order);
     level->tet_order = std::move(side.tet_order);
     return Status::ok();
@@ -1211,15 +1297,30 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
   // The packed form (spec section 10.2.1) of each value stream, kept where it is smaller: the values
   // in decoding order (the same in every pass: the peeling does not depend on how values are coded).
   // GEOM is packed only in a level without edge points, which a packed GEOM cannot code.
+  // A packed point stream holds the vertices coded here (not the seam vertices), in decoding order.
+  std::vector<uint32_t> value_rank(np, kNoIndex);
+  size_t coded_points = np;
+  if (options.seam_count > 0) {
+    std::vector<uint32_t> by_id(np);
+    for (size_t v = 0; v < np; ++v) by_id[out.vertex_order[v]] = static_cast<uint32_t>(v);
+    coded_points = 0;
+    for (size_t id = 0; id < np; ++id)
+      if (options.seam[by_id[id]] == kNoIndex) value_rank[by_id[id]] = static_cast<uint32_t>(coded_points++);
+  } else {
+    for (size_t v = 0; v < np; ++v) value_rank[v] = out.vertex_order[v];
+  }
   std::vector<uint8_t> items;
   auto packed = [&](const uint8_t* src, size_t count, size_t item_bytes, size_t value_size, auto order,
-                    const std::vector<uint8_t>& coded) {
-    items.resize(count * item_bytes);
-    for (size_t i = 0; i < count; ++i) std::memcpy(&items[order(i) * item_bytes], src + i * item_bytes, item_bytes);
-    std::vector<uint8_t> p = packValues(items.data(), count, item_bytes, value_size, coded.size());
+                    const std::vector<uint8_t>& coded, size_t stored) {
+    items.resize(stored * item_bytes);
+    for (size_t i = 0; i < count; ++i) {
+      const size_t at = order(i);
+      if (at != kNoIndex) std::memcpy(&items[at * item_bytes], src + i * item_bytes, item_bytes);
+    }
+    std::vector<uint8_t> p = packValues(items.data(), stored, item_bytes, value_size, coded.size());
     return !p.empty() && p.size() < coded.size() ? p : std::vector<uint8_t>{};
   };
-  auto by_vertex = [&](size_t v) { return size_t{out.vertex_order[v]}; };
+  auto by_vertex = [&](size_t v) { return value_rank[v] == kNoIndex ? size_t{kNoIndex} : size_t{value_rank[v]}; };
   auto by_tet = [&](size_t t) { return static_cast<size_t>(out.tet_order[t]); };
   Forms chosen = predicted;
   std::vector<uint8_t> geo;
@@ -1227,20 +1328,20 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
     const size_t cs = scalarSize(mesh.coord_type);
     std::vector<uint8_t> coords(np * 3 * cs);
     for (size_t i = 0; i < 3 * np; ++i) storeCoordinate(mesh.coord_type, mesh.coords[i], &coords[i * cs]);
-    geo = packed(coords.data(), np, 3 * cs, cs, by_vertex, out.geometry);
+    geo = packed(coords.data(), np, 3 * cs, cs, by_vertex, out.geometry, coded_points);
     chosen.geo = !geo.empty();
   }
   std::vector<std::vector<uint8_t>> pfs(h.point_fields.size()), cfs(h.cell_fields.size());
   for (size_t f = 0; f < pfs.size(); ++f) {
     const Field& field = mesh.point_fields[f];
     pfs[f] = packed(field.bytes.data(), np, field.components * field.valueSize(), field.valueSize(), by_vertex,
-                    out.point_fields[f]);
+                    out.point_fields[f], coded_points);
     chosen.pf[f] = !pfs[f].empty();
   }
   for (size_t f = 0; f < cfs.size(); ++f) {
     const Field& field = mesh.cell_fields[f];
     cfs[f] = packed(field.bytes.data(), nt, field.components * field.valueSize(), field.valueSize(), by_tet,
-                    out.cell_fields[f]);
+                    out.cell_fields[f], nt);
     chosen.cf[f] = !cfs[f].empty();
   }
   // Cell fields in split form: their symbols as predicted, the values they escape packed (the values
@@ -1317,7 +1418,7 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
 }
 
 Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink, DecodeStats* stats,
-                   const std::string& what, const DecodeFields* fields) {
+                   const std::string& what, const DecodeFields* fields, const SeamValues* seams) {
   if (header.coord_type != ScalarType::kFloat32 && header.coord_type != ScalarType::kFloat64)
     return invalidData(what + ": coordinates must be float32 or float64");
   if (header.points >= kNoIndex) return invalidData(what + ": too many points for one level");
@@ -1332,6 +1433,9 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
       if (d.components == 0 || d.components > 4096)
         return invalidData(what + ": field '" + d.name + "' has an invalid component count");
     }
+  const uint32_t seam_count = seams ? seams->count : 0;
+  if (seam_count > header.points) return invalidData(what + ": more seam vertices than points");
+  const uint64_t coded_points = header.points - seam_count;
   using Dec = EntropyCoder<false>;
   // A packed stream (section 10.2.1) is read by its PackedReader; its range decoder gets an empty
   // stream of its own, which nothing reads.
@@ -1351,9 +1455,9 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
   std::vector<std::unique_ptr<PackedReader>> pf_readers(header.point_fields.size()),
       cf_readers(header.cell_fields.size());
   GTN_RETURN_IF_ERROR(
-      open(payload.geometry, header.points, FieldDesc{"", 3, header.coord_type}, "the geometry stream", &geo_reader));
+      open(payload.geometry, coded_points, FieldDesc{"", 3, header.coord_type}, "the geometry stream", &geo_reader));
   for (size_t f = 0; f < pf_readers.size(); ++f)
-    GTN_RETURN_IF_ERROR(open(payload.point_fields[f], header.points, header.point_fields[f],
+    GTN_RETURN_IF_ERROR(open(payload.point_fields[f], coded_points, header.point_fields[f],
                              "point field '" + header.point_fields[f].name + "'", &pf_readers[f]));
   for (size_t f = 0; f < cf_readers.size(); ++f) {
     const std::string name = "cell field '" + header.cell_fields[f].name + "'";
@@ -1380,6 +1484,7 @@ Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshS
                           symbols(payload.geometry), std::move(pf), std::move(cf));
   coder.setDecoder(&sink, &what);
   coder.setFields(fields);
+  coder.setSeams(seams);
   coder.setPackedReaders(std::move(geo_reader), std::move(pf_readers), std::move(cf_readers), std::move(cf_split));
   const Status st = coder.run();
   if (stats) stats->peak_live_vertices = coder.peakLive();

@@ -23,6 +23,11 @@ struct EncodeOptions {
   // Keep a value stream's packed form (spec section 10.2.1) where it is smaller than the predicted
   // stream. Off only to measure the predictions alone.
   bool packed_streams = true;
+  // A piece's seam vertices (codec/pieces.h), stored outside the level: seam[v] = vertex v's index in
+  // the piece's seam list (0 .. seam_count - 1), kNoIndex for a vertex coded here; empty: none. Every
+  // index must name exactly one vertex, and every seam vertex must be used by a tetrahedron.
+  std::vector<uint32_t> seam;
+  uint32_t seam_count = 0;
 };
 
 // The coded streams of one level. `header` carries counts, field descriptions, bounding box and
@@ -39,6 +44,8 @@ struct EncodedLevel {
   // Callers use these to store per-vertex data (the merge tree) in decoding order.
   std::vector<uint32_t> vertex_order;
   std::vector<uint64_t> tet_order;
+  // Vertices introduced while coding the boundary: the decoder's ids 0 .. boundary_points - 1.
+  uint64_t boundary_points = 0;
 };
 
 // Encodes a mesh whose tetrahedra are positively oriented (zero-volume ones allowed).
@@ -64,6 +71,18 @@ struct LevelPayload {
   std::vector<std::span<const uint8_t>> point_fields, cell_fields;
 };
 
+// A piece's seam vertices, given to its decoder (codec/pieces.h): their coordinates (3 per vertex, as
+// stored) and point-field values (the header's point fields' items concatenated, per vertex). The
+// decoder reports, through `seam_of_id` (when not null), each emitted vertex's seam index or kNoIndex,
+// set before the sink's vertex() call for it. A decode fails unless the streams name every seam vertex
+// exactly once.
+struct SeamValues {
+  uint32_t count = 0;
+  const double* coords = nullptr;
+  const uint8_t* values = nullptr;
+  std::vector<uint32_t>* seam_of_id = nullptr;
+};
+
 struct DecodeStats {
   uint64_t peak_live_vertices = 0;  // largest number of vertices emitted and not yet retired
 };
@@ -75,6 +94,7 @@ LevelPayload payloadOf(const EncodedLevel& encoded);
 // never crashes, on any corrupt payload; `what` names the source in messages (file and level).
 // `fields`: which fields to decode (null: all).
 Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink, DecodeStats* stats,
-                   const std::string& what, const DecodeFields* fields = nullptr);
+                   const std::string& what, const DecodeFields* fields = nullptr,
+                   const SeamValues* seams = nullptr);
 
 }  // namespace gtn
