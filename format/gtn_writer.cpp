@@ -75,6 +75,7 @@ PiecedLevel onePieceLevel(const EncodedLevel& e) {
   PieceInfo p;
   p.points = e.header.points;
   p.own_points = e.header.points;
+  p.own_boundary_points = e.boundary_points;
   p.tets = e.header.tets;
   p.boundary_triangles = e.header.boundary_triangles;
   for (int i = 0; i < 3; ++i) {
