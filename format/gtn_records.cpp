@@ -1,6 +1,7 @@
 #include "format/gtn_records.h"
 
 #include <algorithm>
+#include <cstdint>
 
 #include "format/gtn_bytes.h"
 
@@ -182,7 +183,8 @@ std::vector<uint8_t> encodeSeamTable(const std::vector<SeamClass>& classes,
   for (size_t c = 0; c < classes.size(); ++c) {
     const SeamClass& k = classes[c];
     w.varint(k.pieces.size());
-    for (size_t i = 0; i < k.pieces.size(); ++i) w.varint(i == 0 ? k.pieces[0] : k.pieces[i] - k.pieces[i - 1] - 1);
+    for (size_t i = 0; i < k.pieces.size(); ++i)
+      w.varint(i == 0 ? uint64_t{k.pieces[0]} : uint64_t{k.pieces[i]} - k.pieces[i - 1] - 1);
     w.varint(k.points);
     w.varint(c < streams.size() ? streams[c].size() : 0);
   }
@@ -214,6 +216,12 @@ Status decodeSeamTable(std::span<const uint8_t> payload, uint64_t offset, const 
       at = r.offset();
       uint64_t d;
       GTN_RETURN_IF_ERROR(r.varint(&d, "seam class piece"));
+      if (i > 0 && d > UINT64_MAX - next) {  // next + d wraps: a piece at or before the one named before
+        const uint64_t named = next + d;
+        return r.errorAt(at, cls + " names piece " + std::to_string(named) +
+                                 (named == k.pieces[i - 1] ? " twice" : " after piece " + std::to_string(k.pieces[i - 1])) +
+                                 ": a class names each piece once, in increasing order");
+      }
       if (d >= np || next > np - 1 - d)
         return r.errorAt(at, cls + " names a piece beyond the level's " + std::to_string(np) + " pieces");
       k.pieces[i] = static_cast<uint32_t>(next + d);
