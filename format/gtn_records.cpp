@@ -120,6 +120,10 @@ std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& l) {
   w.varint(l.pieces.size());
   for (const PieceInfo& p : l.pieces) {
     w.u8(p.kind);
+    if (l.pieces.size() == 1) {  // the level's counts and box are the piece's
+      w.varint(p.own_boundary_points);
+      break;
+    }
     w.varint(p.points);
     w.varint(p.own_points);
     w.varint(p.own_boundary_points);
@@ -145,8 +149,9 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
   GTN_RETURN_IF_ERROR(readBox(r, l->bbox_min, l->bbox_max));
   uint64_t n;
   uint64_t at_n = r.offset();
-  // A piece entry takes at least 54 bytes: bound the count by the payload before reserving.
-  GTN_RETURN_IF_ERROR(r.varintAtMost(&n, std::min<uint64_t>(kGtnMaxPieces, r.remaining() / 54), "piece count"));
+  // An entry of one of several pieces takes at least 54 bytes: bound the count by the payload first.
+  GTN_RETURN_IF_ERROR(
+      r.varintAtMost(&n, std::max<uint64_t>(1, std::min<uint64_t>(kGtnMaxPieces, r.remaining() / 54)), "piece count"));
   if (n == 0) return r.errorAt(at_n, "piece count is 0; a level has at least one piece");
   l->pieces.resize(n);
   uint64_t tets = 0;
@@ -159,6 +164,21 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
       return r.errorAt(at_p, piece + " has kind " + std::to_string(p.kind) +
                                  ", which this reader does not know (0: unstructured)");
     at_p = r.offset();
+    if (n == 1) {  // one piece: the level's counts and box, and its own boundary points
+      if (l->points > kGtnMaxPiecePoints)
+        return r.errorAt(at_p, "the level's one piece has " + std::to_string(l->points) + " points, more than " +
+                                   std::to_string(kGtnMaxPiecePoints));
+      p.points = p.own_points = l->points;
+      p.tets = l->tets;
+      p.boundary_triangles = l->boundary_triangles;
+      for (int k = 0; k < 3; ++k) {
+        p.bbox_min[k] = l->bbox_min[k];
+        p.bbox_max[k] = l->bbox_max[k];
+      }
+      GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_boundary_points, p.own_points, "piece own boundary point count"));
+      tets = p.tets;
+      break;
+    }
     GTN_RETURN_IF_ERROR(r.varintAtMost(&p.points, kGtnMaxPiecePoints, "piece point count"));
     GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_points, p.points, "piece own point count"));
     GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_boundary_points, p.own_points, "piece own boundary point count"));
@@ -166,9 +186,6 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
     tets += p.tets;
     GTN_RETURN_IF_ERROR(r.varint(&p.boundary_triangles, "piece boundary triangle count"));
     GTN_RETURN_IF_ERROR(readBox(r, p.bbox_min, p.bbox_max));
-    if (n == 1 && (p.points != l->points || p.own_points != p.points || p.tets != l->tets))
-      return r.errorAt(at_p, "the one piece of the level must hold all its " + std::to_string(l->points) +
-                                 " points and " + std::to_string(l->tets) + " tetrahedra, as its own");
   }
   if (tets != l->tets)
     return r.errorAt(at_n, "the pieces' tetrahedra sum to " + std::to_string(tets) + ", the level has " +
