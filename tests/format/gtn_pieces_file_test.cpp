@@ -145,6 +145,25 @@ TEST(GtnPiecesFile, ALevelOfSeveralPiecesRoundTripsThroughTheFile) {
     EXPECT_GT(stats.peak_live_vertices, 0u);
     EXPECT_LE(stats.peak_live_vertices, m.numPoints());
   }
+  // gtn info --json lists the pieces, and each piece's chunks name it.
+  const RunResult info = runGtn("info --json " + path);
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const nlohmann::json j = nlohmann::json::parse(info.out)["levels"][0];
+  std::unique_ptr<GtnReader> r = openFile(path, false);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(j["piece_count"], r->level(0).pieces.size());
+  uint64_t tets = 0, bytes = 0;
+  for (const nlohmann::json& p : j["pieces"]) {
+    tets += p["tets"].get<uint64_t>();
+    bytes += p["bytes"].get<uint64_t>();
+  }
+  EXPECT_EQ(tets, m.numTets());
+  uint64_t piece_chunk_bytes = 0;
+  for (const nlohmann::json& c : j["chunks"])
+    if (c.contains("piece")) piece_chunk_bytes += c["bytes"].get<uint64_t>();
+  EXPECT_EQ(bytes, piece_chunk_bytes);
+  EXPECT_EQ(j["chunks"][1]["section"], "seam");
+  EXPECT_FALSE(j["chunks"][1].contains("piece"));
 }
 
 // With a merge tree and mip levels (as gtn convert writes by default), the tree indexes the stitched
