@@ -1,6 +1,8 @@
 // gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--time-step N] [--compress] [--levels K] [--no-merge-tree]
 //   [--no-verify] [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W] [-q]
+#include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <memory>
 
 #include "cli/commands.h"
@@ -26,6 +28,7 @@ struct ConvertArgs {
   bool no_merge_tree = false;
   bool no_verify = false;      // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
   double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes
+  uint64_t piece_tets = kDefaultPieceTets;  // .gtn: the bound on a piece's tetrahedra
   RankingOptions ranking;
   bool quiet = false;  // -q: no progress line, no summary
 };
@@ -74,6 +77,7 @@ int runConvert(const ConvertArgs& a) {
       wo.command_line = commandLineWithFileNames(paths);  // file names only: no directories in the file
       wo.progress = progress.callback();
       wo.verify = !a.no_verify;
+      wo.piece_tets = a.piece_tets;
       st = writeGtnWithLevels(a, mesh, wo);
       // The encoder's refusals are about the mesh: say where to see the details.
       if (!st.isOk() && st.message().rfind(a.inputs[0] + ": cannot be encoded: ", 0) == 0)
@@ -121,6 +125,21 @@ Command addConvertCommand(CLI::App& app) {
                   ".gtn: automatic levels stop before all levels together would take more than this multiple "
                   "of level 0's bytes (default 2, the paper's bound; 0 = no bound)")
       ->check(finiteAtLeastZero());
+  sub->add_option("--piece-tets", args->piece_tets,
+                  ".gtn: the most tetrahedra a piece holds (default " + std::to_string(kDefaultPieceTets) +
+                      "): a level is cut into pieces that encode, decode and are read by region apart")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            char* end = nullptr;
+            errno = 0;
+            const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
+            if (text.empty() || text[0] == '-' || end == text.c_str() || *end != '\0' || errno == ERANGE ||
+                v < kMinPieceTets)
+              return "'" + text + "' is not a piece size: expected a whole number of tetrahedra of at least " +
+                     std::to_string(kMinPieceTets);
+            return "";
+          },
+          "N >= " + std::to_string(kMinPieceTets)));
   sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
   sub->add_flag(
       "--no-verify", args->no_verify,

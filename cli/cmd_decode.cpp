@@ -1,4 +1,4 @@
-// gtn decode FILE.gtn [--level I | --ratio R] [--fields A,B] [--json]: decodes a stored level, or the
+// gtn decode FILE.gtn [--level I | --ratio R] [--fields A,B] [--box ...] [--json]: decodes a stored level, or the
 // mesh simplified to a ratio, into memory as `gtn export` does (points, tetrahedra, the fields), writes
 // nothing, and reports the counts, the time taken and the tetrahedra decoded per second.
 #include <sys/resource.h>
@@ -26,6 +26,7 @@ struct DecodeArgs {
   size_t level = 0;
   double ratio = -1;                // < 0: not given
   std::vector<std::string> fields;  // empty: all
+  std::string box;                  // --box XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX; empty: the whole level
   bool json = false;
 };
 
@@ -64,6 +65,9 @@ int runDecode(const DecodeArgs& a) {
   view.level = a.level;
   view.ratio = a.ratio;
   view.fields = a.fields;
+  if (!a.box.empty()) {
+    if (Status b = parseBox(a.box, &view); !b.isOk()) return reportError(Status(b.code(), a.input + ": " + b.message()));
+  }
   DecodeFields fields;
   const Clock::time_point decode_start = Clock::now();
   const Status st = decodeView(r, a.input, view, builder, &fields, &plan);
@@ -127,6 +131,10 @@ Command addDecodeCommand(CLI::App& app) {
   sub->add_option("--fields", args->fields,
                   "Decode only these point or cell fields (names, comma-separated); the others are not decoded")
       ->delimiter(',');
+  CLI::Option* box = sub->add_option("--box", args->box,
+                                     "Decode only the pieces of the level whose bounding boxes meet this box, given as "
+                                     "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (the view is those pieces' tetrahedra)");
+  box->excludes(ratio);
   sub->add_flag("--json", args->json, "Print one JSON object on standard output");
   return {sub, [args] { return runDecode(*args); }};
 }

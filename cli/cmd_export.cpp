@@ -1,7 +1,8 @@
-// gtn export FILE.gtn -o OUTPUT [--level I | --ratio R | --merges N] [--fields A,B]: decode a stored
-// level, or the mesh simplified to a ratio or merge count (from the finest stored level not beyond it,
-// the remaining merges applied on the fly), and write it as .vtu, legacy .vtk or TetGen; with --fields,
-// only the named fields (the others are not decoded).
+// gtn export FILE.gtn -o OUTPUT [--level I | --ratio R | --merges N] [--fields A,B] [--box ...]: decode
+// a stored level, or the mesh simplified to a ratio or merge count (from the finest stored level not
+// beyond it, the remaining merges applied on the fly), and write it as .vtu, legacy .vtk or TetGen;
+// with --fields, only the named fields (the others are not decoded); with --box, only the level's
+// pieces that meet the box.
 #include <cstdint>
 #include <memory>
 
@@ -26,6 +27,7 @@ struct ExportArgs {
   double ratio = -1;                // < 0: not given
   int64_t merges = -1;              // < 0: not given
   std::vector<std::string> fields;  // empty: all
+  std::string box;                  // --box XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX; empty: the whole level
 };
 
 int runExport(const ExportArgs& a) {
@@ -53,6 +55,9 @@ int runExport(const ExportArgs& a) {
   view.ratio = a.ratio;
   view.merges = a.merges;
   view.fields = a.fields;
+  if (!a.box.empty()) {
+    if (Status b = parseBox(a.box, &view); !b.isOk()) return reportError(Status(b.code(), a.input + ": " + b.message()));
+  }
   DecodeFields fields;
   const Status st = decodeView(r, a.input, view, sink, &fields, nullptr);
   if (!st.isOk()) return fail(st);
@@ -86,6 +91,10 @@ Command addExportCommand(CLI::App& app) {
   sub->add_option("--fields", args->fields,
                   "Export only these point or cell fields (names, comma-separated); the others are not decoded")
       ->delimiter(',');
+  CLI::Option* box = sub->add_option("--box", args->box,
+                                     "Decode only the pieces of the level whose bounding boxes meet this box, given as "
+                                     "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (the view is those pieces' tetrahedra)");
+  box->excludes(ratio)->excludes(merges);
   return {sub, [args] { return runExport(*args); }};
 }
 

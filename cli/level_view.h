@@ -24,10 +24,17 @@ StatusOr<std::unique_ptr<GtnReader>> openForView(const std::string& input, const
 
 struct ViewRequest {
   size_t level = 0;
+  // --box: only the pieces of the stored level whose bounding boxes meet [box_lo, box_hi] are decoded
+  // (codec/pieces.h piecesInBox), and the view is those pieces' tetrahedra.
+  bool has_box = false;
+  double box_lo[3] = {0, 0, 0}, box_hi[3] = {0, 0, 0};
   double ratio = -1;                // < 0: not given
   int64_t merges = -1;              // < 0: not given; takes precedence over ratio
   std::vector<std::string> fields;  // empty: every field
 };
+
+// Parses --box's "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX" into `v` (a usage error naming the option otherwise).
+Status parseBox(const std::string& text, ViewRequest* v);
 
 // Decodes the view `v` of `r` (opened from `input`) into `sink`: the level is checked, the fields
 // chosen (`*fields` says which were decoded), then the level decoded or, with a ratio or merges, the

@@ -17,8 +17,11 @@ namespace gtn {
 
 // 0x8E "GTN" CR LF ^Z LF: not ASCII, not UTF-8; damage by text-mode transfer or truncation shows.
 inline constexpr std::array<uint8_t, 8> kGtnMagic = {0x8E, 'G', 'T', 'N', 0x0D, 0x0A, 0x1A, 0x0A};
-inline constexpr uint16_t kGtnMajorVersion = 1;
+inline constexpr uint16_t kGtnMajorVersion = 2;
 inline constexpr uint16_t kGtnMinorVersion = 0;
+// Format 2.0 is a draft until it is released: GHDR names the draft revision its bitstream follows,
+// and a reader reads only its own (spec/gtn-format.md, "File header").
+inline constexpr uint64_t kGtnDraftRevision = 3;
 inline constexpr size_t kGtnPrefixSize = 16;
 
 // Four ASCII letters or digits naming a chunk's type.
@@ -32,6 +35,8 @@ struct ChunkTag {
 
 inline constexpr ChunkTag kTagFileHeader("GHDR");
 inline constexpr ChunkTag kTagLevelHeader("LHDR");
+inline constexpr ChunkTag kTagSeam("SEAM");
+inline constexpr ChunkTag kTagGrid("GRID");  // a structured piece's one chunk (piece kind 1)
 inline constexpr ChunkTag kTagBoundary("BNDY");
 inline constexpr ChunkTag kTagConnectivity("CONN");
 inline constexpr ChunkTag kTagGeometry("GEOM");
@@ -61,7 +66,8 @@ inline constexpr size_t kGtnTrailerSize = kChunkFixedHeaderSize + kGtnEndPayload
 std::array<uint8_t, kGtnPrefixSize> encodeGtnPrefix(uint16_t major = kGtnMajorVersion,
                                                     uint16_t minor = kGtnMinorVersion);
 // Checks a prefix: magic (with diagnoses of byte-swapped, text-mode-damaged or foreign files), then the
-// major version (kVersionTooNew when newer), then the prefix checksum. `what` names the file.
+// major version (kVersionTooNew when newer; kUnsupported for 1.x, a draft that was never released),
+// then the prefix checksum. `what` names the file.
 Status checkGtnPrefix(std::span<const uint8_t> bytes, const std::string& what, uint16_t* major, uint16_t* minor);
 
 // XXH3-64 (seed 0) of the bytes, as the chunk checksum uses it.

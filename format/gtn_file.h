@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "codec/level_codec.h"
+#include "codec/pieces.h"
 #include "format/gtn_records.h"
 #include "mesh/mesh_stream.h"
 #include "mesh/progress.h"
@@ -20,16 +21,17 @@ namespace gtn {
 
 // One level to write. For level 0 `merges` is 0; for mip level i it is the number of merge-tree merges
 // already applied to obtain `mesh`. `merge_tree` (optional) produces the level's merge-tree chunk
-// payload given encodeLevel's vertex_order for this level (so the tree is stored in decoding order).
+// payload given the level's vertex_order (PiecedLevel::vertex_order: source vertex -> global id, so
+// the tree is stored in decoding order).
 struct GtnLevelInput {
   const TetMesh* mesh = nullptr;
   uint64_t merges = 0;
   double ratio = 0.0;  // vertices merged away / all vertices of level 0
   std::function<StatusOr<std::vector<uint8_t>>(const std::vector<uint32_t>& vertex_order)> merge_tree;
-  // Optional: `mesh` already encoded by encodeLevel with the default options (while the merge tree
-  // was ranked, say); the writer then uses it instead of encoding the mesh (it sets the header's level
-  // and merges, and verifies it as it would its own).
-  std::shared_ptr<const EncodedLevel> encoded;
+  // Optional: `mesh` already encoded by encodePieces with the default options and the write's
+  // piece_tets (while the merge tree was ranked, say); the writer then uses it instead of encoding the
+  // mesh (it sets the header's level and merges, and verifies it as it would its own).
+  std::shared_ptr<const PiecedLevel> encoded;
   // Instead of `mesh`: makes the level's mesh when the writer comes to it (in level order, just before
   // encoding it), so that a level the writer never reaches (past a storage bound) is never made. The
   // mesh must stay valid until writeGtnFile returns; a failure fails the write. `expected_tets` stands
@@ -47,6 +49,8 @@ struct GtnWriteOptions {
   std::string command_line;  // provenance
   bool zstd = true;          // zstd-compress chunks where it helps
   bool directory = true;     // write the directory and trailer for random access
+  // The bound on a piece's tetrahedra (encodePieces; at least kMinPieceTets). Recorded in GHDR.
+  uint64_t piece_tets = kDefaultPieceTets;
   // > 0: the storage bound of the mip levels. Levels beyond level 0 are kept, finest first, while all
   // kept levels together take at most this multiple of level 0's bytes (every chunk of a level,
   // framing included); the first level that would pass the bound and all coarser ones are left out.
@@ -60,8 +64,9 @@ struct GtnWriteOptions {
   ProgressFn progress;
 };
 
-// Encodes every level (encodeLevel), then writes the file atomically (format/file_io.h): prefix,
-// GHDR, per level LHDR BNDY CONN GEOM PFLD... CFLD... [MTRE], then [DIRC] and GEND. All levels must
+// Encodes every level (encodePieces, options.piece_tets), then writes the file atomically
+// (format/file_io.h): prefix, GHDR, per level LHDR [SEAM] and per piece BNDY CONN GEOM PFLD... CFLD...,
+// then [MTRE]; then [DIRC] and GEND. Byte-identical whatever the thread count. All levels must
 // share level 0's coordinate type and field descriptions. Deterministic: the same meshes and options
 // give the same bytes. Fails with kUsage for an empty level list or a level with neither mesh nor
 // make_mesh. With
@@ -84,8 +89,12 @@ class GtnStreamWriter {
   // Writes the prefix and the GHDR. `level0` gives counts, coordinate type, fields, bounding box and
   // metadata; `level_count` how many levels will follow.
   Status begin(const LevelHeader& level0, uint64_t level_count);
-  // Writes one level's chunks. `encoded.header.level` must be the next index, its fields those of
-  // level 0, and its stream counts match its field counts. `merge_tree`, when given, becomes MTRE.
+  // Writes one level's chunks: LHDR with the piece table, SEAM when there are several pieces, each
+  // piece's streams, MTRE (`merge_tree`, when given). `level.header.level` must be the next index, its
+  // fields those of level 0, every piece's stream counts match its field counts, and the pieces'
+  // tetrahedra sum to the level's.
+  Status addLevel(const PiecedLevel& level, double ratio, const std::optional<std::vector<uint8_t>>& merge_tree);
+  // A level coded by encodeLevel, written as one piece (tests and tools that hand-make streams).
   Status addLevel(const EncodedLevel& encoded, double ratio, const std::optional<std::vector<uint8_t>>& merge_tree);
   // Writes an arbitrary chunk here (part of the current level in the directory, if one has begun).
   Status addChunk(ChunkTag tag, std::span<const uint8_t> payload, bool ancillary);
@@ -108,7 +117,11 @@ class GtnStreamWriter {
   std::vector<uint8_t> scratch_;
 };
 
-// Assembles a whole file in memory from encoded levels (tests, tools). `merge_trees` is empty or has
+// A level coded by encodeLevel as a PiecedLevel of one piece (a copy of its streams), as encodePieces
+// makes a level of at most piece_tets tetrahedra.
+PiecedLevel onePieceLevel(const EncodedLevel& encoded);
+
+// Assembles a whole file in memory from encoded levels, one piece each (tests, tools). `merge_trees` is empty or has
 // one optional payload per level; `ratios` likewise (missing entries: 0).
 StatusOr<std::vector<uint8_t>> assembleGtn(const std::vector<const EncodedLevel*>& levels,
                                            const GtnWriteOptions& options, const std::vector<double>& ratios = {},

@@ -7,6 +7,9 @@
 #define XXH_STATIC_LINKING_ONLY  // XXH3_state_t on the stack
 #include <xxhash.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -69,35 +72,64 @@ std::string at(const std::string& what, uint64_t offset) {
 }
 
 bool isLevelTag(const ChunkTag& t) {
-  return t == kTagBoundary || t == kTagConnectivity || t == kTagGeometry || t == kTagPointField || t == kTagCellField ||
-         t == kTagMergeTree;
+  return t == kTagSeam || t == kTagBoundary || t == kTagConnectivity || t == kTagGeometry || t == kTagPointField ||
+         t == kTagCellField || t == kTagGrid || t == kTagMergeTree;
 }
 bool isKnownTag(const ChunkTag& t) {
   return isLevelTag(t) || t == kTagFileHeader || t == kTagLevelHeader || t == kTagDirectory || t == kTagEnd;
 }
 
-// Which tag the k-th known chunk after LHDR must have (k = 0, 1, ...): BNDY, CONN, GEOM, PFLD x np,
-// CFLD x nc, then optionally MTRE.
-ChunkTag expectedLevelTag(size_t k, size_t np, size_t nc) {
-  if (k == 0) return kTagBoundary;
-  if (k == 1) return kTagConnectivity;
-  if (k == 2) return kTagGeometry;
-  if (k < 3 + np) return kTagPointField;
-  if (k < 3 + np + nc) return kTagCellField;
-  return kTagMergeTree;
+// The chunks a level must hold after its LHDR, as its piece table lays them out: SEAM when it has
+// several pieces, then each piece's group in piece order (kind 0: BNDY, CONN, GEOM, PFLD x np,
+// CFLD x nc; kind 1: GRID). An optional MTRE follows them.
+struct LevelLayout {
+  std::vector<ChunkTag> tags;
+  std::vector<uint32_t> piece;     // per entry: its piece, or kNoIndex (SEAM)
+  std::vector<uint32_t> in_piece;  // per entry: its place in its piece's group
+  size_t size() const { return tags.size(); }
+};
+
+LevelLayout levelLayout(const std::vector<PieceInfo>& pieces, size_t np, size_t nc) {
+  LevelLayout l;
+  auto add = [&](ChunkTag t, uint32_t piece, uint32_t k) {
+    l.tags.push_back(t);
+    l.piece.push_back(piece);
+    l.in_piece.push_back(k);
+  };
+  if (pieces.size() > 1) add(kTagSeam, kNoIndex, 0);
+  for (size_t p = 0; p < pieces.size(); ++p) {
+    const uint32_t piece = static_cast<uint32_t>(p);
+    if (pieces[p].kind == kPieceStructured) {
+      add(kTagGrid, piece, 0);
+      continue;
+    }
+    uint32_t k = 0;
+    add(kTagBoundary, piece, k++);
+    add(kTagConnectivity, piece, k++);
+    add(kTagGeometry, piece, k++);
+    for (size_t f = 0; f < np; ++f) add(kTagPointField, piece, k++);
+    for (size_t f = 0; f < nc; ++f) add(kTagCellField, piece, k++);
+  }
+  return l;
 }
 
-// Checks the next known chunk of a level against the required order; `k` counts known chunks so far.
-Status checkLevelOrder(const ChunkTag& tag, size_t k, size_t np, size_t nc, uint64_t offset, size_t level,
+std::string inPiece(const LevelLayout& l, size_t k) {
+  return k < l.size() && l.piece[k] != kNoIndex ? " (piece " + std::to_string(l.piece[k]) + ")" : std::string();
+}
+
+// Checks the k-th known chunk after a level's LHDR (k = 0, 1, ...) against the level's layout.
+Status checkLevelOrder(const ChunkTag& tag, size_t k, const LevelLayout& layout, uint64_t offset, size_t level,
                        const std::string& what) {
-  if (k > 3 + np + nc)
+  if (k > layout.size())
     return invalidData(at(what, offset) + "chunk '" + tag.str() + "' after the end of level " + std::to_string(level) +
                        "'s chunks");
-  const ChunkTag want = expectedLevelTag(k, np, nc);
-  if (tag != want)
-    return invalidData(at(what, offset) + "chunk '" + tag.str() + "' out of order in level " + std::to_string(level) +
-                       ": expected '" + want.str() + "'");
-  return Status::ok();
+  const ChunkTag want = k < layout.size() ? layout.tags[k] : kTagMergeTree;
+  if (tag == want) return Status::ok();
+  if (want == kTagSeam)
+    return invalidData(at(what, offset) + "level " + std::to_string(level) +
+                       " has several pieces but no 'SEAM' chunk after its 'LHDR' (found '" + tag.str() + "')");
+  return invalidData(at(what, offset) + "chunk '" + tag.str() + "' out of order in level " + std::to_string(level) +
+                     inPiece(layout, k) + ": expected '" + want.str() + "'");
 }
 
 LevelHeader levelHeaderFrom(const GtnFileHeader& fh, const GtnLevelRecord& r) {
@@ -129,6 +161,7 @@ class CheckingSink : public MeshSink {
       return fail("vertex " + std::to_string(id) + " out of sequence or beyond the declared " +
                   std::to_string(h_.points) + " points");
     ++vertices_;
+    peak_live_ = std::max(peak_live_, ++live_);
     return inner_.vertex(id, xyz, values);
   }
   Status boundaryTriangle(const uint32_t v[3]) override {
@@ -147,7 +180,10 @@ class CheckingSink : public MeshSink {
     ++tets_;
     return inner_.tet(v, cell_values);
   }
-  Status retireVertex(uint32_t id) override { return inner_.retireVertex(id); }
+  Status retireVertex(uint32_t id) override {
+    if (live_ > 0) --live_;
+    return inner_.retireVertex(id);
+  }
   Status endLevel() override {
     if (vertices_ != h_.points || tets_ != h_.tets || tris_ != h_.boundary_triangles)
       return fail("decoded " + std::to_string(vertices_) + " points, " + std::to_string(tets_) + " tetrahedra, " +
@@ -158,13 +194,14 @@ class CheckingSink : public MeshSink {
     return inner_.endLevel();
   }
   bool ended() const { return ended_; }
+  uint64_t peakLive() const { return peak_live_; }  // most vertices emitted and not yet retired
 
  private:
   Status fail(const std::string& reason) { return invalidData(what_ + ": " + reason); }
   MeshSink& inner_;
   const LevelHeader& h_;
   std::string what_;
-  uint64_t vertices_ = 0, tets_ = 0, tris_ = 0;
+  uint64_t vertices_ = 0, tets_ = 0, tris_ = 0, live_ = 0, peak_live_ = 0;
   bool ended_ = false;
 };
 
@@ -181,6 +218,20 @@ LevelPayload GtnLevelStreams::payload() const {
 }
 
 GtnReader::~GtnReader() = default;
+
+Status GtnReader::readSource(uint64_t offset, size_t n, uint8_t* out) {
+  bytes_read_ += n;
+  return source_->read(offset, n, out);
+}
+
+uint64_t GtnLevelInfo::pieceBytes(size_t piece) const {
+  uint64_t n = 0;
+  for (size_t k = piece_chunk.at(piece); k < chunks.size(); ++k) {
+    if (chunks[k].piece == piece) n += chunks[k].bytes;
+    else if (chunks[k].piece != kNoIndex) break;
+  }
+  return n;
+}
 
 StatusOr<std::unique_ptr<GtnReader>> GtnReader::open(const std::string& path, const GtnOpenOptions& options) {
   std::unique_ptr<GtnReader> r(new GtnReader());
@@ -226,9 +277,11 @@ StatusOr<std::unique_ptr<GtnReader>> GtnReader::finishOpen(std::unique_ptr<GtnRe
   return r;
 }
 
-std::string GtnReader::sectionName(const ChunkTag& tag, size_t index_in_level) const {
+std::string GtnReader::sectionName(const ChunkTag& tag, size_t index_in_piece) const {
   if (tag == kTagFileHeader) return "header";
   if (tag == kTagLevelHeader) return "level_header";
+  if (tag == kTagSeam) return "seam";
+  if (tag == kTagGrid) return "grid";
   if (tag == kTagBoundary) return "boundary";
   if (tag == kTagConnectivity) return "connectivity";
   if (tag == kTagGeometry) return "geometry";
@@ -237,10 +290,10 @@ std::string GtnReader::sectionName(const ChunkTag& tag, size_t index_in_level) c
   if (tag == kTagEnd) return "trailer";
   const auto& pf = file_.header.point_fields;
   const auto& cf = file_.header.cell_fields;
-  if (tag == kTagPointField && index_in_level >= 3 && index_in_level - 3 < pf.size())
-    return "point_field:" + pf[index_in_level - 3].name;
-  if (tag == kTagCellField && index_in_level >= 3 + pf.size() && index_in_level - 3 - pf.size() < cf.size())
-    return "cell_field:" + cf[index_in_level - 3 - pf.size()].name;
+  if (tag == kTagPointField && index_in_piece >= 3 && index_in_piece - 3 < pf.size())
+    return "point_field:" + pf[index_in_piece - 3].name;
+  if (tag == kTagCellField && index_in_piece >= 3 + pf.size() && index_in_piece - 3 - pf.size() < cf.size())
+    return "cell_field:" + cf[index_in_piece - 3 - pf.size()].name;
   return "unknown:" + tag.str();
 }
 
@@ -250,7 +303,7 @@ StatusOr<std::vector<uint8_t>> GtnReader::readChunkBytes(const GtnChunkInfo& c, 
   if (c.offset >= size) return invalidData(at(what, c.offset) + "chunk offset beyond the end of the file");
   uint8_t head[kChunkFixedHeaderSize + 8];
   const size_t avail = static_cast<size_t>(std::min<uint64_t>(sizeof head, size - c.offset));
-  GTN_RETURN_IF_ERROR(source_->read(c.offset, avail, head));
+  GTN_RETURN_IF_ERROR(readSource(c.offset, avail, head));
   ChunkHeader h;
   size_t needed;
   GTN_RETURN_IF_ERROR(parseGtnChunkHeader({head, avail}, c.offset, size - c.offset, what, &h, &needed));
@@ -258,7 +311,7 @@ StatusOr<std::vector<uint8_t>> GtnReader::readChunkBytes(const GtnChunkInfo& c, 
     return invalidData(at(what, c.offset) + "expected chunk '" + c.tag.str() + "' of " + std::to_string(c.bytes) +
                        " bytes, found '" + h.tag.str() + "' of " + std::to_string(h.totalSize()) + " bytes");
   std::vector<uint8_t> chunk(h.totalSize());
-  GTN_RETURN_IF_ERROR(source_->read(c.offset, chunk.size(), chunk.data()));
+  GTN_RETURN_IF_ERROR(readSource(c.offset, chunk.size(), chunk.data()));
   *out_header = h;
   return chunk;
 }
@@ -282,14 +335,14 @@ StatusOr<bool> GtnReader::checksumMatches(const GtnChunkInfo& c) {
   Status st;
   for (uint64_t done = 0; done < body && st.isOk();) {
     const size_t n = static_cast<size_t>(std::min<uint64_t>(buffer.size(), body - done));
-    st = source_->read(c.offset + done, n, buffer.data());
+    st = readSource(c.offset + done, n, buffer.data());
     XXH3_64bits_update(&state, buffer.data(), n);
     done += n;
   }
   const uint64_t digest = XXH3_64bits_digest(&state);
   GTN_RETURN_IF_ERROR(st);
   uint8_t stored[kChunkChecksumSize];
-  GTN_RETURN_IF_ERROR(source_->read(c.offset + body, kChunkChecksumSize, stored));
+  GTN_RETURN_IF_ERROR(readSource(c.offset + body, kChunkChecksumSize, stored));
   uint64_t expected = 0;
   for (size_t i = 0; i < kChunkChecksumSize; ++i) expected |= static_cast<uint64_t>(stored[i]) << (8 * i);
   return digest == expected;
@@ -334,24 +387,22 @@ Status GtnReader::scan() {
   const std::string& what = file_.path;
   uint8_t prefix[kGtnPrefixSize];
   const size_t n = static_cast<size_t>(std::min<uint64_t>(size, kGtnPrefixSize));
-  GTN_RETURN_IF_ERROR(source_->read(0, n, prefix));
+  GTN_RETURN_IF_ERROR(readSource(0, n, prefix));
   GTN_RETURN_IF_ERROR(checkGtnPrefix({prefix, n}, what, &file_.major, &file_.minor));
 
   uint64_t pos = kGtnPrefixSize;
   bool have_header = false, have_dir = false, level_open = false;
   size_t known_in_level = 0;  // known chunks after the current LHDR
+  LevelLayout layout;         // the chunks the current level must hold after its LHDR
   GtnDirectory dir;
   uint64_t dir_offset = 0, dir_size = 0;
 
   auto closeLevel = [&](uint64_t offset) -> Status {
     if (!level_open) return Status::ok();
     level_open = false;
-    const size_t required = 3 + file_.header.point_fields.size() + file_.header.cell_fields.size();
-    if (known_in_level < required)
-      return invalidData(
-          at(what, offset) + "level " + std::to_string(levels_.size() - 1) + " ends without its '" +
-          expectedLevelTag(known_in_level, file_.header.point_fields.size(), file_.header.cell_fields.size()).str() +
-          "' chunk");
+    if (known_in_level < layout.size())
+      return invalidData(at(what, offset) + "level " + std::to_string(levels_.size() - 1) + " ends without its '" +
+                         layout.tags[known_in_level].str() + "' chunk" + inPiece(layout, known_in_level));
     return Status::ok();
   };
   auto checkLevelCount = [&](uint64_t offset) -> Status {
@@ -371,7 +422,8 @@ Status GtnReader::scan() {
     // damagedChunks() names it and reading it fails. Structural chunks must be intact.
     const bool content = isLevelTag(h.tag) || (!isKnownTag(h.tag) && h.ancillary());
     std::vector<uint8_t> payload;
-    if (!(tolerant_scan_ && content && !gtnChunkChecksumMatches(h, chunk))) {
+    const bool opened = !(tolerant_scan_ && content && !gtnChunkChecksumMatches(h, chunk));
+    if (opened) {
       GTN_ASSIGN_OR_RETURN(payload, openGtnChunk(h, chunk, what));
     }
     std::vector<uint8_t>().swap(chunk);
@@ -406,6 +458,9 @@ Status GtnReader::scan() {
       GtnLevelInfo li;
       li.header = levelHeaderFrom(file_.header, rec);
       li.ratio = rec.ratio;
+      layout = levelLayout(rec.pieces, file_.header.point_fields.size(), file_.header.cell_fields.size());
+      li.pieces = std::move(rec.pieces);
+      li.piece_chunk.assign(li.pieces.size(), 0);
       c.section = sectionName(h.tag, 0);
       li.chunks.push_back(c);
       li.bytes = c.bytes;
@@ -415,9 +470,16 @@ Status GtnReader::scan() {
     } else if (isLevelTag(h.tag)) {
       if (!level_open) return invalidData(at(what, pos) + "chunk '" + h.tag.str() + "' outside a level");
       GtnLevelInfo& li = levels_.back();
-      GTN_RETURN_IF_ERROR(checkLevelOrder(h.tag, known_in_level, file_.header.point_fields.size(),
-                                          file_.header.cell_fields.size(), pos, levels_.size() - 1, what));
-      c.section = sectionName(h.tag, known_in_level);
+      GTN_RETURN_IF_ERROR(checkLevelOrder(h.tag, known_in_level, layout, pos, levels_.size() - 1, what));
+      if (h.tag == kTagSeam && opened) {
+        GtnSeamTable table;
+        GTN_RETURN_IF_ERROR(decodeSeamTable(payload, payload_offset, what, levels_.size() - 1, li.header.points,
+                                            li.pieces, &table));
+      }
+      const bool in_piece = known_in_level < layout.size() && layout.piece[known_in_level] != kNoIndex;
+      c.piece = in_piece ? layout.piece[known_in_level] : kNoIndex;
+      c.section = sectionName(h.tag, in_piece ? layout.in_piece[known_in_level] : 0);
+      if (in_piece && layout.in_piece[known_in_level] == 0) li.piece_chunk[c.piece] = li.chunks.size();
       ++known_in_level;
       if (h.tag == kTagMergeTree) li.has_merge_tree = true;
       li.chunks.push_back(c);
@@ -490,7 +552,7 @@ Status GtnReader::openByDirectory() {
   const std::string& what = file_.path;
   if (size < kGtnPrefixSize + kGtnTrailerSize) return invalidData(what + ": too short for random access");
   uint8_t prefix[kGtnPrefixSize];
-  GTN_RETURN_IF_ERROR(source_->read(0, kGtnPrefixSize, prefix));
+  GTN_RETURN_IF_ERROR(readSource(0, kGtnPrefixSize, prefix));
   GTN_RETURN_IF_ERROR(checkGtnPrefix(prefix, what, &file_.major, &file_.minor));
 
   GtnChunkInfo hc;
@@ -526,6 +588,7 @@ Status GtnReader::openByDirectory() {
     if (dir[i].empty() || dir[i][0].tag != kTagLevelHeader)
       return invalidData(what + ": directory level " + std::to_string(i) + " does not start with LHDR");
     GtnLevelInfo li;
+    LevelLayout layout;
     size_t known = 0;
     for (const GtnDirectoryEntry& e : dir[i]) {
       // Levels may be preceded by ancillary chunks; within a level the chunks are contiguous.
@@ -548,9 +611,15 @@ Status GtnReader::openByDirectory() {
           return invalidData(what + ": level 0's counts disagree with the file header");
         li.header = levelHeaderFrom(file_.header, rec);
         li.ratio = rec.ratio;
+        layout = levelLayout(rec.pieces, np, nc);
+        li.pieces = std::move(rec.pieces);
+        li.piece_chunk.assign(li.pieces.size(), 0);
       } else if (isLevelTag(e.tag)) {
-        GTN_RETURN_IF_ERROR(checkLevelOrder(e.tag, known, np, nc, e.offset, i, what));
-        c.section = sectionName(e.tag, known);
+        GTN_RETURN_IF_ERROR(checkLevelOrder(e.tag, known, layout, e.offset, i, what));
+        const bool in_piece = known < layout.size() && layout.piece[known] != kNoIndex;
+        c.piece = in_piece ? layout.piece[known] : kNoIndex;
+        c.section = sectionName(e.tag, in_piece ? layout.in_piece[known] : 0);
+        if (in_piece && layout.in_piece[known] == 0) li.piece_chunk[c.piece] = li.chunks.size();
         ++known;
         if (e.tag == kTagMergeTree) li.has_merge_tree = true;
       } else if (isKnownTag(e.tag)) {
@@ -561,7 +630,7 @@ Status GtnReader::openByDirectory() {
       li.chunks.push_back(c);
       li.bytes += c.bytes;
     }
-    if (known < 3 + np + nc) return invalidData(what + ": directory level " + std::to_string(i) + " is incomplete");
+    if (known < layout.size()) return invalidData(what + ": directory level " + std::to_string(i) + " is incomplete");
     levels_.push_back(std::move(li));
   }
   if (expect_offset != t.directory_offset) return invalidData(what + ": gap between the last level and the directory");
@@ -570,23 +639,72 @@ Status GtnReader::openByDirectory() {
   return Status::ok();
 }
 
-StatusOr<GtnLevelStreams> GtnReader::readLevelStreams(size_t i) {
+namespace {
+// The header a piece's streams decode with: the level's fields, the piece's counts and bounding box.
+LevelHeader pieceHeader(const LevelHeader& level, const PieceInfo& p) {
+  LevelHeader h = level;
+  h.points = p.points;
+  h.tets = p.tets;
+  h.boundary_triangles = p.boundary_triangles;
+  for (int i = 0; i < 3; ++i) {
+    h.bbox_min[i] = p.bbox_min[i];
+    h.bbox_max[i] = p.bbox_max[i];
+  }
+  return h;
+}
+}  // namespace
+
+StatusOr<GtnLevelStreams> GtnReader::readPieceStreams(size_t i, size_t piece) {
   if (i >= levels_.size())
     return usageError(file_.path + ": level " + std::to_string(i) + " does not exist (the file has " +
                       std::to_string(levels_.size()) + ")");
   const GtnLevelInfo& li = levels_[i];
+  if (piece >= li.pieces.size())
+    return usageError(file_.path + ": level " + std::to_string(i) + " has no piece " + std::to_string(piece) + " (it has " +
+                      std::to_string(li.pieces.size()) + ")");
   GtnLevelStreams s;
-  s.header = li.header;
-  for (const GtnChunkInfo& c : li.chunks) {
-    if (c.tag == kTagLevelHeader || c.tag == kTagMergeTree || !isLevelTag(c.tag)) continue;
+  s.header = li.pieces.size() == 1 ? li.header : pieceHeader(li.header, li.pieces[piece]);
+  for (size_t k = li.piece_chunk[piece]; k < li.chunks.size(); ++k) {
+    const GtnChunkInfo& c = li.chunks[k];
+    if (c.piece != piece) {
+      if (c.piece != kNoIndex) break;
+      continue;
+    }
     GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> p, readChunk(c));
     if (c.tag == kTagBoundary) s.boundary = std::move(p);
     else if (c.tag == kTagConnectivity) s.connectivity = std::move(p);
     else if (c.tag == kTagGeometry) s.geometry = std::move(p);
+    else if (c.tag == kTagGrid) s.connectivity = std::move(p);
     else if (c.tag == kTagPointField) s.point_fields.push_back(std::move(p));
     else s.cell_fields.push_back(std::move(p));
   }
   return s;
+}
+
+StatusOr<GtnLevelStreams> GtnReader::readLevelStreams(size_t i) {
+  if (i < levels_.size() && levels_[i].pieces.size() > 1)
+    return usageError(file_.path + ": level " + std::to_string(i) + " has " + std::to_string(levels_[i].pieces.size()) +
+                      " pieces; read them one by one");
+  return readPieceStreams(i, 0);
+}
+
+StatusOr<GtnSeamTable> GtnReader::readSeamTable(size_t i, std::vector<uint8_t>* payload) {
+  if (i >= levels_.size())
+    return usageError(file_.path + ": level " + std::to_string(i) + " does not exist (the file has " +
+                      std::to_string(levels_.size()) + ")");
+  const GtnLevelInfo& li = levels_[i];
+  GtnSeamTable table;
+  payload->clear();
+  if (li.pieces.size() == 1) return table;
+  for (const GtnChunkInfo& c : li.chunks) {
+    if (c.tag != kTagSeam) continue;
+    ChunkHeader h;
+    GTN_ASSIGN_OR_RETURN(*payload, readChunk(c, &h));
+    GTN_RETURN_IF_ERROR(
+        decodeSeamTable(*payload, c.offset + h.header_size, file_.path, i, li.header.points, li.pieces, &table));
+    return table;
+  }
+  return invalidData(file_.path + ": level " + std::to_string(i) + " has several pieces but no 'SEAM' chunk");
 }
 
 StatusOr<std::optional<std::vector<uint8_t>>> GtnReader::mergeTreePayload(size_t i) {
@@ -601,9 +719,67 @@ StatusOr<std::optional<std::vector<uint8_t>>> GtnReader::mergeTreePayload(size_t
   return std::optional<std::vector<uint8_t>>();
 }
 
+StatusOr<DecodedPieces> GtnReader::decodeLevelPieces(size_t i, const std::vector<uint32_t>& chosen,
+                                                     const DecodeFields* fields) {
+  if (i >= levels_.size())
+    return usageError(file_.path + ": level " + std::to_string(i) + " does not exist (the file has " +
+                      std::to_string(levels_.size()) + ")");
+  const GtnLevelInfo& li = levels_[i];
+  const size_t n = li.pieces.size();
+  for (size_t k = 0; k < chosen.size(); ++k)
+    if (chosen[k] >= n || (k > 0 && chosen[k] <= chosen[k - 1]))
+      return usageError(file_.path + ": level " + std::to_string(i) + ": pieces must be chosen in increasing order, " +
+                        "each below " + std::to_string(n));
+  std::vector<char> wanted(n, chosen.empty() ? 1 : 0);
+  for (uint32_t p : chosen) wanted[p] = 1;
+  std::vector<uint8_t> seam_payload;
+  GTN_ASSIGN_OR_RETURN(GtnSeamTable table, readSeamTable(i, &seam_payload));
+  PiecedLevelView view;
+  view.header = &li.header;
+  view.pieces = li.pieces;
+  view.classes = table.classes;
+  view.seam_streams.resize(table.classes.size());
+  for (size_t c = 0; c < table.classes.size(); ++c) {
+    bool needed = false;
+    for (uint32_t p : table.classes[c].pieces) needed = needed || wanted[p];
+    if (needed)
+      view.seam_streams[c] =
+          std::span<const uint8_t>(seam_payload).subspan(table.streams[c].first, table.streams[c].second);
+  }
+  // The chosen pieces' chunks, read and decompressed in parallel; the first failure in piece order is
+  // reported, whatever the thread count.
+  std::vector<GtnLevelStreams> streams(n);
+  std::vector<Status> failed(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t p = range.begin(); p < range.end(); ++p) {
+      if (!wanted[p]) continue;
+      auto s = readPieceStreams(i, p);
+      if (s.isOk()) streams[p] = std::move(s).value();
+      else failed[p] = s.status();
+    }
+  });
+  for (const Status& st : failed) GTN_RETURN_IF_ERROR(st);
+  view.payloads.resize(n);
+  for (size_t p = 0; p < n; ++p) {
+    if (!wanted[p]) continue;
+    view.payloads[p].header = streams[p].header;
+    view.payloads[p].streams = streams[p].payload();
+  }
+  return decodePieces(view, chosen, file_.path + ": level " + std::to_string(i), fields);
+}
+
 Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, const DecodeFields* fields) {
-  GTN_ASSIGN_OR_RETURN(GtnLevelStreams s, readLevelStreams(i));
   const std::string what = file_.path + ": level " + std::to_string(i);
+  if (i < levels_.size() && levels_[i].pieces.size() > 1) {
+    GTN_ASSIGN_OR_RETURN(DecodedPieces decoded, decodeLevelPieces(i, {}, fields));
+    const LevelHeader& header = levels_[i].header;
+    CheckingSink checker(sink, header, what);
+    GTN_RETURN_IF_ERROR(emitDecoded(header, decoded, checker));
+    if (!checker.ended()) return invalidData(what + ": the decoded level was not emitted to its end");
+    if (stats) stats->peak_live_vertices = checker.peakLive();
+    return Status::ok();
+  }
+  GTN_ASSIGN_OR_RETURN(GtnLevelStreams s, readLevelStreams(i));
   CheckingSink checker(sink, s.header, what);
   // The streams of the fields left out are freed once their declarations are read (a render of
   // blunt fin's density holds 0.3 MB less at its peak, and so does combustion's).

@@ -9,6 +9,7 @@
 // remain.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -17,19 +18,22 @@
 #include <vector>
 
 #include "codec/level_codec.h"
+#include "codec/pieces.h"
 #include "format/gtn_records.h"
+#include "mesh/index.h"
 #include "mesh/mesh_stream.h"
 
 namespace gtn {
 
 struct GtnChunkInfo {
   ChunkTag tag;
-  std::string section;        // "boundary", "point_field:density", "unknown:abcd", ... (see sections())
+  std::string section;        // "boundary", "point_field:density", "seam", "unknown:abcd", ... (see sections())
   uint64_t offset = 0;        // of the chunk's first byte
   uint64_t bytes = 0;         // the whole chunk: framing, stored payload, checksum
   uint64_t stored_bytes = 0;  // payload as stored (0 when only known from the directory)
   uint64_t raw_bytes = 0;     // payload after decompression (0 when only known from the directory)
   bool zstd = false;
+  uint32_t piece = kNoIndex;  // the piece whose stream it holds; kNoIndex for LHDR, SEAM, MTRE, unknown ones
 };
 
 struct GtnLevelInfo {
@@ -38,6 +42,9 @@ struct GtnLevelInfo {
   bool has_merge_tree = false;
   std::vector<GtnChunkInfo> chunks;  // LHDR first, in file order
   uint64_t bytes = 0;                // all chunks of the level
+  std::vector<PieceInfo> pieces;     // the piece table (LHDR), in piece order; at least one
+  std::vector<size_t> piece_chunk;   // per piece: the index in `chunks` of its first chunk
+  uint64_t pieceBytes(size_t piece) const;  // the piece's chunks, framing included
 };
 
 struct GtnFileInfo {
@@ -54,7 +61,8 @@ struct GtnSection {
   uint64_t bytes = 0;
 };
 
-// The coded streams of one level as stored (decompressed), with the header to decode them.
+// The coded streams of one piece as stored (decompressed), with the header to decode them (the
+// level's fields; the piece's counts and bounding box: for a one-piece level, the level's header).
 struct GtnLevelStreams {
   LevelHeader header;
   std::vector<uint8_t> boundary, connectivity, geometry;
@@ -95,11 +103,22 @@ class GtnReader {
   bool openedByDirectory() const { return by_directory_; }
 
   // Decodes level `i` with the codec and streams it to `sink`; checks the stream's counts against the
-  // level header. `stats` (optional) receives the decoder's statistics; `fields` (optional) says which
-  // fields to decode (level_codec.h).
+  // level header. A one-piece level streams from its decoder; a level of several pieces is decoded
+  // whole (decodeLevelPieces) and then emitted (emitDecoded). `stats` (optional) receives the
+  // decoder's statistics; `fields` (optional) says which fields to decode (level_codec.h).
   Status decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats = nullptr, const DecodeFields* fields = nullptr);
-  // Reads (and checksums) level `i`'s coded streams without decoding them.
+  // Decodes the pieces `chosen` of level `i` (increasing piece indices; empty: every piece), stitched
+  // into one mesh (codec/pieces.h), reading only the level's header, its seam table and the chosen
+  // pieces' chunks. `fields` as for decodeLevel.
+  StatusOr<DecodedPieces> decodeLevelPieces(size_t i, const std::vector<uint32_t>& chosen,
+                                            const DecodeFields* fields = nullptr);
+  // Reads (and checksums) the coded streams of piece `piece` of level `i` without decoding them.
+  StatusOr<GtnLevelStreams> readPieceStreams(size_t i, size_t piece);
+  // readPieceStreams(i, 0) of a one-piece level; a level of several pieces is a usage error.
   StatusOr<GtnLevelStreams> readLevelStreams(size_t i);
+  // Reads (and checksums) level `i`'s seam table and class streams (SEAM); an empty table for a
+  // one-piece level. `payload` receives the chunk's payload, which the table's stream ranges index.
+  StatusOr<GtnSeamTable> readSeamTable(size_t i, std::vector<uint8_t>* payload);
   // The raw merge-tree payload of level `i` (MTRE), or nullopt when the level has none.
   StatusOr<std::optional<std::vector<uint8_t>>> mergeTreePayload(size_t i);
 
@@ -109,9 +128,12 @@ class GtnReader {
   StatusOr<std::vector<GtnDamagedChunk>> damagedChunks();
 
   // Bytes per kind of content, summed over the file; the sizes add up to the file size. Names:
-  // prefix, header, level_header, boundary, connectivity, geometry, point_field:<name>,
+  // prefix, header, level_header, seam, boundary, connectivity, geometry, point_field:<name>,
   // cell_field:<name>, merge_tree, directory, trailer, unknown:<type>.
   std::vector<GtnSection> sections() const;
+
+  // Bytes read from the file so far (open included): what a region read costs.
+  uint64_t bytesRead() const { return bytes_read_.load(); }
 
   class Source;
 
@@ -124,13 +146,15 @@ class GtnReader {
   // The whole chunk at c.offset (framing, stored payload, checksum), its framing checked, not its checksum.
   StatusOr<std::vector<uint8_t>> readChunkBytes(const GtnChunkInfo& c, ChunkHeader* header);
   StatusOr<bool> checksumMatches(const GtnChunkInfo& c);
-  std::string sectionName(const ChunkTag& tag, size_t index_in_level) const;
+  Status readSource(uint64_t offset, size_t n, uint8_t* out);
+  std::string sectionName(const ChunkTag& tag, size_t index_in_piece) const;
 
   std::unique_ptr<Source> source_;
   GtnFileInfo file_;
   std::vector<GtnLevelInfo> levels_;
   bool by_directory_ = false;
   bool tolerant_scan_ = false;  // the scan goes past damaged content chunks (GtnOpenOptions::verify false)
+  std::atomic<uint64_t> bytes_read_{0};  // pieces are read in parallel
 };
 
 // How every command opens a .gtn file: GtnReader::open, then GtnReader::damagedChunks, with `warn`

@@ -1,6 +1,7 @@
 #include "format/gtn_records.h"
 
 #include <algorithm>
+#include <cstdint>
 
 #include "format/gtn_bytes.h"
 
@@ -55,6 +56,8 @@ std::vector<uint8_t> encodeFileHeader(const GtnFileHeader& h) {
   w.varint(h.level_count);
   w.varint(h.points);
   w.varint(h.tets);
+  w.varint(h.draft);
+  w.varint(h.piece_tets);
   w.u8(static_cast<uint8_t>(h.coord_type));
   writeFields(w, h.point_fields);
   writeFields(w, h.cell_fields);
@@ -78,6 +81,14 @@ Status decodeFileHeader(std::span<const uint8_t> payload, uint64_t offset, const
   if (h->level_count == 0) return r.errorAt(at, "level count is 0; a file holds at least level 0");
   GTN_RETURN_IF_ERROR(r.varint(&h->points, "point count"));
   GTN_RETURN_IF_ERROR(r.varint(&h->tets, "tetrahedron count"));
+  at = r.offset();
+  GTN_RETURN_IF_ERROR(r.varint(&h->draft, "draft revision"));
+  if (h->draft != kGtnDraftRevision)
+    return Status(StatusCode::kUnsupported,
+                  what + ": GHDR: byte offset " + std::to_string(at) + ": the file follows draft revision " +
+                      std::to_string(h->draft) + " of format 2.0; this gtn reads draft revision " +
+                      std::to_string(kGtnDraftRevision) + " only: convert the source mesh again");
+  GTN_RETURN_IF_ERROR(r.varint(&h->piece_tets, "piece tetrahedron bound"));
   at = r.offset();
   GTN_RETURN_IF_ERROR(readScalarType(r, &h->coord_type, "coordinate type"));
   if (!isFloatType(h->coord_type)) return r.errorAt(at, "coordinate type must be float32 (8) or float64 (9)");
@@ -106,6 +117,21 @@ std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& l) {
   w.varint(l.boundary_triangles);
   for (double v : l.bbox_min) w.f64(v);
   for (double v : l.bbox_max) w.f64(v);
+  w.varint(l.pieces.size());
+  for (const PieceInfo& p : l.pieces) {
+    w.u8(p.kind);
+    if (l.pieces.size() == 1) {  // the level's counts and box are the piece's
+      w.varint(p.own_boundary_points);
+      break;
+    }
+    w.varint(p.points);
+    w.varint(p.own_points);
+    w.varint(p.own_boundary_points);
+    w.varint(p.tets);
+    w.varint(p.boundary_triangles);
+    for (double v : p.bbox_min) w.f64(v);
+    for (double v : p.bbox_max) w.f64(v);
+  }
   return std::move(w.bytes());
 }
 
@@ -121,7 +147,137 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
   GTN_RETURN_IF_ERROR(r.varint(&l->tets, "tetrahedron count"));
   GTN_RETURN_IF_ERROR(r.varint(&l->boundary_triangles, "boundary triangle count"));
   GTN_RETURN_IF_ERROR(readBox(r, l->bbox_min, l->bbox_max));
+  uint64_t n;
+  uint64_t at_n = r.offset();
+  // An entry of one of several pieces takes at least 54 bytes: bound the count by the payload first.
+  GTN_RETURN_IF_ERROR(
+      r.varintAtMost(&n, std::max<uint64_t>(1, std::min<uint64_t>(kGtnMaxPieces, r.remaining() / 54)), "piece count"));
+  if (n == 0) return r.errorAt(at_n, "piece count is 0; a level has at least one piece");
+  l->pieces.resize(n);
+  uint64_t tets = 0;
+  for (size_t i = 0; i < n; ++i) {
+    PieceInfo& p = l->pieces[i];
+    const std::string piece = "piece " + std::to_string(i);
+    uint64_t at_p = r.offset();
+    GTN_RETURN_IF_ERROR(r.u8(&p.kind, "piece kind"));
+    if (p.kind != kPieceUnstructured)
+      return r.errorAt(at_p, piece + " has kind " + std::to_string(p.kind) +
+                                 ", which this reader does not know (0: unstructured)");
+    at_p = r.offset();
+    if (n == 1) {  // one piece: the level's counts and box, and its own boundary points
+      if (l->points > kGtnMaxPiecePoints)
+        return r.errorAt(at_p, "the level's one piece has " + std::to_string(l->points) + " points, more than " +
+                                   std::to_string(kGtnMaxPiecePoints));
+      p.points = p.own_points = l->points;
+      p.tets = l->tets;
+      p.boundary_triangles = l->boundary_triangles;
+      for (int k = 0; k < 3; ++k) {
+        p.bbox_min[k] = l->bbox_min[k];
+        p.bbox_max[k] = l->bbox_max[k];
+      }
+      GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_boundary_points, p.own_points, "piece own boundary point count"));
+      tets = p.tets;
+      break;
+    }
+    GTN_RETURN_IF_ERROR(r.varintAtMost(&p.points, kGtnMaxPiecePoints, "piece point count"));
+    GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_points, p.points, "piece own point count"));
+    GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_boundary_points, p.own_points, "piece own boundary point count"));
+    GTN_RETURN_IF_ERROR(r.varintAtMost(&p.tets, l->tets - tets, "piece tetrahedron count (beyond the level's)"));
+    tets += p.tets;
+    GTN_RETURN_IF_ERROR(r.varint(&p.boundary_triangles, "piece boundary triangle count"));
+    GTN_RETURN_IF_ERROR(readBox(r, p.bbox_min, p.bbox_max));
+  }
+  if (tets != l->tets)
+    return r.errorAt(at_n, "the pieces' tetrahedra sum to " + std::to_string(tets) + ", the level has " +
+                               std::to_string(l->tets));
   return r.expectEnd("the LHDR payload");
+}
+
+std::vector<uint8_t> encodeSeamTable(const std::vector<SeamClass>& classes,
+                                     const std::vector<std::vector<uint8_t>>& streams) {
+  ByteWriter w;
+  w.varint(classes.size());
+  for (size_t c = 0; c < classes.size(); ++c) {
+    const SeamClass& k = classes[c];
+    w.varint(k.pieces.size());
+    for (size_t i = 0; i < k.pieces.size(); ++i)
+      w.varint(i == 0 ? uint64_t{k.pieces[0]} : uint64_t{k.pieces[i]} - k.pieces[i - 1] - 1);
+    w.varint(k.points);
+    w.varint(c < streams.size() ? streams[c].size() : 0);
+  }
+  for (const auto& s : streams) w.raw(s);
+  return std::move(w.bytes());
+}
+
+Status decodeSeamTable(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, uint64_t level,
+                       uint64_t points, std::span<const PieceInfo> pieces, GtnSeamTable* t) {
+  ByteReader r(payload, offset, what + ": SEAM of level " + std::to_string(level));
+  const uint64_t np = pieces.size();
+  uint64_t n;
+  // A class takes at least 5 bytes.
+  GTN_RETURN_IF_ERROR(r.varintAtMost(&n, r.remaining() / 5, "seam class count"));
+  t->classes.assign(n, {});
+  t->streams.assign(n, {});
+  std::vector<uint64_t> seam_of(np, 0);  // seam points each piece uses
+  uint64_t seam_points = 0, stream_bytes = 0;
+  for (size_t c = 0; c < n; ++c) {
+    SeamClass& k = t->classes[c];
+    const std::string cls = "seam class " + std::to_string(c);
+    uint64_t at = r.offset();
+    uint64_t m;
+    GTN_RETURN_IF_ERROR(r.varintAtMost(&m, std::min<uint64_t>(np, r.remaining()), "seam class piece count"));
+    if (m < 2) return r.errorAt(at, cls + " names " + std::to_string(m) + " piece(s); a class names at least 2");
+    k.pieces.resize(m);
+    uint64_t next = 0;  // the smallest index the next piece may have
+    for (size_t i = 0; i < m; ++i) {
+      at = r.offset();
+      uint64_t d;
+      GTN_RETURN_IF_ERROR(r.varint(&d, "seam class piece"));
+      if (i > 0 && d > UINT64_MAX - next) {  // next + d wraps: a piece at or before the one named before
+        const uint64_t named = next + d;
+        return r.errorAt(at, cls + " names piece " + std::to_string(named) +
+                                 (named == k.pieces[i - 1] ? " twice" : " after piece " + std::to_string(k.pieces[i - 1])) +
+                                 ": a class names each piece once, in increasing order");
+      }
+      if (d >= np || next > np - 1 - d)
+        return r.errorAt(at, cls + " names a piece beyond the level's " + std::to_string(np) + " pieces");
+      k.pieces[i] = static_cast<uint32_t>(next + d);
+      next = k.pieces[i] + uint64_t{1};
+    }
+    at = r.offset();
+    GTN_RETURN_IF_ERROR(r.varintAtMost(&k.points, points - seam_points, "seam class point count (beyond the level's)"));
+    if (k.points == 0) return r.errorAt(at, cls + " has no point");
+    seam_points += k.points;
+    if (c > 0 && !(t->classes[c - 1].pieces < k.pieces))
+      return r.errorAt(at, cls + " is not after the class before it (classes are in increasing order of their "
+                               "piece lists, each list once)");
+    for (uint32_t p : k.pieces) seam_of[p] += k.points;
+    GTN_RETURN_IF_ERROR(r.varintAtMost(&t->streams[c].second, r.remaining() - stream_bytes, "seam class stream size"));
+    stream_bytes += t->streams[c].second;
+  }
+  const uint64_t table_end = r.offset() - offset;
+  if (stream_bytes != r.remaining())
+    return r.error("the seam class streams take " + std::to_string(stream_bytes) + " bytes, the chunk holds " +
+                   std::to_string(r.remaining()) + " after the table");
+  uint64_t pos = table_end;
+  for (auto& s : t->streams) {
+    s.first = pos;
+    pos += s.second;
+  }
+  uint64_t own = 0;
+  for (size_t p = 0; p < np; ++p) {
+    const PieceInfo& piece = pieces[p];
+    own += piece.own_points;
+    if (piece.points - piece.own_points != seam_of[p])
+      return r.errorAt(offset, "piece " + std::to_string(p) + " uses " + std::to_string(piece.points - piece.own_points) +
+                                   " seam points by the level header, " + std::to_string(seam_of[p]) +
+                                   " by the seam table");
+  }
+  if (own + seam_points != points)
+    return r.errorAt(offset, "the pieces' own points (" + std::to_string(own) + ") and the seam points (" +
+                                 std::to_string(seam_points) + ") do not sum to the level's " +
+                                 std::to_string(points));
+  return Status::ok();
 }
 
 std::vector<uint8_t> encodeDirectory(const GtnDirectory& d) {

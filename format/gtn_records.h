@@ -1,6 +1,7 @@
 // Payloads of the container's own chunks (spec/gtn-format.md): the file header (GHDR), the level
-// header (LHDR), the directory (DIRC) and the end chunk (GEND). The codec's streams (BNDY, CONN, GEOM,
-// PFLD, CFLD) and the merge tree (MTRE) are opaque here.
+// header (LHDR) with its piece table, the seam table (SEAM), the directory (DIRC) and the end chunk
+// (GEND). The codec's streams (BNDY, CONN, GEOM, PFLD, CFLD, GRID, the seam classes' streams) and the
+// merge tree (MTRE) are opaque here.
 #pragma once
 
 #include <cstdint>
@@ -9,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "codec/pieces.h"
 #include "format/gtn_chunk.h"
 #include "mesh/mesh_stream.h"
 
@@ -18,6 +20,11 @@ namespace gtn {
 inline constexpr uint64_t kGtnMaxLevels = 65535;
 inline constexpr uint64_t kGtnMaxFields = 65535;
 inline constexpr uint64_t kGtnMaxComponents = 4096;  // as the level codec
+inline constexpr uint64_t kGtnMaxPieces = uint64_t{1} << 20;  // per level
+inline constexpr uint64_t kGtnMaxPiecePoints = 0xFFFFFFFEu;  // a piece's vertex ids are 32 bits
+// Piece kinds (LHDR): 0 unstructured (BNDY CONN GEOM PFLD... CFLD...), 1 structured (GRID).
+inline constexpr uint8_t kPieceUnstructured = 0;
+inline constexpr uint8_t kPieceStructured = 1;
 
 // GHDR writer flag bits: informational; readers ignore them (and any other "unused" bit).
 inline constexpr uint8_t kGhdrHasDirectory = 0x01;
@@ -26,6 +33,8 @@ struct GtnFileHeader {
   uint8_t writer_flags = 0;
   uint64_t level_count = 0;
   uint64_t points = 0, tets = 0;  // of level 0
+  uint64_t draft = kGtnDraftRevision;  // the draft revision of format 2.0 the file follows
+  uint64_t piece_tets = 0;             // the writer's bound on a piece's tetrahedra (informative)
   ScalarType coord_type = ScalarType::kFloat64;
   std::vector<FieldDesc> point_fields, cell_fields;
   double bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};  // of level 0
@@ -39,6 +48,13 @@ struct GtnLevelRecord {
   double ratio = 0.0;
   uint64_t points = 0, tets = 0, boundary_triangles = 0;
   double bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
+  std::vector<PieceInfo> pieces;  // at least one; their tetrahedra sum to `tets`
+};
+
+// The seam table (SEAM payload): the classes and where each class's stream lies in the payload.
+struct GtnSeamTable {
+  std::vector<SeamClass> classes;
+  std::vector<std::pair<uint64_t, uint64_t>> streams;  // per class: offset in the payload, size
 };
 
 struct GtnDirectoryEntry {
@@ -54,13 +70,24 @@ struct GtnTrailer {
 
 std::vector<uint8_t> encodeFileHeader(const GtnFileHeader& h);
 std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& r);
+// The SEAM payload: the class table, then the class streams concatenated (one per class).
+std::vector<uint8_t> encodeSeamTable(const std::vector<SeamClass>& classes,
+                                     const std::vector<std::vector<uint8_t>>& streams);
 std::vector<uint8_t> encodeDirectory(const GtnDirectory& d);
 std::vector<uint8_t> encodeTrailer(const GtnTrailer& t);
 
 // Decoders: `payload` is the chunk's (decompressed) payload, `offset` the file offset of its first byte
 // (for messages; for zstd chunks, offsets point into the decompressed payload and say so).
 Status decodeFileHeader(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnFileHeader* h);
+// Checks the piece table against the level's counts too: kinds known, each piece's counts consistent,
+// the pieces' tetrahedra summing to the level's. The one piece of a one-piece level stores only its
+// kind and own boundary points; the rest is the level's.
 Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnLevelRecord* r);
+// Checks the table against level `level` (`points` points, piece table `pieces`): classes of 2 or more increasing piece indices below
+// the piece count, in increasing lexicographic order, the seam points of each piece matching its
+// piece entry, own and seam points summing to the level's, stream sizes summing to the payload.
+Status decodeSeamTable(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, uint64_t level,
+                       uint64_t points, std::span<const PieceInfo> pieces, GtnSeamTable* t);
 Status decodeDirectory(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, uint64_t level_count,
                        GtnDirectory* d);
 Status decodeTrailer(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnTrailer* t);

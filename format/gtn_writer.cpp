@@ -2,7 +2,7 @@
 
 #include <tbb/task_group.h>
 
-#include "codec/level_check.h"
+#include "codec/pieces_check.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
 
@@ -53,6 +53,8 @@ Status GtnStreamWriter::begin(const LevelHeader& level0, uint64_t level_count) {
   h.level_count = level_count;
   h.points = level0.points;
   h.tets = level0.tets;
+  h.draft = kGtnDraftRevision;
+  h.piece_tets = options_.piece_tets;
   h.coord_type = level0.coord_type;
   h.point_fields = level0.point_fields;
   h.cell_fields = level0.cell_fields;
@@ -67,23 +69,67 @@ Status GtnStreamWriter::begin(const LevelHeader& level0, uint64_t level_count) {
   return emit(kTagFileHeader, encodeFileHeader(h), false, true);
 }
 
+PiecedLevel onePieceLevel(const EncodedLevel& e) {
+  PiecedLevel l;
+  l.header = e.header;
+  PieceInfo p;
+  p.points = e.header.points;
+  p.own_points = e.header.points;
+  p.own_boundary_points = e.boundary_points;
+  p.tets = e.header.tets;
+  p.boundary_triangles = e.header.boundary_triangles;
+  for (int i = 0; i < 3; ++i) {
+    p.bbox_min[i] = e.header.bbox_min[i];
+    p.bbox_max[i] = e.header.bbox_max[i];
+  }
+  l.pieces = {p};
+  l.encoded = {e};
+  l.vertex_order = e.vertex_order;
+  l.tet_order = e.tet_order;
+  return l;
+}
+
 Status GtnStreamWriter::addLevel(const EncodedLevel& e, double ratio,
                                  const std::optional<std::vector<uint8_t>>& merge_tree) {
+  return addLevel(onePieceLevel(e), ratio, merge_tree);
+}
+
+Status GtnStreamWriter::addLevel(const PiecedLevel& l, double ratio,
+                                 const std::optional<std::vector<uint8_t>>& merge_tree) {
   if (!begun_ || finished_) return usageError("GtnStreamWriter::addLevel outside begin/finish");
-  const LevelHeader& h = e.header;
+  const LevelHeader& h = l.header;
   if (levels_written_ >= level_count_)
     return usageError("more levels than the " + std::to_string(level_count_) + " declared");
   if (h.level != levels_written_)
     return usageError("level " + std::to_string(h.level) + " given where level " + std::to_string(levels_written_) +
                       " comes next");
+  const std::string level = "level " + std::to_string(h.level);
   if (h.coord_type != level0_.coord_type || !sameFields(h.point_fields, level0_.point_fields) ||
       !sameFields(h.cell_fields, level0_.cell_fields))
-    return usageError("level " + std::to_string(h.level) +
-                      " has a different coordinate type or field list than level 0; all levels must share them");
+    return usageError(level + " has a different coordinate type or field list than level 0; all levels must share them");
   if (h.level == 0 && (h.points != level0_.points || h.tets != level0_.tets))
     return usageError("level 0's counts differ from those given to begin()");
-  if (e.point_fields.size() != h.point_fields.size() || e.cell_fields.size() != h.cell_fields.size())
-    return usageError("level " + std::to_string(h.level) + ": the number of field streams does not match the header");
+  if (l.pieces.empty() || l.pieces.size() > kGtnMaxPieces || l.encoded.size() != l.pieces.size())
+    return usageError(level + " has " + std::to_string(l.pieces.size()) + " pieces and " +
+                      std::to_string(l.encoded.size()) + " piece encodings (1 to " + std::to_string(kGtnMaxPieces) +
+                      " pieces, one encoding each)");
+  if ((l.pieces.size() == 1) != l.classes.empty() || l.seam_streams.size() != l.classes.size())
+    return usageError(level + ": seam classes go with several pieces, one stream each");
+  uint64_t tets = 0;
+  for (size_t p = 0; p < l.pieces.size(); ++p) {
+    const EncodedLevel& e = l.encoded[p];
+    if (l.pieces[p].kind != kPieceUnstructured)
+      return usageError(level + " piece " + std::to_string(p) + ": kind " + std::to_string(l.pieces[p].kind) +
+                        " cannot be written yet");
+    if (e.point_fields.size() != h.point_fields.size() || e.cell_fields.size() != h.cell_fields.size())
+      return usageError(level + ": the number of field streams does not match the header");
+    tets += l.pieces[p].tets;
+  }
+  if (l.pieces.size() == 1 && (l.pieces[0].points != h.points || l.pieces[0].own_points != h.points))
+    return usageError(level + ": its one piece must hold all its points as its own");
+  if (tets != h.tets)
+    return usageError(level + ": the pieces' tetrahedra sum to " + std::to_string(tets) + ", not " +
+                      std::to_string(h.tets));
   if (!(ratio >= 0.0 && ratio <= 1.0)) return usageError("level ratio must be in [0, 1]");
   if (h.level == 0 && h.merges != 0) return usageError("level 0 must have 0 merges");
 
@@ -100,12 +146,16 @@ Status GtnStreamWriter::addLevel(const EncodedLevel& e, double ratio,
     r.bbox_min[i] = h.bbox_min[i];
     r.bbox_max[i] = h.bbox_max[i];
   }
+  r.pieces = l.pieces;
   GTN_RETURN_IF_ERROR(emit(kTagLevelHeader, encodeLevelRecord(r), false, false));
-  GTN_RETURN_IF_ERROR(emit(kTagBoundary, e.boundary, false, true));
-  GTN_RETURN_IF_ERROR(emit(kTagConnectivity, e.connectivity, false, true));
-  GTN_RETURN_IF_ERROR(emit(kTagGeometry, e.geometry, false, true));
-  for (const auto& s : e.point_fields) GTN_RETURN_IF_ERROR(emit(kTagPointField, s, false, true));
-  for (const auto& s : e.cell_fields) GTN_RETURN_IF_ERROR(emit(kTagCellField, s, false, true));
+  if (l.pieces.size() > 1) GTN_RETURN_IF_ERROR(emit(kTagSeam, encodeSeamTable(l.classes, l.seam_streams), false, true));
+  for (const EncodedLevel& e : l.encoded) {
+    GTN_RETURN_IF_ERROR(emit(kTagBoundary, e.boundary, false, true));
+    GTN_RETURN_IF_ERROR(emit(kTagConnectivity, e.connectivity, false, true));
+    GTN_RETURN_IF_ERROR(emit(kTagGeometry, e.geometry, false, true));
+    for (const auto& s : e.point_fields) GTN_RETURN_IF_ERROR(emit(kTagPointField, s, false, true));
+    for (const auto& s : e.cell_fields) GTN_RETURN_IF_ERROR(emit(kTagCellField, s, false, true));
+  }
   if (merge_tree) GTN_RETURN_IF_ERROR(emit(kTagMergeTree, *merge_tree, true, true));
   return Status::ok();
 }
@@ -155,19 +205,24 @@ StatusOr<std::vector<uint8_t>> assembleGtn(const std::vector<const EncodedLevel*
 namespace {
 
 struct EncodedInput {
-  EncodedLevel level;
+  PiecedLevel level;
   std::optional<std::vector<uint8_t>> tree;
 };
 
-StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, size_t i, const TetMesh& mesh) {
+StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, size_t i, const TetMesh& mesh,
+                                   const GtnWriteOptions& options) {
   EncodedInput out;
   if (levels[i].encoded) {
     out.level = *levels[i].encoded;
   } else {
-    GTN_ASSIGN_OR_RETURN(out.level, encodeLevel(mesh, EncodeOptions{}));
+    GTN_ASSIGN_OR_RETURN(out.level, encodePieces(mesh, EncodeOptions{}, options.piece_tets));
   }
   out.level.header.level = static_cast<uint32_t>(i);
   out.level.header.merges = levels[i].merges;
+  for (EncodedLevel& e : out.level.encoded) {
+    e.header.level = static_cast<uint32_t>(i);
+    e.header.merges = levels[i].merges;
+  }
   if (levels[i].merge_tree) {
     auto t = levels[i].merge_tree(out.level.vertex_order);
     if (!t.isOk()) return t.status();
@@ -179,10 +234,10 @@ StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, siz
 // With options.verify: level i passes its own check_mesh and decodes back to its mesh (otherwise the
 // simplifier or the encoder has a bug, and the file must not replace anything).
 Status checkDecodesBack(const std::string& path, const GtnLevelInput& level, const TetMesh& mesh, size_t i,
-                        const EncodedLevel& e, const GtnWriteOptions& options) {
+                        const PiecedLevel& e, const GtnWriteOptions& options) {
   if (!options.verify) return Status::ok();
   if (level.check_mesh) GTN_RETURN_IF_ERROR(level.check_mesh(mesh));
-  const std::string why = losslessMismatch(mesh, e);
+  const std::string why = piecedLosslessMismatch(mesh, e);
   if (why.empty()) return Status::ok();
   return invalidData(path + ": level " + std::to_string(i) + " would not decode back to its mesh (" + why +
                      "), so the file was not written; this is a bug in gtn's encoder, please report it with the input");
@@ -192,6 +247,9 @@ Status checkDecodesBack(const std::string& path, const GtnLevelInput& level, con
 
 Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels, const GtnWriteOptions& options) {
   if (levels.empty()) return usageError(path + ": no level to write");
+  if (options.piece_tets < kMinPieceTets)
+    return usageError(path + ": a piece holds at most " + std::to_string(options.piece_tets) +
+                      " tetrahedra; the bound must be at least " + std::to_string(kMinPieceTets));
   for (size_t i = 0; i < levels.size(); ++i)
     if (!levels[i].mesh && !levels[i].make_mesh)
       return usageError(path + ": level " + std::to_string(i) + " has no mesh");
@@ -244,7 +302,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
         break;
       }
       progress(options.verify ? "encode and verify" : "encode", i);
-      auto e = encodeInput(levels, i, **mesh);
+      auto e = encodeInput(levels, i, **mesh, options);
       if (!e.isOk()) {
         failed = e.status();
         break;
@@ -280,7 +338,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
       if (!bounded) {
         GTN_ASSIGN_OR_RETURN(const TetMesh* mesh, meshOf(i));
         progress("encode", i);
-        auto e = encodeInput(levels, i, *mesh);
+        auto e = encodeInput(levels, i, *mesh, options);
         if (!e.isOk()) return e.status();
         one = std::move(e).value();
         if (options.verify) progress("verify", i);

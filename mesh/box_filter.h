@@ -1,5 +1,5 @@
-// Region reads: the tetrahedra of a mesh that meet an axis-aligned box. Until files are cut into
-// pieces (format 2.0), a region read decodes the whole level and filters it here.
+// Region reads: the tetrahedra of a mesh that meet an axis-aligned box. A region read decodes the
+// pieces of a level whose bounding boxes meet the box (codec/pieces.h) and filters them here.
 #pragma once
 
 #include "mesh/tet_mesh.h"

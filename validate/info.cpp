@@ -200,7 +200,8 @@ LevelZeroBytes levelZeroBytes(const GtnReader& r) {
   b.total = r.file().bytes;
   for (size_t i = 1; i < r.levels(); ++i) b.total -= r.level(i).bytes;
   for (const GtnChunkInfo& c : r.level(0).chunks) {
-    if (c.tag == kTagBoundary || c.tag == kTagConnectivity) b.connectivity += c.bytes;
+    if (c.tag == kTagBoundary || c.tag == kTagConnectivity || c.tag == kTagSeam || c.tag == kTagGrid)
+      b.connectivity += c.bytes;
     else if (c.tag == kTagGeometry) b.geometry += c.bytes;
     else if (c.tag == kTagPointField || c.tag == kTagCellField) b.fields += c.bytes;
     else if (c.tag == kTagMergeTree) b.merge_tree += c.bytes;
@@ -224,6 +225,8 @@ StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const Me
   j["bytes"] = f.bytes;
   j["provenance"] = {{"tool_version", f.header.tool_version}, {"command_line", f.header.command_line}};
   j["has_directory"] = f.has_directory;
+  j["draft"] = f.header.draft;
+  j["piece_tets"] = f.header.piece_tets;
   nlohmann::json sections = nlohmann::json::array();
   for (const GtnSection& s : r.sections()) sections.push_back({{"name", s.name}, {"bytes", s.bytes}});
   j["sections"] = sections;
@@ -237,12 +240,28 @@ StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const Me
   for (size_t i = 0; i < r.levels(); ++i) {
     const GtnLevelInfo& l = r.level(i);
     nlohmann::json chunks = nlohmann::json::array();
-    for (const GtnChunkInfo& c : l.chunks)
-      chunks.push_back({{"type", c.tag.str()},
-                        {"section", c.section},
-                        {"bytes", c.bytes},
-                        {"raw_bytes", c.raw_bytes},
-                        {"zstd", c.zstd}});
+    for (const GtnChunkInfo& c : l.chunks) {
+      nlohmann::json chunk = {{"type", c.tag.str()},
+                              {"section", c.section},
+                              {"bytes", c.bytes},
+                              {"raw_bytes", c.raw_bytes},
+                              {"zstd", c.zstd}};
+      if (c.piece != kNoIndex) chunk["piece"] = c.piece;
+      chunks.push_back(std::move(chunk));
+    }
+    nlohmann::json pieces = nlohmann::json::array();
+    for (size_t p = 0; p < l.pieces.size(); ++p) {
+      const PieceInfo& pi = l.pieces[p];
+      pieces.push_back({{"piece", p},
+                        {"kind", pi.kind},
+                        {"points", pi.points},
+                        {"own_points", pi.own_points},
+                        {"tets", pi.tets},
+                        {"boundary_triangles", pi.boundary_triangles},
+                        {"bbox", {{"min", {pi.bbox_min[0], pi.bbox_min[1], pi.bbox_min[2]}},
+                                  {"max", {pi.bbox_max[0], pi.bbox_max[1], pi.bbox_max[2]}}}},
+                        {"bytes", l.pieceBytes(p)}});
+    }
     levels.push_back({{"level", i},
                       {"points", l.header.points},
                       {"tets", l.header.tets},
@@ -251,6 +270,8 @@ StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const Me
                       {"ratio", l.ratio},
                       {"merge_tree", l.has_merge_tree},
                       {"bytes", l.bytes},
+                      {"piece_count", l.pieces.size()},
+                      {"pieces", pieces},
                       {"chunks", chunks}});
   }
   j["levels"] = levels;

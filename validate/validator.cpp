@@ -218,7 +218,9 @@ std::optional<uint64_t> messageOffset(const std::string& message) {
 IssueCode classifyContainerFailure(const Status& status) {
   const std::string& m = status.message();
   if (status.code() == StatusCode::kNotOurFile) return IssueCode::kBadMagic;
-  if (status.code() == StatusCode::kVersionTooNew || containsText(m, "major version")) {
+  if (status.code() == StatusCode::kVersionTooNew || containsText(m, "major version") ||
+      (status.code() == StatusCode::kUnsupported &&
+       (containsText(m, "format version") || containsText(m, "draft revision")))) {
     return IssueCode::kUnsupportedVersion;
   }
   if (containsText(m, "inside the 16-byte")) return IssueCode::kFileTooSmall;

@@ -20,11 +20,11 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   // Level 0 is encoded while the merges are ranked: on another thread where TBB has one, after the
   // ranking where it has not. A level 0 that fails to encode is left to the writer, which fails on it
   // before any mip level is made.
-  std::shared_ptr<EncodedLevel> level0;
+  std::shared_ptr<PiecedLevel> level0;
   tbb::task_group encoding;
   encoding.run([&] {
-    auto e = encodeLevel(mesh, EncodeOptions{});
-    if (e.isOk()) level0 = std::make_shared<EncodedLevel>(std::move(e).value());
+    auto e = encodePieces(mesh, EncodeOptions{}, wo.piece_tets);
+    if (e.isOk()) level0 = std::make_shared<PiecedLevel>(std::move(e).value());
   });
   RankingStats ranked;
   StatusOr<MergeTree> ranking = rankMerges(mesh, o.ranking, &ranked, wo.progress);

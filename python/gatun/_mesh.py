@@ -51,8 +51,8 @@ def read(path, level=None, ratio=None, fields=None, box=None, threads=None):
             --ratio`; a ratio beyond what the tree allows gives the coarsest mesh
     fields  names of the point and cell fields to decode (default: all; the others are not decoded)
     box     (xmin, ymin, zmin, xmax, ymax, zmax): only the tetrahedra that meet this box, with the
-            points they use. The file is decoded whole and then filtered (files are not yet cut into
-            pieces that could be read alone).
+            points they use. Of a stored level only the pieces whose bounding boxes meet the box are
+            decoded, then filtered; with a ratio the simplified mesh is decoded whole, then filtered.
     threads the most threads the library's parallel parts (TBB) may use during the call (default: every
             core). A level decodes on one thread (until files are cut into pieces), so today this
             bounds nothing a read does; gatun.write's threads bounds the ranking and the check.

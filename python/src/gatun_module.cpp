@@ -17,6 +17,7 @@
 #include "convert/import.h"
 #include "format/decode_fields.h"
 #include "format/gtn_reader.h"
+#include "codec/pieces.h"
 #include "mesh/box_filter.h"
 #include "simplify/levels.h"
 #include "validate/info.h"
@@ -170,6 +171,14 @@ py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::opt
       // Over the vertices tetrahedra use, as the stored levels' ratios and mergesForRatio count.
       const uint64_t free = valueOr(levelZeroUnreferencedMerges(r)), points = r.level(0).header.points;
       level_ratio = points > free && merges > free ? double(merges - free) / double(points - free) : 0.0;
+    } else if (box && piecesInBox(r.level(level_read).pieces, lo, hi).size() < r.level(level_read).pieces.size()) {
+      // A region read decodes only the pieces whose bounding boxes meet the box; the tetrahedra that
+      // meet the box are then kept from those (below).
+      std::vector<uint32_t> chosen = piecesInBox(r.level(level_read).pieces, lo, hi);
+      if (chosen.empty()) chosen = {0};  // no tetrahedron meets the box: the crop below keeps none
+      builder.mesh() = valueOr(r.decodeLevelPieces(level_read, chosen, &fields)).mesh;
+      merges = r.level(level_read).header.merges;
+      level_ratio = r.level(level_read).ratio;
     } else {
       check(r.decodeLevel(level_read, builder, nullptr, &fields));
       merges = r.level(level_read).header.merges;

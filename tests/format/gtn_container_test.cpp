@@ -94,8 +94,9 @@ TEST(GtnContainer, RoundTripStreamsHeadersAndSections) {
     ASSERT_TRUE(opened.isOk()) << opened.status().message();
     GtnReader& r = **opened;
     EXPECT_EQ(r.openedByDirectory(), !verify);
-    EXPECT_EQ(r.file().major, 1);
+    EXPECT_EQ(r.file().major, 2);
     EXPECT_EQ(r.file().minor, 0);
+    EXPECT_EQ(r.file().header.draft, kGtnDraftRevision);
     EXPECT_TRUE(r.file().has_directory);
     EXPECT_EQ(r.file().header.tool_version, "test 1.0");
     EXPECT_EQ(r.file().header.command_line, "gtn convert in.vtk -o out.gtn");
@@ -304,15 +305,22 @@ TEST(GtnContainer, UnknownCriticalChunkRejected) {
 TEST(GtnContainer, VersionsMajorRejectedMinorAccepted) {
   const std::string dir = test::tempDir("container-version");
   std::vector<uint8_t> bytes = twoLevelFile();
-  const auto newer_major = encodeGtnPrefix(2, 0);
+  const auto newer_major = encodeGtnPrefix(3, 0);
   std::copy(newer_major.begin(), newer_major.end(), bytes.begin());
-  const Status st = openStatus(writeTemp(dir, "v2.gtn", bytes));
+  Status st = openStatus(writeTemp(dir, "v3.gtn", bytes));
   EXPECT_EQ(st.code(), StatusCode::kVersionTooNew);
-  EXPECT_NE(st.message().find("format version 2.0 is newer"), std::string::npos) << st.message();
-  const auto newer_minor = encodeGtnPrefix(1, 7);
+  EXPECT_NE(st.message().find("format version 3.0 is newer"), std::string::npos) << st.message();
+  // 1.x was never released: refused, naming its version.
+  const auto older_major = encodeGtnPrefix(1, 0);
+  std::copy(older_major.begin(), older_major.end(), bytes.begin());
+  st = openStatus(writeTemp(dir, "v1.gtn", bytes));
+  EXPECT_EQ(st.code(), StatusCode::kUnsupported);
+  EXPECT_NE(st.message().find("format version 1.0 is not read"), std::string::npos) << st.message();
+  const auto newer_minor = encodeGtnPrefix(2, 7);
   std::copy(newer_minor.begin(), newer_minor.end(), bytes.begin());
-  auto r = GtnReader::open(writeTemp(dir, "v17.gtn", bytes));
+  auto r = GtnReader::open(writeTemp(dir, "v27.gtn", bytes));
   ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ((*r)->file().major, 2);
   EXPECT_EQ((*r)->file().minor, 7);
 }
 
@@ -480,6 +488,20 @@ TEST(GtnContainer, MalformedPayloadsWithValidChecksumsFailCleanly) {
   lh([](GtnLevelRecord& l) { l.level = 1; }, "level header says level 1");
   lh([](GtnLevelRecord& l) { l.ratio = std::nan(""); }, "ratio is not in [0, 1]");
   lh([](GtnLevelRecord& l) { l.merges = 3; }, "level 0's counts disagree");
+  // The piece table.
+  lh([](GtnLevelRecord& l) { l.pieces.clear(); }, "piece count is 0");
+  lh([](GtnLevelRecord& l) { l.pieces[0].kind = 1; }, "piece 0 has kind 1, which this reader does not know");
+  lh([](GtnLevelRecord& l) { l.pieces[0].own_boundary_points = l.pieces[0].own_points + 1; },
+     "piece own boundary point count");
+  // A second piece and no seam table: the chunk order names the missing SEAM.
+  lh(
+      [](GtnLevelRecord& l) {
+        l.pieces.push_back(l.pieces[0]);
+        l.pieces[0].tets = 1;
+        l.pieces[1].tets = l.tets - 1;
+        l.pieces[0].own_points = l.pieces[1].own_points = 0;
+      },
+      "has several pieces but no 'SEAM' chunk");
 }
 
 TEST(GtnContainer, CorruptZstdFrameWithValidChecksumRejected) {
