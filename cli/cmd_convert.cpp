@@ -26,8 +26,8 @@ struct ConvertArgs {
   bool compress = false;
   int levels = -1;  // mip levels beyond level 0, -1 = automatic
   bool no_merge_tree = false;
-  bool no_verify = false;      // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
-  double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes
+  bool no_verify = false;                   // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
+  double level_storage = 2.0;               // automatic levels: all levels within this multiple of level 0's bytes
   uint64_t piece_tets = kDefaultPieceTets;  // .gtn: the bound on a piece's tetrahedra
   RankingOptions ranking;
   bool quiet = false;  // -q: no progress line, no summary

@@ -66,7 +66,8 @@ int runDecode(const DecodeArgs& a) {
   view.ratio = a.ratio;
   view.fields = a.fields;
   if (!a.box.empty()) {
-    if (Status b = parseBox(a.box, &view); !b.isOk()) return reportError(Status(b.code(), a.input + ": " + b.message()));
+    if (Status b = parseBox(a.box, &view); !b.isOk())
+      return reportError(Status(b.code(), a.input + ": " + b.message()));
   }
   DecodeFields fields;
   const Clock::time_point decode_start = Clock::now();

@@ -56,7 +56,8 @@ int runExport(const ExportArgs& a) {
   view.merges = a.merges;
   view.fields = a.fields;
   if (!a.box.empty()) {
-    if (Status b = parseBox(a.box, &view); !b.isOk()) return reportError(Status(b.code(), a.input + ": " + b.message()));
+    if (Status b = parseBox(a.box, &view); !b.isOk())
+      return reportError(Status(b.code(), a.input + ": " + b.message()));
   }
   DecodeFields fields;
   const Status st = decodeView(r, a.input, view, sink, &fields, nullptr);

@@ -1443,89 +1443,90 @@ StatusOr<GridLayout> matchGridLayout(const TetMesh& mesh, const uint32_t dims[3]
   const uint64_t cells = probe.cells();
   const uint64_t first_limit = std::max<uint64_t>(64, cells / 16);
   for (int round = 0; round < 2 && !best; ++round)
-  for (const Candidate& cand : candidates) {
-    const uint64_t limit = round == 0 ? first_limit : cells;
-    GridLayout l = probe;
-    l.split = cand.split;
-    l.parity = cand.parity;
-    l.left_handed = cand.left;
-    const int a2 = cand.left ? 3 : 2, a3 = cand.left ? 2 : 3;
-    uint64_t t = 0, cell = 0, next_extra = nodes;
-    bool ok = true;
-    for (uint64_t k = 0; k < g.ck && ok; ++k)
-      for (uint64_t j = 0; j < g.cj && ok; ++j)
-        for (uint64_t i = 0; i < g.ci && ok; ++i, ++cell) {
-          const uint64_t base = i + g.ni * (j + g.nj * k);
-          uint32_t corner[8];
-          for (int q = 0; q < 8; ++q) corner[q] = nv.empty() ? static_cast<uint32_t>(base + off[q]) : nv[base + off[q]];
-          const auto rule = gridRuleTets(cand.split, ((i + j + k + cand.parity) & 1) != 0);
-          bool regular = t + rule.size() <= T;
-          for (size_t r = 0; r < rule.size() && regular; ++r) {
-            const auto& q = rule[r];
-            const Tet want = {corner[q[0]], corner[q[1]], corner[q[a2]], corner[q[a3]]};
-            regular = mesh.tets[t + r] == want;
-          }
-          if (regular) {
-            t += rule.size();
-            continue;
-          }
-          // The tetrahedra at t whose vertices are all corners of this cell or extra points.
-          GridException x;
-          x.cell = static_cast<uint32_t>(cell);
-          uint32_t extra_ids[kMaxExtras];
-          while (t < T && ok) {
-            std::array<uint8_t, 4> sym{};
-            bool belongs = true;
-            for (int q = 0; q < 4 && belongs; ++q) {
-              const uint32_t v = mesh.tets[t][q];
-              const uint8_t* at = nullptr;
-              for (int c = 0; c < 8 && !at; ++c)
-                if (corner[c] == v) sym[q] = static_cast<uint8_t>(c), at = &sym[q];
-              if (at) continue;
-              if (v < nodes || v >= points) {
-                belongs = false;
-                break;
-              }
-              int e = 0;
-              while (e < x.extras && extra_ids[e] != v) ++e;
-              if (e == x.extras) {
-                // A new extra point of this record: the next in the mesh's order, or not this grid.
-                if (v != next_extra || x.extras == kMaxExtras) {
-                  ok = false;
-                  failure = "extra point " + std::to_string(v) + " is not introduced in cell order";
+    for (const Candidate& cand : candidates) {
+      const uint64_t limit = round == 0 ? first_limit : cells;
+      GridLayout l = probe;
+      l.split = cand.split;
+      l.parity = cand.parity;
+      l.left_handed = cand.left;
+      const int a2 = cand.left ? 3 : 2, a3 = cand.left ? 2 : 3;
+      uint64_t t = 0, cell = 0, next_extra = nodes;
+      bool ok = true;
+      for (uint64_t k = 0; k < g.ck && ok; ++k)
+        for (uint64_t j = 0; j < g.cj && ok; ++j)
+          for (uint64_t i = 0; i < g.ci && ok; ++i, ++cell) {
+            const uint64_t base = i + g.ni * (j + g.nj * k);
+            uint32_t corner[8];
+            for (int q = 0; q < 8; ++q)
+              corner[q] = nv.empty() ? static_cast<uint32_t>(base + off[q]) : nv[base + off[q]];
+            const auto rule = gridRuleTets(cand.split, ((i + j + k + cand.parity) & 1) != 0);
+            bool regular = t + rule.size() <= T;
+            for (size_t r = 0; r < rule.size() && regular; ++r) {
+              const auto& q = rule[r];
+              const Tet want = {corner[q[0]], corner[q[1]], corner[q[a2]], corner[q[a3]]};
+              regular = mesh.tets[t + r] == want;
+            }
+            if (regular) {
+              t += rule.size();
+              continue;
+            }
+            // The tetrahedra at t whose vertices are all corners of this cell or extra points.
+            GridException x;
+            x.cell = static_cast<uint32_t>(cell);
+            uint32_t extra_ids[kMaxExtras];
+            while (t < T && ok) {
+              std::array<uint8_t, 4> sym{};
+              bool belongs = true;
+              for (int q = 0; q < 4 && belongs; ++q) {
+                const uint32_t v = mesh.tets[t][q];
+                const uint8_t* at = nullptr;
+                for (int c = 0; c < 8 && !at; ++c)
+                  if (corner[c] == v) sym[q] = static_cast<uint8_t>(c), at = &sym[q];
+                if (at) continue;
+                if (v < nodes || v >= points) {
+                  belongs = false;
                   break;
                 }
-                extra_ids[x.extras++] = v;
-                ++next_extra;
+                int e = 0;
+                while (e < x.extras && extra_ids[e] != v) ++e;
+                if (e == x.extras) {
+                  // A new extra point of this record: the next in the mesh's order, or not this grid.
+                  if (v != next_extra || x.extras == kMaxExtras) {
+                    ok = false;
+                    failure = "extra point " + std::to_string(v) + " is not introduced in cell order";
+                    break;
+                  }
+                  extra_ids[x.extras++] = v;
+                  ++next_extra;
+                }
+                sym[q] = static_cast<uint8_t>(8 + e);
               }
-              sym[q] = static_cast<uint8_t>(8 + e);
+              if (!ok || !belongs) break;
+              x.tets.push_back(sym);
+              ++t;
             }
-            if (!ok || !belongs) break;
-            x.tets.push_back(sym);
-            ++t;
+            if (!ok) break;
+            if (x.tets.size() > kMaxExplicitTets) {
+              ok = false;
+              failure = "cell " + std::to_string(cell) + " has more than 31 tetrahedra";
+              break;
+            }
+            x.kind = x.tets.empty() ? GridException::kBlanked : GridException::kExplicit;
+            l.exceptions.push_back(std::move(x));
+            if (best && l.exceptions.size() >= best->exceptions.size()) ok = false;  // no better than the best
+            if (l.exceptions.size() > limit) ok = false;
           }
-          if (!ok) break;
-          if (x.tets.size() > kMaxExplicitTets) {
-            ok = false;
-            failure = "cell " + std::to_string(cell) + " has more than 31 tetrahedra";
-            break;
-          }
-          x.kind = x.tets.empty() ? GridException::kBlanked : GridException::kExplicit;
-          l.exceptions.push_back(std::move(x));
-          if (best && l.exceptions.size() >= best->exceptions.size()) ok = false;  // no better than the best
-          if (l.exceptions.size() > limit) ok = false;
-        }
-    if (!ok) continue;
-    if (t != T) {
-      failure = "tetrahedron " + std::to_string(t) + " belongs to no cell in order";
-      continue;
+      if (!ok) continue;
+      if (t != T) {
+        failure = "tetrahedron " + std::to_string(t) + " belongs to no cell in order";
+        continue;
+      }
+      if (next_extra != points) {
+        failure = "points " + std::to_string(next_extra) + " and after are used by no cell";
+        continue;
+      }
+      best = std::move(l);
     }
-    if (next_extra != points) {
-      failure = "points " + std::to_string(next_extra) + " and after are used by no cell";
-      continue;
-    }
-    best = std::move(l);
-  }
   if (!best)
     return invalidData("the mesh is not this " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
                        std::to_string(dims[2]) + " grid: " + failure);

@@ -96,7 +96,7 @@ struct EncoderSide {
   // source vertex is a from edge_point_start[a] on; a coded point's entry becomes kNoIndex.
   std::vector<EdgePoint> edge_points;
   std::vector<uint32_t> edge_point_start;
-  std::vector<uint32_t> face_tet;  // FaceMap index of an open face -> the undecoded tetrahedron behind it
+  std::vector<uint32_t> face_tet;               // FaceMap index of an open face -> the undecoded tetrahedron behind it
   const std::vector<uint32_t>* seam = nullptr;  // EncodeOptions::seam (null: no seam vertex)
 
   // The boundary triangle not coded yet on the open half-edge (p, q) (slots), if any: its index and
@@ -1168,7 +1168,7 @@ class LevelCoder {
   int seam_bits_ = 0;
   std::vector<char> seam_seen_;
   uint32_t seams_introduced_ = 0;
-  uint32_t seam_last_ = kNoIndex;  // the previous seam vertex's index (kNoIndex + 1 = 0 before the first)
+  uint32_t seam_last_ = kNoIndex;      // the previous seam vertex's index (kNoIndex + 1 = 0 before the first)
   BitModel seam_flag_[2], seam_near_;  // seam_flag_: [whether the boundary is done]
   bool boundary_done_ = false;
   BitTree<6> seam_length_, seam_rank_;

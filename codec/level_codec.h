@@ -97,7 +97,6 @@ LevelPayload payloadOf(const EncodedLevel& encoded);
 // never crashes, on any corrupt payload; `what` names the source in messages (file and level).
 // `fields`: which fields to decode (null: all).
 Status decodeLevel(const LevelHeader& header, const LevelPayload& payload, MeshSink& sink, DecodeStats* stats,
-                   const std::string& what, const DecodeFields* fields = nullptr,
-                   const SeamValues* seams = nullptr);
+                   const std::string& what, const DecodeFields* fields = nullptr, const SeamValues* seams = nullptr);
 
 }  // namespace gtn

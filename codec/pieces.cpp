@@ -127,7 +127,8 @@ void seamKeys(const TetMesh& mesh, const LevelHeader& h, const ComponentLayout& 
   }
   for (const Field& f : mesh.point_fields) {
     const size_t vs = f.valueSize();
-    for (uint32_t j = 0; j < f.components; ++j, ++c) keys[c] = keyFromRaw(f.type, &f.bytes[(size_t{v} * f.components + j) * vs]);
+    for (uint32_t j = 0; j < f.components; ++j, ++c)
+      keys[c] = keyFromRaw(f.type, &f.bytes[(size_t{v} * f.components + j) * vs]);
   }
 }
 
@@ -509,7 +510,7 @@ StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vec
 
   // Seam vertices: the classes that hold a chosen piece, decoded in parallel.
   const size_t n_classes = view.classes.size();
-  std::vector<uint64_t> class_first(n_classes + 1, 0);  // global seam id of each class's first vertex
+  std::vector<uint64_t> class_first(n_classes + 1, 0);   // global seam id of each class's first vertex
   std::vector<uint64_t> class_out(n_classes, kNoIndex);  // its first output id, kNoIndex: not decoded
   uint64_t n_seam_out = 0;
   for (size_t c = 0; c < n_classes; ++c) {
@@ -708,8 +709,7 @@ StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vec
     for (size_t k = 0; k < ns; ++k) {
       const SeamRef& r = seam_refs[p][k];
       std::memcpy(&coords[3 * k], &seam_coords[r.cls][3 * r.k], 3 * sizeof(double));
-      if (value_bytes > 0)
-        std::memcpy(&values[k * value_bytes], &seam_values[r.cls][r.k * value_bytes], value_bytes);
+      if (value_bytes > 0) std::memcpy(&values[k * value_bytes], &seam_values[r.cls][r.k * value_bytes], value_bytes);
     }
     Status st = Status::ok();
     if (info.kind == 1) {
@@ -809,7 +809,8 @@ Status emitDecoded(const LevelHeader& header, const DecodedPieces& decoded, Mesh
         std::memcpy(&values[off], &f.bytes[next * ib], ib);
         off += ib;
       }
-      GTN_RETURN_IF_ERROR(sink.vertex(static_cast<uint32_t>(next), mesh.point(next), value_bytes ? values.data() : nullptr));
+      GTN_RETURN_IF_ERROR(
+          sink.vertex(static_cast<uint32_t>(next), mesh.point(next), value_bytes ? values.data() : nullptr));
     }
     return Status::ok();
   };

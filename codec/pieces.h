@@ -32,12 +32,12 @@ inline constexpr uint64_t kMinPieceTets = uint64_t{1} << 12;
 
 // What the level header records of one piece.
 struct PieceInfo {
-  uint8_t kind = 0;                    // 0: unstructured (the level codec)
-  uint64_t points = 0;                 // vertices the piece's streams introduce (own and seam)
-  uint64_t own_points = 0;             // of them, those no other piece uses (stored in the piece)
-  uint64_t own_boundary_points = 0;    // of the own ones, those introduced while coding the boundary
-  uint64_t tets = 0;                   // the piece's tetrahedra
-  uint64_t boundary_triangles = 0;     // triangles of the piece's boundary surface (cut faces included)
+  uint8_t kind = 0;                  // 0: unstructured (the level codec)
+  uint64_t points = 0;               // vertices the piece's streams introduce (own and seam)
+  uint64_t own_points = 0;           // of them, those no other piece uses (stored in the piece)
+  uint64_t own_boundary_points = 0;  // of the own ones, those introduced while coding the boundary
+  uint64_t tets = 0;                 // the piece's tetrahedra
+  uint64_t boundary_triangles = 0;   // triangles of the piece's boundary surface (cut faces included)
   double bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};  // of the vertices the piece uses
 };
 
@@ -49,10 +49,10 @@ struct SeamClass {
 
 // A level coded as pieces.
 struct PiecedLevel {
-  LevelHeader header;                             // the whole level (counts, bbox, fields)
-  std::vector<PieceInfo> pieces;                  // in piece order
-  std::vector<EncodedLevel> encoded;              // one per piece (its own header: the piece's counts)
-  std::vector<SeamClass> classes;                 // in class order (by piece list, lexicographic)
+  LevelHeader header;                              // the whole level (counts, bbox, fields)
+  std::vector<PieceInfo> pieces;                   // in piece order
+  std::vector<EncodedLevel> encoded;               // one per piece (its own header: the piece's counts)
+  std::vector<SeamClass> classes;                  // in class order (by piece list, lexicographic)
   std::vector<std::vector<uint8_t>> seam_streams;  // one per class: its vertices' coordinates and values
   // vertex_order[source vertex] = its global id; tet_order[source tetrahedron] = its global position.
   std::vector<uint32_t> vertex_order;
@@ -73,11 +73,11 @@ struct PiecePayload {
 
 // Everything the decoder needs of one level coded as pieces.
 struct PiecedLevelView {
-  const LevelHeader* header = nullptr;           // the level
-  std::span<const PieceInfo> pieces;             // every piece of the level
-  std::span<const SeamClass> classes;            // every class of the level
+  const LevelHeader* header = nullptr;                 // the level
+  std::span<const PieceInfo> pieces;                   // every piece of the level
+  std::span<const SeamClass> classes;                  // every class of the level
   std::vector<std::span<const uint8_t>> seam_streams;  // per class (may be empty for a class no chosen piece needs)
-  std::vector<PiecePayload> payloads;            // per piece (only the chosen pieces' are read)
+  std::vector<PiecePayload> payloads;                  // per piece (only the chosen pieces' are read)
 };
 
 // A decoded level (or part of one): the mesh and its boundary triangles (outward, by vertex index).

@@ -41,7 +41,7 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
   if (level.encoded.size() != level.pieces.size() || level.pieces.empty())
     return "the level has " + std::to_string(level.pieces.size()) + " pieces and " +
            std::to_string(level.encoded.size()) + " encodings";
-  if (level.pieces.size() == 1) return losslessMismatch(source, level.encoded[0]);
+  if (level.pieces.size() == 1 && level.pieces[0].kind == 0) return losslessMismatch(source, level.encoded[0]);
   const size_t np = source.numPoints(), nt = source.numTets();
   if (level.vertex_order.size() != np || level.tet_order.size() != nt)
     return "the encoder's renumbering does not cover the source";

@@ -45,8 +45,7 @@ void addCandidate(const Tet& t, int k, std::vector<Candidate>& out) {
 // without holding them all): the rule's (with its handedness) in rule cells, an explicit cell's list.
 class CellTets {
  public:
-  explicit CellTets(const GridLayout& l)
-      : l_(l), ni_(l.dims[0]), nj_(l.dims[1]), nv_(nodeVertexMap(l)) {
+  explicit CellTets(const GridLayout& l) : l_(l), ni_(l.dims[0]), nj_(l.dims[1]), nv_(nodeVertexMap(l)) {
     for (int q = 0; q < 8; ++q) off_[q] = kDx[q] + ni_ * (kDy[q] + nj_ * kDz[q]);
     uint64_t next = l.nodes() - l.aliases.size();
     for (const GridException& x : l.exceptions) {
@@ -332,8 +331,8 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   const TetMesh& m = piece.mesh;
   const uint64_t V = m.numPoints(), T = l.tets();
   if (V != header.points || T != header.tets)
-    return invalidData(what + ": the structured piece has " + std::to_string(V) + " vertices and " +
-                       std::to_string(T) + " tetrahedra, the header says " + std::to_string(header.points) + " and " +
+    return invalidData(what + ": the structured piece has " + std::to_string(V) + " vertices and " + std::to_string(T) +
+                       " tetrahedra, the header says " + std::to_string(header.points) + " and " +
                        std::to_string(header.tets));
   GTN_ASSIGN_OR_RETURN(const auto boundary, gridBoundary(l, what + ": structured piece"));
   if (boundary.size() != header.boundary_triangles)
@@ -387,9 +386,9 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
           if (tets[r][0] == v || tets[r][1] == v || tets[r][2] == v || tets[r][3] == v) return ex_first[x] + r;
         return kNoIndex;
       }
-      const uint64_t first = x == 0 ? cell * l.split
-                                    : ex_first[x - 1] + l.exceptions[x - 1].tets.size() +
-                                          (cell - l.exceptions[x - 1].cell - 1) * l.split;
+      const uint64_t first =
+          x == 0 ? cell * l.split
+                 : ex_first[x - 1] + l.exceptions[x - 1].tets.size() + (cell - l.exceptions[x - 1].cell - 1) * l.split;
       for (uint32_t r = l.split; r-- > 0;)
         if (gen.lastInRule(static_cast<int>((a + b + c + l.parity) & 1), r) & (1u << q))
           return static_cast<uint32_t>(first + r);

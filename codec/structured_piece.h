@@ -31,8 +31,7 @@ namespace gtn {
 // the level with encodeLevel; a mesh encodeLevel refuses is refused here too). The result's
 // `connectivity` holds the whole piece; its other streams are empty (one empty vector per field).
 StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const StructuredBlock& block,
-                                             const GridEncodeOptions& options = {},
-                                             GridEncodeReport* report = nullptr);
+                                             const GridEncodeOptions& options = {}, GridEncodeReport* report = nullptr);
 
 // Decodes a piece that encodeStructuredPiece wrote (`bytes`: its `connectivity`) and emits its
 // events to `sink` (order above). `header` as encodeStructuredPiece set it: its fields are the

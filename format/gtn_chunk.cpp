@@ -77,10 +77,10 @@ Status checkGtnPrefix(std::span<const uint8_t> b, const std::string& what, uint1
                                                   std::to_string(kGtnMajorVersion) + ".x); use a newer gtn to read it");
   if (*major == 0) return invalidData(at(what, 8) + "format major version 0 does not exist");
   if (*major < kGtnMajorVersion)
-    return Status(StatusCode::kUnsupported,
-                  at(what, 8) + "format version " + std::to_string(*major) + "." + std::to_string(*minor) +
-                      " is not read by this gtn (it reads " + std::to_string(kGtnMajorVersion) +
-                      ".x; 1.x was never released): convert the source mesh again");
+    return Status(StatusCode::kUnsupported, at(what, 8) + "format version " + std::to_string(*major) + "." +
+                                                std::to_string(*minor) + " is not read by this gtn (it reads " +
+                                                std::to_string(kGtnMajorVersion) +
+                                                ".x; 1.x was never released): convert the source mesh again");
   const uint32_t check = static_cast<uint32_t>(XXH3_64bits(b.data(), 12));
   uint32_t stored = 0;
   for (int i = 3; i >= 0; --i) stored = (stored << 8) | b[12 + i];

@@ -14,6 +14,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include "codec/structured_piece.h"
 #include "format/file_io.h"
 
 namespace gtn {
@@ -473,8 +474,8 @@ Status GtnReader::scan() {
       GTN_RETURN_IF_ERROR(checkLevelOrder(h.tag, known_in_level, layout, pos, levels_.size() - 1, what));
       if (h.tag == kTagSeam && opened) {
         GtnSeamTable table;
-        GTN_RETURN_IF_ERROR(decodeSeamTable(payload, payload_offset, what, levels_.size() - 1, li.header.points,
-                                            li.pieces, &table));
+        GTN_RETURN_IF_ERROR(
+            decodeSeamTable(payload, payload_offset, what, levels_.size() - 1, li.header.points, li.pieces, &table));
       }
       const bool in_piece = known_in_level < layout.size() && layout.piece[known_in_level] != kNoIndex;
       c.piece = in_piece ? layout.piece[known_in_level] : kNoIndex;
@@ -660,8 +661,8 @@ StatusOr<GtnLevelStreams> GtnReader::readPieceStreams(size_t i, size_t piece) {
                       std::to_string(levels_.size()) + ")");
   const GtnLevelInfo& li = levels_[i];
   if (piece >= li.pieces.size())
-    return usageError(file_.path + ": level " + std::to_string(i) + " has no piece " + std::to_string(piece) + " (it has " +
-                      std::to_string(li.pieces.size()) + ")");
+    return usageError(file_.path + ": level " + std::to_string(i) + " has no piece " + std::to_string(piece) +
+                      " (it has " + std::to_string(li.pieces.size()) + ")");
   GtnLevelStreams s;
   s.header = li.pieces.size() == 1 ? li.header : pieceHeader(li.header, li.pieces[piece]);
   for (size_t k = li.piece_chunk[piece]; k < li.chunks.size(); ++k) {
@@ -794,7 +795,11 @@ Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, cons
       if (fields->streams_done) fields->streams_done(point_out, cell_out);
     };
   }
-  GTN_RETURN_IF_ERROR(gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields ? &selected : nullptr));
+  if (i < levels_.size() && !levels_[i].pieces.empty() && levels_[i].pieces[0].kind == kPieceStructured) {
+    GTN_RETURN_IF_ERROR(decodeStructuredPiece(s.header, s.connectivity, checker, what, fields));
+  } else {
+    GTN_RETURN_IF_ERROR(gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields ? &selected : nullptr));
+  }
   if (!checker.ended()) return invalidData(what + ": the decoder stopped before the end of the level");
   return Status::ok();
 }

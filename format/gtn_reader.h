@@ -40,10 +40,10 @@ struct GtnLevelInfo {
   LevelHeader header;  // counts, bounding box of this level; fields and metadata from the file header
   double ratio = 0.0;  // vertices merged away / vertices of level 0
   bool has_merge_tree = false;
-  std::vector<GtnChunkInfo> chunks;  // LHDR first, in file order
-  uint64_t bytes = 0;                // all chunks of the level
-  std::vector<PieceInfo> pieces;     // the piece table (LHDR), in piece order; at least one
-  std::vector<size_t> piece_chunk;   // per piece: the index in `chunks` of its first chunk
+  std::vector<GtnChunkInfo> chunks;         // LHDR first, in file order
+  uint64_t bytes = 0;                       // all chunks of the level
+  std::vector<PieceInfo> pieces;            // the piece table (LHDR), in piece order; at least one
+  std::vector<size_t> piece_chunk;          // per piece: the index in `chunks` of its first chunk
   uint64_t pieceBytes(size_t piece) const;  // the piece's chunks, framing included
 };
 
@@ -153,7 +153,7 @@ class GtnReader {
   GtnFileInfo file_;
   std::vector<GtnLevelInfo> levels_;
   bool by_directory_ = false;
-  bool tolerant_scan_ = false;  // the scan goes past damaged content chunks (GtnOpenOptions::verify false)
+  bool tolerant_scan_ = false;           // the scan goes past damaged content chunks (GtnOpenOptions::verify false)
   std::atomic<uint64_t> bytes_read_{0};  // pieces are read in parallel
 };
 

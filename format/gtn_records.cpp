@@ -160,9 +160,12 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
     const std::string piece = "piece " + std::to_string(i);
     uint64_t at_p = r.offset();
     GTN_RETURN_IF_ERROR(r.u8(&p.kind, "piece kind"));
-    if (p.kind != kPieceUnstructured)
+    if (p.kind != kPieceUnstructured && p.kind != kPieceStructured)
       return r.errorAt(at_p, piece + " has kind " + std::to_string(p.kind) +
-                                 ", which this reader does not know (0: unstructured)");
+                                 ", which this reader does not know (0: unstructured, 1: structured)");
+    if (p.kind == kPieceStructured && n != 1)
+      return r.errorAt(at_p, piece + " is structured in a level of " + std::to_string(n) +
+                                 " pieces; a structured piece is a level's only piece");
     at_p = r.offset();
     if (n == 1) {  // one piece: the level's counts and box, and its own boundary points
       if (l->points > kGtnMaxPiecePoints)
@@ -188,8 +191,8 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
     GTN_RETURN_IF_ERROR(readBox(r, p.bbox_min, p.bbox_max));
   }
   if (tets != l->tets)
-    return r.errorAt(at_n, "the pieces' tetrahedra sum to " + std::to_string(tets) + ", the level has " +
-                               std::to_string(l->tets));
+    return r.errorAt(
+        at_n, "the pieces' tetrahedra sum to " + std::to_string(tets) + ", the level has " + std::to_string(l->tets));
   return r.expectEnd("the LHDR payload");
 }
 
@@ -235,9 +238,10 @@ Status decodeSeamTable(std::span<const uint8_t> payload, uint64_t offset, const 
       GTN_RETURN_IF_ERROR(r.varint(&d, "seam class piece"));
       if (i > 0 && d > UINT64_MAX - next) {  // next + d wraps: a piece at or before the one named before
         const uint64_t named = next + d;
-        return r.errorAt(at, cls + " names piece " + std::to_string(named) +
-                                 (named == k.pieces[i - 1] ? " twice" : " after piece " + std::to_string(k.pieces[i - 1])) +
-                                 ": a class names each piece once, in increasing order");
+        return r.errorAt(at,
+                         cls + " names piece " + std::to_string(named) +
+                             (named == k.pieces[i - 1] ? " twice" : " after piece " + std::to_string(k.pieces[i - 1])) +
+                             ": a class names each piece once, in increasing order");
       }
       if (d >= np || next > np - 1 - d)
         return r.errorAt(at, cls + " names a piece beyond the level's " + std::to_string(np) + " pieces");
@@ -249,7 +253,8 @@ Status decodeSeamTable(std::span<const uint8_t> payload, uint64_t offset, const 
     if (k.points == 0) return r.errorAt(at, cls + " has no point");
     seam_points += k.points;
     if (c > 0 && !(t->classes[c - 1].pieces < k.pieces))
-      return r.errorAt(at, cls + " is not after the class before it (classes are in increasing order of their "
+      return r.errorAt(at, cls +
+                               " is not after the class before it (classes are in increasing order of their "
                                "piece lists, each list once)");
     for (uint32_t p : k.pieces) seam_of[p] += k.points;
     GTN_RETURN_IF_ERROR(r.varintAtMost(&t->streams[c].second, r.remaining() - stream_bytes, "seam class stream size"));
@@ -269,14 +274,13 @@ Status decodeSeamTable(std::span<const uint8_t> payload, uint64_t offset, const 
     const PieceInfo& piece = pieces[p];
     own += piece.own_points;
     if (piece.points - piece.own_points != seam_of[p])
-      return r.errorAt(offset, "piece " + std::to_string(p) + " uses " + std::to_string(piece.points - piece.own_points) +
-                                   " seam points by the level header, " + std::to_string(seam_of[p]) +
-                                   " by the seam table");
+      return r.errorAt(offset,
+                       "piece " + std::to_string(p) + " uses " + std::to_string(piece.points - piece.own_points) +
+                           " seam points by the level header, " + std::to_string(seam_of[p]) + " by the seam table");
   }
   if (own + seam_points != points)
     return r.errorAt(offset, "the pieces' own points (" + std::to_string(own) + ") and the seam points (" +
-                                 std::to_string(seam_points) + ") do not sum to the level's " +
-                                 std::to_string(points));
+                                 std::to_string(seam_points) + ") do not sum to the level's " + std::to_string(points));
   return Status::ok();
 }
 

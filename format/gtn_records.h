@@ -19,9 +19,9 @@ namespace gtn {
 // Bounds a reader enforces on header fields (spec: "Limits").
 inline constexpr uint64_t kGtnMaxLevels = 65535;
 inline constexpr uint64_t kGtnMaxFields = 65535;
-inline constexpr uint64_t kGtnMaxComponents = 4096;  // as the level codec
+inline constexpr uint64_t kGtnMaxComponents = 4096;           // as the level codec
 inline constexpr uint64_t kGtnMaxPieces = uint64_t{1} << 20;  // per level
-inline constexpr uint64_t kGtnMaxPiecePoints = 0xFFFFFFFEu;  // a piece's vertex ids are 32 bits
+inline constexpr uint64_t kGtnMaxPiecePoints = 0xFFFFFFFEu;   // a piece's vertex ids are 32 bits
 // Piece kinds (LHDR): 0 unstructured (BNDY CONN GEOM PFLD... CFLD...), 1 structured (GRID).
 inline constexpr uint8_t kPieceUnstructured = 0;
 inline constexpr uint8_t kPieceStructured = 1;
@@ -32,7 +32,7 @@ inline constexpr uint8_t kGhdrHasDirectory = 0x01;
 struct GtnFileHeader {
   uint8_t writer_flags = 0;
   uint64_t level_count = 0;
-  uint64_t points = 0, tets = 0;  // of level 0
+  uint64_t points = 0, tets = 0;       // of level 0
   uint64_t draft = kGtnDraftRevision;  // the draft revision of format 2.0 the file follows
   uint64_t piece_tets = 0;             // the writer's bound on a piece's tetrahedra (informative)
   ScalarType coord_type = ScalarType::kFloat64;

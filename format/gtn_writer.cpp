@@ -106,7 +106,8 @@ Status GtnStreamWriter::addLevel(const PiecedLevel& l, double ratio,
   const std::string level = "level " + std::to_string(h.level);
   if (h.coord_type != level0_.coord_type || !sameFields(h.point_fields, level0_.point_fields) ||
       !sameFields(h.cell_fields, level0_.cell_fields))
-    return usageError(level + " has a different coordinate type or field list than level 0; all levels must share them");
+    return usageError(level +
+                      " has a different coordinate type or field list than level 0; all levels must share them");
   if (h.level == 0 && (h.points != level0_.points || h.tets != level0_.tets))
     return usageError("level 0's counts differ from those given to begin()");
   if (l.pieces.empty() || l.pieces.size() > kGtnMaxPieces || l.encoded.size() != l.pieces.size())
@@ -118,9 +119,9 @@ Status GtnStreamWriter::addLevel(const PiecedLevel& l, double ratio,
   uint64_t tets = 0;
   for (size_t p = 0; p < l.pieces.size(); ++p) {
     const EncodedLevel& e = l.encoded[p];
-    if (l.pieces[p].kind != kPieceUnstructured)
+    if (l.pieces[p].kind != kPieceUnstructured && !(l.pieces[p].kind == kPieceStructured && l.pieces.size() == 1))
       return usageError(level + " piece " + std::to_string(p) + ": kind " + std::to_string(l.pieces[p].kind) +
-                        " cannot be written yet");
+                        " (a structured piece must be its level's only piece)");
     if (e.point_fields.size() != h.point_fields.size() || e.cell_fields.size() != h.cell_fields.size())
       return usageError(level + ": the number of field streams does not match the header");
     tets += l.pieces[p].tets;
@@ -149,7 +150,12 @@ Status GtnStreamWriter::addLevel(const PiecedLevel& l, double ratio,
   r.pieces = l.pieces;
   GTN_RETURN_IF_ERROR(emit(kTagLevelHeader, encodeLevelRecord(r), false, false));
   if (l.pieces.size() > 1) GTN_RETURN_IF_ERROR(emit(kTagSeam, encodeSeamTable(l.classes, l.seam_streams), false, true));
-  for (const EncodedLevel& e : l.encoded) {
+  for (size_t p = 0; p < l.encoded.size(); ++p) {
+    const EncodedLevel& e = l.encoded[p];
+    if (l.pieces[p].kind == kPieceStructured) {
+      GTN_RETURN_IF_ERROR(emit(kTagGrid, e.connectivity, false, true));
+      continue;
+    }
     GTN_RETURN_IF_ERROR(emit(kTagBoundary, e.boundary, false, true));
     GTN_RETURN_IF_ERROR(emit(kTagConnectivity, e.connectivity, false, true));
     GTN_RETURN_IF_ERROR(emit(kTagGeometry, e.geometry, false, true));

@@ -258,8 +258,9 @@ StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const Me
                         {"own_points", pi.own_points},
                         {"tets", pi.tets},
                         {"boundary_triangles", pi.boundary_triangles},
-                        {"bbox", {{"min", {pi.bbox_min[0], pi.bbox_min[1], pi.bbox_min[2]}},
-                                  {"max", {pi.bbox_max[0], pi.bbox_max[1], pi.bbox_max[2]}}}},
+                        {"bbox",
+                         {{"min", {pi.bbox_min[0], pi.bbox_min[1], pi.bbox_min[2]}},
+                          {"max", {pi.bbox_max[0], pi.bbox_max[1], pi.bbox_max[2]}}}},
                         {"bytes", l.pieceBytes(p)}});
     }
     levels.push_back({{"level", i},

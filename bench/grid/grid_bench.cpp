@@ -125,8 +125,8 @@ int main(int argc, char** argv) {
           "TetMeshBuilder: %.2f ms wall, %.2f ms thread CPU: %.1f (wall), %.1f (CPU) million tetrahedra per second; "
           "into a counting sink %.1f (CPU) (best of %d); encode %.0f ms CPU, of which matching the block %.1f ms%s\n",
           s.name, split, bits(level->connectivity.size(), T), level->connectivity.size(),
-          static_cast<unsigned long long>(level->header.boundary_triangles), best * 1e3, best_cpu * 1e3,
-          T / best / 1e6, T / best_cpu / 1e6, T / count_cpu / 1e6, runs, encode_cpu * 1e3, match_cpu * 1e3,
+          static_cast<unsigned long long>(level->header.boundary_triangles), best * 1e3, best_cpu * 1e3, T / best / 1e6,
+          T / best_cpu / 1e6, T / count_cpu / 1e6, runs, encode_cpu * 1e3, match_cpu * 1e3,
           matched ? "" : " (no match)");
     }
     if (!layout.isOk()) {

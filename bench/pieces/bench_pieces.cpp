@@ -18,9 +18,7 @@
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 uint64_t bytesOf(const gtn::PiecedLevel& level) {
   uint64_t n = 0;
@@ -88,8 +86,10 @@ int main(int argc, char** argv) {
   const int all = tbb::info::default_concurrency();
   std::printf("%s: %zu points, %zu tetrahedra; %d rounds, medians of wall seconds; threads 1 and %d\n",
               inputs[0].c_str(), mesh.numPoints(), mesh.numTets(), rounds, all);
-  std::printf("| piece tets | pieces | classes | seam vertices | bytes | vs one piece | encode 1t | encode %dt | decode 1t | decode %dt | decode speed-up |\n",
-              all, all);
+  std::printf(
+      "| piece tets | pieces | classes | seam vertices | bytes | vs one piece | encode 1t | encode %dt | decode 1t | "
+      "decode %dt | decode speed-up |\n",
+      all, all);
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   uint64_t one_piece = 0;
   for (uint64_t size : sizes) {

@@ -14,10 +14,10 @@
 #include <tbb/global_control.h>
 #include <nlohmann/json.hpp>
 
+#include "codec/pieces.h"
 #include "convert/import.h"
 #include "format/decode_fields.h"
 #include "format/gtn_reader.h"
-#include "codec/pieces.h"
 #include "mesh/box_filter.h"
 #include "simplify/levels.h"
 #include "validate/info.h"

@@ -228,7 +228,8 @@ TEST(Pieces, UnusedPointsAndFieldSubsetsSurviveThePieces) {
   const size_t n = m.numPoints();
   std::vector<std::array<uint32_t, 2>> edges = {{m.tets[0][0], m.tets[0][1]}, {m.tets[9000][2], m.tets[9000][3]}};
   for (const auto& e : edges)
-    for (int i = 0; i < 3; ++i) m.coords.push_back(0.5 * (m.coords[3 * size_t{e[0]} + i] + m.coords[3 * size_t{e[1]} + i]));
+    for (int i = 0; i < 3; ++i)
+      m.coords.push_back(0.5 * (m.coords[3 * size_t{e[0]} + i] + m.coords[3 * size_t{e[1]} + i]));
   m.coords.insert(m.coords.end(), {100.0, 100.0, 100.0});
   for (Field& f : m.point_fields) f.bytes.resize((n + 3) * f.components * f.valueSize(), 7);
   StatusOr<PiecedLevel> level = encodePieces(m, {}, 4096);

@@ -70,7 +70,8 @@ TetMesh meshOf(const GridLayout& layout, ScalarType coord_type = ScalarType::kFl
   }
   m.point_fields = {pressure, velocity, label};
   if (cell_fields) {
-    Field region("region", 1, ScalarType::kInt32, m.numTets()), quality("quality", 1, ScalarType::kFloat64, m.numTets());
+    Field region("region", 1, ScalarType::kInt32, m.numTets()),
+        quality("quality", 1, ScalarType::kFloat64, m.numTets());
     for (size_t t = 0; t < m.numTets(); ++t) {
       region.set<int32_t>(t, 0, m.point(m.tets[t][0])[0] < 3 ? 1 : 2);
       quality.set<double>(t, 0, 1.0 / (1.0 + t));
@@ -209,8 +210,8 @@ TEST(StructuredPiece, ExplicitCellsNeighbouringCellsAndTheBox) {
   l.exceptions.push_back({0, GridException::kExplicit, 1, steinerCell()});  // on the box, beside a blanked cell
   l.exceptions.push_back({1, GridException::kBlanked, 0, {}});
   l.exceptions.push_back({2, GridException::kExplicit, 0, {{0, 1, 2, 6}, {0, 2, 3, 6}}});  // part of a cell
-  l.exceptions.push_back({26, GridException::kExplicit, 1, steinerCell()});  // inside
-  l.exceptions.push_back({27, GridException::kExplicit, 1, steinerCell()});  // beside it
+  l.exceptions.push_back({26, GridException::kExplicit, 1, steinerCell()});                // inside
+  l.exceptions.push_back({27, GridException::kExplicit, 1, steinerCell()});                // beside it
   const TetMesh m = meshOf(l, ScalarType::kFloat32, true);
   for (const Tet& t : m.tets) ASSERT_GT(orient3d(m.point(t[0]), m.point(t[1]), m.point(t[2]), m.point(t[3])), 0);
   roundTrip(m, blockOf(l));
@@ -410,22 +411,25 @@ TEST(StructuredPieceImport, VtkStructuredOffersItsBlockUnstructuredNone) {
   const std::string dir = test::tempDir("structured_piece_vtk");
   const std::string points = dir + "/points.vtk", rect = dir + "/rect.vtk", sgrid = dir + "/sgrid.vtk",
                     unstructured = dir + "/hex.vtk";
-  test::writeFile(points,
-                  "# vtk DataFile Version 3.0\nimage\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 4 3 3\n"
-                  "ORIGIN 0 0 0\nSPACING 1 0.5 2\nPOINT_DATA 36\nSCALARS s float 1\nLOOKUP_TABLE default\n" +
-                      [] {
-                        std::string s;
-                        for (int i = 0; i < 36; ++i) s += std::to_string(i * 0.25) + "\n";
-                        return s;
-                      }());
+  test::writeFile(
+      points,
+      "# vtk DataFile Version 3.0\nimage\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 4 3 3\n"
+      "ORIGIN 0 0 0\nSPACING 1 0.5 2\nPOINT_DATA 36\nSCALARS s float 1\nLOOKUP_TABLE default\n" +
+          [] {
+            std::string s;
+            for (int i = 0; i < 36; ++i) s += std::to_string(i * 0.25) + "\n";
+            return s;
+          }());
   test::writeFile(rect,
                   "# vtk DataFile Version 3.0\nrect\nASCII\nDATASET RECTILINEAR_GRID\nDIMENSIONS 3 3 2\n"
                   "X_COORDINATES 3 float\n0 1 3\nY_COORDINATES 3 float\n0 2 2.5\nZ_COORDINATES 2 float\n0 1\n");
   {
-    std::string s = "# vtk DataFile Version 3.0\nsgrid\nASCII\nDATASET STRUCTURED_GRID\nDIMENSIONS 3 2 2\nPOINTS 12 float\n";
+    std::string s =
+        "# vtk DataFile Version 3.0\nsgrid\nASCII\nDATASET STRUCTURED_GRID\nDIMENSIONS 3 2 2\nPOINTS 12 float\n";
     for (int k = 0; k < 2; ++k)
       for (int j = 0; j < 2; ++j)
-        for (int i = 0; i < 3; ++i) s += std::to_string(i + 0.1 * j) + " " + std::to_string(j) + " " + std::to_string(k) + "\n";
+        for (int i = 0; i < 3; ++i)
+          s += std::to_string(i + 0.1 * j) + " " + std::to_string(j) + " " + std::to_string(k) + "\n";
     test::writeFile(sgrid, s);
   }
   test::writeFile(unstructured, test::shearedHexGridVtk(3));

@@ -482,9 +482,9 @@ GtnLevelRecord levelRecord(const std::vector<uint8_t>& bytes) {
   const GtnChunkInfo c = levelChunk(bytes, kTagLevelHeader);
   ChunkHeader h;
   size_t needed;
-  EXPECT_TRUE(parseGtnChunkHeader(std::span(bytes).subspan(c.offset), c.offset, bytes.size() - c.offset, "gen", &h,
-                                  &needed)
-                  .isOk());
+  EXPECT_TRUE(
+      parseGtnChunkHeader(std::span(bytes).subspan(c.offset), c.offset, bytes.size() - c.offset, "gen", &h, &needed)
+          .isOk());
   auto payload = openGtnChunk(h, std::span(bytes).subspan(c.offset, c.bytes), "gen");
   EXPECT_TRUE(payload.isOk());
   GtnLevelRecord r;
@@ -538,8 +538,8 @@ std::vector<Sample> samples() {
                     [] { return encodeFile(cubeF64Fields(), options(false)); }));
   s.push_back(
       valid("unused-points.f32.dir.v2.0-d3.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
-  s.push_back(
-      valid("two-components.f32.dir.v2.0-d3.gtn", twoComponents, [] { return encodeFile(twoComponents(), options()); }));
+  s.push_back(valid("two-components.f32.dir.v2.0-d3.gtn", twoComponents,
+                    [] { return encodeFile(twoComponents(), options()); }));
   s.push_back(valid("repeated-components.f64.dir.v2.0-d3.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
   s.push_back(valid("decimals.f64.dir.v2.0-d3.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
@@ -550,14 +550,17 @@ std::vector<Sample> samples() {
   s.push_back(valid("value-table.f32.dir.v2.0-d3.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
   s.push_back(valid("packed-values.f32.dir.v2.0-d3.gtn", packedValues,
                     [] { return encodeFile(packedValues(), options(), nullptr, true); }));
-  s.push_back(valid("curvilinear.f32.dir.v2.0-d3.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
+  s.push_back(
+      valid("curvilinear.f32.dir.v2.0-d3.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
   s.push_back(valid("edge-points.f64.dir.v2.0-d3.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
-  s.push_back(valid("delaunay.f64.dir.v2.0-d3.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
+  s.push_back(
+      valid("delaunay.f64.dir.v2.0-d3.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
   s.push_back(valid("degenerate-sweep.f64.dir.v2.0-d3.gtn", degenerateSweep,
                     [] { return encodeFile(degenerateSweep(), options()); }));
-  s.push_back(valid("pieces.f32.dir.v2.0-d3.gtn", piecesMesh,
-                    [] { return encodePiecesFile(piecesMesh(), options()); }));
-  s.push_back(valid("levels.f32.dir.v2.0-d3.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+  s.push_back(
+      valid("pieces.f32.dir.v2.0-d3.gtn", piecesMesh, [] { return encodePiecesFile(piecesMesh(), options()); }));
+  s.push_back(
+      valid("levels.f32.dir.v2.0-d3.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(
       valid("wide-merge-tree.f32.dir.v2.0-d3.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d3.gtn", cubeF32, [] {
