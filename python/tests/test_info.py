@@ -57,7 +57,7 @@ def test_merge_tree_table_agrees_with_json(gtn, converted):
     assert set(quantiles) == set(mt["error_quantiles"])
     for k, v in mt["error_quantiles"].items():
         assert quantiles[k] == pytest.approx(v, rel=1e-3, abs=1e-300)
-    assert len(rows) == len(mt["levels"]) == 5
+    assert len(rows) == len(mt["levels"]) == len(gatun.info(path)["levels"]) >= 3
     for row, level in zip(rows, mt["levels"]):
         assert int(row[0]) == level["level"]
         assert float(row[1]) == pytest.approx(level["ratio"], abs=1e-6)

@@ -12,13 +12,20 @@ import gatun
 
 
 def canonical(points, tets, point_data, cell_data):
-    """The mesh with points sorted lexicographically and tetrahedra as sorted point lists, sorted."""
-    order = np.lexsort(points.T[::-1])
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    t = np.sort(rank[np.asarray(tets, dtype=np.int64)], axis=1)
-    torder = np.lexsort(t.T[::-1])
-    return (points[order], t[torder], {k: np.asarray(v)[order] for k, v in point_data.items()},
+    """The mesh in an order of its own: points sorted by coordinates then values, tetrahedra as their
+    corners' coordinates (each tetrahedron's corners sorted, then the tetrahedra), so that coincident
+    points (blunt fin has some) compare equal whichever of them a tetrahedron names."""
+    points = np.asarray(points)
+    columns = [points[:, i] for i in range(3)]
+    for v in point_data.values():
+        a = np.asarray(v)
+        columns += [a.reshape(len(a), -1)[:, j] for j in range(a.reshape(len(a), -1).shape[1])]
+    order = np.lexsort(columns[::-1])
+    corners = points[np.asarray(tets, dtype=np.int64)]  # (n, 4, 3)
+    inner = np.lexsort((corners[:, :, 2], corners[:, :, 1], corners[:, :, 0]), axis=-1)
+    corners = np.take_along_axis(corners, inner[:, :, None], axis=1).reshape(len(corners), 12)
+    torder = np.lexsort(corners.T[::-1])
+    return (points[order], corners[torder], {k: np.asarray(v)[order] for k, v in point_data.items()},
             {k: np.asarray(v)[torder] for k, v in cell_data.items()})
 
 
@@ -96,7 +103,7 @@ def test_other_cells_are_refused(tmp_path):
 
 def test_meshio_write_takes_gatun_write_options(converted, tmp_path):
     # meshio.write passes its keyword arguments on to gatun.write.
-    source = gatun.read(converted["bluntfin"], level=3)
+    source = gatun.read(converted["bluntfin"], level=len(gatun.info(converted["bluntfin"])["levels"]) - 1)
     mesh = meshio.Mesh(source.points, [("tetra", source.tets)], point_data=source.point_data)
     path = tmp_path / "one-level.gtn"
     with warnings.catch_warnings():

@@ -490,7 +490,10 @@ TEST(GtnContainer, MalformedPayloadsWithValidChecksumsFailCleanly) {
   lh([](GtnLevelRecord& l) { l.merges = 3; }, "level 0's counts disagree");
   // The piece table.
   lh([](GtnLevelRecord& l) { l.pieces.clear(); }, "piece count is 0");
-  lh([](GtnLevelRecord& l) { l.pieces[0].kind = 1; }, "piece 0 has kind 1, which this reader does not know");
+  lh([](GtnLevelRecord& l) { l.pieces[0].kind = 2; }, "piece 0 has kind 2, which this reader does not know");
+  // A structured piece is one GRID chunk: the level codec's chunks are out of order after it.
+  lh([](GtnLevelRecord& l) { l.pieces[0].kind = 1; },
+     "chunk 'BNDY' out of order in level 0 (piece 0): expected 'GRID'");
   lh([](GtnLevelRecord& l) { l.pieces[0].own_boundary_points = l.pieces[0].own_points + 1; },
      "piece own boundary point count");
   // A second piece and no seam table: the chunk order names the missing SEAM.

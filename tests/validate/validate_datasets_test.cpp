@@ -80,8 +80,10 @@ TEST_P(ValidateDatasets, ConvertedFileIsCleanAndEqualsItsSource) {
     for (const auto& l : ij["levels"]) total += l["bytes"].get<uint64_t>();
     const uint64_t level0 = ij["levels"][0]["bytes"].get<uint64_t>();
     EXPECT_LE(total, 2 * level0) << info.out;
+    // (A grid's level 0 is a structured piece, smaller than the coarse levels' unstructured coding
+    // makes them in proportion, so the bound keeps one level fewer than it did before.)
     if (points >= 40000) {
-      EXPECT_GE(levels, 4u) << info.out;
+      EXPECT_GE(levels, 3u) << info.out;
     }
   }
   // Without --against only level 0's flat tetrahedra stay warnings: the validator cannot tell that the
