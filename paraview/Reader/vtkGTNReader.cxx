@@ -5,6 +5,8 @@
 #include <memory>
 #include <vector>
 
+#include <tbb/task_arena.h>
+
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCommand.h"
@@ -241,6 +243,7 @@ void vtkGTNReader::PrintSelf(ostream& os, vtkIndent indent) {
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "Level: " << this->Level << "\n";
   os << indent << "Ratio: " << this->Ratio << "\n";
+  os << indent << "Threads: " << this->Threads << "\n";
 }
 
 int vtkGTNReader::CanReadFile(const char* name) {
@@ -333,7 +336,8 @@ int vtkGTNReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInform
     } else {
       // All pieces (one request): the mesh's own numbering is the level's, and no subset is named.
       const bool all = chosen.size() == file_pieces.size();
-      auto got = r.decodeLevelPieces(level, all ? std::vector<uint32_t>{} : chosen, &fields);
+      tbb::task_arena arena(this->Threads > 0 ? this->Threads : tbb::task_arena::automatic);
+      auto got = arena.execute([&] { return r.decodeLevelPieces(level, all ? std::vector<uint32_t>{} : chosen, &fields); });
       if (!got.isOk()) {
         vtkErrorMacro(<< got.status().message());
         return 0;

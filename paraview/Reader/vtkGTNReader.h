@@ -48,6 +48,11 @@ class VTKGTN_EXPORT vtkGTNReader : public vtkUnstructuredGridAlgorithm {
   vtkSetClampMacro(Ratio, double, 0.0, 1.0);
   vtkGetMacro(Ratio, double);
 
+  // The most threads the decode of a stored level's pieces uses (a TBB arena); 0 = TBB's default,
+  // every core. With several MPI ranks on one machine, cores / ranks keeps them from oversubscribing.
+  vtkSetClampMacro(Threads, int, 0, VTK_INT_MAX);
+  vtkGetMacro(Threads, int);
+
   // Levels the file stores: [0, levels - 1] (after RequestInformation; [0, 0] before).
   vtkGetVector2Macro(LevelRange, int);
 
@@ -75,6 +80,7 @@ class VTKGTN_EXPORT vtkGTNReader : public vtkUnstructuredGridAlgorithm {
   char* FileName = nullptr;
   int Level = 0;
   double Ratio = 0.0;
+  int Threads = 0;
   int LevelRange[2] = {0, 0};
   vtkDataArraySelection* PointDataArraySelection;
   vtkDataArraySelection* CellDataArraySelection;
