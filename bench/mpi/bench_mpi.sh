@@ -1,8 +1,8 @@
 #!/bin/sh
 # ParaView's MPI reading one .gtn: `mpirun -np 1` against `-np N pvbatch`, each rank of N decoding only
 # its run of the file's pieces (vtkGTNReader). The grid is the project's sample shape at SIZE^3 points
-# (gtn-make-sample; 128 gives 127^3 x 6 = 12.3 million tetrahedra), converted with `gtn convert --levels 0`
-# (level 0 alone, in pieces of at most 2^18 tetrahedra: the default). A rank decodes its pieces in
+# (gtn-make-sample; 128 gives 127^3 x 6 = 12.3 million tetrahedra), converted with `gtn convert --levels 0
+# --no-merge-tree` (level 0 alone, no ranking; pieces of at most 2^18 tetrahedra, the default). A rank decodes its pieces in
 # parallel too (TBB), so each round runs, in turn (interleaved, so that whatever else the machine does
 # weighs on all of them):
 #   1 rank, every core (the reader's default, Threads 0)      N ranks, every core each (Threads 0)
@@ -40,7 +40,7 @@ file="$work/grid$size.gtn"
 if [ ! -f "$file" ]; then
   "$build/gtn-make-sample" "$work" "$size" "$size" "$size" >/dev/null
   t0=$(date +%s.%N)
-  "$gtn" convert "$work/sample.xyz" "$work/sample.q" --levels 0 -o "$file" >/dev/null 2>&1
+  "$gtn" convert "$work/sample.xyz" "$work/sample.q" --levels 0 --no-merge-tree -o "$file" >/dev/null 2>&1
   t1=$(date +%s.%N)
   rm -f "$work/sample.xyz" "$work/sample.q"
   echo "converted ${size}^3 in $(echo "$t1 - $t0" | bc) s"
