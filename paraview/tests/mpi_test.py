@@ -102,9 +102,18 @@ if mode == "--serial":
 with open(ref_json) as f:
     ref = json.load(f)
 check(ranks > 1, "%d ranks" % ranks)
+reader.UpdatePipeline()
+# The image first: fetching a rank's output (Fetch(proxy, rank)) before a parallel volume render has
+# been seen to leave ParaView 5.11's ranks out of step in the render's redistribution (a hang).
+# The image ParaView composites from the ranks' pieces equals the serial one.
+mpi_png = os.path.join(tmp, "paraview-mpi.png")
+gtn_pv.render_like_gtn(reader, os.path.join(tmp, "view.json"), mpi_png, "Projected tetra")
+cmp = json.loads(gtn(binary, "compare", "--json", os.path.join(tmp, "paraview-serial.png"), mpi_png))
+print("compare:", cmp)
+check(cmp["rmse"] < 1.5, "composited image equals the serial image up to RMSE %.3f < 1.5" % cmp["rmse"])
+
 # Each rank's own output, fetched one rank at a time (Fetch(proxy, rank)): the tetrahedra of its run of
 # the file's pieces, which are all it decoded.
-reader.UpdatePipeline()
 outs = []
 for rank in range(ranks):
     grid = servermanager.Fetch(reader, rank)
@@ -113,13 +122,6 @@ per_rank = [g.GetNumberOfCells() for g, _, _ in outs]
 print("tetrahedra per rank:", per_rank)
 check(all(0 < n < ref["tets"] for n in per_rank), "each rank holds a share, not the whole mesh")
 check_union(outs, ref, "%d ranks" % ranks)
-
-# The image ParaView composites from the ranks' pieces equals the serial one.
-mpi_png = os.path.join(tmp, "paraview-mpi.png")
-gtn_pv.render_like_gtn(reader, os.path.join(tmp, "view.json"), mpi_png, "Projected tetra")
-cmp = json.loads(gtn(binary, "compare", "--json", os.path.join(tmp, "paraview-serial.png"), mpi_png))
-print("compare:", cmp)
-check(cmp["rmse"] < 1.5, "composited image equals the serial image up to RMSE %.3f < 1.5" % cmp["rmse"])
 
 # Save Data under MPI: the pieces are gathered to rank 0, which writes one .gtn (level 0 alone: the
 # gathering is what is tested here; plugin_test.py writes levels and merge trees).
