@@ -250,6 +250,7 @@ class LevelCoder {
     peeling_.candidates().setDelaunayFirst(con_->bit(delaunay_first_flag_, delaunay_first));
     GTN_RETURN_IF_ERROR(boundary_.run());
     boundary_points_ = next_id_;
+    boundary_done_ = true;
     if constexpr (!kEncode) GTN_RETURN_IF_ERROR(sink_->endBoundary());
     GTN_RETURN_IF_ERROR(peeling_.run());
     GTN_RETURN_IF_ERROR(unusedPoints());
@@ -584,7 +585,7 @@ class LevelCoder {
     const uint32_t s = allocSlot();
     if (seam_count_ > 0) {
       bool is_seam = false;
-      GTN_RETURN_IF_ERROR(codeSeamVertex(src, s, &is_seam));
+      GTN_RETURN_IF_ERROR(codeSeamVertex(src, pred, s, &is_seam));
       if (is_seam) {
         *slot_out = s;
         return Status::ok();
@@ -602,17 +603,102 @@ class LevelCoder {
     return Status::ok();
   }
 
-  // Whether the vertex is one of the piece's seam vertices (a bit in CONN), then its index in the
-  // piece's seam list (direct bits); a seam vertex's values are the seam list's, not coded here.
-  Status codeSeamVertex(uint32_t src, uint32_t s, bool* is_seam) {
+  // An unsigned number as its bit length in an adaptive tree, then the bits below the leading one.
+  uint64_t codeLength(BitTree<6>& tree, uint64_t z) {
+    const uint32_t length = tree.code(*con_, static_cast<uint32_t>(bitLength(z)));
+    if (length == 0) return 0;
+    if (length > 33) return uint64_t{1} << 40;  // beyond any index or rank: the caller refuses it
+    const int low_bits = static_cast<int>(length) - 1;
+    const uint64_t low = z - (uint64_t{1} << low_bits);
+    uint64_t got = 0;
+    if (low_bits > 16) {
+      got = uint64_t{con_->direct(static_cast<uint32_t>(low >> 16), low_bits - 16)} << 16;
+      got |= con_->direct(static_cast<uint32_t>(low & 0xFFFFu), 16);
+    } else {
+      got = con_->direct(static_cast<uint32_t>(low), low_bits);
+    }
+    return (uint64_t{1} << low_bits) + got;
+  }
+
+  // The piece's seam vertices, for ranking them by distance (setSeams, or the encoder's source).
+  void buildSeamGrid() {
+    seam_pos_.assign(3 * size_t{seam_count_}, 0.0);
+    if constexpr (kEncode) {
+      const ScalarType ct = header_.coord_type;
+      for (size_t v = 0; v < enc_->seam->size(); ++v) {
+        const uint32_t k = (*enc_->seam)[v];
+        if (k == kNoIndex) continue;
+        for (int i = 0; i < 3; ++i) {
+          uint8_t raw[8];
+          storeCoordinate(ct, enc_->mesh->coords[3 * v + i], raw);
+          seam_pos_[3 * size_t{k} + i] = doubleFromRaw(ct, raw);
+        }
+      }
+    } else {
+      std::copy(seams_->coords, seams_->coords + 3 * size_t{seam_count_}, seam_pos_.begin());
+    }
+    double lo[3], hi[3];
+    for (int i = 0; i < 3; ++i) lo[i] = hi[i] = seam_pos_[i];
+    for (uint32_t k = 0; k < seam_count_; ++k)
+      for (int i = 0; i < 3; ++i) {
+        lo[i] = std::min(lo[i], seam_pos_[3 * size_t{k} + i]);
+        hi[i] = std::max(hi[i], seam_pos_[3 * size_t{k} + i]);
+      }
+    seam_grid_.build(lo, hi, seam_count_);
+    seam_grid_.reserveSlots(seam_count_);
+    for (uint32_t k = 0; k < seam_count_; ++k) seam_grid_.insert(k, &seam_pos_[3 * size_t{k}]);
+  }
+
+  // Whether the vertex is one of the piece's seam vertices (a bit in CONN), then which: by its rank
+  // among the seam vertices not yet introduced in order of distance to `pred` (then index), or, when
+  // that rank is kSeamRankLimit or more or `pred` is not finite, by its index's difference from the
+  // one after the previous seam vertex's (zigzag). The seam vertex's values are the seam list's.
+  Status codeSeamVertex(uint32_t src, const double pred[3], uint32_t s, bool* is_seam) {
     uint32_t index = kNoIndex;
     if constexpr (kEncode) index = (*enc_->seam)[src];
-    *is_seam = con_->bit(seam_flag_, index != kNoIndex) != 0;
+    *is_seam = con_->bit(seam_flag_[boundary_done_ ? 1 : 0], index != kNoIndex) != 0;
     if (!*is_seam) return Status::ok();
-    index = con_->direct(index, seam_bits_);
-    if (index >= seam_count_) return bad("a seam vertex index beyond the piece's seam list");
+    if (seam_pos_.empty()) buildSeamGrid();
+    const bool finite = std::isfinite(pred[0]) && std::isfinite(pred[1]) && std::isfinite(pred[2]);
+    auto dist = [&](uint32_t k) {
+      const double* q = &seam_pos_[3 * size_t{k}];
+      const double dx = q[0] - pred[0], dy = q[1] - pred[1], dz = q[2] - pred[2];
+      return dx * dx + dy * dy + dz * dz;
+    };
+    auto ok = [](uint32_t) { return true; };
+    auto all = [&](auto fn) {
+      for (uint32_t k = 0; k < seam_count_; ++k)
+        if (!seam_seen_[k]) fn(k);
+    };
+    uint64_t rank = kSeamRankLimit;
+    if constexpr (kEncode) {
+      if (finite) rank = seam_grid_.rankOf(pred, dist(index), index, dist, ok, all);
+    }
+    const uint32_t near = finite ? con_->bit(seam_near_, rank < kSeamRankLimit) : 0;
+    if (near) {
+      rank = codeLength(seam_rank_, rank);
+      if (rank >= kSeamRankLimit) return bad("a seam vertex rank beyond the limit");
+      if constexpr (!kEncode) {
+        index = seam_grid_.kth(pred, rank, dist, ok, all);
+        if (index == kNoIndex) return bad("a seam vertex rank beyond the piece's seam list");
+      }
+    } else {
+      const uint32_t expected = seam_last_ + 1;
+      uint64_t z = 0;
+      if constexpr (kEncode) {
+        const int64_t d = int64_t{index} - int64_t{expected};
+        z = d >= 0 ? uint64_t(d) * 2 : uint64_t(-d) * 2 - 1;
+      }
+      z = codeLength(seam_length_, z);
+      const int64_t d = (z & 1) ? -int64_t((z + 1) / 2) : int64_t(z / 2);
+      const int64_t at = int64_t{expected} + d;
+      if (at < 0 || at >= int64_t{seam_count_}) return bad("a seam vertex index beyond the piece's seam list");
+      index = static_cast<uint32_t>(at);
+    }
     if (seam_seen_[index]) return bad("a seam vertex introduced twice");
     seam_seen_[index] = 1;
+    seam_grid_.erase(index);
+    seam_last_ = index;
     ++seams_introduced_;
     double* x = pool_.position(s);
     uint8_t* out = pool_.slot_bytes > 0 ? pool_.values(s) : nullptr;
@@ -1082,7 +1168,13 @@ class LevelCoder {
   int seam_bits_ = 0;
   std::vector<char> seam_seen_;
   uint32_t seams_introduced_ = 0;
-  BitModel seam_flag_;
+  uint32_t seam_last_ = kNoIndex;  // the previous seam vertex's index (kNoIndex + 1 = 0 before the first)
+  BitModel seam_flag_[2], seam_near_;  // seam_flag_: [whether the boundary is done]
+  bool boundary_done_ = false;
+  BitTree<6> seam_length_, seam_rank_;
+  std::vector<double> seam_pos_;  // 3 per seam vertex
+  NearestGrid seam_grid_;         // the seam vertices not yet introduced
+  static constexpr uint64_t kSeamRankLimit = 4096;
   uint32_t copy_last_[3] = {0, 0, 0};
   std::vector<double> pred_vals_;
 };

@@ -17,6 +17,7 @@
 #include "codec/edge_points.h"
 #include "codec/packed_values.h"
 #include "codec/prediction.h"
+#include "codec/range_coder.h"
 #include "codec/value_coder.h"
 #include "mesh/faces.h"
 #include "mesh/index.h"
@@ -111,67 +112,104 @@ struct ComponentLayout {
   }
 };
 
-// A class's stream: each component of each vertex as the difference of its key (value_coder.h) from
-// the previous vertex's, modulo the type's width, then the items in packed form (codec/packed_values.h).
+// A class's stream, in the smaller of two forms: range coded (first byte 0), each component's key
+// (value_coder.h) coded by the level codec's value coder against the previous vertex's; or packed
+// (codec/packed_values.h), the items holding each key's difference from the previous vertex's modulo
+// the type's width.
+void seamKeys(const TetMesh& mesh, const LevelHeader& h, const ComponentLayout& layout, uint32_t v, uint64_t* keys) {
+  size_t c = 0;
+  for (int i = 0; i < 3; ++i) {
+    uint8_t raw[8];
+    level::storeCoordinate(h.coord_type, mesh.coords[3 * size_t{v} + i], raw);
+    keys[c] = keyFromRaw(layout.types[c], raw);
+    ++c;
+  }
+  for (const Field& f : mesh.point_fields) {
+    const size_t vs = f.valueSize();
+    for (uint32_t j = 0; j < f.components; ++j, ++c) keys[c] = keyFromRaw(f.type, &f.bytes[(size_t{v} * f.components + j) * vs]);
+  }
+}
+
 std::vector<uint8_t> encodeSeamStream(const TetMesh& mesh, const LevelHeader& h, const ComponentLayout& layout,
                                       const std::vector<uint32_t>& vertices) {
-  const size_t n = vertices.size(), ib = layout.item_bytes;
+  const size_t n = vertices.size(), ib = layout.item_bytes, nc = layout.types.size();
   std::vector<uint8_t> items(n * ib);
-  std::vector<uint64_t> prev(layout.types.size(), 0);
-  for (size_t k = 0; k < n; ++k) {
-    const uint32_t v = vertices[k];
-    size_t c = 0;
-    auto put = [&](const uint8_t* raw) {
-      const ScalarType t = layout.types[c];
-      const uint64_t key = keyFromRaw(t, raw);
-      const uint64_t delta = (key - prev[c]) & level::keyMask(scalarBits(t));
-      prev[c] = key;
-      uint8_t* out = &items[k * ib + layout.offsets[c]];
-      for (size_t b = 0; b < scalarSize(t); ++b) out[b] = static_cast<uint8_t>(delta >> (8 * b));
-      ++c;
-    };
-    for (int i = 0; i < 3; ++i) {
-      uint8_t raw[8];
-      level::storeCoordinate(h.coord_type, mesh.coords[3 * size_t{v} + i], raw);
-      put(raw);
+  std::vector<uint64_t> prev(nc, 0), keys(nc);
+  std::vector<uint8_t> coded;
+  {
+    EntropyCoder<true> coder(&coded);
+    std::vector<ValueCoder> vc;
+    for (ScalarType t : layout.types) vc.emplace_back(t, 1);
+    for (size_t k = 0; k < n; ++k) {
+      seamKeys(mesh, h, layout, vertices[k], keys.data());
+      for (size_t c = 0; c < nc; ++c) {
+        const ScalarType t = layout.types[c];
+        const uint64_t pred = k == 0 ? keyFromPrediction(t, 0.0) : prev[c];
+        vc[c].code(coder, 0, pred, keys[c]);
+        const uint64_t delta = (keys[c] - prev[c]) & level::keyMask(scalarBits(t));
+        uint8_t* out = &items[k * ib + layout.offsets[c]];
+        for (size_t b = 0; b < scalarSize(t); ++b) out[b] = static_cast<uint8_t>(delta >> (8 * b));
+        prev[c] = keys[c];
+      }
     }
-    for (const Field& f : mesh.point_fields) {
-      const size_t vs = f.valueSize();
-      for (uint32_t j = 0; j < f.components; ++j) put(&f.bytes[(size_t{v} * f.components + j) * vs]);
-    }
+    coder.finish();
   }
-  return packValues(items.data(), n, ib, layout.value_size);
+  std::vector<uint8_t> packed = packValues(items.data(), n, ib, layout.value_size, coded.size());
+  return !packed.empty() && packed.size() < coded.size() ? packed : coded;
 }
 
 // Decodes a class stream of `n` vertices into coordinates (3 per vertex) and point values (the
 // header's point fields' items concatenated).
 Status decodeSeamStream(std::span<const uint8_t> stream, uint64_t n, const LevelHeader& h,
                         const ComponentLayout& layout, const std::string& what, double* coords, uint8_t* values) {
-  PackedReader reader;
-  GTN_RETURN_IF_ERROR(reader.open(stream, n, layout.item_bytes, layout.value_size, what));
-  std::vector<uint64_t> prev(layout.types.size(), 0);
+  const size_t nc = layout.types.size();
+  std::vector<uint64_t> prev(nc, 0);
   size_t value_bytes = 0;
   for (const FieldDesc& d : h.point_fields) value_bytes += d.itemBytes();
+  auto store = [&](uint64_t k, size_t c, uint64_t key, size_t* out) -> Status {
+    const ScalarType t = layout.types[c];
+    uint8_t raw[8];
+    rawFromKey(t, key, raw);
+    if (c < 3) {
+      const double x = doubleFromRaw(t, raw);
+      if (!std::isfinite(x)) return invalidData(what + ": a seam vertex has a non-finite coordinate");
+      coords[3 * k + c] = x;
+    } else {
+      std::memcpy(values + k * value_bytes + *out, raw, scalarSize(t));
+      *out += scalarSize(t);
+    }
+    return Status::ok();
+  };
+  if (!isPackedStream(stream)) {
+    EntropyCoder<false> coder(stream);
+    std::vector<ValueCoder> vc;
+    for (ScalarType t : layout.types) vc.emplace_back(t, 1);
+    for (uint64_t k = 0; k < n; ++k) {
+      size_t out = 0;
+      for (size_t c = 0; c < nc; ++c) {
+        const uint64_t pred = k == 0 ? keyFromPrediction(layout.types[c], 0.0) : prev[c];
+        const uint64_t key = vc[c].code(coder, 0, pred, 0);
+        if (!coder.ok()) return invalidData(what + ": the stream is corrupt or truncated");
+        prev[c] = key;
+        GTN_RETURN_IF_ERROR(store(k, c, key, &out));
+      }
+    }
+    if (!coder.finishedCleanly()) return invalidData(what + ": the stream is corrupt, truncated or has trailing bytes");
+    return Status::ok();
+  }
+  PackedReader reader;
+  GTN_RETURN_IF_ERROR(reader.open(stream, n, layout.item_bytes, layout.value_size, what));
   for (uint64_t k = 0; k < n; ++k) {
     const uint8_t* item = reader.next();
     if (!item) return invalidData(what + ": " + reader.error());
     size_t out = 0;
-    for (size_t c = 0; c < layout.types.size(); ++c) {
+    for (size_t c = 0; c < nc; ++c) {
       const ScalarType t = layout.types[c];
       uint64_t delta = 0;
       for (size_t b = 0; b < scalarSize(t); ++b) delta |= uint64_t{item[layout.offsets[c] + b]} << (8 * b);
       const uint64_t key = (prev[c] + delta) & level::keyMask(scalarBits(t));
       prev[c] = key;
-      uint8_t raw[8];
-      rawFromKey(t, key, raw);
-      if (c < 3) {
-        const double x = doubleFromRaw(t, raw);
-        if (!std::isfinite(x)) return invalidData(what + ": a seam vertex has a non-finite coordinate");
-        coords[3 * k + c] = x;
-      } else {
-        std::memcpy(values + k * value_bytes + out, raw, scalarSize(t));
-        out += scalarSize(t);
-      }
+      GTN_RETURN_IF_ERROR(store(k, c, key, &out));
     }
   }
   const Status st = reader.finish();

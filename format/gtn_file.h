@@ -117,9 +117,8 @@ class GtnStreamWriter {
   std::vector<uint8_t> scratch_;
 };
 
-// A level coded by encodeLevel as a PiecedLevel of one piece (a copy of its streams). The piece's
-// own_boundary_points is 0: the level codec does not report it, and one piece's global ids are the
-// codec's own whatever it is.
+// A level coded by encodeLevel as a PiecedLevel of one piece (a copy of its streams), as encodePieces
+// makes a level of at most piece_tets tetrahedra.
 PiecedLevel onePieceLevel(const EncodedLevel& encoded);
 
 // Assembles a whole file in memory from encoded levels, one piece each (tests, tools). `merge_trees` is empty or has

@@ -7,6 +7,9 @@
 #define XXH_STATIC_LINKING_ONLY  // XXH3_state_t on the stack
 #include <xxhash.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -743,11 +746,22 @@ StatusOr<DecodedPieces> GtnReader::decodeLevelPieces(size_t i, const std::vector
       view.seam_streams[c] =
           std::span<const uint8_t>(seam_payload).subspan(table.streams[c].first, table.streams[c].second);
   }
+  // The chosen pieces' chunks, read and decompressed in parallel; the first failure in piece order is
+  // reported, whatever the thread count.
   std::vector<GtnLevelStreams> streams(n);
+  std::vector<Status> failed(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t p = range.begin(); p < range.end(); ++p) {
+      if (!wanted[p]) continue;
+      auto s = readPieceStreams(i, p);
+      if (s.isOk()) streams[p] = std::move(s).value();
+      else failed[p] = s.status();
+    }
+  });
+  for (const Status& st : failed) GTN_RETURN_IF_ERROR(st);
   view.payloads.resize(n);
   for (size_t p = 0; p < n; ++p) {
     if (!wanted[p]) continue;
-    GTN_ASSIGN_OR_RETURN(streams[p], readPieceStreams(i, p));
     view.payloads[p].header = streams[p].header;
     view.payloads[p].streams = streams[p].payload();
   }

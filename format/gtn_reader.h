@@ -9,6 +9,7 @@
 // remain.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -132,7 +133,7 @@ class GtnReader {
   std::vector<GtnSection> sections() const;
 
   // Bytes read from the file so far (open included): what a region read costs.
-  uint64_t bytesRead() const { return bytes_read_; }
+  uint64_t bytesRead() const { return bytes_read_.load(); }
 
   class Source;
 
@@ -153,7 +154,7 @@ class GtnReader {
   std::vector<GtnLevelInfo> levels_;
   bool by_directory_ = false;
   bool tolerant_scan_ = false;  // the scan goes past damaged content chunks (GtnOpenOptions::verify false)
-  uint64_t bytes_read_ = 0;
+  std::atomic<uint64_t> bytes_read_{0};  // pieces are read in parallel
 };
 
 // How every command opens a .gtn file: GtnReader::open, then GtnReader::damagedChunks, with `warn`

@@ -1,6 +1,7 @@
 #include "format/gtn_records.h"
 
 #include <algorithm>
+#include <cstdint>
 
 #include "format/gtn_bytes.h"
 
@@ -119,6 +120,10 @@ std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& l) {
   w.varint(l.pieces.size());
   for (const PieceInfo& p : l.pieces) {
     w.u8(p.kind);
+    if (l.pieces.size() == 1) {  // the level's counts and box are the piece's
+      w.varint(p.own_boundary_points);
+      break;
+    }
     w.varint(p.points);
     w.varint(p.own_points);
     w.varint(p.own_boundary_points);
@@ -144,8 +149,9 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
   GTN_RETURN_IF_ERROR(readBox(r, l->bbox_min, l->bbox_max));
   uint64_t n;
   uint64_t at_n = r.offset();
-  // A piece entry takes at least 54 bytes: bound the count by the payload before reserving.
-  GTN_RETURN_IF_ERROR(r.varintAtMost(&n, std::min<uint64_t>(kGtnMaxPieces, r.remaining() / 54), "piece count"));
+  // An entry of one of several pieces takes at least 54 bytes: bound the count by the payload first.
+  GTN_RETURN_IF_ERROR(
+      r.varintAtMost(&n, std::max<uint64_t>(1, std::min<uint64_t>(kGtnMaxPieces, r.remaining() / 54)), "piece count"));
   if (n == 0) return r.errorAt(at_n, "piece count is 0; a level has at least one piece");
   l->pieces.resize(n);
   uint64_t tets = 0;
@@ -158,6 +164,21 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
       return r.errorAt(at_p, piece + " has kind " + std::to_string(p.kind) +
                                  ", which this reader does not know (0: unstructured)");
     at_p = r.offset();
+    if (n == 1) {  // one piece: the level's counts and box, and its own boundary points
+      if (l->points > kGtnMaxPiecePoints)
+        return r.errorAt(at_p, "the level's one piece has " + std::to_string(l->points) + " points, more than " +
+                                   std::to_string(kGtnMaxPiecePoints));
+      p.points = p.own_points = l->points;
+      p.tets = l->tets;
+      p.boundary_triangles = l->boundary_triangles;
+      for (int k = 0; k < 3; ++k) {
+        p.bbox_min[k] = l->bbox_min[k];
+        p.bbox_max[k] = l->bbox_max[k];
+      }
+      GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_boundary_points, p.own_points, "piece own boundary point count"));
+      tets = p.tets;
+      break;
+    }
     GTN_RETURN_IF_ERROR(r.varintAtMost(&p.points, kGtnMaxPiecePoints, "piece point count"));
     GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_points, p.points, "piece own point count"));
     GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_boundary_points, p.own_points, "piece own boundary point count"));
@@ -165,9 +186,6 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
     tets += p.tets;
     GTN_RETURN_IF_ERROR(r.varint(&p.boundary_triangles, "piece boundary triangle count"));
     GTN_RETURN_IF_ERROR(readBox(r, p.bbox_min, p.bbox_max));
-    if (n == 1 && (p.points != l->points || p.own_points != p.points || p.tets != l->tets))
-      return r.errorAt(at_p, "the one piece of the level must hold all its " + std::to_string(l->points) +
-                                 " points and " + std::to_string(l->tets) + " tetrahedra, as its own");
   }
   if (tets != l->tets)
     return r.errorAt(at_n, "the pieces' tetrahedra sum to " + std::to_string(tets) + ", the level has " +
@@ -182,7 +200,8 @@ std::vector<uint8_t> encodeSeamTable(const std::vector<SeamClass>& classes,
   for (size_t c = 0; c < classes.size(); ++c) {
     const SeamClass& k = classes[c];
     w.varint(k.pieces.size());
-    for (size_t i = 0; i < k.pieces.size(); ++i) w.varint(i == 0 ? k.pieces[0] : k.pieces[i] - k.pieces[i - 1] - 1);
+    for (size_t i = 0; i < k.pieces.size(); ++i)
+      w.varint(i == 0 ? uint64_t{k.pieces[0]} : uint64_t{k.pieces[i]} - k.pieces[i - 1] - 1);
     w.varint(k.points);
     w.varint(c < streams.size() ? streams[c].size() : 0);
   }
@@ -214,6 +233,12 @@ Status decodeSeamTable(std::span<const uint8_t> payload, uint64_t offset, const 
       at = r.offset();
       uint64_t d;
       GTN_RETURN_IF_ERROR(r.varint(&d, "seam class piece"));
+      if (i > 0 && d > UINT64_MAX - next) {  // next + d wraps: a piece at or before the one named before
+        const uint64_t named = next + d;
+        return r.errorAt(at, cls + " names piece " + std::to_string(named) +
+                                 (named == k.pieces[i - 1] ? " twice" : " after piece " + std::to_string(k.pieces[i - 1])) +
+                                 ": a class names each piece once, in increasing order");
+      }
       if (d >= np || next > np - 1 - d)
         return r.errorAt(at, cls + " names a piece beyond the level's " + std::to_string(np) + " pieces");
       k.pieces[i] = static_cast<uint32_t>(next + d);

@@ -80,7 +80,8 @@ std::vector<uint8_t> encodeTrailer(const GtnTrailer& t);
 // (for messages; for zstd chunks, offsets point into the decompressed payload and say so).
 Status decodeFileHeader(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnFileHeader* h);
 // Checks the piece table against the level's counts too: kinds known, each piece's counts consistent,
-// the pieces' tetrahedra summing to the level's, and one piece holding all of a one-piece level.
+// the pieces' tetrahedra summing to the level's. The one piece of a one-piece level stores only its
+// kind and own boundary points; the rest is the level's.
 Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnLevelRecord* r);
 // Checks the table against level `level` (`points` points, piece table `pieces`): classes of 2 or more increasing piece indices below
 // the piece count, in increasing lexicographic order, the seam points of each piece matching its

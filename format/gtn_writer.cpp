@@ -75,6 +75,7 @@ PiecedLevel onePieceLevel(const EncodedLevel& e) {
   PieceInfo p;
   p.points = e.header.points;
   p.own_points = e.header.points;
+  p.own_boundary_points = e.boundary_points;
   p.tets = e.header.tets;
   p.boundary_triangles = e.header.boundary_triangles;
   for (int i = 0; i < 3; ++i) {
@@ -124,6 +125,8 @@ Status GtnStreamWriter::addLevel(const PiecedLevel& l, double ratio,
       return usageError(level + ": the number of field streams does not match the header");
     tets += l.pieces[p].tets;
   }
+  if (l.pieces.size() == 1 && (l.pieces[0].points != h.points || l.pieces[0].own_points != h.points))
+    return usageError(level + ": its one piece must hold all its points as its own");
   if (tets != h.tets)
     return usageError(level + ": the pieces' tetrahedra sum to " + std::to_string(tets) + ", not " +
                       std::to_string(h.tets));

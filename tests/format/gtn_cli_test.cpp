@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "format/gtn_chunk.h"
 #include "test_util.h"
 
 namespace gtn {
@@ -57,7 +58,10 @@ TEST_F(GtnCli, ConvertInfoAndPipeOnSpx) {
 
   const json j = infoJson(out);
   EXPECT_EQ(j["format"], "gtn");
-  EXPECT_EQ(j["format_version"], "1.0");
+  EXPECT_EQ(j["format_version"], "2.0");
+  EXPECT_EQ(j["draft"], kGtnDraftRevision);
+  ASSERT_EQ(j["levels"][0]["piece_count"], 1);  // 12936 tetrahedra: one piece at the default bound
+  EXPECT_EQ(j["levels"][0]["pieces"][0]["tets"], 12936);
   EXPECT_EQ(j["points"], 2896);
   EXPECT_EQ(j["tets"], 12936);
   EXPECT_EQ(j["faces"], 27252);
@@ -111,7 +115,7 @@ TEST_F(GtnCli, ConvertInfoAndPipeOnSpx) {
   // Text output names the container and the decoded mesh.
   r = test::runGtn("info " + out);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find(".gtn format 1.0"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(".gtn format 2.0"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("tetrahedra          12936"), std::string::npos) << r.out;
 }
 
@@ -361,8 +365,8 @@ TEST_F(GtnCli, ConformanceFilesThroughInfo) {
       EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
     }
   }
-  EXPECT_GE(valid, 19u);
-  EXPECT_GE(invalid, 6u);
+  EXPECT_GE(valid, 20u);
+  EXPECT_GE(invalid, 11u);
 }
 
 }  // namespace

@@ -26,8 +26,10 @@
 #include "codec/codec_test_util.h"
 #include "codec/packed_values.h"
 #include "codec/value_coder.h"
+#include "format/gtn_chunk.h"
 #include "format/gtn_file.h"
 #include "format/gtn_reader.h"
+#include "format/gtn_records.h"
 #include "mesh/mesh_stats.h"
 #include "simplify/apply.h"
 #include "simplify/levels.h"
@@ -439,6 +441,23 @@ std::vector<uint8_t> encodeWithTree(const TetMesh& mesh, int levels, const GtnWr
   return std::vector<uint8_t>(bytes.begin(), bytes.end());
 }
 
+// A 12 x 12 x 12 grid of cubes (10368 tetrahedra) with a density field: cut into pieces of at most
+// 4096 tetrahedra (kMinPieceTets), it makes 4 pieces and their seams.
+TetMesh piecesMesh() { return finish(densityGrid(12, 11)); }
+
+// `mesh` coded as pieces of at most kMinPieceTets tetrahedra, as `gtn convert --piece-tets 4096
+// --levels 0 --no-merge-tree` writes it.
+std::vector<uint8_t> encodePiecesFile(const TetMesh& mesh, GtnWriteOptions o) {
+  o.piece_tets = kMinPieceTets;
+  GtnLevelInput level0;
+  level0.mesh = &mesh;
+  const std::string path = test::tempDir("conformance-pieces") + "/pieces.gtn";
+  const Status st = writeGtnFile(path, {level0}, o);
+  EXPECT_TRUE(st.isOk()) << st.message();
+  const std::string bytes = test::readFile(path);
+  return std::vector<uint8_t>(bytes.begin(), bytes.end());
+}
+
 // Offset of the first chunk with `tag` in a valid file.
 uint64_t chunkOffset(const std::vector<uint8_t>& bytes, ChunkTag tag) {
   auto r = GtnReader::openMemory(std::string(bytes.begin(), bytes.end()), "gen");
@@ -446,6 +465,54 @@ uint64_t chunkOffset(const std::vector<uint8_t>& bytes, ChunkTag tag) {
   for (const GtnChunkInfo& c : (*r)->level(0).chunks)
     if (c.tag == tag) return c.offset;
   return 0;
+}
+
+// The chunk of level 0 with `tag` in a valid file.
+GtnChunkInfo levelChunk(const std::vector<uint8_t>& bytes, ChunkTag tag) {
+  auto r = GtnReader::openMemory(std::string(bytes.begin(), bytes.end()), "gen");
+  EXPECT_TRUE(r.isOk());
+  for (const GtnChunkInfo& c : (*r)->level(0).chunks)
+    if (c.tag == tag) return c;
+  ADD_FAILURE() << "no chunk " << tag.str();
+  return {};
+}
+
+// Level 0's header record as a valid file stores it.
+GtnLevelRecord levelRecord(const std::vector<uint8_t>& bytes) {
+  const GtnChunkInfo c = levelChunk(bytes, kTagLevelHeader);
+  ChunkHeader h;
+  size_t needed;
+  EXPECT_TRUE(parseGtnChunkHeader(std::span(bytes).subspan(c.offset), c.offset, bytes.size() - c.offset, "gen", &h,
+                                  &needed)
+                  .isOk());
+  auto payload = openGtnChunk(h, std::span(bytes).subspan(c.offset, c.bytes), "gen");
+  EXPECT_TRUE(payload.isOk());
+  GtnLevelRecord r;
+  EXPECT_TRUE(decodeLevelRecord(*payload, 0, "gen", &r).isOk());
+  return r;
+}
+
+// The file header chunk of a valid file (offset and size), its record in `h`.
+std::pair<uint64_t, uint64_t> fileChunk(const std::vector<uint8_t>& bytes, ChunkTag tag, GtnFileHeader* h) {
+  auto r = GtnReader::openMemory(std::string(bytes.begin(), bytes.end()), "gen");
+  EXPECT_TRUE(r.isOk());
+  *h = (*r)->file().header;
+  for (const GtnChunkInfo& c : (*r)->file().chunks)
+    if (c.tag == tag) return {c.offset, c.bytes};
+  ADD_FAILURE() << "no chunk " << tag.str();
+  return {0, 0};
+}
+
+// `bytes` with the chunk at [offset, offset + size) replaced by a chunk of `tag` holding `payload`
+// (zstd-compressed where that helps, as the writer does, unless `zstd` is false), its checksum right.
+std::vector<uint8_t> replaceChunk(const std::vector<uint8_t>& bytes, uint64_t offset, uint64_t size, ChunkTag tag,
+                                  const std::vector<uint8_t>& payload, bool zstd = true) {
+  std::vector<uint8_t> chunk;
+  appendGtnChunk(chunk, tag, payload, false, zstd, kGtnZstdLevel);
+  std::vector<uint8_t> out(bytes.begin(), bytes.begin() + static_cast<ptrdiff_t>(offset));
+  out.insert(out.end(), chunk.begin(), chunk.end());
+  out.insert(out.end(), bytes.begin() + static_cast<ptrdiff_t>(offset + size), bytes.end());
+  return out;
 }
 
 struct Sample {
@@ -464,76 +531,122 @@ Sample valid(std::string name, std::function<TetMesh()> mesh, std::function<std:
 
 std::vector<Sample> samples() {
   std::vector<Sample> s;
-  s.push_back(valid("cube.f32.dir.v1.0.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
+  s.push_back(valid("cube.f32.dir.v2.0-d3.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
   s.push_back(
-      valid("cube.f64.fields.dir.v1.0.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
-  s.push_back(valid("cube.f64.fields.nodir.v1.0.gtn", cubeF64Fields,
+      valid("cube.f64.fields.dir.v2.0-d3.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
+  s.push_back(valid("cube.f64.fields.nodir.v2.0-d3.gtn", cubeF64Fields,
                     [] { return encodeFile(cubeF64Fields(), options(false)); }));
   s.push_back(
-      valid("unused-points.f32.dir.v1.0.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
+      valid("unused-points.f32.dir.v2.0-d3.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
   s.push_back(
-      valid("two-components.f32.dir.v1.0.gtn", twoComponents, [] { return encodeFile(twoComponents(), options()); }));
-  s.push_back(valid("repeated-components.f64.dir.v1.0.gtn", repeatedComponents,
+      valid("two-components.f32.dir.v2.0-d3.gtn", twoComponents, [] { return encodeFile(twoComponents(), options()); }));
+  s.push_back(valid("repeated-components.f64.dir.v2.0-d3.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
-  s.push_back(valid("decimals.f64.dir.v1.0.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
-  s.push_back(valid("printed-singles.f64.dir.v1.0.gtn", printedSingles,
+  s.push_back(valid("decimals.f64.dir.v2.0-d3.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
+  s.push_back(valid("printed-singles.f64.dir.v2.0-d3.gtn", printedSingles,
                     [] { return encodeFile(printedSingles(), options()); }));
-  s.push_back(valid("shift-exceptions.f64.dir.v1.0.gtn", shiftExceptions,
+  s.push_back(valid("shift-exceptions.f64.dir.v2.0-d3.gtn", shiftExceptions,
                     [] { return encodeFile(shiftExceptions(), options()); }));
-  s.push_back(valid("value-table.f32.dir.v1.0.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
-  s.push_back(valid("packed-values.f32.dir.v1.0.gtn", packedValues,
+  s.push_back(valid("value-table.f32.dir.v2.0-d3.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
+  s.push_back(valid("packed-values.f32.dir.v2.0-d3.gtn", packedValues,
                     [] { return encodeFile(packedValues(), options(), nullptr, true); }));
-  s.push_back(valid("curvilinear.f32.dir.v1.0.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
-  s.push_back(valid("edge-points.f64.dir.v1.0.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
-  s.push_back(valid("delaunay.f64.dir.v1.0.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
-  s.push_back(valid("degenerate-sweep.f64.dir.v1.0.gtn", degenerateSweep,
+  s.push_back(valid("curvilinear.f32.dir.v2.0-d3.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
+  s.push_back(valid("edge-points.f64.dir.v2.0-d3.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
+  s.push_back(valid("delaunay.f64.dir.v2.0-d3.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
+  s.push_back(valid("degenerate-sweep.f64.dir.v2.0-d3.gtn", degenerateSweep,
                     [] { return encodeFile(degenerateSweep(), options()); }));
-  s.push_back(valid("levels.f32.dir.v1.0.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+  s.push_back(valid("pieces.f32.dir.v2.0-d3.gtn", piecesMesh,
+                    [] { return encodePiecesFile(piecesMesh(), options()); }));
+  s.push_back(valid("levels.f32.dir.v2.0-d3.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(
-      valid("wide-merge-tree.f32.dir.v1.0.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
-  s.push_back(valid("ancillary-chunk.f32.nodir.v1.0.gtn", cubeF32, [] {
+      valid("wide-merge-tree.f32.dir.v2.0-d3.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
+  s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d3.gtn", cubeF32, [] {
     const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
     return encodeFile(cubeF32(), options(false),
                       [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("xNOT"), note, true).isOk()); });
   }));
-  s.push_back(valid("newer-minor.f32.dir.v1.9.gtn", cubeF32, [] {
+  s.push_back(valid("newer-minor.f32.dir.v2.9-d3.gtn", cubeF32, [] {
     std::vector<uint8_t> b = encodeFile(cubeF32(), options());
-    const auto p = encodeGtnPrefix(1, 9);
+    const auto p = encodeGtnPrefix(2, 9);
     std::copy(p.begin(), p.end(), b.begin());
     return b;
   }));
   // Must fail.
-  s.push_back({"fail.bad-magic-text-mode.gtn", nullptr, [] {
+  s.push_back({"fail.bad-magic-text-mode.v2.0-d3.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.erase(b.begin() + 4);  // CR LF -> LF, as a text-mode transfer does
                  return b;
                }});
-  s.push_back({"fail.bad-checksum.gtn", nullptr, [] {
+  s.push_back({"fail.bad-checksum.v2.0-d3.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b[chunkOffset(b, kTagGeometry) + 40] ^= 0x04;  // past the header, in the payload
                  return b;
                }});
-  s.push_back({"fail.truncated.gtn", nullptr, [] {
+  s.push_back({"fail.truncated.v2.0-d3.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.resize(chunkOffset(b, kTagConnectivity) + 20);
                  return b;
                }});
-  s.push_back({"fail.unknown-critical-chunk.gtn", nullptr, [] {
+  s.push_back({"fail.unknown-critical-chunk.v2.0-d3.gtn", nullptr, [] {
                  const std::vector<uint8_t> payload = {1, 2, 3};
                  return encodeFile(cubeF32(), options(false), [&](GtnStreamWriter& w) {
                    EXPECT_TRUE(w.addChunk(ChunkTag("XTRA"), payload, false).isOk());
                  });
                }});
-  s.push_back({"fail.newer-major.v2.0.gtn", nullptr, [] {
+  s.push_back({"fail.newer-major.v3.0.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
-                 const auto p = encodeGtnPrefix(2, 0);
+                 const auto p = encodeGtnPrefix(3, 0);
                  std::copy(p.begin(), p.end(), b.begin());
                  return b;
                }});
-  s.push_back({"fail.trailing-bytes.gtn", nullptr, [] {
+  s.push_back({"fail.trailing-bytes.v2.0-d3.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.push_back('\n');
                  return b;
+               }});
+  s.push_back({"fail.older-major.v1.0.gtn", nullptr, [] {
+                 std::vector<uint8_t> b = encodeFile(cubeF32(), options());
+                 const auto p = encodeGtnPrefix(1, 0);
+                 std::copy(p.begin(), p.end(), b.begin());
+                 return b;
+               }});
+  s.push_back({"fail.draft-2.v2.0-d2.gtn", nullptr, [] {
+                 std::vector<uint8_t> b = encodeFile(cubeF32(), options(false));
+                 GtnFileHeader h;
+                 const auto [offset, size] = fileChunk(b, kTagFileHeader, &h);
+                 h.draft = 2;
+                 return replaceChunk(b, offset, size, kTagFileHeader, encodeFileHeader(h));
+               }});
+  // Must fail: pieces.
+  s.push_back({"fail.seam-missing.v2.0-d3.gtn", nullptr, [] {
+                 std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
+                 const GtnChunkInfo seam = levelChunk(b, kTagSeam);
+                 b.erase(b.begin() + static_cast<ptrdiff_t>(seam.offset),
+                         b.begin() + static_cast<ptrdiff_t>(seam.offset + seam.bytes));
+                 return b;
+               }});
+  s.push_back({"fail.piece-tets-sum.v2.0-d3.gtn", nullptr, [] {
+                 std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
+                 GtnLevelRecord r = levelRecord(b);
+                 r.pieces[1].tets -= 1;  // the pieces hold one tetrahedron fewer than the level
+                 const GtnChunkInfo lhdr = levelChunk(b, kTagLevelHeader);
+                 return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r), false);
+               }});
+  s.push_back({"fail.seam-class-repeats-piece.v2.0-d3.gtn", nullptr, [] {
+                 std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
+                 auto r = GtnReader::openMemory(std::string(b.begin(), b.end()), "gen");
+                 EXPECT_TRUE(r.isOk());
+                 std::vector<uint8_t> payload;
+                 auto table = (*r)->readSeamTable(0, &payload);
+                 EXPECT_TRUE(table.isOk());
+                 std::vector<SeamClass> classes = table->classes;
+                 std::vector<std::vector<uint8_t>> streams;
+                 for (const auto& [at, n] : table->streams)
+                   streams.emplace_back(payload.begin() + static_cast<ptrdiff_t>(at),
+                                        payload.begin() + static_cast<ptrdiff_t>(at + n));
+                 classes[0].pieces[1] = classes[0].pieces[0];  // the first class names its first piece twice
+                 const GtnChunkInfo seam = levelChunk(b, kTagSeam);
+                 return replaceChunk(b, seam.offset, seam.bytes, kTagSeam, encodeSeamTable(classes, streams));
                }});
   return s;
 }
@@ -634,6 +747,7 @@ void checkRejected(const std::string& path, const Expected& expected) {
 void checkAsExpected(const GtnReader& reader, const TetMesh& got, const Expected& expected) {
   EXPECT_EQ(std::to_string(reader.file().major) + "." + std::to_string(reader.file().minor),
             one(expected, "format version"));
+  EXPECT_EQ(std::to_string(reader.file().header.draft), one(expected, "draft revision"));
   EXPECT_EQ(reader.file().has_directory, one(expected, "directory") == "yes");
   EXPECT_EQ(scalarTypeName(got.coord_type), one(expected, "coordinates"));
   EXPECT_EQ(std::to_string(got.numPoints()), one(expected, "points"));
@@ -646,6 +760,7 @@ void checkAsExpected(const GtnReader& reader, const TetMesh& got, const Expected
     EXPECT_EQ(std::to_string(h.points) + " points, " + std::to_string(h.tets) + " tetrahedra, " +
                   std::to_string(h.merges) + " merges",
               one(expected, "level " + std::to_string(i)));
+    EXPECT_EQ(std::to_string(reader.level(i).pieces.size()), one(expected, "level " + std::to_string(i) + " pieces"));
   }
 }
 
@@ -734,7 +849,7 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsExpected) {
 // The merge tree of more than 2^17 points decodes to the ranking's tree: the same merges as the
 // levels file's grid (the unused points are never merged), in the wide file's vertex numbering.
 TEST(GtnConformance, WideMergeTreeDecodes) {
-  auto r = GtnReader::open(kDir + "wide-merge-tree.f32.dir.v1.0.gtn");
+  auto r = GtnReader::open(kDir + "wide-merge-tree.f32.dir.v2.0-d3.gtn");
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 1u);
   TetMeshBuilder b0;
@@ -764,7 +879,7 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
 // tree as the file stores it, and on-the-fly simplification from the finest stored level gives the
 // same mesh as applying the merges to level 0, at every merge count.
 TEST(GtnConformance, LevelsAndMergeTreesAgree) {
-  auto r = GtnReader::open(kDir + "levels.f32.dir.v1.0.gtn");
+  auto r = GtnReader::open(kDir + "levels.f32.dir.v2.0-d3.gtn");
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 3u);
   TetMeshBuilder b0;

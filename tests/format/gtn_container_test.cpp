@@ -488,6 +488,20 @@ TEST(GtnContainer, MalformedPayloadsWithValidChecksumsFailCleanly) {
   lh([](GtnLevelRecord& l) { l.level = 1; }, "level header says level 1");
   lh([](GtnLevelRecord& l) { l.ratio = std::nan(""); }, "ratio is not in [0, 1]");
   lh([](GtnLevelRecord& l) { l.merges = 3; }, "level 0's counts disagree");
+  // The piece table.
+  lh([](GtnLevelRecord& l) { l.pieces.clear(); }, "piece count is 0");
+  lh([](GtnLevelRecord& l) { l.pieces[0].kind = 1; }, "piece 0 has kind 1, which this reader does not know");
+  lh([](GtnLevelRecord& l) { l.pieces[0].own_boundary_points = l.pieces[0].own_points + 1; },
+     "piece own boundary point count");
+  // A second piece and no seam table: the chunk order names the missing SEAM.
+  lh(
+      [](GtnLevelRecord& l) {
+        l.pieces.push_back(l.pieces[0]);
+        l.pieces[0].tets = 1;
+        l.pieces[1].tets = l.tets - 1;
+        l.pieces[0].own_points = l.pieces[1].own_points = 0;
+      },
+      "has several pieces but no 'SEAM' chunk");
 }
 
 TEST(GtnContainer, CorruptZstdFrameWithValidChecksumRejected) {

@@ -465,10 +465,10 @@ TEST(Levels, ConvertWritesTheSameBytesForAnyThreadCount) {
   const std::string sequential = bytesOf(path);
   ASSERT_FALSE(sequential.empty());
   // A level given already encoded is written as the writer would have encoded it.
-  auto encoded = encodeLevel(g.mesh, EncodeOptions{});
+  auto encoded = encodePieces(g.mesh, EncodeOptions{}, wo.piece_tets);
   ASSERT_TRUE(encoded.isOk()) << encoded.status().message();
   std::vector<GtnLevelInput> inputs = levels->inputs(g.mesh);
-  inputs[0].encoded = std::make_shared<const EncodedLevel>(std::move(encoded).value());
+  inputs[0].encoded = std::make_shared<const PiecedLevel>(std::move(encoded).value());
   ASSERT_TRUE(writeGtnFile(path, inputs, wo).isOk());
   EXPECT_EQ(bytesOf(path), sequential);
   for (const size_t threads : {1, 2}) {

@@ -647,5 +647,25 @@ TEST(MustFail, WarningsAndInfosKeepTheFileValid) {
   EXPECT_EQ(u.count(IssueCode::kUnknownChunk), 1u) << u.toText("unknown");
 }
 
+// Files of format 1.0 (never released) and of another draft revision of 2.0 are reported as an
+// unsupported version, naming it.
+TEST(MustFail, OlderVersionsAndOtherDraftsAreUnsupported) {
+  Bytes v1 = base().bytes;
+  const auto p = encodeGtnPrefix(1, 0);
+  std::copy(p.begin(), p.end(), v1.begin());
+  ValidationReport r = validateBytesForTest(v1);
+  EXPECT_EQ(errorCodeSet(r), std::set<std::string>{"UNSUPPORTED_VERSION"}) << r.toText("v1");
+  EXPECT_NE(r.toText("v1").find("format version 1.0"), std::string::npos) << r.toText("v1");
+  const Bytes draft2 = rewrite([](std::vector<RewriteChunk>& chunks) {
+    GtnFileHeader h;
+    ASSERT_TRUE(decodeFileHeader(chunks[0].payload, 0, "x", &h).isOk());
+    h.draft = 2;
+    chunks[0].payload = encodeFileHeader(h);
+  });
+  r = validateBytesForTest(draft2);
+  EXPECT_EQ(errorCodeSet(r), std::set<std::string>{"UNSUPPORTED_VERSION"}) << r.toText("d2");
+  EXPECT_NE(r.toText("d2").find("draft revision 2"), std::string::npos) << r.toText("d2");
+}
+
 }  // namespace
 }  // namespace gtn::test

@@ -86,15 +86,23 @@ inline Bytes rewriteGtn(const std::string& path, const std::function<void(std::v
       rec.bbox_min[k] = li.header.bbox_min[k];
       rec.bbox_max[k] = li.header.bbox_max[k];
     }
+    rec.pieces = li.pieces;
     const int level = static_cast<int>(i);
     chunks.push_back({kTagLevelHeader, level, encodeLevelRecord(rec), false});
-    StatusOr<GtnLevelStreams> s = reader.readLevelStreams(i);
-    EXPECT_TRUE(s.isOk());
-    chunks.push_back({kTagBoundary, level, s->boundary, false});
-    chunks.push_back({kTagConnectivity, level, s->connectivity, false});
-    chunks.push_back({kTagGeometry, level, s->geometry, false});
-    for (const auto& f : s->point_fields) chunks.push_back({kTagPointField, level, f, false});
-    for (const auto& f : s->cell_fields) chunks.push_back({kTagCellField, level, f, false});
+    if (li.pieces.size() > 1) {
+      Bytes seam;
+      EXPECT_TRUE(reader.readSeamTable(i, &seam).isOk());
+      chunks.push_back({kTagSeam, level, seam, false});
+    }
+    for (size_t p = 0; p < li.pieces.size(); ++p) {
+      StatusOr<GtnLevelStreams> s = reader.readPieceStreams(i, p);
+      EXPECT_TRUE(s.isOk());
+      chunks.push_back({kTagBoundary, level, s->boundary, false});
+      chunks.push_back({kTagConnectivity, level, s->connectivity, false});
+      chunks.push_back({kTagGeometry, level, s->geometry, false});
+      for (const auto& f : s->point_fields) chunks.push_back({kTagPointField, level, f, false});
+      for (const auto& f : s->cell_fields) chunks.push_back({kTagCellField, level, f, false});
+    }
     auto mt = reader.mergeTreePayload(i);
     EXPECT_TRUE(mt.isOk());
     if (mt->has_value()) chunks.push_back({kTagMergeTree, level, **mt, false});
