@@ -39,7 +39,7 @@ struct WriteOptions {
   double w_density = 1.0;
   double w_geometry = 1.0;
   std::string command_line{};
-  uint64_t piece_tets = uint64_t{1} << 18;
+  uint64_t piece_tets = uint64_t{1} << 20;
 };
 
 /*! write() : writes `mesh` to `path` as a .gtn file: level 0 (lossless), its mip levels and merge

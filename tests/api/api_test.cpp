@@ -10,6 +10,7 @@
 #include <thread>
 #include <tuple>
 
+#include "codec/pieces.h"
 #include "gatun/gatun.h"
 #include "render/image.h"
 #include "test_util.h"
@@ -370,6 +371,8 @@ TEST(Api, ThreadsWorkOnTheirOwnFiles) {
 
 // A level stored as pieces: the piece table, reads of chosen pieces and of a box, the level's numbers
 // of a part's points and tetrahedra.
+static_assert(gatun::WriteOptions{}.piece_tets == gtn::kDefaultPieceTets, "the API's default is gtn convert's");
+
 TEST(Api, ReadsPiecesAndBoxesOfALevelInPieces) {
   const std::string dir = tempDir("api_pieces");
   const gatun::Mesh mesh = gridMesh(12);  // 10,368 tetrahedra
