@@ -3,8 +3,8 @@
 # its run of the file's pieces (vtkGTNReader). The grid is the project's sample shape at SIZE^3 points
 # (gtn-make-sample; 128 gives 127^3 x 6 = 12.3 million tetrahedra), converted with `gtn convert --levels 0
 # --no-merge-tree` (level 0 alone, no ranking; pieces of at most 2^20 tetrahedra, the default). A rank
-# decodes its pieces in parallel too (TBB), so each round runs, in turn (interleaved, so that whatever else the machine does
-# weighs on all of them):
+# decodes its pieces in parallel too (TBB), so each round runs, in turn (interleaved, so that whatever
+# else the machine does weighs on all of them):
 #   1 rank, every core (the reader's default, Threads 0)      N ranks, every core each (Threads 0)
 #   1 rank, 1 thread (Threads 1)                              N ranks, cores / N threads each
 #   N ranks, 1 thread each (when cores / N is not 1)
