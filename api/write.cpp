@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <utility>
 
+#include "codec/pieces.h"
 #include "convert/export.h"
 #include "convert/import.h"
 #include "format/file_io.h"
@@ -19,6 +20,10 @@ namespace {
 Error writeImported(const std::string& path, const gtn::TetMesh& mesh, const WriteOptions& options,
                     const std::string& source, const std::string& default_command_line,
                     std::vector<std::string>* warnings) {
+  if (options.piece_tets < gtn::kMinPieceTets)
+    return Error(ErrorCode::kUsage, source + ": piece_tets " + std::to_string(options.piece_tets) +
+                                        " is below the smallest piece, " + std::to_string(gtn::kMinPieceTets) +
+                                        " tetrahedra");
   gtn::GtnConvertOptions o;
   o.levels = options.levels;
   o.merge_tree = options.merge_tree;
@@ -30,6 +35,7 @@ Error writeImported(const std::string& path, const gtn::TetMesh& mesh, const Wri
   wo.tool_version = GTN_VERSION_STRING;
   wo.command_line = options.command_line.empty() ? default_command_line : options.command_line;
   wo.verify = options.verify;
+  wo.piece_tets = options.piece_tets;
   return gtn::api::toError(gtn::writeGtnWithLevels(path, mesh, o, wo, source, warnings));
 }
 

@@ -64,7 +64,8 @@ bool tetMeetsBox(const double* const p[4], const double lo[3], const double hi[3
   return true;
 }
 
-TetMesh cropToBox(const TetMesh& mesh, const double lo[3], const double hi[3]) {
+TetMesh cropToBox(const TetMesh& mesh, const double lo[3], const double hi[3], std::vector<size_t>* kept_points_out,
+                  std::vector<size_t>* kept_tets_out) {
   TetMesh out;
   out.coord_type = mesh.coord_type;
   out.metadata = mesh.metadata;
@@ -99,6 +100,8 @@ TetMesh cropToBox(const TetMesh& mesh, const double lo[3], const double hi[3]) {
   };
   keep(mesh.point_fields, kept_points, out.point_fields);
   keep(mesh.cell_fields, kept_tets, out.cell_fields);
+  if (kept_points_out) *kept_points_out = std::move(kept_points);
+  if (kept_tets_out) *kept_tets_out = std::move(kept_tets);
   return out;
 }
 

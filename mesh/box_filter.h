@@ -2,6 +2,8 @@
 // pieces of a level whose bounding boxes meet the box (codec/pieces.h) and filters them here.
 #pragma once
 
+#include <vector>
+
 #include "mesh/tet_mesh.h"
 
 namespace gtn {
@@ -13,6 +15,8 @@ bool tetMeetsBox(const double* const p[4], const double lo[3], const double hi[3
 
 // The tetrahedra of `mesh` that meet the box, in their order, with their cell field values; the
 // points they use, in their order, with their point field values; coordinate type and metadata kept.
-TetMesh cropToBox(const TetMesh& mesh, const double lo[3], const double hi[3]);
+// `kept_points` / `kept_tets` (optional) receive the indices in `mesh` of the points and tetrahedra kept.
+TetMesh cropToBox(const TetMesh& mesh, const double lo[3], const double hi[3],
+                  std::vector<size_t>* kept_points = nullptr, std::vector<size_t>* kept_tets = nullptr);
 
 }  // namespace gtn

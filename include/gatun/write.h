@@ -27,7 +27,9 @@ namespace gatun {
  *     component is the density ("" = the first that is not constant, "none" = volume only) and the
  *     weights of the density and boundary geometry errors.
  *  `command_line`: the provenance stored in the file header; "" stores "gatun::write(NAME)" or
- *     "gatun::convert(NAME)", NAME the output's file name without its directory. */
+ *     "gatun::convert(NAME)", NAME the output's file name without its directory.
+ *  `piece_tets`: the most tetrahedra a piece of a level holds (`gtn convert --piece-tets`; at least
+ *     4096): levels are stored as pieces that decode in parallel and are read by region apart. */
 struct WriteOptions {
   int levels = -1;
   bool merge_tree = true;
@@ -37,6 +39,7 @@ struct WriteOptions {
   double w_density = 1.0;
   double w_geometry = 1.0;
   std::string command_line{};
+  uint64_t piece_tets = uint64_t{1} << 20;
 };
 
 /*! write() : writes `mesh` to `path` as a .gtn file: level 0 (lossless), its mip levels and merge

@@ -7,14 +7,22 @@
 // decoded. Arrays keep their stored type (float32 stays vtkFloatArray, float64 vtkDoubleArray,
 // integers their VTK types).
 //
-// Piece requests: the reader answers a request for piece p of n by a fixed spatial split. It decodes
-// the whole level (pieces of the format do not exist yet, so the decode itself is not split), cuts
-// the bounding box of the points into n slabs across its longest axis and keeps the
-// tetrahedra whose centroid falls in slab p, the cuts between slabs being the quantiles of the
-// centroids (about equally many tetrahedra per piece). Every tetrahedron lands in
-// exactly one piece. With n > 1 the output carries the file's point and tetrahedron numbers as the
-// GlobalIds of point and cell data ("GlobalPointIds", "GlobalCellIds", vtkIdTypeArray), which
-// vtkGTNWriter uses to put gathered pieces back together.
+// Piece requests (UPDATE_PIECE_NUMBER p of UPDATE_NUMBER_OF_PIECES n, as ParaView sends one per MPI
+// rank): a stored level of several file pieces (gtn convert --piece-tets) is split into n contiguous
+// runs of its pieces holding about equally many tetrahedra, and request p reads and decodes only the
+// pieces of run p (GtnReader::decodeLevelPieces); with n above the number of pieces some requests get
+// none and give an empty grid with the same arrays. Seam vertices shared by pieces of two runs appear
+// in both outputs with the same global id. The output's field data carries the level's piece table,
+// "GTNPieceBounds" (a tuple per piece: xmin, xmax, ymin, ymax, zmin, zmax) and "GTNPieces" (the
+// pieces decoded for this request).
+// A mesh simplified on the fly (Ratio > 0) and a level stored as one piece are decoded whole on every
+// request, and request p keeps slab p: the bounding box of the points is cut across its longest axis
+// into n slabs (the cuts being the quantiles of the tetrahedra's centroids, so about equally many
+// tetrahedra per slab) and a tetrahedron belongs to the slab of its centroid.
+// Either way every tetrahedron lands in exactly one request's output, and with n > 1 the output
+// carries the level's point and tetrahedron numbers as the GlobalIds of point and cell data
+// ("GlobalPointIds", "GlobalCellIds", vtkIdTypeArray; the numbers a serial read gives the points and
+// cells), which vtkGTNWriter uses to put gathered pieces back together.
 #pragma once
 
 #include <string>
@@ -39,6 +47,11 @@ class VTKGTN_EXPORT vtkGTNReader : public vtkUnstructuredGridAlgorithm {
   // Simplification ratio in [0, 1]; > 0 overrides Level.
   vtkSetClampMacro(Ratio, double, 0.0, 1.0);
   vtkGetMacro(Ratio, double);
+
+  // The most threads the decode of a stored level's pieces uses (a TBB arena); 0 = TBB's default,
+  // every core. With several MPI ranks on one machine, cores / ranks keeps them from oversubscribing.
+  vtkSetClampMacro(Threads, int, 0, VTK_INT_MAX);
+  vtkGetMacro(Threads, int);
 
   // Levels the file stores: [0, levels - 1] (after RequestInformation; [0, 0] before).
   vtkGetVector2Macro(LevelRange, int);
@@ -67,6 +80,7 @@ class VTKGTN_EXPORT vtkGTNReader : public vtkUnstructuredGridAlgorithm {
   char* FileName = nullptr;
   int Level = 0;
   double Ratio = 0.0;
+  int Threads = 0;
   int LevelRange[2] = {0, 0};
   vtkDataArraySelection* PointDataArraySelection;
   vtkDataArraySelection* CellDataArraySelection;

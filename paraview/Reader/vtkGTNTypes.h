@@ -52,25 +52,21 @@ inline std::optional<gtn::ScalarType> scalarTypeOf(int vtk_type) {
   }
 }
 
-// A VTK array of `field`'s type holding the items `items` of `field`, in that order.
-inline vtkSmartPointer<vtkDataArray> toVtkArray(const gtn::Field& field, const std::vector<uint32_t>& items) {
+// A VTK array of `field`'s type holding the items `items` of `field`, in that order (nullptr: all).
+inline vtkSmartPointer<vtkDataArray> toVtkArray(const gtn::Field& field, const std::vector<uint32_t>* items) {
   vtkSmartPointer<vtkDataArray> a;
   a.TakeReference(vtkDataArray::CreateDataArray(vtkTypeOf(field.type)));
   a->SetName(field.name.c_str());
   a->SetNumberOfComponents(static_cast<int>(field.components));
-  a->SetNumberOfTuples(static_cast<vtkIdType>(items.size()));
+  a->SetNumberOfTuples(static_cast<vtkIdType>(items ? items->size() : field.itemCount()));
   const size_t item_bytes = field.components * field.valueSize();
   auto* out = static_cast<uint8_t*>(a->GetVoidPointer(0));
-  if (items.size() == field.itemCount()) {
-    bool identity = true;
-    for (size_t i = 0; i < items.size() && identity; ++i) identity = items[i] == i;
-    if (identity) {
-      if (!field.bytes.empty()) std::memcpy(out, field.bytes.data(), field.bytes.size());
-      return a;
-    }
+  if (!items) {
+    if (!field.bytes.empty()) std::memcpy(out, field.bytes.data(), field.bytes.size());
+    return a;
   }
-  for (size_t i = 0; i < items.size(); ++i)
-    std::memcpy(out + i * item_bytes, field.bytes.data() + static_cast<size_t>(items[i]) * item_bytes, item_bytes);
+  for (size_t i = 0; i < items->size(); ++i)
+    std::memcpy(out + i * item_bytes, field.bytes.data() + static_cast<size_t>((*items)[i]) * item_bytes, item_bytes);
   return a;
 }
 

@@ -20,11 +20,18 @@ class Mesh:
     level       the stored level decoded (the one simplified further on the fly for a ratio)
     merges      merges of level 0's merge tree applied (0: the lossless mesh)
     ratio       merges / points of level 0
+    pieces      the stored level's pieces decoded (increasing indices; every piece for a whole
+                level); None for a mesh simplified on the fly
+    point_ids   of a part of a stored level (a read with box or pieces): (n,) uint32 array, the level's
+                numbers of the points (the indices a whole read of the level gives them); else None
+    tet_ids     likewise (m,) uint64 array, the level's numbers of the tetrahedra; else None
     """
 
-    __slots__ = ("points", "tets", "point_data", "cell_data", "metadata", "level", "merges", "ratio")
+    __slots__ = ("points", "tets", "point_data", "cell_data", "metadata", "level", "merges", "ratio", "pieces",
+                 "point_ids", "tet_ids")
 
-    def __init__(self, points, tets, point_data=None, cell_data=None, metadata=None, level=0, merges=0, ratio=0.0):
+    def __init__(self, points, tets, point_data=None, cell_data=None, metadata=None, level=0, merges=0, ratio=0.0,
+                 pieces=None, point_ids=None, tet_ids=None):
         self.points = points
         self.tets = tets
         self.point_data = dict(point_data or {})
@@ -33,6 +40,9 @@ class Mesh:
         self.level = level
         self.merges = merges
         self.ratio = ratio
+        self.pieces = pieces
+        self.point_ids = point_ids
+        self.tet_ids = tet_ids
 
     def __repr__(self):
         return (
@@ -42,7 +52,7 @@ class Mesh:
         )
 
 
-def read(path, level=None, ratio=None, fields=None, box=None, threads=None):
+def read(path, level=None, ratio=None, fields=None, box=None, pieces=None, threads=None):
     """Reads a .gtn file.
 
     level   a stored level (0 = the lossless mesh, the default)
@@ -53,9 +63,14 @@ def read(path, level=None, ratio=None, fields=None, box=None, threads=None):
     box     (xmin, ymin, zmin, xmax, ymax, zmax): only the tetrahedra that meet this box, with the
             points they use. Of a stored level only the pieces whose bounding boxes meet the box are
             decoded, then filtered; with a ratio the simplified mesh is decoded whole, then filtered.
+    pieces  indices of the stored level's pieces to decode (gatun.info(path)["levels"][i]["pieces"]
+            is the piece table: tetrahedra and bounding box of each): their tetrahedra, stitched
+            (seam points once). With box, the pieces named that meet it. Not with ratio.
+            Reads of a part (box, pieces) give the level's numbers of their points and tetrahedra in
+            mesh.point_ids and mesh.tet_ids, and mesh.pieces the pieces decoded.
     threads the most threads the library's parallel parts (TBB) may use during the call (default: every
-            core). A level decodes on one thread (until files are cut into pieces), so today this
-            bounds nothing a read does; gatun.write's threads bounds the ranking and the check.
+            core): a level of several pieces decodes them in parallel; gatun.write's threads bounds
+            the ranking and the check.
 
     The arrays are handed over from the decoder without a copy (float32 coordinates are narrowed from
     the decoder's doubles once). Raises a gatun.Error subclass with the message `gtn` would print.
@@ -72,12 +87,14 @@ def read(path, level=None, ratio=None, fields=None, box=None, threads=None):
         ratio=None if ratio is None else float(ratio),
         fields=None if fields is None else [str(f) for f in fields],
         box=None if box is None else [float(v) for v in box],
+        pieces=None if pieces is None else [int(p) for p in np.atleast_1d(pieces)],
         threads=None if threads is None else int(threads),
     )
     for message in d["warnings"]:
         warnings.warn(DamagedChunkWarning(message), stacklevel=2)
     return Mesh(
-        d["points"], d["tets"], d["point_data"], d["cell_data"], d["metadata"], d["level"], d["merges"], d["ratio"]
+        d["points"], d["tets"], d["point_data"], d["cell_data"], d["metadata"], d["level"], d["merges"], d["ratio"],
+        d["pieces"], d["point_ids"], d["tet_ids"]
     )
 
 

@@ -4,8 +4,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <string>
@@ -115,8 +117,10 @@ py::object jsonToPython(const nlohmann::json& j) {
 
 py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::optional<double> ratio,
                  std::optional<std::vector<std::string>> field_names, std::optional<std::vector<double>> box,
-                 std::optional<int> threads) {
+                 std::optional<std::vector<int64_t>> piece_list, std::optional<int> threads) {
   if (level && ratio) raise(usageError(path + ": level and ratio exclude each other"));
+  if (piece_list && ratio)
+    raise(usageError(path + ": pieces and ratio exclude each other (pieces are those of a stored level)"));
   if (ratio && !(*ratio >= 0 && *ratio <= 1))
     raise(usageError(path + ": ratio " + std::to_string(*ratio) + " is not between 0 and 1"));
   checkThreads(path, threads);
@@ -138,6 +142,12 @@ py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::opt
   size_t level_read = 0;
   uint64_t merges = 0;
   double level_ratio = 0;
+  // A part of a stored level: the pieces decoded and the level's numbers of the mesh's points and
+  // tetrahedra (empty: the mesh's indices are the level's).
+  std::optional<std::vector<uint32_t>> decoded_pieces;
+  std::vector<uint32_t> global_vertex;
+  std::vector<uint64_t> global_tet;
+  bool part = false;
   {
     py::gil_scoped_release release;
     const ThreadLimit limit(threads);
@@ -171,21 +181,75 @@ py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::opt
       // Over the vertices tetrahedra use, as the stored levels' ratios and mergesForRatio count.
       const uint64_t free = valueOr(levelZeroUnreferencedMerges(r)), points = r.level(0).header.points;
       level_ratio = points > free && merges > free ? double(merges - free) / double(points - free) : 0.0;
-    } else if (box && piecesInBox(r.level(level_read).pieces, lo, hi).size() < r.level(level_read).pieces.size()) {
-      // A region read decodes only the pieces whose bounding boxes meet the box; the tetrahedra that
-      // meet the box are then kept from those (below).
-      std::vector<uint32_t> chosen = piecesInBox(r.level(level_read).pieces, lo, hi);
-      if (chosen.empty()) chosen = {0};  // no tetrahedron meets the box: the crop below keeps none
-      builder.mesh() = valueOr(r.decodeLevelPieces(level_read, chosen, &fields)).mesh;
-      merges = r.level(level_read).header.merges;
-      level_ratio = r.level(level_read).ratio;
     } else {
-      check(r.decodeLevel(level_read, builder, nullptr, &fields));
+      // The pieces to decode: those named (every piece by default), of them those whose bounding
+      // boxes meet the box; the tetrahedra that meet the box are then kept from those (below).
+      const std::vector<PieceInfo>& table = r.level(level_read).pieces;
+      std::vector<uint32_t> chosen;
+      if (piece_list) {
+        for (int64_t p : *piece_list)
+          if (p < 0 || static_cast<uint64_t>(p) >= table.size())
+            raise(usageError(path + ": level " + std::to_string(level_read) + ": pieces: no piece " +
+                             std::to_string(p) + " (the level has " + std::to_string(table.size()) +
+                             " piece(s), 0 to " + std::to_string(table.size() - 1) + ")"));
+        chosen.assign(piece_list->begin(), piece_list->end());
+        std::sort(chosen.begin(), chosen.end());
+        chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+      } else {
+        chosen.resize(table.size());
+        for (size_t p = 0; p < table.size(); ++p) chosen[p] = static_cast<uint32_t>(p);
+      }
+      if (box) {
+        const std::vector<uint32_t> in_box = piecesInBox(table, lo, hi);
+        std::vector<uint32_t> both;
+        std::set_intersection(chosen.begin(), chosen.end(), in_box.begin(), in_box.end(), std::back_inserter(both));
+        chosen = std::move(both);
+      }
+      part = piece_list || box;
+      if (chosen.size() == table.size()) {
+        check(r.decodeLevel(level_read, builder, nullptr, &fields));
+      } else if (chosen.empty()) {
+        // Nothing to decode: an empty mesh with the level's (selected) fields.
+        const LevelHeader& h = r.level(level_read).header;
+        TetMesh& m = builder.mesh();
+        m.coord_type = h.coord_type;
+        m.metadata = h.metadata;
+        for (const FieldDesc& f : h.point_fields) m.point_fields.emplace_back(f.name, f.components, f.type, 0);
+        for (const FieldDesc& f : h.cell_fields) m.cell_fields.emplace_back(f.name, f.components, f.type, 0);
+      } else {
+        DecodedPieces decoded = valueOr(r.decodeLevelPieces(level_read, chosen, &fields));
+        builder.mesh() = std::move(decoded.mesh);
+        global_vertex = std::move(decoded.global_vertex);
+        global_tet = std::move(decoded.global_tet);
+      }
+      decoded_pieces = std::move(chosen);
       merges = r.level(level_read).header.merges;
       level_ratio = r.level(level_read).ratio;
     }
     if (field_names) dropUndecodedFields(builder.mesh(), fields);
-    if (box) builder.mesh() = cropToBox(builder.mesh(), lo, hi);
+    if (box) {
+      std::vector<size_t> kept_points, kept_tets;
+      builder.mesh() = cropToBox(builder.mesh(), lo, hi, &kept_points, &kept_tets);
+      if (part) {
+        // The level's numbers of the kept points and tetrahedra.
+        std::vector<uint32_t> gv(kept_points.size());
+        for (size_t i = 0; i < kept_points.size(); ++i)
+          gv[i] = global_vertex.empty() ? static_cast<uint32_t>(kept_points[i]) : global_vertex[kept_points[i]];
+        std::vector<uint64_t> gt(kept_tets.size());
+        for (size_t i = 0; i < kept_tets.size(); ++i) gt[i] = global_tet.empty() ? kept_tets[i] : global_tet[kept_tets[i]];
+        global_vertex = std::move(gv);
+        global_tet = std::move(gt);
+      }
+    }
+    if (part && global_vertex.empty() && builder.mesh().numPoints() > 0) {
+      // Every piece decoded: the indices are the level's numbers.
+      global_vertex.resize(builder.mesh().numPoints());
+      for (size_t i = 0; i < global_vertex.size(); ++i) global_vertex[i] = static_cast<uint32_t>(i);
+    }
+    if (part && global_tet.empty() && builder.mesh().numTets() > 0) {
+      global_tet.resize(builder.mesh().numTets());
+      for (size_t i = 0; i < global_tet.size(); ++i) global_tet[i] = i;
+    }
   }
   TetMesh& mesh = builder.mesh();
   py::dict out;
@@ -208,6 +272,17 @@ py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::opt
   out["merges"] = merges;
   out["ratio"] = level_ratio;
   out["warnings"] = damage;
+  if (part) {
+    out["point_ids"] = handOver(std::move(global_vertex), dtypeOf(ScalarType::kUInt32), {n});
+    out["tet_ids"] = handOver(std::move(global_tet), dtypeOf(ScalarType::kUInt64), {m});
+  } else {
+    out["point_ids"] = py::none();
+    out["tet_ids"] = py::none();
+  }
+  if (decoded_pieces)
+    out["pieces"] = *decoded_pieces;
+  else
+    out["pieces"] = py::none();
   return out;
 }
 
@@ -391,7 +466,8 @@ PYBIND11_MODULE(_gatun, m) {
   });
   m.attr("__version__") = GTN_VERSION_STRING;
   m.def("read", &readGtn, py::arg("path"), py::arg("level") = py::none(), py::arg("ratio") = py::none(),
-        py::arg("fields") = py::none(), py::arg("box") = py::none(), py::arg("threads") = py::none());
+        py::arg("fields") = py::none(), py::arg("box") = py::none(), py::arg("pieces") = py::none(),
+        py::arg("threads") = py::none());
   m.def("decode", &decodeOnly, py::arg("path"), py::arg("level") = 0);
   m.def("write", &writeGtn, py::arg("path"), py::arg("points"), py::arg("tets"), py::arg("point_data"),
         py::arg("cell_data"), py::arg("metadata"), py::arg("levels"), py::arg("merge_tree"), py::arg("level_storage"),

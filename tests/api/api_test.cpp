@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <set>
 #include <thread>
 #include <tuple>
 
+#include "codec/pieces.h"
 #include "gatun/gatun.h"
 #include "render/image.h"
 #include "test_util.h"
@@ -365,6 +367,109 @@ TEST(Api, ThreadsWorkOnTheirOwnFiles) {
     EXPECT_TRUE(same_mesh[t]) << "thread " << t;
     EXPECT_TRUE(same_image[t]) << "thread " << t;
   }
+}
+
+// A level stored as pieces: the piece table, reads of chosen pieces and of a box, the level's numbers
+// of a part's points and tetrahedra.
+static_assert(gatun::WriteOptions{}.piece_tets == gtn::kDefaultPieceTets, "the API's default is gtn convert's");
+
+TEST(Api, ReadsPiecesAndBoxesOfALevelInPieces) {
+  const std::string dir = tempDir("api_pieces");
+  const gatun::Mesh mesh = gridMesh(12);  // 10,368 tetrahedra
+  gatun::WriteOptions options;
+  options.levels = 0;
+  options.piece_tets = 4096;
+  ASSERT_TRUE(gatun::write(dir + "/grid.gtn", mesh, options).ok());
+  auto opened = gatun::Reader::open(dir + "/grid.gtn");
+  ASSERT_TRUE(opened.ok()) << opened.error().message();
+  gatun::Reader reader = std::move(opened).value();
+  const gatun::LevelInfo& level = reader.info().levels.at(0);
+  ASSERT_GT(level.pieces.size(), 2u);
+  uint64_t tets = 0, bytes = 0;
+  for (const gatun::PieceInfo& p : level.pieces) {
+    EXPECT_LE(p.tets, 4096u);
+    EXPECT_GT(p.bytes, 0u);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_LE(reader.info().bbox_min[k], p.bbox_min[k]);
+      EXPECT_LE(p.bbox_min[k], p.bbox_max[k]);
+      EXPECT_LE(p.bbox_max[k], reader.info().bbox_max[k]);
+    }
+    tets += p.tets;
+    bytes += p.bytes;
+  }
+  EXPECT_EQ(tets, mesh.tetCount());
+  EXPECT_LT(bytes, level.bytes);
+
+  gatun::ReadReport report;
+  auto whole = reader.read({}, &report);
+  ASSERT_TRUE(whole.ok()) << whole.error().message();
+  const gatun::Mesh& w = whole.value();
+  EXPECT_EQ(report.pieces.size(), level.pieces.size());
+  EXPECT_TRUE(report.point_ids.empty() && report.tet_ids.empty());
+
+  // Each piece alone: its points and tetrahedra are the whole read's of the same numbers; together the
+  // pieces hold every tetrahedron once and every point (seam points in several pieces).
+  std::vector<int> tet_seen(w.tetCount(), 0), point_seen(w.pointCount(), 0);
+  for (uint32_t p = 0; p < level.pieces.size(); ++p) {
+    auto part = reader.read({.pieces = std::vector<uint32_t>{p}}, &report);
+    ASSERT_TRUE(part.ok()) << part.error().message();
+    const gatun::Mesh& m = part.value();
+    EXPECT_EQ(report.pieces, std::vector<uint32_t>{p});
+    EXPECT_EQ(m.tetCount(), level.pieces[p].tets);
+    ASSERT_EQ(report.point_ids.size(), m.pointCount());
+    ASSERT_EQ(report.tet_ids.size(), m.tetCount());
+    for (uint32_t i = 0; i < m.pointCount(); ++i) {
+      EXPECT_EQ(pointOf(m, i), pointOf(w, report.point_ids[i]));
+      EXPECT_EQ(m.pointField("density")->value(i, 0), w.pointField("density")->value(report.point_ids[i], 0));
+      ++point_seen[report.point_ids[i]];
+    }
+    for (size_t t = 0; t < m.tetCount(); ++t) {
+      for (int k = 0; k < 4; ++k) EXPECT_EQ(report.point_ids[m.tets[t][k]], w.tets[report.tet_ids[t]][k]);
+      EXPECT_EQ(m.cellField("region")->value(t, 0), w.cellField("region")->value(report.tet_ids[t], 0));
+      ++tet_seen[report.tet_ids[t]];
+    }
+  }
+  EXPECT_EQ(std::count(tet_seen.begin(), tet_seen.end(), 1), static_cast<std::ptrdiff_t>(w.tetCount()));
+  EXPECT_EQ(std::count(point_seen.begin(), point_seen.end(), 0), 0);
+  EXPECT_GT(std::count_if(point_seen.begin(), point_seen.end(), [](int n) { return n > 1; }), 0);
+
+  // A box: the pieces whose bounding boxes meet it are decoded, and the tetrahedra meeting it kept,
+  // the same as the box read of each such piece alone.
+  const std::array<double, 6> box{0.0, 0.0, 0.0, 3.5, 4.0, 2.5};
+  std::vector<uint32_t> in_box;
+  for (uint32_t p = 0; p < level.pieces.size(); ++p) {
+    const gatun::PieceInfo& pi = level.pieces[p];
+    bool meets = true;
+    for (int k = 0; k < 3; ++k) meets = meets && pi.bbox_min[k] <= box[k + 3] && box[k] <= pi.bbox_max[k];
+    if (meets) in_box.push_back(p);
+  }
+  ASSERT_FALSE(in_box.empty());
+  ASSERT_LT(in_box.size(), level.pieces.size());
+  auto boxed = reader.read({.box = box}, &report);
+  ASSERT_TRUE(boxed.ok()) << boxed.error().message();
+  EXPECT_EQ(report.pieces, in_box);
+  std::set<uint64_t> boxed_ids(report.tet_ids.begin(), report.tet_ids.end());
+  EXPECT_GT(boxed_ids.size(), 0u);
+  EXPECT_LT(boxed_ids.size(), w.tetCount());
+  std::set<uint64_t> one_by_one;
+  for (uint32_t p : in_box) {
+    ASSERT_TRUE(reader.read({.pieces = std::vector<uint32_t>{p}, .box = box}, &report).ok());
+    one_by_one.insert(report.tet_ids.begin(), report.tet_ids.end());
+  }
+  EXPECT_EQ(boxed_ids, one_by_one);
+
+  auto no_piece = reader.read({.pieces = std::vector<uint32_t>{0, 99}});
+  ASSERT_FALSE(no_piece.ok());
+  EXPECT_NE(no_piece.error().message().find("level 0: pieces: no piece 99 (the level has"), std::string::npos)
+      << no_piece.error().message();
+  auto with_ratio = reader.read({.ratio = 0.5, .pieces = std::vector<uint32_t>{0}});
+  ASSERT_FALSE(with_ratio.ok());
+  EXPECT_EQ(with_ratio.error().code(), gatun::ErrorCode::kUsage);
+  options.piece_tets = 100;
+  const gatun::Error small = gatun::write(dir + "/small.gtn", mesh, options);
+  EXPECT_EQ(small.code(), gatun::ErrorCode::kUsage);
+  EXPECT_NE(small.message().find("piece_tets 100 is below the smallest piece, 4096 tetrahedra"), std::string::npos)
+      << small.message();
 }
 
 TEST(Api, VersionIsTheCommands) {
