@@ -107,7 +107,8 @@ Result<Mesh> Reader::read(const ReadOptions& options, ReadReport* report) {
   if (options.ratio && !(*options.ratio >= 0 && *options.ratio <= 1))
     return Error(ErrorCode::kUsage, path + ": ratio " + std::to_string(*options.ratio) + " is not between 0 and 1");
   if (options.ratio && options.pieces)
-    return Error(ErrorCode::kUsage, path + ": pieces and ratio exclude each other (pieces are those of a stored level)");
+    return Error(ErrorCode::kUsage,
+                 path + ": pieces and ratio exclude each other (pieces are those of a stored level)");
   double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
   if (options.box)
     for (int k = 0; k < 3; ++k) {

@@ -236,7 +236,8 @@ py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::opt
         for (size_t i = 0; i < kept_points.size(); ++i)
           gv[i] = global_vertex.empty() ? static_cast<uint32_t>(kept_points[i]) : global_vertex[kept_points[i]];
         std::vector<uint64_t> gt(kept_tets.size());
-        for (size_t i = 0; i < kept_tets.size(); ++i) gt[i] = global_tet.empty() ? kept_tets[i] : global_tet[kept_tets[i]];
+        for (size_t i = 0; i < kept_tets.size(); ++i)
+          gt[i] = global_tet.empty() ? kept_tets[i] : global_tet[kept_tets[i]];
         global_vertex = std::move(gv);
         global_tet = std::move(gt);
       }
@@ -279,10 +280,8 @@ py::dict readGtn(const std::string& path, std::optional<int64_t> level, std::opt
     out["point_ids"] = py::none();
     out["tet_ids"] = py::none();
   }
-  if (decoded_pieces)
-    out["pieces"] = *decoded_pieces;
-  else
-    out["pieces"] = py::none();
+  if (decoded_pieces) out["pieces"] = *decoded_pieces;
+  else out["pieces"] = py::none();
   return out;
 }
 
