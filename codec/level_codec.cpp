@@ -1228,6 +1228,26 @@ bool looksDelaunay(const TetMesh& mesh, const FaceAdjacency& adj) {
 
 }  // namespace
 
+LevelHeader levelHeaderOf(const TetMesh& mesh) {
+  LevelHeader h;
+  const size_t np = mesh.numPoints();
+  h.points = np;
+  h.tets = mesh.numTets();
+  h.coord_type = mesh.coord_type;
+  for (const Field& f : mesh.point_fields) h.point_fields.push_back({f.name, f.components, f.type});
+  for (const Field& f : mesh.cell_fields) h.cell_fields.push_back({f.name, f.components, f.type});
+  h.metadata = mesh.metadata;
+  if (np > 0) {
+    for (int i = 0; i < 3; ++i) h.bbox_min[i] = h.bbox_max[i] = mesh.coords[i];
+    for (size_t v = 0; v < np; ++v)
+      for (int i = 0; i < 3; ++i) {
+        h.bbox_min[i] = std::min(h.bbox_min[i], mesh.coords[3 * v + i]);
+        h.bbox_max[i] = std::max(h.bbox_max[i], mesh.coords[3 * v + i]);
+      }
+  }
+  return h;
+}
+
 StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& options) {
   if (options.keep_order) return unsupported("encodeLevel: keeping the source order is not implemented");
   GTN_RETURN_IF_ERROR(mesh.checkConsistency("encodeLevel"));
@@ -1247,20 +1267,7 @@ StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& opt
 
   EncodedLevel out;
   LevelHeader& h = out.header;
-  h.points = np;
-  h.tets = nt;
-  h.coord_type = mesh.coord_type;
-  for (const Field& f : mesh.point_fields) h.point_fields.push_back({f.name, f.components, f.type});
-  for (const Field& f : mesh.cell_fields) h.cell_fields.push_back({f.name, f.components, f.type});
-  h.metadata = mesh.metadata;
-  if (np > 0) {
-    for (int i = 0; i < 3; ++i) h.bbox_min[i] = h.bbox_max[i] = mesh.coords[i];
-    for (size_t v = 0; v < np; ++v)
-      for (int i = 0; i < 3; ++i) {
-        h.bbox_min[i] = std::min(h.bbox_min[i], mesh.coords[3 * v + i]);
-        h.bbox_max[i] = std::max(h.bbox_max[i], mesh.coords[3 * v + i]);
-      }
-  }
+  h = levelHeaderOf(mesh);
 
   if (!options.seam.empty() && options.seam.size() != np)
     return invalidData("encodeLevel: the seam list does not have one entry per point");

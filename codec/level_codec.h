@@ -51,6 +51,10 @@ struct EncodedLevel {
   uint64_t boundary_points = 0;
 };
 
+// The header encodeLevel gives `mesh`: its counts (boundary_triangles left 0), coordinate type,
+// fields, metadata and bounding box.
+LevelHeader levelHeaderOf(const TetMesh& mesh);
+
 // Encodes a mesh whose tetrahedra are positively oriented (zero-volume ones allowed).
 StatusOr<EncodedLevel> encodeLevel(const TetMesh& mesh, const EncodeOptions& options);
 

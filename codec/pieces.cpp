@@ -245,6 +245,18 @@ std::vector<std::vector<uint32_t>> pieceSeamLists(std::span<const SeamClass> cla
   return lists;
 }
 
+LevelHeader pieceHeader(const LevelHeader& level, const PieceInfo& piece) {
+  LevelHeader h = level;
+  h.points = piece.points;
+  h.tets = piece.tets;
+  h.boundary_triangles = piece.boundary_triangles;
+  for (int i = 0; i < 3; ++i) {
+    h.bbox_min[i] = piece.bbox_min[i];
+    h.bbox_max[i] = piece.bbox_max[i];
+  }
+  return h;
+}
+
 std::vector<uint32_t> piecesInBox(std::span<const PieceInfo> pieces, const double lo[3], const double hi[3]) {
   std::vector<uint32_t> out;
   for (size_t p = 0; p < pieces.size(); ++p) {
@@ -692,14 +704,7 @@ StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vec
       piece_status[p] = invalidData(piece_what + ": its seam vertices differ from its seam classes'");
       return;
     }
-    LevelHeader ph = h;
-    ph.points = info.points;
-    ph.tets = info.tets;
-    ph.boundary_triangles = info.boundary_triangles;
-    for (int k = 0; k < 3; ++k) {
-      ph.bbox_min[k] = info.bbox_min[k];
-      ph.bbox_max[k] = info.bbox_max[k];
-    }
+    const LevelHeader ph = pieceHeader(h, info);
     StitchSink sink(h, mesh, field_offset, seam_refs[p], class_out, bnd_base[p], info.own_boundary_points, int_base[p],
                     info.own_points - info.own_boundary_points, tet_base[p], info.tets);
     // The piece's seam values, gathered in its seam-list order.

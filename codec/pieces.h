@@ -96,6 +96,10 @@ struct DecodedPieces {
 StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vector<uint32_t>& chosen,
                                      const std::string& what, const DecodeFields* fields = nullptr);
 
+// The header a piece's streams decode with: the level's fields and metadata, the piece's counts and
+// bounding box.
+LevelHeader pieceHeader(const LevelHeader& level, const PieceInfo& piece);
+
 // The indices of the pieces whose bounding boxes meet the box [lo, hi] (closed).
 std::vector<uint32_t> piecesInBox(std::span<const PieceInfo> pieces, const double lo[3], const double hi[3]);
 

@@ -281,22 +281,8 @@ StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const Structur
   if (!piece.isOk()) return unsupported(piece.status().message());
 
   EncodedLevel out;
-  LevelHeader& h = out.header;
-  h.points = np;
-  h.tets = nt;
-  h.boundary_triangles = boundary.size();
-  h.coord_type = mesh.coord_type;
-  for (const Field& f : mesh.point_fields) h.point_fields.push_back({f.name, f.components, f.type});
-  for (const Field& f : mesh.cell_fields) h.cell_fields.push_back({f.name, f.components, f.type});
-  h.metadata = mesh.metadata;
-  if (np > 0) {
-    for (int i = 0; i < 3; ++i) h.bbox_min[i] = h.bbox_max[i] = mesh.coords[i];
-    for (size_t v = 0; v < np; ++v)
-      for (int i = 0; i < 3; ++i) {
-        h.bbox_min[i] = std::min(h.bbox_min[i], mesh.coords[3 * v + i]);
-        h.bbox_max[i] = std::max(h.bbox_max[i], mesh.coords[3 * v + i]);
-      }
-  }
+  out.header = levelHeaderOf(mesh);
+  out.header.boundary_triangles = boundary.size();
   out.connectivity = std::move(*piece);
   out.point_fields.resize(mesh.point_fields.size());
   out.cell_fields.resize(mesh.cell_fields.size());

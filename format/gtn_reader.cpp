@@ -640,21 +640,6 @@ Status GtnReader::openByDirectory() {
   return Status::ok();
 }
 
-namespace {
-// The header a piece's streams decode with: the level's fields, the piece's counts and bounding box.
-LevelHeader pieceHeader(const LevelHeader& level, const PieceInfo& p) {
-  LevelHeader h = level;
-  h.points = p.points;
-  h.tets = p.tets;
-  h.boundary_triangles = p.boundary_triangles;
-  for (int i = 0; i < 3; ++i) {
-    h.bbox_min[i] = p.bbox_min[i];
-    h.bbox_max[i] = p.bbox_max[i];
-  }
-  return h;
-}
-}  // namespace
-
 StatusOr<GtnLevelStreams> GtnReader::readPieceStreams(size_t i, size_t piece) {
   if (i >= levels_.size())
     return usageError(file_.path + ": level " + std::to_string(i) + " does not exist (the file has " +
