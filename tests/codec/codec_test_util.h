@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <set>
+#include <string>
 
 #include "codec/level_check.h"
 #include "codec/level_codec.h"
@@ -271,6 +272,34 @@ inline int expectFieldsDecodeAlone(const EncodedLevel& e, bool unselected_zero) 
     matched += same;
   }
   return matched;
+}
+
+// The mesh as a renumbering-independent multiset: points as (coordinates, field bytes), tetrahedra as
+// the sorted keys of their corners with their cell values.
+inline std::multiset<std::string> canonicalMesh(const TetMesh& m) {
+  std::vector<std::string> key(m.numPoints());
+  for (size_t i = 0; i < m.numPoints(); ++i) {
+    key[i].assign(reinterpret_cast<const char*>(m.point(i)), 24);
+    for (const Field& f : m.point_fields) {
+      const size_t n = f.components * f.valueSize();
+      key[i].append(reinterpret_cast<const char*>(f.bytes.data() + i * n), n);
+    }
+  }
+  std::multiset<std::string> out;
+  for (const std::string& k : key) out.insert("p" + k);
+  for (size_t t = 0; t < m.numTets(); ++t) {
+    std::vector<std::string> c;
+    for (uint32_t v : m.tets[t]) c.push_back(key[v]);
+    std::sort(c.begin(), c.end());
+    std::string k = "t";
+    for (const std::string& s : c) k += s;
+    for (const Field& f : m.cell_fields) {
+      const size_t n = f.components * f.valueSize();
+      k.append(reinterpret_cast<const char*>(f.bytes.data() + t * n), n);
+    }
+    out.insert(k);
+  }
+  return out;
 }
 
 }  // namespace gtn::test

@@ -654,34 +654,6 @@ std::vector<Sample> samples() {
   return s;
 }
 
-// The mesh as a renumbering-independent multiset: points as (coordinates, field bytes), tetrahedra as
-// the sorted keys of their corners with their cell values.
-std::multiset<std::string> canonical(const TetMesh& m) {
-  std::vector<std::string> key(m.numPoints());
-  for (size_t i = 0; i < m.numPoints(); ++i) {
-    key[i].assign(reinterpret_cast<const char*>(m.point(i)), 24);
-    for (const Field& f : m.point_fields) {
-      const size_t n = f.components * f.valueSize();
-      key[i].append(reinterpret_cast<const char*>(f.bytes.data() + i * n), n);
-    }
-  }
-  std::multiset<std::string> out;
-  for (const std::string& k : key) out.insert("p" + k);
-  for (size_t t = 0; t < m.numTets(); ++t) {
-    std::vector<std::string> c;
-    for (uint32_t v : m.tets[t]) c.push_back(key[v]);
-    std::sort(c.begin(), c.end());
-    std::string k = "t";
-    for (const std::string& s : c) k += s;
-    for (const Field& f : m.cell_fields) {
-      const size_t n = f.components * f.valueSize();
-      k.append(reinterpret_cast<const char*>(f.bytes.data() + t * n), n);
-    }
-    out.insert(k);
-  }
-  return out;
-}
-
 // NAME.expected beside NAME.gtn: "key: value" lines (a key may repeat, as "point field" does),
 // blank lines and "#" comments.
 using Expected = std::multimap<std::string, std::string>;
@@ -818,7 +790,7 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsExpected) {
       EXPECT_EQ(got.point_fields[i].type, want.point_fields[i].type);
       EXPECT_EQ(got.point_fields[i].components, want.point_fields[i].components);
     }
-    EXPECT_TRUE(canonical(got) == canonical(want)) << "decoded mesh differs from the generated one";
+    EXPECT_TRUE(canonicalMesh(got) == canonicalMesh(want)) << "decoded mesh differs from the generated one";
     EXPECT_GT(stats.peak_live_vertices, 0u);
     checkAsExpected(**r, got, expected);
     // Opened through the directory (when there is one), the same level decodes the same.
@@ -874,7 +846,7 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
     auto got = applyMerges(level0, *tree, n);
     auto want = applyMerges(wideMesh(), *ranked, n);
     ASSERT_TRUE(got.isOk() && want.isOk());
-    EXPECT_TRUE(canonical(*got) == canonical(*want)) << n << " merges";
+    EXPECT_TRUE(canonicalMesh(*got) == canonicalMesh(*want)) << n << " merges";
   }
 }
 
@@ -902,7 +874,7 @@ TEST(GtnConformance, LevelsAndMergeTreesAgree) {
     ASSERT_TRUE((*r)->decodeLevel(i, bi).isOk());
     auto want = applyMerges(level0, *tree, n);
     ASSERT_TRUE(want.isOk());
-    EXPECT_TRUE(canonical(bi.mesh()) == canonical(*want)) << "level " << i;
+    EXPECT_TRUE(canonicalMesh(bi.mesh()) == canonicalMesh(*want)) << "level " << i;
   }
   for (uint64_t n = 0; n <= tree->merges; n += 7) {
     TetMeshBuilder bn;
@@ -910,7 +882,7 @@ TEST(GtnConformance, LevelsAndMergeTreesAgree) {
     ASSERT_TRUE(streamSimplified(**r, n, bn, &plan).isOk()) << n;
     auto want = applyMerges(level0, *tree, n);
     ASSERT_TRUE(want.isOk());
-    EXPECT_TRUE(canonical(bn.mesh()) == canonical(*want)) << n << " merges, from level " << plan.level;
+    EXPECT_TRUE(canonicalMesh(bn.mesh()) == canonicalMesh(*want)) << n << " merges, from level " << plan.level;
   }
 }
 

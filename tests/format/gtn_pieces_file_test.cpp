@@ -27,37 +27,9 @@ TetMesh fieldGrid(int n) {
   return m;
 }
 
-// The mesh as a renumbering-independent multiset: points as (coordinates, point values), tetrahedra
-// as the sorted keys of their corners with their cell values.
-std::multiset<std::string> canonical(const TetMesh& m) {
-  std::vector<std::string> key(m.numPoints());
-  for (size_t i = 0; i < m.numPoints(); ++i) {
-    key[i].assign(reinterpret_cast<const char*>(m.point(i)), 24);
-    for (const Field& f : m.point_fields) {
-      const size_t n = f.components * f.valueSize();
-      key[i].append(reinterpret_cast<const char*>(f.bytes.data() + i * n), n);
-    }
-  }
-  std::multiset<std::string> out;
-  for (const std::string& k : key) out.insert("p" + k);
-  for (size_t t = 0; t < m.numTets(); ++t) {
-    std::vector<std::string> c;
-    for (uint32_t v : m.tets[t]) c.push_back(key[v]);
-    std::sort(c.begin(), c.end());
-    std::string k = "t";
-    for (const std::string& s : c) k += s;
-    for (const Field& f : m.cell_fields) {
-      const size_t n = f.components * f.valueSize();
-      k.append(reinterpret_cast<const char*>(f.bytes.data() + t * n), n);
-    }
-    out.insert(k);
-  }
-  return out;
-}
-
 // The points the tetrahedra use, in the canonical form (unused points dropped).
 std::multiset<std::string> canonicalTets(const TetMesh& m) {
-  std::multiset<std::string> all = canonical(m), out;
+  std::multiset<std::string> all = canonicalMesh(m), out;
   for (const std::string& k : all)
     if (k[0] == 't') out.insert(k);
   return out;
@@ -141,7 +113,7 @@ TEST(GtnPiecesFile, ALevelOfSeveralPiecesRoundTripsThroughTheFile) {
     DecodeStats stats;
     const Status st = r->decodeLevel(0, b, &stats);
     ASSERT_TRUE(st.isOk()) << st.message();
-    EXPECT_TRUE(canonical(b.mesh()) == canonical(m));
+    EXPECT_TRUE(canonicalMesh(b.mesh()) == canonicalMesh(m));
     EXPECT_GT(stats.peak_live_vertices, 0u);
     EXPECT_LE(stats.peak_live_vertices, m.numPoints());
   }
@@ -188,7 +160,7 @@ TEST(GtnPiecesFile, MergeTreesIndexTheStitchedLevel) {
     auto a = importMesh({dir + "/a.vtu"}, {}), b = importMesh({dir + "/b.vtu"}, {});
     ASSERT_TRUE(a.isOk() && b.isOk());
     EXPECT_GT(a->mesh.numTets(), 0u);
-    EXPECT_TRUE(canonical(a->mesh) == canonical(b->mesh));
+    EXPECT_TRUE(canonicalMesh(a->mesh) == canonicalMesh(b->mesh));
   }
 }
 
