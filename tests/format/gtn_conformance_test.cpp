@@ -790,7 +790,7 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsExpected) {
       EXPECT_EQ(got.point_fields[i].type, want.point_fields[i].type);
       EXPECT_EQ(got.point_fields[i].components, want.point_fields[i].components);
     }
-    EXPECT_TRUE(canonicalMesh(got) == canonicalMesh(want)) << "decoded mesh differs from the generated one";
+    EXPECT_TRUE(test::canonicalMesh(got) == test::canonicalMesh(want)) << "decoded mesh differs from the generated one";
     EXPECT_GT(stats.peak_live_vertices, 0u);
     checkAsExpected(**r, got, expected);
     // Opened through the directory (when there is one), the same level decodes the same.
@@ -846,7 +846,7 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
     auto got = applyMerges(level0, *tree, n);
     auto want = applyMerges(wideMesh(), *ranked, n);
     ASSERT_TRUE(got.isOk() && want.isOk());
-    EXPECT_TRUE(canonicalMesh(*got) == canonicalMesh(*want)) << n << " merges";
+    EXPECT_TRUE(test::canonicalMesh(*got) == test::canonicalMesh(*want)) << n << " merges";
   }
 }
 
@@ -874,7 +874,7 @@ TEST(GtnConformance, LevelsAndMergeTreesAgree) {
     ASSERT_TRUE((*r)->decodeLevel(i, bi).isOk());
     auto want = applyMerges(level0, *tree, n);
     ASSERT_TRUE(want.isOk());
-    EXPECT_TRUE(canonicalMesh(bi.mesh()) == canonicalMesh(*want)) << "level " << i;
+    EXPECT_TRUE(test::canonicalMesh(bi.mesh()) == test::canonicalMesh(*want)) << "level " << i;
   }
   for (uint64_t n = 0; n <= tree->merges; n += 7) {
     TetMeshBuilder bn;
@@ -882,7 +882,8 @@ TEST(GtnConformance, LevelsAndMergeTreesAgree) {
     ASSERT_TRUE(streamSimplified(**r, n, bn, &plan).isOk()) << n;
     auto want = applyMerges(level0, *tree, n);
     ASSERT_TRUE(want.isOk());
-    EXPECT_TRUE(canonicalMesh(bn.mesh()) == canonicalMesh(*want)) << n << " merges, from level " << plan.level;
+    EXPECT_TRUE(test::canonicalMesh(bn.mesh()) == test::canonicalMesh(*want))
+        << n << " merges, from level " << plan.level;
   }
 }
 
