@@ -71,17 +71,37 @@ int runDecode(const DecodeArgs& a) {
   }
   DecodeFields fields;
   const Clock::time_point decode_start = Clock::now();
-  const Status st = decodeView(r, a.input, view, builder, &fields, &plan);
+  // A stored level of several pieces, whole: its pieces decoded in parallel straight into one mesh,
+  // without the mesh stream that export's writers take.
+  const bool whole_pieced = a.ratio < 0 && a.box.empty() && a.level < r.levels() && r.level(a.level).pieces.size() > 1;
+  TetMesh pieced;
+  Status st = Status::ok();
+  if (whole_pieced) {
+    plan.level = a.level;
+    if (!a.fields.empty()) {
+      auto selected = selectDecodeFields(r.level(a.level).header, a.fields, a.input, "--fields");
+      if (selected.isOk()) fields = std::move(selected).value();
+      else st = selected.status();
+    }
+    if (st.isOk()) {
+      auto decoded = r.decodeLevelPieces(a.level, {}, a.fields.empty() ? nullptr : &fields);
+      if (decoded.isOk()) pieced = std::move(decoded->mesh);
+      else st = decoded.status();
+    }
+  } else {
+    st = decodeView(r, a.input, view, builder, &fields, &plan);
+  }
   if (!st.isOk()) {
     damage.flush(st);
     return reportError(st);
   }
-  if (!a.fields.empty()) dropUndecodedFields(builder.mesh(), fields);
+  TetMesh& decoded_mesh = whole_pieced ? pieced : builder.mesh();
+  if (!a.fields.empty()) dropUndecodedFields(decoded_mesh, fields);
   const double decode_s = secondsSince(decode_start);
   const double wall_s = secondsSince(start);
   damage.flush();
 
-  const TetMesh& mesh = builder.mesh();
+  const TetMesh& mesh = decoded_mesh;
   const double tets_per_second = decode_s > 0 ? static_cast<double>(mesh.numTets()) / decode_s : 0.0;
   if (a.json) {
     nlohmann::json j;

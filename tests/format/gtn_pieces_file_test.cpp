@@ -336,5 +336,34 @@ TEST(GtnPiecesFile, ExportBoxReturnsThePiecesMeetingTheBox) {
   EXPECT_NE(run.exit_code, 0);
 }
 
+// gtn decode of a level of several pieces decodes them straight into one mesh: the counts and fields
+// of one-piece file's decode, with --fields too.
+TEST(GtnPiecesFile, DecodeReportsTheWholeLevelOfSeveralPieces) {
+  const std::string dir = tempDir("pieces-decode");
+  const std::string vtk = dir + "/grid.vtk";
+  writeFile(vtk, shearedHexGridVtk(16, false, true));
+  ASSERT_EQ(runGtn("convert " + vtk + " -q -o " + dir + "/pieces.gtn --piece-tets 4096").exit_code, 0);
+  ASSERT_EQ(runGtn("convert " + vtk + " -q -o " + dir + "/one.gtn").exit_code, 0);
+  for (const std::string& extra : {std::string(""), std::string(" --threads 1")}) {
+    const RunResult a = runGtn("decode --json " + dir + "/pieces.gtn" + extra);
+    const RunResult b = runGtn("decode --json " + dir + "/one.gtn" + extra);
+    ASSERT_EQ(a.exit_code, 0) << a.err;
+    ASSERT_EQ(b.exit_code, 0) << b.err;
+    const nlohmann::json ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
+    EXPECT_EQ(ja["points"], jb["points"]);
+    EXPECT_EQ(ja["tets"], jb["tets"]);
+    EXPECT_EQ(ja["fields"], jb["fields"]);
+    EXPECT_GT(ja["tets"].get<uint64_t>(), 4096u);
+  }
+  const RunResult one_field = runGtn("decode --json --fields block " + dir + "/pieces.gtn");
+  ASSERT_EQ(one_field.exit_code, 0) << one_field.err;
+  const nlohmann::json j = nlohmann::json::parse(one_field.out);
+  ASSERT_EQ(j["fields"].size(), 1u);
+  EXPECT_EQ(j["fields"][0]["name"], "block");
+  const RunResult bad = runGtn("decode --fields nosuch " + dir + "/pieces.gtn");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("nosuch"), std::string::npos) << bad.err;
+}
+
 }  // namespace
 }  // namespace gtn::test
