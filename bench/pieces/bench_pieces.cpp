@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "codec/pieces.h"
+#include "codec/pieces_check.h"
 #include "convert/import.h"
 
 namespace {
@@ -31,16 +32,6 @@ uint64_t bytesOf(const gtn::PiecedLevel& level) {
   // The level header's piece table and the seam table (varints and boxes), as the container stores them.
   if (level.pieces.size() > 1) n += level.pieces.size() * (1 + 5 * 4 + 48) + level.classes.size() * 8;
   return n;
-}
-
-gtn::PiecedLevelView viewOf(const gtn::PiecedLevel& level) {
-  gtn::PiecedLevelView view;
-  view.header = &level.header;
-  view.pieces = level.pieces;
-  view.classes = level.classes;
-  for (const auto& s : level.seam_streams) view.seam_streams.emplace_back(s);
-  for (const gtn::EncodedLevel& e : level.encoded) view.payloads.push_back({e.header, gtn::payloadOf(e)});
-  return view;
 }
 
 double median(std::vector<double> v) {
@@ -106,7 +97,7 @@ int main(int argc, char** argv) {
           return 1;
         }
         level = std::move(*e);
-        const gtn::PiecedLevelView view = viewOf(level);
+        const gtn::PiecedLevelView view = gtn::piecedViewOf(level);
         t0 = now();
         gtn::StatusOr<gtn::DecodedPieces> d = gtn::decodePieces(view, {}, "bench");
         const double td = now() - t0;

@@ -1,6 +1,7 @@
 // A level as pieces (codec/pieces.h): lossless through pieces and seams, stitching, subsets, the
 // mesh stream of a stitched level, determinism and corrupt input.
 #include "codec/pieces.h"
+#include "codec/pieces_check.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -15,16 +16,6 @@
 
 namespace gtn::test {
 namespace {
-
-PiecedLevelView viewOf(const PiecedLevel& level) {
-  PiecedLevelView view;
-  view.header = &level.header;
-  view.pieces = level.pieces;
-  view.classes = level.classes;
-  for (const auto& s : level.seam_streams) view.seam_streams.emplace_back(s);
-  for (const EncodedLevel& e : level.encoded) view.payloads.push_back({e.header, payloadOf(e)});
-  return view;
-}
 
 // The orders of a pieced level, where expectSameMesh takes them.
 EncodedLevel ordersOf(const PiecedLevel& level) {
@@ -60,7 +51,7 @@ TEST(Pieces, AGridCutIntoPiecesDecodesToItsSource) {
   }
   EXPECT_EQ(tets, m.numTets());
   EXPECT_EQ(own + seam, m.numPoints());  // each vertex stored once
-  StatusOr<DecodedPieces> decoded = decodePieces(viewOf(*level), {}, "grid");
+  StatusOr<DecodedPieces> decoded = decodePieces(piecedViewOf(*level), {}, "grid");
   ASSERT_TRUE(decoded.isOk()) << decoded.status().message();
   EXPECT_TRUE(decoded->global_vertex.empty());
   expectSameMesh(m, ordersOf(*level), decoded->mesh, decoded->boundary);
@@ -78,7 +69,7 @@ TEST(Pieces, OnePieceIsTheLevelCodecsOwnCoding) {
   EXPECT_EQ(level->encoded[0].connectivity, direct->connectivity);
   EXPECT_EQ(level->encoded[0].geometry, direct->geometry);
   EXPECT_EQ(level->vertex_order, direct->vertex_order);
-  StatusOr<DecodedPieces> decoded = decodePieces(viewOf(*level), {}, "one");
+  StatusOr<DecodedPieces> decoded = decodePieces(piecedViewOf(*level), {}, "one");
   ASSERT_TRUE(decoded.isOk());
   const TetMesh via_codec = decodeToMesh(*direct);
   EXPECT_EQ(decoded->mesh.coords, via_codec.coords);
@@ -108,7 +99,7 @@ TEST(Pieces, AStructuredBlockIsOneStructuredPieceWhenThatIsSmaller) {
     return n;
   };
   EXPECT_LT(bytes(level->encoded[0]), bytes(plain->encoded[0]));
-  StatusOr<DecodedPieces> decoded = decodePieces(viewOf(*level), {}, "block");
+  StatusOr<DecodedPieces> decoded = decodePieces(piecedViewOf(*level), {}, "block");
   ASSERT_TRUE(decoded.isOk()) << decoded.status().message();
   expectSameMesh(m, ordersOf(*level), decoded->mesh, decoded->boundary);
   TetMeshBuilder builder;
@@ -126,7 +117,7 @@ TEST(Pieces, TheMeshStreamOfAStitchedLevelFollowsTheStreamOrder) {
   const TetMesh m = fieldGrid(18);
   StatusOr<PiecedLevel> level = encodePieces(m, {}, 4096);
   ASSERT_TRUE(level.isOk());
-  StatusOr<DecodedPieces> decoded = decodePieces(viewOf(*level), {}, "grid");
+  StatusOr<DecodedPieces> decoded = decodePieces(piecedViewOf(*level), {}, "grid");
   ASSERT_TRUE(decoded.isOk());
   // A checking sink: ids in order, every reference to an emitted and live vertex, boundary first,
   // each vertex retired once after its last tetrahedron.
@@ -167,7 +158,7 @@ TEST(Pieces, ASubsetOfPiecesDecodesAsThoseTetrahedraOfTheWholeLevel) {
   StatusOr<PiecedLevel> level = encodePieces(m, {}, 4096);
   ASSERT_TRUE(level.isOk());
   ASSERT_GE(level->pieces.size(), 4u);
-  const PiecedLevelView view = viewOf(*level);
+  const PiecedLevelView view = piecedViewOf(*level);
   StatusOr<DecodedPieces> whole = decodePieces(view, {}, "grid");
   ASSERT_TRUE(whole.isOk());
   const std::vector<uint32_t> chosen = {1, 3};
@@ -234,14 +225,14 @@ TEST(Pieces, UnusedPointsAndFieldSubsetsSurviveThePieces) {
   for (Field& f : m.point_fields) f.bytes.resize((n + 3) * f.components * f.valueSize(), 7);
   StatusOr<PiecedLevel> level = encodePieces(m, {}, 4096);
   ASSERT_TRUE(level.isOk()) << level.status().message();
-  StatusOr<DecodedPieces> decoded = decodePieces(viewOf(*level), {}, "grid");
+  StatusOr<DecodedPieces> decoded = decodePieces(piecedViewOf(*level), {}, "grid");
   ASSERT_TRUE(decoded.isOk()) << decoded.status().message();
   expectSameMesh(m, ordersOf(*level), decoded->mesh, decoded->boundary);
   // One point field: the others are left out (zero), the chosen one exact.
   DecodeFields fields;
   fields.point = {true, false, false, false, false};
   fields.cell = {false, true};
-  StatusOr<DecodedPieces> some = decodePieces(viewOf(*level), {}, "grid", &fields);
+  StatusOr<DecodedPieces> some = decodePieces(piecedViewOf(*level), {}, "grid", &fields);
   ASSERT_TRUE(some.isOk()) << some.status().message();
   EXPECT_EQ(some->mesh.point_fields[0].bytes, decoded->mesh.point_fields[0].bytes);
   EXPECT_EQ(some->mesh.cell_fields[1].bytes, decoded->mesh.cell_fields[1].bytes);
@@ -255,7 +246,7 @@ TEST(Pieces, CorruptSeamsAndPieceTablesAreRefused) {
   {
     PiecedLevel bad = *level;
     for (size_t i = 3; i < bad.seam_streams[0].size(); i += 7) bad.seam_streams[0][i] ^= 0x5A;
-    StatusOr<DecodedPieces> d = decodePieces(viewOf(bad), {}, "grid.gtn");
+    StatusOr<DecodedPieces> d = decodePieces(piecedViewOf(bad), {}, "grid.gtn");
     ASSERT_FALSE(d.isOk());
     EXPECT_NE(d.status().message().find("grid.gtn"), std::string::npos) << d.status().message();
   }
@@ -263,22 +254,22 @@ TEST(Pieces, CorruptSeamsAndPieceTablesAreRefused) {
     PiecedLevel bad = *level;
     bad.pieces[1].own_boundary_points += 1;
     bad.pieces[2].own_boundary_points -= 1;
-    EXPECT_FALSE(decodePieces(viewOf(bad), {}, "grid").isOk());
+    EXPECT_FALSE(decodePieces(piecedViewOf(bad), {}, "grid").isOk());
   }
   {
     PiecedLevel bad = *level;
     bad.classes[0].points += 1;
-    EXPECT_FALSE(decodePieces(viewOf(bad), {}, "grid").isOk());
+    EXPECT_FALSE(decodePieces(piecedViewOf(bad), {}, "grid").isOk());
   }
   {
     PiecedLevel bad = *level;
     bad.encoded[2].connectivity.resize(bad.encoded[2].connectivity.size() / 2);
-    StatusOr<DecodedPieces> d = decodePieces(viewOf(bad), {}, "grid");
+    StatusOr<DecodedPieces> d = decodePieces(piecedViewOf(bad), {}, "grid");
     ASSERT_FALSE(d.isOk());
     EXPECT_NE(d.status().message().find("piece 2"), std::string::npos) << d.status().message();
   }
-  EXPECT_FALSE(decodePieces(viewOf(*level), {3, 1}, "grid").isOk());
-  EXPECT_FALSE(decodePieces(viewOf(*level), {9999}, "grid").isOk());
+  EXPECT_FALSE(decodePieces(piecedViewOf(*level), {3, 1}, "grid").isOk());
+  EXPECT_FALSE(decodePieces(piecedViewOf(*level), {9999}, "grid").isOk());
   EXPECT_FALSE(encodePieces(m, {}, 100).isOk());
 }
 
