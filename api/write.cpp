@@ -36,6 +36,7 @@ Error writeImported(const std::string& path, const gtn::TetMesh& mesh, const Wri
   wo.command_line = options.command_line.empty() ? default_command_line : options.command_line;
   wo.verify = options.verify;
   wo.piece_tets = options.piece_tets;
+  wo.chain_levels = !options.independent_levels;
   return gtn::api::toError(gtn::writeGtnWithLevels(path, mesh, o, wo, source, warnings));
 }
 

@@ -1,5 +1,5 @@
 // gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--time-step N] [--compress] [--levels K] [--no-merge-tree]
-//   [--no-verify] [--level-storage X] [--simplify-field NAME] [--w-density W] [--w-geometry W] [-q]
+//   [--no-verify] [--level-storage X] [--independent-levels] [--simplify-field NAME] [--w-density W] [--w-geometry W] [-q]
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -26,6 +26,7 @@ struct ConvertArgs {
   bool compress = false;
   int levels = -1;  // mip levels beyond level 0, -1 = automatic
   bool no_merge_tree = false;
+  bool independent_levels = false;          // .gtn: every level stores all its vertices (GtnWriteOptions::chain_levels)
   bool no_verify = false;                   // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
   double level_storage = 2.0;               // automatic levels: all levels within this multiple of level 0's bytes
   uint64_t piece_tets = kDefaultPieceTets;  // .gtn: the bound on a piece's tetrahedra
@@ -78,6 +79,7 @@ int runConvert(const ConvertArgs& a) {
       wo.progress = progress.callback();
       wo.verify = !a.no_verify;
       wo.piece_tets = a.piece_tets;
+      wo.chain_levels = !a.independent_levels;
       st = writeGtnWithLevels(a, mesh, wo);
       // The encoder's refusals are about the mesh: say where to see the details.
       if (!st.isOk() && st.message().rfind(a.inputs[0] + ": cannot be encoded: ", 0) == 0)
@@ -122,8 +124,9 @@ Command addConvertCommand(CLI::App& app) {
   sub->add_option("--levels", args->levels, ".gtn: mip levels beyond level 0 (default: down to a small mesh; 0 = none)")
       ->check(CLI::Range(0, 62));
   sub->add_option("--level-storage", args->level_storage,
-                  ".gtn: automatic levels stop before all levels together would take more than this multiple "
-                  "of level 0's bytes (default 2, the paper's bound; 0 = no bound)")
+                  ".gtn: automatic levels leave out the coarsest ones while all levels together would take more "
+                  "than this multiple of level 0's bytes alone, with its merge tree (default 2, the paper's "
+                  "bound; 0 = no bound)")
       ->check(finiteAtLeastZero());
   sub->add_option("--piece-tets", args->piece_tets,
                   ".gtn: the most tetrahedra a piece holds (default " + std::to_string(kDefaultPieceTets) +
@@ -141,6 +144,9 @@ Command addConvertCommand(CLI::App& app) {
           },
           "N >= " + std::to_string(kMinPieceTets)));
   sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
+  sub->add_flag("--independent-levels", args->independent_levels,
+                ".gtn: every level stores all of its vertices' values and the rest of the merge tree, so that each "
+                "level decodes alone (larger); by default a level names the next coarser level's vertices instead");
   sub->add_flag(
       "--no-verify", args->no_verify,
       ".gtn: do not decode each level back and compare it with its mesh, nor check that each mip level is a valid "

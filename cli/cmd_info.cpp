@@ -93,10 +93,11 @@ int runGtnInfo(const InfoArgs& a) {
   for (size_t i = 0; i < r.levels(); ++i) {
     const GtnLevelInfo& l = r.level(i);
     const std::string pieces = l.pieces.size() > 1 ? ", " + std::to_string(l.pieces.size()) + " pieces" : "";
-    std::printf("  level %-3zu           %llu points, %llu tetrahedra, %llu merges (ratio %.4g), %llu bytes%s%s\n", i,
+    const std::string names = l.base ? ", names level " + std::to_string(i + 1) + "'s vertices" : "";
+    std::printf("  level %-3zu           %llu points, %llu tetrahedra, %llu merges (ratio %.4g), %llu bytes%s%s%s\n", i,
                 static_cast<unsigned long long>(l.header.points), static_cast<unsigned long long>(l.header.tets),
                 static_cast<unsigned long long>(l.header.merges), l.ratio, static_cast<unsigned long long>(l.bytes),
-                pieces.c_str(), l.has_merge_tree ? ", merge tree" : "");
+                pieces.c_str(), l.has_merge_tree ? ", merge tree" : "", names.c_str());
   }
   for (const GtnSection& s : r.sections())
     std::printf("  section %-22s %llu bytes\n", s.name.c_str(), static_cast<unsigned long long>(s.bytes));

@@ -121,10 +121,10 @@ class LosslessCheckSink : public MeshSink {
 
 }  // namespace
 
-std::string losslessMismatch(const TetMesh& source, const EncodedLevel& encoded) {
+std::string losslessMismatch(const TetMesh& source, const EncodedLevel& encoded, const SeamValues* seams) {
   LosslessCheckSink sink(source, encoded);
   if (Status st = sink.prepare(); !st.isOk()) return st.message();
-  const Status st = decodeLevel(encoded.header, payloadOf(encoded), sink, nullptr, "the encoded level");
+  const Status st = decodeLevel(encoded.header, payloadOf(encoded), sink, nullptr, "the encoded level", nullptr, seams);
   if (!sink.difference().empty()) return sink.difference();
   if (!st.isOk()) return "it does not decode: " + st.message();
   if (Status end = sink.finish(); !end.isOk()) return end.message();

@@ -16,6 +16,7 @@ namespace gtn {
 // point-field values; each source tetrahedron emitted at encoded.tet_order[tetrahedron], its
 // vertices an even permutation of the source's, with bit-identical cell-field values. Returns "" when
 // the level decodes back exactly, else the first difference found (or the decoder's error).
-std::string losslessMismatch(const TetMesh& source, const EncodedLevel& encoded);
+// `seams`: the seam values the level names (a piece's seam vertices, or the next level's vertices).
+std::string losslessMismatch(const TetMesh& source, const EncodedLevel& encoded, const SeamValues* seams = nullptr);
 
 }  // namespace gtn

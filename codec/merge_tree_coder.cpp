@@ -53,6 +53,22 @@ Status MergeTree::check(const std::string& what) const {
   return Status::ok();
 }
 
+MergeTree prefixTree(const MergeTree& tree, uint64_t n) {
+  MergeTree out = tree;
+  if (n >= tree.merges) return out;
+  out.merges = n;
+  out.checked = false;
+  for (size_t v = 0; v < out.points(); ++v) {
+    if (out.rank[v] == 0 || out.rank[v] <= n) continue;
+    out.parent[v] = MergeTree::kRoot;
+    out.rank[v] = 0;
+    out.removed[v] = 0;
+    out.boundary[v] = 0;
+    if (v < out.error.size()) out.error[v] = 0;
+  }
+  return out;
+}
+
 void computeErrorQuantiles(MergeTree& tree) {
   tree.error_quantiles.clear();
   if (tree.error.size() != tree.parent.size() || tree.merges == 0) return;

@@ -84,6 +84,10 @@ struct MergeTree {
   Status check(const std::string& what) const;
 };
 
+// The tree of the first n merges (rank order) of `tree`: the later merges' children become roots.
+// Provenance and quantiles are kept.
+MergeTree prefixTree(const MergeTree& tree, uint64_t n);
+
 // The quantile positions of MergeTree::error_quantiles.
 extern const double kMergeErrorQuantiles[9];
 

@@ -267,6 +267,80 @@ std::vector<uint32_t> piecesInBox(std::span<const PieceInfo> pieces, const doubl
   return out;
 }
 
+PiecedLevel onePieceLevel(const EncodedLevel& e) {
+  PiecedLevel l;
+  l.header = e.header;
+  PieceInfo p;
+  p.points = e.header.points;
+  p.own_points = e.header.points;
+  p.own_boundary_points = e.boundary_points;
+  p.tets = e.header.tets;
+  p.boundary_triangles = e.header.boundary_triangles;
+  for (int i = 0; i < 3; ++i) {
+    p.bbox_min[i] = e.header.bbox_min[i];
+    p.bbox_max[i] = e.header.bbox_max[i];
+  }
+  l.pieces = {p};
+  l.encoded = {e};
+  l.vertex_order = e.vertex_order;
+  l.tet_order = e.tet_order;
+  return l;
+}
+
+SeamValues ChainSeams::view(std::vector<uint32_t>* seam_of_id) const {
+  SeamValues s;
+  s.count = count;
+  s.coords = coords.data();
+  s.values = values.data();
+  s.seam_of_id = seam_of_id;
+  return s;
+}
+
+ChainSeams chainSeamsOf(const TetMesh& next, const std::vector<uint32_t>& next_order) {
+  ChainSeams out;
+  const size_t n = next.numPoints();
+  out.count = static_cast<uint32_t>(n);
+  out.coords.resize(3 * n);
+  size_t item = 0;
+  for (const Field& f : next.point_fields) item += f.components * f.valueSize();
+  out.values.resize(item * n);
+  for (size_t v = 0; v < n && v < next_order.size(); ++v) {
+    const size_t id = next_order[v];
+    if (id >= n) continue;
+    std::memcpy(&out.coords[3 * id], next.point(v), 3 * sizeof(double));
+    size_t at = 0;
+    for (const Field& f : next.point_fields) {
+      const size_t b = f.components * f.valueSize();
+      std::memcpy(&out.values[item * id + at], f.bytes.data() + b * v, b);
+      at += b;
+    }
+  }
+  return out;
+}
+
+StatusOr<PiecedLevel> encodeChainedLevel(const TetMesh& mesh, const std::vector<uint32_t>& next_index,
+                                         const std::vector<uint32_t>& next_order) {
+  if (next_index.size() != mesh.numPoints())
+    return usageError("encodeChainedLevel: the map to the next level does not match the mesh");
+  EncodeOptions options;
+  options.structured = false;
+  options.seam.assign(mesh.numPoints(), kNoIndex);
+  std::vector<char> named(next_order.size(), 0);
+  for (size_t v = 0; v < next_index.size(); ++v) {
+    if (next_index[v] == kNoIndex) continue;
+    if (next_index[v] >= next_order.size() || next_order[next_index[v]] >= next_order.size() ||
+        named[next_order[next_index[v]]])
+      return usageError("encodeChainedLevel: the map to the next level is not one to one");
+    options.seam[v] = next_order[next_index[v]];
+    named[options.seam[v]] = 1;
+  }
+  options.seam_count = static_cast<uint32_t>(next_order.size());
+  GTN_ASSIGN_OR_RETURN(EncodedLevel e, encodeLevel(mesh, options));
+  PiecedLevel level = onePieceLevel(e);
+  level.base = 1;
+  return level;
+}
+
 StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets) {
   if (piece_tets < kMinPieceTets) return usageError("encodePieces: pieces must hold at least 4096 tetrahedra");
   if (!options.seam.empty()) return usageError("encodePieces: the seams are the pieces' own");

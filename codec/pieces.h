@@ -57,6 +57,9 @@ struct PiecedLevel {
   // vertex_order[source vertex] = its global id; tet_order[source tetrahedron] = its global position.
   std::vector<uint32_t> vertex_order;
   std::vector<uint64_t> tet_order;
+  // 1: a one-piece level whose streams name the next level's vertices as seam vertices, in that
+  // level's vertex numbering, instead of storing their values (LHDR base; spec section 7.7).
+  uint8_t base = 0;
 };
 
 // Cuts `mesh` into pieces of at most `piece_tets` tetrahedra (recursive bisection at the median of
@@ -64,6 +67,30 @@ struct PiecedLevel {
 // parallel. A mesh of at most `piece_tets` tetrahedra is one piece with no seam, coded exactly as
 // encodeLevel codes it.
 StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets);
+
+// A level coded by encodeLevel as a PiecedLevel of one piece (a copy of its streams), as encodePieces
+// makes a level of at most piece_tets tetrahedra.
+PiecedLevel onePieceLevel(const EncodedLevel& encoded);
+
+// Levels that name the next level's vertices (spec section 7.7). A mip level's vertices are a subset of
+// the finer level's, with the same coordinates and values: the finer level codes the shared ones as
+// seam vertices whose values the next level holds, and stores only its own.
+//
+// The next level's vertices as the seam values of the finer level: coordinates and point values of
+// `next` in its decoding order (`next_order[v]` = the id vertex v decodes as).
+struct ChainSeams {
+  uint32_t count = 0;
+  std::vector<double> coords;
+  std::vector<uint8_t> values;
+  SeamValues view(std::vector<uint32_t>* seam_of_id = nullptr) const;
+};
+ChainSeams chainSeamsOf(const TetMesh& next, const std::vector<uint32_t>& next_order);
+
+// Codes `mesh` as one piece that names the next level's vertices: next_index[v] is vertex v's index in
+// the next level's mesh (kNoIndex for a vertex only this level has), next_order that level's
+// vertex_order. The result has base 1. Fails where next_index does not map onto next_order's vertices.
+StatusOr<PiecedLevel> encodeChainedLevel(const TetMesh& mesh, const std::vector<uint32_t>& next_index,
+                                         const std::vector<uint32_t>& next_order);
 
 // The streams of one piece as read back from a file.
 struct PiecePayload {

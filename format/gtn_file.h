@@ -28,6 +28,13 @@ struct GtnLevelInput {
   uint64_t merges = 0;
   double ratio = 0.0;  // vertices merged away / all vertices of level 0
   std::function<StatusOr<std::vector<uint8_t>>(const std::vector<uint32_t>& vertex_order)> merge_tree;
+  // Optional, for a level that may name the next level's vertices (spec section 7.7): per vertex of
+  // this level's mesh, its index in the next level's mesh (kNoIndex where it merges away before it),
+  // and the level's merge-tree payload holding only the tree's first `merges` merges (those down to
+  // the next level). The writer names the next level's vertices where that takes fewer bytes.
+  std::function<StatusOr<std::vector<uint32_t>>()> next_index;
+  std::function<StatusOr<std::vector<uint8_t>>(const std::vector<uint32_t>& vertex_order, uint64_t merges)>
+      merge_tree_prefix;
   // Optional: `mesh` already encoded by encodePieces with the default options and the write's
   // piece_tets (while the merge tree was ranked, say); the writer then uses it instead of encoding the
   // mesh (it sets the header's level and merges, and verifies it as it would its own).
@@ -56,6 +63,9 @@ struct GtnWriteOptions {
   // framing included); the first level that would pass the bound and all coarser ones are left out.
   // Every kept level still stores the rest of the merge tree, so nothing is lost but the shortcut.
   double level_storage_limit = 0.0;
+  // Levels given next_index name the next level's vertices instead of storing their values again
+  // where that is smaller (every level is then encoded before the file is written, coarsest first).
+  bool chain_levels = true;
   // Decode every level that is written and check that it gives back its mesh exactly
   // (codec/level_check.h) before the file is committed; a level that would not fails the write.
   bool verify = true;
@@ -116,10 +126,6 @@ class GtnStreamWriter {
   std::vector<std::vector<GtnDirectoryEntry>> directory_;
   std::vector<uint8_t> scratch_;
 };
-
-// A level coded by encodeLevel as a PiecedLevel of one piece (a copy of its streams), as encodePieces
-// makes a level of at most piece_tets tetrahedra.
-PiecedLevel onePieceLevel(const EncodedLevel& encoded);
 
 // Assembles a whole file in memory from encoded levels, one piece each (tests, tools). `merge_trees` is empty or has
 // one optional payload per level; `ratios` likewise (missing entries: 0).

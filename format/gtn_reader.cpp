@@ -265,8 +265,16 @@ StatusOr<std::unique_ptr<GtnReader>> GtnReader::openMemory(std::string bytes, co
 
 StatusOr<std::unique_ptr<GtnReader>> GtnReader::finishOpen(std::unique_ptr<GtnReader> r, bool try_directory) {
   r->file_.bytes = r->source_->size();
+  // A level that names the next level's vertices needs that level.
+  auto checkBases = [](const GtnReader& g) -> Status {
+    if (!g.levels_.empty() && g.levels_.back().base != 0)
+      return invalidData(g.file_.path + ": level " + std::to_string(g.levels_.size() - 1) +
+                         " names the vertices of the next level (LHDR base 1), but it is the file's last level");
+    return Status::ok();
+  };
   if (try_directory && r->openByDirectory().isOk()) {
     r->by_directory_ = true;
+    GTN_RETURN_IF_ERROR(checkBases(*r));
     return r;
   }
   GtnFileInfo fresh;
@@ -275,6 +283,7 @@ StatusOr<std::unique_ptr<GtnReader>> GtnReader::finishOpen(std::unique_ptr<GtnRe
   r->file_ = std::move(fresh);
   r->levels_.clear();
   GTN_RETURN_IF_ERROR(r->scan());
+  GTN_RETURN_IF_ERROR(checkBases(*r));
   return r;
 }
 
@@ -462,6 +471,7 @@ Status GtnReader::scan() {
       layout = levelLayout(rec.pieces, file_.header.point_fields.size(), file_.header.cell_fields.size());
       li.pieces = std::move(rec.pieces);
       li.piece_chunk.assign(li.pieces.size(), 0);
+      li.base = rec.base;
       c.section = sectionName(h.tag, 0);
       li.chunks.push_back(c);
       li.bytes = c.bytes;
@@ -615,6 +625,7 @@ Status GtnReader::openByDirectory() {
         layout = levelLayout(rec.pieces, np, nc);
         li.pieces = std::move(rec.pieces);
         li.piece_chunk.assign(li.pieces.size(), 0);
+        li.base = rec.base;
       } else if (isLevelTag(e.tag)) {
         GTN_RETURN_IF_ERROR(checkLevelOrder(e.tag, known, layout, e.offset, i, what));
         const bool in_piece = known < layout.size() && layout.piece[known] != kNoIndex;
@@ -716,6 +727,15 @@ StatusOr<DecodedPieces> GtnReader::decodeLevelPieces(size_t i, const std::vector
     if (chosen[k] >= n || (k > 0 && chosen[k] <= chosen[k - 1]))
       return usageError(file_.path + ": level " + std::to_string(i) + ": pieces must be chosen in increasing order, " +
                         "each below " + std::to_string(n));
+  if (li.base != 0) {
+    // One piece that names the next level's vertices: decoded as a stream, after the levels it names.
+    TetMeshBuilder builder;
+    GTN_RETURN_IF_ERROR(decodeLevel(i, builder, nullptr, fields));
+    DecodedPieces out;
+    out.mesh = std::move(builder.mesh());
+    out.boundary = builder.boundary();
+    return out;
+  }
   std::vector<char> wanted(n, chosen.empty() ? 1 : 0);
   for (uint32_t p : chosen) wanted[p] = 1;
   std::vector<uint8_t> seam_payload;
@@ -754,8 +774,45 @@ StatusOr<DecodedPieces> GtnReader::decodeLevelPieces(size_t i, const std::vector
   return decodePieces(view, chosen, file_.path + ": level " + std::to_string(i), fields);
 }
 
-Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, const DecodeFields* fields) {
+namespace {
+
+// Collects a level's vertices (coordinates and point values, by id) as the seam values of the level
+// that names them.
+class BaseValues : public MeshSink {
+ public:
+  Status beginLevel(const LevelHeader& header) override {
+    item_ = 0;
+    for (const FieldDesc& f : header.point_fields) item_ += f.itemBytes();
+    return Status::ok();
+  }
+  Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) override {
+    if (id != count_) return invalidData("base level: vertex ids out of order");
+    coords.insert(coords.end(), xyz, xyz + 3);
+    if (item_) this->values.insert(this->values.end(), values, values + item_);
+    ++count_;
+    return Status::ok();
+  }
+  Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
+  Status endBoundary() override { return Status::ok(); }
+  Status tet(const uint32_t*, const uint8_t*) override { return Status::ok(); }
+  Status retireVertex(uint32_t) override { return Status::ok(); }
+  Status endLevel() override { return Status::ok(); }
+  uint32_t count() const { return count_; }
+
+  std::vector<double> coords;
+  std::vector<uint8_t> values;
+
+ private:
+  size_t item_ = 0;
+  uint32_t count_ = 0;
+};
+
+}  // namespace
+
+Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, const DecodeFields* fields,
+                              std::vector<uint32_t>* base_ids) {
   const std::string what = file_.path + ": level " + std::to_string(i);
+  if (base_ids) base_ids->clear();
   if (i < levels_.size() && levels_[i].pieces.size() > 1) {
     GTN_ASSIGN_OR_RETURN(DecodedPieces decoded, decodeLevelPieces(i, {}, fields));
     const LevelHeader& header = levels_[i].header;
@@ -782,6 +839,18 @@ Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, cons
   }
   if (i < levels_.size() && !levels_[i].pieces.empty() && levels_[i].pieces[0].kind == kPieceStructured) {
     GTN_RETURN_IF_ERROR(decodeStructuredPiece(s.header, s.connectivity, checker, what, fields));
+  } else if (levels_[i].base != 0) {
+    // The next level's vertices, named by this one (the reader checked at open that it exists).
+    BaseValues base;
+    GTN_RETURN_IF_ERROR(decodeLevel(i + 1, base, nullptr, fields));
+    std::vector<uint32_t> local;
+    SeamValues seams;
+    seams.count = base.count();
+    seams.coords = base.coords.data();
+    seams.values = base.values.data();
+    seams.seam_of_id = base_ids ? base_ids : &local;
+    GTN_RETURN_IF_ERROR(
+        gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields ? &selected : nullptr, &seams));
   } else {
     GTN_RETURN_IF_ERROR(gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields ? &selected : nullptr));
   }

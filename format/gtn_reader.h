@@ -44,6 +44,7 @@ struct GtnLevelInfo {
   uint64_t bytes = 0;                       // all chunks of the level
   std::vector<PieceInfo> pieces;            // the piece table (LHDR), in piece order; at least one
   std::vector<size_t> piece_chunk;          // per piece: the index in `chunks` of its first chunk
+  uint8_t base = 0;                         // 1: names level i + 1's vertices (LHDR base, spec 7.7)
   uint64_t pieceBytes(size_t piece) const;  // the piece's chunks, framing included
 };
 
@@ -106,7 +107,11 @@ class GtnReader {
   // level header. A one-piece level streams from its decoder; a level of several pieces is decoded
   // whole (decodeLevelPieces) and then emitted (emitDecoded). `stats` (optional) receives the
   // decoder's statistics; `fields` (optional) says which fields to decode (level_codec.h).
-  Status decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats = nullptr, const DecodeFields* fields = nullptr);
+  // A level that names the next level's vertices (GtnLevelInfo::base) decodes that level first (and so
+  // on down the chain) for their values; `base_ids` (optional) then receives, per vertex of level i,
+  // its id in level i + 1, or kNoIndex for a vertex level i stores (left empty for other levels).
+  Status decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats = nullptr, const DecodeFields* fields = nullptr,
+                     std::vector<uint32_t>* base_ids = nullptr);
   // Decodes the pieces `chosen` of level `i` (increasing piece indices; empty: every piece), stitched
   // into one mesh (codec/pieces.h), reading only the level's header, its seam table and the chosen
   // pieces' chunks. `fields` as for decodeLevel.

@@ -132,6 +132,7 @@ std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& l) {
     for (double v : p.bbox_min) w.f64(v);
     for (double v : p.bbox_max) w.f64(v);
   }
+  w.u8(l.base);
   return std::move(w.bytes());
 }
 
@@ -193,6 +194,11 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
   if (tets != l->tets)
     return r.errorAt(
         at_n, "the pieces' tetrahedra sum to " + std::to_string(tets) + ", the level has " + std::to_string(l->tets));
+  const uint64_t at_base = r.offset();
+  GTN_RETURN_IF_ERROR(r.u8(&l->base, "base"));
+  if (l->base > 1) return r.errorAt(at_base, "base is " + std::to_string(l->base) + " (0: none, 1: the next level)");
+  if (l->base == 1 && (n != 1 || l->pieces[0].kind != kPieceUnstructured))
+    return r.errorAt(at_base, "a level that names the next level's vertices (base 1) must be one unstructured piece");
   return r.expectEnd("the LHDR payload");
 }
 

@@ -49,6 +49,9 @@ struct GtnLevelRecord {
   uint64_t points = 0, tets = 0, boundary_triangles = 0;
   double bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
   std::vector<PieceInfo> pieces;  // at least one; their tetrahedra sum to `tets`
+  // 1: the level names the vertices of the next level (level + 1) instead of storing their values
+  // (spec section 7.7); 0: it stores every vertex's values.
+  uint8_t base = 0;
 };
 
 // The seam table (SEAM payload): the classes and where each class's stream lies in the payload.

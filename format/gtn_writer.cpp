@@ -2,6 +2,9 @@
 
 #include <tbb/task_group.h>
 
+#include <optional>
+
+#include "codec/level_check.h"
 #include "codec/pieces_check.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
@@ -69,26 +72,6 @@ Status GtnStreamWriter::begin(const LevelHeader& level0, uint64_t level_count) {
   return emit(kTagFileHeader, encodeFileHeader(h), false, true);
 }
 
-PiecedLevel onePieceLevel(const EncodedLevel& e) {
-  PiecedLevel l;
-  l.header = e.header;
-  PieceInfo p;
-  p.points = e.header.points;
-  p.own_points = e.header.points;
-  p.own_boundary_points = e.boundary_points;
-  p.tets = e.header.tets;
-  p.boundary_triangles = e.header.boundary_triangles;
-  for (int i = 0; i < 3; ++i) {
-    p.bbox_min[i] = e.header.bbox_min[i];
-    p.bbox_max[i] = e.header.bbox_max[i];
-  }
-  l.pieces = {p};
-  l.encoded = {e};
-  l.vertex_order = e.vertex_order;
-  l.tet_order = e.tet_order;
-  return l;
-}
-
 Status GtnStreamWriter::addLevel(const EncodedLevel& e, double ratio,
                                  const std::optional<std::vector<uint8_t>>& merge_tree) {
   return addLevel(onePieceLevel(e), ratio, merge_tree);
@@ -133,6 +116,10 @@ Status GtnStreamWriter::addLevel(const PiecedLevel& l, double ratio,
                       std::to_string(h.tets));
   if (!(ratio >= 0.0 && ratio <= 1.0)) return usageError("level ratio must be in [0, 1]");
   if (h.level == 0 && h.merges != 0) return usageError("level 0 must have 0 merges");
+  if (l.base > 1 ||
+      (l.base == 1 && (l.pieces.size() != 1 || l.pieces[0].kind != kPieceUnstructured || h.level + 1 >= level_count_)))
+    return usageError(level + ": a level that names the next level's vertices must be one unstructured piece " +
+                      "and not the last level");
 
   ++levels_written_;
   if (options_.directory) directory_.emplace_back();
@@ -148,6 +135,7 @@ Status GtnStreamWriter::addLevel(const PiecedLevel& l, double ratio,
     r.bbox_max[i] = h.bbox_max[i];
   }
   r.pieces = l.pieces;
+  r.base = l.base;
   GTN_RETURN_IF_ERROR(emit(kTagLevelHeader, encodeLevelRecord(r), false, false));
   if (l.pieces.size() > 1) GTN_RETURN_IF_ERROR(emit(kTagSeam, encodeSeamTable(l.classes, l.seam_streams), false, true));
   for (size_t p = 0; p < l.encoded.size(); ++p) {
@@ -249,6 +237,57 @@ Status checkDecodesBack(const std::string& path, const GtnLevelInput& level, con
                      "), so the file was not written; this is a bug in gtn's encoder, please report it with the input");
 }
 
+// The bytes a level's chunks take, about (streams and merge tree; framing, tables and compression left
+// out): what the writer compares to choose how to store a level, and to apply the storage bound.
+uint64_t approxBytes(const EncodedInput& e) {
+  uint64_t n = e.tree ? e.tree->size() : 0;
+  for (const EncodedLevel& p : e.level.encoded) {
+    n += p.boundary.size() + p.connectivity.size() + p.geometry.size();
+    for (const auto& s : p.point_fields) n += s.size();
+    for (const auto& s : p.cell_fields) n += s.size();
+  }
+  for (const auto& s : e.level.seam_streams) n += s.size();
+  return n;
+}
+
+// Level i encoded so that it names the next level's vertices (whose encoding is `next`), with the part
+// of its merge tree down to the next level.
+StatusOr<EncodedInput> encodeChained(const std::vector<GtnLevelInput>& levels, size_t i, const TetMesh& mesh,
+                                     const EncodedInput& next) {
+  GTN_ASSIGN_OR_RETURN(std::vector<uint32_t> next_index, levels[i].next_index());
+  EncodedInput out;
+  GTN_ASSIGN_OR_RETURN(out.level, encodeChainedLevel(mesh, next_index, next.level.vertex_order));
+  out.level.header.level = static_cast<uint32_t>(i);
+  out.level.header.merges = levels[i].merges;
+  for (EncodedLevel& e : out.level.encoded) {
+    e.header.level = static_cast<uint32_t>(i);
+    e.header.merges = levels[i].merges;
+  }
+  if (levels[i].merge_tree_prefix) {
+    GTN_ASSIGN_OR_RETURN(out.tree,
+                         levels[i].merge_tree_prefix(out.level.vertex_order, levels[i + 1].merges - levels[i].merges));
+  } else if (levels[i].merge_tree) {
+    GTN_ASSIGN_OR_RETURN(out.tree, levels[i].merge_tree(out.level.vertex_order));
+  }
+  return out;
+}
+
+// Whether level i decodes back to its mesh, given the next level's mesh and encoding when it names its
+// vertices (checkDecodesBack's check for such a level).
+Status checkChainedDecodesBack(const std::string& path, const GtnLevelInput& level, const TetMesh& mesh, size_t i,
+                               const EncodedInput& e, const TetMesh* next_mesh, const EncodedInput* next,
+                               const GtnWriteOptions& options) {
+  if (e.level.base == 0) return checkDecodesBack(path, level, mesh, i, e.level, options);
+  if (!options.verify) return Status::ok();
+  if (level.check_mesh) GTN_RETURN_IF_ERROR(level.check_mesh(mesh));
+  const ChainSeams seams = chainSeamsOf(*next_mesh, next->level.vertex_order);
+  const SeamValues view = seams.view();
+  const std::string why = losslessMismatch(mesh, e.level.encoded[0], &view);
+  if (why.empty()) return Status::ok();
+  return invalidData(path + ": level " + std::to_string(i) + " would not decode back to its mesh (" + why +
+                     "), so the file was not written; this is a bug in gtn's encoder, please report it with the input");
+}
+
 }  // namespace
 
 Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& levels, const GtnWriteOptions& options) {
@@ -288,7 +327,67 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
   };
   std::vector<EncodedInput> encoded;
   size_t count = levels.size();
-  if (bounded) {
+  const bool chained = options.chain_levels && levels.size() > 1 && levels[0].next_index;
+  if (chained) {
+    // Levels that name the next level's vertices: every level's mesh is made (finest first, each from
+    // the one before), then the levels are encoded coarsest first, each level choosing between naming
+    // the next level's vertices (with the part of its merge tree down to that level) and storing all
+    // its own (with the rest of the tree), by bytes.
+    for (size_t i = 0; i < levels.size(); ++i) GTN_RETURN_IF_ERROR(meshOf(i).status());
+    encoded.resize(levels.size());
+    uint64_t alone0 = 0;  // level 0 stored alone: the unit of the storage bound
+    auto canChain = [&](size_t i) {
+      return i + 1 < count && levels[i].next_index && meshes[i]->numTets() <= options.piece_tets;
+    };
+    auto encodeDown = [&](size_t top) -> Status {  // levels top, top - 1, ..., 0
+      for (size_t i = top + 1; i-- > 0;) {
+        progress("encode", i);
+        std::optional<EncodedInput> best;
+        if (canChain(i)) {
+          auto c = encodeChained(levels, i, *meshes[i], encoded[i + 1]);
+          if (!c.isOk()) return c.status();
+          best = std::move(c).value();
+        }
+        // Level 0 (often given encoded alone already, and the bound's unit) and grids (often smaller
+        // as a structured piece) are also encoded storing all their vertices; other levels always
+        // take fewer bytes naming the next level's.
+        if (!best || i == 0 || !meshes[i]->blocks.empty()) {
+          auto a = encodeInput(levels, i, *meshes[i], options);
+          if (!a.isOk()) return a.status();
+          if (i == 0) alone0 = approxBytes(*a);
+          if (!best || approxBytes(*a) < approxBytes(*best)) best = std::move(a).value();
+        }
+        encoded[i] = std::move(*best);
+      }
+      return Status::ok();
+    };
+    GTN_RETURN_IF_ERROR(encodeDown(count - 1));
+    if (bounded) {
+      if (alone0 == 0) {
+        GTN_ASSIGN_OR_RETURN(EncodedInput a, encodeInput(levels, 0, *meshes[0], options));
+        alone0 = approxBytes(a);
+      }
+      auto total = [&] {
+        uint64_t t = 0;
+        for (size_t i = 0; i < count; ++i) t += approxBytes(encoded[i]);
+        return t;
+      };
+      // Past the bound, the coarsest level is left out and the new coarsest stores all its vertices.
+      while (count > 1 && static_cast<double>(total()) > options.level_storage_limit * static_cast<double>(alone0)) {
+        --count;
+        const std::vector<uint32_t> order = encoded[count - 1].level.vertex_order;
+        GTN_ASSIGN_OR_RETURN(encoded[count - 1], encodeInput(levels, count - 1, *meshes[count - 1], options));
+        if (encoded[count - 1].level.vertex_order != order && count > 1) GTN_RETURN_IF_ERROR(encodeDown(count - 2));
+      }
+      encoded.resize(count);
+    }
+    for (size_t i = 0; i < count; ++i) {
+      if (options.verify) progress("verify", i);
+      GTN_RETURN_IF_ERROR(checkChainedDecodesBack(path, levels[i], *meshes[i], i, encoded[i],
+                                                  i + 1 < count ? meshes[i + 1] : nullptr,
+                                                  i + 1 < count ? &encoded[i + 1] : nullptr, options));
+    }
+  } else if (bounded) {
     // Each level is checked on another thread while the next one is encoded: one encoder's memory
     // at a time, and the check's time hidden behind the encoding. The bytes each level takes in the
     // file are measured as it is encoded, by writing it to a counter with the same options: the
@@ -341,7 +440,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
         options);
     for (size_t i = 0; i < count; ++i) {
       EncodedInput one;
-      if (!bounded) {
+      if (!bounded && !chained) {
         GTN_ASSIGN_OR_RETURN(const TetMesh* mesh, meshOf(i));
         progress("encode", i);
         auto e = encodeInput(levels, i, *mesh, options);
@@ -350,7 +449,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
         if (options.verify) progress("verify", i);
         GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels[i], *mesh, i, one.level, options));
       }
-      const EncodedInput& e = bounded ? encoded[i] : one;
+      const EncodedInput& e = bounded || chained ? encoded[i] : one;
       if (i == 0) GTN_RETURN_IF_ERROR(w.begin(e.level.header, count));
       Status st = w.addLevel(e.level, levels[i].ratio, e.tree);
       if (!st.isOk()) return Status(st.code(), path + ": " + st.message());

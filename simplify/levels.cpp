@@ -70,6 +70,7 @@ StatusOr<const TetMesh*> MipLevelBuilder::level(size_t i) {
     GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(finer, *finest_tree_, step, &index));
     finest_tree_ = std::make_shared<const MergeTree>(remainingTree(*finest_tree_, step, index));
     trees_.push_back(keep_trees_ ? finest_tree_ : nullptr);
+    next_index_.push_back(std::move(index));
     meshes_.push_back(std::make_unique<TetMesh>(std::move(mesh)));
   }
   return i == 0 ? source_ : meshes_[i].get();
@@ -87,6 +88,7 @@ StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree,
     out.meshes.push_back(std::move(*builder.meshes_[i]));
     out.trees.push_back(builder.tree(i));
   }
+  out.next_index = std::move(builder.next_index_);
   return out;
 }
 
@@ -100,6 +102,13 @@ std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source) const {
     if (trees[i]) {
       std::shared_ptr<const MergeTree> t = trees[i];
       in.merge_tree = [t](const std::vector<uint32_t>& vertex_order) { return encodeMergeTree(*t, vertex_order); };
+      in.merge_tree_prefix = [t](const std::vector<uint32_t>& vertex_order, uint64_t n) {
+        return encodeMergeTree(n < t->merges ? prefixTree(*t, n) : *t, vertex_order);
+      };
+    }
+    if (i < next_index.size()) {
+      const std::vector<uint32_t>* next = &next_index[i];
+      in.next_index = [next]() -> StatusOr<std::vector<uint32_t>> { return *next; };
     }
     result.push_back(std::move(in));
   }
@@ -136,6 +145,74 @@ StatusOr<SimplifyPlan> planSimplification(const GtnReader& reader, uint64_t targ
   }
   plan.extra_merges = target_merges - merges[plan.level];
   return plan;
+}
+
+StatusOr<std::optional<MergeTree>> wholeMergeTree(GtnReader& reader, size_t i,
+                                                  const std::vector<std::vector<uint32_t>>* base_ids) {
+  if (i >= reader.levels()) return usageError(reader.file().path + ": level " + std::to_string(i) + " does not exist");
+  size_t last = i;  // the end of the chain: the first level that stores all its vertices
+  while (last + 1 < reader.levels() && reader.level(last).base != 0) ++last;
+  auto treeOf = [&](size_t k, uint64_t max_merges) -> StatusOr<std::optional<MergeTree>> {
+    GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(k));
+    if (!payload) return std::optional<MergeTree>();
+    GTN_ASSIGN_OR_RETURN(MergeTree t, decodeMergeTree(*payload, reader.level(k).header.points,
+                                                      reader.file().path + ", level " + std::to_string(k), max_merges));
+    return std::optional<MergeTree>(std::move(t));
+  };
+  GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> whole, treeOf(last, UINT64_MAX));
+  if (!whole) return whole;
+  for (size_t k = last; k-- > i;) {
+    const std::string what = reader.file().path + ", level " + std::to_string(k);
+    const uint64_t band =
+        reader.level(k + 1).header.merges - std::min(reader.level(k + 1).header.merges, reader.level(k).header.merges);
+    GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> own, treeOf(k, band));
+    if (!own) return own;
+    if (own->merges != band)
+      return invalidData(what + ": its merge tree holds " + std::to_string(own->merges) + " merges, " +
+                         std::to_string(band) + " are needed down to level " + std::to_string(k + 1));
+    std::vector<uint32_t> decoded;
+    const std::vector<uint32_t>* ids =
+        base_ids && k < base_ids->size() && !(*base_ids)[k].empty() ? &(*base_ids)[k] : nullptr;
+    if (!ids) {
+      CountingSink counter;
+      GTN_RETURN_IF_ERROR(reader.decodeLevel(k, counter, nullptr, nullptr, &decoded));
+      ids = &decoded;
+    }
+    const size_t n = own->points(), next_n = whole->points();
+    if (ids->size() != n) return invalidData(what + ": the ids of the next level's vertices do not match the level");
+    std::vector<uint32_t> here(next_n, kNoIndex);  // next level's id -> this level's id
+    for (uint32_t v = 0; v < n; ++v) {
+      const uint32_t u = (*ids)[v];
+      if (u == kNoIndex) continue;
+      if (u >= next_n || here[u] != kNoIndex)
+        return invalidData(what + ": vertex " + std::to_string(v) + " names a vertex of level " +
+                           std::to_string(k + 1) + " out of range or named twice");
+      here[u] = v;
+    }
+    MergeTree t = std::move(*own);
+    for (uint32_t v = 0; v < n; ++v) {
+      const uint32_t u = (*ids)[v];
+      const bool merged_here = t.rank[v] != 0;
+      if (merged_here == (u != kNoIndex))
+        return invalidData(what + ": vertex " + std::to_string(v) +
+                           (merged_here
+                                ? " merges before level " + std::to_string(k + 1) + " but is one of its vertices"
+                                : " is neither a vertex of level " + std::to_string(k + 1) + " nor merged before it"));
+      if (merged_here || whole->rank[u] == 0) continue;
+      if (here[whole->parent[u]] == kNoIndex)
+        return invalidData(what + ": a merge of level " + std::to_string(k + 1) + " has a parent this level lacks");
+      t.parent[v] = here[whole->parent[u]];
+      t.rank[v] = static_cast<uint32_t>(band + whole->rank[u]);
+      t.removed[v] = whole->removed[u];
+      t.boundary[v] = whole->boundary[u];
+      if (!t.error.empty() && u < whole->error.size()) t.error[v] = whole->error[u];
+    }
+    t.merges = band + whole->merges;
+    t.checked = false;
+    GTN_RETURN_IF_ERROR(t.check(what + ": merge tree with the next levels'"));
+    whole = std::move(t);
+  }
+  return whole;
 }
 
 StatusOr<uint64_t> levelZeroUnreferencedMerges(GtnReader& reader) {

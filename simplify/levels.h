@@ -36,6 +36,7 @@ struct MipLevels {
   std::vector<std::shared_ptr<const MergeTree>> trees;  // per level, in the level's numbering
   std::vector<uint64_t> merges;                         // N_i
   std::vector<double> ratios;                           // N_i / points of level 0
+  std::vector<std::vector<uint32_t>> next_index;        // per level but the last: vertex -> next level's
 
   // The inputs for writeGtnFile; `source` is level 0 and must outlive the result, as must *this.
   std::vector<GtnLevelInput> inputs(const TetMesh& source) const;
@@ -63,6 +64,12 @@ class MipLevelBuilder {
   StatusOr<const TetMesh*> level(size_t i);
   // Level i's merge tree in its numbering, once level i is built; null where options.merge_tree is off.
   std::shared_ptr<const MergeTree> tree(size_t i) const { return i < trees_.size() ? trees_[i] : nullptr; }
+  // Per vertex of level i, its index in level i + 1 (MergeTree::kRoot where it merges away), once level
+  // i + 1 is built; empty before.
+  const std::vector<uint32_t>& nextIndex(size_t i) const {
+    static const std::vector<uint32_t> none;
+    return i < next_index_.size() ? next_index_[i] : none;
+  }
 
  private:
   friend StatusOr<MipLevels> buildMipLevels(const TetMesh&, const MergeTree&, const LevelOptions&);
@@ -75,6 +82,7 @@ class MipLevelBuilder {
   std::vector<std::unique_ptr<TetMesh>> meshes_;         // meshes_[0] is null: the source
   std::vector<std::shared_ptr<const MergeTree>> trees_;  // kept where keep_trees_
   std::shared_ptr<const MergeTree> finest_tree_;         // the newest level's tree, to build the next
+  std::vector<std::vector<uint32_t>> next_index_;        // per built level but the newest: to the next
 };
 
 // The finest stored level to start from for a target of `target_merges` merges: the index of the
@@ -102,6 +110,15 @@ StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio);
 // U of level 0's merge tree (unreferencedMerges); 0 when level 0 stores none. The ratio of N merges
 // is (N - U) / (points - U).
 StatusOr<uint64_t> levelZeroUnreferencedMerges(GtnReader& reader);
+
+// The whole merge tree of level i, in its vertex numbering. A level that names the next level's
+// vertices (GtnLevelInfo::base) stores only the merges down to that level; the rest is the next
+// level's whole tree, renumbered through the ids the level gives the next level's vertices. nullopt
+// when a level of the chain stores no merge tree. `base_ids` (optional): per level, what
+// GtnReader::decodeLevel's base_ids gave (a level whose entry is missing or empty is decoded again to
+// get them). Fails, naming the file and level, where the stored trees and levels do not fit together.
+StatusOr<std::optional<MergeTree>> wholeMergeTree(GtnReader& reader, size_t i,
+                                                  const std::vector<std::vector<uint32_t>>* base_ids = nullptr);
 
 // Streams the mesh after `target_merges` merges to `sink`: decodes the planned level and, when merges
 // remain, filters it through a StreamSimplifier with that level's merge tree. Fails with kUsage when

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "simplify/levels.h"
+
 namespace gtn {
 
 namespace {
@@ -44,11 +46,10 @@ void addCurvePoints(std::vector<MergeErrorPoint>& curve, size_t level, uint64_t 
 }  // namespace
 
 StatusOr<std::optional<MergeTreeReport>> mergeTreeReport(GtnReader& r) {
-  auto payload = r.mergeTreePayload(0);
-  if (!payload.isOk()) return payload.status();
-  if (!payload.value().has_value()) return std::optional<MergeTreeReport>();
+  GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> whole, wholeMergeTree(r, 0));
+  if (!whole) return std::optional<MergeTreeReport>();
   const uint64_t points0 = r.level(0).header.points;
-  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload.value(), points0, r.file().path + ", level 0"));
+  const MergeTree& tree = *whole;
   MergeTreeReport rep;
   rep.stats = computeMergeTreeStats(tree);
   rep.field = tree.field;
@@ -270,6 +271,7 @@ StatusOr<nlohmann::json> gtnInfoJson(GtnReader& r, const TetMesh& mesh, const Me
                       {"merges", l.header.merges},
                       {"ratio", l.ratio},
                       {"merge_tree", l.has_merge_tree},
+                      {"names_next_level", l.base != 0},
                       {"bytes", l.bytes},
                       {"piece_count", l.pieces.size()},
                       {"pieces", pieces},

@@ -12,6 +12,7 @@
 #include "codec/merge_tree_coder.h"
 #include "format/file_io.h"
 #include "format/gtn_reader.h"
+#include "simplify/levels.h"
 #include "validate/mesh_checks.h"
 
 namespace gtn {
@@ -282,11 +283,12 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
   // Decoding: every level into memory, then the mesh, merge-tree and levels layers.
   DecodedFile decoded;
   decoded.command_line = fi.header.command_line;
+  std::vector<std::vector<uint32_t>> base_ids(reader.levels());
   for (size_t i = 0; i < reader.levels(); ++i) {
     const std::string scope = "/levels/" + std::to_string(i);
     TetMeshBuilder builder;
     DecodeStats dstats;
-    const Status st = reader.decodeLevel(i, builder, &dstats);
+    const Status st = reader.decodeLevel(i, builder, &dstats, nullptr, &base_ids[i]);
     if (!st.isOk()) {
       const std::optional<uint64_t> offset = messageOffset(st.message());
       const IssueCode code = (containsText(st.message(), "declares") || containsText(st.message(), "count"))
@@ -324,9 +326,17 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
       if (i == 0) decoded.forest_undecodable = true;
       continue;
     }
-    // Level 0's tree is the one every level derives from; the trees of mip levels (what remains of
-    // it) are only checked to decode.
-    if (i == 0) decoded.forest = forestFromTree(*tree);
+    // Level 0's whole tree (with the next levels' where level 0 names their vertices) is the one every
+    // level derives from; the trees of mip levels (what remains of it) are only checked to decode.
+    if (i == 0) {
+      StatusOr<std::optional<MergeTree>> whole = wholeMergeTree(reader, 0, &base_ids);
+      if (!whole.isOk()) {
+        report.add(IssueCode::kMergeTreeUndecodable, "/merge_tree", "/levels/0/merge_tree", whole.status().message());
+        decoded.forest_undecodable = true;
+      } else if (whole->has_value()) {
+        decoded.forest = forestFromTree(**whole);
+      }
+    }
   }
   validateDecoded(decoded, options, report);
   return report;

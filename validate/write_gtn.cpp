@@ -75,11 +75,21 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
         return structure.check(level, i);
       };
     }
-    if (o.merge_tree)
-      in.merge_tree = [&, i](const std::vector<uint32_t>& vertex_order) -> StatusOr<std::vector<uint8_t>> {
+    if (o.merge_tree) {
+      in.merge_tree_prefix = [&, i](const std::vector<uint32_t>& vertex_order,
+                                    uint64_t merges) -> StatusOr<std::vector<uint8_t>> {
         const std::shared_ptr<const MergeTree> t = levels.tree(i);
         if (!t) return usageError(path + ": level " + std::to_string(i) + "'s merge tree asked for before the level");
-        return encodeMergeTree(*t, vertex_order);
+        return encodeMergeTree(merges < t->merges ? prefixTree(*t, merges) : *t, vertex_order);
+      };
+      in.merge_tree = [prefix = in.merge_tree_prefix](const std::vector<uint32_t>& vertex_order) {
+        return prefix(vertex_order, UINT64_MAX);
+      };
+    }
+    if (i + 1 < count)
+      in.next_index = [&, i]() -> StatusOr<std::vector<uint32_t>> {
+        GTN_RETURN_IF_ERROR(levels.level(i + 1).status());
+        return levels.nextIndex(i);
       };
   }
   return writeGtnFile(path, inputs, bounded);

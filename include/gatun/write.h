@@ -19,8 +19,11 @@ namespace gatun {
  *  `levels`: mip levels beyond level 0; -1 = automatic (down to a small mesh, within level_storage),
  *     0 = none.
  *  `merge_tree`: store the merge trees (simplification to any ratio on the fly).
- *  `level_storage`: automatic levels stop before all levels together would take more than this
- *     multiple of level 0's bytes; 0 = no bound.
+ *  `level_storage`: automatic levels leave out the coarsest while all levels together would take
+ *     more than this multiple of level 0's bytes alone (with its merge tree); 0 = no bound.
+ *  `independent_levels`: every level stores all its vertices and the rest of the merge tree, so that
+ *     each decodes alone (`gtn convert --independent-levels`); by default a level names the next
+ *     coarser level's vertices instead of storing them again (a smaller file).
  *  `verify`: decode every written level back and check it (and each mip level's validity) before the
  *     file is committed; false is faster and skips the guard against encoder or simplifier bugs.
  *  `simplify_field`, `w_density`, `w_geometry`: the ranking of merges: the point field whose first
@@ -34,6 +37,7 @@ struct WriteOptions {
   int levels = -1;
   bool merge_tree = true;
   double level_storage = 2.0;
+  bool independent_levels = false;
   bool verify = true;
   std::string simplify_field{};
   double w_density = 1.0;

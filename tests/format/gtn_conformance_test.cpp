@@ -468,18 +468,18 @@ uint64_t chunkOffset(const std::vector<uint8_t>& bytes, ChunkTag tag) {
 }
 
 // The chunk of level 0 with `tag` in a valid file.
-GtnChunkInfo levelChunk(const std::vector<uint8_t>& bytes, ChunkTag tag) {
+GtnChunkInfo levelChunk(const std::vector<uint8_t>& bytes, ChunkTag tag, size_t level = 0) {
   auto r = GtnReader::openMemory(std::string(bytes.begin(), bytes.end()), "gen");
   EXPECT_TRUE(r.isOk());
-  for (const GtnChunkInfo& c : (*r)->level(0).chunks)
+  for (const GtnChunkInfo& c : (*r)->level(level).chunks)
     if (c.tag == tag) return c;
   ADD_FAILURE() << "no chunk " << tag.str();
   return {};
 }
 
 // Level 0's header record as a valid file stores it.
-GtnLevelRecord levelRecord(const std::vector<uint8_t>& bytes) {
-  const GtnChunkInfo c = levelChunk(bytes, kTagLevelHeader);
+GtnLevelRecord levelRecord(const std::vector<uint8_t>& bytes, size_t level = 0) {
+  const GtnChunkInfo c = levelChunk(bytes, kTagLevelHeader, level);
   ChunkHeader h;
   size_t needed;
   EXPECT_TRUE(
@@ -531,66 +531,66 @@ Sample valid(std::string name, std::function<TetMesh()> mesh, std::function<std:
 
 std::vector<Sample> samples() {
   std::vector<Sample> s;
-  s.push_back(valid("cube.f32.dir.v2.0-d3.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
+  s.push_back(valid("cube.f32.dir.v2.0-d4.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
   s.push_back(
-      valid("cube.f64.fields.dir.v2.0-d3.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
-  s.push_back(valid("cube.f64.fields.nodir.v2.0-d3.gtn", cubeF64Fields,
+      valid("cube.f64.fields.dir.v2.0-d4.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
+  s.push_back(valid("cube.f64.fields.nodir.v2.0-d4.gtn", cubeF64Fields,
                     [] { return encodeFile(cubeF64Fields(), options(false)); }));
   s.push_back(
-      valid("unused-points.f32.dir.v2.0-d3.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
-  s.push_back(valid("two-components.f32.dir.v2.0-d3.gtn", twoComponents,
+      valid("unused-points.f32.dir.v2.0-d4.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
+  s.push_back(valid("two-components.f32.dir.v2.0-d4.gtn", twoComponents,
                     [] { return encodeFile(twoComponents(), options()); }));
-  s.push_back(valid("repeated-components.f64.dir.v2.0-d3.gtn", repeatedComponents,
+  s.push_back(valid("repeated-components.f64.dir.v2.0-d4.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
-  s.push_back(valid("decimals.f64.dir.v2.0-d3.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
-  s.push_back(valid("printed-singles.f64.dir.v2.0-d3.gtn", printedSingles,
+  s.push_back(valid("decimals.f64.dir.v2.0-d4.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
+  s.push_back(valid("printed-singles.f64.dir.v2.0-d4.gtn", printedSingles,
                     [] { return encodeFile(printedSingles(), options()); }));
-  s.push_back(valid("shift-exceptions.f64.dir.v2.0-d3.gtn", shiftExceptions,
+  s.push_back(valid("shift-exceptions.f64.dir.v2.0-d4.gtn", shiftExceptions,
                     [] { return encodeFile(shiftExceptions(), options()); }));
-  s.push_back(valid("value-table.f32.dir.v2.0-d3.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
-  s.push_back(valid("packed-values.f32.dir.v2.0-d3.gtn", packedValues,
+  s.push_back(valid("value-table.f32.dir.v2.0-d4.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
+  s.push_back(valid("packed-values.f32.dir.v2.0-d4.gtn", packedValues,
                     [] { return encodeFile(packedValues(), options(), nullptr, true); }));
   s.push_back(
-      valid("curvilinear.f32.dir.v2.0-d3.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
-  s.push_back(valid("edge-points.f64.dir.v2.0-d3.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
+      valid("curvilinear.f32.dir.v2.0-d4.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
+  s.push_back(valid("edge-points.f64.dir.v2.0-d4.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(
-      valid("delaunay.f64.dir.v2.0-d3.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
-  s.push_back(valid("degenerate-sweep.f64.dir.v2.0-d3.gtn", degenerateSweep,
+      valid("delaunay.f64.dir.v2.0-d4.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
+  s.push_back(valid("degenerate-sweep.f64.dir.v2.0-d4.gtn", degenerateSweep,
                     [] { return encodeFile(degenerateSweep(), options()); }));
   s.push_back(
-      valid("pieces.f32.dir.v2.0-d3.gtn", piecesMesh, [] { return encodePiecesFile(piecesMesh(), options()); }));
+      valid("pieces.f32.dir.v2.0-d4.gtn", piecesMesh, [] { return encodePiecesFile(piecesMesh(), options()); }));
   s.push_back(
-      valid("levels.f32.dir.v2.0-d3.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+      valid("levels.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(
-      valid("wide-merge-tree.f32.dir.v2.0-d3.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
-  s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d3.gtn", cubeF32, [] {
+      valid("wide-merge-tree.f32.dir.v2.0-d4.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
+  s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d4.gtn", cubeF32, [] {
     const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
     return encodeFile(cubeF32(), options(false),
                       [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("xNOT"), note, true).isOk()); });
   }));
-  s.push_back(valid("newer-minor.f32.dir.v2.9-d3.gtn", cubeF32, [] {
+  s.push_back(valid("newer-minor.f32.dir.v2.9-d4.gtn", cubeF32, [] {
     std::vector<uint8_t> b = encodeFile(cubeF32(), options());
     const auto p = encodeGtnPrefix(2, 9);
     std::copy(p.begin(), p.end(), b.begin());
     return b;
   }));
   // Must fail.
-  s.push_back({"fail.bad-magic-text-mode.v2.0-d3.gtn", nullptr, [] {
+  s.push_back({"fail.bad-magic-text-mode.v2.0-d4.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.erase(b.begin() + 4);  // CR LF -> LF, as a text-mode transfer does
                  return b;
                }});
-  s.push_back({"fail.bad-checksum.v2.0-d3.gtn", nullptr, [] {
+  s.push_back({"fail.bad-checksum.v2.0-d4.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b[chunkOffset(b, kTagGeometry) + 40] ^= 0x04;  // past the header, in the payload
                  return b;
                }});
-  s.push_back({"fail.truncated.v2.0-d3.gtn", nullptr, [] {
+  s.push_back({"fail.truncated.v2.0-d4.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.resize(chunkOffset(b, kTagConnectivity) + 20);
                  return b;
                }});
-  s.push_back({"fail.unknown-critical-chunk.v2.0-d3.gtn", nullptr, [] {
+  s.push_back({"fail.unknown-critical-chunk.v2.0-d4.gtn", nullptr, [] {
                  const std::vector<uint8_t> payload = {1, 2, 3};
                  return encodeFile(cubeF32(), options(false), [&](GtnStreamWriter& w) {
                    EXPECT_TRUE(w.addChunk(ChunkTag("XTRA"), payload, false).isOk());
@@ -602,7 +602,7 @@ std::vector<Sample> samples() {
                  std::copy(p.begin(), p.end(), b.begin());
                  return b;
                }});
-  s.push_back({"fail.trailing-bytes.v2.0-d3.gtn", nullptr, [] {
+  s.push_back({"fail.trailing-bytes.v2.0-d4.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.push_back('\n');
                  return b;
@@ -613,29 +613,29 @@ std::vector<Sample> samples() {
                  std::copy(p.begin(), p.end(), b.begin());
                  return b;
                }});
-  s.push_back({"fail.draft-2.v2.0-d2.gtn", nullptr, [] {
+  s.push_back({"fail.draft-3.v2.0-d3.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options(false));
                  GtnFileHeader h;
                  const auto [offset, size] = fileChunk(b, kTagFileHeader, &h);
-                 h.draft = 2;
+                 h.draft = 3;
                  return replaceChunk(b, offset, size, kTagFileHeader, encodeFileHeader(h));
                }});
   // Must fail: pieces.
-  s.push_back({"fail.seam-missing.v2.0-d3.gtn", nullptr, [] {
+  s.push_back({"fail.seam-missing.v2.0-d4.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
                  const GtnChunkInfo seam = levelChunk(b, kTagSeam);
                  b.erase(b.begin() + static_cast<ptrdiff_t>(seam.offset),
                          b.begin() + static_cast<ptrdiff_t>(seam.offset + seam.bytes));
                  return b;
                }});
-  s.push_back({"fail.piece-tets-sum.v2.0-d3.gtn", nullptr, [] {
+  s.push_back({"fail.piece-tets-sum.v2.0-d4.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
                  GtnLevelRecord r = levelRecord(b);
                  r.pieces[1].tets -= 1;  // the pieces hold one tetrahedron fewer than the level
                  const GtnChunkInfo lhdr = levelChunk(b, kTagLevelHeader);
                  return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r), false);
                }});
-  s.push_back({"fail.seam-class-repeats-piece.v2.0-d3.gtn", nullptr, [] {
+  s.push_back({"fail.seam-class-repeats-piece.v2.0-d4.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
                  auto r = GtnReader::openMemory(std::string(b.begin(), b.end()), "gen");
                  EXPECT_TRUE(r.isOk());
@@ -650,6 +650,21 @@ std::vector<Sample> samples() {
                  classes[0].pieces[1] = classes[0].pieces[0];  // the first class names its first piece twice
                  const GtnChunkInfo seam = levelChunk(b, kTagSeam);
                  return replaceChunk(b, seam.offset, seam.bytes, kTagSeam, encodeSeamTable(classes, streams));
+               }});
+  // Must fail: levels that name the next level's vertices.
+  s.push_back({"fail.last-level-names-next.v2.0-d4.gtn", nullptr, [] {
+                 std::vector<uint8_t> b = encodeWithTree(levelsMesh(), 2, options(false));
+                 GtnLevelRecord r = levelRecord(b, 2);
+                 r.base = 1;  // the last level claims to name the vertices of a level the file lacks
+                 const GtnChunkInfo lhdr = levelChunk(b, kTagLevelHeader, 2);
+                 return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r), false);
+               }});
+  s.push_back({"fail.base-of-several-pieces.v2.0-d4.gtn", nullptr, [] {
+                 std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
+                 GtnLevelRecord r = levelRecord(b);
+                 r.base = 1;  // a level of 4 pieces claims to name the next level's vertices
+                 const GtnChunkInfo lhdr = levelChunk(b, kTagLevelHeader);
+                 return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r), false);
                }});
   return s;
 }
@@ -824,7 +839,7 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsExpected) {
 // The merge tree of more than 2^17 points decodes to the ranking's tree: the same merges as the
 // levels file's grid (the unused points are never merged), in the wide file's vertex numbering.
 TEST(GtnConformance, WideMergeTreeDecodes) {
-  auto r = GtnReader::open(kDir + "wide-merge-tree.f32.dir.v2.0-d3.gtn");
+  auto r = GtnReader::open(kDir + "wide-merge-tree.f32.dir.v2.0-d4.gtn");
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 1u);
   TetMeshBuilder b0;
@@ -854,17 +869,27 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
 // tree as the file stores it, and on-the-fly simplification from the finest stored level gives the
 // same mesh as applying the merges to level 0, at every merge count.
 TEST(GtnConformance, LevelsAndMergeTreesAgree) {
-  auto r = GtnReader::open(kDir + "levels.f32.dir.v2.0-d3.gtn");
+  auto r = GtnReader::open(kDir + "levels.f32.dir.v2.0-d4.gtn");
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 3u);
   TetMeshBuilder b0;
   ASSERT_TRUE((*r)->decodeLevel(0, b0).isOk());
   const TetMesh level0 = b0.mesh();
+  // Levels 0 and 1 name the next level's vertices (spec 7.7) and store only their merges down to it;
+  // level 2 stores all its vertices and the rest of the tree.
+  EXPECT_EQ((*r)->level(0).base, 1);
+  EXPECT_EQ((*r)->level(1).base, 1);
+  EXPECT_EQ((*r)->level(2).base, 0);
   auto payload = (*r)->mergeTreePayload(0);
   ASSERT_TRUE(payload.isOk());
   ASSERT_TRUE(payload->has_value());
-  auto tree = decodeMergeTree(**payload, level0.numPoints(), "level 0");
-  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  auto own = decodeMergeTree(**payload, level0.numPoints(), "level 0");
+  ASSERT_TRUE(own.isOk()) << own.status().message();
+  EXPECT_EQ(own->merges, (*r)->level(1).header.merges);
+  auto whole = wholeMergeTree(**r, 0);
+  ASSERT_TRUE(whole.isOk()) << whole.status().message();
+  ASSERT_TRUE(whole->has_value());
+  const MergeTree* tree = &**whole;
   EXPECT_GT(tree->merges, 162u) << "enough merges for both levels";
   EXPECT_EQ(tree->field, "density");
   for (size_t i = 0; i < 3; ++i) {

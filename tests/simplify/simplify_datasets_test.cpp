@@ -158,20 +158,34 @@ TEST_P(Datasets, StoredLevelsDecodeToTheInMemoryResult) {
     const TetMesh& want = i == 0 ? d.mesh : levels->meshes[i];
     EXPECT_EQ(geoTets(b.mesh()), geoTets(want));
   }
-  // Storage of every level with its merge tree against level 0 alone (with its tree).
-  uint64_t level0 = r.level(0).bytes, total = 0;
-  for (size_t i = 0; i < r.levels(); ++i) total += r.level(i).bytes;
+  // The same levels stored independently (--independent-levels): every level whole, with the rest of
+  // the merge tree.
+  GtnWriteOptions independent = wo;
+  independent.chain_levels = false;
+  const std::string independent_path = path + ".independent.gtn";
+  ASSERT_TRUE(writeGtnFile(independent_path, levels->inputs(d.mesh), independent).isOk());
+  auto ir = GtnReader::open(independent_path);
+  ASSERT_TRUE(ir.isOk()) << ir.status().message();
+  uint64_t level0 = (*ir)->level(0).bytes, total = 0, chained = 0;
+  for (size_t i = 0; i < (*ir)->levels(); ++i) total += (*ir)->level(i).bytes;
+  for (size_t i = 0; i < r.levels(); ++i) chained += r.level(i).bytes;
   RecordProperty("levels_over_level0", std::to_string(double(total) / level0));
-  // Every level of the pyramid costs more than half the level above (vertices farther apart predict
-  // worse), so the whole series passes 2x level 0 on the grids; more so where level 0 is a structured
-  // piece (blunt fin 14.6 bits per tetrahedron against the level codec's 18.3) and the coarse levels
-  // are not.
+  RecordProperty("chained_levels_over_level0", std::to_string(double(chained) / level0));
+  // Independent: every level of the pyramid costs more than half the level above (vertices farther
+  // apart predict worse), so the whole series passes 2x level 0 on the grids; more so where level 0 is
+  // a structured piece (blunt fin 14.6 bits per tetrahedron against the level codec's 18.3) and the
+  // coarse levels are not.
   EXPECT_GE(double(total), 1.5 * double(level0));
   EXPECT_LE(double(total), 2.6 * double(level0));
+  // Levels that name the next level's vertices store each value and merge once: the same levels take
+  // far fewer bytes (spx 1.4x level 0 alone, against 2.5x; blunt fin, whose level 0 is a grid that
+  // stores all its nodes, about 1.7x against 2.6x).
+  EXPECT_LT(double(chained), 0.8 * double(total));
+  EXPECT_LE(double(chained), 1.9 * double(level0));
   {
-    // With the paper's bound ("storage doubled"), as `gtn convert` writes by default: the finest levels
-    // that fit, the same ones as above, within 2x level 0 in the file's own bytes.
-    GtnWriteOptions bounded = wo;
+    // With the paper's bound ("storage doubled") and independent levels: the finest levels that fit,
+    // the same ones as above, within 2x level 0 in the file's own bytes.
+    GtnWriteOptions bounded = independent;
     bounded.level_storage_limit = 2.0;
     const std::string bounded_path = path + ".bounded.gtn";
     ASSERT_TRUE(writeGtnFile(bounded_path, levels->inputs(d.mesh), bounded).isOk());
@@ -180,23 +194,34 @@ TEST_P(Datasets, StoredLevelsDecodeToTheInMemoryResult) {
     uint64_t btotal = 0;
     for (size_t i = 0; i < (*br)->levels(); ++i) {
       btotal += (*br)->level(i).bytes;
-      EXPECT_EQ((*br)->level(i).bytes, r.level(i).bytes);
+      EXPECT_EQ((*br)->level(i).bytes, (*ir)->level(i).bytes);
       EXPECT_EQ((*br)->level(i).header.merges, levels->merges[i]);
     }
     RecordProperty("bounded_levels", std::to_string((*br)->levels()));
     EXPECT_LE(btotal, 2 * (*br)->level(0).bytes);
     EXPECT_GE((*br)->levels(), 3u);
-    if (total <= 2 * level0) EXPECT_EQ((*br)->levels(), r.levels());
-    else EXPECT_LT((*br)->levels(), r.levels());
-    // A bound below the first level's cost keeps level 0 alone, with the whole merge tree.
-    bounded.level_storage_limit = 1.01;
-    ASSERT_TRUE(writeGtnFile(bounded_path, levels->inputs(d.mesh), bounded).isOk());
-    auto only0 = GtnReader::open(bounded_path);
-    ASSERT_TRUE(only0.isOk());
-    EXPECT_EQ((*only0)->levels(), 1u);
-    EXPECT_TRUE((*only0)->level(0).has_merge_tree);
+    if (total <= 2 * level0) EXPECT_EQ((*br)->levels(), (*ir)->levels());
+    else EXPECT_LT((*br)->levels(), (*ir)->levels());
+    // With chained levels the same bound keeps every level.
+    GtnWriteOptions chained_bounded = wo;
+    chained_bounded.level_storage_limit = 2.0;
+    ASSERT_TRUE(writeGtnFile(bounded_path, levels->inputs(d.mesh), chained_bounded).isOk());
+    auto cb = GtnReader::open(bounded_path);
+    ASSERT_TRUE(cb.isOk());
+    EXPECT_EQ((*cb)->levels(), r.levels());
+    // A bound below the first level's cost keeps level 0 alone, with the whole merge tree, either way.
+    for (GtnWriteOptions tight : {independent, wo}) {
+      tight.level_storage_limit = 1.01;
+      ASSERT_TRUE(writeGtnFile(bounded_path, levels->inputs(d.mesh), tight).isOk());
+      auto only0 = GtnReader::open(bounded_path);
+      ASSERT_TRUE(only0.isOk());
+      EXPECT_EQ((*only0)->levels(), 1u);
+      EXPECT_TRUE((*only0)->level(0).has_merge_tree);
+      EXPECT_EQ((*only0)->level(0).base, 0);
+    }
     std::filesystem::remove(bounded_path);
   }
+  std::filesystem::remove(independent_path);
   // Reading at a target between two levels starts from the coarser-than-target stored level.
   const uint64_t target = (levels->merges[2] + levels->merges[3]) / 2;
   TetMeshBuilder b;

@@ -331,6 +331,8 @@ TEST(Levels, EachLevelIsThePrefixAndRefinesFurther) {
   EXPECT_FALSE(inputs[1].merge_tree);
 }
 
+// Independent levels (--independent-levels); chained levels are encoded coarsest first, every one
+// (tests/format/gtn_chain_test.cpp).
 TEST(Levels, ABoundedWriteEncodesNoLevelBeyondTheBound) {
   const Ranked& g = grid();
   auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{-1, 32, true});
@@ -342,6 +344,7 @@ TEST(Levels, ABoundedWriteEncodesNoLevelBeyondTheBound) {
     std::vector<std::string> stages;
     GtnWriteOptions wo;
     wo.level_storage_limit = bound;
+    wo.chain_levels = false;
     wo.progress = [&](const std::string& stage, double) { stages.push_back(stage); };
     ASSERT_TRUE(writeGtnFile(path, levels->inputs(g.mesh), wo).isOk());
     auto r = GtnReader::open(path);
@@ -395,9 +398,9 @@ TEST(Levels, TheBuilderMakesEachLevelWhenAskedFor) {
   EXPECT_EQ(builder->level(last + 1).status().code(), StatusCode::kUsage);
 }
 
-// Convert makes only the mip levels the storage bound lets the file keep and the first one past it
-// (its encoded bytes decide), and checks the structure of the kept ones only; the file is the one the
-// levels made up front give.
+// With independent levels, convert makes only the mip levels the storage bound lets the file keep and
+// the first one past it (its encoded bytes decide), and checks the structure of the kept ones only; the
+// file is the one the levels made up front give.
 TEST(Levels, ConvertMakesAndChecksOnlyTheLevelsItStores) {
   TetMesh mesh = makeGrid(20, 20, 20);
   RankingStats stats;
@@ -411,6 +414,7 @@ TEST(Levels, ConvertMakesAndChecksOnlyTheLevelsItStores) {
   convert.level_storage = 1.6;
   GtnWriteOptions eager;
   eager.level_storage_limit = convert.level_storage;
+  eager.chain_levels = false;
   ASSERT_TRUE(writeGtnFile(path, all->inputs(mesh), eager).isOk());
   auto want = readWholeFile(path);
   ASSERT_TRUE(want.isOk()) << want.status().message();
@@ -420,6 +424,7 @@ TEST(Levels, ConvertMakesAndChecksOnlyTheLevelsItStores) {
     std::vector<std::string> built, checked;
     GtnWriteOptions wo;
     wo.verify = verify;
+    wo.chain_levels = false;
     wo.progress = [&](const std::string& stage, double) {
       std::lock_guard<std::mutex> hold(lock);
       if (stage.rfind("build level ", 0) == 0) built.push_back(stage);

@@ -76,12 +76,15 @@ TEST_P(ValidateDatasets, ConvertedFileIsCleanAndEqualsItsSource) {
     ASSERT_EQ(info.exit_code, 0) << info.err;
     const nlohmann::json ij = nlohmann::json::parse(info.out);
     ASSERT_EQ(ij["levels"].size(), levels);
-    uint64_t total = 0;
-    for (const auto& l : ij["levels"]) total += l["bytes"].get<uint64_t>();
-    const uint64_t level0 = ij["levels"][0]["bytes"].get<uint64_t>();
-    EXPECT_LE(total, 2 * level0) << info.out;
-    // (A grid's level 0 is a structured piece, smaller than the coarse levels' unstructured coding
-    // makes them in proportion, so the bound keeps one level fewer than it did before.)
+    // Every level but the last names the next level's vertices where it is one unstructured piece
+    // (a grid's level 0 may store all its nodes as a structured piece), the last stores all of its own;
+    // reading level i reads it and the coarser levels, about half of what reading level i - 1 reads.
+    const auto& ls = ij["levels"];
+    EXPECT_FALSE(ls[levels - 1]["names_next_level"].get<bool>()) << info.out;
+    for (size_t i = 1; i + 1 < levels; ++i) EXPECT_TRUE(ls[i]["names_next_level"].get<bool>()) << i << info.out;
+    std::vector<uint64_t> read(levels + 1, 0);
+    for (size_t i = levels; i-- > 0;) read[i] = read[i + 1] + ls[i]["bytes"].get<uint64_t>();
+    for (size_t i = 1; i < levels; ++i) EXPECT_LT(double(read[i]), 0.62 * double(read[i - 1])) << i << info.out;
     if (points >= 40000) {
       EXPECT_GE(levels, 3u) << info.out;
     }

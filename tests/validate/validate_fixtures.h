@@ -87,6 +87,7 @@ inline Bytes rewriteGtn(const std::string& path, const std::function<void(std::v
       rec.bbox_max[k] = li.header.bbox_max[k];
     }
     rec.pieces = li.pieces;
+    rec.base = li.base;
     const int level = static_cast<int>(i);
     chunks.push_back({kTagLevelHeader, level, encodeLevelRecord(rec), false});
     if (li.pieces.size() > 1) {

@@ -1,0 +1,234 @@
+// Levels that name the next level's vertices (spec section 7.7): every level decodes to the mesh an
+// independent level holds, a level's whole merge tree is its own merges then the next level's,
+// renumbered, the file is smaller, a coarse level reads nothing of the finer ones, and files whose
+// trees and levels do not fit together are refused with the level named.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <string>
+#include <tuple>
+
+#include "codec/codec_test_util.h"
+#include "convert/import.h"
+#include "format/gtn_file.h"
+#include "format/gtn_reader.h"
+#include "simplify/apply.h"
+#include "simplify/levels.h"
+#include "simplify/ranking.h"
+#include "test_util.h"
+#include "validate/validator.h"
+#include "validate/write_gtn.h"
+
+namespace gtn::test {
+namespace {
+
+TetMesh spx() {
+  auto imported = importMesh({dataPath("vtk/spx.vtk")}, ImportOptions{});
+  EXPECT_TRUE(imported.isOk()) << imported.status().message();
+  return imported.isOk() ? std::move(imported->mesh) : TetMesh{};
+}
+
+// One directory for the test program (tempDir empties it when called).
+const std::string& dir() {
+  static const std::string d = tempDir("gtn-chain");
+  return d;
+}
+
+std::string write(const TetMesh& mesh, const std::string& name, bool chain, int levels = 3) {
+  const std::string path = dir() + "/" + name + ".gtn";
+  GtnConvertOptions o;
+  o.levels = levels;
+  GtnWriteOptions w;
+  w.chain_levels = chain;
+  const Status st = writeGtnWithLevels(path, mesh, o, w, name);
+  EXPECT_TRUE(st.isOk()) << st.message();
+  return path;
+}
+
+std::unique_ptr<GtnReader> open(const std::string& path) {
+  auto r = GtnReader::open(path, GtnOpenOptions{false});
+  EXPECT_TRUE(r.isOk()) << r.status().message();
+  return r.isOk() ? std::move(r).value() : nullptr;
+}
+
+TetMesh decode(GtnReader& r, size_t level) {
+  TetMeshBuilder b;
+  const Status st = r.decodeLevel(level, b);
+  EXPECT_TRUE(st.isOk()) << st.message();
+  return std::move(b.mesh());
+}
+
+using Point = std::tuple<double, double, double>;
+Point pointOf(const TetMesh& m, uint32_t v) { return {m.point(v)[0], m.point(v)[1], m.point(v)[2]}; }
+
+// A merge tree by coordinates (spx's points are distinct): child -> (parent, rank, removed, boundary).
+std::map<Point, std::tuple<Point, uint32_t, uint32_t, uint8_t>> treeByPoint(const TetMesh& m, const MergeTree& t) {
+  std::map<Point, std::tuple<Point, uint32_t, uint32_t, uint8_t>> out;
+  for (uint32_t v = 0; v < t.points(); ++v)
+    if (t.rank[v] != 0) out[pointOf(m, v)] = {pointOf(m, t.parent[v]), t.rank[v], t.removed[v], t.boundary[v]};
+  return out;
+}
+
+TEST(GtnChain, LevelsNameTheNextLevelAndDecodeAsIndependentLevelsDo) {
+  const TetMesh mesh = spx();
+  ASSERT_GT(mesh.numTets(), 0u);
+  const std::string chained = write(mesh, "chained", true), alone = write(mesh, "alone", false);
+  auto c = open(chained), a = open(alone);
+  ASSERT_TRUE(c && a);
+  ASSERT_EQ(c->levels(), 4u);
+  ASSERT_EQ(a->levels(), 4u);
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(c->level(i).base, i + 1 < 4 ? 1 : 0) << "level " << i;
+    EXPECT_EQ(a->level(i).base, 0) << "level " << i;
+    EXPECT_EQ(c->level(i).header.merges, a->level(i).header.merges);
+    EXPECT_TRUE(canonicalMesh(decode(*c, i)) == canonicalMesh(decode(*a, i))) << "level " << i;
+    // A level's own merge tree holds its merges down to the next level, the last one the rest.
+    auto own = c->mergeTreePayload(i);
+    ASSERT_TRUE(own.isOk() && own->has_value());
+    auto tree = decodeMergeTree(**own, c->level(i).header.points, "chained");
+    ASSERT_TRUE(tree.isOk()) << tree.status().message();
+    if (i + 1 < 4) {
+      EXPECT_EQ(tree->merges, c->level(i + 1).header.merges - c->level(i).header.merges);
+    }
+  }
+  // The values are stored once: the chained file is far smaller (spx: 2.6 times level 0 alone with
+  // independent levels and a tree per level, 1.5 times chained).
+  const uint64_t chained_bytes = c->file().bytes, alone_bytes = a->file().bytes;
+  EXPECT_LT(chained_bytes * 10, alone_bytes * 7) << chained_bytes << " against " << alone_bytes;
+
+  // Level 0's whole tree, put together from the four levels' trees, is the independent file's level 0
+  // tree (compared by coordinates, since the two files number vertices alike only by chance).
+  auto whole = wholeMergeTree(*c, 0);
+  ASSERT_TRUE(whole.isOk()) << whole.status().message();
+  ASSERT_TRUE(whole->has_value());
+  auto ref_payload = a->mergeTreePayload(0);
+  ASSERT_TRUE(ref_payload.isOk() && ref_payload->has_value());
+  auto ref = decodeMergeTree(**ref_payload, a->level(0).header.points, "alone");
+  ASSERT_TRUE(ref.isOk());
+  EXPECT_EQ((*whole)->merges, ref->merges);
+  const TetMesh c0 = decode(*c, 0), a0 = decode(*a, 0);
+  EXPECT_TRUE(treeByPoint(c0, **whole) == treeByPoint(a0, *ref));
+
+  // Simplification on the fly gives the same meshes from either file, from whichever level it starts.
+  for (uint64_t n : {uint64_t{1}, uint64_t{1000}, uint64_t{1448}, uint64_t{1900}, uint64_t{2500}, ref->merges}) {
+    TetMeshBuilder bc, ba;
+    ASSERT_TRUE(streamSimplified(*c, n, bc).isOk()) << n;
+    ASSERT_TRUE(streamSimplified(*a, n, ba).isOk()) << n;
+    EXPECT_TRUE(canonicalMesh(bc.mesh()) == canonicalMesh(ba.mesh())) << n << " merges";
+  }
+  // And the validator replays the whole tree against every level.
+  auto report = validateGtnFile(chained, ValidateOptions{});
+  ASSERT_TRUE(report.isOk()) << report.status().message();
+  EXPECT_EQ(report->count(Severity::kError), 0u);
+  EXPECT_EQ(report->info()["merge_tree"]["merges"].get<uint64_t>(), ref->merges);
+}
+
+// The storage bound counts every level against level 0 stored alone with its whole tree, and leaves
+// out the coarsest levels (the new coarsest then stores all its vertices and the rest of the tree).
+TEST(GtnChain, TheStorageBoundLeavesOutTheCoarsestLevels) {
+  const TetMesh mesh = spx();
+  const std::string alone = dir() + "/level0.gtn";
+  GtnConvertOptions o;
+  o.levels = 0;
+  ASSERT_TRUE(writeGtnWithLevels(alone, mesh, o, GtnWriteOptions{}, "spx").isOk());
+  const uint64_t unit = open(alone)->file().bytes;
+  size_t previous = 0;
+  for (const double bound : {1.01, 1.3, 2.0}) {
+    SCOPED_TRACE("bound " + std::to_string(bound));
+    const std::string path = dir() + "/bounded.gtn";
+    GtnConvertOptions b;
+    b.level_storage = bound;
+    ASSERT_TRUE(writeGtnWithLevels(path, mesh, b, GtnWriteOptions{}, "spx").isOk());
+    auto r = open(path);
+    ASSERT_TRUE(r);
+    uint64_t total = 0;
+    for (size_t i = 0; i < r->levels(); ++i) total += r->level(i).bytes;
+    // (the writer counts streams and trees, not chunk framing and tables: a few bytes per chunk)
+    EXPECT_LE(double(total), bound * double(unit) + 64.0 * r->levels()) << r->levels() << " levels";
+    EXPECT_GE(r->levels(), previous);
+    previous = r->levels();
+    EXPECT_EQ(r->level(r->levels() - 1).base, 0);
+    if (bound == 1.01) {
+      EXPECT_EQ(r->levels(), 1u);
+    } else if (bound == 2.0) {
+      EXPECT_EQ(r->levels(), 4u);  // spx: down to 362 points
+    }
+    auto report = validateGtnFile(path, ValidateOptions{});
+    ASSERT_TRUE(report.isOk());
+    EXPECT_EQ(report->count(Severity::kError), 0u) << report->toText(path);
+  }
+}
+
+TEST(GtnChain, ACoarseLevelReadsNothingOfTheFinerLevels) {
+  const std::string path = write(spx(), "coarse", true);
+  auto r = open(path);
+  ASSERT_TRUE(r);
+  ASSERT_TRUE(r->openedByDirectory());
+  const uint64_t before = r->bytesRead();
+  TetMesh level2 = decode(*r, 2);
+  EXPECT_EQ(level2.numPoints(), r->level(2).header.points);
+  const uint64_t read = r->bytesRead() - before;
+  EXPECT_LE(read, r->level(2).bytes + r->level(3).bytes);
+  EXPECT_GT(read, r->level(3).bytes);  // level 2 reads level 3, whose vertices it names
+}
+
+TEST(GtnChain, AMergeTreeShorterThanItsBandIsRefusedNamingTheLevel) {
+  const TetMesh mesh = spx();
+  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
+  ASSERT_TRUE(tree.isOk());
+  LevelOptions lo;
+  lo.levels = 2;
+  auto built = buildMipLevels(mesh, *tree, lo);
+  ASSERT_TRUE(built.isOk());
+  std::vector<GtnLevelInput> inputs = built->inputs(mesh);
+  // Level 0 stores one merge fewer than it needs down to level 1.
+  const uint64_t band = built->merges[1];
+  inputs[0].merge_tree_prefix = [&](const std::vector<uint32_t>& order, uint64_t) {
+    return encodeMergeTree(prefixTree(*tree, band - 1), order);
+  };
+  const std::string path = dir() + "/short.gtn";
+  ASSERT_TRUE(writeGtnFile(path, inputs, GtnWriteOptions{}).isOk());
+  auto r = open(path);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->level(0).base, 1);
+  auto whole = wholeMergeTree(*r, 0);
+  ASSERT_FALSE(whole.isOk());
+  EXPECT_NE(whole.status().message().find(path + ", level 0: its merge tree holds " + std::to_string(band - 1) +
+                                          " merges, " + std::to_string(band) + " are needed down to level 1"),
+            std::string::npos)
+      << whole.status().message();
+  auto report = validateGtnFile(path, ValidateOptions{});
+  ASSERT_TRUE(report.isOk());
+  EXPECT_GT(report->count(Severity::kError), 0u);
+  // The levels themselves still decode.
+  EXPECT_EQ(decode(*r, 0).numTets(), mesh.numTets());
+}
+
+TEST(GtnChain, DamageInALevelReachesTheFinerLevelsThatNameItsVertices) {
+  const std::string path = write(spx(), "damaged", true);
+  std::string bytes = readFile(path);
+  size_t geom = 0;
+  {
+    auto r = open(path);
+    ASSERT_TRUE(r);
+    for (const GtnChunkInfo& c : r->level(2).chunks)
+      if (c.tag == kTagGeometry) geom = c.offset;
+  }
+  ASSERT_GT(geom, 0u);
+  bytes[geom + 40] ^= 0x10;
+  const std::string damaged = dir() + "/damaged-geom.gtn";
+  writeFile(damaged, bytes);
+  auto r = open(damaged);
+  ASSERT_TRUE(r);
+  TetMeshBuilder b;
+  EXPECT_TRUE(r->decodeLevel(3, b).isOk());  // coarser than the damage
+  for (size_t i : {size_t{0}, size_t{1}, size_t{2}}) {
+    TetMeshBuilder bi;
+    const Status st = r->decodeLevel(i, bi);
+    ASSERT_FALSE(st.isOk()) << "level " << i;
+    EXPECT_NE(st.message().find("checksum"), std::string::npos) << st.message();
+  }
+}
+
+}  // namespace
+}  // namespace gtn::test
