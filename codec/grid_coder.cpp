@@ -8,6 +8,7 @@
 
 #include "codec/range_coder.h"
 #include "codec/value_coder.h"
+#include "mesh/fresh_memory.h"
 #include "mesh/index.h"
 
 namespace gtn {
@@ -286,8 +287,8 @@ struct Scan {
 
 // The prediction of node (i, j, k) from the decoded values d (one per node and component, `stride`
 // apart) by `predictor` (section 11.3).
-[[gnu::always_inline]] inline double lorenzo(const double* p, uint32_t i, uint32_t j, uint32_t k, size_t si, size_t sj,
-                                             size_t sk) {
+[[gnu::always_inline]] inline double lorenzo(const double* p, uint32_t i, uint32_t j, uint32_t k, ptrdiff_t si,
+                                             ptrdiff_t sj, ptrdiff_t sk) {
   if (i && j && k) return p[-si] + p[-sj] + p[-sk] - p[-si - sj] - p[-si - sk] - p[-sj - sk] + p[-si - sj - sk];
   if (i && j) return p[-si] + p[-sj] - p[-si - sj];
   if (i && k) return p[-si] + p[-sk] - p[-si - sk];
@@ -299,7 +300,7 @@ struct Scan {
 }
 
 [[gnu::always_inline]] inline double predict(uint8_t predictor, const double* p, uint32_t i, uint32_t j, uint32_t k,
-                                             size_t si, size_t sj, size_t sk) {
+                                             ptrdiff_t si, ptrdiff_t sj, ptrdiff_t sk) {
   if (predictor == 1 && i) return p[-si];
   if (predictor == 2 && i) return i > 1 ? 2.0 * p[-si] - p[-2 * si] : p[-si];
   return lorenzo(p, i, j, k, si, sj, sk);
@@ -314,16 +315,23 @@ template <class F, class Ok>
 bool scanValues(const Scan& scan, uint32_t comps, const std::vector<Form>& forms, std::vector<double>& d, F&& codeOne,
                 Ok&& ok) {
   const uint64_t nodes = uint64_t{scan.ni} * scan.nj * scan.nk;
-  d.resize(nodes * comps);
+  const uint64_t plane = uint64_t{scan.ni} * scan.nj * comps;
+  // A prediction reads the node's own k-plane and the one before it; aliases and extra points read
+  // any earlier node. Without them d holds two planes, k's in half k % 2 (it stays in cache).
+  const bool two_planes = !scan.alias_target && scan.extra_cell_base.empty();
+  resizePopulated(d, two_planes ? std::min<uint64_t>(2, scan.nk) * plane : nodes * comps);
   uint8_t predictors[64];
   const bool uniform_lorenzo = std::all_of(forms.begin(), forms.end(), [](const Form& f) { return f.predictor == 0; });
   for (uint32_t cc = 0; cc < comps && cc < 64; ++cc) predictors[cc] = forms[cc].predictor;
-  const size_t si = comps, sj = si * scan.ni, sk = sj * scan.nj;
+  const ptrdiff_t si = comps, sj = si * scan.ni;
   uint64_t v = 0, n = 0;
   for (uint32_t k = 0; k < scan.nk; ++k) {
+    // From plane k to plane k - 1.
+    const ptrdiff_t sk = two_planes && (k & 1) == 0 ? -static_cast<ptrdiff_t>(plane) : static_cast<ptrdiff_t>(plane);
+    double* const at_plane = two_planes ? &d[(k & 1) * plane] : &d[k * plane];
     for (uint32_t j = 0; j < scan.nj; ++j) {
       for (uint32_t i = 0; i < scan.ni; ++i, ++n) {
-        double* p = &d[n * comps];
+        double* p = at_plane + (uint64_t{j} * scan.ni + i) * comps;
         if (scan.alias_target) {
           const uint32_t t = (*scan.alias_target)[n];
           if (t != kNoIndex) {
@@ -358,7 +366,7 @@ bool scanValues(const Scan& scan, uint32_t comps, const std::vector<Form>& forms
 // One value stream (GEOM or a PFLD): the form declarations of its `comps` components, then every
 // vertex's values, component by component (section 11.3). Encoder: `src` holds vertex v's component
 // c at src + v * src_stride + c * size; decoder: `dst` gets them at dst + (v * comps + c) * size.
-// `d`: scratch of nodes * comps doubles (the decoded values by node).
+// `d`: scratch for the decoded values by node (scanValues).
 template <class C>
 Status codeValueStream(C& c, ScalarType type, uint32_t comps, const Scan& scan, std::vector<Form>& forms,
                        const uint8_t* src, size_t src_stride, uint8_t* dst, std::vector<double>& d,
@@ -1382,7 +1390,7 @@ std::vector<Tet> gridTets(const GridLayout& l) {
   const CellGeometry g(l);
   const std::vector<uint32_t> nv = nodeVertices(l);
   std::vector<Tet> out;
-  out.reserve(l.tets());
+  reservePopulated(out, l.tets());
   uint64_t off[8];
   for (int q = 0; q < 8; ++q) off[q] = g.cornerOffset(q);
   const int a2 = l.left_handed ? 3 : 2, a3 = l.left_handed ? 2 : 3;
@@ -1805,7 +1813,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   std::vector<double> d;
   {
     const size_t cs = scalarSize(m.coord_type);
-    std::vector<uint8_t> raw(V * 3 * cs);
+    std::vector<uint8_t> raw;
+    resizePopulated(raw, V * 3 * cs);
     if (forms[2] == 1) {
       GTN_RETURN_IF_ERROR(decodeForm1(streams[2], m.coord_type, 3, scan, raw.data(), d, what + ": GEOM stream"));
     } else {
@@ -1815,14 +1824,15 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
           codeValueStream(c, m.coord_type, 3, scan, declared, nullptr, 0, raw.data(), d, what + ": GEOM stream"));
       if (!c.finishedCleanly()) return invalidData(what + ": GEOM stream is corrupt, truncated or has trailing bytes");
     }
-    m.coords.resize(V * 3);
+    resizePopulated(m.coords, V * 3);
     for (uint64_t i = 0; i < V * 3; ++i) m.coords[i] = doubleFromRaw(m.coord_type, &raw[i * cs]);
   }
   for (size_t f = 0; f < schema.point_fields.size(); ++f) {
     const FieldDesc& desc = schema.point_fields[f];
     if (desc.components == 0 || desc.components > 64)
       return usageError(what + ": point field '" + desc.name + "' of 0 or more than 64 components");
-    Field field(desc.name, desc.components, desc.type, V);
+    Field field(desc.name, desc.components, desc.type, 0);
+    resizePopulated(field.bytes, V * desc.itemBytes());
     const std::string name = what + ": PFLD stream '" + desc.name + "'";
     if (!wanted(fields ? &fields->point : nullptr, f)) {
       // Left out: zero values.
@@ -1844,7 +1854,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
       const FieldDesc& desc = schema.cell_fields[f];
       if (desc.components == 0 || desc.itemBytes() > 64)
         return usageError(what + ": cell field '" + desc.name + "' of 0 components or more than 64 bytes");
-      Field field(desc.name, desc.components, desc.type, cscan.first.back());
+      Field field(desc.name, desc.components, desc.type, 0);
+      resizePopulated(field.bytes, cscan.first.back() * desc.itemBytes());
       const std::string name = what + ": CFLD stream '" + desc.name + "'";
       if (!wanted(fields ? &fields->cell : nullptr, f)) {
         m.cell_fields.push_back(std::move(field));  // left out: zero values
