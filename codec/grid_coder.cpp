@@ -978,92 +978,106 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
   std::vector<uint8_t> ring(size_t{comps} * ni, 0);
   std::vector<size_t> at(comps, 0);
   bool corrupt = false;
-  // Inlined into the scan's loop: GCC leaves it a call per value otherwise (about a seventh of the decode).
-  auto decodeOne = [&](uint32_t cc, uint64_t v, double pred, double* value) __attribute__((always_inline)) {
-    const Form& f = forms[cc];
-    const Form1Domain& dm = dom[cc];
-    uint8_t* raw = dst + (v * comps + cc) * size;
-    uint64_t k;
-    uint8_t& up = ring[cc * ni + at[cc]];
-    at[cc] = at[cc] + 1 == ni ? 0 : at[cc] + 1;
-    if (run[cc] > 0) {
-      --run[cc];
-      up = 0;
-      k = domainPrediction(type, f, dm, keyFromPrediction(type, pred));
-    } else {
-      const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(last[cc], up)];
-      r.refill();
-      if (pc.len.empty()) [[unlikely]] {
-        corrupt = true;
-        std::memset(raw, 0, size);
-        *value = 0;
-        return;
-      }
-      const uint32_t s = pc.read(r);
-      const uint64_t pk = keyFromPrediction(type, pred);
-      k = domainPrediction(type, f, dm, pk);
-      if (s >= dm.runBase()) {
-        const int b = static_cast<int>(s - dm.runBase()) + 2;
-        run[cc] = ((uint64_t{1} << (b - 1)) | r.take(b - 1)) - 1;
-        last[cc] = kAfterRun;
+  // The scan for the value type `type_c` (a std::integral_constant for the common float types, so
+  // that the conversions' switches on the type fold away; the runtime type otherwise).
+  auto scanAs = [&](auto type_c) -> bool {
+    const ScalarType type = type_c;
+    const size_t vsize = type == ScalarType::kFloat32 ? 4 : type == ScalarType::kFloat64 ? 8 : size;
+    // Inlined into the scan's loop: GCC leaves it a call per value otherwise (about a seventh of the decode).
+    auto decodeOne = [&](uint32_t cc, uint64_t v, double pred, double* value) __attribute__((always_inline)) {
+      const Form& f = forms[cc];
+      const Form1Domain& dm = dom[cc];
+      uint8_t* raw = dst + (v * comps + cc) * vsize;
+      uint64_t k;
+      uint8_t& up = ring[cc * ni + at[cc]];
+      at[cc] = at[cc] + 1 == ni ? 0 : at[cc] + 1;
+      if (run[cc] > 0) {
+        --run[cc];
         up = 0;
+        k = domainPrediction(type, f, dm, keyFromPrediction(type, pred));
       } else {
-        last[cc] = symbolBits(s);
-        up = static_cast<uint8_t>(last[cc]);
-        if (dm.escape && s == dm.escapeSymbol()) {
-          // The value's key as a residual against the prediction's at the full width, its value
-          // symbol in the escape class's code.
-          const PrefixCode& ec = codes[cc * kForm1Classes + kEscapeClass];
-          uint64_t key = pk;
-          r.refill();
-          const uint32_t e = ec.len.empty() ? 0 : ec.read(r);
-          if (ec.len.empty() || e >= 4 * static_cast<uint32_t>(width) - 1) {
-            corrupt = true;
-          } else if (e > 0) {
-            uint64_t mag = 1;
-            bool negative = e == 2;
-            if (e >= 3) {
-              const int below = static_cast<int>((e - 3) >> 2);
-              negative = ((e - 3) >> 1) & 1;
-              mag = (uint64_t{2 | ((e - 3) & 1)} << below) | r.get(below);
-            }
-            key = (negative ? pk - mag : pk + mag) & width_mask;
-          }
-          rawFromKey(type, key, raw);
-          *value = doubleFromRaw(type, raw);
+        const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(last[cc], up)];
+        r.refill();
+        if (pc.len.empty()) [[unlikely]] {
+          corrupt = true;
+          std::memset(raw, 0, size);
+          *value = 0;
           return;
         }
-        if (s > 0) {
-          uint64_t mag = 1;
-          bool negative = s == 2;
-          if (s >= 3) {
-            const uint32_t x = s - 3;
-            const int below = static_cast<int>(x >> 2);  // b − 2 raw bits
-            negative = (x >> 1) & 1;
-            mag = (uint64_t{2 | (x & 1)} << below) | (below <= 40 ? r.take(below) : r.get(below));
+        const uint32_t s = pc.read(r);
+        const uint64_t pk = keyFromPrediction(type, pred);
+        k = domainPrediction(type, f, dm, pk);
+        if (s >= dm.runBase()) {
+          const int b = static_cast<int>(s - dm.runBase()) + 2;
+          run[cc] = ((uint64_t{1} << (b - 1)) | r.take(b - 1)) - 1;
+          last[cc] = kAfterRun;
+          up = 0;
+        } else {
+          last[cc] = symbolBits(s);
+          up = static_cast<uint8_t>(last[cc]);
+          if (dm.escape && s == dm.escapeSymbol()) {
+            // The value's key as a residual against the prediction's at the full width, its value
+            // symbol in the escape class's code.
+            const PrefixCode& ec = codes[cc * kForm1Classes + kEscapeClass];
+            uint64_t key = pk;
+            r.refill();
+            const uint32_t e = ec.len.empty() ? 0 : ec.read(r);
+            if (ec.len.empty() || e >= 4 * static_cast<uint32_t>(width) - 1) {
+              corrupt = true;
+            } else if (e > 0) {
+              uint64_t mag = 1;
+              bool negative = e == 2;
+              if (e >= 3) {
+                const int below = static_cast<int>((e - 3) >> 2);
+                negative = ((e - 3) >> 1) & 1;
+                mag = (uint64_t{2 | ((e - 3) & 1)} << below) | r.get(below);
+              }
+              key = (negative ? pk - mag : pk + mag) & width_mask;
+            }
+            rawFromKey(type, key, raw);
+            *value = doubleFromRaw(type, raw);
+            return;
           }
-          k = negative ? k - mag : k + mag;
-          if (dm.w < 64) k &= (uint64_t{1} << dm.w) - 1;
+          if (s > 0) {
+            uint64_t mag = 1;
+            bool negative = s == 2;
+            if (s >= 3) {
+              const uint32_t x = s - 3;
+              const int below = static_cast<int>(x >> 2);  // b − 2 raw bits
+              negative = (x >> 1) & 1;
+              mag = (uint64_t{2 | (x & 1)} << below) | (below <= 40 ? r.take(below) : r.get(below));
+            }
+            k = negative ? k - mag : k + mag;
+            if (dm.w < 64) k &= (uint64_t{1} << dm.w) - 1;
+          }
         }
       }
-    }
-    uint64_t key;
-    if (!f.table.empty()) {
-      if (k >= f.table.size()) corrupt = true, k = 0;
-      key = f.table[k];
-    } else if (f.decimals >= 0) {
-      decimalValue(type, static_cast<int64_t>(k ^ (uint64_t{1} << 63)), f.decimals, raw);
-      key = keyFromRaw(type, raw);
-    } else {
-      const int z = dm.shift;
-      const bool ones = z > 0 && isFloatType(type) && ((k >> (dm.w - 1)) & 1) == 0;
-      key = (k << z) | (ones ? (uint64_t{1} << z) - 1 : 0);
-    }
-    rawFromKey(type, key, raw);
-    *value = doubleFromRaw(type, raw);
+      uint64_t key;
+      if (!f.table.empty()) {
+        if (k >= f.table.size()) corrupt = true, k = 0;
+        key = f.table[k];
+      } else if (f.decimals >= 0) {
+        decimalValue(type, static_cast<int64_t>(k ^ (uint64_t{1} << 63)), f.decimals, raw);
+        key = keyFromRaw(type, raw);
+      } else {
+        const int z = dm.shift;
+        const bool ones = z > 0 && isFloatType(type) && ((k >> (dm.w - 1)) & 1) == 0;
+        key = (k << z) | (ones ? (uint64_t{1} << z) - 1 : 0);
+      }
+      rawFromKey(type, key, raw);
+      *value = doubleFromRaw(type, raw);
+    };
+    return scanValues(scan, comps, forms, d, decodeOne, [&] { return !corrupt && !r.overrun(); });
   };
-  if (!scanValues(scan, comps, forms, d, decodeOne, [&] { return !corrupt && !r.overrun(); }))
-    return bad("truncated or corrupt (a value beyond its code or its table, or past the end)");
+  struct RuntimeType {
+    ScalarType t;
+    operator ScalarType() const { return t; }
+  };
+  const bool scanned = type == ScalarType::kFloat32 ? scanAs(std::integral_constant<ScalarType, ScalarType::kFloat32>{})
+                       : type == ScalarType::kFloat64
+                           ? scanAs(std::integral_constant<ScalarType, ScalarType::kFloat64>{})
+                           : scanAs(RuntimeType{type});
+  if (!scanned) return bad("truncated or corrupt (a value beyond its code or its table, or past the end)");
   for (uint32_t cc = 0; cc < comps; ++cc)
     if (run[cc] > 0)
       return bad("component " + std::to_string(cc) + " has a run of zero residuals " + std::to_string(run[cc]) +

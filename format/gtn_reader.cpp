@@ -200,10 +200,10 @@ class CheckingSink : public MeshSink {
                     std::vector<std::array<uint32_t, 3>>&& boundary) override {
     const uint64_t points = mesh.numPoints();
     if (points != h_.points || mesh.numTets() != h_.tets || boundary.size() != h_.boundary_triangles)
-      return fail("decoded " + std::to_string(points) + " points, " + std::to_string(mesh.numTets()) +
-                  " tetrahedra, " + std::to_string(boundary.size()) +
-                  " boundary triangles; the level header declares " + std::to_string(h_.points) + ", " +
-                  std::to_string(h_.tets) + ", " + std::to_string(h_.boundary_triangles));
+      return fail("decoded " + std::to_string(points) + " points, " + std::to_string(mesh.numTets()) + " tetrahedra, " +
+                  std::to_string(boundary.size()) + " boundary triangles; the level header declares " +
+                  std::to_string(h_.points) + ", " + std::to_string(h_.tets) + ", " +
+                  std::to_string(h_.boundary_triangles));
     uint32_t top = 0;  // the largest vertex named
     for (const Tet& t : mesh.tets) top = std::max({top, t[0], t[1], t[2], t[3]});
     for (const auto& t : boundary) top = std::max({top, t[0], t[1], t[2]});

@@ -59,8 +59,7 @@ class MeshSink {
   // fields as the events would have built them (vertex k is point k, tetrahedra in event order,
   // header's fields), `boundary` its boundary triangles in event order.
   virtual bool takesWholeLevel() const { return false; }
-  virtual Status wholeLevel(const LevelHeader& header, TetMesh&& mesh,
-                            std::vector<std::array<uint32_t, 3>>&& boundary);
+  virtual Status wholeLevel(const LevelHeader& header, TetMesh&& mesh, std::vector<std::array<uint32_t, 3>>&& boundary);
 };
 
 // A sink that only counts what arrives: for decoding to check a stream, and for timing a decoder.
