@@ -8,6 +8,7 @@
 
 #include "codec/range_coder.h"
 #include "codec/value_coder.h"
+#include "mesh/fresh_memory.h"
 #include "mesh/index.h"
 
 namespace gtn {
@@ -286,8 +287,8 @@ struct Scan {
 
 // The prediction of node (i, j, k) from the decoded values d (one per node and component, `stride`
 // apart) by `predictor` (section 11.3).
-[[gnu::always_inline]] inline double lorenzo(const double* p, uint32_t i, uint32_t j, uint32_t k, size_t si, size_t sj,
-                                             size_t sk) {
+[[gnu::always_inline]] inline double lorenzo(const double* p, uint32_t i, uint32_t j, uint32_t k, ptrdiff_t si,
+                                             ptrdiff_t sj, ptrdiff_t sk) {
   if (i && j && k) return p[-si] + p[-sj] + p[-sk] - p[-si - sj] - p[-si - sk] - p[-sj - sk] + p[-si - sj - sk];
   if (i && j) return p[-si] + p[-sj] - p[-si - sj];
   if (i && k) return p[-si] + p[-sk] - p[-si - sk];
@@ -299,7 +300,7 @@ struct Scan {
 }
 
 [[gnu::always_inline]] inline double predict(uint8_t predictor, const double* p, uint32_t i, uint32_t j, uint32_t k,
-                                             size_t si, size_t sj, size_t sk) {
+                                             ptrdiff_t si, ptrdiff_t sj, ptrdiff_t sk) {
   if (predictor == 1 && i) return p[-si];
   if (predictor == 2 && i) return i > 1 ? 2.0 * p[-si] - p[-2 * si] : p[-si];
   return lorenzo(p, i, j, k, si, sj, sk);
@@ -314,16 +315,23 @@ template <class F, class Ok>
 bool scanValues(const Scan& scan, uint32_t comps, const std::vector<Form>& forms, std::vector<double>& d, F&& codeOne,
                 Ok&& ok) {
   const uint64_t nodes = uint64_t{scan.ni} * scan.nj * scan.nk;
-  d.resize(nodes * comps);
+  const uint64_t plane = uint64_t{scan.ni} * scan.nj * comps;
+  // A prediction reads the node's own k-plane and the one before it; aliases and extra points read
+  // any earlier node. Without them d holds two planes, k's in half k % 2 (it stays in cache).
+  const bool two_planes = !scan.alias_target && scan.extra_cell_base.empty();
+  resizePopulated(d, two_planes ? std::min<uint64_t>(2, scan.nk) * plane : nodes * comps);
   uint8_t predictors[64];
   const bool uniform_lorenzo = std::all_of(forms.begin(), forms.end(), [](const Form& f) { return f.predictor == 0; });
   for (uint32_t cc = 0; cc < comps && cc < 64; ++cc) predictors[cc] = forms[cc].predictor;
-  const size_t si = comps, sj = si * scan.ni, sk = sj * scan.nj;
+  const ptrdiff_t si = comps, sj = si * scan.ni;
   uint64_t v = 0, n = 0;
   for (uint32_t k = 0; k < scan.nk; ++k) {
+    // From plane k to plane k - 1.
+    const ptrdiff_t sk = two_planes && (k & 1) == 0 ? -static_cast<ptrdiff_t>(plane) : static_cast<ptrdiff_t>(plane);
+    double* const at_plane = two_planes ? &d[(k & 1) * plane] : &d[k * plane];
     for (uint32_t j = 0; j < scan.nj; ++j) {
       for (uint32_t i = 0; i < scan.ni; ++i, ++n) {
-        double* p = &d[n * comps];
+        double* p = at_plane + (uint64_t{j} * scan.ni + i) * comps;
         if (scan.alias_target) {
           const uint32_t t = (*scan.alias_target)[n];
           if (t != kNoIndex) {
@@ -358,7 +366,7 @@ bool scanValues(const Scan& scan, uint32_t comps, const std::vector<Form>& forms
 // One value stream (GEOM or a PFLD): the form declarations of its `comps` components, then every
 // vertex's values, component by component (section 11.3). Encoder: `src` holds vertex v's component
 // c at src + v * src_stride + c * size; decoder: `dst` gets them at dst + (v * comps + c) * size.
-// `d`: scratch of nodes * comps doubles (the decoded values by node).
+// `d`: scratch for the decoded values by node (scanValues).
 template <class C>
 Status codeValueStream(C& c, ScalarType type, uint32_t comps, const Scan& scan, std::vector<Form>& forms,
                        const uint8_t* src, size_t src_stride, uint8_t* dst, std::vector<double>& d,
@@ -970,92 +978,106 @@ Status decodeForm1(std::span<const uint8_t> in, ScalarType type, uint32_t comps,
   std::vector<uint8_t> ring(size_t{comps} * ni, 0);
   std::vector<size_t> at(comps, 0);
   bool corrupt = false;
-  // Inlined into the scan's loop: GCC leaves it a call per value otherwise (about a seventh of the decode).
-  auto decodeOne = [&](uint32_t cc, uint64_t v, double pred, double* value) __attribute__((always_inline)) {
-    const Form& f = forms[cc];
-    const Form1Domain& dm = dom[cc];
-    uint8_t* raw = dst + (v * comps + cc) * size;
-    uint64_t k;
-    uint8_t& up = ring[cc * ni + at[cc]];
-    at[cc] = at[cc] + 1 == ni ? 0 : at[cc] + 1;
-    if (run[cc] > 0) {
-      --run[cc];
-      up = 0;
-      k = domainPrediction(type, f, dm, keyFromPrediction(type, pred));
-    } else {
-      const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(last[cc], up)];
-      r.refill();
-      if (pc.len.empty()) [[unlikely]] {
-        corrupt = true;
-        std::memset(raw, 0, size);
-        *value = 0;
-        return;
-      }
-      const uint32_t s = pc.read(r);
-      const uint64_t pk = keyFromPrediction(type, pred);
-      k = domainPrediction(type, f, dm, pk);
-      if (s >= dm.runBase()) {
-        const int b = static_cast<int>(s - dm.runBase()) + 2;
-        run[cc] = ((uint64_t{1} << (b - 1)) | r.take(b - 1)) - 1;
-        last[cc] = kAfterRun;
+  // The scan for the value type `type_c` (a std::integral_constant for the common float types, so
+  // that the conversions' switches on the type fold away; the runtime type otherwise).
+  auto scanAs = [&](auto type_c) -> bool {
+    const ScalarType type = type_c;
+    const size_t vsize = type == ScalarType::kFloat32 ? 4 : type == ScalarType::kFloat64 ? 8 : size;
+    // Inlined into the scan's loop: GCC leaves it a call per value otherwise (about a seventh of the decode).
+    auto decodeOne = [&](uint32_t cc, uint64_t v, double pred, double* value) __attribute__((always_inline)) {
+      const Form& f = forms[cc];
+      const Form1Domain& dm = dom[cc];
+      uint8_t* raw = dst + (v * comps + cc) * vsize;
+      uint64_t k;
+      uint8_t& up = ring[cc * ni + at[cc]];
+      at[cc] = at[cc] + 1 == ni ? 0 : at[cc] + 1;
+      if (run[cc] > 0) {
+        --run[cc];
         up = 0;
+        k = domainPrediction(type, f, dm, keyFromPrediction(type, pred));
       } else {
-        last[cc] = symbolBits(s);
-        up = static_cast<uint8_t>(last[cc]);
-        if (dm.escape && s == dm.escapeSymbol()) {
-          // The value's key as a residual against the prediction's at the full width, its value
-          // symbol in the escape class's code.
-          const PrefixCode& ec = codes[cc * kForm1Classes + kEscapeClass];
-          uint64_t key = pk;
-          r.refill();
-          const uint32_t e = ec.len.empty() ? 0 : ec.read(r);
-          if (ec.len.empty() || e >= 4 * static_cast<uint32_t>(width) - 1) {
-            corrupt = true;
-          } else if (e > 0) {
-            uint64_t mag = 1;
-            bool negative = e == 2;
-            if (e >= 3) {
-              const int below = static_cast<int>((e - 3) >> 2);
-              negative = ((e - 3) >> 1) & 1;
-              mag = (uint64_t{2 | ((e - 3) & 1)} << below) | r.get(below);
-            }
-            key = (negative ? pk - mag : pk + mag) & width_mask;
-          }
-          rawFromKey(type, key, raw);
-          *value = doubleFromRaw(type, raw);
+        const PrefixCode& pc = codes[cc * kForm1Classes + form1Class(last[cc], up)];
+        r.refill();
+        if (pc.len.empty()) [[unlikely]] {
+          corrupt = true;
+          std::memset(raw, 0, size);
+          *value = 0;
           return;
         }
-        if (s > 0) {
-          uint64_t mag = 1;
-          bool negative = s == 2;
-          if (s >= 3) {
-            const uint32_t x = s - 3;
-            const int below = static_cast<int>(x >> 2);  // b − 2 raw bits
-            negative = (x >> 1) & 1;
-            mag = (uint64_t{2 | (x & 1)} << below) | (below <= 40 ? r.take(below) : r.get(below));
+        const uint32_t s = pc.read(r);
+        const uint64_t pk = keyFromPrediction(type, pred);
+        k = domainPrediction(type, f, dm, pk);
+        if (s >= dm.runBase()) {
+          const int b = static_cast<int>(s - dm.runBase()) + 2;
+          run[cc] = ((uint64_t{1} << (b - 1)) | r.take(b - 1)) - 1;
+          last[cc] = kAfterRun;
+          up = 0;
+        } else {
+          last[cc] = symbolBits(s);
+          up = static_cast<uint8_t>(last[cc]);
+          if (dm.escape && s == dm.escapeSymbol()) {
+            // The value's key as a residual against the prediction's at the full width, its value
+            // symbol in the escape class's code.
+            const PrefixCode& ec = codes[cc * kForm1Classes + kEscapeClass];
+            uint64_t key = pk;
+            r.refill();
+            const uint32_t e = ec.len.empty() ? 0 : ec.read(r);
+            if (ec.len.empty() || e >= 4 * static_cast<uint32_t>(width) - 1) {
+              corrupt = true;
+            } else if (e > 0) {
+              uint64_t mag = 1;
+              bool negative = e == 2;
+              if (e >= 3) {
+                const int below = static_cast<int>((e - 3) >> 2);
+                negative = ((e - 3) >> 1) & 1;
+                mag = (uint64_t{2 | ((e - 3) & 1)} << below) | r.get(below);
+              }
+              key = (negative ? pk - mag : pk + mag) & width_mask;
+            }
+            rawFromKey(type, key, raw);
+            *value = doubleFromRaw(type, raw);
+            return;
           }
-          k = negative ? k - mag : k + mag;
-          if (dm.w < 64) k &= (uint64_t{1} << dm.w) - 1;
+          if (s > 0) {
+            uint64_t mag = 1;
+            bool negative = s == 2;
+            if (s >= 3) {
+              const uint32_t x = s - 3;
+              const int below = static_cast<int>(x >> 2);  // b − 2 raw bits
+              negative = (x >> 1) & 1;
+              mag = (uint64_t{2 | (x & 1)} << below) | (below <= 40 ? r.take(below) : r.get(below));
+            }
+            k = negative ? k - mag : k + mag;
+            if (dm.w < 64) k &= (uint64_t{1} << dm.w) - 1;
+          }
         }
       }
-    }
-    uint64_t key;
-    if (!f.table.empty()) {
-      if (k >= f.table.size()) corrupt = true, k = 0;
-      key = f.table[k];
-    } else if (f.decimals >= 0) {
-      decimalValue(type, static_cast<int64_t>(k ^ (uint64_t{1} << 63)), f.decimals, raw);
-      key = keyFromRaw(type, raw);
-    } else {
-      const int z = dm.shift;
-      const bool ones = z > 0 && isFloatType(type) && ((k >> (dm.w - 1)) & 1) == 0;
-      key = (k << z) | (ones ? (uint64_t{1} << z) - 1 : 0);
-    }
-    rawFromKey(type, key, raw);
-    *value = doubleFromRaw(type, raw);
+      uint64_t key;
+      if (!f.table.empty()) {
+        if (k >= f.table.size()) corrupt = true, k = 0;
+        key = f.table[k];
+      } else if (f.decimals >= 0) {
+        decimalValue(type, static_cast<int64_t>(k ^ (uint64_t{1} << 63)), f.decimals, raw);
+        key = keyFromRaw(type, raw);
+      } else {
+        const int z = dm.shift;
+        const bool ones = z > 0 && isFloatType(type) && ((k >> (dm.w - 1)) & 1) == 0;
+        key = (k << z) | (ones ? (uint64_t{1} << z) - 1 : 0);
+      }
+      rawFromKey(type, key, raw);
+      *value = doubleFromRaw(type, raw);
+    };
+    return scanValues(scan, comps, forms, d, decodeOne, [&] { return !corrupt && !r.overrun(); });
   };
-  if (!scanValues(scan, comps, forms, d, decodeOne, [&] { return !corrupt && !r.overrun(); }))
-    return bad("truncated or corrupt (a value beyond its code or its table, or past the end)");
+  struct RuntimeType {
+    ScalarType t;
+    operator ScalarType() const { return t; }
+  };
+  const bool scanned = type == ScalarType::kFloat32 ? scanAs(std::integral_constant<ScalarType, ScalarType::kFloat32>{})
+                       : type == ScalarType::kFloat64
+                           ? scanAs(std::integral_constant<ScalarType, ScalarType::kFloat64>{})
+                           : scanAs(RuntimeType{type});
+  if (!scanned) return bad("truncated or corrupt (a value beyond its code or its table, or past the end)");
   for (uint32_t cc = 0; cc < comps; ++cc)
     if (run[cc] > 0)
       return bad("component " + std::to_string(cc) + " has a run of zero residuals " + std::to_string(run[cc]) +
@@ -1382,7 +1404,7 @@ std::vector<Tet> gridTets(const GridLayout& l) {
   const CellGeometry g(l);
   const std::vector<uint32_t> nv = nodeVertices(l);
   std::vector<Tet> out;
-  out.reserve(l.tets());
+  reservePopulated(out, l.tets());
   uint64_t off[8];
   for (int q = 0; q < 8; ++q) off[q] = g.cornerOffset(q);
   const int a2 = l.left_handed ? 3 : 2, a3 = l.left_handed ? 2 : 3;
@@ -1805,7 +1827,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   std::vector<double> d;
   {
     const size_t cs = scalarSize(m.coord_type);
-    std::vector<uint8_t> raw(V * 3 * cs);
+    std::vector<uint8_t> raw;
+    resizePopulated(raw, V * 3 * cs);
     if (forms[2] == 1) {
       GTN_RETURN_IF_ERROR(decodeForm1(streams[2], m.coord_type, 3, scan, raw.data(), d, what + ": GEOM stream"));
     } else {
@@ -1815,14 +1838,15 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
           codeValueStream(c, m.coord_type, 3, scan, declared, nullptr, 0, raw.data(), d, what + ": GEOM stream"));
       if (!c.finishedCleanly()) return invalidData(what + ": GEOM stream is corrupt, truncated or has trailing bytes");
     }
-    m.coords.resize(V * 3);
+    resizePopulated(m.coords, V * 3);
     for (uint64_t i = 0; i < V * 3; ++i) m.coords[i] = doubleFromRaw(m.coord_type, &raw[i * cs]);
   }
   for (size_t f = 0; f < schema.point_fields.size(); ++f) {
     const FieldDesc& desc = schema.point_fields[f];
     if (desc.components == 0 || desc.components > 64)
       return usageError(what + ": point field '" + desc.name + "' of 0 or more than 64 components");
-    Field field(desc.name, desc.components, desc.type, V);
+    Field field(desc.name, desc.components, desc.type, 0);
+    resizePopulated(field.bytes, V * desc.itemBytes());
     const std::string name = what + ": PFLD stream '" + desc.name + "'";
     if (!wanted(fields ? &fields->point : nullptr, f)) {
       // Left out: zero values.
@@ -1844,7 +1868,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
       const FieldDesc& desc = schema.cell_fields[f];
       if (desc.components == 0 || desc.itemBytes() > 64)
         return usageError(what + ": cell field '" + desc.name + "' of 0 components or more than 64 bytes");
-      Field field(desc.name, desc.components, desc.type, cscan.first.back());
+      Field field(desc.name, desc.components, desc.type, 0);
+      resizePopulated(field.bytes, cscan.first.back() * desc.itemBytes());
       const std::string name = what + ": CFLD stream '" + desc.name + "'";
       if (!wanted(fields ? &fields->cell : nullptr, f)) {
         m.cell_fields.push_back(std::move(field));  // left out: zero values

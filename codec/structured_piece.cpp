@@ -301,7 +301,10 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   schema.point_fields = header.point_fields;
   schema.cell_fields = header.cell_fields;
   GridFieldSelection selection;
-  selection.tets = false;  // made cell by cell below
+  // A sink that takes the level whole gets the piece's tetrahedra as gridTets makes them; otherwise
+  // they are made cell by cell below.
+  const bool whole = sink.takesWholeLevel();
+  selection.tets = whole;
   std::vector<char> point_out(header.point_fields.size(), 0), cell_out(header.cell_fields.size(), 0);
   if (fields) {
     selection.point = fields->point;
@@ -314,16 +317,31 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
   GTN_ASSIGN_OR_RETURN(DecodedGridPiece piece, decodeGridPiece(bytes, schema, what, &selection));
   if (fields && fields->streams_done) fields->streams_done(point_out, cell_out);
   const GridLayout& l = piece.layout;
-  const TetMesh& m = piece.mesh;
+  TetMesh& m = piece.mesh;
   const uint64_t V = m.numPoints(), T = l.tets();
   if (V != header.points || T != header.tets)
     return invalidData(what + ": the structured piece has " + std::to_string(V) + " vertices and " + std::to_string(T) +
                        " tetrahedra, the header says " + std::to_string(header.points) + " and " +
                        std::to_string(header.tets));
-  GTN_ASSIGN_OR_RETURN(const auto boundary, gridBoundary(l, what + ": structured piece"));
+  GTN_ASSIGN_OR_RETURN(auto boundary, gridBoundary(l, what + ": structured piece"));
   if (boundary.size() != header.boundary_triangles)
     return invalidData(what + ": the structured piece has " + std::to_string(boundary.size()) +
                        " boundary triangles, the header says " + std::to_string(header.boundary_triangles));
+  if (whole) {
+    TetMesh level;
+    level.coords = std::move(piece.mesh.coords);
+    level.tets = std::move(piece.mesh.tets);
+    level.point_fields = std::move(piece.mesh.point_fields);
+    level.cell_fields = std::move(piece.mesh.cell_fields);
+    // Distinct nodes and corners never repeat a vertex; aliases can.
+    if (!l.aliases.empty())
+      for (size_t t = 0; t < level.tets.size(); ++t) {
+        const Tet& v = level.tets[t];
+        if (v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] || v[2] == v[3])
+          return invalidData(what + ": structured piece: tetrahedron " + std::to_string(t) + " repeats a vertex");
+      }
+    return sink.wholeLevel(header, std::move(level), std::move(boundary));
+  }
   const CellTets gen(l);
   const uint64_t ci = l.dims[0] - 1, cj = l.dims[1] - 1, ck = l.dims[2] - 1;
   const size_t nx = l.exceptions.size();

@@ -224,4 +224,16 @@ StatusOr<std::vector<uint8_t>> openGtnChunk(const ChunkHeader& h, std::span<cons
   return out;
 }
 
+StatusOr<std::vector<uint8_t>> openGtnChunk(const ChunkHeader& h, std::vector<uint8_t>&& chunk,
+                                            const std::string& what) {
+  if (h.zstd() || chunk.size() != h.totalSize()) return openGtnChunk(h, std::span<const uint8_t>(chunk), what);
+  if (!gtnChunkChecksumMatches(h, chunk))
+    return invalidData(at(what, h.offset) + "checksum mismatch in chunk '" + h.tag.str() + "' (" +
+                       std::to_string(h.totalSize()) + " bytes): the data is corrupt");
+  std::vector<uint8_t> out = std::move(chunk);
+  std::memmove(out.data(), out.data() + h.header_size, h.stored_size);
+  out.resize(h.stored_size);
+  return out;
+}
+
 }  // namespace gtn

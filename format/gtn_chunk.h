@@ -106,5 +106,9 @@ bool gtnChunkChecksumMatches(const ChunkHeader& header, std::span<const uint8_t>
 // returns its payload, decompressed when the zstd flag is set (exactly raw_size bytes, one frame).
 StatusOr<std::vector<uint8_t>> openGtnChunk(const ChunkHeader& header, std::span<const uint8_t> chunk,
                                             const std::string& what);
+// The same, taking the chunk's buffer: a payload stored without compression is returned in that
+// buffer (moved to its start) rather than copied.
+StatusOr<std::vector<uint8_t>> openGtnChunk(const ChunkHeader& header, std::vector<uint8_t>&& chunk,
+                                            const std::string& what);
 
 }  // namespace gtn

@@ -16,6 +16,7 @@
 
 #include "codec/structured_piece.h"
 #include "format/file_io.h"
+#include "mesh/fresh_memory.h"
 
 namespace gtn {
 
@@ -194,6 +195,25 @@ class CheckingSink : public MeshSink {
     ended_ = true;
     return inner_.endLevel();
   }
+  bool takesWholeLevel() const override { return inner_.takesWholeLevel(); }
+  Status wholeLevel(const LevelHeader& header, TetMesh&& mesh,
+                    std::vector<std::array<uint32_t, 3>>&& boundary) override {
+    const uint64_t points = mesh.numPoints();
+    if (points != h_.points || mesh.numTets() != h_.tets || boundary.size() != h_.boundary_triangles)
+      return fail("decoded " + std::to_string(points) + " points, " + std::to_string(mesh.numTets()) + " tetrahedra, " +
+                  std::to_string(boundary.size()) + " boundary triangles; the level header declares " +
+                  std::to_string(h_.points) + ", " + std::to_string(h_.tets) + ", " +
+                  std::to_string(h_.boundary_triangles));
+    uint32_t top = 0;  // the largest vertex named
+    for (const Tet& t : mesh.tets) top = std::max({top, t[0], t[1], t[2], t[3]});
+    for (const auto& t : boundary) top = std::max({top, t[0], t[1], t[2]});
+    if ((h_.tets > 0 || h_.boundary_triangles > 0) && top >= points)
+      return fail("a tetrahedron or boundary triangle refers to vertex " + std::to_string(top) + " of " +
+                  std::to_string(points));
+    vertices_ = points, tets_ = h_.tets, tris_ = h_.boundary_triangles;
+    ended_ = true;
+    return inner_.wholeLevel(header, std::move(mesh), std::move(boundary));
+  }
   bool ended() const { return ended_; }
   uint64_t peakLive() const { return peak_live_; }  // most vertices emitted and not yet retired
 
@@ -320,7 +340,8 @@ StatusOr<std::vector<uint8_t>> GtnReader::readChunkBytes(const GtnChunkInfo& c, 
   if (c.bytes != 0 && (h.tag != c.tag || h.totalSize() != c.bytes))
     return invalidData(at(what, c.offset) + "expected chunk '" + c.tag.str() + "' of " + std::to_string(c.bytes) +
                        " bytes, found '" + h.tag.str() + "' of " + std::to_string(h.totalSize()) + " bytes");
-  std::vector<uint8_t> chunk(h.totalSize());
+  std::vector<uint8_t> chunk;
+  resizePopulated(chunk, h.totalSize());
   GTN_RETURN_IF_ERROR(readSource(c.offset, chunk.size(), chunk.data()));
   *out_header = h;
   return chunk;
@@ -330,7 +351,7 @@ StatusOr<std::vector<uint8_t>> GtnReader::readChunk(const GtnChunkInfo& c, Chunk
   ChunkHeader h;
   GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> chunk, readChunkBytes(c, &h));
   if (out_header) *out_header = h;
-  return openGtnChunk(h, chunk, file_.path);
+  return openGtnChunk(h, std::move(chunk), file_.path);
 }
 
 StatusOr<bool> GtnReader::checksumMatches(const GtnChunkInfo& c) {
@@ -340,7 +361,8 @@ StatusOr<bool> GtnReader::checksumMatches(const GtnChunkInfo& c) {
     return invalidData(at(file_.path, c.offset) + "chunk '" + c.tag.str() + "' reaches beyond the end of the file");
   XXH3_state_t state;
   XXH3_64bits_reset(&state);
-  std::vector<uint8_t> buffer(static_cast<size_t>(std::min<uint64_t>(c.bytes, uint64_t{1} << 20)));
+  // A buffer that stays in cache (and in pages already mapped), read again for each part.
+  std::vector<uint8_t> buffer(static_cast<size_t>(std::min<uint64_t>(c.bytes, uint64_t{1} << 16)));
   const uint64_t body = c.bytes - kChunkChecksumSize;
   Status st;
   for (uint64_t done = 0; done < body && st.isOk();) {
@@ -434,7 +456,7 @@ Status GtnReader::scan() {
     std::vector<uint8_t> payload;
     const bool opened = !(tolerant_scan_ && content && !gtnChunkChecksumMatches(h, chunk));
     if (opened) {
-      GTN_ASSIGN_OR_RETURN(payload, openGtnChunk(h, chunk, what));
+      GTN_ASSIGN_OR_RETURN(payload, openGtnChunk(h, std::move(chunk), what));
     }
     std::vector<uint8_t>().swap(chunk);
     c.tag = h.tag;

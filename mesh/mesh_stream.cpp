@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "mesh/fresh_memory.h"
+
 namespace gtn {
 
 namespace {
@@ -21,6 +23,21 @@ inline void appendBytes(std::vector<uint8_t>& bytes, const uint8_t* p, size_t n)
 
 }  // namespace
 
+Status MeshSink::wholeLevel(const LevelHeader&, TetMesh&&, std::vector<std::array<uint32_t, 3>>&&) {
+  return usageError("mesh stream: this sink takes a level's events, not the whole level");
+}
+
+Status TetMeshBuilder::wholeLevel(const LevelHeader& header, TetMesh&& mesh,
+                                  std::vector<std::array<uint32_t, 3>>&& boundary) {
+  header_ = header;
+  mesh_ = std::move(mesh);
+  mesh_.coord_type = header.coord_type;
+  mesh_.metadata = header.metadata;
+  mesh_.blocks.clear();
+  boundary_ = std::move(boundary);
+  return Status::ok();
+}
+
 Status TetMeshBuilder::beginLevel(const LevelHeader& header) {
   header_ = header;
   mesh_ = TetMesh();
@@ -39,14 +56,21 @@ Status TetMeshBuilder::beginLevel(const LevelHeader& header) {
     mesh_.cell_fields.emplace_back(d.name, d.components, d.type, 0);
     mesh_.cell_fields.back().bytes.reserve(d.itemBytes() * std::min<uint64_t>(header.tets, kReserveCap));
   }
+  coords_ready_ = {};
+  tets_ready_ = {};
+  point_ready_.assign(mesh_.point_fields.size(), {});
+  cell_ready_.assign(mesh_.cell_fields.size(), {});
   return Status::ok();
 }
 
 Status TetMeshBuilder::vertex(uint32_t id, const double xyz[3], const uint8_t* values) {
   if (id != mesh_.numPoints()) return invalidData("mesh stream: vertex ids must be consecutive");
+  coords_ready_.before(mesh_.coords, 3);
   mesh_.coords.insert(mesh_.coords.end(), xyz, xyz + 3);
-  for (Field& f : mesh_.point_fields) {
+  for (size_t k = 0; k < mesh_.point_fields.size(); ++k) {
+    Field& f = mesh_.point_fields[k];
     const size_t n = f.components * f.valueSize();
+    point_ready_[k].before(f.bytes, n);
     appendBytes(f.bytes, values, n);
     values += n;
   }
@@ -59,9 +83,12 @@ Status TetMeshBuilder::boundaryTriangle(const uint32_t v[3]) {
 }
 
 Status TetMeshBuilder::tet(const uint32_t v[4], const uint8_t* cell_values) {
+  tets_ready_.before(mesh_.tets, 1);
   mesh_.tets.push_back({v[0], v[1], v[2], v[3]});
-  for (Field& f : mesh_.cell_fields) {
+  for (size_t k = 0; k < mesh_.cell_fields.size(); ++k) {
+    Field& f = mesh_.cell_fields[k];
     const size_t n = f.components * f.valueSize();
+    cell_ready_[k].before(f.bytes, n);
     appendBytes(f.bytes, cell_values, n);
     cell_values += n;
   }

@@ -7,10 +7,13 @@
 // Vertex ids are assigned in emission order within the level: the k-th vertex event has id k.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
+#include <typeinfo>
 #include <vector>
 
+#include "mesh/fresh_memory.h"
 #include "mesh/tet_mesh.h"
 
 namespace gtn {
@@ -49,6 +52,14 @@ class MeshSink {
   // No later event refers to vertex `id`.
   virtual Status retireVertex(uint32_t id) = 0;
   virtual Status endLevel() = 0;
+
+  // A sink that assembles the whole mesh anyway may take a level that a decoder holds whole (a
+  // structured piece) in one call instead of its events: takesWholeLevel() true, and then
+  // wholeLevel() in place of beginLevel .. endLevel. `mesh` holds the level's points, tetrahedra and
+  // fields as the events would have built them (vertex k is point k, tetrahedra in event order,
+  // header's fields), `boundary` its boundary triangles in event order.
+  virtual bool takesWholeLevel() const { return false; }
+  virtual Status wholeLevel(const LevelHeader& header, TetMesh&& mesh, std::vector<std::array<uint32_t, 3>>&& boundary);
 };
 
 // A sink that only counts what arrives: for decoding to check a stream, and for timing a decoder.
@@ -84,6 +95,10 @@ class TetMeshBuilder : public MeshSink {
   Status tet(const uint32_t v[4], const uint8_t* cell_values) override;
   Status retireVertex(uint32_t) override { return Status::ok(); }
   Status endLevel() override { return Status::ok(); }
+  // A subclass (which may watch the events) gets the events.
+  bool takesWholeLevel() const override { return typeid(*this) == typeid(TetMeshBuilder); }
+  Status wholeLevel(const LevelHeader& header, TetMesh&& mesh,
+                    std::vector<std::array<uint32_t, 3>>&& boundary) override;
 
   const LevelHeader& header() const { return header_; }
   TetMesh& mesh() { return mesh_; }
@@ -93,6 +108,9 @@ class TetMeshBuilder : public MeshSink {
   LevelHeader header_;
   TetMesh mesh_;
   std::vector<std::array<uint32_t, 3>> boundary_;
+  // The pages of the storage reserved from the header's counts, mapped a step ahead of the appends.
+  PopulatedPrefix coords_ready_, tets_ready_;
+  std::vector<PopulatedPrefix> point_ready_, cell_ready_;
 };
 
 }  // namespace gtn

@@ -342,6 +342,65 @@ TEST(StructuredPiece, CorruptAndTruncatedPiecesFailCleanly) {
   }
 }
 
+// A sink that assembles the whole mesh (TetMeshBuilder) takes the level in one call: the mesh and
+// boundary it gets are those its events build (a subclass of it, which may watch them, gets the
+// events), for every kind of layout; a corrupt piece fails or decodes alike either way.
+TEST(StructuredPiece, WholeLevelIsTheMeshTheEventsBuild) {
+  class Watching : public TetMeshBuilder {};
+  GridLayout welded = grid(8, 5, 4, 6);
+  for (uint32_t k = 0; k < 4; ++k)
+    for (uint32_t j = 0; j < 5; ++j) welded.aliases.emplace_back(7 + 8 * (j + 5 * k), 8 * (j + 5 * k));
+  GridLayout holes = grid(6, 5, 4, 6);
+  holes.exceptions.push_back({0, GridException::kExplicit, 1, steinerCell()});
+  holes.exceptions.push_back({1, GridException::kBlanked, 0, {}});
+  holes.exceptions.push_back({26, GridException::kExplicit, 1, steinerCell()});
+  const std::vector<std::pair<GridLayout, ScalarType>> cases = {{grid(9, 7, 6, 5, 1), ScalarType::kFloat32},
+                                                                {grid(7, 6, 5, 6), ScalarType::kFloat64},
+                                                                {welded, ScalarType::kFloat32},
+                                                                {holes, ScalarType::kFloat64}};
+  for (const auto& [l, type] : cases) {
+    SCOPED_TRACE("split " + std::to_string(l.split) + ", " + std::to_string(l.aliases.size()) + " aliases, " +
+                 std::to_string(l.exceptions.size()) + " exceptions");
+    const TetMesh m = meshOf(l, type, true);
+    auto enc = encodeStructuredPiece(m, blockOf(l));
+    ASSERT_TRUE(enc.isOk()) << enc.status().message();
+    auto same = [&](const std::vector<uint8_t>& piece, bool must_decode) {
+      TetMeshBuilder whole;
+      Watching events;
+      ASSERT_TRUE(whole.takesWholeLevel());
+      ASSERT_FALSE(events.takesWholeLevel());
+      const Status a = decodeStructuredPiece(enc->header, piece, whole, "test piece");
+      const Status b = decodeStructuredPiece(enc->header, piece, events, "test piece");
+      ASSERT_EQ(a.isOk(), b.isOk()) << a.message() << " / " << b.message();
+      if (must_decode) {
+        ASSERT_TRUE(a.isOk()) << a.message();
+      }
+      if (!a.isOk()) return;
+      const TetMesh &x = whole.mesh(), &y = events.mesh();
+      EXPECT_EQ(x.coord_type, y.coord_type);
+      EXPECT_TRUE(x.coords == y.coords);
+      EXPECT_TRUE(x.tets == y.tets);
+      ASSERT_EQ(x.point_fields.size(), y.point_fields.size());
+      for (size_t f = 0; f < x.point_fields.size(); ++f) {
+        EXPECT_EQ(x.point_fields[f].name, y.point_fields[f].name);
+        EXPECT_TRUE(x.point_fields[f].bytes == y.point_fields[f].bytes) << x.point_fields[f].name;
+      }
+      ASSERT_EQ(x.cell_fields.size(), y.cell_fields.size());
+      for (size_t f = 0; f < x.cell_fields.size(); ++f)
+        EXPECT_TRUE(x.cell_fields[f].bytes == y.cell_fields[f].bytes) << x.cell_fields[f].name;
+      EXPECT_TRUE(whole.boundary() == events.boundary());
+      EXPECT_EQ(whole.header().points, events.header().points);
+    };
+    same(enc->connectivity, true);
+    if (l.aliases.empty()) continue;
+    for (size_t at = 0; at < enc->connectivity.size(); at += 1 + at / 8) {
+      std::vector<uint8_t> bad = enc->connectivity;
+      bad[at] ^= static_cast<uint8_t>(1u << (at % 8));
+      same(bad, false);
+    }
+  }
+}
+
 // ---- The importers' block ------------------------------------------------------------------------
 
 // A PLOT3D grid file (big-endian, 4-byte record markers, float32; a grid count first for several

@@ -541,6 +541,38 @@ TEST(GtnContainer, CorruptZstdFrameWithValidChecksumRejected) {
   EXPECT_EQ(ok.value(), payload);
 }
 
+// A chunk handed over with its buffer opens to the payload the span overload gives (a stored
+// payload in the same buffer, a compressed one decompressed), and a damaged one fails alike.
+TEST(GtnContainer, ChunkOpensInItsOwnBuffer) {
+  for (bool zstd : {false, true}) {
+    SCOPED_TRACE(zstd ? "zstd" : "stored");
+    const std::vector<uint8_t> payload = pattern(300000, 9, zstd);
+    std::vector<uint8_t> chunk;
+    appendGtnChunk(chunk, kTagConnectivity, payload, false, zstd, 3);
+    ASSERT_EQ((chunk[4] & kChunkZstd) != 0, zstd);
+    ChunkHeader h;
+    size_t needed;
+    ASSERT_TRUE(parseGtnChunkHeader(chunk, 16, chunk.size(), "z.gtn", &h, &needed).isOk());
+    auto viewed = openGtnChunk(h, std::span<const uint8_t>(chunk), "z.gtn");
+    auto owned = openGtnChunk(h, std::vector<uint8_t>(chunk), "z.gtn");
+    ASSERT_TRUE(viewed.isOk()) << viewed.status().message();
+    ASSERT_TRUE(owned.isOk()) << owned.status().message();
+    EXPECT_TRUE(owned.value() == payload);
+    EXPECT_TRUE(viewed.value() == payload);
+    std::vector<uint8_t> bad = chunk;
+    bad[bad.size() / 2] ^= 0x10;
+    auto a = openGtnChunk(h, std::span<const uint8_t>(bad), "z.gtn");
+    auto b = openGtnChunk(h, std::move(bad), "z.gtn");
+    ASSERT_FALSE(a.isOk());
+    ASSERT_FALSE(b.isOk());
+    EXPECT_EQ(a.status().message(), b.status().message());
+    EXPECT_NE(b.status().message().find("checksum mismatch"), std::string::npos) << b.status().message();
+    // A buffer of another size than the header's chunk is refused.
+    std::vector<uint8_t> shorter(chunk.begin(), chunk.end() - 1);
+    EXPECT_FALSE(openGtnChunk(h, std::move(shorter), "z.gtn").isOk());
+  }
+}
+
 TEST(GtnContainer, WriterRejectsBadInput) {
   EncodedLevel l0 = handMadeLevel(0, 10, 20);
   EXPECT_EQ(assembleGtn({}, opts()).status().code(), StatusCode::kUsage);

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "mesh/faces.h"
+#include "mesh/fresh_memory.h"
 #include "mesh/hex_split.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/mesh_stream.h"
@@ -234,6 +235,97 @@ TEST(MeshStream, BuilderAssemblesEvents) {
   EXPECT_FALSE(b.vertex(7, p[0], nullptr).isOk());  // ids must be consecutive
   EXPECT_EQ(b.mesh().numPoints(), 4u);
   EXPECT_EQ(b.mesh().point_fields[0].get(3, 0), 13.0);
+}
+
+// The builder grows its storage, reserved from the header's counts, with the pages mapped a step
+// ahead: a header that declares more than the stream holds, or less, still builds what arrives.
+TEST(MeshStream, BuilderKeepsWhatArrivesWhateverTheHeaderDeclares) {
+  for (uint64_t declared : {uint64_t{0}, uint64_t{10}, uint64_t{200000}, uint64_t{1} << 24}) {
+    SCOPED_TRACE(declared);
+    TetMeshBuilder b;
+    LevelHeader h;
+    h.points = declared;
+    h.tets = declared;
+    h.point_fields.push_back({"id", 1, ScalarType::kUInt32});
+    h.cell_fields.push_back({"w", 1, ScalarType::kFloat64});
+    ASSERT_TRUE(b.beginLevel(h).isOk());
+    const uint32_t n = 100000;
+    for (uint32_t i = 0; i < n; ++i) {
+      const double p[3] = {double(i), 0.5 * i, -1.0 * i};
+      ASSERT_TRUE(b.vertex(i, p, reinterpret_cast<const uint8_t*>(&i)).isOk());
+    }
+    for (uint32_t i = 0; i + 3 < n; ++i) {
+      const uint32_t t[4] = {i, i + 1, i + 2, i + 3};
+      const double w = 0.25 * i;
+      ASSERT_TRUE(b.tet(t, reinterpret_cast<const uint8_t*>(&w)).isOk());
+    }
+    const TetMesh& m = b.mesh();
+    ASSERT_EQ(m.numPoints(), n);
+    ASSERT_EQ(m.numTets(), n - 3);
+    for (uint32_t i = 0; i < n; i += 997) {
+      EXPECT_EQ(m.point(i)[2], -1.0 * i);
+      EXPECT_EQ(m.point_fields[0].get(i, 0), double(i));
+    }
+    for (uint32_t i = 0; i + 3 < n; i += 997) {
+      EXPECT_EQ(m.tets[i][3], i + 3);
+      EXPECT_EQ(m.cell_fields[0].get(i, 0), 0.25 * i);
+    }
+  }
+}
+
+// TetMeshBuilder takes a level whole (a decoder that holds it so skips the events); a sink that
+// takes events refuses it, and so does a subclass of the builder (it may be watching the events).
+TEST(MeshStream, WholeLevelGoesToTheBuilderOnly) {
+  class Watching : public TetMeshBuilder {};
+  TetMeshBuilder b;
+  Watching w;
+  CountingSink c;
+  EXPECT_TRUE(b.takesWholeLevel());
+  EXPECT_FALSE(w.takesWholeLevel());
+  EXPECT_FALSE(c.takesWholeLevel());
+  LevelHeader h;
+  h.points = 4;
+  h.tets = 1;
+  h.coord_type = ScalarType::kFloat32;
+  h.metadata = {{"source.format", "test"}};
+  TetMesh m;
+  m.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  m.tets = {{0, 1, 2, 3}};
+  m.blocks.push_back({});
+  const Status refused = c.wholeLevel(h, TetMesh(m), {});
+  EXPECT_FALSE(refused.isOk());
+  EXPECT_EQ(refused.code(), StatusCode::kUsage);
+  ASSERT_TRUE(b.wholeLevel(h, TetMesh(m), {{0, 2, 1}}).isOk());
+  EXPECT_TRUE(b.mesh().coords == m.coords);
+  EXPECT_TRUE(b.mesh().tets == m.tets);
+  EXPECT_EQ(b.mesh().coord_type, ScalarType::kFloat32);  // the header's, as beginLevel sets it
+  EXPECT_TRUE(b.mesh().metadata == h.metadata);
+  EXPECT_TRUE(b.mesh().blocks.empty());  // as the events build it
+  ASSERT_EQ(b.boundary().size(), 1u);
+  EXPECT_EQ(b.boundary()[0][1], 2u);
+  EXPECT_EQ(b.header().tets, 1u);
+}
+
+// Mapping a buffer's pages ahead changes none of its contents, whatever its size and alignment.
+TEST(FreshMemory, PopulatingKeepsTheContents) {
+  for (size_t n : {size_t{1}, size_t{5000}, size_t{1} << 16, (size_t{1} << 20) + 3}) {
+    std::vector<uint8_t> v(n + 7);
+    for (size_t i = 0; i < v.size(); ++i) v[i] = static_cast<uint8_t>(i * 7 + 1);
+    populateForWrite(v.data() + 3, n);
+    for (size_t i = 0; i < v.size(); ++i) ASSERT_EQ(v[i], static_cast<uint8_t>(i * 7 + 1)) << i;
+    std::vector<uint32_t> w = {5, 6};
+    resizePopulated(w, n);
+    ASSERT_EQ(w.size(), n);
+    EXPECT_EQ(w[0], 5u);
+    if (n > 2) {
+      EXPECT_EQ(w[1], 6u);
+      EXPECT_EQ(w[n - 1], 0u);  // new elements value-initialized
+    }
+    std::vector<double> r;
+    reservePopulated(r, n);
+    EXPECT_GE(r.capacity(), n);
+    EXPECT_TRUE(r.empty());
+  }
 }
 
 }  // namespace
