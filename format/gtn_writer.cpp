@@ -355,7 +355,10 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
           auto a = encodeInput(levels, i, *meshes[i], options);
           if (!a.isOk()) return a.status();
           if (i == 0) alone0 = approxBytes(*a);
-          if (!best || approxBytes(*a) < approxBytes(*best)) best = std::move(a).value();
+          // A structured piece is kept whatever the bytes: it decodes at memory speed, alone, where a
+          // level naming the next one decodes with the level codec after every coarser level.
+          const bool grid = a->level.pieces.size() == 1 && a->level.pieces[0].kind == kPieceStructured;
+          if (!best || grid || approxBytes(*a) < approxBytes(*best)) best = std::move(a).value();
         }
         encoded[i] = std::move(*best);
       }
