@@ -155,8 +155,13 @@ class CandidateHeap {
   std::vector<uint32_t> at_;  // per vertex: its entry's index in heap_, kNoIndex for none
 };
 
-using Tri = std::array<uint32_t, 3>;
-using Edge = std::array<uint32_t, 2>;
+// A link triangle (a < b < c) and a link edge (a < b) as one integer each, a << 64 | b << 32 | c and
+// a << 32 | b: the link condition only counts common elements, which integer keys sort and compare
+// in far fewer instructions than arrays.
+using Tri = unsigned __int128;
+using Edge = uint64_t;
+inline Tri triKey(uint32_t a, uint32_t b, uint32_t c) { return (Tri{a} << 64) | (Tri{b} << 32) | c; }
+inline Edge edgeKey(uint32_t a, uint32_t b) { return (Edge{a} << 32) | b; }
 
 template <class T>
 size_t countCommon(const std::vector<T>& a, const std::vector<T>& b) {
@@ -223,14 +228,11 @@ struct Workspace {
   std::vector<BoundaryFace> faces;
   std::vector<StarFace> face_keys;
   std::vector<Candidate> cands;
-  std::vector<double> density_error;  // per target: its density error, where target_ok
-  std::vector<uint8_t> target_ok;     // per target: 1 when every changed tetrahedron stays positive
   uint64_t evaluations = 0;           // candidate errors computed
-  uint64_t dropped = 0;               // dead corners dropped from the stars' runs
 };
 
-// Targets whose density errors are computed together (Ranker::densityErrors).
-constexpr size_t kLanes = 4;
+// The star pool's room beyond the corners, at least (Ranker::star_pool_).
+constexpr size_t kMinStarSlack = 4096;
 
 // Below this many vertices to evaluate, the evaluations run on the calling thread.
 constexpr size_t kParallelEvaluations = 8;
@@ -254,11 +256,10 @@ class Ranker {
     return p[0] == q[0] && p[1] == q[1] && p[2] == q[2];
   }
   void init();
-  void gatherStar(uint32_t v, std::vector<uint32_t>& corners, Workspace& ws);
+  void gatherStar(uint32_t v, std::vector<uint32_t>& corners);
   void gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
                            Workspace& ws) const;
   void candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws);
-  void densityErrors(const size_t* targets, size_t count, bool same, Workspace& ws) const;
   bool validate(uint32_t v, uint32_t w);
   void linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces,
               std::vector<Tri>& tris, std::vector<Edge>& edges, std::vector<uint32_t>& verts);
@@ -276,21 +277,16 @@ class Ranker {
   // Each vertex's corners (4 * tet + local index), in one pool: a vertex's list is a contiguous run,
   // so that gathering a star reads independent words instead of chasing a linked list. Corners of
   // collapsed tetrahedra are dropped lazily, by gatherStar (each evaluation rewrites only its own
-  // vertex's run). A merge writes the target's new list at the pool's end (the source's corners,
-  // then its own: the order every sum over a star follows); the pool is compacted when its dead runs
-  // outweigh the live ones.
+  // vertex's run). A merge writes the target's new list after the used part of the pool (the
+  // source's corners, then its own: the order every sum over a star follows). The pool never grows:
+  // it holds every corner and a quarter more, and when a new list does not fit, the runs are moved
+  // down over the abandoned ones, in place, in the order they lie (compactStars).
   std::vector<uint32_t> star_pool_;
+  uint64_t star_used_ = 0;  // star_pool_[0, star_used_) holds the runs, live and abandoned
+  uint64_t star_pool_peak_ = 0, star_compactions_ = 0;
   std::vector<uint64_t> star_begin_;
   std::vector<uint32_t> star_len_;
-  uint64_t star_live_ = 0;  // corners in the vertices' runs (dead corners not yet dropped included)
   void compactStars();
-  // Takes the workspaces' counts of dropped corners off star_live_.
-  void collectDropped() {
-    for (Workspace& ws : thread_ws_) {
-      star_live_ -= ws.dropped;
-      ws.dropped = 0;
-    }
-  }
   std::vector<uint8_t> boundary_, frozen_, alive_;
   std::vector<uint8_t> pinned_;      // never merged away (may be merged onto): next to a face oriented alike twice
   std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
@@ -312,25 +308,13 @@ class Ranker {
 void Ranker::init() {
   const size_t np = mesh_.numPoints();
   const size_t nt = mesh_.numTets();
-  tets_ = mesh_.tets;
-  star_size_.assign(np, 0);
-  for (const Tet& q : tets_)
-    for (uint32_t v : q) ++star_size_[v];
-  // Every vertex's corners in ascending order.
-  star_begin_.assign(np, 0);
-  star_len_.assign(np, 0);
-  for (size_t v = 1; v < np; ++v) star_begin_[v] = star_begin_[v - 1] + star_size_[v - 1];
-  star_pool_.assign(4 * nt, 0);
-  for (size_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 4; ++k) {
-      const uint32_t v = tets_[t][k];
-      star_pool_[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
-    }
-  star_live_ = star_pool_.size();
+  const std::vector<Tet>& tets = mesh_.tets;
   boundary_.assign(np, 0);
   frozen_.assign(np, 0);
   pinned_.assign(np, 0);
   alive_.assign(np, 1);
+  // The face adjacency first, and gone before the ranking's own copies of the mesh are made: the
+  // peak memory is the larger of the two, not their sum.
   {
     const FaceAdjacency adj = computeFaceAdjacency(mesh_);
     double area = 0;
@@ -340,11 +324,11 @@ void Ranker::init() {
         if (nb < nt) {
           // A face listed in the same direction by both its tetrahedra (a flat one whose orientation
           // the file chose against its neighbours'): neither may change, see ranking.h.
-          if (!facesOpposite(tets_[t], k, tets_[nb]))
-            for (uint32_t x : tets_[t]) pinned_[x] = 1;
+          if (!facesOpposite(tets[t], k, tets[nb]))
+            for (uint32_t x : tets[t]) pinned_[x] = 1;
           continue;
         }
-        const uint32_t a = tets_[t][kTetFace[k][0]], b = tets_[t][kTetFace[k][1]], c = tets_[t][kTetFace[k][2]];
+        const uint32_t a = tets[t][kTetFace[k][0]], b = tets[t][kTetFace[k][1]], c = tets[t][kTetFace[k][2]];
         if (nb == kNonManifold) {
           frozen_[a] = frozen_[b] = frozen_[c] = 1;
           continue;
@@ -357,6 +341,22 @@ void Ranker::init() {
     }
     area_scale_ = area > 0 && std::isfinite(area) ? area : 1.0;
   }
+  tets_ = tets;
+  star_size_.assign(np, 0);
+  for (const Tet& q : tets_)
+    for (uint32_t v : q) ++star_size_[v];
+  // Every vertex's corners in ascending order.
+  star_begin_.assign(np, 0);
+  star_len_.assign(np, 0);
+  for (size_t v = 1; v < np; ++v) star_begin_[v] = star_begin_[v - 1] + star_size_[v - 1];
+  star_used_ = 4 * nt;
+  star_pool_.assign(star_used_ + std::max<size_t>(nt, kMinStarSlack), 0);
+  star_pool_peak_ = star_pool_.size();
+  for (size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t v = tets_[t][k];
+      star_pool_[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
+    }
   double mass = 0, volume = 0;
   for (size_t t = 0; t < nt; ++t) {
     const Tet& q = tets_[t];
@@ -373,7 +373,7 @@ void Ranker::init() {
   tree_.error.assign(np, 0.0f);
 }
 
-void Ranker::gatherStar(uint32_t v, std::vector<uint32_t>& corners, Workspace& ws) {
+void Ranker::gatherStar(uint32_t v, std::vector<uint32_t>& corners) {
   uint32_t* run = star_pool_.data() + star_begin_[v];
   const uint32_t n = star_len_[v];
   uint32_t m = 0;
@@ -382,21 +382,33 @@ void Ranker::gatherStar(uint32_t v, std::vector<uint32_t>& corners, Workspace& w
     run[m] = c;
     m += tets_[c >> 2][0] != kDead;
   }
-  ws.dropped += n - m;
   star_len_[v] = m;
   corners.assign(run, run + m);
 }
 
 void Ranker::compactStars() {
-  std::vector<uint32_t> pool;
-  pool.reserve(star_live_ + star_live_ / 4);
-  for (size_t v = 0; v < star_len_.size(); ++v) {
-    const uint64_t b = star_begin_[v];
-    star_begin_[v] = pool.size();
-    pool.insert(pool.end(), star_pool_.begin() + static_cast<std::ptrdiff_t>(b),
-                star_pool_.begin() + static_cast<std::ptrdiff_t>(b + star_len_[v]));
+  // The runs in the order they lie; each moves down (never up: the runs before it are at most as
+  // long as the space they took), without the corners of collapsed tetrahedra, as gatherStar would.
+  std::vector<std::pair<uint64_t, uint32_t>> runs;
+  for (uint32_t v = 0; v < star_len_.size(); ++v)
+    if (star_len_[v] > 0) runs.emplace_back(star_begin_[v], v);
+  std::sort(runs.begin(), runs.end());
+  uint32_t* pool = star_pool_.data();
+  uint64_t used = 0;
+  for (const auto& [begin, v] : runs) {
+    const uint32_t n = star_len_[v];
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t c = pool[begin + i];
+      pool[used + m] = c;
+      m += tets_[c >> 2][0] != kDead;
+    }
+    star_begin_[v] = used;
+    star_len_[v] = m;
+    used += m;
   }
-  star_pool_.swap(pool);
+  star_used_ = used;
+  ++star_compactions_;
 }
 
 void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
@@ -444,7 +456,7 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
 void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) {
   out.clear();
   if (!alive_[v] || frozen_[v] || pinned_[v] || crowded(v)) return;
-  gatherStar(v, ws.corners, ws);
+  gatherStar(v, ws.corners);
   if (ws.corners.empty()) return;
   const double* pv = pos(v);
   const double rho_v = density_[v];
@@ -564,21 +576,24 @@ void Ranker::linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std:
   for (uint32_t c : corners) {
     const uint32_t t = c >> 2;
     const int k = c & 3;
-    Tri tri{tets_[t][(k + 1) & 3], tets_[t][(k + 2) & 3], tets_[t][(k + 3) & 3]};
-    std::sort(tri.begin(), tri.end());
-    tris.push_back(tri);
+    uint32_t a = tets_[t][(k + 1) & 3], b = tets_[t][(k + 2) & 3], d = tets_[t][(k + 3) & 3];
+    if (a > b) std::swap(a, b);
+    if (b > d) std::swap(b, d);
+    if (a > b) std::swap(a, b);
+    tris.push_back(triKey(a, b, d));
   }
   if (boundary_[u]) {
-    for (const BoundaryFace& f : faces) tris.push_back({std::min(f.x, f.y), std::max(f.x, f.y), kOmega});
+    for (const BoundaryFace& f : faces) tris.push_back(triKey(std::min(f.x, f.y), std::max(f.x, f.y), kOmega));
   }
   sortUnique(tris);
   edges.clear();
   verts.clear();
   for (const Tri& t : tris) {
-    edges.push_back({t[0], t[1]});
-    edges.push_back({t[0], t[2]});
-    edges.push_back({t[1], t[2]});
-    verts.insert(verts.end(), t.begin(), t.end());
+    const uint32_t a = static_cast<uint32_t>(t >> 64), b = static_cast<uint32_t>(t >> 32), c = static_cast<uint32_t>(t);
+    edges.push_back(edgeKey(a, b));
+    edges.push_back(edgeKey(a, c));
+    edges.push_back(edgeKey(b, c));
+    verts.insert(verts.end(), {a, b, c});
   }
   sortUnique(edges);
   sortUnique(verts);
@@ -588,8 +603,8 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
   if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w] || pinned_[v] || crowded(v) || crowded(w))
     return false;
   if (boundary_[v] && !boundary_[w]) return false;
-  gatherStar(v, corners_, *ws_);
-  gatherStar(w, corners_w_, *ws_);
+  gatherStar(v, corners_);
+  gatherStar(w, corners_w_);
   gatherBoundaryFaces(v, corners_, faces_, *ws_);
   gatherBoundaryFaces(w, corners_w_, faces_w_, *ws_);
   // Tetrahedra around the edge vw and the vertices of Lk(vw).
@@ -677,7 +692,7 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
 }
 
 void Ranker::merge(uint32_t v, uint32_t w, float error) {
-  gatherStar(v, corners_, *ws_);
+  gatherStar(v, corners_);
   recompute_.clear();
   recompute_.push_back(w);
   uint32_t removed = 0;
@@ -697,17 +712,21 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
   }
   // w's list becomes v's corners, then its own (the killed ones are dropped when next gathered).
   {
-    const uint64_t b = star_pool_.size();
+    star_len_[v] = 0;
+    if (star_pool_.size() - star_used_ < corners_.size() + star_len_[w]) compactStars();
     const uint32_t nw = star_len_[w];
-    star_pool_.resize(b + corners_.size() + nw);
-    std::copy(corners_.begin(), corners_.end(), star_pool_.begin() + static_cast<std::ptrdiff_t>(b));
-    std::copy_n(star_pool_.begin() + static_cast<std::ptrdiff_t>(star_begin_[w]), nw,
-                star_pool_.begin() + static_cast<std::ptrdiff_t>(b + corners_.size()));
+    // After compaction the runs hold at most every corner, and a list at most two crowded stars.
+    if (star_pool_.size() - star_used_ < corners_.size() + nw) {
+      star_pool_.resize(star_used_ + corners_.size() + nw);
+      star_pool_peak_ = std::max<uint64_t>(star_pool_peak_, star_pool_.size());
+    }
+    const uint64_t b = star_used_;
+    uint32_t* pool = star_pool_.data();
+    std::copy(corners_.begin(), corners_.end(), pool + b);
+    std::copy_n(pool + star_begin_[w], nw, pool + b + corners_.size());
     star_begin_[w] = b;
     star_len_[w] = static_cast<uint32_t>(corners_.size()) + nw;
-    star_len_[v] = 0;
-    collectDropped();
-    if (star_pool_.size() > 2 * star_live_ + 4096) compactStars();
+    star_used_ = b + corners_.size() + nw;
   }
   alive_[v] = 0;
   heap_.erase(v);
@@ -788,6 +807,8 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     stats->rejected = rejected;
     stats->evaluations = 0;
     for (const Workspace& ws : thread_ws_) stats->evaluations += ws.evaluations;
+    stats->star_pool_corners = star_pool_peak_;
+    stats->star_compactions = star_compactions_;
   }
   return std::move(tree_);
 }

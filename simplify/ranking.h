@@ -82,6 +82,8 @@ struct RankingStats {
   uint64_t popped = 0;                       // queue entries examined
   uint64_t rejected = 0;                     // popped candidates that failed the exact checks
   uint64_t evaluations = 0;                  // candidate errors computed
+  uint64_t star_pool_corners = 0;            // the room the stars' corner lists took, at most (4 bytes each)
+  uint64_t star_compactions = 0;             // times the corner lists were moved down over abandoned ones
   std::string field;                         // density field used ("" = volume)
   std::vector<std::string> constant_fields;  // the default skipped these point fields (constant)
 };

@@ -405,8 +405,12 @@ ValidationReport errorsOf(const TetMesh& mesh, const std::string& scope) {
 }
 }  // namespace
 
-Status LevelStructureCheck::check(const TetMesh& level, size_t index) {
+void LevelStructureCheck::checkLevel0() {
   std::call_once(level0_once_, [&] { level0_report_.emplace(errorsOf(*level0_, "/levels/0")); });
+}
+
+Status LevelStructureCheck::check(const TetMesh& level, size_t index) {
+  checkLevel0();
   const ValidationReport report = errorsOf(level, "/levels/" + std::to_string(index));
   std::string errors;
   for (const ReportedIssue& issue : report.issues()) {

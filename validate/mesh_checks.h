@@ -47,6 +47,9 @@ class LevelStructureCheck {
   LevelStructureCheck(const TetMesh& level0, std::string what) : level0_(&level0), what_(std::move(what)) {}
   // Mip level `index` (>= 1).
   Status check(const TetMesh& level, size_t index);
+  // Checks level 0 now rather than in the first check() (on another thread while the merges are
+  // ranked, say); thread-safe, and level 0 is still checked once.
+  void checkLevel0();
 
  private:
   const TetMesh* level0_;

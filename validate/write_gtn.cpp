@@ -19,12 +19,15 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
   // Level 0 is encoded while the merges are ranked: on another thread where TBB has one, after the
   // ranking where it has not. A level 0 that fails to encode is left to the writer, which fails on it
-  // before any mip level is made.
+  // before any mip level is made. Then, where mip levels will be checked, level 0's own errors (the
+  // ones a mip level may keep) are found, so that the first level's check does not wait on them.
+  LevelStructureCheck structure(mesh, path);
   std::shared_ptr<PiecedLevel> level0;
   tbb::task_group encoding;
   encoding.run([&] {
     auto e = encodePieces(mesh, EncodeOptions{}, wo.piece_tets);
     if (e.isOk()) level0 = std::make_shared<PiecedLevel>(std::move(e).value());
+    if (wo.verify && o.levels != 0) structure.checkLevel0();
   });
   RankingStats ranked;
   StatusOr<MergeTree> ranking = rankMerges(mesh, o.ranking, &ranked, wo.progress);
@@ -50,7 +53,6 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
                         " points, enough for " + std::to_string(count - 1) + " level(s) beyond level 0");
   GtnWriteOptions bounded = wo;
   if (o.levels < 0) bounded.level_storage_limit = o.level_storage;
-  LevelStructureCheck structure(mesh, path);
   std::vector<GtnLevelInput> inputs(count);
   for (size_t i = 0; i < count; ++i) {
     GtnLevelInput& in = inputs[i];

@@ -3,6 +3,8 @@
 // `gtn convert` and `gtn validate`.
 #include <gtest/gtest.h>
 
+#include <thread>
+
 #include <nlohmann/json.hpp>
 
 #include "convert/export.h"
@@ -99,6 +101,26 @@ TEST(FlatTets, LevelStructureCheckCatchesOverlaps) {
   EXPECT_NE(st.message().find("BOUNDARY_ORIENTATION"), std::string::npos) << st.message();
   EXPECT_NE(st.message().find("bug"), std::string::npos) << st.message();
   EXPECT_TRUE(checkLevelStructure({&bad, &bad}, "x.gtn").isOk()) << "the source's own errors";
+}
+
+// Convert finds level 0's own errors while the merges are ranked (checkLevel0, on another thread):
+// they are still excused in every mip level, and a new error still fails.
+TEST(FlatTets, LevelZeroCheckedAheadExcusesItsOwnErrors) {
+  const TetMesh good = makeFlatTetMesh(FlatShape::kBox, 4, 1);
+  TetMesh bad;
+  bad.coords = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.2, 0.2, 0.4};
+  bad.tets = {{0, 1, 2, 3}, {0, 1, 2, 4}};
+  LevelStructureCheck from_bad(bad, "x.gtn");
+  std::thread ahead([&] { from_bad.checkLevel0(); });
+  ahead.join();
+  from_bad.checkLevel0();  // once only
+  EXPECT_TRUE(from_bad.check(bad, 1).isOk());
+  LevelStructureCheck from_good(good, "x.gtn");
+  from_good.checkLevel0();
+  EXPECT_TRUE(from_good.check(good, 1).isOk());
+  const Status st = from_good.check(bad, 2);
+  ASSERT_FALSE(st.isOk());
+  EXPECT_NE(st.message().find("mip level 2 is not a valid mesh"), std::string::npos) << st.message();
 }
 
 // Through the CLI: a legacy VTK file of each shape, flat tetrahedra listed with either orientation,

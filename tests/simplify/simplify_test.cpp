@@ -132,6 +132,23 @@ TEST(Ranking, TheTreeIsTheSameForAnyThreadCount) {
   }
 }
 
+TEST(Ranking, TheStarListsStayInTheirRoom) {
+  // Each vertex's corner list lives in one pool; a merge writes the target's new list after the used
+  // part. The pool holds every corner and a quarter more (4096 at least) and is compacted in place
+  // when a list does not fit, instead of growing (it doubled, to 8 corners per tetrahedron and more).
+  const TetMesh mesh = makeGrid(16, 15, 14);
+  RankingStats stats;
+  auto tree = rankMerges(mesh, RankingOptions{}, &stats);
+  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  const uint64_t nt = mesh.numTets();
+  EXPECT_GT(stats.star_compactions, 0u);
+  EXPECT_LE(stats.star_pool_corners, 4 * nt + std::max<uint64_t>(nt, 4096));
+  EXPECT_GT(tree->merges, mesh.numPoints() / 2);
+  auto half = applyMerges(mesh, *tree, tree->merges / 2);
+  ASSERT_TRUE(half.isOk()) << half.status().message();
+  EXPECT_EQ(computeMeshStats(*half).inverted, 0u);
+}
+
 TEST(Ranking, OptionsSelectFieldAndWeights) {
   TetMesh m = makeGrid(4, 4, 4, 5);
   auto missing = rankMerges(m, RankingOptions{"nope", 1, 1, UINT64_MAX}, nullptr);
