@@ -834,7 +834,7 @@ StatusOr<PartPlan> planPart(const TetMesh& part, uint64_t piece_tets) {
   return plan;
 }
 
-StatusOr<SeamPlan> planSeams(const std::vector<PartExposed>& parts) {
+StatusOr<SeamPlan> planSeams(const std::vector<PartExposed>& parts, bool coordinate_keys) {
   SeamPlan plan;
   plan.first_piece.push_back(0);
   for (const PartExposed& p : parts) {
@@ -862,10 +862,19 @@ StatusOr<SeamPlan> planSeams(const std::vector<PartExposed>& parts) {
     std::vector<uint32_t> pieces;
     while (j < copies.size() && copies[j].key == copies[i].key) {
       const Copy& c = copies[j];
-      if (j > i && c.part == copies[j - 1].part)
-        return invalidData("part " + std::to_string(c.part) + " holds two points with the same key (" +
-                           std::to_string(c.key[0]) + ", " + std::to_string(c.key[1]) + ", " +
-                           std::to_string(c.key[2]) + ")");
+      if (j > i && c.part == copies[j - 1].part) {
+        std::string key;
+        if (coordinate_keys) {
+          double x[3];
+          std::memcpy(x, c.key.data(), sizeof x);
+          key = "coordinates (" + std::to_string(x[0]) + ", " + std::to_string(x[1]) + ", " + std::to_string(x[2]) +
+                "): without point global ids, points are matched across parts by their coordinates, which "
+                "coincident points make ambiguous";
+        } else {
+          key = "global id " + std::to_string(c.key[0]);
+        }
+        return invalidData("part " + std::to_string(c.part) + " holds two points with the same " + key);
+      }
       const PartExposed& p = parts[c.part];
       for (uint32_t k = p.uses_first[c.index]; k < p.uses_first[c.index + 1]; ++k) {
         if (p.uses[k] >= p.pieces) return usageError("planSeams: a part names a piece it does not have");

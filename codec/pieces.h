@@ -173,8 +173,9 @@ struct SeamPlan {
 // The seams of the parts' exposed vertices: a key used by pieces of two or more parts, or by two or
 // more pieces of one part, is a seam vertex of the class of those pieces; a key used by one piece is
 // that piece's own, the other parts' copies dropped; an orphan stays with the first part (with
-// pieces) that holds it unless settleOrphans finds it used. Fails when a part exposes one key twice.
-StatusOr<SeamPlan> planSeams(const std::vector<PartExposed>& parts);
+// pieces) that holds it unless settleOrphans finds it used. Fails when a part exposes one key twice
+// (the message shows the key as coordinates when `coordinate_keys`, else as a global id).
+StatusOr<SeamPlan> planSeams(const std::vector<PartExposed>& parts, bool coordinate_keys = false);
 // used[k]: some part's tetrahedra use orphans[k]; then every holder drops it.
 void settleOrphans(SeamPlan& plan, const std::vector<char>& used);
 // Per key of `keys`: whether a tetrahedron of `part` uses a vertex with that key (`part_keys`: per

@@ -278,14 +278,16 @@ Status getClasses(ByteReader& r, std::vector<SeamClass>* classes) {
 }  // namespace
 
 Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std::vector<PointKey>& keys,
-                         PartExchange& exchange, const GtnWriteOptions& options, PartsWriteReport* report) {
+                         bool coordinate_keys, PartExchange& exchange, const GtnWriteOptions& options, PartsWriteReport* report,
+                         const Status& local_failure) {
   Exchange ex(exchange, path);
   const int me = exchange.part(), n_parts = exchange.parts();
   const std::string who = path + ": part " + std::to_string(me);
   auto local = [&](const Status& st) { return st.isOk() ? st : Status(st.code(), who + ": " + st.message()); };
 
   // Up 1: the part's plan and exposed points.
-  Status st = keys.size() == part.numPoints() ? Status::ok() : usageError("one key per point is needed");
+  Status st = local_failure;
+  if (st.isOk() && keys.size() != part.numPoints()) st = usageError("one key per point is needed");
   PartPlan plan;
   if (st.isOk()) {
     auto p = planPart(part, options.piece_tets);
@@ -336,7 +338,7 @@ Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std
       std::vector<PartExposed> exposed;
       for (ExposedMessage& m : msgs) exposed.push_back(std::move(m.exposed));
       if (st.isOk()) {
-        auto p = planSeams(exposed);
+        auto p = planSeams(exposed, coordinate_keys);
         if (p.isOk()) seams = std::move(p).value();
         else st = Status(p.status().code(), path + ": " + p.status().message());
       }

@@ -38,14 +38,18 @@ struct PartsWriteReport {
 };
 
 // Writes `path` (on part 0, atomically) from every part's `part` mesh (positively oriented
-// tetrahedra) and its points' keys (`keys`: one per point of the part, PointKey). Each part cuts its
+// tetrahedra) and its points' keys (`keys`: one per point of the part, PointKey; `coordinate_keys`:
+// they are coordinates, not global ids). Each part cuts its
 // mesh into pieces of at most options.piece_tets tetrahedra and codes them; with options.verify each
 // part decodes its pieces back from the level as written and compares them with its mesh before part
 // 0 commits the file. Every part returns the same status; messages name `path` and, for a part's own
 // failure, the part. The parts' copies of a shared point must agree bit for bit (coordinates and
 // point values), their fields must be the same; parts with no tetrahedra add nothing.
-// options.command_line is recorded with " (N parts: P0 P1 ... pieces)" appended.
+// options.command_line is recorded with " (N parts: P0 P1 ... pieces)" appended. A part that could not
+// make its mesh passes its failure as `local_failure` (its mesh and keys are then not used): every part fails
+// with it.
 Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std::vector<PointKey>& keys,
-                         PartExchange& exchange, const GtnWriteOptions& options, PartsWriteReport* report = nullptr);
+                         bool coordinate_keys, PartExchange& exchange, const GtnWriteOptions& options, PartsWriteReport* report = nullptr,
+                         const Status& local_failure = Status::ok());
 
 }  // namespace gtn

@@ -59,6 +59,7 @@ class ThreadExchange : public PartExchange {
 struct Part {
   TetMesh mesh;
   std::vector<PointKey> keys;
+  bool coordinate_keys = false;
 };
 
 Part makePart(const TetMesh& whole, const std::vector<uint32_t>& tets, const std::vector<uint32_t>& extra,
@@ -70,6 +71,7 @@ Part makePart(const TetMesh& whole, const std::vector<uint32_t>& tets, const std
   used.erase(std::unique(used.begin(), used.end()), used.end());
   std::map<uint32_t, uint32_t> local;
   Part p;
+  p.coordinate_keys = coordinate_keys;
   p.mesh.coord_type = whole.coord_type;
   for (const Field& f : whole.point_fields) p.mesh.point_fields.emplace_back(f.name, f.components, f.type, used.size());
   for (const Field& f : whole.cell_fields) p.mesh.cell_fields.emplace_back(f.name, f.components, f.type, tets.size());
@@ -132,7 +134,8 @@ Written writeParts(const std::string& path, const std::vector<Part>& parts, uint
       o.tool_version = "test";
       o.command_line = "parts test";
       o.piece_tets = piece_tets;
-      w.status[q] = writeGtnFromParts(path, parts[q].mesh, parts[q].keys, ex, o, &w.reports[q]);
+      w.status[q] = writeGtnFromParts(path, parts[q].mesh, parts[q].keys, parts[q].coordinate_keys, ex, o,
+                                       &w.reports[q]);
     });
   for (std::thread& t : threads) t.join();
   return w;
