@@ -942,8 +942,7 @@ std::vector<char> usedKeys(const TetMesh& part, std::span<const PointKey> part_k
 }
 
 StatusOr<EncodedPart> encodePart(const TetMesh& part, const PartPlan& plan, std::span<const SeamClass> classes,
-                                 uint32_t first_piece, std::span<const uint32_t> status,
-                                 const EncodeOptions& options) {
+                                 uint32_t first_piece, std::span<const uint32_t> status, const EncodeOptions& options) {
   if (!options.seam.empty()) return usageError("encodePart: the seams are the parts' own");
   if (status.size() != plan.exposed.size() || plan.piece_of.size() != part.numTets())
     return usageError("encodePart: the plan or the status does not match the part");

@@ -115,7 +115,6 @@ std::vector<std::vector<uint32_t>> pieceSeamLists(std::span<const SeamClass> cla
 // first (decodePieces' do).
 Status emitDecoded(const LevelHeader& header, const DecodedPieces& decoded, MeshSink& sink);
 
-
 // ---- A level held in parts --------------------------------------------------------------------------
 // A mesh held in parts (the ranks of a distributed dataset) is coded where it is: each part is cut
 // into pieces of its own, which it codes, and the parts meet through the level's seam table. A point
@@ -138,11 +137,11 @@ using PointKey = std::array<uint64_t, 3>;
 // A part cut into pieces (the median bisection of encodePieces, at most piece_tets tetrahedra each),
 // and its exposed vertices.
 struct PartPlan {
-  uint32_t pieces = 0;                // none when the part has no tetrahedra
-  std::vector<uint32_t> piece_of;     // per tetrahedron, its piece
-  std::vector<uint32_t> exposed;      // the exposed vertices (increasing local indices)
-  std::vector<uint32_t> uses_first;   // exposed vertex i is used by pieces uses[uses_first[i] .. uses_first[i + 1])
-  std::vector<uint32_t> uses;         // (the part's piece indices, increasing)
+  uint32_t pieces = 0;               // none when the part has no tetrahedra
+  std::vector<uint32_t> piece_of;    // per tetrahedron, its piece
+  std::vector<uint32_t> exposed;     // the exposed vertices (increasing local indices)
+  std::vector<uint32_t> uses_first;  // exposed vertex i is used by pieces uses[uses_first[i] .. uses_first[i + 1])
+  std::vector<uint32_t> uses;        // (the part's piece indices, increasing)
 };
 StatusOr<PartPlan> planPart(const TetMesh& part, uint64_t piece_tets);
 
@@ -155,13 +154,13 @@ struct PartExposed {
 };
 
 // An exposed vertex's status: a global seam id, or one of these.
-inline constexpr uint32_t kPartOwnVertex = kNoIndex;      // the part's own (coded in its piece)
+inline constexpr uint32_t kPartOwnVertex = kNoIndex;       // the part's own (coded in its piece)
 inline constexpr uint32_t kPartDropVertex = kNoIndex - 1;  // another part codes it: left out here
 
 struct SeamPlan {
-  std::vector<SeamClass> classes;               // the level's classes, in class order
-  std::vector<uint32_t> first_piece;            // per part its first piece's index; last: every piece
-  std::vector<std::vector<uint32_t>> status;    // per part, per exposed vertex
+  std::vector<SeamClass> classes;             // the level's classes, in class order
+  std::vector<uint32_t> first_piece;          // per part its first piece's index; last: every piece
+  std::vector<std::vector<uint32_t>> status;  // per part, per exposed vertex
   // Per seam id, the copy whose values the class stream stores: (part, exposed index).
   std::vector<std::pair<uint32_t, uint32_t>> seam_source;
   // Keys that parts hold without any of their exposed vertices being used (unused points): the

@@ -1,9 +1,9 @@
 #include "codec/pieces_check.h"
 
 #include <cstring>
-#include <unordered_map>
 
 #include "codec/level_check.h"
+#include "mesh/index.h"
 
 namespace gtn {
 
@@ -112,12 +112,20 @@ std::string partLosslessMismatch(const TetMesh& part, const EncodedPart& encoded
     in += view.pieces[g].own_points - view.pieces[g].own_boundary_points;
     tet_base += view.pieces[g].tets;
   }
-  // Decoded mesh index of each global id.
-  std::unordered_map<uint64_t, uint32_t> vertex_at, tet_at;
-  for (size_t d = 0; d < got.numPoints(); ++d)
-    vertex_at.emplace(decoded->global_vertex.empty() ? d : decoded->global_vertex[d], static_cast<uint32_t>(d));
-  for (size_t d = 0; d < got.numTets(); ++d)
-    tet_at.emplace(decoded->global_tet.empty() ? d : decoded->global_tet[d], static_cast<uint32_t>(d));
+  // Decoded mesh index of each global vertex id, and of each global tetrahedron position from the
+  // part's first (its pieces' tetrahedra are one run).
+  const uint64_t first_tet = tet_base, n_level_points = view.header->points;
+  std::vector<uint32_t> vertex_at(n_level_points, kNoIndex), tet_at(got.numTets(), kNoIndex);
+  for (size_t d = 0; d < got.numPoints(); ++d) {
+    const uint64_t g = decoded->global_vertex.empty() ? d : decoded->global_vertex[d];
+    if (g >= n_level_points) return "a decoded vertex id beyond the level's points";
+    vertex_at[g] = static_cast<uint32_t>(d);
+  }
+  for (size_t d = 0; d < got.numTets(); ++d) {
+    const uint64_t g = decoded->global_tet.empty() ? d : decoded->global_tet[d];
+    if (g < first_tet || g - first_tet >= tet_at.size()) return "a decoded tetrahedron beyond the part's";
+    tet_at[g - first_tet] = static_cast<uint32_t>(d);
+  }
   std::vector<uint64_t> global(part.numPoints(), UINT64_MAX);
   for (size_t p = 0; p < n_mine; ++p) {
     const EncodedLevel& e = encoded.encoded[p];
@@ -141,13 +149,14 @@ std::string partLosslessMismatch(const TetMesh& part, const EncodedPart& encoded
     for (size_t k = 0; k < tl.size(); ++k) {
       const uint32_t t = tl[k];
       const std::string which = "part tetrahedron " + std::to_string(t);
-      const auto it = tet_at.find(tet_base + e.tet_order[k]);
-      if (it == tet_at.end()) return which + " was not decoded";
+      const uint64_t pos = tet_base + e.tet_order[k] - first_tet;
+      if (pos >= tet_at.size() || tet_at[pos] == kNoIndex) return which + " was not decoded";
+      const uint32_t d_tet = tet_at[pos];
       int perm[4], inversions = 0;
       for (int i = 0; i < 4; ++i) {
         perm[i] = -1;
         for (int j = 0; j < 4; ++j) {
-          const uint32_t d = got.tets[it->second][j];
+          const uint32_t d = got.tets[d_tet][j];
           const uint64_t gid = decoded->global_vertex.empty() ? d : decoded->global_vertex[d];
           if (gid == global[part.tets[t][i]]) perm[i] = j;
         }
@@ -155,17 +164,17 @@ std::string partLosslessMismatch(const TetMesh& part, const EncodedPart& encoded
         for (int j = 0; j < i; ++j) inversions += perm[j] > perm[i];
       }
       if (inversions % 2) return which + " is reversed";
-      if (!sameItem(part.cell_fields, t, got.cell_fields, it->second)) return which + " has other field values";
+      if (!sameItem(part.cell_fields, t, got.cell_fields, d_tet)) return which + " has other field values";
     }
     tet_base += view.pieces[first_piece + p].tets;
   }
   for (size_t v = 0; v < part.numPoints(); ++v) {
     if (global[v] == UINT64_MAX) continue;  // another part's
     const std::string which = "part point " + std::to_string(v);
-    const auto it = vertex_at.find(global[v]);
-    if (it == vertex_at.end()) return which + " was not decoded";
-    if (std::memcmp(got.point(it->second), part.point(v), 3 * sizeof(double)) != 0) return which + " moved";
-    if (!sameItem(part.point_fields, v, got.point_fields, it->second)) return which + " has other field values";
+    const uint32_t d = global[v] < vertex_at.size() ? vertex_at[global[v]] : kNoIndex;
+    if (d == kNoIndex) return which + " was not decoded";
+    if (std::memcmp(got.point(d), part.point(v), 3 * sizeof(double)) != 0) return which + " moved";
+    if (!sameItem(part.point_fields, v, got.point_fields, d)) return which + " has other field values";
   }
   return "";
 }

@@ -278,8 +278,8 @@ Status getClasses(ByteReader& r, std::vector<SeamClass>* classes) {
 }  // namespace
 
 Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std::vector<PointKey>& keys,
-                         bool coordinate_keys, PartExchange& exchange, const GtnWriteOptions& options, PartsWriteReport* report,
-                         const Status& local_failure) {
+                         bool coordinate_keys, PartExchange& exchange, const GtnWriteOptions& options,
+                         PartsWriteReport* report, const Status& local_failure) {
   Exchange ex(exchange, path);
   const int me = exchange.part(), n_parts = exchange.parts();
   const std::string who = path + ": part " + std::to_string(me);
@@ -329,8 +329,9 @@ Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std
             with_pieces = static_cast<int>(q);
             layout = msgs[q].layout;
           } else if (!sameLayout(layout, msgs[q].layout)) {
-            st = invalidData(path + ": part " + std::to_string(q) + " has another coordinate type or other fields than part " +
-                             std::to_string(with_pieces) + " (every part must carry the same arrays)");
+            st = invalidData(path + ": part " + std::to_string(q) +
+                             " has another coordinate type or other fields than part " + std::to_string(with_pieces) +
+                             " (every part must carry the same arrays)");
           }
         }
       }
@@ -367,7 +368,8 @@ Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std
         seam_mesh.coord_type = layout.coord_type;
         const size_t n = seams.seam_source.size();
         seam_mesh.coords.resize(3 * n);
-        for (const FieldDesc& d : layout.point_fields) seam_mesh.point_fields.emplace_back(d.name, d.components, d.type, n);
+        for (const FieldDesc& d : layout.point_fields)
+          seam_mesh.point_fields.emplace_back(d.name, d.components, d.type, n);
         for (size_t s = 0; s < n; ++s) {
           const auto [sq, si] = seams.seam_source[s];
           const uint8_t* item = &msgs[sq].items[si * ib];
@@ -561,14 +563,16 @@ Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std
       GtnWriteOptions wo = options;
       std::string parts_note = std::to_string(n_parts);
       parts_note.append(" parts:");
-      for (int q = 0; q < n_parts; ++q) parts_note.append(" ").append(std::to_string(first_piece[q + 1] - first_piece[q]));
+      for (int q = 0; q < n_parts; ++q)
+        parts_note.append(" ").append(std::to_string(first_piece[q + 1] - first_piece[q]));
       wo.command_line.append(" (").append(parts_note).append(" pieces)");
       level.header.level = 0;
       level.header.merges = 0;
       st = writeFileAtomically(path, [&](std::FILE* f) -> Status {
         GtnStreamWriter w(
             [&](std::span<const uint8_t> b) -> Status {
-              if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size()) return ioError(path + ": write failed");
+              if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size())
+                return ioError(path + ": write failed");
               return Status::ok();
             },
             wo);

@@ -49,7 +49,7 @@ struct PartsWriteReport {
 // make its mesh passes its failure as `local_failure` (its mesh and keys are then not used): every part fails
 // with it.
 Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std::vector<PointKey>& keys,
-                         bool coordinate_keys, PartExchange& exchange, const GtnWriteOptions& options, PartsWriteReport* report = nullptr,
-                         const Status& local_failure = Status::ok());
+                         bool coordinate_keys, PartExchange& exchange, const GtnWriteOptions& options,
+                         PartsWriteReport* report = nullptr, const Status& local_failure = Status::ok());
 
 }  // namespace gtn

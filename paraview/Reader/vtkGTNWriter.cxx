@@ -142,7 +142,7 @@ gtn::Status toMesh(vtkUnstructuredGrid* grid, const std::string& path, gtn::Impo
 
   gtn::TetMesh& mesh = result->mesh;
   mesh.coord_type = grid->GetPoints() && grid->GetPoints()->GetDataType() == VTK_FLOAT ? gtn::ScalarType::kFloat32
-                                                                                      : gtn::ScalarType::kFloat64;
+                                                                                       : gtn::ScalarType::kFloat64;
   mesh.coords.resize(3 * point_order.size());
   for (size_t i = 0; i < point_order.size(); ++i) grid->GetPoint(point_order[i], &mesh.coords[3 * i]);
   mesh.tets.resize(cell_order.size());
@@ -249,8 +249,8 @@ void vtkGTNWriter::WriteData() {
     gtn::GtnWriteOptions wo;
     wo.tool_version = GTN_VERSION_STRING;
     wo.command_line = "vtkGTNWriter";
-    st = gtn::writeGtnFromParts(path, result.mesh, keys, coordinate_keys, parallel ? static_cast<gtn::PartExchange&>(ranks) : solo, wo,
-                                nullptr, st);
+    st = gtn::writeGtnFromParts(path, result.mesh, keys, coordinate_keys,
+                                parallel ? static_cast<gtn::PartExchange&>(ranks) : solo, wo, nullptr, st);
   } else if (st.isOk()) {
     gtn::GtnConvertOptions options;
     options.levels = this->Levels;

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "codec/codec_test_util.h"
+#include "codec/pieces_check.h"
 #include "format/file_io.h"
 #include "format/gtn_reader.h"
 #include "test_util.h"
@@ -134,8 +135,8 @@ Written writeParts(const std::string& path, const std::vector<Part>& parts, uint
       o.tool_version = "test";
       o.command_line = "parts test";
       o.piece_tets = piece_tets;
-      w.status[q] = writeGtnFromParts(path, parts[q].mesh, parts[q].keys, parts[q].coordinate_keys, ex, o,
-                                       &w.reports[q]);
+      w.status[q] =
+          writeGtnFromParts(path, parts[q].mesh, parts[q].keys, parts[q].coordinate_keys, ex, o, &w.reports[q]);
     });
   for (std::thread& t : threads) t.join();
   return w;
@@ -199,9 +200,9 @@ TEST(GtnParts, TwoPartsMakeOneFileThatDecodesToTheWholeMesh) {
     EXPECT_GT(w.reports[0].seam_points, 0u);
   }
   // With one piece per part, part 0 receives the parts' boundaries only.
-  const Written w = writeParts(tempDir("parts") + "/two-big.gtn",
-                               {makePart(whole, share[0], {}, false), makePart(whole, share[1], {}, false)},
-                               kDefaultPieceTets);
+  const Written w =
+      writeParts(tempDir("parts") + "/two-big.gtn",
+                 {makePart(whole, share[0], {}, false), makePart(whole, share[1], {}, false)}, kDefaultPieceTets);
   for (const Status& st : w.status) ASSERT_TRUE(st.isOk()) << st.message();
   EXPECT_EQ(w.reports[0].pieces_per_part, (std::vector<uint32_t>{1, 1}));
   EXPECT_LT(w.reports[0].exposed_points, whole.numPoints() / 2);
@@ -301,6 +302,68 @@ TEST(GtnParts, PartsThatDisagreeFailOnEveryPartAndWriteNothing) {
     }
     EXPECT_FALSE(isRegularFile(path));
   }
+}
+
+// The API step by step for two parts (what writeGtnFromParts exchanges), and the part check:
+// partLosslessMismatch finds a piece whose streams do not give back the part.
+TEST(GtnParts, EachPartChecksItsPiecesAgainstTheAssembledLevel) {
+  const TetMesh whole = fieldGrid(16);
+  const auto share = slabs(whole, 2);
+  const std::vector<Part> parts = {makePart(whole, share[0], {}, false), makePart(whole, share[1], {}, false)};
+  std::vector<PartPlan> plans;
+  std::vector<PartExposed> exposed;
+  for (const Part& p : parts) {
+    auto plan = planPart(p.mesh, kMinPieceTets);
+    ASSERT_TRUE(plan.isOk()) << plan.status().message();
+    PartExposed e;
+    e.pieces = plan->pieces;
+    for (uint32_t v : plan->exposed) e.keys.push_back(p.keys[v]);
+    e.uses_first = plan->uses_first;
+    e.uses = plan->uses;
+    plans.push_back(std::move(plan).value());
+    exposed.push_back(std::move(e));
+  }
+  auto seams = planSeams(exposed);
+  ASSERT_TRUE(seams.isOk()) << seams.status().message();
+  EXPECT_TRUE(seams->orphans.empty());
+  std::vector<EncodedPart> encoded;
+  for (size_t q = 0; q < parts.size(); ++q) {
+    auto e = encodePart(parts[q].mesh, plans[q], seams->classes, seams->first_piece[q], seams->status[q]);
+    ASSERT_TRUE(e.isOk()) << e.status().message();
+    encoded.push_back(std::move(e).value());
+  }
+  // The seam vertices' values, from their source copies.
+  TetMesh seam_mesh;
+  seam_mesh.coord_type = whole.coord_type;
+  for (const Field& f : whole.point_fields)
+    seam_mesh.point_fields.emplace_back(f.name, f.components, f.type, seams->seam_source.size());
+  for (size_t s = 0; s < seams->seam_source.size(); ++s) {
+    const auto [q, i] = seams->seam_source[s];
+    const uint32_t v = plans[q].exposed[i];
+    for (int c = 0; c < 3; ++c) seam_mesh.coords.push_back(parts[q].mesh.coords[3 * size_t{v} + c]);
+    for (size_t f = 0; f < seam_mesh.point_fields.size(); ++f) {
+      const size_t ib = seam_mesh.point_fields[f].components * seam_mesh.point_fields[f].valueSize();
+      std::memcpy(&seam_mesh.point_fields[f].bytes[s * ib], &parts[q].mesh.point_fields[f].bytes[v * ib], ib);
+    }
+  }
+  std::vector<EncodedPart> sent = encoded;  // what the parts send: the streams
+  auto level = assembleParts(std::move(sent), *seams, seam_mesh);
+  ASSERT_TRUE(level.isOk()) << level.status().message();
+  EXPECT_EQ(level->header.points, whole.numPoints());
+  EXPECT_EQ(level->header.tets, whole.numTets());
+  for (size_t q = 0; q < parts.size(); ++q)
+    EXPECT_EQ(partLosslessMismatch(parts[q].mesh, encoded[q], seams->first_piece[q], piecedViewOf(*level)), "");
+  // The whole level decodes to the whole mesh, its boundary that of the whole mesh.
+  auto decoded = decodePieces(piecedViewOf(*level), {}, "parts");
+  ASSERT_TRUE(decoded.isOk()) << decoded.status().message();
+  EXPECT_TRUE(canonicalMesh(decoded->mesh) == canonicalMesh(whole));
+  EXPECT_EQ(level->header.boundary_triangles, decoded->boundary.size());
+  // Part 1's mesh with one cell value changed no longer matches what its pieces decode to.
+  TetMesh changed = parts[1].mesh;
+  changed.cell_fields[0].bytes[0] ^= 1;
+  EXPECT_NE(partLosslessMismatch(changed, encoded[1], seams->first_piece[1], piecedViewOf(*level))
+                .find("has other field values"),
+            std::string::npos);
 }
 
 }  // namespace
