@@ -11,6 +11,7 @@
 #include <cstring>
 #include <map>
 #include <mutex>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 
@@ -865,6 +866,373 @@ StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vec
       gt += info.tets;
     }
   }
+  return out;
+}
+
+// ---- a level held in parts ----------------------------------------------------------------------------
+
+StatusOr<PartPlan> planPart(const TetMesh& part, uint64_t piece_tets) {
+  if (piece_tets < kMinPieceTets) return usageError("planPart: pieces must hold at least 4096 tetrahedra");
+  GTN_RETURN_IF_ERROR(part.checkConsistency("the part"));
+  const size_t np = part.numPoints(), nt = part.numTets();
+  PartPlan plan;
+  if (nt > 0) plan.piece_of = partition(part, piece_tets, &plan.pieces);
+  // Per vertex, the pieces that use it: (vertex, piece) pairs, sorted.
+  std::vector<std::pair<uint32_t, uint32_t>> uses;
+  uses.reserve(4 * nt);
+  for (size_t t = 0; t < nt; ++t)
+    for (uint32_t v : part.tets[t]) uses.emplace_back(v, plan.piece_of[t]);
+  std::sort(uses.begin(), uses.end());
+  uses.erase(std::unique(uses.begin(), uses.end()), uses.end());
+  std::vector<char> exposed(np, 1);  // unused vertices are exposed
+  std::vector<uint32_t> first(np + 1, 0);
+  for (const auto& u : uses) ++first[u.first + 1];
+  for (size_t v = 0; v < np; ++v) {
+    first[v + 1] += first[v];
+    if (first[v + 1] - first[v] == 1) exposed[v] = 0;  // one piece: exposed only on the boundary
+  }
+  if (nt > 0) {
+    const FaceAdjacency adj = computeFaceAdjacency(part);
+    for (size_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 4; ++k)
+        if (adj.neighbor[4 * t + k] == kNoNeighbor)
+          for (int j = 0; j < 3; ++j) exposed[part.tets[t][kTetFace[k][j]]] = 1;
+  }
+  plan.uses_first.push_back(0);
+  for (size_t v = 0; v < np; ++v) {
+    if (!exposed[v]) continue;
+    plan.exposed.push_back(static_cast<uint32_t>(v));
+    for (uint32_t k = first[v]; k < first[v + 1]; ++k) plan.uses.push_back(uses[k].second);
+    plan.uses_first.push_back(static_cast<uint32_t>(plan.uses.size()));
+  }
+  return plan;
+}
+
+StatusOr<SeamPlan> planSeams(const std::vector<PartExposed>& parts, bool coordinate_keys) {
+  SeamPlan plan;
+  plan.first_piece.push_back(0);
+  for (const PartExposed& p : parts) {
+    if (p.uses_first.size() != p.keys.size() + 1 || p.uses_first.back() != p.uses.size())
+      return usageError("planSeams: a part's exposed vertices and their pieces do not match");
+    plan.first_piece.push_back(plan.first_piece.back() + p.pieces);
+  }
+  // Every copy of every key: (key, part, exposed index), sorted by key then part.
+  struct Copy {
+    PointKey key;
+    uint32_t part, index;
+    bool operator<(const Copy& o) const { return std::tie(key, part, index) < std::tie(o.key, o.part, o.index); }
+  };
+  std::vector<Copy> copies;
+  for (uint32_t q = 0; q < parts.size(); ++q) {
+    plan.status.emplace_back(parts[q].keys.size(), kPartOwnVertex);
+    for (uint32_t i = 0; i < parts[q].keys.size(); ++i) copies.push_back({parts[q].keys[i], q, i});
+  }
+  std::sort(copies.begin(), copies.end());
+  // Per key: the level's pieces that use it; seam keys grouped by class (classes in piece-list order,
+  // each class's keys in key order, as the copies are sorted).
+  std::map<std::vector<uint32_t>, std::vector<std::pair<size_t, size_t>>> class_keys;  // -> copy ranges
+  for (size_t i = 0; i < copies.size();) {
+    size_t j = i;
+    std::vector<uint32_t> pieces;
+    while (j < copies.size() && copies[j].key == copies[i].key) {
+      const Copy& c = copies[j];
+      if (j > i && c.part == copies[j - 1].part) {
+        std::string key;
+        if (coordinate_keys) {
+          double x[3];
+          std::memcpy(x, c.key.data(), sizeof x);
+          key = "coordinates (" + std::to_string(x[0]) + ", " + std::to_string(x[1]) + ", " + std::to_string(x[2]) +
+                "): without point global ids, points are matched across parts by their coordinates, which "
+                "coincident points make ambiguous";
+        } else {
+          key = "global id " + std::to_string(c.key[0]);
+        }
+        return invalidData("part " + std::to_string(c.part) + " holds two points with the same " + key);
+      }
+      const PartExposed& p = parts[c.part];
+      for (uint32_t k = p.uses_first[c.index]; k < p.uses_first[c.index + 1]; ++k) {
+        if (p.uses[k] >= p.pieces) return usageError("planSeams: a part names a piece it does not have");
+        pieces.push_back(plan.first_piece[c.part] + p.uses[k]);
+      }
+      ++j;
+    }
+    std::sort(pieces.begin(), pieces.end());
+    if (pieces.size() >= 2) {
+      class_keys[pieces].emplace_back(i, j);
+    } else if (pieces.size() == 1) {
+      // One piece's own: the part that uses it keeps it, the others drop their copies.
+      for (size_t k = i; k < j; ++k) {
+        const uint32_t q = copies[k].part;
+        const bool user = pieces[0] >= plan.first_piece[q] && pieces[0] < plan.first_piece[q + 1];
+        plan.status[q][copies[k].index] = user ? kPartOwnVertex : kPartDropVertex;
+      }
+    } else {
+      // An orphan: the first holder with pieces keeps it for now.
+      plan.orphans.push_back(copies[i].key);
+      plan.orphan_holders.emplace_back();
+      bool kept = false;
+      for (size_t k = i; k < j; ++k) {
+        const uint32_t q = copies[k].part;
+        plan.orphan_holders.back().emplace_back(q, copies[k].index);
+        const bool keep = !kept && parts[q].pieces > 0;
+        kept = kept || keep;
+        plan.status[q][copies[k].index] = keep ? kPartOwnVertex : kPartDropVertex;
+      }
+    }
+    i = j;
+  }
+  uint32_t seam = 0;
+  for (const auto& [pieces, ranges] : class_keys) {
+    plan.classes.push_back({pieces, ranges.size()});
+    for (const auto& [i, j] : ranges) {
+      for (size_t k = i; k < j; ++k) plan.status[copies[k].part][copies[k].index] = seam;
+      plan.seam_source.emplace_back(copies[i].part, copies[i].index);
+      ++seam;
+    }
+  }
+  return plan;
+}
+
+void settleOrphans(SeamPlan& plan, const std::vector<char>& used) {
+  for (size_t k = 0; k < plan.orphans.size() && k < used.size(); ++k)
+    if (used[k])
+      for (const auto& [q, i] : plan.orphan_holders[k]) plan.status[q][i] = kPartDropVertex;
+}
+
+std::vector<char> usedKeys(const TetMesh& part, std::span<const PointKey> part_keys, std::span<const PointKey> keys) {
+  std::vector<char> out(keys.size(), 0);
+  if (keys.empty()) return out;
+  std::map<PointKey, size_t> wanted;
+  for (size_t k = 0; k < keys.size(); ++k) wanted.emplace(keys[k], k);
+  std::vector<char> seen(part.numPoints(), 0);
+  for (const Tet& t : part.tets)
+    for (uint32_t v : t) {
+      if (seen[v] || v >= part_keys.size()) continue;
+      seen[v] = 1;
+      const auto it = wanted.find(part_keys[v]);
+      if (it != wanted.end()) out[it->second] = 1;
+    }
+  return out;
+}
+
+StatusOr<EncodedPart> encodePart(const TetMesh& part, const PartPlan& plan, std::span<const SeamClass> classes,
+                                 uint32_t first_piece, std::span<const uint32_t> status, const EncodeOptions& options) {
+  if (!options.seam.empty()) return usageError("encodePart: the seams are the parts' own");
+  if (status.size() != plan.exposed.size() || plan.piece_of.size() != part.numTets())
+    return usageError("encodePart: the plan or the status does not match the part");
+  const size_t np = part.numPoints(), nt = part.numTets();
+  const uint32_t n_pieces = plan.pieces;
+  EncodedPart out;
+  out.seam_id.assign(np, kNoIndex);
+  std::vector<char> dropped(np, 0);
+  uint64_t n_seam = 0;
+  for (const SeamClass& c : classes) n_seam += c.points;
+  for (size_t i = 0; i < plan.exposed.size(); ++i) {
+    const uint32_t s = status[i];
+    if (s == kPartDropVertex) {
+      dropped[plan.exposed[i]] = 1;
+    } else if (s != kPartOwnVertex) {
+      if (s >= n_seam) return usageError("encodePart: a seam id beyond the classes");
+      out.seam_id[plan.exposed[i]] = s;
+    }
+  }
+  if (n_pieces == 0) return out;
+  out.piece_tets.resize(n_pieces);
+  for (size_t t = 0; t < nt; ++t) out.piece_tets[plan.piece_of[t]].push_back(static_cast<uint32_t>(t));
+  std::vector<uint32_t> first_use(np, kNoIndex);
+  for (uint32_t p = 0; p < n_pieces; ++p)
+    for (uint32_t t : out.piece_tets[p])
+      for (uint32_t v : part.tets[t])
+        if (first_use[v] == kNoIndex) first_use[v] = p;
+  // A dropped vertex is another part's: no tetrahedron here may use it.
+  for (size_t v = 0; v < np; ++v)
+    if (dropped[v] && first_use[v] != kNoIndex)
+      return usageError("encodePart: vertex " + std::to_string(v) + " is used here but another part's");
+  // Unused own points (encodePieces' rule).
+  std::vector<std::vector<uint32_t>> piece_unused(n_pieces);
+  {
+    std::vector<char> unused(np, 0);
+    bool any = false;
+    for (size_t v = 0; v < np; ++v)
+      if (first_use[v] == kNoIndex && !dropped[v]) unused[v] = any = true;
+    if (any) {
+      for (const EdgePoint& e : findEdgePoints(part)) {
+        if (!unused[e.point] || first_use[e.a] == kNoIndex) continue;
+        piece_unused[first_use[e.a]].push_back(e.point);
+        unused[e.point] = 0;
+      }
+      for (size_t v = 0; v < np; ++v)
+        if (unused[v]) piece_unused[n_pieces - 1].push_back(static_cast<uint32_t>(v));
+      for (auto& list : piece_unused) std::sort(list.begin(), list.end());
+    }
+  }
+  // Each piece's seam list: the classes that hold it, in class order, each class's ids in order.
+  std::vector<std::unordered_map<uint32_t, uint32_t>> seam_index(n_pieces);  // global seam id -> index
+  {
+    uint64_t first = 0;
+    for (const SeamClass& c : classes) {
+      for (uint32_t g : c.pieces)
+        if (g >= first_piece && g - first_piece < n_pieces) {
+          auto& index = seam_index[g - first_piece];
+          for (uint64_t k = 0; k < c.points; ++k)
+            index.emplace(static_cast<uint32_t>(first + k), static_cast<uint32_t>(index.size()));
+        }
+      first += c.points;
+    }
+  }
+  out.piece_vertices.resize(n_pieces);
+  out.pieces.resize(n_pieces);
+  out.encoded.resize(n_pieces);
+  std::vector<std::vector<std::array<uint32_t, 3>>> seam_faces(n_pieces);
+  std::vector<Status> failures(n_pieces, Status::ok());
+  tbb::parallel_for(uint32_t{0}, n_pieces, [&](uint32_t p) {
+    std::vector<uint32_t>& verts = out.piece_vertices[p];
+    const std::vector<uint32_t>& tl = out.piece_tets[p];
+    for (uint32_t t : tl)
+      for (uint32_t v : part.tets[t]) verts.push_back(v);
+    verts.insert(verts.end(), piece_unused[p].begin(), piece_unused[p].end());
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    std::unordered_map<uint32_t, uint32_t> local;
+    local.reserve(verts.size());
+    for (size_t k = 0; k < verts.size(); ++k) local.emplace(verts[k], static_cast<uint32_t>(k));
+    TetMesh piece;
+    piece.coord_type = part.coord_type;
+    piece.metadata = part.metadata;
+    piece.coords.resize(3 * verts.size());
+    for (size_t k = 0; k < verts.size(); ++k)
+      for (int i = 0; i < 3; ++i) piece.coords[3 * k + i] = part.coords[3 * size_t{verts[k]} + i];
+    for (const Field& f : part.point_fields) {
+      Field g(f.name, f.components, f.type, verts.size());
+      const size_t ib = f.components * f.valueSize();
+      for (size_t k = 0; k < verts.size(); ++k) std::memcpy(&g.bytes[k * ib], &f.bytes[size_t{verts[k]} * ib], ib);
+      piece.point_fields.push_back(std::move(g));
+    }
+    piece.tets.resize(tl.size());
+    for (size_t k = 0; k < tl.size(); ++k)
+      for (int j = 0; j < 4; ++j) piece.tets[k][j] = local.at(part.tets[tl[k]][j]);
+    for (const Field& f : part.cell_fields) {
+      Field g(f.name, f.components, f.type, tl.size());
+      const size_t ib = f.components * f.valueSize();
+      for (size_t k = 0; k < tl.size(); ++k) std::memcpy(&g.bytes[k * ib], &f.bytes[size_t{tl[k]} * ib], ib);
+      piece.cell_fields.push_back(std::move(g));
+    }
+    {
+      const FaceAdjacency adj = computeFaceAdjacency(piece);
+      for (size_t t = 0; t < piece.tets.size(); ++t)
+        for (int k = 0; k < 4; ++k) {
+          if (adj.neighbor[4 * t + k] != kNoNeighbor) continue;
+          std::array<uint32_t, 3> f;
+          bool seam = true;
+          for (int j = 0; j < 3; ++j) {
+            f[j] = out.seam_id[verts[piece.tets[t][kTetFace[k][j]]]];
+            seam = seam && f[j] != kNoIndex;
+          }
+          if (!seam) continue;
+          std::sort(f.begin(), f.end());
+          seam_faces[p].push_back(f);
+        }
+    }
+    EncodeOptions opt = options;
+    opt.seam.assign(verts.size(), kNoIndex);
+    for (size_t k = 0; k < verts.size(); ++k) {
+      const uint32_t s = out.seam_id[verts[k]];
+      if (s == kNoIndex) continue;
+      const auto it = seam_index[p].find(s);
+      if (it == seam_index[p].end()) {
+        failures[p] = usageError("encodePart: piece " + std::to_string(first_piece + p) + " uses seam vertex " +
+                                 std::to_string(s) + ", whose class does not hold it");
+        return;
+      }
+      opt.seam[k] = it->second;
+    }
+    opt.seam_count = static_cast<uint32_t>(seam_index[p].size());
+    StatusOr<EncodedLevel> e = encodeLevel(piece, opt);
+    if (!e.isOk()) {
+      failures[p] = e.status();
+      return;
+    }
+    out.pieces[p] = infoOf(*e, opt.seam_count);
+    uint64_t own_boundary = 0;
+    for (size_t k = 0; k < verts.size(); ++k)
+      if (opt.seam[k] == kNoIndex && e->vertex_order[k] < e->boundary_points) ++own_boundary;
+    out.pieces[p].own_boundary_points = own_boundary;
+    out.encoded[p] = std::move(*e);
+  });
+  for (const Status& st : failures)
+    if (!st.isOk()) return st;
+  for (auto& list : seam_faces) out.seam_faces.insert(out.seam_faces.end(), list.begin(), list.end());
+  return out;
+}
+
+StatusOr<PiecedLevel> assembleParts(std::vector<EncodedPart>&& parts, const SeamPlan& plan, const TetMesh& seams) {
+  PiecedLevel out;
+  uint64_t n_seam = 0;
+  for (const SeamClass& c : plan.classes) n_seam += c.points;
+  if (seams.numPoints() != n_seam) return usageError("assembleParts: the seam mesh does not hold every seam vertex");
+  if (parts.size() + 1 != plan.first_piece.size()) return usageError("assembleParts: parts and plan do not match");
+  std::vector<std::array<uint32_t, 3>> cut;
+  for (size_t q = 0; q < parts.size(); ++q) {
+    EncodedPart& part = parts[q];
+    if (part.pieces.size() != part.encoded.size() ||
+        part.pieces.size() != plan.first_piece[q + 1] - plan.first_piece[q])
+      return usageError("assembleParts: part " + std::to_string(q) + " has other pieces than the plan");
+    for (size_t p = 0; p < part.pieces.size(); ++p) {
+      out.pieces.push_back(part.pieces[p]);
+      out.encoded.push_back(std::move(part.encoded[p]));
+    }
+    cut.insert(cut.end(), part.seam_faces.begin(), part.seam_faces.end());
+  }
+  if (out.pieces.empty()) return usageError("the parts hold no tetrahedra");
+  LevelHeader& h = out.header;
+  h = out.encoded[0].header;
+  h.points = n_seam;
+  h.tets = 0;
+  h.boundary_triangles = 0;
+  for (size_t p = 0; p < out.pieces.size(); ++p) {
+    const LevelHeader& e = out.encoded[p].header;
+    if (e.coord_type != h.coord_type || e.point_fields.size() != h.point_fields.size() ||
+        e.cell_fields.size() != h.cell_fields.size())
+      return invalidData("piece " + std::to_string(p) + " has another coordinate type or other fields than piece 0");
+    for (int f = 0; f < 2; ++f) {
+      const auto& a = f ? e.cell_fields : e.point_fields;
+      const auto& b = f ? h.cell_fields : h.point_fields;
+      for (size_t i = 0; i < a.size(); ++i)
+        if (a[i].name != b[i].name || a[i].type != b[i].type || a[i].components != b[i].components)
+          return invalidData("piece " + std::to_string(p) + "'s field '" + a[i].name + "' differs from piece 0's");
+    }
+    const PieceInfo& info = out.pieces[p];
+    h.points += info.own_points;
+    h.tets += info.tets;
+    h.boundary_triangles += info.boundary_triangles;
+    for (int i = 0; i < 3; ++i) {
+      h.bbox_min[i] = std::min(h.bbox_min[i], info.bbox_min[i]);
+      h.bbox_max[i] = std::max(h.bbox_max[i], info.bbox_max[i]);
+    }
+  }
+  if (h.points >= kNoIndex || out.pieces.size() > kNoIndex / 2)
+    return invalidData("the parts hold too many points or pieces for one level");
+  std::sort(cut.begin(), cut.end());
+  for (size_t i = 0; i + 1 < cut.size(); ++i)
+    if (cut[i] == cut[i + 1]) h.boundary_triangles -= 2;
+  if (out.pieces.size() == 1) {
+    if (!plan.classes.empty()) return invalidData("a level of one piece with seam classes");
+    out.header.boundary_triangles = out.pieces[0].boundary_triangles;
+    return out;
+  }
+  out.classes = plan.classes;
+  // The seam mesh must carry the level's point fields.
+  if (seams.coord_type != h.coord_type || seams.point_fields.size() != h.point_fields.size())
+    return usageError("assembleParts: the seam mesh's coordinate type or point fields differ from the level's");
+  const ComponentLayout layout(h);
+  out.seam_streams.resize(out.classes.size());
+  std::vector<uint64_t> class_first(out.classes.size() + 1, 0);
+  for (size_t c = 0; c < out.classes.size(); ++c) class_first[c + 1] = class_first[c] + out.classes[c].points;
+  tbb::parallel_for(size_t{0}, out.classes.size(), [&](size_t c) {
+    std::vector<uint32_t> vertices(out.classes[c].points);
+    for (size_t k = 0; k < vertices.size(); ++k) vertices[k] = static_cast<uint32_t>(class_first[c] + k);
+    out.seam_streams[c] = encodeSeamStream(seams, out.header, layout, vertices);
+  });
   return out;
 }
 

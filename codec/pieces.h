@@ -11,12 +11,14 @@
 // Tetrahedra come piece by piece, each piece's in its decoding order.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "codec/level_codec.h"
+#include "mesh/index.h"
 #include "mesh/mesh_stream.h"
 #include "mesh/tet_mesh.h"
 
@@ -139,5 +141,98 @@ std::vector<std::vector<uint32_t>> pieceSeamLists(std::span<const SeamClass> cla
 // after its last tetrahedron. Vertex ids are the mesh's indices, which must put the boundary's vertices
 // first (decodePieces' do).
 Status emitDecoded(const LevelHeader& header, const DecodedPieces& decoded, MeshSink& sink);
+
+// ---- A level held in parts --------------------------------------------------------------------------
+// A mesh held in parts (the ranks of a distributed dataset) is coded where it is: each part is cut
+// into pieces of its own, which it codes, and the parts meet through the level's seam table. A point
+// is one point of the level wherever its key occurs (a global point id, or the bits of its
+// coordinates): parts hold copies of the points they share. The parts agree on the seams through a
+// small exchange that a coordinator (one of the parts) settles:
+//   1. each part: planPart, and tells the coordinator its exposed points (PartExposed): those on its
+//      boundary surface, those several of its pieces use, and those none uses;
+//   2. the coordinator: planSeams over every part's PartExposed (in part order, pieces numbered
+//      part after part); each part answers usedKeys for the plan's orphans; settleOrphans;
+//   3. each part: encodePart with the classes, its first piece and its exposed points' status;
+//   4. the coordinator: assembleParts into the PiecedLevel that the file stores;
+//   5. each part: partLosslessMismatch (codec/pieces_check.h) checks its pieces decode back.
+// The seam vertices of a class are in the order of their keys; the file is the same whatever the
+// number of threads, and for the same parts in the same order.
+
+// A point's identity across parts: {global id, 0, 0}, or the bit patterns of its three coordinates.
+using PointKey = std::array<uint64_t, 3>;
+
+// A part cut into pieces (the median bisection of encodePieces, at most piece_tets tetrahedra each),
+// and its exposed vertices.
+struct PartPlan {
+  uint32_t pieces = 0;               // none when the part has no tetrahedra
+  std::vector<uint32_t> piece_of;    // per tetrahedron, its piece
+  std::vector<uint32_t> exposed;     // the exposed vertices (increasing local indices)
+  std::vector<uint32_t> uses_first;  // exposed vertex i is used by pieces uses[uses_first[i] .. uses_first[i + 1])
+  std::vector<uint32_t> uses;        // (the part's piece indices, increasing)
+};
+StatusOr<PartPlan> planPart(const TetMesh& part, uint64_t piece_tets);
+
+// What a part tells the coordinator: its piece count, and per exposed vertex its key and the part's
+// pieces that use it (as PartPlan).
+struct PartExposed {
+  uint32_t pieces = 0;
+  std::vector<PointKey> keys;
+  std::vector<uint32_t> uses_first, uses;
+};
+
+// An exposed vertex's status: a global seam id, or one of these.
+inline constexpr uint32_t kPartOwnVertex = kNoIndex;       // the part's own (coded in its piece)
+inline constexpr uint32_t kPartDropVertex = kNoIndex - 1;  // another part codes it: left out here
+
+struct SeamPlan {
+  std::vector<SeamClass> classes;             // the level's classes, in class order
+  std::vector<uint32_t> first_piece;          // per part its first piece's index; last: every piece
+  std::vector<std::vector<uint32_t>> status;  // per part, per exposed vertex
+  // Per seam id, the copy whose values the class stream stores: (part, exposed index).
+  std::vector<std::pair<uint32_t, uint32_t>> seam_source;
+  // Keys that parts hold without any of their exposed vertices being used (unused points): the
+  // coordinator asks every part whether one of its tetrahedra uses them (usedKeys) and settles them.
+  std::vector<PointKey> orphans;
+  std::vector<std::vector<std::pair<uint32_t, uint32_t>>> orphan_holders;  // per orphan: (part, exposed index)
+};
+
+// The seams of the parts' exposed vertices: a key used by pieces of two or more parts, or by two or
+// more pieces of one part, is a seam vertex of the class of those pieces; a key used by one piece is
+// that piece's own, the other parts' copies dropped; an orphan stays with the first part (with
+// pieces) that holds it unless settleOrphans finds it used. Fails when a part exposes one key twice
+// (the message shows the key as coordinates when `coordinate_keys`, else as a global id).
+StatusOr<SeamPlan> planSeams(const std::vector<PartExposed>& parts, bool coordinate_keys = false);
+// used[k]: some part's tetrahedra use orphans[k]; then every holder drops it.
+void settleOrphans(SeamPlan& plan, const std::vector<char>& used);
+// Per key of `keys`: whether a tetrahedron of `part` uses a vertex with that key (`part_keys`: per
+// vertex of the part).
+std::vector<char> usedKeys(const TetMesh& part, std::span<const PointKey> part_keys, std::span<const PointKey> keys);
+
+// A part's pieces, coded.
+struct EncodedPart {
+  std::vector<PieceInfo> pieces;
+  std::vector<EncodedLevel> encoded;
+  // Every piece's boundary faces whose corners are all seam vertices, as sorted global seam ids (a
+  // face between two pieces appears twice over all parts).
+  std::vector<std::array<uint32_t, 3>> seam_faces;
+  // The part's own record: per piece its vertices (increasing local indices) and tetrahedra; per
+  // vertex its seam id (kNoIndex: none).
+  std::vector<std::vector<uint32_t>> piece_vertices, piece_tets;
+  std::vector<uint32_t> seam_id;
+};
+
+// Codes the pieces of `part` (as `plan` cuts it; in parallel) against the level's `classes`, its
+// pieces being the level's pieces first_piece, first_piece + 1, ...; `status` per exposed vertex
+// (SeamPlan::status). Unused own points go with a piece that uses the edge they lie on, else with the
+// part's last piece.
+StatusOr<EncodedPart> encodePart(const TetMesh& part, const PartPlan& plan, std::span<const SeamClass> classes,
+                                 uint32_t first_piece, std::span<const uint32_t> status,
+                                 const EncodeOptions& options = {});
+
+// The level from every part's pieces (`parts` in part order: their pieces, encodings and seam faces;
+// their own record is not needed) and `seams`, a mesh of the seam vertices alone in seam id order
+// with the level's coordinate type and point fields (the values of SeamPlan::seam_source). The
+// PiecedLevel's vertex_order and tet_order stay empty: the parts hold the sources.
+StatusOr<PiecedLevel> assembleParts(std::vector<EncodedPart>&& parts, const SeamPlan& plan, const TetMesh& seams);
 
 }  // namespace gtn

@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "codec/level_check.h"
+#include "mesh/index.h"
 
 namespace gtn {
 
@@ -81,6 +82,99 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
     }
     if (inversions % 2) return which + " is reversed";
     if (!sameItem(source.cell_fields, t, got.cell_fields, d)) return which + " has other field values";
+  }
+  return "";
+}
+
+std::string partLosslessMismatch(const TetMesh& part, const EncodedPart& encoded, uint32_t first_piece,
+                                 const PiecedLevelView& view) {
+  const size_t n_mine = encoded.pieces.size();
+  if (n_mine == 0) return "";
+  const size_t n_pieces = view.pieces.size();
+  if (first_piece + n_mine > n_pieces || encoded.encoded.size() != n_mine || encoded.piece_vertices.size() != n_mine ||
+      encoded.piece_tets.size() != n_mine || encoded.seam_id.size() != part.numPoints())
+    return "the part's pieces do not match the level's piece table";
+  std::vector<uint32_t> chosen(n_mine);
+  for (size_t p = 0; p < n_mine; ++p) chosen[p] = static_cast<uint32_t>(first_piece + p);
+  auto decoded = decodePieces(view, chosen, "the encoded part");
+  if (!decoded.isOk()) return "it does not decode: " + decoded.status().message();
+  const TetMesh& got = decoded->mesh;
+  if (got.coord_type != part.coord_type) return "the coordinate type changed";
+  if (!sameLayout(got.point_fields, part.point_fields) || !sameLayout(got.cell_fields, part.cell_fields))
+    return "field names, types or components changed";
+  // The level's global ids (codec/pieces.h) of the part's vertices and tetrahedra.
+  uint64_t n_seam = 0, own_bnd_all = 0;
+  for (const SeamClass& c : view.classes) n_seam += c.points;
+  for (const PieceInfo& info : view.pieces) own_bnd_all += info.own_boundary_points;
+  uint64_t bnd = n_seam, in = n_seam + own_bnd_all, tet_base = 0;
+  for (uint32_t g = 0; g < first_piece; ++g) {
+    bnd += view.pieces[g].own_boundary_points;
+    in += view.pieces[g].own_points - view.pieces[g].own_boundary_points;
+    tet_base += view.pieces[g].tets;
+  }
+  // Decoded mesh index of each global vertex id, and of each global tetrahedron position from the
+  // part's first (its pieces' tetrahedra are one run).
+  const uint64_t first_tet = tet_base, n_level_points = view.header->points;
+  std::vector<uint32_t> vertex_at(n_level_points, kNoIndex), tet_at(got.numTets(), kNoIndex);
+  for (size_t d = 0; d < got.numPoints(); ++d) {
+    const uint64_t g = decoded->global_vertex.empty() ? d : decoded->global_vertex[d];
+    if (g >= n_level_points) return "a decoded vertex id beyond the level's points";
+    vertex_at[g] = static_cast<uint32_t>(d);
+  }
+  for (size_t d = 0; d < got.numTets(); ++d) {
+    const uint64_t g = decoded->global_tet.empty() ? d : decoded->global_tet[d];
+    if (g < first_tet || g - first_tet >= tet_at.size()) return "a decoded tetrahedron beyond the part's";
+    tet_at[g - first_tet] = static_cast<uint32_t>(d);
+  }
+  std::vector<uint64_t> global(part.numPoints(), UINT64_MAX);
+  for (size_t p = 0; p < n_mine; ++p) {
+    const EncodedLevel& e = encoded.encoded[p];
+    const std::vector<uint32_t>& verts = encoded.piece_vertices[p];
+    if (e.vertex_order.size() != verts.size()) return "piece " + std::to_string(first_piece + p) + ": vertex order";
+    std::vector<uint32_t> by_id(verts.size());
+    for (size_t k = 0; k < verts.size(); ++k) {
+      if (e.vertex_order[k] >= verts.size()) return "piece " + std::to_string(first_piece + p) + ": vertex order";
+      by_id[e.vertex_order[k]] = static_cast<uint32_t>(k);
+    }
+    for (size_t id = 0; id < by_id.size(); ++id) {
+      const uint32_t v = verts[by_id[id]];
+      if (encoded.seam_id[v] != kNoIndex) {
+        global[v] = encoded.seam_id[v];
+      } else {
+        global[v] = id < e.boundary_points ? bnd++ : in++;
+      }
+    }
+    const std::vector<uint32_t>& tl = encoded.piece_tets[p];
+    if (e.tet_order.size() != tl.size()) return "piece " + std::to_string(first_piece + p) + ": tetrahedron order";
+    for (size_t k = 0; k < tl.size(); ++k) {
+      const uint32_t t = tl[k];
+      const std::string which = "part tetrahedron " + std::to_string(t);
+      const uint64_t pos = tet_base + e.tet_order[k] - first_tet;
+      if (pos >= tet_at.size() || tet_at[pos] == kNoIndex) return which + " was not decoded";
+      const uint32_t d_tet = tet_at[pos];
+      int perm[4], inversions = 0;
+      for (int i = 0; i < 4; ++i) {
+        perm[i] = -1;
+        for (int j = 0; j < 4; ++j) {
+          const uint32_t d = got.tets[d_tet][j];
+          const uint64_t gid = decoded->global_vertex.empty() ? d : decoded->global_vertex[d];
+          if (gid == global[part.tets[t][i]]) perm[i] = j;
+        }
+        if (perm[i] < 0) return which + " has other vertices";
+        for (int j = 0; j < i; ++j) inversions += perm[j] > perm[i];
+      }
+      if (inversions % 2) return which + " is reversed";
+      if (!sameItem(part.cell_fields, t, got.cell_fields, d_tet)) return which + " has other field values";
+    }
+    tet_base += view.pieces[first_piece + p].tets;
+  }
+  for (size_t v = 0; v < part.numPoints(); ++v) {
+    if (global[v] == UINT64_MAX) continue;  // another part's
+    const std::string which = "part point " + std::to_string(v);
+    const uint32_t d = global[v] < vertex_at.size() ? vertex_at[global[v]] : kNoIndex;
+    if (d == kNoIndex) return which + " was not decoded";
+    if (std::memcmp(got.point(d), part.point(v), 3 * sizeof(double)) != 0) return which + " moved";
+    if (!sameItem(part.point_fields, v, got.point_fields, d)) return which + " has other field values";
   }
   return "";
 }

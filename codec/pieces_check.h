@@ -22,4 +22,12 @@ PiecedLevelView piecedViewOf(const PiecedLevel& level);
 // decodes back exactly, else the first difference found (or the decoder's error).
 std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& level);
 
+// Whether the pieces of a part (codec/pieces.h, "A level held in parts"), decoded from the level as
+// the file holds it, give back the part exactly: `view` holds every piece's info, every class and seam
+// stream, and the payloads of the part's pieces (first_piece, first_piece + 1, ...); the other
+// payloads are not read. Each vertex of the part's pieces and each of its tetrahedra is compared as
+// piecedLosslessMismatch compares them. Returns "" when they decode back exactly.
+std::string partLosslessMismatch(const TetMesh& part, const EncodedPart& encoded, uint32_t first_piece,
+                                 const PiecedLevelView& view);
+
 }  // namespace gtn

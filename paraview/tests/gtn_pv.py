@@ -55,6 +55,19 @@ def checksum(tets):
     return hashlib.sha256(numpy.ascontiguousarray(tets[order]).astype("<i8").tobytes()).hexdigest()
 
 
+def coordinate_checksum(*grids):
+    """SHA-256 of the tetrahedra of `grids` as their corners' coordinates (each tetrahedron's corners
+    sorted, then the tetrahedra sorted): the same for any numbering of the points and tetrahedra, and
+    any split of them into grids."""
+    corners = numpy.concatenate([vtk_to_numpy(g.GetPoints().GetData()).astype("<f8")[tets_of(g)] for g in grids
+                                 if g.GetNumberOfCells() > 0])  # (n, 4, 3)
+    keys = numpy.ascontiguousarray(corners).view([("x", "<f8"), ("y", "<f8"), ("z", "<f8")]).reshape(-1, 4)
+    keys = numpy.sort(keys, axis=1)
+    flat = numpy.ascontiguousarray(keys).view("<f8").reshape(len(keys), 12)
+    order = numpy.lexsort(flat.T[::-1])
+    return hashlib.sha256(numpy.ascontiguousarray(flat[order]).tobytes()).hexdigest()
+
+
 def render_like_gtn(source, view_json, png, mapper="Bunyk ray cast"):
     """Volume-renders `source` with the camera and transfer function `gtn render --dump-view` wrote,
     with ParaView's `mapper` (default the Bunyk ray caster, as bench/render/vtk_compare.py), into `png`."""

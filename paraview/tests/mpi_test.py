@@ -1,8 +1,10 @@
 """The plugin under MPI: `mpirun -np N pvbatch mpi_test.py ...` reads one .gtn stored as many pieces
 (`gtn convert --piece-tets`), each rank decoding only its run of the file's pieces: a rank's output is
 exactly the tetrahedra of its pieces, the union of the ranks' outputs must equal the serial read (counts
-and the checksum of the sorted tetrahedra), the image ParaView composites must equal the serial one, and
-File > Save Data must write one .gtn equal to the source. The serial run also asks the reader for piece
+and the checksum of the sorted tetrahedra), the image ParaView composites must equal the serial one,
+File > Save Data must write one .gtn equal to the source, and the parallel writer GTNPartsWriter (each
+rank codes its share, points shared by ranks matched by GlobalIds or by coordinates) one .gtn whose
+pieces are the ranks' in turn, equal to the source and to the gathered write. The serial run also asks the reader for piece
 requests itself (2, 3 and more requests than the file has pieces) and checks their union.
 
 Usage: pvbatch mpi_test.py GTN PLUGIN SOURCE.gtn TMP_DIR --serial OUT.json   (the serial reference)
@@ -72,7 +74,8 @@ if mode == "--serial":
     check(len(piece_tets) > 2, "the file holds %d pieces" % len(piece_tets))
     grid = servermanager.Fetch(reader)
     tets = gtn_pv.tets_of(grid)
-    ref = {"points": grid.GetNumberOfPoints(), "tets": len(tets), "checksum": gtn_pv.checksum(tets)}
+    ref = {"points": grid.GetNumberOfPoints(), "tets": len(tets), "checksum": gtn_pv.checksum(tets),
+           "coordinate_checksum": gtn_pv.coordinate_checksum(grid)}
     check(field_ids(grid, "GTNPieces") == list(range(len(piece_tets))), "one request decodes every piece")
     # Piece requests asked of the reader itself: any number of them covers the file once; beyond the
     # file's pieces some are empty, with the same arrays.
@@ -123,11 +126,79 @@ print("tetrahedra per rank:", per_rank)
 check(all(0 < n < ref["tets"] for n in per_rank), "each rank holds a share, not the whole mesh")
 check_union(outs, ref, "%d ranks" % ranks)
 
-# Save Data under MPI: the pieces are gathered to rank 0, which writes one .gtn (level 0 alone: the
-# gathering is what is tested here; plugin_test.py writes levels and merge trees).
+# Save Data under MPI (GTNWriter): the pieces are gathered to rank 0, which writes one .gtn (level 0
+# alone: the gathering is what is tested here; plugin_test.py writes levels and merge trees).
 out = os.path.join(tmp, "saved-mpi.gtn")
 SaveData(out, proxy=reader, Levels=0, MergeTree=0)
 gtn(binary, "validate", out, "--against", src)
 saved = json.loads(gtn(binary, "info", "--json", out))
 check((saved["points"], saved["tets"]) == (ref["points"], ref["tets"]), "saved .gtn: one file with the source's mesh")
+
+# The parallel writer (GTNPartsWriter): each rank codes its own share as pieces of level 0, the ranks
+# meet through the seam table, rank 0 writes one file.
+import re  # noqa: E402
+from paraview.simple import PassArrays, Tetrahedralize, Wavelet  # noqa: E402
+
+
+def write_parts(source, name):
+    out = os.path.join(tmp, name)
+    if os.path.exists(out):
+        os.remove(out)
+    servermanager.writers.GTNPartsWriter(Input=source, FileName=out).UpdatePipeline()
+    return out
+
+
+def rank_grids(source):
+    source.UpdatePipeline()
+    return [servermanager.Fetch(source, rank) for rank in range(ranks)]
+
+
+def check_parts_file(out, what, grids, points):
+    """`out` validates, holds level 0 alone with the tetrahedra of `grids` (the ranks' inputs, by
+    coordinates) and `points` points, and its pieces are rank 0's, then rank 1's."""
+    gtn(binary, "validate", out)
+    info = json.loads(gtn(binary, "info", "--json", out))
+    tets = sum(g.GetNumberOfCells() for g in grids)
+    check((info["points"], info["tets"], len(info["levels"])) == (points, tets, 1),
+          "parts writer (%s): %d points, %d tetrahedra, level 0 alone" % (what, points, tets))
+    m = re.search(r"\((\d+) parts:((?: \d+)+) pieces\)", info["provenance"]["command_line"])
+    check(m is not None and int(m.group(1)) == ranks, "parts writer (%s): %s" % (what, info["provenance"]["command_line"]))
+    per_rank_pieces = [int(x) for x in m.group(2).split()]
+    file_piece_tets = [p["tets"] for p in info["levels"][0]["pieces"]]
+    check(all(n > 0 for n in per_rank_pieces) and sum(per_rank_pieces) == len(file_piece_tets),
+          "parts writer (%s): pieces per rank %s" % (what, per_rank_pieces))
+    first = 0
+    for rank, n in enumerate(per_rank_pieces):
+        mine = grids[rank].GetNumberOfCells()
+        check(sum(file_piece_tets[first:first + n]) == mine,
+              "parts writer (%s): rank %d's pieces hold its %d tetrahedra" % (what, rank, mine))
+        first += n
+    # Read back by the ranks: the union of their tetrahedra, by coordinates, equals the ranks' input.
+    check(gtn_pv.coordinate_checksum(*rank_grids(OpenDataFile(out))) == gtn_pv.coordinate_checksum(*grids),
+          "parts writer (%s): the sorted tetrahedra by coordinates equal the input's" % what)
+
+
+# The reader's shares, matched by their point GlobalIds: the same mesh, bit for bit up to renumbering,
+# as the source and as the gathered write.
+out = write_parts(reader, "saved-parts.gtn")
+check_parts_file(out, "global ids", [g for g, _, _ in outs], ref["points"])
+gtn(binary, "validate", out, "--against", src)
+gtn(binary, "validate", out, "--against", os.path.join(tmp, "saved-mpi.gtn"))
+check(gtn_pv.coordinate_checksum(*[g for g, _, _ in outs]) == ref["coordinate_checksum"],
+      "the ranks' shares by coordinates equal the serial read")
+
+# Without GlobalIds, shared points are matched by coordinates: a tetrahedralized wavelet, split by
+# ParaView into extents whose boundary points each rank holds a copy of.
+tetra = Tetrahedralize(Input=Wavelet(WholeExtent=[0, 24, 0, 20, 0, 16]))
+grids = rank_grids(tetra)
+check(all(g.GetNumberOfCells() > 0 for g in grids), "the wavelet is split among the ranks")
+coords = numpy.concatenate([vtk_to_numpy(g.GetPoints().GetData()) for g in grids])
+check(len(coords) > 25 * 21 * 17, "the ranks hold copies of their shared points")
+check_parts_file(write_parts(tetra, "wavelet-parts.gtn"), "coordinates", grids, 25 * 21 * 17)
+
+# Blunt fin without its point ids: its coincident points make coordinates ambiguous; the write is
+# refused (the message names the file and the point) and nothing is written.
+no_ids = PassArrays(Input=reader, PointDataArrays=[a for a in reader.PointData.keys() if a != "GlobalPointIds"],
+                    CellDataArrays=[a for a in reader.CellData.keys() if a != "GlobalCellIds"])
+check(not os.path.exists(write_parts(no_ids, "no-ids.gtn")), "parts writer: blunt fin without ids is refused")
 print("PASS")

@@ -1,7 +1,8 @@
 #!/bin/sh
 # The plugin under MPI (ctest paraview_mpi) on blunt fin stored as many pieces: the serial read's counts
 # and checksum (and the reader's own piece requests), then the same file read by 2 pvbatch ranks, each
-# decoding only its pieces, must give the same union, and Save Data one .gtn equal to the source.
+# decoding only its pieces, must give the same union, and Save Data one .gtn equal to the source; the
+# parallel writer GTNPartsWriter (each rank codes its share) one .gtn equal to it.
 # Usage: mpi_test.sh GTN PLUGIN DATA_DIR TMP_DIR
 set -e
 gtn=$1 plugin=$2 data=${GTN_DATA_DIR:-$3} tmp=$4
