@@ -228,7 +228,7 @@ struct Workspace {
   std::vector<BoundaryFace> faces;
   std::vector<StarFace> face_keys;
   std::vector<Candidate> cands;
-  uint64_t evaluations = 0;           // candidate errors computed
+  uint64_t evaluations = 0;  // candidate errors computed
 };
 
 // The star pool's room beyond the corners, at least (Ranker::star_pool_).
