@@ -268,6 +268,47 @@ std::vector<uint32_t> piecesInBox(std::span<const PieceInfo> pieces, const doubl
   return out;
 }
 
+namespace {
+
+// The mesh of one piece of `src`: its vertices (those of the tetrahedra `tl` and the unused points
+// `unused`, in source order, listed in `verts`) with their coordinates and point values, and the
+// tetrahedra `tl` in that order with their cell values.
+TetMesh pieceMeshOf(const TetMesh& src, const std::vector<uint32_t>& tl, const std::vector<uint32_t>& unused,
+                    std::vector<uint32_t>& verts) {
+  for (uint32_t t : tl)
+    for (uint32_t v : src.tets[t]) verts.push_back(v);
+  verts.insert(verts.end(), unused.begin(), unused.end());
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  std::unordered_map<uint32_t, uint32_t> local;
+  local.reserve(verts.size());
+  for (size_t k = 0; k < verts.size(); ++k) local.emplace(verts[k], static_cast<uint32_t>(k));
+  TetMesh piece;
+  piece.coord_type = src.coord_type;
+  piece.metadata = src.metadata;
+  piece.coords.resize(3 * verts.size());
+  for (size_t k = 0; k < verts.size(); ++k)
+    for (int i = 0; i < 3; ++i) piece.coords[3 * k + i] = src.coords[3 * size_t{verts[k]} + i];
+  for (const Field& f : src.point_fields) {
+    Field g(f.name, f.components, f.type, verts.size());
+    const size_t ib = f.components * f.valueSize();
+    for (size_t k = 0; k < verts.size(); ++k) std::memcpy(&g.bytes[k * ib], &f.bytes[size_t{verts[k]} * ib], ib);
+    piece.point_fields.push_back(std::move(g));
+  }
+  piece.tets.resize(tl.size());
+  for (size_t k = 0; k < tl.size(); ++k)
+    for (int j = 0; j < 4; ++j) piece.tets[k][j] = local.at(src.tets[tl[k]][j]);
+  for (const Field& f : src.cell_fields) {
+    Field g(f.name, f.components, f.type, tl.size());
+    const size_t ib = f.components * f.valueSize();
+    for (size_t k = 0; k < tl.size(); ++k) std::memcpy(&g.bytes[k * ib], &f.bytes[size_t{tl[k]} * ib], ib);
+    piece.cell_fields.push_back(std::move(g));
+  }
+  return piece;
+}
+
+}  // namespace
+
 PiecedLevel onePieceLevel(const EncodedLevel& e) {
   PiecedLevel l;
   l.header = e.header;
@@ -452,36 +493,7 @@ StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& opt
   tbb::parallel_for(uint32_t{0}, n_pieces, [&](uint32_t p) {
     // The piece's mesh: its vertices in source order, its tetrahedra in source order.
     std::vector<uint32_t>& verts = local_to_source[p];
-    for (uint32_t t : piece_tets_list[p])
-      for (uint32_t v : mesh.tets[t]) verts.push_back(v);
-    verts.insert(verts.end(), piece_unused[p].begin(), piece_unused[p].end());
-    std::sort(verts.begin(), verts.end());
-    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
-    std::unordered_map<uint32_t, uint32_t> local;
-    local.reserve(verts.size());
-    for (size_t k = 0; k < verts.size(); ++k) local.emplace(verts[k], static_cast<uint32_t>(k));
-    TetMesh piece;
-    piece.coord_type = mesh.coord_type;
-    piece.metadata = mesh.metadata;
-    piece.coords.resize(3 * verts.size());
-    for (size_t k = 0; k < verts.size(); ++k)
-      for (int i = 0; i < 3; ++i) piece.coords[3 * k + i] = mesh.coords[3 * size_t{verts[k]} + i];
-    for (const Field& f : mesh.point_fields) {
-      Field g(f.name, f.components, f.type, verts.size());
-      const size_t ib = f.components * f.valueSize();
-      for (size_t k = 0; k < verts.size(); ++k) std::memcpy(&g.bytes[k * ib], &f.bytes[size_t{verts[k]} * ib], ib);
-      piece.point_fields.push_back(std::move(g));
-    }
-    const std::vector<uint32_t>& tl = piece_tets_list[p];
-    piece.tets.resize(tl.size());
-    for (size_t k = 0; k < tl.size(); ++k)
-      for (int j = 0; j < 4; ++j) piece.tets[k][j] = local.at(mesh.tets[tl[k]][j]);
-    for (const Field& f : mesh.cell_fields) {
-      Field g(f.name, f.components, f.type, tl.size());
-      const size_t ib = f.components * f.valueSize();
-      for (size_t k = 0; k < tl.size(); ++k) std::memcpy(&g.bytes[k * ib], &f.bytes[size_t{tl[k]} * ib], ib);
-      piece.cell_fields.push_back(std::move(g));
-    }
+    const TetMesh piece = pieceMeshOf(mesh, piece_tets_list[p], piece_unused[p], verts);
     {
       const FaceAdjacency adj = computeFaceAdjacency(piece);
       for (size_t t = 0; t < piece.tets.size(); ++t)
@@ -1087,36 +1099,7 @@ StatusOr<EncodedPart> encodePart(const TetMesh& part, const PartPlan& plan, std:
   std::vector<Status> failures(n_pieces, Status::ok());
   tbb::parallel_for(uint32_t{0}, n_pieces, [&](uint32_t p) {
     std::vector<uint32_t>& verts = out.piece_vertices[p];
-    const std::vector<uint32_t>& tl = out.piece_tets[p];
-    for (uint32_t t : tl)
-      for (uint32_t v : part.tets[t]) verts.push_back(v);
-    verts.insert(verts.end(), piece_unused[p].begin(), piece_unused[p].end());
-    std::sort(verts.begin(), verts.end());
-    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
-    std::unordered_map<uint32_t, uint32_t> local;
-    local.reserve(verts.size());
-    for (size_t k = 0; k < verts.size(); ++k) local.emplace(verts[k], static_cast<uint32_t>(k));
-    TetMesh piece;
-    piece.coord_type = part.coord_type;
-    piece.metadata = part.metadata;
-    piece.coords.resize(3 * verts.size());
-    for (size_t k = 0; k < verts.size(); ++k)
-      for (int i = 0; i < 3; ++i) piece.coords[3 * k + i] = part.coords[3 * size_t{verts[k]} + i];
-    for (const Field& f : part.point_fields) {
-      Field g(f.name, f.components, f.type, verts.size());
-      const size_t ib = f.components * f.valueSize();
-      for (size_t k = 0; k < verts.size(); ++k) std::memcpy(&g.bytes[k * ib], &f.bytes[size_t{verts[k]} * ib], ib);
-      piece.point_fields.push_back(std::move(g));
-    }
-    piece.tets.resize(tl.size());
-    for (size_t k = 0; k < tl.size(); ++k)
-      for (int j = 0; j < 4; ++j) piece.tets[k][j] = local.at(part.tets[tl[k]][j]);
-    for (const Field& f : part.cell_fields) {
-      Field g(f.name, f.components, f.type, tl.size());
-      const size_t ib = f.components * f.valueSize();
-      for (size_t k = 0; k < tl.size(); ++k) std::memcpy(&g.bytes[k * ib], &f.bytes[size_t{tl[k]} * ib], ib);
-      piece.cell_fields.push_back(std::move(g));
-    }
+    const TetMesh piece = pieceMeshOf(part, out.piece_tets[p], piece_unused[p], verts);
     {
       const FaceAdjacency adj = computeFaceAdjacency(piece);
       for (size_t t = 0; t < piece.tets.size(); ++t)

@@ -203,6 +203,16 @@ struct EncodedInput {
   std::optional<std::vector<uint8_t>> tree;
 };
 
+// Level i's index and merges, in its header and its pieces'.
+void setLevelIndex(PiecedLevel& level, size_t i, uint64_t merges) {
+  level.header.level = static_cast<uint32_t>(i);
+  level.header.merges = merges;
+  for (EncodedLevel& e : level.encoded) {
+    e.header.level = static_cast<uint32_t>(i);
+    e.header.merges = merges;
+  }
+}
+
 StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, size_t i, const TetMesh& mesh,
                                    const GtnWriteOptions& options) {
   EncodedInput out;
@@ -211,12 +221,7 @@ StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, siz
   } else {
     GTN_ASSIGN_OR_RETURN(out.level, encodePieces(mesh, EncodeOptions{}, options.piece_tets));
   }
-  out.level.header.level = static_cast<uint32_t>(i);
-  out.level.header.merges = levels[i].merges;
-  for (EncodedLevel& e : out.level.encoded) {
-    e.header.level = static_cast<uint32_t>(i);
-    e.header.merges = levels[i].merges;
-  }
+  setLevelIndex(out.level, i, levels[i].merges);
   if (levels[i].merge_tree) {
     auto t = levels[i].merge_tree(out.level.vertex_order);
     if (!t.isOk()) return t.status();
@@ -257,12 +262,7 @@ StatusOr<EncodedInput> encodeChained(const std::vector<GtnLevelInput>& levels, s
   GTN_ASSIGN_OR_RETURN(std::vector<uint32_t> next_index, levels[i].next_index());
   EncodedInput out;
   GTN_ASSIGN_OR_RETURN(out.level, encodeChainedLevel(mesh, next_index, next.level.vertex_order));
-  out.level.header.level = static_cast<uint32_t>(i);
-  out.level.header.merges = levels[i].merges;
-  for (EncodedLevel& e : out.level.encoded) {
-    e.header.level = static_cast<uint32_t>(i);
-    e.header.merges = levels[i].merges;
-  }
+  setLevelIndex(out.level, i, levels[i].merges);
   if (levels[i].merge_tree_prefix) {
     GTN_ASSIGN_OR_RETURN(out.tree,
                          levels[i].merge_tree_prefix(out.level.vertex_order, levels[i + 1].merges - levels[i].merges));
