@@ -188,6 +188,18 @@ TEST(Api, ReaderReadsLevelsRatiosAndSomeFields) {
   auto bad_ratio = reader.read({.ratio = 1.5});
   ASSERT_FALSE(bad_ratio.ok());
   EXPECT_EQ(bad_ratio.error().code(), gatun::ErrorCode::kUsage);
+
+  // Independent levels: the same levels, each storing all its vertices (a larger file).
+  options.independent_levels = true;
+  ASSERT_TRUE(gatun::write(dir + "/independent.gtn", mesh, options).ok());
+  auto whole = gatun::Reader::open(dir + "/independent.gtn");
+  ASSERT_TRUE(whole.ok()) << whole.error().message();
+  ASSERT_EQ(whole.value().info().levels.size(), 3u);
+  EXPECT_GT(whole.value().info().bytes, info.bytes);
+  auto whole1 = whole.value().read({.level = 1});
+  ASSERT_TRUE(whole1.ok()) << whole1.error().message();
+  EXPECT_EQ(whole1.value().pointCount(), level1.value().pointCount());
+  EXPECT_EQ(whole1.value().tetCount(), level1.value().tetCount());
 }
 
 TEST(Api, ErrorsCarryTheCommandsMessages) {

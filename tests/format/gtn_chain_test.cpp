@@ -159,6 +159,32 @@ TEST(GtnChain, TheStorageBoundLeavesOutTheCoarsestLevels) {
   }
 }
 
+// `gtn convert --independent-levels` stores every level whole; by default levels name the next one.
+TEST(GtnChain, ConvertNamesTheNextLevelUnlessAskedForIndependentLevels) {
+  const std::string spx_path = dataPath("vtk/spx.vtk");
+  const std::string def = dir() + "/cli-default.gtn", ind = dir() + "/cli-independent.gtn";
+  const RunResult a = runGtn("convert " + spx_path + " -q -o " + def);
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const RunResult b = runGtn("convert " + spx_path + " -q --independent-levels -o " + ind);
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  auto d = open(def), i = open(ind);
+  ASSERT_TRUE(d && i);
+  ASSERT_EQ(d->levels(), i->levels());
+  ASSERT_GE(d->levels(), 3u);
+  for (size_t k = 0; k < d->levels(); ++k) {
+    EXPECT_EQ(d->level(k).base, k + 1 < d->levels() ? 1 : 0) << k;
+    EXPECT_EQ(i->level(k).base, 0) << k;
+  }
+  EXPECT_LT(d->file().bytes * 10, i->file().bytes * 7);
+  const RunResult info = runGtn("info " + def);
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("merge tree, names level 1's vertices"), std::string::npos) << info.out;
+  for (const std::string& f : {def, ind}) {
+    const RunResult v = runGtn("validate " + f);
+    EXPECT_EQ(v.exit_code, 0) << v.out << v.err;
+  }
+}
+
 TEST(GtnChain, ACoarseLevelReadsNothingOfTheFinerLevels) {
   const std::string path = write(spx(), "coarse", true);
   auto r = open(path);
