@@ -290,6 +290,14 @@ StatusOr<std::unique_ptr<GtnReader>> GtnReader::finishOpen(std::unique_ptr<GtnRe
     if (!g.levels_.empty() && g.levels_.back().base != 0)
       return invalidData(g.file_.path + ": level " + std::to_string(g.levels_.size() - 1) +
                          " names the vertices of the next level (LHDR base 1), but it is the file's last level");
+    uint64_t run = 0;
+    for (size_t i = 0; i < g.levels_.size(); ++i) {
+      run = g.levels_[i].base != 0 ? run + 1 : 0;
+      if (run > kGtnMaxNamingRun)
+        return invalidData(g.file_.path + ": levels " + std::to_string(i + 1 - run) + " to " + std::to_string(i) +
+                           " each name the next level's vertices, more than " + std::to_string(kGtnMaxNamingRun) +
+                           " in a row");
+    }
     return Status::ok();
   };
   if (try_directory && r->openByDirectory().isOk()) {
@@ -833,8 +841,29 @@ class BaseValues : public MeshSink {
 
 Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, const DecodeFields* fields,
                               std::vector<uint32_t>* base_ids) {
-  const std::string what = file_.path + ": level " + std::to_string(i);
   if (base_ids) base_ids->clear();
+  if (i >= levels_.size() || levels_[i].base == 0) return decodeOnePiece(i, sink, stats, fields, nullptr);
+  // The levels it names, coarsest first, each with the values of the one after it (the reader checked
+  // at open that the run ends within the file and is at most kGtnMaxNamingRun long).
+  size_t last = i;
+  while (levels_[last].base != 0) ++last;
+  BaseValues next;
+  GTN_RETURN_IF_ERROR(decodeOnePiece(last, next, nullptr, fields, nullptr));
+  std::vector<uint32_t> local;
+  for (size_t k = last; k-- > i + 1;) {
+    BaseValues values;
+    SeamValues seams{next.count(), next.coords.data(), next.values.data(), &local};
+    GTN_RETURN_IF_ERROR(decodeOnePiece(k, values, nullptr, fields, &seams));
+    local.clear();
+    next = std::move(values);
+  }
+  SeamValues seams{next.count(), next.coords.data(), next.values.data(), base_ids ? base_ids : &local};
+  return decodeOnePiece(i, sink, stats, fields, &seams);
+}
+
+Status GtnReader::decodeOnePiece(size_t i, MeshSink& sink, DecodeStats* stats, const DecodeFields* fields,
+                                 const SeamValues* seams) {
+  const std::string what = file_.path + ": level " + std::to_string(i);
   if (i < levels_.size() && levels_[i].pieces.size() > 1) {
     GTN_ASSIGN_OR_RETURN(DecodedPieces decoded, decodeLevelPieces(i, {}, fields));
     const LevelHeader& header = levels_[i].header;
@@ -861,20 +890,9 @@ Status GtnReader::decodeLevel(size_t i, MeshSink& sink, DecodeStats* stats, cons
   }
   if (i < levels_.size() && !levels_[i].pieces.empty() && levels_[i].pieces[0].kind == kPieceStructured) {
     GTN_RETURN_IF_ERROR(decodeStructuredPiece(s.header, s.connectivity, checker, what, fields));
-  } else if (levels_[i].base != 0) {
-    // The next level's vertices, named by this one (the reader checked at open that it exists).
-    BaseValues base;
-    GTN_RETURN_IF_ERROR(decodeLevel(i + 1, base, nullptr, fields));
-    std::vector<uint32_t> local;
-    SeamValues seams;
-    seams.count = base.count();
-    seams.coords = base.coords.data();
-    seams.values = base.values.data();
-    seams.seam_of_id = base_ids ? base_ids : &local;
-    GTN_RETURN_IF_ERROR(
-        gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields ? &selected : nullptr, &seams));
   } else {
-    GTN_RETURN_IF_ERROR(gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields ? &selected : nullptr));
+    GTN_RETURN_IF_ERROR(
+        gtn::decodeLevel(s.header, s.payload(), checker, stats, what, fields ? &selected : nullptr, seams));
   }
   if (!checker.ended()) return invalidData(what + ": the decoder stopped before the end of the level");
   return Status::ok();

@@ -146,6 +146,9 @@ class GtnReader {
   GtnReader() = default;
   static StatusOr<std::unique_ptr<GtnReader>> finishOpen(std::unique_ptr<GtnReader> r, bool try_directory);
   Status scan();
+  // decodeLevel of one level of one piece, with the seam values of the level it names (null: none).
+  Status decodeOnePiece(size_t i, MeshSink& sink, DecodeStats* stats, const DecodeFields* fields,
+                        const SeamValues* seams);
   Status openByDirectory();
   StatusOr<std::vector<uint8_t>> readChunk(const GtnChunkInfo& c, ChunkHeader* header = nullptr);
   // The whole chunk at c.offset (framing, stored payload, checksum), its framing checked, not its checksum.

@@ -21,7 +21,10 @@ inline constexpr uint64_t kGtnMaxLevels = 65535;
 inline constexpr uint64_t kGtnMaxFields = 65535;
 inline constexpr uint64_t kGtnMaxComponents = 4096;           // as the level codec
 inline constexpr uint64_t kGtnMaxPieces = uint64_t{1} << 20;  // per level
-inline constexpr uint64_t kGtnMaxPiecePoints = 0xFFFFFFFEu;   // a piece's vertex ids are 32 bits
+// Levels in a row that name the next level's vertices (LHDR base 1; spec section 12): a level decodes
+// after every level it names, so the run bounds the work of one decode.
+inline constexpr uint64_t kGtnMaxNamingRun = 63;
+inline constexpr uint64_t kGtnMaxPiecePoints = 0xFFFFFFFEu;  // a piece's vertex ids are 32 bits
 // Piece kinds (LHDR): 0 unstructured (BNDY CONN GEOM PFLD... CFLD...), 1 structured (GRID).
 inline constexpr uint8_t kPieceUnstructured = 0;
 inline constexpr uint8_t kPieceStructured = 1;

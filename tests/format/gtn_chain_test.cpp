@@ -185,6 +185,43 @@ TEST(GtnChain, ConvertNamesTheNextLevelUnlessAskedForIndependentLevels) {
   }
 }
 
+// At most 63 levels in a row name the next level (spec 12): a reader refuses a longer run at open,
+// before decoding anything, so that no decode can be made to walk an unbounded chain.
+TEST(GtnChain, ALongerRunOfNamingLevelsIsRefusedAtOpen) {
+  const TetMesh cube = gridMesh(3, 3, 3, 5);
+  auto one = encodePieces(cube, EncodeOptions{}, kDefaultPieceTets);
+  ASSERT_TRUE(one.isOk()) << one.status().message();
+  for (const size_t levels : {size_t{64}, size_t{65}}) {
+    SCOPED_TRACE(std::to_string(levels) + " levels");
+    std::string bytes;
+    GtnStreamWriter w(
+        [&](std::span<const uint8_t> b) {
+          bytes.append(reinterpret_cast<const char*>(b.data()), b.size());
+          return Status::ok();
+        },
+        GtnWriteOptions{});
+    ASSERT_TRUE(w.begin(one->header, levels).isOk());
+    for (size_t i = 0; i < levels; ++i) {
+      PiecedLevel l = *one;
+      l.header.level = static_cast<uint32_t>(i);
+      l.header.merges = 0;
+      l.base = i + 1 < levels ? 1 : 0;  // (the streams do not name anything: the open must refuse first)
+      ASSERT_TRUE(w.addLevel(l, 0.0, std::nullopt).isOk()) << i;
+    }
+    ASSERT_TRUE(w.finish().isOk());
+    auto r = GtnReader::openMemory(bytes, "long-run.gtn");
+    if (levels == 64) {
+      EXPECT_TRUE(r.isOk()) << r.status().message();
+    } else {
+      ASSERT_FALSE(r.isOk());
+      EXPECT_NE(r.status().message().find("long-run.gtn: levels 0 to 63 each name the next level's vertices, "
+                                          "more than 63 in a row"),
+                std::string::npos)
+          << r.status().message();
+    }
+  }
+}
+
 TEST(GtnChain, ACoarseLevelReadsNothingOfTheFinerLevels) {
   const std::string path = write(spx(), "coarse", true);
   auto r = open(path);
