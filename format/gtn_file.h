@@ -58,10 +58,12 @@ struct GtnWriteOptions {
   bool directory = true;     // write the directory and trailer for random access
   // The bound on a piece's tetrahedra (encodePieces; at least kMinPieceTets). Recorded in GHDR.
   uint64_t piece_tets = kDefaultPieceTets;
-  // > 0: the storage bound of the mip levels. Levels beyond level 0 are kept, finest first, while all
-  // kept levels together take at most this multiple of level 0's bytes (every chunk of a level,
-  // framing included); the first level that would pass the bound and all coarser ones are left out.
-  // Every kept level still stores the rest of the merge tree, so nothing is lost but the shortcut.
+  // > 0: the storage bound of the mip levels. Independent levels (chain_levels off) are kept, finest
+  // first, while all kept levels together take at most this multiple of level 0's bytes (every chunk of
+  // a level, framing included); the first level that would pass the bound and all coarser ones are left
+  // out. With chained levels the unit is level 0 stored alone with its whole tree, the streams and trees
+  // are counted, and the coarsest levels are left out while the bound is passed. The last kept level
+  // stores the rest of the merge tree, so nothing is lost but the shortcut.
   double level_storage_limit = 0.0;
   // Levels given next_index name the next level's vertices instead of storing their values again
   // where that is smaller (every level is then encoded before the file is written, coarsest first).

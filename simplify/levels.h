@@ -1,8 +1,10 @@
 // Mip levels (paper section 5): level i is the mesh after the first N_i merges of the merge tree,
 // N_i = U + round((1 - 1/2^i) * (points - U)) capped at the tree's merge count (U: unreferencedMerges,
-// the merges of the points no tetrahedron uses, which come first), compacted, and stored with the
-// rest of the merge tree (ranks shifted down by N_i) in that level's own numbering, so that any level
-// can be read without the others and refined further on the fly.
+// the merges of the points no tetrahedron uses, which come first), compacted, with the rest of the
+// merge tree (ranks shifted down by N_i) in that level's own numbering, so that any level can be
+// refined further on the fly. The writer (format/gtn_file.h) stores a level either whole, with that
+// tree, or naming the next level's vertices, with the tree's merges down to the next level only
+// (spec section 7.7; wholeMergeTree below puts a level's tree back together).
 #pragma once
 
 #include <cstdint>

@@ -46,7 +46,7 @@ struct LevelInfo {
   uint64_t points = 0, tets = 0;
   uint64_t merges = 0;
   double ratio = 0.0;
-  bool has_merge_tree = false;   /* the level stores the rest of the merge tree (simplification on the fly) */
+  bool has_merge_tree = false;   /* the level stores a merge tree (simplification on the fly) */
   uint64_t bytes = 0;            /* all chunks of the level in the file */
   std::vector<PieceInfo> pieces; /* the piece table, in piece order (at least one piece) */
 };
