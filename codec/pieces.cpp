@@ -309,6 +309,23 @@ TetMesh pieceMeshOf(const TetMesh& src, const std::vector<uint32_t>& tl, const s
 
 }  // namespace
 
+namespace {
+
+// Codes one piece's mesh with its seam options and fills its table entry (its own boundary points: the
+// own vertices its boundary coding introduces).
+Status encodePieceMesh(const TetMesh& piece, const EncodeOptions& opt, PieceInfo& info, EncodedLevel& encoded) {
+  GTN_ASSIGN_OR_RETURN(EncodedLevel e, encodeLevel(piece, opt));
+  info = infoOf(e, opt.seam_count);
+  uint64_t own_boundary = 0;
+  for (size_t k = 0; k < piece.numPoints(); ++k)
+    if ((opt.seam.empty() || opt.seam[k] == kNoIndex) && e.vertex_order[k] < e.boundary_points) ++own_boundary;
+  info.own_boundary_points = own_boundary;
+  encoded = std::move(e);
+  return Status::ok();
+}
+
+}  // namespace
+
 PiecedLevel onePieceLevel(const EncodedLevel& e) {
   PiecedLevel l;
   l.header = e.header;
@@ -518,17 +535,7 @@ StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& opt
       if (seam_id[verts[k]] != kNoIndex) opt.seam[k] = seam_index.at(seam_id[verts[k]]);
     opt.seam_count = static_cast<uint32_t>(seam_lists[p].size());
     local_seam[p] = opt.seam;
-    StatusOr<EncodedLevel> e = encodeLevel(piece, opt);
-    if (!e.isOk()) {
-      failures[p] = e.status();
-      return;
-    }
-    out.pieces[p] = infoOf(*e, opt.seam_count);
-    uint64_t own_boundary = 0;
-    for (size_t k = 0; k < verts.size(); ++k)
-      if (opt.seam[k] == kNoIndex && e->vertex_order[k] < e->boundary_points) ++own_boundary;
-    out.pieces[p].own_boundary_points = own_boundary;
-    out.encoded[p] = std::move(*e);
+    failures[p] = encodePieceMesh(piece, opt, out.pieces[p], out.encoded[p]);
   });
   for (const Status& st : failures)
     if (!st.isOk()) return st;
@@ -1130,17 +1137,7 @@ StatusOr<EncodedPart> encodePart(const TetMesh& part, const PartPlan& plan, std:
       opt.seam[k] = it->second;
     }
     opt.seam_count = static_cast<uint32_t>(seam_index[p].size());
-    StatusOr<EncodedLevel> e = encodeLevel(piece, opt);
-    if (!e.isOk()) {
-      failures[p] = e.status();
-      return;
-    }
-    out.pieces[p] = infoOf(*e, opt.seam_count);
-    uint64_t own_boundary = 0;
-    for (size_t k = 0; k < verts.size(); ++k)
-      if (opt.seam[k] == kNoIndex && e->vertex_order[k] < e->boundary_points) ++own_boundary;
-    out.pieces[p].own_boundary_points = own_boundary;
-    out.encoded[p] = std::move(*e);
+    failures[p] = encodePieceMesh(piece, opt, out.pieces[p], out.encoded[p]);
   });
   for (const Status& st : failures)
     if (!st.isOk()) return st;

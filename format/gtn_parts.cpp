@@ -14,6 +14,7 @@
 #include "codec/pieces_check.h"
 #include "format/file_io.h"
 #include "format/gtn_bytes.h"
+#include "format/gtn_records.h"
 
 namespace gtn {
 
@@ -62,34 +63,11 @@ Status getCount(ByteReader& r, uint64_t* n, size_t min_bytes, const char* name) 
   return r.varintAtMost(n, r.remaining() / std::max<size_t>(min_bytes, 1), name);
 }
 
-void putFields(ByteWriter& w, const std::vector<FieldDesc>& fields) {
-  w.varint(fields.size());
-  for (const FieldDesc& f : fields) {
-    w.string(f.name);
-    w.varint(f.components);
-    w.u8(static_cast<uint8_t>(f.type));
-  }
-}
-
-Status getFields(ByteReader& r, std::vector<FieldDesc>* fields) {
-  uint64_t n = 0;
-  GTN_RETURN_IF_ERROR(getCount(r, &n, 3, "field count"));
-  fields->resize(n);
-  for (FieldDesc& f : *fields) {
-    uint8_t type = 0;
-    GTN_RETURN_IF_ERROR(r.string(&f.name, "field name"));
-    GTN_RETURN_IF_ERROR(getU32(r, &f.components, "components"));
-    GTN_RETURN_IF_ERROR(r.u8(&type, "field type"));
-    f.type = static_cast<ScalarType>(type);
-  }
-  return Status::ok();
-}
-
 // What a level header says of the mesh's layout (no counts, no box).
 void putLayout(ByteWriter& w, const LevelHeader& h) {
   w.u8(static_cast<uint8_t>(h.coord_type));
-  putFields(w, h.point_fields);
-  putFields(w, h.cell_fields);
+  writeFields(w, h.point_fields);
+  writeFields(w, h.cell_fields);
   w.varint(h.metadata.size());
   for (const auto& [k, v] : h.metadata) {
     w.string(k);
@@ -101,8 +79,8 @@ Status getLayout(ByteReader& r, LevelHeader* h) {
   uint8_t type = 0;
   GTN_RETURN_IF_ERROR(r.u8(&type, "coordinate type"));
   h->coord_type = static_cast<ScalarType>(type);
-  GTN_RETURN_IF_ERROR(getFields(r, &h->point_fields));
-  GTN_RETURN_IF_ERROR(getFields(r, &h->cell_fields));
+  GTN_RETURN_IF_ERROR(readFields(r, &h->point_fields, "point field count"));
+  GTN_RETURN_IF_ERROR(readFields(r, &h->cell_fields, "cell field count"));
   uint64_t n = 0;
   GTN_RETURN_IF_ERROR(getCount(r, &n, 2, "metadata count"));
   h->metadata.resize(n);

@@ -8,14 +8,6 @@
 namespace gtn {
 
 namespace {
-void writeFields(ByteWriter& w, const std::vector<FieldDesc>& fields) {
-  w.varint(fields.size());
-  for (const FieldDesc& f : fields) {
-    w.string(f.name);
-    w.varint(f.components);
-    w.u8(static_cast<uint8_t>(f.type));
-  }
-}
 
 Status readScalarType(ByteReader& r, ScalarType* t, const char* name) {
   const uint64_t at = r.offset();
@@ -24,6 +16,22 @@ Status readScalarType(ByteReader& r, ScalarType* t, const char* name) {
   if (v >= kNumScalarTypes) return r.errorAt(at, std::string(name) + " " + std::to_string(v) + " is not a scalar type");
   *t = static_cast<ScalarType>(v);
   return Status::ok();
+}
+
+Status readBox(ByteReader& r, double mn[3], double mx[3]) {
+  for (int i = 0; i < 3; ++i) GTN_RETURN_IF_ERROR(r.f64(&mn[i], "bounding box minimum"));
+  for (int i = 0; i < 3; ++i) GTN_RETURN_IF_ERROR(r.f64(&mx[i], "bounding box maximum"));
+  return Status::ok();
+}
+}  // namespace
+
+void writeFields(ByteWriter& w, const std::vector<FieldDesc>& fields) {
+  w.varint(fields.size());
+  for (const FieldDesc& f : fields) {
+    w.string(f.name);
+    w.varint(f.components);
+    w.u8(static_cast<uint8_t>(f.type));
+  }
 }
 
 Status readFields(ByteReader& r, std::vector<FieldDesc>* fields, const char* what) {
@@ -42,13 +50,6 @@ Status readFields(ByteReader& r, std::vector<FieldDesc>* fields, const char* wha
   }
   return Status::ok();
 }
-
-Status readBox(ByteReader& r, double mn[3], double mx[3]) {
-  for (int i = 0; i < 3; ++i) GTN_RETURN_IF_ERROR(r.f64(&mn[i], "bounding box minimum"));
-  for (int i = 0; i < 3; ++i) GTN_RETURN_IF_ERROR(r.f64(&mx[i], "bounding box maximum"));
-  return Status::ok();
-}
-}  // namespace
 
 std::vector<uint8_t> encodeFileHeader(const GtnFileHeader& h) {
   ByteWriter w;

@@ -16,6 +16,9 @@
 
 namespace gtn {
 
+class ByteReader;
+class ByteWriter;
+
 // Bounds a reader enforces on header fields (spec: "Limits").
 inline constexpr uint64_t kGtnMaxLevels = 65535;
 inline constexpr uint64_t kGtnMaxFields = 65535;
@@ -73,6 +76,10 @@ using GtnDirectory = std::vector<std::vector<GtnDirectoryEntry>>;  // per level,
 struct GtnTrailer {
   uint64_t directory_offset = 0, directory_size = 0;  // 0, 0: no directory
 };
+
+// Field descriptions as GHDR stores them (name, components, type), also used by other records.
+void writeFields(ByteWriter& w, const std::vector<FieldDesc>& fields);
+Status readFields(ByteReader& r, std::vector<FieldDesc>* fields, const char* what);
 
 std::vector<uint8_t> encodeFileHeader(const GtnFileHeader& h);
 std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& r);
