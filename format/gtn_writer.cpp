@@ -366,10 +366,6 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     };
     GTN_RETURN_IF_ERROR(encodeDown(count - 1));
     if (bounded) {
-      if (alone0 == 0) {
-        GTN_ASSIGN_OR_RETURN(EncodedInput a, encodeInput(levels, 0, *meshes[0], options));
-        alone0 = approxBytes(a);
-      }
       auto total = [&] {
         uint64_t t = 0;
         for (size_t i = 0; i < count; ++i) t += approxBytes(encoded[i]);
