@@ -130,7 +130,8 @@ Command addConvertCommand(CLI::App& app) {
       ->check(finiteAtLeastZero());
   sub->add_option("--piece-tets", args->piece_tets,
                   ".gtn: the most tetrahedra a piece holds (default " + std::to_string(kDefaultPieceTets) +
-                      "): a level is cut into pieces that encode, decode and are read by region apart")
+                      "): a level is cut into pieces that encode, decode and are read by region apart (at the "
+                      "default, a level stored as a grid stays one piece)")
       ->check(CLI::Validator(
           [](std::string& text) -> std::string {
             char* end = nullptr;

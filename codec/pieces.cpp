@@ -400,40 +400,66 @@ StatusOr<PiecedLevel> encodeChainedLevel(const TetMesh& mesh, const std::vector<
   return level;
 }
 
+namespace {
+
+size_t streamBytes(const EncodedLevel& x) {
+  size_t n = x.boundary.size() + x.connectivity.size() + x.geometry.size();
+  for (const auto& f : x.point_fields) n += f.size();
+  for (const auto& f : x.cell_fields) n += f.size();
+  return n;
+}
+
+// A level of one piece: `e` coded by the level codec (kind 0) or the structured-piece coder (kind 1).
+PiecedLevel onePiece(EncodedLevel&& e, uint8_t kind) {
+  PiecedLevel out;
+  out.header = e.header;
+  out.pieces.push_back(infoOf(e, 0));
+  out.pieces[0].kind = kind;
+  // A structured piece gives every vertex before the boundary triangles.
+  out.pieces[0].own_boundary_points = kind == 1 ? e.header.points : e.boundary_points;
+  out.vertex_order = e.vertex_order;
+  out.tet_order = e.tet_order;
+  out.encoded.push_back(std::move(e));
+  return out;
+}
+
+StatusOr<PiecedLevel> encodeCut(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets);
+
+}  // namespace
+
 StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets) {
   if (piece_tets < kMinPieceTets) return usageError("encodePieces: pieces must hold at least 4096 tetrahedra");
   if (!options.seam.empty()) return usageError("encodePieces: the seams are the pieces' own");
-  const size_t np = mesh.numPoints(), nt = mesh.numTets();
-  PiecedLevel out;
-  if (nt <= piece_tets) {
+  // A level that is one structured block is one structured piece where that is smaller than the level
+  // codec's coding; at the default bound whatever its size (one piece decodes at memory speed, where
+  // pieces of the level codec would decode in parallel at a small fraction of it), at another bound
+  // only up to it (the pieces that bound asks for, for region reads and parallel readers).
+  StatusOr<EncodedLevel> grid = invalidData("not a structured block");
+  if (mesh.blocks.size() == 1 && options.structured &&
+      (mesh.numTets() <= piece_tets || piece_tets == kDefaultPieceTets))
+    grid = encodeStructuredPiece(mesh, mesh.blocks[0]);
+  if (mesh.numTets() <= piece_tets) {
     StatusOr<EncodedLevel> e = encodeLevel(mesh, options);
     if (!e.isOk()) return e.status();
-    uint8_t kind = 0;
-    uint64_t own_boundary = e->boundary_points;
-    // A level that is one structured block: a structured piece where that is smaller.
-    if (mesh.blocks.size() == 1 && options.structured) {
-      StatusOr<EncodedLevel> grid = encodeStructuredPiece(mesh, mesh.blocks[0]);
-      auto bytes = [](const EncodedLevel& x) {
-        size_t n = x.boundary.size() + x.connectivity.size() + x.geometry.size();
-        for (const auto& f : x.point_fields) n += f.size();
-        for (const auto& f : x.cell_fields) n += f.size();
-        return n;
-      };
-      if (grid.isOk() && bytes(*grid) < bytes(*e)) {
-        e = std::move(grid);
-        kind = 1;
-        own_boundary = e->header.points;  // every vertex comes before the boundary triangles
-      }
-    }
-    out.header = e->header;
-    out.pieces.push_back(infoOf(*e, 0));
-    out.pieces[0].kind = kind;
-    out.pieces[0].own_boundary_points = own_boundary;
-    out.vertex_order = e->vertex_order;
-    out.tet_order = e->tet_order;
-    out.encoded.push_back(std::move(*e));
-    return out;
+    if (grid.isOk() && streamBytes(*grid) < streamBytes(*e)) return onePiece(std::move(grid).value(), 1);
+    return onePiece(std::move(e).value(), 0);
   }
+  GTN_ASSIGN_OR_RETURN(PiecedLevel cut, encodeCut(mesh, options, piece_tets));
+  if (grid.isOk()) {
+    size_t cut_bytes = 0;
+    for (const EncodedLevel& e : cut.encoded) cut_bytes += streamBytes(e);
+    for (const auto& s : cut.seam_streams) cut_bytes += s.size();
+    if (streamBytes(*grid) < cut_bytes) return onePiece(std::move(grid).value(), 1);
+  }
+  return cut;
+}
+
+namespace {
+
+// encodePieces for a level of more than piece_tets tetrahedra: cut, and each piece coded.
+StatusOr<PiecedLevel> encodeCut(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets) {
+  const size_t np = mesh.numPoints(), nt = mesh.numTets();
+  PiecedLevel out;
   GTN_RETURN_IF_ERROR(mesh.checkConsistency("encodePieces"));
   uint32_t n_pieces = 0;
   const std::vector<uint32_t> piece_of = partition(mesh, piece_tets, &n_pieces);
@@ -597,6 +623,8 @@ StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& opt
   });
   return out;
 }
+
+}  // namespace
 
 StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vector<uint32_t>& chosen_in,
                                      const std::string& what, const DecodeFields* fields) {

@@ -67,7 +67,9 @@ struct PiecedLevel {
 // Cuts `mesh` into pieces of at most `piece_tets` tetrahedra (recursive bisection at the median of
 // the tetrahedra's centroids; deterministic, whatever the thread count) and codes each piece, in
 // parallel. A mesh of at most `piece_tets` tetrahedra is one piece with no seam, coded exactly as
-// encodeLevel codes it.
+// encodeLevel codes it. A mesh that is one structured block (options.structured) is one structured
+// piece where that takes fewer bytes than the level codec's piece or pieces: up to piece_tets
+// tetrahedra, and at the default bound (kDefaultPieceTets) whatever its size.
 StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets);
 
 // A level coded by encodeLevel as a PiecedLevel of one piece (a copy of its streams), as encodePieces

@@ -327,7 +327,9 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
   };
   std::vector<EncodedInput> encoded;
   size_t count = levels.size();
-  const bool chained = options.chain_levels && levels.size() > 1 && levels[0].next_index;
+  const bool chained =
+      options.chain_levels && levels.size() > 1 &&
+      std::any_of(levels.begin(), levels.end() - 1, [](const GtnLevelInput& l) { return bool(l.next_index); });
   if (chained) {
     // Levels that name the next level's vertices: every level's mesh is made (finest first, each from
     // the one before), then the levels are encoded coarsest first, each level choosing between naming

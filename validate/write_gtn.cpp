@@ -2,6 +2,7 @@
 
 #include <tbb/task_group.h>
 
+#include "format/gtn_records.h"
 #include "simplify/levels.h"
 #include "validate/mesh_checks.h"
 
@@ -53,9 +54,25 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
                         " points, enough for " + std::to_string(count - 1) + " level(s) beyond level 0");
   GtnWriteOptions bounded = wo;
   if (o.levels < 0) bounded.level_storage_limit = o.level_storage;
-  std::vector<GtnLevelInput> inputs(count);
-  for (size_t i = 0; i < count; ++i) {
-    GtnLevelInput& in = inputs[i];
+  // Automatic levels beside a structured level 0: only the coarse levels that read faster than level 0
+  // simplified on the fly (kStructuredLevelShare).
+  size_t first = 1;
+  if (o.levels < 0 && count > 1 && level0 && level0->pieces.size() == 1 && level0->pieces[0].kind == kPieceStructured) {
+    uint64_t chain = 0;
+    first = count;
+    for (size_t i = count; i-- > 1;) {
+      GTN_ASSIGN_OR_RETURN(const TetMesh* level, levels.level(i));
+      chain += level->numTets();
+      if (chain * kStructuredLevelShare > mesh.numTets()) break;
+      first = i;
+    }
+  }
+  std::vector<size_t> kept = {0};
+  for (size_t i = first; i < count; ++i) kept.push_back(i);
+  std::vector<GtnLevelInput> inputs(kept.size());
+  for (size_t k = 0; k < kept.size(); ++k) {
+    const size_t i = kept[k];
+    GtnLevelInput& in = inputs[k];
     in.merges = levels.merges()[i];
     in.ratio = levels.ratios()[i];
     if (i == 0) {
@@ -88,7 +105,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
         return prefix(vertex_order, UINT64_MAX);
       };
     }
-    if (i + 1 < count)
+    if (i + 1 < count && (i > 0 || first == 1))
       in.next_index = [&, i]() -> StatusOr<std::vector<uint32_t>> {
         GTN_RETURN_IF_ERROR(levels.level(i + 1).status());
         return levels.nextIndex(i);

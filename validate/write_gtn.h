@@ -12,6 +12,13 @@
 
 namespace gtn {
 
+// Automatic levels beside a level 0 stored as a structured piece: a mip level is stored only when it
+// and the coarser levels (which it may name, and which a reader then decodes first) hold at most
+// 1/kStructuredLevelShare of level 0's tetrahedra. A structured piece decodes at memory speed and on-
+// the-fly simplification streams it at a small fraction of the level codec's cost per tetrahedron, so
+// a larger mip level would read slower than level 0 simplified to its ratio, and take more bytes.
+inline constexpr uint64_t kStructuredLevelShare = 12;
+
 struct GtnConvertOptions {
   int levels = -1;             // mip levels beyond level 0; -1 = automatic (down to a small mesh), 0 = none
   bool merge_tree = true;      // store the merge trees (on-the-fly simplification)

@@ -113,6 +113,60 @@ TEST(Pieces, AStructuredBlockIsOneStructuredPieceWhenThatIsSmaller) {
   EXPECT_EQ(fallback->pieces[0].kind, 0);
 }
 
+// At the default bound, a grid of more tetrahedra than the bound is still one structured piece where
+// that is smaller than the level codec's pieces (it decodes at memory speed); at another bound, or
+// unstructured, it is cut.
+TEST(Pieces, AStructuredBlockLargerThanTheDefaultBoundStaysOnePiece) {
+  const int n = 66;                  // 65^3 cells, 5 tetrahedra each: more than 2^20
+  TetMesh m = gridMesh(n, n, n, 5);  // coordinates only: the level codec takes long on this many
+  StructuredBlock block;
+  block.first_point = 0;
+  block.dims[0] = block.dims[1] = block.dims[2] = n;
+  m.blocks.push_back(block);
+  ASSERT_GT(m.numTets(), kDefaultPieceTets);
+  const uint64_t piece_tets = kDefaultPieceTets;
+  StatusOr<PiecedLevel> level = encodePieces(m, {}, piece_tets);
+  ASSERT_TRUE(level.isOk()) << level.status().message();
+  ASSERT_EQ(level->pieces.size(), 1u);
+  EXPECT_EQ(level->pieces[0].kind, 1);
+  EXPECT_TRUE(level->classes.empty());
+  EXPECT_EQ(level->pieces[0].tets, m.numTets());
+  EncodeOptions unstructured;
+  unstructured.structured = false;
+  StatusOr<PiecedLevel> cut = encodePieces(m, unstructured, piece_tets);
+  ASSERT_TRUE(cut.isOk()) << cut.status().message();
+  EXPECT_GE(cut->pieces.size(), 2u);
+  auto bytes = [](const PiecedLevel& l) {
+    size_t n = 0;
+    for (const EncodedLevel& e : l.encoded) {
+      n += e.boundary.size() + e.connectivity.size() + e.geometry.size();
+      for (const auto& f : e.point_fields) n += f.size();
+      for (const auto& f : e.cell_fields) n += f.size();
+    }
+    for (const auto& s : l.seam_streams) n += s.size();
+    return n;
+  };
+  EXPECT_LT(bytes(*level), bytes(*cut));
+  EXPECT_EQ(piecedLosslessMismatch(m, *level), "");
+  StatusOr<DecodedPieces> decoded = decodePieces(piecedViewOf(*level), {}, "block");
+  ASSERT_TRUE(decoded.isOk()) << decoded.status().message();
+  expectSameMesh(m, ordersOf(*level), decoded->mesh, decoded->boundary);
+  // Another bound asks for pieces: a grid larger than it is cut as the level codec's.
+  TetMesh small = fieldGrid(16);
+  StructuredBlock small_block;
+  small_block.first_point = 0;
+  small_block.dims[0] = small_block.dims[1] = small_block.dims[2] = 16;
+  small.blocks.push_back(small_block);
+  StatusOr<PiecedLevel> asked = encodePieces(small, {}, 4096);
+  ASSERT_TRUE(asked.isOk()) << asked.status().message();
+  EXPECT_GE(asked->pieces.size(), 4u);
+  for (const PieceInfo& p : asked->pieces) EXPECT_EQ(p.kind, 0);
+  StatusOr<PiecedLevel> whole = encodePieces(small, {}, kDefaultPieceTets);
+  ASSERT_TRUE(whole.isOk()) << whole.status().message();
+  ASSERT_EQ(whole->pieces.size(), 1u);
+  EXPECT_EQ(whole->pieces[0].kind, 1);
+}
+
 TEST(Pieces, TheMeshStreamOfAStitchedLevelFollowsTheStreamOrder) {
   const TetMesh m = fieldGrid(18);
   StatusOr<PiecedLevel> level = encodePieces(m, {}, 4096);

@@ -12,6 +12,7 @@
 #include "convert/import.h"
 #include "format/gtn_file.h"
 #include "format/gtn_reader.h"
+#include "format/gtn_records.h"
 #include "simplify/apply.h"
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
@@ -182,6 +183,73 @@ TEST(GtnChain, ConvertNamesTheNextLevelUnlessAskedForIndependentLevels) {
   for (const std::string& f : {def, ind}) {
     const RunResult v = runGtn("validate " + f);
     EXPECT_EQ(v.exit_code, 0) << v.out << v.err;
+  }
+}
+
+// Beside a structured level 0, automatic levels keep only the coarse levels that hold, with the
+// coarser ones, at most 1/kStructuredLevelShare of level 0's tetrahedra; the finer ratios are read
+// from level 0 on the fly. Asked-for levels are all kept. Both files validate.
+TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
+  auto imported = importMesh({dataPath("plot3d/bluntfinxyz.bin"), dataPath("plot3d/bluntfinq.bin")}, ImportOptions{});
+  ASSERT_TRUE(imported.isOk()) << imported.status().message();
+  const TetMesh& mesh = imported->mesh;
+  ASSERT_EQ(mesh.blocks.size(), 1u);
+  // The levels the simplifier makes, and which of them the rule keeps.
+  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
+  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  auto all = buildMipLevels(mesh, *tree, LevelOptions{});
+  ASSERT_TRUE(all.isOk()) << all.status().message();
+  const size_t count = all->meshes.size();
+  ASSERT_GE(count, 6u);
+  std::vector<double> kept_ratios;
+  uint64_t chain = 0;
+  for (size_t i = count; i-- > 1;) {
+    chain += all->meshes[i].numTets();
+    if (chain * kStructuredLevelShare > mesh.numTets()) break;
+    kept_ratios.insert(kept_ratios.begin(), all->ratios[i]);
+  }
+  ASSERT_FALSE(kept_ratios.empty());
+  ASSERT_LT(kept_ratios.size(), count - 1);  // some finer levels are left out
+
+  const std::string path = dir() + "/grid-auto.gtn";
+  ASSERT_TRUE(writeGtnWithLevels(path, mesh, GtnConvertOptions{}, GtnWriteOptions{}, "bluntfin").isOk());
+  auto r = open(path);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->level(0).pieces.size(), 1u);
+  EXPECT_EQ(r->level(0).pieces[0].kind, kPieceStructured);
+  EXPECT_EQ(r->level(0).base, 0);
+  ASSERT_EQ(r->levels(), kept_ratios.size() + 1);
+  uint64_t stored_chain = 0;
+  for (size_t k = r->levels(); k-- > 1;) {
+    EXPECT_DOUBLE_EQ(r->level(k).ratio, kept_ratios[k - 1]) << k;
+    EXPECT_EQ(r->level(k).base, k + 1 < r->levels() ? 1 : 0) << k;
+    stored_chain += r->level(k).header.tets;
+    EXPECT_LE(stored_chain * kStructuredLevelShare, mesh.numTets()) << k;
+  }
+  // A ratio between level 0 and the first stored level is read from level 0, and gives the mesh the
+  // simplifier's level at that ratio has.
+  auto merges = mergesForRatio(*r, 0.5);
+  ASSERT_TRUE(merges.isOk()) << merges.status().message();
+  TetMeshBuilder half;
+  SimplifyPlan plan;
+  ASSERT_TRUE(streamSimplified(*r, *merges, half, &plan).isOk());
+  EXPECT_EQ(plan.level, 0u);
+  EXPECT_EQ(half.mesh().numTets(), all->meshes[1].numTets());
+  EXPECT_EQ(half.mesh().numPoints(), all->meshes[1].numPoints());
+
+  GtnConvertOptions asked;
+  asked.levels = 3;
+  const std::string explicit_path = dir() + "/grid-asked.gtn";
+  ASSERT_TRUE(writeGtnWithLevels(explicit_path, mesh, asked, GtnWriteOptions{}, "bluntfin").isOk());
+  auto e = open(explicit_path);
+  ASSERT_TRUE(e);
+  ASSERT_EQ(e->levels(), 4u);
+  for (size_t k = 1; k < 4; ++k) EXPECT_DOUBLE_EQ(e->level(k).ratio, all->ratios[k]) << k;
+  EXPECT_LT(r->file().bytes, e->file().bytes);
+  for (const std::string& f : {path, explicit_path}) {
+    auto report = validateGtnFile(f, ValidateOptions{});
+    ASSERT_TRUE(report.isOk());
+    EXPECT_EQ(report->count(Severity::kError), 0u) << report->toText(f);
   }
 }
 
