@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
+
+#include <tbb/parallel_for.h>
 
 #include "codec/range_coder.h"
 #include "codec/value_coder.h"
@@ -1824,8 +1827,13 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     return usageError(what + ": coordinates must be float32 or float64");
   const std::vector<uint32_t> targets = aliasTargets(l);
   const Scan scan = valueScan(l, targets.empty() ? nullptr : &targets);
-  std::vector<double> d;
-  {
+  // The streams are independent: each one (and the tetrahedra made from the layout) is decoded into its
+  // own output by a task of its own. The first failure in stream order is returned, as one thread
+  // decoding them in turn would.
+  std::vector<std::function<Status()>> jobs;
+  std::vector<Status> failed;  // per job, a failure found before it runs
+  jobs.push_back([&]() -> Status {
+    std::vector<double> d;
     const size_t cs = scalarSize(m.coord_type);
     std::vector<uint8_t> raw;
     resizePopulated(raw, V * 3 * cs);
@@ -1840,48 +1848,78 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     }
     resizePopulated(m.coords, V * 3);
     for (uint64_t i = 0; i < V * 3; ++i) m.coords[i] = doubleFromRaw(m.coord_type, &raw[i * cs]);
-  }
+    return Status::ok();
+  });
+  failed.push_back(Status::ok());
+  m.point_fields.reserve(schema.point_fields.size());
   for (size_t f = 0; f < schema.point_fields.size(); ++f) {
     const FieldDesc& desc = schema.point_fields[f];
-    if (desc.components == 0 || desc.components > 64)
-      return usageError(what + ": point field '" + desc.name + "' of 0 or more than 64 components");
-    Field field(desc.name, desc.components, desc.type, 0);
-    resizePopulated(field.bytes, V * desc.itemBytes());
-    const std::string name = what + ": PFLD stream '" + desc.name + "'";
-    if (!wanted(fields ? &fields->point : nullptr, f)) {
-      // Left out: zero values.
-    } else if (forms[3 + f] == 1) {
-      GTN_RETURN_IF_ERROR(decodeForm1(streams[3 + f], desc.type, desc.components, scan, field.bytes.data(), d, name));
-    } else {
+    if (desc.components == 0 || desc.components > 64) {
+      failed.push_back(usageError(what + ": point field '" + desc.name + "' of 0 or more than 64 components"));
+      jobs.push_back(nullptr);
+      continue;
+    }
+    m.point_fields.emplace_back(desc.name, desc.components, desc.type, 0);
+    Field& field = m.point_fields.back();
+    failed.push_back(Status::ok());
+    jobs.push_back([&, f, &field = field, &desc = desc]() -> Status {
+      resizePopulated(field.bytes, V * desc.itemBytes());
+      if (!wanted(fields ? &fields->point : nullptr, f)) return Status::ok();  // left out: zero values
+      const std::string name = what + ": PFLD stream '" + desc.name + "'";
+      std::vector<double> d;
+      if (forms[3 + f] == 1)
+        return decodeForm1(streams[3 + f], desc.type, desc.components, scan, field.bytes.data(), d, name);
       EntropyCoder<false> c(streams[3 + f]);
       std::vector<Form> declared;
       GTN_RETURN_IF_ERROR(
           codeValueStream(c, desc.type, desc.components, scan, declared, nullptr, 0, field.bytes.data(), d, name));
       if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
-    }
-    m.point_fields.push_back(std::move(field));
+      return Status::ok();
+    });
   }
-  if (!fields || fields->tets) m.tets = gridTets(l);
-  if (!schema.cell_fields.empty()) {
-    const CellScan cscan = cellScan(l);
-    for (size_t f = 0; f < schema.cell_fields.size(); ++f) {
-      const FieldDesc& desc = schema.cell_fields[f];
-      if (desc.components == 0 || desc.itemBytes() > 64)
-        return usageError(what + ": cell field '" + desc.name + "' of 0 components or more than 64 bytes");
-      Field field(desc.name, desc.components, desc.type, 0);
-      resizePopulated(field.bytes, cscan.first.back() * desc.itemBytes());
+  if (!fields || fields->tets) {
+    jobs.push_back([&]() -> Status {
+      m.tets = gridTets(l);
+      return Status::ok();
+    });
+    failed.push_back(Status::ok());
+  }
+  std::optional<CellScan> cscan;
+  if (!schema.cell_fields.empty()) cscan = cellScan(l);
+  m.cell_fields.reserve(schema.cell_fields.size());
+  for (size_t f = 0; f < schema.cell_fields.size(); ++f) {
+    const FieldDesc& desc = schema.cell_fields[f];
+    if (desc.components == 0 || desc.itemBytes() > 64) {
+      failed.push_back(usageError(what + ": cell field '" + desc.name + "' of 0 components or more than 64 bytes"));
+      jobs.push_back(nullptr);
+      continue;
+    }
+    m.cell_fields.emplace_back(desc.name, desc.components, desc.type, 0);
+    Field& field = m.cell_fields.back();
+    failed.push_back(Status::ok());
+    jobs.push_back([&, f, &field = field, &desc = desc]() -> Status {
+      resizePopulated(field.bytes, cscan->first.back() * desc.itemBytes());
+      if (!wanted(fields ? &fields->cell : nullptr, f)) return Status::ok();  // left out: zero values
       const std::string name = what + ": CFLD stream '" + desc.name + "'";
-      if (!wanted(fields ? &fields->cell : nullptr, f)) {
-        m.cell_fields.push_back(std::move(field));  // left out: zero values
-        continue;
-      }
       EntropyCoder<false> c(streams[3 + schema.point_fields.size() + f]);
       std::vector<Form> declared;
-      GTN_RETURN_IF_ERROR(codeCellField(c, desc, cscan, nullptr, field.bytes.data(), declared, name));
+      GTN_RETURN_IF_ERROR(codeCellField(c, desc, *cscan, nullptr, field.bytes.data(), declared, name));
       if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
-      m.cell_fields.push_back(std::move(field));
-    }
+      return Status::ok();
+    });
   }
+  // Jobs after a field that fails its description are not needed: one thread would stop there.
+  size_t run = jobs.size();
+  for (size_t j = 0; j < jobs.size(); ++j)
+    if (!failed[j].isOk()) {
+      run = j;
+      break;
+    }
+  std::vector<Status> results(run, Status::ok());
+  tbb::parallel_for(size_t{0}, run, [&](size_t j) { results[j] = jobs[j](); });
+  for (size_t j = 0; j < run; ++j)
+    if (!results[j].isOk()) return results[j];
+  if (run < jobs.size()) return failed[run];
   return out;
 }
 
