@@ -1851,31 +1851,37 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     return Status::ok();
   });
   failed.push_back(Status::ok());
-  m.point_fields.reserve(schema.point_fields.size());
+  // A field's job: its description is checked here (a bad one ends the jobs there, as it would end one
+  // thread's decoding), its values are decoded by the job into the field it adds to `to`.
+  auto addField = [&](std::vector<Field>& to, const FieldDesc& desc, bool bad, const std::string& why,
+                      std::function<Status(Field&)> decode) {
+    if (bad) {
+      failed.push_back(usageError(what + why));
+      jobs.push_back(nullptr);
+      return;
+    }
+    to.emplace_back(desc.name, desc.components, desc.type, 0);
+    failed.push_back(Status::ok());
+    jobs.push_back([decode = std::move(decode), &field = to.back()] { return decode(field); });
+  };
+  m.point_fields.reserve(schema.point_fields.size());  // the jobs keep references to the fields
   for (size_t f = 0; f < schema.point_fields.size(); ++f) {
     const FieldDesc& desc = schema.point_fields[f];
-    if (desc.components == 0 || desc.components > 64) {
-      failed.push_back(usageError(what + ": point field '" + desc.name + "' of 0 or more than 64 components"));
-      jobs.push_back(nullptr);
-      continue;
-    }
-    m.point_fields.emplace_back(desc.name, desc.components, desc.type, 0);
-    Field& field = m.point_fields.back();
-    failed.push_back(Status::ok());
-    jobs.push_back([&, f, &field = field, &desc = desc]() -> Status {
-      resizePopulated(field.bytes, V * desc.itemBytes());
-      if (!wanted(fields ? &fields->point : nullptr, f)) return Status::ok();  // left out: zero values
-      const std::string name = what + ": PFLD stream '" + desc.name + "'";
-      std::vector<double> d;
-      if (forms[3 + f] == 1)
-        return decodeForm1(streams[3 + f], desc.type, desc.components, scan, field.bytes.data(), d, name);
-      EntropyCoder<false> c(streams[3 + f]);
-      std::vector<Form> declared;
-      GTN_RETURN_IF_ERROR(
-          codeValueStream(c, desc.type, desc.components, scan, declared, nullptr, 0, field.bytes.data(), d, name));
-      if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
-      return Status::ok();
-    });
+    addField(m.point_fields, desc, desc.components == 0 || desc.components > 64,
+             ": point field '" + desc.name + "' of 0 or more than 64 components", [&, f, &desc = desc](Field& field) {
+               resizePopulated(field.bytes, V * desc.itemBytes());
+               if (!wanted(fields ? &fields->point : nullptr, f)) return Status::ok();  // left out: zero values
+               const std::string name = what + ": PFLD stream '" + desc.name + "'";
+               std::vector<double> d;
+               if (forms[3 + f] == 1)
+                 return decodeForm1(streams[3 + f], desc.type, desc.components, scan, field.bytes.data(), d, name);
+               EntropyCoder<false> c(streams[3 + f]);
+               std::vector<Form> declared;
+               GTN_RETURN_IF_ERROR(codeValueStream(c, desc.type, desc.components, scan, declared, nullptr, 0,
+                                                   field.bytes.data(), d, name));
+               if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
+               return Status::ok();
+             });
   }
   if (!fields || fields->tets) {
     jobs.push_back([&]() -> Status {
@@ -1889,24 +1895,18 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   m.cell_fields.reserve(schema.cell_fields.size());
   for (size_t f = 0; f < schema.cell_fields.size(); ++f) {
     const FieldDesc& desc = schema.cell_fields[f];
-    if (desc.components == 0 || desc.itemBytes() > 64) {
-      failed.push_back(usageError(what + ": cell field '" + desc.name + "' of 0 components or more than 64 bytes"));
-      jobs.push_back(nullptr);
-      continue;
-    }
-    m.cell_fields.emplace_back(desc.name, desc.components, desc.type, 0);
-    Field& field = m.cell_fields.back();
-    failed.push_back(Status::ok());
-    jobs.push_back([&, f, &field = field, &desc = desc]() -> Status {
-      resizePopulated(field.bytes, cscan->first.back() * desc.itemBytes());
-      if (!wanted(fields ? &fields->cell : nullptr, f)) return Status::ok();  // left out: zero values
-      const std::string name = what + ": CFLD stream '" + desc.name + "'";
-      EntropyCoder<false> c(streams[3 + schema.point_fields.size() + f]);
-      std::vector<Form> declared;
-      GTN_RETURN_IF_ERROR(codeCellField(c, desc, *cscan, nullptr, field.bytes.data(), declared, name));
-      if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
-      return Status::ok();
-    });
+    addField(m.cell_fields, desc, desc.components == 0 || desc.itemBytes() > 64,
+             ": cell field '" + desc.name + "' of 0 components or more than 64 bytes",
+             [&, f, &desc = desc](Field& field) {
+               resizePopulated(field.bytes, cscan->first.back() * desc.itemBytes());
+               if (!wanted(fields ? &fields->cell : nullptr, f)) return Status::ok();  // left out: zero values
+               const std::string name = what + ": CFLD stream '" + desc.name + "'";
+               EntropyCoder<false> c(streams[3 + schema.point_fields.size() + f]);
+               std::vector<Form> declared;
+               GTN_RETURN_IF_ERROR(codeCellField(c, desc, *cscan, nullptr, field.bytes.data(), declared, name));
+               if (!c.finishedCleanly()) return invalidData(name + " is corrupt, truncated or has trailing bytes");
+               return Status::ok();
+             });
   }
   // Jobs after a field that fails its description are not needed: one thread would stop there.
   size_t run = jobs.size();
