@@ -8,7 +8,8 @@
 // quadrangles) are skipped with a warning counting them by type, and so are their $ElementData values.
 // Cell fields, as meshio names them: "gmsh:physical" (the element's physical group: its first tag in
 // MSH 2, its entity's first physical tag in MSH 4.1; 0 for none) and "gmsh:geometrical" (its
-// elementary entity). MSH 2 lists an element once per physical group it belongs to: the repetitions
+// elementary entity; in a partitioned MSH 4.1 file the physical tags and the parent of the partitioned
+// entity in $PartitionedEntities, so that a mesh gives the same fields partitioned or not). MSH 2 lists an element once per physical group it belongs to: the repetitions
 // (same type and nodes) are read once, in the first group, with a warning. $NodeData and $ElementData become point and cell fields (float64, their
 // number of components) named by their first string tag; of several time steps of one name, the
 // last (the largest time step index) is read, the sections of that step (partitions) together, and a
@@ -344,7 +345,7 @@ class MshReader {
   // --- sections
   Status readFormat();
   Status readPhysicalNames();
-  Status readEntities();
+  Status readEntities(bool partitioned);
   Status readNodes();
   Status readElements();
   Status readData(const std::string& section);
@@ -373,6 +374,7 @@ class MshReader {
   std::map<int, size_t> skipped_;               // lower-dimension elements by gmsh type
   std::map<int, size_t> higher_order_;          // volume elements with more nodes than corners, by gmsh type
   std::map<int64_t, int32_t> volume_physical_;  // MSH 4.1: volume entity -> its first physical tag
+  std::map<int64_t, int32_t> volume_parent_;    // MSH 4.1: partitioned volume entity -> the volume it was cut from
   size_t multi_physical_ = 0;
   std::vector<std::pair<int64_t, std::string>> volume_names_;
   std::vector<DataSection> data_;
@@ -434,7 +436,18 @@ Status MshReader::readPhysicalNames() {
   return expectEnd("PhysicalNames");
 }
 
-Status MshReader::readEntities() {
+// $Entities, or with partitioned the $PartitionedEntities of a partitioned mesh: the entities gmsh made by
+// cutting the model's, each naming the entity it was cut from (its parent) and carrying its physical tags.
+Status MshReader::readEntities(bool partitioned) {
+  const std::string section = partitioned ? "PartitionedEntities" : "Entities";
+  if (partitioned) {
+    GTN_RETURN_IF_ERROR(readSize("partition count").status());
+    GTN_ASSIGN_OR_RETURN(const int64_t ghosts, readCount("ghost entity count", binary_ ? 8 : 4));
+    for (int64_t g = 0; g < ghosts; ++g) {
+      GTN_RETURN_IF_ERROR(readInt("ghost entity tag").status());
+      GTN_RETURN_IF_ERROR(readInt("ghost entity partition").status());
+    }
+  }
   int64_t counts[4];
   const char* kinds[4] = {"point entity count", "curve entity count", "surface entity count", "volume entity count"};
   for (int d = 0; d < 4; ++d) {
@@ -443,6 +456,13 @@ Status MshReader::readEntities() {
   for (int d = 0; d < 4; ++d) {
     for (int64_t e = 0; e < counts[d]; ++e) {
       GTN_ASSIGN_OR_RETURN(const int64_t tag, readInt("entity tag"));
+      if (partitioned) {
+        GTN_ASSIGN_OR_RETURN(const int64_t parent_dim, readInt("parent entity dimension"));
+        GTN_ASSIGN_OR_RETURN(const int64_t parent_tag, readInt("parent entity tag"));
+        if (d == 3 && parent_dim == 3) volume_parent_[tag] = static_cast<int32_t>(parent_tag);
+        GTN_ASSIGN_OR_RETURN(const int64_t num_partitions, readCount("partition tag count", binary_ ? 4 : 2));
+        for (int64_t k = 0; k < num_partitions; ++k) GTN_RETURN_IF_ERROR(readInt("partition tag").status());
+      }
       for (int k = 0; k < (d == 0 ? 3 : 6); ++k) GTN_RETURN_IF_ERROR(readDouble("entity bounding box").status());
       GTN_ASSIGN_OR_RETURN(const int64_t num_physical, readCount("physical tag count", binary_ ? 4 : 2));
       for (int64_t k = 0; k < num_physical; ++k) {
@@ -456,7 +476,7 @@ Status MshReader::readEntities() {
       }
     }
   }
-  return expectEnd("Entities");
+  return expectEnd(section);
 }
 
 Status MshReader::readNodes() {
@@ -646,12 +666,15 @@ Status MshReader::readElements() {
       GTN_ASSIGN_OR_RETURN(const int64_t count,
                            readCount("element count of a block", (binary_ ? sizeBytes() : 2) * (1 + type->nodes)));
       int32_t physical = 0;
+      int32_t geometrical = static_cast<int32_t>(entity);
       if (dim == 3) {
         auto it = volume_physical_.find(entity);
         if (it != volume_physical_.end()) {
           physical = it->second;
           any_physical_ = true;
         }
+        auto parent = volume_parent_.find(entity);
+        if (parent != volume_parent_.end()) geometrical = parent->second;
       }
       nodes.resize(static_cast<size_t>(type->nodes));
       for (int64_t e = 0; e < count; ++e) {
@@ -661,7 +684,7 @@ Status MshReader::readElements() {
         for (int64_t& v : nodes) {
           GTN_ASSIGN_OR_RETURN(v, readSize("element node"));
         }
-        GTN_RETURN_IF_ERROR(addElement(tag, *type, nodes.data(), physical, static_cast<int32_t>(entity), line_at));
+        GTN_RETURN_IF_ERROR(addElement(tag, *type, nodes.data(), physical, geometrical, line_at));
       }
     }
     if (static_cast<int64_t>(element_map_.tags.size()) != n)
@@ -874,8 +897,8 @@ StatusOr<ImportResult> MshReader::read(const ImportOptions& options) {
     if (section == "MeshFormat") return errorAt(section_at, "a second $MeshFormat");
     if (section == "PhysicalNames") {
       GTN_RETURN_IF_ERROR(readPhysicalNames());
-    } else if (section == "Entities" && version_ == 4) {
-      GTN_RETURN_IF_ERROR(readEntities());
+    } else if ((section == "Entities" || section == "PartitionedEntities") && version_ == 4) {
+      GTN_RETURN_IF_ERROR(readEntities(section == "PartitionedEntities"));
     } else if (section == "Nodes") {
       GTN_RETURN_IF_ERROR(readNodes());
     } else if (section == "Elements") {

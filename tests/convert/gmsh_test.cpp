@@ -328,6 +328,58 @@ TEST(GmshImport, VolumeInTwoPhysicalGroups) {
   }
 }
 
+// A mesh that gmsh partitions (-part 3) keeps its physical groups and entities: MSH 4.1 puts its elements
+// in partitioned entities, listed in $PartitionedEntities with their physical tags and the entity they
+// were cut from. Each tetrahedron, found by its corners, gets the fields it has in the file not partitioned.
+TEST(GmshImport, PartitionedFilesKeepPhysicalGroupsAndEntities) {
+  std::string why;
+  if (!gmshAvailable(&why)) GTEST_SKIP() << why;
+  const std::string dir = tempDir("gmsh_partitioned");
+  using Corners = std::array<std::array<double, 3>, 4>;
+  auto fieldsByCorners = [](const TetMesh& m) {
+    std::map<Corners, std::pair<int32_t, int32_t>> by;
+    const Field* physical = findField(m.cell_fields, "gmsh:physical");
+    const Field* geometrical = findField(m.cell_fields, "gmsh:geometrical");
+    EXPECT_NE(physical, nullptr);
+    EXPECT_NE(geometrical, nullptr);
+    if (physical == nullptr || geometrical == nullptr) return by;
+    for (size_t t = 0; t < m.numTets(); ++t) {
+      Corners c;
+      for (int k = 0; k < 4; ++k)
+        for (int a = 0; a < 3; ++a) c[k][a] = m.coords[3 * m.tets[t][k] + a];
+      std::sort(c.begin(), c.end());
+      by[c] = {physical->data<int32_t>()[t], geometrical->data<int32_t>()[t]};
+    }
+    return by;
+  };
+  for (const std::string binary : {"", "-bin"}) {
+    // ASCII coordinates are rounded: compare with the same mesh written the same way.
+    const std::string whole = makeGmshFile(dir, "whole" + binary + ".msh", "-format msh41 " + binary);
+    const std::string path = makeGmshFile(dir, "parts" + binary + ".msh", "-format msh41 -part 3 " + binary);
+    SCOPED_TRACE(path);
+    auto w = importMesh({whole}, ImportOptions{});
+    ASSERT_TRUE(w.isOk()) << w.status().message();
+    const auto expected = fieldsByCorners(w->mesh);
+    std::set<int32_t> groups;
+    for (const auto& entry : expected) groups.insert(entry.second.first);
+    EXPECT_EQ(groups, (std::set<int32_t>{11, 12}));
+    ASSERT_NE(test::readFile(path).find("$PartitionedEntities"), std::string::npos);
+    auto r = importMesh({path}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->mesh.numTets(), w->mesh.numTets());
+    const auto got = fieldsByCorners(r->mesh);
+    size_t differ = 0;
+    for (const auto& [corners, fields] : got) {
+      auto it = expected.find(corners);
+      if (it == expected.end() || it->second != fields) ++differ;
+    }
+    EXPECT_EQ(got.size(), expected.size());
+    EXPECT_EQ(differ, 0u) << "tetrahedra whose gmsh:physical or gmsh:geometrical differ from the unpartitioned file's";
+    EXPECT_EQ(*r->mesh.findMetadata("gmsh.physical_name.11"), "left");
+    EXPECT_FALSE(hasWarning(r->report, "PartitionedEntities")) << allWarnings(r->report);
+  }
+}
+
 // A hand-written MSH 2.2 file: a hexahedron, a pyramid on it, a prism beside it and a tetrahedron on
 // the prism, with sparse node tags, boundary elements, $ElementData and $ElementNodeData.
 const char* kMixed =
