@@ -67,8 +67,14 @@ InputFormat detectInputFormat(const std::string& path) {
       ext == "pvti" || h.find("<VTKFile") != std::string::npos)
     return InputFormat::kVtu;
   if (ext == "msh" || h.rfind("$MeshFormat", 0) == 0) return InputFormat::kGmsh;
-  if (ext == "meshb") return InputFormat::kMeshb;
-  if (ext == "mesh" || h.find("MeshVersionFormatted") != std::string::npos) return InputFormat::kMedit;
+  // Medit: the content tells ASCII from binary whatever the extension (gmsh 4.8 writes ASCII into a
+  // file it names .meshb); binary starts with the code 1 in either byte order.
+  const bool gmf_binary = h.size() >= 8 && (h.compare(0, 4, std::string("\x01\0\0\0", 4)) == 0 ||
+                                            h.compare(0, 4, std::string("\0\0\0\x01", 4)) == 0);
+  const bool medit_text = h.find("MeshVersionFormatted") != std::string::npos;
+  if (ext == "meshb") return medit_text && !gmf_binary ? InputFormat::kMedit : InputFormat::kMeshb;
+  if (ext == "mesh" && gmf_binary) return InputFormat::kMeshb;
+  if (ext == "mesh" || medit_text) return InputFormat::kMedit;
   if (ext == "off" || ext == "toff") return InputFormat::kOff;
   if (ext == "node" || ext == "ele" || ext == "face") return InputFormat::kTetgen;
   // A TetGen basename such as "foo.1" has an extension of its own but names no file.
