@@ -1,7 +1,8 @@
 // gmsh .msh importer, written from the format's documentation: MSH 2.x (2.0 to 2.2) and 4.1, ASCII
 // and binary (either byte order, told by the integer 1 after the $MeshFormat line).
 //
-// Every node becomes a point, in the order of $Nodes (tags may be sparse: they are mapped). Volume
+// Every node becomes a point, in the order of $Nodes or MSH 2's $ParametricNodes (tags may be sparse: they
+// are mapped; parametric coordinates are not kept). Volume
 // elements (tetrahedra, hexahedra, prisms, pyramids, of any order) become VTK cells of their corners
 // and are split as the VTK importers split theirs (cell_split.h); the other nodes of higher-order
 // elements stay as unreferenced points. Elements of lower dimension (points, lines, triangles,
@@ -234,6 +235,12 @@ class MshReader {
     while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
     if (pos_ < text_.size()) ++pos_;
   }
+  // Whether only blanks are left on the current line (text).
+  bool atLineEnd() const {
+    size_t p = pos_;
+    while (p < text_.size() && (text_[p] == ' ' || text_[p] == '\t' || text_[p] == '\r')) ++p;
+    return p >= text_.size() || text_[p] == '\n';
+  }
   bool token(std::string_view* out) {
     skipSpace();
     if (pos_ >= text_.size()) return false;
@@ -346,7 +353,7 @@ class MshReader {
   Status readFormat();
   Status readPhysicalNames();
   Status readEntities(bool partitioned);
-  Status readNodes();
+  Status readNodes(bool parametric);
   Status readElements();
   Status readData(const std::string& section);
   Status addElement(int64_t tag, const GmshType& type, const int64_t* nodes, int32_t physical, int32_t geometrical,
@@ -479,8 +486,11 @@ Status MshReader::readEntities(bool partitioned) {
   return expectEnd(section);
 }
 
-Status MshReader::readNodes() {
-  if (have_nodes_) return errorAt(token_at_, "a second $Nodes section (only one is read)");
+// MSH 2 writes the nodes as $ParametricNodes when asked to save parametric coordinates (gmsh -save_parametric):
+// after each node's coordinates its entity's dimension and tag, then 1 (curve) or 2 (surface) parameters,
+// which are not kept. In text a node on no entity has none of these.
+Status MshReader::readNodes(bool parametric) {
+  if (have_nodes_) return errorAt(token_at_, "a second $Nodes or $ParametricNodes section (only one is read)");
   have_nodes_ = true;
   std::vector<int64_t>& tags = node_map_.tags;
   auto addNode = [&](int64_t tag, const double xyz[3], size_t at) -> Status {
@@ -503,8 +513,20 @@ Status MshReader::readNodes() {
       for (double& c : xyz) {
         GTN_ASSIGN_OR_RETURN(c, readDouble("node coordinate"));
       }
+      const size_t coords_at = binary_ ? at : token_at_;
+      if (parametric && (binary_ || !atLineEnd())) {
+        GTN_ASSIGN_OR_RETURN(const int64_t dim, readInt("node entity dimension"));
+        if (dim < 0 || dim > 3) {
+          const std::string reason =
+              "node " + std::to_string(tag) + ": entity dimension " + std::to_string(dim) + " is not 0 to 3";
+          return binary_ ? binaryErrorAt(pos_ - 4, reason) : errorAt(token_at_, reason);
+        }
+        GTN_RETURN_IF_ERROR(readInt("node entity tag").status());
+        for (int64_t k = 0; k < (dim == 1 || dim == 2 ? dim : 0); ++k)
+          GTN_RETURN_IF_ERROR(readDouble("node parametric coordinate").status());
+      }
       tags.push_back(tag);
-      GTN_RETURN_IF_ERROR(addNode(tag, xyz, binary_ ? at : token_at_));
+      GTN_RETURN_IF_ERROR(addNode(tag, xyz, coords_at));
     }
   } else {
     GTN_ASSIGN_OR_RETURN(const int64_t blocks, readCount("node block count", binary_ ? 12 + sizeBytes() : 8));
@@ -549,7 +571,7 @@ Status MshReader::readNodes() {
   int64_t duplicate = 0;
   if (!node_map_.build(&duplicate))
     return errorAt(pos_, "node tag " + std::to_string(duplicate) + " occurs twice in $Nodes");
-  return expectEnd("Nodes");
+  return expectEnd(parametric ? "ParametricNodes" : "Nodes");
 }
 
 Status MshReader::addElement(int64_t tag, const GmshType& type, const int64_t* nodes, int32_t physical,
@@ -899,8 +921,8 @@ StatusOr<ImportResult> MshReader::read(const ImportOptions& options) {
       GTN_RETURN_IF_ERROR(readPhysicalNames());
     } else if ((section == "Entities" || section == "PartitionedEntities") && version_ == 4) {
       GTN_RETURN_IF_ERROR(readEntities(section == "PartitionedEntities"));
-    } else if (section == "Nodes") {
-      GTN_RETURN_IF_ERROR(readNodes());
+    } else if (section == "Nodes" || (section == "ParametricNodes" && version_ == 2)) {
+      GTN_RETURN_IF_ERROR(readNodes(section == "ParametricNodes"));
     } else if (section == "Elements") {
       GTN_RETURN_IF_ERROR(readElements());
       if (version_ == 2) dropRepeatedElements();

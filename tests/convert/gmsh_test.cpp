@@ -380,6 +380,49 @@ TEST(GmshImport, PartitionedFilesKeepPhysicalGroupsAndEntities) {
   }
 }
 
+// gmsh -save_parametric writes MSH 2 nodes as $ParametricNodes (each node's entity, then its curve or
+// surface parameters): the same mesh as without. By hand: nodes on a point, a curve, a surface, a
+// volume and (text only) on no entity.
+TEST(GmshImport, ParametricNodesOfMsh2) {
+  std::string why;
+  if (!gmshAvailable(&why)) GTEST_SKIP() << why;
+  const std::string dir = tempDir("gmsh_parametric");
+  for (const std::string binary : {"", "-bin"}) {
+    const std::string plain = makeGmshFile(dir, "plain" + binary + ".msh", "-format msh22 " + binary);
+    const std::string path = makeGmshFile(dir, "param" + binary + ".msh", "-format msh22 -save_parametric " + binary);
+    SCOPED_TRACE(path);
+    ASSERT_NE(test::readFile(path).find("$ParametricNodes"), std::string::npos);
+    auto a = importMesh({plain}, ImportOptions{});
+    auto b = importMesh({path}, ImportOptions{});
+    ASSERT_TRUE(a.isOk()) << a.status().message();
+    ASSERT_TRUE(b.isOk()) << b.status().message();
+    EXPECT_EQ(b->mesh.coords, a->mesh.coords);
+    EXPECT_EQ(b->mesh.tets, a->mesh.tets);
+    ASSERT_EQ(b->mesh.cell_fields.size(), a->mesh.cell_fields.size());
+    for (size_t f = 0; f < a->mesh.cell_fields.size(); ++f)
+      EXPECT_EQ(b->mesh.cell_fields[f].bytes, a->mesh.cell_fields[f].bytes) << a->mesh.cell_fields[f].name;
+    EXPECT_FALSE(hasWarning(b->report, "ParametricNodes")) << allWarnings(b->report);
+  }
+  const std::string text =
+      "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$ParametricNodes\n5\n"
+      "1 0 0 0 0 7\n2 1 0 0 1 3 0.25\n3 0 1 0 2 4 0.5 0.75\n4 0 0 1\n5 0.2 0.2 0.2 3 1\n"
+      "$EndParametricNodes\n$Elements\n1\n1 4 2 6 1 1 2 3 4\n$EndElements\n";
+  writeFile(dir + "/hand.msh", text);
+  auto r = importMesh({dir + "/hand.msh"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numPoints(), 5u);
+  ASSERT_EQ(r->mesh.numTets(), 1u);
+  EXPECT_EQ(r->mesh.point(4)[0], 0.2);
+  EXPECT_EQ(r->mesh.point(3)[2], 1.0);
+  // A dimension that no entity has is an error naming the node and the line.
+  std::string bad = text;
+  bad.replace(bad.find("2 4 0.5 0.75"), 1, "7");
+  writeFile(dir + "/bad.msh", bad);
+  auto e = importMesh({dir + "/bad.msh"}, ImportOptions{});
+  ASSERT_FALSE(e.isOk());
+  EXPECT_EQ(e.status().message(), dir + "/bad.msh:8: node 3: entity dimension 7 is not 0 to 3");
+}
+
 // A hand-written MSH 2.2 file: a hexahedron, a pyramid on it, a prism beside it and a tetrahedron on
 // the prism, with sparse node tags, boundary elements, $ElementData and $ElementNodeData.
 const char* kMixed =
