@@ -418,6 +418,29 @@ class ClassicHeader {
   uint64_t pos_ = 0;
 };
 
+// The end of a netCDF-4 (HDF5) file as its superblock records it (base address plus end-of-file
+// address, little-endian, of the superblock's offset size), or 0 where it cannot be told. A file cut
+// short ends before it; the libraries would only say "HDF error" (and the Exodus library that netCDF-4 is
+// not supported).
+uint64_t hdf5End(std::string_view b) {
+  if (b.size() < 12 || b.compare(0, 8, "\x89HDF\r\n\x1a\n") != 0) return 0;
+  const uint8_t version = static_cast<uint8_t>(b[8]);
+  const size_t offsets = static_cast<uint8_t>(version <= 1 ? (b.size() > 13 ? b[13] : 0) : b[9]);
+  if (offsets != 2 && offsets != 4 && offsets != 8) return 0;
+  const size_t first = version == 0 ? 24 : version == 1 ? 28 : version <= 3 ? 12 : 0;
+  if (first == 0 || b.size() < first + 3 * offsets) return 0;
+  auto address = [&](size_t at) {
+    uint64_t v = 0;
+    for (size_t i = 0; i < offsets; ++i) v |= static_cast<uint64_t>(static_cast<uint8_t>(b[at + i])) << (8 * i);
+    return v;
+  };
+  const uint64_t undefined = offsets == 8 ? UINT64_MAX : (uint64_t{1} << (8 * offsets)) - 1;
+  const uint64_t base = address(first);
+  const uint64_t eof = address(first + 2 * offsets);  // after the base and the free-space or extension address
+  if (base == undefined || eof == undefined || eof > UINT64_MAX - base) return 0;
+  return base + eof;
+}
+
 struct Block {
   int64_t id = 0;
   std::string type;
@@ -444,7 +467,7 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
   if (::stat(path.c_str(), &sb) != 0) return ioError(path + ": cannot read it");
   const uint64_t file_size = static_cast<uint64_t>(sb.st_size);
   // A classic file must hold all that its header describes (netCDF would read the missing bytes as
-  // zeros); HDF5 checks its own end of file.
+  // zeros), and a netCDF-4 file the end of file its HDF5 superblock records.
   // The header lies at the start: the first 256 MiB hold any real one.
   std::string bytes(static_cast<size_t>(std::min<uint64_t>(file_size, uint64_t{256} << 20)), '\0');
   if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
@@ -460,6 +483,9 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
       return invalidData(path + ": truncated: its netCDF header places values up to byte " + std::to_string(end) +
                          ", but the file has " + std::to_string(file_size) + " bytes");
   }
+  if (const uint64_t end = hdf5End(bytes); end > file_size)
+    return invalidData(path + ": truncated: its HDF5 superblock gives the file " + std::to_string(end) +
+                       " bytes, but it has " + std::to_string(file_size));
   // The library would print its errors and, by default in some versions, abort: it is told to do
   // neither, and its messages go into ours.
   api.ex_opts(EX_DEFAULT);

@@ -654,9 +654,12 @@ TEST(ExodusErrors, DamagedAndTruncatedFiles) {
     writeFile(dir + "/cut.exo", good.substr(0, good.size() - 4));
     auto cut = load(dir + "/cut.exo");
     ASSERT_FALSE(cut.isOk());
+    // netCDF-4: the end of file the HDF5 superblock records (the libraries would say "HDF error", and the
+    // Exodus library on standard error that netCDF-4 is not supported).
     if (mode & EX_NETCDF4)
-      EXPECT_EQ(cut.status().message().rfind(dir + "/cut.exo: cannot open it as an Exodus II file (ex_open: ", 0), 0u)
-          << cut.status().message();
+      EXPECT_EQ(cut.status().message(), dir + "/cut.exo: truncated: its HDF5 superblock gives the file " +
+                                            std::to_string(good.size()) + " bytes, but it has " +
+                                            std::to_string(good.size() - 4));
     else
       EXPECT_EQ(cut.status().message(), dir + "/cut.exo: truncated: its netCDF header places values up to byte " +
                                             std::to_string(good.size()) + ", but the file has " +
