@@ -476,7 +476,7 @@ Status MshReader::readEntities(bool partitioned) {
         GTN_ASSIGN_OR_RETURN(const int64_t physical, readInt("physical tag"));
         if (d == 3 && k == 0) volume_physical_[tag] = static_cast<int32_t>(physical);
       }
-      if (d == 3 && num_physical > 1) ++multi_physical_;
+      if (d == 3 && num_physical > 1 && !partitioned) ++multi_physical_;  // counted once, in $Entities
       if (d > 0) {
         GTN_ASSIGN_OR_RETURN(const int64_t num_bounding, readCount("bounding entity count", binary_ ? 4 : 2));
         for (int64_t k = 0; k < num_bounding; ++k) GTN_RETURN_IF_ERROR(readInt("bounding entity tag").status());

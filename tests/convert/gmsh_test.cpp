@@ -326,6 +326,16 @@ TEST(GmshImport, VolumeInTwoPhysicalGroups) {
                                           : "1 volume entities belong to several physical groups"))
         << allWarnings(r->report);
   }
+  // Partitioned: the volume is still one entity of the model, whatever its partitioned entities.
+  const std::string parts = dir + "/two_parts.msh";
+  const auto g = runShell("gmsh -3 -format msh41 -part 3 '" + geo + "' -o '" + parts + "'");
+  ASSERT_EQ(g.exit_code, 0) << g.out << g.err;
+  auto r = importMesh({parts}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const Field* physical = findField(r->mesh.cell_fields, "gmsh:physical");
+  ASSERT_NE(physical, nullptr);
+  for (size_t t = 0; t < r->mesh.numTets(); ++t) ASSERT_EQ(physical->data<int32_t>()[t], 1);
+  EXPECT_TRUE(hasWarning(r->report, "1 volume entities belong to several physical groups")) << allWarnings(r->report);
 }
 
 // A mesh that gmsh partitions (-part 3) keeps its physical groups and entities: MSH 4.1 puts its elements
