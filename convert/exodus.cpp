@@ -14,7 +14,7 @@
 // velocity_y, velocity_z: "velocity_"). An element variable
 // that a block does not define (the truth table) is NaN there, and so is a variable whose values the
 // library does not find (a warning), except nodal variables stored as meshio stores them
-// (readNetcdfNodal). Global variables of the step become
+// (netcdfNodal). Global variables of the step become
 // metadata ("exodus.global.NAME"). What is not read is said in a warning each: blocks of lower
 // dimension (triangles, quadrilaterals, shells, bars, ...) and polyhedra, node sets, side sets and the
 // other sets, edge and face blocks, element attributes and the variables of sets.
@@ -62,7 +62,7 @@ struct ExodusApi {
   decltype(&::ex_set_int64_status) ex_set_int64_status = nullptr;
   decltype(&::ex_open_int) ex_open_int = nullptr;
   // Of the netCDF library the Exodus library loads (optional): error texts, and nodal variables that
-  // the Exodus library does not find (readNodalNetcdf).
+  // the Exodus library does not find (netcdfNodal).
   const char* (*nc_strerror)(int) = nullptr;
   int (*nc_inq_varid)(int, const char*, int*) = nullptr;
   int (*nc_inq_varndims)(int, int, int*) = nullptr;
