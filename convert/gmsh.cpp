@@ -3,9 +3,10 @@
 //
 // Every node becomes a point, in the order of $Nodes or MSH 2's $ParametricNodes (tags may be sparse:
 // they are mapped; parametric coordinates are not kept). Volume elements (tetrahedra, hexahedra,
-// prisms, pyramids, of any order) become VTK cells of their corners and are split as the VTK importers
-// split theirs (cell_split.h); the other nodes of higher-order elements stay as unreferenced points. Elements of lower dimension (points, lines, triangles,
-// quadrangles) are skipped with a warning counting them by type, and so are their $ElementData values.
+// prisms, pyramids, of any order) become VTK cells of their corners and are split as the VTK
+// importers split theirs (cell_split.h); the other nodes of higher-order elements stay as
+// unreferenced points. Elements of lower dimension (points, lines, triangles, quadrangles) are
+// skipped with a warning counting them by type, and so are their $ElementData values.
 // Cell fields, as meshio names them: "gmsh:physical" (the element's physical group: its first tag in
 // MSH 2, its entity's first physical tag in MSH 4.1; 0 for none) and "gmsh:geometrical" (its
 // elementary entity; in a partitioned MSH 4.1 file the physical tags and the parent of the partitioned
@@ -14,8 +15,9 @@
 // read once, in the first group, with a warning. $NodeData and $ElementData become point and cell
 // fields (float64, their number of components) named by their first string tag; of several time
 // steps of one name, the last (the largest time step index) is read, the sections of that step
-// (partitions) together, and a warning says so. $ElementNodeData and other sections are skipped with a warning naming them. Names
-// of volume physical groups go into the metadata as gmsh.physical_name.<tag>.
+// (partitions) together, and a warning says so. $ElementNodeData and other sections are skipped with
+// a warning naming them. Names of volume physical groups go into the metadata as
+// gmsh.physical_name.<tag>.
 //
 // Counts are never trusted: each is checked against the bytes left in the file before anything is
 // allocated for it. Errors name the file and the line (text) or byte offset (binary data).
