@@ -12,7 +12,9 @@
 // file's word size; variables named NAMEX, NAMEY, NAMEZ (or NAMEx, NAMEy, NAMEz) one after the other
 // become one 3-component field NAME, as VTK's Exodus reader and meshio join them (velocity_x,
 // velocity_y, velocity_z: "velocity_"). An element variable
-// that a block does not define (the truth table) is NaN there. Global variables of the step become
+// that a block does not define (the truth table) is NaN there, and so is a variable whose values the
+// library does not find (a warning), except nodal variables stored as meshio stores them
+// (netcdfNodal). Global variables of the step become
 // metadata ("exodus.global.NAME"). What is not read is said in a warning each: blocks of lower
 // dimension (triangles, quadrilaterals, shells, bars, ...) and polyhedra, node sets, side sets and the
 // other sets, edge and face blocks, element attributes and the variables of sets.
@@ -59,7 +61,14 @@ struct ExodusApi {
   decltype(&::ex_set_max_name_length) ex_set_max_name_length = nullptr;
   decltype(&::ex_set_int64_status) ex_set_int64_status = nullptr;
   decltype(&::ex_open_int) ex_open_int = nullptr;
-  const char* (*nc_strerror)(int) = nullptr;  // of the netCDF library the Exodus library loads (optional)
+  // Of the netCDF library the Exodus library loads (optional): error texts, and nodal variables that
+  // the Exodus library does not find (netcdfNodal).
+  const char* (*nc_strerror)(int) = nullptr;
+  int (*nc_inq_varid)(int, const char*, int*) = nullptr;
+  int (*nc_inq_varndims)(int, int, int*) = nullptr;
+  int (*nc_inq_vardimid)(int, int, int*) = nullptr;
+  int (*nc_inq_dimlen)(int, int, size_t*) = nullptr;
+  int (*nc_get_vara_double)(int, int, const size_t*, const size_t*, double*) = nullptr;
 };
 const ExodusApi* exodusApi(std::string* why) {
   static std::string error;
@@ -96,6 +105,14 @@ const ExodusApi* exodusApi(std::string* why) {
     load(api.ex_set_int64_status, "ex_set_int64_status");
     load(api.ex_open_int, "ex_open_int");
     api.nc_strerror = reinterpret_cast<const char* (*)(int)>(dlsym(lib, "nc_strerror"));
+    auto optional = [&](auto& f, const char* name) {
+      f = reinterpret_cast<std::remove_reference_t<decltype(f)>>(dlsym(lib, name));
+    };
+    optional(api.nc_inq_varid, "nc_inq_varid");
+    optional(api.nc_inq_varndims, "nc_inq_varndims");
+    optional(api.nc_inq_vardimid, "nc_inq_vardimid");
+    optional(api.nc_inq_dimlen, "nc_inq_dimlen");
+    optional(api.nc_get_vara_double, "nc_get_vara_double");
     return ok ? &api : nullptr;
   }();
   if (!api) *why = error;
@@ -176,15 +193,17 @@ StatusOr<std::vector<std::string>> readNames(const ExodusApi& api, const std::st
 
 // Groups of variables that become one field: their indices (0-based) and the field's name. Three
 // names one after the other that differ only in a last letter x, y, z (the same case, after a common
-// stem) are one 3-component field named after the stem.
+// stem) are one 3-component field named after the stem; a variable of several components stands alone.
 struct VariableGroup {
   std::string name;
   std::vector<int> variables;
 };
-std::vector<VariableGroup> groupVariables(const std::vector<std::string>& names) {
+std::vector<VariableGroup> groupVariables(const std::vector<std::string>& names,
+                                          const std::vector<size_t>& components = {}) {
   std::vector<VariableGroup> groups;
+  auto single = [&](size_t i) { return components.empty() || components[i] == 1; };
   for (size_t i = 0; i < names.size();) {
-    if (i + 2 < names.size()) {
+    if (i + 2 < names.size() && single(i) && single(i + 1) && single(i + 2)) {
       const std::string& a = names[i];
       const std::string& b = names[i + 1];
       const std::string& c = names[i + 2];
@@ -207,6 +226,44 @@ std::vector<VariableGroup> groupVariables(const std::vector<std::string>& names)
 void putValue(Field& f, size_t item, uint32_t c, double v) {
   if (f.type == ScalarType::kFloat32) f.set<float>(item, c, static_cast<float>(v));
   else f.set<double>(item, c, v);
+}
+
+// A nodal variable as netCDF stores it in its own variable vals_nod_var<k> (k 1-based): dimensions
+// (time_step, num_nodes), the layout of Exodus's "large model", or (time_step, num_nodes, C) for C
+// components. meshio writes every file so, vectors as the second form, without the file_size attribute
+// that tells the Exodus library to look there: the library then finds no values (a warning, not an
+// error). Its components, 0 where the variable is not so stored or netCDF cannot be asked.
+struct NetcdfNodal {
+  int varid = -1;
+  size_t components = 0;
+};
+NetcdfNodal netcdfNodal(const ExodusApi& api, int exoid, int k, size_t num_nodes) {
+  NetcdfNodal out;
+  if (!api.nc_inq_varid || !api.nc_inq_varndims || !api.nc_inq_vardimid || !api.nc_inq_dimlen ||
+      !api.nc_get_vara_double)
+    return out;
+  int varid = -1, ndims = 0;
+  const std::string name = "vals_nod_var" + std::to_string(k);
+  if (api.nc_inq_varid(exoid, name.c_str(), &varid) != 0 || api.nc_inq_varndims(exoid, varid, &ndims) != 0 ||
+      (ndims != 2 && ndims != 3))
+    return out;
+  int dims[3];
+  size_t lengths[3] = {0, 0, 1};
+  if (api.nc_inq_vardimid(exoid, varid, dims) != 0) return out;
+  for (int d = 0; d < ndims; ++d)
+    if (api.nc_inq_dimlen(exoid, dims[d], &lengths[d]) != 0) return out;
+  if (lengths[1] != num_nodes || lengths[2] < 1 || lengths[2] > 64) return out;
+  out.varid = varid;
+  out.components = lengths[2];
+  return out;
+}
+// Reads step (1-based) of such a variable: num_nodes x components values, component fastest.
+bool readNetcdfNodal(const ExodusApi& api, int exoid, const NetcdfNodal& v, int step, size_t num_nodes,
+                     std::vector<double>* values) {
+  values->assign(num_nodes * v.components, 0.0);
+  const size_t start[3] = {static_cast<size_t>(step - 1), 0, 0};
+  const size_t count[3] = {1, num_nodes, v.components};
+  return num_nodes == 0 || api.nc_get_vara_double(exoid, v.varid, start, count, values->data()) == 0;
 }
 
 std::string plural(int64_t n, const char* one, const char* many) {
@@ -361,6 +418,29 @@ class ClassicHeader {
   uint64_t pos_ = 0;
 };
 
+// The end of a netCDF-4 (HDF5) file as its superblock records it (base address plus end-of-file
+// address, little-endian, of the superblock's offset size), or 0 where it cannot be told. A file cut
+// short ends before it; the libraries would only say "HDF error" (and the Exodus library that netCDF-4 is
+// not supported).
+uint64_t hdf5End(std::string_view b) {
+  if (b.size() < 12 || b.compare(0, 8, "\x89HDF\r\n\x1a\n") != 0) return 0;
+  const uint8_t version = static_cast<uint8_t>(b[8]);
+  const size_t offsets = static_cast<uint8_t>(version <= 1 ? (b.size() > 13 ? b[13] : 0) : b[9]);
+  if (offsets != 2 && offsets != 4 && offsets != 8) return 0;
+  const size_t first = version == 0 ? 24 : version == 1 ? 28 : version <= 3 ? 12 : 0;
+  if (first == 0 || b.size() < first + 3 * offsets) return 0;
+  auto address = [&](size_t at) {
+    uint64_t v = 0;
+    for (size_t i = 0; i < offsets; ++i) v |= static_cast<uint64_t>(static_cast<uint8_t>(b[at + i])) << (8 * i);
+    return v;
+  };
+  const uint64_t undefined = offsets == 8 ? UINT64_MAX : (uint64_t{1} << (8 * offsets)) - 1;
+  const uint64_t base = address(first);
+  const uint64_t eof = address(first + 2 * offsets);  // after the base and the free-space or extension address
+  if (base == undefined || eof == undefined || eof > UINT64_MAX - base) return 0;
+  return base + eof;
+}
+
 struct Block {
   int64_t id = 0;
   std::string type;
@@ -387,7 +467,7 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
   if (::stat(path.c_str(), &sb) != 0) return ioError(path + ": cannot read it");
   const uint64_t file_size = static_cast<uint64_t>(sb.st_size);
   // A classic file must hold all that its header describes (netCDF would read the missing bytes as
-  // zeros); HDF5 checks its own end of file.
+  // zeros), and a netCDF-4 file the end of file its HDF5 superblock records.
   // The header lies at the start: the first 256 MiB hold any real one.
   std::string bytes(static_cast<size_t>(std::min<uint64_t>(file_size, uint64_t{256} << 20)), '\0');
   if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
@@ -403,6 +483,9 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
       return invalidData(path + ": truncated: its netCDF header places values up to byte " + std::to_string(end) +
                          ", but the file has " + std::to_string(file_size) + " bytes");
   }
+  if (const uint64_t end = hdf5End(bytes); end > file_size)
+    return invalidData(path + ": truncated: its HDF5 superblock gives the file " + std::to_string(end) +
+                       " bytes, but it has " + std::to_string(file_size));
   // The library would print its errors and, by default in some versions, abort: it is told to do
   // neither, and its messages go into ours.
   api.ex_opts(EX_DEFAULT);
@@ -597,18 +680,46 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     GTN_ASSIGN_OR_RETURN(const std::vector<std::string> node_names,
                          readNames(api, path, exoid, EX_NODAL, num_node_vars, name_length, "nodal variables"));
     std::vector<double> values;
-    for (const VariableGroup& g : groupVariables(node_names)) {
-      Field f(g.name, static_cast<uint32_t>(g.variables.size()), value_type, num_nodes);
-      for (size_t c = 0; c < g.variables.size(); ++c) {
-        values.assign(num_nodes, 0.0);
-        if (num_nodes > 0 &&
-            api.ex_get_var(exoid, step, EX_NODAL, g.variables[c] + 1, 1, init.num_nodes, values.data()) < 0)
-          return invalidData(path + ": cannot read nodal variable '" + node_names[g.variables[c]] + "' at time step " +
-                             std::to_string(step) + " (ex_get_var: " + exodusError(api) + ")");
-        for (size_t i = 0; i < num_nodes; ++i) putValue(f, i, static_cast<uint32_t>(c), values[i]);
+    std::vector<NetcdfNodal> stored(node_names.size());
+    std::vector<size_t> components(node_names.size(), 1);
+    for (size_t v = 0; v < node_names.size(); ++v) {
+      stored[v] = netcdfNodal(api, exoid, static_cast<int>(v + 1), num_nodes);
+      if (stored[v].components > 1) components[v] = stored[v].components;
+    }
+    std::vector<std::string> missing;
+    for (const VariableGroup& g : groupVariables(node_names, components)) {
+      uint32_t width = 0;
+      for (int v : g.variables) width += static_cast<uint32_t>(components[static_cast<size_t>(v)]);
+      Field f(g.name, width, value_type, num_nodes);
+      uint32_t c = 0;
+      for (int v : g.variables) {
+        const NetcdfNodal& nc = stored[static_cast<size_t>(v)];
+        const std::string what =
+            "nodal variable '" + node_names[static_cast<size_t>(v)] + "' at time step " + std::to_string(step);
+        int rc = 0;
+        if (nc.components <= 1) {
+          values.assign(num_nodes, 0.0);
+          if (num_nodes > 0) rc = api.ex_get_var(exoid, step, EX_NODAL, v + 1, 1, init.num_nodes, values.data());
+          if (rc < 0) return invalidData(path + ": cannot read " + what + " (ex_get_var: " + exodusError(api) + ")");
+        }
+        // Values the Exodus library does not find (rc > 0, a warning) may be where meshio puts them.
+        if (nc.components > 1 || rc > 0) {
+          if (nc.components == 0 || !readNetcdfNodal(api, exoid, nc, step, num_nodes, &values)) {
+            missing.push_back(node_names[static_cast<size_t>(v)]);
+            values.assign(num_nodes * std::max<size_t>(nc.components, 1), std::numeric_limits<double>::quiet_NaN());
+          }
+        }
+        const size_t n = std::max<size_t>(nc.components, 1);
+        for (size_t i = 0; i < num_nodes; ++i)
+          for (size_t k = 0; k < n; ++k) putValue(f, i, c + static_cast<uint32_t>(k), values[i * n + k]);
+        c += static_cast<uint32_t>(n);
       }
       mesh.point_fields.push_back(std::move(f));
     }
+    if (!missing.empty())
+      warnings.push_back("the Exodus library finds no values of the nodal " +
+                         std::string(missing.size() == 1 ? "variable " : "variables ") + joinNames(missing) +
+                         " at time step " + std::to_string(step) + ": NaN there");
 
     // Element variables, where the truth table defines them.
     GTN_ASSIGN_OR_RETURN(const std::vector<std::string> elem_names,
@@ -618,6 +729,7 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
         api.ex_get_truth_table(exoid, EX_ELEM_BLOCK, num_blocks, num_elem_vars, truth.data()) < 0)
       return invalidData(
           path + ": cannot read the element variable truth table (ex_get_truth_table: " + exodusError(api) + ")");
+    missing.clear();
     for (const VariableGroup& g : groupVariables(elem_names)) {
       Field f(g.name, static_cast<uint32_t>(g.variables.size()), value_type, num_cells);
       std::vector<int64_t> undefined_blocks;
@@ -634,10 +746,15 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
             continue;
           }
           values.assign(n, 0.0);
-          if (api.ex_get_var(exoid, step, EX_ELEM_BLOCK, var + 1, blk.id, blk.elements, values.data()) < 0)
+          const int rc = api.ex_get_var(exoid, step, EX_ELEM_BLOCK, var + 1, blk.id, blk.elements, values.data());
+          if (rc < 0)
             return invalidData(path + ": cannot read element variable '" + elem_names[var] + "' of element block " +
                                std::to_string(blk.id) + " at time step " + std::to_string(step) +
                                " (ex_get_var: " + exodusError(api) + ")");
+          if (rc > 0) {  // a warning: no values where the truth table says there are
+            values.assign(n, std::numeric_limits<double>::quiet_NaN());
+            missing.push_back(elem_names[var] + " (block " + std::to_string(blk.id) + ")");
+          }
           for (size_t e = 0; e < n; ++e) putValue(f, blk.first_cell + e, static_cast<uint32_t>(c), values[e]);
         }
       }
@@ -649,15 +766,24 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
       }
       cell_fields.push_back(std::move(f));
     }
+    if (!missing.empty())
+      warnings.push_back("the Exodus library finds no values of the element " +
+                         std::string(missing.size() == 1 ? "variable " : "variables ") + joinNames(missing) +
+                         " at time step " + std::to_string(step) + ": NaN there");
 
     // Global variables: one value each, kept as metadata.
     GTN_ASSIGN_OR_RETURN(const std::vector<std::string> global_names,
                          readNames(api, path, exoid, EX_GLOBAL, num_global_vars, name_length, "global variables"));
     values.assign(static_cast<size_t>(num_global_vars), 0.0);
-    if (num_global_vars > 0 && api.ex_get_var(exoid, step, EX_GLOBAL, 1, 0, num_global_vars, values.data()) < 0)
+    const int global_rc =
+        num_global_vars > 0 ? api.ex_get_var(exoid, step, EX_GLOBAL, 1, 0, num_global_vars, values.data()) : 0;
+    if (global_rc < 0)
       return invalidData(path + ": cannot read the global variables at time step " + std::to_string(step) +
                          " (ex_get_var: " + exodusError(api) + ")");
-    for (int i = 0; i < num_global_vars; ++i) {
+    if (global_rc > 0)
+      warnings.push_back("the Exodus library finds no values of the global variables " + joinNames(global_names) +
+                         " at time step " + std::to_string(step) + ": not kept");
+    for (int i = 0; i < (global_rc > 0 ? 0 : num_global_vars); ++i) {
       char text[64];
       std::snprintf(text, sizeof text, "%.17g", values[static_cast<size_t>(i)]);
       mesh.setMetadata("exodus.global." + global_names[static_cast<size_t>(i)], text);

@@ -1,19 +1,23 @@
 // gmsh .msh importer, written from the format's documentation: MSH 2.x (2.0 to 2.2) and 4.1, ASCII
 // and binary (either byte order, told by the integer 1 after the $MeshFormat line).
 //
-// Every node becomes a point, in the order of $Nodes (tags may be sparse: they are mapped). Volume
-// elements (tetrahedra, hexahedra, prisms, pyramids, of any order) become VTK cells of their corners
-// and are split as the VTK importers split theirs (cell_split.h); the other nodes of higher-order
-// elements stay as unreferenced points. Elements of lower dimension (points, lines, triangles,
-// quadrangles) are skipped with a warning counting them by type, and so are their $ElementData values.
+// Every node becomes a point, in the order of $Nodes or MSH 2's $ParametricNodes (tags may be sparse:
+// they are mapped; parametric coordinates are not kept). Volume elements (tetrahedra, hexahedra,
+// prisms, pyramids, of any order) become VTK cells of their corners and are split as the VTK
+// importers split theirs (cell_split.h); the other nodes of higher-order elements stay as
+// unreferenced points. Elements of lower dimension (points, lines, triangles, quadrangles) are
+// skipped with a warning counting them by type, and so are their $ElementData values.
 // Cell fields, as meshio names them: "gmsh:physical" (the element's physical group: its first tag in
 // MSH 2, its entity's first physical tag in MSH 4.1; 0 for none) and "gmsh:geometrical" (its
-// elementary entity). MSH 2 lists an element once per physical group it belongs to: the repetitions
-// (same type and nodes) are read once, in the first group, with a warning. $NodeData and $ElementData become point and cell fields (float64, their
-// number of components) named by their first string tag; of several time steps of one name, the
-// last (the largest time step index) is read, the sections of that step (partitions) together, and a
-// warning says so. $ElementNodeData and other sections are skipped with a warning naming them. Names
-// of volume physical groups go into the metadata as gmsh.physical_name.<tag>.
+// elementary entity; in a partitioned MSH 4.1 file the physical tags and the parent of the partitioned
+// entity in $PartitionedEntities, so that a mesh gives the same fields partitioned or not). MSH 2
+// lists an element once per physical group it belongs to: the repetitions (same type and nodes) are
+// read once, in the first group, with a warning. $NodeData and $ElementData become point and cell
+// fields (float64, their number of components) named by their first string tag; of several time
+// steps of one name, the last (the largest time step index) is read, the sections of that step
+// (partitions) together, and a warning says so. $ElementNodeData and other sections are skipped with
+// a warning naming them. Names of volume physical groups go into the metadata as
+// gmsh.physical_name.<tag>.
 //
 // Counts are never trusted: each is checked against the bytes left in the file before anything is
 // allocated for it. Errors name the file and the line (text) or byte offset (binary data).
@@ -233,6 +237,12 @@ class MshReader {
     while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
     if (pos_ < text_.size()) ++pos_;
   }
+  // Whether only blanks are left on the current line (text).
+  bool atLineEnd() const {
+    size_t p = pos_;
+    while (p < text_.size() && (text_[p] == ' ' || text_[p] == '\t' || text_[p] == '\r')) ++p;
+    return p >= text_.size() || text_[p] == '\n';
+  }
   bool token(std::string_view* out) {
     skipSpace();
     if (pos_ >= text_.size()) return false;
@@ -344,8 +354,8 @@ class MshReader {
   // --- sections
   Status readFormat();
   Status readPhysicalNames();
-  Status readEntities();
-  Status readNodes();
+  Status readEntities(bool partitioned);
+  Status readNodes(bool parametric);
   Status readElements();
   Status readData(const std::string& section);
   Status addElement(int64_t tag, const GmshType& type, const int64_t* nodes, int32_t physical, int32_t geometrical,
@@ -373,6 +383,7 @@ class MshReader {
   std::map<int, size_t> skipped_;               // lower-dimension elements by gmsh type
   std::map<int, size_t> higher_order_;          // volume elements with more nodes than corners, by gmsh type
   std::map<int64_t, int32_t> volume_physical_;  // MSH 4.1: volume entity -> its first physical tag
+  std::map<int64_t, int32_t> volume_parent_;    // MSH 4.1: partitioned volume entity -> the volume it was cut from
   size_t multi_physical_ = 0;
   std::vector<std::pair<int64_t, std::string>> volume_names_;
   std::vector<DataSection> data_;
@@ -434,7 +445,18 @@ Status MshReader::readPhysicalNames() {
   return expectEnd("PhysicalNames");
 }
 
-Status MshReader::readEntities() {
+// $Entities, or with partitioned the $PartitionedEntities of a partitioned mesh: the entities gmsh made by
+// cutting the model's, each naming the entity it was cut from (its parent) and carrying its physical tags.
+Status MshReader::readEntities(bool partitioned) {
+  const std::string section = partitioned ? "PartitionedEntities" : "Entities";
+  if (partitioned) {
+    GTN_RETURN_IF_ERROR(readSize("partition count").status());
+    GTN_ASSIGN_OR_RETURN(const int64_t ghosts, readCount("ghost entity count", binary_ ? 8 : 4));
+    for (int64_t g = 0; g < ghosts; ++g) {
+      GTN_RETURN_IF_ERROR(readInt("ghost entity tag").status());
+      GTN_RETURN_IF_ERROR(readInt("ghost entity partition").status());
+    }
+  }
   int64_t counts[4];
   const char* kinds[4] = {"point entity count", "curve entity count", "surface entity count", "volume entity count"};
   for (int d = 0; d < 4; ++d) {
@@ -443,24 +465,34 @@ Status MshReader::readEntities() {
   for (int d = 0; d < 4; ++d) {
     for (int64_t e = 0; e < counts[d]; ++e) {
       GTN_ASSIGN_OR_RETURN(const int64_t tag, readInt("entity tag"));
+      if (partitioned) {
+        GTN_ASSIGN_OR_RETURN(const int64_t parent_dim, readInt("parent entity dimension"));
+        GTN_ASSIGN_OR_RETURN(const int64_t parent_tag, readInt("parent entity tag"));
+        if (d == 3 && parent_dim == 3) volume_parent_[tag] = static_cast<int32_t>(parent_tag);
+        GTN_ASSIGN_OR_RETURN(const int64_t num_partitions, readCount("partition tag count", binary_ ? 4 : 2));
+        for (int64_t k = 0; k < num_partitions; ++k) GTN_RETURN_IF_ERROR(readInt("partition tag").status());
+      }
       for (int k = 0; k < (d == 0 ? 3 : 6); ++k) GTN_RETURN_IF_ERROR(readDouble("entity bounding box").status());
       GTN_ASSIGN_OR_RETURN(const int64_t num_physical, readCount("physical tag count", binary_ ? 4 : 2));
       for (int64_t k = 0; k < num_physical; ++k) {
         GTN_ASSIGN_OR_RETURN(const int64_t physical, readInt("physical tag"));
         if (d == 3 && k == 0) volume_physical_[tag] = static_cast<int32_t>(physical);
       }
-      if (d == 3 && num_physical > 1) ++multi_physical_;
+      if (d == 3 && num_physical > 1 && !partitioned) ++multi_physical_;  // counted once, in $Entities
       if (d > 0) {
         GTN_ASSIGN_OR_RETURN(const int64_t num_bounding, readCount("bounding entity count", binary_ ? 4 : 2));
         for (int64_t k = 0; k < num_bounding; ++k) GTN_RETURN_IF_ERROR(readInt("bounding entity tag").status());
       }
     }
   }
-  return expectEnd("Entities");
+  return expectEnd(section);
 }
 
-Status MshReader::readNodes() {
-  if (have_nodes_) return errorAt(token_at_, "a second $Nodes section (only one is read)");
+// MSH 2 writes the nodes as $ParametricNodes when asked to save parametric coordinates (gmsh -save_parametric):
+// after each node's coordinates its entity's dimension and tag, then 1 (curve) or 2 (surface) parameters,
+// which are not kept. In text a node on no entity has none of these.
+Status MshReader::readNodes(bool parametric) {
+  if (have_nodes_) return errorAt(token_at_, "a second $Nodes or $ParametricNodes section (only one is read)");
   have_nodes_ = true;
   std::vector<int64_t>& tags = node_map_.tags;
   auto addNode = [&](int64_t tag, const double xyz[3], size_t at) -> Status {
@@ -483,8 +515,20 @@ Status MshReader::readNodes() {
       for (double& c : xyz) {
         GTN_ASSIGN_OR_RETURN(c, readDouble("node coordinate"));
       }
+      const size_t coords_at = binary_ ? at : token_at_;
+      if (parametric && (binary_ || !atLineEnd())) {
+        GTN_ASSIGN_OR_RETURN(const int64_t dim, readInt("node entity dimension"));
+        if (dim < 0 || dim > 3) {
+          const std::string reason =
+              "node " + std::to_string(tag) + ": entity dimension " + std::to_string(dim) + " is not 0 to 3";
+          return binary_ ? binaryErrorAt(pos_ - 4, reason) : errorAt(token_at_, reason);
+        }
+        GTN_RETURN_IF_ERROR(readInt("node entity tag").status());
+        for (int64_t k = 0; k < (dim == 1 || dim == 2 ? dim : 0); ++k)
+          GTN_RETURN_IF_ERROR(readDouble("node parametric coordinate").status());
+      }
       tags.push_back(tag);
-      GTN_RETURN_IF_ERROR(addNode(tag, xyz, binary_ ? at : token_at_));
+      GTN_RETURN_IF_ERROR(addNode(tag, xyz, coords_at));
     }
   } else {
     GTN_ASSIGN_OR_RETURN(const int64_t blocks, readCount("node block count", binary_ ? 12 + sizeBytes() : 8));
@@ -529,7 +573,7 @@ Status MshReader::readNodes() {
   int64_t duplicate = 0;
   if (!node_map_.build(&duplicate))
     return errorAt(pos_, "node tag " + std::to_string(duplicate) + " occurs twice in $Nodes");
-  return expectEnd("Nodes");
+  return expectEnd(parametric ? "ParametricNodes" : "Nodes");
 }
 
 Status MshReader::addElement(int64_t tag, const GmshType& type, const int64_t* nodes, int32_t physical,
@@ -646,12 +690,15 @@ Status MshReader::readElements() {
       GTN_ASSIGN_OR_RETURN(const int64_t count,
                            readCount("element count of a block", (binary_ ? sizeBytes() : 2) * (1 + type->nodes)));
       int32_t physical = 0;
+      int32_t geometrical = static_cast<int32_t>(entity);
       if (dim == 3) {
         auto it = volume_physical_.find(entity);
         if (it != volume_physical_.end()) {
           physical = it->second;
           any_physical_ = true;
         }
+        auto parent = volume_parent_.find(entity);
+        if (parent != volume_parent_.end()) geometrical = parent->second;
       }
       nodes.resize(static_cast<size_t>(type->nodes));
       for (int64_t e = 0; e < count; ++e) {
@@ -661,7 +708,7 @@ Status MshReader::readElements() {
         for (int64_t& v : nodes) {
           GTN_ASSIGN_OR_RETURN(v, readSize("element node"));
         }
-        GTN_RETURN_IF_ERROR(addElement(tag, *type, nodes.data(), physical, static_cast<int32_t>(entity), line_at));
+        GTN_RETURN_IF_ERROR(addElement(tag, *type, nodes.data(), physical, geometrical, line_at));
       }
     }
     if (static_cast<int64_t>(element_map_.tags.size()) != n)
@@ -874,10 +921,10 @@ StatusOr<ImportResult> MshReader::read(const ImportOptions& options) {
     if (section == "MeshFormat") return errorAt(section_at, "a second $MeshFormat");
     if (section == "PhysicalNames") {
       GTN_RETURN_IF_ERROR(readPhysicalNames());
-    } else if (section == "Entities" && version_ == 4) {
-      GTN_RETURN_IF_ERROR(readEntities());
-    } else if (section == "Nodes") {
-      GTN_RETURN_IF_ERROR(readNodes());
+    } else if ((section == "Entities" || section == "PartitionedEntities") && version_ == 4) {
+      GTN_RETURN_IF_ERROR(readEntities(section == "PartitionedEntities"));
+    } else if (section == "Nodes" || (section == "ParametricNodes" && version_ == 2)) {
+      GTN_RETURN_IF_ERROR(readNodes(section == "ParametricNodes"));
     } else if (section == "Elements") {
       GTN_RETURN_IF_ERROR(readElements());
       if (version_ == 2) dropRepeatedElements();

@@ -1,5 +1,7 @@
 #include "convert/import.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <bit>
 #include <cctype>
@@ -25,7 +27,10 @@ std::string lowerExtension(const std::string& path) {
   return ext;
 }
 
+// The first n bytes of a regular file ("" for anything else: reading a pipe would consume what its
+// importer reads, and opening a FIFO without a writer would wait forever).
 std::string head(const std::string& path, size_t n) {
+  if (!isRegularFile(path)) return "";
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) return "";
   std::string s(n, '\0');
@@ -67,8 +72,14 @@ InputFormat detectInputFormat(const std::string& path) {
       ext == "pvti" || h.find("<VTKFile") != std::string::npos)
     return InputFormat::kVtu;
   if (ext == "msh" || h.rfind("$MeshFormat", 0) == 0) return InputFormat::kGmsh;
-  if (ext == "meshb") return InputFormat::kMeshb;
-  if (ext == "mesh" || h.find("MeshVersionFormatted") != std::string::npos) return InputFormat::kMedit;
+  // Medit: the content tells ASCII from binary whatever the extension (gmsh 4.8 writes ASCII into a
+  // file it names .meshb); binary starts with the code 1 in either byte order.
+  const bool gmf_binary = h.size() >= 8 && (h.compare(0, 4, std::string("\x01\0\0\0", 4)) == 0 ||
+                                            h.compare(0, 4, std::string("\0\0\0\x01", 4)) == 0);
+  const bool medit_text = h.find("MeshVersionFormatted") != std::string::npos;
+  if (ext == "meshb") return medit_text && !gmf_binary ? InputFormat::kMedit : InputFormat::kMeshb;
+  if (ext == "mesh" && gmf_binary) return InputFormat::kMeshb;
+  if (ext == "mesh" || medit_text) return InputFormat::kMedit;
   if (ext == "off" || ext == "toff") return InputFormat::kOff;
   if (ext == "node" || ext == "ele" || ext == "face") return InputFormat::kTetgen;
   // A TetGen basename such as "foo.1" has an extension of its own but names no file.
@@ -207,6 +218,15 @@ StatusOr<ImportResult> importMeshOnce(const std::vector<std::string>& inputs, co
                                            "; standard input is read as a .gtn stream: name a "
                                            "mesh file instead");
     return r;
+  }
+  // A pipe (a FIFO, or the shell's <(...)) can be read once, but an input is read twice: its first bytes
+  // tell its format, then its importer reads it from the start.
+  for (const std::string& p : inputs) {
+    struct stat sb;
+    if (::stat(p.c_str(), &sb) == 0 && (S_ISFIFO(sb.st_mode) || S_ISSOCK(sb.st_mode)))
+      return ioError(p +
+                     ": is a pipe, not a file: an input is read more than once (its first bytes tell its format); "
+                     "save it to a file first");
   }
   // A repository cloned without Git LFS holds a short text pointer in place of each large file; every
   // importer would misread one as a malformed file of its own format.

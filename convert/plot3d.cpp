@@ -1127,15 +1127,26 @@ std::string directoryOf(const std::string& path) {
   return slash == std::string::npos ? "" : path.substr(0, slash + 1);
 }
 
+// A .json file, or a .p3d file that is JSON text: many .p3d files are PLOT3D grids themselves (gmsh's
+// -format p3d writes an ASCII grid so, and CFD grids are often so named), read as grid files. A file
+// that cannot be read is taken by its name, for readP3dMeta to say why.
 bool isP3dMeta(const std::string& path) {
   const size_t slash = path.find_last_of('/');
   const size_t dot = path.find_last_of('.');
-  if (dot != std::string::npos && (slash == std::string::npos || dot > slash)) {
-    std::string ext = path.substr(dot + 1);
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext == "p3d" || ext == "json") return true;
-  }
-  return false;
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return false;
+  std::string ext = path.substr(dot + 1);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == "json") return true;
+  if (ext != "p3d") return false;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return true;
+  char head[64];
+  const size_t n = std::fread(head, 1, sizeof head, f);
+  std::fclose(f);
+  const std::string_view h(head, n);
+  if (h.find('\0') != std::string_view::npos) return false;  // binary: a grid
+  const size_t first = h.find_first_not_of(" \t\r\n\xEF\xBB\xBF");
+  return first != std::string_view::npos && (h[first] == '{' || h[first] == '[');
 }
 
 StatusOr<P3dFiles> readP3dMeta(const std::string& path) {

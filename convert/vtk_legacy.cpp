@@ -101,6 +101,7 @@ class LegacyReader {
   std::vector<Field> cell_fields_;
   // What is read past, for the warnings: METADATA blocks (annotations of arrays) and lookup tables.
   size_t metadata_blocks_ = 0, metadata_line_ = 0;
+  uint64_t last_components_ = 1;  // of the array read last: the lines of a METADATA block's COMPONENT_NAMES
   std::vector<std::string> lookup_tables_;
   void warnAboutSkipped();
 };
@@ -196,6 +197,7 @@ Status LegacyReader::readValues(ScalarType type, uint64_t n, const std::string& 
 }
 
 Status LegacyReader::readIndexArray(uint64_t n, const std::string& what, std::vector<int64_t>* out, ScalarType type) {
+  last_components_ = 1;
   std::vector<uint8_t> raw;
   GTN_RETURN_IF_ERROR(readValues(type, n, what, &raw));
   size_t bad = 0;
@@ -209,6 +211,7 @@ Status LegacyReader::readPoints() {
   GTN_ASSIGN_OR_RETURN(ScalarType type, dataType("POINTS"));
   std::vector<uint8_t> raw;
   if (n > UINT64_MAX / 3) return tr_.error("point count too large");
+  last_components_ = 3;
   GTN_RETURN_IF_ERROR(readValues(type, 3 * n, "POINTS", &raw));
   scalarsToDouble(type, raw.data(), 3 * n, &result_.mesh.coords);
   result_.mesh.coord_type = type == ScalarType::kFloat32 ? ScalarType::kFloat32 : ScalarType::kFloat64;
@@ -283,17 +286,25 @@ Status LegacyReader::readCellTypes() {
 }
 
 void LegacyReader::skipMetadata() {
-  // METADATA blocks (version 5.1) end at the first empty line.
+  // METADATA blocks (version 5.1) end at the first empty line, but for the lines after COMPONENT_NAMES:
+  // one per component of the array before the block, empty for a component without a name.
   if (metadata_blocks_++ == 0) metadata_line_ = tr_.line();
   tr_.skipLine();
+  uint64_t name_lines = 0;
   while (tr_.offset() < text_.size()) {
     const size_t at = tr_.offset();
     size_t end = text_.find('\n', at);
     if (end == std::string_view::npos) end = text_.size();
-    bool blank = true;
-    for (size_t i = at; i < end; ++i) blank &= std::isspace(static_cast<unsigned char>(text_[i])) != 0;
+    std::string_view line = text_.substr(at, end - at);
+    while (!line.empty() && std::isspace(static_cast<unsigned char>(line.front()))) line.remove_prefix(1);
+    while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.remove_suffix(1);
     tr_.skipLine();
-    if (blank) break;
+    if (name_lines > 0) {
+      --name_lines;
+      continue;
+    }
+    if (line.empty()) break;
+    if (upper(line) == "COMPONENT_NAMES") name_lines = last_components_;
   }
 }
 
@@ -324,6 +335,7 @@ Status LegacyReader::readFieldData(std::vector<Field>* into) {
     if (name == "NULL_ARRAY") continue;  // vtkDataWriter's line for an array that is null: nothing follows
     GTN_ASSIGN_OR_RETURN(uint64_t comps, count("component count"));
     GTN_ASSIGN_OR_RETURN(uint64_t tuples, count("tuple count"));
+    last_components_ = comps;
     GTN_ASSIGN_OR_RETURN(const bool strings, skipStringArray("FIELD array", name, comps, tuples, into != nullptr));
     if (strings) {
       if (!into) dataset_arrays.push_back(decodeName(name));
@@ -445,6 +457,7 @@ Status LegacyReader::readAttribute(const std::string& kw) {
   } else if (kw == "GLOBAL_IDS" || kw == "PEDIGREE_IDS") {
     // One id per item; pedigree ids may be strings, which are not mesh data.
     if (kw == "PEDIGREE_IDS") {
+      last_components_ = 1;
       GTN_ASSIGN_OR_RETURN(const bool strings, skipStringArray(kw, name, 1, section_items_, true));
       if (strings) return Status::ok();
     }
@@ -465,6 +478,7 @@ Status LegacyReader::readAttribute(const std::string& kw) {
   }
   Field f(decodeName(name), static_cast<uint32_t>(comps), type, 0);
   if (section_items_ > UINT64_MAX / comps) return tr_.error(kw + " " + name + ": too many values");
+  last_components_ = comps;
   GTN_RETURN_IF_ERROR(readValues(type, comps * section_items_, kw + " " + name, &f.bytes));
   if (kw == "COLOR_SCALARS" && !binary_) {
     // ASCII colours are written as floats in [0, 1]; VTK's reader makes them the bytes the binary
@@ -518,6 +532,7 @@ Status LegacyReader::readAxis(int axis) {
   const std::string what = std::string(1, static_cast<char>('X' + axis)) + "_COORDINATES";
   GTN_ASSIGN_OR_RETURN(uint64_t n, count("coordinate count"));
   GTN_ASSIGN_OR_RETURN(ScalarType type, dataType(what));
+  last_components_ = 1;
   if (have_dims_ && n != dims_[axis])
     return tr_.error(what + " " + std::to_string(n) + " does not match DIMENSIONS (" + std::to_string(dims_[axis]) +
                      " along this axis)");

@@ -4,6 +4,7 @@
 // damaged and truncated files.
 #include <exodusII.h>
 #include <gtest/gtest.h>
+#include <netcdf.h>
 
 #include <algorithm>
 #include <cmath>
@@ -329,6 +330,107 @@ TEST(ExodusImport, NoTimeStepsAndNoSets) {
   EXPECT_EQ(step.status().message(), dir + "/m.exo: --time-step 1: the file has no time steps");
 }
 
+// A file as meshio writes it, with the netCDF library and no file_size attribute: each nodal variable
+// in its own netCDF variable (time_step, num_nodes), a vector as (time_step, num_nodes, 3). The Exodus
+// library looks for them elsewhere and finds nothing (a warning); they are read with netCDF. A name
+// without values is NaN with a warning, never zeros.
+void writeMeshioStyle(const std::string& path, int format, bool with_values) {
+  int nc = -1;
+  auto ok = [](int status) { ASSERT_EQ(status, NC_NOERR) << nc_strerror(status); };
+  ok(nc_create(path.c_str(), NC_CLOBBER | format, &nc));
+  const double coords[3][5] = {{0, 1, 0, 0, 0.3}, {0, 0, 1, 0, 0.3}, {0, 0, 0, 1, -1}};
+  const long long conn[2][4] = {{1, 2, 3, 4}, {1, 3, 2, 5}};
+  int num_nodes, num_dim, num_elem, num_el_blk, len_string, time_step, in_blk, per_el, num_nod_var, vec;
+  ok(nc_def_dim(nc, "num_nodes", 5, &num_nodes));
+  ok(nc_def_dim(nc, "num_dim", 3, &num_dim));
+  ok(nc_def_dim(nc, "num_elem", 2, &num_elem));
+  ok(nc_def_dim(nc, "num_el_blk", 1, &num_el_blk));
+  ok(nc_def_dim(nc, "len_string", 33, &len_string));
+  ok(nc_def_dim(nc, "time_step", NC_UNLIMITED, &time_step));
+  ok(nc_def_dim(nc, "num_el_in_blk1", 2, &in_blk));
+  ok(nc_def_dim(nc, "num_nod_per_el1", 4, &per_el));
+  ok(nc_def_dim(nc, "num_nod_var", 2, &num_nod_var));
+  ok(nc_def_dim(nc, "dim_nod_var11", 3, &vec));
+  const float version = 5.1f;
+  const int word_size = 8;
+  ok(nc_put_att_text(nc, NC_GLOBAL, "title", 19, "Created by meshio 5"));
+  ok(nc_put_att_float(nc, NC_GLOBAL, "version", NC_FLOAT, 1, &version));
+  ok(nc_put_att_float(nc, NC_GLOBAL, "api_version", NC_FLOAT, 1, &version));
+  ok(nc_put_att_int(nc, NC_GLOBAL, "floating_point_word_size", NC_INT, 1, &word_size));
+  int time_whole, coord, eb_prop1, connect1, names, scalar = -1, vector = -1;
+  ok(nc_def_var(nc, "time_whole", NC_FLOAT, 1, &time_step, &time_whole));
+  const int coord_dims[2] = {num_dim, num_nodes};
+  ok(nc_def_var(nc, "coord", NC_DOUBLE, 2, coord_dims, &coord));
+  ok(nc_def_var(nc, "eb_prop1", NC_INT, 1, &num_el_blk, &eb_prop1));
+  const int conn_dims[2] = {in_blk, per_el};
+  ok(nc_def_var(nc, "connect1", format == NC_NETCDF4 ? NC_INT64 : NC_INT, 2, conn_dims, &connect1));
+  ok(nc_put_att_text(nc, connect1, "elem_type", 5, "TETRA"));
+  const int name_dims[2] = {num_nod_var, len_string};
+  ok(nc_def_var(nc, "name_nod_var", NC_CHAR, 2, name_dims, &names));
+  if (with_values) {
+    const int scalar_dims[2] = {time_step, num_nodes};
+    ok(nc_def_var(nc, "vals_nod_var1", NC_DOUBLE, 2, scalar_dims, &scalar));
+    const int vector_dims[3] = {time_step, num_nodes, vec};
+    ok(nc_def_var(nc, "vals_nod_var2", NC_DOUBLE, 3, vector_dims, &vector));
+  }
+  ok(nc_enddef(nc));
+  const size_t zero[3] = {0, 0, 0}, one = 1;
+  const float t = 0.25f;
+  ok(nc_put_vara_float(nc, time_whole, zero, &one, &t));
+  ok(nc_put_var_double(nc, coord, &coords[0][0]));
+  const int block = 7;
+  ok(nc_put_var_int(nc, eb_prop1, &block));
+  ok(nc_put_var_longlong(nc, connect1, &conn[0][0]));
+  char name_text[2][33] = {{"temp"}, {"vel"}};
+  ok(nc_put_var_text(nc, names, &name_text[0][0]));
+  if (with_values) {
+    double temp[5], vel[5][3];
+    for (int i = 0; i < 5; ++i) {
+      temp[i] = 10 + i;
+      for (int c = 0; c < 3; ++c) vel[i][c] = coords[c][i] * 2;
+    }
+    const size_t scalar_count[2] = {1, 5}, vector_count[3] = {1, 5, 3};
+    ok(nc_put_vara_double(nc, scalar, zero, scalar_count, temp));
+    ok(nc_put_vara_double(nc, vector, zero, vector_count, &vel[0][0]));
+  }
+  ok(nc_close(nc));
+}
+
+TEST(ExodusImport, NodalVariablesStoredAsMeshioWritesThem) {
+  const std::string dir = tempDir("exodus-meshio-style");
+  for (int format : {0, NC_NETCDF4}) {
+    const std::string path = dir + (format ? "/m4.exo" : "/m.exo");
+    SCOPED_TRACE(path);
+    ASSERT_NO_FATAL_FAILURE(writeMeshioStyle(path, format, true));
+    auto r = load(path);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const TetMesh& m = r->mesh;
+    ASSERT_EQ(m.numPoints(), 5u);
+    EXPECT_EQ(m.numTets(), 2u);
+    const Field* temp = findField(m.point_fields, "temp");
+    const Field* vel = findField(m.point_fields, "vel");
+    ASSERT_NE(temp, nullptr);
+    for (size_t i = 0; i < 5; ++i) EXPECT_EQ(temp->get(i, 0), 10.0 + i) << i;
+    ASSERT_NE(vel, nullptr);
+    ASSERT_EQ(vel->components, 3u);
+    for (size_t i = 0; i < 5; ++i) {
+      for (uint32_t c = 0; c < 3; ++c) EXPECT_EQ(vel->get(i, c), 2 * m.point(i)[c]) << i << " " << c;
+    }
+    EXPECT_FALSE(hasWarning(r->report, "finds no values")) << allWarnings(r->report);
+  }
+  // Names without values anywhere: NaN and a warning.
+  ASSERT_NO_FATAL_FAILURE(writeMeshioStyle(dir + "/none.exo", 0, false));
+  auto r = load(dir + "/none.exo");
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const Field* temp = findField(r->mesh.point_fields, "temp");
+  ASSERT_NE(temp, nullptr);
+  for (size_t i = 0; i < 5; ++i) EXPECT_TRUE(std::isnan(temp->get(i, 0))) << i;
+  EXPECT_TRUE(hasWarning(r->report,
+                         "the Exodus library finds no values of the nodal variables 'temp', 'vel' at time "
+                         "step 1: NaN there"))
+      << allWarnings(r->report);
+}
+
 // The command line: info and validate show what was skipped, convert --time-step picks a step.
 TEST(ExodusImport, CommandLine) {
   const std::string dir = tempDir("exodus-cli");
@@ -552,9 +654,12 @@ TEST(ExodusErrors, DamagedAndTruncatedFiles) {
     writeFile(dir + "/cut.exo", good.substr(0, good.size() - 4));
     auto cut = load(dir + "/cut.exo");
     ASSERT_FALSE(cut.isOk());
+    // netCDF-4: the end of file the HDF5 superblock records (the libraries would say "HDF error", and the
+    // Exodus library on standard error that netCDF-4 is not supported).
     if (mode & EX_NETCDF4)
-      EXPECT_EQ(cut.status().message().rfind(dir + "/cut.exo: cannot open it as an Exodus II file (ex_open: ", 0), 0u)
-          << cut.status().message();
+      EXPECT_EQ(cut.status().message(), dir + "/cut.exo: truncated: its HDF5 superblock gives the file " +
+                                            std::to_string(good.size()) + " bytes, but it has " +
+                                            std::to_string(good.size() - 4));
     else
       EXPECT_EQ(cut.status().message(), dir + "/cut.exo: truncated: its netCDF header places values up to byte " +
                                             std::to_string(good.size()) + ", but the file has " +

@@ -326,6 +326,111 @@ TEST(GmshImport, VolumeInTwoPhysicalGroups) {
                                           : "1 volume entities belong to several physical groups"))
         << allWarnings(r->report);
   }
+  // Partitioned: the volume is still one entity of the model, whatever its partitioned entities.
+  const std::string parts = dir + "/two_parts.msh";
+  const auto g = runShell("gmsh -3 -format msh41 -part 3 '" + geo + "' -o '" + parts + "'");
+  ASSERT_EQ(g.exit_code, 0) << g.out << g.err;
+  auto r = importMesh({parts}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const Field* physical = findField(r->mesh.cell_fields, "gmsh:physical");
+  ASSERT_NE(physical, nullptr);
+  for (size_t t = 0; t < r->mesh.numTets(); ++t) ASSERT_EQ(physical->data<int32_t>()[t], 1);
+  EXPECT_TRUE(hasWarning(r->report, "1 volume entities belong to several physical groups")) << allWarnings(r->report);
+}
+
+// A mesh that gmsh partitions (-part 3) keeps its physical groups and entities: MSH 4.1 puts its elements
+// in partitioned entities, listed in $PartitionedEntities with their physical tags and the entity they
+// were cut from. Each tetrahedron, found by its corners, gets the fields it has in the file not partitioned.
+TEST(GmshImport, PartitionedFilesKeepPhysicalGroupsAndEntities) {
+  std::string why;
+  if (!gmshAvailable(&why)) GTEST_SKIP() << why;
+  const std::string dir = tempDir("gmsh_partitioned");
+  using Corners = std::array<std::array<double, 3>, 4>;
+  auto fieldsByCorners = [](const TetMesh& m) {
+    std::map<Corners, std::pair<int32_t, int32_t>> by;
+    const Field* physical = findField(m.cell_fields, "gmsh:physical");
+    const Field* geometrical = findField(m.cell_fields, "gmsh:geometrical");
+    EXPECT_NE(physical, nullptr);
+    EXPECT_NE(geometrical, nullptr);
+    if (physical == nullptr || geometrical == nullptr) return by;
+    for (size_t t = 0; t < m.numTets(); ++t) {
+      Corners c;
+      for (int k = 0; k < 4; ++k)
+        for (int a = 0; a < 3; ++a) c[k][a] = m.coords[3 * m.tets[t][k] + a];
+      std::sort(c.begin(), c.end());
+      by[c] = {physical->data<int32_t>()[t], geometrical->data<int32_t>()[t]};
+    }
+    return by;
+  };
+  for (const std::string binary : {"", "-bin"}) {
+    // ASCII coordinates are rounded: compare with the same mesh written the same way.
+    const std::string whole = makeGmshFile(dir, "whole" + binary + ".msh", "-format msh41 " + binary);
+    const std::string path = makeGmshFile(dir, "parts" + binary + ".msh", "-format msh41 -part 3 " + binary);
+    SCOPED_TRACE(path);
+    auto w = importMesh({whole}, ImportOptions{});
+    ASSERT_TRUE(w.isOk()) << w.status().message();
+    const auto expected = fieldsByCorners(w->mesh);
+    std::set<int32_t> groups;
+    for (const auto& entry : expected) groups.insert(entry.second.first);
+    EXPECT_EQ(groups, (std::set<int32_t>{11, 12}));
+    ASSERT_NE(test::readFile(path).find("$PartitionedEntities"), std::string::npos);
+    auto r = importMesh({path}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->mesh.numTets(), w->mesh.numTets());
+    const auto got = fieldsByCorners(r->mesh);
+    size_t differ = 0;
+    for (const auto& [corners, fields] : got) {
+      auto it = expected.find(corners);
+      if (it == expected.end() || it->second != fields) ++differ;
+    }
+    EXPECT_EQ(got.size(), expected.size());
+    EXPECT_EQ(differ, 0u) << "tetrahedra whose gmsh:physical or gmsh:geometrical differ from the unpartitioned file's";
+    EXPECT_EQ(*r->mesh.findMetadata("gmsh.physical_name.11"), "left");
+    EXPECT_FALSE(hasWarning(r->report, "PartitionedEntities")) << allWarnings(r->report);
+  }
+}
+
+// gmsh -save_parametric writes MSH 2 nodes as $ParametricNodes (each node's entity, then its curve or
+// surface parameters): the same mesh as without. By hand: nodes on a point, a curve, a surface, a
+// volume and (text only) on no entity.
+TEST(GmshImport, ParametricNodesOfMsh2) {
+  std::string why;
+  if (!gmshAvailable(&why)) GTEST_SKIP() << why;
+  const std::string dir = tempDir("gmsh_parametric");
+  for (const std::string binary : {"", "-bin"}) {
+    const std::string plain = makeGmshFile(dir, "plain" + binary + ".msh", "-format msh22 " + binary);
+    const std::string path = makeGmshFile(dir, "param" + binary + ".msh", "-format msh22 -save_parametric " + binary);
+    SCOPED_TRACE(path);
+    ASSERT_NE(test::readFile(path).find("$ParametricNodes"), std::string::npos);
+    auto a = importMesh({plain}, ImportOptions{});
+    auto b = importMesh({path}, ImportOptions{});
+    ASSERT_TRUE(a.isOk()) << a.status().message();
+    ASSERT_TRUE(b.isOk()) << b.status().message();
+    EXPECT_EQ(b->mesh.coords, a->mesh.coords);
+    EXPECT_EQ(b->mesh.tets, a->mesh.tets);
+    ASSERT_EQ(b->mesh.cell_fields.size(), a->mesh.cell_fields.size());
+    for (size_t f = 0; f < a->mesh.cell_fields.size(); ++f)
+      EXPECT_EQ(b->mesh.cell_fields[f].bytes, a->mesh.cell_fields[f].bytes) << a->mesh.cell_fields[f].name;
+    EXPECT_FALSE(hasWarning(b->report, "ParametricNodes")) << allWarnings(b->report);
+  }
+  const std::string text =
+      "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$ParametricNodes\n5\n"
+      "1 0 0 0 0 7\n2 1 0 0 1 3 0.25\n3 0 1 0 2 4 0.5 0.75\n4 0 0 1\n5 0.2 0.2 0.2 3 1\n"
+      "$EndParametricNodes\n$Elements\n1\n1 4 2 6 1 1 2 3 4\n$EndElements\n";
+  writeFile(dir + "/hand.msh", text);
+  auto r = importMesh({dir + "/hand.msh"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numPoints(), 5u);
+  ASSERT_EQ(r->mesh.numTets(), 1u);
+  EXPECT_EQ(r->mesh.point(4)[0], 0.2);
+  EXPECT_EQ(r->mesh.point(3)[2], 1.0);
+  // A dimension that no entity has is an error naming the node and the line.
+  std::string bad = text;
+  bad.replace(bad.find("2 4 0.5 0.75"), 1, "7");
+  writeFile(dir + "/bad.msh", bad);
+  auto e = importMesh({dir + "/bad.msh"}, ImportOptions{});
+  ASSERT_FALSE(e.isOk());
+  EXPECT_EQ(e.status().message(), dir + "/bad.msh:8: node 3: entity dimension 7 is not 0 to 3");
 }
 
 // A hand-written MSH 2.2 file: a hexahedron, a pyramid on it, a prism beside it and a tetrahedron on

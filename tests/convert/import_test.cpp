@@ -1,5 +1,8 @@
 // The import dispatcher: what it tells the user before any one importer reads the file.
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <string>
 
 #include "convert/import.h"
 #include "test_util.h"
@@ -27,6 +30,26 @@ TEST(ImportDispatch, GitLfsPointerIsNamedAsSuch) {
   auto r = importMesh({dir + "/g.xyz", dir + "/a.xyz"}, ImportOptions{});
   ASSERT_FALSE(r.isOk());
   EXPECT_NE(r.status().message().find(dir + "/a.xyz: a Git LFS pointer"), std::string::npos) << r.status().message();
+}
+
+// A pipe (the shell's <(gunzip -c x.vtk.gz)) is named as such: its first bytes, read to tell its format,
+// would be gone for its importer ("larger than the limit of 1 bytes" said nothing of that).
+TEST(ImportDispatch, PipeIsNamedAsSuch) {
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  const std::string text =
+      "# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+      "0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n";
+  ASSERT_EQ(::write(fds[1], text.data(), text.size()), static_cast<ssize_t>(text.size()));
+  ::close(fds[1]);
+  const std::string path = "/dev/fd/" + std::to_string(fds[0]);
+  auto r = importMesh({path}, ImportOptions{});
+  ::close(fds[0]);
+  ASSERT_FALSE(r.isOk());
+  EXPECT_EQ(r.status().code(), StatusCode::kIo);
+  EXPECT_EQ(r.status().message(), path +
+                                      ": is a pipe, not a file: an input is read more than once (its first bytes "
+                                      "tell its format); save it to a file first");
 }
 
 // Several inputs where the format takes one: the error names the extra input; of an unknown format,

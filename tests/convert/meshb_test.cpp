@@ -239,6 +239,34 @@ TEST(MeshbImport, EverySkippedKeywordIsCounted) {
 }
 
 // Higher-order volume elements are skipped by position with a warning; the rest still reads.
+// The content, not the extension, tells ASCII from binary Medit: gmsh 4.8 (-format mesh -bin) writes
+// ASCII into a file it names .meshb, and a binary file renamed .mesh is still binary.
+TEST(MeshbImport, ContentDecidesBetweenAsciiAndBinary) {
+  const std::string dir = tempDir("meshb-content");
+  const std::string ascii =
+      "MeshVersionFormatted 2\nDimension\n3\nVertices\n4\n0 0 0 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n"
+      "Tetrahedra\n1\n1 2 3 4 7\nEnd\n";
+  writeFile(dir + "/ascii.meshb", ascii);
+  EXPECT_EQ(detectInputFormat(dir + "/ascii.meshb"), InputFormat::kMedit);
+  auto a = importMesh({dir + "/ascii.meshb"}, ImportOptions{});
+  ASSERT_TRUE(a.isOk()) << a.status().message();
+  EXPECT_EQ(a->mesh.numPoints(), 4u);
+  ASSERT_EQ(a->mesh.numTets(), 1u);
+  ASSERT_EQ(a->mesh.cell_fields.size(), 1u);
+  EXPECT_EQ(a->mesh.cell_fields[0].get(0, 0), 7);
+
+  for (bool swap : {false, true}) {
+    const std::string path = dir + (swap ? "/binary_be.mesh" : "/binary_le.mesh");
+    writeFile(path, twoCubesAndATet(2, swap));
+    EXPECT_EQ(detectInputFormat(path), InputFormat::kMeshb) << path;
+    auto b = importMesh({path}, ImportOptions{});
+    ASSERT_TRUE(b.isOk()) << path << ": " << b.status().message();
+    EXPECT_EQ(b->mesh.numPoints(), 13u);
+    EXPECT_EQ(b->mesh.numTets(), 13u);
+    EXPECT_EQ(*b->mesh.findMetadata("source.format"), "meshb");
+  }
+}
+
 TEST(MeshbImport, QuadraticElementsAreSkippedWithAWarning) {
   const std::string dir = tempDir("meshb-p2");
   MeshbWriter w(2, false);

@@ -1644,4 +1644,33 @@ TEST_F(Plot3dSynthetic, AsciiMultiGridWithIblankAndQ) {
 }
 
 }  // namespace
+// A .p3d file is a meta-file when it is JSON text; otherwise it is a grid file itself, as gmsh's
+// -format p3d (ASCII) and many CFD grids (binary) are named.
+TEST_F(Plot3dSynthetic, P3dFileThatIsAGrid) {
+  const std::vector<Block> blocks = {boxBlock(3, 4, 3)};
+  GridOptions o;
+  o.big_endian = true;
+  o.marker = 0;
+  for (const auto& [name, bytes, precision] :
+       {std::tuple<std::string, std::string, int>{"binary.p3d", gridFile(blocks, o), 4},
+        {"ascii.p3d", asciiGrid(blocks, true, false), 8}}) {
+    SCOPED_TRACE(name);
+    const std::string path = write(name, bytes);
+    EXPECT_EQ(detectInputFormat(path), InputFormat::kPlot3d);
+    auto r = importFiles({path});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    expectCoords(r->mesh, blocks, precision);
+    EXPECT_EQ(r->mesh.numTets(), 2u * 3u * 2u * 6u);
+  }
+  // JSON text after blanks is still a meta-file, and a damaged one says so.
+  write("m.xyz", gridFile(blocks, o));
+  auto meta = importFiles({write("meta.p3d", "\n  {\"filenames\": [{\"xyz\": \"m.xyz\"}]}")});
+  ASSERT_TRUE(meta.isOk()) << meta.status().message();
+  EXPECT_EQ(meta->mesh.numTets(), 2u * 3u * 2u * 6u);
+  auto broken = importFiles({write("broken.p3d", "{ \"filenames\": [ ")});
+  ASSERT_FALSE(broken.isOk());
+  EXPECT_NE(broken.status().message().find("not a valid .p3d JSON meta-file"), std::string::npos)
+      << broken.status().message();
+}
+
 }  // namespace gtn

@@ -312,6 +312,67 @@ TEST(VtkLegacy, SkippedMetadataAndLookupTablesAreSaid) {
                 "skipped 1 LOOKUP_TABLE definition ('colours'): colour tables are not read"}));
 }
 
+// COMPONENT_NAMES in a METADATA block has one line per component of the array, empty for a component
+// without a name (as vtkDataWriter writes it): that line does not end the block. Arrays follow it.
+TEST(VtkLegacy, MetadataWithAnUnnamedComponent) {
+  const std::string dir = tempDir("vtk-legacy-component-names");
+  for (const char* mode : {"ASCII", "BINARY"}) {
+    SCOPED_TRACE(mode);
+    const bool binary = std::string(mode) == "BINARY";
+    std::string vel = "1 2 3 4 5 6 7 8 9 10 11 12";
+    if (binary) {
+      vel.clear();
+      for (int i = 1; i <= 12; ++i) {
+        const float v = static_cast<float>(i);
+        uint32_t u;
+        std::memcpy(&u, &v, 4);
+        for (int b = 3; b >= 0; --b) vel += static_cast<char>(u >> (8 * b));
+      }
+    }
+    writeFile(dir + "/m.vtk",
+              std::string("# vtk DataFile Version 5.1\nt\n") + mode +
+                  "\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n"
+                  "0 0 0 1 0 0 0 1 0 0 0 1\n"
+                  "CELLS 2 4\nOFFSETS vtktypeint64\n0 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\nCELL_TYPES 1\n10\n"
+                  "POINT_DATA 4\nFIELD FieldData 2\nvel 3 4 float\n" +
+                  vel +
+                  "\nMETADATA\nCOMPONENT_NAMES\nvx\n\nvz\nINFORMATION 1\nNAME UNITS_LABEL LOCATION vtkDataArray\n"
+                  "DATA m/s\n\n"
+                  "t 1 4 double\n0.5 1.5 2.5 3.5\n");
+    if (binary) {
+      // The binary dialect: the points and the last array as big-endian values too.
+      std::string text = test::readFile(dir + "/m.vtk");
+      auto be = [](const std::vector<double>& values) {
+        std::string out;
+        for (double v : values) {
+          uint64_t u;
+          std::memcpy(&u, &v, 8);
+          for (int b = 7; b >= 0; --b) out += static_cast<char>(u >> (8 * b));
+        }
+        return out;
+      };
+      text.replace(text.find("0 0 0 1 0 0 0 1 0 0 0 1"), 23, be({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}));
+      text.replace(text.find("0.5 1.5 2.5 3.5"), 15, be({0.5, 1.5, 2.5, 3.5}));
+      text.replace(text.find("0 4\nCONNECTIVITY"), 3, std::string("\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\4", 16));
+      text.replace(text.find("0 1 2 3\nCELL_TYPES"), 7,
+                   std::string("\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\1\0\0\0\0\0\0\0\2\0\0\0\0\0\0\0\3", 32));
+      text.replace(text.find("10\nPOINT_DATA"), 2, std::string("\0\0\0\x0a", 4));
+      writeFile(dir + "/m.vtk", text);
+    }
+    auto r = importMesh({dir + "/m.vtk"}, ImportOptions{});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->mesh.numTets(), 1u);
+    ASSERT_EQ(r->mesh.point_fields.size(), 2u);
+    const Field& v = r->mesh.point_fields[0];
+    const Field& t = r->mesh.point_fields[1];
+    EXPECT_EQ(v.name, "vel");
+    ASSERT_EQ(v.components, 3u);
+    EXPECT_EQ(v.get(3, 2), 12.0);
+    EXPECT_EQ(t.name, "t");
+    EXPECT_EQ(t.get(3, 0), 3.5);
+  }
+}
+
 TEST(VtkLegacy, TruncatedBinaryDataFailsCleanlyAtEveryCut) {
   const std::string dir = tempDir("vtk_legacy_cut");
   const std::string text = makeDataset(true, false).text;
