@@ -430,10 +430,10 @@ StatusOr<PiecedLevel> encodeCut(const TetMesh& mesh, const EncodeOptions& option
 StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets) {
   if (piece_tets < kMinPieceTets) return usageError("encodePieces: pieces must hold at least 4096 tetrahedra");
   if (!options.seam.empty()) return usageError("encodePieces: the seams are the pieces' own");
-  // A level that is one structured block is one structured piece where that is smaller than the level
-  // codec's coding; at the default bound whatever its size (one piece decodes at memory speed, where
-  // pieces of the level codec would decode in parallel at a small fraction of it), at another bound
-  // only up to it (the pieces that bound asks for, for region reads and parallel readers).
+  // A level that is one structured block is one structured piece: up to the bound where that is smaller
+  // than the level codec's piece; at the default bound also beyond it (one piece decodes at memory
+  // speed, where pieces of the level codec would decode in parallel at a small fraction of it); at
+  // another bound not beyond it (the pieces that bound asks for, for region reads and parallel readers).
   StatusOr<EncodedLevel> grid = invalidData("not a structured block");
   if (mesh.blocks.size() == 1 && options.structured &&
       (mesh.numTets() <= piece_tets || piece_tets == kDefaultPieceTets))
@@ -444,14 +444,10 @@ StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& opt
     if (grid.isOk() && streamBytes(*grid) < streamBytes(*e)) return onePiece(std::move(grid).value(), 1);
     return onePiece(std::move(e).value(), 0);
   }
-  GTN_ASSIGN_OR_RETURN(PiecedLevel cut, encodeCut(mesh, options, piece_tets));
-  if (grid.isOk()) {
-    size_t cut_bytes = 0;
-    for (const EncodedLevel& e : cut.encoded) cut_bytes += streamBytes(e);
-    for (const auto& s : cut.seam_streams) cut_bytes += s.size();
-    if (streamBytes(*grid) < cut_bytes) return onePiece(std::move(grid).value(), 1);
-  }
-  return cut;
+  // Larger than the bound: the level codec's pieces are not tried (on grids they take more bytes, and
+  // they decode many times slower).
+  if (grid.isOk()) return onePiece(std::move(grid).value(), 1);
+  return encodeCut(mesh, options, piece_tets);
 }
 
 namespace {

@@ -68,8 +68,8 @@ struct PiecedLevel {
 // the tetrahedra's centroids; deterministic, whatever the thread count) and codes each piece, in
 // parallel. A mesh of at most `piece_tets` tetrahedra is one piece with no seam, coded exactly as
 // encodeLevel codes it. A mesh that is one structured block (options.structured) is one structured
-// piece where that takes fewer bytes than the level codec's piece or pieces: up to piece_tets
-// tetrahedra, and at the default bound (kDefaultPieceTets) whatever its size.
+// piece: of at most piece_tets tetrahedra where that takes fewer bytes than the level codec's piece,
+// and of more at the default bound (kDefaultPieceTets) without trying the level codec's pieces.
 StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets);
 
 // A level coded by encodeLevel as a PiecedLevel of one piece (a copy of its streams), as encodePieces

@@ -113,9 +113,9 @@ TEST(Pieces, AStructuredBlockIsOneStructuredPieceWhenThatIsSmaller) {
   EXPECT_EQ(fallback->pieces[0].kind, 0);
 }
 
-// At the default bound, a grid of more tetrahedra than the bound is still one structured piece where
-// that is smaller than the level codec's pieces (it decodes at memory speed); at another bound, or
-// unstructured, it is cut.
+// At the default bound, a grid of more tetrahedra than the bound is one structured piece (the level
+// codec's pieces are not tried: they decode many times slower, and take more bytes, as here); at
+// another bound, or unstructured, it is cut.
 TEST(Pieces, AStructuredBlockLargerThanTheDefaultBoundStaysOnePiece) {
   const int n = 66;                  // 65^3 cells, 5 tetrahedra each: more than 2^20
   TetMesh m = gridMesh(n, n, n, 5);  // coordinates only: the level codec takes long on this many
