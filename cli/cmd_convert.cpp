@@ -144,7 +144,9 @@ Command addConvertCommand(CLI::App& app) {
             return "";
           },
           "N >= " + std::to_string(kMinPieceTets)));
-  sub->add_flag("--no-merge-tree", args->no_merge_tree, ".gtn: store no merge tree (no on-the-fly simplification)");
+  sub->add_flag("--no-merge-tree", args->no_merge_tree,
+                ".gtn: store no merge tree: level 0 alone, no mip levels (they are checked against the tree) and no "
+                "on-the-fly simplification");
   sub->add_flag("--independent-levels", args->independent_levels,
                 ".gtn: every level stores all of its vertices' values and the rest of the merge tree, so that each "
                 "level decodes alone (larger); by default a level names the next coarser level's vertices instead");

@@ -11,7 +11,12 @@ namespace gtn {
 namespace {
 Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& o, const GtnWriteOptions& wo,
                    const std::string& source, std::vector<std::string>* warnings) {
-  if (o.levels == 0 && !o.merge_tree) {
+  // Mip levels are made from the merge tree and checked against it (a validator reports levels without
+  // one): without a tree, level 0 alone.
+  if (!o.merge_tree && o.levels > 0)
+    return usageError(source + ": --levels " + std::to_string(o.levels) +
+                      " with no merge tree: mip levels are stored with the merge tree they are checked against");
+  if (!o.merge_tree) {
     GtnLevelInput level0;
     level0.mesh = &mesh;
     return writeGtnFile(path, {level0}, wo);

@@ -21,7 +21,7 @@ inline constexpr uint64_t kStructuredLevelShare = 12;
 
 struct GtnConvertOptions {
   int levels = -1;             // mip levels beyond level 0; -1 = automatic (down to a small mesh), 0 = none
-  bool merge_tree = true;      // store the merge trees (on-the-fly simplification)
+  bool merge_tree = true;      // store the merge trees (on-the-fly simplification); false: level 0 alone
   double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes (0 = no bound)
   RankingOptions ranking;
 };

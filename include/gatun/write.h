@@ -18,7 +18,8 @@ namespace gatun {
 /*! WriteOptions : how write() and convert() store a .gtn file (the options of `gtn convert`).
  *  `levels`: mip levels beyond level 0; -1 = automatic (down to a small mesh, within level_storage),
  *     0 = none.
- *  `merge_tree`: store the merge trees (simplification to any ratio on the fly).
+ *  `merge_tree`: store the merge trees (simplification to any ratio on the fly); false stores level 0
+ *     alone (mip levels are stored with the tree they are checked against; levels > 0 is refused).
  *  `level_storage`: automatic levels leave out the coarsest while all levels together would take
  *     more than this multiple of level 0's bytes alone (with its merge tree); 0 = no bound.
  *  `independent_levels`: every level stores all its vertices and the rest of the merge tree, so that

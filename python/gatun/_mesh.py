@@ -122,7 +122,7 @@ def write(
     point_data  dict name -> (n,) or (n, components) array of int8..uint64, float32 or float64
     cell_data   dict name -> (m,) or (m, components) array
     levels      mip levels beyond level 0 (None: automatic, within level_storage times level 0's bytes)
-    merge_tree  store the merge trees (on-the-fly simplification); False = --no-merge-tree
+    merge_tree  store the merge trees (on-the-fly simplification); False = --no-merge-tree (level 0 alone)
     verify      decode every level back and compare before the file is renamed into place
     simplify_field, w_density, w_geometry: the ranking's density field and weights (--simplify-field ...)
     threads     the most threads the ranking and the check may use (default: every core)

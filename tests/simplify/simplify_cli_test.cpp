@@ -65,6 +65,24 @@ TEST_F(SimplifyCli, ConvertOptionsTurnLevelsOff) {
   EXPECT_FALSE(fileExists(dir_ + "/bad.gtn"));
 }
 
+// Mip levels are checked against the merge tree they come from: without a tree, convert stores level 0
+// alone (a file the validator accepts), and refuses levels asked for.
+TEST_F(SimplifyCli, NoMergeTreeStoresLevelZeroAloneAndRefusesLevels) {
+  const std::string flat = dir_ + "/no-tree.gtn";
+  const RunResult r = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + flat + " --no-merge-tree");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = info(flat + " --merge-tree");
+  EXPECT_EQ(j["levels"].size(), 1u);
+  EXPECT_TRUE(j["merge_tree"].is_null());
+  const RunResult v = runGtn("validate " + flat);
+  EXPECT_EQ(v.exit_code, 0) << v.out << v.err;
+  const std::string asked = dir_ + "/no-tree-levels.gtn";
+  const RunResult bad = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + asked + " --no-merge-tree --levels 2");
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("--levels 2 with no merge tree"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fileExists(asked));
+}
+
 TEST_F(SimplifyCli, ExportSimplifiesOnTheFly) {
   const std::string in = dir_ + "/spx.gtn";
   struct Case {
