@@ -14,8 +14,9 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   // Mip levels are made from the merge tree and checked against it (a validator reports levels without
   // one): without a tree, level 0 alone.
   if (!o.merge_tree && o.levels > 0)
-    return usageError(source + ": --levels " + std::to_string(o.levels) +
-                      " with no merge tree: mip levels are stored with the merge tree they are checked against");
+    return usageError(source + ": " + std::to_string(o.levels) +
+                      " mip level(s) asked for with no merge tree: mip levels are stored with the merge tree "
+                      "they are checked against");
   if (!o.merge_tree) {
     GtnLevelInput level0;
     level0.mesh = &mesh;
