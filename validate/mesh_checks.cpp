@@ -409,6 +409,17 @@ void LevelStructureCheck::checkLevel0() {
   std::call_once(level0_once_, [&] { level0_report_.emplace(errorsOf(*level0_, "/levels/0")); });
 }
 
+std::string LevelStructureCheck::level0Errors() {
+  checkLevel0();
+  std::string errors;
+  for (const ReportedIssue& issue : level0_report_->issues()) {
+    const IssueInfo& info = issueInfo(issue.code);
+    if (info.severity == Severity::kError)
+      errors += std::string(errors.empty() ? "" : "; ") + info.code + ": " + issue.message();
+  }
+  return errors;
+}
+
 Status LevelStructureCheck::check(const TetMesh& level, size_t index) {
   checkLevel0();
   const ValidationReport report = errorsOf(level, "/levels/" + std::to_string(index));

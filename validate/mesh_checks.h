@@ -50,6 +50,8 @@ class LevelStructureCheck {
   // Checks level 0 now rather than in the first check() (on another thread while the merges are
   // ranked, say); thread-safe, and level 0 is still checked once.
   void checkLevel0();
+  // The errors level 0 has of its own, "CODE: message; ..." ("" when none), checking it first if needed.
+  std::string level0Errors();
 
  private:
   const TetMesh* level0_;

@@ -9,6 +9,14 @@
 namespace gtn {
 
 namespace {
+// Level 0 is stored as it is, errors included: say so, since `gtn validate` reports them on the file.
+void warnOfLevel0Errors(LevelStructureCheck& check, const std::string& source, std::vector<std::string>* warnings) {
+  if (!warnings) return;
+  if (const std::string errors = check.level0Errors(); !errors.empty())
+    warnings->push_back(source + ": the mesh has errors that `gtn validate` reports on the file too (" + errors +
+                        "); it is stored as it is");
+}
+
 Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& o, const GtnWriteOptions& wo,
                    const std::string& source, std::vector<std::string>* warnings) {
   // Mip levels are made from the merge tree and checked against it (a validator reports levels without
@@ -20,7 +28,12 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   if (!o.merge_tree) {
     GtnLevelInput level0;
     level0.mesh = &mesh;
-    return writeGtnFile(path, {level0}, wo);
+    GTN_RETURN_IF_ERROR(writeGtnFile(path, {level0}, wo));
+    if (wo.verify) {
+      LevelStructureCheck structure(mesh, path);
+      warnOfLevel0Errors(structure, source, warnings);
+    }
+    return Status::ok();
   }
   reportProgress(wo.progress, "rank merges", 0.0);
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
@@ -117,7 +130,9 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
         return levels.nextIndex(i);
       };
   }
-  return writeGtnFile(path, inputs, bounded);
+  GTN_RETURN_IF_ERROR(writeGtnFile(path, inputs, bounded));
+  if (wo.verify) warnOfLevel0Errors(structure, source, warnings);
+  return Status::ok();
 }
 }  // namespace
 

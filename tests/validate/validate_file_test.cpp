@@ -74,6 +74,28 @@ TEST(ValidateFile, SpxIsCleanAndEqualsItsSource) {
   EXPECT_EQ(errorCodeSet(against), (std::set<std::string>{"SOURCE_MESH_MISMATCH"})) << against.toText("x");
 }
 
+// A mesh with errors of its own (two tetrahedra overlapping) is stored as it is, and convert says that
+// `gtn validate` will report them; a clean mesh gets no such warning.
+TEST(ValidateFile, ConvertWarnsOfTheMeshsOwnErrors) {
+  const std::string dir = tempDir("validate-overlap");
+  writeFile(dir + "/m.node", "5 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0.1 0.1 0.1\n");
+  writeFile(dir + "/m.ele", "2 4 0\n1 1 2 3 4\n2 1 2 3 5\n");
+  for (const char* levels : {"", " --levels 0 --no-merge-tree"}) {
+    SCOPED_TRACE(levels);
+    const RunResult c = runGtn("convert " + dir + "/m.node -o " + dir + "/m.gtn" + std::string(levels));
+    ASSERT_EQ(c.exit_code, 0) << c.err;
+    EXPECT_NE(c.err.find("the mesh has errors that `gtn validate` reports on the file too (BOUNDARY_ORIENTATION"),
+              std::string::npos)
+        << c.err;
+    const RunResult v = runGtn("validate " + dir + "/m.gtn");
+    EXPECT_EQ(v.exit_code, 1) << v.out;
+    EXPECT_NE(v.out.find("BOUNDARY_ORIENTATION"), std::string::npos) << v.out;
+  }
+  const RunResult clean = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir + "/spx.gtn");
+  ASSERT_EQ(clean.exit_code, 0) << clean.err;
+  EXPECT_EQ(clean.err.find("the mesh has errors"), std::string::npos) << clean.err;
+}
+
 TEST(ValidateFile, CliExitCodesAndJson) {
   const SpxFile& f = spxFile();
   RunResult ok = runGtn("validate " + f.gtn + " --json --against " + dataPath("vtk/spx.vtk"));
