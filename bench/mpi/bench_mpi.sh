@@ -2,7 +2,7 @@
 # ParaView's MPI reading one .gtn: `mpirun -np 1` against `-np N pvbatch`, each rank of N decoding only
 # its run of the file's pieces (vtkGTNReader). The grid is the project's sample shape at SIZE^3 points
 # (gtn-make-sample; 128 gives 127^3 x 6 = 12.3 million tetrahedra), converted with `gtn convert --levels 0
-# --no-merge-tree` (level 0 alone, no ranking; pieces of at most 2^20 tetrahedra, the default). A rank
+# --no-merge-tree --piece-tets 524288` (level 0 alone, no ranking; pieces of at most 2^19 tetrahedra). A rank
 # decodes its pieces in parallel too (TBB), so each round runs, in turn (interleaved, so that whatever
 # else the machine does weighs on all of them):
 #   1 rank, every core (the reader's default, Threads 0)      N ranks, every core each (Threads 0)
@@ -22,29 +22,8 @@ ranks=${2:-2}
 rounds=${3:-3}
 build=${4:-build}
 here=$(cd "$(dirname "$0")" && pwd)
-gtn="$build/gtn"
-plugin=$(find "$build" -name 'GatunPlugin.so' | head -n 1)
-for tool in pvbatch mpirun; do
-  command -v $tool >/dev/null || { echo "bench_mpi: $tool not found" >&2; exit 2; }
-done
-[ -x "$gtn" ] && [ -x "$build/gtn-make-sample" ] && [ -n "$plugin" ] ||
-  { echo "bench_mpi: build gtn_cli, gtn_make_sample and GatunPlugin in $build first" >&2; exit 2; }
-if [ -n "${BENCH_MPI_DIR:-}" ]; then
-  work=$BENCH_MPI_DIR
-  mkdir -p "$work"
-else
-  work=$(mktemp -d)
-  trap 'rm -rf "$work"' EXIT
-fi
-file="$work/grid$size.gtn"
-if [ ! -f "$file" ]; then
-  "$build/gtn-make-sample" "$work" "$size" "$size" "$size" >/dev/null
-  t0=$(date +%s.%N)
-  "$gtn" convert "$work/sample.xyz" "$work/sample.q" --levels 0 --no-merge-tree -o "$file" >/dev/null 2>&1
-  t1=$(date +%s.%N)
-  rm -f "$work/sample.xyz" "$work/sample.q"
-  echo "converted ${size}^3 in $(echo "$t1 - $t0" | bc) s"
-fi
+name=bench_mpi
+. "$here/grid_file.sh"
 python3 - "$gtn" "$file" <<'PY'
 import json, subprocess, sys
 j = json.loads(subprocess.run([sys.argv[1], "info", "--json", sys.argv[2]], capture_output=True, check=True, text=True).stdout)

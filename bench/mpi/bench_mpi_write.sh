@@ -3,7 +3,7 @@
 # level 0, rank 0 gathers the coded pieces and writes) against GTNWriter's gathering (rank 0 receives
 # the whole grid and codes it; level 0 alone, so that both write the same level). The grid is the
 # project's sample shape at SIZE^3 points (gtn-make-sample; 128 gives 12.3 million tetrahedra), stored
-# with `gtn convert --levels 0 --no-merge-tree` and read by the ranks (write_timed.py) before each write.
+# with `gtn convert --levels 0 --no-merge-tree --piece-tets 524288` and read by the ranks (write_timed.py) before each write.
 # Prints each run (rank 0's write time and peak memory), then the medians.
 #
 # Usage: bench/mpi/bench_mpi_write.sh [SIZE] [RANKS] [ROUNDS] [BUILD_DIR]
@@ -16,26 +16,8 @@ ranks=${2:-2}
 rounds=${3:-3}
 build=${4:-build}
 here=$(cd "$(dirname "$0")" && pwd)
-gtn="$build/gtn"
-plugin=$(find "$build" -name 'GatunPlugin.so' | head -n 1)
-for tool in pvbatch mpirun; do
-  command -v $tool >/dev/null || { echo "bench_mpi_write: $tool not found" >&2; exit 2; }
-done
-[ -x "$gtn" ] && [ -x "$build/gtn-make-sample" ] && [ -n "$plugin" ] ||
-  { echo "bench_mpi_write: build gtn_cli, gtn_make_sample and GatunPlugin in $build first" >&2; exit 2; }
-if [ -n "${BENCH_MPI_DIR:-}" ]; then
-  work=$BENCH_MPI_DIR
-  mkdir -p "$work"
-else
-  work=$(mktemp -d)
-  trap 'rm -rf "$work"' EXIT
-fi
-file="$work/grid$size.gtn"
-if [ ! -f "$file" ]; then
-  "$build/gtn-make-sample" "$work" "$size" "$size" "$size" >/dev/null
-  "$gtn" convert "$work/sample.xyz" "$work/sample.q" --levels 0 --no-merge-tree -o "$file" >/dev/null 2>&1
-  rm -f "$work/sample.xyz" "$work/sample.q"
-fi
+name=bench_mpi_write
+. "$here/grid_file.sh"
 results=""
 i=1
 while [ $i -le "$rounds" ]; do
