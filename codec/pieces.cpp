@@ -402,6 +402,30 @@ StatusOr<PiecedLevel> encodeChainedLevel(const TetMesh& mesh, const std::vector<
 
 namespace {
 
+// The unused points (unused(v)) of a mesh cut into n_pieces pieces, per piece, increasing: each goes
+// with a piece that uses the edge it lies on (the level codec codes it with that edge), else with the
+// last piece. first_piece[v]: the first piece that uses v (kNoIndex: none).
+template <class Unused>
+std::vector<std::vector<uint32_t>> placeUnusedPoints(const TetMesh& mesh, const std::vector<uint32_t>& first_piece,
+                                                     uint32_t n_pieces, Unused&& unused_point) {
+  std::vector<std::vector<uint32_t>> out(n_pieces);
+  const size_t np = mesh.numPoints();
+  std::vector<char> unused(np, 0);
+  bool any = false;
+  for (size_t v = 0; v < np; ++v)
+    if (unused_point(v)) unused[v] = any = true;
+  if (!any) return out;
+  for (const EdgePoint& e : findEdgePoints(mesh)) {
+    if (!unused[e.point] || first_piece[e.a] == kNoIndex) continue;
+    out[first_piece[e.a]].push_back(e.point);
+    unused[e.point] = 0;
+  }
+  for (size_t v = 0; v < np; ++v)
+    if (unused[v]) out[n_pieces - 1].push_back(static_cast<uint32_t>(v));
+  for (auto& list : out) std::sort(list.begin(), list.end());
+  return out;
+}
+
 size_t streamBytes(const EncodedLevel& x) {
   size_t n = x.boundary.size() + x.connectivity.size() + x.geometry.size();
   for (const auto& f : x.point_fields) n += f.size();
@@ -500,25 +524,8 @@ StatusOr<PiecedLevel> encodeCut(const TetMesh& mesh, const EncodeOptions& option
     for (uint32_t v : verts) seam_id[v] = n_seam++;
   }
 
-  // Unused points: each goes with a piece that uses the edge it lies on (the level codec codes it with
-  // that edge), else with the last piece.
-  std::vector<std::vector<uint32_t>> piece_unused(n_pieces);
-  {
-    std::vector<char> unused(np, 0);
-    bool any = false;
-    for (size_t v = 0; v < np; ++v)
-      if (first_piece[v] == kNoIndex) unused[v] = any = true;
-    if (any) {
-      for (const EdgePoint& e : findEdgePoints(mesh)) {
-        if (!unused[e.point] || first_piece[e.a] == kNoIndex) continue;
-        piece_unused[first_piece[e.a]].push_back(e.point);
-        unused[e.point] = 0;
-      }
-      for (size_t v = 0; v < np; ++v)
-        if (unused[v]) piece_unused[n_pieces - 1].push_back(static_cast<uint32_t>(v));
-      for (auto& list : piece_unused) std::sort(list.begin(), list.end());
-    }
-  }
+  const std::vector<std::vector<uint32_t>> piece_unused =
+      placeUnusedPoints(mesh, first_piece, n_pieces, [&](size_t v) { return first_piece[v] == kNoIndex; });
 
   const std::vector<std::vector<uint32_t>> seam_lists = pieceSeamLists(out.classes, n_pieces);
   out.encoded.resize(n_pieces);
@@ -1092,23 +1099,8 @@ StatusOr<EncodedPart> encodePart(const TetMesh& part, const PartPlan& plan, std:
     if (dropped[v] && first_use[v] != kNoIndex)
       return usageError("encodePart: vertex " + std::to_string(v) + " is used here but another part's");
   // Unused own points (encodePieces' rule).
-  std::vector<std::vector<uint32_t>> piece_unused(n_pieces);
-  {
-    std::vector<char> unused(np, 0);
-    bool any = false;
-    for (size_t v = 0; v < np; ++v)
-      if (first_use[v] == kNoIndex && !dropped[v]) unused[v] = any = true;
-    if (any) {
-      for (const EdgePoint& e : findEdgePoints(part)) {
-        if (!unused[e.point] || first_use[e.a] == kNoIndex) continue;
-        piece_unused[first_use[e.a]].push_back(e.point);
-        unused[e.point] = 0;
-      }
-      for (size_t v = 0; v < np; ++v)
-        if (unused[v]) piece_unused[n_pieces - 1].push_back(static_cast<uint32_t>(v));
-      for (auto& list : piece_unused) std::sort(list.begin(), list.end());
-    }
-  }
+  const std::vector<std::vector<uint32_t>> piece_unused =
+      placeUnusedPoints(part, first_use, n_pieces, [&](size_t v) { return first_use[v] == kNoIndex && !dropped[v]; });
   // Each piece's seam list: the classes that hold it, in class order, each class's ids in order.
   std::vector<std::unordered_map<uint32_t, uint32_t>> seam_index(n_pieces);  // global seam id -> index
   {
