@@ -326,23 +326,16 @@ Status encodePieceMesh(const TetMesh& piece, const EncodeOptions& opt, PieceInfo
 
 }  // namespace
 
-PiecedLevel onePieceLevel(const EncodedLevel& e) {
+PiecedLevel onePieceLevel(EncodedLevel e, uint8_t kind) {
   PiecedLevel l;
   l.header = e.header;
-  PieceInfo p;
-  p.points = e.header.points;
-  p.own_points = e.header.points;
-  p.own_boundary_points = e.boundary_points;
-  p.tets = e.header.tets;
-  p.boundary_triangles = e.header.boundary_triangles;
-  for (int i = 0; i < 3; ++i) {
-    p.bbox_min[i] = e.header.bbox_min[i];
-    p.bbox_max[i] = e.header.bbox_max[i];
-  }
-  l.pieces = {p};
-  l.encoded = {e};
+  l.pieces = {infoOf(e, 0)};
+  l.pieces[0].kind = kind;
+  // A structured piece gives every vertex before the boundary triangles.
+  l.pieces[0].own_boundary_points = kind == kPieceStructured ? e.header.points : e.boundary_points;
   l.vertex_order = e.vertex_order;
   l.tet_order = e.tet_order;
+  l.encoded.push_back(std::move(e));
   return l;
 }
 
@@ -395,7 +388,7 @@ StatusOr<PiecedLevel> encodeChainedLevel(const TetMesh& mesh, const std::vector<
   }
   options.seam_count = static_cast<uint32_t>(next_order.size());
   GTN_ASSIGN_OR_RETURN(EncodedLevel e, encodeLevel(mesh, options));
-  PiecedLevel level = onePieceLevel(e);
+  PiecedLevel level = onePieceLevel(std::move(e));
   level.base = 1;
   return level;
 }
@@ -433,20 +426,6 @@ size_t streamBytes(const EncodedLevel& x) {
   return n;
 }
 
-// A level of one piece: `e` coded by the level codec (kind 0) or the structured-piece coder (kind 1).
-PiecedLevel onePiece(EncodedLevel&& e, uint8_t kind) {
-  PiecedLevel out;
-  out.header = e.header;
-  out.pieces.push_back(infoOf(e, 0));
-  out.pieces[0].kind = kind;
-  // A structured piece gives every vertex before the boundary triangles.
-  out.pieces[0].own_boundary_points = kind == 1 ? e.header.points : e.boundary_points;
-  out.vertex_order = e.vertex_order;
-  out.tet_order = e.tet_order;
-  out.encoded.push_back(std::move(e));
-  return out;
-}
-
 StatusOr<PiecedLevel> encodeCut(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets);
 
 }  // namespace
@@ -465,12 +444,13 @@ StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& opt
   if (mesh.numTets() <= piece_tets) {
     StatusOr<EncodedLevel> e = encodeLevel(mesh, options);
     if (!e.isOk()) return e.status();
-    if (grid.isOk() && streamBytes(*grid) < streamBytes(*e)) return onePiece(std::move(grid).value(), 1);
-    return onePiece(std::move(e).value(), 0);
+    if (grid.isOk() && streamBytes(*grid) < streamBytes(*e))
+      return onePieceLevel(std::move(grid).value(), kPieceStructured);
+    return onePieceLevel(std::move(e).value());
   }
   // Larger than the bound: the level codec's pieces are not tried (on grids they take more bytes, and
   // they decode many times slower).
-  if (grid.isOk()) return onePiece(std::move(grid).value(), 1);
+  if (grid.isOk()) return onePieceLevel(std::move(grid).value(), kPieceStructured);
   return encodeCut(mesh, options, piece_tets);
 }
 
@@ -842,7 +822,7 @@ StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vec
       if (value_bytes > 0) std::memcpy(&values[k * value_bytes], &seam_values[r.cls][r.k * value_bytes], value_bytes);
     }
     Status st = Status::ok();
-    if (info.kind == 1) {
+    if (info.kind == kPieceStructured) {
       // A structured piece: a level of one piece, no seam vertex.
       if (n_pieces != 1) {
         piece_status[p] = invalidData(piece_what + ": a structured piece in a level of several pieces");
@@ -850,7 +830,7 @@ StatusOr<DecodedPieces> decodePieces(const PiecedLevelView& view, const std::vec
       }
       sink.seam_of_id.assign(info.points, kNoIndex);
       st = decodeStructuredPiece(ph, view.payloads[p].streams.connectivity, sink, piece_what, fields);
-    } else if (info.kind != 0) {
+    } else if (info.kind != kPieceUnstructured) {
       st = invalidData(piece_what + ": unknown piece kind " + std::to_string(info.kind));
     } else {
       SeamValues seams;

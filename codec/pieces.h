@@ -32,9 +32,14 @@ namespace gtn {
 inline constexpr uint64_t kDefaultPieceTets = uint64_t{1} << 20;
 inline constexpr uint64_t kMinPieceTets = uint64_t{1} << 12;
 
+// Piece kinds (LHDR): the level codec's streams (BNDY CONN GEOM PFLD... CFLD...), or a structured piece
+// (GRID, codec/structured_piece.h).
+inline constexpr uint8_t kPieceUnstructured = 0;
+inline constexpr uint8_t kPieceStructured = 1;
+
 // What the level header records of one piece.
 struct PieceInfo {
-  uint8_t kind = 0;                  // 0: unstructured (the level codec)
+  uint8_t kind = kPieceUnstructured;
   uint64_t points = 0;               // vertices the piece's streams introduce (own and seam)
   uint64_t own_points = 0;           // of them, those no other piece uses (stored in the piece)
   uint64_t own_boundary_points = 0;  // of the own ones, those introduced while coding the boundary
@@ -72,9 +77,10 @@ struct PiecedLevel {
 // and of more at the default bound (kDefaultPieceTets) without trying the level codec's pieces.
 StatusOr<PiecedLevel> encodePieces(const TetMesh& mesh, const EncodeOptions& options, uint64_t piece_tets);
 
-// A level coded by encodeLevel as a PiecedLevel of one piece (a copy of its streams), as encodePieces
-// makes a level of at most piece_tets tetrahedra.
-PiecedLevel onePieceLevel(const EncodedLevel& encoded);
+// A level coded by encodeLevel (kPieceUnstructured), or by the structured-piece coder (kPieceStructured),
+// as a PiecedLevel of one piece, as encodePieces makes a level of at most piece_tets tetrahedra or a
+// structured one.
+PiecedLevel onePieceLevel(EncodedLevel encoded, uint8_t kind = kPieceUnstructured);
 
 // Levels that name the next level's vertices (spec section 7.7). A mip level's vertices are a subset of
 // the finer level's, with the same coordinates and values: the finer level codes the shared ones as

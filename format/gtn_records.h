@@ -28,9 +28,7 @@ inline constexpr uint64_t kGtnMaxPieces = uint64_t{1} << 20;  // per level
 // after every level it names, so the run bounds the work of one decode.
 inline constexpr uint64_t kGtnMaxNamingRun = 63;
 inline constexpr uint64_t kGtnMaxPiecePoints = 0xFFFFFFFEu;  // a piece's vertex ids are 32 bits
-// Piece kinds (LHDR): 0 unstructured (BNDY CONN GEOM PFLD... CFLD...), 1 structured (GRID).
-inline constexpr uint8_t kPieceUnstructured = 0;
-inline constexpr uint8_t kPieceStructured = 1;
+// Piece kinds (LHDR): kPieceUnstructured and kPieceStructured, codec/pieces.h.
 
 // GHDR writer flag bits: informational; readers ignore them (and any other "unused" bit).
 inline constexpr uint8_t kGhdrHasDirectory = 0x01;

@@ -2,7 +2,7 @@
 
 #include <tbb/task_group.h>
 
-#include "format/gtn_records.h"
+#include "codec/pieces.h"
 #include "simplify/levels.h"
 #include "validate/mesh_checks.h"
 
@@ -124,7 +124,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
         return prefix(vertex_order, UINT64_MAX);
       };
     }
-    if (i + 1 < count && (i > 0 || first == 1))
+    if (k + 1 < kept.size() && kept[k + 1] == i + 1)  // the next stored level is the next one
       in.next_index = [&, i]() -> StatusOr<std::vector<uint32_t>> {
         GTN_RETURN_IF_ERROR(levels.level(i + 1).status());
         return levels.nextIndex(i);
