@@ -333,8 +333,15 @@ PiecedLevel onePieceLevel(EncodedLevel e, uint8_t kind) {
   l.pieces[0].kind = kind;
   // A structured piece gives every vertex before the boundary triangles.
   l.pieces[0].own_boundary_points = kind == kPieceStructured ? e.header.points : e.boundary_points;
-  l.vertex_order = e.vertex_order;
-  l.tet_order = e.tet_order;
+  // A structured piece's checks and decoding read the level's renumbering, not the piece's: moved, not
+  // copied (8 bytes a tetrahedron).
+  if (kind == kPieceStructured) {
+    l.vertex_order = std::move(e.vertex_order);
+    l.tet_order = std::move(e.tet_order);
+  } else {
+    l.vertex_order = e.vertex_order;
+    l.tet_order = e.tet_order;
+  }
   l.encoded.push_back(std::move(e));
   return l;
 }

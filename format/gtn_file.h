@@ -37,8 +37,10 @@ struct GtnLevelInput {
       merge_tree_prefix;
   // Optional: `mesh` already encoded by encodePieces with the default options and the write's
   // piece_tets (while the merge tree was ranked, say); the writer then uses it instead of encoding the
-  // mesh (it sets the header's level and merges, and verifies it as it would its own).
-  std::shared_ptr<const PiecedLevel> encoded;
+  // mesh (it sets the header's level and merges, and verifies it as it would its own). Where the writer
+  // holds the only reference, it takes the encoding over (moves from it) instead of copying it, and
+  // encodes the mesh again if it needs the level a second time.
+  std::shared_ptr<PiecedLevel> encoded;
   // Instead of `mesh`: makes the level's mesh when the writer comes to it (in level order, just before
   // encoding it), so that a level the writer never reaches (past a storage bound) is never made. The
   // mesh must stay valid until writeGtnFile returns; a failure fails the write. `expected_tets` stands

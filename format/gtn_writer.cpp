@@ -216,8 +216,15 @@ void setLevelIndex(PiecedLevel& level, size_t i, uint64_t merges) {
 StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, size_t i, const TetMesh& mesh,
                                    const GtnWriteOptions& options) {
   EncodedInput out;
-  if (levels[i].encoded) {
-    out.level = *levels[i].encoded;
+  const std::shared_ptr<PiecedLevel>& given = levels[i].encoded;
+  if (given && !given->encoded.empty()) {
+    // Taken over where nothing else holds it (level 0's encoding is as large as the level's file).
+    if (given.use_count() == 1) {
+      out.level = std::move(*given);
+      given->encoded.clear();
+    } else {
+      out.level = *given;
+    }
   } else {
     GTN_ASSIGN_OR_RETURN(out.level, encodePieces(mesh, EncodeOptions{}, options.piece_tets));
   }

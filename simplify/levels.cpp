@@ -28,7 +28,7 @@ uint64_t unreferencedMerges(const MergeTree& tree) {
 }
 
 MipLevelBuilder::MipLevelBuilder(const TetMesh& source, const MergeTree& tree, bool keep_trees)
-    : source_(&source), keep_trees_(keep_trees) {
+    : source_(&source), tree_(&tree), keep_trees_(keep_trees) {
   meshes_.emplace_back();
   // Level 0's tree is the caller's: not copied.
   finest_tree_ = std::shared_ptr<const MergeTree>(std::shared_ptr<const MergeTree>(), &tree);
@@ -62,6 +62,21 @@ StatusOr<const TetMesh*> MipLevelBuilder::level(size_t i) {
   // Level i is made from level i - 1 and its tree (the rest of the merges, in its numbering): the same
   // mesh and tree as from the source (compaction keeps the vertex and tetrahedron order), in time that
   // shrinks with the levels instead of a pass over the source for each.
+  if (i > 0 && i < skip_to_) return usageError("mip level " + std::to_string(i) + " asked for, after it was skipped");
+  if (meshes_.size() == 1 && skip_to_ > 1 && i > 0) {
+    // Level skip_to_ straight from the source: the levels between are placeholders.
+    std::vector<uint32_t> index;
+    GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(*source_, *tree_, merges_[skip_to_], &index));
+    finest_tree_ = std::make_shared<const MergeTree>(remainingTree(*tree_, merges_[skip_to_], index));
+    for (size_t k = 1; k < skip_to_; ++k) {
+      trees_.push_back(nullptr);
+      next_index_.emplace_back();
+      meshes_.push_back(nullptr);
+    }
+    next_index_.emplace_back();  // level skip_to_ - 1 is not made: nothing maps into level skip_to_
+    trees_.push_back(keep_trees_ ? finest_tree_ : nullptr);
+    meshes_.push_back(std::make_unique<TetMesh>(std::move(mesh)));
+  }
   while (meshes_.size() <= i) {
     const size_t next = meshes_.size();
     const TetMesh& finer = next == 1 ? *source_ : *meshes_.back();
@@ -74,6 +89,10 @@ StatusOr<const TetMesh*> MipLevelBuilder::level(size_t i) {
     meshes_.push_back(std::make_unique<TetMesh>(std::move(mesh)));
   }
   return i == 0 ? source_ : meshes_[i].get();
+}
+
+uint64_t MipLevelBuilder::tetsOf(size_t i) const {
+  return i < count() ? source_->numTets() - tree_->tetsRemovedUpTo(merges_[i]) : 0;
 }
 
 StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree, const LevelOptions& options) {

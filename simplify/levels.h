@@ -64,10 +64,17 @@ class MipLevelBuilder {
   size_t built() const { return meshes_.size(); }                  // levels made so far, level 0 included
   // Level i's mesh (level 0: the source), building the levels up to it first.
   StatusOr<const TetMesh*> level(size_t i);
-  // Level i's merge tree in its numbering, once level i is built; null where options.merge_tree is off.
+  // Level i's tetrahedra, from the tree's counts: nothing is built.
+  uint64_t tetsOf(size_t i) const;
+  // The levels from 1 to first - 1 will never be asked for (a writer stores level 0 and levels first
+  // on): level first is then made from the source in one pass, and the levels between are never made.
+  // Before any level is built; first >= 1.
+  void skipTo(size_t first) { skip_to_ = first; }
+  // Level i's merge tree in its numbering, once level i is built; null where options.merge_tree is off
+  // and for the levels skipTo leaves out.
   std::shared_ptr<const MergeTree> tree(size_t i) const { return i < trees_.size() ? trees_[i] : nullptr; }
   // Per vertex of level i, its index in level i + 1 (MergeTree::kRoot where it merges away), once level
-  // i + 1 is built; empty before.
+  // i + 1 is built; empty before, and for the levels skipTo leaves out.
   const std::vector<uint32_t>& nextIndex(size_t i) const {
     static const std::vector<uint32_t> none;
     return i < next_index_.size() ? next_index_[i] : none;
@@ -78,7 +85,9 @@ class MipLevelBuilder {
   MipLevelBuilder(const TetMesh& source, const MergeTree& tree, bool keep_trees);
 
   const TetMesh* source_;
+  const MergeTree* tree_;
   bool keep_trees_;
+  size_t skip_to_ = 1;
   std::vector<uint64_t> merges_;
   std::vector<double> ratios_;
   std::vector<std::unique_ptr<TetMesh>> meshes_;         // meshes_[0] is null: the source

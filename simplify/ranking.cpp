@@ -91,6 +91,7 @@ class CandidateHeap {
  public:
   explicit CandidateHeap(size_t points) : at_(points, kNoIndex) {}
   bool empty() const { return heap_.empty(); }
+  bool has(uint32_t v) const { return at_[v] != kNoIndex; }
   const QueueEntry& top() const { return heap_.front(); }
   // Sets v's entry (adds it, or replaces the one it has).
   void set(const QueueEntry& e) {
@@ -288,6 +289,10 @@ class Ranker {
   std::vector<uint32_t> star_len_;
   void compactStars();
   std::vector<uint8_t> boundary_, frozen_, alive_;
+  // Lazy evaluation (RankingOptions::lazy): per vertex, whether its queued candidate was computed
+  // before a merge changed its star, and is recomputed when it comes to the top.
+  std::vector<uint8_t> stale_;
+  std::vector<uint32_t> now_;        // merge's vertices evaluated at once
   std::vector<uint8_t> pinned_;      // never merged away (may be merged onto): next to a face oriented alike twice
   std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
   bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
@@ -736,7 +741,19 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
   tree_.boundary[v] = boundary_[v];
   tree_.error[v] = error;
   ws_->uniqueByMark(recompute_);
-  recompute(recompute_);
+  if (!options_.lazy) {
+    recompute(recompute_);
+    return;
+  }
+  // w, whose star is now v's and its own, is evaluated at once, and so is a vertex with no queued
+  // candidate (nothing would bring it back); the others are only marked stale.
+  now_.clear();
+  for (uint32_t u : recompute_) {
+    const bool at_once = u == w || !heap_.has(u);
+    stale_[u] = !at_once;
+    if (at_once) now_.push_back(u);
+  }
+  recompute(now_);
 }
 
 void Ranker::recompute(const std::vector<uint32_t>& list) {
@@ -771,6 +788,7 @@ void Ranker::recompute(const std::vector<uint32_t>& list) {
 
 MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   init();
+  stale_.assign(options_.lazy ? mesh_.numPoints() : 0, 0);
   ws_ = &thread_ws_.local();
   const uint32_t np = static_cast<uint32_t>(mesh_.numPoints());
   {
@@ -778,12 +796,20 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     for (uint32_t v = 0; v < np; ++v) all[v] = v;
     recompute(all);
   }
-  uint64_t popped = 0, rejected = 0;
+  uint64_t popped = 0, rejected = 0, restaled = 0;
   std::vector<Candidate> sorted;
   while (!heap_.empty() && tree_.merges < options_.max_merges) {
     const QueueEntry e = heap_.top();
     heap_.pop();
     ++popped;
+    if (options_.lazy && stale_[e.v]) {
+      // Computed before its star changed: computed again, and queued by its new error.
+      stale_[e.v] = 0;
+      now_.assign(1, e.v);
+      recompute(now_);
+      ++restaled;
+      continue;
+    }
     if (validate(e.v, e.w)) {
       merge(e.v, e.w, e.error);
       if (tree_.merges % 16384 == 0) reportProgress(progress, "rank merges", static_cast<double>(tree_.merges) / np);
@@ -804,6 +830,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   }
   if (stats) {
     stats->popped = popped;
+    stats->stale = restaled;
     stats->rejected = rejected;
     stats->evaluations = 0;
     for (const Workspace& ws : thread_ws_) stats->evaluations += ws.evaluations;

@@ -54,8 +54,14 @@
 // targets count the other merges against the referenced vertices (simplify/levels.h).
 //
 // Candidates are kept per vertex (its best target) in an indexed priority queue ordered by (error, v,
-// w), one entry per vertex, replaced in place; after a merge v -> w the candidates of w and of v's
-// former neighbours are recomputed, and each popped candidate is checked exactly before it is applied.
+// w), one entry per vertex, replaced in place, and each popped candidate is checked exactly before it
+// is applied. After a merge v -> w, w's candidate is recomputed; v's former neighbours' candidates are
+// recomputed too (greedy), or by default only marked stale (lazy): a stale candidate that comes to the
+// top of the queue is recomputed and queued again by its new error, and only a fresh one is applied.
+// Lazy evaluation computes about a third of the candidates (a merge changes the stars of some eight
+// vertices, and most are merged or changed again before they come to the top), and a vertex whose
+// error a nearby merge lowered waits until its old error comes up: the order differs from the greedy
+// one, and so does the tree.
 #pragma once
 
 #include <cstdint>
@@ -74,6 +80,9 @@ struct RankingOptions {
   double w_density = 1.0;
   double w_geometry = 1.0;
   uint64_t max_merges = UINT64_MAX;  // stop after this many merges
+  // Recompute the candidates a merge makes stale when they come to the top of the queue (lazy, the
+  // default) rather than after every merge (greedy); see above.
+  bool lazy = true;
 };
 
 struct RankingStats {
@@ -81,6 +90,7 @@ struct RankingStats {
   uint64_t merges = 0, boundary_merges = 0;
   uint64_t popped = 0;                       // queue entries examined
   uint64_t rejected = 0;                     // popped candidates that failed the exact checks
+  uint64_t stale = 0;                        // popped candidates recomputed because they were stale (lazy)
   uint64_t evaluations = 0;                  // candidate errors computed
   uint64_t star_pool_corners = 0;            // the room the stars' corner lists took, at most (4 bytes each)
   uint64_t star_compactions = 0;             // times the corner lists were moved down over abandoned ones

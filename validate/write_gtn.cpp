@@ -80,11 +80,12 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
     uint64_t chain = 0;
     first = count;
     for (size_t i = count; i-- > 1;) {
-      GTN_ASSIGN_OR_RETURN(const TetMesh* level, levels.level(i));
-      chain += level->numTets();
+      chain += levels.tetsOf(i);
       if (chain * kStructuredLevelShare > mesh.numTets()) break;
       first = i;
     }
+    // The finer levels are never made: the first stored one comes from level 0 in one pass.
+    if (first < count) levels.skipTo(first);
   }
   std::vector<size_t> kept = {0};
   for (size_t i = first; i < count; ++i) kept.push_back(i);

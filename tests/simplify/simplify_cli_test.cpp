@@ -83,6 +83,23 @@ TEST_F(SimplifyCli, NoMergeTreeStoresLevelZeroAloneAndRefusesLevels) {
   EXPECT_FALSE(fileExists(asked));
 }
 
+// --greedy-ranking ranks in the greedy order: another tree than the default lazy one, in a file that
+// validates, and the same file again when run again.
+TEST_F(SimplifyCli, GreedyRankingGivesTheGreedyTree) {
+  const std::string a = dir_ + "/greedy-a.gtn", b = dir_ + "/greedy-b.gtn";
+  for (const std::string& out : {a, b}) {
+    const RunResult r = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + out + " --greedy-ranking");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  EXPECT_EQ(runGtn("validate " + a).exit_code, 0);
+  const nlohmann::json greedy = info(a + " --merge-tree"), lazy = info(dir_ + "/spx.gtn --merge-tree");
+  ASSERT_TRUE(greedy.contains("merge_tree") && lazy.contains("merge_tree"));
+  EXPECT_NE(greedy["merge_tree"]["error_quantiles"], lazy["merge_tree"]["error_quantiles"]);
+  EXPECT_EQ(greedy["merge_tree"]["merges"].get<uint64_t>() + greedy["merge_tree"]["roots"].get<uint64_t>(), 2896u);
+  const nlohmann::json again = info(b + " --merge-tree");
+  EXPECT_EQ(again["merge_tree"], greedy["merge_tree"]);
+}
+
 TEST_F(SimplifyCli, ExportSimplifiesOnTheFly) {
   const std::string in = dir_ + "/spx.gtn";
   struct Case {

@@ -132,6 +132,43 @@ TEST(Ranking, TheTreeIsTheSameForAnyThreadCount) {
   }
 }
 
+// Lazy evaluation (the default) recomputes a stale candidate when it comes to the top of the queue:
+// far fewer candidates are computed than by the greedy order, every prefix of its tree is still a
+// valid mesh, and the simplified meshes keep the volume about as well as the greedy ones.
+TEST(Ranking, LazyEvaluationComputesFewerCandidatesAndKeepsTheShape) {
+  const TetMesh mesh = makeGrid(12, 11, 10);
+  RankingOptions greedy;
+  greedy.lazy = false;
+  RankingStats lazy_stats, greedy_stats;
+  auto lazy = rankMerges(mesh, RankingOptions{}, &lazy_stats);
+  auto exact = rankMerges(mesh, greedy, &greedy_stats);
+  ASSERT_TRUE(lazy.isOk() && exact.isOk());
+  ASSERT_TRUE(lazy->check("lazy").isOk());
+  EXPECT_GT(lazy_stats.stale, 0u);
+  EXPECT_EQ(greedy_stats.stale, 0u);
+  EXPECT_LT(lazy_stats.evaluations * 2, greedy_stats.evaluations);
+  EXPECT_NE(lazy->rank, exact->rank);
+  // Both simplify nearly all of the grid.
+  EXPECT_GT(lazy->merges, exact->merges * 99 / 100);
+  const double v0 = computeMeshStats(mesh).total_volume;
+  for (int level : {1, 2, 3}) {
+    SCOPED_TRACE("level " + std::to_string(level));
+    auto a = applyMerges(mesh, *lazy, levelMerges(level, mesh.numPoints(), lazy->merges));
+    auto b = applyMerges(mesh, *exact, levelMerges(level, mesh.numPoints(), exact->merges));
+    ASSERT_TRUE(a.isOk() && b.isOk());
+    const MeshStats sa = computeMeshStats(*a), sb = computeMeshStats(*b);
+    EXPECT_EQ(sa.inverted, 0u);
+    EXPECT_LE(std::fabs(sa.total_volume - v0), 2 * std::fabs(sb.total_volume - v0) + 1e-3 * v0);
+  }
+  // Every prefix is a valid mesh, as the greedy order's are.
+  for (uint64_t n : sampleMerges(*lazy, mesh.numPoints())) {
+    auto m = applyMerges(mesh, *lazy, n);
+    ASSERT_TRUE(m.isOk()) << n << " merges: " << m.status().message();
+    EXPECT_TRUE(m->checkConsistency("prefix").isOk()) << n;
+    EXPECT_EQ(computeMeshStats(*m).inverted, 0u) << n;
+  }
+}
+
 TEST(Ranking, TheStarListsStayInTheirRoom) {
   // Each vertex's corner list lives in one pool; a merge writes the target's new list after the used
   // part. The pool holds every corner and a quarter more (4096 at least) and is compacted in place
@@ -415,6 +452,36 @@ TEST(Levels, TheBuilderMakesEachLevelWhenAskedFor) {
   EXPECT_EQ(builder->level(last + 1).status().code(), StatusCode::kUsage);
 }
 
+// A writer that stores level 0 and the coarse levels only skips the levels between: their tetrahedra
+// are known from the tree, the first stored level is made from level 0 in one pass, and the levels
+// from there on are the same meshes and trees as when every level is made.
+TEST(Levels, TheBuilderSkipsTheLevelsAWriterLeavesOut) {
+  const Ranked& g = grid();
+  const LevelOptions lo{-1, 32, true};
+  auto all = buildMipLevels(g.mesh, g.tree, lo);
+  ASSERT_TRUE(all.isOk()) << all.status().message();
+  ASSERT_GE(all->merges.size(), 5u);
+  auto builder = MipLevelBuilder::create(g.mesh, g.tree, lo);
+  ASSERT_TRUE(builder.isOk());
+  EXPECT_EQ(builder->tetsOf(0), g.mesh.numTets());
+  for (size_t i = 1; i < builder->count(); ++i) EXPECT_EQ(builder->tetsOf(i), all->meshes[i].numTets()) << i;
+  builder->skipTo(3);
+  auto three = builder->level(3);
+  ASSERT_TRUE(three.isOk()) << three.status().message();
+  EXPECT_EQ((*three)->tets, all->meshes[3].tets);
+  EXPECT_EQ((*three)->coords, all->meshes[3].coords);
+  ASSERT_TRUE(builder->tree(3));
+  EXPECT_EQ(builder->tree(3)->rank, all->trees[3]->rank);
+  EXPECT_EQ(builder->tree(3)->parent, all->trees[3]->parent);
+  EXPECT_FALSE(builder->tree(2));
+  EXPECT_TRUE(builder->nextIndex(2).empty());
+  EXPECT_EQ(builder->level(2).status().code(), StatusCode::kUsage);
+  auto four = builder->level(4);
+  ASSERT_TRUE(four.isOk());
+  EXPECT_EQ((*four)->tets, all->meshes[4].tets);
+  EXPECT_EQ(builder->nextIndex(3), all->next_index[3]);
+}
+
 // With independent levels, convert makes only the mip levels the storage bound lets the file keep and
 // the first one past it (its encoded bytes decide), and checks the structure of the kept ones only; the
 // file is the one the levels made up front give.
@@ -490,7 +557,7 @@ TEST(Levels, ConvertWritesTheSameBytesForAnyThreadCount) {
   auto encoded = encodePieces(g.mesh, EncodeOptions{}, wo.piece_tets);
   ASSERT_TRUE(encoded.isOk()) << encoded.status().message();
   std::vector<GtnLevelInput> inputs = levels->inputs(g.mesh);
-  inputs[0].encoded = std::make_shared<const PiecedLevel>(std::move(encoded).value());
+  inputs[0].encoded = std::make_shared<PiecedLevel>(std::move(encoded).value());
   ASSERT_TRUE(writeGtnFile(path, inputs, wo).isOk());
   EXPECT_EQ(bytesOf(path), sequential);
   for (const size_t threads : {1, 2}) {
