@@ -1403,11 +1403,13 @@ Status checkGridLayout(const GridLayout& l, const std::string& what) {
   return Status::ok();
 }
 
-std::vector<Tet> gridTets(const GridLayout& l) {
+namespace {
+// Calls emit(tet) for each tetrahedron of the layout, in gridTets's order, until emit returns false;
+// returns whether every call returned true.
+template <class Emit>
+bool forEachGridTet(const GridLayout& l, Emit&& emit) {
   const CellGeometry g(l);
   const std::vector<uint32_t> nv = nodeVertices(l);
-  std::vector<Tet> out;
-  reservePopulated(out, l.tets());
   uint64_t off[8];
   for (int q = 0; q < 8; ++q) off[q] = g.cornerOffset(q);
   const int a2 = l.left_handed ? 3 : 2, a3 = l.left_handed ? 2 : 3;
@@ -1423,13 +1425,32 @@ std::vector<Tet> gridTets(const GridLayout& l) {
         if (x < l.exceptions.size() && l.exceptions[x].cell == cell) {
           const GridException& e = l.exceptions[x++];
           for (int q = 0; q < e.extras; ++q) corner[8 + q] = next_extra++;
-          for (const auto& t : e.tets) out.push_back({corner[t[0]], corner[t[1]], corner[t[2]], corner[t[3]]});
+          for (const auto& t : e.tets)
+            if (!emit(Tet{corner[t[0]], corner[t[1]], corner[t[2]], corner[t[3]]})) return false;
           continue;
         }
         const bool odd = ((i + j + k + l.parity) & 1) != 0;
         for (const auto& t : gridRuleTets(l.split, odd))
-          out.push_back({corner[t[0]], corner[t[1]], corner[t[a2]], corner[t[a3]]});
+          if (!emit(Tet{corner[t[0]], corner[t[1]], corner[t[a2]], corner[t[a3]]})) return false;
       }
+  return true;
+}
+
+// Whether `tets` are the layout's, in its order (compared as they are made: nothing is held).
+bool isGridTets(const GridLayout& l, const std::vector<Tet>& tets) {
+  if (tets.size() != l.tets()) return false;
+  size_t n = 0;
+  return forEachGridTet(l, [&](const Tet& t) { return tets[n++] == t; });
+}
+}  // namespace
+
+std::vector<Tet> gridTets(const GridLayout& l) {
+  std::vector<Tet> out;
+  reservePopulated(out, l.tets());
+  forEachGridTet(l, [&](const Tet& t) {
+    out.push_back(t);
+    return true;
+  });
   return out;
 }
 
@@ -1575,7 +1596,7 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
   if (mesh.numPoints() != V)
     return usageError("structured piece: the mesh has " + std::to_string(mesh.numPoints()) + " points, the layout " +
                       std::to_string(V));
-  if (mesh.tets != gridTets(layout)) return usageError("structured piece: the mesh's tetrahedra are not the layout's");
+  if (!isGridTets(layout, mesh.tets)) return usageError("structured piece: the mesh's tetrahedra are not the layout's");
   if (mesh.coord_type != ScalarType::kFloat32 && mesh.coord_type != ScalarType::kFloat64)
     return usageError("structured piece: coordinates must be float32 or float64");
   for (const Field& f : mesh.point_fields)

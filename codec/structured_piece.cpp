@@ -259,13 +259,17 @@ StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const Structur
   }
   // The boundary from the grid, which the decoder computes so: it must be what the generic face
   // adjacency finds (it is, for a mesh with no face in three tetrahedra).
-  const FaceAdjacency adj = computeFaceAdjacency(mesh);
-  if (adj.non_manifold_faces > 0)
-    return unsupported(what + ": " + std::to_string(adj.non_manifold_faces) +
-                       " faces are shared by three or more tetrahedra (non-manifold)");
+  // (The adjacency, 16 bytes a tetrahedron, is gone before the piece is coded.)
+  std::vector<Triangle> generic;
+  {
+    const FaceAdjacency adj = computeFaceAdjacency(mesh);
+    if (adj.non_manifold_faces > 0)
+      return unsupported(what + ": " + std::to_string(adj.non_manifold_faces) +
+                         " faces are shared by three or more tetrahedra (non-manifold)");
+    generic = boundaryTriangles(mesh, adj);
+  }
   GTN_ASSIGN_OR_RETURN(auto boundary, gridBoundary(layout, what));
   {
-    std::vector<Triangle> generic = boundaryTriangles(mesh, adj);
     auto canonical = [](std::vector<Triangle>& v) {
       for (Triangle& t : v) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
       std::sort(v.begin(), v.end());
@@ -276,6 +280,7 @@ StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const Structur
     if (generic != mine)
       return unsupported(what + ": the block's boundary (" + std::to_string(mine.size()) +
                          " triangles) is not the mesh's (" + std::to_string(generic.size()) + ")");
+    generic = {};
   }
   auto piece = encodeGridPiece(layout, mesh, options, report);
   if (!piece.isOk()) return unsupported(piece.status().message());
