@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -238,13 +239,51 @@ constexpr size_t kMinStarSlack = 4096;
 // Below this many vertices to evaluate, the evaluations run on the calling thread.
 constexpr size_t kParallelEvaluations = 8;
 
+// One queue of candidates and the pool of star lists it works on: the whole mesh's, or, while the
+// ranking runs in parts (RankingOptions::parts), one part's, whose merges touch no other part.
+struct Lane {
+  explicit Lane(size_t points) : heap(points) {}
+  CandidateHeap heap;
+  // The corners (4 * tet + local index) of the vertices whose lists this pool holds: a vertex's list
+  // is a contiguous run, so that gathering a star reads independent words instead of chasing a
+  // linked list. Corners of collapsed tetrahedra are dropped lazily, by gatherStar (each evaluation
+  // rewrites only its own vertex's run). A merge writes the target's new list after the used part of
+  // the pool (the source's corners, then its own: the order every sum over a star follows). The pool
+  // keeps room for a quarter more than its corners, and when a new list does not fit, the runs are
+  // moved down over the abandoned ones, in place, in the order they lie (compactStars).
+  std::vector<uint32_t> pool;
+  uint64_t used = 0;  // pool[0, used) holds the runs, live and abandoned
+  uint64_t peak = 0, compactions = 0;
+  std::vector<uint32_t> members;   // the vertices whose runs the pool holds, ascending; empty: every vertex
+  bool restricted = false;         // merges only between vertices with no neighbour in another part
+  bool parallel = true;            // a merge's vertices are evaluated in parallel
+  uint64_t limit = UINT64_MAX;     // stop after this many merges
+  std::vector<uint32_t> sequence;  // the vertices merged away, in order
+  uint64_t popped = 0, rejected = 0, stale = 0;
+  Workspace* ws = nullptr;        // the thread's that runs the lane
+  std::vector<Candidate> best;    // recompute's results, per listed vertex
+  std::vector<Candidate> sorted;  // a rejected vertex's candidates
+  // Scratch buffers of validate and merge.
+  std::vector<uint32_t> corners, corners_w, recompute, now;
+  std::vector<BoundaryFace> faces, faces_w;
+  std::vector<Tri> tris_a, tris_b;
+  std::vector<Edge> edges_a, edges_b;
+  std::vector<uint32_t> verts_a, verts_b, lk_verts;
+};
+
+// The share of a part's vertices (those with no neighbour in another part) its first phase merges.
+constexpr double kPartShare = 0.5;
+// RankingOptions::parts = 0 ranks in kAutoParts parts from kAutoPartTets tetrahedra on.
+constexpr uint32_t kAutoParts = 8;
+constexpr size_t kAutoPartTets = size_t{1} << 20;
+constexpr uint32_t kMaxParts = 256;  // part_ is a byte
+
 class Ranker {
  public:
   Ranker(const TetMesh& mesh, std::vector<double> density, const RankingOptions& options)
       : mesh_(mesh),
         density_(std::move(density)),
         options_(options),
-        heap_(mesh.numPoints()),
         thread_ws_([points = mesh.numPoints()] { return Workspace(points); }) {}
 
   MergeTree run(RankingStats* stats, const ProgressFn& progress);
@@ -257,17 +296,26 @@ class Ranker {
     return p[0] == q[0] && p[1] == q[1] && p[2] == q[2];
   }
   void init();
-  void gatherStar(uint32_t v, std::vector<uint32_t>& corners);
+  // Parts of about equal numbers of vertices, by recursive bisection of their positions along the
+  // longest side: part_ and seam_.
+  void partition(uint32_t parts);
+  // Fills a lane's pool with its members' lists (every vertex's when it has none) from `from`
+  // (nullptr: from the tetrahedra).
+  void buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from);
+  // Evaluates the lane's vertices and merges until its queue is empty or its limit is reached.
+  void runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress);
+  void gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners);
   void gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
                            Workspace& ws) const;
-  void candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws);
-  bool validate(uint32_t v, uint32_t w);
+  void candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Workspace& ws);
+  bool validate(Lane& L, uint32_t v, uint32_t w);
   void linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces,
               std::vector<Tri>& tris, std::vector<Edge>& edges, std::vector<uint32_t>& verts);
-  void merge(uint32_t v, uint32_t w, float error);
+  void merge(Lane& L, uint32_t v, uint32_t w, float error);
   // Evaluates the vertices of `list` again (distinct) and queues each one's best target.
-  void recompute(const std::vector<uint32_t>& list);
-  void push(uint32_t v, const Candidate& c) { heap_.set(QueueEntry{static_cast<float>(c.error), v, c.w}); }
+  void recompute(Lane& L, const std::vector<uint32_t>& list);
+  void push(Lane& L, uint32_t v, const Candidate& c) { L.heap.set(QueueEntry{static_cast<float>(c.error), v, c.w}); }
+  void compactStars(Lane& L);
 
   const TetMesh& mesh_;
   std::vector<double> density_;
@@ -275,39 +323,21 @@ class Ranker {
   double mass_scale_ = 1, area_scale_ = 1;
 
   std::vector<Tet> tets_;
-  // Each vertex's corners (4 * tet + local index), in one pool: a vertex's list is a contiguous run,
-  // so that gathering a star reads independent words instead of chasing a linked list. Corners of
-  // collapsed tetrahedra are dropped lazily, by gatherStar (each evaluation rewrites only its own
-  // vertex's run). A merge writes the target's new list after the used part of the pool (the
-  // source's corners, then its own: the order every sum over a star follows). The pool never grows:
-  // it holds every corner and a quarter more, and when a new list does not fit, the runs are moved
-  // down over the abandoned ones, in place, in the order they lie (compactStars).
-  std::vector<uint32_t> star_pool_;
-  uint64_t star_used_ = 0;  // star_pool_[0, star_used_) holds the runs, live and abandoned
-  uint64_t star_pool_peak_ = 0, star_compactions_ = 0;
+  // Per vertex: where its list of corners begins in its lane's pool, and its length.
   std::vector<uint64_t> star_begin_;
   std::vector<uint32_t> star_len_;
-  void compactStars();
   std::vector<uint8_t> boundary_, frozen_, alive_;
   // Lazy evaluation (RankingOptions::lazy): per vertex, whether its queued candidate was computed
   // before a merge changed its star, and is recomputed when it comes to the top.
   std::vector<uint8_t> stale_;
-  std::vector<uint32_t> now_;        // merge's vertices evaluated at once
   std::vector<uint8_t> pinned_;      // never merged away (may be merged onto): next to a face oriented alike twice
   std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
   bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
-  CandidateHeap heap_;
+  // Ranking in parts: each vertex's part, and whether it shares a tetrahedron with another part's.
+  std::vector<uint8_t> part_, seam_;
   MergeTree tree_;
 
   tbb::enumerable_thread_specific<Workspace> thread_ws_;
-  Workspace* ws_ = nullptr;      // the calling thread's (also its own in the parallel evaluations)
-  std::vector<Candidate> best_;  // recompute's results, per listed vertex
-  // Scratch buffers of validate and merge.
-  std::vector<uint32_t> corners_, corners_w_, recompute_;
-  std::vector<BoundaryFace> faces_, faces_w_;
-  std::vector<Tri> tris_a_, tris_b_;
-  std::vector<Edge> edges_a_, edges_b_;
-  std::vector<uint32_t> verts_a_, verts_b_, lk_verts_;
 };
 
 void Ranker::init() {
@@ -350,18 +380,8 @@ void Ranker::init() {
   star_size_.assign(np, 0);
   for (const Tet& q : tets_)
     for (uint32_t v : q) ++star_size_[v];
-  // Every vertex's corners in ascending order.
   star_begin_.assign(np, 0);
   star_len_.assign(np, 0);
-  for (size_t v = 1; v < np; ++v) star_begin_[v] = star_begin_[v - 1] + star_size_[v - 1];
-  star_used_ = 4 * nt;
-  star_pool_.assign(star_used_ + std::max<size_t>(nt, kMinStarSlack), 0);
-  star_pool_peak_ = star_pool_.size();
-  for (size_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 4; ++k) {
-      const uint32_t v = tets_[t][k];
-      star_pool_[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
-    }
   double mass = 0, volume = 0;
   for (size_t t = 0; t < nt; ++t) {
     const Tet& q = tets_[t];
@@ -378,8 +398,148 @@ void Ranker::init() {
   tree_.error.assign(np, 0.0f);
 }
 
-void Ranker::gatherStar(uint32_t v, std::vector<uint32_t>& corners) {
-  uint32_t* run = star_pool_.data() + star_begin_[v];
+void Ranker::partition(uint32_t parts) {
+  const size_t np = mesh_.numPoints();
+  part_.assign(np, 0);
+  seam_.assign(np, 0);
+  std::vector<uint32_t> ids(np);
+  for (uint32_t v = 0; v < np; ++v) ids[v] = v;
+  // Splits ids[lo, hi) into k parts numbered from `first`: the longer share of the bounding box's
+  // longest side first, at the vertex whose place matches the parts' shares (ties by index).
+  auto split = [&](auto&& self, size_t lo, size_t hi, uint32_t k, uint32_t first) -> void {
+    if (k <= 1 || hi - lo < 2) {
+      for (size_t i = lo; i < hi; ++i) part_[ids[i]] = static_cast<uint8_t>(first);
+      return;
+    }
+    double mn[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, mx[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (size_t i = lo; i < hi; ++i)
+      for (int a = 0; a < 3; ++a) {
+        mn[a] = std::min(mn[a], pos(ids[i])[a]);
+        mx[a] = std::max(mx[a], pos(ids[i])[a]);
+      }
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (mx[a] - mn[a] > mx[axis] - mn[axis]) axis = a;
+    const uint32_t k0 = k / 2;
+    const size_t mid = lo + (hi - lo) * k0 / k;
+    std::nth_element(ids.begin() + lo, ids.begin() + mid, ids.begin() + hi, [&](uint32_t x, uint32_t y) {
+      const double px = pos(x)[axis], py = pos(y)[axis];
+      return px < py || (px == py && x < y);  // NaN coordinates compare by index alone
+    });
+    self(self, lo, mid, k0, first);
+    self(self, mid, hi, k - k0, first + k0);
+  };
+  split(split, 0, np, parts, 0);
+  for (const Tet& q : tets_) {
+    const uint8_t p = part_[q[0]];
+    if (part_[q[1]] != p || part_[q[2]] != p || part_[q[3]] != p)
+      for (uint32_t v : q) seam_[v] = 1;
+  }
+}
+
+void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from) {
+  const size_t np = mesh_.numPoints();
+  std::vector<uint64_t> src_begin;
+  if (from) {
+    // From the parts' pools (every vertex's list, into one pool): the live corners only.
+    src_begin = star_begin_;
+    for (uint32_t v = 0; v < np; ++v) {
+      Lane& src = *(*from)[part_[v]];
+      uint32_t* run = src.pool.data() + src_begin[v];
+      uint32_t m = 0;
+      for (uint32_t i = 0; i < star_len_[v]; ++i) {
+        run[m] = run[i];
+        m += tets_[run[i] >> 2][0] != kDead;
+      }
+      star_len_[v] = m;
+    }
+  }
+  // Each listed vertex's run at its place in the pool, in vertex order.
+  uint64_t total = 0;
+  auto place = [&](uint32_t v) {
+    star_begin_[v] = total;
+    total += from ? star_len_[v] : star_size_[v];
+  };
+  if (L.members.empty()) {
+    for (uint32_t v = 0; v < np; ++v) place(v);
+  } else {
+    for (uint32_t v : L.members) place(v);
+  }
+  L.pool.assign(total + std::max<uint64_t>(total / 4, kMinStarSlack), 0);
+  L.peak = L.pool.size();
+  L.used = total;
+  if (from) {
+    for (uint32_t v = 0; v < np; ++v) {
+      const Lane& src = *(*from)[part_[v]];
+      std::copy_n(src.pool.data() + src_begin[v], star_len_[v], L.pool.data() + star_begin_[v]);
+    }
+    return;
+  }
+  // From the tetrahedra: every listed vertex's corners in ascending order.
+  std::vector<uint8_t> mine;
+  if (!L.members.empty()) {
+    mine.assign(np, 0);
+    for (uint32_t v : L.members) mine[v] = 1;
+  }
+  for (uint32_t v = 0; v < np; ++v)
+    if (mine.empty() || mine[v]) star_len_[v] = 0;
+  for (size_t t = 0; t < tets_.size(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t v = tets_[t][k];
+      if (mine.empty() || mine[v]) L.pool[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
+    }
+}
+
+void Ranker::runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress) {
+  L.ws = &thread_ws_.local();
+  {
+    std::vector<uint32_t> all;
+    if (L.members.empty()) {
+      all.reserve(mesh_.numPoints());
+      for (uint32_t v = 0; v < mesh_.numPoints(); ++v)
+        if (alive_[v]) all.push_back(v);
+    } else {
+      all = L.members;
+    }
+    recompute(L, all);
+  }
+  const uint64_t np = mesh_.numPoints();
+  while (!L.heap.empty() && merged_before + L.sequence.size() < options_.max_merges && L.sequence.size() < L.limit) {
+    const QueueEntry e = L.heap.top();
+    L.heap.pop();
+    ++L.popped;
+    if (options_.lazy && stale_[e.v]) {
+      // Computed before its star changed: computed again, and queued by its new error.
+      stale_[e.v] = 0;
+      L.now.assign(1, e.v);
+      recompute(L, L.now);
+      ++L.stale;
+      continue;
+    }
+    if (validate(L, e.v, e.w)) {
+      merge(L, e.v, e.w, e.error);
+      const uint64_t merged = merged_before + L.sequence.size();
+      if (progress && merged % 16384 == 0)
+        reportProgress(*progress, "rank merges", static_cast<double>(merged) / static_cast<double>(np));
+      continue;
+    }
+    ++L.rejected;
+    // The cheap filter let an invalid target through: take the best target that passes every check.
+    candidates(L, e.v, L.sorted, *L.ws);
+    std::sort(L.sorted.begin(), L.sorted.end(), [](const Candidate& a, const Candidate& b) {
+      return a.error < b.error || (a.error == b.error && a.w < b.w);
+    });
+    for (const Candidate& c : L.sorted) {
+      if (validate(L, e.v, c.w)) {
+        push(L, e.v, c);
+        break;
+      }
+    }
+  }
+}
+
+void Ranker::gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners) {
+  uint32_t* run = L.pool.data() + star_begin_[v];
   const uint32_t n = star_len_[v];
   uint32_t m = 0;
   for (uint32_t i = 0; i < n; ++i) {
@@ -391,14 +551,19 @@ void Ranker::gatherStar(uint32_t v, std::vector<uint32_t>& corners) {
   corners.assign(run, run + m);
 }
 
-void Ranker::compactStars() {
+void Ranker::compactStars(Lane& L) {
   // The runs in the order they lie; each moves down (never up: the runs before it are at most as
   // long as the space they took), without the corners of collapsed tetrahedra, as gatherStar would.
   std::vector<std::pair<uint64_t, uint32_t>> runs;
-  for (uint32_t v = 0; v < star_len_.size(); ++v)
-    if (star_len_[v] > 0) runs.emplace_back(star_begin_[v], v);
+  if (L.members.empty()) {
+    for (uint32_t v = 0; v < star_len_.size(); ++v)
+      if (star_len_[v] > 0) runs.emplace_back(star_begin_[v], v);
+  } else {
+    for (uint32_t v : L.members)
+      if (star_len_[v] > 0) runs.emplace_back(star_begin_[v], v);
+  }
   std::sort(runs.begin(), runs.end());
-  uint32_t* pool = star_pool_.data();
+  uint32_t* pool = L.pool.data();
   uint64_t used = 0;
   for (const auto& [begin, v] : runs) {
     const uint32_t n = star_len_[v];
@@ -412,8 +577,8 @@ void Ranker::compactStars() {
     star_len_[v] = m;
     used += m;
   }
-  star_used_ = used;
-  ++star_compactions_;
+  L.used = used;
+  ++L.compactions;
 }
 
 void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
@@ -458,10 +623,10 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
   }
 }
 
-void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) {
+void Ranker::candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Workspace& ws) {
   out.clear();
-  if (!alive_[v] || frozen_[v] || pinned_[v] || crowded(v)) return;
-  gatherStar(v, ws.corners);
+  if (!alive_[v] || frozen_[v] || pinned_[v] || crowded(v) || (L.restricted && seam_[v])) return;
+  gatherStar(L, v, ws.corners);
   if (ws.corners.empty()) return;
   const double* pv = pos(v);
   const double rho_v = density_[v];
@@ -515,7 +680,7 @@ void Ranker::candidates(uint32_t v, std::vector<Candidate>& out, Workspace& ws) 
   double* vol_w = ws.vol_w.data();
   for (size_t j = 0; j < num_targets; ++j) {
     const uint32_t w = ws.targets[j];
-    if (frozen_[w] || crowded(w)) continue;
+    if (frozen_[w] || crowded(w) || (L.restricted && seam_[w])) continue;
     ++ws.evaluations;
     const bool same = samePosition(v, w);
     const double* pw = pos(w);
@@ -604,25 +769,26 @@ void Ranker::linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std:
   sortUnique(verts);
 }
 
-bool Ranker::validate(uint32_t v, uint32_t w) {
+bool Ranker::validate(Lane& L, uint32_t v, uint32_t w) {
   if (v == w || !alive_[v] || !alive_[w] || frozen_[v] || frozen_[w] || pinned_[v] || crowded(v) || crowded(w))
     return false;
   if (boundary_[v] && !boundary_[w]) return false;
-  gatherStar(v, corners_);
-  gatherStar(w, corners_w_);
-  gatherBoundaryFaces(v, corners_, faces_, *ws_);
-  gatherBoundaryFaces(w, corners_w_, faces_w_, *ws_);
+  if (L.restricted && (seam_[v] || seam_[w])) return false;
+  gatherStar(L, v, L.corners);
+  gatherStar(L, w, L.corners_w);
+  gatherBoundaryFaces(v, L.corners, L.faces, *L.ws);
+  gatherBoundaryFaces(w, L.corners_w, L.faces_w, *L.ws);
   // Tetrahedra around the edge vw and the vertices of Lk(vw).
   size_t edge_tets = 0;
-  lk_verts_.clear();
+  L.lk_verts.clear();
   const bool same = samePosition(v, w);
-  for (uint32_t c : corners_) {
+  for (uint32_t c : L.corners) {
     const Tet& q = tets_[c >> 2];
     const int k = c & 3;
     if (q[0] == w || q[1] == w || q[2] == w || q[3] == w) {
       ++edge_tets;
       for (uint32_t x : q) {
-        if (x != v && x != w) lk_verts_.push_back(x);
+        if (x != v && x != w) L.lk_verts.push_back(x);
       }
       continue;
     }
@@ -634,7 +800,7 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
   }
   if (edge_tets == 0) return false;
   size_t edge_faces = 0;
-  for (const BoundaryFace& f : faces_) {
+  for (const BoundaryFace& f : L.faces) {
     if (f.x == w || f.y == w) {
       ++edge_faces;
       continue;
@@ -653,7 +819,7 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
   // is on the boundary, the tetrahedron across the other one inherits the boundary triangle: the
   // streamed triangle keeps T's orientation, the mesh's takes the neighbour's. They agree when both
   // are positively oriented (a flat tetrahedron's orientation is arbitrary), so require that.
-  for (uint32_t c : corners_) {
+  for (uint32_t c : L.corners) {
     const uint32_t t = c >> 2;
     const Tet& q = tets_[t];
     if (q[0] != w && q[1] != w && q[2] != w && q[3] != w) continue;
@@ -675,7 +841,7 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
       }
       return kNoIndex;
     };
-    const uint32_t nv = across(corners_), nw = across(corners_w_);
+    const uint32_t nv = across(L.corners), nw = across(L.corners_w);
     if (nv != kNoIndex && nw != kNoIndex) continue;
     if (orient3d(pos(q[0]), pos(q[1]), pos(q[2]), pos(q[3])) <= 0) return false;
     const uint32_t n = nv != kNoIndex ? nv : nw;
@@ -685,26 +851,26 @@ bool Ranker::validate(uint32_t v, uint32_t w) {
     }
   }
   // Link condition: Lk(v) ∩ Lk(w) = Lk(vw), counted per dimension (Lk(vw) is always contained).
-  sortUnique(lk_verts_);
-  const size_t lk_v = lk_verts_.size() + (edge_faces > 0 ? 1 : 0);
+  sortUnique(L.lk_verts);
+  const size_t lk_v = L.lk_verts.size() + (edge_faces > 0 ? 1 : 0);
   const size_t lk_e = edge_tets + edge_faces;
-  linkOf(v, corners_, faces_, tris_a_, edges_a_, verts_a_);
-  linkOf(w, corners_w_, faces_w_, tris_b_, edges_b_, verts_b_);
-  if (countCommon(tris_a_, tris_b_) != 0) return false;
-  if (countCommon(edges_a_, edges_b_) != lk_e) return false;
-  if (countCommon(verts_a_, verts_b_) != lk_v) return false;
+  linkOf(v, L.corners, L.faces, L.tris_a, L.edges_a, L.verts_a);
+  linkOf(w, L.corners_w, L.faces_w, L.tris_b, L.edges_b, L.verts_b);
+  if (countCommon(L.tris_a, L.tris_b) != 0) return false;
+  if (countCommon(L.edges_a, L.edges_b) != lk_e) return false;
+  if (countCommon(L.verts_a, L.verts_b) != lk_v) return false;
   return true;
 }
 
-void Ranker::merge(uint32_t v, uint32_t w, float error) {
-  gatherStar(v, corners_);
-  recompute_.clear();
-  recompute_.push_back(w);
+void Ranker::merge(Lane& L, uint32_t v, uint32_t w, float error) {
+  gatherStar(L, v, L.corners);
+  L.recompute.clear();
+  L.recompute.push_back(w);
   uint32_t removed = 0;
-  for (uint32_t c : corners_) {
+  for (uint32_t c : L.corners) {
     Tet& q = tets_[c >> 2];
     for (uint32_t x : q) {
-      if (x != v) recompute_.push_back(x);
+      if (x != v) L.recompute.push_back(x);
     }
     if (q[0] == w || q[1] == w || q[2] == w || q[3] == w) {
       for (uint32_t x : q) --star_size_[x];
@@ -718,58 +884,58 @@ void Ranker::merge(uint32_t v, uint32_t w, float error) {
   // w's list becomes v's corners, then its own (the killed ones are dropped when next gathered).
   {
     star_len_[v] = 0;
-    if (star_pool_.size() - star_used_ < corners_.size() + star_len_[w]) compactStars();
+    if (L.pool.size() - L.used < L.corners.size() + star_len_[w]) compactStars(L);
     const uint32_t nw = star_len_[w];
     // After compaction the runs hold at most every corner, and a list at most two crowded stars.
-    if (star_pool_.size() - star_used_ < corners_.size() + nw) {
-      star_pool_.resize(star_used_ + corners_.size() + nw);
-      star_pool_peak_ = std::max<uint64_t>(star_pool_peak_, star_pool_.size());
+    if (L.pool.size() - L.used < L.corners.size() + nw) {
+      L.pool.resize(L.used + L.corners.size() + nw);
+      L.peak = std::max<uint64_t>(L.peak, L.pool.size());
     }
-    const uint64_t b = star_used_;
-    uint32_t* pool = star_pool_.data();
-    std::copy(corners_.begin(), corners_.end(), pool + b);
-    std::copy_n(pool + star_begin_[w], nw, pool + b + corners_.size());
+    const uint64_t b = L.used;
+    uint32_t* pool = L.pool.data();
+    std::copy(L.corners.begin(), L.corners.end(), pool + b);
+    std::copy_n(pool + star_begin_[w], nw, pool + b + L.corners.size());
     star_begin_[w] = b;
-    star_len_[w] = static_cast<uint32_t>(corners_.size()) + nw;
-    star_used_ = b + corners_.size() + nw;
+    star_len_[w] = static_cast<uint32_t>(L.corners.size()) + nw;
+    L.used = b + L.corners.size() + nw;
   }
   alive_[v] = 0;
-  heap_.erase(v);
+  L.heap.erase(v);
   tree_.parent[v] = w;
-  tree_.rank[v] = static_cast<uint32_t>(++tree_.merges);
+  L.sequence.push_back(v);
   tree_.removed[v] = removed;
   tree_.boundary[v] = boundary_[v];
   tree_.error[v] = error;
-  ws_->uniqueByMark(recompute_);
+  L.ws->uniqueByMark(L.recompute);
   if (!options_.lazy) {
-    recompute(recompute_);
+    recompute(L, L.recompute);
     return;
   }
   // w, whose star is now v's and its own, is evaluated at once, and so is a vertex with no queued
   // candidate (nothing would bring it back); the others are only marked stale.
-  now_.clear();
-  for (uint32_t u : recompute_) {
-    const bool at_once = u == w || !heap_.has(u);
+  L.now.clear();
+  for (uint32_t u : L.recompute) {
+    const bool at_once = u == w || !L.heap.has(u);
     stale_[u] = !at_once;
-    if (at_once) now_.push_back(u);
+    if (at_once) L.now.push_back(u);
   }
-  recompute(now_);
+  recompute(L, L.now);
 }
 
-void Ranker::recompute(const std::vector<uint32_t>& list) {
+void Ranker::recompute(Lane& L, const std::vector<uint32_t>& list) {
   // The evaluations read the mesh and each rewrites only its own vertex's star run, so they run in
   // parallel; the results are queued afterwards in the list's order, as one thread would.
   const size_t n = list.size();
-  best_.resize(n);
+  L.best.resize(n);
   auto evaluate = [&](size_t i, Workspace& ws) {
-    candidates(list[i], ws.cands, ws);
+    candidates(L, list[i], ws.cands, ws);
     Candidate best{0, kNoIndex};
     for (const Candidate& c : ws.cands)
       if (best.w == kNoIndex || c.error < best.error || (c.error == best.error && c.w < best.w)) best = c;
-    best_[i] = best;
+    L.best[i] = best;
   };
-  if (n < kParallelEvaluations) {
-    for (size_t i = 0; i < n; ++i) evaluate(i, *ws_);
+  if (!L.parallel || n < kParallelEvaluations) {
+    for (size_t i = 0; i < n; ++i) evaluate(i, *L.ws);
   } else {
     // Isolated: while it waits for its share, this thread takes no task from outside the ranking (a
     // level being encoded beside it, say), which would hold up every merge after this one.
@@ -781,61 +947,100 @@ void Ranker::recompute(const std::vector<uint32_t>& list) {
     });
   }
   for (size_t i = 0; i < n; ++i) {
-    if (best_[i].w != kNoIndex) push(list[i], best_[i]);
-    else heap_.erase(list[i]);
+    if (L.best[i].w != kNoIndex) push(L, list[i], L.best[i]);
+    else L.heap.erase(list[i]);
   }
 }
 
 MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   init();
-  stale_.assign(options_.lazy ? mesh_.numPoints() : 0, 0);
-  ws_ = &thread_ws_.local();
-  const uint32_t np = static_cast<uint32_t>(mesh_.numPoints());
-  {
-    std::vector<uint32_t> all(np);
-    for (uint32_t v = 0; v < np; ++v) all[v] = v;
-    recompute(all);
-  }
-  uint64_t popped = 0, rejected = 0, restaled = 0;
-  std::vector<Candidate> sorted;
-  while (!heap_.empty() && tree_.merges < options_.max_merges) {
-    const QueueEntry e = heap_.top();
-    heap_.pop();
-    ++popped;
-    if (options_.lazy && stale_[e.v]) {
-      // Computed before its star changed: computed again, and queued by its new error.
-      stale_[e.v] = 0;
-      now_.assign(1, e.v);
-      recompute(now_);
-      ++restaled;
-      continue;
+  const size_t np = mesh_.numPoints();
+  stale_.assign(options_.lazy ? np : 0, 0);
+  const uint32_t parts = std::min<uint32_t>(
+      options_.parts != 0 ? options_.parts : (mesh_.numTets() >= kAutoPartTets ? kAutoParts : 1), kMaxParts);
+  // In parts: each part merges its share of the vertices that have no neighbour in another part,
+  // which touches nothing another part reads or writes, so the parts run in parallel; their merges
+  // are then interleaved by error (each part's in its own order), and the whole mesh's queue goes on
+  // from there with every vertex, the seams between the parts included.
+  std::vector<uint32_t> order;
+  uint64_t popped = 0, rejected = 0, restaled = 0, pool_peak = 0, compactions = 0, part_merges = 0;
+  if (parts > 1) {
+    partition(parts);
+    std::vector<std::unique_ptr<Lane>> lanes;
+    for (uint32_t p = 0; p < parts; ++p) {
+      lanes.push_back(std::make_unique<Lane>(np));
+      lanes.back()->restricted = true;
+      lanes.back()->parallel = false;
     }
-    if (validate(e.v, e.w)) {
-      merge(e.v, e.w, e.error);
-      if (tree_.merges % 16384 == 0) reportProgress(progress, "rank merges", static_cast<double>(tree_.merges) / np);
-      continue;
+    for (uint32_t v = 0; v < np; ++v) lanes[part_[v]]->members.push_back(v);
+    for (auto& L : lanes) {
+      uint64_t free = 0;
+      for (uint32_t v : L->members) free += !seam_[v];
+      L->limit = static_cast<uint64_t>(kPartShare * static_cast<double>(free));
+      buildPool(*L, nullptr);
     }
-    ++rejected;
-    // The cheap filter let an invalid target through: take the best target that passes every check.
-    candidates(e.v, sorted, *ws_);
-    std::sort(sorted.begin(), sorted.end(), [](const Candidate& a, const Candidate& b) {
-      return a.error < b.error || (a.error == b.error && a.w < b.w);
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, parts, 1), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t p = r.begin(); p < r.end(); ++p) runLane(*lanes[p], 0, nullptr);
+      });
     });
-    for (const Candidate& c : sorted) {
-      if (validate(e.v, c.w)) {
-        push(e.v, c);
-        break;
+    // The parts' merges by error, each part's in its order (ties: the lower part first).
+    std::vector<size_t> next(parts, 0);
+    for (;;) {
+      int best = -1;
+      for (uint32_t p = 0; p < parts; ++p) {
+        if (next[p] == lanes[p]->sequence.size()) continue;
+        const float e = tree_.error[lanes[p]->sequence[next[p]]];
+        if (best < 0 || e < tree_.error[lanes[best]->sequence[next[best]]]) best = static_cast<int>(p);
       }
+      if (best < 0) break;
+      order.push_back(lanes[best]->sequence[next[best]++]);
     }
+    for (const auto& L : lanes) {
+      popped += L->popped;
+      rejected += L->rejected;
+      restaled += L->stale;
+      pool_peak += L->peak;
+      compactions += L->compactions;
+    }
+    std::fill(stale_.begin(), stale_.end(), 0);
+    Lane whole(np);
+    buildPool(whole, &lanes);
+    lanes.clear();
+    part_ = {};
+    seam_ = {};
+    reportProgress(progress, "rank merges", static_cast<double>(order.size()) / static_cast<double>(np));
+    part_merges = order.size();
+    runLane(whole, order.size(), &progress);
+    order.insert(order.end(), whole.sequence.begin(), whole.sequence.end());
+    popped += whole.popped;
+    rejected += whole.rejected;
+    restaled += whole.stale;
+    pool_peak = std::max(pool_peak, whole.peak);
+    compactions += whole.compactions;
+  } else {
+    Lane whole(np);
+    buildPool(whole, nullptr);
+    runLane(whole, 0, &progress);
+    order = std::move(whole.sequence);
+    popped = whole.popped;
+    rejected = whole.rejected;
+    restaled = whole.stale;
+    pool_peak = whole.peak;
+    compactions = whole.compactions;
   }
+  for (size_t i = 0; i < order.size(); ++i) tree_.rank[order[i]] = static_cast<uint32_t>(i + 1);
+  tree_.merges = order.size();
   if (stats) {
     stats->popped = popped;
-    stats->stale = restaled;
     stats->rejected = rejected;
+    stats->stale = restaled;
     stats->evaluations = 0;
     for (const Workspace& ws : thread_ws_) stats->evaluations += ws.evaluations;
-    stats->star_pool_corners = star_pool_peak_;
-    stats->star_compactions = star_compactions_;
+    stats->star_pool_corners = pool_peak;
+    stats->star_compactions = compactions;
+    stats->parts = parts;
+    stats->part_merges = part_merges;
   }
   return std::move(tree_);
 }

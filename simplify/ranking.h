@@ -58,6 +58,15 @@
 // is applied. After a merge v -> w, w's candidate is recomputed; v's former neighbours' candidates are
 // recomputed too (greedy), or by default only marked stale (lazy): a stale candidate that comes to the
 // top of the queue is recomputed and queued again by its new error, and only a fresh one is applied.
+// In parts (RankingOptions::parts; large meshes by default): the vertices are first split into parts
+// of about equal counts by recursive bisection of their positions, and each part, on its own thread,
+// ranks merges between its vertices that share no tetrahedron with another part's (the seams), with
+// its own queue, until it has merged half of them. Such merges touch no tetrahedron another part
+// reads, so the parts' merges commute: they are interleaved by error, each part's in its own order,
+// and every prefix is still a valid mesh. The whole mesh's queue then goes on with every vertex left,
+// the seams included, which releases them: the coarse levels are not frozen along the parts' seams.
+// The tree depends on the number of parts, never on the number of threads.
+//
 // Lazy evaluation computes about a third of the candidates (a merge changes the stars of some eight
 // vertices, and most are merged or changed again before they come to the top), and a vertex whose
 // error a nearby merge lowered waits until its old error comes up: the order differs from the greedy
@@ -83,6 +92,9 @@ struct RankingOptions {
   // Recompute the candidates a merge makes stale when they come to the top of the queue (lazy, the
   // default) rather than after every merge (greedy); see above.
   bool lazy = true;
+  // Rank in this many parts first (see above), 1 = not in parts; 0 = automatic: 8 parts for meshes of
+  // 2^20 tetrahedra or more, else 1. The tree depends on it (not on the threads).
+  uint32_t parts = 0;
 };
 
 struct RankingStats {
@@ -91,6 +103,8 @@ struct RankingStats {
   uint64_t popped = 0;                       // queue entries examined
   uint64_t rejected = 0;                     // popped candidates that failed the exact checks
   uint64_t stale = 0;                        // popped candidates recomputed because they were stale (lazy)
+  uint32_t parts = 1;                        // parts ranked first (RankingOptions::parts)
+  uint64_t part_merges = 0;                  // merges made in the parts, before the whole mesh's queue
   uint64_t evaluations = 0;                  // candidate errors computed
   uint64_t star_pool_corners = 0;            // the room the stars' corner lists took, at most (4 bytes each)
   uint64_t star_compactions = 0;             // times the corner lists were moved down over abandoned ones

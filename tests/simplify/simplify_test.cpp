@@ -169,6 +169,55 @@ TEST(Ranking, LazyEvaluationComputesFewerCandidatesAndKeepsTheShape) {
   }
 }
 
+// Ranked in parts, then as a whole: the parts' merges come first, interleaved by error; every prefix
+// is a valid mesh; the tree is the same for any thread count; the seams are released afterwards, so
+// the coarse levels keep the shape as the ranking of the whole mesh does. Small meshes are ranked
+// whole by default.
+TEST(Ranking, InPartsThePrefixesAreValidAndTheThreadsChangeNothing) {
+  const TetMesh mesh = makeGrid(14, 13, 12);
+  RankingOptions in_parts;
+  in_parts.parts = 4;
+  std::vector<MergeTree> trees;
+  RankingStats stats;
+  for (const size_t threads : {1, 2, 3}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    auto t = rankMerges(mesh, in_parts, &stats);
+    ASSERT_TRUE(t.isOk()) << t.status().message();
+    trees.push_back(std::move(t).value());
+  }
+  for (size_t i = 1; i < trees.size(); ++i) {
+    EXPECT_EQ(trees[i].parent, trees[0].parent);
+    EXPECT_EQ(trees[i].rank, trees[0].rank);
+  }
+  const MergeTree& tree = trees[0];
+  ASSERT_TRUE(tree.check("in parts").isOk());
+  EXPECT_EQ(stats.parts, 4u);
+  EXPECT_GT(stats.part_merges, tree.merges / 5);
+  EXPECT_LT(stats.part_merges, tree.merges / 2);
+  RankingStats whole_stats;
+  auto whole = rankMerges(mesh, RankingOptions{}, &whole_stats);
+  ASSERT_TRUE(whole.isOk());
+  EXPECT_EQ(whole_stats.parts, 1u);
+  EXPECT_EQ(whole_stats.part_merges, 0u);
+  EXPECT_NE(whole->rank, tree.rank);
+  EXPECT_GT(tree.merges, whole->merges * 99 / 100);
+  for (uint64_t n : sampleMerges(tree, mesh.numPoints())) {
+    auto m = applyMerges(mesh, tree, n);
+    ASSERT_TRUE(m.isOk()) << n << " merges: " << m.status().message();
+    EXPECT_TRUE(m->checkConsistency("prefix").isOk()) << n;
+    EXPECT_EQ(computeMeshStats(*m).inverted, 0u) << n;
+  }
+  const double v0 = computeMeshStats(mesh).total_volume;
+  for (int level : {1, 2, 3}) {
+    SCOPED_TRACE("level " + std::to_string(level));
+    auto a = applyMerges(mesh, tree, levelMerges(level, mesh.numPoints(), tree.merges));
+    auto b = applyMerges(mesh, *whole, levelMerges(level, mesh.numPoints(), whole->merges));
+    ASSERT_TRUE(a.isOk() && b.isOk());
+    EXPECT_LE(std::fabs(computeMeshStats(*a).total_volume - v0),
+              2 * std::fabs(computeMeshStats(*b).total_volume - v0) + 1e-3 * v0);
+  }
+}
+
 TEST(Ranking, TheStarListsStayInTheirRoom) {
   // Each vertex's corner list lives in one pool; a merge writes the target's new list after the used
   // part. The pool holds every corner and a quarter more (4096 at least) and is compacted in place
