@@ -299,9 +299,13 @@ class Ranker {
   // Parts of about equal numbers of vertices, by recursive bisection of their positions along the
   // longest side: part_ and seam_.
   void partition(uint32_t parts);
-  // Fills a lane's pool with its members' lists (every vertex's when it has none) from `from`
-  // (nullptr: from the tetrahedra).
-  void buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from);
+  // Fills a lane's pool with its members' lists (every vertex's when it has none): from the
+  // tetrahedra, or from the previous lanes' pools (`from`, the parts they were for, and where each
+  // vertex's run began there), after dropDeadCorners.
+  void buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from = nullptr,
+                 const std::vector<uint8_t>* from_part = nullptr, const std::vector<uint64_t>* from_begin = nullptr);
+  // Drops the corners of collapsed tetrahedra from every vertex's run in the lanes of part_.
+  void dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes);
   // Evaluates the lane's vertices and merges until its queue is empty or its limit is reached.
   void runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress);
   void gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners);
@@ -431,29 +435,29 @@ void Ranker::partition(uint32_t parts) {
   };
   split(split, 0, np, parts, 0);
   for (const Tet& q : tets_) {
+    if (q[0] == kDead) continue;
     const uint8_t p = part_[q[0]];
     if (part_[q[1]] != p || part_[q[2]] != p || part_[q[3]] != p)
       for (uint32_t v : q) seam_[v] = 1;
   }
 }
 
-void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from) {
-  const size_t np = mesh_.numPoints();
-  std::vector<uint64_t> src_begin;
-  if (from) {
-    // From the parts' pools (every vertex's list, into one pool): the live corners only.
-    src_begin = star_begin_;
-    for (uint32_t v = 0; v < np; ++v) {
-      Lane& src = *(*from)[part_[v]];
-      uint32_t* run = src.pool.data() + src_begin[v];
-      uint32_t m = 0;
-      for (uint32_t i = 0; i < star_len_[v]; ++i) {
-        run[m] = run[i];
-        m += tets_[run[i] >> 2][0] != kDead;
-      }
-      star_len_[v] = m;
+void Ranker::dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes) {
+  for (uint32_t v = 0; v < mesh_.numPoints(); ++v) {
+    Lane& src = *lanes[part_[v]];
+    uint32_t* run = src.pool.data() + star_begin_[v];
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < star_len_[v]; ++i) {
+      run[m] = run[i];
+      m += tets_[run[i] >> 2][0] != kDead;
     }
+    star_len_[v] = m;
   }
+}
+
+void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from, const std::vector<uint8_t>* from_part,
+                       const std::vector<uint64_t>* from_begin) {
+  const size_t np = mesh_.numPoints();
   // Each listed vertex's run at its place in the pool, in vertex order.
   uint64_t total = 0;
   auto place = [&](uint32_t v) {
@@ -469,9 +473,15 @@ void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from) 
   L.peak = L.pool.size();
   L.used = total;
   if (from) {
-    for (uint32_t v = 0; v < np; ++v) {
-      const Lane& src = *(*from)[part_[v]];
-      std::copy_n(src.pool.data() + src_begin[v], star_len_[v], L.pool.data() + star_begin_[v]);
+    // From the previous lanes' pools (dropDeadCorners first): each vertex's live corners, in order.
+    auto copy = [&](uint32_t v) {
+      const Lane& src = *(*from)[(*from_part)[v]];
+      std::copy_n(src.pool.data() + (*from_begin)[v], star_len_[v], L.pool.data() + star_begin_[v]);
+    };
+    if (L.members.empty()) {
+      for (uint32_t v = 0; v < np; ++v) copy(v);
+    } else {
+      for (uint32_t v : L.members) copy(v);
     }
     return;
   }
@@ -960,56 +970,76 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
       options_.parts != 0 ? options_.parts : (mesh_.numTets() >= kAutoPartTets ? kAutoParts : 1), kMaxParts);
   // In parts: each part merges its share of the vertices that have no neighbour in another part,
   // which touches nothing another part reads or writes, so the parts run in parallel; their merges
-  // are then interleaved by error (each part's in its own order), and the whole mesh's queue goes on
-  // from there with every vertex, the seams between the parts included.
+  // are then interleaved by error (each part's in its own order). A second round does the same with
+  // other parts, and the whole mesh's queue goes on from there with every vertex, the seams between
+  // the parts included.
   std::vector<uint32_t> order;
   uint64_t popped = 0, rejected = 0, restaled = 0, pool_peak = 0, compactions = 0, part_merges = 0;
   if (parts > 1) {
-    partition(parts);
+    // Two rounds of parts: the second with one part fewer, so that its cuts fall elsewhere and most
+    // of the first round's seams are inside its parts.
     std::vector<std::unique_ptr<Lane>> lanes;
-    for (uint32_t p = 0; p < parts; ++p) {
-      lanes.push_back(std::make_unique<Lane>(np));
-      lanes.back()->restricted = true;
-      lanes.back()->parallel = false;
-    }
-    for (uint32_t v = 0; v < np; ++v) lanes[part_[v]]->members.push_back(v);
-    for (auto& L : lanes) {
-      uint64_t free = 0;
-      for (uint32_t v : L->members) free += !seam_[v];
-      L->limit = static_cast<uint64_t>(kPartShare * static_cast<double>(free));
-      buildPool(*L, nullptr);
-    }
-    tbb::this_task_arena::isolate([&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, parts, 1), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t p = r.begin(); p < r.end(); ++p) runLane(*lanes[p], 0, nullptr);
-      });
-    });
-    // The parts' merges by error, each part's in its order (ties: the lower part first).
-    std::vector<size_t> next(parts, 0);
-    for (;;) {
-      int best = -1;
-      for (uint32_t p = 0; p < parts; ++p) {
-        if (next[p] == lanes[p]->sequence.size()) continue;
-        const float e = tree_.error[lanes[p]->sequence[next[p]]];
-        if (best < 0 || e < tree_.error[lanes[best]->sequence[next[best]]]) best = static_cast<int>(p);
+    for (const uint32_t round_parts : {parts, parts - 1}) {
+      std::vector<uint8_t> old_part;
+      std::swap(old_part, part_);
+      partition(round_parts);
+      std::vector<std::unique_ptr<Lane>> next_lanes;
+      for (uint32_t p = 0; p < round_parts; ++p) {
+        next_lanes.push_back(std::make_unique<Lane>(np));
+        next_lanes.back()->restricted = true;
+        next_lanes.back()->parallel = false;
       }
-      if (best < 0) break;
-      order.push_back(lanes[best]->sequence[next[best]++]);
+      for (uint32_t v = 0; v < np; ++v)
+        if (alive_[v]) next_lanes[part_[v]]->members.push_back(v);
+      std::vector<uint64_t> old_begin;
+      if (!lanes.empty()) {
+        std::swap(part_, old_part);
+        dropDeadCorners(lanes);
+        std::swap(part_, old_part);
+        old_begin = star_begin_;
+      }
+      for (auto& L : next_lanes) {
+        uint64_t free = 0;
+        for (uint32_t v : L->members) free += !seam_[v];
+        L->limit = static_cast<uint64_t>(kPartShare * static_cast<double>(free));
+        if (lanes.empty()) buildPool(*L);
+        else buildPool(*L, &lanes, &old_part, &old_begin);
+      }
+      lanes = std::move(next_lanes);
+      tbb::this_task_arena::isolate([&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, round_parts, 1), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t p = r.begin(); p < r.end(); ++p) runLane(*lanes[p], 0, nullptr);
+        });
+      });
+      // The parts' merges by error, each part's in its order (ties: the lower part first).
+      std::vector<size_t> next(round_parts, 0);
+      for (;;) {
+        int best = -1;
+        for (uint32_t p = 0; p < round_parts; ++p) {
+          if (next[p] == lanes[p]->sequence.size()) continue;
+          const float e = tree_.error[lanes[p]->sequence[next[p]]];
+          if (best < 0 || e < tree_.error[lanes[best]->sequence[next[best]]]) best = static_cast<int>(p);
+        }
+        if (best < 0) break;
+        order.push_back(lanes[best]->sequence[next[best]++]);
+      }
+      for (const auto& L : lanes) {
+        popped += L->popped;
+        rejected += L->rejected;
+        restaled += L->stale;
+        pool_peak = std::max(pool_peak, L->peak * round_parts);
+        compactions += L->compactions;
+      }
+      std::fill(stale_.begin(), stale_.end(), 0);
+      reportProgress(progress, "rank merges", static_cast<double>(order.size()) / static_cast<double>(np));
     }
-    for (const auto& L : lanes) {
-      popped += L->popped;
-      rejected += L->rejected;
-      restaled += L->stale;
-      pool_peak += L->peak;
-      compactions += L->compactions;
-    }
-    std::fill(stale_.begin(), stale_.end(), 0);
+    dropDeadCorners(lanes);
+    const std::vector<uint64_t> old_begin = star_begin_;
     Lane whole(np);
-    buildPool(whole, &lanes);
+    buildPool(whole, &lanes, &part_, &old_begin);
     lanes.clear();
     part_ = {};
     seam_ = {};
-    reportProgress(progress, "rank merges", static_cast<double>(order.size()) / static_cast<double>(np));
     part_merges = order.size();
     runLane(whole, order.size(), &progress);
     order.insert(order.end(), whole.sequence.begin(), whole.sequence.end());
@@ -1020,7 +1050,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     compactions += whole.compactions;
   } else {
     Lane whole(np);
-    buildPool(whole, nullptr);
+    buildPool(whole);
     runLane(whole, 0, &progress);
     order = std::move(whole.sequence);
     popped = whole.popped;

@@ -58,14 +58,16 @@
 // is applied. After a merge v -> w, w's candidate is recomputed; v's former neighbours' candidates are
 // recomputed too (greedy), or by default only marked stale (lazy): a stale candidate that comes to the
 // top of the queue is recomputed and queued again by its new error, and only a fresh one is applied.
-// In parts (RankingOptions::parts; large meshes by default): the vertices are first split into parts
+// In parts (RankingOptions::parts; large meshes by default): the vertices are first split into P parts
 // of about equal counts by recursive bisection of their positions, and each part, on its own thread,
 // ranks merges between its vertices that share no tetrahedron with another part's (the seams), with
 // its own queue, until it has merged half of them. Such merges touch no tetrahedron another part
 // reads, so the parts' merges commute: they are interleaved by error, each part's in its own order,
-// and every prefix is still a valid mesh. The whole mesh's queue then goes on with every vertex left,
-// the seams included, which releases them: the coarse levels are not frozen along the parts' seams.
-// The tree depends on the number of parts, never on the number of threads.
+// and every prefix is still a valid mesh. A second round does the same with the vertices left in P - 1
+// parts, whose cuts fall elsewhere, so that most of the first round's seams are inside its parts. The
+// whole mesh's queue then goes on with every vertex left, the seams included, which releases them:
+// the coarse levels are not frozen along the parts' seams. The tree depends on the number of parts,
+// never on the number of threads.
 //
 // Lazy evaluation computes about a third of the candidates (a merge changes the stars of some eight
 // vertices, and most are merged or changed again before they come to the top), and a vertex whose

@@ -192,8 +192,8 @@ TEST(Ranking, InPartsThePrefixesAreValidAndTheThreadsChangeNothing) {
   const MergeTree& tree = trees[0];
   ASSERT_TRUE(tree.check("in parts").isOk());
   EXPECT_EQ(stats.parts, 4u);
-  EXPECT_GT(stats.part_merges, tree.merges / 5);
-  EXPECT_LT(stats.part_merges, tree.merges / 2);
+  EXPECT_GT(stats.part_merges, tree.merges / 2);  // two rounds
+  EXPECT_LT(stats.part_merges, tree.merges * 4 / 5);
   RankingStats whole_stats;
   auto whole = rankMerges(mesh, RankingOptions{}, &whole_stats);
   ASSERT_TRUE(whole.isOk());
