@@ -243,6 +243,18 @@ constexpr size_t kParallelEvaluations = 8;
 // ranking runs in parts (RankingOptions::parts), one part's, whose merges touch no other part.
 struct Lane {
   explicit Lane(size_t points) : heap(points) {}
+  // Everything but the pool (which the next lanes are built from).
+  void keepOnlyPool() {
+    heap = CandidateHeap(0);
+    members = {};
+    sequence = {};
+    best = sorted = {};
+    corners = corners_w = recompute = now = {};
+    faces = faces_w = {};
+    tris_a = tris_b = {};
+    edges_a = edges_b = {};
+    verts_a = verts_b = lk_verts = {};
+  }
   CandidateHeap heap;
   // The corners (4 * tet + local index) of the vertices whose lists this pool holds: a vertex's list
   // is a contiguous run, so that gathering a star reads independent words instead of chasing a
@@ -1029,6 +1041,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
         restaled += L->stale;
         pool_peak = std::max(pool_peak, L->peak * round_parts);
         compactions += L->compactions;
+        L->keepOnlyPool();
       }
       std::fill(stale_.begin(), stale_.end(), 0);
       reportProgress(progress, "rank merges", static_cast<double>(order.size()) / static_cast<double>(np));

@@ -40,19 +40,26 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   // Level 0 is encoded while the merges are ranked: on another thread where TBB has one, after the
   // ranking where it has not. A level 0 that fails to encode is left to the writer, which fails on it
   // before any mip level is made. Then, where mip levels will be checked, level 0's own errors (the
-  // ones a mip level may keep) are found, so that the first level's check does not wait on them.
+  // ones a mip level may keep) are found, on another thread while the writer starts, after the ranking
+  // (its face adjacency beside the ranking's star lists was the peak of a large convert's memory).
   LevelStructureCheck structure(mesh, path);
   std::shared_ptr<PiecedLevel> level0;
   tbb::task_group encoding;
   encoding.run([&] {
     auto e = encodePieces(mesh, EncodeOptions{}, wo.piece_tets);
     if (e.isOk()) level0 = std::make_shared<PiecedLevel>(std::move(e).value());
-    if (wo.verify && o.levels != 0) structure.checkLevel0();
   });
   RankingStats ranked;
   StatusOr<MergeTree> ranking = rankMerges(mesh, o.ranking, &ranked, wo.progress);
   encoding.wait();
   if (!ranking.isOk()) return ranking.status();
+  // Waited for on every return from here (check() waits for it too, and `structure` must outlive it).
+  tbb::task_group checking;
+  struct Join {
+    tbb::task_group& g;
+    ~Join() { g.wait(); }
+  } join{checking};
+  if (wo.verify && o.levels != 0) checking.run([&] { structure.checkLevel0(); });
   MergeTree tree = std::move(ranking).value();
   if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
     warnings->push_back(source + ": " + note);
