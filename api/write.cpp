@@ -31,6 +31,10 @@ Error writeImported(const std::string& path, const gtn::TetMesh& mesh, const Wri
   o.ranking.field = options.simplify_field;
   o.ranking.w_density = options.w_density;
   o.ranking.w_geometry = options.w_geometry;
+  if (options.greedy_ranking) {
+    o.ranking.lazy = false;
+    o.ranking.parts = 1;
+  }
   gtn::GtnWriteOptions wo;
   wo.tool_version = GTN_VERSION_STRING;
   wo.command_line = options.command_line.empty() ? default_command_line : options.command_line;

@@ -30,6 +30,9 @@ namespace gatun {
  *  `simplify_field`, `w_density`, `w_geometry`: the ranking of merges: the point field whose first
  *     component is the density ("" = the first that is not constant, "none" = volume only) and the
  *     weights of the density and boundary geometry errors.
+ *  `greedy_ranking`: rank the whole mesh in one queue, every candidate a merge changes ranked again at
+ *     once (`gtn convert --greedy-ranking`); by default a changed candidate is ranked again when it
+ *     comes to the top of the queue, and large meshes are first ranked in parts, in parallel.
  *  `command_line`: the provenance stored in the file header; "" stores "gatun::write(NAME)" or
  *     "gatun::convert(NAME)", NAME the output's file name without its directory.
  *  `piece_tets`: the most tetrahedra a piece of a level holds (`gtn convert --piece-tets`; at least
@@ -43,6 +46,7 @@ struct WriteOptions {
   std::string simplify_field{};
   double w_density = 1.0;
   double w_geometry = 1.0;
+  bool greedy_ranking = false;
   std::string command_line{};
   uint64_t piece_tets = uint64_t{1} << 20;
 };

@@ -113,6 +113,7 @@ def write(
     simplify_field="",
     w_density=1.0,
     w_geometry=1.0,
+    greedy_ranking=False,
     threads=None,
 ):
     """Writes a .gtn file as `gtn convert` does, with the same defaults.
@@ -125,6 +126,7 @@ def write(
     merge_tree  store the merge trees (on-the-fly simplification); False = --no-merge-tree (level 0 alone)
     verify      decode every level back and compare before the file is renamed into place
     simplify_field, w_density, w_geometry: the ranking's density field and weights (--simplify-field ...)
+    greedy_ranking  rank in one queue, in the greedy order (--greedy-ranking)
     threads     the most threads the ranking and the check may use (default: every core)
 
     The file appears atomically, only when everything succeeded.
@@ -148,6 +150,7 @@ def write(
         str(simplify_field),
         float(w_density),
         float(w_geometry),
+        bool(greedy_ranking),
         None if threads is None else int(threads),
     )
     for message in found:

@@ -55,6 +55,23 @@ def test_levels_and_options(tmp_path, converted):
     assert info["merge_tree"]["field"] == ""
 
 
+def test_greedy_ranking_is_the_commands_flag(gtn, converted, tmp_path):
+    cli = tmp_path / "cli.gtn"
+    gtn.run("convert", converted["bunny"], "-o", cli, "--greedy-ranking")
+    mesh = gatun.read(converted["bunny"])
+    greedy, lazy = tmp_path / "greedy.gtn", tmp_path / "lazy.gtn"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the constant field the ranking skips, as gtn says
+        gatun.write(greedy, mesh.points, mesh.tets, point_data=mesh.point_data, cell_data=mesh.cell_data,
+                    metadata=mesh.metadata, greedy_ranking=True)
+        gatun.write(lazy, mesh.points, mesh.tets, point_data=mesh.point_data, cell_data=mesh.cell_data,
+                    metadata=mesh.metadata)
+    a, b, c = gatun.info(cli, merge_tree=True), gatun.info(greedy, merge_tree=True), gatun.info(lazy, merge_tree=True)
+    assert sections(a) == sections(b)
+    assert a["merge_tree"] == b["merge_tree"]
+    assert c["merge_tree"]["error_quantiles"] != b["merge_tree"]["error_quantiles"]
+
+
 def test_types_and_metadata_round_trip(tmp_path):
     rng = np.random.default_rng(7)
     points = rng.random((200, 3)).astype(np.float32)

@@ -256,6 +256,23 @@ TEST(Api, ConvertWritesTheBytesOfGtnConvert) {
   EXPECT_NE(not_gtn.error().message().find("not .gtn"), std::string::npos) << not_gtn.error().message();
 }
 
+// greedy_ranking is `gtn convert --greedy-ranking`: the same bytes, and another tree than the default's.
+TEST(Api, GreedyRankingIsTheCommandsFlag) {
+  const std::string dir = tempDir("api_greedy");
+  writeFile(dir + "/hex.vtk", gtn::test::shearedHexGridVtk(5, false, true));
+  ASSERT_EQ(runGtn("convert -q " + dir + "/hex.vtk -o " + dir + "/cli.gtn --greedy-ranking").exit_code, 0);
+  auto cli_info = gatun::readInfo(dir + "/cli.gtn");
+  ASSERT_TRUE(cli_info.ok()) << cli_info.error().message();
+  gatun::ConvertOptions options;
+  options.write.command_line = cli_info.value().command_line;
+  options.write.greedy_ranking = true;
+  ASSERT_TRUE(gatun::convert({dir + "/hex.vtk"}, dir + "/api.gtn", options).ok());
+  EXPECT_EQ(readFile(dir + "/api.gtn"), readFile(dir + "/cli.gtn"));
+  options.write.greedy_ranking = false;
+  ASSERT_TRUE(gatun::convert({dir + "/hex.vtk"}, dir + "/lazy.gtn", options).ok());
+  EXPECT_NE(readFile(dir + "/lazy.gtn"), readFile(dir + "/cli.gtn"));
+}
+
 TEST(Api, ValidateReportsWhatGtnValidateReports) {
   const std::string dir = tempDir("api_validate");
   ASSERT_TRUE(gatun::write(dir + "/grid.gtn", gridMesh(3)).ok());
