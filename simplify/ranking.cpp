@@ -316,11 +316,30 @@ class Ranker {
   // vertex's run began there), after dropDeadCorners.
   void buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from = nullptr,
                  const std::vector<uint8_t>* from_part = nullptr, const std::vector<uint64_t>* from_begin = nullptr);
-  // Drops the corners of collapsed tetrahedra from every vertex's run in the lanes of part_.
-  void dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes);
+  // Drops the corners of collapsed tetrahedra from every vertex's run in `lanes`, the lanes of `part`.
+  void dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>& part);
   // Evaluates the lane's vertices and merges until its queue is empty or its limit is reached.
   void runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress);
   void gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners);
+  // Moves run[0, n)'s corners of live tetrahedra to its front, in order; returns how many.
+  uint32_t keepLive(uint32_t* run, uint32_t n) const {
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t c = run[i];
+      run[m] = c;
+      m += tets_[c >> 2][0] != kDead;
+    }
+    return m;
+  }
+  // Calls f(v) for each vertex whose run the lane's pool holds, ascending.
+  template <class F>
+  void forMembers(const Lane& L, F&& f) const {
+    if (L.members.empty()) {
+      for (uint32_t v = 0; v < star_len_.size(); ++v) f(v);
+    } else {
+      for (uint32_t v : L.members) f(v);
+    }
+  }
   void gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
                            Workspace& ws) const;
   void candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Workspace& ws);
@@ -454,17 +473,9 @@ void Ranker::partition(uint32_t parts) {
   }
 }
 
-void Ranker::dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes) {
-  for (uint32_t v = 0; v < mesh_.numPoints(); ++v) {
-    Lane& src = *lanes[part_[v]];
-    uint32_t* run = src.pool.data() + star_begin_[v];
-    uint32_t m = 0;
-    for (uint32_t i = 0; i < star_len_[v]; ++i) {
-      run[m] = run[i];
-      m += tets_[run[i] >> 2][0] != kDead;
-    }
-    star_len_[v] = m;
-  }
+void Ranker::dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>& part) {
+  for (uint32_t v = 0; v < mesh_.numPoints(); ++v)
+    star_len_[v] = keepLive(lanes[part[v]]->pool.data() + star_begin_[v], star_len_[v]);
 }
 
 void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from, const std::vector<uint8_t>* from_part,
@@ -472,29 +483,19 @@ void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from, 
   const size_t np = mesh_.numPoints();
   // Each listed vertex's run at its place in the pool, in vertex order.
   uint64_t total = 0;
-  auto place = [&](uint32_t v) {
+  forMembers(L, [&](uint32_t v) {
     star_begin_[v] = total;
     total += from ? star_len_[v] : star_size_[v];
-  };
-  if (L.members.empty()) {
-    for (uint32_t v = 0; v < np; ++v) place(v);
-  } else {
-    for (uint32_t v : L.members) place(v);
-  }
+  });
   L.pool.assign(total + std::max<uint64_t>(total / 4, kMinStarSlack), 0);
   L.peak = L.pool.size();
   L.used = total;
   if (from) {
     // From the previous lanes' pools (dropDeadCorners first): each vertex's live corners, in order.
-    auto copy = [&](uint32_t v) {
+    forMembers(L, [&](uint32_t v) {
       const Lane& src = *(*from)[(*from_part)[v]];
       std::copy_n(src.pool.data() + (*from_begin)[v], star_len_[v], L.pool.data() + star_begin_[v]);
-    };
-    if (L.members.empty()) {
-      for (uint32_t v = 0; v < np; ++v) copy(v);
-    } else {
-      for (uint32_t v : L.members) copy(v);
-    }
+    });
     return;
   }
   // From the tetrahedra: every listed vertex's corners in ascending order.
@@ -503,8 +504,7 @@ void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from, 
     mine.assign(np, 0);
     for (uint32_t v : L.members) mine[v] = 1;
   }
-  for (uint32_t v = 0; v < np; ++v)
-    if (mine.empty() || mine[v]) star_len_[v] = 0;
+  forMembers(L, [&](uint32_t v) { star_len_[v] = 0; });
   for (size_t t = 0; t < tets_.size(); ++t)
     for (int k = 0; k < 4; ++k) {
       const uint32_t v = tets_[t][k];
@@ -516,13 +516,9 @@ void Ranker::runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress
   L.ws = &thread_ws_.local();
   {
     std::vector<uint32_t> all;
-    if (L.members.empty()) {
-      all.reserve(mesh_.numPoints());
-      for (uint32_t v = 0; v < mesh_.numPoints(); ++v)
-        if (alive_[v]) all.push_back(v);
-    } else {
-      all = L.members;
-    }
+    forMembers(L, [&](uint32_t v) {
+      if (alive_[v]) all.push_back(v);
+    });
     recompute(L, all);
   }
   const uint64_t np = mesh_.numPoints();
@@ -562,13 +558,7 @@ void Ranker::runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress
 
 void Ranker::gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners) {
   uint32_t* run = L.pool.data() + star_begin_[v];
-  const uint32_t n = star_len_[v];
-  uint32_t m = 0;
-  for (uint32_t i = 0; i < n; ++i) {
-    const uint32_t c = run[i];
-    run[m] = c;
-    m += tets_[c >> 2][0] != kDead;
-  }
+  const uint32_t m = keepLive(run, star_len_[v]);
   star_len_[v] = m;
   corners.assign(run, run + m);
 }
@@ -577,13 +567,9 @@ void Ranker::compactStars(Lane& L) {
   // The runs in the order they lie; each moves down (never up: the runs before it are at most as
   // long as the space they took), without the corners of collapsed tetrahedra, as gatherStar would.
   std::vector<std::pair<uint64_t, uint32_t>> runs;
-  if (L.members.empty()) {
-    for (uint32_t v = 0; v < star_len_.size(); ++v)
-      if (star_len_[v] > 0) runs.emplace_back(star_begin_[v], v);
-  } else {
-    for (uint32_t v : L.members)
-      if (star_len_[v] > 0) runs.emplace_back(star_begin_[v], v);
-  }
+  forMembers(L, [&](uint32_t v) {
+    if (star_len_[v] > 0) runs.emplace_back(star_begin_[v], v);
+  });
   std::sort(runs.begin(), runs.end());
   uint32_t* pool = L.pool.data();
   uint64_t used = 0;
@@ -986,92 +972,84 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   // other parts, and the whole mesh's queue goes on from there with every vertex, the seams between
   // the parts included.
   std::vector<uint32_t> order;
-  uint64_t popped = 0, rejected = 0, restaled = 0, pool_peak = 0, compactions = 0, part_merges = 0;
-  if (parts > 1) {
-    // Two rounds of parts: the second with one part fewer, so that its cuts fall elsewhere and most
-    // of the first round's seams are inside its parts.
-    std::vector<std::unique_ptr<Lane>> lanes;
-    for (const uint32_t round_parts : {parts, parts - 1}) {
-      std::vector<uint8_t> old_part;
-      std::swap(old_part, part_);
-      partition(round_parts);
-      std::vector<std::unique_ptr<Lane>> next_lanes;
-      for (uint32_t p = 0; p < round_parts; ++p) {
-        next_lanes.push_back(std::make_unique<Lane>(np));
-        next_lanes.back()->restricted = true;
-        next_lanes.back()->parallel = false;
-      }
-      for (uint32_t v = 0; v < np; ++v)
-        if (alive_[v]) next_lanes[part_[v]]->members.push_back(v);
-      std::vector<uint64_t> old_begin;
-      if (!lanes.empty()) {
-        std::swap(part_, old_part);
-        dropDeadCorners(lanes);
-        std::swap(part_, old_part);
-        old_begin = star_begin_;
-      }
-      for (auto& L : next_lanes) {
-        uint64_t free = 0;
-        for (uint32_t v : L->members) free += !seam_[v];
-        L->limit = static_cast<uint64_t>(kPartShare * static_cast<double>(free));
-        if (lanes.empty()) buildPool(*L);
-        else buildPool(*L, &lanes, &old_part, &old_begin);
-      }
-      lanes = std::move(next_lanes);
-      tbb::this_task_arena::isolate([&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, round_parts, 1), [&](const tbb::blocked_range<size_t>& r) {
-          for (size_t p = r.begin(); p < r.end(); ++p) runLane(*lanes[p], 0, nullptr);
-        });
-      });
-      // The parts' merges by error, each part's in its order (ties: the lower part first).
-      std::vector<size_t> next(round_parts, 0);
-      for (;;) {
-        int best = -1;
-        for (uint32_t p = 0; p < round_parts; ++p) {
-          if (next[p] == lanes[p]->sequence.size()) continue;
-          const float e = tree_.error[lanes[p]->sequence[next[p]]];
-          if (best < 0 || e < tree_.error[lanes[best]->sequence[next[best]]]) best = static_cast<int>(p);
-        }
-        if (best < 0) break;
-        order.push_back(lanes[best]->sequence[next[best]++]);
-      }
-      for (const auto& L : lanes) {
-        popped += L->popped;
-        rejected += L->rejected;
-        restaled += L->stale;
-        pool_peak = std::max(pool_peak, L->peak * round_parts);
-        compactions += L->compactions;
-        L->keepOnlyPool();
-      }
-      std::fill(stale_.begin(), stale_.end(), 0);
-      reportProgress(progress, "rank merges", static_cast<double>(order.size()) / static_cast<double>(np));
+  uint64_t popped = 0, rejected = 0, restaled = 0, pool_peak = 0, compactions = 0;
+  auto count = [&](const Lane& L, uint64_t lanes_alike) {
+    popped += L.popped;
+    rejected += L.rejected;
+    restaled += L.stale;
+    pool_peak = std::max(pool_peak, L.peak * lanes_alike);
+    compactions += L.compactions;
+  };
+  // The last round's lanes, whose pools the next lanes are built from, and their parts.
+  std::vector<std::unique_ptr<Lane>> lanes;
+  std::vector<uint8_t> lane_part;
+  std::vector<uint64_t> lane_begin;
+  auto leaveLanes = [&] {  // before part_ and star_begin_ change
+    dropDeadCorners(lanes, part_);
+    lane_part = part_;
+    lane_begin = star_begin_;
+  };
+  // Two rounds of parts: the second with one part fewer, so that its cuts fall elsewhere and most of
+  // the first round's seams are inside its parts.
+  const std::vector<uint32_t> rounds = parts > 1 ? std::vector<uint32_t>{parts, parts - 1} : std::vector<uint32_t>{};
+  for (const uint32_t round_parts : rounds) {
+    if (!lanes.empty()) leaveLanes();
+    partition(round_parts);
+    std::vector<std::unique_ptr<Lane>> next_lanes;
+    for (uint32_t p = 0; p < round_parts; ++p) {
+      next_lanes.push_back(std::make_unique<Lane>(np));
+      next_lanes.back()->restricted = true;
+      next_lanes.back()->parallel = false;
     }
-    dropDeadCorners(lanes);
-    const std::vector<uint64_t> old_begin = star_begin_;
-    Lane whole(np);
-    buildPool(whole, &lanes, &part_, &old_begin);
-    lanes.clear();
-    part_ = {};
-    seam_ = {};
-    part_merges = order.size();
-    runLane(whole, order.size(), &progress);
-    order.insert(order.end(), whole.sequence.begin(), whole.sequence.end());
-    popped += whole.popped;
-    rejected += whole.rejected;
-    restaled += whole.stale;
-    pool_peak = std::max(pool_peak, whole.peak);
-    compactions += whole.compactions;
-  } else {
-    Lane whole(np);
-    buildPool(whole);
-    runLane(whole, 0, &progress);
-    order = std::move(whole.sequence);
-    popped = whole.popped;
-    rejected = whole.rejected;
-    restaled = whole.stale;
-    pool_peak = whole.peak;
-    compactions = whole.compactions;
+    for (uint32_t v = 0; v < np; ++v)
+      if (alive_[v]) next_lanes[part_[v]]->members.push_back(v);
+    for (auto& L : next_lanes) {
+      uint64_t free = 0;
+      for (uint32_t v : L->members) free += !seam_[v];
+      L->limit = static_cast<uint64_t>(kPartShare * static_cast<double>(free));
+      if (lanes.empty()) buildPool(*L);
+      else buildPool(*L, &lanes, &lane_part, &lane_begin);
+    }
+    lanes = std::move(next_lanes);
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, round_parts, 1), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t p = r.begin(); p < r.end(); ++p) runLane(*lanes[p], 0, nullptr);
+      });
+    });
+    // The parts' merges by error, each part's in its order (ties: the lower part first).
+    std::vector<size_t> next(round_parts, 0);
+    for (;;) {
+      int best = -1;
+      for (uint32_t p = 0; p < round_parts; ++p) {
+        if (next[p] == lanes[p]->sequence.size()) continue;
+        const float e = tree_.error[lanes[p]->sequence[next[p]]];
+        if (best < 0 || e < tree_.error[lanes[best]->sequence[next[best]]]) best = static_cast<int>(p);
+      }
+      if (best < 0) break;
+      order.push_back(lanes[best]->sequence[next[best]++]);
+    }
+    for (const auto& L : lanes) {
+      count(*L, round_parts);
+      L->keepOnlyPool();
+    }
+    std::fill(stale_.begin(), stale_.end(), 0);
+    reportProgress(progress, "rank merges", static_cast<double>(order.size()) / static_cast<double>(np));
   }
+  // The whole mesh's queue, from the last round's lanes or from the tetrahedra.
+  const uint64_t part_merges = order.size();
+  Lane whole(np);
+  if (lanes.empty()) {
+    buildPool(whole);
+  } else {
+    leaveLanes();
+    buildPool(whole, &lanes, &lane_part, &lane_begin);
+    lanes.clear();
+    part_ = seam_ = lane_part = {};
+    lane_begin = {};
+  }
+  runLane(whole, part_merges, &progress);
+  order.insert(order.end(), whole.sequence.begin(), whole.sequence.end());
+  count(whole, 1);
   for (size_t i = 0; i < order.size(); ++i) tree_.rank[order[i]] = static_cast<uint32_t>(i + 1);
   tree_.merges = order.size();
   if (stats) {
