@@ -59,9 +59,6 @@ StatusOr<MipLevelBuilder> MipLevelBuilder::create(const TetMesh& source, const M
 StatusOr<const TetMesh*> MipLevelBuilder::level(size_t i) {
   if (i >= count())
     return usageError("mip level " + std::to_string(i) + " asked for, of " + std::to_string(count()) + " levels");
-  // Level i is made from level i - 1 and its tree (the rest of the merges, in its numbering): the same
-  // mesh and tree as from the source (compaction keeps the vertex and tetrahedron order), in time that
-  // shrinks with the levels instead of a pass over the source for each.
   if (i > 0 && i < skip_to_) return usageError("mip level " + std::to_string(i) + " asked for, after it was skipped");
   if (meshes_.size() == 1 && skip_to_ > 1 && i > 0) {
     // Level skip_to_ straight from the source: the levels between are placeholders.
@@ -77,6 +74,9 @@ StatusOr<const TetMesh*> MipLevelBuilder::level(size_t i) {
     trees_.push_back(keep_trees_ ? finest_tree_ : nullptr);
     meshes_.push_back(std::make_unique<TetMesh>(std::move(mesh)));
   }
+  // Level i is made from level i - 1 and its tree (the rest of the merges, in its numbering): the same
+  // mesh and tree as from the source (compaction keeps the vertex and tetrahedron order), in time that
+  // shrinks with the levels instead of a pass over the source for each.
   while (meshes_.size() <= i) {
     const size_t next = meshes_.size();
     const TetMesh& finer = next == 1 ? *source_ : *meshes_.back();

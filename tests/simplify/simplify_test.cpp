@@ -132,6 +132,30 @@ TEST(Ranking, TheTreeIsTheSameForAnyThreadCount) {
   }
 }
 
+// Every sampled prefix of `tree` is a consistent mesh with no inverted tetrahedron.
+void expectEveryPrefixValid(const TetMesh& mesh, const MergeTree& tree) {
+  for (uint64_t n : sampleMerges(tree, mesh.numPoints())) {
+    auto m = applyMerges(mesh, tree, n);
+    ASSERT_TRUE(m.isOk()) << n << " merges: " << m.status().message();
+    EXPECT_TRUE(m->checkConsistency("prefix").isOk()) << n;
+    EXPECT_EQ(computeMeshStats(*m).inverted, 0u) << n;
+  }
+}
+
+// At levels 1-3, `tree`'s mesh is off the source's volume by at most twice `reference`'s (plus 0.1%).
+void expectKeepsTheVolumeAsWellAs(const TetMesh& mesh, const MergeTree& tree, const MergeTree& reference) {
+  const double v0 = computeMeshStats(mesh).total_volume;
+  for (int level : {1, 2, 3}) {
+    SCOPED_TRACE("level " + std::to_string(level));
+    auto a = applyMerges(mesh, tree, levelMerges(level, mesh.numPoints(), tree.merges));
+    auto b = applyMerges(mesh, reference, levelMerges(level, mesh.numPoints(), reference.merges));
+    ASSERT_TRUE(a.isOk() && b.isOk());
+    const MeshStats sa = computeMeshStats(*a), sb = computeMeshStats(*b);
+    EXPECT_EQ(sa.inverted, 0u);
+    EXPECT_LE(std::fabs(sa.total_volume - v0), 2 * std::fabs(sb.total_volume - v0) + 1e-3 * v0);
+  }
+}
+
 // Lazy evaluation (the default) recomputes a stale candidate when it comes to the top of the queue:
 // far fewer candidates are computed than by the greedy order, every prefix of its tree is still a
 // valid mesh, and the simplified meshes keep the volume about as well as the greedy ones.
@@ -150,23 +174,9 @@ TEST(Ranking, LazyEvaluationComputesFewerCandidatesAndKeepsTheShape) {
   EXPECT_NE(lazy->rank, exact->rank);
   // Both simplify nearly all of the grid.
   EXPECT_GT(lazy->merges, exact->merges * 99 / 100);
-  const double v0 = computeMeshStats(mesh).total_volume;
-  for (int level : {1, 2, 3}) {
-    SCOPED_TRACE("level " + std::to_string(level));
-    auto a = applyMerges(mesh, *lazy, levelMerges(level, mesh.numPoints(), lazy->merges));
-    auto b = applyMerges(mesh, *exact, levelMerges(level, mesh.numPoints(), exact->merges));
-    ASSERT_TRUE(a.isOk() && b.isOk());
-    const MeshStats sa = computeMeshStats(*a), sb = computeMeshStats(*b);
-    EXPECT_EQ(sa.inverted, 0u);
-    EXPECT_LE(std::fabs(sa.total_volume - v0), 2 * std::fabs(sb.total_volume - v0) + 1e-3 * v0);
-  }
+  expectKeepsTheVolumeAsWellAs(mesh, *lazy, *exact);
   // Every prefix is a valid mesh, as the greedy order's are.
-  for (uint64_t n : sampleMerges(*lazy, mesh.numPoints())) {
-    auto m = applyMerges(mesh, *lazy, n);
-    ASSERT_TRUE(m.isOk()) << n << " merges: " << m.status().message();
-    EXPECT_TRUE(m->checkConsistency("prefix").isOk()) << n;
-    EXPECT_EQ(computeMeshStats(*m).inverted, 0u) << n;
-  }
+  expectEveryPrefixValid(mesh, *lazy);
 }
 
 // Ranked in parts, then as a whole: the parts' merges come first, interleaved by error; every prefix
@@ -201,21 +211,8 @@ TEST(Ranking, InPartsThePrefixesAreValidAndTheThreadsChangeNothing) {
   EXPECT_EQ(whole_stats.part_merges, 0u);
   EXPECT_NE(whole->rank, tree.rank);
   EXPECT_GT(tree.merges, whole->merges * 99 / 100);
-  for (uint64_t n : sampleMerges(tree, mesh.numPoints())) {
-    auto m = applyMerges(mesh, tree, n);
-    ASSERT_TRUE(m.isOk()) << n << " merges: " << m.status().message();
-    EXPECT_TRUE(m->checkConsistency("prefix").isOk()) << n;
-    EXPECT_EQ(computeMeshStats(*m).inverted, 0u) << n;
-  }
-  const double v0 = computeMeshStats(mesh).total_volume;
-  for (int level : {1, 2, 3}) {
-    SCOPED_TRACE("level " + std::to_string(level));
-    auto a = applyMerges(mesh, tree, levelMerges(level, mesh.numPoints(), tree.merges));
-    auto b = applyMerges(mesh, *whole, levelMerges(level, mesh.numPoints(), whole->merges));
-    ASSERT_TRUE(a.isOk() && b.isOk());
-    EXPECT_LE(std::fabs(computeMeshStats(*a).total_volume - v0),
-              2 * std::fabs(computeMeshStats(*b).total_volume - v0) + 1e-3 * v0);
-  }
+  expectEveryPrefixValid(mesh, tree);
+  expectKeepsTheVolumeAsWellAs(mesh, tree, *whole);
 }
 
 TEST(Ranking, TheStarListsStayInTheirRoom) {
