@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include "codec/range_coder.h"
 
@@ -96,6 +97,7 @@ struct Models {
   BitModel sign[2];   // per context (choice == 0 or not)
   BitTree<6> len[2];
   BitTree<4> removed[2];
+  BitTree<4> index[2];  // version 3: per boundary bit, the parent's place among the candidates (15 = not one)
 };
 
 // x in [0, total), 1 <= total, as a truncated binary code of direct bits.
@@ -145,20 +147,147 @@ struct DeltaPredictions {
   }
 };
 
+// Version 3: the parent as a place among the child's neighbours at the time of its merge, in the
+// mesh the earlier merges left (the vertices that share a tetrahedron of the level with the child or
+// with a vertex merged into it, each replaced by the vertex it has been merged into, recursively),
+// nearest first: by the squared distance ((dx*dx + dy*dy) + dz*dz) in double, ties to the smaller
+// decoding id. The encoder works in the tree's own numbering and breaks ties by `key` (the decoding
+// ids); the decoder in decoding order with no key.
+class ParentCandidates {
+ public:
+  // `tets`: 4 vertex ids per tetrahedron, all below n (the caller checks); `coords`: 3 per vertex.
+  ParentCandidates(size_t n, std::span<const uint32_t> tets, const double* coords, const uint32_t* key)
+      : coords_(coords), key_(key), up_(n), next_(n, kNone), last_(n), mark_(n, kNone) {
+    for (uint32_t v = 0; v < n; ++v) up_[v] = last_[v] = v;
+    // Vertex -> tetrahedra, then each vertex's neighbours once.
+    std::vector<uint64_t> at(n + 1, 0);
+    for (uint32_t v : tets) ++at[v + 1];
+    for (size_t v = 0; v < n; ++v) at[v + 1] += at[v];
+    std::vector<uint32_t> incident(tets.size());
+    {
+      std::vector<uint64_t> fill(at.begin(), at.end() - 1);
+      for (size_t i = 0; i < tets.size(); ++i) incident[fill[tets[i]]++] = static_cast<uint32_t>(i / 4);
+    }
+    start_.assign(n + 1, 0);
+    for (int pass = 0; pass < 2; ++pass) {
+      uint64_t out = 0;
+      for (uint32_t v = 0; v < n; ++v) {
+        start_[v] = out;
+        for (uint64_t k = at[v]; k < at[v + 1]; ++k) {
+          const uint32_t* t = tets.data() + 4 * size_t{incident[k]};
+          for (int j = 0; j < 4; ++j) {
+            const uint32_t w = t[j];
+            if (w == v || mark_[w] == v) continue;
+            mark_[w] = v;
+            if (pass) neighbours_[out] = w;
+            ++out;
+          }
+        }
+      }
+      start_[n] = out;
+      if (!pass) neighbours_.resize(out);
+      std::fill(mark_.begin(), mark_.end(), kNone);
+    }
+  }
+
+  // The candidates of child c (a vertex not merged yet), sorted.
+  const std::vector<uint32_t>& gather(uint32_t c) {
+    ++stamp_;
+    list_.clear();
+    for (uint32_t y = c; y != kNone; y = next_[y]) {
+      for (uint64_t k = start_[y]; k < start_[y + 1]; ++k) {
+        const uint32_t q = root(neighbours_[k]);
+        if (q == c || mark_[q] == stamp_) continue;
+        mark_[q] = stamp_;
+        list_.push_back(q);
+      }
+    }
+    if (list_.size() > 1) {
+      keyed_.clear();
+      const double* pc = coords_ + 3 * size_t{c};
+      for (uint32_t q : list_) {
+        const double* pq = coords_ + 3 * size_t{q};
+        const double dx = pq[0] - pc[0], dy = pq[1] - pc[1], dz = pq[2] - pc[2];
+        keyed_.push_back({(dx * dx + dy * dy) + dz * dz, key_ ? key_[q] : q, q});
+      }
+      std::sort(keyed_.begin(), keyed_.end(),
+                [](const Keyed& a, const Keyed& b) { return a.d2 < b.d2 || (a.d2 == b.d2 && a.id < b.id); });
+      for (size_t i = 0; i < keyed_.size(); ++i) list_[i] = keyed_[i].v;
+    }
+    return list_;
+  }
+
+  // Child c merges into parent p: c's vertices become p's.
+  void merge(uint32_t c, uint32_t p) {
+    up_[c] = p;
+    next_[last_[p]] = c;
+    last_[p] = last_[c];
+  }
+
+ private:
+  static constexpr uint32_t kNone = UINT32_MAX;
+  struct Keyed {
+    double d2;
+    uint32_t id, v;
+  };
+  uint32_t root(uint32_t x) {
+    while (up_[x] != x) {
+      up_[x] = up_[up_[x]];
+      x = up_[x];
+    }
+    return x;
+  }
+  const double* coords_;
+  const uint32_t* key_;
+  std::vector<uint64_t> start_;
+  std::vector<uint32_t> neighbours_;
+  std::vector<uint32_t> up_, next_, last_, mark_;
+  uint32_t stamp_ = 0;
+  std::vector<uint32_t> list_;
+  std::vector<Keyed> keyed_;
+};
+
+// Version 3's parent index: the place i of the parent among `count` candidates, or count when it is
+// not one of them (then the version 2 delta code follows). BitTree<4> s per boundary bit: s = i for
+// i < 14, 14 and then i - 14 uniform in [0, count - 14) for i >= 14, 15 = not a candidate. Nothing is
+// coded when there is no candidate.
+constexpr uint32_t kIndexEscape = 15, kIndexLong = 14;
+
+template <class C>
+uint32_t codeParentIndex(C& c, Models& m, uint32_t boundary, uint32_t index, uint32_t count) {
+  if (count == 0) return 0;
+  const uint32_t s = m.index[boundary].code(c, index >= count ? kIndexEscape : std::min(index, kIndexLong));
+  if (s == kIndexEscape) return count;
+  if (s < kIndexLong) return s;               // the decoder checks s < count
+  if (count <= kIndexLong) return count + 1;  // corrupt: rejected by the decoder
+  return kIndexLong + codeUniform(c, index - kIndexLong, count - kIndexLong);
+}
+
 // The per-merge body of the payload (rank order), shared by the encoder (values in, returned
 // unchanged) and the decoder (values out).
 struct MergeCode {
   uint32_t child_index, boundary, exact, hit, choice, sign, len, low_bits, removed;
+  uint32_t index;  // version 3: the parent's place among the candidates (= their count: not one)
 };
 
 template <class C>
 void codeDelta(C& c, Models& m, MergeCode& v);
 
 // What follows the child's index (codeUniform over the vertices not merged yet), once the child and
-// so its parent-delta predictions are known.
+// so its parent-delta predictions are known; `candidates` is the number of the child's parent
+// candidates in version 3, -1 in version 2.
 template <class C>
-void codeMerge(C& c, Models& m, MergeCode& v, int predictions) {
+void codeMerge(C& c, Models& m, MergeCode& v, int predictions, int64_t candidates) {
   v.boundary = c.bit(m.boundary, v.boundary);
+  if (candidates >= 0) {
+    const uint32_t count = static_cast<uint32_t>(candidates);
+    v.index = codeParentIndex(c, m, v.boundary, v.index, count);
+    if (v.index < count || v.index > count) {  // a candidate, or corrupt (the decoder rejects it)
+      const uint32_t k = m.removed[v.boundary].code(c, std::min<uint32_t>(v.removed, 15));
+      v.removed = k == 15 ? c.direct(v.removed, 32) : k;
+      return;
+    }
+  }
   if (predictions > 0) v.exact = c.bit(m.exact[v.boundary], v.exact);
   if (v.exact) {
     v.hit = m.hit.code(c, v.hit);
@@ -304,15 +433,46 @@ class Reader {
   const std::string& what_;
 };
 
-constexpr uint8_t kVersion = 2;
+constexpr uint8_t kVersion2 = 2, kVersion3 = 3;
+
+// The header fields shared by versions 2 and 3 (free_merges is version 3's).
+struct Header {
+  uint8_t version = 0;
+  uint64_t points = 0, merges = 0, boundary_merges = 0, tets_removed = 0, free_merges = 0;
+  std::span<const uint8_t> body;
+};
+
+// The tetrahedra of `mesh` as 4 ids each, after checking that they name its points.
+StatusOr<std::span<const uint32_t>> tetIds(const TetMesh& mesh, const std::string& what) {
+  std::span<const uint32_t> ids(mesh.tets.empty() ? nullptr : mesh.tets.front().data(), 4 * mesh.tets.size());
+  const size_t n = mesh.numPoints();
+  for (size_t i = 0; i < ids.size(); ++i) {
+    if (ids[i] >= n)
+      return invalidData(what + ": tetrahedron " + std::to_string(i / 4) + " names a vertex out of range");
+  }
+  return ids;
+}
 
 }  // namespace
 
-StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order) {
+uint64_t leadingFreeMerges(const MergeTree& tree) {
+  std::vector<uint8_t> free(tree.merges, 0);
+  for (size_t v = 0; v < tree.points(); ++v) {
+    if (tree.rank[v] == 0 || tree.rank[v] > tree.merges) continue;
+    free[tree.rank[v] - 1] = tree.removed[v] == 0 && !tree.boundary[v];
+  }
+  uint64_t u = 0;
+  while (u < free.size() && free[u]) ++u;
+  return u;
+}
+
+StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order,
+                                               const TetMesh* mesh) {
   GTN_RETURN_IF_ERROR(tree.check("merge tree"));
   const size_t n = tree.points();
   if (vertex_order.size() != n) return invalidData("merge tree: vertex order has the wrong size");
   if (n > 0xFFFFFFF0u) return unsupported("merge tree: more than 2^32 - 16 vertices");
+  if (mesh && mesh->numPoints() != n) return invalidData("merge tree: the mesh and the tree differ in vertices");
   // inverse[id] = source vertex with decoding id `id`.
   std::vector<uint32_t> inverse(n, MergeTree::kRoot);
   for (size_t v = 0; v < n; ++v) {
@@ -320,12 +480,14 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     if (id >= n || inverse[id] != MergeTree::kRoot) return invalidData("merge tree: vertex order is not a permutation");
     inverse[id] = static_cast<uint32_t>(v);
   }
+  const uint8_t version = mesh ? kVersion3 : kVersion2;
   std::vector<uint8_t> out;
-  out.push_back(kVersion);
+  out.push_back(version);
   putVarint(out, n);
   putVarint(out, tree.merges);
   putVarint(out, tree.boundaryMergesUpTo(tree.merges));
   putVarint(out, tree.tetsRemovedUpTo(tree.merges));
+  if (version == kVersion3) putVarint(out, leadingFreeMerges(tree));
   putF64(out, tree.w_density);
   putF64(out, tree.w_geometry);
   putVarint(out, tree.field.size());
@@ -334,6 +496,11 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   out.push_back(static_cast<uint8_t>(q));
   for (size_t i = 0; i < q; ++i) putF64(out, tree.error_quantiles[i]);
 
+  std::optional<ParentCandidates> candidates;
+  if (mesh) {
+    GTN_ASSIGN_OR_RETURN(std::span<const uint32_t> tets, tetIds(*mesh, "merge tree"));
+    candidates.emplace(n, tets, mesh->coords.data(), vertex_order.data());
+  }
   // by_rank[r - 1] = decoding id of the vertex merged at rank r.
   std::vector<uint32_t> by_rank(tree.merges);
   for (size_t v = 0; v < n; ++v) {
@@ -349,6 +516,13 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     const uint32_t v = inverse[id];
     MergeCode code{};
     code.child_index = unmerged.countBelow(id + 1);
+    int64_t count = -1;
+    if (candidates) {
+      const std::vector<uint32_t>& list = candidates->gather(v);
+      count = static_cast<int64_t>(list.size());
+      code.index = static_cast<uint32_t>(std::find(list.begin(), list.end(), tree.parent[v]) - list.begin());
+      candidates->merge(v, tree.parent[v]);
+    }
     const uint32_t pid = vertex_order[tree.parent[v]];
     const int64_t delta = int64_t{pid} - int64_t{id};
     int64_t residual = delta;
@@ -372,7 +546,7 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     code.boundary = tree.boundary[v] ? 1 : 0;
     code.removed = tree.removed[v];
     codeUniform(rc, code.child_index, static_cast<uint32_t>(n - r));
-    codeMerge(rc, m, code, pred.count);
+    codeMerge(rc, m, code, pred.count, count);
     unmerged.take(id + 1);
   }
   rc.finish();
@@ -381,52 +555,88 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   return out;
 }
 
-StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,
-                                    uint64_t max_merges) {
-  Reader r(payload, what);
-  uint8_t version = 0;
-  GTN_RETURN_IF_ERROR(r.u8(&version, "version"));
-  if (version != kVersion) return r.error("version", "unsupported version " + std::to_string(version));
-  uint64_t points = 0, merges = 0, boundary_merges = 0, tets_removed = 0;
-  GTN_RETURN_IF_ERROR(r.varint(&points, "points"));
-  if (points != expected_points)
-    return r.error("points", std::to_string(points) + " vertices, the level has " + std::to_string(expected_points));
-  if (points > 0xFFFFFFF0u) return r.error("points", "more than 2^32 - 16 vertices");
-  GTN_RETURN_IF_ERROR(r.varint(&merges, "merges"));
-  if (merges > points) return r.error("merges", "more merges than vertices");
-  GTN_RETURN_IF_ERROR(r.varint(&boundary_merges, "boundary_merges"));
-  if (boundary_merges > merges) return r.error("boundary_merges", "more boundary merges than merges");
-  GTN_RETURN_IF_ERROR(r.varint(&tets_removed, "tets_removed"));
-  MergeTree tree;
-  GTN_RETURN_IF_ERROR(r.f64(&tree.w_density, "w_density"));
-  GTN_RETURN_IF_ERROR(r.f64(&tree.w_geometry, "w_geometry"));
+namespace {
+
+StatusOr<Header> readHeader(Reader& r, uint64_t expected_points, MergeTree* tree) {
+  Header h;
+  GTN_RETURN_IF_ERROR(r.u8(&h.version, "version"));
+  if (h.version != kVersion2 && h.version != kVersion3)
+    return r.error("version", "unsupported version " + std::to_string(h.version));
+  GTN_RETURN_IF_ERROR(r.varint(&h.points, "points"));
+  if (h.points != expected_points)
+    return r.error("points", std::to_string(h.points) + " vertices, the level has " + std::to_string(expected_points));
+  if (h.points > 0xFFFFFFF0u) return r.error("points", "more than 2^32 - 16 vertices");
+  GTN_RETURN_IF_ERROR(r.varint(&h.merges, "merges"));
+  if (h.merges > h.points) return r.error("merges", "more merges than vertices");
+  GTN_RETURN_IF_ERROR(r.varint(&h.boundary_merges, "boundary_merges"));
+  if (h.boundary_merges > h.merges) return r.error("boundary_merges", "more boundary merges than merges");
+  GTN_RETURN_IF_ERROR(r.varint(&h.tets_removed, "tets_removed"));
+  if (h.version == kVersion3) {
+    GTN_RETURN_IF_ERROR(r.varint(&h.free_merges, "free_merges"));
+    if (h.free_merges > h.merges - h.boundary_merges) return r.error("free_merges", "more than the interior merges");
+  }
+  GTN_RETURN_IF_ERROR(r.f64(&tree->w_density, "w_density"));
+  GTN_RETURN_IF_ERROR(r.f64(&tree->w_geometry, "w_geometry"));
   uint64_t name_len = 0;
   GTN_RETURN_IF_ERROR(r.varint(&name_len, "field name length"));
   std::span<const uint8_t> name;
   GTN_RETURN_IF_ERROR(r.bytes(name_len, &name, "field name"));
-  tree.field.assign(name.begin(), name.end());
+  tree->field.assign(name.begin(), name.end());
   uint8_t q = 0;
   GTN_RETURN_IF_ERROR(r.u8(&q, "quantile count"));
   if (q != 0 && q != 9) return r.error("quantile count", "must be 0 or 9");
   for (int i = 0; i < q; ++i) {
     double d = 0;
     GTN_RETURN_IF_ERROR(r.f64(&d, "quantile"));
-    tree.error_quantiles.push_back(d);
+    tree->error_quantiles.push_back(d);
   }
   uint64_t body_len = 0;
   GTN_RETURN_IF_ERROR(r.varint(&body_len, "body length"));
-  std::span<const uint8_t> body;
-  GTN_RETURN_IF_ERROR(r.bytes(body_len, &body, "body"));
+  GTN_RETURN_IF_ERROR(r.bytes(body_len, &h.body, "body"));
   if (r.pos() != r.size()) return r.error("end", "trailing bytes after the body");
+  return h;
+}
 
-  const size_t n = points;
-  const uint64_t decode = std::min(merges, max_merges);
+}  // namespace
+
+StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, uint64_t expected_points,
+                                              const std::string& what) {
+  Reader r(payload, what);
+  MergeTree scratch;
+  GTN_ASSIGN_OR_RETURN(Header h, readHeader(r, expected_points, &scratch));
+  MergeTreeHeader out;
+  out.version = h.version;
+  out.merges = h.merges;
+  out.boundary_merges = h.boundary_merges;
+  out.tets_removed = h.tets_removed;
+  out.free_merges = h.free_merges;
+  out.needs_mesh = h.version == kVersion3;
+  return out;
+}
+
+StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,
+                                    const TetMesh* mesh, uint64_t max_merges) {
+  Reader r(payload, what);
+  MergeTree tree;
+  GTN_ASSIGN_OR_RETURN(Header h, readHeader(r, expected_points, &tree));
+  const size_t n = h.points;
+  const uint64_t decode = std::min(h.merges, max_merges);
+  std::optional<ParentCandidates> candidates;
+  if (h.version == kVersion3 && decode > 0) {
+    if (!mesh)
+      return usageError(what + ": the merge tree (version 3) is decoded against its level's mesh, and none was given");
+    if (mesh->numPoints() != n)
+      return invalidData(what + ": the merge tree has " + std::to_string(n) + " vertices, its level's mesh " +
+                         std::to_string(mesh->numPoints()));
+    GTN_ASSIGN_OR_RETURN(std::span<const uint32_t> tets, tetIds(*mesh, what));
+    candidates.emplace(n, tets, mesh->coords.data(), nullptr);
+  }
   tree.merges = decode;
   tree.parent.assign(n, MergeTree::kRoot);
   tree.rank.assign(n, 0);
   tree.removed.assign(n, 0);
   tree.boundary.assign(n, 0);
-  EntropyCoder<false> rc(body);
+  EntropyCoder<false> rc(h.body);
   Models m;
   FreeRanks unmerged(static_cast<uint32_t>(n));
   uint64_t got_boundary = 0, got_removed = 0;
@@ -439,23 +649,31 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     if (code.child_index >= n - r) return bodyError(r, "child out of range");
     const uint32_t id = unmerged.kth(code.child_index) - 1;
     const DeltaPredictions pred(tree.parent, id);
-    codeMerge(rc, m, code, pred.count);
+    const std::vector<uint32_t>* list = candidates ? &candidates->gather(id) : nullptr;
+    codeMerge(rc, m, code, pred.count, list ? static_cast<int64_t>(list->size()) : -1);
     if (!rc.ok()) return bodyError(r, "body truncated or corrupt");
-    int64_t delta;
-    if (code.exact) {
-      if (code.hit >= static_cast<uint32_t>(pred.count)) return bodyError(r, "parent prediction out of range");
-      delta = pred.d[code.hit];
+    uint32_t pid = 0;
+    if (list && code.index < list->size()) {
+      pid = (*list)[code.index];
     } else {
-      if (code.len > 33) return bodyError(r, "parent delta too long");
-      if (code.choice > static_cast<uint32_t>(pred.count)) return bodyError(r, "parent predictor out of range");
-      const int64_t mag = code.len == 0 ? 0 : static_cast<int64_t>((uint64_t{1} << (code.len - 1)) | code.low_bits);
-      delta = (code.choice ? pred.d[code.choice - 1] : 0) + (code.sign ? -mag : mag);
+      if (list && code.index > list->size()) return bodyError(r, "parent candidate out of range");
+      int64_t delta;
+      if (code.exact) {
+        if (code.hit >= static_cast<uint32_t>(pred.count)) return bodyError(r, "parent prediction out of range");
+        delta = pred.d[code.hit];
+      } else {
+        if (code.len > 33) return bodyError(r, "parent delta too long");
+        if (code.choice > static_cast<uint32_t>(pred.count)) return bodyError(r, "parent predictor out of range");
+        const int64_t mag = code.len == 0 ? 0 : static_cast<int64_t>((uint64_t{1} << (code.len - 1)) | code.low_bits);
+        delta = (code.choice ? pred.d[code.choice - 1] : 0) + (code.sign ? -mag : mag);
+      }
+      const int64_t pid64 = int64_t{id} + delta;
+      if (delta == 0 || pid64 < 0 || pid64 >= static_cast<int64_t>(n)) return bodyError(r, "parent id out of range");
+      pid = static_cast<uint32_t>(pid64);
     }
-    const int64_t pid64 = int64_t{id} + delta;
-    if (delta == 0 || pid64 < 0 || pid64 >= static_cast<int64_t>(n)) return bodyError(r, "parent id out of range");
-    const uint32_t pid = static_cast<uint32_t>(pid64);
     // The parent must still be alive: merged later (a larger rank) or never.
     if (tree.parent[pid] != MergeTree::kRoot) return bodyError(r, "merges into a vertex merged earlier");
+    if (candidates) candidates->merge(id, pid);
     unmerged.take(id + 1);
     tree.parent[id] = pid;
     tree.rank[id] = static_cast<uint32_t>(r + 1);
@@ -464,12 +682,14 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     got_boundary += code.boundary;
     got_removed += code.removed;
   }
-  tree.checked = true;               // every record was checked as it was decoded
-  if (decode < merges) return tree;  // a prefix: the rest of the body is not read
+  tree.checked = true;                 // every record was checked as it was decoded
+  if (decode < h.merges) return tree;  // a prefix: the rest of the body is not read
   if (!rc.finishedCleanly())
     return invalidData(what + ": merge tree payload body truncated, corrupt or followed by trailing bytes");
-  if (got_boundary != boundary_merges || got_removed != tets_removed)
+  if (got_boundary != h.boundary_merges || got_removed != h.tets_removed)
     return invalidData(what + ": merge tree payload counts disagree with its header");
+  if (h.version == kVersion3 && leadingFreeMerges(tree) != h.free_merges)
+    return invalidData(what + ": merge tree payload's free_merges disagrees with its records");
   return tree;
 }
 

@@ -6,12 +6,14 @@
 // (a vertex can only be merged into a vertex that is still alive), which makes the tree acyclic and
 // lets a top-down traversal compute ancestors in one pass.
 //
-// Payload layout (version 2; little-endian; varint = unsigned LEB128, at most 10 bytes):
-//   u8      version                  = 2
+// Payload layout (spec section 11; versions 2 and 3, writers write 3; little-endian; varint =
+// unsigned LEB128, at most 10 bytes):
+//   u8      version                  = 3 (or 2)
 //   varint  points P                 vertices of the level (must equal the level header's count)
 //   varint  merges M                 M <= P
 //   varint  boundary_merges          merges whose child is a boundary vertex
 //   varint  tets_removed             sum over merges of the tetrahedra each merge removes
+//   varint  free_merges              version 3 only: leadingFreeMerges (below)
 //   f64     w_density, w_geometry    weights the ranking used (provenance)
 //   varint  n, then n bytes          name of the density field ("" = volume only)
 //   u8      q                        number of error quantiles (0 or 9)
@@ -27,9 +29,15 @@
 //                                    bitlen(U-1), u = 2^b - U; b-1 bits y; if y >= u one more bit,
 //                                    x = 2y + bit - u. Nothing is coded when U = 1.
 //       bit   boundary               one model; 1 = c is a boundary vertex
-//       delta = p - c, predicted by D: the deltas of the merges already coded whose children are
-//       ids c-1, c+1, c-2, c+2, c-3, c+3, c-4, c+4 (those in range and merged, in that order; values
-//       may repeat; DeltaPredictions in the .cpp):
+//       version 3, when c has K > 0 parent candidates (ParentCandidates in the .cpp: the vertices
+//       that share a tetrahedron of the level with c or with a vertex merged into c, each replaced by
+//       the vertex it has been merged into, nearest c first, ties to the smaller id):
+//         BitTree<4> s                 tree per boundary bit; s < 14: p is candidate s; 14: candidate
+//                                      14 + uniform in [0, K - 14); 15: p is no candidate, and the
+//                                      version 2 parent code follows
+//       version 2 parent code: delta = p - c, predicted by D: the deltas of the merges already coded
+//       whose children are ids c-1, c+1, c-2, c+2, c-3, c+3, c-4, c+4 (those in range and merged, in
+//       that order; values may repeat; DeltaPredictions in the .cpp):
 //       if |D| > 0: bit exact          model per boundary bit; 1 = delta == D[h]
 //       if exact:   BitTree<3>  h      the first such h
 //       else:
@@ -43,10 +51,10 @@
 //           len-1 direct bits          |residual| below its leading one
 //       BitTree<4>  t                  tree per boundary bit; t = tetrahedra the merge removes, 15 =
 //                                      escape followed by 32 direct bits holding t
-// The decoder rejects: an unknown version, P different from the expected count, M > P, h >= |D|,
-// k > |D|, len > 33, a parent out of range, equal to c or already merged (its rank must be larger), a body
-// read past its end, and, when it decodes all M merges, counts that disagree with the header fields
-// and trailing bytes.
+// The decoder rejects: an unknown version, P different from the expected count, M > P, a candidate
+// index out of range, h >= |D|, k > |D|, len > 33, a parent out of range, equal to c or already merged
+// (its rank must be larger), a body read past its end, and, when it decodes all M merges, counts that
+// disagree with the header fields and trailing bytes.
 #pragma once
 
 #include <cstdint>
@@ -56,6 +64,7 @@
 
 #include "mesh/index.h"
 #include "mesh/status.h"
+#include "mesh/tet_mesh.h"
 
 namespace gtn {
 
@@ -94,16 +103,34 @@ extern const double kMergeErrorQuantiles[9];
 // Fills error_quantiles from `error` (empty when there are no merges or no errors).
 void computeErrorQuantiles(MergeTree& tree);
 
+// Merges 1..U whose children remove nothing and are interior (the unused mid-edge points merged
+// first, simplify/ranking.h): the largest such U. Version 3 stores it in the header (free_merges).
+uint64_t leadingFreeMerges(const MergeTree& tree);
+
 // Encodes `tree` (vertex numbering of the source mesh) with vertex v stored at vertex_order[v], the
-// id the level decoder gives it. vertex_order must be a permutation of 0..P-1.
-StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order);
+// id the level decoder gives it. vertex_order must be a permutation of 0..P-1. With the level's mesh
+// (`mesh`, in the tree's numbering) the payload is version 3, which codes each parent as a place
+// among the child's neighbours; without it version 2.
+StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order,
+                                               const TetMesh* mesh);
+
+// A payload's header, read and checked without its body (and without the level's mesh).
+struct MergeTreeHeader {
+  uint8_t version = 0;
+  uint64_t merges = 0, boundary_merges = 0, tets_removed = 0;
+  uint64_t free_merges = 0;  // version 3; 0 in version 2 (count them with leadingFreeMerges)
+  bool needs_mesh = false;   // decoding merges needs the level's mesh (version 3)
+};
+StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, uint64_t expected_points,
+                                              const std::string& what);
 
 // Decodes a payload; `expected_points` is the level's vertex count (it bounds every allocation).
-// `what` names the source in messages (file and level). Only the first `max_merges` merges are
-// decoded (the tree of a prefix of the ranking is itself a merge tree, with the later merges' children
-// as roots); the checks that need the whole body (header counts, trailing bytes) run only when the
-// whole body is read.
+// `what` names the source in messages (file and level). `mesh` is the level as decoded (points and
+// tetrahedra in decoding order): version 3 needs it to decode any merge (kUsage without it), version 2
+// ignores it. Only the first `max_merges` merges are decoded (the tree of a prefix of the ranking is
+// itself a merge tree, with the later merges' children as roots); the checks that need the whole body
+// (header counts, trailing bytes) run only when the whole body is read.
 StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,
-                                    uint64_t max_merges = UINT64_MAX);
+                                    const TetMesh* mesh, uint64_t max_merges = UINT64_MAX);
 
 }  // namespace gtn

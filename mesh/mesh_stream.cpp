@@ -95,4 +95,34 @@ Status TetMeshBuilder::tet(const uint32_t v[4], const uint8_t* cell_values) {
   return Status::ok();
 }
 
+namespace {
+// Item i of `fields`, concatenated in their order, into `out` (resized to the item's bytes).
+void packItem(const std::vector<Field>& fields, size_t i, std::vector<uint8_t>& out) {
+  out.clear();
+  for (const Field& f : fields) {
+    const size_t n = f.components * f.valueSize();
+    out.insert(out.end(), f.bytes.begin() + i * n, f.bytes.begin() + (i + 1) * n);
+  }
+}
+}  // namespace
+
+Status replayLevel(const LevelHeader& header, const TetMesh& mesh, const std::vector<std::array<uint32_t, 3>>& boundary,
+                   MeshSink& sink) {
+  GTN_RETURN_IF_ERROR(sink.beginLevel(header));
+  std::vector<uint8_t> item;
+  const uint32_t n = static_cast<uint32_t>(mesh.numPoints());
+  for (uint32_t v = 0; v < n; ++v) {
+    packItem(mesh.point_fields, v, item);
+    GTN_RETURN_IF_ERROR(sink.vertex(v, mesh.point(v), item.empty() ? nullptr : item.data()));
+  }
+  for (const std::array<uint32_t, 3>& t : boundary) GTN_RETURN_IF_ERROR(sink.boundaryTriangle(t.data()));
+  GTN_RETURN_IF_ERROR(sink.endBoundary());
+  for (size_t i = 0; i < mesh.tets.size(); ++i) {
+    packItem(mesh.cell_fields, i, item);
+    GTN_RETURN_IF_ERROR(sink.tet(mesh.tets[i].data(), item.empty() ? nullptr : item.data()));
+  }
+  for (uint32_t v = 0; v < n; ++v) GTN_RETURN_IF_ERROR(sink.retireVertex(v));
+  return sink.endLevel();
+}
+
 }  // namespace gtn

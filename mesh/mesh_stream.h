@@ -113,4 +113,10 @@ class TetMeshBuilder : public MeshSink {
   std::vector<PopulatedPrefix> point_ready_, cell_ready_;
 };
 
+// Streams a whole level (as TetMeshBuilder assembled it: `mesh` with header's fields, `boundary`) to
+// `sink` as events: every vertex in id order, the boundary triangles, the tetrahedra, then every
+// vertex retired.
+Status replayLevel(const LevelHeader& header, const TetMesh& mesh, const std::vector<std::array<uint32_t, 3>>& boundary,
+                   MeshSink& sink);
+
 }  // namespace gtn

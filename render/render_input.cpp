@@ -53,9 +53,9 @@ StatusOr<uint64_t> RenderInput::mergeTreeMerges(size_t i) {
   if (!hasMergeTree(i)) return uint64_t{0};
   GTN_ASSIGN_OR_RETURN(auto payload, reader_->mergeTreePayload(i));
   if (!payload) return uint64_t{0};
-  GTN_ASSIGN_OR_RETURN(MergeTree tree,
-                       decodeMergeTree(*payload, levelHeader(i).points, path_ + ": level " + std::to_string(i)));
-  return tree.merges;
+  GTN_ASSIGN_OR_RETURN(MergeTreeHeader header,
+                       readMergeTreeHeader(*payload, levelHeader(i).points, path_ + ": level " + std::to_string(i)));
+  return header.merges;
 }
 
 StatusOr<ResolvedLevel> RenderInput::resolve(const LevelChoice& choice) const {
@@ -110,11 +110,10 @@ Status RenderInput::stream(ResolvedLevel& level, MeshSink& out, const FieldSelec
     return decodeLevel(encoded_->header, payloadOf(*encoded_), sink, nullptr, path_, &fields);
   }
   if (level.extra_merges == 0) return reader_->decodeLevel(level.level, sink, nullptr, &fields);
-  GTN_ASSIGN_OR_RETURN(auto payload, reader_->mergeTreePayload(level.level));
-  if (!payload) return usageError(path_ + ": level " + std::to_string(level.level) + " has no merge tree");
-  GTN_ASSIGN_OR_RETURN(
-      MergeTree tree,
-      decodeMergeTree(*payload, level.points, path_ + ": level " + std::to_string(level.level), level.extra_merges));
+  if (!reader_->level(level.level).has_merge_tree)
+    return usageError(path_ + ": level " + std::to_string(level.level) + " has no merge tree");
+  GTN_ASSIGN_OR_RETURN(LevelTree stored, levelMergeTree(*reader_, level.level, level.extra_merges, &fields));
+  const MergeTree& tree = stored.tree;
   if (tree.merges < level.extra_merges) {
     if (level.exact_merges)
       return usageError(path_ + ", level " + std::to_string(level.level) + ": " + std::to_string(level.total_merges()) +
@@ -122,7 +121,7 @@ Status RenderInput::stream(ResolvedLevel& level, MeshSink& out, const FieldSelec
     level.extra_merges = tree.merges;
   }
   StreamSimplifier simplifier(tree, level.extra_merges, sink);
-  return reader_->decodeLevel(level.level, simplifier, nullptr, &fields);
+  return emitLevel(*reader_, stored, simplifier, &fields);
 }
 
 }  // namespace gtn

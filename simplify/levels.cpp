@@ -16,16 +16,7 @@ uint64_t levelMerges(int level, uint64_t points, uint64_t merges) {
   return std::min<uint64_t>(static_cast<uint64_t>(n), merges);
 }
 
-uint64_t unreferencedMerges(const MergeTree& tree) {
-  std::vector<uint8_t> free(tree.merges, 0);
-  for (size_t v = 0; v < tree.points(); ++v) {
-    if (tree.rank[v] == 0 || tree.rank[v] > tree.merges) continue;
-    free[tree.rank[v] - 1] = tree.removed[v] == 0 && !tree.boundary[v];
-  }
-  uint64_t u = 0;
-  while (u < free.size() && free[u]) ++u;
-  return u;
-}
+uint64_t unreferencedMerges(const MergeTree& tree) { return leadingFreeMerges(tree); }
 
 MipLevelBuilder::MipLevelBuilder(const TetMesh& source, const MergeTree& tree, bool keep_trees)
     : source_(&source), tree_(&tree), keep_trees_(keep_trees) {
@@ -120,9 +111,12 @@ std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source) const {
     in.ratio = ratios[i];
     if (trees[i]) {
       std::shared_ptr<const MergeTree> t = trees[i];
-      in.merge_tree = [t](const std::vector<uint32_t>& vertex_order) { return encodeMergeTree(*t, vertex_order); };
-      in.merge_tree_prefix = [t](const std::vector<uint32_t>& vertex_order, uint64_t n) {
-        return encodeMergeTree(n < t->merges ? prefixTree(*t, n) : *t, vertex_order);
+      const TetMesh* mesh = in.mesh;
+      in.merge_tree = [t, mesh](const std::vector<uint32_t>& vertex_order) {
+        return encodeMergeTree(*t, vertex_order, mesh);
+      };
+      in.merge_tree_prefix = [t, mesh](const std::vector<uint32_t>& vertex_order, uint64_t n) {
+        return encodeMergeTree(n < t->merges ? prefixTree(*t, n) : *t, vertex_order, mesh);
       };
     }
     if (i < next_index.size()) {
@@ -167,36 +161,53 @@ StatusOr<SimplifyPlan> planSimplification(const GtnReader& reader, uint64_t targ
 }
 
 StatusOr<std::optional<MergeTree>> wholeMergeTree(GtnReader& reader, size_t i,
-                                                  const std::vector<std::vector<uint32_t>>* base_ids) {
+                                                  const std::vector<std::vector<uint32_t>>* base_ids,
+                                                  const std::vector<const TetMesh*>* meshes) {
   if (i >= reader.levels()) return usageError(reader.file().path + ": level " + std::to_string(i) + " does not exist");
   size_t last = i;  // the end of the chain: the first level that stores all its vertices
   while (last + 1 < reader.levels() && reader.level(last).base != 0) ++last;
-  auto treeOf = [&](size_t k, uint64_t max_merges) -> StatusOr<std::optional<MergeTree>> {
+  // Level k's mesh, decoded here unless the caller has it (then `ids` gets the names it gives the
+  // next level's vertices too).
+  std::unique_ptr<TetMeshBuilder> own_mesh;
+  std::vector<uint32_t> decoded;
+  auto meshOf = [&](size_t k, std::vector<uint32_t>* ids) -> StatusOr<const TetMesh*> {
+    if (meshes && k < meshes->size() && (*meshes)[k] && !ids) return (*meshes)[k];
+    own_mesh = std::make_unique<TetMeshBuilder>();
+    GTN_RETURN_IF_ERROR(reader.decodeLevel(k, *own_mesh, nullptr, nullptr, ids));
+    return &own_mesh->mesh();
+  };
+  auto treeOf = [&](size_t k, uint64_t max_merges, const TetMesh* mesh) -> StatusOr<std::optional<MergeTree>> {
     GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(k));
     if (!payload) return std::optional<MergeTree>();
-    GTN_ASSIGN_OR_RETURN(MergeTree t, decodeMergeTree(*payload, reader.level(k).header.points,
-                                                      reader.file().path + ", level " + std::to_string(k), max_merges));
+    const std::string what = reader.file().path + ", level " + std::to_string(k);
+    if (!mesh) {
+      GTN_ASSIGN_OR_RETURN(MergeTreeHeader h, readMergeTreeHeader(*payload, reader.level(k).header.points, what));
+      if (h.needs_mesh) {
+        GTN_ASSIGN_OR_RETURN(mesh, meshOf(k, nullptr));
+      }
+    }
+    GTN_ASSIGN_OR_RETURN(MergeTree t, decodeMergeTree(*payload, reader.level(k).header.points, what, mesh, max_merges));
     return std::optional<MergeTree>(std::move(t));
   };
-  GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> whole, treeOf(last, UINT64_MAX));
+  GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> whole, treeOf(last, UINT64_MAX, nullptr));
   if (!whole) return whole;
   for (size_t k = last; k-- > i;) {
     const std::string what = reader.file().path + ", level " + std::to_string(k);
     const uint64_t band =
         reader.level(k + 1).header.merges - std::min(reader.level(k + 1).header.merges, reader.level(k).header.merges);
-    GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> own, treeOf(k, band));
+    const std::vector<uint32_t>* ids =
+        base_ids && k < base_ids->size() && !(*base_ids)[k].empty() ? &(*base_ids)[k] : nullptr;
+    const TetMesh* mesh = nullptr;
+    if (!ids) {
+      decoded.clear();
+      GTN_ASSIGN_OR_RETURN(mesh, meshOf(k, &decoded));
+      ids = &decoded;
+    }
+    GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> own, treeOf(k, band, mesh));
     if (!own) return own;
     if (own->merges != band)
       return invalidData(what + ": its merge tree holds " + std::to_string(own->merges) + " merges, " +
                          std::to_string(band) + " are needed down to level " + std::to_string(k + 1));
-    std::vector<uint32_t> decoded;
-    const std::vector<uint32_t>* ids =
-        base_ids && k < base_ids->size() && !(*base_ids)[k].empty() ? &(*base_ids)[k] : nullptr;
-    if (!ids) {
-      CountingSink counter;
-      GTN_RETURN_IF_ERROR(reader.decodeLevel(k, counter, nullptr, nullptr, &decoded));
-      ids = &decoded;
-    }
     const size_t n = own->points(), next_n = whole->points();
     if (ids->size() != n) return invalidData(what + ": the ids of the next level's vertices do not match the level");
     std::vector<uint32_t> here(next_n, kNoIndex);  // next level's id -> this level's id
@@ -238,8 +249,11 @@ StatusOr<uint64_t> levelZeroUnreferencedMerges(GtnReader& reader) {
   if (reader.levels() == 0 || !reader.level(0).has_merge_tree) return uint64_t{0};
   GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(0));
   if (!payload) return uint64_t{0};
-  GTN_ASSIGN_OR_RETURN(MergeTree tree,
-                       decodeMergeTree(*payload, reader.level(0).header.points, reader.file().path + ", level 0"));
+  const uint64_t points = reader.level(0).header.points;
+  const std::string what = reader.file().path + ", level 0";
+  GTN_ASSIGN_OR_RETURN(MergeTreeHeader h, readMergeTreeHeader(*payload, points, what));
+  if (h.version >= 3) return h.free_merges;
+  GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, points, what, nullptr));
   return unreferencedMerges(tree);
 }
 
@@ -250,18 +264,36 @@ StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio) {
   return free + static_cast<uint64_t>(std::llround(std::min(1.0, ratio) * static_cast<double>(points - free)));
 }
 
+StatusOr<LevelTree> levelMergeTree(GtnReader& reader, size_t i, uint64_t max_merges, const DecodeFields* fields) {
+  const std::string what = reader.file().path + ", level " + std::to_string(i);
+  GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(i));
+  if (!payload) return usageError(what + " stores no merge tree: cannot simplify beyond the stored levels");
+  const uint64_t points = reader.level(i).header.points;
+  GTN_ASSIGN_OR_RETURN(MergeTreeHeader h, readMergeTreeHeader(*payload, points, what));
+  LevelTree out;
+  out.level = i;
+  if (h.needs_mesh && max_merges > 0) {
+    out.decoded = std::make_unique<TetMeshBuilder>();
+    GTN_RETURN_IF_ERROR(reader.decodeLevel(i, *out.decoded, nullptr, fields));
+  }
+  GTN_ASSIGN_OR_RETURN(
+      out.tree, decodeMergeTree(*payload, points, what, out.decoded ? &out.decoded->mesh() : nullptr, max_merges));
+  return out;
+}
+
+Status emitLevel(GtnReader& reader, const LevelTree& level, MeshSink& sink, const DecodeFields* fields) {
+  if (!level.decoded) return reader.decodeLevel(level.level, sink, nullptr, fields);
+  return replayLevel(level.decoded->header(), level.decoded->mesh(), level.decoded->boundary(), sink);
+}
+
 Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out, bool clamp,
                         const DecodeFields* fields) {
   GTN_ASSIGN_OR_RETURN(SimplifyPlan plan, planSimplification(reader, target_merges));
   if (plan_out) *plan_out = plan;
   if (plan.extra_merges == 0) return reader.decodeLevel(plan.level, sink, nullptr, fields);
-  auto payload_or = reader.mergeTreePayload(plan.level);
-  if (!payload_or.isOk()) return payload_or.status();
-  const std::optional<std::vector<uint8_t>>& payload = payload_or.value();
   const std::string what = reader.file().path + ", level " + std::to_string(plan.level);
-  if (!payload.has_value()) return usageError(what + " stores no merge tree: cannot simplify beyond the stored levels");
-  GTN_ASSIGN_OR_RETURN(MergeTree tree,
-                       decodeMergeTree(*payload, reader.level(plan.level).header.points, what, plan.extra_merges));
+  GTN_ASSIGN_OR_RETURN(LevelTree level, levelMergeTree(reader, plan.level, plan.extra_merges, fields));
+  const MergeTree& tree = level.tree;
   if (plan.extra_merges > tree.merges && clamp) {
     plan.extra_merges = tree.merges;
     if (plan_out) *plan_out = plan;
@@ -270,7 +302,7 @@ Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sin
     return usageError(what + ": " + std::to_string(target_merges) + " merges requested, the merge tree has " +
                       std::to_string(reader.level(plan.level).header.merges + tree.merges));
   StreamSimplifier filter(tree, plan.extra_merges, sink);
-  return reader.decodeLevel(plan.level, filter, nullptr, fields);
+  return emitLevel(reader, level, filter, fields);
 }
 
 }  // namespace gtn

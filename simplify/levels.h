@@ -13,6 +13,7 @@
 
 #include "codec/merge_tree_coder.h"
 #include "format/gtn_file.h"
+#include "mesh/mesh_stream.h"
 #include "mesh/tet_mesh.h"
 
 namespace gtn {
@@ -128,8 +129,23 @@ StatusOr<uint64_t> levelZeroUnreferencedMerges(GtnReader& reader);
 // when a level of the chain stores no merge tree. `base_ids` (optional): per level, what
 // GtnReader::decodeLevel's base_ids gave (a level whose entry is missing or empty is decoded again to
 // get them). Fails, naming the file and level, where the stored trees and levels do not fit together.
+// `meshes` (optional): per level, its mesh as decoded (null entries, or levels past its end, are decoded
+// where a tree needs them).
 StatusOr<std::optional<MergeTree>> wholeMergeTree(GtnReader& reader, size_t i,
-                                                  const std::vector<std::vector<uint32_t>>* base_ids = nullptr);
+                                                  const std::vector<std::vector<uint32_t>>* base_ids = nullptr,
+                                                  const std::vector<const TetMesh*>* meshes = nullptr);
+
+// Level i's own merge tree, its first `max_merges` merges, for simplifying the level on the fly. A tree
+// that is decoded against its level (merge_tree_coder.h, version 3) has the level decoded first, into
+// `decoded`, with `fields`; emitLevel then replays it instead of decoding the level again.
+struct LevelTree {
+  size_t level = 0;
+  MergeTree tree;
+  std::unique_ptr<TetMeshBuilder> decoded;
+};
+StatusOr<LevelTree> levelMergeTree(GtnReader& reader, size_t i, uint64_t max_merges, const DecodeFields* fields);
+// Streams the level of `level` to `sink` (a StreamSimplifier over level.tree, say).
+Status emitLevel(GtnReader& reader, const LevelTree& level, MeshSink& sink, const DecodeFields* fields);
 
 // Streams the mesh after `target_merges` merges to `sink`: decodes the planned level and, when merges
 // remain, filters it through a StreamSimplifier with that level's merge tree. Fails with kUsage when

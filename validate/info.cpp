@@ -74,7 +74,7 @@ StatusOr<std::optional<MergeTreeReport>> mergeTreeReport(GtnReader& r) {
     if (!level_payload.isOk()) return level_payload.status();
     if (!level_payload.value().has_value()) continue;
     GTN_ASSIGN_OR_RETURN(MergeTree head, decodeMergeTree(*level_payload.value(), l.header.points,
-                                                         r.file().path + ", level " + std::to_string(i), 0));
+                                                         r.file().path + ", level " + std::to_string(i), nullptr, 0));
     addCurvePoints(rep.error_curve, i, l.header.merges, tree.merges - l.header.merges, head.error_quantiles, points0);
   }
   std::stable_sort(rep.error_curve.begin(), rep.error_curve.end(),

@@ -308,6 +308,8 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
     info["peak_live_vertices"][i] = dstats.peak_live_vertices;
   }
   if (decoded.levels.empty()) return report;  // level 0 did not decode: nothing else can be checked
+  std::vector<const TetMesh*> level_meshes(reader.levels(), nullptr);  // what version 3 trees decode against
+  for (const DecodedLevel& l : decoded.levels) level_meshes[l.level] = &l.mesh;
   for (size_t i = 0; i < reader.levels(); ++i) {
     StatusOr<std::optional<std::vector<uint8_t>>> payload = reader.mergeTreePayload(i);
     if (!payload.isOk()) {
@@ -318,8 +320,13 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
     }
     if (!payload->has_value()) continue;
     const uint64_t points = reader.level(i).header.points;
-    StatusOr<MergeTree> tree =
-        decodeMergeTree(**payload, points, fi.path + ": level " + std::to_string(i) + " merge tree");
+    const std::string what = fi.path + ": level " + std::to_string(i) + " merge tree";
+    StatusOr<MergeTree> tree = level_meshes[i] ? decodeMergeTree(**payload, points, what, level_meshes[i])
+                                               : StatusOr<MergeTree>(invalidData(what + ": its level did not decode"));
+    if (!level_meshes[i]) {
+      if (auto h = readMergeTreeHeader(**payload, points, what); h.isOk() && !h->needs_mesh)
+        tree = decodeMergeTree(**payload, points, what, nullptr);
+    }
     if (!tree.isOk()) {
       report.add(IssueCode::kMergeTreeUndecodable, "/merge_tree", "/levels/" + std::to_string(i) + "/merge_tree",
                  tree.status().message());
@@ -329,7 +336,7 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
     // Level 0's whole tree (with the next levels' where level 0 names their vertices) is the one every
     // level derives from; the trees of mip levels (what remains of it) are only checked to decode.
     if (i == 0) {
-      StatusOr<std::optional<MergeTree>> whole = wholeMergeTree(reader, 0, &base_ids);
+      StatusOr<std::optional<MergeTree>> whole = wholeMergeTree(reader, 0, &base_ids, &level_meshes);
       if (!whole.isOk()) {
         report.add(IssueCode::kMergeTreeUndecodable, "/merge_tree", "/levels/0/merge_tree", whole.status().message());
         decoded.forest_undecodable = true;

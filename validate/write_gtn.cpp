@@ -126,7 +126,11 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
                                     uint64_t merges) -> StatusOr<std::vector<uint8_t>> {
         const std::shared_ptr<const MergeTree> t = levels.tree(i);
         if (!t) return usageError(path + ": level " + std::to_string(i) + "'s merge tree asked for before the level");
-        return encodeMergeTree(merges < t->merges ? prefixTree(*t, merges) : *t, vertex_order);
+        const TetMesh* level_mesh = &mesh;
+        if (i > 0) {
+          GTN_ASSIGN_OR_RETURN(level_mesh, levels.level(i));
+        }
+        return encodeMergeTree(merges < t->merges ? prefixTree(*t, merges) : *t, vertex_order, level_mesh);
       };
       in.merge_tree = [prefix = in.merge_tree_prefix](const std::vector<uint32_t>& vertex_order) {
         return prefix(vertex_order, UINT64_MAX);

@@ -159,8 +159,15 @@ int run(const Dataset& d, int repeat) {
     std::fprintf(stderr, "%s: %s\n", d.name.c_str(), enc.status().message().c_str());
     return 1;
   }
-  auto payload = encodeMergeTree(*tree, enc->vertex_order);
-  auto stream_tree = decodeMergeTree(*payload, mesh.numPoints(), d.name);
+  // The level as its decoder numbers it: what the merge tree is decoded against.
+  auto decodedMesh = [&](const EncodedLevel& e) {
+    TetMeshBuilder b;
+    (void)decodeLevel(e.header, payloadOf(e), b, nullptr, d.name);
+    return std::move(b.mesh());
+  };
+  const TetMesh decoded0 = decodedMesh(*enc);
+  auto payload = encodeMergeTree(*tree, enc->vertex_order, &mesh);
+  auto stream_tree = decodeMergeTree(*payload, mesh.numPoints(), d.name, &decoded0);
   if (!payload.isOk() || !stream_tree.isOk()) return 1;
   const LevelPayload lp = payloadOf(*enc);
   // Plain and filtered decodes alternate, and each keeps its best thread CPU time, so that load from
@@ -169,8 +176,9 @@ int run(const Dataset& d, int repeat) {
   // through it, less replaying it into a null sink), over the plain decode; every figure is the best of `repeat` runs of thread CPU time,
   // which keeps load from other processes out of the short runs.
   double last_tree_decode = 0;
-  auto compare = [&](const LevelHeader& header, const LevelPayload& payload, const MergeTree& st,
-                     const std::vector<uint8_t>& tree_bytes, uint64_t n, double* plain, double* filter, uint64_t* out) {
+  auto compare = [&](const LevelHeader& header, const LevelPayload& payload, const TetMesh& decoded,
+                     const MergeTree& st, const std::vector<uint8_t>& tree_bytes, uint64_t n, double* plain,
+                     double* filter, uint64_t* out) {
     RecordingSink rec;
     (void)decodeLevel(header, payload, rec, nullptr, d.name);
     *plain = 1e30;
@@ -196,7 +204,7 @@ int run(const Dataset& d, int repeat) {
     double tree_decode = 1e30;  // reading the MTRE chunk is part of the price
     for (int r = 0; r < repeat; ++r) {
       const double t0 = threadSeconds();
-      (void)decodeMergeTree(tree_bytes, st.points(), d.name, n);  // as the reader: the first n merges
+      (void)decodeMergeTree(tree_bytes, st.points(), d.name, &decoded, n);  // as the reader: the first n merges
       tree_decode = std::min(tree_decode, threadSeconds() - t0);
     }
     *filter = std::max(0.0, simp_replay - null_replay) + tree_decode;
@@ -213,7 +221,7 @@ int run(const Dataset& d, int repeat) {
     const uint64_t n = std::min<uint64_t>(tree->merges, std::llround(ratio * mesh.numPoints()));
     double plain, t;
     uint64_t out = 0;
-    compare(enc->header, lp, *stream_tree, *payload, n, &plain, &t, &out);
+    compare(enc->header, lp, decoded0, *stream_tree, *payload, n, &plain, &t, &out);
     std::printf("%8.2f %10llu %10.4f %10.4f %10.4f %8.1f%%\n", ratio, (unsigned long long)out, plain, t,
                 last_tree_decode, 100.0 * t / plain);
   }
@@ -230,13 +238,14 @@ int run(const Dataset& d, int repeat) {
     const TetMesh& lm = li == 0 ? mesh : levels->meshes[li];
     auto e = encodeLevel(lm, EncodeOptions{});
     if (!e.isOk()) return 1;
-    auto tp = encodeMergeTree(*levels->trees[li], e->vertex_order);
+    auto tp = encodeMergeTree(*levels->trees[li], e->vertex_order, &lm);
     if (!tp.isOk()) return 1;
-    auto st = decodeMergeTree(*tp, lm.numPoints(), d.name);
+    const TetMesh dl = decodedMesh(*e);
+    auto st = decodeMergeTree(*tp, lm.numPoints(), d.name, &dl);
     if (!st.isOk()) return 1;
     double plain, t;
     uint64_t out = 0;
-    compare(e->header, payloadOf(*e), *st, *tp, n - levels->merges[li], &plain, &t, &out);
+    compare(e->header, payloadOf(*e), dl, *st, *tp, n - levels->merges[li], &plain, &t, &out);
     std::printf("%8.2f %6zu %10llu %10.4f %10.4f %10.4f %8.1f%%\n", ratio, li, (unsigned long long)out, plain, t,
                 last_tree_decode, 100.0 * t / plain);
   }
@@ -251,7 +260,7 @@ int run(const Dataset& d, int repeat) {
     volumeMass(lm, stats.field, &v, &m);
     auto e = encodeLevel(lm, EncodeOptions{});
     if (!e.isOk()) return 1;
-    auto tp = encodeMergeTree(*levels->trees[i], e->vertex_order);
+    auto tp = encodeMergeTree(*levels->trees[i], e->vertex_order, &lm);
     if (!tp.isOk()) return 1;
     const uint64_t bytes = levelBytes(*e) + tp->size();
     total += bytes;

@@ -86,7 +86,8 @@ TEST(GtnChain, LevelsNameTheNextLevelAndDecodeAsIndependentLevelsDo) {
     // A level's own merge tree holds its merges down to the next level, the last one the rest.
     auto own = c->mergeTreePayload(i);
     ASSERT_TRUE(own.isOk() && own->has_value());
-    auto tree = decodeMergeTree(**own, c->level(i).header.points, "chained");
+    const TetMesh level = decode(*c, i);
+    auto tree = decodeMergeTree(**own, c->level(i).header.points, "chained", &level);
     ASSERT_TRUE(tree.isOk()) << tree.status().message();
     if (i + 1 < 4) {
       EXPECT_EQ(tree->merges, c->level(i + 1).header.merges - c->level(i).header.merges);
@@ -104,10 +105,10 @@ TEST(GtnChain, LevelsNameTheNextLevelAndDecodeAsIndependentLevelsDo) {
   ASSERT_TRUE(whole->has_value());
   auto ref_payload = a->mergeTreePayload(0);
   ASSERT_TRUE(ref_payload.isOk() && ref_payload->has_value());
-  auto ref = decodeMergeTree(**ref_payload, a->level(0).header.points, "alone");
+  const TetMesh c0 = decode(*c, 0), a0 = decode(*a, 0);
+  auto ref = decodeMergeTree(**ref_payload, a->level(0).header.points, "alone", &a0);
   ASSERT_TRUE(ref.isOk());
   EXPECT_EQ((*whole)->merges, ref->merges);
-  const TetMesh c0 = decode(*c, 0), a0 = decode(*a, 0);
   EXPECT_TRUE(treeByPoint(c0, **whole) == treeByPoint(a0, *ref));
 
   // Simplification on the fly gives the same meshes from either file, from whichever level it starts.
@@ -315,7 +316,7 @@ TEST(GtnChain, AMergeTreeShorterThanItsBandIsRefusedNamingTheLevel) {
   // Level 0 stores one merge fewer than it needs down to level 1.
   const uint64_t band = built->merges[1];
   inputs[0].merge_tree_prefix = [&](const std::vector<uint32_t>& order, uint64_t) {
-    return encodeMergeTree(prefixTree(*tree, band - 1), order);
+    return encodeMergeTree(prefixTree(*tree, band - 1), order, &mesh);
   };
   const std::string path = dir() + "/short.gtn";
   ASSERT_TRUE(writeGtnFile(path, inputs, GtnWriteOptions{}).isOk());

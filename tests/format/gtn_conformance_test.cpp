@@ -850,7 +850,7 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
   auto payload = (*r)->mergeTreePayload(0);
   ASSERT_TRUE(payload.isOk());
   ASSERT_TRUE(payload->has_value());
-  auto tree = decodeMergeTree(**payload, level0.numPoints(), "wide level 0");
+  auto tree = decodeMergeTree(**payload, level0.numPoints(), "wide level 0", &level0);
   ASSERT_TRUE(tree.isOk()) << tree.status().message();
   RankingOptions greedy;
   greedy.lazy = false;
@@ -886,7 +886,7 @@ TEST(GtnConformance, LevelsAndMergeTreesAgree) {
   auto payload = (*r)->mergeTreePayload(0);
   ASSERT_TRUE(payload.isOk());
   ASSERT_TRUE(payload->has_value());
-  auto own = decodeMergeTree(**payload, level0.numPoints(), "level 0");
+  auto own = decodeMergeTree(**payload, level0.numPoints(), "level 0", &level0);
   ASSERT_TRUE(own.isOk()) << own.status().message();
   EXPECT_EQ(own->merges, (*r)->level(1).header.merges);
   auto whole = wholeMergeTree(**r, 0);

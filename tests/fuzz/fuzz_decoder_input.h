@@ -22,7 +22,13 @@ namespace gtn::fuzz {
 inline bool decodeFuzzInput(const uint8_t* data, size_t size) {
   if (size < 12) return false;
   if (data[0] & 1) {
-    return decodeMergeTree(std::span<const uint8_t>(data + 2, size - 2), data[1] % 64, "fuzz").isOk();
+    // A version 3 tree decodes against a level: a strip of tetrahedra over the points.
+    const uint32_t points = data[1] % 64;
+    TetMesh strip;
+    for (uint32_t v = 0; v < points; ++v)
+      strip.coords.insert(strip.coords.end(), {double(v), double(v % 3), double(v % 5)});
+    for (uint32_t v = 0; v + 3 < points; ++v) strip.tets.push_back({v, v + 1, v + 2, v + 3});
+    return decodeMergeTree(std::span<const uint8_t>(data + 2, size - 2), points, "fuzz", &strip).isOk();
   }
   LevelHeader h;
   h.points = data[1] % 64;

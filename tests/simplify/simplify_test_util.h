@@ -167,6 +167,17 @@ struct MeshChecks {
   uint64_t boundary_triangles = 0;
 };
 
+// `mesh` with vertex v numbered order[v] (points and tetrahedra only): the mesh a decoder that gives v
+// the id order[v] sees, which a version 3 merge tree is decoded against.
+inline TetMesh renumberedMesh(const TetMesh& mesh, const std::vector<uint32_t>& order) {
+  TetMesh out;
+  out.coords.resize(mesh.coords.size());
+  for (size_t v = 0; v < mesh.numPoints(); ++v)
+    for (int k = 0; k < 3; ++k) out.coords[3 * size_t{order[v]} + k] = mesh.coords[3 * v + k];
+  for (const Tet& t : mesh.tets) out.tets.push_back({order[t[0]], order[t[1]], order[t[2]], order[t[3]]});
+  return out;
+}
+
 inline long eulerOfTriangles(const std::vector<Triangle>& tris) {
   std::set<uint32_t> verts;
   std::set<std::pair<uint32_t, uint32_t>> edges;
@@ -290,9 +301,10 @@ inline void expectStreamMatchesApply(const TetMesh& mesh, const MergeTree& tree,
     StatusOr<EncodedLevel> own = encoded ? StatusOr<EncodedLevel>(Status::ok()) : encodeLevel(mesh, EncodeOptions{});
     ASSERT_TRUE(encoded || own.isOk()) << own.status().message();
     const EncodedLevel* enc = encoded ? encoded : &own.value();
-    auto payload = encodeMergeTree(tree, enc->vertex_order);
+    auto payload = encodeMergeTree(tree, enc->vertex_order, &mesh);
     ASSERT_TRUE(payload.isOk()) << payload.status().message();
-    auto stream_tree = decodeMergeTree(*payload, mesh.numPoints(), "test");
+    const TetMesh decoded = renumberedMesh(mesh, enc->vertex_order);
+    auto stream_tree = decodeMergeTree(*payload, mesh.numPoints(), "test", &decoded);
     ASSERT_TRUE(stream_tree.isOk()) << stream_tree.status().message();
     StreamSimplifier simp(*stream_tree, n, rec);
     Status st = decodeLevel(enc->header, payloadOf(*enc), simp, nullptr, "test");
@@ -303,9 +315,10 @@ inline void expectStreamMatchesApply(const TetMesh& mesh, const MergeTree& tree,
     std::mt19937 rng(static_cast<uint32_t>(n) + 7);
     std::shuffle(perm.begin(), perm.end(), rng);
     const std::vector<uint32_t> sid = emitterIds(mesh, perm);
-    auto payload = encodeMergeTree(tree, sid);
+    auto payload = encodeMergeTree(tree, sid, &mesh);
     ASSERT_TRUE(payload.isOk()) << payload.status().message();
-    auto stream_tree = decodeMergeTree(*payload, mesh.numPoints(), "test");
+    const TetMesh decoded = renumberedMesh(mesh, sid);
+    auto stream_tree = decodeMergeTree(*payload, mesh.numPoints(), "test", &decoded);
     ASSERT_TRUE(stream_tree.isOk()) << stream_tree.status().message();
     StreamSimplifier simp(*stream_tree, n, rec);
     Status st = emitMesh(mesh, perm, simp);

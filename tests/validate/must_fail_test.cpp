@@ -80,15 +80,16 @@ Bytes writeLevels(const std::vector<GtnLevelInput>& levels) {
   return readBytes(path);
 }
 
-decltype(GtnLevelInput::merge_tree) treeCoder(const MergeTree& tree) {
-  return [tree](const std::vector<uint32_t>& order) { return encodeMergeTree(tree, order); };
+// Codes `tree` against `mesh`, the level it belongs to (which must outlive the writer).
+decltype(GtnLevelInput::merge_tree) treeCoder(const MergeTree& tree, const TetMesh& mesh) {
+  return [tree, &mesh](const std::vector<uint32_t>& order) { return encodeMergeTree(tree, order, &mesh); };
 }
 
 // Level 0 + level 1 after n merges of `tree` (declared `declared` merges and ratio).
 Bytes twoLevels(const MergeTree& tree, const TetMesh& level1, uint64_t declared, double ratio, bool with_tree) {
   GtnLevelInput l0;
   l0.mesh = &base().mesh;
-  if (with_tree) l0.merge_tree = treeCoder(tree);
+  if (with_tree) l0.merge_tree = treeCoder(tree, base().mesh);
   GtnLevelInput l1;
   l1.mesh = &level1;
   l1.merges = declared;
@@ -461,7 +462,7 @@ Bytes oneMergeFile(const TetMesh& mesh, uint32_t c, uint32_t p, uint32_t extra_r
   EXPECT_TRUE(t.check("one merge").isOk());
   GtnLevelInput l0;
   l0.mesh = &mesh;
-  l0.merge_tree = treeCoder(t);
+  l0.merge_tree = treeCoder(t, mesh);
   return writeLevels({l0});
 }
 
