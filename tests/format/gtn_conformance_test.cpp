@@ -561,6 +561,8 @@ std::vector<Sample> samples() {
       valid("pieces.f32.dir.v2.0-d4.gtn", piecesMesh, [] { return encodePiecesFile(piecesMesh(), options()); }));
   s.push_back(
       valid("levels.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+  s.push_back(valid("levels-mtre3.f32.dir.v2.0-d4.gtn", levelsMesh,
+                    [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(
       valid("wide-merge-tree.f32.dir.v2.0-d4.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d4.gtn", cubeF32, [] {
@@ -868,11 +870,22 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
   }
 }
 
-// The file with levels: every stored level is what its merges make of level 0, with level 0's merge
+// The files with levels: every stored level is what its merges make of level 0, with level 0's merge
 // tree as the file stores it, and on-the-fly simplification from the finest stored level gives the
-// same mesh as applying the merges to level 0, at every merge count.
+// same mesh as applying the merges to level 0, at every merge count. levels.f32 stores MTRE payload
+// version 2, levels-mtre3.f32 version 3 (parents among the neighbours in the level's mesh).
+void expectLevelsAndTreesAgree(const std::string& path, int version);
+
 TEST(GtnConformance, LevelsAndMergeTreesAgree) {
-  auto r = GtnReader::open(kDir + "levels.f32.dir.v2.0-d4.gtn");
+  for (const auto& [name, version] : {std::pair<std::string, int>{"levels.f32.dir.v2.0-d4.gtn", 2},
+                                      std::pair<std::string, int>{"levels-mtre3.f32.dir.v2.0-d4.gtn", 3}}) {
+    SCOPED_TRACE(name);
+    expectLevelsAndTreesAgree(kDir + name, version);
+  }
+}
+
+void expectLevelsAndTreesAgree(const std::string& path, int version) {
+  auto r = GtnReader::open(path);
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 3u);
   TetMeshBuilder b0;
@@ -886,6 +899,7 @@ TEST(GtnConformance, LevelsAndMergeTreesAgree) {
   auto payload = (*r)->mergeTreePayload(0);
   ASSERT_TRUE(payload.isOk());
   ASSERT_TRUE(payload->has_value());
+  EXPECT_EQ((**payload)[0], version);
   auto own = decodeMergeTree(**payload, level0.numPoints(), "level 0", &level0);
   ASSERT_TRUE(own.isOk()) << own.status().message();
   EXPECT_EQ(own->merges, (*r)->level(1).header.merges);
