@@ -190,31 +190,36 @@ class ParentCandidates {
     }
   }
 
-  // The candidates of child c (a vertex not merged yet), sorted.
-  const std::vector<uint32_t>& gather(uint32_t c) {
+  // Gathers the candidates of child c (a vertex not merged yet); returns their number.
+  uint32_t gather(uint32_t c) {
     ++stamp_;
-    list_.clear();
+    keyed_.clear();
+    const double* pc = coords_ + 3 * size_t{c};
     for (uint32_t y = c; y != kNone; y = next_[y]) {
       for (uint64_t k = start_[y]; k < start_[y + 1]; ++k) {
         const uint32_t q = root(neighbours_[k]);
         if (q == c || mark_[q] == stamp_) continue;
         mark_[q] = stamp_;
-        list_.push_back(q);
-      }
-    }
-    if (list_.size() > 1) {
-      keyed_.clear();
-      const double* pc = coords_ + 3 * size_t{c};
-      for (uint32_t q : list_) {
         const double* pq = coords_ + 3 * size_t{q};
         const double dx = pq[0] - pc[0], dy = pq[1] - pc[1], dz = pq[2] - pc[2];
         keyed_.push_back({(dx * dx + dy * dy) + dz * dz, key_ ? key_[q] : q, q});
       }
-      std::sort(keyed_.begin(), keyed_.end(),
-                [](const Keyed& a, const Keyed& b) { return a.d2 < b.d2 || (a.d2 == b.d2 && a.id < b.id); });
-      for (size_t i = 0; i < keyed_.size(); ++i) list_[i] = keyed_[i].v;
     }
-    return list_;
+    return static_cast<uint32_t>(keyed_.size());
+  }
+  // The place of p among the gathered candidates in their order (the count when p is none of them).
+  uint32_t placeOf(uint32_t p) const {
+    const Keyed* at = nullptr;
+    for (const Keyed& k : keyed_) at = k.v == p ? &k : at;
+    if (!at) return static_cast<uint32_t>(keyed_.size());
+    uint32_t place = 0;
+    for (const Keyed& k : keyed_) place += before(k, *at);
+    return place;
+  }
+  // The candidate at place i (i below the count) in their order.
+  uint32_t at(uint32_t i) {
+    std::nth_element(keyed_.begin(), keyed_.begin() + i, keyed_.end(), before);
+    return keyed_[i].v;
   }
 
   // Child c merges into parent p: c's vertices become p's.
@@ -230,6 +235,7 @@ class ParentCandidates {
     double d2;
     uint32_t id, v;
   };
+  static bool before(const Keyed& a, const Keyed& b) { return a.d2 < b.d2 || (a.d2 == b.d2 && a.id < b.id); }
   uint32_t root(uint32_t x) {
     while (up_[x] != x) {
       up_[x] = up_[up_[x]];
@@ -243,7 +249,6 @@ class ParentCandidates {
   std::vector<uint32_t> neighbours_;
   std::vector<uint32_t> up_, next_, last_, mark_;
   uint32_t stamp_ = 0;
-  std::vector<uint32_t> list_;
   std::vector<Keyed> keyed_;
 };
 
@@ -518,9 +523,8 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     code.child_index = unmerged.countBelow(id + 1);
     int64_t count = -1;
     if (candidates) {
-      const std::vector<uint32_t>& list = candidates->gather(v);
-      count = static_cast<int64_t>(list.size());
-      code.index = static_cast<uint32_t>(std::find(list.begin(), list.end(), tree.parent[v]) - list.begin());
+      count = candidates->gather(v);
+      code.index = candidates->placeOf(tree.parent[v]);
       candidates->merge(v, tree.parent[v]);
     }
     const uint32_t pid = vertex_order[tree.parent[v]];
@@ -649,14 +653,14 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     if (code.child_index >= n - r) return bodyError(r, "child out of range");
     const uint32_t id = unmerged.kth(code.child_index) - 1;
     const DeltaPredictions pred(tree.parent, id);
-    const std::vector<uint32_t>* list = candidates ? &candidates->gather(id) : nullptr;
-    codeMerge(rc, m, code, pred.count, list ? static_cast<int64_t>(list->size()) : -1);
+    const int64_t count = candidates ? int64_t{candidates->gather(id)} : -1;
+    codeMerge(rc, m, code, pred.count, count);
     if (!rc.ok()) return bodyError(r, "body truncated or corrupt");
     uint32_t pid = 0;
-    if (list && code.index < list->size()) {
-      pid = (*list)[code.index];
+    if (count >= 0 && code.index < count) {
+      pid = candidates->at(code.index);
     } else {
-      if (list && code.index > list->size()) return bodyError(r, "parent candidate out of range");
+      if (count >= 0 && code.index > count) return bodyError(r, "parent candidate out of range");
       int64_t delta;
       if (code.exact) {
         if (code.hit >= static_cast<uint32_t>(pred.count)) return bodyError(r, "parent prediction out of range");

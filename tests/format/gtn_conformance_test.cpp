@@ -561,8 +561,8 @@ std::vector<Sample> samples() {
       valid("pieces.f32.dir.v2.0-d4.gtn", piecesMesh, [] { return encodePiecesFile(piecesMesh(), options()); }));
   s.push_back(
       valid("levels.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
-  s.push_back(valid("levels-mtre3.f32.dir.v2.0-d4.gtn", levelsMesh,
-                    [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+  s.push_back(
+      valid("levels-mtre3.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(
       valid("wide-merge-tree.f32.dir.v2.0-d4.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d4.gtn", cubeF32, [] {
