@@ -148,46 +148,26 @@ struct DeltaPredictions {
 };
 
 // Version 3: the parent as a place among the child's neighbours at the time of its merge, in the
-// mesh the earlier merges left (the vertices that share a tetrahedron of the level with the child or
-// with a vertex merged into it, each replaced by the vertex it has been merged into, recursively),
-// nearest first: by the squared distance ((dx*dx + dy*dy) + dz*dz) in double, ties to the smaller
-// decoding id. The encoder works in the tree's own numbering and breaks ties by `key` (the decoding
-// ids); the decoder in decoding order with no key.
+// mesh the earlier merges left: the tetrahedra of the level whose four vertices still have four
+// distinct roots (root: the vertex a vertex has been merged into, recursively) are that mesh's; the
+// candidates are the roots of the vertices of those that hold the child's root, nearest the child
+// first: by the squared distance ((dx*dx + dy*dy) + dz*dz) in double, ties to the smaller decoding
+// id. The number of those tetrahedra that hold the parent is what the merge removes. The encoder
+// works in the tree's own numbering and breaks ties by `key` (the decoding ids); the decoder in
+// decoding order with no key.
 class ParentCandidates {
  public:
   // `tets`: 4 vertex ids per tetrahedron, all below n (the caller checks); `coords`: 3 per vertex.
   ParentCandidates(size_t n, std::span<const uint32_t> tets, const double* coords, const uint32_t* key)
-      : coords_(coords), key_(key), up_(n), next_(n, kNone), last_(n), mark_(n, kNone) {
+      : tets_(tets), coords_(coords), key_(key), up_(n), next_(n, kNone), last_(n), mark_(n, kNone), held_(n, 0) {
     for (uint32_t v = 0; v < n; ++v) up_[v] = last_[v] = v;
-    // Vertex -> tetrahedra, then each vertex's neighbours once.
-    std::vector<uint64_t> at(n + 1, 0);
-    for (uint32_t v : tets) ++at[v + 1];
-    for (size_t v = 0; v < n; ++v) at[v + 1] += at[v];
-    std::vector<uint32_t> incident(tets.size());
-    {
-      std::vector<uint64_t> fill(at.begin(), at.end() - 1);
-      for (size_t i = 0; i < tets.size(); ++i) incident[fill[tets[i]]++] = static_cast<uint32_t>(i / 4);
-    }
+    // Vertex -> its tetrahedra.
     start_.assign(n + 1, 0);
-    for (int pass = 0; pass < 2; ++pass) {
-      uint64_t out = 0;
-      for (uint32_t v = 0; v < n; ++v) {
-        start_[v] = out;
-        for (uint64_t k = at[v]; k < at[v + 1]; ++k) {
-          const uint32_t* t = tets.data() + 4 * size_t{incident[k]};
-          for (int j = 0; j < 4; ++j) {
-            const uint32_t w = t[j];
-            if (w == v || mark_[w] == v) continue;
-            mark_[w] = v;
-            if (pass) neighbours_[out] = w;
-            ++out;
-          }
-        }
-      }
-      start_[n] = out;
-      if (!pass) neighbours_.resize(out);
-      std::fill(mark_.begin(), mark_.end(), kNone);
-    }
+    for (uint32_t v : tets) ++start_[v + 1];
+    for (size_t v = 0; v < n; ++v) start_[v + 1] += start_[v];
+    incident_.resize(tets.size());
+    std::vector<uint64_t> fill(start_.begin(), start_.end() - 1);
+    for (size_t i = 0; i < tets.size(); ++i) incident_[fill[tets[i]]++] = static_cast<uint32_t>(i / 4);
   }
 
   // Gathers the candidates of child c (a vertex not merged yet); returns their number.
@@ -197,16 +177,27 @@ class ParentCandidates {
     const double* pc = coords_ + 3 * size_t{c};
     for (uint32_t y = c; y != kNone; y = next_[y]) {
       for (uint64_t k = start_[y]; k < start_[y + 1]; ++k) {
-        const uint32_t q = root(neighbours_[k]);
-        if (q == c || mark_[q] == stamp_) continue;
-        mark_[q] = stamp_;
-        const double* pq = coords_ + 3 * size_t{q};
-        const double dx = pq[0] - pc[0], dy = pq[1] - pc[1], dz = pq[2] - pc[2];
-        keyed_.push_back({(dx * dx + dy * dy) + dz * dz, key_ ? key_[q] : q, q});
+        const uint32_t* t = tets_.data() + 4 * size_t{incident_[k]};
+        const uint32_t r[4] = {root(t[0]), root(t[1]), root(t[2]), root(t[3])};
+        if (r[0] == r[1] || r[0] == r[2] || r[0] == r[3] || r[1] == r[2] || r[1] == r[3] || r[2] == r[3]) continue;
+        // A live tetrahedron holds exactly one vertex of c's: it is met once.
+        for (uint32_t q : r) {
+          if (q == c) continue;
+          if (mark_[q] != stamp_) {
+            mark_[q] = stamp_;
+            held_[q] = 0;
+            const double* pq = coords_ + 3 * size_t{q};
+            const double dx = pq[0] - pc[0], dy = pq[1] - pc[1], dz = pq[2] - pc[2];
+            keyed_.push_back({(dx * dx + dy * dy) + dz * dz, key_ ? key_[q] : q, q});
+          }
+          ++held_[q];
+        }
       }
     }
     return static_cast<uint32_t>(keyed_.size());
   }
+  // The live tetrahedra that hold c and p, for the last gathered c: what the merge removes.
+  uint32_t removed(uint32_t p) const { return mark_[p] == stamp_ ? held_[p] : 0; }
   // The place of p among the gathered candidates in their order (the count when p is none of them).
   uint32_t placeOf(uint32_t p) const {
     const Keyed* at = nullptr;
@@ -243,11 +234,12 @@ class ParentCandidates {
     }
     return x;
   }
+  std::span<const uint32_t> tets_;
   const double* coords_;
   const uint32_t* key_;
-  std::vector<uint64_t> start_;
-  std::vector<uint32_t> neighbours_;
-  std::vector<uint32_t> up_, next_, last_, mark_;
+  std::vector<uint64_t> start_;     // per vertex: its first entry in incident_
+  std::vector<uint32_t> incident_;  // the tetrahedra of each vertex
+  std::vector<uint32_t> up_, next_, last_, mark_, held_;
   uint32_t stamp_ = 0;
   std::vector<Keyed> keyed_;
 };
@@ -280,18 +272,14 @@ void codeDelta(C& c, Models& m, MergeCode& v);
 
 // What follows the child's index (codeUniform over the vertices not merged yet), once the child and
 // so its parent-delta predictions are known; `candidates` is the number of the child's parent
-// candidates in version 3, -1 in version 2.
+// candidates in version 3, -1 in version 2. Version 3 codes no tetrahedron count: the mesh gives it.
 template <class C>
 void codeMerge(C& c, Models& m, MergeCode& v, int predictions, int64_t candidates) {
   v.boundary = c.bit(m.boundary, v.boundary);
   if (candidates >= 0) {
     const uint32_t count = static_cast<uint32_t>(candidates);
     v.index = codeParentIndex(c, m, v.boundary, v.index, count);
-    if (v.index < count || v.index > count) {  // a candidate, or corrupt (the decoder rejects it)
-      const uint32_t k = m.removed[v.boundary].code(c, std::min<uint32_t>(v.removed, 15));
-      v.removed = k == 15 ? c.direct(v.removed, 32) : k;
-      return;
-    }
+    if (v.index != count) return;  // a candidate, or corrupt (the decoder rejects it)
   }
   if (predictions > 0) v.exact = c.bit(m.exact[v.boundary], v.exact);
   if (v.exact) {
@@ -299,6 +287,7 @@ void codeMerge(C& c, Models& m, MergeCode& v, int predictions, int64_t candidate
   } else {
     codeDelta(c, m, v);
   }
+  if (candidates >= 0) return;
   const uint32_t k = m.removed[v.boundary].code(c, std::min<uint32_t>(v.removed, 15));
   v.removed = k == 15 ? c.direct(v.removed, 32) : k;
 }
@@ -525,6 +514,10 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     if (candidates) {
       count = candidates->gather(v);
       code.index = candidates->placeOf(tree.parent[v]);
+      if (candidates->removed(tree.parent[v]) != tree.removed[v])
+        return invalidData("merge tree: merge " + std::to_string(r + 1) + " removes " +
+                           std::to_string(tree.removed[v]) + " tetrahedra by the tree, " +
+                           std::to_string(candidates->removed(tree.parent[v])) + " in the mesh");
       candidates->merge(v, tree.parent[v]);
     }
     const uint32_t pid = vertex_order[tree.parent[v]];
@@ -677,7 +670,10 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     }
     // The parent must still be alive: merged later (a larger rank) or never.
     if (tree.parent[pid] != MergeTree::kRoot) return bodyError(r, "merges into a vertex merged earlier");
-    if (candidates) candidates->merge(id, pid);
+    if (candidates) {
+      code.removed = candidates->removed(pid);  // version 3 codes none: the level's mesh gives it
+      candidates->merge(id, pid);
+    }
     unmerged.take(id + 1);
     tree.parent[id] = pid;
     tree.rank[id] = static_cast<uint32_t>(r + 1);
