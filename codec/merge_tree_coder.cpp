@@ -12,6 +12,15 @@ namespace gtn {
 
 const double kMergeErrorQuantiles[9] = {0.0, 0.01, 0.1, 0.25, 0.5, 0.75, 0.9, 0.99, 1.0};
 
+void MergeTree::makeRoots(size_t n) {
+  parent.assign(n, kRoot);
+  rank.assign(n, 0);
+  removed.assign(n, 0);
+  boundary.assign(n, 0);
+  merges = 0;
+  checked = false;
+}
+
 uint64_t MergeTree::boundaryMergesUpTo(uint64_t n) const {
   uint64_t count = 0;
   for (size_t v = 0; v < parent.size(); ++v) {
@@ -628,11 +637,8 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     GTN_ASSIGN_OR_RETURN(std::span<const uint32_t> tets, tetIds(*mesh, what));
     candidates.emplace(n, tets, mesh->coords.data(), nullptr);
   }
+  tree.makeRoots(n);
   tree.merges = decode;
-  tree.parent.assign(n, MergeTree::kRoot);
-  tree.rank.assign(n, 0);
-  tree.removed.assign(n, 0);
-  tree.boundary.assign(n, 0);
   EntropyCoder<false> rc(h.body);
   Models m;
   FreeRanks unmerged(static_cast<uint32_t>(n));

@@ -87,6 +87,8 @@ struct MergeTree {
   std::vector<double> error_quantiles;  // 0 or 9 values, see the payload layout
 
   size_t points() const { return parent.size(); }
+  // n vertices, every one a root: no merge (errors, provenance and quantiles are left as they are).
+  void makeRoots(size_t n);
   // Number of boundary merges and tetrahedra removed among the merges of rank <= n.
   uint64_t boundaryMergesUpTo(uint64_t n) const;
   uint64_t tetsRemovedUpTo(uint64_t n) const;

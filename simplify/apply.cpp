@@ -71,10 +71,7 @@ MergeTree remainingTree(const MergeTree& tree, uint64_t n, const std::vector<uin
   MergeTree out;
   size_t kept = 0;
   for (uint32_t x : new_index) kept += x != MergeTree::kRoot;
-  out.parent.assign(kept, MergeTree::kRoot);
-  out.rank.assign(kept, 0);
-  out.removed.assign(kept, 0);
-  out.boundary.assign(kept, 0);
+  out.makeRoots(kept);
   if (!tree.error.empty()) out.error.assign(kept, 0.0f);
   for (size_t v = 0; v < tree.points(); ++v) {
     const uint32_t i = new_index[v];

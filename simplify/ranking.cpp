@@ -426,10 +426,7 @@ void Ranker::init() {
     volume += std::fabs(vol);
   }
   mass_scale_ = mass > 0 && std::isfinite(mass) ? mass : (volume > 0 && std::isfinite(volume) ? volume : 1.0);
-  tree_.parent.assign(np, MergeTree::kRoot);
-  tree_.rank.assign(np, 0);
-  tree_.removed.assign(np, 0);
-  tree_.boundary.assign(np, 0);
+  tree_.makeRoots(np);
   tree_.error.assign(np, 0.0f);
 }
 

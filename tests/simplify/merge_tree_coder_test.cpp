@@ -109,10 +109,7 @@ TEST(MergeTreeCoder, Version3CodesParentsThatAreNotNeighbours) {
   mesh.coords.insert(mesh.coords.end(), {0.5, 0.5, 0.5});  // a point no tetrahedron uses
   MergeTree tree;
   const size_t n = mesh.numPoints();
-  tree.parent.assign(n, MergeTree::kRoot);
-  tree.rank.assign(n, 0);
-  tree.removed.assign(n, 0);
-  tree.boundary.assign(n, 0);
+  tree.makeRoots(n);
   // Rank 1: the lone point into vertex 3; rank 2: vertex 0 into the last grid vertex (far away).
   tree.parent[lone] = 3;
   tree.rank[lone] = 1;
@@ -215,10 +212,7 @@ TEST(MergeTreeCoder, HandlesEmptyAndRootOnlyTrees) {
   ASSERT_TRUE(d.isOk()) << d.status().message();
   EXPECT_EQ(d->points(), 0u);
   MergeTree roots;
-  roots.parent.assign(5, MergeTree::kRoot);
-  roots.rank.assign(5, 0);
-  roots.removed.assign(5, 0);
-  roots.boundary.assign(5, 0);
+  roots.makeRoots(5);
   auto q = encodeMergeTree(roots, {4, 3, 2, 1, 0}, nullptr);
   ASSERT_TRUE(q.isOk());
   auto e = decodeMergeTree(*q, 5, "t", nullptr);

@@ -451,10 +451,7 @@ TEST(MustFail, EachCaseGetsExactlyItsCode) {
 Bytes oneMergeFile(const TetMesh& mesh, uint32_t c, uint32_t p, uint32_t extra_removed = 0) {
   MergeTree t;
   const size_t n = mesh.numPoints();
-  t.parent.assign(n, MergeTree::kRoot);
-  t.rank.assign(n, 0);
-  t.removed.assign(n, 0);
-  t.boundary.assign(n, 0);
+  t.makeRoots(n);
   t.parent[c] = p;
   t.rank[c] = 1;
   t.merges = 1;
