@@ -157,56 +157,86 @@ struct DeltaPredictions {
 };
 
 // Version 3: the parent as a place among the child's neighbours at the time of its merge, in the
-// mesh the earlier merges left: the tetrahedra of the level whose four vertices still have four
-// distinct roots (root: the vertex a vertex has been merged into, recursively) are that mesh's; the
-// candidates are the roots of the vertices of those that hold the child's root, nearest the child
-// first: by the squared distance ((dx*dx + dy*dy) + dz*dz) in double, ties to the smaller decoding
-// id. The number of those tetrahedra that hold the parent is what the merge removes. The encoder
-// works in the tree's own numbering and breaks ties by `key` (the decoding ids); the decoder in
-// decoding order with no key.
+// mesh the earlier merges left (the vertices that share a tetrahedron of the level with the child or
+// with a vertex merged into it, each replaced by its root: the vertex it has been merged into,
+// recursively), nearest first: by the squared distance ((dx*dx + dy*dy) + dz*dz) in double, ties to
+// the smaller decoding id. The encoder works in the tree's own numbering and breaks ties by `key` (the
+// decoding ids); the decoder in decoding order with no key.
 class ParentCandidates {
  public:
   // `tets`: 4 vertex ids per tetrahedron, all below n (the caller checks); `coords`: 3 per vertex.
   ParentCandidates(size_t n, std::span<const uint32_t> tets, const double* coords, const uint32_t* key)
-      : tets_(tets), coords_(coords), key_(key), up_(n), next_(n, kNone), last_(n), mark_(n, kNone), held_(n, 0) {
+      : coords_(coords), key_(key), up_(n), next_(n, kNone), last_(n), mark_(n, kNone), live_(n) {
     for (uint32_t v = 0; v < n; ++v) up_[v] = last_[v] = v;
-    // Vertex -> its tetrahedra.
+    // Vertex -> tetrahedra, then each vertex's neighbours once.
+    std::vector<uint64_t> at(n + 1, 0);
+    for (uint32_t v : tets) ++at[v + 1];
+    for (size_t v = 0; v < n; ++v) at[v + 1] += at[v];
+    std::vector<uint32_t> incident(tets.size());
+    {
+      std::vector<uint64_t> fill(at.begin(), at.end() - 1);
+      for (size_t i = 0; i < tets.size(); ++i) incident[fill[tets[i]]++] = static_cast<uint32_t>(i / 4);
+    }
     start_.assign(n + 1, 0);
-    for (uint32_t v : tets) ++start_[v + 1];
-    for (size_t v = 0; v < n; ++v) start_[v + 1] += start_[v];
-    incident_.resize(tets.size());
-    std::vector<uint64_t> fill(start_.begin(), start_.end() - 1);
-    for (size_t i = 0; i < tets.size(); ++i) incident_[fill[tets[i]]++] = static_cast<uint32_t>(i / 4);
+    for (int pass = 0; pass < 2; ++pass) {
+      uint64_t out = 0;
+      for (uint32_t v = 0; v < n; ++v) {
+        start_[v] = out;
+        for (uint64_t k = at[v]; k < at[v + 1]; ++k) {
+          const uint32_t* t = tets.data() + 4 * size_t{incident[k]};
+          for (int j = 0; j < 4; ++j) {
+            const uint32_t w = t[j];
+            if (w == v || mark_[w] == v) continue;
+            mark_[w] = v;
+            if (pass) neighbours_[out] = w;
+            ++out;
+          }
+        }
+        if (pass) live_[v] = static_cast<uint32_t>(out - start_[v]);
+      }
+      start_[n] = out;
+      if (!pass) neighbours_.resize(out);
+      std::fill(mark_.begin(), mark_.end(), kNone);
+    }
   }
 
-  // Gathers the candidates of child c (a vertex not merged yet); returns their number.
+  // Gathers the candidates of child c (a vertex not merged yet); returns their number. A neighbour
+  // whose root is c stays in c's class (roots only merge): it leaves its vertex's list when met, and
+  // a vertex with no other neighbour left leaves the class's list (c itself stays), so that a gather
+  // costs about the child's neighbours, however many vertices were merged into it.
   uint32_t gather(uint32_t c) {
     ++stamp_;
     keyed_.clear();
     const double* pc = coords_ + 3 * size_t{c};
-    for (uint32_t y = c; y != kNone; y = next_[y]) {
-      for (uint64_t k = start_[y]; k < start_[y + 1]; ++k) {
-        const uint32_t* t = tets_.data() + 4 * size_t{incident_[k]};
-        const uint32_t r[4] = {root(t[0]), root(t[1]), root(t[2]), root(t[3])};
-        if (r[0] == r[1] || r[0] == r[2] || r[0] == r[3] || r[1] == r[2] || r[1] == r[3] || r[2] == r[3]) continue;
-        // A live tetrahedron holds exactly one vertex of c's: it is met once.
-        for (uint32_t q : r) {
-          if (q == c) continue;
-          if (mark_[q] != stamp_) {
-            mark_[q] = stamp_;
-            held_[q] = 0;
-            const double* pq = coords_ + 3 * size_t{q};
-            const double dx = pq[0] - pc[0], dy = pq[1] - pc[1], dz = pq[2] - pc[2];
-            keyed_.push_back({(dx * dx + dy * dy) + dz * dz, key_ ? key_[q] : q, q});
-          }
-          ++held_[q];
+    uint32_t prev = kNone;
+    for (uint32_t y = c; y != kNone;) {
+      const uint64_t begin = start_[y];
+      uint64_t end = begin + live_[y];
+      for (uint64_t k = begin; k < end;) {
+        const uint32_t q = root(neighbours_[k]);
+        if (q == c) {
+          neighbours_[k] = neighbours_[--end];
+          continue;
         }
+        ++k;
+        if (mark_[q] == stamp_) continue;
+        mark_[q] = stamp_;
+        const double* pq = coords_ + 3 * size_t{q};
+        const double dx = pq[0] - pc[0], dy = pq[1] - pc[1], dz = pq[2] - pc[2];
+        keyed_.push_back({(dx * dx + dy * dy) + dz * dz, key_ ? key_[q] : q, q});
       }
+      live_[y] = static_cast<uint32_t>(end - begin);
+      const uint32_t after = next_[y];
+      if (end == begin && y != c) {
+        next_[prev] = after;
+        if (last_[c] == y) last_[c] = prev;
+      } else {
+        prev = y;
+      }
+      y = after;
     }
     return static_cast<uint32_t>(keyed_.size());
   }
-  // The live tetrahedra that hold c and p, for the last gathered c: what the merge removes.
-  uint32_t removed(uint32_t p) const { return mark_[p] == stamp_ ? held_[p] : 0; }
   // The place of p among the gathered candidates in their order (the count when p is none of them).
   uint32_t placeOf(uint32_t p) const {
     const Keyed* at = nullptr;
@@ -243,12 +273,12 @@ class ParentCandidates {
     }
     return x;
   }
-  std::span<const uint32_t> tets_;
   const double* coords_;
   const uint32_t* key_;
-  std::vector<uint64_t> start_;     // per vertex: its first entry in incident_
-  std::vector<uint32_t> incident_;  // the tetrahedra of each vertex
-  std::vector<uint32_t> up_, next_, last_, mark_, held_;
+  std::vector<uint64_t> start_;       // per vertex: its first entry in neighbours_
+  std::vector<uint32_t> neighbours_;  // each vertex's neighbours in the level, those outside its class first
+  std::vector<uint32_t> up_, next_, last_, mark_;
+  std::vector<uint32_t> live_;  // per vertex: its neighbours that may still lie outside its class
   uint32_t stamp_ = 0;
   std::vector<Keyed> keyed_;
 };
@@ -281,22 +311,24 @@ void codeDelta(C& c, Models& m, MergeCode& v);
 
 // What follows the child's index (codeUniform over the vertices not merged yet), once the child and
 // so its parent-delta predictions are known; `candidates` is the number of the child's parent
-// candidates in version 3, -1 in version 2. Version 3 codes no tetrahedron count: the mesh gives it.
+// candidates in version 3, -1 in version 2.
 template <class C>
 void codeMerge(C& c, Models& m, MergeCode& v, int predictions, int64_t candidates) {
   v.boundary = c.bit(m.boundary, v.boundary);
+  bool delta = true;
   if (candidates >= 0) {
     const uint32_t count = static_cast<uint32_t>(candidates);
     v.index = codeParentIndex(c, m, v.boundary, v.index, count);
-    if (v.index != count) return;  // a candidate, or corrupt (the decoder rejects it)
+    delta = v.index == count;  // otherwise a candidate, or corrupt (the decoder rejects it)
   }
-  if (predictions > 0) v.exact = c.bit(m.exact[v.boundary], v.exact);
-  if (v.exact) {
-    v.hit = m.hit.code(c, v.hit);
-  } else {
-    codeDelta(c, m, v);
+  if (delta) {
+    if (predictions > 0) v.exact = c.bit(m.exact[v.boundary], v.exact);
+    if (v.exact) {
+      v.hit = m.hit.code(c, v.hit);
+    } else {
+      codeDelta(c, m, v);
+    }
   }
-  if (candidates >= 0) return;
   const uint32_t k = m.removed[v.boundary].code(c, std::min<uint32_t>(v.removed, 15));
   v.removed = k == 15 ? c.direct(v.removed, 32) : k;
 }
@@ -523,10 +555,6 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     if (candidates) {
       count = candidates->gather(v);
       code.index = candidates->placeOf(tree.parent[v]);
-      if (candidates->removed(tree.parent[v]) != tree.removed[v])
-        return invalidData("merge tree: merge " + std::to_string(r + 1) + " removes " +
-                           std::to_string(tree.removed[v]) + " tetrahedra by the tree, " +
-                           std::to_string(candidates->removed(tree.parent[v])) + " in the mesh");
       candidates->merge(v, tree.parent[v]);
     }
     const uint32_t pid = vertex_order[tree.parent[v]];
@@ -676,10 +704,7 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     }
     // The parent must still be alive: merged later (a larger rank) or never.
     if (tree.parent[pid] != MergeTree::kRoot) return bodyError(r, "merges into a vertex merged earlier");
-    if (candidates) {
-      code.removed = candidates->removed(pid);  // version 3 codes none: the level's mesh gives it
-      candidates->merge(id, pid);
-    }
+    if (candidates) candidates->merge(id, pid);
     unmerged.take(id + 1);
     tree.parent[id] = pid;
     tree.rank[id] = static_cast<uint32_t>(r + 1);

@@ -29,9 +29,9 @@
 //                                    bitlen(U-1), u = 2^b - U; b-1 bits y; if y >= u one more bit,
 //                                    x = 2y + bit - u. Nothing is coded when U = 1.
 //       bit   boundary               one model; 1 = c is a boundary vertex
-//       version 3, when c has K > 0 parent candidates (ParentCandidates in the .cpp: the roots of
-//       the vertices of the live tetrahedra of the level, those whose vertices have four distinct
-//       roots, that hold a vertex of c's, nearest c first, ties to the smaller id):
+//       version 3, when c has K > 0 parent candidates (ParentCandidates in the .cpp: the vertices
+//       that share a tetrahedron of the level with c or with a vertex merged into c, each replaced by
+//       the vertex it has been merged into, nearest c first, ties to the smaller id):
 //         BitTree<4> s                 tree per boundary bit; s < 14: p is candidate s; 14: candidate
 //                                      14 + uniform in [0, K - 14); 15: p is no candidate, and the
 //                                      version 2 parent code follows
@@ -49,9 +49,8 @@
 //         if len > 0:
 //           bit   sign                 model per context; 1 = residual < 0
 //           len-1 direct bits          |residual| below its leading one
-//       version 2: BitTree<4>  t       tree per boundary bit; t = tetrahedra the merge removes, 15 =
-//                                      escape followed by 32 direct bits holding t (version 3 counts
-//                                      them: the live tetrahedra that hold c's and p's vertices)
+//       BitTree<4>  t                  tree per boundary bit; t = tetrahedra the merge removes, 15 =
+//                                      escape followed by 32 direct bits holding t
 // The decoder rejects: an unknown version, P different from the expected count, M > P, a candidate
 // index out of range, h >= |D|, k > |D|, len > 33, a parent out of range, equal to c or already merged
 // (its rank must be larger), a body read past its end, and, when it decodes all M merges, counts that
@@ -113,8 +112,7 @@ uint64_t leadingFreeMerges(const MergeTree& tree);
 // Encodes `tree` (vertex numbering of the source mesh) with vertex v stored at vertex_order[v], the
 // id the level decoder gives it. vertex_order must be a permutation of 0..P-1. With the level's mesh
 // (`mesh`, in the tree's numbering) the payload is version 3, which codes each parent as a place
-// among the child's neighbours and takes the tetrahedra each merge removes from the mesh (a tree whose
-// counts disagree with it is refused); without it version 2.
+// among the child's neighbours; without it version 2.
 StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order,
                                                const TetMesh* mesh);
 

@@ -80,13 +80,9 @@ Bytes writeLevels(const std::vector<GtnLevelInput>& levels) {
   return readBytes(path);
 }
 
-// Codes `tree` against `mesh`, the level it belongs to (which must outlive the writer), as payload
-// version 3; as version 2 when `version2` (which stores counts of removed tetrahedra the mesh
-// contradicts, where version 3 takes them from the mesh).
-decltype(GtnLevelInput::merge_tree) treeCoder(const MergeTree& tree, const TetMesh& mesh, bool version2 = false) {
-  return [tree, &mesh, version2](const std::vector<uint32_t>& order) {
-    return encodeMergeTree(tree, order, version2 ? nullptr : &mesh);
-  };
+// Codes `tree` against `mesh`, the level it belongs to (which must outlive the writer).
+decltype(GtnLevelInput::merge_tree) treeCoder(const MergeTree& tree, const TetMesh& mesh) {
+  return [tree, &mesh](const std::vector<uint32_t>& order) { return encodeMergeTree(tree, order, &mesh); };
 }
 
 // Level 0 + level 1 after n merges of `tree` (declared `declared` merges and ratio).
@@ -463,7 +459,7 @@ Bytes oneMergeFile(const TetMesh& mesh, uint32_t c, uint32_t p, uint32_t extra_r
   EXPECT_TRUE(t.check("one merge").isOk());
   GtnLevelInput l0;
   l0.mesh = &mesh;
-  l0.merge_tree = treeCoder(t, mesh, extra_removed != 0);
+  l0.merge_tree = treeCoder(t, mesh);
   return writeLevels({l0});
 }
 
