@@ -220,6 +220,13 @@ TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
   EXPECT_EQ(r->level(0).pieces[0].kind, kPieceStructured);
   EXPECT_EQ(r->level(0).base, 0);
   ASSERT_EQ(r->levels(), kept_ratios.size() + 1);
+  // The grid's whole tree is MTRE version 2, which decodes without the level (the finer ratios all
+  // read it on the fly); the coarse levels' trees are version 3.
+  for (size_t k = 0; k < r->levels(); ++k) {
+    auto payload = r->mergeTreePayload(k);
+    ASSERT_TRUE(payload.isOk() && payload->has_value()) << k;
+    EXPECT_EQ((**payload)[0], k == 0 ? 2 : 3) << k;
+  }
   uint64_t stored_chain = 0;
   for (size_t k = r->levels(); k-- > 1;) {
     EXPECT_DOUBLE_EQ(r->level(k).ratio, kept_ratios[k - 1]) << k;
