@@ -658,7 +658,7 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
   std::optional<ParentCandidates> candidates;
   if (h.version == kVersion3 && decode > 0) {
     if (!mesh)
-      return usageError(what + ": the merge tree (version 3) is decoded against its level's mesh, and none was given");
+      return usageError(what + ": the merge tree (version 3) is decoded against its level, which was not decoded");
     if (mesh->numPoints() != n)
       return invalidData(what + ": the merge tree has " + std::to_string(n) + " vertices, its level's mesh " +
                          std::to_string(mesh->numPoints()));

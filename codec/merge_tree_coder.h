@@ -105,8 +105,9 @@ extern const double kMergeErrorQuantiles[9];
 // Fills error_quantiles from `error` (empty when there are no merges or no errors).
 void computeErrorQuantiles(MergeTree& tree);
 
-// Merges 1..U whose children remove nothing and are interior (the unused mid-edge points merged
-// first, simplify/ranking.h): the largest such U. Version 3 stores it in the header (free_merges).
+// Merges 1..U that remove no tetrahedron and are no boundary merges: those of the points no tetrahedron
+// uses, which simplify/ranking.h merges first (mid-edge points); the largest such U. Version 3 stores it
+// in the header (free_merges).
 uint64_t leadingFreeMerges(const MergeTree& tree);
 
 // Encodes `tree` (vertex numbering of the source mesh) with vertex v stored at vertex_order[v], the

@@ -97,7 +97,7 @@ namespace gtn {
 
 MergeTreeStats computeMergeTreeStats(const MergeTree& tree) {
   // Counted over the vertices tetrahedra use: the merges of the others, which come first, are left out.
-  if (const uint64_t free = unreferencedMerges(tree)) {
+  if (const uint64_t free = leadingFreeMerges(tree)) {
     std::vector<uint32_t> index(tree.points(), MergeTree::kRoot);
     uint32_t next = 0;
     for (size_t v = 0; v < tree.points(); ++v)

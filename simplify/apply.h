@@ -31,7 +31,7 @@ MergeTree remainingTree(const MergeTree& tree, uint64_t n, const std::vector<uin
 namespace gtn {
 
 // Shape of a merge tree, as `gtn info --merge-tree` reports it, over the vertices tetrahedra use (the
-// first merges, of points no tetrahedron uses, are left out: simplify/levels.h's unreferencedMerges).
+// first merges, of points no tetrahedron uses, are left out: codec/merge_tree_coder.h's leadingFreeMerges).
 struct MergeTreeStats {
   uint64_t points = 0, merges = 0, roots = 0, boundary_merges = 0, tets_removed = 0;
   uint64_t depth_max = 0;   // merges on the longest path from a vertex to its root

@@ -16,8 +16,6 @@ uint64_t levelMerges(int level, uint64_t points, uint64_t merges) {
   return std::min<uint64_t>(static_cast<uint64_t>(n), merges);
 }
 
-uint64_t unreferencedMerges(const MergeTree& tree) { return leadingFreeMerges(tree); }
-
 MipLevelBuilder::MipLevelBuilder(const TetMesh& source, const MergeTree& tree, bool keep_trees)
     : source_(&source), tree_(&tree), keep_trees_(keep_trees) {
   meshes_.emplace_back();
@@ -34,7 +32,7 @@ StatusOr<MipLevelBuilder> MipLevelBuilder::create(const TetMesh& source, const M
   out.merges_.push_back(0);
   out.ratios_.push_back(0.0);
   // Counted over the vertices tetrahedra use: the merges of the others come first and count for nothing.
-  const uint64_t free = unreferencedMerges(tree);
+  const uint64_t free = leadingFreeMerges(tree);
   const uint64_t points = source.numPoints() - free;
   const int max_levels = options.levels < 0 ? 62 : options.levels;
   for (int i = 1; i <= max_levels; ++i) {
@@ -254,7 +252,7 @@ StatusOr<uint64_t> levelZeroUnreferencedMerges(GtnReader& reader) {
   GTN_ASSIGN_OR_RETURN(MergeTreeHeader h, readMergeTreeHeader(*payload, points, what));
   if (h.version >= 3) return h.free_merges;
   GTN_ASSIGN_OR_RETURN(MergeTree tree, decodeMergeTree(*payload, points, what, nullptr));
-  return unreferencedMerges(tree);
+  return leadingFreeMerges(tree);
 }
 
 StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio) {

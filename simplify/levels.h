@@ -1,5 +1,5 @@
 // Mip levels (paper section 5): level i is the mesh after the first N_i merges of the merge tree,
-// N_i = U + round((1 - 1/2^i) * (points - U)) capped at the tree's merge count (U: unreferencedMerges,
+// N_i = U + round((1 - 1/2^i) * (points - U)) capped at the tree's merge count (U: leadingFreeMerges,
 // the merges of the points no tetrahedron uses, which come first), compacted, with the rest of the
 // merge tree (ranks shifted down by N_i) in that level's own numbering, so that any level can be
 // refined further on the fly. The writer (format/gtn_file.h) stores a level either whole, with that
@@ -27,11 +27,10 @@ struct LevelOptions {
 // N_i for level i of a mesh with `points` vertices and a tree of `merges` merges.
 uint64_t levelMerges(int level, uint64_t points, uint64_t merges);
 
-// The merges a tree starts with that remove no tetrahedron and are no boundary merges: those of points
-// no tetrahedron uses (simplify/ranking.h merges mid-edge points first). The merges of a level, a ratio
-// or a target count on from there: N_i = U + levelMerges(i, points - U, merges - U), and a ratio is
-// (merges - U) / (points - U), over the vertices tetrahedra use.
-uint64_t unreferencedMerges(const MergeTree& tree);
+// U = leadingFreeMerges(tree) (codec/merge_tree_coder.h): the merges of the points no tetrahedron uses,
+// which come first. The merges of a level, a ratio or a target count on from there: N_i = U +
+// levelMerges(i, points - U, merges - U), and a ratio is (merges - U) / (points - U), over the
+// vertices tetrahedra use.
 
 struct MipLevels {
   // meshes[0] is empty: level 0 is the source mesh, which the caller keeps.
@@ -119,7 +118,7 @@ StatusOr<SimplifyPlan> planSimplification(const GtnReader& reader, uint64_t targ
 // vertices tetrahedra use: U + ratio * (points - U), rounded, U read from level 0's merge tree when it
 // has one).
 StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio);
-// U of level 0's merge tree (unreferencedMerges); 0 when level 0 stores none. The ratio of N merges
+// U of level 0's merge tree (leadingFreeMerges); 0 when level 0 stores none. The ratio of N merges
 // is (N - U) / (points - U).
 StatusOr<uint64_t> levelZeroUnreferencedMerges(GtnReader& reader);
 

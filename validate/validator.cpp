@@ -321,12 +321,7 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
     if (!payload->has_value()) continue;
     const uint64_t points = reader.level(i).header.points;
     const std::string what = fi.path + ": level " + std::to_string(i) + " merge tree";
-    StatusOr<MergeTree> tree = level_meshes[i] ? decodeMergeTree(**payload, points, what, level_meshes[i])
-                                               : StatusOr<MergeTree>(invalidData(what + ": its level did not decode"));
-    if (!level_meshes[i]) {
-      if (auto h = readMergeTreeHeader(**payload, points, what); h.isOk() && !h->needs_mesh)
-        tree = decodeMergeTree(**payload, points, what, nullptr);
-    }
+    StatusOr<MergeTree> tree = decodeMergeTree(**payload, points, what, level_meshes[i]);
     if (!tree.isOk()) {
       report.add(IssueCode::kMergeTreeUndecodable, "/merge_tree", "/levels/" + std::to_string(i) + "/merge_tree",
                  tree.status().message());
