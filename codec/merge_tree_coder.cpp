@@ -18,6 +18,7 @@ void MergeTree::makeRoots(size_t n) {
   removed.assign(n, 0);
   boundary.assign(n, 0);
   merges = 0;
+  batches.clear();
   checked = false;
 }
 
@@ -60,13 +61,49 @@ Status MergeTree::check(const std::string& what) const {
       return invalidData(what + ": vertex " + std::to_string(v) + " merges into a vertex merged earlier");
   }
   if (merged != merges) return invalidData(what + ": merge count disagrees with the tree");
+  if (!batches.empty()) {
+    uint64_t sum = 0;
+    for (uint32_t b : batches) {
+      if (b == 0) return invalidData(what + ": merge tree has an empty batch");
+      sum += b;
+    }
+    if (sum != merges) return invalidData(what + ": merge tree batches hold another number of merges");
+  }
   return Status::ok();
+}
+
+std::vector<uint32_t> sliceBatches(const std::vector<uint32_t>& batches, uint64_t from, uint64_t to) {
+  std::vector<uint32_t> out;
+  uint64_t begin = 0;
+  for (uint32_t b : batches) {
+    const uint64_t end = begin + b;
+    const uint64_t lo = std::max(begin, from), hi = std::min(end, to);
+    if (lo < hi) out.push_back(static_cast<uint32_t>(hi - lo));
+    begin = end;
+  }
+  return out;
+}
+
+uint64_t batchKeyOfId(uint64_t z) {
+  z ^= z >> 30;
+  z *= 0xBF58476D1CE4E5B9ull;
+  z ^= z >> 27;
+  z *= 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return z;
+}
+
+uint64_t batchKeyOfPoint(const double* p) {
+  uint64_t b[3];
+  std::memcpy(b, p, sizeof b);
+  return batchKeyOfId(batchKeyOfId(batchKeyOfId(b[0]) ^ b[1]) ^ b[2]);
 }
 
 MergeTree prefixTree(const MergeTree& tree, uint64_t n) {
   MergeTree out = tree;
   if (n >= tree.merges) return out;
   out.merges = n;
+  out.batches = sliceBatches(tree.batches, 0, n);
   out.checked = false;
   for (size_t v = 0; v < out.points(); ++v) {
     if (out.rank[v] == 0 || out.rank[v] <= n) continue;
@@ -107,7 +144,36 @@ struct Models {
   BitTree<6> len[2];
   BitTree<4> removed[2];
   BitTree<4> index[2];  // version 3: per boundary bit, the parent's place among the candidates (15 = not one)
+  // Version 4's batches.
+  BitModel rule;          // the batch has the rule's size
+  BitTree<6> size;        // otherwise the bit length of its size
+  BitTree<6> gap;         // the bit lengths of the gaps between a batch's children
+  BitModel pass[4];       // per run (the fourth on): another run follows
+  BitModel in_run[3][2];  // per run (the third on) and the previous flag: a child is in the run
 };
+
+// Whether a run of `run` of the `left` children left is cheaper coded as flags (about left * H(run /
+// left) bits) than the order of the rest outright (about log2(left) - 1.44 bits a child, for each one
+// the run places). The encoder's choice; the decoder reads it.
+inline bool runPays(uint32_t run, uint32_t left) {
+  const double f = static_cast<double>(run) / left;
+  const double flags = f >= 1 ? 0.0 : -(f * std::log2(f) + (1 - f) * std::log2(1 - f)) * left;
+  return flags < run * (std::log2(static_cast<double>(left)) - 1.44);
+}
+
+// v < 2^32 as its bit length (BitTree<6>, 0..32) and the bits below its leading one (direct bits).
+// Sets *bad on a length over 32 (only a corrupt stream).
+template <class C>
+uint32_t codeLength(C& c, BitTree<6>& t, uint32_t v, bool* bad) {
+  const uint32_t len = t.code(c, static_cast<uint32_t>(bitLength(v)));
+  if (len > 32) {
+    *bad = true;
+    return 0;
+  }
+  if (len == 0) return 0;
+  const uint32_t top = uint32_t{1} << (len - 1);
+  return top | c.direct(v & (top - 1), static_cast<int>(len) - 1);
+}
 
 // x in [0, total), 1 <= total, as a truncated binary code of direct bits.
 template <class C>
@@ -408,6 +474,140 @@ class FreeRanks {
   size_t top_ = 1;
 };
 
+// Version 4's batches: a batch's size (the rule's, or coded), its children as a set (ascending ids,
+// each as its gap among the vertices not merged yet after the previous one), and their order: the
+// children in key order (ties to the smaller id), except the ones flagged as deferred, which follow
+// in a coded order (each as its place among the deferred ones left, in key order).
+struct BatchScratch {
+  std::vector<uint32_t> ids;
+  std::vector<std::pair<uint64_t, uint32_t>> keyed;
+  std::vector<uint32_t> deferred;
+  std::vector<uint8_t> flags;
+};
+
+uint32_t batchRule(uint64_t unmerged, uint64_t left, uint32_t divisor) {
+  return static_cast<uint32_t>(std::min<uint64_t>((unmerged + divisor - 1) / divisor, left));
+}
+
+template <class Key>
+void sortByKey(BatchScratch& w, const Key& key) {
+  w.keyed.clear();
+  for (uint32_t id : w.ids) w.keyed.emplace_back(key(id), id);
+  std::sort(w.keyed.begin(), w.keyed.end());
+}
+
+// `seq`: the batch's children (decoding ids) in rank order; `place`: scratch of P entries.
+template <class Key>
+void encodeBatch(EntropyCoder<true>& rc, Models& m, FreeRanks& unmerged, uint32_t rule, std::span<const uint32_t> seq,
+                 const Key& key, BatchScratch& w, std::vector<uint32_t>& place) {
+  const uint32_t size = static_cast<uint32_t>(seq.size());
+  bool bad = false;
+  rc.bit(m.rule, size == rule);
+  if (size != rule) codeLength(rc, m.size, size, &bad);
+  w.ids.assign(seq.begin(), seq.end());
+  std::sort(w.ids.begin(), w.ids.end());
+  uint32_t pos = 0;
+  for (uint32_t id : w.ids) {
+    const uint32_t at = unmerged.countBelow(id + 1);
+    codeLength(rc, m.gap, at - pos, &bad);
+    unmerged.take(id + 1);
+    pos = at;
+  }
+  if (size == 1) return;
+  sortByKey(w, key);
+  for (uint32_t k = 0; k < size; ++k) place[w.keyed[k].second] = k;
+  // The rank order as runs, each in key order (each the longest that is): a run is coded as a flag per
+  // child left, in key order, while that is cheaper than coding the rest's order outright.
+  w.deferred.clear();  // the children left, in key order
+  for (const auto& [k, id] : w.keyed) w.deferred.push_back(id);
+  std::vector<uint8_t>& in_run = w.flags;
+  uint32_t done = 0;
+  for (uint32_t pass = 0; w.deferred.size() > 1; ++pass) {
+    const uint32_t left = static_cast<uint32_t>(w.deferred.size());
+    uint32_t run = 1;
+    while (done + run < size && place[seq[done + run]] > place[seq[done + run - 1]]) ++run;
+    if (!runPays(run, left)) {
+      rc.bit(m.pass[std::min(pass, 3u)], 0);
+      break;
+    }
+    rc.bit(m.pass[std::min(pass, 3u)], 1);
+    in_run.assign(size, 0);
+    for (uint32_t j = done; j < done + run; ++j) in_run[place[seq[j]]] = 1;
+    uint32_t prev = 0, kept = 0;
+    for (uint32_t id : w.deferred) {
+      const uint32_t flag = in_run[place[id]];
+      rc.bit(m.in_run[std::min(pass, 2u)][prev], flag);
+      prev = flag;
+      if (!flag) w.deferred[kept++] = id;
+    }
+    w.deferred.resize(kept);
+    done += run;
+  }
+  // The rest in rank order, each as its place among those left, in key order.
+  const uint32_t left = static_cast<uint32_t>(w.deferred.size());
+  if (left <= 1) return;
+  for (uint32_t k = 0; k < left; ++k) place[w.deferred[k]] = k;
+  FreeRanks rest(left);
+  for (uint32_t j = done; j < size; ++j) {
+    const uint32_t d = place[seq[j]];
+    codeUniform(rc, rest.countBelow(d + 1), left - (j - done));
+    rest.take(d + 1);
+  }
+}
+
+// Decodes a batch of at most `most` children into `seq`, in their merge order; false on a corrupt
+// batch.
+template <class Key>
+bool decodeBatch(EntropyCoder<false>& rc, Models& m, FreeRanks& unmerged, uint64_t unmerged_count, uint32_t rule,
+                 uint64_t most, const Key& key, BatchScratch& w, std::vector<uint32_t>& seq) {
+  bool bad = false;
+  uint64_t size = rule;
+  if (!rc.bit(m.rule, 0)) size = codeLength(rc, m.size, 0, &bad);
+  if (bad || size == 0 || size > most || !rc.ok()) return false;
+  w.ids.clear();
+  uint64_t pos = 0;
+  for (uint64_t j = 0; j < size; ++j) {
+    const uint64_t at = pos + codeLength(rc, m.gap, 0, &bad);
+    if (bad || at >= unmerged_count - j || !rc.ok()) return false;
+    const uint32_t id = unmerged.kth(static_cast<uint32_t>(at)) - 1;
+    unmerged.take(id + 1);
+    w.ids.push_back(id);
+    pos = at;
+  }
+  seq.clear();
+  if (size == 1) {
+    seq.push_back(w.ids[0]);
+    return true;
+  }
+  sortByKey(w, key);
+  w.deferred.clear();
+  for (const auto& [k, id] : w.keyed) w.deferred.push_back(id);
+  for (uint32_t pass = 0; w.deferred.size() > 1; ++pass) {
+    if (!rc.bit(m.pass[std::min(pass, 3u)], 0)) break;
+    uint32_t prev = 0, kept = 0;
+    const size_t first = seq.size();
+    for (uint32_t id : w.deferred) {
+      prev = rc.bit(m.in_run[std::min(pass, 2u)][prev], 0);
+      if (prev) seq.push_back(id);
+      else w.deferred[kept++] = id;
+    }
+    if (seq.size() == first || !rc.ok()) return false;  // an empty run: corrupt
+    w.deferred.resize(kept);
+  }
+  const uint32_t left = static_cast<uint32_t>(w.deferred.size());
+  if (left == 1) seq.push_back(w.deferred[0]);
+  if (left <= 1) return rc.ok();
+  FreeRanks rest(left);
+  for (uint32_t j = 0; j < left; ++j) {
+    const uint32_t x = codeUniform(rc, 0, left - j);
+    if (x >= left - j) return false;
+    const uint32_t d = rest.kth(x) - 1;
+    rest.take(d + 1);
+    seq.push_back(w.deferred[d]);
+  }
+  return rc.ok();
+}
+
 void putVarint(std::vector<uint8_t>& out, uint64_t v) {
   while (v >= 0x80) {
     out.push_back(static_cast<uint8_t>(v | 0x80));
@@ -468,12 +668,14 @@ class Reader {
   const std::string& what_;
 };
 
-constexpr uint8_t kVersion2 = 2, kVersion3 = 3;
+constexpr uint8_t kVersion2 = 2, kVersion3 = 3, kVersion4 = 4;
 
-// The header fields shared by versions 2 and 3 (free_merges is version 3's).
+// The header fields of every version (free_merges is version 3's and 4's; parent_form and divisor
+// version 4's, and parent_form is 3 in version 3).
 struct Header {
-  uint8_t version = 0;
-  uint64_t points = 0, merges = 0, boundary_merges = 0, tets_removed = 0, free_merges = 0;
+  uint8_t version = 0, parent_form = 2;
+  uint64_t points = 0, merges = 0, boundary_merges = 0, tets_removed = 0, free_merges = 0, divisor = 0;
+  bool candidates() const { return parent_form == 3; }
   std::span<const uint8_t> body;
 };
 
@@ -503,10 +705,19 @@ uint64_t leadingFreeMerges(const MergeTree& tree) {
 
 StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order,
                                                const TetMesh* mesh) {
+  return encodeMergeTree(tree, vertex_order, mesh, MergeTreeForm{mesh ? kVersion3 : kVersion2, mesh != nullptr});
+}
+
+StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order,
+                                               const TetMesh* mesh, const MergeTreeForm& form) {
   GTN_RETURN_IF_ERROR(tree.check("merge tree"));
   const size_t n = tree.points();
   if (vertex_order.size() != n) return invalidData("merge tree: vertex order has the wrong size");
   if (n > 0xFFFFFFF0u) return unsupported("merge tree: more than 2^32 - 16 vertices");
+  if (form.version < kVersion2 || form.version > kVersion4) return usageError("merge tree: no such payload version");
+  const uint8_t version = form.version;
+  const bool with_candidates = version == kVersion3 || (version == kVersion4 && form.candidates);
+  if (with_candidates && !mesh) return usageError("merge tree: parent candidates are coded against the level's mesh");
   if (mesh && mesh->numPoints() != n) return invalidData("merge tree: the mesh and the tree differ in vertices");
   // inverse[id] = source vertex with decoding id `id`.
   std::vector<uint32_t> inverse(n, MergeTree::kRoot);
@@ -515,14 +726,18 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     if (id >= n || inverse[id] != MergeTree::kRoot) return invalidData("merge tree: vertex order is not a permutation");
     inverse[id] = static_cast<uint32_t>(v);
   }
-  const uint8_t version = mesh ? kVersion3 : kVersion2;
+  const uint32_t divisor = tree.batch_divisor ? tree.batch_divisor : kDefaultBatchDivisor;
   std::vector<uint8_t> out;
   out.push_back(version);
   putVarint(out, n);
   putVarint(out, tree.merges);
   putVarint(out, tree.boundaryMergesUpTo(tree.merges));
   putVarint(out, tree.tetsRemovedUpTo(tree.merges));
-  if (version == kVersion3) putVarint(out, leadingFreeMerges(tree));
+  if (version >= kVersion3) putVarint(out, leadingFreeMerges(tree));
+  if (version == kVersion4) {
+    out.push_back(with_candidates ? kVersion3 : kVersion2);
+    putVarint(out, divisor);
+  }
   putF64(out, tree.w_density);
   putF64(out, tree.w_geometry);
   putVarint(out, tree.field.size());
@@ -532,7 +747,7 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   for (size_t i = 0; i < q; ++i) putF64(out, tree.error_quantiles[i]);
 
   std::optional<ParentCandidates> candidates;
-  if (mesh) {
+  if (with_candidates) {
     GTN_ASSIGN_OR_RETURN(std::span<const uint32_t> tets, tetIds(*mesh, "merge tree"));
     candidates.emplace(n, tets, mesh->coords.data(), vertex_order.data());
   }
@@ -546,11 +761,23 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   Models m;
   FreeRanks unmerged(static_cast<uint32_t>(n));             // decoding ids + 1 of the vertices not merged yet
   std::vector<uint32_t> coded_parent(n, MergeTree::kRoot);  // decoding ids, merges coded so far
+  BatchScratch scratch;
+  std::vector<uint32_t> place(version == kVersion4 ? n : 0);
+  auto key = [&](uint32_t id) {
+    return with_candidates ? batchKeyOfPoint(mesh->coords.data() + 3 * size_t{inverse[id]}) : batchKeyOfId(id);
+  };
+  uint64_t batch_end = 0;
+  size_t batch = 0;
   for (uint64_t r = 0; r < tree.merges; ++r) {
+    if (version == kVersion4 && r == batch_end) {
+      const uint32_t rule = batchRule(n - r, tree.merges - r, divisor);
+      const uint32_t size = tree.batches.empty() ? rule : tree.batches[batch++];
+      encodeBatch(rc, m, unmerged, rule, std::span<const uint32_t>(by_rank.data() + r, size), key, scratch, place);
+      batch_end = r + size;
+    }
     const uint32_t id = by_rank[r];
     const uint32_t v = inverse[id];
     MergeCode code{};
-    code.child_index = unmerged.countBelow(id + 1);
     int64_t count = -1;
     if (candidates) {
       count = candidates->gather(v);
@@ -579,9 +806,12 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     code.low_bits = code.len > 1 ? static_cast<uint32_t>(mag & ((uint64_t{1} << (code.len - 1)) - 1)) : 0;
     code.boundary = tree.boundary[v] ? 1 : 0;
     code.removed = tree.removed[v];
-    codeUniform(rc, code.child_index, static_cast<uint32_t>(n - r));
+    if (version != kVersion4) {
+      code.child_index = unmerged.countBelow(id + 1);
+      codeUniform(rc, code.child_index, static_cast<uint32_t>(n - r));
+      unmerged.take(id + 1);
+    }
     codeMerge(rc, m, code, pred.count, count);
-    unmerged.take(id + 1);
   }
   rc.finish();
   putVarint(out, body.size());
@@ -594,7 +824,7 @@ namespace {
 StatusOr<Header> readHeader(Reader& r, uint64_t expected_points, MergeTree* tree) {
   Header h;
   GTN_RETURN_IF_ERROR(r.u8(&h.version, "version"));
-  if (h.version != kVersion2 && h.version != kVersion3)
+  if (h.version < kVersion2 || h.version > kVersion4)
     return r.error("version", "unsupported version " + std::to_string(h.version));
   GTN_RETURN_IF_ERROR(r.varint(&h.points, "points"));
   if (h.points != expected_points)
@@ -605,9 +835,16 @@ StatusOr<Header> readHeader(Reader& r, uint64_t expected_points, MergeTree* tree
   GTN_RETURN_IF_ERROR(r.varint(&h.boundary_merges, "boundary_merges"));
   if (h.boundary_merges > h.merges) return r.error("boundary_merges", "more boundary merges than merges");
   GTN_RETURN_IF_ERROR(r.varint(&h.tets_removed, "tets_removed"));
-  if (h.version == kVersion3) {
+  if (h.version >= kVersion3) {
     GTN_RETURN_IF_ERROR(r.varint(&h.free_merges, "free_merges"));
     if (h.free_merges > h.merges - h.boundary_merges) return r.error("free_merges", "more than the interior merges");
+    h.parent_form = 3;
+  }
+  if (h.version == kVersion4) {
+    GTN_RETURN_IF_ERROR(r.u8(&h.parent_form, "parent_form"));
+    if (h.parent_form != 2 && h.parent_form != 3) return r.error("parent_form", "must be 2 or 3");
+    GTN_RETURN_IF_ERROR(r.varint(&h.divisor, "batch_divisor"));
+    if (h.divisor == 0 || h.divisor > 0xFFFFFFFFu) return r.error("batch_divisor", "must be 1 to 2^32 - 1");
   }
   GTN_RETURN_IF_ERROR(r.f64(&tree->w_density, "w_density"));
   GTN_RETURN_IF_ERROR(r.f64(&tree->w_geometry, "w_geometry"));
@@ -644,7 +881,8 @@ StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, 
   out.boundary_merges = h.boundary_merges;
   out.tets_removed = h.tets_removed;
   out.free_merges = h.free_merges;
-  out.needs_mesh = h.version == kVersion3;
+  out.candidates = h.candidates();
+  out.needs_mesh = h.candidates();
   return out;
 }
 
@@ -656,9 +894,10 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
   const size_t n = h.points;
   const uint64_t decode = std::min(h.merges, max_merges);
   std::optional<ParentCandidates> candidates;
-  if (h.version == kVersion3 && decode > 0) {
+  if (h.candidates() && decode > 0) {
     if (!mesh)
-      return usageError(what + ": the merge tree (version 3) is decoded against its level, which was not decoded");
+      return usageError(what + ": the merge tree (version " + std::to_string(h.version) +
+                        ") is decoded against its level, which was not decoded");
     if (mesh->numPoints() != n)
       return invalidData(what + ": the merge tree has " + std::to_string(n) + " vertices, its level's mesh " +
                          std::to_string(mesh->numPoints()));
@@ -667,6 +906,7 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
   }
   tree.makeRoots(n);
   tree.merges = decode;
+  if (h.version == kVersion4) tree.batch_divisor = static_cast<uint32_t>(h.divisor);
   EntropyCoder<false> rc(h.body);
   Models m;
   FreeRanks unmerged(static_cast<uint32_t>(n));
@@ -674,11 +914,30 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
   auto bodyError = [&](uint64_t r, const std::string& why) {
     return invalidData(what + ": merge tree payload body, merge " + std::to_string(r + 1) + ": " + why);
   };
+  BatchScratch scratch;
+  std::vector<uint32_t> seq;
+  size_t next = 0;
+  auto key = [&](uint32_t id) {
+    return h.candidates() ? batchKeyOfPoint(mesh->coords.data() + 3 * size_t{id}) : batchKeyOfId(id);
+  };
   for (uint64_t r = 0; r < decode; ++r) {
     MergeCode code{};
-    code.child_index = codeUniform(rc, 0, static_cast<uint32_t>(n - r));
-    if (code.child_index >= n - r) return bodyError(r, "child out of range");
-    const uint32_t id = unmerged.kth(code.child_index) - 1;
+    uint32_t id = 0;
+    if (h.version == kVersion4) {
+      if (next == seq.size()) {
+        const uint32_t rule = batchRule(n - r, h.merges - r, static_cast<uint32_t>(h.divisor));
+        if (!decodeBatch(rc, m, unmerged, n - r, rule, h.merges - r, key, scratch, seq))
+          return bodyError(r, "batch corrupt or out of range");
+        next = 0;
+        tree.batches.push_back(static_cast<uint32_t>(std::min<uint64_t>(seq.size(), decode - r)));
+      }
+      id = seq[next++];
+    } else {
+      code.child_index = codeUniform(rc, 0, static_cast<uint32_t>(n - r));
+      if (code.child_index >= n - r) return bodyError(r, "child out of range");
+      id = unmerged.kth(code.child_index) - 1;
+      unmerged.take(id + 1);
+    }
     const DeltaPredictions pred(tree.parent, id);
     const int64_t count = candidates ? int64_t{candidates->gather(id)} : -1;
     codeMerge(rc, m, code, pred.count, count);
@@ -705,7 +964,6 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     // The parent must still be alive: merged later (a larger rank) or never.
     if (tree.parent[pid] != MergeTree::kRoot) return bodyError(r, "merges into a vertex merged earlier");
     if (candidates) candidates->merge(id, pid);
-    unmerged.take(id + 1);
     tree.parent[id] = pid;
     tree.rank[id] = static_cast<uint32_t>(r + 1);
     tree.boundary[id] = static_cast<uint8_t>(code.boundary);
@@ -719,7 +977,7 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     return invalidData(what + ": merge tree payload body truncated, corrupt or followed by trailing bytes");
   if (got_boundary != h.boundary_merges || got_removed != h.tets_removed)
     return invalidData(what + ": merge tree payload counts disagree with its header");
-  if (h.version == kVersion3 && leadingFreeMerges(tree) != h.free_merges)
+  if (h.version >= kVersion3 && leadingFreeMerges(tree) != h.free_merges)
     return invalidData(what + ": merge tree payload's free_merges disagrees with its records");
   return tree;
 }

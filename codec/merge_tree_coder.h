@@ -76,6 +76,11 @@ struct MergeTree {
   std::vector<uint8_t> boundary;  // per vertex: 1 if v is a boundary vertex (its merge is a boundary merge)
   std::vector<float> error;       // per vertex: error of its merge when chosen (not coded; may be empty)
   uint64_t merges = 0;            // ranks 1..merges
+  // Batches of the ranks (version 4; simplify/ranking.h's batchMerges): the sizes of consecutive runs
+  // of ranks, each merged in an order the payload need not code (see batchKeyOfPoint), summing to
+  // `merges`; empty = none chosen (the encoder then cuts by the rule, ceil(unmerged / divisor)).
+  std::vector<uint32_t> batches;
+  uint32_t batch_divisor = 0;  // the rule's divisor the batches were made with (0 = the default)
   // Set by decodeMergeTree, whose trees satisfy check() by construction, so that the stream filter
   // need not check them again; whoever changes such a tree must clear it.
   bool checked = false;
@@ -96,8 +101,21 @@ struct MergeTree {
 };
 
 // The tree of the first n merges (rank order) of `tree`: the later merges' children become roots.
-// Provenance and quantiles are kept.
+// Provenance, quantiles and the batches (cut at n) are kept.
 MergeTree prefixTree(const MergeTree& tree, uint64_t n);
+
+// The batch sizes of the merges ranked in [from, to) (a batch cut by either end keeps its part).
+std::vector<uint32_t> sliceBatches(const std::vector<uint32_t>& batches, uint64_t from, uint64_t to);
+
+// Version 4's default batch divisor: a batch merges about 1/8 of the vertices not merged yet.
+constexpr uint32_t kDefaultBatchDivisor = 8;
+
+// The keys that order a version 4 batch's children (ties to the smaller id): by position where the
+// parents are coded as candidates (the decoder has the level), by decoding id where they are coded as
+// deltas. Both are the splitmix64 finaliser m: m(id), and m(m(m(X) ^ Y) ^ Z) of the binary64 bit
+// patterns of the coordinates.
+uint64_t batchKeyOfId(uint64_t id);
+uint64_t batchKeyOfPoint(const double* p);
 
 // The quantile positions of MergeTree::error_quantiles.
 extern const double kMergeErrorQuantiles[9];
@@ -110,10 +128,19 @@ void computeErrorQuantiles(MergeTree& tree);
 // in the header (free_merges).
 uint64_t leadingFreeMerges(const MergeTree& tree);
 
+// How a payload is coded: its version, and in version 4 the parents' code (as version 3's candidates,
+// which needs the level's tetrahedra, or as version 2's deltas, which needs nothing of the level).
+struct MergeTreeForm {
+  uint8_t version = 4;
+  bool candidates = true;
+};
+
 // Encodes `tree` (vertex numbering of the source mesh) with vertex v stored at vertex_order[v], the
-// id the level decoder gives it. vertex_order must be a permutation of 0..P-1. With the level's mesh
-// (`mesh`, in the tree's numbering) the payload is version 3, which codes each parent as a place
-// among the child's neighbours; without it version 2.
+// id the level decoder gives it. vertex_order must be a permutation of 0..P-1. `mesh` is the level (in
+// the tree's numbering): versions 3 and 4 with candidates need it, and version 4 its points. The
+// three-argument form writes version 3 with a mesh and version 2 without.
+StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order,
+                                               const TetMesh* mesh, const MergeTreeForm& form);
 StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std::vector<uint32_t>& vertex_order,
                                                const TetMesh* mesh);
 
@@ -121,16 +148,17 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
 struct MergeTreeHeader {
   uint8_t version = 0;
   uint64_t merges = 0, boundary_merges = 0, tets_removed = 0;
-  uint64_t free_merges = 0;  // version 3; 0 in version 2 (count them with leadingFreeMerges)
-  bool needs_mesh = false;   // decoding merges needs the level's mesh (version 3)
+  uint64_t free_merges = 0;  // versions 3 and 4; 0 in version 2 (count them with leadingFreeMerges)
+  bool candidates = false;   // parents coded as candidates (version 3, and version 4 where it says so)
+  bool needs_mesh = false;   // decoding merges needs the level's mesh (candidates)
 };
 StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, uint64_t expected_points,
                                               const std::string& what);
 
 // Decodes a payload; `expected_points` is the level's vertex count (it bounds every allocation).
 // `what` names the source in messages (file and level). `mesh` is the level as decoded (points and
-// tetrahedra in decoding order): version 3 needs it to decode any merge (kUsage without it), version 2
-// ignores it. Only the first `max_merges` merges are decoded (the tree of a prefix of the ranking is
+// tetrahedra in decoding order): candidates (version 3, or version 4 that says so) need it to decode
+// any merge (kUsage without it); otherwise it is ignored. Only the first `max_merges` merges are decoded (the tree of a prefix of the ranking is
 // itself a merge tree, with the later merges' children as roots); the checks that need the whole body
 // (header counts, trailing bytes) run only when the whole body is read.
 StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,

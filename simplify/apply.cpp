@@ -84,6 +84,8 @@ MergeTree remainingTree(const MergeTree& tree, uint64_t n, const std::vector<uin
     if (!tree.error.empty()) out.error[i] = tree.error[v];
   }
   out.merges = tree.merges - n;
+  out.batches = sliceBatches(tree.batches, n, tree.merges);
+  out.batch_divisor = tree.batch_divisor;
   out.field = tree.field;
   out.w_density = tree.w_density;
   out.w_geometry = tree.w_geometry;

@@ -100,7 +100,7 @@ StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree,
   return out;
 }
 
-std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source) const {
+std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source, bool level0_candidates) const {
   std::vector<GtnLevelInput> result;
   for (size_t i = 0; i < merges.size(); ++i) {
     GtnLevelInput in;
@@ -110,11 +110,12 @@ std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source) const {
     if (trees[i]) {
       std::shared_ptr<const MergeTree> t = trees[i];
       const TetMesh* mesh = in.mesh;
-      in.merge_tree = [t, mesh](const std::vector<uint32_t>& vertex_order) {
-        return encodeMergeTree(*t, vertex_order, mesh);
+      const MergeTreeForm form{4, i > 0 || level0_candidates};
+      in.merge_tree = [t, mesh, form](const std::vector<uint32_t>& vertex_order) {
+        return encodeMergeTree(*t, vertex_order, mesh, form);
       };
-      in.merge_tree_prefix = [t, mesh](const std::vector<uint32_t>& vertex_order, uint64_t n) {
-        return encodeMergeTree(n < t->merges ? prefixTree(*t, n) : *t, vertex_order, mesh);
+      in.merge_tree_prefix = [t, mesh, form](const std::vector<uint32_t>& vertex_order, uint64_t n) {
+        return encodeMergeTree(n < t->merges ? prefixTree(*t, n) : *t, vertex_order, mesh, form);
       };
     }
     if (i < next_index.size()) {
@@ -236,6 +237,7 @@ StatusOr<std::optional<MergeTree>> wholeMergeTree(GtnReader& reader, size_t i,
       if (!t.error.empty() && u < whole->error.size()) t.error[v] = whole->error[u];
     }
     t.merges = band + whole->merges;
+    t.batches.insert(t.batches.end(), whole->batches.begin(), whole->batches.end());
     t.checked = false;
     GTN_RETURN_IF_ERROR(t.check(what + ": merge tree with the next levels'"));
     whole = std::move(t);

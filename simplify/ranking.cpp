@@ -299,6 +299,8 @@ class Ranker {
         thread_ws_([points = mesh.numPoints()] { return Workspace(points); }) {}
 
   MergeTree run(RankingStats* stats, const ProgressFn& progress);
+  // batchMerges (ranking.h) on a Ranker of the same mesh.
+  MergeTree batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor, BatchStats* stats);
 
  private:
   const double* pos(uint32_t v) const { return mesh_.coords.data() + 3 * size_t{v}; }
@@ -371,6 +373,7 @@ class Ranker {
   // Ranking in parts: each vertex's part, and whether it shares a tetrahedron with another part's.
   std::vector<uint8_t> part_, seam_;
   MergeTree tree_;
+  bool replaying_ = false;  // batch(): merges are applied as given, nothing is evaluated
 
   tbb::enumerable_thread_specific<Workspace> thread_ws_;
 };
@@ -911,6 +914,7 @@ void Ranker::merge(Lane& L, uint32_t v, uint32_t w, float error) {
   tree_.removed[v] = removed;
   tree_.boundary[v] = boundary_[v];
   tree_.error[v] = error;
+  if (replaying_) return;
   L.ws->uniqueByMark(L.recompute);
   if (!options_.lazy) {
     recompute(L, L.recompute);
@@ -1063,6 +1067,155 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   return std::move(tree_);
 }
 
+MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor,
+                        BatchStats* stats) {
+  init();
+  replaying_ = true;
+  const size_t np = mesh_.numPoints();
+  Lane whole(np);
+  buildPool(whole);
+  whole.ws = &thread_ws_.local();
+  std::vector<uint32_t> by_rank(ranked.merges);
+  for (uint32_t v = 0; v < np; ++v)
+    if (ranked.rank[v]) by_rank[ranked.rank[v] - 1] = v;
+  // The vertex each one has been merged into, recursively (path halving).
+  std::vector<uint32_t> up(np);
+  for (uint32_t v = 0; v < np; ++v) up[v] = v;
+  auto root = [&](uint32_t x) {
+    while (up[x] != x) {
+      up[x] = up[up[x]];
+      x = up[x];
+    }
+    return x;
+  };
+  auto byKey = [&](uint32_t a, uint32_t b) { return keys[a] < keys[b] || (keys[a] == keys[b] && a < b); };
+  std::vector<uint32_t> order;
+  order.reserve(ranked.merges);
+  BatchStats st;
+  // The unused points' merges first, as one batch (they remove nothing and change no tetrahedron).
+  const uint64_t free = leadingFreeMerges(ranked);
+  if (free) {
+    std::vector<uint32_t> first(by_rank.begin(), by_rank.begin() + static_cast<std::ptrdiff_t>(free));
+    std::sort(first.begin(), first.end(), byKey);
+    for (uint32_t v : first) {
+      alive_[v] = 0;
+      up[v] = ranked.parent[v];
+      tree_.parent[v] = ranked.parent[v];
+      tree_.error[v] = ranked.error.empty() ? 0.0f : ranked.error[v];
+      order.push_back(v);
+    }
+    tree_.batches.push_back(static_cast<uint32_t>(free));
+  }
+  const uint32_t d = divisor ? divisor : kDefaultBatchDivisor;
+  uint64_t unmerged = np - free;
+  size_t next = free;
+  std::vector<uint32_t> carry, batch, deferred, still;
+  // Per vertex: its rank while it is the child of a merge of the batch not made yet, else kNoIndex.
+  std::vector<uint32_t> pending(np, kNoIndex);
+  auto apply = [&](uint32_t v, uint32_t w) {
+    merge(whole, v, w, ranked.error.empty() ? 0.0f : ranked.error[v]);
+    up[v] = w;
+    order.push_back(v);
+  };
+  auto tryMerge = [&](uint32_t v) {
+    const uint32_t w = root(ranked.parent[v]);
+    if (w == v || !validate(whole, v, w)) return false;
+    apply(v, w);
+    return true;
+  };
+  // Into the target the ranking's error prefers among those the checks allow now.
+  auto tryOther = [&](uint32_t v) {
+    candidates(whole, v, whole.sorted, *whole.ws);
+    std::sort(whole.sorted.begin(), whole.sorted.end(), [](const Candidate& a, const Candidate& b) {
+      return a.error < b.error || (a.error == b.error && a.w < b.w);
+    });
+    for (const Candidate& c : whole.sorted) {
+      if (validate(whole, v, c.w)) {
+        apply(v, c.w);
+        ++st.retargeted;
+        return true;
+      }
+    }
+    return false;
+  };
+  while (next < by_rank.size() || !carry.empty()) {
+    const uint64_t want = (unmerged + d - 1) / d;
+    // The merges left over from the last batch first (their ranks are the smallest), then the next
+    // ones by rank.
+    batch = carry;
+    while (batch.size() < want && next < by_rank.size()) batch.push_back(by_rank[next++]);
+    const size_t before = order.size();
+    // A merge waits for the merges of the batch ranked before it whose child is in its child's star:
+    // one of them would change the other's neighbourhood, and the ranking made them in rank order.
+    for (uint32_t v : batch) pending[v] = ranked.rank[v];
+    auto waits = [&](uint32_t v) {
+      const uint32_t r = ranked.rank[v];
+      gatherStar(whole, v, whole.corners);
+      for (uint32_t c : whole.corners)
+        for (uint32_t y : tets_[c >> 2])
+          if (pending[y] < r) return true;
+      return false;
+    };
+    // Passes in key order, each making the merges that need not wait and are allowed, while one does.
+    deferred = batch;
+    std::sort(deferred.begin(), deferred.end(), byKey);
+    for (size_t made = 1; made && !deferred.empty();) {
+      made = 0;
+      still.clear();
+      for (uint32_t v : deferred) {
+        if (waits(v) || !tryMerge(v)) {
+          still.push_back(v);
+          continue;
+        }
+        ++made;
+        pending[v] = kNoIndex;
+      }
+      deferred.swap(still);
+      ++st.passes;
+    }
+    for (uint32_t v : batch) pending[v] = kNoIndex;
+    st.deferred += deferred.size();
+    // The deferred ones by rank, as long as one of them can merge.
+    std::sort(deferred.begin(), deferred.end(),
+              [&](uint32_t a, uint32_t b) { return ranked.rank[a] < ranked.rank[b]; });
+    for (bool progress = true; progress && !deferred.empty();) {
+      progress = false;
+      still.clear();
+      for (uint32_t v : deferred) {
+        if (tryMerge(v)) progress = true;
+        else still.push_back(v);
+      }
+      deferred.swap(still);
+    }
+    // Those whose parent the new order made invalid: another target, where one is allowed.
+    still.clear();
+    for (uint32_t v : deferred)
+      if (!tryOther(v)) still.push_back(v);
+    deferred.swap(still);
+    carry = deferred;
+    st.carried += carry.size();
+    const uint64_t made = order.size() - before;
+    if (made == 0) {
+      // None of them can merge in this order: the first one stays a root.
+      carry.erase(carry.begin());
+      ++st.dropped;
+      continue;
+    }
+    tree_.batches.push_back(static_cast<uint32_t>(made));
+    unmerged -= made;
+  }
+  for (size_t i = 0; i < order.size(); ++i) tree_.rank[order[i]] = static_cast<uint32_t>(i + 1);
+  tree_.merges = order.size();
+  tree_.batch_divisor = d;
+  tree_.field = ranked.field;
+  tree_.w_density = ranked.w_density;
+  tree_.w_geometry = ranked.w_geometry;
+  tree_.error_quantiles = ranked.error_quantiles;
+  st.batches = tree_.batches.size();
+  if (stats) *stats = st;
+  return std::move(tree_);
+}
+
 // The mid-edge points (codec/edge_points.h) merge into their edge's first end as merges 1..U, before
 // the ranked ones (see ranking.h).
 void mergeEdgePointsFirst(const TetMesh& mesh, MergeTree& tree) {
@@ -1150,6 +1303,23 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
     stats->constant_fields = std::move(constant_fields);
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
+  return tree;
+}
+
+StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const std::vector<uint64_t>& keys,
+                                uint32_t divisor, BatchStats* stats) {
+  const auto start = std::chrono::steady_clock::now();
+  GTN_RETURN_IF_ERROR(ranked.check("merge tree"));
+  if (ranked.points() != mesh.numPoints() || keys.size() != mesh.numPoints())
+    return invalidData("batchMerges: the tree, the keys and the mesh differ in vertices");
+  RankingOptions options;
+  options.w_density = ranked.w_density;
+  options.w_geometry = ranked.w_geometry;
+  Ranker ranker(mesh, std::vector<double>(mesh.numPoints(), 1.0), options);
+  BatchStats local;
+  MergeTree tree = ranker.batch(ranked, keys, divisor, &local);
+  local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (stats) *stats = local;
   return tree;
 }
 

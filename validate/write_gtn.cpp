@@ -61,6 +61,13 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   } join{checking};
   if (wo.verify && o.levels != 0) checking.run([&] { structure.checkLevel0(); });
   MergeTree tree = std::move(ranking).value();
+  bool level0_candidates = true;
+  if (o.merge_tree && level0) {
+    reportProgress(wo.progress, "batch merges", 0.0);
+    GTN_ASSIGN_OR_RETURN(StoredMergeTree stored, storedMergeTree(mesh, tree, *level0));
+    tree = std::move(stored.tree);
+    level0_candidates = stored.level0_candidates;
+  }
   if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
     warnings->push_back(source + ": " + note);
   LevelOptions lo;
@@ -94,12 +101,6 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
     // The finer levels are never made: the first stored one comes from level 0 in one pass.
     if (first < count) levels.skipTo(first);
   }
-  // A structured level 0 (a grid, never naming the next level's vertices) stores the whole tree, which
-  // readers decode to simplify it on the fly at every ratio finer than the stored levels: as MTRE
-  // version 2, whose decode does not depend on the level. Version 3 is about 10% smaller there, but
-  // decodes against the level at about 2.5 us a merge, which made a grid's on-the-fly read three
-  // times slower than the level's own decode and simplification.
-  const bool structured0 = level0 && level0->pieces.size() == 1 && level0->pieces[0].kind == kPieceStructured;
   std::vector<size_t> kept = {0};
   for (size_t i = first; i < count; ++i) kept.push_back(i);
   std::vector<GtnLevelInput> inputs(kept.size());
@@ -132,11 +133,12 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
                                     uint64_t merges) -> StatusOr<std::vector<uint8_t>> {
         const std::shared_ptr<const MergeTree> t = levels.tree(i);
         if (!t) return usageError(path + ": level " + std::to_string(i) + "'s merge tree asked for before the level");
-        const TetMesh* level_mesh = structured0 ? nullptr : &mesh;
+        const TetMesh* level_mesh = &mesh;
         if (i > 0) {
           GTN_ASSIGN_OR_RETURN(level_mesh, levels.level(i));
         }
-        return encodeMergeTree(merges < t->merges ? prefixTree(*t, merges) : *t, vertex_order, level_mesh);
+        const MergeTreeForm form{4, i > 0 || level0_candidates};
+        return encodeMergeTree(merges < t->merges ? prefixTree(*t, merges) : *t, vertex_order, level_mesh, form);
       };
       in.merge_tree = [prefix = in.merge_tree_prefix](const std::vector<uint32_t>& vertex_order) {
         return prefix(vertex_order, UINT64_MAX);
@@ -153,6 +155,25 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   return Status::ok();
 }
 }  // namespace
+
+StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0) {
+  // A structured level 0 (a grid, never naming the next level's vertices) stores the whole tree, which
+  // readers decode to simplify it on the fly at every ratio finer than the stored levels: its parents
+  // are coded as deltas, which needs nothing of the level, and its batches are ordered by decoding id.
+  // Candidates are about 10% smaller there, but decode against the level at about 2.5 us a merge,
+  // which made a grid's on-the-fly read three times slower than the level's own decode and
+  // simplification. Every other level codes its parents as candidates, and its batches are ordered by
+  // position.
+  StoredMergeTree out;
+  out.level0_candidates = !(level0.pieces.size() == 1 && level0.pieces[0].kind == kPieceStructured);
+  if (!out.level0_candidates && level0.vertex_order.size() != mesh.numPoints())
+    return invalidData("storedMergeTree: level 0's vertex order does not match the mesh");
+  std::vector<uint64_t> keys(mesh.numPoints());
+  for (size_t v = 0; v < keys.size(); ++v)
+    keys[v] = out.level0_candidates ? batchKeyOfPoint(mesh.point(v)) : batchKeyOfId(level0.vertex_order[v]);
+  GTN_ASSIGN_OR_RETURN(out.tree, batchMerges(mesh, ranked, keys, kDefaultBatchDivisor));
+  return out;
+}
 
 Status writeGtnWithLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& options,
                           const GtnWriteOptions& write_options, const std::string& source,

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "codec/pieces.h"
 #include "format/gtn_file.h"
 #include "mesh/tet_mesh.h"
 #include "simplify/ranking.h"
@@ -30,6 +31,16 @@ struct GtnConvertOptions {
 // messages (the input file). The encoder's refusals become "<source>: cannot be encoded: <reason>".
 // `warnings` (optional) receives what the user should hear about, e.g. fewer levels than asked for
 // because the merge tree stops early.
+// The merge tree a .gtn stores for `mesh` ranked as `ranked` (rankMerges), level 0 being `level0`
+// (encodePieces): batched (batchMerges) by the keys its payloads order batches by, which are level 0's
+// decoding ids where level 0 is one structured piece (whose tree codes its parents as deltas, and so
+// decodes without the level), and the positions elsewhere (parents as candidates).
+struct StoredMergeTree {
+  MergeTree tree;
+  bool level0_candidates = true;
+};
+StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0);
+
 Status writeGtnWithLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& options,
                           const GtnWriteOptions& write_options, const std::string& source,
                           std::vector<std::string>* warnings = nullptr);

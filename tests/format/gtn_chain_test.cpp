@@ -198,7 +198,12 @@ TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
   // The levels the simplifier makes, and which of them the rule keeps.
   auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
   ASSERT_TRUE(tree.isOk()) << tree.status().message();
-  auto all = buildMipLevels(mesh, *tree, LevelOptions{});
+  auto level0 = encodePieces(mesh, EncodeOptions{}, kDefaultPieceTets);
+  ASSERT_TRUE(level0.isOk()) << level0.status().message();
+  auto stored = storedMergeTree(mesh, *tree, *level0);
+  ASSERT_TRUE(stored.isOk()) << stored.status().message();
+  EXPECT_FALSE(stored->level0_candidates);
+  auto all = buildMipLevels(mesh, stored->tree, LevelOptions{});
   ASSERT_TRUE(all.isOk()) << all.status().message();
   const size_t count = all->meshes.size();
   ASSERT_GE(count, 6u);
@@ -220,12 +225,16 @@ TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
   EXPECT_EQ(r->level(0).pieces[0].kind, kPieceStructured);
   EXPECT_EQ(r->level(0).base, 0);
   ASSERT_EQ(r->levels(), kept_ratios.size() + 1);
-  // The grid's whole tree is MTRE version 2, which decodes without the level (the finer ratios all
-  // read it on the fly); the coarse levels' trees are version 3.
+  // The grid's whole tree codes its parents as deltas, and so decodes without the level (the finer
+  // ratios all read it on the fly); the coarse levels' trees code them as candidates.
   for (size_t k = 0; k < r->levels(); ++k) {
     auto payload = r->mergeTreePayload(k);
     ASSERT_TRUE(payload.isOk() && payload->has_value()) << k;
-    EXPECT_EQ((**payload)[0], k == 0 ? 2 : 3) << k;
+    auto header = readMergeTreeHeader(**payload, r->level(k).header.points, "grid");
+    ASSERT_TRUE(header.isOk()) << header.status().message();
+    EXPECT_EQ(header->version, 4) << k;
+    EXPECT_EQ(header->candidates, k > 0) << k;
+    EXPECT_EQ(header->needs_mesh, k > 0) << k;
   }
   uint64_t stored_chain = 0;
   for (size_t k = r->levels(); k-- > 1;) {

@@ -536,7 +536,11 @@ TEST(Levels, ConvertMakesAndChecksOnlyTheLevelsItStores) {
   RankingStats stats;
   auto tree = rankMerges(mesh, RankingOptions{}, &stats);
   ASSERT_TRUE(tree.isOk()) << tree.status().message();
-  auto all = buildMipLevels(mesh, *tree, LevelOptions{});
+  auto level0 = encodePieces(mesh, EncodeOptions{}, kDefaultPieceTets);
+  ASSERT_TRUE(level0.isOk()) << level0.status().message();
+  auto stored = storedMergeTree(mesh, *tree, *level0);
+  ASSERT_TRUE(stored.isOk()) << stored.status().message();
+  auto all = buildMipLevels(mesh, stored->tree, LevelOptions{});
   ASSERT_TRUE(all.isOk()) << all.status().message();
   const size_t count = all->merges.size();
   const std::string path = ::testing::TempDir() + "/lazy_levels.gtn";
@@ -545,7 +549,7 @@ TEST(Levels, ConvertMakesAndChecksOnlyTheLevelsItStores) {
   GtnWriteOptions eager;
   eager.level_storage_limit = convert.level_storage;
   eager.chain_levels = false;
-  ASSERT_TRUE(writeGtnFile(path, all->inputs(mesh), eager).isOk());
+  ASSERT_TRUE(writeGtnFile(path, all->inputs(mesh, stored->level0_candidates), eager).isOk());
   auto want = readWholeFile(path);
   ASSERT_TRUE(want.isOk()) << want.status().message();
   for (const bool verify : {true, false}) {
@@ -594,15 +598,19 @@ TEST(Levels, ConvertWritesTheSameBytesForAnyThreadCount) {
   };
   GtnWriteOptions wo;
   wo.level_storage_limit = 2.0;
-  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{});
+  auto level0 = encodePieces(g.mesh, EncodeOptions{}, wo.piece_tets);
+  ASSERT_TRUE(level0.isOk()) << level0.status().message();
+  auto stored = storedMergeTree(g.mesh, g.tree, *level0);
+  ASSERT_TRUE(stored.isOk()) << stored.status().message();
+  auto levels = buildMipLevels(g.mesh, stored->tree, LevelOptions{});
   ASSERT_TRUE(levels.isOk()) << levels.status().message();
-  ASSERT_TRUE(writeGtnFile(path, levels->inputs(g.mesh), wo).isOk());
+  ASSERT_TRUE(writeGtnFile(path, levels->inputs(g.mesh, stored->level0_candidates), wo).isOk());
   const std::string sequential = bytesOf(path);
   ASSERT_FALSE(sequential.empty());
   // A level given already encoded is written as the writer would have encoded it.
   auto encoded = encodePieces(g.mesh, EncodeOptions{}, wo.piece_tets);
   ASSERT_TRUE(encoded.isOk()) << encoded.status().message();
-  std::vector<GtnLevelInput> inputs = levels->inputs(g.mesh);
+  std::vector<GtnLevelInput> inputs = levels->inputs(g.mesh, stored->level0_candidates);
   inputs[0].encoded = std::make_shared<PiecedLevel>(std::move(encoded).value());
   ASSERT_TRUE(writeGtnFile(path, inputs, wo).isOk());
   EXPECT_EQ(bytesOf(path), sequential);
