@@ -6,14 +6,17 @@
 // (a vertex can only be merged into a vertex that is still alive), which makes the tree acyclic and
 // lets a top-down traversal compute ancestors in one pass.
 //
-// Payload layout (spec section 11; versions 2 and 3, writers write 3; little-endian; varint =
+// Payload layout (spec section 11; versions 2, 3 and 4, writers write 4; little-endian; varint =
 // unsigned LEB128, at most 10 bytes):
-//   u8      version                  = 3 (or 2)
+//   u8      version                  = 4 (or 2, 3)
 //   varint  points P                 vertices of the level (must equal the level header's count)
 //   varint  merges M                 M <= P
 //   varint  boundary_merges          merges whose child is a boundary vertex
 //   varint  tets_removed             sum over merges of the tetrahedra each merge removes
-//   varint  free_merges              version 3 only: leadingFreeMerges (below)
+//   varint  free_merges              versions 3 and 4: leadingFreeMerges (below)
+//   u8      parent_form              version 4: 3 = parents as candidates, 2 = as deltas (version 3
+//                                    has 3, version 2 has 2)
+//   varint  batch_divisor d          version 4: the batches' rule, ceil(unmerged / d)
 //   f64     w_density, w_geometry    weights the ranking used (provenance)
 //   varint  n, then n bytes          name of the density field ("" = volume only)
 //   u8      q                        number of error quantiles (0 or 9)
@@ -22,14 +25,19 @@
 //   varint  body_bytes, then the body: one stream of codec/range_coder.h (adaptive BitModel bits,
 //           BitTree symbols, direct bits; the encoder's flush ends it) holding the merges in rank
 //           order r = 1..M, so that a reader that applies only the first N merges decodes only the
-//           first N records. Merge r, child c (the vertex merged away) into parent p, ids in the
+//           first N records. Version 4 codes its records in batches, each one's children and their
+//           order before its records (encodeBatch in the .cpp, spec section 11 "Batches"): the size
+//           (the rule's, or a length code), the children as gaps among the unmerged, then runs of
+//           them in key order (batchKeyOfPoint or batchKeyOfId, by parent_form) and the rest as
+//           uniform places. Merge r, child c (the vertex merged away) into parent p, ids in the
 //           level's vertex numbering 0..P-1 (decoding order):
+//       versions 2 and 3:
 //       uniform x in [0, U)          U = P - (r - 1), the vertices not merged yet; c is the (x+1)-th
 //                                    smallest of them. Truncated binary in direct bits: b =
 //                                    bitlen(U-1), u = 2^b - U; b-1 bits y; if y >= u one more bit,
 //                                    x = 2y + bit - u. Nothing is coded when U = 1.
 //       bit   boundary               one model; 1 = c is a boundary vertex
-//       version 3, when c has K > 0 parent candidates (ParentCandidates in the .cpp: the vertices
+//       parent_form 3, when c has K > 0 parent candidates (ParentCandidates in the .cpp: the vertices
 //       that share a tetrahedron of the level with c or with a vertex merged into c, each replaced by
 //       the vertex it has been merged into, nearest c first, ties to the smaller id):
 //         BitTree<4> s                 tree per boundary bit; s < 14: p is candidate s; 14: candidate

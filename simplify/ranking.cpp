@@ -1067,6 +1067,9 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   return std::move(tree_);
 }
 
+// The most passes in key order a batch makes (batchMerges).
+constexpr uint32_t kBatchPasses = 8;
+
 MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor,
                         BatchStats* stats) {
   init();
@@ -1159,7 +1162,10 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     // Passes in key order, each making the merges that need not wait and are allowed, while one does.
     deferred = batch;
     std::sort(deferred.begin(), deferred.end(), byKey);
-    for (size_t made = 1; made && !deferred.empty();) {
+    // At most kBatchPasses: where the ranking made long chains of neighbouring merges (on a smooth
+    // grid, whose errors tie), each pass makes few of them, and the rest go by rank.
+    uint32_t passes = 0;
+    for (size_t made = 1; made && !deferred.empty() && passes++ < kBatchPasses;) {
       made = 0;
       still.clear();
       for (uint32_t v : deferred) {

@@ -130,17 +130,20 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
 
 // Batches (MTRE payload version 4, spec section 11): the ranked merges regrouped so that most of their
 // order need not be coded. Batch after batch, the next ceil(U / divisor) merges by rank (U = the
-// vertices not merged yet; the leading merges of unused points are a batch of their own) are applied
-// in the order of keys[child] (ties to the smaller child), each as the ranking's checks allow it
-// (ranking.h's constraints, the link condition included, in the mesh the merges before it made), into
-// the vertex its ranked parent has been merged into by then; the ones they do not allow yet follow by
-// rank, and any that still cannot merge go on to the next batch, where they come first. (One that can
-// merge in no batch stays a root.) So every batch ends where the ranking's prefix of the same merges
-// does, and every prefix of the result is a valid mesh, as it is of the ranking's. The keys are those
-// the payload orders a batch by (codec/merge_tree_coder.h): by position, or by decoding id.
+// vertices not merged yet; the leading merges of unused points are a batch of their own) are made in
+// passes (at most 8) in the order of keys[child] (ties to the smaller child): a merge waits while a
+// merge of the batch ranked before it has its child in the star of its own child, and is made when
+// the ranking's checks allow it (ranking.h's constraints, the link condition included, in the mesh the
+// merges before it made), into the vertex its ranked parent has been merged into by then. The ones
+// left follow by rank; one whose parent the new order no longer allows takes the target the ranking's
+// error prefers among those allowed; any that still cannot merge goes on to the next batch, where it
+// comes first (and one that can merge in no batch stays a root). So a batch normally ends where the
+// ranking's prefix of the same merges does, and every prefix of the result is a valid mesh, as it is
+// of the ranking's. The keys are those the payload orders a batch by (codec/merge_tree_coder.h): by
+// position, or by decoding id. The tree's error, provenance and quantiles are the ranking's.
 struct BatchStats {
   uint64_t batches = 0;
-  uint64_t deferred = 0;    // merges that could not go in key order (then merged by rank)
+  uint64_t deferred = 0;    // merges the passes left (then merged by rank)
   uint64_t carried = 0;     // merges moved to the next batch
   uint64_t passes = 0;      // passes in key order, over all batches
   uint64_t retargeted = 0;  // merged into another target than the ranking's (its parent was not allowed)

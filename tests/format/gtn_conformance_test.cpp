@@ -35,6 +35,7 @@
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
 #include "test_util.h"
+#include "validate/write_gtn.h"
 
 namespace gtn {
 namespace {
@@ -427,16 +428,20 @@ std::vector<uint8_t> encodeFile(const TetMesh& mesh, const GtnWriteOptions& o,
 }
 
 // `mesh` with its merge tree (MTRE, section 11) and `levels` mip levels, as `gtn convert --levels K`
-// writes it.
+// writes it: the ranked merges in batches (MTRE payload version 4).
 std::vector<uint8_t> encodeWithTree(const TetMesh& mesh, int levels, const GtnWriteOptions& o) {
   auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
   EXPECT_TRUE(tree.isOk());
+  auto level0 = encodePieces(mesh, EncodeOptions{}, o.piece_tets);
+  EXPECT_TRUE(level0.isOk());
+  auto stored = storedMergeTree(mesh, *tree, *level0);
+  EXPECT_TRUE(stored.isOk());
   LevelOptions lo;
   lo.levels = levels;
-  auto built = buildMipLevels(mesh, *tree, lo);
+  auto built = buildMipLevels(mesh, stored->tree, lo);
   EXPECT_TRUE(built.isOk());
   const std::string path = test::tempDir("conformance-tree") + "/tree.gtn";
-  EXPECT_TRUE(writeGtnFile(path, built->inputs(mesh), o).isOk());
+  EXPECT_TRUE(writeGtnFile(path, built->inputs(mesh, stored->level0_candidates), o).isOk());
   const std::string bytes = test::readFile(path);
   return std::vector<uint8_t>(bytes.begin(), bytes.end());
 }
@@ -563,6 +568,8 @@ std::vector<Sample> samples() {
       valid("levels.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(
       valid("levels-mtre3.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+  s.push_back(
+      valid("levels-mtre4.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(
       valid("wide-merge-tree.f32.dir.v2.0-d4.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
   s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d4.gtn", cubeF32, [] {
@@ -873,12 +880,14 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
 // The files with levels: every stored level is what its merges make of level 0, with level 0's merge
 // tree as the file stores it, and on-the-fly simplification from the finest stored level gives the
 // same mesh as applying the merges to level 0, at every merge count. levels.f32 stores MTRE payload
-// version 2, levels-mtre3.f32 version 3 (parents among the neighbours in the level's mesh).
+// version 2, levels-mtre3.f32 version 3 (parents among the neighbours in the level's mesh),
+// levels-mtre4.f32 version 4 (batches).
 void expectLevelsAndTreesAgree(const std::string& path, int version);
 
 TEST(GtnConformance, LevelsAndMergeTreesAgree) {
   for (const auto& [name, version] : {std::pair<std::string, int>{"levels.f32.dir.v2.0-d4.gtn", 2},
-                                      std::pair<std::string, int>{"levels-mtre3.f32.dir.v2.0-d4.gtn", 3}}) {
+                                      std::pair<std::string, int>{"levels-mtre3.f32.dir.v2.0-d4.gtn", 3},
+                                      std::pair<std::string, int>{"levels-mtre4.f32.dir.v2.0-d4.gtn", 4}}) {
     SCOPED_TRACE(name);
     expectLevelsAndTreesAgree(kDir + name, version);
   }

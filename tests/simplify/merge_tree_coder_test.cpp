@@ -1,6 +1,7 @@
-// The merge-tree chunk payload, versions 3 (parents among the child's neighbours in the level's mesh,
-// what writers write) and 2 (parents as id deltas): round trip in decoding order, compactness, and
-// clean rejection of truncated, corrupted and inconsistent payloads.
+// The merge-tree chunk payload, versions 4 (batches whose order is mostly implied, what writers
+// write), 3 (parents among the child's neighbours in the level's mesh) and 2 (parents as id deltas):
+// round trip in decoding order, compactness, and clean rejection of truncated, corrupted and
+// inconsistent payloads; and the batches the writer makes (batchMerges).
 #include <gtest/gtest.h>
 
 #include <numeric>
@@ -12,6 +13,7 @@
 #include "simplify/ranking.h"
 #include "simplify_test_util.h"
 #include "test_util.h"
+#include "validate/merge_checks.h"
 
 namespace gtn::test {
 namespace {
@@ -19,10 +21,15 @@ namespace {
 struct Fixture {
   TetMesh mesh;
   MergeTree tree;
-  std::vector<uint32_t> order;    // a shuffled decoding order
-  TetMesh decoded;                // mesh as its decoder numbers it (renumbered by order)
-  std::vector<uint8_t> payload;   // version 3
-  std::vector<uint8_t> payload2;  // version 2
+  std::vector<uint32_t> order;     // a shuffled decoding order
+  TetMesh decoded;                 // mesh as its decoder numbers it (renumbered by order)
+  std::vector<uint8_t> payload;    // version 3
+  std::vector<uint8_t> payload2;   // version 2
+  MergeTree batched;               // tree in batches, by position
+  MergeTree batched_ids;           // tree in batches, by decoding id
+  BatchStats stats;                // batched's
+  std::vector<uint8_t> payload4;   // version 4 of batched, parents as candidates
+  std::vector<uint8_t> payload4d;  // version 4 of batched_ids, parents as deltas
 };
 
 const Fixture& fixture() {
@@ -37,6 +44,15 @@ const Fixture& fixture() {
     x.decoded = renumberedMesh(x.mesh, x.order);
     x.payload = encodeMergeTree(x.tree, x.order, &x.mesh).value();
     x.payload2 = encodeMergeTree(x.tree, x.order, nullptr).value();
+    std::vector<uint64_t> by_point(x.mesh.numPoints()), by_id(x.mesh.numPoints());
+    for (size_t v = 0; v < by_point.size(); ++v) {
+      by_point[v] = batchKeyOfPoint(x.mesh.point(v));
+      by_id[v] = batchKeyOfId(x.order[v]);
+    }
+    x.batched = batchMerges(x.mesh, x.tree, by_point, kDefaultBatchDivisor, &x.stats).value();
+    x.batched_ids = batchMerges(x.mesh, x.tree, by_id, kDefaultBatchDivisor).value();
+    x.payload4 = encodeMergeTree(x.batched, x.order, &x.mesh, MergeTreeForm{4, true}).value();
+    x.payload4d = encodeMergeTree(x.batched_ids, x.order, &x.mesh, MergeTreeForm{4, false}).value();
     return x;
   }();
   return f;
@@ -166,29 +182,140 @@ TEST(MergeTreeCoder, Version3IsSmallerOnARealMesh) {
 // (the later children as roots), as the full decode restricted to ranks <= n.
 TEST(MergeTreeCoder, DecodesAPrefixOfTheRanking) {
   const Fixture& f = fixture();
-  auto full = decodeMergeTree(f.payload, f.mesh.numPoints(), "t", &f.decoded);
-  ASSERT_TRUE(full.isOk());
-  for (uint64_t n :
-       {uint64_t{0}, uint64_t{1}, f.tree.merges / 3, f.tree.merges - 1, f.tree.merges, f.tree.merges + 5}) {
-    SCOPED_TRACE(n);
-    auto part = decodeMergeTree(f.payload, f.mesh.numPoints(), "t", &f.decoded, n);
-    ASSERT_TRUE(part.isOk()) << part.status().message();
-    EXPECT_EQ(part->merges, std::min(n, f.tree.merges));
-    EXPECT_TRUE(part->checked);
-    EXPECT_TRUE(part->check("t").isOk());
-    for (size_t v = 0; v < full->points(); ++v) {
-      const bool kept = full->rank[v] != 0 && full->rank[v] <= n;
-      EXPECT_EQ(part->parent[v], kept ? full->parent[v] : MergeTree::kRoot);
-      EXPECT_EQ(part->rank[v], kept ? full->rank[v] : 0u);
-      EXPECT_EQ(part->removed[v], kept ? full->removed[v] : 0u);
-      EXPECT_EQ(part->boundary[v], kept ? full->boundary[v] : 0u);
+  for (const std::vector<uint8_t>* payload : {&f.payload, &f.payload4}) {
+    SCOPED_TRACE("version " + std::to_string((*payload)[0]));
+    auto full = decodeMergeTree(*payload, f.mesh.numPoints(), "t", &f.decoded);
+    ASSERT_TRUE(full.isOk());
+    for (uint64_t n :
+         {uint64_t{0}, uint64_t{1}, f.tree.merges / 3, f.tree.merges - 1, f.tree.merges, f.tree.merges + 5}) {
+      SCOPED_TRACE(n);
+      auto part = decodeMergeTree(*payload, f.mesh.numPoints(), "t", &f.decoded, n);
+      ASSERT_TRUE(part.isOk()) << part.status().message();
+      EXPECT_EQ(part->merges, std::min(n, f.tree.merges));
+      EXPECT_TRUE(part->checked);
+      EXPECT_TRUE(part->check("t").isOk());
+      for (size_t v = 0; v < full->points(); ++v) {
+        const bool kept = full->rank[v] != 0 && full->rank[v] <= n;
+        EXPECT_EQ(part->parent[v], kept ? full->parent[v] : MergeTree::kRoot);
+        EXPECT_EQ(part->rank[v], kept ? full->rank[v] : 0u);
+        EXPECT_EQ(part->removed[v], kept ? full->removed[v] : 0u);
+        EXPECT_EQ(part->boundary[v], kept ? full->boundary[v] : 0u);
+      }
+      EXPECT_EQ(computeAncestors(*part, n), computeAncestors(*full, n));
+      if ((*payload)[0] == 4) EXPECT_EQ(part->batches, sliceBatches(full->batches, 0, n));
     }
-    EXPECT_EQ(computeAncestors(*part, n), computeAncestors(*full, n));
+    // A prefix cut short by truncation is still an error, not a shorter tree.
+    auto cut = decodeMergeTree(std::span<const uint8_t>(payload->data(), payload->size() / 2), f.mesh.numPoints(), "t",
+                               &f.decoded, f.tree.merges - 1);
+    EXPECT_FALSE(cut.isOk());
   }
-  // A prefix cut short by truncation is still an error, not a shorter tree.
-  auto cut = decodeMergeTree(std::span<const uint8_t>(f.payload.data(), f.payload.size() / 2), f.mesh.numPoints(), "t",
-                             &f.decoded, f.tree.merges - 1);
-  EXPECT_FALSE(cut.isOk());
+}
+
+// The tree `got` (decoding ids) is `want` (source ids) renumbered by `order`.
+void expectSameTree(const MergeTree& got, const MergeTree& want, const std::vector<uint32_t>& order) {
+  ASSERT_EQ(got.points(), want.points());
+  EXPECT_EQ(got.merges, want.merges);
+  for (size_t v = 0; v < want.points(); ++v) {
+    const uint32_t id = order[v];
+    if (want.parent[v] == MergeTree::kRoot) {
+      EXPECT_EQ(got.parent[id], MergeTree::kRoot) << v;
+      continue;
+    }
+    EXPECT_EQ(got.parent[id], order[want.parent[v]]) << v;
+    EXPECT_EQ(got.rank[id], want.rank[v]) << v;
+    EXPECT_EQ(got.removed[id], want.removed[v]) << v;
+    EXPECT_EQ(got.boundary[id], want.boundary[v]) << v;
+  }
+}
+
+// Version 4: the batched trees round trip with their batches, the one with deltas without the level;
+// the decoded tree, coded again in its own numbering, gives the same bytes; and a tree in rank order
+// with no batches (cut by the rule) round trips too.
+TEST(MergeTreeCoder, Version4RoundTripsItsBatches) {
+  const Fixture& f = fixture();
+  EXPECT_EQ(f.payload4[0], 4);
+  EXPECT_EQ(f.payload4d[0], 4);
+  auto got = decodeMergeTree(f.payload4, f.mesh.numPoints(), "t", &f.decoded);
+  ASSERT_TRUE(got.isOk()) << got.status().message();
+  expectSameTree(*got, f.batched, f.order);
+  EXPECT_EQ(got->batches, f.batched.batches);
+  EXPECT_EQ(got->batch_divisor, kDefaultBatchDivisor);
+  auto h = readMergeTreeHeader(f.payload4d, f.mesh.numPoints(), "t");
+  ASSERT_TRUE(h.isOk()) << h.status().message();
+  EXPECT_FALSE(h->candidates);
+  EXPECT_FALSE(h->needs_mesh);
+  auto deltas = decodeMergeTree(f.payload4d, f.mesh.numPoints(), "t", nullptr);
+  ASSERT_TRUE(deltas.isOk()) << deltas.status().message();
+  expectSameTree(*deltas, f.batched_ids, f.order);
+  EXPECT_EQ(deltas->batches, f.batched_ids.batches);
+  // Candidates need the level.
+  EXPECT_EQ(decodeMergeTree(f.payload4, f.mesh.numPoints(), "t", nullptr).status().code(), StatusCode::kUsage);
+  std::vector<uint32_t> identity(f.mesh.numPoints());
+  std::iota(identity.begin(), identity.end(), 0u);
+  EXPECT_EQ(encodeMergeTree(*got, identity, &f.decoded, MergeTreeForm{4, true}).value(), f.payload4);
+  EXPECT_EQ(encodeMergeTree(*deltas, identity, &f.decoded, MergeTreeForm{4, false}).value(), f.payload4d);
+  // The ranking's own order, in batches of the rule: larger, but the same tree.
+  auto ranked = encodeMergeTree(f.tree, f.order, &f.mesh, MergeTreeForm{4, true});
+  ASSERT_TRUE(ranked.isOk()) << ranked.status().message();
+  auto back = decodeMergeTree(*ranked, f.mesh.numPoints(), "t", &f.decoded);
+  ASSERT_TRUE(back.isOk()) << back.status().message();
+  expectSameTree(*back, f.tree, f.order);
+  EXPECT_LT(f.payload4.size(), ranked->size());
+}
+
+// The batches regroup the ranking's merges: every merge of the batched tree passes the validator's
+// replay (no inversion, the link condition, boundary rules, its count of removed tetrahedra), and
+// where no merge had to move to a later batch, every batch ends with the same merges made as the
+// ranking's prefix of that length.
+TEST(MergeTreeCoder, BatchesKeepTheRankingsPrefixesAndEveryMergeValid) {
+  const Fixture& f = fixture();
+  for (const MergeTree* t : {&f.batched, &f.batched_ids}) {
+    ASSERT_TRUE(t->check("t").isOk());
+    ValidationReport report;
+    checkMergeTree(f.mesh, forestFromTree(*t), {}, report);
+    EXPECT_EQ(report.count(Severity::kError), 0u) << report.toText("batched");
+    ASSERT_FALSE(t->batches.empty());
+    EXPECT_GT(t->batches.size(), 4u);
+  }
+  EXPECT_EQ(f.stats.dropped, 0u);
+  EXPECT_EQ(f.batched.merges, f.tree.merges);
+  if (f.stats.carried == 0) {
+    uint64_t end = 0;
+    for (uint32_t b : f.batched.batches) {
+      end += b;
+      for (size_t v = 0; v < f.tree.points(); ++v) {
+        const bool ranked = f.tree.rank[v] != 0 && f.tree.rank[v] <= end;
+        const bool batched = f.batched.rank[v] != 0 && f.batched.rank[v] <= end;
+        ASSERT_EQ(ranked, batched) << "vertex " << v << ", batches ending at " << end;
+      }
+    }
+  }
+}
+
+// On a real mesh the batches make the children cheap: the bunny's tree, batched, takes at most 80% of
+// version 3's bytes for its ranked tree, and decodes to the batched tree.
+TEST(MergeTreeCoder, Version4IsSmallerOnARealMesh) {
+  ImportOptions io;
+  auto imported = importMesh({dataDir() + "/medit/bunny.mesh"}, io);
+  ASSERT_TRUE(imported.isOk()) << imported.status().message();
+  const TetMesh& mesh = imported->mesh;
+  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
+  ASSERT_TRUE(tree.isOk());
+  std::vector<uint64_t> keys(mesh.numPoints());
+  for (size_t v = 0; v < keys.size(); ++v) keys[v] = batchKeyOfPoint(mesh.point(v));
+  auto batched = batchMerges(mesh, *tree, keys, kDefaultBatchDivisor);
+  ASSERT_TRUE(batched.isOk()) << batched.status().message();
+  auto enc = encodeLevel(mesh, EncodeOptions{});
+  ASSERT_TRUE(enc.isOk());
+  auto v4 = encodeMergeTree(*batched, enc->vertex_order, &mesh, MergeTreeForm{4, true});
+  auto v3 = encodeMergeTree(*tree, enc->vertex_order, &mesh);
+  ASSERT_TRUE(v4.isOk() && v3.isOk());
+  EXPECT_LT(v4->size() * 5, v3->size() * 4) << v4->size() << " against " << v3->size();
+  TetMeshBuilder b;
+  ASSERT_TRUE(decodeLevel(enc->header, payloadOf(*enc), b, nullptr, "bunny").isOk());
+  auto got = decodeMergeTree(*v4, mesh.numPoints(), "bunny", &b.mesh());
+  ASSERT_TRUE(got.isOk()) << got.status().message();
+  expectSameTree(*got, *batched, enc->vertex_order);
 }
 
 TEST(MergeTreeCoder, IsCompact) {
@@ -244,24 +371,28 @@ TEST(MergeTreeCoder, RejectsBadInputToTheEncoder) {
 
 TEST(MergeTreeCoder, RejectsEveryTruncationAndTrailingBytes) {
   const Fixture& f = fixture();
-  for (size_t n = 0; n < f.payload.size(); ++n) {
-    auto d = decodeMergeTree(std::span<const uint8_t>(f.payload.data(), n), f.mesh.numPoints(), "t", &f.decoded);
-    ASSERT_FALSE(d.isOk()) << "prefix of " << n << " bytes";
-    EXPECT_EQ(d.status().code(), StatusCode::kInvalidData);
-    EXPECT_NE(d.status().message().find("merge tree payload"), std::string::npos);
+  for (const std::vector<uint8_t>* payload : {&f.payload, &f.payload4, &f.payload4d}) {
+    SCOPED_TRACE("version " + std::to_string((*payload)[0]));
+    for (size_t n = 0; n < payload->size(); ++n) {
+      auto d = decodeMergeTree(std::span<const uint8_t>(payload->data(), n), f.mesh.numPoints(), "t", &f.decoded);
+      ASSERT_FALSE(d.isOk()) << "prefix of " << n << " bytes";
+      EXPECT_EQ(d.status().code(), StatusCode::kInvalidData);
+      EXPECT_NE(d.status().message().find("merge tree payload"), std::string::npos);
+    }
+    std::vector<uint8_t> longer = *payload;
+    longer.push_back(0);
+    EXPECT_FALSE(decodeMergeTree(longer, f.mesh.numPoints(), "t", &f.decoded).isOk());
+    EXPECT_FALSE(decodeMergeTree(*payload, f.mesh.numPoints() + 1, "t", &f.decoded).isOk());
   }
-  std::vector<uint8_t> longer = f.payload;
-  longer.push_back(0);
-  EXPECT_FALSE(decodeMergeTree(longer, f.mesh.numPoints(), "t", &f.decoded).isOk());
-  EXPECT_FALSE(decodeMergeTree(f.payload, f.mesh.numPoints() + 1, "t", &f.decoded).isOk());
 }
 
 TEST(MergeTreeCoder, CorruptedPayloadsFailCleanlyOrDecodeToAValidTree) {
   const Fixture& f = fixture();
   std::mt19937 rng(12);
   int rejected = 0;
-  for (int i = 0; i < 400; ++i) {
-    std::vector<uint8_t> p = i % 2 ? f.payload : f.payload2;
+  for (int i = 0; i < 800; ++i) {
+    const std::vector<uint8_t>* payloads[] = {&f.payload, &f.payload2, &f.payload4, &f.payload4d};
+    std::vector<uint8_t> p = *payloads[i % 4];
     const size_t at = rng() % p.size();
     p[at] ^= static_cast<uint8_t>(1u << (rng() % 8));
     auto d = decodeMergeTree(p, f.mesh.numPoints(), "t", &f.decoded);
@@ -273,13 +404,14 @@ TEST(MergeTreeCoder, CorruptedPayloadsFailCleanlyOrDecodeToAValidTree) {
     // Whatever decodes is a structurally valid tree, safe for the stream filter.
     EXPECT_TRUE(d->check("t").isOk());
   }
-  EXPECT_GT(rejected, 300);
+  EXPECT_GT(rejected, 600);
 }
 
 TEST(MergeTreeCoder, DecodedTreeDrivesTheFilterLikeTheOriginal) {
   const Fixture& f = fixture();
   TetMesh m = f.mesh;
   for (uint64_t n : {uint64_t{0}, f.tree.merges / 2, f.tree.merges}) expectStreamMatchesApply(m, f.tree, n, false);
+  for (uint64_t n : {f.batched.merges / 3, f.batched.merges}) expectStreamMatchesApply(m, f.batched, n, false);
 }
 
 }  // namespace
