@@ -1114,7 +1114,7 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
   size_t next = free;
   std::vector<uint32_t> carry, batch, deferred, still;
   // Per vertex: its rank while it is the child of a merge of the batch not made yet, else kNoIndex.
-  std::vector<uint32_t> pending(np, kNoIndex);
+  std::vector<uint32_t> pending(np, kNoIndex), late(np, 0), touched;
   auto apply = [&](uint32_t v, uint32_t w) {
     merge(whole, v, w, ranked.error.empty() ? 0.0f : ranked.error[v]);
     up[v] = w;
@@ -1165,11 +1165,46 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     // At most kBatchPasses: where the ranking made long chains of neighbouring merges (on a smooth
     // grid, whose errors tie), each pass makes few of them, and the rest go by rank.
     uint32_t passes = 0;
+    // A merge in the very neighbourhood the ranking made it in is allowed as it was then, and is made
+    // without the checks: while every batch so far ended at the ranking's prefix, when its parent is
+    // still a root, no merge of the batch ranked before it is left with its child in the star of the
+    // child or of the parent, and none ranked after it has been made with its child in those stars
+    // (late[y]: the largest rank of the batch's merges made so far whose child's star held y).
+    const bool ranked_so_far = st.carried == 0 && st.retargeted == 0 && st.dropped == 0;
+    auto asRanked = [&](uint32_t v) {
+      const uint32_t r = ranked.rank[v];
+      const uint32_t w = ranked.parent[v];
+      if (!ranked_so_far || root(w) != w) return false;
+      for (uint32_t x : {v, w}) {
+        gatherStar(whole, x, whole.corners);
+        for (uint32_t c : whole.corners)
+          for (uint32_t y : tets_[c >> 2])
+            if (pending[y] < r || late[y] > r) return false;
+      }
+      return true;
+    };
+    auto markLate = [&](uint32_t v) {
+      const uint32_t r = ranked.rank[v];
+      gatherStar(whole, v, whole.corners);
+      for (uint32_t c : whole.corners)
+        for (uint32_t y : tets_[c >> 2]) {
+          if (late[y] == 0) touched.push_back(y);
+          late[y] = std::max(late[y], r);
+        }
+    };
     for (size_t made = 1; made && !deferred.empty() && passes++ < kBatchPasses;) {
       made = 0;
       still.clear();
       for (uint32_t v : deferred) {
-        if (waits(v) || !tryMerge(v)) {
+        if (waits(v)) {
+          still.push_back(v);
+          continue;
+        }
+        markLate(v);
+        if (asRanked(v)) {
+          apply(v, ranked.parent[v]);
+          ++st.unchecked;
+        } else if (!tryMerge(v)) {
           still.push_back(v);
           continue;
         }
@@ -1179,20 +1214,31 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
       deferred.swap(still);
       ++st.passes;
     }
-    for (uint32_t v : batch) pending[v] = kNoIndex;
     st.deferred += deferred.size();
-    // The deferred ones by rank, as long as one of them can merge.
+    // The deferred ones by rank, as long as one of them can merge (the first time through, those
+    // in the neighbourhood the ranking made them in without the checks).
     std::sort(deferred.begin(), deferred.end(),
               [&](uint32_t a, uint32_t b) { return ranked.rank[a] < ranked.rank[b]; });
-    for (bool progress = true; progress && !deferred.empty();) {
+    for (bool progress = true, first = true; progress && !deferred.empty(); first = false) {
       progress = false;
       still.clear();
       for (uint32_t v : deferred) {
-        if (tryMerge(v)) progress = true;
-        else still.push_back(v);
+        if (first) markLate(v);
+        if (first && asRanked(v)) {
+          apply(v, ranked.parent[v]);
+          ++st.unchecked;
+        } else if (!tryMerge(v)) {
+          still.push_back(v);
+          continue;
+        }
+        progress = true;
+        pending[v] = kNoIndex;
       }
       deferred.swap(still);
     }
+    for (uint32_t v : batch) pending[v] = kNoIndex;
+    for (uint32_t y : touched) late[y] = 0;
+    touched.clear();
     // Those whose parent the new order made invalid: another target, where one is allowed.
     still.clear();
     for (uint32_t v : deferred)

@@ -146,6 +146,7 @@ struct BatchStats {
   uint64_t deferred = 0;    // merges the passes left (then merged by rank)
   uint64_t carried = 0;     // merges moved to the next batch
   uint64_t passes = 0;      // passes in key order, over all batches
+  uint64_t unchecked = 0;   // merges made in the neighbourhood the ranking made them in (not checked again)
   uint64_t retargeted = 0;  // merged into another target than the ranking's (its parent was not allowed)
   uint64_t dropped = 0;     // merges left out (their children stay roots)
   double seconds = 0;
