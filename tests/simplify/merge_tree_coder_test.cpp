@@ -154,22 +154,39 @@ TEST(MergeTreeCoder, Version3CodesParentsThatAreNotNeighbours) {
 
 // On a real mesh the parents cost a few bits, not an id: version 3 takes at most two thirds of
 // version 2's bytes for the bunny's ranked tree, in its level codec's decoding order.
+// The bunny, its ranked tree and its level codec's encoding.
+struct Bunny {
+  TetMesh mesh;
+  MergeTree tree;
+  EncodedLevel enc;
+};
+const Bunny& bunny() {
+  static const Bunny b = [] {
+    Bunny x;
+    auto imported = importMesh({dataDir() + "/medit/bunny.mesh"}, ImportOptions{});
+    EXPECT_TRUE(imported.isOk()) << imported.status().message();
+    if (!imported.isOk()) return x;
+    x.mesh = std::move(imported->mesh);
+    x.tree = rankMerges(x.mesh, RankingOptions{}, nullptr).value();
+    x.enc = encodeLevel(x.mesh, EncodeOptions{}).value();
+    return x;
+  }();
+  return b;
+}
+
 TEST(MergeTreeCoder, Version3IsSmallerOnARealMesh) {
-  ImportOptions io;
-  auto imported = importMesh({dataDir() + "/medit/bunny.mesh"}, io);
-  ASSERT_TRUE(imported.isOk()) << imported.status().message();
-  const TetMesh& mesh = imported->mesh;
-  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
-  ASSERT_TRUE(tree.isOk());
-  auto enc = encodeLevel(mesh, EncodeOptions{});
-  ASSERT_TRUE(enc.isOk());
+  const Bunny& b = bunny();
+  ASSERT_GT(b.mesh.numTets(), 0u);
+  const TetMesh& mesh = b.mesh;
+  const MergeTree* tree = &b.tree;
+  const EncodedLevel* enc = &b.enc;
   auto v3 = encodeMergeTree(*tree, enc->vertex_order, &mesh);
   auto v2 = encodeMergeTree(*tree, enc->vertex_order, nullptr);
   ASSERT_TRUE(v3.isOk() && v2.isOk());
   EXPECT_LT(v3->size() * 3, v2->size() * 2) << v3->size() << " against " << v2->size();
-  TetMeshBuilder b;
-  ASSERT_TRUE(decodeLevel(enc->header, payloadOf(*enc), b, nullptr, "bunny").isOk());
-  auto got = decodeMergeTree(*v3, mesh.numPoints(), "bunny", &b.mesh());
+  TetMeshBuilder decoded;
+  ASSERT_TRUE(decodeLevel(enc->header, payloadOf(*enc), decoded, nullptr, "bunny").isOk());
+  auto got = decodeMergeTree(*v3, mesh.numPoints(), "bunny", &decoded.mesh());
   auto want = decodeMergeTree(*v2, mesh.numPoints(), "bunny", nullptr);
   ASSERT_TRUE(got.isOk()) << got.status().message();
   ASSERT_TRUE(want.isOk());
@@ -295,25 +312,22 @@ TEST(MergeTreeCoder, BatchesKeepTheRankingsPrefixesAndEveryMergeValid) {
 // On a real mesh the batches make the children cheap: the bunny's tree, batched, takes at most 80% of
 // version 3's bytes for its ranked tree, and decodes to the batched tree.
 TEST(MergeTreeCoder, Version4IsSmallerOnARealMesh) {
-  ImportOptions io;
-  auto imported = importMesh({dataDir() + "/medit/bunny.mesh"}, io);
-  ASSERT_TRUE(imported.isOk()) << imported.status().message();
-  const TetMesh& mesh = imported->mesh;
-  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
-  ASSERT_TRUE(tree.isOk());
+  const Bunny& b = bunny();
+  ASSERT_GT(b.mesh.numTets(), 0u);
+  const TetMesh& mesh = b.mesh;
+  const MergeTree* tree = &b.tree;
+  const EncodedLevel* enc = &b.enc;
   std::vector<uint64_t> keys(mesh.numPoints());
   for (size_t v = 0; v < keys.size(); ++v) keys[v] = batchKeyOfPoint(mesh.point(v));
   auto batched = batchMerges(mesh, *tree, keys, kDefaultBatchDivisor);
   ASSERT_TRUE(batched.isOk()) << batched.status().message();
-  auto enc = encodeLevel(mesh, EncodeOptions{});
-  ASSERT_TRUE(enc.isOk());
   auto v4 = encodeMergeTree(*batched, enc->vertex_order, &mesh, MergeTreeForm{4, true});
   auto v3 = encodeMergeTree(*tree, enc->vertex_order, &mesh);
   ASSERT_TRUE(v4.isOk() && v3.isOk());
   EXPECT_LT(v4->size() * 5, v3->size() * 4) << v4->size() << " against " << v3->size();
-  TetMeshBuilder b;
-  ASSERT_TRUE(decodeLevel(enc->header, payloadOf(*enc), b, nullptr, "bunny").isOk());
-  auto got = decodeMergeTree(*v4, mesh.numPoints(), "bunny", &b.mesh());
+  TetMeshBuilder decoded;
+  ASSERT_TRUE(decodeLevel(enc->header, payloadOf(*enc), decoded, nullptr, "bunny").isOk());
+  auto got = decodeMergeTree(*v4, mesh.numPoints(), "bunny", &decoded.mesh());
   ASSERT_TRUE(got.isOk()) << got.status().message();
   expectSameTree(*got, *batched, enc->vertex_order);
 }
