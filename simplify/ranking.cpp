@@ -1115,7 +1115,18 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
   std::vector<uint32_t> carry, batch, deferred, still;
   // Per vertex: its rank while it is the child of a merge of the batch not made yet, else kNoIndex.
   std::vector<uint32_t> pending(np, kNoIndex), late(np, 0), touched;
+  // Per merge of the batch in its passes: the vertex it waits for, and the count of merges made when
+  // its checks last failed with the parent it then had (kNoIndex: none).
+  std::vector<uint32_t> blocker(np, kNoIndex), failed(np, kNoIndex), failed_root(np, kNoIndex);
+  // stamp[y]: the count of merges made when one last changed a tetrahedron around y (the merge of a
+  // vertex whose star held y); a check that failed is not made again while nothing around it changed.
+  std::vector<uint32_t> stamp(np, 0);
+  uint32_t clock = 0;
   auto apply = [&](uint32_t v, uint32_t w) {
+    gatherStar(whole, v, whole.corners);
+    ++clock;
+    for (uint32_t c : whole.corners)
+      for (uint32_t y : tets_[c >> 2]) stamp[y] = clock;
     merge(whole, v, w, ranked.error.empty() ? 0.0f : ranked.error[v]);
     up[v] = w;
     order.push_back(v);
@@ -1151,12 +1162,23 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     // A merge waits for the merges of the batch ranked before it whose child is in its child's star:
     // one of them would change the other's neighbourhood, and the ranking made them in rank order.
     for (uint32_t v : batch) pending[v] = ranked.rank[v];
-    auto waits = [&](uint32_t v) {
+    // The vertex of v's star whose pending merge v waits for (kNoIndex: none); blocker[v] keeps it,
+    // so that v is not looked at again before that merge is made.
+    auto waitsFor = [&](uint32_t v) {
       const uint32_t r = ranked.rank[v];
       gatherStar(whole, v, whole.corners);
       for (uint32_t c : whole.corners)
         for (uint32_t y : tets_[c >> 2])
-          if (pending[y] < r) return true;
+          if (pending[y] < r) return y;
+      return kNoIndex;
+    };
+    auto changedSince = [&](uint32_t v, uint32_t w, uint32_t t) {
+      for (uint32_t x : {v, w}) {
+        gatherStar(whole, x, whole.corners);
+        for (uint32_t c : whole.corners)
+          for (uint32_t y : tets_[c >> 2])
+            if (stamp[y] > t) return true;
+      }
       return false;
     };
     // Passes in key order, each making the merges that need not wait and are allowed, while one does.
@@ -1196,7 +1218,18 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
       made = 0;
       still.clear();
       for (uint32_t v : deferred) {
-        if (waits(v)) {
+        const uint32_t r = ranked.rank[v];
+        if (blocker[v] != kNoIndex && pending[blocker[v]] < r) {
+          still.push_back(v);
+          continue;
+        }
+        const uint32_t w = root(ranked.parent[v]);
+        if (failed[v] != kNoIndex && failed_root[v] == w && !changedSince(v, w, failed[v])) {
+          still.push_back(v);
+          continue;
+        }
+        blocker[v] = waitsFor(v);
+        if (blocker[v] != kNoIndex) {
           still.push_back(v);
           continue;
         }
@@ -1205,6 +1238,8 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
           apply(v, ranked.parent[v]);
           ++st.unchecked;
         } else if (!tryMerge(v)) {
+          failed[v] = clock;
+          failed_root[v] = w;
           still.push_back(v);
           continue;
         }
@@ -1236,7 +1271,7 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
       }
       deferred.swap(still);
     }
-    for (uint32_t v : batch) pending[v] = kNoIndex;
+    for (uint32_t v : batch) pending[v] = blocker[v] = failed[v] = kNoIndex;
     for (uint32_t y : touched) late[y] = 0;
     touched.clear();
     // Those whose parent the new order made invalid: another target, where one is allowed.
