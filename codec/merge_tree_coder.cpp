@@ -475,9 +475,9 @@ class FreeRanks {
 };
 
 // Version 4's batches: a batch's size (the rule's, or coded), its children as a set (ascending ids,
-// each as its gap among the vertices not merged yet after the previous one), and their order: the
-// children in key order (ties to the smaller id), except the ones flagged as deferred, which follow
-// in a coded order (each as its place among the deferred ones left, in key order).
+// each as its gap among the vertices not merged yet after the previous one), and their order: runs,
+// each a flag per child left in key order (ties to the smaller id), then the rest, each as its place
+// among those left in key order.
 struct BatchScratch {
   std::vector<uint32_t> ids;
   std::vector<std::pair<uint64_t, uint32_t>> keyed;

@@ -1122,11 +1122,17 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
   // vertex whose star held y); a check that failed is not made again while nothing around it changed.
   std::vector<uint32_t> stamp(np, 0);
   uint32_t clock = 0;
-  auto apply = [&](uint32_t v, uint32_t w) {
-    gatherStar(whole, v, whole.corners);
-    ++clock;
+  // The first vertex y of the tetrahedra around x with stop(y) (kNoIndex: none).
+  auto inStar = [&](uint32_t x, auto&& stop) {
+    gatherStar(whole, x, whole.corners);
     for (uint32_t c : whole.corners)
-      for (uint32_t y : tets_[c >> 2]) stamp[y] = clock;
+      for (uint32_t y : tets_[c >> 2])
+        if (stop(y)) return y;
+    return kNoIndex;
+  };
+  auto apply = [&](uint32_t v, uint32_t w) {
+    ++clock;
+    inStar(v, [&](uint32_t y) { return stamp[y] = clock, false; });
     merge(whole, v, w, ranked.error.empty() ? 0.0f : ranked.error[v]);
     up[v] = w;
     order.push_back(v);
@@ -1152,6 +1158,38 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     }
     return false;
   };
+  // A merge waits for the merges of the batch ranked before it whose child is in its child's star:
+  // one of them would change the other's neighbourhood, and the ranking made them in rank order. The
+  // vertex it waits for goes to blocker[v], so that v is not looked at again before that merge is made.
+  auto waitsFor = [&](uint32_t v) {
+    const uint32_t r = ranked.rank[v];
+    return inStar(v, [&](uint32_t y) { return pending[y] < r; });
+  };
+  auto changedSince = [&](uint32_t v, uint32_t w, uint32_t t) {
+    auto changed = [&](uint32_t y) { return stamp[y] > t; };
+    return inStar(v, changed) != kNoIndex || inStar(w, changed) != kNoIndex;
+  };
+  // A merge in the very neighbourhood the ranking made it in is allowed as it was then, and is made
+  // without the checks: while every batch so far ended at the ranking's prefix (ranked_so_far), when
+  // its parent is still a root, no merge of the batch ranked before it is left with its child in the
+  // star of the child or of the parent, and none ranked after it has been made with its child in those
+  // stars (late[y]: the largest rank of the batch's merges tried so far whose child's star held y).
+  bool ranked_so_far = true;
+  auto asRanked = [&](uint32_t v) {
+    const uint32_t r = ranked.rank[v];
+    const uint32_t w = ranked.parent[v];
+    if (!ranked_so_far || root(w) != w) return false;
+    auto differs = [&](uint32_t y) { return pending[y] < r || late[y] > r; };
+    return inStar(v, differs) == kNoIndex && inStar(w, differs) == kNoIndex;
+  };
+  auto markLate = [&](uint32_t v) {
+    const uint32_t r = ranked.rank[v];
+    inStar(v, [&](uint32_t y) {
+      if (late[y] == 0) touched.push_back(y);
+      late[y] = std::max(late[y], r);
+      return false;
+    });
+  };
   while (next < by_rank.size() || !carry.empty()) {
     const uint64_t want = (unmerged + d - 1) / d;
     // The merges left over from the last batch first (their ranks are the smallest), then the next
@@ -1159,61 +1197,14 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     batch = carry;
     while (batch.size() < want && next < by_rank.size()) batch.push_back(by_rank[next++]);
     const size_t before = order.size();
-    // A merge waits for the merges of the batch ranked before it whose child is in its child's star:
-    // one of them would change the other's neighbourhood, and the ranking made them in rank order.
     for (uint32_t v : batch) pending[v] = ranked.rank[v];
-    // The vertex of v's star whose pending merge v waits for (kNoIndex: none); blocker[v] keeps it,
-    // so that v is not looked at again before that merge is made.
-    auto waitsFor = [&](uint32_t v) {
-      const uint32_t r = ranked.rank[v];
-      gatherStar(whole, v, whole.corners);
-      for (uint32_t c : whole.corners)
-        for (uint32_t y : tets_[c >> 2])
-          if (pending[y] < r) return y;
-      return kNoIndex;
-    };
-    auto changedSince = [&](uint32_t v, uint32_t w, uint32_t t) {
-      for (uint32_t x : {v, w}) {
-        gatherStar(whole, x, whole.corners);
-        for (uint32_t c : whole.corners)
-          for (uint32_t y : tets_[c >> 2])
-            if (stamp[y] > t) return true;
-      }
-      return false;
-    };
+    ranked_so_far = st.carried == 0 && st.retargeted == 0 && st.dropped == 0;
     // Passes in key order, each making the merges that need not wait and are allowed, while one does.
     deferred = batch;
     std::sort(deferred.begin(), deferred.end(), byKey);
     // At most kBatchPasses: where the ranking made long chains of neighbouring merges (on a smooth
     // grid, whose errors tie), each pass makes few of them, and the rest go by rank.
     uint32_t passes = 0;
-    // A merge in the very neighbourhood the ranking made it in is allowed as it was then, and is made
-    // without the checks: while every batch so far ended at the ranking's prefix, when its parent is
-    // still a root, no merge of the batch ranked before it is left with its child in the star of the
-    // child or of the parent, and none ranked after it has been made with its child in those stars
-    // (late[y]: the largest rank of the batch's merges made so far whose child's star held y).
-    const bool ranked_so_far = st.carried == 0 && st.retargeted == 0 && st.dropped == 0;
-    auto asRanked = [&](uint32_t v) {
-      const uint32_t r = ranked.rank[v];
-      const uint32_t w = ranked.parent[v];
-      if (!ranked_so_far || root(w) != w) return false;
-      for (uint32_t x : {v, w}) {
-        gatherStar(whole, x, whole.corners);
-        for (uint32_t c : whole.corners)
-          for (uint32_t y : tets_[c >> 2])
-            if (pending[y] < r || late[y] > r) return false;
-      }
-      return true;
-    };
-    auto markLate = [&](uint32_t v) {
-      const uint32_t r = ranked.rank[v];
-      gatherStar(whole, v, whole.corners);
-      for (uint32_t c : whole.corners)
-        for (uint32_t y : tets_[c >> 2]) {
-          if (late[y] == 0) touched.push_back(y);
-          late[y] = std::max(late[y], r);
-        }
-    };
     for (size_t made = 1; made && !deferred.empty() && passes++ < kBatchPasses;) {
       made = 0;
       still.clear();
