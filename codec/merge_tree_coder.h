@@ -65,6 +65,7 @@
 // disagree with the header fields and trailing bytes.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -136,11 +137,15 @@ void computeErrorQuantiles(MergeTree& tree);
 // in the header (free_merges).
 uint64_t leadingFreeMerges(const MergeTree& tree);
 
-// How a payload is coded: its version, and in version 4 the parents' code (as version 3's candidates,
-// which needs the level's tetrahedra, or as version 2's deltas, which needs nothing of the level).
+// How a payload is coded: its version, and in version 4 the parents' code: as version 3's candidates,
+// which needs the level's tetrahedra; as places among the roots of the grid nodes next to the child,
+// where the level is an ni x nj x nk block whose nodes are its first decoding ids in node order (i
+// fastest), which needs nothing of the level but `grid` (a grid of no nodes: not this form); or as
+// version 2's deltas, which needs nothing of the level.
 struct MergeTreeForm {
   uint8_t version = 4;
   bool candidates = true;
+  std::array<uint32_t, 3> grid = {0, 0, 0};  // without candidates: the block's ni, nj, nk
 };
 
 // Encodes `tree` (vertex numbering of the source mesh) with vertex v stored at vertex_order[v], the
@@ -156,9 +161,10 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
 struct MergeTreeHeader {
   uint8_t version = 0;
   uint64_t merges = 0, boundary_merges = 0, tets_removed = 0;
-  uint64_t free_merges = 0;  // versions 3 and 4; 0 in version 2 (count them with leadingFreeMerges)
-  bool candidates = false;   // parents coded as candidates (version 3, and version 4 where it says so)
-  bool needs_mesh = false;   // decoding merges needs the level's mesh (candidates)
+  uint64_t free_merges = 0;                  // versions 3 and 4; 0 in version 2 (count them with leadingFreeMerges)
+  bool candidates = false;                   // parents coded as candidates (version 3, and version 4 where it says so)
+  bool needs_mesh = false;                   // decoding merges needs the level's mesh (candidates)
+  std::array<uint32_t, 3> grid = {0, 0, 0};  // version 4 grid places: the block's ni, nj, nk; else 0
 };
 StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, uint64_t expected_points,
                                               const std::string& what);

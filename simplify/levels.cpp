@@ -100,7 +100,7 @@ StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree,
   return out;
 }
 
-std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source, bool level0_candidates) const {
+std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source, const MergeTreeForm& level0_form) const {
   std::vector<GtnLevelInput> result;
   for (size_t i = 0; i < merges.size(); ++i) {
     GtnLevelInput in;
@@ -110,7 +110,7 @@ std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source, bool level0_
     if (trees[i]) {
       std::shared_ptr<const MergeTree> t = trees[i];
       const TetMesh* mesh = in.mesh;
-      const MergeTreeForm form{4, i > 0 || level0_candidates};
+      const MergeTreeForm form = i == 0 ? level0_form : MergeTreeForm{};
       in.merge_tree = [t, mesh, form](const std::vector<uint32_t>& vertex_order) {
         return encodeMergeTree(*t, vertex_order, mesh, form);
       };

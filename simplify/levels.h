@@ -41,9 +41,9 @@ struct MipLevels {
   std::vector<std::vector<uint32_t>> next_index;        // per level but the last: vertex -> next level's
 
   // The inputs for writeGtnFile; `source` is level 0 and must outlive the result, as must *this. The
-  // merge trees are MTRE version 4, level 0's with its parents as candidates or as deltas
-  // (validate/write_gtn.h's storedMergeTree says which the writer chooses).
-  std::vector<GtnLevelInput> inputs(const TetMesh& source, bool level0_candidates = true) const;
+  // merge trees are MTRE version 4, level 0's in `level0_form` (validate/write_gtn.h's storedMergeTree
+  // says which the writer chooses), the others with their parents as candidates.
+  std::vector<GtnLevelInput> inputs(const TetMesh& source, const MergeTreeForm& level0_form = {}) const;
   // Every level's mesh, `source` (level 0) first.
   std::vector<const TetMesh*> levelMeshes(const TetMesh& source) const;
 };

@@ -61,12 +61,12 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   } join{checking};
   if (wo.verify && o.levels != 0) checking.run([&] { structure.checkLevel0(); });
   MergeTree tree = std::move(ranking).value();
-  bool level0_candidates = true;
+  MergeTreeForm level0_form;
   if (o.merge_tree && level0) {
     reportProgress(wo.progress, "batch merges", 0.0);
     GTN_ASSIGN_OR_RETURN(StoredMergeTree stored, storedMergeTree(mesh, tree, *level0));
     tree = std::move(stored.tree);
-    level0_candidates = stored.level0_candidates;
+    level0_form = stored.level0_form;
   }
   if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
     warnings->push_back(source + ": " + note);
@@ -137,7 +137,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
         if (i > 0) {
           GTN_ASSIGN_OR_RETURN(level_mesh, levels.level(i));
         }
-        const MergeTreeForm form{4, i > 0 || level0_candidates};
+        const MergeTreeForm form = i == 0 ? level0_form : MergeTreeForm{};
         return encodeMergeTree(merges < t->merges ? prefixTree(*t, merges) : *t, vertex_order, level_mesh, form);
       };
       in.merge_tree = [prefix = in.merge_tree_prefix](const std::vector<uint32_t>& vertex_order) {
@@ -159,18 +159,27 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
 StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0) {
   // A structured level 0 (a grid, never naming the next level's vertices) stores the whole tree, which
   // readers decode to simplify it on the fly at every ratio finer than the stored levels: its parents
-  // are coded as deltas, which needs nothing of the level, and its batches are ordered by decoding id.
-  // Candidates are about 10% smaller there, but decode against the level at about 2.5 us a merge,
-  // which made a grid's on-the-fly read three times slower than the level's own decode and
-  // simplification. Every other level codes its parents as candidates, and its batches are ordered by
-  // position.
+  // are coded as grid places (the block's dims and the decoding ids decide the candidates), or as
+  // deltas where the block's nodes are not its first decoding ids (aliases), neither of which needs
+  // anything of the level, and its batches are ordered by decoding id. Candidates against the level
+  // decode at about 2.5 us a merge, which made a grid's on-the-fly read three times slower than the
+  // level's own decode and simplification. Every other level codes its parents as candidates, and its
+  // batches are ordered by position.
   StoredMergeTree out;
-  out.level0_candidates = !(level0.pieces.size() == 1 && level0.pieces[0].kind == kPieceStructured);
-  if (!out.level0_candidates && level0.vertex_order.size() != mesh.numPoints())
+  const bool structured = level0.pieces.size() == 1 && level0.pieces[0].kind == kPieceStructured;
+  out.level0_form.candidates = !structured;
+  if (structured && level0.vertex_order.size() != mesh.numPoints())
     return invalidData("storedMergeTree: level 0's vertex order does not match the mesh");
+  if (structured && mesh.blocks.size() == 1 && mesh.blocks[0].first_point == 0 && mesh.blocks[0].aliases.empty()) {
+    const StructuredBlock& b = mesh.blocks[0];
+    const uint64_t nodes = uint64_t{b.dims[0]} * b.dims[1] * b.dims[2];
+    bool in_order = nodes > 0 && nodes <= mesh.numPoints();
+    for (uint64_t g = 0; in_order && g < nodes; ++g) in_order = level0.vertex_order[g] == g;
+    if (in_order) out.level0_form.grid = {b.dims[0], b.dims[1], b.dims[2]};
+  }
   std::vector<uint64_t> keys(mesh.numPoints());
   for (size_t v = 0; v < keys.size(); ++v)
-    keys[v] = out.level0_candidates ? batchKeyOfPoint(mesh.point(v)) : batchKeyOfId(level0.vertex_order[v]);
+    keys[v] = structured ? batchKeyOfId(level0.vertex_order[v]) : batchKeyOfPoint(mesh.point(v));
   GTN_ASSIGN_OR_RETURN(out.tree, batchMerges(mesh, ranked, keys, kDefaultBatchDivisor));
   return out;
 }

@@ -32,12 +32,13 @@ struct GtnConvertOptions {
 // `warnings` (optional) receives what the user should hear about, e.g. fewer levels than asked for
 // because the merge tree stops early.
 // The merge tree a .gtn stores for `mesh` ranked as `ranked` (rankMerges), level 0 being `level0`
-// (encodePieces): batched (batchMerges) by the keys its payloads order batches by, which are level 0's
-// decoding ids where level 0 is one structured piece (whose tree codes its parents as deltas, and so
+// (encodePieces), and the form level 0's payload codes it in: batched (batchMerges) by the keys its
+// payloads order batches by, which are level 0's decoding ids where level 0 is one structured piece
+// (whose tree codes its parents as grid places, or as deltas where the block has aliases, and so
 // decodes without the level), and the positions elsewhere (parents as candidates).
 struct StoredMergeTree {
   MergeTree tree;
-  bool level0_candidates = true;
+  MergeTreeForm level0_form;
 };
 StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0);
 

@@ -202,7 +202,7 @@ TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
   ASSERT_TRUE(level0.isOk()) << level0.status().message();
   auto stored = storedMergeTree(mesh, *tree, *level0);
   ASSERT_TRUE(stored.isOk()) << stored.status().message();
-  EXPECT_FALSE(stored->level0_candidates);
+  EXPECT_FALSE(stored->level0_form.candidates);
   auto all = buildMipLevels(mesh, stored->tree, LevelOptions{});
   ASSERT_TRUE(all.isOk()) << all.status().message();
   const size_t count = all->meshes.size();

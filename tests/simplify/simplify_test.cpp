@@ -549,7 +549,7 @@ TEST(Levels, ConvertMakesAndChecksOnlyTheLevelsItStores) {
   GtnWriteOptions eager;
   eager.level_storage_limit = convert.level_storage;
   eager.chain_levels = false;
-  ASSERT_TRUE(writeGtnFile(path, all->inputs(mesh, stored->level0_candidates), eager).isOk());
+  ASSERT_TRUE(writeGtnFile(path, all->inputs(mesh, stored->level0_form), eager).isOk());
   auto want = readWholeFile(path);
   ASSERT_TRUE(want.isOk()) << want.status().message();
   for (const bool verify : {true, false}) {
@@ -604,13 +604,13 @@ TEST(Levels, ConvertWritesTheSameBytesForAnyThreadCount) {
   ASSERT_TRUE(stored.isOk()) << stored.status().message();
   auto levels = buildMipLevels(g.mesh, stored->tree, LevelOptions{});
   ASSERT_TRUE(levels.isOk()) << levels.status().message();
-  ASSERT_TRUE(writeGtnFile(path, levels->inputs(g.mesh, stored->level0_candidates), wo).isOk());
+  ASSERT_TRUE(writeGtnFile(path, levels->inputs(g.mesh, stored->level0_form), wo).isOk());
   const std::string sequential = bytesOf(path);
   ASSERT_FALSE(sequential.empty());
   // A level given already encoded is written as the writer would have encoded it.
   auto encoded = encodePieces(g.mesh, EncodeOptions{}, wo.piece_tets);
   ASSERT_TRUE(encoded.isOk()) << encoded.status().message();
-  std::vector<GtnLevelInput> inputs = levels->inputs(g.mesh, stored->level0_candidates);
+  std::vector<GtnLevelInput> inputs = levels->inputs(g.mesh, stored->level0_form);
   inputs[0].encoded = std::make_shared<PiecedLevel>(std::move(encoded).value());
   ASSERT_TRUE(writeGtnFile(path, inputs, wo).isOk());
   EXPECT_EQ(bytesOf(path), sequential);
