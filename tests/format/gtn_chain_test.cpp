@@ -4,6 +4,7 @@
 // trees and levels do not fit together are refused with the level named.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <map>
 #include <string>
 #include <tuple>
@@ -203,6 +204,9 @@ TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
   auto stored = storedMergeTree(mesh, *tree, *level0);
   ASSERT_TRUE(stored.isOk()) << stored.status().message();
   EXPECT_FALSE(stored->level0_form.candidates);
+  // Its parents are grid places: the block's dims, its nodes being the decoding ids.
+  EXPECT_EQ(stored->level0_form.grid,
+            (std::array<uint32_t, 3>{mesh.blocks[0].dims[0], mesh.blocks[0].dims[1], mesh.blocks[0].dims[2]}));
   auto all = buildMipLevels(mesh, stored->tree, LevelOptions{});
   ASSERT_TRUE(all.isOk()) << all.status().message();
   const size_t count = all->meshes.size();
@@ -225,8 +229,8 @@ TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
   EXPECT_EQ(r->level(0).pieces[0].kind, kPieceStructured);
   EXPECT_EQ(r->level(0).base, 0);
   ASSERT_EQ(r->levels(), kept_ratios.size() + 1);
-  // The grid's whole tree codes its parents as deltas, and so decodes without the level (the finer
-  // ratios all read it on the fly); the coarse levels' trees code them as candidates.
+  // The grid's whole tree codes its parents as grid places, and so decodes without the level (the
+  // finer ratios all read it on the fly); the coarse levels' trees code them as candidates.
   for (size_t k = 0; k < r->levels(); ++k) {
     auto payload = r->mergeTreePayload(k);
     ASSERT_TRUE(payload.isOk() && payload->has_value()) << k;
@@ -235,6 +239,8 @@ TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
     EXPECT_EQ(header->version, 4) << k;
     EXPECT_EQ(header->candidates, k > 0) << k;
     EXPECT_EQ(header->needs_mesh, k > 0) << k;
+    const std::array<uint32_t, 3> none = {0, 0, 0};
+    EXPECT_EQ(header->grid, k == 0 ? stored->level0_form.grid : none) << k;
   }
   uint64_t stored_chain = 0;
   for (size_t k = r->levels(); k-- > 1;) {
