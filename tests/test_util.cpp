@@ -23,11 +23,33 @@ std::string dataDir() {
 
 std::string dataPath(const std::string& relative) { return dataDir() + "/" + relative; }
 
+namespace {
+// The directories tempDir made in this process, removed when it ends: unless a test failed (they are
+// kept for a look) or GTN_KEEP_TEST_FILES is set. Made after gtest's own instance, so destroyed before it.
+struct TempDirs {
+  std::vector<std::filesystem::path> made;
+  ~TempDirs() {
+    const char* keep = std::getenv("GTN_KEEP_TEST_FILES");
+    if ((keep && *keep) || ::testing::UnitTest::GetInstance()->Failed()) return;
+    for (const std::filesystem::path& p : made) {
+      std::error_code ec;
+      std::filesystem::remove_all(p, ec);
+    }
+  }
+};
+TempDirs& tempDirs() {
+  static TempDirs dirs;
+  return dirs;
+}
+}  // namespace
+
 std::string tempDir(const std::string& name) {
+  (void)::testing::UnitTest::GetInstance();  // constructed before tempDirs(), destroyed after it
   std::filesystem::path p =
       std::filesystem::temp_directory_path() / ("gtn-test-" + std::to_string(getpid()) + "-" + name);
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
+  tempDirs().made.push_back(p);
   return p.string();
 }
 
@@ -63,8 +85,7 @@ RunResult runShell(const std::string& command) {
 // The binary's caches (gtn render keeps calibrations and colour ranges under XDG_CACHE_HOME) go to a
 // directory of this test process, never to the user's ~/.cache.
 RunResult runGtn(const std::string& args) {
-  static const std::string cache =
-      std::filesystem::temp_directory_path() / ("gtn-test-cache-" + std::to_string(getpid()));
+  static const std::string cache = tempDir("cache");
   return runShell("XDG_CACHE_HOME=" + cache + " " + std::string(GTN_BINARY) + " " + args);
 }
 

@@ -13,7 +13,8 @@ namespace gtn::test {
 // GTN_DATA_DIR, or ../shared/data relative to the project root.
 std::string dataDir();
 std::string dataPath(const std::string& relative);
-// A fresh empty directory under the build's temp area, removed by nothing (ctest cleans the tree).
+// A fresh empty directory under the system's temporary directory, removed with everything in it when
+// the test process ends; kept where a test failed, or where GTN_KEEP_TEST_FILES is set.
 std::string tempDir(const std::string& name);
 
 struct RunResult {
