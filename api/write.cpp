@@ -28,6 +28,7 @@ Error writeImported(const std::string& path, const gtn::TetMesh& mesh, const Wri
   o.levels = options.levels;
   o.merge_tree = options.merge_tree;
   o.level_storage = options.level_storage;
+  o.keep_invalid = options.keep_invalid;
   o.ranking.field = options.simplify_field;
   o.ranking.w_density = options.w_density;
   o.ranking.w_geometry = options.w_geometry;

@@ -1,5 +1,5 @@
 // gtn convert INPUT... -o OUTPUT [--split 5|6] [--weld] [--time-step N] [--compress] [--levels K] [--no-merge-tree]
-//   [--no-verify] [--level-storage X] [--independent-levels] [--simplify-field NAME] [--w-density W] [--w-geometry W] [--greedy-ranking] [-q]
+//   [--no-verify] [--keep-invalid] [--level-storage X] [--independent-levels] [--simplify-field NAME] [--w-density W] [--w-geometry W] [--greedy-ranking] [-q]
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -26,9 +26,10 @@ struct ConvertArgs {
   bool compress = false;
   int levels = -1;  // mip levels beyond level 0, -1 = automatic
   bool no_merge_tree = false;
-  bool independent_levels = false;          // .gtn: every level stores all its vertices (GtnWriteOptions::chain_levels)
-  bool no_verify = false;                   // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
-  double level_storage = 2.0;               // automatic levels: all levels within this multiple of level 0's bytes
+  bool independent_levels = false;  // .gtn: every level stores all its vertices (GtnWriteOptions::chain_levels)
+  bool no_verify = false;           // .gtn: skip decoding every written level back (GtnWriteOptions::verify)
+  bool keep_invalid = false;        // .gtn: write a mesh with errors of its own (GtnConvertOptions::keep_invalid)
+  double level_storage = 2.0;       // automatic levels: all levels within this multiple of level 0's bytes
   uint64_t piece_tets = kDefaultPieceTets;  // .gtn: the bound on a piece's tetrahedra
   RankingOptions ranking;
   bool quiet = false;  // -q: no progress line, no summary
@@ -41,6 +42,7 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
   o.merge_tree = !a.no_merge_tree;
   o.level_storage = a.level_storage;
   o.ranking = a.ranking;
+  o.keep_invalid = a.keep_invalid;
   std::vector<std::string> warnings;
   Status st = gtn::writeGtnWithLevels(a.output, mesh, o, wo, a.inputs[0], &warnings);
   for (const std::string& w : warnings) warn(w);
@@ -154,6 +156,10 @@ Command addConvertCommand(CLI::App& app) {
       "--no-verify", args->no_verify,
       ".gtn: do not decode each level back and compare it with its mesh, nor check that each mip level is a valid "
       "mesh, before the file is written (faster; the checks guard against encoder and simplifier bugs)");
+  sub->add_flag(
+      "--keep-invalid", args->keep_invalid,
+      ".gtn: write a mesh that has errors of its own (overlapping tetrahedra, say), which `gtn validate` then "
+      "reports; by default such a mesh is refused and nothing is written");
   sub->add_option("--simplify-field", args->ranking.field,
                   ".gtn: point field whose first component is the density of the simplification error "
                   "(default: the first point field that is not constant; 'none' = volume only)");

@@ -9,12 +9,19 @@
 namespace gtn {
 
 namespace {
-// Level 0 is stored as it is, errors included: say so, since `gtn validate` reports them on the file.
-void warnOfLevel0Errors(LevelStructureCheck& check, const std::string& source, std::vector<std::string>* warnings) {
-  if (!warnings) return;
-  if (const std::string errors = check.level0Errors(); !errors.empty())
+// A mesh with errors of its own would make a file that `gtn validate` calls invalid: refused before
+// anything is written, unless the caller keeps it (then stored as it is, and said so).
+Status refuseOrWarnOfLevel0Errors(LevelStructureCheck& check, const GtnConvertOptions& o, const std::string& source,
+                                  std::vector<std::string>* warnings) {
+  const std::string errors = check.level0Errors();
+  if (errors.empty()) return Status::ok();
+  if (!o.keep_invalid)
+    return invalidData(source + ": the mesh has errors that `gtn validate` would report on the file (" + errors +
+                       "); nothing was written (--keep-invalid writes it as it is)");
+  if (warnings)
     warnings->push_back(source + ": the mesh has errors that `gtn validate` reports on the file too (" + errors +
-                        "); it is stored as it is");
+                        "); it is stored as it is (--keep-invalid)");
+  return Status::ok();
 }
 
 Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& o, const GtnWriteOptions& wo,
@@ -26,14 +33,13 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
                       " mip level(s) asked for with no merge tree: mip levels are stored with the merge tree "
                       "they are checked against");
   if (!o.merge_tree) {
-    GtnLevelInput level0;
-    level0.mesh = &mesh;
-    GTN_RETURN_IF_ERROR(writeGtnFile(path, {level0}, wo));
     if (wo.verify) {
       LevelStructureCheck structure(mesh, path);
-      warnOfLevel0Errors(structure, source, warnings);
+      GTN_RETURN_IF_ERROR(refuseOrWarnOfLevel0Errors(structure, o, source, warnings));
     }
-    return Status::ok();
+    GtnLevelInput level0;
+    level0.mesh = &mesh;
+    return writeGtnFile(path, {level0}, wo);
   }
   reportProgress(wo.progress, "rank merges", 0.0);
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
@@ -150,9 +156,9 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
         return levels.nextIndex(i);
       };
   }
-  GTN_RETURN_IF_ERROR(writeGtnFile(path, inputs, bounded));
-  if (wo.verify) warnOfLevel0Errors(structure, source, warnings);
-  return Status::ok();
+  // Level 0's own errors (checked on another thread meanwhile) decide before anything is written.
+  if (wo.verify) GTN_RETURN_IF_ERROR(refuseOrWarnOfLevel0Errors(structure, o, source, warnings));
+  return writeGtnFile(path, inputs, bounded);
 }
 }  // namespace
 

@@ -25,10 +25,15 @@ struct GtnConvertOptions {
   bool merge_tree = true;      // store the merge trees (on-the-fly simplification); false: level 0 alone
   double level_storage = 2.0;  // automatic levels: all levels within this multiple of level 0's bytes (0 = no bound)
   RankingOptions ranking;
+  // A mesh with errors of its own that `gtn validate` reports on the file (overlapping tetrahedra, a
+  // boundary whose faces disagree in orientation): refused, nothing written, unless this is set (then
+  // written with a warning). Checked where the writer verifies (GtnWriteOptions::verify).
+  bool keep_invalid = false;
 };
 
 // Writes `mesh` (orientation normalised, e.g. by an importer) to `path`. `source` names the mesh in
-// messages (the input file). The encoder's refusals become "<source>: cannot be encoded: <reason>".
+// messages (the input file). The encoder's refusals become "<source>: cannot be encoded: <reason>"; a
+// mesh with errors of its own is refused with kInvalidData naming them (GtnConvertOptions::keep_invalid).
 // `warnings` (optional) receives what the user should hear about, e.g. fewer levels than asked for
 // because the merge tree stops early.
 // The merge tree a .gtn stores for `mesh` ranked as `ranked` (rankMerges), level 0 being `level0`

@@ -27,6 +27,9 @@ namespace gatun {
  *     coarser level's vertices instead of storing them again (a smaller file).
  *  `verify`: decode every written level back and check it (and each mip level's validity) before the
  *     file is committed; false is faster and skips the guard against encoder or simplifier bugs.
+ *  `keep_invalid`: write a mesh that has errors of its own, which validate() then reports on the file
+ *     (overlapping tetrahedra, say; `gtn convert --keep-invalid`); by default, where `verify` is set,
+ *     such a mesh is refused (kInvalidData naming the errors) and nothing is written.
  *  `simplify_field`, `w_density`, `w_geometry`: the ranking of merges: the point field whose first
  *     component is the density ("" = the first that is not constant, "none" = volume only) and the
  *     weights of the density and boundary geometry errors.
@@ -43,6 +46,7 @@ struct WriteOptions {
   double level_storage = 2.0;
   bool independent_levels = false;
   bool verify = true;
+  bool keep_invalid = false;
   std::string simplify_field{};
   double w_density = 1.0;
   double w_geometry = 1.0;
@@ -59,7 +63,9 @@ struct WriteOptions {
  *  positive orientation", or fewer levels than asked because the merge tree stops early.
  *  Errors: kUsage (a tetrahedron referring to a missing point, a field of the wrong size, coordinates
  *  that are not finite or not representable in coord_type), kInvalidData (a mesh the encoder refuses,
- *  "...: cannot be encoded: <reason>"), kIo. On failure `path` is left as it was. */
+ *  "...: cannot be encoded: <reason>"; a mesh with errors of its own, "...: the mesh has errors that
+ *  `gtn validate` would report on the file (...)", see keep_invalid), kIo. On failure `path` is left
+ *  as it was. */
 Error write(const std::string& path, const Mesh& mesh, const WriteOptions& options = {},
             std::vector<std::string>* warnings = nullptr);
 

@@ -114,6 +114,7 @@ def write(
     w_density=1.0,
     w_geometry=1.0,
     greedy_ranking=False,
+    keep_invalid=False,
     threads=None,
 ):
     """Writes a .gtn file as `gtn convert` does, with the same defaults.
@@ -127,6 +128,8 @@ def write(
     verify      decode every level back and compare before the file is renamed into place
     simplify_field, w_density, w_geometry: the ranking's density field and weights (--simplify-field ...)
     greedy_ranking  rank in one queue, in the greedy order (--greedy-ranking)
+    keep_invalid  write a mesh with errors of its own that validate() reports (--keep-invalid); by default
+                such a mesh raises gatun.InvalidDataError and nothing is written
     threads     the most threads the ranking and the check may use (default: every core)
 
     The file appears atomically, only when everything succeeded.
@@ -151,6 +154,7 @@ def write(
         float(w_density),
         float(w_geometry),
         bool(greedy_ranking),
+        bool(keep_invalid),
         None if threads is None else int(threads),
     )
     for message in found:

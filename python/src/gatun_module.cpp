@@ -342,7 +342,7 @@ std::vector<Field> fieldsFrom(const py::dict& data, size_t items, const std::str
 py::list writeGtn(const std::string& path, py::array points, py::array tets, py::dict point_data, py::dict cell_data,
                   py::dict metadata, int levels, bool merge_tree, double level_storage, bool verify,
                   const std::string& simplify_field, double w_density, double w_geometry, bool greedy_ranking,
-                  std::optional<int> threads) {
+                  bool keep_invalid, std::optional<int> threads) {
   const std::string source = "gatun.write(" + path + ")";
   checkThreads(source, threads);
   TetMesh mesh;
@@ -399,6 +399,7 @@ py::list writeGtn(const std::string& path, py::array points, py::array tets, py:
     o.levels = levels;
     o.merge_tree = merge_tree;
     o.level_storage = level_storage;
+    o.keep_invalid = keep_invalid;
     o.ranking.field = simplify_field;
     o.ranking.w_density = w_density;
     o.ranking.w_geometry = w_geometry;
@@ -476,7 +477,7 @@ PYBIND11_MODULE(_gatun, m) {
   m.def("write", &writeGtn, py::arg("path"), py::arg("points"), py::arg("tets"), py::arg("point_data"),
         py::arg("cell_data"), py::arg("metadata"), py::arg("levels"), py::arg("merge_tree"), py::arg("level_storage"),
         py::arg("verify"), py::arg("simplify_field"), py::arg("w_density"), py::arg("w_geometry"),
-        py::arg("greedy_ranking"), py::arg("threads") = py::none());
+        py::arg("greedy_ranking"), py::arg("keep_invalid"), py::arg("threads") = py::none());
   m.def("info", &info, py::arg("inputs"), py::arg("merge_tree"));
   m.def("validate", &validate, py::arg("path"), py::arg("against"), py::arg("quick"), py::arg("max_issues"));
   m.def("merge_tree", &mergeTree, py::arg("path"));

@@ -120,6 +120,22 @@ def test_bad_input_is_refused_and_nothing_written(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_mesh_with_errors_of_its_own_is_refused_unless_kept(tmp_path):
+    # Two tetrahedra overlapping: validate() would call the file invalid, so nothing is written, unless
+    # keep_invalid asks for it (then with a warning, and validate() reports the errors).
+    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.1, 0.1, 0.1]])
+    tets = [[0, 1, 2, 3], [0, 1, 2, 4]]
+    path = tmp_path / "overlap.gtn"
+    with pytest.raises(gatun.InvalidDataError, match="errors that `gtn validate` would report.*BOUNDARY_ORIENTATION"):
+        gatun.write(path, points, tets)
+    assert not path.exists()
+    with pytest.warns(UserWarning, match="BOUNDARY_ORIENTATION"):
+        gatun.write(path, points, tets, keep_invalid=True)
+    report = gatun.validate(path)
+    assert not report["valid"]
+    assert any(m["code"] == "BOUNDARY_ORIENTATION" for m in report["messages"])
+
+
 def test_what_the_import_step_changes_is_said(tmp_path):
     # A flat tetrahedron on a face of a solid one: listed one way it agrees with its neighbour, the
     # other way it is turned around, and write says so as `gtn convert` does (the note was dropped).

@@ -141,6 +141,30 @@ TEST(Api, WriteThenReadGivesTheMeshBackBitForBit) {
   EXPECT_TRUE(has_meta);
 }
 
+// A mesh with errors of its own (two tetrahedra overlapping) is refused with kInvalidData naming them,
+// and nothing is written; keep_invalid writes it, with a warning.
+TEST(Api, WriteRefusesAMeshWithErrorsOfItsOwnUnlessKept) {
+  const std::string dir = tempDir("api_overlap");
+  gatun::Mesh mesh;
+  mesh.points = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.1, 0.1, 0.1};
+  mesh.tets = {{0, 1, 2, 3}, {0, 1, 2, 4}};
+  const std::string path = dir + "/overlap.gtn";
+  const gatun::Error refused = gatun::write(path, mesh);
+  EXPECT_EQ(refused.code(), gatun::ErrorCode::kInvalidData);
+  EXPECT_NE(refused.message().find("errors that `gtn validate` would report on the file (BOUNDARY_ORIENTATION"),
+            std::string::npos)
+      << refused.message();
+  EXPECT_FALSE(gtn::test::fileExists(path));
+  gatun::WriteOptions keep;
+  keep.keep_invalid = true;
+  std::vector<std::string> warnings;
+  const gatun::Error kept = gatun::write(path, mesh, keep, &warnings);
+  ASSERT_TRUE(kept.ok()) << kept.message();
+  EXPECT_TRUE(gtn::test::fileExists(path));
+  ASSERT_FALSE(warnings.empty());
+  EXPECT_NE(warnings.back().find("--keep-invalid"), std::string::npos) << warnings.back();
+}
+
 TEST(Api, ReaderReadsLevelsRatiosAndSomeFields) {
   const std::string dir = tempDir("api_levels");
   const gatun::Mesh mesh = gridMesh(6);

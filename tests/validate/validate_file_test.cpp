@@ -74,19 +74,30 @@ TEST(ValidateFile, SpxIsCleanAndEqualsItsSource) {
   EXPECT_EQ(errorCodeSet(against), (std::set<std::string>{"SOURCE_MESH_MISMATCH"})) << against.toText("x");
 }
 
-// A mesh with errors of its own (two tetrahedra overlapping) is stored as it is, and convert says that
-// `gtn validate` will report them; a clean mesh gets no such warning.
-TEST(ValidateFile, ConvertWarnsOfTheMeshsOwnErrors) {
+// A mesh with errors of its own (two tetrahedra overlapping) is refused: convert names the errors
+// `gtn validate` would report, exits 1 and writes nothing (a file already there is left as it was), so
+// that every file it writes validates. --keep-invalid stores it as it is, with a warning, and validate
+// then reports the errors. A clean mesh gets neither.
+TEST(ValidateFile, ConvertRefusesAMeshWithErrorsOfItsOwn) {
   const std::string dir = tempDir("validate-overlap");
   writeFile(dir + "/m.node", "5 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0.1 0.1 0.1\n");
   writeFile(dir + "/m.ele", "2 4 0\n1 1 2 3 4\n2 1 2 3 5\n");
   for (const char* levels : {"", " --levels 0 --no-merge-tree"}) {
     SCOPED_TRACE(levels);
+    writeFile(dir + "/m.gtn", "what was there");
     const RunResult c = runGtn("convert " + dir + "/m.node -o " + dir + "/m.gtn" + std::string(levels));
-    ASSERT_EQ(c.exit_code, 0) << c.err;
-    EXPECT_NE(c.err.find("the mesh has errors that `gtn validate` reports on the file too (BOUNDARY_ORIENTATION"),
+    EXPECT_EQ(c.exit_code, 1) << c.err;
+    EXPECT_NE(c.err.find("m.node: the mesh has errors that `gtn validate` would report on the file "
+                         "(BOUNDARY_ORIENTATION"),
               std::string::npos)
         << c.err;
+    EXPECT_NE(c.err.find("nothing was written (--keep-invalid"), std::string::npos) << c.err;
+    EXPECT_EQ(readFile(dir + "/m.gtn"), "what was there");
+    const RunResult k = runGtn("convert " + dir + "/m.node -o " + dir + "/m.gtn --keep-invalid" + std::string(levels));
+    ASSERT_EQ(k.exit_code, 0) << k.err;
+    EXPECT_NE(k.err.find("the mesh has errors that `gtn validate` reports on the file too (BOUNDARY_ORIENTATION"),
+              std::string::npos)
+        << k.err;
     const RunResult v = runGtn("validate " + dir + "/m.gtn");
     EXPECT_EQ(v.exit_code, 1) << v.out;
     EXPECT_NE(v.out.find("BOUNDARY_ORIENTATION"), std::string::npos) << v.out;
