@@ -848,7 +848,7 @@ Status MshReader::buildFields(ImportResult* result, std::vector<Field>* cell_fie
     if (!nodes && !have_elements_) return invalidData(path_ + ": " + kind + " '" + name + "' but no $Elements");
     const size_t items = nodes ? result->mesh.numPoints() : num_cells;
     Field field;
-    size_t missing = items;
+    size_t missing = items, conflicting = 0;
     std::vector<uint8_t> seen(items, 0);
     for (const DataSection& d : data_) {
       if (d.nodes != nodes || d.name != name || d.step != last) continue;
@@ -878,11 +878,15 @@ Status MshReader::buildFields(ImportResult* result, std::vector<Field>* cell_fie
             continue;
           }
         }
+        const double* v = d.values.data() + i * field.components;
         if (!seen[item]) {
           seen[item] = 1;
           --missing;
+        } else if (std::memcmp(field.data<double>() + size_t{item} * field.components, v,
+                               field.components * sizeof(double)) != 0) {
+          ++conflicting;  // given twice, differently (partitions repeat their shared nodes' values alike)
         }
-        for (uint32_t c = 0; c < field.components; ++c) field.set<double>(item, c, d.values[i * field.components + c]);
+        for (uint32_t c = 0; c < field.components; ++c) field.set<double>(item, c, v[c]);
       }
     }
     if (items == 0) continue;
@@ -892,6 +896,10 @@ Status MshReader::buildFields(ImportResult* result, std::vector<Field>* cell_fie
     if (missing > 0)
       result->report.warnings.push_back(kind + " '" + name + "' has no value for " + std::to_string(missing) + " of " +
                                         std::to_string(items) + (nodes ? " points" : " volume cells") + " (NaN there)");
+    if (conflicting > 0)
+      result->report.warnings.push_back(kind + " '" + name + "' gives " + std::to_string(conflicting) +
+                                        (nodes ? " points" : " volume cells") +
+                                        " a second, different value in the same time step (the last one is kept)");
     (nodes ? result->mesh.point_fields : *cell_fields).push_back(std::move(field));
   }
   if (skipped_values > 0)

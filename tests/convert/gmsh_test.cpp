@@ -500,6 +500,44 @@ TEST(GmshImport, MixedCellsSparseTagsAndElementData) {
   EXPECT_EQ(val2.exit_code, 0) << val2.out << val2.err;
 }
 
+// A $NodeData that gives a node two different values (two sections of one time step, or a row
+// repeated) keeps the last and says so; the same value twice (partitions repeat their shared nodes)
+// says nothing. The same for $ElementData.
+TEST(GmshImport, DataGivenTwiceDifferentlyKeepsTheLastAndWarns) {
+  const std::string dir = tempDir("gmsh_twice");
+  const std::string head =
+      "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
+      "$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n"
+      "$Elements\n2\n1 4 2 1 1 1 2 3 4\n2 4 2 1 1 2 3 4 5\n$EndElements\n";
+  auto nodeData = [](const std::string& rows, int n) {
+    return "$NodeData\n1\n\"p\"\n1\n0.0\n3\n0\n1\n" + std::to_string(n) + "\n" + rows + "$EndNodeData\n";
+  };
+  const std::string elementData = "$ElementData\n1\n\"q\"\n1\n0.0\n3\n0\n1\n3\n1 10\n2 20\n1 11\n$EndElementData\n";
+  writeFile(dir + "/twice.msh",
+            head + nodeData("1 1\n2 2\n3 3\n", 3) + nodeData("3 3\n4 4\n5 5\n1 7\n", 4) + elementData);
+  auto r = importMesh({dir + "/twice.msh"}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  const Field* p = findField(r->mesh.point_fields, "p");
+  ASSERT_NE(p, nullptr);
+  EXPECT_EQ(p->data<double>()[0], 7.0);
+  EXPECT_EQ(p->data<double>()[2], 3.0);
+  EXPECT_TRUE(hasWarning(r->report,
+                         "$NodeData 'p' gives 1 points a second, different value in the same time step (the last "
+                         "one is kept)"))
+      << allWarnings(r->report);
+  const Field* q = findField(r->mesh.cell_fields, "q");
+  ASSERT_NE(q, nullptr);
+  EXPECT_TRUE(hasWarning(r->report,
+                         "$ElementData 'q' gives 1 volume cells a second, different value in the same time step (the "
+                         "last one is kept)"))
+      << allWarnings(r->report);
+  // The same values repeated: no such warning.
+  writeFile(dir + "/same.msh", head + nodeData("1 1\n2 2\n3 3\n", 3) + nodeData("3 3\n4 4\n5 5\n1 1\n", 4));
+  auto same = importMesh({dir + "/same.msh"}, ImportOptions{});
+  ASSERT_TRUE(same.isOk()) << same.status().message();
+  EXPECT_EQ(allWarnings(same->report).find("different value"), std::string::npos) << allWarnings(same->report);
+}
+
 // Binary files written here in both byte orders and both versions: two tetrahedra, a $NodeData.
 std::string binaryFile(bool big_endian, int version, int size_bytes = 8) {
   std::string s = version == 2 ? "$MeshFormat\n2.2 1 8\n" : "$MeshFormat\n4.1 1 " + std::to_string(size_bytes) + "\n";
