@@ -123,7 +123,9 @@ Command addConvertCommand(CLI::App& app) {
                   "Exodus II: the time step (1, 2, ...) whose variables become fields (default: the last)")
       ->check(CLI::PositiveNumber);
   sub->add_flag("--compress", args->compress, ".vtu: zlib-compress the data arrays");
-  sub->add_option("--levels", args->levels, ".gtn: mip levels beyond level 0 (default: down to a small mesh; 0 = none)")
+  sub->add_option(
+         "--levels", args->levels,
+         ".gtn: mip levels beyond level 0 (default: down to a level of 256 points or 4096 tetrahedra; 0 = none)")
       ->check(CLI::Range(0, 62));
   sub->add_option("--level-storage", args->level_storage,
                   ".gtn: automatic levels leave out the coarsest ones while all levels together would take more "

@@ -39,6 +39,7 @@ StatusOr<MipLevelBuilder> MipLevelBuilder::create(const TetMesh& source, const M
     const uint64_t n = free + levelMerges(i, points, tree.merges - free);
     if (n <= out.merges_.back()) break;  // the tree is exhausted
     if (options.levels < 0 && points - (n - free) < options.min_points) break;
+    if (options.levels < 0 && source.numTets() - tree.tetsRemovedUpTo(n) < options.min_tets) break;
     out.merges_.push_back(n);
     out.ratios_.push_back(points ? static_cast<double>(n - free) / static_cast<double>(points) : 0.0);
   }

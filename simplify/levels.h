@@ -22,6 +22,12 @@ struct LevelOptions {
   int levels = -1;            // mip levels beyond level 0; -1 = down to a small mesh
   uint64_t min_points = 256;  // automatic levels stop before a level would have fewer points
   bool merge_tree = true;     // store each level's merge tree
+  // Automatic levels also stop before a level would have fewer tetrahedra than the smallest piece
+  // (codec/pieces.h, kMinPieceTets): below that a level's own costs (its connectivity, its sparse
+  // vertices' values, each stream's models learning from nothing) come to 19-25 bits a tetrahedron
+  // against 15-18 for level 0, to save the decode of at most 2 x 4096 tetrahedra (a few milliseconds)
+  // when a coarser view is read on the fly instead.
+  uint64_t min_tets = kMinPieceTets;
 };
 
 // N_i for level i of a mesh with `points` vertices and a tree of `merges` merges.

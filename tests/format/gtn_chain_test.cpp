@@ -154,7 +154,7 @@ TEST(GtnChain, TheStorageBoundLeavesOutTheCoarsestLevels) {
     if (bound == 1.01) {
       EXPECT_EQ(r->levels(), 1u);
     } else if (bound == 2.0) {
-      EXPECT_EQ(r->levels(), 4u);  // spx: down to 362 points
+      EXPECT_EQ(r->levels(), 2u);  // spx: down to 5775 tetrahedra (the next level would have 2992)
     }
     auto report = validateGtnFile(path, ValidateOptions{});
     ASSERT_TRUE(report.isOk());
@@ -166,9 +166,9 @@ TEST(GtnChain, TheStorageBoundLeavesOutTheCoarsestLevels) {
 TEST(GtnChain, ConvertNamesTheNextLevelUnlessAskedForIndependentLevels) {
   const std::string spx_path = dataPath("vtk/spx.vtk");
   const std::string def = dir() + "/cli-default.gtn", ind = dir() + "/cli-independent.gtn";
-  const RunResult a = runGtn("convert " + spx_path + " -q -o " + def);
+  const RunResult a = runGtn("convert " + spx_path + " -q --levels 3 -o " + def);
   ASSERT_EQ(a.exit_code, 0) << a.err;
-  const RunResult b = runGtn("convert " + spx_path + " -q --independent-levels -o " + ind);
+  const RunResult b = runGtn("convert " + spx_path + " -q --levels 3 --independent-levels -o " + ind);
   ASSERT_EQ(b.exit_code, 0) << b.err;
   auto d = open(def), i = open(ind);
   ASSERT_TRUE(d && i);

@@ -70,7 +70,7 @@ class Quadratic : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = tempDir("quadratic");
-    TetMesh m = makeGrid(12, 11, 10, 3);
+    TetMesh m = makeGrid(16, 15, 14, 3);
     writeFile(dir_ + "/linear.vtk", vtkText(m, false));
     writeFile(dir_ + "/quadratic.vtk", vtkText(m, true));
     points_ = m.numPoints();

@@ -378,7 +378,7 @@ TEST(StreamSimplifier, RejectsATreeOfAnotherLevel) {
 
 TEST(Levels, EachLevelIsThePrefixAndRefinesFurther) {
   const Ranked& g = grid();
-  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{-1, 32, true});
+  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{-1, 32, true, 0});
   ASSERT_TRUE(levels.isOk()) << levels.status().message();
   ASSERT_GE(levels->merges.size(), 4u);
   const uint64_t points = g.mesh.numPoints();
@@ -435,7 +435,7 @@ TEST(Levels, EachLevelIsThePrefixAndRefinesFurther) {
 // (tests/format/gtn_chain_test.cpp).
 TEST(Levels, ABoundedWriteEncodesNoLevelBeyondTheBound) {
   const Ranked& g = grid();
-  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{-1, 32, true});
+  auto levels = buildMipLevels(g.mesh, g.tree, LevelOptions{-1, 32, true, 0});
   ASSERT_TRUE(levels.isOk()) << levels.status().message();
   ASSERT_GE(levels->merges.size(), 4u);
   const std::string path = ::testing::TempDir() + "/bounded_levels.gtn";
@@ -463,7 +463,7 @@ TEST(Levels, ABoundedWriteEncodesNoLevelBeyondTheBound) {
 
 TEST(Levels, TheBuilderMakesEachLevelWhenAskedFor) {
   const Ranked& g = grid();
-  const LevelOptions lo{-1, 32, true};
+  const LevelOptions lo{-1, 32, true, 0};
   auto all = buildMipLevels(g.mesh, g.tree, lo);
   ASSERT_TRUE(all.isOk()) << all.status().message();
   ASSERT_GE(all->merges.size(), 4u);
@@ -503,7 +503,7 @@ TEST(Levels, TheBuilderMakesEachLevelWhenAskedFor) {
 // from there on are the same meshes and trees as when every level is made.
 TEST(Levels, TheBuilderSkipsTheLevelsAWriterLeavesOut) {
   const Ranked& g = grid();
-  const LevelOptions lo{-1, 32, true};
+  const LevelOptions lo{-1, 32, true, 0};
   auto all = buildMipLevels(g.mesh, g.tree, lo);
   ASSERT_TRUE(all.isOk()) << all.status().message();
   ASSERT_GE(all->merges.size(), 5u);

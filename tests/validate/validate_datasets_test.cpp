@@ -58,15 +58,19 @@ TEST_P(ValidateDatasets, ConvertedFileIsCleanAndEqualsItsSource) {
   const bool zero_volume_source = std::string(c.name).rfind("bluntfin", 0) == 0;
   EXPECT_EQ(flat_from_source > 0, zero_volume_source) << val.out;
   // The file has what convert was asked for: a merge tree unless told otherwise, and mip levels
-  // down to a small mesh (none for a mesh that is already small, such as cornellbox's 331 points).
+  // down to a small mesh (none for a mesh that is already small, such as cornellbox's 1631
+  // tetrahedra: a level stops at 256 points or a piece's 4096 tetrahedra; a level of half the points
+  // keeps less than half of the tetrahedra, about).
   const size_t levels = j["info"]["levels"].size();
   if (c.convert_options.find("--levels 0") != std::string::npos) {
     EXPECT_EQ(levels, 1u);
   } else {
     const uint64_t points = j["info"]["levels"][0]["points"].get<uint64_t>();
-    if (points - points / 2 >= LevelOptions{}.min_points) {
+    const uint64_t tets = j["info"]["levels"][0]["tets"].get<uint64_t>();
+    const LevelOptions automatic;
+    if (points - points / 2 >= automatic.min_points && tets >= 3 * automatic.min_tets) {
       EXPECT_GE(levels, 2u);
-    } else {
+    } else if (points - points / 2 < automatic.min_points || tets < automatic.min_tets) {
       EXPECT_EQ(levels, 1u);
     }
     EXPECT_GT(j["info"]["merge_tree"]["merges"].get<uint64_t>(), 0u);
