@@ -97,12 +97,17 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   // simplified on the fly (kStructuredLevelShare).
   size_t first = 1;
   if (o.levels < 0 && count > 1 && level0 && level0->pieces.size() == 1 && level0->pieces[0].kind == kPieceStructured) {
+    // The share counts the levels below the floor of automatic levels too (LevelOptions::min_tets),
+    // which are not stored: the floor leaves out levels, it does not let a finer one in.
+    LevelOptions unfloored = lo;
+    unfloored.min_tets = 0;
+    GTN_ASSIGN_OR_RETURN(MipLevelBuilder all, MipLevelBuilder::create(mesh, tree, unfloored));
     uint64_t chain = 0;
     first = count;
-    for (size_t i = count; i-- > 1;) {
-      chain += levels.tetsOf(i);
+    for (size_t i = all.count(); i-- > 1;) {
+      chain += all.tetsOf(i);
       if (chain * kStructuredLevelShare > mesh.numTets()) break;
-      first = i;
+      first = std::min(i, count);
     }
     // The finer levels are never made: the first stored one comes from level 0 in one pass.
     if (first < count) levels.skipTo(first);

@@ -207,18 +207,28 @@ TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
   // Its parents are grid places: the block's dims, its nodes being the decoding ids.
   EXPECT_EQ(stored->level0_form.grid,
             (std::array<uint32_t, 3>{mesh.blocks[0].dims[0], mesh.blocks[0].dims[1], mesh.blocks[0].dims[2]}));
-  auto all = buildMipLevels(mesh, stored->tree, LevelOptions{});
+  // The share counts every level down to 256 points; of those it keeps, the ones below the floor of
+  // automatic levels (LevelOptions::min_tets, a piece's 4096 tetrahedra) are not stored either.
+  LevelOptions unfloored;
+  unfloored.min_tets = 0;
+  auto all = buildMipLevels(mesh, stored->tree, unfloored);
   ASSERT_TRUE(all.isOk()) << all.status().message();
   const size_t count = all->meshes.size();
   ASSERT_GE(count, 6u);
   std::vector<double> kept_ratios;
   uint64_t chain = 0;
+  size_t below_floor = 0;
   for (size_t i = count; i-- > 1;) {
     chain += all->meshes[i].numTets();
     if (chain * kStructuredLevelShare > mesh.numTets()) break;
+    if (all->meshes[i].numTets() < LevelOptions{}.min_tets) {
+      ++below_floor;
+      continue;
+    }
     kept_ratios.insert(kept_ratios.begin(), all->ratios[i]);
   }
   ASSERT_FALSE(kept_ratios.empty());
+  EXPECT_GT(below_floor, 0u);                // blunt fin's two coarsest levels
   ASSERT_LT(kept_ratios.size(), count - 1);  // some finer levels are left out
 
   const std::string path = dir() + "/grid-auto.gtn";

@@ -90,7 +90,7 @@ TEST_P(ValidateDatasets, ConvertedFileIsCleanAndEqualsItsSource) {
     for (size_t i = levels; i-- > 0;) read[i] = read[i + 1] + ls[i]["bytes"].get<uint64_t>();
     for (size_t i = 1; i < levels; ++i) EXPECT_LT(double(read[i]), 0.62 * double(read[i - 1])) << i << info.out;
     if (points >= 40000) {
-      EXPECT_GE(levels, 3u) << info.out;
+      EXPECT_GE(levels, 2u) << info.out;  // a grid stores only its coarse levels, down to 4096 tetrahedra
     }
   }
   // Without --against only level 0's flat tetrahedra stay warnings: the validator cannot tell that the
