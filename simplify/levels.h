@@ -25,8 +25,8 @@ struct LevelOptions {
   // Automatic levels also stop before a level would have fewer tetrahedra than the smallest piece
   // (codec/pieces.h, kMinPieceTets): below that a level's own costs (its connectivity, its sparse
   // vertices' values, each stream's models learning from nothing) come to 19-25 bits a tetrahedron
-  // against 15-18 for level 0, to save the decode of at most 2 x 4096 tetrahedra (a few milliseconds)
-  // when a coarser view is read on the fly instead.
+  // against 15-18 for level 0. A coarser view is read on the fly from the coarsest stored level
+  // instead: the bunny's at ratio 0.95 in 18-23 ms rather than 5-6 ms from its own level.
   uint64_t min_tets = kMinPieceTets;
 };
 
