@@ -441,32 +441,18 @@ std::vector<uint8_t> encodeFile(const TetMesh& mesh, const GtnWriteOptions& o,
 }
 
 // `mesh` with its merge tree (MTRE, section 11) and `levels` mip levels, as `gtn convert --levels K`
-// writes it: the ranked merges in batches (MTRE payload version 4).
-std::vector<uint8_t> encodeWithTree(const TetMesh& mesh, int levels, const GtnWriteOptions& o) {
+// writes it: the ranked merges in batches (MTRE payload version 4). `level0`: level 0 as given (the
+// writer encodes it otherwise).
+std::vector<uint8_t> encodeWithTree(const TetMesh& mesh, int levels, const GtnWriteOptions& o,
+                                    std::shared_ptr<PiecedLevel> level0 = nullptr) {
   auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
   EXPECT_TRUE(tree.isOk());
-  auto level0 = encodePieces(mesh, EncodeOptions{}, o.piece_tets);
-  EXPECT_TRUE(level0.isOk());
-  auto stored = storedMergeTree(mesh, *tree, *level0);
-  EXPECT_TRUE(stored.isOk());
-  LevelOptions lo;
-  lo.levels = levels;
-  auto built = buildMipLevels(mesh, stored->tree, lo);
-  EXPECT_TRUE(built.isOk());
-  const std::string path = test::tempDir("conformance-tree") + "/tree.gtn";
-  EXPECT_TRUE(writeGtnFile(path, built->inputs(mesh, stored->level0_form), o).isOk());
-  const std::string bytes = test::readFile(path);
-  return std::vector<uint8_t>(bytes.begin(), bytes.end());
-}
-
-// `mesh` (one structured block) with level 0 as a structured piece, whatever the level codec would
-// take, its merge tree and `levels` mip levels, as `gtn convert` writes a grid.
-std::vector<uint8_t> encodeGridWithTree(const TetMesh& mesh, int levels, const GtnWriteOptions& o) {
-  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
-  EXPECT_TRUE(tree.isOk());
-  auto piece = encodeStructuredPiece(mesh, mesh.blocks.at(0));
-  EXPECT_TRUE(piece.isOk()) << piece.status().message();
-  auto level0 = std::make_shared<PiecedLevel>(onePieceLevel(std::move(piece).value(), kPieceStructured));
+  const bool given = level0 != nullptr;
+  if (!given) {
+    auto encoded = encodePieces(mesh, EncodeOptions{}, o.piece_tets);
+    EXPECT_TRUE(encoded.isOk());
+    level0 = std::make_shared<PiecedLevel>(std::move(encoded).value());
+  }
   auto stored = storedMergeTree(mesh, *tree, *level0);
   EXPECT_TRUE(stored.isOk());
   LevelOptions lo;
@@ -474,12 +460,21 @@ std::vector<uint8_t> encodeGridWithTree(const TetMesh& mesh, int levels, const G
   auto built = buildMipLevels(mesh, stored->tree, lo);
   EXPECT_TRUE(built.isOk());
   std::vector<GtnLevelInput> inputs = built->inputs(mesh, stored->level0_form);
-  inputs[0].encoded = level0;
-  const std::string path = test::tempDir("conformance-grid") + "/grid.gtn";
+  if (given) inputs[0].encoded = level0;
+  const std::string path = test::tempDir("conformance-tree") + "/tree.gtn";
   const Status st = writeGtnFile(path, inputs, o);
   EXPECT_TRUE(st.isOk()) << st.message();
   const std::string bytes = test::readFile(path);
   return std::vector<uint8_t>(bytes.begin(), bytes.end());
+}
+
+// `mesh` (one structured block) with level 0 as a structured piece, whatever the level codec would
+// take, its merge tree and `levels` mip levels, as `gtn convert` writes a grid.
+std::vector<uint8_t> encodeGridWithTree(const TetMesh& mesh, int levels, const GtnWriteOptions& o) {
+  auto piece = encodeStructuredPiece(mesh, mesh.blocks.at(0));
+  EXPECT_TRUE(piece.isOk()) << piece.status().message();
+  return encodeWithTree(mesh, levels, o,
+                        std::make_shared<PiecedLevel>(onePieceLevel(std::move(piece).value(), kPieceStructured)));
 }
 
 // A 12 x 12 x 12 grid of cubes (10368 tetrahedra) with a density field: cut into pieces of at most
