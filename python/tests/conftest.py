@@ -54,11 +54,13 @@ def data_dir():
 
 @pytest.fixture(scope="session")
 def converted(gtn, data_dir, tmp_path_factory):
-    """The real datasets converted by `gtn convert`: name -> path of the .gtn file."""
+    """The real datasets converted by `gtn convert`: name -> path of the .gtn file. Blunt fin asks for
+    three levels (automatic levels give a grid only its coarse level of about 5000 tetrahedra), so that reading
+    levels 1 to 3 of a grid file is tested."""
     out = tmp_path_factory.mktemp("converted")
     files = {
         "bunny": [data_dir / "medit" / "bunny.mesh"],
-        "bluntfin": [data_dir / "plot3d" / "bluntfinxyz.bin", data_dir / "plot3d" / "bluntfinq.bin"],
+        "bluntfin": [data_dir / "plot3d" / "bluntfinxyz.bin", data_dir / "plot3d" / "bluntfinq.bin", "--levels", "3"],
     }
     paths = {}
     for name, inputs in files.items():
