@@ -224,6 +224,16 @@ struct DeltaPredictions {
   }
 };
 
+// The vertex x has been merged into, recursively (x itself if it is a root): up[v] is v's parent for the
+// merges made so far, v for a root. Path halving shortens the chains as it goes.
+inline uint32_t rootOf(std::vector<uint32_t>& up, uint32_t x) {
+  while (up[x] != x) {
+    up[x] = up[up[x]];
+    x = up[x];
+  }
+  return x;
+}
+
 // Version 3: the parent as a place among the child's neighbours at the time of its merge, in the
 // mesh the earlier merges left (the vertices that share a tetrahedron of the level with the child or
 // with a vertex merged into it, each replaced by its root: the vertex it has been merged into,
@@ -335,13 +345,7 @@ class ParentCandidates {
     uint32_t id, v;
   };
   static bool before(const Keyed& a, const Keyed& b) { return a.d2 < b.d2 || (a.d2 == b.d2 && a.id < b.id); }
-  uint32_t root(uint32_t x) {
-    while (up_[x] != x) {
-      up_[x] = up_[up_[x]];
-      x = up_[x];
-    }
-    return x;
-  }
+  uint32_t root(uint32_t x) { return rootOf(up_, x); }
   const double* coords_;
   const uint32_t* key_;
   std::vector<uint64_t> start_;       // per vertex: its first entry in neighbours_
@@ -471,13 +475,7 @@ class GridCandidates {
     out[2] = jk / nj_;
     out[1] = jk - out[2] * nj_;
   }
-  uint32_t root(uint32_t x) {
-    while (up_[x] != x) {
-      up_[x] = up_[up_[x]];
-      x = up_[x];
-    }
-    return x;
-  }
+  uint32_t root(uint32_t x) { return rootOf(up_, x); }
   uint32_t ni_, nj_, nk_;
   uint64_t nodes_;
   Offset offsets_[26];
