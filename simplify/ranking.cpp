@@ -300,7 +300,8 @@ class Ranker {
 
   MergeTree run(RankingStats* stats, const ProgressFn& progress);
   // batchMerges (ranking.h) on a Ranker of the same mesh.
-  MergeTree batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor, BatchStats* stats);
+  MergeTree batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor,
+                  const std::vector<RankingRound>& rounds, BatchStats* stats);
 
  private:
   const double* pos(uint32_t v) const { return mesh_.coords.data() + 3 * size_t{v}; }
@@ -313,11 +314,17 @@ class Ranker {
   // Parts of about equal numbers of vertices, by recursive bisection of their positions along the
   // longest side: part_ and seam_.
   void partition(uint32_t parts);
+  // seam_: the vertices of the live tetrahedra whose vertices lie in more than one part of part_.
+  void markSeams();
   // Fills a lane's pool with its members' lists (every vertex's when it has none): from the
   // tetrahedra, or from the previous lanes' pools (`from`, the parts they were for, and where each
   // vertex's run began there), after dropDeadCorners.
   void buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from = nullptr,
                  const std::vector<uint8_t>* from_part = nullptr, const std::vector<uint64_t>* from_begin = nullptr);
+  // Fills the pools of `lanes` (the lanes of the parts of `part`; without `part`, one lane of every
+  // vertex) with their members' lists, each vertex's live corners in ascending order, in one pass
+  // over the tetrahedra.
+  void buildPoolsFromTets(std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>* part);
   // Drops the corners of collapsed tetrahedra from every vertex's run in `lanes`, the lanes of `part`.
   void dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>& part);
   // Evaluates the lane's vertices and merges until its queue is empty or its limit is reached.
@@ -465,6 +472,11 @@ void Ranker::partition(uint32_t parts) {
     self(self, mid, hi, k - k0, first + k0);
   };
   split(split, 0, np, parts, 0);
+  markSeams();
+}
+
+void Ranker::markSeams() {
+  seam_.assign(mesh_.numPoints(), 0);
   for (const Tet& q : tets_) {
     if (q[0] == kDead) continue;
     const uint8_t p = part_[q[0]];
@@ -510,6 +522,28 @@ void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from, 
       const uint32_t v = tets_[t][k];
       if (mine.empty() || mine[v]) L.pool[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
     }
+}
+
+void Ranker::buildPoolsFromTets(std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>* part) {
+  for (auto& L : lanes) {
+    uint64_t total = 0;
+    forMembers(*L, [&](uint32_t v) {
+      star_begin_[v] = total;
+      star_len_[v] = 0;
+      total += star_size_[v];
+    });
+    L->pool.assign(total + std::max<uint64_t>(total / 4, kMinStarSlack), 0);
+    L->peak = L->pool.size();
+    L->used = total;
+  }
+  for (size_t t = 0; t < tets_.size(); ++t) {
+    if (tets_[t][0] == kDead) continue;
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t v = tets_[t][k];
+      Lane& L = *lanes[part ? (*part)[v] : 0];
+      L.pool[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
+    }
+  }
 }
 
 void Ranker::runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress) {
@@ -908,7 +942,7 @@ void Ranker::merge(Lane& L, uint32_t v, uint32_t w, float error) {
     L.used = b + L.corners.size() + nw;
   }
   alive_[v] = 0;
-  L.heap.erase(v);
+  if (!replaying_) L.heap.erase(v);
   tree_.parent[v] = w;
   L.sequence.push_back(v);
   tree_.removed[v] = removed;
@@ -973,6 +1007,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   // other parts, and the whole mesh's queue goes on from there with every vertex, the seams between
   // the parts included.
   std::vector<uint32_t> order;
+  std::vector<RankingRound> made_rounds;
   uint64_t popped = 0, rejected = 0, restaled = 0, pool_peak = 0, compactions = 0;
   auto count = [&](const Lane& L, uint64_t lanes_alike) {
     popped += L.popped;
@@ -996,6 +1031,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   for (const uint32_t round_parts : rounds) {
     if (!lanes.empty()) leaveLanes();
     partition(round_parts);
+    const size_t round_begin = order.size();
     std::vector<std::unique_ptr<Lane>> next_lanes;
     for (uint32_t p = 0; p < round_parts; ++p) {
       next_lanes.push_back(std::make_unique<Lane>(np));
@@ -1029,6 +1065,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
       if (best < 0) break;
       order.push_back(lanes[best]->sequence[next[best]++]);
     }
+    made_rounds.push_back(RankingRound{order.size() - round_begin, round_parts, part_});
     for (const auto& L : lanes) {
       count(*L, round_parts);
       L->keepOnlyPool();
@@ -1063,6 +1100,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     stats->star_compactions = compactions;
     stats->parts = parts;
     stats->part_merges = part_merges;
+    stats->rounds = std::move(made_rounds);
   }
   return std::move(tree_);
 }
@@ -1071,17 +1109,15 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
 constexpr uint32_t kBatchPasses = 8;
 
 MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor,
-                        BatchStats* stats) {
+                        const std::vector<RankingRound>& rounds, BatchStats* stats) {
   init();
   replaying_ = true;
   const size_t np = mesh_.numPoints();
-  Lane whole(np);
-  buildPool(whole);
-  whole.ws = &thread_ws_.local();
   std::vector<uint32_t> by_rank(ranked.merges);
   for (uint32_t v = 0; v < np; ++v)
     if (ranked.rank[v]) by_rank[ranked.rank[v] - 1] = v;
-  // The vertex each one has been merged into, recursively (path halving).
+  // The vertex each one has been merged into, recursively (path halving). A part's chains stay in
+  // the part: its merges' parents are its own vertices, alive when its round began.
   std::vector<uint32_t> up(np);
   for (uint32_t v = 0; v < np; ++v) up[v] = v;
   auto root = [&](uint32_t x) {
@@ -1111,176 +1147,283 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
   }
   const uint32_t d = divisor ? divisor : kDefaultBatchDivisor;
   uint64_t unmerged = np - free;
-  size_t next = free;
-  std::vector<uint32_t> carry, batch, deferred, still;
-  // Per vertex: its rank while it is the child of a merge of the batch not made yet, else kNoIndex.
-  std::vector<uint32_t> pending(np, kNoIndex), late(np, 0), touched;
-  // Per merge of the batch in its passes: the vertex it waits for, and the count of merges made when
-  // its checks last failed with the parent it then had (kNoIndex: none).
-  std::vector<uint32_t> blocker(np, kNoIndex), failed(np, kNoIndex), failed_root(np, kNoIndex);
-  // stamp[y]: the count of merges made when one last changed a tetrahedron around y (the merge of a
-  // vertex whose star held y); a check that failed is not made again while nothing around it changed.
-  std::vector<uint32_t> stamp(np, 0);
-  uint32_t clock = 0;
-  // The first vertex y of the tetrahedra around x with stop(y) (kNoIndex: none).
-  auto inStar = [&](uint32_t x, auto&& stop) {
-    gatherStar(whole, x, whole.corners);
-    for (uint32_t c : whole.corners)
-      for (uint32_t y : tets_[c >> 2])
-        if (stop(y)) return y;
-    return kNoIndex;
-  };
-  auto apply = [&](uint32_t v, uint32_t w) {
-    ++clock;
-    inStar(v, [&](uint32_t y) { return stamp[y] = clock, false; });
-    merge(whole, v, w, ranked.error.empty() ? 0.0f : ranked.error[v]);
-    up[v] = w;
-    order.push_back(v);
-  };
-  auto tryMerge = [&](uint32_t v) {
-    const uint32_t w = root(ranked.parent[v]);
-    if (w == v || !validate(whole, v, w)) return false;
-    apply(v, w);
-    return true;
-  };
-  // Into the target the ranking's error prefers among those the checks allow now.
-  auto tryOther = [&](uint32_t v) {
-    candidates(whole, v, whole.sorted, *whole.ws);
-    std::sort(whole.sorted.begin(), whole.sorted.end(), [](const Candidate& a, const Candidate& b) {
-      return a.error < b.error || (a.error == b.error && a.w < b.w);
-    });
-    for (const Candidate& c : whole.sorted) {
-      if (validate(whole, v, c.w)) {
-        apply(v, c.w);
-        ++st.retargeted;
-        return true;
-      }
+  // Per vertex, written only by the lane that holds it: its rank while it is the child of a merge of
+  // the lane's batch not made yet, else kNoIndex; the largest rank of the batch's merges tried so far
+  // whose child's star held it (late); the vertex a merge of the batch waits for, and the count of
+  // the lane's merges made when its checks last failed with the parent it then had (kNoIndex: none);
+  // the count of the lane's merges made when one last changed a tetrahedron around it (stamp: a check
+  // that failed is not made again while nothing around it changed).
+  std::vector<uint32_t> pending(np, kNoIndex), late(np, 0), blocker(np, kNoIndex), failed(np, kNoIndex),
+      failed_root(np, kNoIndex), stamp(np, 0);
+  // A merge made by a lane: its place in the batch's order (the pass, or the sweep after the passes,
+  // then the key, or the rank), and its child.
+  struct Made {
+    uint32_t stage;
+    uint64_t key;
+    uint32_t v;
+    bool operator<(const Made& o) const {
+      return stage != o.stage ? stage < o.stage : (key != o.key ? key < o.key : v < o.v);
     }
-    return false;
   };
-  // A merge waits for the merges of the batch ranked before it whose child is in its child's star:
-  // one of them would change the other's neighbourhood, and the ranking made them in rank order. The
-  // vertex it waits for goes to blocker[v], so that v is not looked at again before that merge is made.
-  auto waitsFor = [&](uint32_t v) {
-    const uint32_t r = ranked.rank[v];
-    return inStar(v, [&](uint32_t y) { return pending[y] < r; });
-  };
-  auto changedSince = [&](uint32_t v, uint32_t w, uint32_t t) {
-    auto changed = [&](uint32_t y) { return stamp[y] > t; };
-    return inStar(v, changed) != kNoIndex || inStar(w, changed) != kNoIndex;
-  };
-  // A merge in the very neighbourhood the ranking made it in is allowed as it was then, and is made
-  // without the checks: while every batch so far ended at the ranking's prefix (ranked_so_far), when
-  // its parent is still a root, no merge of the batch ranked before it is left with its child in the
-  // star of the child or of the parent, and none ranked after it has been made with its child in those
-  // stars (late[y]: the largest rank of the batch's merges tried so far whose child's star held y).
-  bool ranked_so_far = true;
-  auto asRanked = [&](uint32_t v) {
-    const uint32_t r = ranked.rank[v];
-    const uint32_t w = ranked.parent[v];
-    if (!ranked_so_far || root(w) != w) return false;
-    auto differs = [&](uint32_t y) { return pending[y] < r || late[y] > r; };
-    return inStar(v, differs) == kNoIndex && inStar(w, differs) == kNoIndex;
-  };
-  auto markLate = [&](uint32_t v) {
-    const uint32_t r = ranked.rank[v];
-    inStar(v, [&](uint32_t y) {
-      if (late[y] == 0) touched.push_back(y);
-      late[y] = std::max(late[y], r);
+  constexpr uint32_t kSweeps = kBatchPasses + 1;  // the sweeps by rank after the passes
+  constexpr uint32_t kOther = UINT32_MAX;         // the merges into another target
+  // Batches the merges `merges` (by rank) of lane L, whose vertices not merged yet number `left`,
+  // into `out` (each batch's merges as made): see ranking.h. `clean` = every batch before them ended
+  // where the ranking's prefix does.
+  auto batchLane = [&](Lane& L, const std::vector<uint32_t>& merges, uint64_t left, bool clean,
+                       std::vector<std::vector<Made>>& out, BatchStats& bs) {
+    L.ws = &thread_ws_.local();
+    std::vector<uint32_t> carry, batch, deferred, still, touched;
+    std::vector<Made>* made_into = nullptr;
+    uint32_t clock = 0;
+    size_t next = 0;
+    // The first vertex y of the tetrahedra around x with stop(y) (kNoIndex: none).
+    auto inStar = [&](uint32_t x, auto&& stop) {
+      gatherStar(L, x, L.corners);
+      for (uint32_t c : L.corners)
+        for (uint32_t y : tets_[c >> 2])
+          if (stop(y)) return y;
+      return kNoIndex;
+    };
+    auto apply = [&](uint32_t v, uint32_t w, uint32_t stage, uint64_t key) {
+      ++clock;
+      inStar(v, [&](uint32_t y) { return stamp[y] = clock, false; });
+      merge(L, v, w, ranked.error.empty() ? 0.0f : ranked.error[v]);
+      up[v] = w;
+      made_into->push_back(Made{stage, key, v});
+    };
+    auto tryMerge = [&](uint32_t v, uint32_t stage, uint64_t key) {
+      const uint32_t w = root(ranked.parent[v]);
+      if (w == v || !validate(L, v, w)) return false;
+      apply(v, w, stage, key);
+      return true;
+    };
+    // Into the target the ranking's error prefers among those the checks allow now.
+    auto tryOther = [&](uint32_t v) {
+      candidates(L, v, L.sorted, *L.ws);
+      std::sort(L.sorted.begin(), L.sorted.end(), [](const Candidate& a, const Candidate& b) {
+        return a.error < b.error || (a.error == b.error && a.w < b.w);
+      });
+      for (const Candidate& c : L.sorted) {
+        if (validate(L, v, c.w)) {
+          apply(v, c.w, kOther, ranked.rank[v]);
+          ++bs.retargeted;
+          return true;
+        }
+      }
       return false;
-    });
+    };
+    // A merge waits for the merges of the batch ranked before it whose child is in its child's star:
+    // one of them would change the other's neighbourhood, and the ranking made them in rank order.
+    // The vertex it waits for goes to blocker[v], so that v is not looked at again before that merge
+    // is made.
+    auto waitsFor = [&](uint32_t v) {
+      const uint32_t r = ranked.rank[v];
+      return inStar(v, [&](uint32_t y) { return pending[y] < r; });
+    };
+    auto changedSince = [&](uint32_t v, uint32_t w, uint32_t t) {
+      auto changed = [&](uint32_t y) { return stamp[y] > t; };
+      return inStar(v, changed) != kNoIndex || inStar(w, changed) != kNoIndex;
+    };
+    // A merge in the very neighbourhood the ranking made it in is allowed as it was then, and is made
+    // without the checks: while every batch so far ended at the ranking's prefix (ranked_so_far), when
+    // its parent is still a root, no merge of the batch ranked before it is left with its child in the
+    // star of the child or of the parent, and none ranked after it has been made with its child in
+    // those stars (late[y]: the largest rank of the batch's merges tried so far whose child's star held
+    // y). In a part, the child and the parent are away from the other parts, as in the ranking.
+    bool ranked_so_far = clean;
+    auto asRanked = [&](uint32_t v) {
+      const uint32_t r = ranked.rank[v];
+      const uint32_t w = ranked.parent[v];
+      if (!ranked_so_far || root(w) != w || (L.restricted && (seam_[v] || seam_[w]))) return false;
+      auto differs = [&](uint32_t y) { return pending[y] < r || late[y] > r; };
+      return inStar(v, differs) == kNoIndex && inStar(w, differs) == kNoIndex;
+    };
+    auto markLate = [&](uint32_t v) {
+      const uint32_t r = ranked.rank[v];
+      inStar(v, [&](uint32_t y) {
+        if (late[y] == 0) touched.push_back(y);
+        late[y] = std::max(late[y], r);
+        return false;
+      });
+    };
+    while (next < merges.size() || !carry.empty()) {
+      const uint64_t want = (left + d - 1) / d;
+      // The merges left over from the last batch first (their ranks are the smallest), then the next
+      // ones by rank.
+      batch = carry;
+      while (batch.size() < want && next < merges.size()) batch.push_back(merges[next++]);
+      out.emplace_back();
+      made_into = &out.back();
+      for (uint32_t v : batch) pending[v] = ranked.rank[v];
+      ranked_so_far = clean && bs.carried == 0 && bs.retargeted == 0 && bs.dropped == 0;
+      // Passes in key order, each making the merges that need not wait and are allowed, while one does.
+      deferred = batch;
+      std::sort(deferred.begin(), deferred.end(), byKey);
+      // At most kBatchPasses: where the ranking made long chains of neighbouring merges (on a smooth
+      // grid, whose errors tie), each pass makes few of them, and the rest go by rank.
+      uint32_t passes = 0;
+      for (size_t made = 1; made && !deferred.empty() && passes++ < kBatchPasses;) {
+        made = 0;
+        still.clear();
+        for (uint32_t v : deferred) {
+          const uint32_t r = ranked.rank[v];
+          if (blocker[v] != kNoIndex && pending[blocker[v]] < r) {
+            still.push_back(v);
+            continue;
+          }
+          const uint32_t w = root(ranked.parent[v]);
+          if (failed[v] != kNoIndex && failed_root[v] == w && !changedSince(v, w, failed[v])) {
+            still.push_back(v);
+            continue;
+          }
+          blocker[v] = waitsFor(v);
+          if (blocker[v] != kNoIndex) {
+            still.push_back(v);
+            continue;
+          }
+          markLate(v);
+          if (asRanked(v)) {
+            apply(v, ranked.parent[v], passes, keys[v]);
+            ++bs.unchecked;
+          } else if (!tryMerge(v, passes, keys[v])) {
+            failed[v] = clock;
+            failed_root[v] = w;
+            still.push_back(v);
+            continue;
+          }
+          ++made;
+          pending[v] = kNoIndex;
+        }
+        deferred.swap(still);
+        ++bs.passes;
+      }
+      bs.deferred += deferred.size();
+      // The deferred ones by rank, as long as one of them can merge (the first time through, those
+      // in the neighbourhood the ranking made them in without the checks).
+      std::sort(deferred.begin(), deferred.end(),
+                [&](uint32_t a, uint32_t b) { return ranked.rank[a] < ranked.rank[b]; });
+      uint32_t sweep = kSweeps;
+      for (bool progress = true, first = true; progress && !deferred.empty(); first = false, ++sweep) {
+        progress = false;
+        still.clear();
+        for (uint32_t v : deferred) {
+          if (first) markLate(v);
+          if (first && asRanked(v)) {
+            apply(v, ranked.parent[v], sweep, ranked.rank[v]);
+            ++bs.unchecked;
+          } else if (!tryMerge(v, sweep, ranked.rank[v])) {
+            still.push_back(v);
+            continue;
+          }
+          progress = true;
+          pending[v] = kNoIndex;
+        }
+        deferred.swap(still);
+      }
+      for (uint32_t v : batch) pending[v] = blocker[v] = failed[v] = kNoIndex;
+      for (uint32_t y : touched) late[y] = 0;
+      touched.clear();
+      // Those whose parent the new order made invalid: another target, where one is allowed.
+      still.clear();
+      for (uint32_t v : deferred)
+        if (!tryOther(v)) still.push_back(v);
+      deferred.swap(still);
+      carry = deferred;
+      bs.carried += carry.size();
+      if (made_into->empty()) {
+        // None of them can merge in this order: the first one stays a root.
+        out.pop_back();
+        carry.erase(carry.begin());
+        ++bs.dropped;
+        continue;
+      }
+      left -= made_into->size();
+    }
   };
-  while (next < by_rank.size() || !carry.empty()) {
-    const uint64_t want = (unmerged + d - 1) / d;
-    // The merges left over from the last batch first (their ranks are the smallest), then the next
-    // ones by rank.
-    batch = carry;
-    while (batch.size() < want && next < by_rank.size()) batch.push_back(by_rank[next++]);
-    const size_t before = order.size();
-    for (uint32_t v : batch) pending[v] = ranked.rank[v];
-    ranked_so_far = st.carried == 0 && st.retargeted == 0 && st.dropped == 0;
-    // Passes in key order, each making the merges that need not wait and are allowed, while one does.
-    deferred = batch;
-    std::sort(deferred.begin(), deferred.end(), byKey);
-    // At most kBatchPasses: where the ranking made long chains of neighbouring merges (on a smooth
-    // grid, whose errors tie), each pass makes few of them, and the rest go by rank.
-    uint32_t passes = 0;
-    for (size_t made = 1; made && !deferred.empty() && passes++ < kBatchPasses;) {
-      made = 0;
-      still.clear();
-      for (uint32_t v : deferred) {
-        const uint32_t r = ranked.rank[v];
-        if (blocker[v] != kNoIndex && pending[blocker[v]] < r) {
-          still.push_back(v);
-          continue;
-        }
-        const uint32_t w = root(ranked.parent[v]);
-        if (failed[v] != kNoIndex && failed_root[v] == w && !changedSince(v, w, failed[v])) {
-          still.push_back(v);
-          continue;
-        }
-        blocker[v] = waitsFor(v);
-        if (blocker[v] != kNoIndex) {
-          still.push_back(v);
-          continue;
-        }
-        markLate(v);
-        if (asRanked(v)) {
-          apply(v, ranked.parent[v]);
-          ++st.unchecked;
-        } else if (!tryMerge(v)) {
-          failed[v] = clock;
-          failed_root[v] = w;
-          still.push_back(v);
-          continue;
-        }
-        ++made;
-        pending[v] = kNoIndex;
+  auto add = [](BatchStats& to, const BatchStats& from) {
+    to.deferred += from.deferred;
+    to.carried += from.carried;
+    to.passes += from.passes;
+    to.unchecked += from.unchecked;
+    to.retargeted += from.retargeted;
+    to.dropped += from.dropped;
+  };
+  auto clean = [](const BatchStats& s) { return s.carried == 0 && s.retargeted == 0 && s.dropped == 0; };
+  // The i-th batches of the lanes, together: one batch of the tree each.
+  auto appendBatches = [&](std::vector<std::vector<std::vector<Made>>>& lane_batches) {
+    for (size_t i = 0;; ++i) {
+      std::vector<Made> all;
+      bool any = false;
+      for (auto& lb : lane_batches) {
+        if (i >= lb.size()) continue;
+        any = true;
+        all.insert(all.end(), lb[i].begin(), lb[i].end());
+        lb[i] = {};
       }
-      deferred.swap(still);
-      ++st.passes;
+      if (!any) break;
+      std::sort(all.begin(), all.end());
+      for (const Made& m : all) order.push_back(m.v);
+      tree_.batches.push_back(static_cast<uint32_t>(all.size()));
+      unmerged -= all.size();
     }
-    st.deferred += deferred.size();
-    // The deferred ones by rank, as long as one of them can merge (the first time through, those
-    // in the neighbourhood the ranking made them in without the checks).
-    std::sort(deferred.begin(), deferred.end(),
-              [&](uint32_t a, uint32_t b) { return ranked.rank[a] < ranked.rank[b]; });
-    for (bool progress = true, first = true; progress && !deferred.empty(); first = false) {
-      progress = false;
-      still.clear();
-      for (uint32_t v : deferred) {
-        if (first) markLate(v);
-        if (first && asRanked(v)) {
-          apply(v, ranked.parent[v]);
-          ++st.unchecked;
-        } else if (!tryMerge(v)) {
-          still.push_back(v);
-          continue;
-        }
-        progress = true;
-        pending[v] = kNoIndex;
-      }
-      deferred.swap(still);
+  };
+  // The rounds of parts, when they are the ranking's (their merges follow the unused points').
+  bool use_rounds = !rounds.empty();
+  uint64_t round_merges = 0;
+  for (const RankingRound& rr : rounds) {
+    round_merges += rr.merges;
+    use_rounds = use_rounds && rr.parts > 1 && rr.parts <= kMaxParts && rr.part.size() == np &&
+                 std::all_of(rr.part.begin(), rr.part.end(), [&](uint8_t p) { return p < rr.parts; });
+  }
+  use_rounds = use_rounds && free + round_merges <= ranked.merges;
+  size_t next = free;
+  bool all_clean = true;
+  // Each round's lanes (and then the whole mesh's) hold their vertices' lists from the tetrahedra
+  // left, the last round's lanes gone first (one set of lists at a time).
+  std::vector<std::unique_ptr<Lane>> lanes;
+  for (const RankingRound& rr : use_rounds ? rounds : std::vector<RankingRound>{}) {
+    lanes.clear();
+    part_ = rr.part;
+    markSeams();
+    std::vector<std::vector<uint32_t>> lane_merges(rr.parts);
+    for (uint32_t p = 0; p < rr.parts; ++p) {
+      lanes.push_back(std::make_unique<Lane>(0));
+      lanes.back()->restricted = true;
+      lanes.back()->parallel = false;
     }
-    for (uint32_t v : batch) pending[v] = blocker[v] = failed[v] = kNoIndex;
-    for (uint32_t y : touched) late[y] = 0;
-    touched.clear();
-    // Those whose parent the new order made invalid: another target, where one is allowed.
-    still.clear();
-    for (uint32_t v : deferred)
-      if (!tryOther(v)) still.push_back(v);
-    deferred.swap(still);
-    carry = deferred;
-    st.carried += carry.size();
-    const uint64_t made = order.size() - before;
-    if (made == 0) {
-      // None of them can merge in this order: the first one stays a root.
-      carry.erase(carry.begin());
-      ++st.dropped;
-      continue;
+    for (uint32_t v = 0; v < np; ++v)
+      if (alive_[v]) lanes[part_[v]]->members.push_back(v);
+    for (uint64_t i = 0; i < rr.merges; ++i, ++next) lane_merges[part_[by_rank[next]]].push_back(by_rank[next]);
+    buildPoolsFromTets(lanes, &part_);
+    std::fill(stamp.begin(), stamp.end(), 0);
+    std::vector<std::vector<std::vector<Made>>> lane_batches(rr.parts);
+    std::vector<BatchStats> lane_stats(rr.parts);
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, rr.parts, 1), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t p = r.begin(); p < r.end(); ++p)
+          batchLane(*lanes[p], lane_merges[p], lanes[p]->members.size(), all_clean, lane_batches[p], lane_stats[p]);
+      });
+    });
+    for (const BatchStats& s : lane_stats) {
+      add(st, s);
+      all_clean = all_clean && clean(s);
     }
-    tree_.batches.push_back(static_cast<uint32_t>(made));
-    unmerged -= made;
+    appendBatches(lane_batches);
+  }
+  // The merges after the rounds, on the whole mesh.
+  lanes.clear();
+  part_ = seam_ = {};
+  lanes.push_back(std::make_unique<Lane>(0));
+  buildPoolsFromTets(lanes, nullptr);
+  std::fill(stamp.begin(), stamp.end(), 0);
+  {
+    std::vector<std::vector<std::vector<Made>>> whole_batches(1);
+    BatchStats s;
+    const std::vector<uint32_t> rest(by_rank.begin() + static_cast<std::ptrdiff_t>(next), by_rank.end());
+    batchLane(*lanes[0], rest, unmerged, all_clean, whole_batches[0], s);
+    add(st, s);
+    appendBatches(whole_batches);
   }
   for (size_t i = 0; i < order.size(); ++i) tree_.rank[order[i]] = static_cast<uint32_t>(i + 1);
   tree_.merges = order.size();
@@ -1374,7 +1517,7 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
   computeErrorQuantiles(tree);
   if (options.max_merges > tree.merges) mergeEdgePointsFirst(mesh, tree);
   if (stats) {
-    *stats = local;
+    *stats = std::move(local);
     stats->merges = tree.merges;
     stats->boundary_merges = tree.boundaryMergesUpTo(tree.merges);
     stats->field = tree.field;
@@ -1385,7 +1528,7 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
 }
 
 StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const std::vector<uint64_t>& keys,
-                                uint32_t divisor, BatchStats* stats) {
+                                uint32_t divisor, BatchStats* stats, const std::vector<RankingRound>& rounds) {
   const auto start = std::chrono::steady_clock::now();
   GTN_RETURN_IF_ERROR(ranked.check("merge tree"));
   if (ranked.points() != mesh.numPoints() || keys.size() != mesh.numPoints())
@@ -1395,7 +1538,7 @@ StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, co
   options.w_geometry = ranked.w_geometry;
   Ranker ranker(mesh, std::vector<double>(mesh.numPoints(), 1.0), options);
   BatchStats local;
-  MergeTree tree = ranker.batch(ranked, keys, divisor, &local);
+  MergeTree tree = ranker.batch(ranked, keys, divisor, rounds, &local);
   local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (stats) *stats = local;
   return tree;

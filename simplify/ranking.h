@@ -77,6 +77,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "codec/merge_tree_coder.h"
 #include "mesh/progress.h"
@@ -99,6 +100,14 @@ struct RankingOptions {
   uint32_t parts = 0;
 };
 
+// A round of the ranking in parts (see above): how many merges it made (the ranks after those of the
+// rounds before it, and after the unused points' merges), in how many parts, and each vertex's part.
+struct RankingRound {
+  uint64_t merges = 0;
+  uint32_t parts = 0;
+  std::vector<uint8_t> part;
+};
+
 struct RankingStats {
   double seconds = 0;
   uint64_t merges = 0, boundary_merges = 0;
@@ -110,6 +119,7 @@ struct RankingStats {
   uint64_t evaluations = 0;                  // candidate errors computed
   uint64_t star_pool_corners = 0;            // the room the stars' corner lists took, at most (4 bytes each)
   uint64_t star_compactions = 0;             // times the corner lists were moved down over abandoned ones
+  std::vector<RankingRound> rounds;          // the rounds of parts, in order (batchMerges follows them)
   std::string field;                         // density field used ("" = volume)
   std::vector<std::string> constant_fields;  // the default skipped these point fields (constant)
 };
@@ -141,6 +151,16 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
 // ranking's prefix of the same merges does, and every prefix of the result is a valid mesh, as it is
 // of the ranking's. The keys are those the payload orders a batch by (codec/merge_tree_coder.h): by
 // position, or by decoding id. The tree's error, provenance and quantiles are the ranking's.
+//
+// Given the ranking's rounds of parts (RankingStats::rounds), each round's merges are batched in its
+// parts, in parallel: a part's merges touch no other part (the ranking's restriction holds in the
+// batches too: no merge, retargeted ones included, into or from a vertex next to another part), so
+// each part makes its batches as above from its own merges, with U its own vertices not merged yet,
+// carried merges stay in the part, and the i-th batch of the round is the parts' i-th batches
+// together, in the order of their passes and within a pass by key (then the deferred ones, by
+// rank). Any interleaving of merges of distinct parts is a valid order, since they commute. The
+// merges after the rounds are batched on the whole mesh. The tree depends on the rounds, never on
+// the number of threads.
 struct BatchStats {
   uint64_t batches = 0;
   uint64_t deferred = 0;    // merges the passes left (then merged by rank)
@@ -152,6 +172,7 @@ struct BatchStats {
   double seconds = 0;
 };
 StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const std::vector<uint64_t>& keys,
-                                uint32_t divisor, BatchStats* stats = nullptr);
+                                uint32_t divisor, BatchStats* stats = nullptr,
+                                const std::vector<RankingRound>& rounds = {});
 
 }  // namespace gtn

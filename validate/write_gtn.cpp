@@ -70,9 +70,10 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   MergeTreeForm level0_form;
   if (o.merge_tree && level0) {
     reportProgress(wo.progress, "batch merges", 0.0);
-    GTN_ASSIGN_OR_RETURN(StoredMergeTree stored, storedMergeTree(mesh, tree, *level0));
+    GTN_ASSIGN_OR_RETURN(StoredMergeTree stored, storedMergeTree(mesh, tree, *level0, ranked.rounds));
     tree = std::move(stored.tree);
     level0_form = stored.level0_form;
+    ranked.rounds = {};
   }
   if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
     warnings->push_back(source + ": " + note);
@@ -167,7 +168,8 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
 }
 }  // namespace
 
-StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0) {
+StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0,
+                                          const std::vector<RankingRound>& rounds) {
   // A structured level 0 (a grid, never naming the next level's vertices) stores the whole tree, which
   // readers decode to simplify it on the fly at every ratio finer than the stored levels: its parents
   // are coded as grid places (the block's dims and the decoding ids decide the candidates), or as
@@ -191,7 +193,7 @@ StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& 
   std::vector<uint64_t> keys(mesh.numPoints());
   for (size_t v = 0; v < keys.size(); ++v)
     keys[v] = structured ? batchKeyOfId(level0.vertex_order[v]) : batchKeyOfPoint(mesh.point(v));
-  GTN_ASSIGN_OR_RETURN(out.tree, batchMerges(mesh, ranked, keys, kDefaultBatchDivisor));
+  GTN_ASSIGN_OR_RETURN(out.tree, batchMerges(mesh, ranked, keys, kDefaultBatchDivisor, nullptr, rounds));
   return out;
 }
 

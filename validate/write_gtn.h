@@ -40,12 +40,14 @@ struct GtnConvertOptions {
 // (encodePieces), and the form level 0's payload codes it in: batched (batchMerges) by the keys its
 // payloads order batches by, which are level 0's decoding ids where level 0 is one structured piece
 // (whose tree codes its parents as grid places, or as deltas where the block has aliases, and so
-// decodes without the level), and the positions elsewhere (parents as candidates).
+// decodes without the level), and the positions elsewhere (parents as candidates); in the ranking's
+// rounds of parts where it had them (RankingStats::rounds), which the batches follow.
 struct StoredMergeTree {
   MergeTree tree;
   MergeTreeForm level0_form;
 };
-StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0);
+StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0,
+                                          const std::vector<RankingRound>& rounds = {});
 
 Status writeGtnWithLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& options,
                           const GtnWriteOptions& write_options, const std::string& source,

@@ -215,6 +215,72 @@ TEST(Ranking, InPartsThePrefixesAreValidAndTheThreadsChangeNothing) {
   expectKeepsTheVolumeAsWellAs(mesh, tree, *whole);
 }
 
+// Batched in the ranking's rounds of parts (batchMerges with RankingStats::rounds): each round's
+// merges are batched in its parts, in parallel. The batched tree is the same for any thread count,
+// every merge passes the validator's replay, the batches end where each round of the ranking does
+// (when no merge moved to a later batch), and the payload is no larger than 3% over the batches made
+// on the whole mesh.
+TEST(Ranking, BatchesInTheRoundsPartsAreValidAndTheThreadsChangeNothing) {
+  const TetMesh mesh = makeGrid(14, 13, 12);
+  RankingOptions in_parts;
+  in_parts.parts = 4;
+  RankingStats stats;
+  auto ranked = rankMerges(mesh, in_parts, &stats);
+  ASSERT_TRUE(ranked.isOk()) << ranked.status().message();
+  ASSERT_EQ(stats.rounds.size(), 2u);
+  EXPECT_EQ(stats.rounds[0].parts, 4u);
+  EXPECT_EQ(stats.rounds[1].parts, 3u);
+  EXPECT_EQ(stats.rounds[0].merges + stats.rounds[1].merges, stats.part_merges);
+  for (const RankingRound& r : stats.rounds) EXPECT_EQ(r.part.size(), mesh.numPoints());
+  std::vector<uint64_t> keys(mesh.numPoints());
+  for (size_t v = 0; v < keys.size(); ++v) keys[v] = batchKeyOfPoint(mesh.point(v));
+  std::vector<MergeTree> trees;
+  BatchStats bs;
+  for (const size_t threads : {1, 2, 3}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    auto t = batchMerges(mesh, *ranked, keys, kDefaultBatchDivisor, &bs, stats.rounds);
+    ASSERT_TRUE(t.isOk()) << t.status().message();
+    trees.push_back(std::move(t).value());
+  }
+  for (size_t i = 1; i < trees.size(); ++i) {
+    EXPECT_EQ(trees[i].parent, trees[0].parent);
+    EXPECT_EQ(trees[i].rank, trees[0].rank);
+    EXPECT_EQ(trees[i].batches, trees[0].batches);
+  }
+  const MergeTree& tree = trees[0];
+  ASSERT_TRUE(tree.check("batched in parts").isOk());
+  ValidationReport report;
+  checkMergeTree(mesh, forestFromTree(tree), {}, report);
+  EXPECT_EQ(report.count(Severity::kError), 0u) << report.toText("batched in parts");
+  EXPECT_EQ(bs.dropped, 0u);
+  EXPECT_EQ(tree.merges, ranked->merges);
+  auto whole = batchMerges(mesh, *ranked, keys, kDefaultBatchDivisor);
+  ASSERT_TRUE(whole.isOk());
+  // The parts' batches differ from the whole mesh's: each part's first batch is an eighth of its own
+  // vertices, whatever the errors of the other parts' merges.
+  EXPECT_NE(whole->rank, tree.rank);
+  if (bs.carried == 0 && bs.retargeted == 0) {
+    uint64_t end = 0;
+    size_t b = 0;
+    for (const RankingRound& r : stats.rounds) {
+      const uint64_t round_end = end + r.merges;
+      while (end < round_end && b < tree.batches.size()) end += tree.batches[b++];
+      ASSERT_EQ(end, round_end) << "the batches cross the end of a round";
+      for (size_t v = 0; v < mesh.numPoints(); ++v) {
+        const bool in_ranking = ranked->rank[v] != 0 && ranked->rank[v] <= end;
+        const bool in_batches = tree.rank[v] != 0 && tree.rank[v] <= end;
+        ASSERT_EQ(in_ranking, in_batches) << "vertex " << v << ", round ending at " << end;
+      }
+    }
+  }
+  std::vector<uint32_t> identity(mesh.numPoints());
+  for (uint32_t v = 0; v < identity.size(); ++v) identity[v] = v;
+  auto parts_bytes = encodeMergeTree(tree, identity, &mesh, MergeTreeForm{4, true});
+  auto whole_bytes = encodeMergeTree(*whole, identity, &mesh, MergeTreeForm{4, true});
+  ASSERT_TRUE(parts_bytes.isOk() && whole_bytes.isOk());
+  EXPECT_LE(parts_bytes->size(), whole_bytes->size() * 103 / 100);
+}
+
 TEST(Ranking, TheStarListsStayInTheirRoom) {
   // Each vertex's corner list lives in one pool; a merge writes the target's new list after the used
   // part. The pool holds every corner and a quarter more (4096 at least) and is compacted in place
