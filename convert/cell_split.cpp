@@ -167,14 +167,6 @@ double roundedToFloat32(double x) {
   return f;
 }
 
-// Position in the face's cycle of its vertex with the smallest global index.
-int minCorner(const Face& f, const uint32_t* g) {
-  int m = 0;
-  for (int k = 1; k < f.n; ++k)
-    if (g[f.v[k]] < g[f.v[m]]) m = k;
-  return m;
-}
-
 class Splitter {
  public:
   // `coords`: the num_points points (3 per point), or nullptr to split by indices alone. `steiner`:
@@ -220,15 +212,48 @@ class Splitter {
         [&](uint32_t point, std::vector<Tet>* out) { coneFrom(faces, g, -1, point, out); }, cell);
   }
 
-  // Appends to *out the tetrahedra from `apex` to the fan of a face of n corners (global index
-  // idx(k), cyclic order) from its smallest-index corner: a quadrilateral is cut along its diagonal
-  // through that corner, a triangle stays whole.
+  // The face rule: the place in its cycle of the corner a face of n corners (global index idx(k),
+  // cyclic order) is fanned from. Its smallest-index corner, unless that fan has a flat triangle
+  // (three corners in a line: a straight angle, as a hanging node on an edge makes) and another
+  // corner's does not: then the first such corner by global index. A quadrilateral is cut along the
+  // diagonal through that corner. The choice depends on the face alone (its indices and points), so
+  // the two cells that share a face cut it alike.
   template <class Index>
-  static void fan(uint32_t apex, int64_t n, Index idx, std::vector<Tet>* out) {
+  int64_t fanCorner(int64_t n, Index idx) const {
     int64_t m = 0;
     for (int64_t k = 1; k < n; ++k)
       if (idx(k) < idx(m)) m = k;
+    if (!coords_ || n <= 3 || !flatFan(n, idx, m)) return m;
+    int64_t best = -1;
+    for (int64_t k = 0; k < n; ++k)
+      if (k != m && (best < 0 || idx(k) < idx(best)) && !flatFan(n, idx, k)) best = k;
+    return best >= 0 ? best : m;
+  }
+  // Whether the fan of a face from its corner at place m has a triangle whose corners lie in a line
+  // (exactly: its normal's three components, the projected orientations, are zero).
+  template <class Index>
+  bool flatFan(int64_t n, Index idx, int64_t m) const {
+    const double* a = coords_ + 3 * size_t{idx(m)};
+    for (int64_t k = 1; k + 1 < n; ++k) {
+      const double* b = coords_ + 3 * size_t{idx((m + k) % n)};
+      const double* c = coords_ + 3 * size_t{idx((m + k + 1) % n)};
+      if (orient2dProjected(a, b, c, 0) == 0 && orient2dProjected(a, b, c, 1) == 0 &&
+          orient2dProjected(a, b, c, 2) == 0)
+        return true;
+    }
+    return false;
+  }
+  // Appends to *out the tetrahedra from `apex` to the fan of a face of n corners (global index
+  // idx(k), cyclic order) from the corner the face rule chooses: a quadrilateral is cut along its
+  // diagonal through that corner, a triangle stays whole.
+  template <class Index>
+  void fan(uint32_t apex, int64_t n, Index idx, std::vector<Tet>* out) const {
+    const int64_t m = fanCorner(n, idx);
     for (int64_t k = 1; k + 1 < n; ++k) out->push_back({apex, idx(m), idx((m + k) % n), idx((m + k + 1) % n)});
+  }
+  // fanCorner of a cell's face (local vertices f.v, global g).
+  int faceCorner(const Face& f, const uint32_t* g) const {
+    return static_cast<int>(fanCorner(f.n, [&](int64_t k) { return g[f.v[k]]; }));
   }
 
   // A polyhedron from its face stream `f` (checked): the cone from its smallest vertex over the fans
@@ -251,10 +276,10 @@ class Splitter {
 
   // True when the hexahedron's six face diagonals (by the smallest-index rule) are the edges of one
   // inscribed tetrahedron; *odd says which ({1,3,4,6} rather than {0,2,5,7}).
-  static bool fiveSplittable(const uint32_t* g, bool* odd) {
+  bool fiveSplittable(const uint32_t* g, bool* odd) const {
     int even_count = 0;
     for (const Face& f : kHexFaces) {
-      const int corner = f.v[minCorner(f, g)];
+      const int corner = f.v[faceCorner(f, g)];
       if (corner == 0 || corner == 2 || corner == 5 || corner == 7) ++even_count;
     }
     *odd = even_count == 0;
@@ -266,7 +291,7 @@ class Splitter {
     if (split == 5 && fiveSplittable(g, &odd)) {
       five_scratch_.clear();
       splitHexFive(g, odd, five_scratch_);
-      if (!coords_ || !mixedOrientation(five_scratch_)) {
+      if (!coords_ || (!mixedOrientation(five_scratch_) && !flatBeside(five_scratch_))) {
         for (const Tet& t : five_scratch_) emit(t, cell);
         ++hex_five_;
         return;
@@ -299,7 +324,8 @@ class Splitter {
                                          out->push_back({point, q[m], q[m + 1], q[m + 2]});
                                          out->push_back({point, q[m], q[m + 2], q[(m + 3) % 4]});
                                        }
-                                     });
+                                     },
+                                     [&](const std::vector<Tet>& t) { return !mixedOrientation(t); });
       if (!fixed) ++mixed_;
     }
     for (const Tet& t : scratch_) emit(t, cell);
@@ -316,6 +342,20 @@ class Splitter {
                                  "of the corners'): split between their vertices alone, some of their tetrahedra "
                                  "come out inverted");
     }
+    if (unflattened_ || steiner_flat_) {
+      report->steiner_points += steiner_flat_;
+      report->warnings.push_back(
+          std::to_string(unflattened_ + steiner_flat_) +
+          " cells with a straight angle in a face, or a vertex in the plane of a face, split so that none of their "
+          "tetrahedra is flat: " +
+          std::to_string(unflattened_) + " from another vertex than their smallest, " + std::to_string(steiner_flat_) +
+          " around a point added inside them (a Steiner point, the mean of their corners or of their kernel's "
+          "vertices; its point fields the mean of the corners')");
+    }
+    if (flat_kept_)
+      report->warnings.push_back(std::to_string(flat_kept_) +
+                                 " cells have flat tetrahedra however they are split (their points in a plane in "
+                                 "places); the flat tetrahedra are kept");
     if (mixed_)
       report->warnings.push_back(std::to_string(mixed_) +
                                  " cells that are not convex have inverted tetrahedra however they are split, even "
@@ -327,6 +367,9 @@ class Splitter {
   size_t resplit_ = 0;        // cells split from another vertex than their smallest (cone)
   size_t mixed_ = 0;          // cells whose every allowed cone mixes orientations, even from a Steiner point
   size_t steiner_cells_ = 0;  // cells split from an added point
+  size_t unflattened_ = 0;    // cells split from another vertex than their smallest, so that none is flat
+  size_t steiner_flat_ = 0;   // cells split from an added point, so that none is flat
+  size_t flat_kept_ = 0;      // cells with flat tetrahedra however they are split
   size_t hex_five_ = 0;
   size_t five_inverted_ = 0;  // hexahedra whose diagonals allow 5 tetrahedra, of which some come out inverted
 
@@ -340,21 +383,39 @@ class Splitter {
   // allowed(k): whether the face rule allows apex k; coneOf(k, out): its cone into *out;
   // corners(out): the cell's distinct corners, appended; coneFromPoint(p, out): the cone from
   // point p (a vertex of no face) over every face, into *out.
+  // A cone with a flat tetrahedron beside solid ones (and no mix) is treated alike: the first allowed
+  // apex whose cone has neither, else a Steiner point whose cone has neither, else it is kept (counted
+  // in flat_kept_). A mixed cone takes such a cone too when there is one, else as before the first
+  // cone with no mix, flat pieces allowed.
   template <class Allowed, class ConeOf, class Corners, class ConeFromPoint>
   void coneAvoidingMix(size_t n, Allowed allowed, ConeOf coneOf, Corners corners, ConeFromPoint coneFromPoint,
                        uint32_t cell) {
     coneOf(0, &scratch_);
-    if (coords_ && mixedOrientation(scratch_)) {
-      for (size_t k = 1; k < n; ++k) {
-        if (!allowed(k)) continue;
-        coneOf(k, &other_);
-        if (!mixedOrientation(other_)) {
-          scratch_.swap(other_);
-          ++resplit_;
-          break;
+    const bool mixed = coords_ && mixedOrientation(scratch_);
+    const bool flat = coords_ && !mixed && flatBeside(scratch_);
+    if (mixed || flat) {
+      auto clean = [&](const std::vector<Tet>& t) { return !mixedOrientation(t) && !flatBeside(t); };
+      auto unmixed = [&](const std::vector<Tet>& t) { return !mixedOrientation(t); };
+      bool fixed = false;
+      for (int pass = 0; pass < (mixed ? 2 : 1) && !fixed; ++pass) {
+        for (size_t k = 1; k < n && !fixed; ++k) {
+          if (!allowed(k)) continue;
+          coneOf(k, &other_);
+          if (pass == 0 ? clean(other_) : unmixed(other_)) {
+            scratch_.swap(other_);
+            ++(flat ? unflattened_ : resplit_);
+            fixed = true;
+          }
+        }
+        if (!fixed && steiner_) {
+          fixed = pass == 0 ? steinerCone(corners, coneFromPoint, clean) : steinerCone(corners, coneFromPoint, unmixed);
+          if (fixed && flat) {
+            --steiner_cells_;
+            ++steiner_flat_;
+          }
         }
       }
-      if (mixedOrientation(scratch_) && !(steiner_ && steinerCone(corners, coneFromPoint))) ++mixed_;
+      if (!fixed) ++(mixed ? mixed_ : flat_kept_);
     }
     for (const Tet& t : scratch_) emit(t, cell);
   }
@@ -363,8 +424,8 @@ class Splitter {
   // keeps the point; otherwise adds nothing and returns false. The point tried first is the mean of
   // the corners; then, in a cell that it does not see whole, the mean of the vertices of the cell's
   // kernel (the points that see every face triangle from inside), when there is one.
-  template <class Corners, class ConeFromPoint>
-  bool steinerCone(Corners corners, ConeFromPoint coneFromPoint) {
+  template <class Corners, class ConeFromPoint, class Accept>
+  bool steinerCone(Corners corners, ConeFromPoint coneFromPoint, Accept accept) {
     const size_t first_corner = steiner_->corners.size();
     corners(&steiner_->corners);
     std::sort(steiner_->corners.begin() + first_corner, steiner_->corners.end());
@@ -384,7 +445,7 @@ class Splitter {
       for (const double* candidate : {static_cast<const double*>(mean), static_cast<const double*>(kernel)}) {
         if (candidate == kernel && !kernelMean(other_, mean, kernel)) break;
         for (int d = 0; d < 3; ++d) at[d] = float32_ ? roundedToFloat32(candidate[d]) : candidate[d];
-        if (!mixedOrientation(other_)) {
+        if (accept(other_)) {
           scratch_.swap(other_);
           steiner_->corner_offsets.push_back(steiner_->corners.size());
           ++steiner_cells_;
@@ -455,7 +516,7 @@ class Splitter {
   // The cone from point `apex` over the faces without local vertex `skip` (the apex itself, or -1
   // for a point inside the cell), into *out.
   template <size_t N>
-  static void coneFrom(const Face (&faces)[N], const uint32_t* g, int skip, uint32_t apex, std::vector<Tet>* out) {
+  void coneFrom(const Face (&faces)[N], const uint32_t* g, int skip, uint32_t apex, std::vector<Tet>* out) const {
     out->clear();
     for (const Face& f : faces) {
       if (std::find(f.v, f.v + f.n, skip) != f.v + f.n) continue;
@@ -463,24 +524,24 @@ class Splitter {
           apex, f.n, [&](int64_t k) { return g[f.v[k]]; }, out);
     }
   }
-  // Whether the face rule (fan from the smallest corner, at place m) cuts a face of n corners
+  // Whether the face rule (fan from the corner at place m, fanCorner) cuts a face of n corners
   // through its corner at place `at`: a triangle always, a quadrilateral when `at` ends the diagonal
   // from m, a larger face when `at` is m.
   static bool cutThrough(int64_t n, int64_t at, int64_t m) {
     return n == 3 || at == m || (n == 4 && at == (m + 2) % 4);
   }
   // True when every face through local vertex v is cut through v by the face rule: a triangle, a
-  // quadrilateral whose diagonal (from its smallest corner) ends at v, or a larger face fanned from v.
+  // quadrilateral whose diagonal ends at v, or a larger face fanned from v.
   template <size_t N>
-  static bool allowedApex(const Face (&faces)[N], const uint32_t* g, int v) {
+  bool allowedApex(const Face (&faces)[N], const uint32_t* g, int v) const {
     for (const Face& f : faces) {
       const int at = static_cast<int>(std::find(f.v, f.v + f.n, v) - f.v);
-      if (at != f.n && !cutThrough(f.n, at, minCorner(f, g))) return false;
+      if (at != f.n && !cutThrough(f.n, at, faceCorner(f, g))) return false;
     }
     return true;
   }
   // The cone from vertex `apex` over the fans of the faces of face stream f without it, into *out.
-  static void polyhedronCone(const int64_t* f, uint32_t apex, std::vector<Tet>* out) {
+  void polyhedronCone(const int64_t* f, uint32_t apex, std::vector<Tet>* out) const {
     out->clear();
     for (int64_t k = 0, at = 1; k < f[0]; ++k, at += 1 + f[at]) {
       const int64_t n = f[at];
@@ -491,19 +552,33 @@ class Splitter {
     }
   }
   // allowedApex for a polyhedron: every face through `apex` is a triangle, a quadrilateral whose
-  // diagonal from its smallest corner ends at it, or a larger face whose smallest corner it is.
-  static bool allowedPolyhedronApex(const int64_t* f, uint32_t apex) {
+  // diagonal ends at it, or a larger face the face rule fans from it.
+  bool allowedPolyhedronApex(const int64_t* f, uint32_t apex) const {
     for (int64_t k = 0, at = 1; k < f[0]; ++k, at += 1 + f[at]) {
       const int64_t n = f[at];
       const int64_t* v = f + at + 1;
       const int64_t pos = std::find(v, v + n, int64_t{apex}) - v;
-      if (pos != n && !cutThrough(n, pos, std::min_element(v, v + n) - v)) return false;
+      if (pos != n && !cutThrough(n, pos, fanCorner(n, [&](int64_t i) { return static_cast<uint32_t>(v[i]); })))
+        return false;
     }
     return true;
   }
   // Point i: an input point, or a Steiner point added so far.
   const double* at(uint32_t i) const {
     return i < num_points_ ? coords_ + 3 * size_t{i} : steiner_->coords.data() + 3 * (i - num_points_);
+  }
+  // A flat tetrahedron (four distinct points in a plane) beside one that is not: a split that a
+  // straight angle in a face, or a vertex in the plane of a face it is coned to, made flat where
+  // another split need not be. (One that repeats a point is dropped, not flat.)
+  bool flatBeside(const std::vector<Tet>& tets) const {
+    bool flat = false, solid = false;
+    for (const Tet& t : tets) {
+      if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) continue;
+      const bool zero = orient3d(at(t[0]), at(t[1]), at(t[2]), at(t[3])) == 0;
+      flat |= zero;
+      solid |= !zero;
+    }
+    return flat && solid;
   }
   // Some tetrahedra positively oriented and some negatively (flat ones count as neither).
   bool mixedOrientation(const std::vector<Tet>& tets) const {

@@ -307,6 +307,80 @@ TEST(CellSplit, PolyhedraSplitFromTheirFacesAndConform) {
   }
 }
 
+// A straight angle in a face (three corners in a line: a pentagonal prism whose base has a point on
+// an edge, a cube whose faces carry the hanging nodes of a refined neighbour) would make the fan from
+// the face's smallest corner hold a flat triangle, and the cell's cone flat tetrahedra, overlapping
+// their neighbours'. The face is fanned from the first corner whose fan has none, alike from both
+// cells that share it, and the cell is coned from an apex or an added point that makes no flat
+// tetrahedron: the volumes add up, nothing is flat, and shared faces match (numbered at random).
+TEST(CellSplit, StraightAnglesInFacesMakeNoFlatTetrahedra) {
+  for (uint32_t seed = 0; seed < 12; ++seed) {
+    // Two pentagonal prisms, z in [0, 1], on either side of y = 0, each with (0.5, 0) on its base.
+    const std::array<double, 2> base[7] = {{0, 0}, {0.5, 0}, {1, 0}, {1, 1}, {0, 1}, {0, -1}, {1, -1}};
+    std::vector<std::array<double, 3>> pts;
+    for (int z = 0; z < 2; ++z)
+      for (const auto& b : base) pts.push_back({b[0], b[1], double(z)});
+    std::vector<uint32_t> perm;
+    const TetMesh mesh = shuffledPoints(pts, seed, &perm);
+    auto P = [&](int z, int i) { return static_cast<int64_t>(perm[7 * z + i]); };
+    VtkCells cells;
+    for (const std::array<int, 5>& ring : {std::array<int, 5>{0, 1, 2, 3, 4}, std::array<int, 5>{0, 5, 6, 2, 1}}) {
+      cells.types.push_back(kVtkPentagonalPrism);
+      for (int z = 0; z < 2; ++z)
+        for (int i : ring) cells.connectivity.push_back(P(z, i));
+      cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+    }
+    ImportResult r = splitInto(mesh, cells, 6);
+    const MeshStats s = computeMeshStats(r.mesh);
+    EXPECT_EQ(s.zero_volume, 0u) << seed;
+    EXPECT_EQ(s.inverted, 0u) << seed;
+    EXPECT_EQ(s.non_manifold_faces, 0u) << seed;
+    // Each prism: its two pentagons of 3 triangles and three free sides of 2.
+    EXPECT_EQ(s.boundary_faces, 2u * (6 + 6)) << seed;
+    EXPECT_NEAR(s.total_volume, 2.0, 1e-12) << seed;
+  }
+  for (uint32_t seed = 0; seed < 12; ++seed) {
+    // A unit cube as a polyhedron whose x = 1 face is four quadrilaterals (its centre and the middles
+    // of its edges, a refined neighbour's nodes), so that its four faces around it are pentagons.
+    std::vector<std::array<double, 3>> pts;
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) pts.push_back({double(i), double(j), double(k)});
+    for (const std::array<double, 3>& q :
+         std::vector<std::array<double, 3>>{{1, 0.5, 0}, {1, 1, 0.5}, {1, 0.5, 1}, {1, 0, 0.5}, {1, 0.5, 0.5}})
+      pts.push_back(q);
+    std::vector<uint32_t> perm;
+    const TetMesh mesh = shuffledPoints(pts, seed, &perm);
+    auto C = [&](int i, int j, int k) { return static_cast<int64_t>(perm[(k * 2 + j) * 2 + i]); };
+    auto M = [&](int i) { return static_cast<int64_t>(perm[8 + i]); };
+    const int64_t a = C(0, 0, 0), b = C(1, 0, 0), c = C(1, 1, 0), d = C(0, 1, 0);
+    const int64_t e = C(0, 0, 1), f = C(1, 0, 1), g = C(1, 1, 1), h = C(0, 1, 1);
+    const int64_t z0 = M(0), y1 = M(1), z1 = M(2), y0 = M(3), mid = M(4);
+    // Each face wound with its normal outward.
+    const std::vector<std::vector<int64_t>> faces = {{a, e, h, d},  // x = 0
+                                                     {b, z0, mid, y0}, {z0, c, y1, mid},
+                                                     {mid, y1, g, z1}, {y0, mid, z1, f},   // x = 1
+                                                     {a, d, c, z0, b}, {e, f, z1, g, h},   // z = 0, z = 1
+                                                     {a, b, y0, f, e}, {d, h, g, y1, c}};  // y = 0, y = 1
+    VtkCells cells;
+    cells.types = {kVtkPolyhedron};
+    cells.connectivity = {static_cast<int64_t>(faces.size())};
+    for (const auto& face : faces) {
+      cells.connectivity.push_back(static_cast<int64_t>(face.size()));
+      cells.connectivity.insert(cells.connectivity.end(), face.begin(), face.end());
+    }
+    cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+    ImportResult r = splitInto(mesh, cells, 6);
+    const MeshStats s = computeMeshStats(r.mesh);
+    EXPECT_EQ(s.zero_volume, 0u) << seed;
+    EXPECT_EQ(s.inverted, 0u) << seed;
+    EXPECT_EQ(s.non_manifold_faces, 0u) << seed;
+    // x = 0: 2 triangles; x = 1: 4 quadrilaterals of 2; four pentagons of 3.
+    EXPECT_EQ(s.boundary_faces, 2u + 8 + 12) << seed;
+    EXPECT_NEAR(s.total_volume, 1.0, 1e-12) << seed;
+  }
+}
+
 TEST(CellSplit, MalformedFaceStreamsAreRejected) {
   auto attempt = [](const std::vector<int64_t>& stream) {
     VtkCells cells;
