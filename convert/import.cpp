@@ -152,6 +152,20 @@ std::vector<uint32_t> weldIdentities(const TetMesh& mesh) {
 void weldPoints(TetMesh& mesh, ImportReport& report) {
   const size_t n = mesh.numPoints();
   const std::vector<uint32_t> rep = weldIdentities(mesh);
+  // A welded point whose values differ from those of the point it is merged into (a solver's values
+  // discontinuous across its pieces' seams) loses them: the first point's are kept. Said per field.
+  std::string differ;
+  for (const Field& f : mesh.point_fields) {
+    const size_t item = f.components * f.valueSize();
+    if (item == 0 || f.bytes.size() < n * item) continue;
+    size_t count = 0;
+    for (size_t p = 0; p < n; ++p)
+      count += rep[p] != p && std::memcmp(f.bytes.data() + p * item, f.bytes.data() + rep[p] * item, item) != 0;
+    if (count > 0) differ += (differ.empty() ? "" : ", ") + std::string("'") + f.name + "' at " + std::to_string(count);
+  }
+  if (!differ.empty())
+    report.warnings.push_back("--weld merged points whose values differ (" + differ +
+                              " of the welded points); each keeps the values of the first point at its position");
   std::vector<uint32_t> new_index(n);
   uint32_t kept = 0;
   for (size_t p = 0; p < n; ++p) {

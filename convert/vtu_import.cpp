@@ -21,6 +21,7 @@
 #include "convert/text_reader.h"
 #include "convert/vtk_common.h"
 #include "format/file_io.h"
+#include "mesh/index.h"
 
 namespace gtn {
 
@@ -118,13 +119,45 @@ void dropGhostArrays(TetMesh& mesh) {
         fields->end());
 }
 
+// In a piece of several, the points marked as copies of another piece's (vtkGhostType
+// DUPLICATEPOINT) that no tetrahedron left uses: the ghost cells' own points, which went with them.
+// Removed, with their values; returns how many.
+size_t dropGhostOnlyPoints(TetMesh& mesh) {
+  const size_t n = mesh.numPoints();
+  const uint8_t* marks = vtkGhostMarks(mesh.point_fields, n);
+  if (!marks) return 0;
+  std::vector<uint8_t> used(n, 0);
+  for (const Tet& t : mesh.tets)
+    for (uint32_t v : t) used[v] = 1;
+  std::vector<uint32_t> new_index(n, kNoIndex);
+  uint32_t kept = 0;
+  for (size_t p = 0; p < n; ++p) {
+    if (!used[p] && (marks[p] & kVtkDuplicatePoint)) continue;
+    if (kept != p) {
+      for (int a = 0; a < 3; ++a) mesh.coords[3 * size_t{kept} + a] = mesh.coords[3 * p + a];
+      for (Field& f : mesh.point_fields) f.copyItem(f, p, kept);
+    }
+    new_index[p] = kept++;
+  }
+  if (kept == n) return 0;
+  mesh.coords.resize(3 * size_t{kept});
+  for (Field& f : mesh.point_fields) f.bytes.resize(size_t{kept} * f.components * f.valueSize());
+  for (Tet& t : mesh.tets)
+    for (uint32_t& v : t) v = new_index[v];
+  return n - kept;
+}
+
 // What reading several unstructured pieces into one mesh did (a .pvtu's files, or the <Piece>s of one
 // .vtu): the ghost copies of other pieces' cells went, the points the pieces share stayed apart.
-void reportPieces(size_t pieces, size_t ghost_tets, ImportReport* report) {
+void reportPieces(size_t pieces, size_t ghost_tets, size_t ghost_points, bool weld, ImportReport* report) {
   if (ghost_tets > 0)
     report->warnings.push_back(std::to_string(ghost_tets) +
                                " tetrahedra of ghost cells (vtkGhostType duplicates of other pieces' cells) dropped");
-  if (pieces > 1)
+  if (ghost_points > 0)
+    report->warnings.push_back(
+        std::to_string(ghost_points) +
+        " points of ghost cells alone (vtkGhostType duplicates of other pieces' points) dropped");
+  if (pieces > 1 && !weld)
     report->warnings.push_back(std::to_string(pieces) +
                                " pieces read; the points they share are kept once per piece (--weld merges them)");
 }
@@ -1078,7 +1111,7 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
   const std::string dir = parentDirectory(path_);
   ImportResult all;
   bool float64 = false;
-  size_t ghosts = 0;
+  size_t ghosts = 0, ghost_points = 0;
   for (size_t k = 0; k < sources.size(); ++k) {
     const std::string piece_path = sources[k][0] == '/' ? sources[k] : dir + sources[k];
     auto pieceError = [&](const Status& st) {
@@ -1100,6 +1133,7 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
     // Ghost cells, copies of cells that other pieces own, were dropped by finishVtkImport: they are
     // kept once, by their owner.
     ghosts += reader.duplicate_tets_;
+    ghost_points += dropGhostOnlyPoints(m);
     dropGhostArrays(m);
     float64 |= m.coord_type == ScalarType::kFloat64;
     if (k == 0) {
@@ -1132,7 +1166,7 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
     for (const std::string& w : b.warnings) a.warnings.push_back(piece_path + ": " + w);
   }
   all.mesh.coord_type = float64 ? ScalarType::kFloat64 : ScalarType::kFloat32;
-  reportPieces(sources.size(), ghosts, &all.report);
+  reportPieces(sources.size(), ghosts, ghost_points, options.weld, &all.report);
   return all;
 }
 
@@ -1237,8 +1271,9 @@ StatusOr<ImportResult> VtuReader::readParsed(const pugi::xml_node& root, const I
   GTN_RETURN_IF_ERROR(finishVtkImport(path_, cells_, cell_fields_, options, &result_,
                                       in_parallel_ || several ? &duplicate_tets_ : nullptr));
   if (several) {
+    const size_t ghost_points = dropGhostOnlyPoints(result_.mesh);
     dropGhostArrays(result_.mesh);
-    reportPieces(pieces, duplicate_tets_, &result_.report);
+    reportPieces(pieces, duplicate_tets_, ghost_points, options.weld, &result_.report);
   } else if (!in_parallel_) {
     if (const uint8_t* marks = vtkGhostMarks(cell_fields_, cells_.types.size())) {
       size_t copies = 0;

@@ -33,31 +33,39 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
                       " mip level(s) asked for with no merge tree: mip levels are stored with the merge tree "
                       "they are checked against");
   if (!o.merge_tree) {
+    GtnLevelInput level0;
+    level0.mesh = &mesh;
     if (wo.verify) {
+      // Encoded first: a mesh the encoder cannot store (non-manifold faces, say) is refused for that,
+      // not offered --keep-invalid.
+      GTN_ASSIGN_OR_RETURN(PiecedLevel encoded, encodePieces(mesh, EncodeOptions{}, wo.piece_tets));
+      level0.encoded = std::make_shared<PiecedLevel>(std::move(encoded));
       LevelStructureCheck structure(mesh, path);
       GTN_RETURN_IF_ERROR(refuseOrWarnOfLevel0Errors(structure, o, source, warnings));
     }
-    GtnLevelInput level0;
-    level0.mesh = &mesh;
     return writeGtnFile(path, {level0}, wo);
   }
   reportProgress(wo.progress, "rank merges", 0.0);
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
   // Level 0 is encoded while the merges are ranked: on another thread where TBB has one, after the
-  // ranking where it has not. A level 0 that fails to encode is left to the writer, which fails on it
-  // before any mip level is made. Then, where mip levels will be checked, level 0's own errors (the
+  // ranking where it has not. A level 0 that fails to encode fails the conversion then, before its
+  // own errors are looked at (the encoder's refusal says why no option stores it). Then, where mip
+  // levels will be checked, level 0's own errors (the
   // ones a mip level may keep) are found, on another thread while the writer starts, after the ranking
   // (its face adjacency beside the ranking's star lists was the peak of a large convert's memory).
   LevelStructureCheck structure(mesh, path);
   std::shared_ptr<PiecedLevel> level0;
+  Status encoded = Status::ok();
   tbb::task_group encoding;
   encoding.run([&] {
     auto e = encodePieces(mesh, EncodeOptions{}, wo.piece_tets);
     if (e.isOk()) level0 = std::make_shared<PiecedLevel>(std::move(e).value());
+    else encoded = e.status();
   });
   RankingStats ranked;
   StatusOr<MergeTree> ranking = rankMerges(mesh, o.ranking, &ranked, wo.progress);
   encoding.wait();
+  GTN_RETURN_IF_ERROR(encoded);
   if (!ranking.isOk()) return ranking.status();
   // Waited for on every return from here (check() waits for it too, and `structure` must outlive it).
   tbb::task_group checking;

@@ -1251,6 +1251,33 @@ TEST(Vtu, ParallelFilesReadTheirPieces) {
   EXPECT_NEAR(ws.total_volume, 2.0, 1e-12);
   EXPECT_EQ(welded->mesh.cell_fields[0].bytes, r->mesh.cell_fields[0].bytes);
 
+  // Where the piece marks the ghost cube's points too (vtkGhostType DUPLICATEPOINT in its point
+  // data, as VTK writes a ghost level), those that no cell left uses go with the ghost cell.
+  {
+    std::string marked = piece(cube(0) + cube(1), 16, hex(0) + hex(8), 2, "0 1", "0 1", "Int32");
+    marked.insert(marked.find("<CellData>"),
+                  "<PointData><DataArray type=\"UInt8\" Name=\"vtkGhostType\" format=\"ascii\">0 1 0 1 0 1 0 1 "
+                  "1 1 1 1 1 1 1 1</DataArray></PointData>\n");
+    writeFile(dir + "/m_0.vtu", marked);
+    std::string text = pvtu;
+    text.replace(text.find("p_0.vtu"), 7, "m_0.vtu");
+    text.replace(text.find("SECOND"), 6, "p_1.vtu");
+    writeFile(dir + "/m.pvtu", text);
+    auto m = importMesh({dir + "/m.pvtu"}, ImportOptions{});
+    ASSERT_TRUE(m.isOk()) << m.status().message();
+    // The first cube's points at x = 1 are marked too (the second piece owns them) but its cell
+    // uses them: they stay.
+    EXPECT_EQ(m->mesh.numPoints(), 16u);
+    EXPECT_EQ(computeMeshStats(m->mesh).unreferenced_points, 0u);
+    EXPECT_NEAR(computeMeshStats(m->mesh).total_volume, 2.0, 1e-12);
+    for (const Field& f : m->mesh.point_fields) EXPECT_NE(f.name, "vtkGhostType");
+    const auto& mw = m->report.warnings;
+    EXPECT_TRUE(std::any_of(mw.begin(), mw.end(), [](const std::string& x) {
+      return x.find("8 points of ghost cells alone (vtkGhostType duplicates of other pieces' points) dropped") !=
+             std::string::npos;
+    })) << ::testing::PrintToString(mw);
+  }
+
   expectError(withSecond("missing.pvtu", "p_9.vtu"), "p_9.vtu");
   expectError(withSecond("types.pvtu", "p_1i16.vtu"), "its array 'id' (1 int16) does not match");
   expectError(withSecond("self.pvtu", "self.pvtu"), "a piece of a parallel file is itself a parallel file");
@@ -1384,6 +1411,63 @@ TEST(Vtu, WeldDropsCollapsedTetrahedraWithTheirCellValues) {
   // The third tetrahedron's corner 7 became point 4 (the first of the two), point values kept.
   EXPECT_EQ(r->mesh.point_fields[0].data<int32_t>()[4], 4);
   EXPECT_EQ(r->mesh.point_fields[0].data<int32_t>()[6], 6);
+}
+
+// --weld merges points at the same position whatever their values: where the pieces of a .pvtu give
+// a shared point other values (a field discontinuous across a seam), the first point's are kept, and
+// the import says so, per field, with the count; values that agree say nothing. Under --weld the
+// "kept once per piece" remark is not made.
+TEST(Vtu, WeldSaysWhenWeldedPointsHadOtherValues) {
+  const std::string dir = tempDir("vtu_weld_values");
+  auto piece = [](const std::string& points, const std::string& t, const std::string& id) {
+    return R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian"><UnstructuredGrid>
+<Piece NumberOfPoints="4" NumberOfCells="1">
+<PointData><DataArray type="Float64" Name="T" format="ascii">)" +
+           t + R"(</DataArray><DataArray type="Int32" Name="id" format="ascii">)" + id +
+           R"(</DataArray></PointData>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">)" +
+           points + R"(</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">4</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">10</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>
+)";
+  };
+  // Two tetrahedra on either side of the triangle (1,0,0), (0,1,0), (0,0,1).
+  writeFile(dir + "/a.vtu", piece("0 0 0 1 0 0 0 1 0 0 0 1", "1 2 3 4", "7 7 7 7"));
+  writeFile(dir + "/b.vtu", piece("1 1 1 1 0 0 0 0 1 0 1 0", "5 20 40 30", "7 7 7 7"));
+  writeFile(dir + "/d.pvtu", R"(<?xml version="1.0"?>
+<VTKFile type="PUnstructuredGrid" version="1.0" byte_order="LittleEndian"><PUnstructuredGrid GhostLevel="0">
+<PPointData><PDataArray type="Float64" Name="T"/><PDataArray type="Int32" Name="id"/></PPointData>
+<PPoints><PDataArray type="Float64" NumberOfComponents="3"/></PPoints>
+<Piece Source="a.vtu"/><Piece Source="b.vtu"/>
+</PUnstructuredGrid></VTKFile>
+)");
+  ImportOptions weld;
+  weld.weld = true;
+  auto r = importMesh({dir + "/d.pvtu"}, weld);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->report.welded_points, 3u);
+  EXPECT_EQ(r->mesh.numPoints(), 5u);
+  const auto& w = r->report.warnings;
+  auto said = [&](const std::string& text) {
+    return std::any_of(w.begin(), w.end(), [&](const std::string& m) { return m.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(said("--weld merged points whose values differ ('T' at 3 of the welded points)"))
+      << ::testing::PrintToString(w);
+  EXPECT_FALSE(said("'id'")) << ::testing::PrintToString(w);
+  EXPECT_FALSE(said("kept once per piece")) << ::testing::PrintToString(w);
+  // The first piece's values are the ones kept.
+  const Field* t = r->mesh.findPointField("T");
+  ASSERT_NE(t, nullptr);
+  std::vector<double> kept(t->data<double>(), t->data<double>() + 5);
+  std::sort(kept.begin(), kept.end());
+  EXPECT_EQ(kept, (std::vector<double>{1, 2, 3, 4, 5}));
+  auto plain = importMesh({dir + "/d.pvtu"}, ImportOptions{});
+  ASSERT_TRUE(plain.isOk());
+  EXPECT_TRUE(std::any_of(plain->report.warnings.begin(), plain->report.warnings.end(),
+                          [](const std::string& m) { return m.find("kept once per piece") != std::string::npos; }));
 }
 
 TEST(Vtu, MalformedFilesFailWithTheFileNamed) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <random>
 
@@ -101,6 +102,20 @@ TEST(ValidateFile, ConvertRefusesAMeshWithErrorsOfItsOwn) {
     const RunResult v = runGtn("validate " + dir + "/m.gtn");
     EXPECT_EQ(v.exit_code, 1) << v.out;
     EXPECT_NE(v.out.find("BOUNDARY_ORIENTATION"), std::string::npos) << v.out;
+  }
+  // Three tetrahedra on one face: a mesh the encoder cannot store at all is refused for that, with
+  // or without --keep-invalid, which is not offered.
+  writeFile(dir + "/n.node", "6 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0 0 -1\n6 0.2 0.2 0.5\n");
+  writeFile(dir + "/n.ele", "3 4 0\n1 1 2 3 4\n2 1 3 2 5\n3 1 2 3 6\n");
+  for (const char* extra : {"", " --keep-invalid", " --levels 0 --no-merge-tree", " --no-merge-tree --keep-invalid"}) {
+    SCOPED_TRACE(extra);
+    const RunResult n = runGtn("convert " + dir + "/n.node -o " + dir + "/n.gtn" + std::string(extra));
+    EXPECT_EQ(n.exit_code, 1) << n.err;
+    EXPECT_NE(n.err.find("n.node: cannot be encoded: 1 faces are shared by three or more tetrahedra"),
+              std::string::npos)
+        << n.err;
+    EXPECT_EQ(n.err.find("--keep-invalid"), std::string::npos) << n.err;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/n.gtn"));
   }
   const RunResult clean = runGtn("convert " + dataPath("vtk/spx.vtk") + " -o " + dir + "/spx.gtn");
   ASSERT_EQ(clean.exit_code, 0) << clean.err;
