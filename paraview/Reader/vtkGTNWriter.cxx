@@ -70,6 +70,7 @@ void vtkGTNWriter::PrintSelf(ostream& os, vtkIndent indent) {
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "Levels: " << this->Levels << "\n";
   os << indent << "MergeTree: " << this->MergeTree << "\n";
+  os << indent << "KeepInvalid: " << this->KeepInvalid << "\n";
   os << indent << "WriteInParts: " << this->WriteInParts << "\n";
   os << indent << "Piece: " << this->Piece << " of " << this->NumberOfPieces << "\n";
 }
@@ -255,6 +256,7 @@ void vtkGTNWriter::WriteData() {
     gtn::GtnConvertOptions options;
     options.levels = this->Levels;
     options.merge_tree = this->MergeTree;
+    options.keep_invalid = this->KeepInvalid;
     gtn::GtnWriteOptions wo;
     wo.tool_version = GTN_VERSION_STRING;
     wo.command_line = "vtkGTNWriter";

@@ -41,6 +41,11 @@ class VTKGTN_EXPORT vtkGTNWriter : public vtkWriter {
   vtkSetMacro(MergeTree, bool);
   vtkGetMacro(MergeTree, bool);
   vtkBooleanMacro(MergeTree, bool);
+  // Store a mesh with errors of its own that `gtn validate` reports (overlapping tetrahedra, say), with
+  // a warning, rather than refuse it (gtn convert --keep-invalid).
+  vtkSetMacro(KeepInvalid, bool);
+  vtkGetMacro(KeepInvalid, bool);
+  vtkBooleanMacro(KeepInvalid, bool);
   // Write level 0 alone, each rank of the global controller coding its own part (off: the serial
   // writer, levels and merge trees as asked).
   vtkSetMacro(WriteInParts, bool);
@@ -64,6 +69,7 @@ class VTKGTN_EXPORT vtkGTNWriter : public vtkWriter {
   char* FileName = nullptr;
   int Levels = -1;
   bool MergeTree = true;
+  bool KeepInvalid = false;
   bool WriteInParts = false;
   int Piece = 0;
   int NumberOfPieces = 1;

@@ -5,6 +5,7 @@ File > Save Data back to .gtn.
 Usage: xvfb-run -a pvbatch plugin_test.py GTN PLUGIN DATA_DIR TMP_DIR (GTN_DATA_DIR overrides DATA_DIR)"""
 import json
 import os
+import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -73,4 +74,22 @@ gtn(binary, "validate", out, "--against", src)
 check(True, "saved .gtn validates against the source")
 saved = json.loads(gtn(binary, "info", "--json", out))
 check((saved["points"], saved["tets"]) == (info["points"], info["tets"]), "saved .gtn has the source's counts")
+
+# A mesh with errors of its own (two overlapping tetrahedra) is refused, nothing written, unless
+# KeepInvalid stores it as it is (then `gtn validate` reports it).
+with open(os.path.join(tmp, "overlap.node"), "w") as f:
+    f.write("5 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0.1 0.1 0.1\n")
+with open(os.path.join(tmp, "overlap.ele"), "w") as f:
+    f.write("2 4 0\n1 1 2 3 4\n2 1 2 3 5\n")
+overlap_vtu = os.path.join(tmp, "overlap.vtu")
+gtn(binary, "convert", os.path.join(tmp, "overlap.node"), "-o", overlap_vtu)
+bad = OpenDataFile(overlap_vtu)
+refused = os.path.join(tmp, "refused.gtn")
+SaveData(refused, proxy=bad)
+check(not os.path.exists(refused), "the writer refuses a mesh with errors of its own")
+kept = os.path.join(tmp, "kept.gtn")
+SaveData(kept, proxy=bad, KeepInvalid=1)
+check(os.path.exists(kept), "KeepInvalid writes it")
+check(subprocess.run([binary, "validate", kept], capture_output=True).returncode == 1,
+      "gtn validate reports the kept mesh's errors")
 print("PASS")
