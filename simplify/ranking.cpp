@@ -201,12 +201,19 @@ struct StarFace {
 struct Workspace {
   explicit Workspace(size_t points) : mark(points, 0), target_index(points, 0) {}
 
+  // n stamps no mark holds yet, the first returned (mark is cleared when the count would wrap).
+  uint32_t freshStamps(uint32_t n) {
+    if (stamp > UINT32_MAX - n) {
+      std::fill(mark.begin(), mark.end(), 0);
+      stamp = 0;
+    }
+    const uint32_t first = stamp + 1;
+    stamp += n;
+    return first;
+  }
   // Deduplicates small vertex lists without sorting: mark[x] == stamp means x is already listed.
   void uniqueByMark(std::vector<uint32_t>& list) {
-    if (++stamp == 0) {
-      std::fill(mark.begin(), mark.end(), 0);
-      stamp = 1;
-    }
+    stamp = freshStamps(1);
     size_t n = 0;
     for (uint32_t x : list) {
       if (mark[x] == stamp) continue;
@@ -251,9 +258,9 @@ struct Lane {
     best = sorted = {};
     corners = corners_w = recompute = now = {};
     faces = faces_w = {};
-    tris_a = tris_b = {};
+    tris_a = tris_b = whole_a = whole_b = {};
     edges_a = edges_b = {};
-    verts_a = verts_b = lk_verts = {};
+    lk_verts = {};
   }
   CandidateHeap heap;
   // The corners (4 * tet + local index) of the vertices whose lists this pool holds: a vertex's list
@@ -278,9 +285,9 @@ struct Lane {
   // Scratch buffers of validate and merge.
   std::vector<uint32_t> corners, corners_w, recompute, now;
   std::vector<BoundaryFace> faces, faces_w;
-  std::vector<Tri> tris_a, tris_b;
+  std::vector<Tri> tris_a, tris_b, whole_a, whole_b;
   std::vector<Edge> edges_a, edges_b;
-  std::vector<uint32_t> verts_a, verts_b, lk_verts;
+  std::vector<uint32_t> lk_verts;
 };
 
 // The share of a part's vertices (those with no neighbour in another part) its first phase merges.
@@ -353,8 +360,10 @@ class Ranker {
                            Workspace& ws) const;
   void candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Workspace& ws);
   bool validate(Lane& L, uint32_t v, uint32_t w);
-  void linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces,
-              std::vector<Tri>& tris, std::vector<Edge>& edges, std::vector<uint32_t>& verts);
+  // The triangles of Lk(u) in the complex with the boundary coned to kOmega (each one's vertices
+  // ascending; a triangle twice only where the mesh is not a manifold).
+  void linkTriangles(const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces, bool boundary,
+                     std::vector<Tri>& tris) const;
   void merge(Lane& L, uint32_t v, uint32_t w, float error);
   // Evaluates the vertices of `list` again (distinct) and queues each one's best target.
   void recompute(Lane& L, const std::vector<uint32_t>& list);
@@ -782,8 +791,8 @@ void Ranker::candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Worksp
   }
 }
 
-void Ranker::linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces,
-                    std::vector<Tri>& tris, std::vector<Edge>& edges, std::vector<uint32_t>& verts) {
+void Ranker::linkTriangles(const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces, bool boundary,
+                           std::vector<Tri>& tris) const {
   tris.clear();
   for (uint32_t c : corners) {
     const uint32_t t = c >> 2;
@@ -794,21 +803,9 @@ void Ranker::linkOf(uint32_t u, const std::vector<uint32_t>& corners, const std:
     if (a > b) std::swap(a, b);
     tris.push_back(triKey(a, b, d));
   }
-  if (boundary_[u]) {
+  if (boundary) {
     for (const BoundaryFace& f : faces) tris.push_back(triKey(std::min(f.x, f.y), std::max(f.x, f.y), kOmega));
   }
-  sortUnique(tris);
-  edges.clear();
-  verts.clear();
-  for (const Tri& t : tris) {
-    const uint32_t a = static_cast<uint32_t>(t >> 64), b = static_cast<uint32_t>(t >> 32), c = static_cast<uint32_t>(t);
-    edges.push_back(edgeKey(a, b));
-    edges.push_back(edgeKey(a, c));
-    edges.push_back(edgeKey(b, c));
-    verts.insert(verts.end(), {a, b, c});
-  }
-  sortUnique(edges);
-  sortUnique(verts);
 }
 
 bool Ranker::validate(Lane& L, uint32_t v, uint32_t w) {
@@ -896,12 +893,54 @@ bool Ranker::validate(Lane& L, uint32_t v, uint32_t w) {
   sortUnique(L.lk_verts);
   const size_t lk_v = L.lk_verts.size() + (edge_faces > 0 ? 1 : 0);
   const size_t lk_e = edge_tets + edge_faces;
-  linkOf(v, L.corners, L.faces, L.tris_a, L.edges_a, L.verts_a);
-  linkOf(w, L.corners_w, L.faces_w, L.tris_b, L.edges_b, L.verts_b);
-  if (countCommon(L.tris_a, L.tris_b) != 0) return false;
-  if (countCommon(L.edges_a, L.edges_b) != lk_e) return false;
-  if (countCommon(L.verts_a, L.verts_b) != lk_v) return false;
-  return true;
+  linkTriangles(L.corners, L.faces, boundary_[v], L.tris_a);
+  linkTriangles(L.corners_w, L.faces_w, boundary_[w], L.tris_b);
+  // Common vertices first, by marks (Lk(v)'s at `s`, those Lk(w) has too at s + 1): a common edge or
+  // triangle has only common vertices, so the edges and triangles compared are those few, sorted.
+  Workspace& ws = *L.ws;
+  const uint32_t s = ws.freshStamps(2);
+  bool omega_v = false, omega_w = false;
+  auto corners3 = [](Tri t) {
+    return std::array<uint32_t, 3>{static_cast<uint32_t>(t >> 64), static_cast<uint32_t>(t >> 32),
+                                   static_cast<uint32_t>(t)};
+  };
+  for (Tri t : L.tris_a)
+    for (uint32_t x : corners3(t)) {
+      if (x == kOmega) omega_v = true;
+      else ws.mark[x] = s;
+    }
+  size_t common = 0;
+  for (Tri t : L.tris_b)
+    for (uint32_t x : corners3(t)) {
+      if (x == kOmega) {
+        omega_w = true;
+      } else if (ws.mark[x] == s) {
+        ws.mark[x] = s + 1;
+        ++common;
+      }
+    }
+  const bool omega = omega_v && omega_w;
+  if (common + (omega ? 1 : 0) != lk_v) return false;
+  auto shared = [&](uint32_t x) { return x == kOmega ? omega : ws.mark[x] == s + 1; };
+  // The edges and triangles of a link whose vertices are all common.
+  auto sharedParts = [&](const std::vector<Tri>& tris, std::vector<Edge>& edges, std::vector<Tri>& whole) {
+    edges.clear();
+    whole.clear();
+    for (Tri t : tris) {
+      const auto [a, b, c] = corners3(t);
+      const bool sa = shared(a), sb = shared(b), sc = shared(c);
+      if (sa && sb) edges.push_back(edgeKey(a, b));
+      if (sa && sc) edges.push_back(edgeKey(a, c));
+      if (sb && sc) edges.push_back(edgeKey(b, c));
+      if (sa && sb && sc) whole.push_back(t);
+    }
+    sortUnique(edges);
+    sortUnique(whole);
+  };
+  sharedParts(L.tris_a, L.edges_a, L.whole_a);
+  sharedParts(L.tris_b, L.edges_b, L.whole_b);
+  if (countCommon(L.whole_a, L.whole_b) != 0) return false;
+  return countCommon(L.edges_a, L.edges_b) == lk_e;
 }
 
 void Ranker::merge(Lane& L, uint32_t v, uint32_t w, float error) {
