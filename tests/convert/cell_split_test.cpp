@@ -307,6 +307,16 @@ TEST(CellSplit, PolyhedraSplitFromTheirFacesAndConform) {
   }
 }
 
+// No flat, inverted or non-manifold piece, the boundary triangles and the volume expected.
+void expectSolidSplit(const ImportResult& r, size_t boundary_faces, double volume, uint32_t seed) {
+  const MeshStats s = computeMeshStats(r.mesh);
+  EXPECT_EQ(s.zero_volume, 0u) << seed;
+  EXPECT_EQ(s.inverted, 0u) << seed;
+  EXPECT_EQ(s.non_manifold_faces, 0u) << seed;
+  EXPECT_EQ(s.boundary_faces, boundary_faces) << seed;
+  EXPECT_NEAR(s.total_volume, volume, 1e-12) << seed;
+}
+
 // A straight angle in a face (three corners in a line: a pentagonal prism whose base has a point on
 // an edge, a cube whose faces carry the hanging nodes of a refined neighbour) would make the fan from
 // the face's smallest corner hold a flat triangle, and the cell's cone flat tetrahedra, overlapping
@@ -330,14 +340,8 @@ TEST(CellSplit, StraightAnglesInFacesMakeNoFlatTetrahedra) {
         for (int i : ring) cells.connectivity.push_back(P(z, i));
       cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
     }
-    ImportResult r = splitInto(mesh, cells, 6);
-    const MeshStats s = computeMeshStats(r.mesh);
-    EXPECT_EQ(s.zero_volume, 0u) << seed;
-    EXPECT_EQ(s.inverted, 0u) << seed;
-    EXPECT_EQ(s.non_manifold_faces, 0u) << seed;
     // Each prism: its two pentagons of 3 triangles and three free sides of 2.
-    EXPECT_EQ(s.boundary_faces, 2u * (6 + 6)) << seed;
-    EXPECT_NEAR(s.total_volume, 2.0, 1e-12) << seed;
+    expectSolidSplit(splitInto(mesh, cells, 6), 2u * (6 + 6), 2.0, seed);
   }
   for (uint32_t seed = 0; seed < 12; ++seed) {
     // A unit cube as a polyhedron whose x = 1 face is four quadrilaterals (its centre and the middles
@@ -370,14 +374,8 @@ TEST(CellSplit, StraightAnglesInFacesMakeNoFlatTetrahedra) {
       cells.connectivity.insert(cells.connectivity.end(), face.begin(), face.end());
     }
     cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
-    ImportResult r = splitInto(mesh, cells, 6);
-    const MeshStats s = computeMeshStats(r.mesh);
-    EXPECT_EQ(s.zero_volume, 0u) << seed;
-    EXPECT_EQ(s.inverted, 0u) << seed;
-    EXPECT_EQ(s.non_manifold_faces, 0u) << seed;
     // x = 0: 2 triangles; x = 1: 4 quadrilaterals of 2; four pentagons of 3.
-    EXPECT_EQ(s.boundary_faces, 2u + 8 + 12) << seed;
-    EXPECT_NEAR(s.total_volume, 1.0, 1e-12) << seed;
+    expectSolidSplit(splitInto(mesh, cells, 6), 2u + 8 + 12, 1.0, seed);
   }
 }
 
