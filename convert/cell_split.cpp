@@ -354,8 +354,8 @@ class Splitter {
     }
     if (flat_kept_)
       report->warnings.push_back(std::to_string(flat_kept_) +
-                                 " cells have flat tetrahedra however they are split (their points in a plane in "
-                                 "places); the flat tetrahedra are kept");
+                                 " cells have flat tetrahedra however they are split (some of their corners coincide, "
+                                 "or lie in a line or a plane); the flat tetrahedra are kept");
     if (mixed_)
       report->warnings.push_back(std::to_string(mixed_) +
                                  " cells that are not convex have inverted tetrahedra however they are split, even "
