@@ -377,6 +377,32 @@ TEST(CellSplit, StraightAnglesInFacesMakeNoFlatTetrahedra) {
     // x = 0: 2 triangles; x = 1: 4 quadrilaterals of 2; four pentagons of 3.
     expectSolidSplit(splitInto(mesh, cells, 6), 2u + 8 + 12, 1.0, seed);
   }
+  // A hexahedron whose x = 0 face is collapsed onto a segment by its coordinates (distinct indices: a
+  // wedge written as a hexahedron, as at the axis of an O-grid) has flat pieces however it is split:
+  // it is split as before, with no point added, and said to be.
+  for (uint32_t seed = 0; seed < 6; ++seed) {
+    std::vector<std::array<double, 3>> pts;
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) pts.push_back({double(i), i == 0 ? 0.0 : double(j), double(k)});
+    std::vector<uint32_t> perm;
+    const TetMesh mesh = shuffledPoints(pts, seed, &perm);
+    auto C = [&](int i, int j, int k) { return static_cast<int64_t>(perm[(k * 2 + j) * 2 + i]); };
+    VtkCells cells;
+    cells.types = {kVtkHexahedron};
+    cells.connectivity = {C(0, 0, 0), C(1, 0, 0), C(1, 1, 0), C(0, 1, 0),
+                          C(0, 0, 1), C(1, 0, 1), C(1, 1, 1), C(0, 1, 1)};
+    cells.offsets.push_back(8);
+    const ImportResult r = splitInto(mesh, cells, 6);
+    EXPECT_EQ(r.mesh.numPoints(), 8u) << seed;
+    EXPECT_EQ(r.report.steiner_points, 0u) << seed;
+    EXPECT_EQ(r.mesh.numTets(), 6u) << seed;
+    EXPECT_NEAR(computeMeshStats(r.mesh).total_volume, 0.5, 1e-12) << seed;
+    const auto& w = r.report.warnings;
+    EXPECT_TRUE(std::any_of(w.begin(), w.end(), [](const std::string& m) {
+      return m.find("1 cells have flat tetrahedra however they are split") != std::string::npos;
+    })) << seed;
+  }
 }
 
 TEST(CellSplit, MalformedFaceStreamsAreRejected) {
