@@ -144,17 +144,22 @@ Command addDecodeCommand(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "decode", "Decode a .gtn file into memory as export does, write nothing, report counts and time");
   sub->add_option("input", args->input, "Input .gtn file ('-' for standard input)")->required();
-  CLI::Option* level = sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)");
+  CLI::Option* level = sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)")
+                           ->check(finiteAtLeastZero());
   CLI::Option* ratio = sub->add_option("--ratio", args->ratio,
                                        "Simplification ratio: vertices merged away / vertices of level 0 (0 to 1)")
-                           ->check(CLI::Range(0.0, 1.0));
+                           ->check(ratioFromZeroToOne());
   level->excludes(ratio);
   sub->add_option("--fields", args->fields,
                   "Decode only these point or cell fields (names, comma-separated); the others are not decoded")
       ->delimiter(',');
-  CLI::Option* box = sub->add_option("--box", args->box,
-                                     "Decode only the pieces of the level whose bounding boxes meet this box, given as "
-                                     "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (the view is those pieces' tetrahedra)");
+  CLI::Option* box =
+      sub->add_option("--box", args->box,
+                      "Decode only the pieces of the level whose bounding boxes meet this box, given as "
+                      "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (the view is those pieces' tetrahedra)")
+          ->check(CLI::Validator(
+              [](std::string& text) -> std::string { return text.empty() ? "an empty box: 6 numbers are needed" : ""; },
+              "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX"));
   box->excludes(ratio);
   sub->add_flag("--json", args->json, "Print one JSON object on standard output");
   return {sub, [args] { return runDecode(*args); }};

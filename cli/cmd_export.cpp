@@ -80,10 +80,11 @@ Command addExportCommand(CLI::App& app) {
   sub->add_option("input", args->input, "Input .gtn file ('-' for standard input)")->required();
   sub->add_option("-o,--output", args->output, "Output file: .vtu (VTK XML), .vtk (legacy VTK) or .node/.ele (TetGen)")
       ->required();
-  CLI::Option* level = sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)");
+  CLI::Option* level = sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)")
+                           ->check(finiteAtLeastZero());
   CLI::Option* ratio = sub->add_option("--ratio", args->ratio,
                                        "Simplification ratio: vertices merged away / vertices of level 0 (0 to 1)")
-                           ->check(CLI::Range(0.0, 1.0));
+                           ->check(ratioFromZeroToOne());
   CLI::Option* merges = sub->add_option("--merges", args->merges, "Number of merges of the merge tree to apply")
                             ->check(finiteAtLeastZero());
   level->excludes(ratio)->excludes(merges);
@@ -92,9 +93,13 @@ Command addExportCommand(CLI::App& app) {
   sub->add_option("--fields", args->fields,
                   "Export only these point or cell fields (names, comma-separated); the others are not decoded")
       ->delimiter(',');
-  CLI::Option* box = sub->add_option("--box", args->box,
-                                     "Decode only the pieces of the level whose bounding boxes meet this box, given as "
-                                     "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (the view is those pieces' tetrahedra)");
+  CLI::Option* box =
+      sub->add_option("--box", args->box,
+                      "Decode only the pieces of the level whose bounding boxes meet this box, given as "
+                      "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (the view is those pieces' tetrahedra)")
+          ->check(CLI::Validator(
+              [](std::string& text) -> std::string { return text.empty() ? "an empty box: 6 numbers are needed" : ""; },
+              "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX"));
   box->excludes(ratio)->excludes(merges);
   return {sub, [args] { return runExport(*args); }};
 }

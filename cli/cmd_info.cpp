@@ -41,8 +41,10 @@ void printText(const std::string& name, const MeshStats& s, const ImportReport& 
               s.bbox_min[1], s.bbox_max[1], s.bbox_min[2], s.bbox_max[2]);
   std::printf("  volume              min %.6g, max %.6g, total %.9g\n", s.min_volume, s.max_volume, s.total_volume);
   for (const FieldStats& f : s.fields) {
-    std::printf("  %s field %-12s %u x %s, range [%.9g, %.9g]%s\n", f.per_cell ? "cell " : "point", f.name.c_str(),
-                f.components, scalarTypeName(f.type), f.min, f.max,
+    char range[80] = "no finite value";
+    if (f.has_range) std::snprintf(range, sizeof range, "range [%.9g, %.9g]", f.min, f.max);
+    std::printf("  %s field %-12s %u x %s, %s%s\n", f.per_cell ? "cell " : "point", f.name.c_str(), f.components,
+                scalarTypeName(f.type), range,
                 f.non_finite ? (", " + std::to_string(f.non_finite) + " non-finite").c_str() : "");
   }
   for (const auto& [k, v] : mesh.metadata) std::printf("  metadata %s = %s\n", k.c_str(), v.c_str());

@@ -43,6 +43,19 @@ inline CLI::Validator finiteAtLeastZero(bool positive = false) {
       positive ? "NUMBER > 0" : "NUMBER >= 0");
 }
 
+// A simplification ratio: a finite number from 0 to 1 (CLI11's Range lets NaN through).
+inline CLI::Validator ratioFromZeroToOne() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !(v >= 0 && v <= 1))
+          return "'" + text + "' is not a number from 0 to 1";
+        return "";
+      },
+      "0..1");
+}
+
 // Prints "gtn: error: <message>" on standard error and returns the exit code for the status.
 int reportError(const Status& status);
 // Prints a warning line on standard error.

@@ -11,6 +11,7 @@
 #include "convert/export.h"
 #include "convert/vtk_common.h"
 #include "format/file_io.h"
+#include "mesh/utf8.h"
 
 namespace gtn {
 
@@ -18,9 +19,14 @@ namespace {
 
 constexpr size_t kBlockSize = 32 * 1024;
 
-std::string xmlEscape(const std::string& s) {
+// A name as XML 1.0 allows it in an attribute: UTF-8 (bytes that are not are read as Latin-1, as
+// toUtf8 does), markup escaped, tabs and line breaks as character references, and the other control
+// characters, which no XML 1.0 document may hold even as references, as %XX (VTK's legacy encoding).
+std::string xmlEscape(const std::string& name) {
+  const std::string s = toUtf8(name);
   std::string out;
   for (char c : s) {
+    const unsigned char u = static_cast<unsigned char>(c);
     switch (c) {
       case '&': out += "&amp;"; break;
       case '<': out += "&lt;"; break;
@@ -30,7 +36,14 @@ std::string xmlEscape(const std::string& s) {
       case '\t': out += "&#9;"; break;
       case '\n': out += "&#10;"; break;
       case '\r': out += "&#13;"; break;
-      default: out += c;
+      default:
+        if (u < 0x20) {
+          char buf[4];
+          std::snprintf(buf, sizeof buf, "%%%02X", u);
+          out += buf;
+        } else {
+          out += c;
+        }
     }
   }
   return out;

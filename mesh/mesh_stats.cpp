@@ -31,6 +31,7 @@ FieldStats fieldStats(const Field& f, bool per_cell) {
     }
   }
   if (lo <= hi) {
+    s.has_range = true;
     s.min = lo;
     s.max = hi;
   }

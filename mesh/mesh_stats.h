@@ -14,7 +14,8 @@ struct FieldStats {
   uint32_t components = 1;
   ScalarType type = ScalarType::kFloat32;
   bool per_cell = false;
-  double min = 0, max = 0;  // over all finite component values
+  bool has_range = false;   // some component value is finite
+  double min = 0, max = 0;  // over all finite component values (0 when none is)
   uint64_t non_finite = 0;  // NaN or infinite values
 };
 

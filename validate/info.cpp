@@ -178,8 +178,8 @@ nlohmann::json meshInfoJson(const MeshStats& s, const ImportReport& r, const Tet
                       {"components", f.components},
                       {"type", scalarTypeName(f.type)},
                       {"location", f.per_cell ? "cell" : "point"},
-                      {"min", f.min},
-                      {"max", f.max},
+                      {"min", f.has_range ? nlohmann::json(f.min) : nlohmann::json(nullptr)},
+                      {"max", f.has_range ? nlohmann::json(f.max) : nlohmann::json(nullptr)},
                       {"non_finite", f.non_finite}});
   }
   j["fields"] = fields;

@@ -177,5 +177,26 @@ TEST_F(DecodeCli, BadInput) {
   EXPECT_NE(rd.err.find("gtn: error: " + damaged + ": byte offset "), std::string::npos) << rd.err;
 }
 
+// A field with no finite value (all NaN, all infinite) has no range: `gtn info` says so, and its
+// JSON gives null for min and max, not a range of [0, 0] that no value has.
+TEST_F(DecodeCli, AFieldWithNoFiniteValueHasNoRange) {
+  const std::string vtk = dir_ + "/nan.vtk";
+  test::writeFile(
+      vtk,
+      "# vtk DataFile Version 4.2\nnan\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n0 0 0 1 0 0 0 1 0 "
+      "0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS allnan double 1\n"
+      "LOOKUP_TABLE default\nnan nan nan nan\nSCALARS some double 1\nLOOKUP_TABLE default\n1 nan 3 inf\n");
+  const test::RunResult text = test::runGtn("info " + vtk);
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("allnan       1 x float64, no finite value, 4 non-finite"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("some         1 x float64, range [1, 3], 2 non-finite"), std::string::npos) << text.out;
+  const json info = runJson("info " + vtk + " --json");
+  ASSERT_EQ(info["fields"].size(), 2u);
+  EXPECT_TRUE(info["fields"][0]["min"].is_null());
+  EXPECT_TRUE(info["fields"][0]["max"].is_null());
+  EXPECT_EQ(info["fields"][1]["min"].get<double>(), 1.0);
+  EXPECT_EQ(info["fields"][1]["max"].get<double>(), 3.0);
+}
+
 }  // namespace
 }  // namespace gtn

@@ -336,6 +336,18 @@ TEST(GtnPiecesFile, ExportBoxReturnsThePiecesMeetingTheBox) {
   }
   run = runGtn("export " + path + " --box=0,0,0,1,1,1 --ratio 0.5 -o " + dir + "/bad.vtu");
   EXPECT_NE(run.exit_code, 0);
+  // An empty box, a ratio that is not a number and a negative level are usage errors (exit 2), for
+  // export and decode alike, naming the option; none is taken for the whole level 0.
+  for (const std::string& bad :
+       {std::string("--box="), std::string("--ratio nan"), std::string("--ratio -nan"), std::string("--level -1")}) {
+    for (const std::string& command : {"export " + path + " -o " + dir + "/bad.vtu ", "decode " + path + " "}) {
+      run = runGtn(command + bad);
+      EXPECT_EQ(run.exit_code, 2) << command << bad << ": " << run.err;
+      EXPECT_NE(run.err.find(bad.substr(0, bad.find_first_of("= "))), std::string::npos) << run.err;
+      EXPECT_EQ(run.err.find("18446744073709551615"), std::string::npos) << run.err;
+      EXPECT_FALSE(fileExists(dir + "/bad.vtu"));
+    }
+  }
 }
 
 // gtn decode of a level of several pieces decodes them straight into one mesh: the counts and fields
