@@ -153,13 +153,7 @@ Command addDecodeCommand(CLI::App& app) {
   sub->add_option("--fields", args->fields,
                   "Decode only these point or cell fields (names, comma-separated); the others are not decoded")
       ->delimiter(',');
-  CLI::Option* box =
-      sub->add_option("--box", args->box,
-                      "Decode only the pieces of the level whose bounding boxes meet this box, given as "
-                      "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (the view is those pieces' tetrahedra)")
-          ->check(CLI::Validator(
-              [](std::string& text) -> std::string { return text.empty() ? "an empty box: 6 numbers are needed" : ""; },
-              "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX"));
+  CLI::Option* box = addBoxOption(sub, &args->box);
   box->excludes(ratio);
   sub->add_flag("--json", args->json, "Print one JSON object on standard output");
   return {sub, [args] { return runDecode(*args); }};

@@ -93,13 +93,7 @@ Command addExportCommand(CLI::App& app) {
   sub->add_option("--fields", args->fields,
                   "Export only these point or cell fields (names, comma-separated); the others are not decoded")
       ->delimiter(',');
-  CLI::Option* box =
-      sub->add_option("--box", args->box,
-                      "Decode only the pieces of the level whose bounding boxes meet this box, given as "
-                      "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (the view is those pieces' tetrahedra)")
-          ->check(CLI::Validator(
-              [](std::string& text) -> std::string { return text.empty() ? "an empty box: 6 numbers are needed" : ""; },
-              "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX"));
+  CLI::Option* box = addBoxOption(sub, &args->box);
   box->excludes(ratio)->excludes(merges);
   return {sub, [args] { return runExport(*args); }};
 }

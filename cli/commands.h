@@ -56,6 +56,18 @@ inline CLI::Validator ratioFromZeroToOne() {
       "0..1");
 }
 
+// --box XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX of export and decode into *box (parsed by level_view.h's
+// parseBox; an empty one is refused here, since it would read as no box).
+inline CLI::Option* addBoxOption(CLI::App* sub, std::string* box) {
+  return sub
+      ->add_option("--box", *box,
+                   "Decode only the pieces of the level whose bounding boxes meet this box, given as "
+                   "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (the view is those pieces' tetrahedra)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string { return text.empty() ? "an empty box: 6 numbers are needed" : ""; },
+          "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX"));
+}
+
 // Prints "gtn: error: <message>" on standard error and returns the exit code for the status.
 int reportError(const Status& status);
 // Prints a warning line on standard error.
