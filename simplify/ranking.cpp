@@ -213,7 +213,7 @@ struct Workspace {
   }
   // Deduplicates small vertex lists without sorting: mark[x] == stamp means x is already listed.
   void uniqueByMark(std::vector<uint32_t>& list) {
-    stamp = freshStamps(1);
+    freshStamps(1);
     size_t n = 0;
     for (uint32_t x : list) {
       if (mark[x] == stamp) continue;
@@ -326,15 +326,15 @@ class Ranker {
   void partition(uint32_t parts);
   // seam_: the vertices of the live tetrahedra whose vertices lie in more than one part of part_.
   void markSeams();
-  // Fills a lane's pool with its members' lists (every vertex's when it has none): from the
-  // tetrahedra, or from the previous lanes' pools (`from`, the parts they were for, and where each
-  // vertex's run began there), after dropDeadCorners.
-  void buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from = nullptr,
-                 const std::vector<uint8_t>* from_part = nullptr, const std::vector<uint64_t>* from_begin = nullptr);
+  // Fills a lane's pool with its members' lists (every vertex's when it has none) from the previous
+  // lanes' pools (`from`, the parts they were for, and where each vertex's run began there), after
+  // dropDeadCorners.
+  void buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>& from, const std::vector<uint8_t>& from_part,
+                 const std::vector<uint64_t>& from_begin);
   // Fills the pools of `lanes` (the lanes of the parts of `part`; without `part`, one lane of every
   // vertex) with their members' lists, each vertex's live corners in ascending order, in one pass
   // over the tetrahedra.
-  void buildPoolsFromTets(std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>* part);
+  void buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vector<uint8_t>* part);
   // Drops the corners of collapsed tetrahedra from every vertex's run in `lanes`, the lanes of `part`.
   void dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>& part);
   // Evaluates the lane's vertices and merges until its queue is empty or its limit is reached.
@@ -502,42 +502,25 @@ void Ranker::dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, co
     star_len_[v] = keepLive(lanes[part[v]]->pool.data() + star_begin_[v], star_len_[v]);
 }
 
-void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>* from, const std::vector<uint8_t>* from_part,
-                       const std::vector<uint64_t>* from_begin) {
-  const size_t np = mesh_.numPoints();
-  // Each listed vertex's run at its place in the pool, in vertex order.
+void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>& from, const std::vector<uint8_t>& from_part,
+                       const std::vector<uint64_t>& from_begin) {
+  // Each listed vertex's run at its place in the pool, in vertex order: its live corners, in order.
   uint64_t total = 0;
   forMembers(L, [&](uint32_t v) {
     star_begin_[v] = total;
-    total += from ? star_len_[v] : star_size_[v];
+    total += star_len_[v];
   });
   L.pool.assign(total + std::max<uint64_t>(total / 4, kMinStarSlack), 0);
   L.peak = L.pool.size();
   L.used = total;
-  if (from) {
-    // From the previous lanes' pools (dropDeadCorners first): each vertex's live corners, in order.
-    forMembers(L, [&](uint32_t v) {
-      const Lane& src = *(*from)[(*from_part)[v]];
-      std::copy_n(src.pool.data() + (*from_begin)[v], star_len_[v], L.pool.data() + star_begin_[v]);
-    });
-    return;
-  }
-  // From the tetrahedra: every listed vertex's corners in ascending order.
-  std::vector<uint8_t> mine;
-  if (!L.members.empty()) {
-    mine.assign(np, 0);
-    for (uint32_t v : L.members) mine[v] = 1;
-  }
-  forMembers(L, [&](uint32_t v) { star_len_[v] = 0; });
-  for (size_t t = 0; t < tets_.size(); ++t)
-    for (int k = 0; k < 4; ++k) {
-      const uint32_t v = tets_[t][k];
-      if (mine.empty() || mine[v]) L.pool[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
-    }
+  forMembers(L, [&](uint32_t v) {
+    const Lane& src = *from[from_part[v]];
+    std::copy_n(src.pool.data() + from_begin[v], star_len_[v], L.pool.data() + star_begin_[v]);
+  });
 }
 
-void Ranker::buildPoolsFromTets(std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>* part) {
-  for (auto& L : lanes) {
+void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vector<uint8_t>* part) {
+  for (Lane* L : lanes) {
     uint64_t total = 0;
     forMembers(*L, [&](uint32_t v) {
       star_begin_[v] = total;
@@ -1082,13 +1065,15 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     }
     for (uint32_t v = 0; v < np; ++v)
       if (alive_[v]) next_lanes[part_[v]]->members.push_back(v);
+    std::vector<Lane*> built;
     for (auto& L : next_lanes) {
       uint64_t free = 0;
       for (uint32_t v : L->members) free += !seam_[v];
       L->limit = static_cast<uint64_t>(kPartShare * static_cast<double>(free));
-      if (lanes.empty()) buildPool(*L);
-      else buildPool(*L, &lanes, &lane_part, &lane_begin);
+      if (!lanes.empty()) buildPool(*L, lanes, lane_part, lane_begin);
+      built.push_back(L.get());
     }
+    if (lanes.empty()) buildPoolsFromTets(built, &part_);
     lanes = std::move(next_lanes);
     tbb::this_task_arena::isolate([&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, round_parts, 1), [&](const tbb::blocked_range<size_t>& r) {
@@ -1119,10 +1104,10 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   const uint64_t part_merges = order.size();
   Lane whole(np);
   if (lanes.empty()) {
-    buildPool(whole);
+    buildPoolsFromTets({&whole}, nullptr);
   } else {
     leaveLanes();
-    buildPool(whole, &lanes, &lane_part, &lane_begin);
+    buildPool(whole, lanes, lane_part, lane_begin);
     lanes.clear();
     part_ = seam_ = lane_part = {};
     lane_begin = {};
@@ -1437,7 +1422,9 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     for (uint32_t v = 0; v < np; ++v)
       if (alive_[v]) lanes[part_[v]]->members.push_back(v);
     for (uint64_t i = 0; i < rr.merges; ++i, ++next) lane_merges[part_[by_rank[next]]].push_back(by_rank[next]);
-    buildPoolsFromTets(lanes, &part_);
+    std::vector<Lane*> built;
+    for (auto& L : lanes) built.push_back(L.get());
+    buildPoolsFromTets(built, &part_);
     std::fill(stamp.begin(), stamp.end(), 0);
     std::vector<std::vector<std::vector<Made>>> lane_batches(rr.parts);
     std::vector<BatchStats> lane_stats(rr.parts);
@@ -1456,14 +1443,14 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
   // The merges after the rounds, on the whole mesh.
   lanes.clear();
   part_ = seam_ = {};
-  lanes.push_back(std::make_unique<Lane>(0));
-  buildPoolsFromTets(lanes, nullptr);
+  Lane whole(0);
+  buildPoolsFromTets({&whole}, nullptr);
   std::fill(stamp.begin(), stamp.end(), 0);
   {
     std::vector<std::vector<std::vector<Made>>> whole_batches(1);
     BatchStats s;
     const std::vector<uint32_t> rest(by_rank.begin() + static_cast<std::ptrdiff_t>(next), by_rank.end());
-    batchLane(*lanes[0], rest, unmerged, all_clean, whole_batches[0], s);
+    batchLane(whole, rest, unmerged, all_clean, whole_batches[0], s);
     add(st, s);
     appendBatches(whole_batches);
   }
