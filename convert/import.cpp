@@ -12,6 +12,7 @@
 #include "codec/grid_coder.h"
 #include "format/file_io.h"
 #include "format/gtn_reader.h"
+#include "mesh/index.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/utf8.h"
 
@@ -149,6 +150,23 @@ std::vector<uint32_t> weldIdentities(const TetMesh& mesh) {
   return rep;
 }
 
+std::vector<uint32_t> keepPoints(TetMesh& mesh, const std::vector<uint8_t>& keep) {
+  const size_t n = mesh.numPoints();
+  std::vector<uint32_t> new_index(n, kNoIndex);
+  uint32_t kept = 0;
+  for (size_t p = 0; p < n; ++p) {
+    if (!keep[p]) continue;
+    if (kept != p) {
+      for (int a = 0; a < 3; ++a) mesh.coords[3 * size_t{kept} + a] = mesh.coords[3 * p + a];
+      for (Field& f : mesh.point_fields) f.copyItem(f, p, kept);
+    }
+    new_index[p] = kept++;
+  }
+  mesh.coords.resize(3 * size_t{kept});
+  for (Field& f : mesh.point_fields) f.bytes.resize(size_t{kept} * f.components * f.valueSize());
+  return new_index;
+}
+
 void weldPoints(TetMesh& mesh, ImportReport& report) {
   const size_t n = mesh.numPoints();
   const std::vector<uint32_t> rep = weldIdentities(mesh);
@@ -166,18 +184,10 @@ void weldPoints(TetMesh& mesh, ImportReport& report) {
   if (!differ.empty())
     report.warnings.push_back("--weld merged points whose values differ (" + differ +
                               " of the welded points); each keeps the values of the first point at its position");
-  std::vector<uint32_t> new_index(n);
-  uint32_t kept = 0;
-  for (size_t p = 0; p < n; ++p) {
-    if (rep[p] == p) {
-      new_index[p] = kept;
-      if (kept != p) {
-        for (int a = 0; a < 3; ++a) mesh.coords[3 * kept + a] = mesh.coords[3 * p + a];
-        for (Field& f : mesh.point_fields) f.copyItem(f, p, kept);
-      }
-      ++kept;
-    }
-  }
+  std::vector<uint8_t> keep(n);
+  for (size_t p = 0; p < n; ++p) keep[p] = rep[p] == p;
+  const std::vector<uint32_t> new_index = keepPoints(mesh, keep);
+  const size_t kept = mesh.numPoints();
   report.welded_points += n - kept;
   if (kept == n) return;
   // A block's nodes welded into earlier ones become its aliases (the other nodes keep their order).
@@ -189,8 +199,6 @@ void weldPoints(TetMesh& mesh, ImportReport& report) {
   } else {
     mesh.blocks.clear();
   }
-  mesh.coords.resize(3 * static_cast<size_t>(kept));
-  for (Field& f : mesh.point_fields) f.bytes.resize(static_cast<size_t>(kept) * f.components * f.valueSize());
   for (Tet& q : mesh.tets)
     for (uint32_t& v : q) v = new_index[rep[v]];
   report.collapsed_tets += dropFlatTets(mesh);

@@ -50,6 +50,10 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
 // flips and zero-volume cells into the report.
 void finishImport(ImportResult& result);
 
+// Keeps the points p with keep[p] (coordinates and point field values moved down, in order) and
+// returns each point's new index (kNoIndex for a point dropped); renumbering the tetrahedra is the
+// caller's.
+std::vector<uint32_t> keepPoints(TetMesh& mesh, const std::vector<uint8_t>& keep);
 // --weld: merges points whose three coordinates are bit-identical into the first of them (its point
 // field values are kept), drops the tetrahedra that lose a vertex that way (with their cell field
 // values) and compacts points and point fields. Closes the seams between PLOT3D blocks and between

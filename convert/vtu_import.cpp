@@ -21,7 +21,6 @@
 #include "convert/text_reader.h"
 #include "convert/vtk_common.h"
 #include "format/file_io.h"
-#include "mesh/index.h"
 
 namespace gtn {
 
@@ -129,22 +128,13 @@ size_t dropGhostOnlyPoints(TetMesh& mesh) {
   std::vector<uint8_t> used(n, 0);
   for (const Tet& t : mesh.tets)
     for (uint32_t v : t) used[v] = 1;
-  std::vector<uint32_t> new_index(n, kNoIndex);
-  uint32_t kept = 0;
-  for (size_t p = 0; p < n; ++p) {
-    if (!used[p] && (marks[p] & kVtkDuplicatePoint)) continue;
-    if (kept != p) {
-      for (int a = 0; a < 3; ++a) mesh.coords[3 * size_t{kept} + a] = mesh.coords[3 * p + a];
-      for (Field& f : mesh.point_fields) f.copyItem(f, p, kept);
-    }
-    new_index[p] = kept++;
-  }
-  if (kept == n) return 0;
-  mesh.coords.resize(3 * size_t{kept});
-  for (Field& f : mesh.point_fields) f.bytes.resize(size_t{kept} * f.components * f.valueSize());
+  std::vector<uint8_t> keep(n);
+  for (size_t p = 0; p < n; ++p) keep[p] = used[p] || !(marks[p] & kVtkDuplicatePoint);
+  if (std::find(keep.begin(), keep.end(), 0) == keep.end()) return 0;
+  const std::vector<uint32_t> new_index = keepPoints(mesh, keep);
   for (Tet& t : mesh.tets)
     for (uint32_t& v : t) v = new_index[v];
-  return n - kept;
+  return n - mesh.numPoints();
 }
 
 // What reading several unstructured pieces into one mesh did (a .pvtu's files, or the <Piece>s of one
