@@ -326,7 +326,7 @@ class Splitter {
                                        }
                                      },
                                      [&](const std::vector<Tet>& t) { return !mixedOrientation(t); });
-      if (!fixed) ++mixed_;
+      ++(fixed ? steiner_cells_ : mixed_);
     }
     for (const Tet& t : scratch_) emit(t, cell);
   }
@@ -409,10 +409,7 @@ class Splitter {
         }
         if (!fixed && steiner_) {
           fixed = pass == 0 ? steinerCone(corners, coneFromPoint, clean) : steinerCone(corners, coneFromPoint, unmixed);
-          if (fixed && flat) {
-            --steiner_cells_;
-            ++steiner_flat_;
-          }
+          if (fixed) ++(flat ? steiner_flat_ : steiner_cells_);
         }
       }
       if (!fixed) ++(mixed ? mixed_ : flat_kept_);
@@ -420,8 +417,8 @@ class Splitter {
     for (const Tet& t : scratch_) emit(t, cell);
   }
   // Adds a point inside the cell (rounded to float32 when the points are) and, when its cone over
-  // the faces has no inverted tetrahedron beside a positive one, takes that cone into scratch_ and
-  // keeps the point; otherwise adds nothing and returns false. The point tried first is the mean of
+  // the faces is one `accept` takes, takes that cone into scratch_ and keeps the point (the caller
+  // counts it); otherwise adds nothing and returns false. The point tried first is the mean of
   // the corners; then, in a cell that it does not see whole, the mean of the vertices of the cell's
   // kernel (the points that see every face triangle from inside), when there is one.
   template <class Corners, class ConeFromPoint, class Accept>
@@ -448,7 +445,6 @@ class Splitter {
         if (accept(other_)) {
           scratch_.swap(other_);
           steiner_->corner_offsets.push_back(steiner_->corners.size());
-          ++steiner_cells_;
           return true;
         }
       }
