@@ -8,6 +8,7 @@
 #include <string>
 
 #include "convert/vtk_common.h"
+#include "mesh/fresh_memory.h"
 #include "mesh/hex_split.h"
 #include "mesh/index.h"
 #include "mesh/predicates.h"
@@ -959,8 +960,8 @@ Status finishStructuredImport(const std::string& path, const uint64_t dims[3], c
   const uint8_t* cell_ghost = vtkGhostMarks(cell_fields, num_cells);
   const uint8_t* point_ghost = vtkGhostMarks(mesh.point_fields, mesh.numPoints());
   std::vector<uint32_t> tet_cell;
-  mesh.tets.reserve(num_cells * static_cast<uint64_t>(options.split == 5 ? 5 : 6));
-  tet_cell.reserve(mesh.tets.capacity());
+  reservePopulated(mesh.tets, num_cells * static_cast<uint64_t>(options.split == 5 ? 5 : 6));
+  reservePopulated(tet_cell, mesh.tets.capacity());
   auto id = [&](uint64_t i, uint64_t j, uint64_t k) { return static_cast<uint32_t>(i + nx * (j + ny * k)); };
   uint32_t cell = 0;
   size_t hidden = 0;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <bit>
 
+#include "mesh/fresh_memory.h"
+
 namespace gtn {
 
 const int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
@@ -50,7 +52,7 @@ struct GroupFace {
 FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
   FaceAdjacency adj;
   const size_t nt = mesh.tets.size();
-  adj.neighbor.assign(4 * nt, kNoNeighbor);
+  assignPopulated(adj.neighbor, 4 * nt, kNoNeighbor);
   const size_t groups = mesh.numPoints() + 1;
   auto groupOf = [&](uint32_t v) { return std::min<size_t>(v, groups - 1); };
   std::vector<uint32_t> start(groups + 1, 0);
@@ -60,7 +62,8 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
     for (int k = 0; k < 4; ++k) ++start[groupOf(m[k]) + 1];
   }
   for (size_t g = 1; g <= groups; ++g) start[g] += start[g - 1];
-  std::vector<uint32_t> slots(4 * nt);
+  std::vector<uint32_t> slots;
+  resizePopulated(slots, 4 * nt);
   {
     std::vector<uint32_t> next(start.begin(), start.end() - 1);
     for (size_t t = 0; t < nt; ++t) {

@@ -12,6 +12,7 @@
 
 #include "codec/edge_points.h"
 #include "mesh/faces.h"
+#include "mesh/fresh_memory.h"
 #include "mesh/index.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
@@ -90,7 +91,7 @@ struct QueueEntry {
 // for its position), where a queue with stale entries grows with every evaluation.
 class CandidateHeap {
  public:
-  explicit CandidateHeap(size_t points) : at_(points, kNoIndex) {}
+  explicit CandidateHeap(size_t points) { assignPopulated(at_, points, kNoIndex); }
   bool empty() const { return heap_.empty(); }
   bool has(uint32_t v) const { return at_[v] != kNoIndex; }
   const QueueEntry& top() const { return heap_.front(); }
@@ -199,7 +200,10 @@ struct StarFace {
 // What evaluating one vertex needs besides the mesh: scratch buffers reused from one vertex to the
 // next, one set per thread (the vertices around a merge are evaluated in parallel).
 struct Workspace {
-  explicit Workspace(size_t points) : mark(points, 0), target_index(points, 0) {}
+  explicit Workspace(size_t points) {
+    assignPopulated(mark, points, 0u);
+    assignPopulated(target_index, points, 0u);
+  }
 
   // n stamps no mark holds yet, the first returned (mark is cleared when the count would wrap).
   uint32_t freshStamps(uint32_t n) {
@@ -311,7 +315,7 @@ class Ranker {
   MergeTree run(RankingStats* stats, const ProgressFn& progress);
   // batchMerges (ranking.h) on a Ranker of the same mesh.
   MergeTree batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor,
-                  const std::vector<RankingRound>& rounds, BatchStats* stats);
+                  const std::vector<RankingRound>& rounds, const RankingFaces* faces, BatchStats* stats);
 
  private:
   const double* pos(uint32_t v) const { return mesh_.coords.data() + 3 * size_t{v}; }
@@ -320,7 +324,9 @@ class Ranker {
     const double* q = pos(b);
     return p[0] == q[0] && p[1] == q[1] && p[2] == q[2];
   }
-  void init();
+  // The ranking's state for the mesh as given; the face flags from `faces` where given (batch()).
+  void init(const RankingFaces* faces = nullptr);
+  RankingFaces faces() const { return RankingFaces{boundary_, frozen_, pinned_, area_scale_}; }
   // Parts of about equal numbers of vertices, by recursive bisection of their positions along the
   // longest side: part_ and seam_.
   void partition(uint32_t parts);
@@ -397,17 +403,22 @@ class Ranker {
   tbb::enumerable_thread_specific<Workspace> thread_ws_;
 };
 
-void Ranker::init() {
+void Ranker::init(const RankingFaces* faces) {
   const size_t np = mesh_.numPoints();
   const size_t nt = mesh_.numTets();
   const std::vector<Tet>& tets = mesh_.tets;
-  boundary_.assign(np, 0);
-  frozen_.assign(np, 0);
-  pinned_.assign(np, 0);
   alive_.assign(np, 1);
-  // The face adjacency first, and gone before the ranking's own copies of the mesh are made: the
-  // peak memory is the larger of the two, not their sum.
-  {
+  if (faces && faces->boundary.size() == np && faces->frozen.size() == np && faces->pinned.size() == np) {
+    boundary_ = faces->boundary;
+    frozen_ = faces->frozen;
+    pinned_ = faces->pinned;
+    area_scale_ = faces->area_scale;
+  } else {
+    boundary_.assign(np, 0);
+    frozen_.assign(np, 0);
+    pinned_.assign(np, 0);
+    // The face adjacency first, and gone before the ranking's own copies of the mesh are made: the
+    // peak memory is the larger of the two, not their sum.
     const FaceAdjacency adj = computeFaceAdjacency(mesh_);
     double area = 0;
     for (size_t t = 0; t < nt; ++t) {
@@ -433,7 +444,9 @@ void Ranker::init() {
     }
     area_scale_ = area > 0 && std::isfinite(area) ? area : 1.0;
   }
-  tets_ = tets;
+  tets_.clear();
+  reservePopulated(tets_, nt);
+  tets_.assign(tets.begin(), tets.end());
   star_size_.assign(np, 0);
   for (const Tet& q : tets_)
     for (uint32_t v : q) ++star_size_[v];
@@ -510,7 +523,7 @@ void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>& from, 
     star_begin_[v] = total;
     total += star_len_[v];
   });
-  L.pool.assign(total + std::max<uint64_t>(total / 4, kMinStarSlack), 0);
+  assignPopulated(L.pool, total + std::max<uint64_t>(total / 4, kMinStarSlack), 0u);
   L.peak = L.pool.size();
   L.used = total;
   forMembers(L, [&](uint32_t v) {
@@ -527,7 +540,7 @@ void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vect
       star_len_[v] = 0;
       total += star_size_[v];
     });
-    L->pool.assign(total + std::max<uint64_t>(total / 4, kMinStarSlack), 0);
+    assignPopulated(L->pool, total + std::max<uint64_t>(total / 4, kMinStarSlack), 0u);
     L->peak = L->pool.size();
     L->used = total;
   }
@@ -1112,6 +1125,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     part_ = seam_ = lane_part = {};
     lane_begin = {};
   }
+  if (options_.beside_whole_queue) options_.beside_whole_queue();
   runLane(whole, part_merges, &progress);
   order.insert(order.end(), whole.sequence.begin(), whole.sequence.end());
   count(whole, 1);
@@ -1128,6 +1142,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     stats->parts = parts;
     stats->part_merges = part_merges;
     stats->rounds = std::move(made_rounds);
+    stats->faces = std::make_shared<const RankingFaces>(faces());
   }
   return std::move(tree_);
 }
@@ -1136,8 +1151,8 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
 constexpr uint32_t kBatchPasses = 8;
 
 MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor,
-                        const std::vector<RankingRound>& rounds, BatchStats* stats) {
-  init();
+                        const std::vector<RankingRound>& rounds, const RankingFaces* faces, BatchStats* stats) {
+  init(faces);
   replaying_ = true;
   const size_t np = mesh_.numPoints();
   std::vector<uint32_t> by_rank(ranked.merges);
@@ -1180,8 +1195,13 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
   // the lane's merges made when its checks last failed with the parent it then had (kNoIndex: none);
   // the count of the lane's merges made when one last changed a tetrahedron around it (stamp: a check
   // that failed is not made again while nothing around it changed).
-  std::vector<uint32_t> pending(np, kNoIndex), late(np, 0), blocker(np, kNoIndex), failed(np, kNoIndex),
-      failed_root(np, kNoIndex), stamp(np, 0);
+  auto perVertex = [np](uint32_t value) {
+    std::vector<uint32_t> v;
+    assignPopulated(v, np, value);
+    return v;
+  };
+  std::vector<uint32_t> pending = perVertex(kNoIndex), late = perVertex(0), blocker = perVertex(kNoIndex),
+                        failed = perVertex(kNoIndex), failed_root = perVertex(kNoIndex), stamp = perVertex(0);
   // A merge made by a lane: its place in the batch's order (the pass, or the sweep after the passes,
   // then the key, or the rank), and its child.
   struct Made {
@@ -1557,7 +1577,8 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
 }
 
 StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const std::vector<uint64_t>& keys,
-                                uint32_t divisor, BatchStats* stats, const std::vector<RankingRound>& rounds) {
+                                uint32_t divisor, BatchStats* stats, const std::vector<RankingRound>& rounds,
+                                const RankingFaces* faces) {
   const auto start = std::chrono::steady_clock::now();
   GTN_RETURN_IF_ERROR(ranked.check("merge tree"));
   if (ranked.points() != mesh.numPoints() || keys.size() != mesh.numPoints())
@@ -1567,7 +1588,7 @@ StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, co
   options.w_geometry = ranked.w_geometry;
   Ranker ranker(mesh, std::vector<double>(mesh.numPoints(), 1.0), options);
   BatchStats local;
-  MergeTree tree = ranker.batch(ranked, keys, divisor, rounds, &local);
+  MergeTree tree = ranker.batch(ranked, keys, divisor, rounds, faces, &local);
   local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (stats) *stats = local;
   return tree;

@@ -76,6 +76,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -98,6 +100,10 @@ struct RankingOptions {
   // Rank in this many parts first (see above), 1 = not in parts; 0 = automatic: 8 parts for meshes of
   // 2^20 tetrahedra or more, else 1. The tree depends on it (not on the threads).
   uint32_t parts = 0;
+  // Called once, on the ranking's thread, as the whole mesh's queue starts (after the rounds of parts,
+  // whose star lists are gone by then, or at once): where a caller starts work to run beside the
+  // queue, which is one thread's work.
+  std::function<void()> beside_whole_queue{};
 };
 
 // A round of the ranking in parts (see above): how many merges it made (the ranks after those of the
@@ -108,20 +114,31 @@ struct RankingRound {
   std::vector<uint8_t> part;
 };
 
+// What the ranking learns of the mesh's faces before its first merge: the vertices on the boundary,
+// those on a face of three or more tetrahedra (never merged), those on a face both its tetrahedra
+// list in the same direction (never merged away), and the boundary's area (the geometric error's
+// scale). batchMerges takes them from the ranking of the same mesh (RankingStats::faces) instead of
+// computing the face adjacency again.
+struct RankingFaces {
+  std::vector<uint8_t> boundary, frozen, pinned;  // per point
+  double area_scale = 1;
+};
+
 struct RankingStats {
   double seconds = 0;
   uint64_t merges = 0, boundary_merges = 0;
-  uint64_t popped = 0;                       // queue entries examined
-  uint64_t rejected = 0;                     // popped candidates that failed the exact checks
-  uint64_t stale = 0;                        // popped candidates recomputed because they were stale (lazy)
-  uint32_t parts = 1;                        // parts ranked first (RankingOptions::parts)
-  uint64_t part_merges = 0;                  // merges made in the parts, before the whole mesh's queue
-  uint64_t evaluations = 0;                  // candidate errors computed
-  uint64_t star_pool_corners = 0;            // the room the stars' corner lists took, at most (4 bytes each)
-  uint64_t star_compactions = 0;             // times the corner lists were moved down over abandoned ones
-  std::vector<RankingRound> rounds;          // the rounds of parts, in order (batchMerges follows them)
-  std::string field;                         // density field used ("" = volume)
-  std::vector<std::string> constant_fields;  // the default skipped these point fields (constant)
+  uint64_t popped = 0;                        // queue entries examined
+  uint64_t rejected = 0;                      // popped candidates that failed the exact checks
+  uint64_t stale = 0;                         // popped candidates recomputed because they were stale (lazy)
+  uint32_t parts = 1;                         // parts ranked first (RankingOptions::parts)
+  uint64_t part_merges = 0;                   // merges made in the parts, before the whole mesh's queue
+  uint64_t evaluations = 0;                   // candidate errors computed
+  uint64_t star_pool_corners = 0;             // the room the stars' corner lists took, at most (4 bytes each)
+  uint64_t star_compactions = 0;              // times the corner lists were moved down over abandoned ones
+  std::vector<RankingRound> rounds;           // the rounds of parts, in order (batchMerges follows them)
+  std::shared_ptr<const RankingFaces> faces;  // for batchMerges
+  std::string field;                          // density field used ("" = volume)
+  std::vector<std::string> constant_fields;   // the default skipped these point fields (constant)
 };
 
 // What `gtn convert` says when the default density skipped constant fields: "the simplification
@@ -160,7 +177,7 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
 // together, in the order of their passes and within a pass by key (then the deferred ones, by
 // rank). Any interleaving of merges of distinct parts is a valid order, since they commute. The
 // merges after the rounds are batched on the whole mesh. The tree depends on the rounds, never on
-// the number of threads.
+// the number of threads. `faces`, where given, are the ranking's of the same mesh (RankingStats::faces).
 struct BatchStats {
   uint64_t batches = 0;
   uint64_t deferred = 0;    // merges the passes left (then merged by rank)
@@ -173,6 +190,6 @@ struct BatchStats {
 };
 StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const std::vector<uint64_t>& keys,
                                 uint32_t divisor, BatchStats* stats = nullptr,
-                                const std::vector<RankingRound>& rounds = {});
+                                const std::vector<RankingRound>& rounds = {}, const RankingFaces* faces = nullptr);
 
 }  // namespace gtn

@@ -49,11 +49,22 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
   // Level 0 is encoded while the merges are ranked: on another thread where TBB has one, after the
   // ranking where it has not. A level 0 that fails to encode fails the conversion then, before its
-  // own errors are looked at (the encoder's refusal says why no option stores it). Then, where mip
-  // levels will be checked, level 0's own errors (the
-  // ones a mip level may keep) are found, on another thread while the writer starts, after the ranking
-  // (its face adjacency beside the ranking's star lists was the peak of a large convert's memory).
+  // own errors are looked at (the encoder's refusal says why no option stores it). Where mip levels
+  // will be checked, level 0's own errors (the ones a mip level may keep) are found on another thread
+  // too (below).
   LevelStructureCheck structure(mesh, path);
+  // Waited for on every return from here (check() waits for it too, and `structure` must outlive it).
+  tbb::task_group checking;
+  struct Join {
+    tbb::task_group& g;
+    ~Join() { g.wait(); }
+  } join{checking};
+  bool checking_level0 = false;
+  auto checkLevel0 = [&] {
+    if (checking_level0 || !wo.verify || o.levels == 0) return;
+    checking_level0 = true;
+    checking.run([&] { structure.checkLevel0(); });
+  };
   std::shared_ptr<PiecedLevel> level0;
   Status encoded = Status::ok();
   tbb::task_group encoding;
@@ -63,25 +74,25 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
     else encoded = e.status();
   });
   RankingStats ranked;
-  StatusOr<MergeTree> ranking = rankMerges(mesh, o.ranking, &ranked, wo.progress);
+  // Level 0's check runs beside the whole mesh's queue, one thread's work after the parallel rounds
+  // of parts, whose star lists are gone by then (the check's face adjacency beside them, or beside
+  // the batches', was the peak of a large convert's memory).
+  RankingOptions ranking_options = o.ranking;
+  ranking_options.beside_whole_queue = checkLevel0;
+  StatusOr<MergeTree> ranking = rankMerges(mesh, ranking_options, &ranked, wo.progress);
   encoding.wait();
   GTN_RETURN_IF_ERROR(encoded);
   if (!ranking.isOk()) return ranking.status();
-  // Waited for on every return from here (check() waits for it too, and `structure` must outlive it).
-  tbb::task_group checking;
-  struct Join {
-    tbb::task_group& g;
-    ~Join() { g.wait(); }
-  } join{checking};
-  if (wo.verify && o.levels != 0) checking.run([&] { structure.checkLevel0(); });
+  checkLevel0();  // where the ranking did not start it
   MergeTree tree = std::move(ranking).value();
   MergeTreeForm level0_form;
   if (o.merge_tree && level0) {
     reportProgress(wo.progress, "batch merges", 0.0);
-    GTN_ASSIGN_OR_RETURN(StoredMergeTree stored, storedMergeTree(mesh, tree, *level0, ranked.rounds));
+    GTN_ASSIGN_OR_RETURN(StoredMergeTree stored, storedMergeTree(mesh, tree, *level0, &ranked));
     tree = std::move(stored.tree);
     level0_form = stored.level0_form;
     ranked.rounds = {};
+    ranked.faces = {};
   }
   if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
     warnings->push_back(source + ": " + note);
@@ -177,7 +188,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
 }  // namespace
 
 StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0,
-                                          const std::vector<RankingRound>& rounds) {
+                                          const RankingStats* ranking) {
   // A structured level 0 (a grid, never naming the next level's vertices) stores the whole tree, which
   // readers decode to simplify it on the fly at every ratio finer than the stored levels: its parents
   // are coded as grid places (the block's dims and the decoding ids decide the candidates), or as
@@ -201,7 +212,10 @@ StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& 
   std::vector<uint64_t> keys(mesh.numPoints());
   for (size_t v = 0; v < keys.size(); ++v)
     keys[v] = structured ? batchKeyOfId(level0.vertex_order[v]) : batchKeyOfPoint(mesh.point(v));
-  GTN_ASSIGN_OR_RETURN(out.tree, batchMerges(mesh, ranked, keys, kDefaultBatchDivisor, nullptr, rounds));
+  static const std::vector<RankingRound> kNoRounds;
+  GTN_ASSIGN_OR_RETURN(
+      out.tree, batchMerges(mesh, ranked, keys, kDefaultBatchDivisor, nullptr, ranking ? ranking->rounds : kNoRounds,
+                            ranking ? ranking->faces.get() : nullptr));
   return out;
 }
 

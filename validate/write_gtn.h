@@ -41,13 +41,14 @@ struct GtnConvertOptions {
 // payloads order batches by, which are level 0's decoding ids where level 0 is one structured piece
 // (whose tree codes its parents as grid places, or as deltas where the block has aliases, and so
 // decodes without the level), and the positions elsewhere (parents as candidates); in the ranking's
-// rounds of parts where it had them (RankingStats::rounds), which the batches follow.
+// rounds of parts where it had them (RankingStats::rounds, from `ranking` where given), which the
+// batches follow.
 struct StoredMergeTree {
   MergeTree tree;
   MergeTreeForm level0_form;
 };
 StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0,
-                                          const std::vector<RankingRound>& rounds = {});
+                                          const RankingStats* ranking = nullptr);
 
 Status writeGtnWithLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& options,
                           const GtnWriteOptions& write_options, const std::string& source,

@@ -249,6 +249,18 @@ TEST(Ranking, BatchesInTheRoundsPartsAreValidAndTheThreadsChangeNothing) {
   }
   const MergeTree& tree = trees[0];
   ASSERT_TRUE(tree.check("batched in parts").isOk());
+  // With the ranking's face flags (what the writer passes) instead of its own face adjacency: the
+  // same tree. The flags are the grid's: its boundary nodes, nothing frozen or pinned.
+  ASSERT_NE(stats.faces, nullptr);
+  ASSERT_EQ(stats.faces->boundary.size(), mesh.numPoints());
+  EXPECT_EQ(std::count(stats.faces->boundary.begin(), stats.faces->boundary.end(), 1), 15 * 14 * 13 - 13 * 12 * 11);
+  EXPECT_EQ(std::count(stats.faces->frozen.begin(), stats.faces->frozen.end(), 1), 0);
+  EXPECT_EQ(std::count(stats.faces->pinned.begin(), stats.faces->pinned.end(), 1), 0);
+  auto with_faces = batchMerges(mesh, *ranked, keys, kDefaultBatchDivisor, nullptr, stats.rounds, stats.faces.get());
+  ASSERT_TRUE(with_faces.isOk()) << with_faces.status().message();
+  EXPECT_EQ(with_faces->parent, tree.parent);
+  EXPECT_EQ(with_faces->rank, tree.rank);
+  EXPECT_EQ(with_faces->batches, tree.batches);
   ValidationReport report;
   checkMergeTree(mesh, forestFromTree(tree), {}, report);
   EXPECT_EQ(report.count(Severity::kError), 0u) << report.toText("batched in parts");
