@@ -1,5 +1,6 @@
 #include <cstdio>
 
+#include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
 #include <optional>
@@ -348,6 +349,16 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     auto canChain = [&](size_t i) {
       return i + 1 < count && levels[i].next_index && meshes[i]->numTets() <= options.piece_tets;
     };
+    // Level 0 stored alone needs no other level (its merge tree, the whole one, is most of its work):
+    // it is encoded on another thread while the coarser levels are, coarsest first. The meshes are all
+    // made, so the levels' inputs are only read from here on.
+    tbb::task_group ahead;
+    struct Join {
+      tbb::task_group& g;
+      ~Join() { g.wait(); }
+    } join_ahead{ahead};
+    std::optional<StatusOr<EncodedInput>> level0_alone;
+    if (count > 1) ahead.run([&] { level0_alone = encodeInput(levels, 0, *meshes[0], options); });
     auto encodeDown = [&](size_t top) -> Status {  // levels top, top - 1, ..., 0
       for (size_t i = top + 1; i-- > 0;) {
         progress("encode", i);
@@ -361,7 +372,9 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
         // as a structured piece) are also encoded storing all their vertices; other levels always
         // take fewer bytes naming the next level's.
         if (!best || i == 0 || !meshes[i]->blocks.empty()) {
-          auto a = encodeInput(levels, i, *meshes[i], options);
+          if (i == 0) ahead.wait();
+          auto a = i == 0 && level0_alone ? std::move(*level0_alone) : encodeInput(levels, i, *meshes[i], options);
+          if (i == 0) level0_alone.reset();  // taken (a later pass down encodes it again)
           if (!a.isOk()) return a.status();
           if (i == 0) alone0 = approxBytes(*a);
           // A structured piece is kept whatever the bytes: it decodes at memory speed, alone, where a
@@ -389,12 +402,16 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
       }
       encoded.resize(count);
     }
-    for (size_t i = 0; i < count; ++i) {
-      if (options.verify) progress("verify", i);
-      GTN_RETURN_IF_ERROR(checkChainedDecodesBack(path, levels[i], *meshes[i], i, encoded[i],
-                                                  i + 1 < count ? meshes[i + 1] : nullptr,
-                                                  i + 1 < count ? &encoded[i + 1] : nullptr, options));
-    }
+    // The levels are checked in parallel (level 0's check, the longest, beside the others); the first
+    // failure in level order is returned.
+    if (options.verify) progress("verify", 0);
+    std::vector<Status> checks(count);
+    tbb::parallel_for(size_t{0}, count, [&](size_t i) {
+      checks[i] =
+          checkChainedDecodesBack(path, levels[i], *meshes[i], i, encoded[i], i + 1 < count ? meshes[i + 1] : nullptr,
+                                  i + 1 < count ? &encoded[i + 1] : nullptr, options);
+    });
+    for (const Status& c : checks) GTN_RETURN_IF_ERROR(c);
   } else if (bounded) {
     // Each level is checked on another thread while the next one is encoded: one encoder's memory
     // at a time, and the check's time hidden behind the encoding. The bytes each level takes in the
