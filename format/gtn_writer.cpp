@@ -403,10 +403,11 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
       encoded.resize(count);
     }
     // The levels are checked in parallel (level 0's check, the longest, beside the others); the first
-    // failure in level order is returned.
-    if (options.verify) progress("verify", 0);
+    // failure in level order is returned. Each check reports its stage as it starts (ProgressFn is
+    // thread-safe).
     std::vector<Status> checks(count);
     tbb::parallel_for(size_t{0}, count, [&](size_t i) {
+      if (options.verify) progress("verify", i);
       checks[i] =
           checkChainedDecodesBack(path, levels[i], *meshes[i], i, encoded[i], i + 1 < count ? meshes[i + 1] : nullptr,
                                   i + 1 < count ? &encoded[i + 1] : nullptr, options);
