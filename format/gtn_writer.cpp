@@ -9,6 +9,7 @@
 #include "codec/pieces_check.h"
 #include "format/file_io.h"
 #include "format/gtn_file.h"
+#include "mesh/wait_on_exit.h"
 
 namespace gtn {
 
@@ -353,12 +354,17 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     // it is encoded on another thread while the coarser levels are, coarsest first. The meshes are all
     // made, so the levels' inputs are only read from here on.
     tbb::task_group ahead;
-    struct Join {
-      tbb::task_group& g;
-      ~Join() { g.wait(); }
-    } join_ahead{ahead};
+    const WaitOnExit join_ahead{ahead};
     std::optional<StatusOr<EncodedInput>> level0_alone;
     if (count > 1) ahead.run([&] { level0_alone = encodeInput(levels, 0, *meshes[0], options); });
+    auto encodeAlone = [&](size_t i) -> StatusOr<EncodedInput> {
+      if (i != 0) return encodeInput(levels, i, *meshes[i], options);
+      ahead.wait();
+      if (!level0_alone) return encodeInput(levels, 0, *meshes[0], options);  // a later pass down
+      StatusOr<EncodedInput> taken = std::move(*level0_alone);
+      level0_alone.reset();
+      return taken;
+    };
     auto encodeDown = [&](size_t top) -> Status {  // levels top, top - 1, ..., 0
       for (size_t i = top + 1; i-- > 0;) {
         progress("encode", i);
@@ -372,9 +378,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
         // as a structured piece) are also encoded storing all their vertices; other levels always
         // take fewer bytes naming the next level's.
         if (!best || i == 0 || !meshes[i]->blocks.empty()) {
-          if (i == 0) ahead.wait();
-          auto a = i == 0 && level0_alone ? std::move(*level0_alone) : encodeInput(levels, i, *meshes[i], options);
-          if (i == 0) level0_alone.reset();  // taken (a later pass down encodes it again)
+          auto a = encodeAlone(i);
           if (!a.isOk()) return a.status();
           if (i == 0) alone0 = approxBytes(*a);
           // A structured piece is kept whatever the bytes: it decodes at memory speed, alone, where a

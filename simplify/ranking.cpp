@@ -326,7 +326,6 @@ class Ranker {
   }
   // The ranking's state for the mesh as given; the face flags from `faces` where given (batch()).
   void init(const RankingFaces* faces = nullptr);
-  RankingFaces faces() const { return RankingFaces{boundary_, frozen_, pinned_, area_scale_}; }
   // Parts of about equal numbers of vertices, by recursive bisection of their positions along the
   // longest side: part_ and seam_.
   void partition(uint32_t parts);
@@ -1142,7 +1141,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     stats->parts = parts;
     stats->part_merges = part_merges;
     stats->rounds = std::move(made_rounds);
-    stats->faces = std::make_shared<const RankingFaces>(faces());
+    stats->faces = RankingFaces{std::move(boundary_), std::move(frozen_), std::move(pinned_), area_scale_};
   }
   return std::move(tree_);
 }

@@ -77,7 +77,6 @@
 
 #include <cstdint>
 #include <functional>
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -127,18 +126,18 @@ struct RankingFaces {
 struct RankingStats {
   double seconds = 0;
   uint64_t merges = 0, boundary_merges = 0;
-  uint64_t popped = 0;                        // queue entries examined
-  uint64_t rejected = 0;                      // popped candidates that failed the exact checks
-  uint64_t stale = 0;                         // popped candidates recomputed because they were stale (lazy)
-  uint32_t parts = 1;                         // parts ranked first (RankingOptions::parts)
-  uint64_t part_merges = 0;                   // merges made in the parts, before the whole mesh's queue
-  uint64_t evaluations = 0;                   // candidate errors computed
-  uint64_t star_pool_corners = 0;             // the room the stars' corner lists took, at most (4 bytes each)
-  uint64_t star_compactions = 0;              // times the corner lists were moved down over abandoned ones
-  std::vector<RankingRound> rounds;           // the rounds of parts, in order (batchMerges follows them)
-  std::shared_ptr<const RankingFaces> faces;  // for batchMerges
-  std::string field;                          // density field used ("" = volume)
-  std::vector<std::string> constant_fields;   // the default skipped these point fields (constant)
+  uint64_t popped = 0;                       // queue entries examined
+  uint64_t rejected = 0;                     // popped candidates that failed the exact checks
+  uint64_t stale = 0;                        // popped candidates recomputed because they were stale (lazy)
+  uint32_t parts = 1;                        // parts ranked first (RankingOptions::parts)
+  uint64_t part_merges = 0;                  // merges made in the parts, before the whole mesh's queue
+  uint64_t evaluations = 0;                  // candidate errors computed
+  uint64_t star_pool_corners = 0;            // the room the stars' corner lists took, at most (4 bytes each)
+  uint64_t star_compactions = 0;             // times the corner lists were moved down over abandoned ones
+  std::vector<RankingRound> rounds;          // the rounds of parts, in order (batchMerges follows them)
+  RankingFaces faces;                        // for batchMerges
+  std::string field;                         // density field used ("" = volume)
+  std::vector<std::string> constant_fields;  // the default skipped these point fields (constant)
 };
 
 // What `gtn convert` says when the default density skipped constant fields: "the simplification

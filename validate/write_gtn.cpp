@@ -3,6 +3,7 @@
 #include <tbb/task_group.h>
 
 #include "codec/pieces.h"
+#include "mesh/wait_on_exit.h"
 #include "simplify/levels.h"
 #include "validate/mesh_checks.h"
 
@@ -55,10 +56,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   LevelStructureCheck structure(mesh, path);
   // Waited for on every return from here (check() waits for it too, and `structure` must outlive it).
   tbb::task_group checking;
-  struct Join {
-    tbb::task_group& g;
-    ~Join() { g.wait(); }
-  } join{checking};
+  const WaitOnExit join{checking};
   bool checking_level0 = false;
   auto checkLevel0 = [&] {
     if (checking_level0 || !wo.verify || o.levels == 0) return;
@@ -215,7 +213,7 @@ StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& 
   static const std::vector<RankingRound> kNoRounds;
   GTN_ASSIGN_OR_RETURN(
       out.tree, batchMerges(mesh, ranked, keys, kDefaultBatchDivisor, nullptr, ranking ? ranking->rounds : kNoRounds,
-                            ranking ? ranking->faces.get() : nullptr));
+                            ranking ? &ranking->faces : nullptr));
   return out;
 }
 

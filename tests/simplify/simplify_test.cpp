@@ -251,12 +251,13 @@ TEST(Ranking, BatchesInTheRoundsPartsAreValidAndTheThreadsChangeNothing) {
   ASSERT_TRUE(tree.check("batched in parts").isOk());
   // With the ranking's face flags (what the writer passes) instead of its own face adjacency: the
   // same tree. The flags are the grid's: its boundary nodes, nothing frozen or pinned.
-  ASSERT_NE(stats.faces, nullptr);
-  ASSERT_EQ(stats.faces->boundary.size(), mesh.numPoints());
-  EXPECT_EQ(std::count(stats.faces->boundary.begin(), stats.faces->boundary.end(), 1), 15 * 14 * 13 - 13 * 12 * 11);
-  EXPECT_EQ(std::count(stats.faces->frozen.begin(), stats.faces->frozen.end(), 1), 0);
-  EXPECT_EQ(std::count(stats.faces->pinned.begin(), stats.faces->pinned.end(), 1), 0);
-  auto with_faces = batchMerges(mesh, *ranked, keys, kDefaultBatchDivisor, nullptr, stats.rounds, stats.faces.get());
+  ASSERT_EQ(stats.faces.boundary.size(), mesh.numPoints());
+  ASSERT_EQ(stats.faces.frozen.size(), mesh.numPoints());
+  ASSERT_EQ(stats.faces.pinned.size(), mesh.numPoints());
+  EXPECT_EQ(std::count(stats.faces.boundary.begin(), stats.faces.boundary.end(), 1), 15 * 14 * 13 - 13 * 12 * 11);
+  EXPECT_EQ(std::count(stats.faces.frozen.begin(), stats.faces.frozen.end(), 1), 0);
+  EXPECT_EQ(std::count(stats.faces.pinned.begin(), stats.faces.pinned.end(), 1), 0);
+  auto with_faces = batchMerges(mesh, *ranked, keys, kDefaultBatchDivisor, nullptr, stats.rounds, &stats.faces);
   ASSERT_TRUE(with_faces.isOk()) << with_faces.status().message();
   EXPECT_EQ(with_faces->parent, tree.parent);
   EXPECT_EQ(with_faces->rank, tree.rank);
