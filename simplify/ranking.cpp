@@ -283,7 +283,8 @@ struct Lane {
   std::vector<uint32_t> members;   // the vertices whose runs the pool holds, ascending; empty: every vertex
   bool restricted = false;         // merges only between vertices with no neighbour in another part
   bool parallel = true;            // a merge's vertices are evaluated in parallel
-  uint64_t limit = UINT64_MAX;     // stop after this many merges
+  float error_limit = INFINITY;    // stop before a merge of a larger error
+  bool started = false;            // startLane has queued its vertices
   std::vector<uint32_t> sequence;  // the vertices merged away, in order
   uint64_t popped = 0, rejected = 0, stale = 0;
   Workspace* ws = nullptr;        // the thread's that runs the lane
@@ -297,8 +298,11 @@ struct Lane {
   std::vector<uint32_t> lk_verts;
 };
 
-// The share of a part's vertices (those with no neighbour in another part) its first phase merges.
-constexpr double kPartShare = 0.5;
+// The rounds of parts: at most kMaxRounds, in P, P - 1, ... parts (at least 2). Each round's bound on
+// the error of its merges is the kRoundQuantile quantile of the errors of its vertices' best
+// candidates as the round starts.
+constexpr uint32_t kMaxRounds = 6;
+constexpr double kRoundQuantile = 0.6;
 // RankingOptions::parts = 0 ranks in kAutoParts parts from kAutoPartTets tetrahedra on.
 constexpr uint32_t kAutoParts = 8;
 constexpr size_t kAutoPartTets = size_t{1} << 20;
@@ -342,7 +346,9 @@ class Ranker {
   void buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vector<uint8_t>* part);
   // Drops the corners of collapsed tetrahedra from every vertex's run in `lanes`, the lanes of `part`.
   void dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>& part);
-  // Evaluates the lane's vertices and merges until its queue is empty or its limit is reached.
+  // Evaluates the lane's vertices (startLane, where not done yet) and merges until its queue is empty
+  // or its error limit is reached.
+  void startLane(Lane& L);
   void runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress);
   void gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners);
   // Moves run[0, n)'s corners of live tetrahedra to its front, in order; returns how many.
@@ -553,17 +559,22 @@ void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vect
   }
 }
 
-void Ranker::runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress) {
+void Ranker::startLane(Lane& L) {
   L.ws = &thread_ws_.local();
-  {
-    std::vector<uint32_t> all;
-    forMembers(L, [&](uint32_t v) {
-      if (alive_[v]) all.push_back(v);
-    });
-    recompute(L, all);
-  }
+  std::vector<uint32_t> all;
+  forMembers(L, [&](uint32_t v) {
+    if (alive_[v]) all.push_back(v);
+  });
+  recompute(L, all);
+  L.started = true;
+}
+
+void Ranker::runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress) {
+  if (!L.started) startLane(L);
+  L.ws = &thread_ws_.local();
   const uint64_t np = mesh_.numPoints();
-  while (!L.heap.empty() && merged_before + L.sequence.size() < options_.max_merges && L.sequence.size() < L.limit) {
+  while (!L.heap.empty() && merged_before + L.sequence.size() < options_.max_merges &&
+         !(L.heap.top().error > L.error_limit)) {
     const QueueEntry e = L.heap.top();
     L.heap.pop();
     ++L.popped;
@@ -1032,17 +1043,31 @@ void Ranker::recompute(Lane& L, const std::vector<uint32_t>& list) {
   }
 }
 
+// The kRoundQuantile quantile of the errors of the best candidates the lanes' vertices had when they
+// started (infinite when none has one).
+float roundErrorBound(const std::vector<std::unique_ptr<Lane>>& lanes) {
+  std::vector<float> errors;
+  for (const auto& L : lanes)
+    for (const Candidate& c : L->best)
+      if (c.w != kNoIndex) errors.push_back(static_cast<float>(c.error));
+  if (errors.empty()) return INFINITY;
+  const size_t k =
+      std::min(errors.size() - 1, static_cast<size_t>(kRoundQuantile * static_cast<double>(errors.size())));
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(k), errors.end());
+  return errors[k];
+}
+
 MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   init();
   const size_t np = mesh_.numPoints();
   stale_.assign(options_.lazy ? np : 0, 0);
   const uint32_t parts = std::min<uint32_t>(
       options_.parts != 0 ? options_.parts : (mesh_.numTets() >= kAutoPartTets ? kAutoParts : 1), kMaxParts);
-  // In parts: each part merges its share of the vertices that have no neighbour in another part,
-  // which touches nothing another part reads or writes, so the parts run in parallel; their merges
-  // are then interleaved by error (each part's in its own order). A second round does the same with
-  // other parts, and the whole mesh's queue goes on from there with every vertex, the seams between
-  // the parts included.
+  // In parts: each part merges vertices that have no neighbour in another part, which touches
+  // nothing another part reads or writes, so the parts run in parallel, up to the round's bound on
+  // the error; their merges are then interleaved by error (each part's in its own order). Further
+  // rounds do the same with other parts, and the whole mesh's queue goes on from there with every
+  // vertex, the seams between the parts included.
   std::vector<uint32_t> order;
   std::vector<RankingRound> made_rounds;
   uint64_t popped = 0, rejected = 0, restaled = 0, pool_peak = 0, compactions = 0;
@@ -1062,9 +1087,10 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     lane_part = part_;
     lane_begin = star_begin_;
   };
-  // Two rounds of parts: the second with one part fewer, so that its cuts fall elsewhere and most of
-  // the first round's seams are inside its parts.
-  const std::vector<uint32_t> rounds = parts > 1 ? std::vector<uint32_t>{parts, parts - 1} : std::vector<uint32_t>{};
+  // Rounds of parts, each with one part fewer than the one before, so that its cuts fall elsewhere
+  // and most of the last round's seams are inside its parts.
+  std::vector<uint32_t> rounds;
+  for (uint32_t r = 0; parts > 1 && r < kMaxRounds && parts - r >= 2; ++r) rounds.push_back(parts - r);
   for (const uint32_t round_parts : rounds) {
     if (!lanes.empty()) leaveLanes();
     partition(round_parts);
@@ -1079,19 +1105,26 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
       if (alive_[v]) next_lanes[part_[v]]->members.push_back(v);
     std::vector<Lane*> built;
     for (auto& L : next_lanes) {
-      uint64_t free = 0;
-      for (uint32_t v : L->members) free += !seam_[v];
-      L->limit = static_cast<uint64_t>(kPartShare * static_cast<double>(free));
       if (!lanes.empty()) buildPool(*L, lanes, lane_part, lane_begin);
       built.push_back(L.get());
     }
     if (lanes.empty()) buildPoolsFromTets(built, &part_);
     lanes = std::move(next_lanes);
-    tbb::this_task_arena::isolate([&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, round_parts, 1), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t p = r.begin(); p < r.end(); ++p) runLane(*lanes[p], 0, nullptr);
+    auto eachPart = [&](auto&& fn) {
+      tbb::this_task_arena::isolate([&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, round_parts, 1), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t p = r.begin(); p < r.end(); ++p) fn(*lanes[p]);
+        });
       });
-    });
+    };
+    // Every part's vertices evaluated first: the round's bound on the error is a quantile of their
+    // best candidates' errors (the same whatever the threads), so that the parts stop at about the
+    // same error, and merges a part would make at errors where other parts stop wait for the next
+    // round or the whole mesh's queue.
+    eachPart([&](Lane& L) { startLane(L); });
+    const float bound = roundErrorBound(lanes);
+    for (auto& L : lanes) L->error_limit = bound;
+    eachPart([&](Lane& L) { runLane(L, 0, nullptr); });
     // The parts' merges by error, each part's in its order (ties: the lower part first).
     std::vector<size_t> next(round_parts, 0);
     for (;;) {
@@ -1104,7 +1137,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
       if (best < 0) break;
       order.push_back(lanes[best]->sequence[next[best]++]);
     }
-    made_rounds.push_back(RankingRound{order.size() - round_begin, round_parts, part_});
+    made_rounds.push_back(RankingRound{order.size() - round_begin, round_parts, part_, bound});
     for (const auto& L : lanes) {
       count(*L, round_parts);
       L->keepOnlyPool();

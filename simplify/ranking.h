@@ -61,13 +61,16 @@
 // In parts (RankingOptions::parts; large meshes by default): the vertices are first split into P parts
 // of about equal counts by recursive bisection of their positions, and each part, on its own thread,
 // ranks merges between its vertices that share no tetrahedron with another part's (the seams), with
-// its own queue, until it has merged half of them. Such merges touch no tetrahedron another part
+// its own queue, up to the round's bound on the error: 0.6 quantile of the errors of the best
+// candidates of the round's vertices as it starts, the same for every part, so that the parts stop
+// at about the same error (a part of a busy field does not run ahead of a smooth one, as it did when
+// each part merged a fixed share of its vertices). Such merges touch no tetrahedron another part
 // reads, so the parts' merges commute: they are interleaved by error, each part's in its own order,
-// and every prefix is still a valid mesh. A second round does the same with the vertices left in P - 1
-// parts, whose cuts fall elsewhere, so that most of the first round's seams are inside its parts. The
-// whole mesh's queue then goes on with every vertex left, the seams included, which releases them:
-// the coarse levels are not frozen along the parts' seams. The tree depends on the number of parts,
-// never on the number of threads.
+// and every prefix is still a valid mesh. Up to six rounds do the same with the vertices left, in
+// P - 1, P - 2, ... parts (at least 2), whose cuts fall elsewhere, so that most of the last round's
+// seams are inside the next one's parts. The whole mesh's queue then goes on with every vertex left,
+// the seams included, which releases them: the coarse levels are not frozen along the parts' seams.
+// The tree depends on the number of parts, never on the number of threads.
 //
 // Lazy evaluation computes about a third of the candidates (a merge changes the stars of some eight
 // vertices, and most are merged or changed again before they come to the top), and a vertex whose
@@ -106,11 +109,13 @@ struct RankingOptions {
 };
 
 // A round of the ranking in parts (see above): how many merges it made (the ranks after those of the
-// rounds before it, and after the unused points' merges), in how many parts, and each vertex's part.
+// rounds before it, and after the unused points' merges), in how many parts, each vertex's part, and
+// the bound on the errors of its merges.
 struct RankingRound {
   uint64_t merges = 0;
   uint32_t parts = 0;
   std::vector<uint8_t> part;
+  float error_limit = 0;
 };
 
 // What the ranking learns of the mesh's faces before its first merge: the vertices on the boundary,

@@ -1,6 +1,8 @@
 // Ranking, in-memory application, on-the-fly simplification and mip levels on synthetic meshes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <mutex>
 
@@ -227,11 +229,28 @@ TEST(Ranking, BatchesInTheRoundsPartsAreValidAndTheThreadsChangeNothing) {
   RankingStats stats;
   auto ranked = rankMerges(mesh, in_parts, &stats);
   ASSERT_TRUE(ranked.isOk()) << ranked.status().message();
-  ASSERT_EQ(stats.rounds.size(), 2u);
+  // Rounds in 4, 3 and 2 parts; each round's merges are ranked after the rounds before it, and none
+  // has a larger error than the round's bound, which lies among the errors of the merges ranked.
+  ASSERT_EQ(stats.rounds.size(), 3u);
   EXPECT_EQ(stats.rounds[0].parts, 4u);
   EXPECT_EQ(stats.rounds[1].parts, 3u);
-  EXPECT_EQ(stats.rounds[0].merges + stats.rounds[1].merges, stats.part_merges);
-  for (const RankingRound& r : stats.rounds) EXPECT_EQ(r.part.size(), mesh.numPoints());
+  EXPECT_EQ(stats.rounds[2].parts, 2u);
+  EXPECT_EQ(stats.rounds[0].merges + stats.rounds[1].merges + stats.rounds[2].merges, stats.part_merges);
+  {
+    const float largest = *std::max_element(ranked->error.begin(), ranked->error.end());
+    uint64_t end = leadingFreeMerges(*ranked);
+    for (const RankingRound& r : stats.rounds) {
+      EXPECT_EQ(r.part.size(), mesh.numPoints());
+      EXPECT_GT(r.merges, 0u);
+      EXPECT_TRUE(std::isfinite(r.error_limit));
+      EXPECT_LT(r.error_limit, largest);
+      for (size_t v = 0; v < mesh.numPoints(); ++v) {
+        if (ranked->rank[v] <= end || ranked->rank[v] > end + r.merges) continue;
+        ASSERT_LE(ranked->error[v], r.error_limit) << "vertex " << v << " of the round of " << r.parts << " parts";
+      }
+      end += r.merges;
+    }
+  }
   std::vector<uint64_t> keys(mesh.numPoints());
   for (size_t v = 0; v < keys.size(); ++v) keys[v] = batchKeyOfPoint(mesh.point(v));
   std::vector<MergeTree> trees;
