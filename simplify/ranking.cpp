@@ -1044,12 +1044,12 @@ void Ranker::recompute(Lane& L, const std::vector<uint32_t>& list) {
 }
 
 // The kRoundQuantile quantile of the errors of the best candidates the lanes' vertices had when they
-// started (infinite when none has one).
+// started (infinite when none has one; errors that are not finite are left out).
 float roundErrorBound(const std::vector<std::unique_ptr<Lane>>& lanes) {
   std::vector<float> errors;
   for (const auto& L : lanes)
     for (const Candidate& c : L->best)
-      if (c.w != kNoIndex) errors.push_back(static_cast<float>(c.error));
+      if (c.w != kNoIndex && std::isfinite(static_cast<float>(c.error))) errors.push_back(static_cast<float>(c.error));
   if (errors.empty()) return INFINITY;
   const size_t k =
       std::min(errors.size() - 1, static_cast<size_t>(kRoundQuantile * static_cast<double>(errors.size())));
