@@ -971,6 +971,7 @@ void Ranker::merge(Lane& L, uint32_t v, uint32_t w, float error) {
       ++star_size_[w];
     }
   }
+  star_size_[v] = 0;  // its tetrahedra are w's now, or gone: lists built from the tetrahedra size by it
   // w's list becomes v's corners, then its own (the killed ones are dropped when next gathered).
   {
     star_len_[v] = 0;
