@@ -284,7 +284,6 @@ struct Lane {
   bool restricted = false;         // merges only between vertices with no neighbour in another part
   bool parallel = true;            // a merge's vertices are evaluated in parallel
   float error_limit = INFINITY;    // stop before a merge of a larger error
-  bool started = false;            // startLane has queued its vertices
   std::vector<uint32_t> sequence;  // the vertices merged away, in order
   uint64_t popped = 0, rejected = 0, stale = 0;
   Workspace* ws = nullptr;        // the thread's that runs the lane
@@ -346,9 +345,10 @@ class Ranker {
   void buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vector<uint8_t>* part);
   // Drops the corners of collapsed tetrahedra from every vertex's run in `lanes`, the lanes of `part`.
   void dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>& part);
-  // Evaluates the lane's vertices (startLane, where not done yet) and merges until its queue is empty
-  // or its error limit is reached.
+  // Evaluates the lane's live vertices and queues their best candidates (their results stay in
+  // L.best until the lane's next evaluation).
   void startLane(Lane& L);
+  // Merges until the lane's queue is empty or its error limit is reached (startLane first).
   void runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress);
   void gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners);
   // Moves run[0, n)'s corners of live tetrahedra to its front, in order; returns how many.
@@ -566,12 +566,10 @@ void Ranker::startLane(Lane& L) {
     if (alive_[v]) all.push_back(v);
   });
   recompute(L, all);
-  L.started = true;
 }
 
 void Ranker::runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress) {
-  if (!L.started) startLane(L);
-  L.ws = &thread_ws_.local();
+  L.ws = &thread_ws_.local();  // the thread that runs it, perhaps not startLane's
   const uint64_t np = mesh_.numPoints();
   while (!L.heap.empty() && merged_before + L.sequence.size() < options_.max_merges &&
          !(L.heap.top().error > L.error_limit)) {
@@ -1045,7 +1043,7 @@ void Ranker::recompute(Lane& L, const std::vector<uint32_t>& list) {
 }
 
 // The kRoundQuantile quantile of the errors of the best candidates the lanes' vertices had when they
-// started (infinite when none has one; errors that are not finite are left out).
+// started (startLane's L.best; infinite when none has one; errors that are not finite are left out).
 float roundErrorBound(const std::vector<std::unique_ptr<Lane>>& lanes) {
   std::vector<float> errors;
   for (const auto& L : lanes)
@@ -1091,7 +1089,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   // Rounds of parts, each with one part fewer than the one before, so that its cuts fall elsewhere
   // and most of the last round's seams are inside its parts.
   std::vector<uint32_t> rounds;
-  for (uint32_t r = 0; parts > 1 && r < kMaxRounds && parts - r >= 2; ++r) rounds.push_back(parts - r);
+  for (uint32_t r = 0; r < kMaxRounds && parts >= r + 2; ++r) rounds.push_back(parts - r);
   for (const uint32_t round_parts : rounds) {
     if (!lanes.empty()) leaveLanes();
     partition(round_parts);
@@ -1159,6 +1157,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     lane_begin = {};
   }
   if (options_.beside_whole_queue) options_.beside_whole_queue();
+  startLane(whole);
   runLane(whole, part_merges, &progress);
   order.insert(order.end(), whole.sequence.begin(), whole.sequence.end());
   count(whole, 1);

@@ -230,7 +230,7 @@ TEST(Ranking, BatchesInTheRoundsPartsAreValidAndTheThreadsChangeNothing) {
   auto ranked = rankMerges(mesh, in_parts, &stats);
   ASSERT_TRUE(ranked.isOk()) << ranked.status().message();
   // Rounds in 4, 3 and 2 parts; each round's merges are ranked after the rounds before it, and none
-  // has a larger error than the round's bound, which lies among the errors of the merges ranked.
+  // has a larger error than the round's bound, which is finite and below the tree's largest error.
   ASSERT_EQ(stats.rounds.size(), 3u);
   EXPECT_EQ(stats.rounds[0].parts, 4u);
   EXPECT_EQ(stats.rounds[1].parts, 3u);
