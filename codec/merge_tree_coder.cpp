@@ -356,6 +356,111 @@ class ParentCandidates {
   std::vector<Keyed> keyed_;
 };
 
+// Version 5's inferred values (parent_form 3): a merge's child's boundary bit and the tetrahedra the
+// merge removes, read off the mesh the earlier merges made of the level. A tetrahedron of the level is
+// alive while the roots of its four vertices differ; a merge c -> p kills the alive ones whose roots
+// include c and p. The child's star is the alive tetrahedra with a vertex whose root is c (exactly one
+// such vertex each); c is a boundary vertex when an edge of its link (the other three roots of each
+// tetrahedron of its star, in pairs) lies in exactly one of them. Each vertex keeps its tetrahedra,
+// the dead ones dropped when met, and a class (the vertices merged into a root) drops a vertex whose
+// tetrahedra are all dead, so that a star costs about its tetrahedra, however large the class.
+class StarCounter {
+ public:
+  StarCounter(size_t n, std::span<const uint32_t> tets)
+      : tets_(tets), up_(n), next_(n, kNone), last_(n), at_(n + 1, 0), live_(n), dead_(tets.size() / 4, 0) {
+    for (uint32_t v = 0; v < n; ++v) up_[v] = last_[v] = v;
+    for (uint32_t v : tets) ++at_[v + 1];
+    for (size_t v = 0; v < n; ++v) at_[v + 1] += at_[v];
+    incident_.resize(tets.size());
+    std::vector<uint64_t> fill(at_.begin(), at_.end() - 1);
+    for (size_t i = 0; i < tets.size(); ++i) incident_[fill[tets[i]]++] = static_cast<uint32_t>(i / 4);
+    for (size_t v = 0; v < n; ++v) live_[v] = static_cast<uint32_t>(at_[v + 1] - at_[v]);
+  }
+
+  // Gathers the star of c (a root): call before boundary() and merge().
+  void gather(uint32_t c) {
+    star_.clear();
+    uint32_t prev = kNone;
+    for (uint32_t y = c; y != kNone;) {
+      const uint64_t begin = at_[y];
+      uint64_t end = begin + live_[y];
+      for (uint64_t k = begin; k < end;) {
+        const uint32_t t = incident_[k];
+        if (dead_[t]) {
+          incident_[k] = incident_[--end];
+          continue;
+        }
+        ++k;
+        Entry e{t, {0, 0, 0}};
+        int m = 0;
+        for (int j = 0; j < 4; ++j) {
+          const uint32_t w = root(tets_[4 * size_t{t} + j]);
+          if (w != c && m < 3) e.other[m++] = w;
+        }
+        if (m == 3) star_.push_back(e);  // always, as a merge kills every tetrahedron it folds
+      }
+      live_[y] = static_cast<uint32_t>(end - begin);
+      const uint32_t after = next_[y];
+      if (end == begin && y != c) {
+        next_[prev] = after;
+        if (last_[c] == y) last_[c] = prev;
+      } else {
+        prev = y;
+      }
+      y = after;
+    }
+  }
+  // Whether the gathered child is a boundary vertex.
+  bool boundary() {
+    edges_.clear();
+    for (const Entry& e : star_) {
+      const uint32_t a = e.other[0], b = e.other[1], d = e.other[2];
+      edges_.push_back(edgeKey(a, b));
+      edges_.push_back(edgeKey(a, d));
+      edges_.push_back(edgeKey(b, d));
+    }
+    std::sort(edges_.begin(), edges_.end());
+    for (size_t i = 0; i < edges_.size();) {
+      size_t j = i + 1;
+      while (j < edges_.size() && edges_[j] == edges_[i]) ++j;
+      if (j - i == 1) return true;
+      i = j;
+    }
+    return false;
+  }
+  // The gathered child c merges into p: returns the tetrahedra the merge removes.
+  uint32_t merge(uint32_t c, uint32_t p) {
+    uint32_t removed = 0;
+    for (const Entry& e : star_) {
+      if (e.other[0] == p || e.other[1] == p || e.other[2] == p) {
+        dead_[e.tet] = 1;
+        ++removed;
+      }
+    }
+    up_[c] = p;
+    next_[last_[p]] = c;
+    last_[p] = last_[c];
+    return removed;
+  }
+
+ private:
+  static constexpr uint32_t kNone = UINT32_MAX;
+  struct Entry {
+    uint32_t tet;
+    uint32_t other[3];  // the roots of its other three vertices
+  };
+  static uint64_t edgeKey(uint32_t a, uint32_t b) { return a < b ? (uint64_t{a} << 32) | b : (uint64_t{b} << 32) | a; }
+  uint32_t root(uint32_t x) { return rootOf(up_, x); }
+  std::span<const uint32_t> tets_;
+  std::vector<uint32_t> up_, next_, last_;
+  std::vector<uint64_t> at_;        // per vertex: its first entry in incident_
+  std::vector<uint32_t> incident_;  // each vertex's tetrahedra, those still alive first
+  std::vector<uint32_t> live_;      // per vertex: its tetrahedra that may still be alive
+  std::vector<uint8_t> dead_;       // per tetrahedron
+  std::vector<Entry> star_;
+  std::vector<uint64_t> edges_;
+};
+
 // Version 4's grid places (parent_form 4): the parent as a place among the roots of the grid nodes
 // next to the child, where decoding id g < ni * nj * nk is node (g mod ni, (g / ni) mod nj, g / (ni *
 // nj)) of an ni x nj x nk block and the nodes next to a node are the up to 26 others of its 3 x 3 x 3
@@ -529,13 +634,19 @@ uint32_t codeGridPlace(C& c, Models& m, uint32_t boundary, uint32_t place, bool*
 // How a merge's parent is coded: version 3's candidates, version 4's grid places, or deltas only.
 enum class ParentCode { kCandidates, kGridPlaces, kDeltas };
 
+// Version 5's `inferred` bits: what the body leaves out because the decoder knows it.
+constexpr uint8_t kInferRemoved = 1;   // the tetrahedra a merge removes (parent_form 3: StarCounter)
+constexpr uint8_t kInferBoundary = 2;  // the child's boundary bit (parent_form 3: StarCounter)
+constexpr uint8_t kOwnChildren = 4;    // the children are the level's vertices the next level lacks
+
 // What follows the child's index (codeUniform over the vertices not merged yet), once the child and
 // so its parent-delta predictions are known; `candidates` is the number of the child's parent
 // candidates for ParentCode::kCandidates. v.index: the parent's place (kCandidates: the count when
 // none; kGridPlaces: kNoPlace when none). Sets *bad on a corrupt code.
 template <class C>
-void codeMerge(C& c, Models& m, MergeCode& v, int predictions, ParentCode form, uint32_t candidates, bool* bad) {
-  v.boundary = c.bit(m.boundary, v.boundary);
+void codeMerge(C& c, Models& m, MergeCode& v, int predictions, ParentCode form, uint32_t candidates, bool* bad,
+               uint8_t inferred) {
+  if (!(inferred & kInferBoundary)) v.boundary = c.bit(m.boundary, v.boundary);
   bool delta = true;
   if (form == ParentCode::kCandidates) {
     v.index = codeParentIndex(c, m.index[v.boundary], v.index, candidates);
@@ -552,6 +663,7 @@ void codeMerge(C& c, Models& m, MergeCode& v, int predictions, ParentCode form, 
       codeDelta(c, m, v);
     }
   }
+  if (inferred & kInferRemoved) return;
   const uint32_t k = m.removed[v.boundary].code(c, std::min<uint32_t>(v.removed, 15));
   v.removed = k == 15 ? c.direct(v.removed, 32) : k;
 }
@@ -654,9 +766,11 @@ void sortByKey(BatchScratch& w, const Key& key) {
 }
 
 // `seq`: the batch's children (decoding ids) in rank order; `place`: scratch of P entries.
+// `all_left`: the batch's children are known to be every vertex left in `unmerged` (version 5's own
+// children, last batch): no gap is coded.
 template <class Key>
 void encodeBatch(EntropyCoder<true>& rc, Models& m, FreeRanks& unmerged, uint32_t rule, std::span<const uint32_t> seq,
-                 const Key& key, BatchScratch& w, std::vector<uint32_t>& place) {
+                 bool all_left, const Key& key, BatchScratch& w, std::vector<uint32_t>& place) {
   const uint32_t size = static_cast<uint32_t>(seq.size());
   bool bad = false;
   rc.bit(m.rule, size == rule);
@@ -666,7 +780,7 @@ void encodeBatch(EntropyCoder<true>& rc, Models& m, FreeRanks& unmerged, uint32_
   uint32_t pos = 0;
   for (uint32_t id : w.ids) {
     const uint32_t at = unmerged.countBelow(id + 1);
-    codeLength(rc, m.gap, at - pos, &bad);
+    if (!all_left) codeLength(rc, m.gap, at - pos, &bad);
     unmerged.take(id + 1);
     pos = at;
   }
@@ -713,18 +827,20 @@ void encodeBatch(EntropyCoder<true>& rc, Models& m, FreeRanks& unmerged, uint32_
 }
 
 // Decodes a batch of at most `most` children into `seq`, in their merge order; false on a corrupt
-// batch.
+// batch. `own`: the children are drawn from `unmerged` (unmerged_count of them) as version 5's own
+// children, and a batch of all of them codes no gap.
 template <class Key>
 bool decodeBatch(EntropyCoder<false>& rc, Models& m, FreeRanks& unmerged, uint64_t unmerged_count, uint32_t rule,
-                 uint64_t most, const Key& key, BatchScratch& w, std::vector<uint32_t>& seq) {
+                 uint64_t most, bool own, const Key& key, BatchScratch& w, std::vector<uint32_t>& seq) {
   bool bad = false;
   uint64_t size = rule;
   if (!rc.bit(m.rule, 0)) size = codeLength(rc, m.size, 0, &bad);
   if (bad || size == 0 || size > most || !rc.ok()) return false;
+  const bool all_left = own && size == unmerged_count;
   w.ids.clear();
   uint64_t pos = 0;
   for (uint64_t j = 0; j < size; ++j) {
-    const uint64_t at = pos + codeLength(rc, m.gap, 0, &bad);
+    const uint64_t at = all_left ? 0 : pos + codeLength(rc, m.gap, 0, &bad);
     if (bad || at >= unmerged_count - j || !rc.ok()) return false;
     const uint32_t id = unmerged.kth(static_cast<uint32_t>(at)) - 1;
     unmerged.take(id + 1);
@@ -779,6 +895,12 @@ void putF64(std::vector<uint8_t>& out, double d) {
   out.insert(out.end(), b, b + 8);
 }
 
+void putF32(std::vector<uint8_t>& out, float f) {
+  uint8_t b[4];
+  std::memcpy(b, &f, 4);
+  out.insert(out.end(), b, b + 4);
+}
+
 class Reader {
  public:
   Reader(std::span<const uint8_t> in, const std::string& what) : in_(in), what_(what) {}
@@ -807,6 +929,14 @@ class Reader {
     pos_ += 8;
     return Status::ok();
   }
+  Status f32(double* v, const char* field) {
+    if (in_.size() - pos_ < 4) return error(field, "truncated");
+    float f;
+    std::memcpy(&f, in_.data() + pos_, 4);
+    pos_ += 4;
+    *v = f;
+    return Status::ok();
+  }
   Status bytes(uint64_t n, std::span<const uint8_t>* out, const char* field) {
     if (n > in_.size() - pos_) return error(field, "length exceeds the payload");
     *out = in_.subspan(pos_, n);
@@ -825,13 +955,13 @@ class Reader {
   const std::string& what_;
 };
 
-constexpr uint8_t kVersion2 = 2, kVersion3 = 3, kVersion4 = 4;
+constexpr uint8_t kVersion2 = 2, kVersion3 = 3, kVersion4 = 4, kVersion5 = 5;
 
 // The header fields of every version (free_merges is version 3's and 4's; parent_form and divisor
 // version 4's, and parent_form is 3 in version 3; grid is parent_form 4's).
 constexpr uint8_t kParentDeltas = 2, kParentCandidates = 3, kParentGrid = 4;
 struct Header {
-  uint8_t version = 0, parent_form = kParentDeltas;
+  uint8_t version = 0, parent_form = kParentDeltas, inferred = 0;
   uint64_t points = 0, merges = 0, boundary_merges = 0, tets_removed = 0, free_merges = 0, divisor = 0;
   std::array<uint32_t, 3> grid = {0, 0, 0};
   bool candidates() const { return parent_form == kParentCandidates; }
@@ -873,12 +1003,13 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   const size_t n = tree.points();
   if (vertex_order.size() != n) return invalidData("merge tree: vertex order has the wrong size");
   if (n > 0xFFFFFFF0u) return unsupported("merge tree: more than 2^32 - 16 vertices");
-  if (form.version < kVersion2 || form.version > kVersion4) return usageError("merge tree: no such payload version");
+  if (form.version < kVersion2 || form.version > kVersion5) return usageError("merge tree: no such payload version");
   const uint8_t version = form.version;
-  const bool with_candidates = version == kVersion3 || (version == kVersion4 && form.candidates);
+  const bool batched = version >= kVersion4;
+  const bool with_candidates = version == kVersion3 || (batched && form.candidates);
   if (with_candidates && !mesh) return usageError("merge tree: parent candidates are coded against the level's mesh");
   const uint64_t grid_nodes = uint64_t{form.grid[0]} * form.grid[1] * form.grid[2];
-  const bool with_grid = version == kVersion4 && !with_candidates && grid_nodes > 0;
+  const bool with_grid = batched && !with_candidates && grid_nodes > 0;
   if (with_grid && grid_nodes > n) return usageError("merge tree: a grid of more nodes than the tree has vertices");
   if (mesh && mesh->numPoints() != n) return invalidData("merge tree: the mesh and the tree differ in vertices");
   // inverse[id] = source vertex with decoding id `id`.
@@ -888,7 +1019,126 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     if (id >= n || inverse[id] != MergeTree::kRoot) return invalidData("merge tree: vertex order is not a permutation");
     inverse[id] = static_cast<uint32_t>(v);
   }
+  // Version 5: the children among the level's own vertices where it names the next level's (they are
+  // then exactly the tree's children), and with candidates, the removed counts and boundary bits left
+  // to the decoder where the level's mesh gives them (tried, and dropped if a merge disagrees).
+  uint8_t inferred = 0;
+  if (version == kVersion5 && form.next_index) {
+    if (form.next_index->size() != n) return invalidData("merge tree: the next level's ids have the wrong size");
+    for (size_t v = 0; v < n; ++v)
+      if ((tree.parent[v] == MergeTree::kRoot) == ((*form.next_index)[v] == kNoIndex))
+        return invalidData("merge tree: vertex " + std::to_string(v) +
+                           (tree.parent[v] == MergeTree::kRoot ? " is neither merged nor a vertex of the next level"
+                                                               : " is merged but also a vertex of the next level"));
+    inferred |= kOwnChildren;
+  }
+  if (version == kVersion5 && with_candidates) inferred |= kInferRemoved | kInferBoundary;
   const uint32_t divisor = tree.batch_divisor ? tree.batch_divisor : kDefaultBatchDivisor;
+  std::span<const uint32_t> tets;
+  if (with_candidates) {
+    GTN_ASSIGN_OR_RETURN(tets, tetIds(*mesh, "merge tree"));
+  }
+  // by_rank[r - 1] = decoding id of the vertex merged at rank r.
+  std::vector<uint32_t> by_rank(tree.merges);
+  for (size_t v = 0; v < n; ++v) {
+    if (tree.parent[v] != MergeTree::kRoot) by_rank[tree.rank[v] - 1] = vertex_order[v];
+  }
+  auto key = [&](uint32_t id) {
+    return with_candidates ? batchKeyOfPoint(mesh->coords.data() + 3 * size_t{inverse[id]}) : batchKeyOfId(id);
+  };
+  // The body with the given inferred bits; false where a merge's removed count or boundary bit is not
+  // what the level gives (the caller then codes them).
+  std::vector<uint8_t> body;
+  auto codeBody = [&](uint8_t inferring) -> bool {
+    body.clear();
+    EntropyCoder<true> rc(&body);
+    Models m;
+    std::optional<ParentCandidates> candidates;
+    if (with_candidates) candidates.emplace(n, tets, mesh->coords.data(), vertex_order.data());
+    std::optional<StarCounter> stars;
+    if (inferring & (kInferRemoved | kInferBoundary)) stars.emplace(n, tets);
+    std::optional<GridCandidates> grid;
+    if (with_grid) grid.emplace(n, form.grid);
+    const ParentCode parent_code = with_candidates ? ParentCode::kCandidates
+                                   : with_grid     ? ParentCode::kGridPlaces
+                                                   : ParentCode::kDeltas;
+    FreeRanks unmerged(static_cast<uint32_t>(n));  // decoding ids + 1 of the vertices not merged yet
+    uint64_t own_left = n;                         // of them, those the batches draw from
+    if (inferring & kOwnChildren) {
+      for (size_t v = 0; v < n; ++v)
+        if (tree.parent[v] == MergeTree::kRoot) unmerged.take(vertex_order[v] + 1);
+      own_left = tree.merges;
+    }
+    std::vector<uint32_t> coded_parent(n, MergeTree::kRoot);  // decoding ids, merges coded so far
+    BatchScratch scratch;
+    std::vector<uint32_t> place(batched ? n : 0);
+    uint64_t batch_end = 0;
+    size_t batch = 0;
+    for (uint64_t r = 0; r < tree.merges; ++r) {
+      if (batched && r == batch_end) {
+        const uint32_t rule = batchRule(n - r, tree.merges - r, divisor);
+        const uint32_t size = tree.batches.empty() ? rule : tree.batches[batch++];
+        encodeBatch(rc, m, unmerged, rule, std::span<const uint32_t>(by_rank.data() + r, size),
+                    (inferring & kOwnChildren) && size == own_left, key, scratch, place);
+        own_left -= size;
+        batch_end = r + size;
+      }
+      const uint32_t id = by_rank[r];
+      const uint32_t v = inverse[id];
+      MergeCode code{};
+      uint32_t count = 0;
+      const uint32_t pid = vertex_order[tree.parent[v]];
+      if (stars) {
+        stars->gather(v);
+        if ((inferring & kInferBoundary) && stars->boundary() != (tree.boundary[v] != 0)) return false;
+        if (stars->merge(v, tree.parent[v]) != tree.removed[v] && (inferring & kInferRemoved)) return false;
+      }
+      if (candidates) {
+        count = candidates->gather(v);
+        code.index = candidates->placeOf(tree.parent[v]);
+        candidates->merge(v, tree.parent[v]);
+      } else if (grid) {
+        grid->begin(id);
+        code.index = grid->placeOf(pid);
+        grid->merge(id, pid);
+      }
+      const int64_t delta = int64_t{pid} - int64_t{id};
+      int64_t residual = delta;
+      const DeltaPredictions pred(coded_parent, id);
+      for (int k = 0; k < pred.count; ++k) {
+        const int64_t d = delta - pred.d[k];
+        if (d == 0 && !code.exact) {
+          code.exact = 1;
+          code.hit = static_cast<uint32_t>(k);
+        }
+        if (std::llabs(d) < std::llabs(residual)) {
+          residual = d;
+          code.choice = static_cast<uint32_t>(k + 1);
+        }
+      }
+      coded_parent[id] = pid;
+      const uint64_t mag = static_cast<uint64_t>(std::llabs(residual));
+      code.len = static_cast<uint32_t>(bitLength(mag));
+      code.sign = residual < 0 ? 1 : 0;
+      code.low_bits = code.len > 1 ? static_cast<uint32_t>(mag & ((uint64_t{1} << (code.len - 1)) - 1)) : 0;
+      code.boundary = tree.boundary[v] ? 1 : 0;
+      code.removed = tree.removed[v];
+      if (!batched) {
+        code.child_index = unmerged.countBelow(id + 1);
+        codeUniform(rc, code.child_index, static_cast<uint32_t>(n - r));
+        unmerged.take(id + 1);
+      }
+      bool bad = false;
+      codeMerge(rc, m, code, pred.count, parent_code, count, &bad, inferring);
+    }
+    rc.finish();
+    return true;
+  };
+  if (!codeBody(inferred)) {
+    inferred &= kOwnChildren;
+    codeBody(inferred);
+  }
+
   std::vector<uint8_t> out;
   out.push_back(version);
   putVarint(out, n);
@@ -896,11 +1146,12 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   putVarint(out, tree.boundaryMergesUpTo(tree.merges));
   putVarint(out, tree.tetsRemovedUpTo(tree.merges));
   if (version >= kVersion3) putVarint(out, leadingFreeMerges(tree));
-  if (version == kVersion4) {
+  if (batched) {
     out.push_back(with_candidates ? kParentCandidates : with_grid ? kParentGrid : kParentDeltas);
     if (with_grid)
       for (uint32_t d : form.grid) putVarint(out, d);
     putVarint(out, divisor);
+    if (version == kVersion5) out.push_back(inferred);
   }
   putF64(out, tree.w_density);
   putF64(out, tree.w_geometry);
@@ -908,86 +1159,11 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
   out.insert(out.end(), tree.field.begin(), tree.field.end());
   const size_t q = tree.error_quantiles.size() == 9 ? 9 : 0;
   out.push_back(static_cast<uint8_t>(q));
-  for (size_t i = 0; i < q; ++i) putF64(out, tree.error_quantiles[i]);
-
-  std::optional<ParentCandidates> candidates;
-  if (with_candidates) {
-    GTN_ASSIGN_OR_RETURN(std::span<const uint32_t> tets, tetIds(*mesh, "merge tree"));
-    candidates.emplace(n, tets, mesh->coords.data(), vertex_order.data());
+  // Version 5 stores the quantiles as f32: they are merges' errors, which the ranking keeps as float.
+  for (size_t i = 0; i < q; ++i) {
+    if (version == kVersion5) putF32(out, static_cast<float>(tree.error_quantiles[i]));
+    else putF64(out, tree.error_quantiles[i]);
   }
-  std::optional<GridCandidates> grid;
-  if (with_grid) grid.emplace(n, form.grid);
-  const ParentCode parent_code = with_candidates ? ParentCode::kCandidates
-                                 : with_grid     ? ParentCode::kGridPlaces
-                                                 : ParentCode::kDeltas;
-  // by_rank[r - 1] = decoding id of the vertex merged at rank r.
-  std::vector<uint32_t> by_rank(tree.merges);
-  for (size_t v = 0; v < n; ++v) {
-    if (tree.parent[v] != MergeTree::kRoot) by_rank[tree.rank[v] - 1] = vertex_order[v];
-  }
-  std::vector<uint8_t> body;
-  EntropyCoder<true> rc(&body);
-  Models m;
-  FreeRanks unmerged(static_cast<uint32_t>(n));             // decoding ids + 1 of the vertices not merged yet
-  std::vector<uint32_t> coded_parent(n, MergeTree::kRoot);  // decoding ids, merges coded so far
-  BatchScratch scratch;
-  std::vector<uint32_t> place(version == kVersion4 ? n : 0);
-  auto key = [&](uint32_t id) {
-    return with_candidates ? batchKeyOfPoint(mesh->coords.data() + 3 * size_t{inverse[id]}) : batchKeyOfId(id);
-  };
-  uint64_t batch_end = 0;
-  size_t batch = 0;
-  for (uint64_t r = 0; r < tree.merges; ++r) {
-    if (version == kVersion4 && r == batch_end) {
-      const uint32_t rule = batchRule(n - r, tree.merges - r, divisor);
-      const uint32_t size = tree.batches.empty() ? rule : tree.batches[batch++];
-      encodeBatch(rc, m, unmerged, rule, std::span<const uint32_t>(by_rank.data() + r, size), key, scratch, place);
-      batch_end = r + size;
-    }
-    const uint32_t id = by_rank[r];
-    const uint32_t v = inverse[id];
-    MergeCode code{};
-    uint32_t count = 0;
-    const uint32_t pid = vertex_order[tree.parent[v]];
-    if (candidates) {
-      count = candidates->gather(v);
-      code.index = candidates->placeOf(tree.parent[v]);
-      candidates->merge(v, tree.parent[v]);
-    } else if (grid) {
-      grid->begin(id);
-      code.index = grid->placeOf(pid);
-      grid->merge(id, pid);
-    }
-    const int64_t delta = int64_t{pid} - int64_t{id};
-    int64_t residual = delta;
-    const DeltaPredictions pred(coded_parent, id);
-    for (int k = 0; k < pred.count; ++k) {
-      const int64_t d = delta - pred.d[k];
-      if (d == 0 && !code.exact) {
-        code.exact = 1;
-        code.hit = static_cast<uint32_t>(k);
-      }
-      if (std::llabs(d) < std::llabs(residual)) {
-        residual = d;
-        code.choice = static_cast<uint32_t>(k + 1);
-      }
-    }
-    coded_parent[id] = pid;
-    const uint64_t mag = static_cast<uint64_t>(std::llabs(residual));
-    code.len = static_cast<uint32_t>(bitLength(mag));
-    code.sign = residual < 0 ? 1 : 0;
-    code.low_bits = code.len > 1 ? static_cast<uint32_t>(mag & ((uint64_t{1} << (code.len - 1)) - 1)) : 0;
-    code.boundary = tree.boundary[v] ? 1 : 0;
-    code.removed = tree.removed[v];
-    if (version != kVersion4) {
-      code.child_index = unmerged.countBelow(id + 1);
-      codeUniform(rc, code.child_index, static_cast<uint32_t>(n - r));
-      unmerged.take(id + 1);
-    }
-    bool bad = false;
-    codeMerge(rc, m, code, pred.count, parent_code, count, &bad);
-  }
-  rc.finish();
   putVarint(out, body.size());
   out.insert(out.end(), body.begin(), body.end());
   return out;
@@ -998,7 +1174,7 @@ namespace {
 StatusOr<Header> readHeader(Reader& r, uint64_t expected_points, MergeTree* tree) {
   Header h;
   GTN_RETURN_IF_ERROR(r.u8(&h.version, "version"));
-  if (h.version < kVersion2 || h.version > kVersion4)
+  if (h.version < kVersion2 || h.version > kVersion5)
     return r.error("version", "unsupported version " + std::to_string(h.version));
   GTN_RETURN_IF_ERROR(r.varint(&h.points, "points"));
   if (h.points != expected_points)
@@ -1014,7 +1190,7 @@ StatusOr<Header> readHeader(Reader& r, uint64_t expected_points, MergeTree* tree
     if (h.free_merges > h.merges - h.boundary_merges) return r.error("free_merges", "more than the interior merges");
     h.parent_form = 3;
   }
-  if (h.version == kVersion4) {
+  if (h.version >= kVersion4) {
     GTN_RETURN_IF_ERROR(r.u8(&h.parent_form, "parent_form"));
     if (h.parent_form < kParentDeltas || h.parent_form > kParentGrid)
       return r.error("parent_form", "must be 2, 3 or 4");
@@ -1032,6 +1208,13 @@ StatusOr<Header> readHeader(Reader& r, uint64_t expected_points, MergeTree* tree
     GTN_RETURN_IF_ERROR(r.varint(&h.divisor, "batch_divisor"));
     if (h.divisor == 0 || h.divisor > 0xFFFFFFFFu) return r.error("batch_divisor", "must be 1 to 2^32 - 1");
   }
+  if (h.version == kVersion5) {
+    GTN_RETURN_IF_ERROR(r.u8(&h.inferred, "inferred"));
+    if (h.inferred & ~(kInferRemoved | kInferBoundary | kOwnChildren))
+      return r.error("inferred", "unknown bits " + std::to_string(h.inferred));
+    if ((h.inferred & (kInferRemoved | kInferBoundary)) && h.parent_form != kParentCandidates)
+      return r.error("inferred", "removed counts and boundary bits are inferred only with parents as candidates");
+  }
   GTN_RETURN_IF_ERROR(r.f64(&tree->w_density, "w_density"));
   GTN_RETURN_IF_ERROR(r.f64(&tree->w_geometry, "w_geometry"));
   uint64_t name_len = 0;
@@ -1044,7 +1227,7 @@ StatusOr<Header> readHeader(Reader& r, uint64_t expected_points, MergeTree* tree
   if (q != 0 && q != 9) return r.error("quantile count", "must be 0 or 9");
   for (int i = 0; i < q; ++i) {
     double d = 0;
-    GTN_RETURN_IF_ERROR(r.f64(&d, "quantile"));
+    GTN_RETURN_IF_ERROR(h.version == kVersion5 ? r.f32(&d, "quantile") : r.f64(&d, "quantile"));
     tree->error_quantiles.push_back(d);
   }
   uint64_t body_len = 0;
@@ -1069,12 +1252,14 @@ StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, 
   out.free_merges = h.free_merges;
   out.candidates = h.candidates();
   out.needs_mesh = h.candidates();
+  out.needs_next_ids = (h.inferred & kOwnChildren) != 0;
+  out.inferred = h.inferred;
   out.grid = h.grid;
   return out;
 }
 
 StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,
-                                    const TetMesh* mesh, uint64_t max_merges) {
+                                    const TetMesh* mesh, uint64_t max_merges, const std::vector<uint32_t>* next_ids) {
   Reader r(payload, what);
   MergeTree tree;
   GTN_ASSIGN_OR_RETURN(Header h, readHeader(r, expected_points, &tree));
@@ -1086,6 +1271,7 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
                                  : h.parent_form == kParentGrid ? ParentCode::kGridPlaces
                                                                 : ParentCode::kDeltas;
   std::optional<ParentCandidates> candidates;
+  std::optional<StarCounter> stars;
   if (h.candidates() && decode > 0) {
     if (!mesh)
       return usageError(what + ": the merge tree (version " + std::to_string(h.version) +
@@ -1095,13 +1281,33 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
                          std::to_string(mesh->numPoints()));
     GTN_ASSIGN_OR_RETURN(std::span<const uint32_t> tets, tetIds(*mesh, what));
     candidates.emplace(n, tets, mesh->coords.data(), nullptr);
+    if (h.inferred & (kInferRemoved | kInferBoundary)) stars.emplace(n, tets);
   }
   tree.makeRoots(n);
   tree.merges = decode;
-  if (h.version == kVersion4) tree.batch_divisor = static_cast<uint32_t>(h.divisor);
+  if (h.version >= kVersion4) tree.batch_divisor = static_cast<uint32_t>(h.divisor);
   EntropyCoder<false> rc(h.body);
   Models m;
   FreeRanks unmerged(static_cast<uint32_t>(n));
+  uint64_t own_left = n;  // the vertices the batches draw their children from, not merged yet
+  const bool own = (h.inferred & kOwnChildren) != 0;
+  if (own && decode > 0) {
+    if (!next_ids)
+      return usageError(what +
+                        ": the merge tree (version 5) is decoded knowing which of its level's vertices the "
+                        "next level has (the level names none, or they were not given)");
+    if (next_ids->size() != n)
+      return invalidData(what + ": the merge tree has " + std::to_string(n) + " vertices, the next level's ids " +
+                         std::to_string(next_ids->size()));
+    own_left = 0;
+    for (uint32_t v = 0; v < n; ++v) {
+      if ((*next_ids)[v] != kNoIndex) unmerged.take(v + 1);
+      else ++own_left;
+    }
+    if (own_left != h.merges)
+      return invalidData(what + ": the merge tree has " + std::to_string(h.merges) + " merges, its level " +
+                         std::to_string(own_left) + " vertices the next level lacks");
+  }
   uint64_t got_boundary = 0, got_removed = 0;
   auto bodyError = [&](uint64_t r, const std::string& why) {
     return invalidData(what + ": merge tree payload body, merge " + std::to_string(r + 1) + ": " + why);
@@ -1115,11 +1321,12 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
   for (uint64_t r = 0; r < decode; ++r) {
     MergeCode code{};
     uint32_t id = 0;
-    if (h.version == kVersion4) {
+    if (h.version >= kVersion4) {
       if (next == seq.size()) {
         const uint32_t rule = batchRule(n - r, h.merges - r, static_cast<uint32_t>(h.divisor));
-        if (!decodeBatch(rc, m, unmerged, n - r, rule, h.merges - r, key, scratch, seq))
+        if (!decodeBatch(rc, m, unmerged, own ? own_left : n - r, rule, h.merges - r, own, key, scratch, seq))
           return bodyError(r, "batch corrupt or out of range");
+        if (own) own_left -= seq.size();
         next = 0;
         tree.batches.push_back(static_cast<uint32_t>(std::min<uint64_t>(seq.size(), decode - r)));
       }
@@ -1133,8 +1340,12 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     const DeltaPredictions pred(tree.parent, id);
     const uint32_t count = candidates ? candidates->gather(id) : 0;
     if (grid) grid->begin(id);
+    if (stars) {
+      stars->gather(id);
+      if (h.inferred & kInferBoundary) code.boundary = stars->boundary() ? 1 : 0;
+    }
     bool bad = false;
-    codeMerge(rc, m, code, pred.count, parent_code, count, &bad);
+    codeMerge(rc, m, code, pred.count, parent_code, count, &bad, h.inferred);
     if (!rc.ok() || bad) return bodyError(r, "body truncated or corrupt");
     uint32_t pid = 0;
     if (candidates && code.index < count) {
@@ -1162,6 +1373,10 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
     if (tree.parent[pid] != MergeTree::kRoot) return bodyError(r, "merges into a vertex merged earlier");
     if (candidates) candidates->merge(id, pid);
     if (grid) grid->merge(id, pid);
+    if (stars) {
+      const uint32_t removed = stars->merge(id, pid);
+      if (h.inferred & kInferRemoved) code.removed = removed;
+    }
     tree.parent[id] = pid;
     tree.rank[id] = static_cast<uint32_t>(r + 1);
     tree.boundary[id] = static_cast<uint8_t>(code.boundary);

@@ -143,9 +143,13 @@ uint64_t leadingFreeMerges(const MergeTree& tree);
 // fastest), which needs nothing of the level but `grid` (a grid of no nodes: not this form); or as
 // version 2's deltas, which needs nothing of the level.
 struct MergeTreeForm {
-  uint8_t version = 4;
+  uint8_t version = 5;
   bool candidates = true;
   std::array<uint32_t, 3> grid = {0, 0, 0};  // without candidates: the block's ni, nj, nk
+  // Version 5, a level that names the next level's vertices (spec section 7.7) and whose tree holds
+  // the merges down to it: next_index[v] is vertex v's id in the next level, kNoIndex for the
+  // vertices the tree merges (every other one). The children are then coded among those.
+  const std::vector<uint32_t>* next_index = nullptr;
 };
 
 // Encodes `tree` (vertex numbering of the source mesh) with vertex v stored at vertex_order[v], the
@@ -164,6 +168,8 @@ struct MergeTreeHeader {
   uint64_t free_merges = 0;                  // versions 3 and 4; 0 in version 2 (count them with leadingFreeMerges)
   bool candidates = false;                   // parents coded as candidates (version 3, and version 4 where it says so)
   bool needs_mesh = false;                   // decoding merges needs the level's mesh (candidates)
+  bool needs_next_ids = false;               // decoding merges needs the level's next-level ids (version 5)
+  uint8_t inferred = 0;                      // version 5: what the body leaves to the decoder (spec section 11)
   std::array<uint32_t, 3> grid = {0, 0, 0};  // version 4 grid places: the block's ni, nj, nk; else 0
 };
 StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, uint64_t expected_points,
@@ -176,6 +182,7 @@ StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, 
 // itself a merge tree, with the later merges' children as roots); the checks that need the whole body
 // (header counts, trailing bytes) run only when the whole body is read.
 StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,
-                                    const TetMesh* mesh, uint64_t max_merges = UINT64_MAX);
+                                    const TetMesh* mesh, uint64_t max_merges = UINT64_MAX,
+                                    const std::vector<uint32_t>* next_ids = nullptr);
 
 }  // namespace gtn

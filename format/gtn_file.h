@@ -31,9 +31,11 @@ struct GtnLevelInput {
   // Optional, for a level that may name the next level's vertices (spec section 7.7): per vertex of
   // this level's mesh, its index in the next level's mesh (kNoIndex where it merges away before it),
   // and the level's merge-tree payload holding only the tree's first `merges` merges (those down to
-  // the next level). The writer names the next level's vertices where that takes fewer bytes.
+  // the next level), for the level naming the next level's vertices by `next_index`. The writer names
+  // the next level's vertices where that takes fewer bytes.
   std::function<StatusOr<std::vector<uint32_t>>()> next_index;
-  std::function<StatusOr<std::vector<uint8_t>>(const std::vector<uint32_t>& vertex_order, uint64_t merges)>
+  std::function<StatusOr<std::vector<uint8_t>>(const std::vector<uint32_t>& vertex_order, uint64_t merges,
+                                               const std::vector<uint32_t>& next_index)>
       merge_tree_prefix;
   // Optional: `mesh` already encoded by encodePieces with the default options and the write's
   // piece_tets (while the merge tree was ranked, say); the writer then uses it instead of encoding the

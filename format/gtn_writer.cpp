@@ -273,8 +273,8 @@ StatusOr<EncodedInput> encodeChained(const std::vector<GtnLevelInput>& levels, s
   GTN_ASSIGN_OR_RETURN(out.level, encodeChainedLevel(mesh, next_index, next.level.vertex_order));
   setLevelIndex(out.level, i, levels[i].merges);
   if (levels[i].merge_tree_prefix) {
-    GTN_ASSIGN_OR_RETURN(out.tree,
-                         levels[i].merge_tree_prefix(out.level.vertex_order, levels[i + 1].merges - levels[i].merges));
+    GTN_ASSIGN_OR_RETURN(out.tree, levels[i].merge_tree_prefix(out.level.vertex_order,
+                                                               levels[i + 1].merges - levels[i].merges, next_index));
   } else if (levels[i].merge_tree) {
     GTN_ASSIGN_OR_RETURN(out.tree, levels[i].merge_tree(out.level.vertex_order));
   }

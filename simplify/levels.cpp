@@ -115,8 +115,11 @@ std::vector<GtnLevelInput> MipLevels::inputs(const TetMesh& source, const MergeT
       in.merge_tree = [t, mesh, form](const std::vector<uint32_t>& vertex_order) {
         return encodeMergeTree(*t, vertex_order, mesh, form);
       };
-      in.merge_tree_prefix = [t, mesh, form](const std::vector<uint32_t>& vertex_order, uint64_t n) {
-        return encodeMergeTree(n < t->merges ? prefixTree(*t, n) : *t, vertex_order, mesh, form);
+      in.merge_tree_prefix = [t, mesh, form](const std::vector<uint32_t>& vertex_order, uint64_t n,
+                                             const std::vector<uint32_t>& next_index) {
+        MergeTreeForm chained = form;
+        chained.next_index = &next_index;
+        return encodeMergeTree(n < t->merges ? prefixTree(*t, n) : *t, vertex_order, mesh, chained);
       };
     }
     if (i < next_index.size()) {
@@ -176,7 +179,8 @@ StatusOr<std::optional<MergeTree>> wholeMergeTree(GtnReader& reader, size_t i,
     GTN_RETURN_IF_ERROR(reader.decodeLevel(k, *own_mesh, nullptr, nullptr, ids));
     return &own_mesh->mesh();
   };
-  auto treeOf = [&](size_t k, uint64_t max_merges, const TetMesh* mesh) -> StatusOr<std::optional<MergeTree>> {
+  auto treeOf = [&](size_t k, uint64_t max_merges, const TetMesh* mesh,
+                    const std::vector<uint32_t>* ids) -> StatusOr<std::optional<MergeTree>> {
     GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(k));
     if (!payload) return std::optional<MergeTree>();
     const std::string what = reader.file().path + ", level " + std::to_string(k);
@@ -186,10 +190,11 @@ StatusOr<std::optional<MergeTree>> wholeMergeTree(GtnReader& reader, size_t i,
         GTN_ASSIGN_OR_RETURN(mesh, meshOf(k, nullptr));
       }
     }
-    GTN_ASSIGN_OR_RETURN(MergeTree t, decodeMergeTree(*payload, reader.level(k).header.points, what, mesh, max_merges));
+    GTN_ASSIGN_OR_RETURN(MergeTree t,
+                         decodeMergeTree(*payload, reader.level(k).header.points, what, mesh, max_merges, ids));
     return std::optional<MergeTree>(std::move(t));
   };
-  GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> whole, treeOf(last, UINT64_MAX, nullptr));
+  GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> whole, treeOf(last, UINT64_MAX, nullptr, nullptr));
   if (!whole) return whole;
   for (size_t k = last; k-- > i;) {
     const std::string what = reader.file().path + ", level " + std::to_string(k);
@@ -203,7 +208,7 @@ StatusOr<std::optional<MergeTree>> wholeMergeTree(GtnReader& reader, size_t i,
       GTN_ASSIGN_OR_RETURN(mesh, meshOf(k, &decoded));
       ids = &decoded;
     }
-    GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> own, treeOf(k, band, mesh));
+    GTN_ASSIGN_OR_RETURN(std::optional<MergeTree> own, treeOf(k, band, mesh, ids));
     if (!own) return own;
     if (own->merges != band)
       return invalidData(what + ": its merge tree holds " + std::to_string(own->merges) + " merges, " +
@@ -273,12 +278,13 @@ StatusOr<LevelTree> levelMergeTree(GtnReader& reader, size_t i, uint64_t max_mer
   GTN_ASSIGN_OR_RETURN(MergeTreeHeader h, readMergeTreeHeader(*payload, points, what));
   LevelTree out;
   out.level = i;
-  if (h.needs_mesh && max_merges > 0) {
+  std::vector<uint32_t> ids;  // the next level's ids of the level's vertices, where the tree needs them
+  if ((h.needs_mesh || h.needs_next_ids) && max_merges > 0) {
     out.decoded = std::make_unique<TetMeshBuilder>();
-    GTN_RETURN_IF_ERROR(reader.decodeLevel(i, *out.decoded, nullptr, fields));
+    GTN_RETURN_IF_ERROR(reader.decodeLevel(i, *out.decoded, nullptr, fields, h.needs_next_ids ? &ids : nullptr));
   }
-  GTN_ASSIGN_OR_RETURN(
-      out.tree, decodeMergeTree(*payload, points, what, out.decoded ? &out.decoded->mesh() : nullptr, max_merges));
+  GTN_ASSIGN_OR_RETURN(out.tree, decodeMergeTree(*payload, points, what, out.decoded ? &out.decoded->mesh() : nullptr,
+                                                 max_merges, h.needs_next_ids ? &ids : nullptr));
   return out;
 }
 

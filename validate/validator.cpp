@@ -321,7 +321,8 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
     if (!payload->has_value()) continue;
     const uint64_t points = reader.level(i).header.points;
     const std::string what = fi.path + ": level " + std::to_string(i) + " merge tree";
-    StatusOr<MergeTree> tree = decodeMergeTree(**payload, points, what, level_meshes[i]);
+    StatusOr<MergeTree> tree = decodeMergeTree(**payload, points, what, level_meshes[i], UINT64_MAX,
+                                               base_ids[i].empty() ? nullptr : &base_ids[i]);
     if (!tree.isOk()) {
       report.add(IssueCode::kMergeTreeUndecodable, "/merge_tree", "/levels/" + std::to_string(i) + "/merge_tree",
                  tree.status().message());

@@ -158,19 +158,26 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
       };
     }
     if (o.merge_tree) {
-      in.merge_tree_prefix = [&, i](const std::vector<uint32_t>& vertex_order,
-                                    uint64_t merges) -> StatusOr<std::vector<uint8_t>> {
+      // Level i's tree, its first `merges` merges; `next_index` where the level names the next level's
+      // vertices.
+      auto encodeTree = [&, i](const std::vector<uint32_t>& vertex_order, uint64_t merges,
+                               const std::vector<uint32_t>* next_index) -> StatusOr<std::vector<uint8_t>> {
         const std::shared_ptr<const MergeTree> t = levels.tree(i);
         if (!t) return usageError(path + ": level " + std::to_string(i) + "'s merge tree asked for before the level");
         const TetMesh* level_mesh = &mesh;
         if (i > 0) {
           GTN_ASSIGN_OR_RETURN(level_mesh, levels.level(i));
         }
-        const MergeTreeForm form = i == 0 ? level0_form : MergeTreeForm{};
+        MergeTreeForm form = i == 0 ? level0_form : MergeTreeForm{};
+        form.next_index = next_index;
         return encodeMergeTree(merges < t->merges ? prefixTree(*t, merges) : *t, vertex_order, level_mesh, form);
       };
-      in.merge_tree = [prefix = in.merge_tree_prefix](const std::vector<uint32_t>& vertex_order) {
-        return prefix(vertex_order, UINT64_MAX);
+      in.merge_tree_prefix = [encodeTree](const std::vector<uint32_t>& vertex_order, uint64_t merges,
+                                          const std::vector<uint32_t>& next_index) {
+        return encodeTree(vertex_order, merges, &next_index);
+      };
+      in.merge_tree = [encodeTree](const std::vector<uint32_t>& vertex_order) {
+        return encodeTree(vertex_order, UINT64_MAX, nullptr);
       };
     }
     if (k + 1 < kept.size() && kept[k + 1] == i + 1)  // the next stored level is the next one

@@ -87,9 +87,19 @@ TEST(GtnChain, LevelsNameTheNextLevelAndDecodeAsIndependentLevelsDo) {
     // A level's own merge tree holds its merges down to the next level, the last one the rest.
     auto own = c->mergeTreePayload(i);
     ASSERT_TRUE(own.isOk() && own->has_value());
-    const TetMesh level = decode(*c, i);
-    auto tree = decodeMergeTree(**own, c->level(i).header.points, "chained", &level);
+    // Its children are coded among the level's own vertices, which the level's decoding names.
+    TetMeshBuilder level;
+    std::vector<uint32_t> ids;
+    ASSERT_TRUE(c->decodeLevel(i, level, nullptr, nullptr, &ids).isOk());
+    ASSERT_EQ(ids.empty(), i + 1 == 4);
+    auto tree = decodeMergeTree(**own, c->level(i).header.points, "chained", &level.mesh(), UINT64_MAX,
+                                ids.empty() ? nullptr : &ids);
     ASSERT_TRUE(tree.isOk()) << tree.status().message();
+    if (!ids.empty()) {
+      auto blind = decodeMergeTree(**own, c->level(i).header.points, "chained", &level.mesh());
+      ASSERT_FALSE(blind.isOk());
+      EXPECT_NE(blind.status().message().find("next level has"), std::string::npos) << blind.status().message();
+    }
     if (i + 1 < 4) {
       EXPECT_EQ(tree->merges, c->level(i + 1).header.merges - c->level(i).header.merges);
     }
@@ -246,8 +256,12 @@ TEST(GtnChain, BesideAGridLevel0OnlyTheCoarseLevelsAreStored) {
     ASSERT_TRUE(payload.isOk() && payload->has_value()) << k;
     auto header = readMergeTreeHeader(**payload, r->level(k).header.points, "grid");
     ASSERT_TRUE(header.isOk()) << header.status().message();
-    EXPECT_EQ(header->version, 4) << k;
+    EXPECT_EQ(header->version, 5) << k;
     EXPECT_EQ(header->candidates, k > 0) << k;
+    // Version 5: the candidates' levels leave the removed counts and boundary bits to the decoder,
+    // and a level naming the next one codes its children among its own vertices.
+    EXPECT_EQ(header->inferred, (k > 0 ? 3 : 0) | (r->level(k).base == 1 ? 4 : 0)) << k;
+    EXPECT_EQ(header->needs_next_ids, r->level(k).base == 1) << k;
     EXPECT_EQ(header->needs_mesh, k > 0) << k;
     const std::array<uint32_t, 3> none = {0, 0, 0};
     EXPECT_EQ(header->grid, k == 0 ? stored->level0_form.grid : none) << k;
@@ -347,7 +361,7 @@ TEST(GtnChain, AMergeTreeShorterThanItsBandIsRefusedNamingTheLevel) {
   std::vector<GtnLevelInput> inputs = built->inputs(mesh);
   // Level 0 stores one merge fewer than it needs down to level 1.
   const uint64_t band = built->merges[1];
-  inputs[0].merge_tree_prefix = [&](const std::vector<uint32_t>& order, uint64_t) {
+  inputs[0].merge_tree_prefix = [&](const std::vector<uint32_t>& order, uint64_t, const std::vector<uint32_t>&) {
     return encodeMergeTree(prefixTree(*tree, band - 1), order, &mesh);
   };
   const std::string path = dir() + "/short.gtn";

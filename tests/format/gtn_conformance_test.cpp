@@ -441,7 +441,7 @@ std::vector<uint8_t> encodeFile(const TetMesh& mesh, const GtnWriteOptions& o,
 }
 
 // `mesh` with its merge tree (MTRE, section 11) and `levels` mip levels, as `gtn convert --levels K`
-// writes it: the ranked merges in batches (MTRE payload version 4). `level0`: level 0 as given (the
+// writes it: the ranked merges in batches (MTRE payload version 5). `level0`: level 0 as given (the
 // writer encodes it otherwise).
 std::vector<uint8_t> encodeWithTree(const TetMesh& mesh, int levels, const GtnWriteOptions& o,
                                     std::shared_ptr<PiecedLevel> level0 = nullptr) {
@@ -601,6 +601,8 @@ std::vector<Sample> samples() {
       valid("levels-mtre3.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(
       valid("levels-mtre4.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+  s.push_back(
+      valid("levels-mtre5.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
   s.push_back(
       valid("wide-merge-tree.f32.dir.v2.0-d4.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
   s.push_back(valid("grid-tree.f32.dir.v2.0-d4.gtn", gridTreeMesh,
@@ -916,13 +918,15 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
 // tree as the file stores it, and on-the-fly simplification from the finest stored level gives the
 // same mesh as applying the merges to level 0, at every merge count. levels.f32 stores MTRE payload
 // version 2, levels-mtre3.f32 version 3 (parents among the neighbours in the level's mesh),
-// levels-mtre4.f32 version 4 (batches).
+// levels-mtre4.f32 version 4 (batches), levels-mtre5.f32 version 5 (removed counts and boundary bits
+// inferred, each band's children among its level's own vertices).
 void expectLevelsAndTreesAgree(const std::string& path, int version);
 
 TEST(GtnConformance, LevelsAndMergeTreesAgree) {
   for (const auto& [name, version] : {std::pair<std::string, int>{"levels.f32.dir.v2.0-d4.gtn", 2},
                                       std::pair<std::string, int>{"levels-mtre3.f32.dir.v2.0-d4.gtn", 3},
-                                      std::pair<std::string, int>{"levels-mtre4.f32.dir.v2.0-d4.gtn", 4}}) {
+                                      std::pair<std::string, int>{"levels-mtre4.f32.dir.v2.0-d4.gtn", 4},
+                                      std::pair<std::string, int>{"levels-mtre5.f32.dir.v2.0-d4.gtn", 5}}) {
     SCOPED_TRACE(name);
     expectLevelsAndTreesAgree(kDir + name, version);
   }
@@ -974,7 +978,8 @@ void expectLevelsAndTreesAgree(const std::string& path, int version) {
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 3u);
   TetMeshBuilder b0;
-  ASSERT_TRUE((*r)->decodeLevel(0, b0).isOk());
+  std::vector<uint32_t> ids;  // level 0's vertices' ids in level 1
+  ASSERT_TRUE((*r)->decodeLevel(0, b0, nullptr, nullptr, &ids).isOk());
   const TetMesh level0 = b0.mesh();
   // Levels 0 and 1 name the next level's vertices (spec 7.7) and store only their merges down to it;
   // level 2 stores all its vertices and the rest of the tree.
@@ -985,7 +990,12 @@ void expectLevelsAndTreesAgree(const std::string& path, int version) {
   ASSERT_TRUE(payload.isOk());
   ASSERT_TRUE(payload->has_value());
   EXPECT_EQ((**payload)[0], version);
-  auto own = decodeMergeTree(**payload, level0.numPoints(), "level 0", &level0);
+  auto header = readMergeTreeHeader(**payload, level0.numPoints(), "level 0");
+  ASSERT_TRUE(header.isOk()) << header.status().message();
+  // Version 5 codes level 0's children among the vertices level 1 lacks, which the level names.
+  EXPECT_EQ(header->needs_next_ids, version >= 5);
+  EXPECT_EQ(header->inferred, version >= 5 ? 7 : 0);
+  auto own = decodeMergeTree(**payload, level0.numPoints(), "level 0", &level0, UINT64_MAX, &ids);
   ASSERT_TRUE(own.isOk()) << own.status().message();
   EXPECT_EQ(own->merges, (*r)->level(1).header.merges);
   auto whole = wholeMergeTree(**r, 0);

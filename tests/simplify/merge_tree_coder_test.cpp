@@ -1,6 +1,7 @@
-// The merge-tree chunk payload, versions 4 (batches whose order is mostly implied, what writers
-// write; parents as candidates, grid places or deltas), 3 (parents among the child's neighbours in
-// the level's mesh) and 2 (parents as id deltas):
+// The merge-tree chunk payload, versions 5 (what writers write: version 4 with the removed counts
+// and boundary bits left to the decoder, and a band's children among the level's own vertices), 4
+// (batches whose order is mostly implied; parents as candidates, grid places or deltas), 3 (parents
+// among the child's neighbours in the level's mesh) and 2 (parents as id deltas):
 // round trip in decoding order, compactness, and clean rejection of truncated, corrupted and
 // inconsistent payloads; and the batches the writer makes (batchMerges).
 #include <gtest/gtest.h>
@@ -34,6 +35,7 @@ struct Fixture {
   std::vector<uint8_t> payload4d;  // version 4 of batched_ids, parents as deltas
   MergeTree batched_grid;          // tree in batches, by node id (the decoding ids are the node ids)
   std::vector<uint8_t> payload4g;  // version 4 of batched_grid, parents as grid places
+  std::vector<uint8_t> payload5;   // version 5 of batched, parents as candidates
 };
 
 // The fixture's grid: 6 x 5 x 5 cells, 7 x 6 x 6 nodes in node order.
@@ -66,6 +68,7 @@ const Fixture& fixture() {
     for (size_t v = 0; v < by_node.size(); ++v) by_node[v] = batchKeyOfId(v);
     x.batched_grid = batchMerges(x.mesh, x.tree, by_node, kDefaultBatchDivisor).value();
     x.payload4g = encodeMergeTree(x.batched_grid, identity, nullptr, MergeTreeForm{4, false, kFixtureDims}).value();
+    x.payload5 = encodeMergeTree(x.batched, x.order, &x.mesh, MergeTreeForm{5, true}).value();
     return x;
   }();
   return f;
@@ -297,6 +300,129 @@ TEST(MergeTreeCoder, Version4RoundTripsItsBatches) {
   EXPECT_LT(f.payload4.size(), ranked->size());
 }
 
+// The offset of a version 5 payload's `inferred` byte: after the version, five varints (points,
+// merges, boundary merges, tetrahedra removed, free merges), parent_form, the grid's dims where
+// parent_form is 4, and the divisor.
+size_t inferredOffset(const std::vector<uint8_t>& p) {
+  size_t at = 1;
+  auto skipVarint = [&] {
+    while (p[at] & 0x80) ++at;
+    ++at;
+  };
+  for (int i = 0; i < 5; ++i) skipVarint();
+  const uint8_t form = p[at++];
+  if (form == 4)
+    for (int i = 0; i < 3; ++i) skipVarint();
+  skipVarint();
+  return at;
+}
+
+// Version 5 with candidates leaves each merge's removed count and boundary bit to the decoder, which
+// reads them off the mesh the earlier merges made: the same tree as version 4, in fewer bytes. A
+// tree whose counts or flags are not the mesh's (here one count off) still codes, with them in the
+// body.
+TEST(MergeTreeCoder, Version5InfersTheRemovedCountsAndBoundaryBits) {
+  const Fixture& f = fixture();
+  ASSERT_EQ(f.payload5[0], 5);
+  auto h = readMergeTreeHeader(f.payload5, f.mesh.numPoints(), "t");
+  ASSERT_TRUE(h.isOk()) << h.status().message();
+  EXPECT_EQ(h->inferred, 3);
+  EXPECT_TRUE(h->needs_mesh);
+  EXPECT_FALSE(h->needs_next_ids);
+  auto got = decodeMergeTree(f.payload5, f.mesh.numPoints(), "t", &f.decoded);
+  ASSERT_TRUE(got.isOk()) << got.status().message();
+  expectSameTree(*got, f.batched, f.order);
+  EXPECT_EQ(got->batches, f.batched.batches);
+  std::vector<float> quantiles(f.batched.error_quantiles.begin(), f.batched.error_quantiles.end());
+  EXPECT_EQ(std::vector<float>(got->error_quantiles.begin(), got->error_quantiles.end()), quantiles);
+  EXPECT_LT(f.payload5.size() * 10, f.payload4.size() * 9) << f.payload5.size() << " against " << f.payload4.size();
+  for (uint64_t n : {uint64_t{1}, f.batched.merges / 3}) {
+    auto part = decodeMergeTree(f.payload5, f.mesh.numPoints(), "t", &f.decoded, n);
+    ASSERT_TRUE(part.isOk()) << part.status().message();
+    expectSameTree(*part, prefixTree(f.batched, n), f.order);
+  }
+
+  MergeTree odd = f.batched;
+  for (size_t v = 0; v < odd.points(); ++v)
+    if (odd.rank[v] == odd.merges / 2) ++odd.removed[v];
+  auto coded = encodeMergeTree(odd, f.order, &f.mesh, MergeTreeForm{5, true});
+  ASSERT_TRUE(coded.isOk()) << coded.status().message();
+  EXPECT_EQ((*coded)[inferredOffset(*coded)], 0);
+  auto back = decodeMergeTree(*coded, f.mesh.numPoints(), "t", &f.decoded);
+  ASSERT_TRUE(back.isOk()) << back.status().message();
+  expectSameTree(*back, odd, f.order);
+
+  // Unknown bits, and inferred values without candidates, are refused.
+  for (const uint8_t bits : {uint8_t{8}, uint8_t{0x80}}) {
+    std::vector<uint8_t> p = f.payload5;
+    p[inferredOffset(p)] |= bits;
+    auto bad = readMergeTreeHeader(p, f.mesh.numPoints(), "t");
+    ASSERT_FALSE(bad.isOk());
+    EXPECT_NE(bad.status().message().find("inferred"), std::string::npos) << bad.status().message();
+  }
+  auto deltas = encodeMergeTree(f.batched_ids, f.order, &f.mesh, MergeTreeForm{5, false});
+  ASSERT_TRUE(deltas.isOk());
+  ASSERT_EQ((*deltas)[inferredOffset(*deltas)], 0);
+  std::vector<uint8_t> p = *deltas;
+  p[inferredOffset(p)] = 1;
+  EXPECT_FALSE(readMergeTreeHeader(p, f.mesh.numPoints(), "t").isOk());
+}
+
+// A level that names the next level's vertices codes the merges down to it: its children are exactly
+// its own vertices, which the decoder knows from the level, and version 5 codes them among those.
+TEST(MergeTreeCoder, Version5CodesABandsChildrenAmongTheLevelsOwnVertices) {
+  const Fixture& f = fixture();
+  const size_t n = f.mesh.numPoints();
+  const MergeTree band = prefixTree(f.batched, f.batched.merges / 2);
+  std::vector<uint32_t> next_index(n, kNoIndex);  // the tree's numbering
+  uint32_t kept = 0;
+  for (size_t v = 0; v < n; ++v)
+    if (band.parent[v] == MergeTree::kRoot) next_index[v] = kept++;
+  std::vector<uint32_t> next_ids(n, kNoIndex);  // the decoder's numbering
+  for (size_t v = 0; v < n; ++v) next_ids[f.order[v]] = next_index[v];
+  MergeTreeForm form{5, true};
+  form.next_index = &next_index;
+  auto own = encodeMergeTree(band, f.order, &f.mesh, form);
+  ASSERT_TRUE(own.isOk()) << own.status().message();
+  auto plain = encodeMergeTree(band, f.order, &f.mesh, MergeTreeForm{5, true});
+  ASSERT_TRUE(plain.isOk());
+  EXPECT_LT(own->size(), plain->size());
+  auto h = readMergeTreeHeader(*own, n, "t");
+  ASSERT_TRUE(h.isOk()) << h.status().message();
+  EXPECT_EQ(h->inferred, 7);
+  EXPECT_TRUE(h->needs_next_ids);
+  auto got = decodeMergeTree(*own, n, "t", &f.decoded, UINT64_MAX, &next_ids);
+  ASSERT_TRUE(got.isOk()) << got.status().message();
+  expectSameTree(*got, band, f.order);
+  EXPECT_EQ(got->batches, band.batches);
+  auto part = decodeMergeTree(*own, n, "t", &f.decoded, band.merges / 2, &next_ids);
+  ASSERT_TRUE(part.isOk()) << part.status().message();
+  expectSameTree(*part, prefixTree(band, band.merges / 2), f.order);
+  // Without the ids, or with ids that name one vertex too many, it is refused.
+  auto blind = decodeMergeTree(*own, n, "t", &f.decoded);
+  ASSERT_FALSE(blind.isOk());
+  EXPECT_EQ(blind.status().code(), StatusCode::kUsage);
+  std::vector<uint32_t> more = next_ids;
+  for (uint32_t& id : more)
+    if (id == kNoIndex) {
+      id = kept;
+      break;
+    }
+  auto wrong = decodeMergeTree(*own, n, "t", &f.decoded, UINT64_MAX, &more);
+  ASSERT_FALSE(wrong.isOk());
+  EXPECT_EQ(wrong.status().code(), StatusCode::kInvalidData);
+  EXPECT_NE(wrong.status().message().find("vertices the next level lacks"), std::string::npos);
+  // The encoder refuses ids that do not match the tree's children.
+  std::vector<uint32_t> mismatched = next_index;
+  for (uint32_t& id : mismatched)
+    if (id == kNoIndex) {
+      id = kept;
+      break;
+    }
+  form.next_index = &mismatched;
+  EXPECT_FALSE(encodeMergeTree(band, f.order, &f.mesh, form).isOk());
+}
+
 // The batches regroup the ranking's merges: every merge of the batched tree passes the validator's
 // replay (no inversion, the link condition, boundary rules, its count of removed tetrahedra), and
 // where no merge had to move to a later batch, every batch ends with the same merges made as the
@@ -327,7 +453,8 @@ TEST(MergeTreeCoder, BatchesKeepTheRankingsPrefixesAndEveryMergeValid) {
 }
 
 // On a real mesh the batches make the children cheap: the bunny's tree, batched, takes at most 80% of
-// version 3's bytes for its ranked tree, and decodes to the batched tree.
+// version 3's bytes for its ranked tree, and decodes to the batched tree; version 5 takes at most 75%
+// of version 4's.
 TEST(MergeTreeCoder, Version4IsSmallerOnARealMesh) {
   const Bunny& b = bunny();
   ASSERT_GT(b.mesh.numTets(), 0u);
@@ -347,6 +474,16 @@ TEST(MergeTreeCoder, Version4IsSmallerOnARealMesh) {
   auto got = decodeMergeTree(*v4, mesh.numPoints(), "bunny", &decoded.mesh());
   ASSERT_TRUE(got.isOk()) << got.status().message();
   expectSameTree(*got, *batched, enc->vertex_order);
+  // Version 5 infers every merge's removed count and boundary bit from the mesh: about a third less.
+  auto v5 = encodeMergeTree(*batched, enc->vertex_order, &mesh, MergeTreeForm{5, true});
+  ASSERT_TRUE(v5.isOk());
+  auto h = readMergeTreeHeader(*v5, mesh.numPoints(), "bunny");
+  ASSERT_TRUE(h.isOk());
+  EXPECT_EQ(h->inferred, 3);
+  EXPECT_LT(v5->size() * 4, v4->size() * 3) << v5->size() << " against " << v4->size();
+  auto got5 = decodeMergeTree(*v5, mesh.numPoints(), "bunny", &decoded.mesh());
+  ASSERT_TRUE(got5.isOk()) << got5.status().message();
+  expectSameTree(*got5, *batched, enc->vertex_order);
 }
 
 // Grid places: the parents of a grid's tree as places among the roots of the child's grid neighbours.
@@ -516,7 +653,7 @@ TEST(MergeTreeCoder, RejectsBadInputToTheEncoder) {
 
 TEST(MergeTreeCoder, RejectsEveryTruncationAndTrailingBytes) {
   const Fixture& f = fixture();
-  for (const std::vector<uint8_t>* payload : {&f.payload, &f.payload4, &f.payload4d, &f.payload4g}) {
+  for (const std::vector<uint8_t>* payload : {&f.payload, &f.payload4, &f.payload4d, &f.payload4g, &f.payload5}) {
     SCOPED_TRACE("version " + std::to_string((*payload)[0]) + (payload == &f.payload4g ? ", grid places" : ""));
     for (size_t n = 0; n < payload->size(); ++n) {
       auto d = decodeMergeTree(std::span<const uint8_t>(payload->data(), n), f.mesh.numPoints(), "t", &f.decoded);
@@ -536,8 +673,9 @@ TEST(MergeTreeCoder, CorruptedPayloadsFailCleanlyOrDecodeToAValidTree) {
   std::mt19937 rng(12);
   int rejected = 0;
   for (int i = 0; i < 1000; ++i) {
-    const std::vector<uint8_t>* payloads[] = {&f.payload, &f.payload2, &f.payload4, &f.payload4d, &f.payload4g};
-    std::vector<uint8_t> p = *payloads[i % 5];
+    const std::vector<uint8_t>* payloads[] = {&f.payload,   &f.payload2,  &f.payload4,
+                                              &f.payload4d, &f.payload4g, &f.payload5};
+    std::vector<uint8_t> p = *payloads[i % 6];
     const size_t at = rng() % p.size();
     p[at] ^= static_cast<uint8_t>(1u << (rng() % 8));
     auto d = decodeMergeTree(p, f.mesh.numPoints(), "t", &f.decoded);
