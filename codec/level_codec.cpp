@@ -585,7 +585,7 @@ class LevelCoder {
     const uint32_t s = allocSlot();
     if (seam_count_ > 0) {
       bool is_seam = false;
-      GTN_RETURN_IF_ERROR(codeSeamVertex(src, pred, s, &is_seam));
+      GTN_RETURN_IF_ERROR(codeSeamVertex(src, pred, fp, s, &is_seam));
       if (is_seam) {
         *slot_out = s;
         return Status::ok();
@@ -652,13 +652,12 @@ class LevelCoder {
   // Whether the vertex is one of the piece's seam vertices (a bit in CONN), then which: by its rank
   // among the seam vertices not yet introduced in order of distance to `pred` (then index), or, when
   // that rank is kSeamRankLimit or more or `pred` is not finite, by its index's difference from the
-  // one after the previous seam vertex's (zigzag). The seam vertex's values are the seam list's.
-  Status codeSeamVertex(uint32_t src, const double pred[3], uint32_t s, bool* is_seam) {
+  // one after the previous seam vertex's (zigzag). The seam vertex's values are the seam list's. The
+  // models' context is how near `pred` the nearest seam vertex not yet introduced lies, against the
+  // length of the stencil's first edge (fp.s[0], fp.s[1]): a vertex predicted onto one is likely it.
+  Status codeSeamVertex(uint32_t src, const double pred[3], const FieldPrediction& fp, uint32_t s, bool* is_seam) {
     uint32_t index = kNoIndex;
     if constexpr (kEncode) index = (*enc_->seam)[src];
-    *is_seam = con_->bit(seam_flag_[boundary_done_ ? 1 : 0], index != kNoIndex) != 0;
-    if (!*is_seam) return Status::ok();
-    if (seam_pos_.empty()) buildSeamGrid();
     const bool finite = std::isfinite(pred[0]) && std::isfinite(pred[1]) && std::isfinite(pred[2]);
     auto dist = [&](uint32_t k) {
       const double* q = &seam_pos_[3 * size_t{k}];
@@ -670,13 +669,27 @@ class LevelCoder {
       for (uint32_t k = 0; k < seam_count_; ++k)
         if (!seam_seen_[k]) fn(k);
     };
+    uint32_t ctx = 0;
+    if (finite && fp.s[0] != kNoIndex && fp.s[1] != kNoIndex && seams_introduced_ < seam_count_) {
+      if (seam_pos_.empty()) buildSeamGrid();
+      const double* a = pool_.position(fp.s[0]);
+      const double* b = pool_.position(fp.s[1]);
+      const double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+      const double e2 = dx * dx + dy * dy + dz * dz;
+      // Only a seam vertex nearer than the edge's length can make the context (5 d2 < 2 e2).
+      const double d2 = seam_grid_.nearestWithin(pred, e2, dist, all);
+      ctx = 50 * d2 < e2 ? 3 : 10 * d2 < e2 ? 2 : 5 * d2 < 2 * e2 ? 1 : 0;
+    }
+    *is_seam = con_->bit(seam_flag_[boundary_done_ ? 1 : 0][ctx], index != kNoIndex) != 0;
+    if (!*is_seam) return Status::ok();
+    if (seam_pos_.empty()) buildSeamGrid();
     uint64_t rank = kSeamRankLimit;
     if constexpr (kEncode) {
       if (finite) rank = seam_grid_.rankOf(pred, dist(index), index, dist, ok, all);
     }
-    const uint32_t near = finite ? con_->bit(seam_near_, rank < kSeamRankLimit) : 0;
+    const uint32_t near = finite ? con_->bit(seam_near_[ctx], rank < kSeamRankLimit) : 0;
     if (near) {
-      rank = codeLength(seam_rank_, rank);
+      rank = codeLength(seam_rank_[ctx], rank);
       if (rank >= kSeamRankLimit) return bad("a seam vertex rank beyond the limit");
       if constexpr (!kEncode) {
         index = seam_grid_.kth(pred, rank, dist, ok, all);
@@ -1168,10 +1181,11 @@ class LevelCoder {
   int seam_bits_ = 0;
   std::vector<char> seam_seen_;
   uint32_t seams_introduced_ = 0;
-  uint32_t seam_last_ = kNoIndex;      // the previous seam vertex's index (kNoIndex + 1 = 0 before the first)
-  BitModel seam_flag_[2], seam_near_;  // seam_flag_: [whether the boundary is done]
+  uint32_t seam_last_ = kNoIndex;  // the previous seam vertex's index (kNoIndex + 1 = 0 before the first)
+  // [whether the boundary is done][context], [context]: codeSeamVertex.
+  BitModel seam_flag_[2][4], seam_near_[4];
   bool boundary_done_ = false;
-  BitTree<6> seam_length_, seam_rank_;
+  BitTree<6> seam_length_, seam_rank_[4];
   std::vector<double> seam_pos_;  // 3 per seam vertex
   NearestGrid seam_grid_;         // the seam vertices not yet introduced
   static constexpr uint64_t kSeamRankLimit = 4096;

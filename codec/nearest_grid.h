@@ -100,6 +100,23 @@ class NearestGrid {
         [](double safe2) { return safe2; }, ok, all);
   }
 
+  // The smallest dist(s) over the points where it is below r2, else r2 or more (a squared distance
+  // and its bound): the rings stop at radius sqrt(r2), or where the nearest point seen lies within
+  // the rings.
+  template <class Dist, class All>
+  double nearestWithin(const double p[3], double r2, Dist dist, All all) {
+    double best = INFINITY;
+    auto each = [&](uint32_t s) {
+      const double d = dist(s);
+      if (d < best) best = d;
+    };
+    if (!visit(p, each, [&](double safe2) { return safe2 >= r2 || best <= safe2; })) {
+      best = INFINITY;
+      all(each);
+    }
+    return best;
+  }
+
   // The same in (key(s), s) order. `bound(safe2)`: a b such that every point with key.k < b
   // lies within sqrt(safe2) of `centre` (-infinity when none surely does; infinite safe2 means
   // every point has been seen).

@@ -21,7 +21,7 @@ inline constexpr uint16_t kGtnMajorVersion = 2;
 inline constexpr uint16_t kGtnMinorVersion = 0;
 // Format 2.0 is a draft until it is released: GHDR names the draft revision its bitstream follows,
 // and a reader reads only its own (spec/gtn-format.md, "File header").
-inline constexpr uint64_t kGtnDraftRevision = 4;
+inline constexpr uint64_t kGtnDraftRevision = 5;
 inline constexpr size_t kGtnPrefixSize = 16;
 
 // Four ASCII letters or digits naming a chunk's type.

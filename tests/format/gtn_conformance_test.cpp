@@ -389,7 +389,7 @@ TetMesh levelsMesh() { return finish(densityGrid(5, 9)); }
 
 // levelsMesh() as the structured block it is (6 x 6 x 6 nodes in node order), as a PLOT3D importer
 // would hand it over: level 0 is a structured piece, and its merge tree codes its parents as grid
-// places (MTRE version 4, parent_form 4).
+// places (MTRE version 5, parent_form 4).
 TetMesh gridTreeMesh() {
   TetMesh m = levelsMesh();
   StructuredBlock b;
@@ -442,10 +442,15 @@ std::vector<uint8_t> encodeFile(const TetMesh& mesh, const GtnWriteOptions& o,
 
 // `mesh` with its merge tree (MTRE, section 11) and `levels` mip levels, as `gtn convert --levels K`
 // writes it: the ranked merges in batches (MTRE payload version 5). `level0`: level 0 as given (the
-// writer encodes it otherwise).
+// writer encodes it otherwise). `mtre_version` 2, 3 or 4: the trees in that payload version instead,
+// as the writer wrote them before (2 and 3: the ranking's own order, without batches); `greedy`: the
+// ranking in the greedy order (RankingOptions::lazy off), as it was before the lazy one.
 std::vector<uint8_t> encodeWithTree(const TetMesh& mesh, int levels, const GtnWriteOptions& o,
-                                    std::shared_ptr<PiecedLevel> level0 = nullptr) {
-  auto tree = rankMerges(mesh, RankingOptions{}, nullptr);
+                                    std::shared_ptr<PiecedLevel> level0 = nullptr, int mtre_version = 5,
+                                    bool greedy = false) {
+  RankingOptions ranking;
+  ranking.lazy = !greedy;
+  auto tree = rankMerges(mesh, ranking, nullptr);
   EXPECT_TRUE(tree.isOk());
   const bool given = level0 != nullptr;
   if (!given) {
@@ -457,10 +462,26 @@ std::vector<uint8_t> encodeWithTree(const TetMesh& mesh, int levels, const GtnWr
   EXPECT_TRUE(stored.isOk());
   LevelOptions lo;
   lo.levels = levels;
-  auto built = buildMipLevels(mesh, stored->tree, lo);
+  auto built = buildMipLevels(mesh, mtre_version >= 4 ? stored->tree : *tree, lo);
   EXPECT_TRUE(built.isOk());
   std::vector<GtnLevelInput> inputs = built->inputs(mesh, stored->level0_form);
   if (given) inputs[0].encoded = level0;
+  if (mtre_version != 5) {
+    const std::vector<const TetMesh*> meshes = built->levelMeshes(mesh);
+    const MergeTreeForm form{static_cast<uint8_t>(mtre_version), mtre_version != 2};
+    for (size_t i = 0; i < inputs.size(); ++i) {
+      const std::shared_ptr<const MergeTree> t = built->trees[i];
+      if (!t) continue;
+      const TetMesh* m = meshes[i];
+      inputs[i].merge_tree = [t, m, form](const std::vector<uint32_t>& order) {
+        return encodeMergeTree(*t, order, m, form);
+      };
+      inputs[i].merge_tree_prefix = [t, m, form](const std::vector<uint32_t>& order, uint64_t n,
+                                                 const std::vector<uint32_t>&) {
+        return encodeMergeTree(n < t->merges ? prefixTree(*t, n) : *t, order, m, form);
+      };
+    }
+  }
   const std::string path = test::tempDir("conformance-tree") + "/tree.gtn";
   const Status st = writeGtnFile(path, inputs, o);
   EXPECT_TRUE(st.isOk()) << st.message();
@@ -567,74 +588,74 @@ Sample valid(std::string name, std::function<TetMesh()> mesh, std::function<std:
 
 std::vector<Sample> samples() {
   std::vector<Sample> s;
-  s.push_back(valid("cube.f32.dir.v2.0-d4.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
+  s.push_back(valid("cube.f32.dir.v2.0-d5.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
   s.push_back(
-      valid("cube.f64.fields.dir.v2.0-d4.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
-  s.push_back(valid("cube.f64.fields.nodir.v2.0-d4.gtn", cubeF64Fields,
+      valid("cube.f64.fields.dir.v2.0-d5.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
+  s.push_back(valid("cube.f64.fields.nodir.v2.0-d5.gtn", cubeF64Fields,
                     [] { return encodeFile(cubeF64Fields(), options(false)); }));
   s.push_back(
-      valid("unused-points.f32.dir.v2.0-d4.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
-  s.push_back(valid("two-components.f32.dir.v2.0-d4.gtn", twoComponents,
+      valid("unused-points.f32.dir.v2.0-d5.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
+  s.push_back(valid("two-components.f32.dir.v2.0-d5.gtn", twoComponents,
                     [] { return encodeFile(twoComponents(), options()); }));
-  s.push_back(valid("repeated-components.f64.dir.v2.0-d4.gtn", repeatedComponents,
+  s.push_back(valid("repeated-components.f64.dir.v2.0-d5.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
-  s.push_back(valid("decimals.f64.dir.v2.0-d4.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
-  s.push_back(valid("printed-singles.f64.dir.v2.0-d4.gtn", printedSingles,
+  s.push_back(valid("decimals.f64.dir.v2.0-d5.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
+  s.push_back(valid("printed-singles.f64.dir.v2.0-d5.gtn", printedSingles,
                     [] { return encodeFile(printedSingles(), options()); }));
-  s.push_back(valid("shift-exceptions.f64.dir.v2.0-d4.gtn", shiftExceptions,
+  s.push_back(valid("shift-exceptions.f64.dir.v2.0-d5.gtn", shiftExceptions,
                     [] { return encodeFile(shiftExceptions(), options()); }));
-  s.push_back(valid("value-table.f32.dir.v2.0-d4.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
-  s.push_back(valid("packed-values.f32.dir.v2.0-d4.gtn", packedValues,
+  s.push_back(valid("value-table.f32.dir.v2.0-d5.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
+  s.push_back(valid("packed-values.f32.dir.v2.0-d5.gtn", packedValues,
                     [] { return encodeFile(packedValues(), options(), nullptr, true); }));
   s.push_back(
-      valid("curvilinear.f32.dir.v2.0-d4.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
-  s.push_back(valid("edge-points.f64.dir.v2.0-d4.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
+      valid("curvilinear.f32.dir.v2.0-d5.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
+  s.push_back(valid("edge-points.f64.dir.v2.0-d5.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(
-      valid("delaunay.f64.dir.v2.0-d4.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
-  s.push_back(valid("degenerate-sweep.f64.dir.v2.0-d4.gtn", degenerateSweep,
+      valid("delaunay.f64.dir.v2.0-d5.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
+  s.push_back(valid("degenerate-sweep.f64.dir.v2.0-d5.gtn", degenerateSweep,
                     [] { return encodeFile(degenerateSweep(), options()); }));
   s.push_back(
-      valid("pieces.f32.dir.v2.0-d4.gtn", piecesMesh, [] { return encodePiecesFile(piecesMesh(), options()); }));
+      valid("pieces.f32.dir.v2.0-d5.gtn", piecesMesh, [] { return encodePiecesFile(piecesMesh(), options()); }));
+  s.push_back(valid("levels.f32.dir.v2.0-d5.gtn", levelsMesh,
+                    [] { return encodeWithTree(levelsMesh(), 2, options(), nullptr, 2, true); }));
+  s.push_back(valid("levels-mtre3.f32.dir.v2.0-d5.gtn", levelsMesh,
+                    [] { return encodeWithTree(levelsMesh(), 2, options(), nullptr, 3); }));
+  s.push_back(valid("levels-mtre4.f32.dir.v2.0-d5.gtn", levelsMesh,
+                    [] { return encodeWithTree(levelsMesh(), 2, options(), nullptr, 4); }));
   s.push_back(
-      valid("levels.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
-  s.push_back(
-      valid("levels-mtre3.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
-  s.push_back(
-      valid("levels-mtre4.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
-  s.push_back(
-      valid("levels-mtre5.f32.dir.v2.0-d4.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
-  s.push_back(
-      valid("wide-merge-tree.f32.dir.v2.0-d4.gtn", wideMesh, [] { return encodeWithTree(wideMesh(), 0, options()); }));
-  s.push_back(valid("grid-tree.f32.dir.v2.0-d4.gtn", gridTreeMesh,
+      valid("levels-mtre5.f32.dir.v2.0-d5.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+  s.push_back(valid("wide-merge-tree.f32.dir.v2.0-d5.gtn", wideMesh,
+                    [] { return encodeWithTree(wideMesh(), 0, options(), nullptr, 3, true); }));
+  s.push_back(valid("grid-tree.f32.dir.v2.0-d5.gtn", gridTreeMesh,
                     [] { return encodeGridWithTree(gridTreeMesh(), 1, options()); }));
-  s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d4.gtn", cubeF32, [] {
+  s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d5.gtn", cubeF32, [] {
     const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
     return encodeFile(cubeF32(), options(false),
                       [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("xNOT"), note, true).isOk()); });
   }));
-  s.push_back(valid("newer-minor.f32.dir.v2.9-d4.gtn", cubeF32, [] {
+  s.push_back(valid("newer-minor.f32.dir.v2.9-d5.gtn", cubeF32, [] {
     std::vector<uint8_t> b = encodeFile(cubeF32(), options());
     const auto p = encodeGtnPrefix(2, 9);
     std::copy(p.begin(), p.end(), b.begin());
     return b;
   }));
   // Must fail.
-  s.push_back({"fail.bad-magic-text-mode.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.bad-magic-text-mode.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.erase(b.begin() + 4);  // CR LF -> LF, as a text-mode transfer does
                  return b;
                }});
-  s.push_back({"fail.bad-checksum.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.bad-checksum.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b[chunkOffset(b, kTagGeometry) + 40] ^= 0x04;  // past the header, in the payload
                  return b;
                }});
-  s.push_back({"fail.truncated.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.truncated.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.resize(chunkOffset(b, kTagConnectivity) + 20);
                  return b;
                }});
-  s.push_back({"fail.unknown-critical-chunk.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.unknown-critical-chunk.v2.0-d5.gtn", nullptr, [] {
                  const std::vector<uint8_t> payload = {1, 2, 3};
                  return encodeFile(cubeF32(), options(false), [&](GtnStreamWriter& w) {
                    EXPECT_TRUE(w.addChunk(ChunkTag("XTRA"), payload, false).isOk());
@@ -646,7 +667,7 @@ std::vector<Sample> samples() {
                  std::copy(p.begin(), p.end(), b.begin());
                  return b;
                }});
-  s.push_back({"fail.trailing-bytes.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.trailing-bytes.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.push_back('\n');
                  return b;
@@ -657,29 +678,29 @@ std::vector<Sample> samples() {
                  std::copy(p.begin(), p.end(), b.begin());
                  return b;
                }});
-  s.push_back({"fail.draft-3.v2.0-d3.gtn", nullptr, [] {
+  s.push_back({"fail.draft-4.v2.0-d4.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options(false));
                  GtnFileHeader h;
                  const auto [offset, size] = fileChunk(b, kTagFileHeader, &h);
-                 h.draft = 3;
+                 h.draft = 4;
                  return replaceChunk(b, offset, size, kTagFileHeader, encodeFileHeader(h));
                }});
   // Must fail: pieces.
-  s.push_back({"fail.seam-missing.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.seam-missing.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
                  const GtnChunkInfo seam = levelChunk(b, kTagSeam);
                  b.erase(b.begin() + static_cast<ptrdiff_t>(seam.offset),
                          b.begin() + static_cast<ptrdiff_t>(seam.offset + seam.bytes));
                  return b;
                }});
-  s.push_back({"fail.piece-tets-sum.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.piece-tets-sum.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
                  GtnLevelRecord r = levelRecord(b);
                  r.pieces[1].tets -= 1;  // the pieces hold one tetrahedron fewer than the level
                  const GtnChunkInfo lhdr = levelChunk(b, kTagLevelHeader);
                  return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r), false);
                }});
-  s.push_back({"fail.seam-class-repeats-piece.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.seam-class-repeats-piece.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
                  auto r = GtnReader::openMemory(std::string(b.begin(), b.end()), "gen");
                  EXPECT_TRUE(r.isOk());
@@ -696,14 +717,14 @@ std::vector<Sample> samples() {
                  return replaceChunk(b, seam.offset, seam.bytes, kTagSeam, encodeSeamTable(classes, streams));
                }});
   // Must fail: levels that name the next level's vertices.
-  s.push_back({"fail.last-level-names-next.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.last-level-names-next.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeWithTree(levelsMesh(), 2, options(false));
                  GtnLevelRecord r = levelRecord(b, 2);
                  r.base = 1;  // the last level claims to name the vertices of a level the file lacks
                  const GtnChunkInfo lhdr = levelChunk(b, kTagLevelHeader, 2);
                  return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r), false);
                }});
-  s.push_back({"fail.base-of-several-pieces.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.base-of-several-pieces.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
                  GtnLevelRecord r = levelRecord(b);
                  r.base = 1;  // a level of 4 pieces claims to name the next level's vertices
@@ -886,7 +907,7 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsExpected) {
 // levels file's grid (the unused points are never merged), in the wide file's vertex numbering. The
 // file's tree was ranked in the greedy order (RankingOptions::lazy off).
 TEST(GtnConformance, WideMergeTreeDecodes) {
-  auto r = GtnReader::open(kDir + "wide-merge-tree.f32.dir.v2.0-d4.gtn");
+  auto r = GtnReader::open(kDir + "wide-merge-tree.f32.dir.v2.0-d5.gtn");
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 1u);
   TetMeshBuilder b0;
@@ -923,21 +944,21 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
 void expectLevelsAndTreesAgree(const std::string& path, int version);
 
 TEST(GtnConformance, LevelsAndMergeTreesAgree) {
-  for (const auto& [name, version] : {std::pair<std::string, int>{"levels.f32.dir.v2.0-d4.gtn", 2},
-                                      std::pair<std::string, int>{"levels-mtre3.f32.dir.v2.0-d4.gtn", 3},
-                                      std::pair<std::string, int>{"levels-mtre4.f32.dir.v2.0-d4.gtn", 4},
-                                      std::pair<std::string, int>{"levels-mtre5.f32.dir.v2.0-d4.gtn", 5}}) {
+  for (const auto& [name, version] : {std::pair<std::string, int>{"levels.f32.dir.v2.0-d5.gtn", 2},
+                                      std::pair<std::string, int>{"levels-mtre3.f32.dir.v2.0-d5.gtn", 3},
+                                      std::pair<std::string, int>{"levels-mtre4.f32.dir.v2.0-d5.gtn", 4},
+                                      std::pair<std::string, int>{"levels-mtre5.f32.dir.v2.0-d5.gtn", 5}}) {
     SCOPED_TRACE(name);
     expectLevelsAndTreesAgree(kDir + name, version);
   }
 }
 
 // grid-tree.f32: level 0 is a structured piece whose merge tree codes its parents as grid places
-// (MTRE version 4, parent_form 4, the block's dims in the header): it decodes without the level, its
+// (MTRE version 5, parent_form 4, the block's dims in the header): it decodes without the level, its
 // batches are ordered by id, level 1 is what its merges make of level 0, and every merge count on the
 // fly is level 0 after that many merges.
 TEST(GtnConformance, GridTreeDecodesWithoutTheLevel) {
-  auto r = GtnReader::open(kDir + "grid-tree.f32.dir.v2.0-d4.gtn");
+  auto r = GtnReader::open(kDir + "grid-tree.f32.dir.v2.0-d5.gtn");
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 2u);
   ASSERT_EQ((*r)->level(0).pieces.size(), 1u);
@@ -947,7 +968,8 @@ TEST(GtnConformance, GridTreeDecodesWithoutTheLevel) {
   ASSERT_TRUE(payload.isOk() && payload->has_value());
   auto h = readMergeTreeHeader(**payload, 216, "level 0");
   ASSERT_TRUE(h.isOk()) << h.status().message();
-  EXPECT_EQ(h->version, 4);
+  EXPECT_EQ(h->version, 5);
+  EXPECT_EQ(h->inferred, 0);
   EXPECT_FALSE(h->needs_mesh);
   EXPECT_EQ(h->grid, (std::array<uint32_t, 3>{6, 6, 6}));
   auto tree = decodeMergeTree(**payload, 216, "level 0", nullptr);
