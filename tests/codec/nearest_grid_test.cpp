@@ -1,5 +1,5 @@
-// NearestGrid's answers are defined by the (distance, slot) order alone: they must equal a scan of
-// every point, whatever the grid's cells, for points inside and outside the box it was built for,
+// NearestGrid's answers (kth, rankOf, nearestWithin) are defined by the (distance, slot) order alone:
+// they must equal a scan of every point, whatever the grid's cells, for points inside and outside the box it was built for,
 // coincident points, non-finite coordinates, and points inserted and erased as the front moves.
 #include "codec/nearest_grid.h"
 
@@ -88,6 +88,17 @@ void runScenario(uint32_t seed, bool clustered) {
     if (!order.empty()) {
       const size_t i = rng() % order.size();
       ASSERT_EQ(grid.rankOf(p, order[i].first, order[i].second, d, ok, all), i) << "seed " << seed << " step " << step;
+    }
+    // The nearest point within a radius: the smallest distance below r2, else r2 or more.
+    const double r2 = 0.3 * std::abs(u(rng));
+    double nearest = INFINITY;
+    for (uint32_t s = 0; s < slots; ++s)
+      if (m.live[s] && d(s) < nearest) nearest = d(s);
+    const double within = grid.nearestWithin(p, r2, d, all);
+    if (nearest < r2) {
+      ASSERT_EQ(within, nearest) << "seed " << seed << " step " << step;
+    } else {
+      ASSERT_GE(within, r2) << "seed " << seed << " step " << step;
     }
   }
 }

@@ -412,6 +412,24 @@ TEST(MergeTreeCoder, Version5CodesABandsChildrenAmongTheLevelsOwnVertices) {
   ASSERT_FALSE(wrong.isOk());
   EXPECT_EQ(wrong.status().code(), StatusCode::kInvalidData);
   EXPECT_NE(wrong.status().message().find("vertices the next level lacks"), std::string::npos);
+  // A corrupted payload fails cleanly or decodes to a valid tree, and every truncation fails.
+  std::mt19937 rng(21);
+  int rejected = 0;
+  for (int i = 0; i < 400; ++i) {
+    std::vector<uint8_t> p = *own;
+    p[rng() % p.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
+    auto d = decodeMergeTree(p, n, "t", &f.decoded, UINT64_MAX, &next_ids);
+    if (!d.isOk()) {
+      ++rejected;
+      EXPECT_EQ(d.status().code(), StatusCode::kInvalidData) << d.status().message();
+      continue;
+    }
+    EXPECT_TRUE(d->check("t").isOk());
+  }
+  EXPECT_GT(rejected, 250);
+  for (size_t k = 0; k < own->size(); ++k)
+    EXPECT_FALSE(
+        decodeMergeTree(std::span<const uint8_t>(own->data(), k), n, "t", &f.decoded, UINT64_MAX, &next_ids).isOk());
   // The encoder refuses ids that do not match the tree's children.
   std::vector<uint32_t> mismatched = next_index;
   for (uint32_t& id : mismatched)
