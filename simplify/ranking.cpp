@@ -91,17 +91,21 @@ struct QueueEntry {
 // for its position), where a queue with stale entries grows with every evaluation.
 class CandidateHeap {
  public:
-  explicit CandidateHeap(size_t points) { assignPopulated(at_, points, kNoIndex); }
+  // Room for `points` vertices: every vertex, or with `local`, the vertices v whose local[v] is below
+  // `points` (a part's, numbered within it), which are then the only ones it may hold.
+  explicit CandidateHeap(size_t points, const uint32_t* local = nullptr) : local_(local) {
+    assignPopulated(at_, points, kNoIndex);
+  }
   bool empty() const { return heap_.empty(); }
-  bool has(uint32_t v) const { return at_[v] != kNoIndex; }
+  bool has(uint32_t v) const { return at(v) != kNoIndex; }
   const QueueEntry& top() const { return heap_.front(); }
   // Sets v's entry (adds it, or replaces the one it has).
   void set(const QueueEntry& e) {
-    uint32_t i = at_[e.v];
+    uint32_t i = at(e.v);
     if (i == kNoIndex) {
       i = static_cast<uint32_t>(heap_.size());
       heap_.push_back(e);
-      at_[e.v] = i;
+      at(e.v) = i;
       up(i);
       return;
     }
@@ -112,24 +116,26 @@ class CandidateHeap {
   }
   // Removes v's entry, if it has one.
   void erase(uint32_t v) {
-    const uint32_t i = at_[v];
+    const uint32_t i = at(v);
     if (i == kNoIndex) return;
-    at_[v] = kNoIndex;
+    at(v) = kNoIndex;
     const QueueEntry last = heap_.back();
     heap_.pop_back();
     if (i == heap_.size()) return;
     const bool smaller = last < heap_[i];
     heap_[i] = last;
-    at_[last.v] = i;
+    at(last.v) = i;
     if (smaller) up(i);
     else down(i);
   }
   void pop() { erase(heap_.front().v); }
 
  private:
+  uint32_t& at(uint32_t v) { return at_[local_ ? local_[v] : v]; }
+  uint32_t at(uint32_t v) const { return at_[local_ ? local_[v] : v]; }
   void place(uint32_t i, const QueueEntry& e) {
     heap_[i] = e;
-    at_[e.v] = i;
+    at(e.v) = i;
   }
   void up(uint32_t i) {
     const QueueEntry e = heap_[i];
@@ -156,6 +162,7 @@ class CandidateHeap {
   }
   std::vector<QueueEntry> heap_;
   std::vector<uint32_t> at_;  // per vertex: its entry's index in heap_, kNoIndex for none
+  const uint32_t* local_;     // vertex -> index in at_, or null: the vertex itself
 };
 
 // A link triangle (a < b < c) and a link edge (a < b) as one integer each, a << 64 | b << 32 | c and
@@ -402,6 +409,7 @@ class Ranker {
   bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
   // Ranking in parts: each vertex's part, and whether it shares a tetrahedron with another part's.
   std::vector<uint8_t> part_, seam_;
+  std::vector<uint32_t> part_index_;  // each vertex's place among its part's members (the parts' heaps)
   MergeTree tree_;
   bool replaying_ = false;  // batch(): merges are applied as given, nothing is evaluated
 
@@ -1096,12 +1104,21 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     const size_t round_begin = order.size();
     std::vector<std::unique_ptr<Lane>> next_lanes;
     for (uint32_t p = 0; p < round_parts; ++p) {
-      next_lanes.push_back(std::make_unique<Lane>(np));
+      next_lanes.push_back(std::make_unique<Lane>(0));
       next_lanes.back()->restricted = true;
       next_lanes.back()->parallel = false;
     }
-    for (uint32_t v = 0; v < np; ++v)
-      if (alive_[v]) next_lanes[part_[v]]->members.push_back(v);
+    // A part's heap holds only its own vertices (a merge in a round of parts touches no other part's),
+    // numbered within the part: one array of the vertices' numbers for every part, not one of every
+    // vertex per part.
+    part_index_.assign(np, 0);
+    for (uint32_t v = 0; v < np; ++v) {
+      if (!alive_[v]) continue;
+      std::vector<uint32_t>& members = next_lanes[part_[v]]->members;
+      part_index_[v] = static_cast<uint32_t>(members.size());
+      members.push_back(v);
+    }
+    for (auto& L : next_lanes) L->heap = CandidateHeap(L->members.size(), part_index_.data());
     std::vector<Lane*> built;
     for (auto& L : next_lanes) {
       if (!lanes.empty()) buildPool(*L, lanes, lane_part, lane_begin);
