@@ -234,6 +234,44 @@ inline uint32_t rootOf(std::vector<uint32_t>& up, uint32_t x) {
   return x;
 }
 
+// The classes of the merges made so far (a root and the vertices merged into it, recursively) as
+// chains of vertices. A walk of a class drops the vertices that have nothing left to give, so that
+// it costs about what the rest give, however large the class.
+class ClassChains {
+ public:
+  explicit ClassChains(size_t n) : up_(n), next_(n, kNone), last_(n) {
+    for (uint32_t v = 0; v < n; ++v) up_[v] = last_[v] = v;
+  }
+  uint32_t root(uint32_t x) { return rootOf(up_, x); }
+  // Calls keep(y) for every vertex y of the class of root c, c first; a y other than c for which it
+  // returns false leaves the chain.
+  template <class Keep>
+  void walk(uint32_t c, Keep keep) {
+    uint32_t prev = kNone;
+    for (uint32_t y = c; y != kNone;) {
+      const bool kept = keep(y);
+      const uint32_t after = next_[y];
+      if (!kept && y != c) {
+        next_[prev] = after;
+        if (last_[c] == y) last_[c] = prev;
+      } else {
+        prev = y;
+      }
+      y = after;
+    }
+  }
+  // Root c merges into root p: c's class joins p's.
+  void merge(uint32_t c, uint32_t p) {
+    up_[c] = p;
+    next_[last_[p]] = c;
+    last_[p] = last_[c];
+  }
+
+ private:
+  static constexpr uint32_t kNone = UINT32_MAX;
+  std::vector<uint32_t> up_, next_, last_;
+};
+
 // Version 3: the parent as a place among the child's neighbours at the time of its merge, in the
 // mesh the earlier merges left (the vertices that share a tetrahedron of the level with the child or
 // with a vertex merged into it, each replaced by its root: the vertex it has been merged into,
@@ -244,8 +282,7 @@ class ParentCandidates {
  public:
   // `tets`: 4 vertex ids per tetrahedron, all below n (the caller checks); `coords`: 3 per vertex.
   ParentCandidates(size_t n, std::span<const uint32_t> tets, const double* coords, const uint32_t* key)
-      : coords_(coords), key_(key), up_(n), next_(n, kNone), last_(n), mark_(n, kNone), live_(n) {
-    for (uint32_t v = 0; v < n; ++v) up_[v] = last_[v] = v;
+      : coords_(coords), key_(key), chains_(n), mark_(n, kNone), live_(n) {
     // Vertex -> tetrahedra, then each vertex's neighbours once.
     std::vector<uint64_t> at(n + 1, 0);
     for (uint32_t v : tets) ++at[v + 1];
@@ -286,12 +323,11 @@ class ParentCandidates {
     ++stamp_;
     keyed_.clear();
     const double* pc = coords_ + 3 * size_t{c};
-    uint32_t prev = kNone;
-    for (uint32_t y = c; y != kNone;) {
+    chains_.walk(c, [&](uint32_t y) {
       const uint64_t begin = start_[y];
       uint64_t end = begin + live_[y];
       for (uint64_t k = begin; k < end;) {
-        const uint32_t q = root(neighbours_[k]);
+        const uint32_t q = chains_.root(neighbours_[k]);
         if (q == c) {
           neighbours_[k] = neighbours_[--end];
           continue;
@@ -304,15 +340,8 @@ class ParentCandidates {
         keyed_.push_back({(dx * dx + dy * dy) + dz * dz, key_ ? key_[q] : q, q});
       }
       live_[y] = static_cast<uint32_t>(end - begin);
-      const uint32_t after = next_[y];
-      if (end == begin && y != c) {
-        next_[prev] = after;
-        if (last_[c] == y) last_[c] = prev;
-      } else {
-        prev = y;
-      }
-      y = after;
-    }
+      return end != begin;
+    });
     return static_cast<uint32_t>(keyed_.size());
   }
   // The place of p among the gathered candidates in their order (the count when p is none of them).
@@ -332,11 +361,7 @@ class ParentCandidates {
   }
 
   // Child c merges into parent p: c's vertices become p's.
-  void merge(uint32_t c, uint32_t p) {
-    up_[c] = p;
-    next_[last_[p]] = c;
-    last_[p] = last_[c];
-  }
+  void merge(uint32_t c, uint32_t p) { chains_.merge(c, p); }
 
  private:
   static constexpr uint32_t kNone = UINT32_MAX;
@@ -345,12 +370,12 @@ class ParentCandidates {
     uint32_t id, v;
   };
   static bool before(const Keyed& a, const Keyed& b) { return a.d2 < b.d2 || (a.d2 == b.d2 && a.id < b.id); }
-  uint32_t root(uint32_t x) { return rootOf(up_, x); }
   const double* coords_;
   const uint32_t* key_;
   std::vector<uint64_t> start_;       // per vertex: its first entry in neighbours_
   std::vector<uint32_t> neighbours_;  // each vertex's neighbours in the level, those outside its class first
-  std::vector<uint32_t> up_, next_, last_, mark_;
+  ClassChains chains_;
+  std::vector<uint32_t> mark_;
   std::vector<uint32_t> live_;  // per vertex: its neighbours that may still lie outside its class
   uint32_t stamp_ = 0;
   std::vector<Keyed> keyed_;
@@ -367,8 +392,7 @@ class ParentCandidates {
 class StarCounter {
  public:
   StarCounter(size_t n, std::span<const uint32_t> tets)
-      : tets_(tets), up_(n), next_(n, kNone), last_(n), at_(n + 1, 0), live_(n), dead_(tets.size() / 4, 0) {
-    for (uint32_t v = 0; v < n; ++v) up_[v] = last_[v] = v;
+      : tets_(tets), chains_(n), at_(n + 1, 0), live_(n), dead_(tets.size() / 4, 0) {
     for (uint32_t v : tets) ++at_[v + 1];
     for (size_t v = 0; v < n; ++v) at_[v + 1] += at_[v];
     incident_.resize(tets.size());
@@ -380,8 +404,7 @@ class StarCounter {
   // Gathers the star of c (a root): call before boundary() and merge().
   void gather(uint32_t c) {
     star_.clear();
-    uint32_t prev = kNone;
-    for (uint32_t y = c; y != kNone;) {
+    chains_.walk(c, [&](uint32_t y) {
       const uint64_t begin = at_[y];
       uint64_t end = begin + live_[y];
       for (uint64_t k = begin; k < end;) {
@@ -394,21 +417,14 @@ class StarCounter {
         Entry e{t, {0, 0, 0}};
         int m = 0;
         for (int j = 0; j < 4; ++j) {
-          const uint32_t w = root(tets_[4 * size_t{t} + j]);
+          const uint32_t w = chains_.root(tets_[4 * size_t{t} + j]);
           if (w != c && m < 3) e.other[m++] = w;
         }
         if (m == 3) star_.push_back(e);  // always, as a merge kills every tetrahedron it folds
       }
       live_[y] = static_cast<uint32_t>(end - begin);
-      const uint32_t after = next_[y];
-      if (end == begin && y != c) {
-        next_[prev] = after;
-        if (last_[c] == y) last_[c] = prev;
-      } else {
-        prev = y;
-      }
-      y = after;
-    }
+      return end != begin;
+    });
   }
   // Whether the gathered child is a boundary vertex.
   bool boundary() {
@@ -437,22 +453,18 @@ class StarCounter {
         ++removed;
       }
     }
-    up_[c] = p;
-    next_[last_[p]] = c;
-    last_[p] = last_[c];
+    chains_.merge(c, p);
     return removed;
   }
 
  private:
-  static constexpr uint32_t kNone = UINT32_MAX;
   struct Entry {
     uint32_t tet;
     uint32_t other[3];  // the roots of its other three vertices
   };
   static uint64_t edgeKey(uint32_t a, uint32_t b) { return a < b ? (uint64_t{a} << 32) | b : (uint64_t{b} << 32) | a; }
-  uint32_t root(uint32_t x) { return rootOf(up_, x); }
   std::span<const uint32_t> tets_;
-  std::vector<uint32_t> up_, next_, last_;
+  ClassChains chains_;
   std::vector<uint64_t> at_;        // per vertex: its first entry in incident_
   std::vector<uint32_t> incident_;  // each vertex's tetrahedra, those still alive first
   std::vector<uint32_t> live_;      // per vertex: its tetrahedra that may still be alive
