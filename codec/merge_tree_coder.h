@@ -6,26 +6,30 @@
 // (a vertex can only be merged into a vertex that is still alive), which makes the tree acyclic and
 // lets a top-down traversal compute ancestors in one pass.
 //
-// Payload layout (spec section 11; versions 2, 3 and 4, writers write 4; little-endian; varint =
+// Payload layout (spec section 11; versions 2 to 5, writers write 5; little-endian; varint =
 // unsigned LEB128, at most 10 bytes):
-//   u8      version                  = 4 (or 2, 3)
+//   u8      version                  = 5 (or 2, 3, 4)
 //   varint  points P                 vertices of the level (must equal the level header's count)
 //   varint  merges M                 M <= P
 //   varint  boundary_merges          merges whose child is a boundary vertex
 //   varint  tets_removed             sum over merges of the tetrahedra each merge removes
-//   varint  free_merges              versions 3 and 4: leadingFreeMerges (below)
-//   u8      parent_form              version 4: 3 = parents as candidates, 2 = as deltas (version 3
-//                                    has 3, version 2 has 2)
-//   varint  batch_divisor d          version 4: the batches' rule, ceil(unmerged / d)
+//   varint  free_merges              versions 3 to 5: leadingFreeMerges (below)
+//   u8      parent_form              versions 4 and 5: 3 = parents as candidates, 4 = as grid places,
+//                                    2 = as deltas (version 3 has 3, version 2 has 2)
+//   varint  batch_divisor d          versions 4 and 5: the batches' rule, ceil(unmerged / d)
+//   u8      inferred                 version 5: 1 = removed counts and 2 = boundary bits not coded
+//                                    (read off the level's mesh; parent_form 3 only), 4 = the
+//                                    children drawn from the level's own vertices (a level naming the
+//                                    next level's; decodeMergeTree's next_ids)
 //   f64     w_density, w_geometry    weights the ranking used (provenance)
 //   varint  n, then n bytes          name of the density field ("" = volume only)
 //   u8      q                        number of error quantiles (0 or 9)
-//   f64 x q                          error at the quantiles 0, .01, .1, .25, .5, .75, .9, .99, 1 of the
+//   f64 x q (version 5: f32 x q)     error at the quantiles 0, .01, .1, .25, .5, .75, .9, .99, 1 of the
 //                                    merges (error when chosen, normalised as in simplify/ranking.h)
 //   varint  body_bytes, then the body: one stream of codec/range_coder.h (adaptive BitModel bits,
 //           BitTree symbols, direct bits; the encoder's flush ends it) holding the merges in rank
 //           order r = 1..M, so that a reader that applies only the first N merges decodes only the
-//           first N records. Version 4 codes its records in batches, each one's children and their
+//           first N records. Versions 4 and 5 code their records in batches, each one's children and their
 //           order before its records (encodeBatch in the .cpp, spec section 11 "Batches"): the size
 //           (the rule's, or a length code), the children as gaps among the unmerged, then runs of
 //           them in key order (batchKeyOfPoint or batchKeyOfId, by parent_form) and the rest as
@@ -177,10 +181,13 @@ StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, 
 
 // Decodes a payload; `expected_points` is the level's vertex count (it bounds every allocation).
 // `what` names the source in messages (file and level). `mesh` is the level as decoded (points and
-// tetrahedra in decoding order): candidates (version 3, or version 4 that says so) need it to decode
-// any merge (kUsage without it); otherwise it is ignored. Only the first `max_merges` merges are decoded (the tree of a prefix of the ranking is
-// itself a merge tree, with the later merges' children as roots); the checks that need the whole body
-// (header counts, trailing bytes) run only when the whole body is read.
+// tetrahedra in decoding order): candidates (version 3, or versions 4 and 5 that say so) need it to
+// decode any merge (kUsage without it); otherwise it is ignored. `next_ids`: per vertex of the level,
+// its id in the next level (kNoIndex for its own vertices), as GtnReader::decodeLevel gives them; a
+// version 5 tree that draws its children from the own vertices needs it (kUsage without it,
+// MergeTreeHeader::needs_next_ids). Only the first `max_merges` merges are decoded (the tree of a
+// prefix of the ranking is itself a merge tree, with the later merges' children as roots); the checks
+// that need the whole body (header counts, trailing bytes) run only when the whole body is read.
 StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,
                                     const TetMesh* mesh, uint64_t max_merges = UINT64_MAX,
                                     const std::vector<uint32_t>* next_ids = nullptr);
