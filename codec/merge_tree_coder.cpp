@@ -234,6 +234,23 @@ inline uint32_t rootOf(std::vector<uint32_t>& up, uint32_t x) {
   return x;
 }
 
+// Each vertex's tetrahedra: incident[at[v] .. at[v + 1]) are the tetrahedra of vertex v, in order.
+struct VertexTets {
+  std::vector<uint64_t> at;
+  std::vector<uint32_t> incident;
+};
+// `tets`: 4 vertex ids per tetrahedron, all below n.
+VertexTets vertexTets(size_t n, std::span<const uint32_t> tets) {
+  VertexTets out;
+  out.at.assign(n + 1, 0);
+  for (uint32_t v : tets) ++out.at[v + 1];
+  for (size_t v = 0; v < n; ++v) out.at[v + 1] += out.at[v];
+  out.incident.resize(tets.size());
+  std::vector<uint64_t> fill(out.at.begin(), out.at.end() - 1);
+  for (size_t i = 0; i < tets.size(); ++i) out.incident[fill[tets[i]]++] = static_cast<uint32_t>(i / 4);
+  return out;
+}
+
 // The classes of the merges made so far (a root and the vertices merged into it, recursively) as
 // chains of vertices. A walk of a class drops the vertices that have nothing left to give, so that
 // it costs about what the rest give, however large the class.
@@ -280,18 +297,14 @@ class ClassChains {
 // decoding ids); the decoder in decoding order with no key.
 class ParentCandidates {
  public:
-  // `tets`: 4 vertex ids per tetrahedron, all below n (the caller checks); `coords`: 3 per vertex.
-  ParentCandidates(size_t n, std::span<const uint32_t> tets, const double* coords, const uint32_t* key)
+  // `tets`: 4 vertex ids per tetrahedron, all below n (the caller checks), `vt` their vertexTets;
+  // `coords`: 3 per vertex.
+  ParentCandidates(size_t n, std::span<const uint32_t> tets, const VertexTets& vt, const double* coords,
+                   const uint32_t* key)
       : coords_(coords), key_(key), chains_(n), mark_(n, kNone), live_(n) {
-    // Vertex -> tetrahedra, then each vertex's neighbours once.
-    std::vector<uint64_t> at(n + 1, 0);
-    for (uint32_t v : tets) ++at[v + 1];
-    for (size_t v = 0; v < n; ++v) at[v + 1] += at[v];
-    std::vector<uint32_t> incident(tets.size());
-    {
-      std::vector<uint64_t> fill(at.begin(), at.end() - 1);
-      for (size_t i = 0; i < tets.size(); ++i) incident[fill[tets[i]]++] = static_cast<uint32_t>(i / 4);
-    }
+    // Each vertex's neighbours once.
+    const std::vector<uint64_t>& at = vt.at;
+    const std::vector<uint32_t>& incident = vt.incident;
     start_.assign(n + 1, 0);
     for (int pass = 0; pass < 2; ++pass) {
       uint64_t out = 0;
@@ -391,13 +404,14 @@ class ParentCandidates {
 // tetrahedra are all dead, so that a star costs about its tetrahedra, however large the class.
 class StarCounter {
  public:
-  StarCounter(size_t n, std::span<const uint32_t> tets)
-      : tets_(tets), chains_(n), at_(n + 1, 0), live_(n), dead_(tets.size() / 4, 0) {
-    for (uint32_t v : tets) ++at_[v + 1];
-    for (size_t v = 0; v < n; ++v) at_[v + 1] += at_[v];
-    incident_.resize(tets.size());
-    std::vector<uint64_t> fill(at_.begin(), at_.end() - 1);
-    for (size_t i = 0; i < tets.size(); ++i) incident_[fill[tets[i]]++] = static_cast<uint32_t>(i / 4);
+  // `vt`: vertexTets of `tets` (taken over: the walks reorder each vertex's list).
+  StarCounter(size_t n, std::span<const uint32_t> tets, VertexTets vt)
+      : tets_(tets),
+        chains_(n),
+        at_(std::move(vt.at)),
+        incident_(std::move(vt.incident)),
+        live_(n),
+        dead_(tets.size() / 4, 0) {
     for (size_t v = 0; v < n; ++v) live_[v] = static_cast<uint32_t>(at_[v + 1] - at_[v]);
   }
 
@@ -1066,9 +1080,12 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     EntropyCoder<true> rc(&body);
     Models m;
     std::optional<ParentCandidates> candidates;
-    if (with_candidates) candidates.emplace(n, tets, mesh->coords.data(), vertex_order.data());
     std::optional<StarCounter> stars;
-    if (inferring & (kInferRemoved | kInferBoundary)) stars.emplace(n, tets);
+    if (with_candidates) {
+      VertexTets vt = vertexTets(n, tets);
+      candidates.emplace(n, tets, vt, mesh->coords.data(), vertex_order.data());
+      if (inferring & (kInferRemoved | kInferBoundary)) stars.emplace(n, tets, std::move(vt));
+    }
     std::optional<GridCandidates> grid;
     if (with_grid) grid.emplace(n, form.grid);
     const ParentCode parent_code = with_candidates ? ParentCode::kCandidates
@@ -1292,8 +1309,9 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
       return invalidData(what + ": the merge tree has " + std::to_string(n) + " vertices, its level's mesh " +
                          std::to_string(mesh->numPoints()));
     GTN_ASSIGN_OR_RETURN(std::span<const uint32_t> tets, tetIds(*mesh, what));
-    candidates.emplace(n, tets, mesh->coords.data(), nullptr);
-    if (h.inferred & (kInferRemoved | kInferBoundary)) stars.emplace(n, tets);
+    VertexTets vt = vertexTets(n, tets);
+    candidates.emplace(n, tets, vt, mesh->coords.data(), nullptr);
+    if (h.inferred & (kInferRemoved | kInferBoundary)) stars.emplace(n, tets, std::move(vt));
   }
   tree.makeRoots(n);
   tree.merges = decode;
