@@ -32,8 +32,8 @@ namespace gtn {
 inline constexpr uint64_t kDefaultPieceTets = uint64_t{1} << 20;
 inline constexpr uint64_t kMinPieceTets = uint64_t{1} << 12;
 
-// Piece kinds (LHDR): the level codec's streams (BNDY CONN GEOM PFLD... CFLD...), or a structured piece
-// (GRID, codec/structured_piece.h).
+// Piece kinds (LHDR): the level codec's streams (BNDY CONN GEOM PFLD... CFLD..., one PIEC chunk), or a
+// structured piece (GRID, codec/structured_piece.h).
 inline constexpr uint8_t kPieceUnstructured = 0;
 inline constexpr uint8_t kPieceStructured = 1;
 

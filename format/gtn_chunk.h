@@ -21,7 +21,7 @@ inline constexpr uint16_t kGtnMajorVersion = 2;
 inline constexpr uint16_t kGtnMinorVersion = 0;
 // Format 2.0 is a draft until it is released: GHDR names the draft revision its bitstream follows,
 // and a reader reads only its own (spec/gtn-format.md, "File header").
-inline constexpr uint64_t kGtnDraftRevision = 5;
+inline constexpr uint64_t kGtnDraftRevision = 6;
 inline constexpr size_t kGtnPrefixSize = 16;
 
 // Four ASCII letters or digits naming a chunk's type.
@@ -36,12 +36,8 @@ struct ChunkTag {
 inline constexpr ChunkTag kTagFileHeader("GHDR");
 inline constexpr ChunkTag kTagLevelHeader("LHDR");
 inline constexpr ChunkTag kTagSeam("SEAM");
-inline constexpr ChunkTag kTagGrid("GRID");  // a structured piece's one chunk (piece kind 1)
-inline constexpr ChunkTag kTagBoundary("BNDY");
-inline constexpr ChunkTag kTagConnectivity("CONN");
-inline constexpr ChunkTag kTagGeometry("GEOM");
-inline constexpr ChunkTag kTagPointField("PFLD");
-inline constexpr ChunkTag kTagCellField("CFLD");
+inline constexpr ChunkTag kTagGrid("GRID");   // a structured piece's one chunk (piece kind 1)
+inline constexpr ChunkTag kTagPiece("PIEC");  // an unstructured piece's codec streams (piece kind 0)
 inline constexpr ChunkTag kTagMergeTree("MTRE");
 inline constexpr ChunkTag kTagDirectory("DIRC");
 inline constexpr ChunkTag kTagEnd("GEND");

@@ -81,8 +81,8 @@ struct GtnWriteOptions {
 };
 
 // Encodes every level (encodePieces, options.piece_tets), then writes the file atomically
-// (format/file_io.h): prefix, GHDR, per level LHDR [SEAM] and per piece BNDY CONN GEOM PFLD... CFLD...,
-// then [MTRE]; then [DIRC] and GEND. Byte-identical whatever the thread count. All levels must
+// (format/file_io.h): prefix, GHDR, per level LHDR [SEAM] and per piece PIEC (its streams BNDY CONN
+// GEOM PFLD... CFLD...) or GRID, then [MTRE]; then [DIRC] and GEND. Byte-identical whatever the thread count. All levels must
 // share level 0's coordinate type and field descriptions. Deterministic: the same meshes and options
 // give the same bytes. Fails with kUsage for an empty level list or a level with neither mesh nor
 // make_mesh. With
@@ -106,7 +106,7 @@ class GtnStreamWriter {
   // metadata; `level_count` how many levels will follow.
   Status begin(const LevelHeader& level0, uint64_t level_count);
   // Writes one level's chunks: LHDR with the piece table, SEAM when there are several pieces, each
-  // piece's streams, MTRE (`merge_tree`, when given). `level.header.level` must be the next index, its
+  // piece's chunk (PIEC: its streams; GRID), MTRE (`merge_tree`, when given). `level.header.level` must be the next index, its
   // fields those of level 0, every piece's stream counts match its field counts, and the pieces'
   // tetrahedra sum to the level's.
   Status addLevel(const PiecedLevel& level, double ratio, const std::optional<std::vector<uint8_t>>& merge_tree);
@@ -125,6 +125,7 @@ class GtnStreamWriter {
   Output out_;
   GtnWriteOptions options_;
   LevelHeader level0_;
+  LevelRecordContext record_context_;  // what the next LHDR is coded against
   uint64_t level_count_ = 0;
   uint64_t levels_written_ = 0;
   uint64_t offset_ = 0;

@@ -73,44 +73,29 @@ std::string at(const std::string& what, uint64_t offset) {
   return what + ": byte offset " + std::to_string(offset) + ": ";
 }
 
-bool isLevelTag(const ChunkTag& t) {
-  return t == kTagSeam || t == kTagBoundary || t == kTagConnectivity || t == kTagGeometry || t == kTagPointField ||
-         t == kTagCellField || t == kTagGrid || t == kTagMergeTree;
-}
+bool isLevelTag(const ChunkTag& t) { return t == kTagSeam || t == kTagPiece || t == kTagGrid || t == kTagMergeTree; }
 bool isKnownTag(const ChunkTag& t) {
   return isLevelTag(t) || t == kTagFileHeader || t == kTagLevelHeader || t == kTagDirectory || t == kTagEnd;
 }
 
 // The chunks a level must hold after its LHDR, as its piece table lays them out: SEAM when it has
-// several pieces, then each piece's group in piece order (kind 0: BNDY, CONN, GEOM, PFLD x np,
-// CFLD x nc; kind 1: GRID). An optional MTRE follows them.
+// several pieces, then each piece's chunk in piece order (kind 0: PIEC; kind 1: GRID). An optional
+// MTRE follows them.
 struct LevelLayout {
   std::vector<ChunkTag> tags;
-  std::vector<uint32_t> piece;     // per entry: its piece, or kNoIndex (SEAM)
-  std::vector<uint32_t> in_piece;  // per entry: its place in its piece's group
+  std::vector<uint32_t> piece;  // per entry: its piece, or kNoIndex (SEAM)
   size_t size() const { return tags.size(); }
 };
 
-LevelLayout levelLayout(const std::vector<PieceInfo>& pieces, size_t np, size_t nc) {
+LevelLayout levelLayout(const std::vector<PieceInfo>& pieces) {
   LevelLayout l;
-  auto add = [&](ChunkTag t, uint32_t piece, uint32_t k) {
-    l.tags.push_back(t);
-    l.piece.push_back(piece);
-    l.in_piece.push_back(k);
-  };
-  if (pieces.size() > 1) add(kTagSeam, kNoIndex, 0);
+  if (pieces.size() > 1) {
+    l.tags.push_back(kTagSeam);
+    l.piece.push_back(kNoIndex);
+  }
   for (size_t p = 0; p < pieces.size(); ++p) {
-    const uint32_t piece = static_cast<uint32_t>(p);
-    if (pieces[p].kind == kPieceStructured) {
-      add(kTagGrid, piece, 0);
-      continue;
-    }
-    uint32_t k = 0;
-    add(kTagBoundary, piece, k++);
-    add(kTagConnectivity, piece, k++);
-    add(kTagGeometry, piece, k++);
-    for (size_t f = 0; f < np; ++f) add(kTagPointField, piece, k++);
-    for (size_t f = 0; f < nc; ++f) add(kTagCellField, piece, k++);
+    l.tags.push_back(pieces[p].kind == kPieceStructured ? kTagGrid : kTagPiece);
+    l.piece.push_back(static_cast<uint32_t>(p));
   }
   return l;
 }
@@ -132,6 +117,17 @@ Status checkLevelOrder(const ChunkTag& tag, size_t k, const LevelLayout& layout,
                        " has several pieces but no 'SEAM' chunk after its 'LHDR' (found '" + tag.str() + "')");
   return invalidData(at(what, offset) + "chunk '" + tag.str() + "' out of order in level " + std::to_string(level) +
                      inPiece(layout, k) + ": expected '" + want.str() + "'");
+}
+
+// A PIEC chunk's payload must hold exactly the streams its LHDR entry lists.
+Status checkPieceStreams(const GtnLevelInfo& li, const GtnChunkInfo& c, uint64_t payload_size,
+                         const std::string& what) {
+  uint64_t sum = 0;
+  for (uint64_t size : li.piece_streams.at(c.piece)) sum += size;
+  if (sum != payload_size)
+    return invalidData(at(what, c.offset) + "piece " + std::to_string(c.piece) + "'s stream sizes (LHDR) sum to " +
+                       std::to_string(sum) + " bytes, but its 'PIEC' payload holds " + std::to_string(payload_size));
+  return Status::ok();
 }
 
 LevelHeader levelHeaderFrom(const GtnFileHeader& fh, const GtnLevelRecord& r) {
@@ -315,24 +311,27 @@ StatusOr<std::unique_ptr<GtnReader>> GtnReader::finishOpen(std::unique_ptr<GtnRe
   return r;
 }
 
-std::string GtnReader::sectionName(const ChunkTag& tag, size_t index_in_piece) const {
+std::string GtnReader::sectionName(const ChunkTag& tag) const {
   if (tag == kTagFileHeader) return "header";
   if (tag == kTagLevelHeader) return "level_header";
   if (tag == kTagSeam) return "seam";
   if (tag == kTagGrid) return "grid";
-  if (tag == kTagBoundary) return "boundary";
-  if (tag == kTagConnectivity) return "connectivity";
-  if (tag == kTagGeometry) return "geometry";
+  if (tag == kTagPiece) return "piece";
   if (tag == kTagMergeTree) return "merge_tree";
   if (tag == kTagDirectory) return "directory";
   if (tag == kTagEnd) return "trailer";
+  return "unknown:" + tag.str();
+}
+
+std::string GtnReader::streamSectionName(size_t k) const {
   const auto& pf = file_.header.point_fields;
   const auto& cf = file_.header.cell_fields;
-  if (tag == kTagPointField && index_in_piece >= 3 && index_in_piece - 3 < pf.size())
-    return "point_field:" + pf[index_in_piece - 3].name;
-  if (tag == kTagCellField && index_in_piece >= 3 + pf.size() && index_in_piece - 3 - pf.size() < cf.size())
-    return "cell_field:" + cf[index_in_piece - 3 - pf.size()].name;
-  return "unknown:" + tag.str();
+  if (k == 0) return "boundary";
+  if (k == 1) return "connectivity";
+  if (k == 2) return "geometry";
+  if (k - 3 < pf.size()) return "point_field:" + pf[k - 3].name;
+  if (k - 3 - pf.size() < cf.size()) return "cell_field:" + cf[k - 3 - pf.size()].name;
+  return "stream " + std::to_string(k);
 }
 
 StatusOr<std::vector<uint8_t>> GtnReader::readChunkBytes(const GtnChunkInfo& c, ChunkHeader* out_header) {
@@ -432,8 +431,9 @@ Status GtnReader::scan() {
 
   uint64_t pos = kGtnPrefixSize;
   bool have_header = false, have_dir = false, level_open = false;
-  size_t known_in_level = 0;  // known chunks after the current LHDR
-  LevelLayout layout;         // the chunks the current level must hold after its LHDR
+  LevelRecordContext record_context;  // what the next LHDR is coded against (set by GHDR)
+  size_t known_in_level = 0;          // known chunks after the current LHDR
+  LevelLayout layout;                 // the chunks the current level must hold after its LHDR
   GtnDirectory dir;
   uint64_t dir_offset = 0, dir_size = 0;
 
@@ -479,8 +479,9 @@ Status GtnReader::scan() {
     if (h.tag == kTagFileHeader) {
       if (have_header) return invalidData(at(what, pos) + "a second 'GHDR' chunk");
       GTN_RETURN_IF_ERROR(decodeFileHeader(payload, payload_offset, what, &file_.header));
+      record_context = levelRecordContext(file_.header);
       have_header = true;
-      c.section = sectionName(h.tag, 0);
+      c.section = sectionName(h.tag);
       file_.chunks.push_back(c);
     } else if (h.tag == kTagLevelHeader) {
       if (have_dir) return invalidData(at(what, pos) + "a level after the directory");
@@ -489,7 +490,8 @@ Status GtnReader::scan() {
         return invalidData(at(what, pos) + "more levels than the " + std::to_string(file_.header.level_count) +
                            " the header declares");
       GtnLevelRecord rec;
-      GTN_RETURN_IF_ERROR(decodeLevelRecord(payload, payload_offset, what, &rec));
+      GTN_RETURN_IF_ERROR(decodeLevelRecord(payload, payload_offset, what, record_context, &rec));
+      record_context = nextLevelRecordContext(record_context, rec);
       if (rec.level != levels_.size())
         return invalidData(at(what, payload_offset) + "level header says level " + std::to_string(rec.level) +
                            " where level " + std::to_string(levels_.size()) + " comes");
@@ -498,11 +500,12 @@ Status GtnReader::scan() {
       GtnLevelInfo li;
       li.header = levelHeaderFrom(file_.header, rec);
       li.ratio = rec.ratio;
-      layout = levelLayout(rec.pieces, file_.header.point_fields.size(), file_.header.cell_fields.size());
+      layout = levelLayout(rec.pieces);
       li.pieces = std::move(rec.pieces);
+      li.piece_streams = std::move(rec.streams);
       li.piece_chunk.assign(li.pieces.size(), 0);
       li.base = rec.base;
-      c.section = sectionName(h.tag, 0);
+      c.section = sectionName(h.tag);
       li.chunks.push_back(c);
       li.bytes = c.bytes;
       levels_.push_back(std::move(li));
@@ -519,8 +522,11 @@ Status GtnReader::scan() {
       }
       const bool in_piece = known_in_level < layout.size() && layout.piece[known_in_level] != kNoIndex;
       c.piece = in_piece ? layout.piece[known_in_level] : kNoIndex;
-      c.section = sectionName(h.tag, in_piece ? layout.in_piece[known_in_level] : 0);
-      if (in_piece && layout.in_piece[known_in_level] == 0) li.piece_chunk[c.piece] = li.chunks.size();
+      c.section = sectionName(h.tag);
+      if (in_piece) {
+        li.piece_chunk[c.piece] = li.chunks.size();
+        if (h.tag == kTagPiece && opened) GTN_RETURN_IF_ERROR(checkPieceStreams(li, c, payload.size(), what));
+      }
       ++known_in_level;
       if (h.tag == kTagMergeTree) li.has_merge_tree = true;
       li.chunks.push_back(c);
@@ -533,7 +539,7 @@ Status GtnReader::scan() {
       have_dir = true;
       dir_offset = pos;
       dir_size = c.bytes;
-      c.section = sectionName(h.tag, 0);
+      c.section = sectionName(h.tag);
       file_.chunks.push_back(c);
     } else if (h.tag == kTagEnd) {
       GTN_RETURN_IF_ERROR(closeLevel(pos));
@@ -550,7 +556,7 @@ Status GtnReader::scan() {
                            (have_dir ? "the directory is at offset " + std::to_string(dir_offset) + " (" +
                                            std::to_string(dir_size) + " bytes)"
                                      : std::string("the file has none")));
-      c.section = sectionName(h.tag, 0);
+      c.section = sectionName(h.tag);
       file_.chunks.push_back(c);
       pos += c.bytes;
       if (pos != size)
@@ -561,7 +567,7 @@ Status GtnReader::scan() {
       if (!h.ancillary())
         return invalidData(at(what, pos) + "unknown critical chunk '" + h.tag.str() +
                            "': this file needs a newer reader");
-      c.section = sectionName(h.tag, 0);
+      c.section = sectionName(h.tag);
       if (level_open) {
         levels_.back().chunks.push_back(c);
         levels_.back().bytes += c.bytes;
@@ -624,7 +630,7 @@ Status GtnReader::openByDirectory() {
   GTN_RETURN_IF_ERROR(decodeDirectory(dp, dc.offset + h.header_size, what, file_.header.level_count, &dir));
 
   uint64_t expect_offset = levels_begin;
-  const size_t np = file_.header.point_fields.size(), nc = file_.header.cell_fields.size();
+  LevelRecordContext record_context = levelRecordContext(file_.header);
   for (size_t i = 0; i < dir.size(); ++i) {
     if (dir[i].empty() || dir[i][0].tag != kTagLevelHeader)
       return invalidData(what + ": directory level " + std::to_string(i) + " does not start with LHDR");
@@ -646,22 +652,24 @@ Status GtnReader::openByDirectory() {
         c.raw_bytes = h.raw_size;
         c.zstd = h.zstd();
         GtnLevelRecord rec;
-        GTN_RETURN_IF_ERROR(decodeLevelRecord(lp, c.offset + h.header_size, what, &rec));
+        GTN_RETURN_IF_ERROR(decodeLevelRecord(lp, c.offset + h.header_size, what, record_context, &rec));
+        record_context = nextLevelRecordContext(record_context, rec);
         if (rec.level != i) return invalidData(what + ": level index mismatch");
         if (rec.level == 0 && (rec.points != file_.header.points || rec.tets != file_.header.tets || rec.merges != 0))
           return invalidData(what + ": level 0's counts disagree with the file header");
         li.header = levelHeaderFrom(file_.header, rec);
         li.ratio = rec.ratio;
-        layout = levelLayout(rec.pieces, np, nc);
+        layout = levelLayout(rec.pieces);
         li.pieces = std::move(rec.pieces);
+        li.piece_streams = std::move(rec.streams);
         li.piece_chunk.assign(li.pieces.size(), 0);
         li.base = rec.base;
       } else if (isLevelTag(e.tag)) {
         GTN_RETURN_IF_ERROR(checkLevelOrder(e.tag, known, layout, e.offset, i, what));
         const bool in_piece = known < layout.size() && layout.piece[known] != kNoIndex;
         c.piece = in_piece ? layout.piece[known] : kNoIndex;
-        c.section = sectionName(e.tag, in_piece ? layout.in_piece[known] : 0);
-        if (in_piece && layout.in_piece[known] == 0) li.piece_chunk[c.piece] = li.chunks.size();
+        c.section = sectionName(e.tag);
+        if (in_piece) li.piece_chunk[c.piece] = li.chunks.size();
         ++known;
         if (e.tag == kTagMergeTree) li.has_merge_tree = true;
       } else if (isKnownTag(e.tag)) {
@@ -691,19 +699,26 @@ StatusOr<GtnLevelStreams> GtnReader::readPieceStreams(size_t i, size_t piece) {
                       " (it has " + std::to_string(li.pieces.size()) + ")");
   GtnLevelStreams s;
   s.header = li.pieces.size() == 1 ? li.header : pieceHeader(li.header, li.pieces[piece]);
-  for (size_t k = li.piece_chunk[piece]; k < li.chunks.size(); ++k) {
-    const GtnChunkInfo& c = li.chunks[k];
-    if (c.piece != piece) {
-      if (c.piece != kNoIndex) break;
-      continue;
-    }
-    GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> p, readChunk(c));
-    if (c.tag == kTagBoundary) s.boundary = std::move(p);
-    else if (c.tag == kTagConnectivity) s.connectivity = std::move(p);
-    else if (c.tag == kTagGeometry) s.geometry = std::move(p);
-    else if (c.tag == kTagGrid) s.connectivity = std::move(p);
-    else if (c.tag == kTagPointField) s.point_fields.push_back(std::move(p));
-    else s.cell_fields.push_back(std::move(p));
+  const GtnChunkInfo& c = li.chunks.at(li.piece_chunk[piece]);
+  GTN_ASSIGN_OR_RETURN(std::vector<uint8_t> p, readChunk(c));
+  if (c.tag == kTagGrid) {
+    s.connectivity = std::move(p);
+    return s;
+  }
+  // A PIEC: its streams in order, as long as LHDR says.
+  GTN_RETURN_IF_ERROR(checkPieceStreams(li, c, p.size(), file_.path));
+  const std::vector<uint64_t>& sizes = li.piece_streams[piece];
+  const size_t np = file_.header.point_fields.size();
+  uint64_t at = 0;
+  for (size_t k = 0; k < sizes.size(); ++k) {
+    std::vector<uint8_t> stream(p.begin() + static_cast<std::ptrdiff_t>(at),
+                                p.begin() + static_cast<std::ptrdiff_t>(at + sizes[k]));
+    at += sizes[k];
+    if (k == 0) s.boundary = std::move(stream);
+    else if (k == 1) s.connectivity = std::move(stream);
+    else if (k == 2) s.geometry = std::move(stream);
+    else if (k - 3 < np) s.point_fields.push_back(std::move(stream));
+    else s.cell_fields.push_back(std::move(stream));
   }
   return s;
 }
@@ -912,7 +927,20 @@ std::vector<GtnSection> GtnReader::sections() const {
   for (const GtnChunkInfo& c : file_.chunks)
     if (c.tag == kTagFileHeader) add(c.section, c.bytes);
   for (const GtnLevelInfo& l : levels_)
-    for (const GtnChunkInfo& c : l.chunks) add(c.section, c.bytes);
+    for (const GtnChunkInfo& c : l.chunks) {
+      // A piece stored raw: its streams each to their own section, its framing to "piece_framing";
+      // stored compressed, the whole chunk to "piece".
+      uint64_t streams = 0;
+      if (c.tag == kTagPiece)
+        for (uint64_t size : l.piece_streams.at(c.piece)) streams += size;
+      if (c.tag != kTagPiece || c.bytes != kChunkFixedHeaderSize + streams + kChunkChecksumSize) {
+        add(c.section, c.bytes);
+        continue;
+      }
+      const std::vector<uint64_t>& sizes = l.piece_streams[c.piece];
+      for (size_t k = 0; k < sizes.size(); ++k) add(streamSectionName(k), sizes[k]);
+      add("piece_framing", c.bytes - streams);
+    }
   for (const GtnChunkInfo& c : file_.chunks)
     if (c.tag != kTagFileHeader) add(c.section, c.bytes);
   return out;

@@ -27,7 +27,7 @@ namespace gtn {
 
 struct GtnChunkInfo {
   ChunkTag tag;
-  std::string section;        // "boundary", "point_field:density", "seam", "unknown:abcd", ... (see sections())
+  std::string section;        // "piece", "grid", "seam", "unknown:abcd", ... (see sections())
   uint64_t offset = 0;        // of the chunk's first byte
   uint64_t bytes = 0;         // the whole chunk: framing, stored payload, checksum
   uint64_t stored_bytes = 0;  // payload as stored (0 when only known from the directory)
@@ -40,10 +40,12 @@ struct GtnLevelInfo {
   LevelHeader header;  // counts, bounding box of this level; fields and metadata from the file header
   double ratio = 0.0;  // vertices merged away / vertices of level 0
   bool has_merge_tree = false;
-  std::vector<GtnChunkInfo> chunks;         // LHDR first, in file order
-  uint64_t bytes = 0;                       // all chunks of the level
-  std::vector<PieceInfo> pieces;            // the piece table (LHDR), in piece order; at least one
-  std::vector<size_t> piece_chunk;          // per piece: the index in `chunks` of its first chunk
+  std::vector<GtnChunkInfo> chunks;  // LHDR first, in file order
+  uint64_t bytes = 0;                // all chunks of the level
+  std::vector<PieceInfo> pieces;     // the piece table (LHDR), in piece order; at least one
+  std::vector<size_t> piece_chunk;   // per piece: the index in `chunks` of its chunk (PIEC or GRID)
+  // Per piece of kind 0: the byte sizes of its codec streams in its PIEC payload (LHDR).
+  std::vector<std::vector<uint64_t>> piece_streams;
   uint8_t base = 0;                         // 1: names level i + 1's vertices (LHDR base, spec 7.7)
   uint64_t pieceBytes(size_t piece) const;  // the piece's chunks, framing included
 };
@@ -76,7 +78,7 @@ struct GtnOpenOptions {
   // truncation and trailing bytes. false: with a seekable file that has a valid trailer and directory,
   // read only the prefix, GHDR, trailer, directory and level headers (each chunk still checksummed
   // when read); without them, fall back to the full scan, which then goes past a level's content
-  // chunk (BNDY ... MTRE, or an ancillary chunk) whose checksum fails: reading that chunk fails.
+  // chunk (SEAM, PIEC, GRID, MTRE, or an ancillary chunk) whose checksum fails: reading that chunk fails.
   bool verify = true;
 };
 
@@ -155,7 +157,10 @@ class GtnReader {
   StatusOr<std::vector<uint8_t>> readChunkBytes(const GtnChunkInfo& c, ChunkHeader* header);
   StatusOr<bool> checksumMatches(const GtnChunkInfo& c);
   Status readSource(uint64_t offset, size_t n, uint8_t* out);
-  std::string sectionName(const ChunkTag& tag, size_t index_in_piece) const;
+  std::string sectionName(const ChunkTag& tag) const;
+  // The section of an unstructured piece's k-th codec stream: boundary, connectivity, geometry,
+  // point_field:NAME, cell_field:NAME.
+  std::string streamSectionName(size_t k) const;
 
   std::unique_ptr<Source> source_;
   GtnFileInfo file_;

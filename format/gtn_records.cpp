@@ -1,6 +1,7 @@
 #include "format/gtn_records.h"
 
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 
 #include "format/gtn_bytes.h"
@@ -108,7 +109,33 @@ Status decodeFileHeader(std::span<const uint8_t> payload, uint64_t offset, const
   return r.expectEnd("the GHDR payload");
 }
 
-std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& l) {
+LevelRecordContext levelRecordContext(const GtnFileHeader& h) {
+  LevelRecordContext c;
+  for (int i = 0; i < 3; ++i) {
+    c.prev_min[i] = h.bbox_min[i];
+    c.prev_max[i] = h.bbox_max[i];
+  }
+  c.streams = 3 + h.point_fields.size() + h.cell_fields.size();
+  return c;
+}
+
+LevelRecordContext nextLevelRecordContext(const LevelRecordContext& c, const GtnLevelRecord& r) {
+  LevelRecordContext n = c;
+  for (int i = 0; i < 3; ++i) {
+    n.prev_min[i] = r.bbox_min[i];
+    n.prev_max[i] = r.bbox_max[i];
+  }
+  return n;
+}
+
+namespace {
+// The six bounds of a box in LHDR order: min x, y, z, max x, y, z.
+double& bound(double mn[3], double mx[3], int k) { return k < 3 ? mn[k] : mx[k - 3]; }
+double bound(const double mn[3], const double mx[3], int k) { return k < 3 ? mn[k] : mx[k - 3]; }
+bool sameBits(double a, double b) { return std::bit_cast<uint64_t>(a) == std::bit_cast<uint64_t>(b); }
+}  // namespace
+
+std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& l, const LevelRecordContext& c) {
   ByteWriter w;
   w.varint(l.level);
   w.varint(l.merges);
@@ -116,29 +143,37 @@ std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& l) {
   w.varint(l.points);
   w.varint(l.tets);
   w.varint(l.boundary_triangles);
-  for (double v : l.bbox_min) w.f64(v);
-  for (double v : l.bbox_max) w.f64(v);
+  // The box: a bit per bound equal to the previous box's, then the others.
+  uint8_t same = 0;
+  for (int k = 0; k < 6; ++k)
+    if (sameBits(bound(l.bbox_min, l.bbox_max, k), bound(c.prev_min, c.prev_max, k))) same |= uint8_t(1u << k);
+  w.u8(same);
+  for (int k = 0; k < 6; ++k)
+    if (!(same & (1u << k))) w.f64(bound(l.bbox_min, l.bbox_max, k));
   w.varint(l.pieces.size());
-  for (const PieceInfo& p : l.pieces) {
+  for (size_t i = 0; i < l.pieces.size(); ++i) {
+    const PieceInfo& p = l.pieces[i];
     w.u8(p.kind);
     if (l.pieces.size() == 1) {  // the level's counts and box are the piece's
       w.varint(p.own_boundary_points);
-      break;
+    } else {
+      w.varint(p.points);
+      w.varint(p.own_points);
+      w.varint(p.own_boundary_points);
+      w.varint(p.tets);
+      w.varint(p.boundary_triangles);
+      for (double v : p.bbox_min) w.f64(v);
+      for (double v : p.bbox_max) w.f64(v);
     }
-    w.varint(p.points);
-    w.varint(p.own_points);
-    w.varint(p.own_boundary_points);
-    w.varint(p.tets);
-    w.varint(p.boundary_triangles);
-    for (double v : p.bbox_min) w.f64(v);
-    for (double v : p.bbox_max) w.f64(v);
+    if (p.kind == kPieceUnstructured)
+      for (uint64_t size : l.streams.at(i)) w.varint(size);
   }
   w.u8(l.base);
   return std::move(w.bytes());
 }
 
 Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, const std::string& what,
-                         GtnLevelRecord* l) {
+                         const LevelRecordContext& c, GtnLevelRecord* l) {
   ByteReader r(payload, offset, what + ": LHDR");
   GTN_RETURN_IF_ERROR(r.varint(&l->level, "level index"));
   GTN_RETURN_IF_ERROR(r.varint(&l->merges, "merge count"));
@@ -148,7 +183,14 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
   GTN_RETURN_IF_ERROR(r.varint(&l->points, "point count"));
   GTN_RETURN_IF_ERROR(r.varint(&l->tets, "tetrahedron count"));
   GTN_RETURN_IF_ERROR(r.varint(&l->boundary_triangles, "boundary triangle count"));
-  GTN_RETURN_IF_ERROR(readBox(r, l->bbox_min, l->bbox_max));
+  const uint64_t at_same = r.offset();
+  uint8_t same;
+  GTN_RETURN_IF_ERROR(r.u8(&same, "bounding box bits"));
+  if (same & 0xC0) return r.errorAt(at_same, "bounding box bits 6 and 7 are set; they must be 0");
+  for (int k = 0; k < 6; ++k) {
+    if (same & (1u << k)) bound(l->bbox_min, l->bbox_max, k) = bound(c.prev_min, c.prev_max, k);
+    else GTN_RETURN_IF_ERROR(r.f64(&bound(l->bbox_min, l->bbox_max, k), "bounding box bound"));
+  }
   uint64_t n;
   uint64_t at_n = r.offset();
   // An entry of one of several pieces takes at least 54 bytes: bound the count by the payload first.
@@ -156,6 +198,7 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
       r.varintAtMost(&n, std::max<uint64_t>(1, std::min<uint64_t>(kGtnMaxPieces, r.remaining() / 54)), "piece count"));
   if (n == 0) return r.errorAt(at_n, "piece count is 0; a level has at least one piece");
   l->pieces.resize(n);
+  l->streams.assign(n, {});
   uint64_t tets = 0;
   for (size_t i = 0; i < n; ++i) {
     PieceInfo& p = l->pieces[i];
@@ -182,15 +225,30 @@ Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, cons
       }
       GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_boundary_points, p.own_points, "piece own boundary point count"));
       tets = p.tets;
-      break;
+    } else {
+      GTN_RETURN_IF_ERROR(r.varintAtMost(&p.points, kGtnMaxPiecePoints, "piece point count"));
+      GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_points, p.points, "piece own point count"));
+      GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_boundary_points, p.own_points, "piece own boundary point count"));
+      GTN_RETURN_IF_ERROR(r.varintAtMost(&p.tets, l->tets - tets, "piece tetrahedron count (beyond the level's)"));
+      tets += p.tets;
+      GTN_RETURN_IF_ERROR(r.varint(&p.boundary_triangles, "piece boundary triangle count"));
+      GTN_RETURN_IF_ERROR(readBox(r, p.bbox_min, p.bbox_max));
     }
-    GTN_RETURN_IF_ERROR(r.varintAtMost(&p.points, kGtnMaxPiecePoints, "piece point count"));
-    GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_points, p.points, "piece own point count"));
-    GTN_RETURN_IF_ERROR(r.varintAtMost(&p.own_boundary_points, p.own_points, "piece own boundary point count"));
-    GTN_RETURN_IF_ERROR(r.varintAtMost(&p.tets, l->tets - tets, "piece tetrahedron count (beyond the level's)"));
-    tets += p.tets;
-    GTN_RETURN_IF_ERROR(r.varint(&p.boundary_triangles, "piece boundary triangle count"));
-    GTN_RETURN_IF_ERROR(readBox(r, p.bbox_min, p.bbox_max));
+    if (p.kind != kPieceUnstructured) continue;
+    // Its streams' sizes, one varint (at least a byte) each: checked against the payload before
+    // anything is reserved; their sum must fit in a chunk.
+    const uint64_t at_s = r.offset();
+    if (r.remaining() < c.streams)
+      return r.errorAt(at_s,
+                       piece + ": its " + std::to_string(c.streams) + " stream sizes need more bytes than remain");
+    std::vector<uint64_t>& sizes = l->streams[i];
+    sizes.resize(c.streams);
+    uint64_t sum = 0;
+    for (uint64_t& size : sizes) {
+      GTN_RETURN_IF_ERROR(r.varint(&size, "stream size"));
+      if (size > (uint64_t{1} << 62) - sum) return r.errorAt(at_s, piece + ": its stream sizes sum beyond 2^62 bytes");
+      sum += size;
+    }
   }
   if (tets != l->tets)
     return r.errorAt(

@@ -1,7 +1,7 @@
 // Payloads of the container's own chunks (spec/gtn-format.md): the file header (GHDR), the level
 // header (LHDR) with its piece table, the seam table (SEAM), the directory (DIRC) and the end chunk
-// (GEND). The codec's streams (BNDY, CONN, GEOM, PFLD, CFLD, GRID, the seam classes' streams) and the
-// merge tree (MTRE) are opaque here.
+// (GEND). The codec's streams (BNDY, CONN, GEOM, PFLD, CFLD, which a piece's PIEC chunk holds, GRID,
+// the seam classes' streams) and the merge tree (MTRE) are opaque here.
 #pragma once
 
 #include <cstdint>
@@ -53,6 +53,9 @@ struct GtnLevelRecord {
   uint64_t points = 0, tets = 0, boundary_triangles = 0;
   double bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
   std::vector<PieceInfo> pieces;  // at least one; their tetrahedra sum to `tets`
+  // Per piece: the byte sizes of its codec streams in PIEC order (BNDY, CONN, GEOM, each PFLD, each
+  // CFLD); empty for a structured piece.
+  std::vector<std::vector<uint64_t>> streams;
   // 1: the level names the vertices of the next level (level + 1) instead of storing their values
   // (spec section 7.7); 0: it stores every vertex's values.
   uint8_t base = 0;
@@ -80,7 +83,17 @@ void writeFields(ByteWriter& w, const std::vector<FieldDesc>& fields);
 Status readFields(ByteReader& r, std::vector<FieldDesc>* fields, const char* what);
 
 std::vector<uint8_t> encodeFileHeader(const GtnFileHeader& h);
-std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& r);
+// What an LHDR is coded against: the previous box (GHDR's for level 0, else the previous level's),
+// whose equal bounds it does not store, and the number of codec streams of an unstructured piece.
+struct LevelRecordContext {
+  double prev_min[3] = {0, 0, 0}, prev_max[3] = {0, 0, 0};
+  size_t streams = 3;  // 3 + point fields + cell fields
+};
+LevelRecordContext levelRecordContext(const GtnFileHeader& h);  // level 0's
+// Level i + 1's, after level i's record r.
+LevelRecordContext nextLevelRecordContext(const LevelRecordContext& c, const GtnLevelRecord& r);
+
+std::vector<uint8_t> encodeLevelRecord(const GtnLevelRecord& r, const LevelRecordContext& c);
 // The SEAM payload: the class table, then the class streams concatenated (one per class).
 std::vector<uint8_t> encodeSeamTable(const std::vector<SeamClass>& classes,
                                      const std::vector<std::vector<uint8_t>>& streams);
@@ -93,7 +106,8 @@ Status decodeFileHeader(std::span<const uint8_t> payload, uint64_t offset, const
 // Checks the piece table against the level's counts too: kinds known, each piece's counts consistent,
 // the pieces' tetrahedra summing to the level's. The one piece of a one-piece level stores only its
 // kind and own boundary points; the rest is the level's.
-Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, const std::string& what, GtnLevelRecord* r);
+Status decodeLevelRecord(std::span<const uint8_t> payload, uint64_t offset, const std::string& what,
+                         const LevelRecordContext& c, GtnLevelRecord* r);
 // Checks the table against level `level` (`points` points, piece table `pieces`): classes of 2 or more increasing piece indices below
 // the piece count, in increasing lexicographic order, the seam points of each piece matching its
 // piece entry, own and seam points summing to the level's, stream sizes summing to the payload.

@@ -14,6 +14,14 @@
 namespace gtn {
 
 namespace {
+// An unstructured piece's codec streams in PIEC order (spec section 7.2).
+std::vector<const std::vector<uint8_t>*> pieceStreams(const EncodedLevel& e) {
+  std::vector<const std::vector<uint8_t>*> out = {&e.boundary, &e.connectivity, &e.geometry};
+  for (const auto& s : e.point_fields) out.push_back(&s);
+  for (const auto& s : e.cell_fields) out.push_back(&s);
+  return out;
+}
+
 bool sameFields(const std::vector<FieldDesc>& a, const std::vector<FieldDesc>& b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i)
@@ -70,6 +78,7 @@ Status GtnStreamWriter::begin(const LevelHeader& level0, uint64_t level_count) {
   h.tool_version = options_.tool_version;
   h.command_line = options_.command_line;
   h.metadata = level0.metadata;
+  record_context_ = levelRecordContext(h);
   begun_ = true;
   return emit(kTagFileHeader, encodeFileHeader(h), false, true);
 }
@@ -137,20 +146,24 @@ Status GtnStreamWriter::addLevel(const PiecedLevel& l, double ratio,
     r.bbox_max[i] = h.bbox_max[i];
   }
   r.pieces = l.pieces;
+  r.streams.resize(l.pieces.size());
+  for (size_t p = 0; p < l.encoded.size(); ++p)
+    if (l.pieces[p].kind == kPieceUnstructured)
+      for (const std::vector<uint8_t>* s : pieceStreams(l.encoded[p])) r.streams[p].push_back(s->size());
   r.base = l.base;
-  GTN_RETURN_IF_ERROR(emit(kTagLevelHeader, encodeLevelRecord(r), false, false));
+  GTN_RETURN_IF_ERROR(emit(kTagLevelHeader, encodeLevelRecord(r, record_context_), false, false));
+  record_context_ = nextLevelRecordContext(record_context_, r);
   if (l.pieces.size() > 1) GTN_RETURN_IF_ERROR(emit(kTagSeam, encodeSeamTable(l.classes, l.seam_streams), false, true));
+  std::vector<uint8_t> piece;
   for (size_t p = 0; p < l.encoded.size(); ++p) {
     const EncodedLevel& e = l.encoded[p];
     if (l.pieces[p].kind == kPieceStructured) {
       GTN_RETURN_IF_ERROR(emit(kTagGrid, e.connectivity, false, true));
       continue;
     }
-    GTN_RETURN_IF_ERROR(emit(kTagBoundary, e.boundary, false, true));
-    GTN_RETURN_IF_ERROR(emit(kTagConnectivity, e.connectivity, false, true));
-    GTN_RETURN_IF_ERROR(emit(kTagGeometry, e.geometry, false, true));
-    for (const auto& s : e.point_fields) GTN_RETURN_IF_ERROR(emit(kTagPointField, s, false, true));
-    for (const auto& s : e.cell_fields) GTN_RETURN_IF_ERROR(emit(kTagCellField, s, false, true));
+    piece.clear();
+    for (const std::vector<uint8_t>* s : pieceStreams(e)) piece.insert(piece.end(), s->begin(), s->end());
+    GTN_RETURN_IF_ERROR(emit(kTagPiece, piece, false, true));
   }
   if (merge_tree) GTN_RETURN_IF_ERROR(emit(kTagMergeTree, *merge_tree, true, true));
   return Status::ok();

@@ -390,7 +390,7 @@ TEST(GtnChain, DamageInALevelReachesTheFinerLevelsThatNameItsVertices) {
     auto r = open(path);
     ASSERT_TRUE(r);
     for (const GtnChunkInfo& c : r->level(2).chunks)
-      if (c.tag == kTagGeometry) geom = c.offset;
+      if (c.tag == kTagPiece) geom = c.offset;
   }
   ASSERT_GT(geom, 0u);
   bytes[geom + 40] ^= 0x10;

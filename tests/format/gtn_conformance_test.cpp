@@ -534,19 +534,26 @@ GtnChunkInfo levelChunk(const std::vector<uint8_t>& bytes, ChunkTag tag, size_t 
   return {};
 }
 
-// Level 0's header record as a valid file stores it.
-GtnLevelRecord levelRecord(const std::vector<uint8_t>& bytes, size_t level = 0) {
-  const GtnChunkInfo c = levelChunk(bytes, kTagLevelHeader, level);
-  ChunkHeader h;
-  size_t needed;
-  EXPECT_TRUE(
-      parseGtnChunkHeader(std::span(bytes).subspan(c.offset), c.offset, bytes.size() - c.offset, "gen", &h, &needed)
-          .isOk());
-  auto payload = openGtnChunk(h, std::span(bytes).subspan(c.offset, c.bytes), "gen");
-  EXPECT_TRUE(payload.isOk());
+// A level's header record as a valid file stores it, and what it is coded against (the levels'
+// records are coded in turn, each against the one before).
+std::pair<GtnLevelRecord, LevelRecordContext> levelRecord(const std::vector<uint8_t>& bytes, size_t level = 0) {
+  auto reader = GtnReader::openMemory(std::string(bytes.begin(), bytes.end()), "gen");
+  EXPECT_TRUE(reader.isOk());
+  LevelRecordContext context = levelRecordContext((*reader)->file().header);
   GtnLevelRecord r;
-  EXPECT_TRUE(decodeLevelRecord(*payload, 0, "gen", &r).isOk());
-  return r;
+  for (size_t i = 0; i <= level; ++i) {
+    const GtnChunkInfo c = levelChunk(bytes, kTagLevelHeader, i);
+    ChunkHeader h;
+    size_t needed;
+    EXPECT_TRUE(
+        parseGtnChunkHeader(std::span(bytes).subspan(c.offset), c.offset, bytes.size() - c.offset, "gen", &h, &needed)
+            .isOk());
+    auto payload = openGtnChunk(h, std::span(bytes).subspan(c.offset, c.bytes), "gen");
+    EXPECT_TRUE(payload.isOk());
+    EXPECT_TRUE(decodeLevelRecord(*payload, 0, "gen", context, &r).isOk());
+    if (i < level) context = nextLevelRecordContext(context, r);
+  }
+  return {r, context};
 }
 
 // The file header chunk of a valid file (offset and size), its record in `h`.
@@ -588,74 +595,74 @@ Sample valid(std::string name, std::function<TetMesh()> mesh, std::function<std:
 
 std::vector<Sample> samples() {
   std::vector<Sample> s;
-  s.push_back(valid("cube.f32.dir.v2.0-d5.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
+  s.push_back(valid("cube.f32.dir.v2.0-d6.gtn", cubeF32, [] { return encodeFile(cubeF32(), options()); }));
   s.push_back(
-      valid("cube.f64.fields.dir.v2.0-d5.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
-  s.push_back(valid("cube.f64.fields.nodir.v2.0-d5.gtn", cubeF64Fields,
+      valid("cube.f64.fields.dir.v2.0-d6.gtn", cubeF64Fields, [] { return encodeFile(cubeF64Fields(), options()); }));
+  s.push_back(valid("cube.f64.fields.nodir.v2.0-d6.gtn", cubeF64Fields,
                     [] { return encodeFile(cubeF64Fields(), options(false)); }));
   s.push_back(
-      valid("unused-points.f32.dir.v2.0-d5.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
-  s.push_back(valid("two-components.f32.dir.v2.0-d5.gtn", twoComponents,
+      valid("unused-points.f32.dir.v2.0-d6.gtn", unusedPoints, [] { return encodeFile(unusedPoints(), options()); }));
+  s.push_back(valid("two-components.f32.dir.v2.0-d6.gtn", twoComponents,
                     [] { return encodeFile(twoComponents(), options()); }));
-  s.push_back(valid("repeated-components.f64.dir.v2.0-d5.gtn", repeatedComponents,
+  s.push_back(valid("repeated-components.f64.dir.v2.0-d6.gtn", repeatedComponents,
                     [] { return encodeFile(repeatedComponents(), options()); }));
-  s.push_back(valid("decimals.f64.dir.v2.0-d5.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
-  s.push_back(valid("printed-singles.f64.dir.v2.0-d5.gtn", printedSingles,
+  s.push_back(valid("decimals.f64.dir.v2.0-d6.gtn", decimals, [] { return encodeFile(decimals(), options()); }));
+  s.push_back(valid("printed-singles.f64.dir.v2.0-d6.gtn", printedSingles,
                     [] { return encodeFile(printedSingles(), options()); }));
-  s.push_back(valid("shift-exceptions.f64.dir.v2.0-d5.gtn", shiftExceptions,
+  s.push_back(valid("shift-exceptions.f64.dir.v2.0-d6.gtn", shiftExceptions,
                     [] { return encodeFile(shiftExceptions(), options()); }));
-  s.push_back(valid("value-table.f32.dir.v2.0-d5.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
-  s.push_back(valid("packed-values.f32.dir.v2.0-d5.gtn", packedValues,
+  s.push_back(valid("value-table.f32.dir.v2.0-d6.gtn", valueTable, [] { return encodeFile(valueTable(), options()); }));
+  s.push_back(valid("packed-values.f32.dir.v2.0-d6.gtn", packedValues,
                     [] { return encodeFile(packedValues(), options(), nullptr, true); }));
   s.push_back(
-      valid("curvilinear.f32.dir.v2.0-d5.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
-  s.push_back(valid("edge-points.f64.dir.v2.0-d5.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
+      valid("curvilinear.f32.dir.v2.0-d6.gtn", curvilinear, [] { return encodeFile(curvilinear(), options()); }));
+  s.push_back(valid("edge-points.f64.dir.v2.0-d6.gtn", edgePoints, [] { return encodeFile(edgePoints(), options()); }));
   s.push_back(
-      valid("delaunay.f64.dir.v2.0-d5.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
-  s.push_back(valid("degenerate-sweep.f64.dir.v2.0-d5.gtn", degenerateSweep,
+      valid("delaunay.f64.dir.v2.0-d6.gtn", delaunayMesh, [] { return encodeFile(delaunayMesh(), options()); }));
+  s.push_back(valid("degenerate-sweep.f64.dir.v2.0-d6.gtn", degenerateSweep,
                     [] { return encodeFile(degenerateSweep(), options()); }));
   s.push_back(
-      valid("pieces.f32.dir.v2.0-d5.gtn", piecesMesh, [] { return encodePiecesFile(piecesMesh(), options()); }));
-  s.push_back(valid("levels.f32.dir.v2.0-d5.gtn", levelsMesh,
+      valid("pieces.f32.dir.v2.0-d6.gtn", piecesMesh, [] { return encodePiecesFile(piecesMesh(), options()); }));
+  s.push_back(valid("levels.f32.dir.v2.0-d6.gtn", levelsMesh,
                     [] { return encodeWithTree(levelsMesh(), 2, options(), nullptr, 2, true); }));
-  s.push_back(valid("levels-mtre3.f32.dir.v2.0-d5.gtn", levelsMesh,
+  s.push_back(valid("levels-mtre3.f32.dir.v2.0-d6.gtn", levelsMesh,
                     [] { return encodeWithTree(levelsMesh(), 2, options(), nullptr, 3); }));
-  s.push_back(valid("levels-mtre4.f32.dir.v2.0-d5.gtn", levelsMesh,
+  s.push_back(valid("levels-mtre4.f32.dir.v2.0-d6.gtn", levelsMesh,
                     [] { return encodeWithTree(levelsMesh(), 2, options(), nullptr, 4); }));
   s.push_back(
-      valid("levels-mtre5.f32.dir.v2.0-d5.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
-  s.push_back(valid("wide-merge-tree.f32.dir.v2.0-d5.gtn", wideMesh,
+      valid("levels-mtre5.f32.dir.v2.0-d6.gtn", levelsMesh, [] { return encodeWithTree(levelsMesh(), 2, options()); }));
+  s.push_back(valid("wide-merge-tree.f32.dir.v2.0-d6.gtn", wideMesh,
                     [] { return encodeWithTree(wideMesh(), 0, options(), nullptr, 3, true); }));
-  s.push_back(valid("grid-tree.f32.dir.v2.0-d5.gtn", gridTreeMesh,
+  s.push_back(valid("grid-tree.f32.dir.v2.0-d6.gtn", gridTreeMesh,
                     [] { return encodeGridWithTree(gridTreeMesh(), 1, options()); }));
-  s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d5.gtn", cubeF32, [] {
+  s.push_back(valid("ancillary-chunk.f32.nodir.v2.0-d6.gtn", cubeF32, [] {
     const std::vector<uint8_t> note = {'a', 'n', 'o', 't', 'e'};
     return encodeFile(cubeF32(), options(false),
                       [&](GtnStreamWriter& w) { EXPECT_TRUE(w.addChunk(ChunkTag("xNOT"), note, true).isOk()); });
   }));
-  s.push_back(valid("newer-minor.f32.dir.v2.9-d5.gtn", cubeF32, [] {
+  s.push_back(valid("newer-minor.f32.dir.v2.9-d6.gtn", cubeF32, [] {
     std::vector<uint8_t> b = encodeFile(cubeF32(), options());
     const auto p = encodeGtnPrefix(2, 9);
     std::copy(p.begin(), p.end(), b.begin());
     return b;
   }));
   // Must fail.
-  s.push_back({"fail.bad-magic-text-mode.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.bad-magic-text-mode.v2.0-d6.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.erase(b.begin() + 4);  // CR LF -> LF, as a text-mode transfer does
                  return b;
                }});
-  s.push_back({"fail.bad-checksum.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.bad-checksum.v2.0-d6.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
-                 b[chunkOffset(b, kTagGeometry) + 40] ^= 0x04;  // past the header, in the payload
+                 b[chunkOffset(b, kTagPiece) + 40] ^= 0x04;  // past the header, in the payload
                  return b;
                }});
-  s.push_back({"fail.truncated.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.truncated.v2.0-d6.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
-                 b.resize(chunkOffset(b, kTagConnectivity) + 20);
+                 b.resize(chunkOffset(b, kTagPiece) + 20);
                  return b;
                }});
-  s.push_back({"fail.unknown-critical-chunk.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.unknown-critical-chunk.v2.0-d6.gtn", nullptr, [] {
                  const std::vector<uint8_t> payload = {1, 2, 3};
                  return encodeFile(cubeF32(), options(false), [&](GtnStreamWriter& w) {
                    EXPECT_TRUE(w.addChunk(ChunkTag("XTRA"), payload, false).isOk());
@@ -667,7 +674,7 @@ std::vector<Sample> samples() {
                  std::copy(p.begin(), p.end(), b.begin());
                  return b;
                }});
-  s.push_back({"fail.trailing-bytes.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.trailing-bytes.v2.0-d6.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options());
                  b.push_back('\n');
                  return b;
@@ -678,29 +685,29 @@ std::vector<Sample> samples() {
                  std::copy(p.begin(), p.end(), b.begin());
                  return b;
                }});
-  s.push_back({"fail.draft-4.v2.0-d4.gtn", nullptr, [] {
+  s.push_back({"fail.draft-5.v2.0-d5.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeFile(cubeF32(), options(false));
                  GtnFileHeader h;
                  const auto [offset, size] = fileChunk(b, kTagFileHeader, &h);
-                 h.draft = 4;
+                 h.draft = 5;
                  return replaceChunk(b, offset, size, kTagFileHeader, encodeFileHeader(h));
                }});
   // Must fail: pieces.
-  s.push_back({"fail.seam-missing.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.seam-missing.v2.0-d6.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
                  const GtnChunkInfo seam = levelChunk(b, kTagSeam);
                  b.erase(b.begin() + static_cast<ptrdiff_t>(seam.offset),
                          b.begin() + static_cast<ptrdiff_t>(seam.offset + seam.bytes));
                  return b;
                }});
-  s.push_back({"fail.piece-tets-sum.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.piece-tets-sum.v2.0-d6.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
-                 GtnLevelRecord r = levelRecord(b);
+                 auto [r, context] = levelRecord(b);
                  r.pieces[1].tets -= 1;  // the pieces hold one tetrahedron fewer than the level
                  const GtnChunkInfo lhdr = levelChunk(b, kTagLevelHeader);
-                 return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r), false);
+                 return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r, context), false);
                }});
-  s.push_back({"fail.seam-class-repeats-piece.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.seam-class-repeats-piece.v2.0-d6.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
                  auto r = GtnReader::openMemory(std::string(b.begin(), b.end()), "gen");
                  EXPECT_TRUE(r.isOk());
@@ -717,19 +724,19 @@ std::vector<Sample> samples() {
                  return replaceChunk(b, seam.offset, seam.bytes, kTagSeam, encodeSeamTable(classes, streams));
                }});
   // Must fail: levels that name the next level's vertices.
-  s.push_back({"fail.last-level-names-next.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.last-level-names-next.v2.0-d6.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodeWithTree(levelsMesh(), 2, options(false));
-                 GtnLevelRecord r = levelRecord(b, 2);
+                 auto [r, context] = levelRecord(b, 2);
                  r.base = 1;  // the last level claims to name the vertices of a level the file lacks
                  const GtnChunkInfo lhdr = levelChunk(b, kTagLevelHeader, 2);
-                 return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r), false);
+                 return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r, context), false);
                }});
-  s.push_back({"fail.base-of-several-pieces.v2.0-d5.gtn", nullptr, [] {
+  s.push_back({"fail.base-of-several-pieces.v2.0-d6.gtn", nullptr, [] {
                  std::vector<uint8_t> b = encodePiecesFile(piecesMesh(), options(false));
-                 GtnLevelRecord r = levelRecord(b);
+                 auto [r, context] = levelRecord(b);
                  r.base = 1;  // a level of 4 pieces claims to name the next level's vertices
                  const GtnChunkInfo lhdr = levelChunk(b, kTagLevelHeader);
-                 return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r), false);
+                 return replaceChunk(b, lhdr.offset, lhdr.bytes, kTagLevelHeader, encodeLevelRecord(r, context), false);
                }});
   return s;
 }
@@ -907,7 +914,7 @@ TEST(GtnConformance, CommittedFilesDecodeOrFailAsExpected) {
 // levels file's grid (the unused points are never merged), in the wide file's vertex numbering. The
 // file's tree was ranked in the greedy order (RankingOptions::lazy off).
 TEST(GtnConformance, WideMergeTreeDecodes) {
-  auto r = GtnReader::open(kDir + "wide-merge-tree.f32.dir.v2.0-d5.gtn");
+  auto r = GtnReader::open(kDir + "wide-merge-tree.f32.dir.v2.0-d6.gtn");
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 1u);
   TetMeshBuilder b0;
@@ -944,10 +951,10 @@ TEST(GtnConformance, WideMergeTreeDecodes) {
 void expectLevelsAndTreesAgree(const std::string& path, int version);
 
 TEST(GtnConformance, LevelsAndMergeTreesAgree) {
-  for (const auto& [name, version] : {std::pair<std::string, int>{"levels.f32.dir.v2.0-d5.gtn", 2},
-                                      std::pair<std::string, int>{"levels-mtre3.f32.dir.v2.0-d5.gtn", 3},
-                                      std::pair<std::string, int>{"levels-mtre4.f32.dir.v2.0-d5.gtn", 4},
-                                      std::pair<std::string, int>{"levels-mtre5.f32.dir.v2.0-d5.gtn", 5}}) {
+  for (const auto& [name, version] : {std::pair<std::string, int>{"levels.f32.dir.v2.0-d6.gtn", 2},
+                                      std::pair<std::string, int>{"levels-mtre3.f32.dir.v2.0-d6.gtn", 3},
+                                      std::pair<std::string, int>{"levels-mtre4.f32.dir.v2.0-d6.gtn", 4},
+                                      std::pair<std::string, int>{"levels-mtre5.f32.dir.v2.0-d6.gtn", 5}}) {
     SCOPED_TRACE(name);
     expectLevelsAndTreesAgree(kDir + name, version);
   }
@@ -958,7 +965,7 @@ TEST(GtnConformance, LevelsAndMergeTreesAgree) {
 // batches are ordered by id, level 1 is what its merges make of level 0, and every merge count on the
 // fly is level 0 after that many merges.
 TEST(GtnConformance, GridTreeDecodesWithoutTheLevel) {
-  auto r = GtnReader::open(kDir + "grid-tree.f32.dir.v2.0-d5.gtn");
+  auto r = GtnReader::open(kDir + "grid-tree.f32.dir.v2.0-d6.gtn");
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 2u);
   ASSERT_EQ((*r)->level(0).pieces.size(), 1u);

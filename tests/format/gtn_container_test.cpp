@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <functional>
+#include <map>
 #include <random>
 
 #include "format/gtn_bytes.h"
@@ -133,29 +134,48 @@ TEST(GtnContainer, RoundTripStreamsHeadersAndSections) {
         EXPECT_EQ(**mt, pattern(50, 9, false));
       }
     }
+    // The pieces are stored compressed (their CONN streams shrink): a section of their own.
     uint64_t total = 0;
-    bool saw_velocity = false;
+    bool saw_piece = false;
     for (const GtnSection& s : r.sections()) {
       total += s.bytes;
-      saw_velocity |= s.name == "point_field:velocity";
+      saw_piece |= s.name == "piece";
     }
     EXPECT_EQ(total, bytes.size());
-    EXPECT_TRUE(saw_velocity);
+    EXPECT_TRUE(saw_piece);
     EXPECT_FALSE(r.readLevelStreams(2).isOk());
   }
+  // Stored raw, a piece's bytes count in its streams' sections, and its framing apart.
+  const EncodedLevel l0 = handMadeLevel(0, 100, 400);
+  auto raw = assembleGtn({&l0}, opts(true, false));
+  ASSERT_TRUE(raw.isOk());
+  auto r = GtnReader::open(writeTemp(dir, "raw.gtn", raw.value()));
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  std::map<std::string, uint64_t> sections;
+  uint64_t total = 0;
+  for (const GtnSection& s : (*r)->sections()) {
+    sections[s.name] = s.bytes;
+    total += s.bytes;
+  }
+  EXPECT_EQ(total, raw->size());
+  EXPECT_EQ(sections["connectivity"], l0.connectivity.size());
+  EXPECT_EQ(sections["point_field:velocity"], l0.point_fields[1].size());
+  EXPECT_EQ(sections["piece_framing"], kChunkFixedHeaderSize + kChunkChecksumSize);
+  EXPECT_EQ(sections.count("piece"), 0u);
 }
 
 TEST(GtnContainer, ZstdOnlyWhereItHelps) {
   const std::string dir = test::tempDir("container-zstd");
   auto r = GtnReader::open(writeTemp(dir, "z.gtn", twoLevelFile()));
   ASSERT_TRUE(r.isOk());
-  bool conn_zstd = false, geom_zstd = true;
-  for (const GtnChunkInfo& c : (*r)->level(0).chunks) {
-    if (c.tag == kTagConnectivity) conn_zstd = c.zstd && c.stored_bytes < c.raw_bytes;
-    if (c.tag == kTagGeometry) geom_zstd = c.zstd;
-  }
-  EXPECT_TRUE(conn_zstd);
-  EXPECT_FALSE(geom_zstd);
+  // Level 0's piece holds a compressible CONN stream; level 1's merge tree is random bytes.
+  bool piece_zstd = false, tree_zstd = true;
+  for (const GtnChunkInfo& c : (*r)->level(0).chunks)
+    if (c.tag == kTagPiece) piece_zstd = c.zstd && c.stored_bytes < c.raw_bytes;
+  for (const GtnChunkInfo& c : (*r)->level(1).chunks)
+    if (c.tag == kTagMergeTree) tree_zstd = c.zstd;
+  EXPECT_TRUE(piece_zstd);
+  EXPECT_FALSE(tree_zstd);
   // Without zstd the file is bigger and reads back the same streams.
   const EncodedLevel l0 = handMadeLevel(0, 100, 400);
   auto raw = assembleGtn({&l0}, opts(true, false));
@@ -239,13 +259,13 @@ TEST(GtnContainer, ChecksumMismatchNamesChunkAndOffset) {
   std::vector<uint8_t> bytes = twoLevelFile();
   auto r = GtnReader::open(writeTemp(dir, "ok.gtn", bytes));
   ASSERT_TRUE(r.isOk());
-  const GtnChunkInfo geom = (*r)->level(1).chunks[3];
-  ASSERT_EQ(geom.tag, kTagGeometry);
-  bytes[geom.offset + 20] ^= 0x10;
+  const GtnChunkInfo geom = (*r)->level(1).chunks[1];
+  ASSERT_EQ(geom.tag, kTagPiece);
+  bytes[geom.offset + geom.bytes / 2] ^= 0x10;  // in the payload
   const std::string path = writeTemp(dir, "bad.gtn", bytes);
   const Status st = openStatus(path);
   EXPECT_EQ(st.code(), StatusCode::kInvalidData);
-  EXPECT_NE(st.message().find("checksum mismatch in chunk 'GEOM'"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("checksum mismatch in chunk 'PIEC'"), std::string::npos) << st.message();
   EXPECT_NE(st.message().find("byte offset " + std::to_string(geom.offset)), std::string::npos) << st.message();
   // Opened through the directory, the damage shows when the level is read.
   GtnOpenOptions fast;
@@ -342,7 +362,7 @@ TEST(GtnContainer, MagicDiagnoses) {
 
 TEST(GtnContainer, ReservedFlagBitsRejected) {
   std::vector<uint8_t> chunk;
-  appendGtnChunk(chunk, kTagGeometry, pattern(20, 1, false), false, false, 1);
+  appendGtnChunk(chunk, kTagPiece, pattern(20, 1, false), false, false, 1);
   chunk[4] |= 0x40;
   ChunkHeader h;
   size_t needed;
@@ -360,7 +380,7 @@ TEST(GtnContainer, HugeDeclaredSizesFailBeforeAllocating) {
   Status st = parseGtnChunkHeader(chunk, 16, chunk.size(), "x.gtn", &h, &needed);
   EXPECT_NE(st.message().find("truncated"), std::string::npos) << st.message();
   std::vector<uint8_t> z;
-  appendGtnChunk(z, kTagConnectivity, pattern(3000, 1, true), false, true, 3);
+  appendGtnChunk(z, kTagPiece, pattern(3000, 1, true), false, true, 3);
   ASSERT_EQ(z[4] & kChunkZstd, kChunkZstd);
   z[13 + 7] = 0x7F;  // raw_size high byte
   st = parseGtnChunkHeader(z, 16, z.size(), "x.gtn", &h, &needed);
@@ -382,15 +402,16 @@ TEST(GtnContainer, VarintsAreStrict) {
 }
 
 TEST(GtnContainer, ChunksOutOfOrderRejected) {
-  // A level whose CONN precedes its BNDY: built by swapping the two chunks of a directory-less file.
+  // A level whose MTRE precedes its PIEC: built by swapping the two chunks of a directory-less file.
   const std::string dir = test::tempDir("container-order");
   const EncodedLevel l0 = handMadeLevel(0, 10, 20);
-  auto made = assembleGtn({&l0}, opts(false));
+  auto made = assembleGtn({&l0}, opts(false), {0.0}, {pattern(50, 9, false)});
   ASSERT_TRUE(made.isOk());
   auto r = GtnReader::open(writeTemp(dir, "ok.gtn", made.value()));
   ASSERT_TRUE(r.isOk());
   const GtnChunkInfo bndy = (*r)->level(0).chunks[1], conn = (*r)->level(0).chunks[2];
-  ASSERT_EQ(bndy.tag, kTagBoundary);
+  ASSERT_EQ(bndy.tag, kTagPiece);
+  ASSERT_EQ(conn.tag, kTagMergeTree);
   const std::vector<uint8_t>& b = made.value();
   std::vector<uint8_t> swapped(b.begin(), b.begin() + bndy.offset);
   swapped.insert(swapped.end(), b.begin() + conn.offset, b.begin() + conn.offset + conn.bytes);
@@ -476,13 +497,16 @@ TEST(GtnContainer, MalformedPayloadsWithValidChecksumsFailCleanly) {
   fh([](GtnFileHeader& h) { h.level_count = 2; }, "the file holds 1 levels, the header declares 2");
   fh([](GtnFileHeader& h) { h.points = 11; }, "level 0's counts disagree with the file header");
   fh([](GtnFileHeader& h) { h.point_fields[0].components = 0; }, "has 0 components");
-  fh([](GtnFileHeader& h) { h.cell_fields.push_back({"extra", 1, ScalarType::kInt8}); }, "without its 'CFLD' chunk");
+  // One more field: the LHDR's piece then lacks a stream size.
+  fh([](GtnFileHeader& h) { h.cell_fields.push_back({"extra", 1, ScalarType::kInt8}); }, "LHDR: byte offset");
   auto lh = [&](const std::function<void(GtnLevelRecord&)>& edit, const std::string& want) {
     GtnLevelRecord l;
     const size_t hs = 13;
-    ASSERT_TRUE(decodeLevelRecord({file.data() + targets[1].offset + hs, targets[1].stored_bytes}, 0, "x", &l).isOk());
+    const LevelRecordContext context = levelRecordContext((*r)->file().header);
+    ASSERT_TRUE(
+        decodeLevelRecord({file.data() + targets[1].offset + hs, targets[1].stored_bytes}, 0, "x", context, &l).isOk());
     edit(l);
-    const Status st = memoryStatus(reframe(file, targets[1], encodeLevelRecord(l)));
+    const Status st = memoryStatus(reframe(file, targets[1], encodeLevelRecord(l, context)));
     EXPECT_NE(st.message().find(want), std::string::npos) << st.message();
   };
   lh([](GtnLevelRecord& l) { l.level = 1; }, "level header says level 1");
@@ -491,15 +515,18 @@ TEST(GtnContainer, MalformedPayloadsWithValidChecksumsFailCleanly) {
   // The piece table.
   lh([](GtnLevelRecord& l) { l.pieces.clear(); }, "piece count is 0");
   lh([](GtnLevelRecord& l) { l.pieces[0].kind = 2; }, "piece 0 has kind 2, which this reader does not know");
-  // A structured piece is one GRID chunk: the level codec's chunks are out of order after it.
+  // A structured piece is one GRID chunk: the level codec's PIEC is out of order in its place.
   lh([](GtnLevelRecord& l) { l.pieces[0].kind = 1; },
-     "chunk 'BNDY' out of order in level 0 (piece 0): expected 'GRID'");
+     "chunk 'PIEC' out of order in level 0 (piece 0): expected 'GRID'");
+  // The piece's streams must fill its PIEC exactly.
+  lh([](GtnLevelRecord& l) { l.streams[0][1] += 1; }, "stream sizes (LHDR) sum to");
   lh([](GtnLevelRecord& l) { l.pieces[0].own_boundary_points = l.pieces[0].own_points + 1; },
      "piece own boundary point count");
   // A second piece and no seam table: the chunk order names the missing SEAM.
   lh(
       [](GtnLevelRecord& l) {
         l.pieces.push_back(l.pieces[0]);
+        l.streams.push_back(l.streams[0]);
         l.pieces[0].tets = 1;
         l.pieces[1].tets = l.tets - 1;
         l.pieces[0].own_points = l.pieces[1].own_points = 0;
@@ -510,7 +537,7 @@ TEST(GtnContainer, MalformedPayloadsWithValidChecksumsFailCleanly) {
 TEST(GtnContainer, CorruptZstdFrameWithValidChecksumRejected) {
   std::vector<uint8_t> chunk;
   const std::vector<uint8_t> payload = pattern(5000, 3, true);
-  appendGtnChunk(chunk, kTagConnectivity, payload, false, true, 3);
+  appendGtnChunk(chunk, kTagPiece, payload, false, true, 3);
   ASSERT_TRUE(chunk[4] & kChunkZstd);
   auto check = [&](std::vector<uint8_t> c, const std::string& want) {
     const size_t body = c.size() - 8;
@@ -531,7 +558,7 @@ TEST(GtnContainer, CorruptZstdFrameWithValidChecksumRejected) {
   check(c, "more than the declared 4999");
   c = chunk;
   for (size_t i = 21; i < 29; ++i) c[i] ^= 0x5A;  // the frame header
-  check(c, "zstd payload of chunk 'CONN' is corrupt");
+  check(c, "zstd payload of chunk 'PIEC' is corrupt");
   // A valid chunk opens to its payload.
   ChunkHeader h;
   size_t needed;
@@ -548,7 +575,7 @@ TEST(GtnContainer, ChunkOpensInItsOwnBuffer) {
     SCOPED_TRACE(zstd ? "zstd" : "stored");
     const std::vector<uint8_t> payload = pattern(300000, 9, zstd);
     std::vector<uint8_t> chunk;
-    appendGtnChunk(chunk, kTagConnectivity, payload, false, zstd, 3);
+    appendGtnChunk(chunk, kTagPiece, payload, false, zstd, 3);
     ASSERT_EQ((chunk[4] & kChunkZstd) != 0, zstd);
     ChunkHeader h;
     size_t needed;

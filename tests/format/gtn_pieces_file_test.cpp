@@ -79,14 +79,21 @@ TEST(GtnPiecesFile, ALevelOfSeveralPiecesRoundTripsThroughTheFile) {
       own += p.own_points;
     }
     EXPECT_EQ(tets, m.numTets());
-    // The chunks: LHDR, SEAM, then each piece's group of 3 + 5 + 2 streams in piece order.
-    ASSERT_EQ(li.chunks.size(), 2 + li.pieces.size() * 10);
+    // The chunks: LHDR, SEAM, then each piece's PIEC in piece order, which holds its 3 + 5 + 2
+    // streams.
+    ASSERT_EQ(li.chunks.size(), 2 + li.pieces.size());
     EXPECT_EQ(li.chunks[1].tag, kTagSeam);
     EXPECT_EQ(li.chunks[1].section, "seam");
     for (size_t p = 0; p < li.pieces.size(); ++p) {
-      EXPECT_EQ(li.piece_chunk[p], 2 + 10 * p);
-      EXPECT_EQ(li.chunks[li.piece_chunk[p]].tag, kTagBoundary);
-      for (size_t k = 0; k < 10; ++k) EXPECT_EQ(li.chunks[2 + 10 * p + k].piece, p);
+      EXPECT_EQ(li.piece_chunk[p], 2 + p);
+      const GtnChunkInfo& c = li.chunks[li.piece_chunk[p]];
+      EXPECT_EQ(c.tag, kTagPiece);
+      EXPECT_EQ(c.piece, p);
+      ASSERT_EQ(li.piece_streams[p].size(), 10u);
+      uint64_t sum = 0;
+      for (uint64_t n : li.piece_streams[p]) sum += n;
+      if (c.raw_bytes != 0) EXPECT_EQ(sum, c.raw_bytes);  // known once the chunk was read (a scan)
+      EXPECT_EQ(li.pieceBytes(p), c.bytes);
     }
     // The seam table: the seam points and the own points make up the level.
     std::vector<uint8_t> payload;
@@ -216,8 +223,8 @@ TEST(GtnPiecesFile, DamageInOnePieceSparesTheOthers) {
     std::unique_ptr<GtnReader> r = openFile(path, true);
     ASSERT_TRUE(r);
     const GtnLevelInfo& li = r->level(0);
-    const GtnChunkInfo& geom = li.chunks[li.piece_chunk[2] + 2];
-    ASSERT_EQ(geom.tag, kTagGeometry);
+    const GtnChunkInfo& geom = li.chunks[li.piece_chunk[2]];
+    ASSERT_EQ(geom.tag, kTagPiece);
     offset = geom.offset + geom.bytes / 2;
   }
   std::string bytes = readFile(path);
@@ -229,12 +236,12 @@ TEST(GtnPiecesFile, DamageInOnePieceSparesTheOthers) {
   auto r = openGtnChecked(path, o, [&](const std::string& w) { warnings.push_back(w); });
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_NE(warnings[0].find("'GEOM' (level 0, geometry"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("'PIEC' (level 0, piece"), std::string::npos) << warnings[0];
   EXPECT_TRUE((*r)->decodeLevelPieces(0, {0, 1}).isOk());
   TetMeshBuilder b;
   const Status st = (*r)->decodeLevel(0, b);
   EXPECT_EQ(st.code(), StatusCode::kInvalidData);
-  EXPECT_NE(st.message().find("checksum mismatch in chunk 'GEOM'"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("checksum mismatch in chunk 'PIEC'"), std::string::npos) << st.message();
 }
 
 TEST(GtnPiecesFile, TheSameBytesForAnyThreadCount) {

@@ -176,7 +176,7 @@ std::map<std::string, Case> cases() {
   };
   c["CHECKSUM_MISMATCH"].file = [] {
     Bytes b = base().bytes;
-    b[chunkOffset(0, kTagConnectivity) + kChunkFixedHeaderSize + 2] ^= 0x04;
+    b[chunkOffset(0, kTagPiece) + kChunkFixedHeaderSize + 2] ^= 0x04;
     return b;
   };
   c["RESERVED_BITS_SET"].file = [] {
@@ -219,7 +219,7 @@ std::map<std::string, Case> cases() {
   c["NO_LEVELS"].decoded = [] { return reportOf(DecodedFile{}); };
   c["LEVEL_DECODE_FAILED"].file = [] {
     return rewrite([](std::vector<RewriteChunk>& chunks) {
-      Bytes& p = find(chunks, 1, kTagConnectivity).payload;
+      Bytes& p = find(chunks, 1, kTagPiece).streams.at(1);  // CONN
       p.resize(p.size() / 2);
     });
   };

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -56,11 +57,15 @@ inline void writeValidGtn(const std::string& path, const TetMesh& mesh, int leve
 }
 
 // One chunk of a file being rebuilt: its tag and (decompressed) payload; `level` is -1 outside levels.
+// An LHDR keeps its record, a PIEC its codec streams: both are encoded when the file is assembled,
+// the LHDR with the sizes of its level's PIEC streams as they are then.
 struct RewriteChunk {
   ChunkTag tag;
   int level = -1;
   Bytes payload;
   bool ancillary = false;
+  std::vector<Bytes> streams;            // PIEC: BNDY, CONN, GEOM, PFLD..., CFLD...
+  std::optional<GtnLevelRecord> record;  // LHDR
 };
 
 // Rebuilds the file at `path` from its parsed content: prefix, GHDR, each level's chunks, DIRC and
@@ -89,7 +94,7 @@ inline Bytes rewriteGtn(const std::string& path, const std::function<void(std::v
     rec.pieces = li.pieces;
     rec.base = li.base;
     const int level = static_cast<int>(i);
-    chunks.push_back({kTagLevelHeader, level, encodeLevelRecord(rec), false});
+    chunks.push_back({kTagLevelHeader, level, {}, false, {}, rec});
     if (li.pieces.size() > 1) {
       Bytes seam;
       EXPECT_TRUE(reader.readSeamTable(i, &seam).isOk());
@@ -98,17 +103,43 @@ inline Bytes rewriteGtn(const std::string& path, const std::function<void(std::v
     for (size_t p = 0; p < li.pieces.size(); ++p) {
       StatusOr<GtnLevelStreams> s = reader.readPieceStreams(i, p);
       EXPECT_TRUE(s.isOk());
-      chunks.push_back({kTagBoundary, level, s->boundary, false});
-      chunks.push_back({kTagConnectivity, level, s->connectivity, false});
-      chunks.push_back({kTagGeometry, level, s->geometry, false});
-      for (const auto& f : s->point_fields) chunks.push_back({kTagPointField, level, f, false});
-      for (const auto& f : s->cell_fields) chunks.push_back({kTagCellField, level, f, false});
+      if (li.pieces[p].kind == kPieceStructured) {
+        chunks.push_back({kTagGrid, level, s->connectivity, false});
+        continue;
+      }
+      std::vector<Bytes> streams = {s->boundary, s->connectivity, s->geometry};
+      streams.insert(streams.end(), s->point_fields.begin(), s->point_fields.end());
+      streams.insert(streams.end(), s->cell_fields.begin(), s->cell_fields.end());
+      chunks.push_back({kTagPiece, level, {}, false, std::move(streams)});
     }
     auto mt = reader.mergeTreePayload(i);
     EXPECT_TRUE(mt.isOk());
     if (mt->has_value()) chunks.push_back({kTagMergeTree, level, **mt, false});
   }
   mutate(chunks);
+  // PIEC payloads from their streams, and the LHDRs with those streams' sizes.
+  std::vector<std::vector<std::vector<uint64_t>>> sizes(reader.levels());
+  for (RewriteChunk& c : chunks) {
+    if (c.tag != kTagPiece || c.streams.empty()) continue;
+    c.payload.clear();
+    std::vector<uint64_t> piece;
+    for (const Bytes& b : c.streams) {
+      c.payload.insert(c.payload.end(), b.begin(), b.end());
+      piece.push_back(b.size());
+    }
+    if (c.level >= 0 && static_cast<size_t>(c.level) < sizes.size()) sizes[c.level].push_back(std::move(piece));
+  }
+  LevelRecordContext context = levelRecordContext(reader.file().header);
+  for (RewriteChunk& c : chunks) {
+    if (c.tag != kTagLevelHeader || !c.record) continue;
+    GtnLevelRecord& rec = *c.record;
+    rec.streams.assign(rec.pieces.size(), {});
+    size_t k = 0;
+    for (size_t p = 0; p < rec.pieces.size(); ++p)
+      if (rec.pieces[p].kind == kPieceUnstructured && k < sizes[c.level].size()) rec.streams[p] = sizes[c.level][k++];
+    c.payload = encodeLevelRecord(rec, context);
+    context = nextLevelRecordContext(context, rec);
+  }
   Bytes out;
   const auto prefix = encodeGtnPrefix();
   out.insert(out.end(), prefix.begin(), prefix.end());
