@@ -8,6 +8,9 @@
 #include <optional>
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
 
 #include "codec/range_coder.h"
 #include "codec/value_coder.h"
@@ -1853,6 +1856,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   // decoding them in turn would.
   std::vector<std::function<Status()>> jobs;
   std::vector<Status> failed;  // per job, a failure found before it runs
+  std::vector<uint64_t> cost;  // per job, its stream's bytes: what its decoding takes, about
+  cost.push_back(streams[2].size());
   jobs.push_back([&]() -> Status {
     std::vector<double> d;
     const size_t cs = scalarSize(m.coord_type);
@@ -1874,8 +1879,9 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   failed.push_back(Status::ok());
   // A field's job: its description is checked here (a bad one ends the jobs there, as it would end one
   // thread's decoding), its values are decoded by the job into the field it adds to `to`.
-  auto addField = [&](std::vector<Field>& to, const FieldDesc& desc, bool bad, const std::string& why,
+  auto addField = [&](std::vector<Field>& to, const FieldDesc& desc, bool bad, const std::string& why, size_t stream,
                       std::function<Status(Field&)> decode) {
+    cost.push_back(stream < streams.size() ? streams[stream].size() : 0);
     if (bad) {
       failed.push_back(usageError(what + why));
       jobs.push_back(nullptr);
@@ -1889,7 +1895,8 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
   for (size_t f = 0; f < schema.point_fields.size(); ++f) {
     const FieldDesc& desc = schema.point_fields[f];
     addField(m.point_fields, desc, desc.components == 0 || desc.components > 64,
-             ": point field '" + desc.name + "' of 0 or more than 64 components", [&, f, &desc = desc](Field& field) {
+             ": point field '" + desc.name + "' of 0 or more than 64 components", 3 + f,
+             [&, f, &desc = desc](Field& field) {
                resizePopulated(field.bytes, V * desc.itemBytes());
                if (!wanted(fields ? &fields->point : nullptr, f)) return Status::ok();  // left out: zero values
                const std::string name = what + ": PFLD stream '" + desc.name + "'";
@@ -1905,6 +1912,7 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
              });
   }
   if (!fields || fields->tets) {
+    cost.push_back(0);
     jobs.push_back([&]() -> Status {
       m.tets = gridTets(l);
       return Status::ok();
@@ -1918,7 +1926,7 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
     const FieldDesc& desc = schema.cell_fields[f];
     addField(m.cell_fields, desc, desc.components == 0 || desc.itemBytes() > 64,
              ": cell field '" + desc.name + "' of 0 components or more than 64 bytes",
-             [&, f, &desc = desc](Field& field) {
+             3 + schema.point_fields.size() + f, [&, f, &desc = desc](Field& field) {
                resizePopulated(field.bytes, cscan->first.back() * desc.itemBytes());
                if (!wanted(fields ? &fields->cell : nullptr, f)) return Status::ok();  // left out: zero values
                const std::string name = what + ": CFLD stream '" + desc.name + "'";
@@ -1929,6 +1937,11 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
                return Status::ok();
              });
   }
+  if (fields && fields->beside) {
+    cost.push_back(0);
+    jobs.push_back([&]() -> Status { return fields->beside(l); });
+    failed.push_back(Status::ok());
+  }
   // Jobs after a field that fails its description are not needed: one thread would stop there.
   size_t run = jobs.size();
   for (size_t j = 0; j < jobs.size(); ++j)
@@ -1936,8 +1949,17 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
       run = j;
       break;
     }
+  // Each thread takes the costliest job left (longest first: the largest streams start at once, the
+  // small ones fill in); the results are still read in job order.
+  std::vector<size_t> order(run);
+  for (size_t j = 0; j < run; ++j) order[j] = j;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return cost[a] > cost[b]; });
   std::vector<Status> results(run, Status::ok());
-  tbb::parallel_for(size_t{0}, run, [&](size_t j) { results[j] = jobs[j](); });
+  std::atomic<size_t> next{0};
+  const size_t workers = std::min<size_t>(run, static_cast<size_t>(tbb::this_task_arena::max_concurrency()));
+  tbb::parallel_for(size_t{0}, workers, [&](size_t) {
+    for (size_t k; (k = next.fetch_add(1)) < run;) results[order[k]] = jobs[order[k]]();
+  });
   for (size_t j = 0; j < run; ++j)
     if (!results[j].isOk()) return results[j];
   if (run < jobs.size()) return failed[run];

@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <utility>
@@ -126,9 +127,13 @@ struct DecodedGridPiece {
 // Which fields decodeGridPiece decodes: point[f], cell[f] false leaves schema field f out (its
 // stream is not read; its values come out zero). Empty vectors (or no selection) decode every field.
 // `tets` false leaves DecodedGridPiece::mesh.tets empty (for a caller that makes them from the layout).
+// `beside`, when set, runs once the layout is read, in parallel with the streams' decoding (a caller's
+// own work from the layout, such as the boundary triangles); its failure fails the decode after any
+// stream's.
 struct GridFieldSelection {
   std::vector<bool> point, cell;
   bool tets = true;
+  std::function<Status(const GridLayout&)> beside;
 };
 
 // Decodes a piece written by encodeGridPiece. Fails with kInvalidData, naming `what`, the part and

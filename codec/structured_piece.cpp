@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "mesh/faces.h"
+#include "mesh/fresh_memory.h"
 #include "mesh/index.h"
 
 namespace gtn {
@@ -156,7 +157,10 @@ StatusOr<std::vector<std::array<uint32_t, 3>>> gridBoundary(const GridLayout& l,
                                [](const GridException& e, uint64_t c) { return e.cell < c; });
     return it != l.exceptions.end() && it->cell == cell ? static_cast<size_t>(it - l.exceptions.begin()) : nx;
   };
+  // The outer box's rule faces give two triangles each; exceptions add a few more. Mapped at once:
+  // growing by appends would fault its pages in one at a time.
   std::vector<Candidate> cand;
+  reservePopulated(cand, 4 * (ci * cj + cj * ck + ci * ck) + 64);
   Tet tets[32];
   // A rule cell's triangles on its face f.
   auto ruleFace = [&](uint64_t i, uint64_t j, uint64_t k, int f) {
@@ -201,8 +205,9 @@ StatusOr<std::vector<std::array<uint32_t, 3>>> gridBoundary(const GridLayout& l,
   // The faces met once. Without aliases and exceptions every candidate is a face of the outer box,
   // each met once.
   if (l.aliases.empty() && nx == 0) {
-    std::vector<std::array<uint32_t, 3>> out(cand.size());
-    for (size_t a = 0; a < cand.size(); ++a) out[a] = cand[a].tri;
+    std::vector<std::array<uint32_t, 3>> out;
+    reservePopulated(out, cand.size());
+    for (const Candidate& c : cand) out.push_back(c.tri);
     return out;
   }
   std::sort(cand.begin(), cand.end());
@@ -319,6 +324,12 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
     for (size_t f = 0; f < cell_out.size(); ++f)
       cell_out[f] = !fields->cell.empty() && (f >= fields->cell.size() || !fields->cell[f]);
   }
+  // The boundary triangles come from the layout alone: made beside the streams' decoding.
+  std::vector<std::array<uint32_t, 3>> boundary;
+  selection.beside = [&](const GridLayout& layout) -> Status {
+    GTN_ASSIGN_OR_RETURN(boundary, gridBoundary(layout, what + ": structured piece"));
+    return Status::ok();
+  };
   GTN_ASSIGN_OR_RETURN(DecodedGridPiece piece, decodeGridPiece(bytes, schema, what, &selection));
   if (fields && fields->streams_done) fields->streams_done(point_out, cell_out);
   const GridLayout& l = piece.layout;
@@ -328,7 +339,6 @@ Status decodeStructuredPiece(const LevelHeader& header, std::span<const uint8_t>
     return invalidData(what + ": the structured piece has " + std::to_string(V) + " vertices and " + std::to_string(T) +
                        " tetrahedra, the header says " + std::to_string(header.points) + " and " +
                        std::to_string(header.tets));
-  GTN_ASSIGN_OR_RETURN(auto boundary, gridBoundary(l, what + ": structured piece"));
   if (boundary.size() != header.boundary_triangles)
     return invalidData(what + ": the structured piece has " + std::to_string(boundary.size()) +
                        " boundary triangles, the header says " + std::to_string(header.boundary_triangles));
