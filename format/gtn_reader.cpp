@@ -122,8 +122,7 @@ Status checkLevelOrder(const ChunkTag& tag, size_t k, const LevelLayout& layout,
 // A PIEC chunk's payload must hold exactly the streams its LHDR entry lists.
 Status checkPieceStreams(const GtnLevelInfo& li, const GtnChunkInfo& c, uint64_t payload_size,
                          const std::string& what) {
-  uint64_t sum = 0;
-  for (uint64_t size : li.piece_streams.at(c.piece)) sum += size;
+  const uint64_t sum = li.pieceStreamBytes(c.piece);
   if (sum != payload_size)
     return invalidData(at(what, c.offset) + "piece " + std::to_string(c.piece) + "'s stream sizes (LHDR) sum to " +
                        std::to_string(sum) + " bytes, but its 'PIEC' payload holds " + std::to_string(payload_size));
@@ -239,6 +238,16 @@ GtnReader::~GtnReader() = default;
 Status GtnReader::readSource(uint64_t offset, size_t n, uint8_t* out) {
   bytes_read_ += n;
   return source_->read(offset, n, out);
+}
+
+uint64_t GtnLevelInfo::pieceStreamBytes(size_t piece) const {
+  uint64_t sum = 0;
+  for (uint64_t size : piece_streams.at(piece)) sum += size;
+  return sum;
+}
+
+bool GtnLevelInfo::pieceStoredRaw(const GtnChunkInfo& c) const {
+  return c.tag == kTagPiece && c.bytes == kChunkFixedHeaderSize + pieceStreamBytes(c.piece) + kChunkChecksumSize;
 }
 
 uint64_t GtnLevelInfo::pieceBytes(size_t piece) const {
@@ -930,16 +939,13 @@ std::vector<GtnSection> GtnReader::sections() const {
     for (const GtnChunkInfo& c : l.chunks) {
       // A piece stored raw: its streams each to their own section, its framing to "piece_framing";
       // stored compressed, the whole chunk to "piece".
-      uint64_t streams = 0;
-      if (c.tag == kTagPiece)
-        for (uint64_t size : l.piece_streams.at(c.piece)) streams += size;
-      if (c.tag != kTagPiece || c.bytes != kChunkFixedHeaderSize + streams + kChunkChecksumSize) {
+      if (!l.pieceStoredRaw(c)) {
         add(c.section, c.bytes);
         continue;
       }
       const std::vector<uint64_t>& sizes = l.piece_streams[c.piece];
       for (size_t k = 0; k < sizes.size(); ++k) add(streamSectionName(k), sizes[k]);
-      add("piece_framing", c.bytes - streams);
+      add("piece_framing", kChunkFixedHeaderSize + kChunkChecksumSize);
     }
   for (const GtnChunkInfo& c : file_.chunks)
     if (c.tag != kTagFileHeader) add(c.section, c.bytes);

@@ -48,6 +48,11 @@ struct GtnLevelInfo {
   std::vector<std::vector<uint64_t>> piece_streams;
   uint8_t base = 0;                         // 1: names level i + 1's vertices (LHDR base, spec 7.7)
   uint64_t pieceBytes(size_t piece) const;  // the piece's chunks, framing included
+  // The sum of piece_streams[piece]: its PIEC payload's size, decompressed.
+  uint64_t pieceStreamBytes(size_t piece) const;
+  // Whether chunk c is a PIEC stored raw (framing and its streams, nothing else), so that each of its
+  // streams' bytes is known from LHDR.
+  bool pieceStoredRaw(const GtnChunkInfo& c) const;
 };
 
 struct GtnFileInfo {

@@ -204,21 +204,13 @@ LevelZeroBytes levelZeroBytes(const GtnReader& r) {
   for (const GtnChunkInfo& c : l0.chunks) {
     if (c.tag == kTagSeam || c.tag == kTagGrid) {
       b.connectivity += c.bytes;
+    } else if (l0.pieceStoredRaw(c)) {
+      // Its streams by kind, its framing with the connectivity (boundary and peeling).
+      const std::vector<uint64_t>& sizes = l0.piece_streams[c.piece];
+      for (size_t k = 0; k < sizes.size(); ++k) (k == 2 ? b.geometry : k > 2 ? b.fields : b.connectivity) += sizes[k];
+      b.connectivity += kChunkFixedHeaderSize + kChunkChecksumSize;
     } else if (c.tag == kTagPiece) {
-      // Its streams by kind (their shares of the chunk, when it is stored compressed); the rest, its
-      // framing, with the connectivity (boundary and peeling).
-      const std::vector<uint64_t>& sizes = l0.piece_streams.at(c.piece);
-      uint64_t streams = 0;
-      for (uint64_t size : sizes) streams += size;
-      const uint64_t stored = c.bytes - std::min<uint64_t>(c.bytes, kChunkFixedHeaderSize + kChunkChecksumSize);
-      const double scale = streams > stored && streams > 0 ? double(stored) / double(streams) : 1.0;
-      uint64_t counted = 0;
-      for (size_t k = 0; k < sizes.size(); ++k) {
-        const uint64_t n = static_cast<uint64_t>(std::llround(double(sizes[k]) * scale));
-        (k == 2 ? b.geometry : k > 2 ? b.fields : b.connectivity) += n;
-        counted += n;
-      }
-      b.connectivity += c.bytes - std::min(c.bytes, counted);
+      b.connectivity += c.bytes;  // stored compressed: its streams' shares are not known (as in sections())
     } else if (c.tag == kTagMergeTree) {
       b.merge_tree += c.bytes;
     }
