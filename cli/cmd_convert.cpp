@@ -58,6 +58,8 @@ int runConvert(const ConvertArgs& a) {
     if (in == a.output || sameFile(in, a.output))
       return reportError(usageError(a.output + ": the output would overwrite an input"));
   }
+  // An output that cannot be written fails now, not after the import, ranking and encoding.
+  if (Status w = checkOutputWritable(a.output); !w.isOk()) return reportError(w);
   if (a.compress && out_format != OutputFormat::kVtu)
     warn(a.output + ": --compress applies to .vtu outputs only; ignored");
   ProgressLine progress("gtn convert", !a.quiet);

@@ -55,9 +55,11 @@ class LosslessCheckSink : public MeshSink {
       return mismatch("vertex " + std::to_string(id) + " is not expected");
     ++vertices_;
     const uint32_t v = vertex_src_[id];
-    const std::string which = "source point " + std::to_string(v) + " (decoded " + std::to_string(id) + ")";
-    if (std::memcmp(xyz, src_.point(v), 3 * sizeof(double)) != 0) return mismatch(which + " moved");
-    if (!sameItem(src_.point_fields, v, values)) return mismatch(which + " has other field values");
+    auto which = [&] {
+      return "source point " + std::to_string(v) + " (decoded " + std::to_string(id) + ")";
+    };  // made only for a difference
+    if (std::memcmp(xyz, src_.point(v), 3 * sizeof(double)) != 0) return mismatch(which() + " moved");
+    if (!sameItem(src_.point_fields, v, values)) return mismatch(which() + " has other field values");
     return Status::ok();
   }
   Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
@@ -65,19 +67,21 @@ class LosslessCheckSink : public MeshSink {
   Status tet(const uint32_t v[4], const uint8_t* cell_values) override {
     if (tets_ >= tet_src_.size()) return mismatch("more tetrahedra decoded than the source has");
     const uint32_t t = tet_src_[tets_];
-    const std::string which = "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(tets_) + ")";
-    ++tets_;
+    const uint64_t decoded = tets_++;
+    auto which = [&] {
+      return "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(decoded) + ")";
+    };
     int perm[4], inversions = 0;
     for (int i = 0; i < 4; ++i) {
       perm[i] = -1;
       const uint32_t want = enc_.vertex_order[src_.tets[t][i]];
       for (int j = 0; j < 4; ++j)
         if (v[j] == want) perm[i] = j;
-      if (perm[i] < 0) return mismatch(which + " has other vertices");
+      if (perm[i] < 0) return mismatch(which() + " has other vertices");
       for (int j = 0; j < i; ++j) inversions += perm[j] > perm[i];
     }
-    if (inversions % 2) return mismatch(which + " is reversed");
-    if (!sameItem(src_.cell_fields, t, cell_values)) return mismatch(which + " has other field values");
+    if (inversions % 2) return mismatch(which() + " is reversed");
+    if (!sameItem(src_.cell_fields, t, cell_values)) return mismatch(which() + " has other field values");
     return Status::ok();
   }
   Status retireVertex(uint32_t) override { return Status::ok(); }

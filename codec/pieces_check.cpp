@@ -1,5 +1,9 @@
 #include "codec/pieces_check.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
 #include <cstring>
 
 #include "codec/level_check.h"
@@ -21,6 +25,20 @@ bool sameItem(const std::vector<Field>& a, size_t i, const std::vector<Field>& b
     if (std::memcmp(&a[f].bytes[i * n], &b[f].bytes[j * n], n) != 0) return false;
   }
   return true;
+}
+// The first i < n for which `difference(i)` names one (a reason, else nullptr), or n; the items are
+// looked at in parallel.
+template <class Difference>
+size_t firstWith(size_t n, const Difference& difference) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, size_t{1} << 14), n,
+      [&](const tbb::blocked_range<size_t>& r, size_t first) {
+        if (first < r.begin()) return first;  // a smaller one is known already
+        for (size_t i = r.begin(); i < r.end(); ++i)
+          if (difference(i)) return i;
+        return first;
+      },
+      [](size_t a, size_t b) { return std::min(a, b); });
 }
 }  // namespace
 
@@ -56,33 +74,47 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
   if (got.coord_type != source.coord_type) return "the coordinate type changed";
   if (!sameLayout(got.point_fields, source.point_fields) || !sameLayout(got.cell_fields, source.cell_fields))
     return "field names, types or components changed";
+  // The renumberings first (cheap, one pass each), then the comparisons, in parallel: a grid's level
+  // has millions of points and tetrahedra. The first difference by source item is reported.
   std::vector<char> seen(np, 0);
   for (size_t v = 0; v < np; ++v) {
     const uint32_t d = level.vertex_order[v];
     if (d >= np || seen[d]) return "the encoder's vertex order is not a permutation";
     seen[d] = 1;
-    const std::string which = "source point " + std::to_string(v) + " (decoded " + std::to_string(d) + ")";
-    if (std::memcmp(got.point(d), source.point(v), 3 * sizeof(double)) != 0) return which + " moved";
-    if (!sameItem(source.point_fields, v, got.point_fields, d)) return which + " has other field values";
   }
   std::vector<char> placed(nt, 0);
   for (size_t t = 0; t < nt; ++t) {
     const uint64_t d = level.tet_order[t];
     if (d >= nt || placed[d]) return "the encoder's tetrahedron order is not a permutation";
     placed[d] = 1;
-    const std::string which = "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(d) + ")";
+  }
+  auto pointDifference = [&](size_t v) -> const char* {
+    const uint32_t d = level.vertex_order[v];
+    if (std::memcmp(got.point(d), source.point(v), 3 * sizeof(double)) != 0) return " moved";
+    if (!sameItem(source.point_fields, v, got.point_fields, d)) return " has other field values";
+    return nullptr;
+  };
+  if (const size_t v = firstWith(np, pointDifference); v < np)
+    return "source point " + std::to_string(v) + " (decoded " + std::to_string(level.vertex_order[v]) + ")" +
+           pointDifference(v);
+  auto tetDifference = [&](size_t t) -> const char* {
+    const uint64_t d = level.tet_order[t];
     int perm[4], inversions = 0;
     for (int i = 0; i < 4; ++i) {
       perm[i] = -1;
       const uint32_t want = level.vertex_order[source.tets[t][i]];
       for (int j = 0; j < 4; ++j)
         if (got.tets[d][j] == want) perm[i] = j;
-      if (perm[i] < 0) return which + " has other vertices";
+      if (perm[i] < 0) return " has other vertices";
       for (int j = 0; j < i; ++j) inversions += perm[j] > perm[i];
     }
-    if (inversions % 2) return which + " is reversed";
-    if (!sameItem(source.cell_fields, t, got.cell_fields, d)) return which + " has other field values";
-  }
+    if (inversions % 2) return " is reversed";
+    if (!sameItem(source.cell_fields, t, got.cell_fields, d)) return " has other field values";
+    return nullptr;
+  };
+  if (const size_t t = firstWith(nt, tetDifference); t < nt)
+    return "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(level.tet_order[t]) + ")" +
+           tetDifference(t);
   return "";
 }
 
@@ -148,9 +180,9 @@ std::string partLosslessMismatch(const TetMesh& part, const EncodedPart& encoded
     if (e.tet_order.size() != tl.size()) return "piece " + std::to_string(first_piece + p) + ": tetrahedron order";
     for (size_t k = 0; k < tl.size(); ++k) {
       const uint32_t t = tl[k];
-      const std::string which = "part tetrahedron " + std::to_string(t);
+      auto which = [t] { return "part tetrahedron " + std::to_string(t); };  // made only for a difference
       const uint64_t pos = tet_base + e.tet_order[k] - first_tet;
-      if (pos >= tet_at.size() || tet_at[pos] == kNoIndex) return which + " was not decoded";
+      if (pos >= tet_at.size() || tet_at[pos] == kNoIndex) return which() + " was not decoded";
       const uint32_t d_tet = tet_at[pos];
       int perm[4], inversions = 0;
       for (int i = 0; i < 4; ++i) {
@@ -160,21 +192,21 @@ std::string partLosslessMismatch(const TetMesh& part, const EncodedPart& encoded
           const uint64_t gid = decoded->global_vertex.empty() ? d : decoded->global_vertex[d];
           if (gid == global[part.tets[t][i]]) perm[i] = j;
         }
-        if (perm[i] < 0) return which + " has other vertices";
+        if (perm[i] < 0) return which() + " has other vertices";
         for (int j = 0; j < i; ++j) inversions += perm[j] > perm[i];
       }
-      if (inversions % 2) return which + " is reversed";
-      if (!sameItem(part.cell_fields, t, got.cell_fields, d_tet)) return which + " has other field values";
+      if (inversions % 2) return which() + " is reversed";
+      if (!sameItem(part.cell_fields, t, got.cell_fields, d_tet)) return which() + " has other field values";
     }
     tet_base += view.pieces[first_piece + p].tets;
   }
   for (size_t v = 0; v < part.numPoints(); ++v) {
     if (global[v] == UINT64_MAX) continue;  // another part's
-    const std::string which = "part point " + std::to_string(v);
+    auto which = [v] { return "part point " + std::to_string(v); };
     const uint32_t d = global[v] < vertex_at.size() ? vertex_at[global[v]] : kNoIndex;
-    if (d == kNoIndex) return which + " was not decoded";
-    if (std::memcmp(got.point(d), part.point(v), 3 * sizeof(double)) != 0) return which + " moved";
-    if (!sameItem(part.point_fields, v, got.point_fields, d)) return which + " has other field values";
+    if (d == kNoIndex) return which() + " was not decoded";
+    if (std::memcmp(got.point(d), part.point(v), 3 * sizeof(double)) != 0) return which() + " moved";
+    if (!sameItem(part.point_fields, v, got.point_fields, d)) return which() + " has other field values";
   }
   return "";
 }

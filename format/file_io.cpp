@@ -160,6 +160,21 @@ Status writeFileAtomically(const std::string& path, const std::function<Status(s
   return Status::ok();
 }
 
+Status checkOutputWritable(const std::string& path) {
+  if (path == "-") return Status::ok();
+  std::string target, why;
+  const Target kind = outputTarget(path, &target, &why);
+  if (kind == Target::kRefused) return ioError(path + ": " + why);
+  GTN_RETURN_IF_ERROR(checkReplaceable(path, target, kind));
+  if (kind == Target::kInPlace) return Status::ok();
+  std::string tmp;
+  std::FILE* f = nullptr;
+  GTN_RETURN_IF_ERROR(openTemporary(target, &tmp, &f));
+  std::fclose(f);
+  unlink(tmp.c_str());
+  return Status::ok();
+}
+
 Status writeBytesAtomically(const std::string& path, const void* data, size_t size, bool sync) {
   return writeFileAtomically(
       path,

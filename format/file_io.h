@@ -30,6 +30,12 @@ bool sameFile(const std::string& a, const std::string& b);
 // socket is refused.
 Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write, bool sync = true);
 
+// Whether writeFileAtomically could write `path` now, for a long job to ask before its work rather
+// than fail at its end: the checks it makes before writing (a directory or block device refused, a
+// read-only file kept), and a temporary file created beside the target and removed at once (a
+// directory that is missing, read-only or full). "-", a character device and a FIFO pass.
+Status checkOutputWritable(const std::string& path);
+
 // Convenience for writing one buffer atomically.
 Status writeBytesAtomically(const std::string& path, const void* data, size_t size, bool sync = true);
 

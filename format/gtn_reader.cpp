@@ -9,6 +9,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -199,8 +200,17 @@ class CheckingSink : public MeshSink {
                   std::to_string(boundary.size()) + " boundary triangles; the level header declares " +
                   std::to_string(h_.points) + ", " + std::to_string(h_.tets) + ", " +
                   std::to_string(h_.boundary_triangles));
-    uint32_t top = 0;  // the largest vertex named
-    for (const Tet& t : mesh.tets) top = std::max({top, t[0], t[1], t[2], t[3]});
+    // The largest vertex named, over the tetrahedra in parallel (a grid's level is millions of them).
+    uint32_t top = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, mesh.tets.size(), size_t{1} << 16), uint32_t{0},
+        [&](const tbb::blocked_range<size_t>& r, uint32_t m) {
+          for (size_t i = r.begin(); i < r.end(); ++i) {
+            const Tet& t = mesh.tets[i];
+            m = std::max({m, t[0], t[1], t[2], t[3]});
+          }
+          return m;
+        },
+        [](uint32_t a, uint32_t b) { return std::max(a, b); });
     for (const auto& t : boundary) top = std::max({top, t[0], t[1], t[2]});
     if ((h_.tets > 0 || h_.boundary_triangles > 0) && top >= points)
       return fail("a tetrahedron or boundary triangle refers to vertex " + std::to_string(top) + " of " +

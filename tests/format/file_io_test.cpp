@@ -52,6 +52,35 @@ TEST(FileIo, FailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
   EXPECT_EQ(test::readFile(target), "new");
 }
 
+// A long job asks before its work whether its output can be written: the temporary it would write
+// is created and removed, and what writeFileAtomically refuses is refused the same way.
+TEST(FileIo, OutputWritableIsAskedBeforeTheWork) {
+  const std::string dir = test::tempDir("fileio-writable");
+  EXPECT_TRUE(checkOutputWritable(dir + "/new.gtn").isOk());
+  test::writeFile(dir + "/old.gtn", "kept");
+  EXPECT_TRUE(checkOutputWritable(dir + "/old.gtn").isOk());
+  EXPECT_EQ(test::readFile(dir + "/old.gtn"), "kept");
+  size_t entries = 0;
+  for ([[maybe_unused]] auto& e : std::filesystem::directory_iterator(dir)) ++entries;
+  EXPECT_EQ(entries, 1u);  // no temporary left behind, nothing made for new.gtn
+  EXPECT_TRUE(checkOutputWritable("-").isOk());
+  const Status missing = checkOutputWritable(dir + "/no-such-dir/out.gtn");
+  ASSERT_FALSE(missing.isOk());
+  EXPECT_EQ(missing.code(), StatusCode::kIo);
+  EXPECT_NE(missing.message().find(dir + "/no-such-dir/out.gtn: cannot create a temporary file beside it"),
+            std::string::npos)
+      << missing.message();
+  const Status to_dir = checkOutputWritable(dir);
+  ASSERT_FALSE(to_dir.isOk());
+  EXPECT_NE(to_dir.message().find(dir + ": is a directory"), std::string::npos) << to_dir.message();
+
+  // gtn convert asks first: an output it cannot write is reported before the input is even read.
+  const test::RunResult r = test::runGtn("convert " + dir + "/missing-input.vtk -o " + dir + "/no-such-dir/out.gtn");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("no-such-dir/out.gtn: cannot create a temporary file beside it"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("missing-input.vtk"), std::string::npos) << r.err;
+}
+
 // A new file gets 0666 less the umask, as the shell's '>' gives it; a replaced file keeps its mode; a
 // file the user may not write is not replaced (root may write any).
 TEST(FileIo, OutputsKeepModesAndTheUmask) {

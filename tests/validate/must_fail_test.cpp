@@ -638,7 +638,7 @@ TEST(MustFail, WarningsAndInfosKeepTheFileValid) {
 
   // An ancillary chunk the validator does not know is an info.
   const Bytes b = rewrite([](std::vector<RewriteChunk>& chunks) {
-    chunks.insert(chunks.begin() + 2, RewriteChunk{ChunkTag("ZZZZ"), 0, {1, 2, 3}, true});
+    chunks.insert(chunks.begin() + 2, RewriteChunk{ChunkTag("ZZZZ"), 0, {1, 2, 3}, true, {}, {}});
   });
   ValidationReport u = validateBytesForTest(b);
   EXPECT_FALSE(u.hasErrors()) << u.toText("unknown");

@@ -77,7 +77,7 @@ inline Bytes rewriteGtn(const std::string& path, const std::function<void(std::v
   if (!r.isOk()) return {};
   GtnReader& reader = *r.value();
   std::vector<RewriteChunk> chunks;
-  chunks.push_back({kTagFileHeader, -1, encodeFileHeader(reader.file().header), false});
+  chunks.push_back({kTagFileHeader, -1, encodeFileHeader(reader.file().header), false, {}, {}});
   for (size_t i = 0; i < reader.levels(); ++i) {
     const GtnLevelInfo& li = reader.level(i);
     GtnLevelRecord rec;
@@ -98,23 +98,23 @@ inline Bytes rewriteGtn(const std::string& path, const std::function<void(std::v
     if (li.pieces.size() > 1) {
       Bytes seam;
       EXPECT_TRUE(reader.readSeamTable(i, &seam).isOk());
-      chunks.push_back({kTagSeam, level, seam, false});
+      chunks.push_back({kTagSeam, level, seam, false, {}, {}});
     }
     for (size_t p = 0; p < li.pieces.size(); ++p) {
       StatusOr<GtnLevelStreams> s = reader.readPieceStreams(i, p);
       EXPECT_TRUE(s.isOk());
       if (li.pieces[p].kind == kPieceStructured) {
-        chunks.push_back({kTagGrid, level, s->connectivity, false});
+        chunks.push_back({kTagGrid, level, s->connectivity, false, {}, {}});
         continue;
       }
       std::vector<Bytes> streams = {s->boundary, s->connectivity, s->geometry};
       streams.insert(streams.end(), s->point_fields.begin(), s->point_fields.end());
       streams.insert(streams.end(), s->cell_fields.begin(), s->cell_fields.end());
-      chunks.push_back({kTagPiece, level, {}, false, std::move(streams)});
+      chunks.push_back({kTagPiece, level, {}, false, std::move(streams), {}});
     }
     auto mt = reader.mergeTreePayload(i);
     EXPECT_TRUE(mt.isOk());
-    if (mt->has_value()) chunks.push_back({kTagMergeTree, level, **mt, false});
+    if (mt->has_value()) chunks.push_back({kTagMergeTree, level, **mt, false, {}, {}});
   }
   mutate(chunks);
   // PIEC payloads from their streams, and the LHDRs with those streams' sizes.
