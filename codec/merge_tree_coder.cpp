@@ -532,12 +532,15 @@ class GridCandidates {
     while (list_.size() <= i && group_ < kGroups) gatherGroup();
     return list_.size() > i;
   }
-  // The place of p among all the candidates (kNoPlace when p is none of them).
+  // The place of p among all the candidates (kNoPlace when p is none of them). The groups are gathered
+  // only up to p's: a group only appends to the list, and a candidate is listed once, so its place is
+  // the same in the whole list (the farther roots, the costliest group, are mostly never needed).
   uint32_t placeOf(uint32_t p) {
-    while (group_ < kGroups) gatherGroup();
-    for (size_t i = 0; i < list_.size(); ++i)
+    for (size_t i = 0;; ++i) {
+      while (i == list_.size() && group_ < kGroups) gatherGroup();
+      if (i == list_.size()) return kNoPlace;
       if (list_[i].v == p) return static_cast<uint32_t>(i);
-    return kNoPlace;
+    }
   }
   // The candidate at place i (has(i) true).
   uint32_t at(uint32_t i) const { return list_[i].v; }
