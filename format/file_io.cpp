@@ -75,6 +75,15 @@ StatusOr<std::string> readWholeFile(const std::string& path, uint64_t max_bytes)
     if (!f) return ioError(path + ": cannot open: " + errnoText());
   }
   std::string data;
+  // A regular file's size is known: room for it at once (growing by doubling copied a 64 MB grid
+  // file about twice over, onto fresh pages each time). A file that grows meanwhile is read on.
+  struct stat st;
+  if (f != stdin && ::fstat(fileno(f), &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0 &&
+      static_cast<uint64_t>(st.st_size) <= max_bytes) {
+    data.resize(static_cast<size_t>(st.st_size));
+    const size_t got = std::fread(data.data(), 1, data.size(), f);
+    data.resize(got);
+  }
   char buf[1 << 16];
   size_t n;
   while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) {
