@@ -92,7 +92,9 @@ TEST(GtnPiecesFile, ALevelOfSeveralPiecesRoundTripsThroughTheFile) {
       ASSERT_EQ(li.piece_streams[p].size(), 10u);
       uint64_t sum = 0;
       for (uint64_t n : li.piece_streams[p]) sum += n;
-      if (c.raw_bytes != 0) EXPECT_EQ(sum, c.raw_bytes);  // known once the chunk was read (a scan)
+      if (c.raw_bytes != 0) {  // known once the chunk was read (a scan)
+        EXPECT_EQ(sum, c.raw_bytes);
+      }
       EXPECT_EQ(li.pieceBytes(p), c.bytes);
     }
     // The seam table: the seam points and the own points make up the level.
