@@ -43,10 +43,6 @@ struct GtnLevelInput {
   // holds the only reference, it takes the encoding over (moves from it) instead of copying it, and
   // encodes the mesh again if it needs the level a second time.
   std::shared_ptr<PiecedLevel> encoded;
-  // With `encoded`: the caller has checked already that it decodes back to `mesh` (piecedLosslessMismatch
-  // found no difference; beside the ranking, say), so the writer, verifying, does not decode that
-  // encoding again (a level it encodes itself is still checked).
-  bool encoded_verified = false;
   // Instead of `mesh`: makes the level's mesh when the writer comes to it (in level order, just before
   // encoding it), so that a level the writer never reaches (past a storage bound) is never made. The
   // mesh must stay valid until writeGtnFile returns; a failure fails the write. `expected_tets` stands

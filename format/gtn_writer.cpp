@@ -216,7 +216,6 @@ namespace {
 struct EncodedInput {
   PiecedLevel level;
   std::optional<std::vector<uint8_t>> tree;
-  bool verified = false;  // the level's GtnLevelInput::encoded, checked by the caller (encoded_verified)
 };
 
 // Level i's index and merges, in its header and its pieces'.
@@ -241,7 +240,6 @@ StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, siz
     } else {
       out.level = *given;
     }
-    out.verified = levels[i].encoded_verified;
   } else {
     GTN_ASSIGN_OR_RETURN(out.level, encodePieces(mesh, EncodeOptions{}, options.piece_tets));
   }
@@ -257,10 +255,9 @@ StatusOr<EncodedInput> encodeInput(const std::vector<GtnLevelInput>& levels, siz
 // With options.verify: level i passes its own check_mesh and decodes back to its mesh (otherwise the
 // simplifier or the encoder has a bug, and the file must not replace anything).
 Status checkDecodesBack(const std::string& path, const GtnLevelInput& level, const TetMesh& mesh, size_t i,
-                        const PiecedLevel& e, const GtnWriteOptions& options, bool verified = false) {
+                        const PiecedLevel& e, const GtnWriteOptions& options) {
   if (!options.verify) return Status::ok();
   if (level.check_mesh) GTN_RETURN_IF_ERROR(level.check_mesh(mesh));
-  if (verified) return Status::ok();  // the caller's check of the same encoding
   const std::string why = piecedLosslessMismatch(mesh, e);
   if (why.empty()) return Status::ok();
   return invalidData(path + ": level " + std::to_string(i) + " would not decode back to its mesh (" + why +
@@ -302,7 +299,7 @@ StatusOr<EncodedInput> encodeChained(const std::vector<GtnLevelInput>& levels, s
 Status checkChainedDecodesBack(const std::string& path, const GtnLevelInput& level, const TetMesh& mesh, size_t i,
                                const EncodedInput& e, const TetMesh* next_mesh, const EncodedInput* next,
                                const GtnWriteOptions& options) {
-  if (e.level.base == 0) return checkDecodesBack(path, level, mesh, i, e.level, options, e.verified);
+  if (e.level.base == 0) return checkDecodesBack(path, level, mesh, i, e.level, options);
   if (!options.verify) return Status::ok();
   if (level.check_mesh) GTN_RETURN_IF_ERROR(level.check_mesh(mesh));
   const ChainSeams seams = chainSeamsOf(*next_mesh, next->level.vertex_order);
@@ -471,9 +468,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
       if (i > 0 && static_cast<double>(total) > options.level_storage_limit * static_cast<double>(level0)) break;
       encoded.push_back(std::move(e).value());
       ++count;
-      checking.run([&, i] {
-        checks[i] = checkDecodesBack(path, levels[i], *meshes[i], i, encoded[i].level, options, encoded[i].verified);
-      });
+      checking.run([&, i] { checks[i] = checkDecodesBack(path, levels[i], *meshes[i], i, encoded[i].level, options); });
     }
     checking.wait();
     GTN_RETURN_IF_ERROR(failed);
@@ -495,7 +490,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
         if (!e.isOk()) return e.status();
         one = std::move(e).value();
         if (options.verify) progress("verify", i);
-        GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels[i], *mesh, i, one.level, options, one.verified));
+        GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels[i], *mesh, i, one.level, options));
       }
       const EncodedInput& e = bounded || chained ? encoded[i] : one;
       if (i == 0) GTN_RETURN_IF_ERROR(w.begin(e.level.header, count));

@@ -2,10 +2,7 @@
 
 #include <tbb/task_group.h>
 
-#include <atomic>
-
 #include "codec/pieces.h"
-#include "codec/pieces_check.h"
 #include "mesh/wait_on_exit.h"
 #include "simplify/levels.h"
 #include "validate/mesh_checks.h"
@@ -61,28 +58,18 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   tbb::task_group checking;
   const WaitOnExit join{checking};
   bool checking_level0 = false;
-  std::shared_ptr<PiecedLevel> level0;
-  std::atomic<bool> level0_encoded{false};  // level0 is set (release), or the encoding failed
-  bool level0_verified = false;             // level0 decodes back to the mesh, checked beside the queue
   auto checkLevel0 = [&] {
-    if (checking_level0 || !wo.verify) return;
+    if (checking_level0 || !wo.verify || o.levels == 0) return;
     checking_level0 = true;
-    checking.run([&] {
-      if (o.levels != 0) structure.checkLevel0();
-      // Then, where level 0 is encoded by now, whether it decodes back (the writer's check, which was
-      // the longest part of a grid's verification at the end): one thread's work beside the queue,
-      // after the check's face adjacency is gone. A difference is left for the writer to report.
-      if (level0_encoded.load(std::memory_order_acquire) && level0)
-        level0_verified = piecedLosslessMismatch(mesh, *level0).empty();
-    });
+    checking.run([&] { structure.checkLevel0(); });
   };
+  std::shared_ptr<PiecedLevel> level0;
   Status encoded = Status::ok();
   tbb::task_group encoding;
   encoding.run([&] {
     auto e = encodePieces(mesh, EncodeOptions{}, wo.piece_tets);
     if (e.isOk()) level0 = std::make_shared<PiecedLevel>(std::move(e).value());
     else encoded = e.status();
-    level0_encoded.store(true, std::memory_order_release);
   });
   RankingStats ranked;
   // Level 0's check runs beside the whole mesh's queue, one thread's work after the parallel rounds
@@ -95,8 +82,6 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   GTN_RETURN_IF_ERROR(encoded);
   if (!ranking.isOk()) return ranking.status();
   checkLevel0();  // where the ranking did not start it
-  // Done before the batches' own copy of the mesh is made (and level0_verified final).
-  checking.wait();
   MergeTree tree = std::move(ranking).value();
   MergeTreeForm level0_form;
   if (o.merge_tree && level0) {
@@ -155,7 +140,6 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
     in.ratio = levels.ratios()[i];
     if (i == 0) {
       in.mesh = &mesh;
-      in.encoded_verified = level0_verified;
       in.encoded = std::move(level0);
     } else {
       // A level keeps about as many tetrahedra per point as level 0 (progress only).

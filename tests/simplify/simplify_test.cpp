@@ -721,41 +721,5 @@ TEST(Levels, ConvertWritesTheSameBytesForAnyThreadCount) {
   std::filesystem::remove(path);
 }
 
-TEST(Levels, WriterChecksAGivenEncodingUnlessTheCallerHas) {
-  // writeGtnWithLevels checks that level 0 decodes back beside the ranking and tells the writer so
-  // (GtnLevelInput::encoded_verified); otherwise the writer decodes a given encoding back itself.
-  const Ranked& g = grid();
-  const std::string path = ::testing::TempDir() + "/verified.gtn";
-  GtnWriteOptions wo;
-  wo.level_storage_limit = 2.0;
-  auto level0 = encodePieces(g.mesh, EncodeOptions{}, wo.piece_tets);
-  ASSERT_TRUE(level0.isOk()) << level0.status().message();
-  auto stored = storedMergeTree(g.mesh, g.tree, *level0);
-  ASSERT_TRUE(stored.isOk()) << stored.status().message();
-  auto levels = buildMipLevels(g.mesh, stored->tree, LevelOptions{});
-  ASSERT_TRUE(levels.isOk()) << levels.status().message();
-  // Level 0's mesh with one point moved, given with the encoding of the mesh as it was.
-  TetMesh moved = g.mesh;
-  moved.coords[3 * 7] += 0.5;
-  for (const bool verified : {false, true}) {
-    SCOPED_TRACE(verified ? "verified by the caller" : "not verified");
-    auto encoded = encodePieces(g.mesh, EncodeOptions{}, wo.piece_tets);
-    ASSERT_TRUE(encoded.isOk()) << encoded.status().message();
-    std::vector<GtnLevelInput> inputs = levels->inputs(g.mesh, stored->level0_form);
-    inputs[0].mesh = &moved;
-    inputs[0].encoded = std::make_shared<PiecedLevel>(std::move(encoded).value());
-    inputs[0].encoded_verified = verified;
-    const Status st = writeGtnFile(path, inputs, wo);
-    if (verified) {
-      EXPECT_TRUE(st.isOk()) << st.message();
-    } else {
-      ASSERT_FALSE(st.isOk());
-      EXPECT_NE(st.message().find("level 0 would not decode back to its mesh (source point 7"), std::string::npos)
-          << st.message();
-    }
-  }
-  std::filesystem::remove(path);
-}
-
 }  // namespace
 }  // namespace gtn::test
