@@ -22,6 +22,9 @@ bool facesOpposite(const Tet& a, int k, const Tet& b) {
 }
 
 namespace {
+// Up to this many face slots (4 bytes each), the face adjacency groups them in one pass.
+constexpr uint64_t kOnePassSlots = uint64_t{1} << 24;
+
 // The smallest vertex of each local face of t: t's smallest vertex, but for the face opposite it,
 // which has the second smallest.
 void faceMinima(const Tet& t, uint32_t out[4]) {
@@ -49,7 +52,7 @@ struct GroupFace {
 // cost most of the encoder's set-up in cache misses, and sorting each group most of the rest.
 // Vertices beyond `points` (a damaged mesh) share one last group rather than sizing the groups by
 // them.
-FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
+FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots) {
   FaceAdjacency adj;
   const size_t nt = mesh.tets.size();
   assignPopulated(adj.neighbor, 4 * nt, kNoNeighbor);
@@ -62,63 +65,82 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh) {
     for (int k = 0; k < 4; ++k) ++start[groupOf(m[k]) + 1];
   }
   for (size_t g = 1; g <= groups; ++g) start[g] += start[g - 1];
+  // A large mesh's slots in two passes, each over the groups that hold about half of them: the slots
+  // were half of the peak of a check of a large mesh (16 of its 32 bytes per tetrahedron), and a
+  // convert's peak was that check's. A pass costs a read of the tetrahedra.
+  const uint64_t total = start[groups];
+  if (pass_slots == 0) pass_slots = total <= kOnePassSlots ? total : (total + 1) / 2;
   std::vector<uint32_t> slots;
-  resizePopulated(slots, 4 * nt);
-  {
-    std::vector<uint32_t> next(start.begin(), start.end() - 1);
-    for (size_t t = 0; t < nt; ++t) {
-      uint32_t m[4];
-      faceMinima(mesh.tets[t], m);
-      for (int k = 0; k < 4; ++k) slots[next[groupOf(m[k])]++] = static_cast<uint32_t>(4 * t + k);
-    }
+  uint64_t most = 0;  // the slots of the largest pass
+  for (size_t g0 = 0, g1 = 0; g0 < groups; g0 = g1) {
+    g1 = g0 + 1;
+    while (g1 < groups && start[g1 + 1] - start[g0] <= pass_slots) ++g1;
+    most = std::max<uint64_t>(most, start[g1] - start[g0]);
   }
+  resizePopulated(slots, most);
+  std::vector<uint32_t> next;
   std::vector<GroupFace> faces;
   std::vector<uint32_t> table;    // open addressing, at most half full: index in faces, or kNoIndex
   std::vector<uint32_t> face_of;  // per slot of the group: its index in faces
-  for (size_t g = 0; g < groups; ++g) {
-    const uint32_t n = start[g + 1] - start[g];
-    if (n == 0) continue;
-    const int bits = std::max(4, static_cast<int>(std::bit_width(2 * n - 1)));
-    table.assign(size_t{1} << bits, kNoIndex);
-    faces.clear();
-    face_of.resize(n);
-    bool non_manifold = false;
-    for (uint32_t i = 0; i < n; ++i) {
-      const uint32_t slot = slots[start[g] + i];
-      const Tet& t = mesh.tets[slot / 4];
-      const int k = slot % 4;
-      uint32_t a = t[kTetFace[k][0]], b = t[kTetFace[k][1]], c = t[kTetFace[k][2]];
-      if (a > b) std::swap(a, b);
-      if (b > c) std::swap(b, c);
-      if (a > b) std::swap(a, b);
-      const uint64_t bc = (uint64_t{b} << 32) | c;
-      size_t h = ((bc ^ a) * 0x9E3779B97F4A7C15u) >> (64 - bits);
-      while (table[h] != kNoIndex && !(faces[table[h]].bc == bc && faces[table[h]].a == a))
-        h = (h + 1) & (table.size() - 1);
-      if (table[h] == kNoIndex) {
-        table[h] = static_cast<uint32_t>(faces.size());
-        faces.push_back({a, bc, slot, 0, 1});
-      } else {
-        GroupFace& f = faces[table[h]];
-        if (f.count == 1) f.second = slot;
-        non_manifold |= ++f.count == 3;
-      }
-      face_of[i] = table[h];
-    }
-    adj.faces += faces.size();
-    for (const GroupFace& f : faces) {
-      if (f.count == 1) {
-        ++adj.boundary_faces;
-      } else if (f.count == 2) {
-        adj.neighbor[f.first] = f.second / 4;
-        adj.neighbor[f.second] = f.first / 4;
-      } else {
-        ++adj.non_manifold_faces;
+  for (size_t g0 = 0, g1 = 0; g0 < groups; g0 = g1) {
+    g1 = g0 + 1;
+    while (g1 < groups && start[g1 + 1] - start[g0] <= pass_slots) ++g1;
+    // The slots of groups g0 .. g1 - 1, from start[g0] on.
+    const uint32_t base = start[g0];
+    next.assign(start.begin() + static_cast<std::ptrdiff_t>(g0), start.begin() + static_cast<std::ptrdiff_t>(g1));
+    for (size_t t = 0; t < nt; ++t) {
+      uint32_t m[4];
+      faceMinima(mesh.tets[t], m);
+      for (int k = 0; k < 4; ++k) {
+        const size_t g = groupOf(m[k]);
+        if (g >= g0 && g < g1) slots[next[g - g0]++ - base] = static_cast<uint32_t>(4 * t + k);
       }
     }
-    if (non_manifold)
-      for (uint32_t i = 0; i < n; ++i)
-        if (faces[face_of[i]].count > 2) adj.neighbor[slots[start[g] + i]] = kNonManifold;
+    for (size_t g = g0; g < g1; ++g) {
+      const uint32_t n = start[g + 1] - start[g];
+      if (n == 0) continue;
+      const int bits = std::max(4, static_cast<int>(std::bit_width(2 * n - 1)));
+      table.assign(size_t{1} << bits, kNoIndex);
+      faces.clear();
+      face_of.resize(n);
+      bool non_manifold = false;
+      for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t slot = slots[start[g] - base + i];
+        const Tet& t = mesh.tets[slot / 4];
+        const int k = slot % 4;
+        uint32_t a = t[kTetFace[k][0]], b = t[kTetFace[k][1]], c = t[kTetFace[k][2]];
+        if (a > b) std::swap(a, b);
+        if (b > c) std::swap(b, c);
+        if (a > b) std::swap(a, b);
+        const uint64_t bc = (uint64_t{b} << 32) | c;
+        size_t h = ((bc ^ a) * 0x9E3779B97F4A7C15u) >> (64 - bits);
+        while (table[h] != kNoIndex && !(faces[table[h]].bc == bc && faces[table[h]].a == a))
+          h = (h + 1) & (table.size() - 1);
+        if (table[h] == kNoIndex) {
+          table[h] = static_cast<uint32_t>(faces.size());
+          faces.push_back({a, bc, slot, 0, 1});
+        } else {
+          GroupFace& f = faces[table[h]];
+          if (f.count == 1) f.second = slot;
+          non_manifold |= ++f.count == 3;
+        }
+        face_of[i] = table[h];
+      }
+      adj.faces += faces.size();
+      for (const GroupFace& f : faces) {
+        if (f.count == 1) {
+          ++adj.boundary_faces;
+        } else if (f.count == 2) {
+          adj.neighbor[f.first] = f.second / 4;
+          adj.neighbor[f.second] = f.first / 4;
+        } else {
+          ++adj.non_manifold_faces;
+        }
+      }
+      if (non_manifold)
+        for (uint32_t i = 0; i < n; ++i)
+          if (faces[face_of[i]].count > 2) adj.neighbor[slots[start[g] - base + i]] = kNonManifold;
+    }
   }
   return adj;
 }

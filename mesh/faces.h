@@ -31,7 +31,10 @@ struct FaceAdjacency {
   uint64_t non_manifold_faces = 0;  // triangles in three or more tetrahedra
 };
 
-FaceAdjacency computeFaceAdjacency(const TetMesh& mesh);
+// The face slots (4 bytes each) are grouped in passes over the tetrahedra of at most `pass_slots` slots
+// each (a vertex's group is never split); 0, the default: one pass up to 2^24 slots, two beyond (a
+// large mesh's check held half as many).
+FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots = 0);
 
 // Whether face k of tetrahedron a and the same triangle as a face of tetrahedron b run in opposite
 // directions (a's outward listing against b's), as they do in a consistently oriented mesh; b must

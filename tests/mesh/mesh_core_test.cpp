@@ -105,6 +105,27 @@ TEST(Faces, VerticesBeyondThePointsStillPair) {
   EXPECT_EQ(adj.neighbor[4 * 2 + 3], 0u);
 }
 
+// A large mesh's face slots are grouped in several passes over its tetrahedra (two by default, past 2^24
+// slots): the adjacency is the same for any number of passes, non-manifold faces and vertices beyond
+// the points included.
+TEST(Faces, PassesGiveTheSameAdjacency) {
+  TetMesh m = structuredGrid(9, 6, 1.0);
+  const uint32_t np = static_cast<uint32_t>(m.numPoints());
+  m.tets.push_back({0, 1, np + 5, np + 9});  // a damaged tetrahedron: two vertices past the points
+  m.tets.push_back(m.tets[3]);               // its faces in three tetrahedra
+  m.tets.push_back(m.tets[3]);
+  const FaceAdjacency one = computeFaceAdjacency(m);
+  ASSERT_GT(one.non_manifold_faces, 0u);
+  for (const uint64_t pass_slots : {uint64_t{1}, uint64_t{7}, uint64_t{100}, uint64_t{2000}}) {
+    SCOPED_TRACE("passes of at most " + std::to_string(pass_slots) + " slots");
+    const FaceAdjacency passes = computeFaceAdjacency(m, pass_slots);
+    EXPECT_EQ(passes.neighbor, one.neighbor);
+    EXPECT_EQ(passes.faces, one.faces);
+    EXPECT_EQ(passes.boundary_faces, one.boundary_faces);
+    EXPECT_EQ(passes.non_manifold_faces, one.non_manifold_faces);
+  }
+}
+
 // Every interior face of a grid is found from both sides.
 TEST(Faces, GridNeighboursAreMutual) {
   const TetMesh m = structuredGrid(5, 5);
