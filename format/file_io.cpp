@@ -139,6 +139,15 @@ Status checkReplaceable(const std::string& path, const std::string& target, Targ
   if (kind == Target::kNew || ::access(target.c_str(), W_OK) == 0 || errno != EACCES) return Status::ok();
   return ioError(path + ": is read-only (not replaced)");
 }
+
+// The target writeFileAtomically writes for `path` and its kind, after the checks it makes before
+// writing (a refused kind, a read-only file).
+Status writableTarget(const std::string& path, std::string* target, Target* kind) {
+  std::string why;
+  *kind = outputTarget(path, target, &why);
+  if (*kind == Target::kRefused) return ioError(path + ": " + why);
+  return checkReplaceable(path, *target, *kind);
+}
 }  // namespace
 
 Status writeFileAtomically(const std::string& path, const std::function<Status(std::FILE*)>& write, bool sync) {
@@ -147,10 +156,9 @@ Status writeFileAtomically(const std::string& path, const std::function<Status(s
     if (std::fflush(stdout) != 0) return ioError("standard output: write failed: " + errnoText());
     return Status::ok();
   }
-  std::string target, why;
-  const Target kind = outputTarget(path, &target, &why);
-  if (kind == Target::kRefused) return ioError(path + ": " + why);
-  GTN_RETURN_IF_ERROR(checkReplaceable(path, target, kind));
+  std::string target;
+  Target kind;
+  GTN_RETURN_IF_ERROR(writableTarget(path, &target, &kind));
   if (kind == Target::kInPlace) {
     std::FILE* f = std::fopen(target.c_str(), "wb");
     if (!f) return ioError(path + ": cannot open for writing: " + errnoText());
@@ -171,10 +179,9 @@ Status writeFileAtomically(const std::string& path, const std::function<Status(s
 
 Status checkOutputWritable(const std::string& path) {
   if (path == "-") return Status::ok();
-  std::string target, why;
-  const Target kind = outputTarget(path, &target, &why);
-  if (kind == Target::kRefused) return ioError(path + ": " + why);
-  GTN_RETURN_IF_ERROR(checkReplaceable(path, target, kind));
+  std::string target;
+  Target kind;
+  GTN_RETURN_IF_ERROR(writableTarget(path, &target, &kind));
   if (kind == Target::kInPlace) return Status::ok();
   std::string tmp;
   std::FILE* f = nullptr;

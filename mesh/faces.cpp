@@ -70,21 +70,24 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots) {
   // convert's peak was that check's. A pass costs a read of the tetrahedra.
   const uint64_t total = start[groups];
   if (pass_slots == 0) pass_slots = total <= kOnePassSlots ? total : (total + 1) / 2;
-  std::vector<uint32_t> slots;
+  // The passes: groups pass_begin[p] .. pass_begin[p + 1] - 1 (a group is never split).
+  std::vector<size_t> pass_begin = {0};
   uint64_t most = 0;  // the slots of the largest pass
-  for (size_t g0 = 0, g1 = 0; g0 < groups; g0 = g1) {
-    g1 = g0 + 1;
+  while (pass_begin.back() < groups) {
+    const size_t g0 = pass_begin.back();
+    size_t g1 = g0 + 1;
     while (g1 < groups && start[g1 + 1] - start[g0] <= pass_slots) ++g1;
     most = std::max<uint64_t>(most, start[g1] - start[g0]);
+    pass_begin.push_back(g1);
   }
+  std::vector<uint32_t> slots;
   resizePopulated(slots, most);
   std::vector<uint32_t> next;
   std::vector<GroupFace> faces;
   std::vector<uint32_t> table;    // open addressing, at most half full: index in faces, or kNoIndex
   std::vector<uint32_t> face_of;  // per slot of the group: its index in faces
-  for (size_t g0 = 0, g1 = 0; g0 < groups; g0 = g1) {
-    g1 = g0 + 1;
-    while (g1 < groups && start[g1 + 1] - start[g0] <= pass_slots) ++g1;
+  for (size_t p = 0; p + 1 < pass_begin.size(); ++p) {
+    const size_t g0 = pass_begin[p], g1 = pass_begin[p + 1];
     // The slots of groups g0 .. g1 - 1, from start[g0] on.
     const uint32_t base = start[g0];
     next.assign(start.begin() + static_cast<std::ptrdiff_t>(g0), start.begin() + static_cast<std::ptrdiff_t>(g1));
