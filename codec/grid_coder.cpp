@@ -7,15 +7,11 @@
 #include <memory>
 #include <optional>
 
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
-#include <atomic>
-
 #include "codec/range_coder.h"
 #include "codec/value_coder.h"
 #include "mesh/fresh_memory.h"
 #include "mesh/index.h"
+#include "mesh/longest_first.h"
 
 namespace gtn {
 
@@ -1949,17 +1945,11 @@ StatusOr<DecodedGridPiece> decodeGridPiece(std::span<const uint8_t> bytes, const
       run = j;
       break;
     }
-  // Each thread takes the costliest job left (longest first: the largest streams start at once, the
-  // small ones fill in); the results are still read in job order.
-  std::vector<size_t> order(run);
-  for (size_t j = 0; j < run; ++j) order[j] = j;
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return cost[a] > cost[b]; });
+  // Each thread takes the costliest job left (the largest streams start at once, the small ones fill
+  // in); the results are still read in job order.
+  cost.resize(run);
   std::vector<Status> results(run, Status::ok());
-  std::atomic<size_t> next{0};
-  const size_t workers = std::min<size_t>(run, static_cast<size_t>(tbb::this_task_arena::max_concurrency()));
-  tbb::parallel_for(size_t{0}, workers, [&](size_t) {
-    for (size_t k; (k = next.fetch_add(1)) < run;) results[order[k]] = jobs[order[k]]();
-  });
+  forEachLongestFirst(cost, [&](size_t j) { results[j] = jobs[j](); });
   for (size_t j = 0; j < run; ++j)
     if (!results[j].isOk()) return results[j];
   if (run < jobs.size()) return failed[run];

@@ -14,6 +14,7 @@
 #include "mesh/faces.h"
 #include "mesh/fresh_memory.h"
 #include "mesh/index.h"
+#include "mesh/longest_first.h"
 #include "mesh/mesh_stats.h"
 #include "mesh/predicates.h"
 
@@ -1126,21 +1127,26 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     }
     if (lanes.empty()) buildPoolsFromTets(built, &part_);
     lanes = std::move(next_lanes);
-    auto eachPart = [&](auto&& fn) {
-      tbb::this_task_arena::isolate([&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, round_parts, 1), [&](const tbb::blocked_range<size_t>& r) {
-          for (size_t p = r.begin(); p < r.end(); ++p) fn(*lanes[p]);
-        });
-      });
+    // The parts on the threads, the costliest first (cost: an estimate of each part's work).
+    auto eachPart = [&](const std::vector<uint64_t>& cost, auto&& fn) {
+      tbb::this_task_arena::isolate([&] { forEachLongestFirst(cost, [&](size_t p) { fn(*lanes[p]); }); });
     };
     // Every part's vertices evaluated first: the round's bound on the error is a quantile of their
     // best candidates' errors (the same whatever the threads), so that the parts stop at about the
     // same error, and merges a part would make at errors where other parts stop wait for the next
     // round or the whole mesh's queue.
-    eachPart([&](Lane& L) { startLane(L); });
+    std::vector<uint64_t> cost(round_parts);
+    for (uint32_t p = 0; p < round_parts; ++p) cost[p] = lanes[p]->members.size();
+    eachPart(cost, [&](Lane& L) { startLane(L); });
     const float bound = roundErrorBound(lanes);
     for (auto& L : lanes) L->error_limit = bound;
-    eachPart([&](Lane& L) { runLane(L, 0, nullptr); });
+    // A part makes about as many merges as it has vertices whose best candidate is within the bound.
+    for (uint32_t p = 0; p < round_parts; ++p)
+      cost[p] =
+          static_cast<uint64_t>(std::count_if(lanes[p]->best.begin(), lanes[p]->best.end(), [&](const Candidate& c) {
+            return c.w != kNoIndex && !(c.error > bound);
+          }));
+    eachPart(cost, [&](Lane& L) { runLane(L, 0, nullptr); });
     // The parts' merges by error, each part's in its order (ties: the lower part first).
     std::vector<size_t> next(round_parts, 0);
     for (;;) {
@@ -1497,10 +1503,12 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     std::fill(stamp.begin(), stamp.end(), 0);
     std::vector<std::vector<std::vector<Made>>> lane_batches(rr.parts);
     std::vector<BatchStats> lane_stats(rr.parts);
+    // The parts on the threads, those of the most merges first.
+    std::vector<uint64_t> cost(rr.parts);
+    for (uint32_t p = 0; p < rr.parts; ++p) cost[p] = lane_merges[p].size();
     tbb::this_task_arena::isolate([&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, rr.parts, 1), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t p = r.begin(); p < r.end(); ++p)
-          batchLane(*lanes[p], lane_merges[p], lanes[p]->members.size(), all_clean, lane_batches[p], lane_stats[p]);
+      forEachLongestFirst(cost, [&](size_t p) {
+        batchLane(*lanes[p], lane_merges[p], lanes[p]->members.size(), all_clean, lane_batches[p], lane_stats[p]);
       });
     });
     for (const BatchStats& s : lane_stats) {
