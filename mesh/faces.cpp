@@ -1,6 +1,10 @@
 #include "mesh/faces.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <atomic>
 #include <bit>
 
 #include "mesh/fresh_memory.h"
@@ -24,6 +28,8 @@ bool facesOpposite(const Tet& a, int k, const Tet& b) {
 namespace {
 // Up to this many face slots (4 bytes each), the face adjacency groups them in one pass.
 constexpr uint64_t kOnePassSlots = uint64_t{1} << 24;
+// Groups (vertices) matched by one task.
+constexpr size_t kGroupsPerTask = 4096;
 
 // The smallest vertex of each local face of t: t's smallest vertex, but for the face opposite it,
 // which has the second smallest.
@@ -83,9 +89,7 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots) {
   std::vector<uint32_t> slots;
   resizePopulated(slots, most);
   std::vector<uint32_t> next;
-  std::vector<GroupFace> faces;
-  std::vector<uint32_t> table;    // open addressing, at most half full: index in faces, or kNoIndex
-  std::vector<uint32_t> face_of;  // per slot of the group: its index in faces
+  std::atomic<uint64_t> all_faces{0}, boundary_faces{0}, non_manifold_faces{0};
   for (size_t p = 0; p + 1 < pass_begin.size(); ++p) {
     const size_t g0 = pass_begin[p], g1 = pass_begin[p + 1];
     // The slots of groups g0 .. g1 - 1, from start[g0] on.
@@ -99,52 +103,69 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots) {
         if (g >= g0 && g < g1) slots[next[g - g0]++ - base] = static_cast<uint32_t>(4 * t + k);
       }
     }
-    for (size_t g = g0; g < g1; ++g) {
-      const uint32_t n = start[g + 1] - start[g];
-      if (n == 0) continue;
-      const int bits = std::max(4, static_cast<int>(std::bit_width(2 * n - 1)));
-      table.assign(size_t{1} << bits, kNoIndex);
-      faces.clear();
-      face_of.resize(n);
-      bool non_manifold = false;
-      for (uint32_t i = 0; i < n; ++i) {
-        const uint32_t slot = slots[start[g] - base + i];
-        const Tet& t = mesh.tets[slot / 4];
-        const int k = slot % 4;
-        uint32_t a = t[kTetFace[k][0]], b = t[kTetFace[k][1]], c = t[kTetFace[k][2]];
-        if (a > b) std::swap(a, b);
-        if (b > c) std::swap(b, c);
-        if (a > b) std::swap(a, b);
-        const uint64_t bc = (uint64_t{b} << 32) | c;
-        size_t h = ((bc ^ a) * 0x9E3779B97F4A7C15u) >> (64 - bits);
-        while (table[h] != kNoIndex && !(faces[table[h]].bc == bc && faces[table[h]].a == a))
-          h = (h + 1) & (table.size() - 1);
-        if (table[h] == kNoIndex) {
-          table[h] = static_cast<uint32_t>(faces.size());
-          faces.push_back({a, bc, slot, 0, 1});
-        } else {
-          GroupFace& f = faces[table[h]];
-          if (f.count == 1) f.second = slot;
-          non_manifold |= ++f.count == 3;
+    // The groups are matched in parallel: each writes the neighbours of its own slots alone. Isolated:
+    // the caller's thread, waiting for its share, takes no other task of its caller's (which could
+    // run long).
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(g0, g1, kGroupsPerTask), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<GroupFace> faces;
+        std::vector<uint32_t> table;    // open addressing, at most half full: index in faces, or kNoIndex
+        std::vector<uint32_t> face_of;  // per slot of the group: its index in faces
+        uint64_t count_faces = 0, count_boundary = 0, count_non_manifold = 0;
+        for (size_t g = r.begin(); g < r.end(); ++g) {
+          const uint32_t n = start[g + 1] - start[g];
+          if (n == 0) continue;
+          const int bits = std::max(4, static_cast<int>(std::bit_width(2 * n - 1)));
+          table.assign(size_t{1} << bits, kNoIndex);
+          faces.clear();
+          face_of.resize(n);
+          bool non_manifold = false;
+          for (uint32_t i = 0; i < n; ++i) {
+            const uint32_t slot = slots[start[g] - base + i];
+            const Tet& t = mesh.tets[slot / 4];
+            const int k = slot % 4;
+            uint32_t a = t[kTetFace[k][0]], b = t[kTetFace[k][1]], c = t[kTetFace[k][2]];
+            if (a > b) std::swap(a, b);
+            if (b > c) std::swap(b, c);
+            if (a > b) std::swap(a, b);
+            const uint64_t bc = (uint64_t{b} << 32) | c;
+            size_t h = ((bc ^ a) * 0x9E3779B97F4A7C15u) >> (64 - bits);
+            while (table[h] != kNoIndex && !(faces[table[h]].bc == bc && faces[table[h]].a == a))
+              h = (h + 1) & (table.size() - 1);
+            if (table[h] == kNoIndex) {
+              table[h] = static_cast<uint32_t>(faces.size());
+              faces.push_back({a, bc, slot, 0, 1});
+            } else {
+              GroupFace& f = faces[table[h]];
+              if (f.count == 1) f.second = slot;
+              non_manifold |= ++f.count == 3;
+            }
+            face_of[i] = table[h];
+          }
+          count_faces += faces.size();
+          for (const GroupFace& f : faces) {
+            if (f.count == 1) {
+              ++count_boundary;
+            } else if (f.count == 2) {
+              adj.neighbor[f.first] = f.second / 4;
+              adj.neighbor[f.second] = f.first / 4;
+            } else {
+              ++count_non_manifold;
+            }
+          }
+          if (non_manifold)
+            for (uint32_t i = 0; i < n; ++i)
+              if (faces[face_of[i]].count > 2) adj.neighbor[slots[start[g] - base + i]] = kNonManifold;
         }
-        face_of[i] = table[h];
-      }
-      adj.faces += faces.size();
-      for (const GroupFace& f : faces) {
-        if (f.count == 1) {
-          ++adj.boundary_faces;
-        } else if (f.count == 2) {
-          adj.neighbor[f.first] = f.second / 4;
-          adj.neighbor[f.second] = f.first / 4;
-        } else {
-          ++adj.non_manifold_faces;
-        }
-      }
-      if (non_manifold)
-        for (uint32_t i = 0; i < n; ++i)
-          if (faces[face_of[i]].count > 2) adj.neighbor[slots[start[g] - base + i]] = kNonManifold;
-    }
+        all_faces += count_faces;
+        boundary_faces += count_boundary;
+        non_manifold_faces += count_non_manifold;
+      });
+    });
   }
+  adj.faces = all_faces;
+  adj.boundary_faces = boundary_faces;
+  adj.non_manifold_faces = non_manifold_faces;
   return adj;
 }
 

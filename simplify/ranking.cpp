@@ -1,6 +1,8 @@
 #include "simplify/ranking.h"
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -8,6 +10,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include "codec/edge_points.h"
@@ -31,6 +34,32 @@ constexpr double kLocalWeight = 1.0 / 16;  // see ranking.h
 // merge next to it, so a star of S tetrahedra costs about S^3 (a book of 1000 tetrahedra around one
 // edge ran for minutes). Real meshes stay far below: the largest star of the shared datasets is 110.
 constexpr uint32_t kMaxStar = 256;
+
+// The passes between the rounds over the tetrahedra or the vertices (the seams, the runs' live
+// corners) run in parallel in blocks of kBlock items; what they find does not depend on the threads.
+constexpr size_t kBlock = size_t{1} << 14;
+// Partitions split the two sides of a cut at once from this many vertices.
+constexpr size_t kParallelSplit = size_t{1} << 16;
+
+// Runs f isolated: while the ranking's thread waits for its share of the parallel work in f, it
+// takes no task from outside the ranking (a level being encoded beside it, say), which would hold up
+// the ranking for as long as that task runs.
+template <class F>
+void isolated(F&& f) {
+  tbb::this_task_arena::isolate(f);
+}
+
+// Calls f(begin, end) for the blocks [b * kBlock, (b + 1) * kBlock) of [0, n), in parallel.
+template <class F>
+void parallelBlocks(size_t n, F&& f) {
+  isolated([&] {
+    tbb::parallel_for(size_t{0}, (n + kBlock - 1) / kBlock,
+                      [&](size_t b) { f(b * kBlock, std::min(n, (b + 1) * kBlock)); });
+  });
+}
+
+// Sets a per-vertex flag that other threads may set too (never clear) at the same time.
+inline void setFlag(uint8_t& flag) { std::atomic_ref<uint8_t>(flag).store(1, std::memory_order_relaxed); }
 
 inline void cross(const double* a, const double* b, double* out) {
   out[0] = a[1] * b[2] - a[2] * b[1];
@@ -507,26 +536,37 @@ void Ranker::partition(uint32_t parts) {
       const double px = pos(x)[axis], py = pos(y)[axis];
       return px < py || (px == py && x < y);  // NaN coordinates compare by index alone
     });
-    self(self, lo, mid, k0, first);
-    self(self, mid, hi, k - k0, first + k0);
+    // The two sides are apart (ids and part_ at distinct places): split at once when large.
+    if (hi - lo >= kParallelSplit)
+      tbb::parallel_invoke([&] { self(self, lo, mid, k0, first); }, [&] { self(self, mid, hi, k - k0, first + k0); });
+    else {
+      self(self, lo, mid, k0, first);
+      self(self, mid, hi, k - k0, first + k0);
+    }
   };
-  split(split, 0, np, parts, 0);
+  isolated([&] { split(split, 0, np, parts, 0); });
   markSeams();
 }
 
 void Ranker::markSeams() {
   seam_.assign(mesh_.numPoints(), 0);
-  for (const Tet& q : tets_) {
-    if (q[0] == kDead) continue;
-    const uint8_t p = part_[q[0]];
-    if (part_[q[1]] != p || part_[q[2]] != p || part_[q[3]] != p)
-      for (uint32_t v : q) seam_[v] = 1;
-  }
+  parallelBlocks(tets_.size(), [&](size_t t0, size_t t1) {
+    for (size_t t = t0; t < t1; ++t) {
+      const Tet& q = tets_[t];
+      if (q[0] == kDead) continue;
+      const uint8_t p = part_[q[0]];
+      if (part_[q[1]] != p || part_[q[2]] != p || part_[q[3]] != p)
+        for (uint32_t v : q) setFlag(seam_[v]);
+    }
+  });
 }
 
 void Ranker::dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>& part) {
-  for (uint32_t v = 0; v < mesh_.numPoints(); ++v)
-    star_len_[v] = keepLive(lanes[part[v]]->pool.data() + star_begin_[v], star_len_[v]);
+  // Each vertex's run alone: in parallel.
+  parallelBlocks(mesh_.numPoints(), [&](size_t v0, size_t v1) {
+    for (size_t v = v0; v < v1; ++v)
+      star_len_[v] = keepLive(lanes[part[v]]->pool.data() + star_begin_[v], star_len_[v]);
+  });
 }
 
 void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>& from, const std::vector<uint8_t>& from_part,
@@ -547,25 +587,41 @@ void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>& from, 
 }
 
 void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vector<uint8_t>* part) {
-  for (Lane* L : lanes) {
-    uint64_t total = 0;
-    forMembers(*L, [&](uint32_t v) {
-      star_begin_[v] = total;
-      star_len_[v] = 0;
-      total += star_size_[v];
+  isolated([&] {
+    tbb::parallel_for(size_t{0}, lanes.size(), [&](size_t i) {
+      Lane* L = lanes[i];
+      uint64_t total = 0;
+      forMembers(*L, [&](uint32_t v) {
+        star_begin_[v] = total;
+        star_len_[v] = 0;
+        total += star_size_[v];
+      });
+      assignPopulated(L->pool, total + std::max<uint64_t>(total / 4, kMinStarSlack), 0u);
+      L->peak = L->pool.size();
+      L->used = total;
     });
-    assignPopulated(L->pool, total + std::max<uint64_t>(total / 4, kMinStarSlack), 0u);
-    L->peak = L->pool.size();
-    L->used = total;
-  }
-  for (size_t t = 0; t < tets_.size(); ++t) {
-    if (tets_[t][0] == kDead) continue;
-    for (int k = 0; k < 4; ++k) {
-      const uint32_t v = tets_[t][k];
-      Lane& L = *lanes[part ? (*part)[v] : 0];
-      L.pool[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
-    }
-  }
+  });
+  // The corners in groups of vertices, one group a thread: each reads every tetrahedron and writes
+  // its own vertices' runs, in the tetrahedra's order (the same runs for any number of groups).
+  // The groups: the parts' lanes in turn, or the whole mesh's vertices in equal ranges.
+  const uint64_t np = mesh_.numPoints();
+  const uint32_t groups = static_cast<uint32_t>(std::clamp<int>(tbb::this_task_arena::max_concurrency(), 1, 64));
+  std::array<uint8_t, kMaxParts> group_of_part{};
+  for (uint32_t p = 0; p < kMaxParts; ++p) group_of_part[p] = static_cast<uint8_t>(p % groups);
+  isolated([&] {
+    tbb::parallel_for(uint32_t{0}, groups, [&](uint32_t g) {
+      const uint64_t lo = np * g / groups, hi = np * (g + 1) / groups;
+      for (size_t t = 0; t < tets_.size(); ++t) {
+        if (tets_[t][0] == kDead) continue;
+        for (int k = 0; k < 4; ++k) {
+          const uint32_t v = tets_[t][k];
+          if (part ? group_of_part[(*part)[v]] != g : (v < lo || v >= hi)) continue;
+          Lane& L = *lanes[part ? (*part)[v] : 0];
+          L.pool[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
+        }
+      }
+    });
+  });
 }
 
 void Ranker::startLane(Lane& L) {
@@ -1121,11 +1177,18 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     }
     for (auto& L : next_lanes) L->heap = CandidateHeap(L->members.size(), part_index_.data());
     std::vector<Lane*> built;
-    for (auto& L : next_lanes) {
-      if (!lanes.empty()) buildPool(*L, lanes, lane_part, lane_begin);
-      built.push_back(L.get());
+    for (auto& L : next_lanes) built.push_back(L.get());
+    if (lanes.empty()) {
+      buildPoolsFromTets(built, &part_);
+    } else {
+      // Each lane's pool from the last round's, in parallel (a lane writes its own pool and its own
+      // vertices' runs).
+      std::vector<uint64_t> members(round_parts);
+      for (uint32_t p = 0; p < round_parts; ++p) members[p] = next_lanes[p]->members.size();
+      tbb::this_task_arena::isolate([&] {
+        forEachLongestFirst(members, [&](size_t p) { buildPool(*next_lanes[p], lanes, lane_part, lane_begin); });
+      });
     }
-    if (lanes.empty()) buildPoolsFromTets(built, &part_);
     lanes = std::move(next_lanes);
     // The parts on the threads, the costliest first (cost: an estimate of each part's work).
     auto eachPart = [&](const std::vector<uint64_t>& cost, auto&& fn) {
