@@ -48,11 +48,12 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   }
   reportProgress(wo.progress, "rank merges", 0.0);
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
-  // Level 0 is encoded while the merges are ranked: on another thread where TBB has one, after the
-  // ranking where it has not. A level 0 that fails to encode fails the conversion then, before its
+  // Level 0 is encoded while the merges are ranked, beside the whole mesh's queue (one thread's work,
+  // after the rounds of parts that keep every thread busy): on another thread where TBB has one, after
+  // the ranking where it has not. A level 0 that fails to encode fails the conversion then, before its
   // own errors are looked at (the encoder's refusal says why no option stores it). Where mip levels
   // will be checked, level 0's own errors (the ones a mip level may keep) are found on another thread
-  // too (below).
+  // too, beside the same queue (below).
   LevelStructureCheck structure(mesh, path);
   // Waited for on every return from here (check() waits for it too, and `structure` must outlive it).
   tbb::task_group checking;
@@ -66,18 +67,29 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   std::shared_ptr<PiecedLevel> level0;
   Status encoded = Status::ok();
   tbb::task_group encoding;
-  encoding.run([&] {
-    auto e = encodePieces(mesh, EncodeOptions{}, wo.piece_tets);
-    if (e.isOk()) level0 = std::make_shared<PiecedLevel>(std::move(e).value());
-    else encoded = e.status();
-  });
+  const WaitOnExit join_encoding{encoding};
+  bool encoding_level0 = false;
+  auto encodeLevel0 = [&] {
+    if (encoding_level0) return;
+    encoding_level0 = true;
+    encoding.run([&] {
+      auto e = encodePieces(mesh, EncodeOptions{}, wo.piece_tets);
+      if (e.isOk()) level0 = std::make_shared<PiecedLevel>(std::move(e).value());
+      else encoded = e.status();
+    });
+  };
   RankingStats ranked;
-  // Level 0's check runs beside the whole mesh's queue, one thread's work after the parallel rounds
-  // of parts, whose star lists are gone by then (the check's face adjacency beside them, or beside
-  // the batches', was the peak of a large convert's memory).
+  // Level 0's encoding and check run beside the whole mesh's queue, one thread's work after the
+  // parallel rounds of parts, whose star lists are gone by then (the check's face adjacency beside
+  // them, or beside the batches', was the peak of a large convert's memory, and the encoding beside
+  // the first round took a thread from it).
   RankingOptions ranking_options = o.ranking;
-  ranking_options.beside_whole_queue = checkLevel0;
+  ranking_options.beside_whole_queue = [&] {
+    encodeLevel0();
+    checkLevel0();
+  };
   StatusOr<MergeTree> ranking = rankMerges(mesh, ranking_options, &ranked, wo.progress);
+  encodeLevel0();  // where the ranking did not start it
   encoding.wait();
   GTN_RETURN_IF_ERROR(encoded);
   if (!ranking.isOk()) return ranking.status();
