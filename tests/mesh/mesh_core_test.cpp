@@ -1,5 +1,6 @@
 // The mesh core: exact orientation, face adjacency, boundary surface, hexahedron splits, statistics.
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <set>
@@ -123,6 +124,31 @@ TEST(Faces, PassesGiveTheSameAdjacency) {
     EXPECT_EQ(passes.faces, one.faces);
     EXPECT_EQ(passes.boundary_faces, one.boundary_faces);
     EXPECT_EQ(passes.non_manifold_faces, one.non_manifold_faces);
+  }
+}
+
+// The groups are matched in parallel: any number of threads finds the same adjacency, on a mesh of
+// many tasks' worth of groups with faces in three tetrahedra among them.
+TEST(Faces, ThreadsGiveTheSameAdjacency) {
+  TetMesh m = structuredGrid(24, 6, 1.0);
+  ASSERT_GT(m.numPoints(), 3u * 4096);
+  for (size_t t : {size_t{3}, m.tets.size() / 2, m.tets.size() - 1}) {
+    m.tets.push_back(m.tets[t]);  // its faces in three tetrahedra (two where a face was on the boundary)
+  }
+  auto adjacencyWith = [&](int threads) {
+    FaceAdjacency adj;
+    tbb::task_arena(threads).execute([&] { adj = computeFaceAdjacency(m); });
+    return adj;
+  };
+  const FaceAdjacency one = adjacencyWith(1);
+  EXPECT_GT(one.non_manifold_faces, 0u);
+  for (const int threads : {2, 4}) {
+    SCOPED_TRACE(std::to_string(threads) + " threads");
+    const FaceAdjacency many = adjacencyWith(threads);
+    EXPECT_EQ(many.neighbor, one.neighbor);
+    EXPECT_EQ(many.faces, one.faces);
+    EXPECT_EQ(many.boundary_faces, one.boundary_faces);
+    EXPECT_EQ(many.non_manifold_faces, one.non_manifold_faces);
   }
 }
 
