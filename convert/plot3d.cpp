@@ -57,6 +57,7 @@
 #include "convert/text_reader.h"
 #include "format/file_io.h"
 #include "format/gtn_bytes.h"
+#include "mesh/fresh_memory.h"
 #include "mesh/index.h"
 #include "mesh/predicates.h"
 
@@ -1287,7 +1288,7 @@ Status addGrid(const std::string& path, std::string_view bytes, const Fit& fit, 
   if (total > UINT32_MAX)
     return unsupported(path + ": " + std::to_string(total) + " points exceed the 2^32 limit of a mesh");
   mesh.coord_type = l.precision == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
-  mesh.coords.resize(3 * total);
+  resizePopulated(mesh.coords, 3 * total);
   if (l.iblank) iblank->resize(total);
   std::string scratch, reordered;
   size_t base = 0;
@@ -1327,12 +1328,16 @@ void addQ(std::string_view bytes, const Fit& fit, TetMesh& mesh, std::vector<std
   const size_t nq = static_cast<size_t>(fit.nq);
   const bool classic = nq >= 5;
   std::vector<Field> fields;
+  auto addField = [&](std::string name, uint32_t components) {  // its pages mapped in one call
+    fields.emplace_back(std::move(name), components, type, 0);
+    resizePopulated(fields.back().bytes, total * components * scalarSize(type));
+  };
   if (classic) {
-    fields.emplace_back("density", 1, type, total);
-    fields.emplace_back("momentum", 3, type, total);
-    fields.emplace_back("stagnation_energy", 1, type, total);
+    addField("density", 1);
+    addField("momentum", 3);
+    addField("stagnation_energy", 1);
   }
-  for (size_t k = classic ? 5 : 0; k < nq; ++k) fields.emplace_back("q" + std::to_string(k + 1), 1, type, total);
+  for (size_t k = classic ? 5 : 0; k < nq; ++k) addField("q" + std::to_string(k + 1), 1);
   // The freestream reals before OVERFLOW's IGAM: FSMACH ALPHA REY TIME, then GAMINF BETA TINF.
   const int header_reals = l.overflow ? 7 : 4;
   std::string scratch, reordered;
@@ -1607,7 +1612,7 @@ void splitCells(const std::vector<BlockDims>& blocks, const std::vector<int32_t>
                 const std::vector<uint8_t>& parity, TetMesh& mesh, ImportReport& report) {
   uint64_t cells = 0;
   for (const BlockDims& b : blocks) cells += static_cast<uint64_t>((b.n[0] - 1) * (b.n[1] - 1) * (b.n[2] - 1));
-  mesh.tets.reserve(cells * static_cast<uint64_t>(split));
+  reservePopulated(mesh.tets, cells * static_cast<uint64_t>(split));
   GridHexSplitter grid(&mesh);
   uint64_t base = 0;
   for (size_t g = 0; g < blocks.size(); ++g) {

@@ -11,6 +11,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "mesh/fresh_memory.h"
+
 namespace gtn {
 
 namespace {
@@ -76,10 +78,13 @@ StatusOr<std::string> readWholeFile(const std::string& path, uint64_t max_bytes)
   }
   std::string data;
   // A regular file's size is known: room for it at once (growing by doubling copied a 64 MB grid
-  // file about twice over, onto fresh pages each time). A file that grows meanwhile is read on.
+  // file about twice over, onto fresh pages each time), its pages mapped in one call before they
+  // are zeroed and read into. A file that grows meanwhile is read on.
   struct stat st;
   if (f != stdin && ::fstat(fileno(f), &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0 &&
       static_cast<uint64_t>(st.st_size) <= max_bytes) {
+    data.reserve(static_cast<size_t>(st.st_size));
+    populateForWrite(data.data(), static_cast<size_t>(st.st_size));
     data.resize(static_cast<size_t>(st.st_size));
     const size_t got = std::fread(data.data(), 1, data.size(), f);
     data.resize(got);
