@@ -1734,8 +1734,9 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
     return noMatchError(path, bytes, kind, d, blocks, grid_path, grid.fit.layout);
   };
   if (!second_path.empty()) {
-    GTN_ASSIGN_OR_RETURN(const std::string raw, readInput(second_path, Kind::kQ));
-    std::string bytes = raw, fbytes = raw;
+    // Read as a Q file in place (its bytes transcoded where it is text); read again, as a function
+    // file, only where it is no Q file for the grid (a copy of a large file costs more than its use).
+    GTN_ASSIGN_OR_RETURN(std::string bytes, readInput(second_path, Kind::kQ));
     Detection dq, df;
     Status q_text, f_text;
     GTN_ASSIGN_OR_RETURN(Selected q, for_grid(second_path, &bytes, Kind::kQ, &dq, &q_text));
@@ -1746,6 +1747,8 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
       if (!q_text.isOk()) return q_text;
       return no_match(second_path, bytes, Kind::kQ, dq);
     } else {
+      GTN_ASSIGN_OR_RETURN(const std::string raw, readInput(second_path, Kind::kFunction));
+      std::string fbytes = raw;
       GTN_ASSIGN_OR_RETURN(Selected f, for_grid(second_path, &fbytes, Kind::kFunction, &df, &f_text));
       if (!f.found) {
         if (!q_text.isOk() && !f_text.isOk())

@@ -967,6 +967,26 @@ TEST_F(Plot3dSynthetic, FunctionFileAsSecondAndThirdInput) {
   EXPECT_EQ(third->mesh.findPointField("function_0")->get(23, 0), 23.0);
 }
 
+// A second file that fits the grid neither as a Q file nor as a function file is refused, named,
+// for both readings (each reads the file as it is on disk).
+TEST_F(Plot3dSynthetic, SecondFileThatFitsNeitherReadingIsNamed) {
+  const std::vector<Block> blocks = {boxBlock(3, 4, 2)};
+  GridOptions o;
+  const std::string xyz = write("n.xyz", gridFile(blocks, o));
+  const std::string junk = write("n.q", std::string(1001, '\x01'));
+  auto r = importFiles({xyz, junk});
+  ASSERT_FALSE(r.isOk());
+  const std::string& m = r.status().message();
+  EXPECT_NE(m.find(junk + ": neither a PLOT3D Q file nor a function file for the grid"), std::string::npos) << m;
+  EXPECT_NE(m.find("as a Q file: "), std::string::npos) << m;
+  EXPECT_NE(m.find("as a function file: "), std::string::npos) << m;
+  // The function file's reading still works after the Q file's failed.
+  const std::string fun = write("n.f", functionFile(blocks, o, 2));
+  auto ok = importFiles({xyz, fun});
+  ASSERT_TRUE(ok.isOk()) << ok.status().message();
+  EXPECT_EQ(ok->mesh.findPointField("function_1")->get(5, 0), 105.0);
+}
+
 TEST_F(Plot3dSynthetic, TwoDimensionalGridIsRejected) {
   Bytes b;
   b.i32(5);
