@@ -41,18 +41,13 @@ constexpr size_t kBlock = size_t{1} << 14;
 // Partitions split the two sides of a cut at once from this many vertices.
 constexpr size_t kParallelSplit = size_t{1} << 16;
 
-// Runs f isolated: while the ranking's thread waits for its share of the parallel work in f, it
+// Calls f(begin, end) for the blocks [b * kBlock, (b + 1) * kBlock) of [0, n), in parallel. Like
+// every parallel step of the ranking, isolated: while the ranking's thread waits for its share, it
 // takes no task from outside the ranking (a level being encoded beside it, say), which would hold up
 // the ranking for as long as that task runs.
 template <class F>
-void isolated(F&& f) {
-  tbb::this_task_arena::isolate(f);
-}
-
-// Calls f(begin, end) for the blocks [b * kBlock, (b + 1) * kBlock) of [0, n), in parallel.
-template <class F>
 void parallelBlocks(size_t n, F&& f) {
-  isolated([&] {
+  tbb::this_task_arena::isolate([&] {
     tbb::parallel_for(size_t{0}, (n + kBlock - 1) / kBlock,
                       [&](size_t b) { f(b * kBlock, std::min(n, (b + 1) * kBlock)); });
   });
@@ -544,7 +539,7 @@ void Ranker::partition(uint32_t parts) {
       self(self, mid, hi, k - k0, first + k0);
     }
   };
-  isolated([&] { split(split, 0, np, parts, 0); });
+  tbb::this_task_arena::isolate([&] { split(split, 0, np, parts, 0); });
   markSeams();
 }
 
@@ -587,7 +582,7 @@ void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>& from, 
 }
 
 void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vector<uint8_t>* part) {
-  isolated([&] {
+  tbb::this_task_arena::isolate([&] {
     tbb::parallel_for(size_t{0}, lanes.size(), [&](size_t i) {
       Lane* L = lanes[i];
       uint64_t total = 0;
@@ -608,7 +603,7 @@ void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vect
   const uint32_t groups = static_cast<uint32_t>(std::clamp<int>(tbb::this_task_arena::max_concurrency(), 1, 64));
   std::array<uint8_t, kMaxParts> group_of_part{};
   for (uint32_t p = 0; p < kMaxParts; ++p) group_of_part[p] = static_cast<uint8_t>(p % groups);
-  isolated([&] {
+  tbb::this_task_arena::isolate([&] {
     tbb::parallel_for(uint32_t{0}, groups, [&](uint32_t g) {
       const uint64_t lo = np * g / groups, hi = np * (g + 1) / groups;
       for (size_t t = 0; t < tets_.size(); ++t) {
@@ -1178,19 +1173,20 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     for (auto& L : next_lanes) L->heap = CandidateHeap(L->members.size(), part_index_.data());
     std::vector<Lane*> built;
     for (auto& L : next_lanes) built.push_back(L.get());
+    // Per part, an estimate of the work at hand: its vertices, then (below) its likely merges.
+    std::vector<uint64_t> cost(round_parts);
+    for (uint32_t p = 0; p < round_parts; ++p) cost[p] = next_lanes[p]->members.size();
     if (lanes.empty()) {
       buildPoolsFromTets(built, &part_);
     } else {
       // Each lane's pool from the last round's, in parallel (a lane writes its own pool and its own
       // vertices' runs).
-      std::vector<uint64_t> members(round_parts);
-      for (uint32_t p = 0; p < round_parts; ++p) members[p] = next_lanes[p]->members.size();
       tbb::this_task_arena::isolate([&] {
-        forEachLongestFirst(members, [&](size_t p) { buildPool(*next_lanes[p], lanes, lane_part, lane_begin); });
+        forEachLongestFirst(cost, [&](size_t p) { buildPool(*next_lanes[p], lanes, lane_part, lane_begin); });
       });
     }
     lanes = std::move(next_lanes);
-    // The parts on the threads, the costliest first (cost: an estimate of each part's work).
+    // The parts on the threads, the costliest first.
     auto eachPart = [&](const std::vector<uint64_t>& cost, auto&& fn) {
       tbb::this_task_arena::isolate([&] { forEachLongestFirst(cost, [&](size_t p) { fn(*lanes[p]); }); });
     };
@@ -1198,8 +1194,6 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     // best candidates' errors (the same whatever the threads), so that the parts stop at about the
     // same error, and merges a part would make at errors where other parts stop wait for the next
     // round or the whole mesh's queue.
-    std::vector<uint64_t> cost(round_parts);
-    for (uint32_t p = 0; p < round_parts; ++p) cost[p] = lanes[p]->members.size();
     eachPart(cost, [&](Lane& L) { startLane(L); });
     const float bound = roundErrorBound(lanes);
     for (auto& L : lanes) L->error_limit = bound;
