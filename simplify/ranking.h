@@ -68,8 +68,11 @@
 // reads, so the parts' merges commute: they are interleaved by error, each part's in its own order,
 // and every prefix is still a valid mesh. Up to six rounds do the same with the vertices left, in
 // P - 1, P - 2, ... parts (at least 2), whose cuts fall elsewhere, so that most of the last round's
-// seams are inside the next one's parts. The whole mesh's queue then goes on with every vertex left,
-// the seams included, which releases them: the coarse levels are not frozen along the parts' seams.
+// seams are inside the next one's parts. Large meshes are ranked in many parts of a bounded size
+// (their data stays near the processor); where P is 16 or more, these fine rounds are followed by
+// coarse rounds in 8, 7, ... 3 parts, which take most of the fine rounds' seams. The whole mesh's
+// queue then goes on with every vertex left, the seams included, which releases them: the coarse
+// levels are not frozen along the parts' seams.
 // The tree depends on the number of parts, never on the number of threads.
 //
 // Lazy evaluation computes about a third of the candidates (a merge changes the stars of some eight
@@ -99,13 +102,16 @@ struct RankingOptions {
   // Recompute the candidates a merge makes stale when they come to the top of the queue (lazy, the
   // default) rather than after every merge (greedy); see above.
   bool lazy = true;
-  // Rank in this many parts first (see above), 1 = not in parts; 0 = automatic: 8 parts for meshes of
-  // 2^20 tetrahedra or more, else 1. The tree depends on it (not on the threads).
+  // Rank in this many parts first (see above), 1 = not in parts; 0 = automatic: for meshes of 2^20
+  // tetrahedra or more, one part per 2^18 tetrahedra (8 at least, 256 at most), else 1. The tree
+  // depends on it (not on the threads).
   uint32_t parts = 0;
-  // Called once, on the ranking's thread, as the whole mesh's queue starts (after the rounds of parts,
-  // whose star lists are gone by then, or at once): where a caller starts work to run beside the
-  // queue, which is one thread's work.
-  std::function<void()> beside_whole_queue{};
+  // Called once, on the ranking's thread, as the ranking's tail starts: the coarse rounds after the
+  // fine ones (see above), or else the whole mesh's queue (after the rounds of parts, whose star lists
+  // are gone by then, or at once). Where a caller starts work to run beside the tail, which leaves
+  // threads idle: the whole mesh's queue is one thread's work, and the coarse rounds' few parts
+  // differ in size.
+  std::function<void()> beside_ranking_tail{};
 };
 
 // A round of the ranking in parts (see above): how many merges it made (the ranks after those of the

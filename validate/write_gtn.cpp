@@ -48,12 +48,12 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   }
   reportProgress(wo.progress, "rank merges", 0.0);
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
-  // Level 0 is encoded while the merges are ranked, beside the whole mesh's queue (one thread's work,
-  // after the rounds of parts that keep every thread busy): on another thread where TBB has one, after
-  // the ranking where it has not. A level 0 that fails to encode fails the conversion then, before its
+  // Level 0 is encoded while the merges are ranked, beside the ranking's tail (the coarse rounds of
+  // few parts and the whole mesh's queue, one thread's work, after the rounds of parts that keep every
+  // thread busy): on another thread where TBB has one, after the ranking where it has not. A level 0 that fails to encode fails the conversion then, before its
   // own errors are looked at (the encoder's refusal says why no option stores it). Where mip levels
   // will be checked, level 0's own errors (the ones a mip level may keep) are found on another thread
-  // too, beside the same queue (below).
+  // too, beside the same tail (below).
   LevelStructureCheck structure(mesh, path);
   // Waited for on every return from here (check() waits for it too, and `structure` must outlive it).
   tbb::task_group checking;
@@ -79,12 +79,12 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
     });
   };
   RankingStats ranked;
-  // Level 0's encoding and check run beside the whole mesh's queue, one thread's work after the
-  // parallel rounds of parts, whose star lists are gone by then (the check's face adjacency beside
-  // them, or beside the batches', was the peak of a large convert's memory, and the encoding beside
-  // the first round took a thread from it).
+  // Level 0's encoding and check run beside the ranking's tail, after the fine rounds of many parts,
+  // whose star lists are gone by then (the check's face adjacency beside them, or beside the
+  // batches', was the peak of a large convert's memory, and the encoding beside the first round took
+  // a thread from it).
   RankingOptions ranking_options = o.ranking;
-  ranking_options.beside_whole_queue = [&] {
+  ranking_options.beside_ranking_tail = [&] {
     encodeLevel0();
     checkLevel0();
   };
@@ -94,6 +94,9 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   GTN_RETURN_IF_ERROR(encoded);
   if (!ranking.isOk()) return ranking.status();
   checkLevel0();  // where the ranking did not start it
+  // The check's face adjacency beside the batches was a convert's peak of memory: the check ends
+  // before them (beside a short tail of the ranking, it may still run).
+  checking.wait();
   MergeTree tree = std::move(ranking).value();
   MergeTreeForm level0_form;
   if (o.merge_tree && level0) {

@@ -217,6 +217,55 @@ TEST(Ranking, InPartsThePrefixesAreValidAndTheThreadsChangeNothing) {
   expectKeepsTheVolumeAsWellAs(mesh, tree, *whole);
 }
 
+// Many parts (16 or more): six fine rounds in P, P - 1, ... parts, then six coarse rounds in 8, 7, ...
+// 3 parts, which take the fine rounds' seams before the whole mesh's queue. The tree is the same for
+// any thread count, and the tail's hook runs once, as the coarse rounds start (the progress then
+// counts the fine rounds' merges).
+TEST(Ranking, ManyPartsRankInFineThenCoarseRounds) {
+  const TetMesh mesh = makeGrid(24, 23, 22);
+  RankingOptions in_parts;
+  in_parts.parts = 16;
+  std::vector<MergeTree> trees;
+  RankingStats stats;
+  for (const size_t threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    double last = -1, at_tail = -1;
+    int tails = 0;
+    RankingOptions o = in_parts;
+    o.beside_ranking_tail = [&] {
+      ++tails;
+      at_tail = last;
+    };
+    auto t = rankMerges(mesh, o, &stats, [&](const std::string& stage, double fraction) {
+      if (stage == "rank merges") last = fraction;
+    });
+    ASSERT_TRUE(t.isOk()) << t.status().message();
+    EXPECT_EQ(tails, 1);
+    ASSERT_EQ(stats.rounds.size(), 12u);
+    uint64_t fine = 0;
+    for (size_t r = 0; r < 6; ++r) {
+      EXPECT_EQ(stats.rounds[r].parts, 16u - r);
+      EXPECT_EQ(stats.rounds[r + 6].parts, 8u - r);
+      EXPECT_GT(stats.rounds[r + 6].merges, 0u);
+      fine += stats.rounds[r].merges;
+    }
+    EXPECT_NEAR(at_tail, static_cast<double>(fine) / static_cast<double>(mesh.numPoints()), 1e-12);
+    trees.push_back(std::move(t).value());
+  }
+  EXPECT_EQ(trees[1].parent, trees[0].parent);
+  EXPECT_EQ(trees[1].rank, trees[0].rank);
+  ASSERT_TRUE(trees[0].check("in many parts").isOk());
+  // The coarse rounds leave the whole mesh's queue less than the fine rounds alone would.
+  RankingOptions fine_only = in_parts;
+  fine_only.parts = 15;  // fine rounds alone (below 16 parts)
+  RankingStats fine_stats;
+  auto fine_tree = rankMerges(mesh, fine_only, &fine_stats);
+  ASSERT_TRUE(fine_tree.isOk());
+  ASSERT_EQ(fine_stats.rounds.size(), 6u);
+  EXPECT_LT(trees[0].merges - stats.part_merges, (fine_tree->merges - fine_stats.part_merges) / 2);
+  expectEveryPrefixValid(mesh, trees[0]);
+}
+
 // Batched in the ranking's rounds of parts (batchMerges with RankingStats::rounds): each round's
 // merges are batched in its parts, in parallel. The batched tree is the same for any thread count,
 // every merge passes the validator's replay, the batches end where each round of the ranking does
