@@ -180,8 +180,8 @@ Command addConvertCommand(CLI::App& app) {
       ".gtn: rank the whole mesh in one queue, and after each merge rank again every vertex whose neighbourhood it "
       "changed (the greedy order, about 1.4 times the ranking's time); by default such a vertex is ranked again when "
       "it comes to the top of the queue, and meshes of 2^20 tetrahedra or more are first ranked in rounds of parts "
-      "in parallel (P, P - 1, ... parts, P one per 2^18 tetrahedra, 8 to 256; then 8, 7, ... 3 where P is 16 or "
-      "more)");
+      "in parallel (P, P - 1, ... parts, P one per 2^18 tetrahedra, 8 to 256; where P is 16 or more, more series "
+      "on the mesh left, the last in 8, 7, ... 3 parts)");
   sub->add_flag("-q,--quiet", args->quiet,
                 "no progress line (shown while standard error is a terminal) and no summary line at the end");
   return {sub, [args] { return runConvert(*args); }};

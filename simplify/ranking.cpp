@@ -330,10 +330,9 @@ struct Lane {
   std::vector<uint32_t> lk_verts;
 };
 
-// The rounds of parts: at most kMaxRounds in P, P - 1, ... parts (at least 2), and where P is at least
-// 2 kAutoParts, then up to kMaxRounds more in kAutoParts, kAutoParts - 1, ... parts (roundsOfParts).
-// Each round's bound on the error of its merges is the kRoundQuantile quantile of the errors of its
-// vertices' best candidates as the round starts.
+// The rounds of parts come in series of at most kMaxRounds rounds, in P, P - 1, ... parts (at least
+// 2); see nextRankingSeries. Each round's bound on the error of its merges is the kRoundQuantile
+// quantile of the errors of its vertices' best candidates as the round starts.
 constexpr uint32_t kMaxRounds = 6;
 constexpr double kRoundQuantile = 0.6;
 // RankingOptions::parts = 0 ranks meshes of kAutoPartTets tetrahedra or more in parts of about
@@ -348,7 +347,7 @@ constexpr size_t kAutoPartTets = size_t{1} << 20;
 constexpr size_t kPartTets = size_t{1} << 18;
 // The fine rounds' cuts, shifted by these fractions of a part (Ranker::partition): one part fewer
 // moves the cuts of many parts little (the 128^3 grid's middle cut by 1.4 nodes from 46 to 45
-// parts), and a vertex by a cut in every fine round waits for the coarse rounds. Unshifted, the
+// parts), and a vertex by a cut in every fine round waits for a later series. Unshifted, the
 // 128^3 grid's view at ratio 0.9 was off the full view by an RMSE of 0.22 against 0.18 with 8
 // parts; shifted, 0.21 (0.34 against 0.31 at 0.95, and 0.06 against 0.07 at 0.75).
 constexpr double kFineShift[kMaxRounds] = {0, 1.0 / 3, -1.0 / 3, 1.0 / 6, -1.0 / 6, 0.5};
@@ -357,23 +356,6 @@ constexpr uint32_t kMaxParts = 256;  // part_ is a byte
 uint32_t autoParts(size_t tets) {
   if (tets < kAutoPartTets) return 1;
   return static_cast<uint32_t>(std::clamp<size_t>(tets / kPartTets, kAutoParts, kMaxParts));
-}
-
-// The part counts of the rounds for P parts. Many small parts (the fine rounds) leave many seams, and
-// one part fewer moves the cuts of a large P little: the vertices along them would be left to the
-// whole mesh's queue, one thread's work (48 parts of the 128^3 grid left it 270 thousand merges, 8
-// parts 150 thousand). Rounds in kAutoParts, kAutoParts - 1, ... parts (the coarse rounds) take most
-// of them first, on a mesh the fine rounds have made much smaller. `tail`: the first round after the
-// fine ones (rounds.size() where there are no coarse rounds).
-std::vector<uint32_t> roundsOfParts(uint32_t parts, size_t* tail) {
-  std::vector<uint32_t> rounds;
-  auto series = [&](uint32_t p) {
-    for (uint32_t r = 0; r < kMaxRounds && p >= r + 2; ++r) rounds.push_back(p - r);
-  };
-  series(parts);
-  *tail = rounds.size();
-  if (parts >= 2 * kAutoParts) series(kAutoParts);
-  return rounds;
 }
 
 class Ranker {
@@ -401,6 +383,8 @@ class Ranker {
   // Parts of about equal numbers of vertices, by recursive bisection of their positions along the
   // longest side: part_ and seam_.
   void partition(uint32_t parts, double shift);
+  // The tetrahedra not collapsed yet.
+  size_t liveTets() const;
   // seam_: the vertices of the live tetrahedra whose vertices lie in more than one part of part_.
   void markSeams();
   // Fills a lane's pool with its members' lists (every vertex's when it has none) from the previous
@@ -580,6 +564,16 @@ void Ranker::partition(uint32_t parts, double shift) {
   };
   tbb::this_task_arena::isolate([&] { split(split, 0, np, parts, 0); });
   markSeams();
+}
+
+size_t Ranker::liveTets() const {
+  std::atomic<size_t> live{0};
+  parallelBlocks(tets_.size(), [&](size_t t0, size_t t1) {
+    size_t n = 0;
+    for (size_t t = t0; t < t1; ++t) n += tets_[t][0] != kDead;
+    live.fetch_add(n, std::memory_order_relaxed);
+  });
+  return live.load();
 }
 
 void Ranker::markSeams() {
@@ -1185,15 +1179,10 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     lane_part = part_;
     lane_begin = star_begin_;
   };
-  // Rounds of parts, each with one part fewer than the one before, so that its cuts fall elsewhere
-  // and most of the last round's seams are inside its parts.
-  size_t tail = 0;
-  const std::vector<uint32_t> rounds = roundsOfParts(parts, &tail);
-  for (size_t round = 0; round < rounds.size(); ++round) {
-    const uint32_t round_parts = rounds[round];
-    if (round == tail && options_.beside_ranking_tail) options_.beside_ranking_tail();
+  // One round in `round_parts` parts, their cuts shifted by `shift` (partition).
+  auto runRound = [&](uint32_t round_parts, double shift) {
     if (!lanes.empty()) leaveLanes();
-    partition(round_parts, round < tail && tail < rounds.size() ? kFineShift[round] : 0.0);
+    partition(round_parts, shift);
     const size_t round_begin = order.size();
     std::vector<std::unique_ptr<Lane>> next_lanes;
     for (uint32_t p = 0; p < round_parts; ++p) {
@@ -1278,6 +1267,24 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     }
     std::fill(stale_.begin(), stale_.end(), 0);
     reportProgress(progress, "rank merges", static_cast<double>(order.size()) / static_cast<double>(np));
+  };
+  // Series of rounds of parts, each round with one part fewer than the one before, so that its cuts
+  // fall elsewhere and most of the last round's seams are inside its parts (nextRankingSeries). The
+  // tail starts after the first series where another follows, else with the whole mesh's queue.
+  bool tail_started = false;
+  auto startTail = [&] {
+    if (!tail_started && options_.beside_ranking_tail) options_.beside_ranking_tail();
+    tail_started = true;
+  };
+  uint32_t series = parts > 1 ? parts : 0;
+  for (bool first = true; series != 0; first = false) {
+    if (!first) startTail();
+    const bool fine = series >= 2 * kAutoParts;
+    for (uint32_t r = 0; r < kMaxRounds && series >= r + 2; ++r) {
+      const uint32_t round_parts = series - r;
+      runRound(round_parts, fine ? kFineShift[r] : 0.0);
+    }
+    series = nextRankingSeries(series, liveTets());
   }
   // The whole mesh's queue, from the last round's lanes or from the tetrahedra.
   const uint64_t part_merges = order.size();
@@ -1291,7 +1298,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     part_ = seam_ = lane_part = {};
     lane_begin = {};
   }
-  if (tail == rounds.size() && options_.beside_ranking_tail) options_.beside_ranking_tail();
+  startTail();
   startLane(whole);
   runLane(whole, part_merges, &progress);
   order.insert(order.end(), whole.sequence.begin(), whole.sequence.end());
@@ -1675,6 +1682,22 @@ void mergeEdgePointsFirst(const TetMesh& mesh, MergeTree& tree) {
 }
 
 }  // namespace
+
+// The series of rounds (ranking.h): P, P - 1, ... parts (kMaxRounds rounds at most, 2 parts at
+// least). Many small parts (a fine series, P >= 2 kAutoParts) leave many seams, and one part fewer
+// moves the cuts of a large P little: the vertices along them would be left to the whole mesh's
+// queue, one thread's work (46 parts of the 128^3 grid left it 270 thousand merges, 8 parts 150
+// thousand). So a fine series (its cuts shifted, kFineShift) is followed by another, in one part per
+// kPartTets of the tetrahedra left (at most half as many parts), or, below 2 kAutoParts such parts,
+// by the last series in kAutoParts, kAutoParts - 1, ... parts, which takes most of the seams left on
+// a mesh the fine series have made much smaller (the 200^3 grid: 180 parts, then 22, then 8). A
+// series of fewer than 2 kAutoParts parts is the last. Returns the part count of the series after
+// one of `parts` parts, 0 where it was the last.
+uint32_t nextRankingSeries(uint32_t parts, size_t live_tets) {
+  if (parts < 2 * kAutoParts) return 0;
+  const size_t next = std::min<size_t>(live_tets / kPartTets, parts / 2);
+  return next >= 2 * kAutoParts ? static_cast<uint32_t>(next) : kAutoParts;
+}
 
 std::string defaultFieldNote(const RankingStats& stats) {
   if (stats.constant_fields.empty()) return "";

@@ -69,10 +69,11 @@
 // and every prefix is still a valid mesh. Up to six rounds do the same with the vertices left, in
 // P - 1, P - 2, ... parts (at least 2), whose cuts fall elsewhere, so that most of the last round's
 // seams are inside the next one's parts. Large meshes are ranked in many parts of a bounded size
-// (their data stays near the processor); where P is 16 or more, these fine rounds are followed by
-// coarse rounds in 8, 7, ... 3 parts, which take most of the fine rounds' seams. The whole mesh's
-// queue then goes on with every vertex left, the seams included, which releases them: the coarse
-// levels are not frozen along the parts' seams.
+// (their data stays near the processor); where P is 16 or more, such a fine series of rounds (its
+// cuts shifted from round to round) is followed by another, in parts of the same size on the mesh
+// left, and at last by a series in 8, 7, ... 3 parts, which takes most of the fine rounds' seams
+// (nextRankingSeries). The whole mesh's queue then goes on with every vertex left, the seams
+// included, which releases them: the coarse levels are not frozen along the parts' seams.
 // The tree depends on the number of parts, never on the number of threads.
 //
 // Lazy evaluation computes about a third of the candidates (a merge changes the stars of some eight
@@ -81,6 +82,7 @@
 // one, and so does the tree.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -113,6 +115,10 @@ struct RankingOptions {
   // differ in size.
   std::function<void()> beside_ranking_tail{};
 };
+
+// The part count of the series of rounds after a series in `parts` parts, with `live_tets` tetrahedra
+// left; 0 where that series was the last (see above and ranking.cpp).
+uint32_t nextRankingSeries(uint32_t parts, size_t live_tets);
 
 // A round of the ranking in parts (see above): how many merges it made (the ranks after those of the
 // rounds before it, and after the unused points' merges), in how many parts, each vertex's part, and

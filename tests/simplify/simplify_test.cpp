@@ -266,6 +266,23 @@ TEST(Ranking, ManyPartsRankInFineThenCoarseRounds) {
   expectEveryPrefixValid(mesh, trees[0]);
 }
 
+// The series after a fine one: parts of 2^18 tetrahedra on the mesh left, at most half as many as
+// before, 8 parts where that comes to fewer than 16; a series of fewer than 16 parts is the last.
+TEST(Ranking, TheSeriesOfRoundsShrinkWithTheMeshLeft) {
+  const size_t part = size_t{1} << 18;
+  EXPECT_EQ(nextRankingSeries(8, 100 * part), 0u);
+  EXPECT_EQ(nextRankingSeries(15, 100 * part), 0u);
+  EXPECT_EQ(nextRankingSeries(180, 30 * part + 5), 30u);
+  EXPECT_EQ(nextRankingSeries(180, 170 * part), 90u);
+  EXPECT_EQ(nextRankingSeries(46, 15 * part), 8u);
+  EXPECT_EQ(nextRankingSeries(16, 0), 8u);
+  // Every chain of series ends, whatever is left.
+  for (uint32_t p : {16u, 46u, 180u, 256u}) {
+    int series = 0;
+    for (uint32_t s = p; s != 0; s = nextRankingSeries(s, size_t{1} << 40)) ASSERT_LT(++series, 10);
+  }
+}
+
 // Batched in the ranking's rounds of parts (batchMerges with RankingStats::rounds): each round's
 // merges are batched in its parts, in parallel. The batched tree is the same for any thread count,
 // every merge passes the validator's replay, the batches end where each round of the ranking does
