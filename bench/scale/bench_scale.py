@@ -8,8 +8,8 @@ it to .gtn with the default levels and merge tree (6-split), and decodes level 0
 wall time, CPU time (user + system) and peak resident set come from the kernel (wait4's rusage).
 
 Sizes are nodes per side: 64 (1.5 million tetrahedra), 128 (12.2 million), 200 (47.3 million).
-The 200 size's convert takes about 215 s with 2 threads on a 2-core machine (385 s of CPU time), and
-about 4.5 GB of memory; --sizes chooses a subset.
+The 200 size's convert takes about 180-190 s with 2 threads on a 2-core machine (330-350 s of CPU
+time), and about 4.6 GB of memory; --sizes chooses a subset.
 
     python3 bench/scale/bench_scale.py --build build --sizes 64,128
     cmake --build build --target bench-scale      # the sizes in GTN_BENCH_SCALE_SIZES (default all three)
