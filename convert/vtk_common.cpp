@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "convert/text_reader.h"
+#include "mesh/fresh_memory.h"
 
 namespace gtn {
 
@@ -231,7 +232,7 @@ size_t base64DecodedSize(std::string_view text) {
 bool base64Decode(std::string_view text, std::vector<uint8_t>* out) {
   out->clear();
   if (text.size() % 4 != 0) return false;
-  out->reserve(text.size() / 4 * 3);
+  reservePopulated(*out, text.size() / 4 * 3);
   for (size_t i = 0; i < text.size(); i += 4) {
     const bool last = i + 4 == text.size();
     int v[4];
@@ -324,7 +325,7 @@ T loadAs(const uint8_t* p) {
 }  // namespace
 
 bool scalarsToInt64(ScalarType type, const uint8_t* data, size_t count, std::vector<int64_t>* out, size_t* bad) {
-  out->resize(count);
+  resizePopulated(*out, count);
   const size_t s = scalarSize(type);
   for (size_t i = 0; i < count; ++i) {
     const uint8_t* p = data + i * s;

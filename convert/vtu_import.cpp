@@ -21,6 +21,7 @@
 #include "convert/text_reader.h"
 #include "convert/vtk_common.h"
 #include "format/file_io.h"
+#include "mesh/fresh_memory.h"
 
 namespace gtn {
 
@@ -316,7 +317,7 @@ Status VtuReader::inflateBlocks(const uint8_t* header, const uint8_t* blocks, si
   if (total < expected_bytes_ || (!at_least_ && total != expected_bytes_))
     return fail(where, "compressed blocks hold " + std::to_string(total) + " bytes, expected " +
                            (at_least_ ? "at least " : "") + std::to_string(expected_bytes_));
-  out->resize(total);
+  resizePopulated(*out, total);
   uint64_t in_pos = 0, out_pos = 0;
   for (uint64_t b = 0; b < num_blocks; ++b) {
     const uint64_t c = headerValue(header + (3 + b) * header_bytes_);
@@ -400,6 +401,7 @@ Status VtuReader::decodeRaw(size_t offset, const std::string& where, std::vector
   if (n > left)
     return fail(where, "byte offset " + std::to_string(appended_begin_ + offset) + ": header says " +
                            std::to_string(n) + " bytes but only " + std::to_string(left) + " remain in the file");
+  reservePopulated(*out, n);
   out->assign(p + header_bytes_, p + header_bytes_ + n);
   return Status::ok();
 }
@@ -451,7 +453,9 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
   }
   if (format == "binary") {
     std::string b64;
-    b64.reserve(std::strlen(node.text().get()));
+    const size_t chars = std::strlen(node.text().get());
+    b64.reserve(chars);
+    if (chars >= kPopulateMinBytes) populateForWrite(b64.data(), chars);
     for (const char* c = node.text().get(); *c; ++c)
       if (!std::isspace(static_cast<unsigned char>(*c))) b64 += *c;
     GTN_RETURN_IF_ERROR(decodeBinary(b64, where, &out->bytes));
@@ -554,6 +558,13 @@ Status VtuReader::readPiece(const pugi::xml_node& piece, size_t index) {
       return fail(at + " Cells connectivity", "value " + std::to_string(bad) + " is not an index");
   }
   const int64_t conn_base = static_cast<int64_t>(cells_.connectivity.size());
+  // Room for this piece's cells, mapped at once (and doubled, so that many pieces copy little).
+  auto room = [](auto& v, size_t adding) {
+    if (v.size() + adding > v.capacity()) reservePopulated(v, std::max(v.size() + adding, 2 * v.capacity()));
+  };
+  room(cells_.types, type_values.size());
+  room(cells_.offsets, type_values.size());
+  room(cells_.connectivity, connectivity.size());
   for (size_t c = 0; c < type_values.size(); ++c) {
     if (type_values[c] < 0 || type_values[c] > 255)
       return fail(at + " Cells types", "cell " + std::to_string(c) + " has type " + std::to_string(type_values[c]));
