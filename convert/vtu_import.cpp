@@ -230,6 +230,7 @@ class VtuReader {
   Compressor compressor_ = Compressor::kNone;
   bool appended_base64_ = false;
   size_t appended_begin_ = 0, appended_end_ = 0;  // bytes after '_' in the file
+  std::string xml_;                               // the XML text doc_ was parsed from, in place (it must outlive doc_)
   pugi::xml_document doc_;
   ImportResult result_;
   VtkCells cells_;
@@ -1173,8 +1174,8 @@ StatusOr<ImportResult> VtuReader::readParallel(const pugi::xml_node& root, const
 
 StatusOr<pugi::xml_node> VtuReader::parse() {
   // Raw appended data after '_' is not XML: hand pugixml only what precedes it, closed again.
-  std::string xml_text;
-  std::string_view xml = text_;
+  size_t xml_size = text_.size();
+  std::string_view close_xml;
   const size_t appended = text_.find("<AppendedData");
   if (appended != std::string::npos) {
     const size_t tag_end = text_.find('>', appended);
@@ -1185,12 +1186,18 @@ StatusOr<pugi::xml_node> VtuReader::parse() {
     appended_begin_ = underscore + 1;
     const size_t close = text_.rfind("</AppendedData>");
     appended_end_ = close == std::string::npos || close < appended_begin_ ? text_.size() : close;
-    xml_text.assign(text_.data(), underscore);
-    xml_text += "</AppendedData></VTKFile>";
-    xml = xml_text;
+    xml_size = underscore;
+    close_xml = "</AppendedData></VTKFile>";
   }
+  // A copy pugixml parses in place, its pages mapped in one call (pugixml's own copy, which
+  // load_buffer makes, maps them one at a time: inline arrays make that most of the file).
+  xml_.clear();
+  xml_.reserve(xml_size + close_xml.size());
+  if (xml_.capacity() >= kPopulateMinBytes) populateForWrite(xml_.data(), xml_size + close_xml.size());
+  xml_.assign(text_.data(), xml_size);
+  xml_ += close_xml;
   const pugi::xml_parse_result parsed =
-      doc_.load_buffer(xml.data(), xml.size(), pugi::parse_default, pugi::encoding_utf8);
+      doc_.load_buffer_inplace(xml_.data(), xml_.size(), pugi::parse_default, pugi::encoding_utf8);
   if (!parsed)
     return invalidData(path_ + ": byte offset " + std::to_string(parsed.offset) + ": not well-formed XML (" +
                        parsed.description() + ")");
