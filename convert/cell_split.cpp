@@ -838,8 +838,9 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
   CellCensus census;
   GTN_RETURN_IF_ERROR(surveyCells(path, cells, num_points, &census));
   GTN_RETURN_IF_ERROR(checkCellTypes(path, census, cells.types.size(), report));
-  tets->reserve(tets->size() + census.out_tets);
-  tet_cell->reserve(tet_cell->size() + census.out_tets);
+  // Room for every tetrahedron, its pages mapped in one call.
+  reservePopulated(*tets, tets->size() + census.out_tets);
+  reservePopulated(*tet_cell, tet_cell->size() + census.out_tets);
   Splitter splitter(tets, tet_cell, coords, num_points, coords ? steiner : nullptr, float32);
   size_t next_stream = 0;
   for (size_t c = 0; c < cells.types.size(); ++c) {
