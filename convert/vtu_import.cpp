@@ -454,9 +454,7 @@ Status VtuReader::readArray(const pugi::xml_node& node, uint64_t tuples, const s
   }
   if (format == "binary") {
     std::string b64;
-    const size_t chars = std::strlen(node.text().get());
-    b64.reserve(chars);
-    if (chars >= kPopulateMinBytes) populateForWrite(b64.data(), chars);
+    reservePopulated(b64, std::strlen(node.text().get()));
     for (const char* c = node.text().get(); *c; ++c)
       if (!std::isspace(static_cast<unsigned char>(*c))) b64 += *c;
     GTN_RETURN_IF_ERROR(decodeBinary(b64, where, &out->bytes));
@@ -1192,8 +1190,7 @@ StatusOr<pugi::xml_node> VtuReader::parse() {
   // A copy pugixml parses in place, its pages mapped in one call (pugixml's own copy, which
   // load_buffer makes, maps them one at a time: inline arrays make that most of the file).
   xml_.clear();
-  xml_.reserve(xml_size + close_xml.size());
-  if (xml_.capacity() >= kPopulateMinBytes) populateForWrite(xml_.data(), xml_size + close_xml.size());
+  reservePopulated(xml_, xml_size + close_xml.size());
   xml_.assign(text_.data(), xml_size);
   xml_ += close_xml;
   const pugi::xml_parse_result parsed =

@@ -23,12 +23,14 @@ inline constexpr size_t kPopulateMinBytes = size_t{1} << 16;
 // Maps the pages of [p, p + bytes) for writing now, where the system can; a hint, never an error.
 void populateForWrite(const void* p, size_t bytes);
 
-// v.reserve(n), with the new storage's pages mapped in one call (populateForWrite).
-template <class T>
-void reservePopulated(std::vector<T>& v, size_t n) {
+// v.reserve(n), with the new storage's pages mapped in one call (populateForWrite). For a vector or
+// a string.
+template <class Contiguous>
+void reservePopulated(Contiguous& v, size_t n) {
   if (n <= v.capacity()) return;
   v.reserve(n);
-  if (n * sizeof(T) >= kPopulateMinBytes) populateForWrite(v.data(), n * sizeof(T));
+  const size_t bytes = n * sizeof(typename Contiguous::value_type);
+  if (bytes >= kPopulateMinBytes) populateForWrite(v.data(), bytes);
 }
 
 // v.resize(n) (new elements value-initialized), its storage's pages mapped first.

@@ -338,18 +338,17 @@ constexpr double kRoundQuantile = 0.6;
 // RankingOptions::parts = 0 ranks meshes of kAutoPartTets tetrahedra or more in parts of about
 // kPartTets tetrahedra (kAutoParts at least). A part's queue jumps about its part of the mesh: with
 // parts of a fixed size, what it touches stays about as near the processor as on a small mesh, and
-// the time per tetrahedron stays about the same as the mesh grows (with 8 parts of the 128^3 grid,
-// 1.5 million tetrahedra each, the first rounds took 1.4 times as long per merge as on the 64^3
-// grid's). Below 2^21 tetrahedra a part's data fits the processor's cache anyway: 16, 24 or 8 parts
-// ranked the 64^3 grid (1.5 million) in the same time.
+// the time per tetrahedron stays about the same as the mesh grows (8 parts of the 128^3 grid took
+// 1.4 times as long per merge as on the 64^3 grid). Meshes of fewer than 9 kPartTets tetrahedra
+// keep kAutoParts parts: their parts fit the cache, and more, smaller parts made coarser views
+// worse for little time.
 constexpr uint32_t kAutoParts = 8;
 constexpr size_t kAutoPartTets = size_t{1} << 20;
 constexpr size_t kPartTets = size_t{1} << 18;
 // The fine rounds' cuts, shifted by these fractions of a part (Ranker::partition): one part fewer
 // moves the cuts of many parts little (the 128^3 grid's middle cut by 1.4 nodes from 46 to 45
-// parts), and a vertex by a cut in every fine round waits for a later series. Unshifted, the
-// 128^3 grid's view at ratio 0.9 was off the full view by an RMSE of 0.22 against 0.18 with 8
-// parts; shifted, 0.21 (0.34 against 0.31 at 0.95, and 0.06 against 0.07 at 0.75).
+// parts), and a vertex by a cut in every fine round would wait for a later series, which left
+// the coarse views further from the source.
 constexpr double kFineShift[kMaxRounds] = {0, 1.0 / 3, -1.0 / 3, 1.0 / 6, -1.0 / 6, 0.5};
 constexpr uint32_t kMaxParts = 256;  // part_ is a byte
 
@@ -548,6 +547,7 @@ void Ranker::partition(uint32_t parts, double shift) {
     for (int a = 1; a < 3; ++a)
       if (mx[a] - mn[a] > mx[axis] - mn[axis]) axis = a;
     const uint32_t k0 = k / 2;
+    // Unshifted, in integers: the exact shares.
     const size_t mid = shift == 0 ? lo + (hi - lo) * k0 / k
                                   : lo + static_cast<size_t>(static_cast<double>(hi - lo) * (k0 + shift) / k);
     std::nth_element(ids.begin() + lo, ids.begin() + mid, ids.begin() + hi, [&](uint32_t x, uint32_t y) {
