@@ -264,6 +264,8 @@ Status checkDecodesBack(const std::string& path, const GtnLevelInput& level, con
                      "), so the file was not written; this is a bug in gtn's encoder, please report it with the input");
 }
 
+bool isGrid(const PiecedLevel& level) { return level.pieces.size() == 1 && level.pieces[0].kind == kPieceStructured; }
+
 // The bytes a level's chunks take, about (streams and merge tree; framing, tables and compression left
 // out): what the writer compares to choose how to store a level, and to apply the storage bound.
 uint64_t approxBytes(const EncodedInput& e) {
@@ -366,10 +368,32 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     // Level 0 stored alone needs no other level (its merge tree, the whole one, is most of its work):
     // it is encoded on another thread while the coarser levels are, coarsest first. The meshes are all
     // made, so the levels' inputs are only read from here on.
+    std::optional<StatusOr<EncodedInput>> level0_alone;
+    // The levels' checks (verify) start as soon as the first pass down has made a level final: a
+    // level i > 0 when it is encoded (the level it names, i + 1, is final before it), and a level 0
+    // stored as a grid, which is kept whatever the other levels' bytes (encodeDown), when its
+    // encoding alone is done, beside the coarser levels' encoding. They are tasks of `ahead`, run by
+    // the thread that waits for level 0's encoding where no other thread takes them. early[i]: level
+    // i's check, made while encoded[i] (and encoded[i + 1]) are the levels it checked; the bound
+    // (below) may encode levels again, and then every level is checked again.
+    std::vector<std::optional<Status>> early(count);
+    std::optional<Status> level0_grid_check;
+    bool first_pass = true;
+    auto checkLevel = [&](size_t i) {
+      if (options.verify) progress("verify", i);
+      return checkChainedDecodesBack(path, levels[i], *meshes[i], i, encoded[i],
+                                     i + 1 < count ? meshes[i + 1] : nullptr, i + 1 < count ? &encoded[i + 1] : nullptr,
+                                     options);
+    };
+    // Waited for on every return from here, before what its tasks use is gone.
     tbb::task_group ahead;
     const WaitOnExit join_ahead{ahead};
-    std::optional<StatusOr<EncodedInput>> level0_alone;
-    if (count > 1) ahead.run([&] { level0_alone = encodeInput(levels, 0, *meshes[0], options); });
+    if (count > 1)
+      ahead.run([&] {
+        level0_alone = encodeInput(levels, 0, *meshes[0], options);
+        if (options.verify && level0_alone->isOk() && isGrid((*level0_alone)->level))
+          level0_grid_check = checkDecodesBack(path, levels[0], *meshes[0], 0, (*level0_alone)->level, options);
+      });
     auto encodeAlone = [&](size_t i) -> StatusOr<EncodedInput> {
       if (i != 0) return encodeInput(levels, i, *meshes[i], options);
       ahead.wait();
@@ -396,14 +420,20 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
           if (i == 0) alone0 = approxBytes(*a);
           // A structured piece is kept whatever the bytes: it decodes at memory speed, alone, where a
           // level naming the next one decodes with the level codec after every coarser level.
-          const bool grid = a->level.pieces.size() == 1 && a->level.pieces[0].kind == kPieceStructured;
+          const bool grid = isGrid(a->level);
           if (!best || grid || approxBytes(*a) < approxBytes(*best)) best = std::move(a).value();
         }
         encoded[i] = std::move(*best);
+        if (first_pass && options.verify) {
+          if (i > 0) ahead.run([&, i] { early[i] = checkLevel(i); });
+          else if (level0_grid_check && isGrid(encoded[0].level)) early[0] = std::move(level0_grid_check);
+        }
       }
       return Status::ok();
     };
     GTN_RETURN_IF_ERROR(encodeDown(count - 1));
+    first_pass = false;
+    ahead.wait();
     if (bounded) {
       auto total = [&] {
         uint64_t t = 0;
@@ -413,23 +443,19 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
       // Past the bound, the coarsest level is left out and the new coarsest stores all its vertices.
       while (count > 1 && static_cast<double>(total()) > options.level_storage_limit * static_cast<double>(alone0)) {
         --count;
+        early.assign(count, std::nullopt);
         const std::vector<uint32_t> order = encoded[count - 1].level.vertex_order;
         GTN_ASSIGN_OR_RETURN(encoded[count - 1], encodeInput(levels, count - 1, *meshes[count - 1], options));
         if (encoded[count - 1].level.vertex_order != order && count > 1) GTN_RETURN_IF_ERROR(encodeDown(count - 2));
       }
       encoded.resize(count);
     }
-    // The levels are checked in parallel (level 0's check, the longest, beside the others); the first
-    // failure in level order is returned. Each check reports its stage as it starts (ProgressFn is
-    // thread-safe).
-    std::vector<Status> checks(count);
+    // The levels not checked yet, in parallel; the first failure in level order is returned. Each
+    // check reports its stage as it starts (ProgressFn is thread-safe).
     tbb::parallel_for(size_t{0}, count, [&](size_t i) {
-      if (options.verify) progress("verify", i);
-      checks[i] =
-          checkChainedDecodesBack(path, levels[i], *meshes[i], i, encoded[i], i + 1 < count ? meshes[i + 1] : nullptr,
-                                  i + 1 < count ? &encoded[i + 1] : nullptr, options);
+      if (!early[i]) early[i] = checkLevel(i);
     });
-    for (const Status& c : checks) GTN_RETURN_IF_ERROR(c);
+    for (const std::optional<Status>& c : early) GTN_RETURN_IF_ERROR(*c);
   } else if (bounded) {
     // Each level is checked on another thread while the next one is encoded: one encoder's memory
     // at a time, and the check's time hidden behind the encoding. The bytes each level takes in the

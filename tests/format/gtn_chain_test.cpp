@@ -4,7 +4,10 @@
 // trees and levels do not fit together are refused with the level named.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <atomic>
+#include <filesystem>
 #include <map>
 #include <string>
 #include <tuple>
@@ -405,6 +408,78 @@ TEST(GtnChain, DamageInALevelReachesTheFinerLevelsThatNameItsVertices) {
     const Status st = r->decodeLevel(i, bi);
     ASSERT_FALSE(st.isOk()) << "level " << i;
     EXPECT_NE(st.message().find("checksum"), std::string::npos) << st.message();
+  }
+}
+
+// The writer checks each level as soon as it is final, while others are still being encoded (a grid
+// level 0 right after its encoding): a failing check stops the write all the same, the first failure
+// in level order is the one returned, nothing is written, and every level is checked once, or again
+// after the storage bound has made the writer encode levels anew.
+TEST(GtnChain, ALevelsCheckStopsTheWriteWhenItRunsBesideTheEncoding) {
+  struct Case {
+    std::string name;
+    TetMesh mesh;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"spx", spx()});
+  auto fin = importMesh({dataPath("plot3d/bluntfinxyz.bin"), dataPath("plot3d/bluntfinq.bin")}, ImportOptions{});
+  ASSERT_TRUE(fin.isOk()) << fin.status().message();
+  cases.push_back({"blunt fin", std::move(fin->mesh)});
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    auto tree = rankMerges(c.mesh, RankingOptions{}, nullptr);
+    ASSERT_TRUE(tree.isOk()) << tree.status().message();
+    auto level0 = encodePieces(c.mesh, EncodeOptions{}, kDefaultPieceTets);
+    ASSERT_TRUE(level0.isOk()) << level0.status().message();
+    auto stored = storedMergeTree(c.mesh, *tree, *level0);
+    ASSERT_TRUE(stored.isOk()) << stored.status().message();
+    LevelOptions lo;
+    lo.levels = 3;
+    auto levels = buildMipLevels(c.mesh, stored->tree, lo);
+    ASSERT_TRUE(levels.isOk()) << levels.status().message();
+    ASSERT_EQ(levels->meshes.size(), 4u);
+    const std::string path = dir() + "/checked.gtn";
+    for (const double bound : {0.0, 1.3}) {
+      for (const std::vector<size_t> failing : std::vector<std::vector<size_t>>{{}, {0}, {1}, {3}, {2, 1}}) {
+        std::string which;
+        for (size_t i : failing) which += " " + std::to_string(i);
+        SCOPED_TRACE("bound " + std::to_string(bound) + ", failing levels" + which);
+        std::filesystem::remove(path);
+        std::vector<GtnLevelInput> inputs = levels->inputs(c.mesh, stored->level0_form);
+        std::vector<std::atomic<int>> checked(inputs.size());
+        for (size_t i = 0; i < inputs.size(); ++i)
+          inputs[i].check_mesh = [&, i](const TetMesh&) {
+            ++checked[i];
+            const bool fails = std::find(failing.begin(), failing.end(), i) != failing.end();
+            return fails ? invalidData("level " + std::to_string(i) + " refused by the test") : Status::ok();
+          };
+        GtnWriteOptions wo;
+        wo.level_storage_limit = bound;
+        const Status st = writeGtnFile(path, inputs, wo);
+        if (failing.empty()) {
+          ASSERT_TRUE(st.isOk()) << st.message();
+          auto r = open(path);
+          ASSERT_TRUE(r);
+          for (size_t i = 0; i < r->levels(); ++i) EXPECT_GE(checked[i].load(), 1) << "level " << i;
+          if (bound == 0.0) {
+            ASSERT_EQ(r->levels(), inputs.size());
+            for (size_t i = 0; i < inputs.size(); ++i) EXPECT_EQ(checked[i].load(), 1) << "level " << i;
+          }
+          continue;
+        }
+        const size_t first = *std::min_element(failing.begin(), failing.end());
+        if (bound > 0.0 && st.isOk()) {
+          // The bound left the failing levels out of the file: the kept ones passed.
+          auto r = open(path);
+          ASSERT_TRUE(r);
+          EXPECT_LE(r->levels(), first);
+          continue;
+        }
+        ASSERT_FALSE(st.isOk());
+        EXPECT_EQ(st.message(), "level " + std::to_string(first) + " refused by the test");
+        EXPECT_FALSE(std::filesystem::exists(path));
+      }
+    }
   }
 }
 
