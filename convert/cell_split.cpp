@@ -260,7 +260,8 @@ class Splitter {
   // A polyhedron from its face stream `f` (checked): the cone from its smallest vertex over the fans
   // of the faces without it; when that mixes orientations (a cell that is not convex), from the next
   // vertex the face rule allows whose cone does not, as cone() does (among the first kMaxApexTries).
-  void polyhedron(const int64_t* f, uint32_t cell) {
+  void polyhedron(const int64_t* stream, uint32_t cell) {
+    const int64_t* f = windFacesAlike(stream);
     const int64_t num_faces = f[0];
     corners_.clear();
     for (int64_t k = 0, at = 1; k < num_faces; ++k, at += 1 + f[at])
@@ -373,6 +374,7 @@ class Splitter {
   size_t flat_kept_ = 0;      // cells with flat tetrahedra however they are split
   size_t hex_five_ = 0;
   size_t five_inverted_ = 0;  // hexahedra whose diagonals allow 5 tetrahedra, of which some come out inverted
+  size_t rewound_ = 0;        // polyhedra whose faces did not all wind the same way
 
  private:
   std::vector<Tet>* tets_;
@@ -548,6 +550,87 @@ class Splitter {
           apex, n, [&](int64_t i) { return static_cast<uint32_t>(v[i]); }, out);
     }
   }
+  // A polyhedron's face stream whose faces all wind the same way, outward where they did not: f
+  // itself where they already do (each edge of its faces is walked once each way), or where its faces
+  // are not a closed surface that can be wound alike (an edge of one face, or of three); otherwise a
+  // copy (wound_) with the faces that disagree reversed: the faces agreeing with the first are then
+  // reversed or not as a whole, so that the cell's volume (their cones from a corner) is positive.
+  // Reversing a face changes its fan's orientation, not its triangles (fanCorner reads no order), so
+  // a face stays cut as its neighbour cuts it.
+  const int64_t* windFacesAlike(const int64_t* f) {
+    const int64_t num_faces = f[0];
+    face_at_.clear();
+    edges_.clear();
+    for (int64_t k = 0, at = 1; k < num_faces; ++k, at += 1 + f[at]) {
+      face_at_.push_back(at);
+      const int64_t n = f[at];
+      const int64_t* v = f + at + 1;
+      for (int64_t i = 0; i < n; ++i) {
+        const int64_t a = v[i], b = v[(i + 1) % n];
+        edges_.push_back({std::min(a, b), std::max(a, b), static_cast<uint32_t>(k), a < b});
+      }
+    }
+    std::sort(edges_.begin(), edges_.end(), [](const WoundEdge& x, const WoundEdge& y) {
+      return x.lo != y.lo ? x.lo < y.lo : (x.hi != y.hi ? x.hi < y.hi : x.face < y.face);
+    });
+    bool alike = true;
+    for (size_t i = 0; i < edges_.size(); i += 2) {
+      if (i + 1 >= edges_.size() || edges_[i + 1].lo != edges_[i].lo || edges_[i + 1].hi != edges_[i].hi ||
+          (i + 2 < edges_.size() && edges_[i + 2].lo == edges_[i].lo && edges_[i + 2].hi == edges_[i].hi) ||
+          edges_[i].face == edges_[i + 1].face)
+        return f;  // not a closed surface of faces meeting in pairs along their edges
+      alike = alike && edges_[i].up != edges_[i + 1].up;
+    }
+    if (alike) return f;
+    // Each face's winding against the first's, spread across the shared edges.
+    const size_t nf = static_cast<size_t>(num_faces);
+    flip_.assign(nf, -1);
+    flip_[0] = 0;
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (size_t i = 0; i < edges_.size(); i += 2) {
+        const WoundEdge& x = edges_[i];
+        const WoundEdge& y = edges_[i + 1];
+        const int8_t differ = x.up == y.up ? 1 : 0;  // walked the same way: one of the two turns
+        if (flip_[x.face] >= 0 && flip_[y.face] < 0) {
+          flip_[y.face] = static_cast<int8_t>(flip_[x.face] ^ differ);
+          changed = true;
+        } else if (flip_[y.face] >= 0 && flip_[x.face] < 0) {
+          flip_[x.face] = static_cast<int8_t>(flip_[y.face] ^ differ);
+          changed = true;
+        } else if (flip_[x.face] >= 0 && (flip_[x.face] ^ differ) != flip_[y.face]) {
+          return f;  // a surface that cannot be wound alike
+        }
+      }
+    }
+    if (std::find(flip_.begin(), flip_.end(), int8_t{-1}) != flip_.end()) return f;  // in several parts
+    if (!coords_) return f;  // which way is outward is not known
+    // Six times the volume the faces enclose, wound as the first: the cones from one corner.
+    const double* o = at(static_cast<uint32_t>(f[2]));
+    double volume6 = 0;
+    for (size_t k = 0; k < nf; ++k) {
+      const int64_t n = f[face_at_[k]];
+      const int64_t* v = f + face_at_[k] + 1;
+      for (int64_t i = 1; i + 1 < n; ++i) {
+        const double* a = at(static_cast<uint32_t>(v[0]));
+        const double* b = at(static_cast<uint32_t>(v[i]));
+        const double* c = at(static_cast<uint32_t>(v[i + 1]));
+        const double u[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]};
+        const double w[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
+        const double z[3] = {c[0] - o[0], c[1] - o[1], c[2] - o[2]};
+        const double det = u[0] * (w[1] * z[2] - w[2] * z[1]) - u[1] * (w[0] * z[2] - w[2] * z[0]) +
+                           u[2] * (w[0] * z[1] - w[1] * z[0]);
+        volume6 += flip_[k] ? -det : det;
+      }
+    }
+    const int8_t all = volume6 < 0 ? 1 : 0;
+    wound_.assign(f, f + (face_at_.back() + 1 + f[face_at_.back()]));
+    for (size_t k = 0; k < nf; ++k)
+      if (flip_[k] ^ all)
+        std::reverse(wound_.begin() + face_at_[k] + 1, wound_.begin() + face_at_[k] + 1 + f[face_at_[k]]);
+    ++rewound_;
+    return wound_.data();
+  }
   // allowedApex for a polyhedron: every face through `apex` is a triangle, a quadrilateral whose
   // diagonal ends at it, or a larger face the face rule fans from it.
   bool allowedPolyhedronApex(const int64_t* f, uint32_t apex) const {
@@ -594,6 +677,18 @@ class Splitter {
   bool float32_;
   std::vector<Tet> five_scratch_, scratch_, other_, pieces_;
   std::vector<uint32_t> corners_;  // a polyhedron's distinct vertices, ascending
+  // windFacesAlike's scratch: each face's place in the stream, the faces' edges (ends ascending, the
+  // face, whether the face walks it from lo to hi), each face's winding against the first face's
+  // (-1: not reached yet), and the stream with its faces wound alike.
+  struct WoundEdge {
+    int64_t lo, hi;
+    uint32_t face;
+    bool up;
+  };
+  std::vector<int64_t> face_at_;
+  std::vector<WoundEdge> edges_;
+  std::vector<int8_t> flip_;
+  std::vector<int64_t> wound_;
 };
 
 }  // namespace
@@ -817,6 +912,10 @@ void reportSplit(const CellCensus& census, const Splitter& splitter, int split, 
   if (splitter.five_inverted_)
     report->warnings.push_back(std::to_string(splitter.five_inverted_) + " of " + std::to_string(hexes) +
                                " hexahedra split into 6 tetrahedra: not convex, 5 would invert some");
+  if (splitter.rewound_)
+    report->warnings.push_back(std::to_string(splitter.rewound_) +
+                               " polyhedra (VTK_POLYHEDRON) whose faces do not all wind the same way split with "
+                               "those faces turned to wind outward, as the others do");
   if (splitter.resplit_)
     report->warnings.push_back(std::to_string(splitter.resplit_) +
                                " cells that are not convex split from another vertex than their smallest, so that "

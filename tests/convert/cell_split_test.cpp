@@ -317,6 +317,55 @@ void expectSolidSplit(const ImportResult& r, size_t boundary_faces, double volum
   EXPECT_NEAR(s.total_volume, volume, 1e-12) << seed;
 }
 
+// Polyhedra whose faces do not all wind the same way (writers differ, and some wind each face as it
+// comes): the faces that disagree are turned before the split, the cell is coned from its smallest
+// vertex as a cube wound outward is, and the faces it shares with a hexahedron beside it still match.
+// Every subset of the cube's six faces turned but all six (a cell wound inward throughout, whose
+// tetrahedra the import flips afterwards), numbered at random.
+TEST(CellSplit, PolyhedraWhoseFacesWindBothWaysSplitAsWoundAlike) {
+  std::vector<std::array<double, 3>> pts;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 3; ++i) pts.push_back({double(i), double(j), double(k)});
+  for (uint32_t turned = 0; turned < 63; ++turned) {
+    SCOPED_TRACE("faces turned " + std::to_string(turned));
+    std::vector<uint32_t> perm;
+    const TetMesh mesh = shuffledPoints(pts, turned, &perm);
+    auto P = [&](int i, int j, int k) { return static_cast<int64_t>(perm[(k * 2 + j) * 3 + i]); };
+    const int64_t a = P(0, 0, 0), b = P(1, 0, 0), c = P(1, 1, 0), d = P(0, 1, 0);
+    const int64_t e = P(0, 0, 1), f = P(1, 0, 1), g = P(1, 1, 1), h = P(0, 1, 1);
+    std::vector<std::vector<int64_t>> faces = {{a, d, c, b}, {e, f, g, h}, {b, c, g, f},
+                                               {a, e, h, d}, {a, b, f, e}, {d, h, g, c}};
+    for (size_t k = 0; k < faces.size(); ++k)
+      if (turned >> k & 1) std::reverse(faces[k].begin(), faces[k].end());
+    VtkCells cells;
+    cells.types = {kVtkPolyhedron, kVtkHexahedron};
+    cells.connectivity = {a, b, c, d, e, f, g, h};
+    cells.faces = {static_cast<int64_t>(faces.size())};
+    for (const auto& face : faces) {
+      cells.faces.push_back(static_cast<int64_t>(face.size()));
+      cells.faces.insert(cells.faces.end(), face.begin(), face.end());
+    }
+    cells.face_offsets = {static_cast<int64_t>(cells.faces.size()), -1};
+    cells.offsets = {0, 8};
+    for (const int64_t p :
+         {P(1, 0, 0), P(2, 0, 0), P(2, 1, 0), P(1, 1, 0), P(1, 0, 1), P(2, 0, 1), P(2, 1, 1), P(1, 1, 1)})
+      cells.connectivity.push_back(p);
+    cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+    const ImportResult r = splitInto(mesh, cells, 6);
+    // Two unit cubes: 10 free squares of 2 triangles each, nothing inverted, nothing flat.
+    expectSolidSplit(r, 10 * 2, 2.0, turned);
+    EXPECT_EQ(r.mesh.numTets(), 12u);
+    EXPECT_EQ(r.report.steiner_points, 0u);
+    // Turned are the faces against the rest: reported where the faces did not all wind alike.
+    const bool mixed = turned != 0;
+    const bool said = std::any_of(r.report.warnings.begin(), r.report.warnings.end(), [](const std::string& w) {
+      return w.find("1 polyhedra (VTK_POLYHEDRON) whose faces do not all wind the same way") != std::string::npos;
+    });
+    EXPECT_EQ(said, mixed);
+  }
+}
+
 // A straight angle in a face (three corners in a line: a pentagonal prism whose base has a point on
 // an edge, a cube whose faces carry the hanging nodes of a refined neighbour) would make the fan from
 // the face's smallest corner hold a flat triangle, and the cell's cone flat tetrahedra, overlapping
