@@ -166,6 +166,38 @@ TEST_F(UsabilityCli, ProgressShowsOnATerminalOnly) {
 
 // ---- the header's command line (item 12a) -------------------------------------------------------
 
+// On glibc, gtn starts itself again once with glibc.malloc.hugetlb=1 added to GLIBC_TUNABLES: its
+// arguments and its standard input reach the command as given (the decode of a file piped in reports
+// what the decode of the file does), a tunable the user set is kept, and one the user set for huge
+// pages is left alone (nothing is started again, so nothing loops).
+#if defined(__GLIBC__) && defined(__linux__)
+TEST_F(UsabilityCli, StartsItselfAgainOnceAskingMallocForHugePages) {
+  const std::string gtn = dir_ + "/grid.gtn";
+  ASSERT_EQ(runGtn("convert " + vtk_ + " -o " + gtn + " -q").exit_code, 0);
+  const RunResult direct = runGtn("decode " + gtn + " --json");
+  ASSERT_EQ(direct.exit_code, 0) << direct.err;
+  const nlohmann::json want = nlohmann::json::parse(direct.out);
+  for (const std::string env :
+       {"env -u GLIBC_TUNABLES", "GLIBC_TUNABLES=glibc.malloc.check=0", "GLIBC_TUNABLES=glibc.malloc.hugetlb=0"}) {
+    SCOPED_TRACE(env);
+    const RunResult r = test::runShell(env + " " + GTN_BINARY + " decode - --json < " + gtn);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json got = nlohmann::json::parse(r.out, nullptr, false);
+    ASSERT_FALSE(got.is_discarded()) << r.out;
+    EXPECT_EQ(got["points"], want["points"]);
+    EXPECT_EQ(got["tets"], want["tets"]);
+    EXPECT_EQ(got["bytes"], want["bytes"]);
+    EXPECT_EQ(got["input"], "-");
+  }
+  // The environment of the command started again, while it waits for its input.
+  const RunResult seen = test::runShell("(sleep 2; cat " + gtn + ") | env -u GLIBC_TUNABLES " + GTN_BINARY +
+                                        " decode - > /dev/null & pid=$!; sleep 1; tr '\\0' '\\n' < /proc/$pid/environ "
+                                        "| grep '^GLIBC_TUNABLES='; wait $pid");
+  ASSERT_EQ(seen.exit_code, 0) << seen.err;
+  EXPECT_EQ(seen.out, "GLIBC_TUNABLES=glibc.malloc.hugetlb=1\n");
+}
+#endif
+
 TEST_F(UsabilityCli, TheHeaderStoresFileNamesWithoutDirectories) {
   const std::string out = dir_ + "/named.gtn";
   ASSERT_EQ(runGtn("convert " + vtk_ + " --output=" + out + " --levels 1 -q").exit_code, 0);
