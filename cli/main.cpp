@@ -146,16 +146,27 @@ void returnFreedLargeBlocks() {
 // large block is mapped anew (returnFreedLargeBlocks), and in 4 KiB pages each page costs a trap on
 // its first write (about 15 us in the virtual machines this project runs on): a convert spent about
 // a tenth of its time there. Where huge pages are off ("never"), glibc does not know the tunable, or
-// the program cannot be started again (no /proc), it runs as it is.
+// the program cannot be started again (no /proc, its file gone), it runs as it is.
 void askForHugePages(char** argv) {
 #if defined(__GLIBC__) && defined(__linux__)
   constexpr const char* kTunable = "glibc.malloc.hugetlb";
-  const char* tunables = std::getenv("GLIBC_TUNABLES");
-  if (tunables && std::strstr(tunables, kTunable)) return;
-  const std::string set = (tunables && *tunables ? std::string(tunables) + ":" : std::string()) + kTunable + "=1";
+  const char* found = std::getenv("GLIBC_TUNABLES");
+  if (found && std::strstr(found, kTunable)) return;
+  const bool had = found != nullptr;
+  const std::string tunables = had ? found : "";
+  const std::string set = (tunables.empty() ? std::string() : tunables + ":") + kTunable + "=1";
+  // The program's own file, by its path: a process started from /proc/self/exe would be named "exe"
+  // (in ps, top and perf), not after the program.
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+  if (n <= 0 || static_cast<size_t>(n) >= sizeof self - 1) return;
+  self[n] = '\0';
   if (setenv("GLIBC_TUNABLES", set.c_str(), 1) != 0) return;
-  execv("/proc/self/exe", argv);
-  // Not started again: go on in this process (the variable only reaches programs it starts).
+  execv(self, argv);
+  // Not started again (the file is gone, say): go on in this process, and leave the variable as it
+  // was for the programs this one starts.
+  if (had) setenv("GLIBC_TUNABLES", tunables.c_str(), 1);
+  else unsetenv("GLIBC_TUNABLES");
 #else
   (void)argv;
 #endif

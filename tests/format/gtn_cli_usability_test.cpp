@@ -189,12 +189,13 @@ TEST_F(UsabilityCli, StartsItselfAgainOnceAskingMallocForHugePages) {
     EXPECT_EQ(got["bytes"], want["bytes"]);
     EXPECT_EQ(got["input"], "-");
   }
-  // The environment of the command started again, while it waits for its input.
+  // The environment of the command started again, while it waits for its input ...
   const RunResult seen = test::runShell("(sleep 2; cat " + gtn + ") | env -u GLIBC_TUNABLES " + GTN_BINARY +
                                         " decode - > /dev/null & pid=$!; sleep 1; tr '\\0' '\\n' < /proc/$pid/environ "
-                                        "| grep '^GLIBC_TUNABLES='; wait $pid");
+                                        "| grep '^GLIBC_TUNABLES='; cat /proc/$pid/comm; wait $pid");
   ASSERT_EQ(seen.exit_code, 0) << seen.err;
-  EXPECT_EQ(seen.out, "GLIBC_TUNABLES=glibc.malloc.hugetlb=1\n");
+  // ... and its name, the program's (ps, top and perf show it).
+  EXPECT_EQ(seen.out, "GLIBC_TUNABLES=glibc.malloc.hugetlb=1\ngtn\n");
 }
 #endif
 
