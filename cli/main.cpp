@@ -7,6 +7,7 @@
 #include <malloc.h>
 #endif
 #if defined(__linux__)
+#include <sys/auxv.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -152,6 +153,10 @@ void askForHugePages(char** argv) {
   constexpr const char* kTunable = "glibc.malloc.hugetlb";
   const char* found = std::getenv("GLIBC_TUNABLES");
   if (found && std::strstr(found, kTunable)) return;
+  // Started by naming the dynamic loader (ld-linux-x86-64.so.2 gtn ...), the process's file is the
+  // loader, which would take the arguments for its own: the kernel then gave the process no
+  // interpreter (AT_BASE 0), as it does a static program, and it runs as it is.
+  if (getauxval(AT_BASE) == 0) return;
   const bool had = found != nullptr;
   const std::string tunables = had ? found : "";
   const std::string set = (tunables.empty() ? std::string() : tunables + ":") + kTunable + "=1";

@@ -189,6 +189,12 @@ TEST_F(UsabilityCli, StartsItselfAgainOnceAskingMallocForHugePages) {
     EXPECT_EQ(got["bytes"], want["bytes"]);
     EXPECT_EQ(got["input"], "-");
   }
+  // Started through the dynamic loader, it is not started again (the loader would read the
+  // arguments as its own) and runs as it is.
+  const RunResult loader = test::runShell("$(readelf -p .interp " + std::string(GTN_BINARY) +
+                                          " | awk '/\\]/ {print $NF}') " + GTN_BINARY + " --version");
+  ASSERT_EQ(loader.exit_code, 0) << loader.err;
+  EXPECT_EQ(loader.out.rfind("gtn ", 0), 0u) << loader.out;
   // The environment of the command started again, while it waits for its input ...
   const RunResult seen = test::runShell("(sleep 2; cat " + gtn + ") | env -u GLIBC_TUNABLES " + GTN_BINARY +
                                         " decode - > /dev/null & pid=$!; sleep 1; tr '\\0' '\\n' < /proc/$pid/environ "
