@@ -146,8 +146,9 @@ void returnFreedLargeBlocks() {
 // tunable added to GLIBC_TUNABLES, unless it is there already (set by the user, or by this). Every
 // large block is mapped anew (returnFreedLargeBlocks), and in 4 KiB pages each page costs a trap on
 // its first write (about 15 us in the virtual machines this project runs on): a convert spent about
-// a tenth of its time there. Where huge pages are off ("never"), glibc does not know the tunable, or
-// the program cannot be started again (no /proc, its file gone), it runs as it is.
+// a tenth of its time there. Where huge pages are off ("never") or glibc does not know the tunable,
+// the second start changes nothing; where the program cannot be started again (no /proc, its file
+// gone), it runs as it is.
 void askForHugePages(char** argv) {
 #if defined(__GLIBC__) && defined(__linux__)
   constexpr const char* kTunable = "glibc.malloc.hugetlb";
