@@ -67,6 +67,8 @@ struct PiecedLevel {
   // 1: a one-piece level whose streams name the next level's vertices as seam vertices, in that
   // level's vertex numbering, instead of storing their values (LHDR base; spec section 7.7).
   uint8_t base = 0;
+  // A grid: the whole level is one structured piece.
+  bool isGrid() const { return pieces.size() == 1 && pieces[0].kind == kPieceStructured; }
 };
 
 // Cuts `mesh` into pieces of at most `piece_tets` tetrahedra (recursive bisection at the median of

@@ -605,25 +605,19 @@ class Splitter {
     }
     if (std::find(flip_.begin(), flip_.end(), int8_t{-1}) != flip_.end()) return f;  // in several parts
     if (!coords_) return f;  // which way is outward is not known
-    // Six times the volume the faces enclose, wound as the first: the cones from one corner.
+    // The volume the faces enclose, wound as the first: the cones from one corner over their fans.
     const double* o = at(static_cast<uint32_t>(f[2]));
-    double volume6 = 0;
+    double volume = 0;
     for (size_t k = 0; k < nf; ++k) {
       const int64_t n = f[face_at_[k]];
       const int64_t* v = f + face_at_[k] + 1;
       for (int64_t i = 1; i + 1 < n; ++i) {
-        const double* a = at(static_cast<uint32_t>(v[0]));
-        const double* b = at(static_cast<uint32_t>(v[i]));
-        const double* c = at(static_cast<uint32_t>(v[i + 1]));
-        const double u[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]};
-        const double w[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
-        const double z[3] = {c[0] - o[0], c[1] - o[1], c[2] - o[2]};
-        const double det = u[0] * (w[1] * z[2] - w[2] * z[1]) - u[1] * (w[0] * z[2] - w[2] * z[0]) +
-                           u[2] * (w[0] * z[1] - w[1] * z[0]);
-        volume6 += flip_[k] ? -det : det;
+        const double cone = signedVolume(o, at(static_cast<uint32_t>(v[0])), at(static_cast<uint32_t>(v[i])),
+                                         at(static_cast<uint32_t>(v[i + 1])));
+        volume += flip_[k] ? -cone : cone;
       }
     }
-    const int8_t all = volume6 < 0 ? 1 : 0;
+    const int8_t all = volume < 0 ? 1 : 0;
     wound_.assign(f, f + (face_at_.back() + 1 + f[face_at_.back()]));
     for (size_t k = 0; k < nf; ++k)
       if (flip_[k] ^ all)

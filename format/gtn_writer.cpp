@@ -264,8 +264,6 @@ Status checkDecodesBack(const std::string& path, const GtnLevelInput& level, con
                      "), so the file was not written; this is a bug in gtn's encoder, please report it with the input");
 }
 
-bool isGrid(const PiecedLevel& level) { return level.pieces.size() == 1 && level.pieces[0].kind == kPieceStructured; }
-
 // The bytes a level's chunks take, about (streams and merge tree; framing, tables and compression left
 // out): what the writer compares to choose how to store a level, and to apply the storage bound.
 uint64_t approxBytes(const EncodedInput& e) {
@@ -391,7 +389,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     if (count > 1)
       ahead.run([&] {
         level0_alone = encodeInput(levels, 0, *meshes[0], options);
-        if (options.verify && level0_alone->isOk() && isGrid((*level0_alone)->level))
+        if (options.verify && level0_alone->isOk() && (*level0_alone)->level.isGrid())
           level0_grid_check = checkDecodesBack(path, levels[0], *meshes[0], 0, (*level0_alone)->level, options);
       });
     auto encodeAlone = [&](size_t i) -> StatusOr<EncodedInput> {
@@ -420,13 +418,13 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
           if (i == 0) alone0 = approxBytes(*a);
           // A structured piece is kept whatever the bytes: it decodes at memory speed, alone, where a
           // level naming the next one decodes with the level codec after every coarser level.
-          const bool grid = isGrid(a->level);
+          const bool grid = a->level.isGrid();
           if (!best || grid || approxBytes(*a) < approxBytes(*best)) best = std::move(a).value();
         }
         encoded[i] = std::move(*best);
         if (first_pass && options.verify) {
           if (i > 0) ahead.run([&, i] { early[i] = checkLevel(i); });
-          else if (level0_grid_check && isGrid(encoded[0].level)) early[0] = std::move(level0_grid_check);
+          else if (level0_grid_check && encoded[0].level.isGrid()) early[0] = std::move(level0_grid_check);
         }
       }
       return Status::ok();

@@ -129,7 +129,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   // Automatic levels beside a structured level 0: only the coarse levels that read faster than level 0
   // simplified on the fly (kStructuredLevelShare).
   size_t first = 1;
-  if (o.levels < 0 && count > 1 && level0 && level0->pieces.size() == 1 && level0->pieces[0].kind == kPieceStructured) {
+  if (o.levels < 0 && count > 1 && level0 && level0->isGrid()) {
     // The share counts the levels below the floor of automatic levels too (LevelOptions::min_tets),
     // which are not stored: the floor leaves out levels, it does not let a finer one in.
     LevelOptions unfloored = lo;
@@ -218,7 +218,7 @@ StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& 
   // level's own decode and simplification. Every other level codes its parents as candidates, and its
   // batches are ordered by position.
   StoredMergeTree out;
-  const bool structured = level0.pieces.size() == 1 && level0.pieces[0].kind == kPieceStructured;
+  const bool structured = level0.isGrid();
   out.level0_form.candidates = !structured;
   if (structured && level0.vertex_order.size() != mesh.numPoints())
     return invalidData("storedMergeTree: level 0's vertex order does not match the mesh");
