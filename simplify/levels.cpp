@@ -2,9 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <optional>
 
+#include <tbb/task_group.h>
+
+#include "codec/merge_tree_coder.h"
 #include "format/gtn_reader.h"
+#include "mesh/wait_on_exit.h"
 #include "simplify/apply.h"
 #include "simplify/stream_simplifier.h"
 
@@ -293,22 +298,90 @@ Status emitLevel(GtnReader& reader, const LevelTree& level, MeshSink& sink, cons
   return replayLevel(level.decoded->header(), level.decoded->mesh(), level.decoded->boundary(), sink);
 }
 
+namespace {
+
+// The merges to apply from a level's tree: the plan's, or where `clamp`, at most the tree's (a ratio
+// beyond what the tree allows gets the coarsest mesh); a usage error where the tree has fewer.
+Status fitPlanToTree(GtnReader& reader, const MergeTree& tree, uint64_t target_merges, bool clamp, SimplifyPlan& plan,
+                     SimplifyPlan* plan_out) {
+  if (plan.extra_merges > tree.merges && clamp) {
+    plan.extra_merges = tree.merges;
+    if (plan_out) *plan_out = plan;
+  }
+  if (plan.extra_merges > tree.merges)
+    return usageError(reader.file().path + ", level " + std::to_string(plan.level) + ": " +
+                      std::to_string(target_merges) + " merges requested, the merge tree has " +
+                      std::to_string(reader.level(plan.level).header.merges + tree.merges));
+  return Status::ok();
+}
+
+// A StreamSimplifier made when the level's first event arrives, from a merge tree decoded on another
+// thread meanwhile: `ready()` waits for it and gives it (or its failure). A structured piece decodes
+// its streams before its first event, so its streams and the tree decode side by side.
+class SimplifierOnceTreeIsReady : public MeshSink {
+ public:
+  SimplifierOnceTreeIsReady(std::function<StatusOr<const MergeTree*>()> ready, const SimplifyPlan& plan, MeshSink& out)
+      : ready_(std::move(ready)), plan_(plan), out_(out) {}
+  Status beginLevel(const LevelHeader& header) override {
+    GTN_ASSIGN_OR_RETURN(const MergeTree* tree, ready_());
+    filter_.emplace(*tree, plan_.extra_merges, out_);
+    return filter_->beginLevel(header);
+  }
+  Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) override {
+    return filter_->vertex(id, xyz, values);
+  }
+  Status boundaryTriangle(const uint32_t v[3]) override { return filter_->boundaryTriangle(v); }
+  Status endBoundary() override { return filter_->endBoundary(); }
+  Status tet(const uint32_t v[4], const uint8_t* cell_values) override { return filter_->tet(v, cell_values); }
+  Status retireVertex(uint32_t id) override { return filter_->retireVertex(id); }
+  Status endLevel() override { return filter_->endLevel(); }
+
+ private:
+  std::function<StatusOr<const MergeTree*>()> ready_;
+  const SimplifyPlan& plan_;
+  MeshSink& out_;
+  std::optional<StreamSimplifier> filter_;
+};
+
+}  // namespace
+
 Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sink, SimplifyPlan* plan_out, bool clamp,
                         const DecodeFields* fields) {
   GTN_ASSIGN_OR_RETURN(SimplifyPlan plan, planSimplification(reader, target_merges));
   if (plan_out) *plan_out = plan;
   if (plan.extra_merges == 0) return reader.decodeLevel(plan.level, sink, nullptr, fields);
   const std::string what = reader.file().path + ", level " + std::to_string(plan.level);
-  GTN_ASSIGN_OR_RETURN(LevelTree level, levelMergeTree(reader, plan.level, plan.extra_merges, fields));
-  const MergeTree& tree = level.tree;
-  if (plan.extra_merges > tree.merges && clamp) {
-    plan.extra_merges = tree.merges;
-    if (plan_out) *plan_out = plan;
+  // A tree that decodes without its level (a grid's, whose parents are grid places) is decoded on
+  // another thread while the level is: the payload is read here (the reader is used by one thread
+  // at a time), and the level's first event waits for the tree.
+  GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(plan.level));
+  if (!payload) return usageError(what + " stores no merge tree: cannot simplify beyond the stored levels");
+  const uint64_t points = reader.level(plan.level).header.points;
+  GTN_ASSIGN_OR_RETURN(MergeTreeHeader h, readMergeTreeHeader(*payload, points, what));
+  if (!h.needs_mesh && !h.needs_next_ids) {
+    std::optional<StatusOr<MergeTree>> tree;
+    tbb::task_group decoding;
+    const WaitOnExit join{decoding};
+    decoding.run([&] { tree = decodeMergeTree(*payload, points, what, nullptr, plan.extra_merges); });
+    bool waited = false;
+    auto ready = [&]() -> StatusOr<const MergeTree*> {
+      decoding.wait();
+      waited = true;
+      if (!tree->isOk()) return tree->status();
+      GTN_RETURN_IF_ERROR(fitPlanToTree(reader, **tree, target_merges, clamp, plan, plan_out));
+      return &**tree;
+    };
+    SimplifierOnceTreeIsReady filter(ready, plan, sink);
+    Status st = reader.decodeLevel(plan.level, filter, nullptr, fields);
+    // The tree's failure first, as when the tree was decoded before the level.
+    decoding.wait();
+    if (!tree->isOk()) return tree->status();
+    if (!waited) GTN_RETURN_IF_ERROR(fitPlanToTree(reader, **tree, target_merges, clamp, plan, plan_out));
+    return st;
   }
-  if (plan.extra_merges > tree.merges)
-    return usageError(what + ": " + std::to_string(target_merges) + " merges requested, the merge tree has " +
-                      std::to_string(reader.level(plan.level).header.merges + tree.merges));
-  StreamSimplifier filter(tree, plan.extra_merges, sink);
+  GTN_ASSIGN_OR_RETURN(LevelTree level, levelMergeTree(reader, plan.level, plan.extra_merges, fields));
+  GTN_RETURN_IF_ERROR(fitPlanToTree(reader, level.tree, target_merges, clamp, plan, plan_out));
+  StreamSimplifier filter(level.tree, plan.extra_merges, sink);
   return emitLevel(reader, level, filter, fields);
 }
 

@@ -9,6 +9,7 @@
 
 #include <tbb/task_arena.h>
 
+#include "codec/merge_tree_coder.h"
 #include "convert/import.h"
 #include "format/gtn_file.h"
 #include "format/gtn_reader.h"
@@ -235,6 +236,58 @@ TEST_P(Datasets, StoredLevelsDecodeToTheInMemoryResult) {
   ASSERT_TRUE(want.isOk());
   EXPECT_EQ(geoTets(b.mesh()), geoTets(*want));
   std::filesystem::remove(path);
+}
+
+// A grid's level 0 whose merge tree decodes without the level (its parents are grid places): the
+// tree is decoded beside the level's streams (streamSimplified), and a read gives what applying the
+// merges to level 0 gives, whatever the threads, at merge counts within the tree and past it
+// (clamped to the whole tree, or refused without the clamp, as before).
+TEST(StreamSimplified, GridTreeDecodedBesideItsLevelGivesTheMergesOfLevel0) {
+  const std::string dir = tempDir("stream_simplified_grid");
+  const std::string path = dir + "/bluntfin.gtn";
+  const RunResult made = runGtn("convert " + dataPath("plot3d/bluntfinxyz.bin") + " " +
+                                dataPath("plot3d/bluntfinq.bin") + " -o " + path + " --levels 0 -q");
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  auto r = GtnReader::open(path);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ((*r)->levels(), 1u);
+  auto payload = (*r)->mergeTreePayload(0);
+  ASSERT_TRUE(payload.isOk() && payload->has_value());
+  const uint64_t points = (*r)->level(0).header.points;
+  auto h = readMergeTreeHeader(**payload, points, "level 0");
+  ASSERT_TRUE(h.isOk()) << h.status().message();
+  ASSERT_FALSE(h->needs_mesh);
+  ASSERT_FALSE(h->needs_next_ids);
+  auto tree = decodeMergeTree(**payload, points, "level 0", nullptr);
+  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  TetMeshBuilder level0;
+  ASSERT_TRUE((*r)->decodeLevel(0, level0).isOk());
+  for (uint64_t n : {uint64_t{1}, tree->merges / 3, tree->merges - 1, tree->merges + 1000}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    auto want = applyMerges(level0.mesh(), *tree, std::min(n, tree->merges));
+    ASSERT_TRUE(want.isOk()) << want.status().message();
+    for (int threads : {1, 2}) {
+      TetMeshBuilder b;
+      SimplifyPlan plan;
+      Status st;
+      tbb::task_arena(threads).execute([&] { st = streamSimplified(**r, n, b, &plan, /*clamp=*/true); });
+      ASSERT_TRUE(st.isOk()) << st.message();
+      EXPECT_EQ(plan.level, 0u);
+      EXPECT_EQ(plan.extra_merges, std::min(n, tree->merges)) << threads << " thread(s)";
+      EXPECT_EQ(geoTets(b.mesh()), geoTets(*want)) << threads << " thread(s)";
+      EXPECT_EQ(b.mesh().numPoints(), want->numPoints()) << threads << " thread(s)";
+    }
+    if (n > tree->merges) {
+      TetMeshBuilder b;
+      const Status st = streamSimplified(**r, n, b, nullptr, /*clamp=*/false);
+      EXPECT_EQ(st.code(), StatusCode::kUsage);
+      EXPECT_NE(st.message().find(std::to_string(n) + " merges requested, the merge tree has " +
+                                  std::to_string(tree->merges)),
+                std::string::npos)
+          << st.message();
+    }
+  }
+  std::filesystem::remove_all(dir);
 }
 
 INSTANTIATE_TEST_SUITE_P(Simplify, Datasets, ::testing::Values("spx", "cornell", "bluntfin", "combustion"));
