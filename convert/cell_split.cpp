@@ -864,6 +864,13 @@ void splitCell(const VtkCells& cells, size_t c, int split, Splitter& splitter, s
   // Corners come first: an arbitrary-order cell's further points (beyond 27) are not needed.
   const int n = static_cast<int>(std::min<int64_t>(cells.offsets[c + 1] - begin, 27));
   for (int k = 0; k < n; ++k) g[k] = static_cast<uint32_t>(cells.connectivity[begin + k]);
+  // VTK's Lagrange and Bezier wedges turn their first triangle towards the second one, its linear
+  // and quadratic wedges away from it: their corners in the linear wedge's order, so that a cell VTK
+  // stores positively is split into positive tetrahedra.
+  if ((cells.types[c] == kVtkLagrangeWedge || cells.types[c] == kVtkBezierWedge) && n >= 6) {
+    std::swap(g[1], g[2]);
+    std::swap(g[4], g[5]);
+  }
   const uint32_t cell = static_cast<uint32_t>(c);
   switch (linearType(cells.types[c])) {
     case kVtkTetra:

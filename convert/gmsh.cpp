@@ -587,12 +587,20 @@ Status MshReader::addElement(int64_t tag, const GmshType& type, const int64_t* n
   if (cells_.types.size() >= static_cast<size_t>(kMaxItems))
     return invalidData(where(at) + "more volume elements than 32-bit indices can address");
   const int c = corners(type.vtk);
+  const size_t first = cells_.connectivity.size();
   for (int k = 0; k < type.nodes; ++k) {
     const uint32_t p = node_map_.find(nodes[k]);
     if (p == kNoIndex)
       return invalidData(where(at) + "element " + std::to_string(tag) + " (" + type.name + ") refers to node " +
                          std::to_string(nodes[k]) + ", which $Nodes does not define");
     if (k < c) cells_.connectivity.push_back(p);
+  }
+  // gmsh's prism turns its first triangle towards the second one (its reference corners (0, 0, 0),
+  // (1, 0, 0), (0, 1, 0), then the same at z = 1); VTK's wedge turns it away. Its corners in VTK's
+  // order, so that a prism gmsh stores positively is split into positive tetrahedra.
+  if (type.vtk == kVtkWedge) {
+    std::swap(cells_.connectivity[first + 1], cells_.connectivity[first + 2]);
+    std::swap(cells_.connectivity[first + 4], cells_.connectivity[first + 5]);
   }
   element_cell_.push_back(static_cast<uint32_t>(cells_.types.size()));
   cells_.types.push_back(type.vtk);

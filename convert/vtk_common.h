@@ -27,6 +27,8 @@ constexpr uint8_t kVtkQuadraticHexahedron = 25;
 constexpr uint8_t kVtkQuadraticWedge = 26;
 constexpr uint8_t kVtkQuadraticPyramid = 27;
 constexpr uint8_t kVtkTriquadraticHexahedron = 29;
+constexpr uint8_t kVtkLagrangeWedge = 73;
+constexpr uint8_t kVtkBezierWedge = 80;
 
 // vtkGhostType, VTK's marks of ghost and blanked points and cells (vtkDataSetAttributes): a
 // duplicate is a copy of what another piece owns, a hidden one is not part of the dataset (blanking).

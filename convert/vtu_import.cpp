@@ -363,8 +363,14 @@ Status VtuReader::decodeBinary(std::string_view b64, const std::string& where, s
   } else {
     data_size = headerValue(head.data());
   }
+  // Apart, the header's last quartet ends in as many '=' as its size leaves over (two after a UInt32
+  // header, one after a UInt64 one); together, the data's first bytes fill some of those places (a
+  // header and 1 or 2 bytes of data can end in one '=', or none, at the same place).
   const size_t header_chars = quartets(header_size);
-  const bool apart = header_size % 3 != 0 && b64[header_chars - 1] == '=';
+  const size_t header_pads = (3 - header_size % 3) % 3;
+  size_t pads = 0;
+  while (pads < 2 && b64[header_chars - 1 - pads] == '=') ++pads;
+  const bool apart = header_pads != 0 && pads == header_pads;
   const uint64_t need = apart ? header_chars + quartets(data_size) : quartets(header_size + data_size);
   if (data_size > b64.size() || need > b64.size())
     return fail(where, "base64 data is cut short: the header announces " + std::to_string(data_size) +
@@ -753,8 +759,9 @@ Status VtuReader::readSection(const pugi::xml_node& piece, const char* section, 
                               std::vector<Field>* fields) {
   for (pugi::xml_node a : piece.child(section).children()) {
     const std::string name = a.attribute("Name").as_string();
-    if (std::string(a.name()) != "DataArray") {
-      // VTK writes its string arrays as <Array type="String">: text, not mesh data.
+    // VTK writes its string arrays as <Array type="String"> (VTK 5 to 8: <DataArray type="String">):
+    // text, not mesh data.
+    if (std::string(a.name()) != "DataArray" || std::string(a.attribute("type").as_string()) == "String") {
       if (a.type() == pugi::node_element && skipped_arrays_.insert(std::string(section) + "/" + name).second)
         result_.report.warnings.push_back(std::string("skipped <") + a.name() + "> '" + name + "' (" +
                                           a.attribute("type").as_string() + ") of " + section +

@@ -1638,6 +1638,108 @@ TEST(Vtu, BitArraysReadAsBytes) {
   expectError(dir + "/long.vtu", "holds 2 bytes, expected 1 (5 bits)");
 }
 
+// Inline binary arrays whose UInt32 header and data are base64-encoded together, as some writers
+// do: a 1- or 2-byte array (the types of a one-cell mesh, a one-byte cell field) ends its first two
+// quartets in one '=' or none, where VTK's encoding apart ends the header's in two. Both read alike,
+// and so do arrays encoded apart.
+TEST(Vtu, OneAndTwoByteArraysEncodedWithTheirHeader) {
+  const std::string dir = tempDir("vtu_combined_b64");
+  auto together = [](const std::vector<uint8_t>& data) {
+    std::vector<uint8_t> all = {static_cast<uint8_t>(data.size()), 0, 0, 0};
+    all.insert(all.end(), data.begin(), data.end());
+    return base64Encode(all.data(), all.size());
+  };
+  auto apart = [](const std::vector<uint8_t>& data) {
+    const uint8_t head[4] = {static_cast<uint8_t>(data.size()), 0, 0, 0};
+    return base64Encode(head, 4) + base64Encode(data.data(), data.size());
+  };
+  for (auto encode : {+together, +apart}) {
+    for (const std::vector<uint8_t>& labels : {std::vector<uint8_t>{7}, std::vector<uint8_t>{7, 9}}) {
+      const size_t cells = labels.size();
+      const std::vector<uint8_t> types(cells, 10);
+      std::string conn = "0 1 2 3", offsets = "4";
+      if (cells == 2) {
+        conn += " 1 2 3 4";
+        offsets += " 8";
+      }
+      const std::string text = std::string(R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian" header_type="UInt32">
+<UnstructuredGrid><Piece NumberOfPoints="5" NumberOfCells=")") +
+                               std::to_string(cells) + R"(">
+<CellData><DataArray type="UInt8" Name="label" format="binary">)" +
+                               encode(labels) + R"(</DataArray></CellData>
+<Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0 0 0 1 1 1 1</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">)" +
+                               conn + R"(</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">)" +
+                               offsets + R"(</DataArray>
+<DataArray type="UInt8" Name="types" format="binary">)" +
+                               encode(types) + R"(</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>
+)";
+      const std::string path = dir + "/cells" + std::to_string(cells) + ".vtu";
+      writeFile(path, text);
+      auto r = importMesh({path}, ImportOptions{});
+      ASSERT_TRUE(r.isOk()) << r.status().message() << "\n" << text;
+      EXPECT_EQ(r->mesh.numTets(), cells);
+      ASSERT_EQ(r->mesh.cell_fields.size(), 1u);
+      EXPECT_EQ(r->mesh.cell_fields[0].bytes, labels);
+    }
+  }
+}
+
+// VTK's Lagrange wedge (73) turns its first triangle towards the second one, its linear wedge (13)
+// away from it: a positive cell of either kind splits into positive tetrahedra, none reported flipped.
+TEST(Vtu, LagrangeAndLinearWedgesKeepTheirOrientation) {
+  const std::string path = tempDir("vtu_wedges") + "/wedges.vtu";
+  writeFile(path, R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian" header_type="UInt32">
+<UnstructuredGrid><Piece NumberOfPoints="12" NumberOfCells="2">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">
+0 0 0  1 0 0  0 1 0  0 0 1  1 0 1  0 1 1
+5 0 0  5 1 0  6 0 0  5 0 1  5 1 1  6 0 1</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 4 5 6 7 8 9 10 11</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">6 12</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">73 13</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>
+)");
+  auto r = importMesh({path}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 6u);
+  EXPECT_EQ(r->report.flipped, 0u);
+}
+
+// VTK 5 to 8 wrote string arrays as <DataArray type="String"> (VTK 9 as <Array>): skipped with a
+// warning, in CellData as in PointData, not a failure of the whole file.
+TEST(Vtu, StringDataArraysAreSkipped) {
+  const std::string dir = tempDir("vtu_string_dataarray");
+  const std::string path = dir + "/strings.vtu";
+  writeFile(path, R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian" header_type="UInt32">
+<UnstructuredGrid><Piece NumberOfPoints="4" NumberOfCells="1">
+<PointData><DataArray type="String" Name="tag" format="ascii">97 0 98 0 99 0 100 0</DataArray>
+<DataArray type="Float32" Name="t" format="ascii">1 2 3 4</DataArray></PointData>
+<CellData><DataArray type="String" Name="mat" format="ascii">115 116 101 101 108 0</DataArray>
+<DataArray type="Int32" Name="region" format="ascii">5</DataArray></CellData>
+<Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0 0 0 1</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">4</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">10</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>
+)");
+  auto r = importMesh({path}, ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  ASSERT_EQ(r->mesh.point_fields.size(), 1u);
+  EXPECT_EQ(r->mesh.point_fields[0].name, "t");
+  ASSERT_EQ(r->mesh.cell_fields.size(), 1u);
+  EXPECT_EQ(r->mesh.cell_fields[0].name, "region");
+  EXPECT_EQ(r->mesh.cell_fields[0].data<int32_t>()[0], 5);
+  const std::vector<std::string> want = {
+      "skipped <DataArray> 'tag' (String) of PointData: only numeric DataArrays are mesh data",
+      "skipped <DataArray> 'mat' (String) of CellData: only numeric DataArrays are mesh data"};
+  EXPECT_EQ(r->report.warnings, want);
+}
+
 // VTK's blanking of structured grids (BlankCell, BlankPoint): cells marked HIDDENCELL, or with a
 // corner marked HIDDENPOINT, are holes and are dropped, as PLOT3D IBLANK holes are.
 TEST(Vtu, BlankedStructuredCellsAreDropped) {
