@@ -146,9 +146,10 @@ Command addDecodeCommand(CLI::App& app) {
   sub->add_option("input", args->input, "Input .gtn file ('-' for standard input)")->required();
   CLI::Option* level = sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)")
                            ->check(finiteAtLeastZero());
-  CLI::Option* ratio = sub->add_option("--ratio", args->ratio,
-                                       "Simplification ratio: vertices merged away / vertices of level 0 (0 to 1)")
-                           ->check(ratioFromZeroToOne());
+  CLI::Option* ratio =
+      sub->add_option("--ratio", args->ratio,
+                      "Simplification ratio: vertices merged away / vertices of level 0 that tetrahedra use (0 to 1)")
+          ->check(ratioFromZeroToOne());
   level->excludes(ratio);
   sub->add_option("--fields", args->fields,
                   "Decode only these point or cell fields (names, comma-separated); the others are not decoded")

@@ -82,9 +82,10 @@ Command addExportCommand(CLI::App& app) {
       ->required();
   CLI::Option* level = sub->add_option("--level", args->level, "Stored level to decode (0 = the lossless mesh)")
                            ->check(finiteAtLeastZero());
-  CLI::Option* ratio = sub->add_option("--ratio", args->ratio,
-                                       "Simplification ratio: vertices merged away / vertices of level 0 (0 to 1)")
-                           ->check(ratioFromZeroToOne());
+  CLI::Option* ratio =
+      sub->add_option("--ratio", args->ratio,
+                      "Simplification ratio: vertices merged away / vertices of level 0 that tetrahedra use (0 to 1)")
+          ->check(ratioFromZeroToOne());
   CLI::Option* merges = sub->add_option("--merges", args->merges, "Number of merges of the merge tree to apply")
                             ->check(finiteAtLeastZero());
   level->excludes(ratio)->excludes(merges);

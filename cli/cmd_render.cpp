@@ -325,7 +325,8 @@ Command addRenderCommand(CLI::App& app) {
       ->check(CLI::IsMember({"integrated", "generic"}));
   // Checked here: a negative value meant "not given" below, and was ignored silently.
   sub->add_option("--level", a->level, "render stored level I as is")->check(finiteAtLeastZero());
-  sub->add_option("--ratio", a->ratio, "simplification ratio in [0, 1]: merged vertices / vertices")
+  sub->add_option("--ratio", a->ratio,
+                  "simplification ratio in [0, 1]: vertices merged away / vertices of level 0 that tetrahedra use")
       ->check(CLI::Range(0.0, 1.0));
   sub->add_option("--merges", a->merges, "number of merges of the merge tree to apply")->check(finiteAtLeastZero());
   sub->add_option("--budget-ms", a->budget_ms, "choose level and merges to render within T milliseconds")

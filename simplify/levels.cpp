@@ -335,6 +335,13 @@ class SimplifierOnceTreeIsReady : public MeshSink {
   Status tet(const uint32_t v[4], const uint8_t* cell_values) override { return filter_->tet(v, cell_values); }
   Status retireVertex(uint32_t id) override { return filter_->retireVertex(id); }
   Status endLevel() override { return filter_->endLevel(); }
+  bool takesWholeLevel() const override { return out_.takesWholeLevel(); }
+  Status wholeLevel(const LevelHeader& header, TetMesh&& mesh,
+                    std::vector<std::array<uint32_t, 3>>&& boundary) override {
+    GTN_ASSIGN_OR_RETURN(const MergeTree* tree, ready_());
+    filter_.emplace(*tree, plan_.extra_merges, out_);
+    return filter_->wholeLevel(header, std::move(mesh), std::move(boundary));
+  }
 
  private:
   std::function<StatusOr<const MergeTree*>()> ready_;

@@ -1,8 +1,13 @@
 #include "simplify/stream_simplifier.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "mesh/fresh_memory.h"
 #include "mesh/index.h"
 
 namespace gtn {
@@ -11,6 +16,11 @@ StreamSimplifier::StreamSimplifier(const MergeTree& tree, uint64_t n, MeshSink& 
     : tree_(tree), n_(std::min<uint64_t>(n, tree.merges)), out_(out) {}
 
 Status StreamSimplifier::beginLevel(const LevelHeader& header) {
+  GTN_RETURN_IF_ERROR(prepare(header));
+  return out_.beginLevel(out_header_);
+}
+
+Status StreamSimplifier::prepare(const LevelHeader& header) {
   if (header.points != tree_.points())
     return invalidData("simplification: the level has " + std::to_string(header.points) + " vertices, its merge tree " +
                        std::to_string(tree_.points()));
@@ -66,7 +76,108 @@ Status StreamSimplifier::beginLevel(const LevelHeader& header) {
     return invalidData("simplification: the merge tree removes more elements than the level has");
   out_header_.tets = header.tets - removed;
   out_header_.boundary_triangles = header.boundary_triangles - boundary_removed;
-  return out_.beginLevel(out_header_);
+  return Status::ok();
+}
+
+namespace {
+// The items i < n for which keep(i) holds, in order, written by put(i, place) at places 0, 1, ...
+// counted in blocks on every thread; returns how many.
+template <class Keep, class Put>
+size_t compactInOrder(size_t n, const Keep& keep, const Put& put) {
+  constexpr size_t kBlock = size_t{1} << 14;
+  const size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<size_t> first(blocks + 1, 0);
+  tbb::parallel_for(size_t{0}, blocks, [&](size_t b) {
+    size_t k = 0;
+    for (size_t i = b * kBlock, end = std::min(n, i + kBlock); i < end; ++i) k += keep(i);
+    first[b + 1] = k;
+  });
+  for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
+  tbb::parallel_for(size_t{0}, blocks, [&](size_t b) {
+    size_t at = first[b];
+    for (size_t i = b * kBlock, end = std::min(n, i + kBlock); i < end; ++i)
+      if (keep(i)) put(i, at++);
+  });
+  return first[blocks];
+}
+}  // namespace
+
+Status StreamSimplifier::wholeLevel(const LevelHeader& header, TetMesh&& mesh,
+                                    std::vector<std::array<uint32_t, 3>>&& boundary) {
+  GTN_RETURN_IF_ERROR(prepare(header));
+  const size_t np = mesh.numPoints();
+  if (np != header.points || mesh.numTets() != header.tets || boundary.size() != header.boundary_triangles ||
+      mesh.coords.size() != 3 * np)
+    return invalidData("simplification: the level given whole disagrees with its header");
+  for (const Tet& t : mesh.tets)
+    if (std::max({t[0], t[1], t[2], t[3]}) >= np)
+      return invalidData("simplification: a tetrahedron refers to a vertex beyond the level");
+  for (const auto& f : boundary)
+    if (std::max({f[0], f[1], f[2]}) >= np)
+      return invalidData("simplification: a boundary triangle refers to a vertex beyond the level");
+  const size_t survivors = out_header_.points;
+  TetMesh out;
+  out.coord_type = mesh.coord_type;
+  out.metadata = mesh.metadata;
+  resizePopulated(out.coords, 3 * survivors);
+  for (const Field& f : mesh.point_fields) {
+    out.point_fields.emplace_back(f.name, f.components, f.type, 0);
+    resizePopulated(out.point_fields.back().bytes, survivors * f.components * f.valueSize());
+  }
+  // Survivors keep their order: vertex v's place is out_of_[v].
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, np, size_t{1} << 14), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      if (!survives_[v]) continue;
+      const uint32_t o = out_of_[v];
+      std::copy_n(mesh.coords.data() + 3 * v, 3, out.coords.data() + 3 * size_t{o});
+      for (size_t i = 0; i < mesh.point_fields.size(); ++i) out.point_fields[i].copyItem(mesh.point_fields[i], v, o);
+    }
+  });
+  auto mapped = [&](const Tet& t) { return Tet{out_of_[t[0]], out_of_[t[1]], out_of_[t[2]], out_of_[t[3]]}; };
+  auto distinct = [](const Tet& q) {
+    return q[0] != q[1] && q[0] != q[2] && q[0] != q[3] && q[1] != q[2] && q[1] != q[3] && q[2] != q[3];
+  };
+  const size_t nt = mesh.numTets();
+  resizePopulated(out.tets, out_header_.tets);
+  std::vector<uint32_t> kept_cell;  // per output tetrahedron, its input one (for the cell fields)
+  if (!mesh.cell_fields.empty()) resizePopulated(kept_cell, out_header_.tets);
+  std::atomic<bool> overflow{false};
+  const size_t tets = compactInOrder(
+      nt, [&](size_t t) { return distinct(mapped(mesh.tets[t])); },
+      [&](size_t t, size_t at) {
+        if (at >= out.tets.size()) {
+          overflow.store(true, std::memory_order_relaxed);
+          return;
+        }
+        out.tets[at] = mapped(mesh.tets[t]);
+        if (!kept_cell.empty()) kept_cell[at] = static_cast<uint32_t>(t);
+      });
+  dropped_tets_ = nt - tets;
+  if (overflow.load() || tets != out_header_.tets)
+    return invalidData("simplification: " + std::to_string(tets) + " tetrahedra, the merge tree implies " +
+                       std::to_string(out_header_.tets));
+  for (const Field& f : mesh.cell_fields) {
+    out.cell_fields.emplace_back(f.name, f.components, f.type, 0);
+    Field& g = out.cell_fields.back();
+    resizePopulated(g.bytes, tets * f.components * f.valueSize());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tets, size_t{1} << 14), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) g.copyItem(f, kept_cell[i], i);
+    });
+  }
+  std::vector<std::array<uint32_t, 3>> out_boundary;
+  out_boundary.reserve(out_header_.boundary_triangles);
+  for (const auto& f : boundary) {
+    const std::array<uint32_t, 3> o = {out_of_[f[0]], out_of_[f[1]], out_of_[f[2]]};
+    if (o[0] != o[1] && o[0] != o[2] && o[1] != o[2]) out_boundary.push_back(o);
+  }
+  if (out_boundary.size() != out_header_.boundary_triangles)
+    return invalidData("simplification: " + std::to_string(out_boundary.size()) +
+                       " boundary triangles, the merge tree implies " + std::to_string(out_header_.boundary_triangles));
+  received_ = emitted_ = static_cast<uint32_t>(np);
+  out_tets_ = tets;
+  out_triangles_ = out_boundary.size();
+  mesh = TetMesh();  // the input's memory back before the output's consumer runs
+  return out_.wholeLevel(out_header_, std::move(out), std::move(out_boundary));
 }
 
 Status StreamSimplifier::vertex(uint32_t id, const double xyz[3], const uint8_t* values) {

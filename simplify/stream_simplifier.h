@@ -32,6 +32,12 @@ class StreamSimplifier : public MeshSink {
   Status tet(const uint32_t v[4], const uint8_t* cell_values) override;
   Status retireVertex(uint32_t id) override;
   Status endLevel() override;
+  // A level given whole (a structured piece) to a sink that takes it whole is simplified whole, on
+  // every thread: the surviving vertices in input order, the tetrahedra and boundary triangles that
+  // keep four and three distinct vertices in input order.
+  bool takesWholeLevel() const override { return out_.takesWholeLevel(); }
+  Status wholeLevel(const LevelHeader& header, TetMesh&& mesh,
+                    std::vector<std::array<uint32_t, 3>>&& boundary) override;
 
   uint64_t droppedTets() const { return dropped_tets_; }
   uint64_t peakHeld() const { return peak_held_; }
@@ -45,6 +51,8 @@ class StreamSimplifier : public MeshSink {
     uint32_t next;  // the next element waiting for the same vertex, or kNoIndex
     bool triangle;
   };
+  // beginLevel's work but for passing the header on: the ancestors' output ids and the counts.
+  Status prepare(const LevelHeader& header);
   Status emitHeld(uint32_t slot);
   Status release(uint32_t o);  // drops one reference, retires when none is left
   Status hold(const uint32_t* o, int count, bool triangle, const uint8_t* cell_values);

@@ -9,10 +9,12 @@
 
 #include <tbb/task_arena.h>
 
+#include "codec/codec_test_util.h"
 #include "codec/merge_tree_coder.h"
 #include "convert/import.h"
 #include "format/gtn_file.h"
 #include "format/gtn_reader.h"
+#include "mesh/predicates.h"
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
 #include "simplify_test_util.h"
@@ -286,6 +288,73 @@ TEST(StreamSimplified, GridTreeDecodedBesideItsLevelGivesTheMergesOfLevel0) {
                 std::string::npos)
           << st.message();
     }
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// A sink that takes a level whole (as TetMeshBuilder does) gets a grid's simplified level whole from
+// the filter, made on every thread; a sink that takes events gets the same mesh as events. Both are
+// the same points, oriented tetrahedra with their cell values, and boundary triangles.
+TEST(StreamSimplified, AGridLevelGivenWholeIsSimplifiedWhole) {
+  struct WholeSink : TetMeshBuilder {
+    bool takesWholeLevel() const override { return true; }
+    Status wholeLevel(const LevelHeader& header, TetMesh&& mesh,
+                      std::vector<std::array<uint32_t, 3>>&& boundary) override {
+      ++whole_levels;
+      return TetMeshBuilder::wholeLevel(header, std::move(mesh), std::move(boundary));
+    }
+    Status beginLevel(const LevelHeader& header) override {
+      ++event_levels;
+      return TetMeshBuilder::beginLevel(header);
+    }
+    int whole_levels = 0, event_levels = 0;
+  };
+  struct EventSink : TetMeshBuilder {};  // not exactly TetMeshBuilder: takes the events
+  const std::string dir = tempDir("stream_simplified_whole");
+  const std::string path = dir + "/bluntfin.gtn";
+  const RunResult made = runGtn("convert " + dataPath("plot3d/bluntfinxyz.bin") + " " +
+                                dataPath("plot3d/bluntfinq.bin") + " -o " + path + " --levels 0 -q");
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  auto r = GtnReader::open(path);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  // Each tetrahedron with its orientation, each boundary triangle, by their points' coordinates.
+  auto oriented = [](const TetMesh& m) {
+    std::multiset<std::string> out;
+    for (const Tet& t : m.tets) {
+      std::array<std::string, 4> c;
+      for (int i = 0; i < 4; ++i) c[i].assign(reinterpret_cast<const char*>(m.point(t[i])), 24);
+      const int sign = orient3d(m.point(t[0]), m.point(t[1]), m.point(t[2]), m.point(t[3]));
+      std::sort(c.begin(), c.end());
+      out.insert(std::to_string(sign) + c[0] + c[1] + c[2] + c[3]);
+    }
+    return out;
+  };
+  auto triangles = [](const TetMesh& m, const std::vector<std::array<uint32_t, 3>>& b) {
+    std::multiset<std::string> out;
+    for (const auto& f : b) {
+      std::array<std::string, 3> c;
+      for (int i = 0; i < 3; ++i) c[i].assign(reinterpret_cast<const char*>(m.point(f[i])), 24);
+      std::sort(c.begin(), c.end());
+      out.insert(c[0] + c[1] + c[2]);
+    }
+    return out;
+  };
+  const uint64_t points = (*r)->level(0).header.points;
+  for (uint64_t n : {points / 10, points / 2, points * 9 / 10}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    WholeSink whole;
+    EventSink events;
+    ASSERT_TRUE(streamSimplified(**r, n, whole).isOk());
+    ASSERT_TRUE(streamSimplified(**r, n, events).isOk());
+    EXPECT_EQ(whole.whole_levels, 1);
+    EXPECT_EQ(whole.event_levels, 0);
+    EXPECT_EQ(whole.header().points, events.header().points);
+    EXPECT_EQ(whole.header().tets, events.header().tets);
+    EXPECT_EQ(whole.mesh().numTets(), events.mesh().numTets());
+    EXPECT_TRUE(canonicalMesh(whole.mesh()) == canonicalMesh(events.mesh()));
+    EXPECT_TRUE(oriented(whole.mesh()) == oriented(events.mesh()));
+    EXPECT_TRUE(triangles(whole.mesh(), whole.boundary()) == triangles(events.mesh(), events.boundary()));
+    EXPECT_EQ(whole.boundary().size(), events.header().boundary_triangles);
   }
   std::filesystem::remove_all(dir);
 }
