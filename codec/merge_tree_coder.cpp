@@ -546,6 +546,16 @@ class GridCandidates {
   uint32_t at(uint32_t i) const { return list_[i].v; }
   // Child c merges into parent p.
   void merge(uint32_t c, uint32_t p) { up_[c] = p; }
+  // Starts loading what begin(c) and the groups read: the neighbours' parents, in c's row and the
+  // rows around it (an id's neighbours lie in 9 runs of 3 ids).
+  void prefetch(uint32_t c) const {
+    if (c >= nodes_) return;
+    for (int64_t dk = -1; dk <= 1; ++dk)
+      for (int64_t dj = -1; dj <= 1; ++dj) {
+        const int64_t x = int64_t{c} + int64_t{ni_} * (dj + int64_t{nj_} * dk);
+        if (x >= 0 && static_cast<uint64_t>(x) < up_.size()) __builtin_prefetch(&up_[static_cast<size_t>(x)]);
+      }
+  }
 
   static constexpr uint32_t kNoPlace = UINT32_MAX;
 
@@ -1106,7 +1116,22 @@ StatusOr<std::vector<uint8_t>> encodeMergeTree(const MergeTree& tree, const std:
     std::vector<uint32_t> place(batched ? n : 0);
     uint64_t batch_end = 0;
     size_t batch = 0;
+    // What a merge reads lies anywhere in arrays of a vertex each: on a large grid their loads are
+    // started a few merges ahead, in the order they depend on each other (the child's id, then its
+    // vertex, then its parent's id).
+    constexpr uint64_t kAhead = 16;
     for (uint64_t r = 0; r < tree.merges; ++r) {
+      if (r + kAhead < tree.merges) __builtin_prefetch(&inverse[by_rank[r + kAhead]]);
+      if (r + kAhead / 2 < tree.merges) {
+        const uint32_t id2 = by_rank[r + kAhead / 2], v2 = inverse[id2];
+        __builtin_prefetch(&tree.parent[v2]);
+        __builtin_prefetch(&tree.boundary[v2]);
+        __builtin_prefetch(&tree.removed[v2]);
+        __builtin_prefetch(&coded_parent[id2]);
+        if (grid) grid->prefetch(id2);
+      }
+      if (r + kAhead / 4 < tree.merges)
+        __builtin_prefetch(&vertex_order[tree.parent[inverse[by_rank[r + kAhead / 4]]]]);
       if (batched && r == batch_end) {
         const uint32_t rule = batchRule(n - r, tree.merges - r, divisor);
         const uint32_t size = tree.batches.empty() ? rule : tree.batches[batch++];

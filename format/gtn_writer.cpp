@@ -386,10 +386,19 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     // Waited for on every return from here, before what its tasks use is gone.
     tbb::task_group ahead;
     const WaitOnExit join_ahead{ahead};
+    // A grid level 0 given encoded is checked from the start, as a task of its own beside its merge
+    // tree's encoding (a long one thread's work on a large grid), by the first thread free for it.
+    // The task holds a reference to the encoding, so that encodeInput copies it rather than move
+    // from it while the check reads it.
+    const std::shared_ptr<PiecedLevel>& given0 = levels[0].encoded;
+    const bool check0_early = count > 1 && options.verify && given0 && !given0->encoded.empty() && given0->isGrid();
+    if (check0_early)
+      ahead.run(
+          [&, held = given0] { level0_grid_check = checkDecodesBack(path, levels[0], *meshes[0], 0, *held, options); });
     if (count > 1)
       ahead.run([&] {
         level0_alone = encodeInput(levels, 0, *meshes[0], options);
-        if (options.verify && level0_alone->isOk() && (*level0_alone)->level.isGrid())
+        if (!check0_early && options.verify && level0_alone->isOk() && (*level0_alone)->level.isGrid())
           level0_grid_check = checkDecodesBack(path, levels[0], *meshes[0], 0, (*level0_alone)->level, options);
       });
     auto encodeAlone = [&](size_t i) -> StatusOr<EncodedInput> {

@@ -439,47 +439,53 @@ TEST(GtnChain, ALevelsCheckStopsTheWriteWhenItRunsBesideTheEncoding) {
     ASSERT_TRUE(levels.isOk()) << levels.status().message();
     ASSERT_EQ(levels->meshes.size(), 4u);
     const std::string path = dir() + "/checked.gtn";
-    for (const double bound : {0.0, 1.3}) {
-      for (const std::vector<size_t> failing : std::vector<std::vector<size_t>>{{}, {0}, {1}, {3}, {2, 1}}) {
-        std::string which;
-        for (size_t i : failing) which += " " + std::to_string(i);
-        SCOPED_TRACE("bound " + std::to_string(bound) + ", failing levels" + which);
-        std::filesystem::remove(path);
-        std::vector<GtnLevelInput> inputs = levels->inputs(c.mesh, stored->level0_form);
-        std::vector<std::atomic<int>> checked(inputs.size());
-        for (size_t i = 0; i < inputs.size(); ++i)
-          inputs[i].check_mesh = [&, i](const TetMesh&) {
-            ++checked[i];
-            const bool fails = std::find(failing.begin(), failing.end(), i) != failing.end();
-            return fails ? invalidData("level " + std::to_string(i) + " refused by the test") : Status::ok();
-          };
-        GtnWriteOptions wo;
-        wo.level_storage_limit = bound;
-        const Status st = writeGtnFile(path, inputs, wo);
-        if (failing.empty()) {
-          ASSERT_TRUE(st.isOk()) << st.message();
-          auto r = open(path);
-          ASSERT_TRUE(r);
-          for (size_t i = 0; i < r->levels(); ++i) EXPECT_GE(checked[i].load(), 1) << "level " << i;
-          if (bound == 0.0) {
-            ASSERT_EQ(r->levels(), inputs.size());
-            for (size_t i = 0; i < inputs.size(); ++i) EXPECT_EQ(checked[i].load(), 1) << "level " << i;
+    // Level 0 given encoded (as a convert gives it): a grid's is checked from the start, beside the
+    // encoding of its merge tree.
+    for (const bool given : {false, true})
+      for (const double bound : {0.0, 1.3}) {
+        for (const std::vector<size_t>& failing : std::vector<std::vector<size_t>>{{}, {0}, {1}, {3}, {2, 1}}) {
+          if (given && (!level0->isGrid() || failing.size() > 1)) continue;
+          std::string which;
+          for (size_t i : failing) which += " " + std::to_string(i);
+          SCOPED_TRACE("bound " + std::to_string(bound) + ", failing levels" + which +
+                       (given ? ", level 0 given" : ""));
+          std::filesystem::remove(path);
+          std::vector<GtnLevelInput> inputs = levels->inputs(c.mesh, stored->level0_form);
+          if (given) inputs[0].encoded = std::make_shared<PiecedLevel>(*level0);
+          std::vector<std::atomic<int>> checked(inputs.size());
+          for (size_t i = 0; i < inputs.size(); ++i)
+            inputs[i].check_mesh = [&, i](const TetMesh&) {
+              ++checked[i];
+              const bool fails = std::find(failing.begin(), failing.end(), i) != failing.end();
+              return fails ? invalidData("level " + std::to_string(i) + " refused by the test") : Status::ok();
+            };
+          GtnWriteOptions wo;
+          wo.level_storage_limit = bound;
+          const Status st = writeGtnFile(path, inputs, wo);
+          if (failing.empty()) {
+            ASSERT_TRUE(st.isOk()) << st.message();
+            auto r = open(path);
+            ASSERT_TRUE(r);
+            for (size_t i = 0; i < r->levels(); ++i) EXPECT_GE(checked[i].load(), 1) << "level " << i;
+            if (bound == 0.0) {
+              ASSERT_EQ(r->levels(), inputs.size());
+              for (size_t i = 0; i < inputs.size(); ++i) EXPECT_EQ(checked[i].load(), 1) << "level " << i;
+            }
+            continue;
           }
-          continue;
+          const size_t first = *std::min_element(failing.begin(), failing.end());
+          if (bound > 0.0 && st.isOk()) {
+            // The bound left the failing levels out of the file: the kept ones passed.
+            auto r = open(path);
+            ASSERT_TRUE(r);
+            EXPECT_LE(r->levels(), first);
+            continue;
+          }
+          ASSERT_FALSE(st.isOk());
+          EXPECT_EQ(st.message(), "level " + std::to_string(first) + " refused by the test");
+          EXPECT_FALSE(std::filesystem::exists(path));
         }
-        const size_t first = *std::min_element(failing.begin(), failing.end());
-        if (bound > 0.0 && st.isOk()) {
-          // The bound left the failing levels out of the file: the kept ones passed.
-          auto r = open(path);
-          ASSERT_TRUE(r);
-          EXPECT_LE(r->levels(), first);
-          continue;
-        }
-        ASSERT_FALSE(st.isOk());
-        EXPECT_EQ(st.message(), "level " + std::to_string(first) + " refused by the test");
-        EXPECT_FALSE(std::filesystem::exists(path));
       }
-    }
   }
 }
 
