@@ -1315,6 +1315,9 @@ StatusOr<MergeTreeHeader> readMergeTreeHeader(std::span<const uint8_t> payload, 
   return out;
 }
 
+// How many merges ahead decodeMergeTree starts loading what a merge reads.
+constexpr size_t kDecodeAhead = 8;
+
 StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t expected_points, const std::string& what,
                                     const TetMesh* mesh, uint64_t max_merges, const std::vector<uint32_t>* next_ids) {
   Reader r(payload, what);
@@ -1389,6 +1392,14 @@ StatusOr<MergeTree> decodeMergeTree(std::span<const uint8_t> payload, uint64_t e
         tree.batches.push_back(static_cast<uint32_t>(std::min<uint64_t>(seq.size(), decode - r)));
       }
       id = seq[next++];
+      // The batch's children are known: what a merge reads around one (its neighbours' parents and,
+      // on a grid, their union-find entries) is loaded a few merges ahead (encodeMergeTree does so).
+      if (next + kDecodeAhead <= seq.size()) {
+        const uint32_t ahead = seq[next + kDecodeAhead - 1];
+        __builtin_prefetch(&tree.parent[ahead]);
+        __builtin_prefetch(&tree.rank[ahead]);
+        if (grid) grid->prefetch(ahead);
+      }
     } else {
       code.child_index = codeUniform(rc, 0, static_cast<uint32_t>(n - r));
       if (code.child_index >= n - r) return bodyError(r, "child out of range");
