@@ -41,7 +41,6 @@ constexpr SkippedSection kSkipped[] = {
     {"EdgesP2", 4},
     {"TrianglesP2", 7},
     {"QuadrilateralsQ2", 10},
-    {"TetrahedraP2", 11, true},
     {"HexahedraQ2", 28, true},
     {"Corners", 1},
     {"Ridges", 1},
@@ -285,13 +284,13 @@ Status MeditReader::readVertexRef(size_t i, size_t n, Field* ref, std::vector<do
 Status MeditReader::readVolumeSection(const MeditVolumeKeyword& kw) {
   TetMesh& mesh = result_.mesh;
   cells_.addSection(kw, "line " + std::to_string(reader_.line()));
-  GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader_, kw.corners + 1, kw.name));
+  GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader_, kw.nodes + 1, kw.name));
   const size_t n = static_cast<size_t>(count);
   const int64_t np = have_vertices_ ? static_cast<int64_t>(mesh.numPoints()) : kMaxItems;
   cells_.reserve(kw, n, &mesh);
   for (size_t e = 0; e < n; ++e) {
-    uint32_t corners[8];
-    for (int k = 0; k < kw.corners; ++k) {
+    uint32_t corners[10];
+    for (int k = 0; k < kw.nodes; ++k) {
       GTN_ASSIGN_OR_RETURN(const int64_t v, reader_.readInt("a vertex number"));
       if (v < 1 || v > np) {
         return reader_.error(std::string(kw.singular) + " " + std::to_string(e + 1) + " refers to vertex " +

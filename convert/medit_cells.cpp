@@ -4,11 +4,14 @@
 
 namespace gtn {
 
-const MeditVolumeKeyword kMeditVolumeKeywords[4] = {
-    {"Tetrahedra", "tetrahedron", 4, kVtkTetra},
-    {"Hexahedra", "hexahedron", 8, kVtkHexahedron},
-    {"Prisms", "prism", 6, kVtkWedge},
-    {"Pyramids", "pyramid", 5, kVtkPyramid},
+const MeditVolumeKeyword kMeditVolumeKeywords[kMeditVolumeKinds] = {
+    {"Tetrahedra", "tetrahedron", 4, kVtkTetra, 4},
+    {"Hexahedra", "hexahedron", 8, kVtkHexahedron, 8},
+    {"Prisms", "prism", 6, kVtkWedge, 6},
+    {"Pyramids", "pyramid", 5, kVtkPyramid, 5},
+    // Its corners join the other elements (as VTK tetrahedra), not the Tetrahedra: a solution's
+    // SolAtTetrahedra values are the Tetrahedra's.
+    {"TetrahedraP2", "P2 tetrahedron", 4, kVtkTetra, 10},
 };
 
 void MeditCells::addSection(const MeditVolumeKeyword& kw, const std::string& where) {
@@ -17,7 +20,7 @@ void MeditCells::addSection(const MeditVolumeKeyword& kw, const std::string& whe
 }
 
 void MeditCells::warnAboutSections(ImportResult* result) const {
-  for (size_t i = 0; i < 4; ++i) {
+  for (size_t i = 0; i < kMeditVolumeKinds; ++i) {
     if (section_count[i] < 2) continue;
     result->report.warnings.push_back(std::to_string(section_count[i]) + " " + kMeditVolumeKeywords[i].name +
                                       " sections (" + sections[i] +
@@ -43,6 +46,7 @@ void MeditCells::add(const MeditVolumeKeyword& kw, const uint32_t* corners, int3
     tet_refs.push_back(ref);
     return;
   }
+  if (kw.nodes > kw.corners) ++reduced;
   for (int k = 0; k < kw.corners; ++k) others.connectivity.push_back(corners[k]);
   others.types.push_back(kw.vtk_type);
   others.offsets.push_back(static_cast<int64_t>(others.connectivity.size()));
@@ -50,15 +54,20 @@ void MeditCells::add(const MeditVolumeKeyword& kw, const uint32_t* corners, int3
 }
 
 std::string noVolumeElements(const std::string& skipped) {
-  return skipped.empty() ? "no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids): a surface mesh is not a "
-                           "volume mesh"
-                         : "no linear volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids), only " + skipped +
-                               ", which are not read";
+  return skipped.empty()
+             ? "no volume elements (Tetrahedra, TetrahedraP2, Hexahedra, Prisms or Pyramids): a surface mesh is not a "
+               "volume mesh"
+             : "no volume elements it reads (Tetrahedra, TetrahedraP2, Hexahedra, Prisms or Pyramids), only " +
+                   skipped + ", which are not read";
 }
 
 Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells, const ImportOptions& options,
                          ImportResult* result) {
   TetMesh& mesh = result->mesh;
+  if (cells->reduced > 0)
+    result->report.warnings.push_back(std::to_string(cells->reduced) +
+                                      " TetrahedraP2 elements kept by their 4 corners; their mid-edge nodes are kept "
+                                      "as unreferenced points");
   const bool tets_only = cells->other_refs.empty();
   if (!tets_only) GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, result));
   if (tets_only) {

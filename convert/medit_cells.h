@@ -20,16 +20,20 @@
 
 namespace gtn {
 
-// A Medit keyword that holds volume elements: its name, corners per element (a reference number
-// follows them) and the VTK cell type with the same corner order.
+// A Medit keyword that holds volume elements: its name, the vertex numbers per element (a reference
+// number follows them), how many of them are the corners the element keeps (the first ones: a
+// TetrahedraP2 element lists its 4 corners, then its 6 mid-edge nodes, which stay as unreferenced
+// points) and the VTK cell type with the same corner order.
 struct MeditVolumeKeyword {
   const char* name;
   const char* singular;
   int corners;
   int vtk_type;
+  int nodes;
 };
-// Tetrahedra, Hexahedra, Prisms, Pyramids.
-extern const MeditVolumeKeyword kMeditVolumeKeywords[4];
+// Tetrahedra, Hexahedra, Prisms, Pyramids, TetrahedraP2.
+inline constexpr size_t kMeditVolumeKinds = 5;
+extern const MeditVolumeKeyword kMeditVolumeKeywords[kMeditVolumeKinds];
 
 // The volume elements read so far. Tetrahedra go straight to mesh.tets (their references to
 // tet_refs); the other elements wait in `others`, 0-based, until finishMeditImport splits them.
@@ -42,8 +46,9 @@ struct MeditCells {
   std::vector<int32_t> tet_refs;
   VtkCells others;
   std::vector<int32_t> other_refs;
-  std::string sections[4];  // per keyword of kMeditVolumeKeywords, where its sections begin ("line 7")
-  int section_count[4] = {0, 0, 0, 0};
+  std::string sections[kMeditVolumeKinds];  // per keyword of kMeditVolumeKeywords, where its sections begin ("line 7")
+  int section_count[kMeditVolumeKinds] = {};
+  uint64_t reduced = 0;  // elements with more nodes than corners (TetrahedraP2), kept by their corners
   // The largest vertex number read before the Vertices section, and where: the element ("tetrahedron
   // 5") and a place (a line, or a byte offset) for the error.
   int64_t late_vertex = 0;
@@ -60,7 +65,7 @@ struct MeditCells {
   }
   // Makes room for n elements of `kw`.
   void reserve(const MeditVolumeKeyword& kw, size_t n, TetMesh* mesh);
-  // One element of `kw`: its corners (0-based) and its reference.
+  // One element of `kw`: its corners (0-based; the first kw.corners of its nodes) and its reference.
   void add(const MeditVolumeKeyword& kw, const uint32_t* corners, int32_t ref, TetMesh* mesh);
 };
 

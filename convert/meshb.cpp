@@ -26,7 +26,8 @@ namespace gtn {
 
 namespace {
 
-constexpr uint32_t kDimension = 3, kVertices = 4, kTetrahedra = 8, kPrisms = 9, kHexahedra = 10, kPyramids = 49;
+constexpr uint32_t kDimension = 3, kVertices = 4, kTetrahedra = 8, kPrisms = 9, kHexahedra = 10, kPyramids = 49,
+                   kTetrahedraP2 = 30;
 
 // Volume elements the reader skips (higher-order and polyhedral ones): skipping them loses volume,
 // so a warning names them.
@@ -35,9 +36,9 @@ struct SkippedVolume {
   const char* name;
 };
 constexpr SkippedVolume kSkippedVolumes[] = {
-    {30, "TetrahedraP2"}, {33, "HexahedraQ2"},  {46, "Polyhedra"},   {86, "PrismsP2"},    {87, "PyramidsP2"},
-    {96, "TetrahedraP3"}, {97, "TetrahedraP4"}, {98, "HexahedraQ3"}, {99, "HexahedraQ4"}, {100, "PyramidsP3"},
-    {101, "PyramidsP4"},  {102, "PrismsP3"},    {103, "PrismsP4"},
+    {33, "HexahedraQ2"},  {46, "Polyhedra"},    {86, "PrismsP2"},    {87, "PyramidsP2"},
+    {96, "TetrahedraP3"}, {97, "TetrahedraP4"}, {98, "HexahedraQ3"}, {99, "HexahedraQ4"},
+    {100, "PyramidsP3"},  {101, "PyramidsP4"},  {102, "PrismsP3"},   {103, "PrismsP4"},
 };
 
 // libMeshb's keyword names by code (GmfKwdCod; "" for the codes it reserves).
@@ -165,6 +166,7 @@ const MeditVolumeKeyword* volumeKeyword(uint32_t code) {
     case kHexahedra: return &kMeditVolumeKeywords[1];
     case kPrisms: return &kMeditVolumeKeywords[2];
     case kPyramids: return &kMeditVolumeKeywords[3];
+    case kTetrahedraP2: return &kMeditVolumeKeywords[4];
     default: return nullptr;
   }
 }
@@ -246,14 +248,14 @@ Status MeshbReader::readVertices(uint64_t end) {
 Status MeshbReader::readElements(const MeditVolumeKeyword& kw, uint64_t end) {
   const uint64_t at = in_.position();
   cells_.addSection(kw, "byte offset " + std::to_string(at));
-  GTN_ASSIGN_OR_RETURN(const uint64_t n, count(kw.name, (kw.corners + 1) * in_.intSize(), end));
+  GTN_ASSIGN_OR_RETURN(const uint64_t n, count(kw.name, (kw.nodes + 1) * in_.intSize(), end));
   TetMesh& mesh = result_.mesh;
   // Before the Vertices keyword (any order is allowed) only the range of an index is checked here.
   const int64_t np = have_vertices_ ? static_cast<int64_t>(mesh.numPoints()) : int64_t{UINT32_MAX} - 1;
   cells_.reserve(kw, n, &mesh);
   for (uint64_t e = 0; e < n; ++e) {
-    uint32_t corners[8];
-    for (int k = 0; k < kw.corners; ++k) {
+    uint32_t corners[10];
+    for (int k = 0; k < kw.nodes; ++k) {
       const uint64_t v_at = in_.position();
       const int64_t v = in_.integer();
       if (v < 1 || v > np)

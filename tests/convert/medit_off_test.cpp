@@ -497,28 +497,43 @@ End
   EXPECT_TRUE(m.tets[0] == (Tet{0, 1, 2, 3}));
 }
 
-// Pentahedra is an old name of Prisms; quadratic volume elements are not read, and a warning says
-// their volume is missing (an error when nothing else is left).
+// Pentahedra is an old name of Prisms; TetrahedraP2 elements are kept by their 4 corners (their
+// mid-edge nodes stay as unreferenced points, as other formats' quadratic tetrahedra do), with a
+// warning; other higher-order elements are not read, and a warning says their volume is missing (an
+// error when nothing else is left).
 TEST(MeditImport, PentahedraAndQuadraticVolumeElements) {
   const std::string dir = tempDir("medit-pentahedra");
   const std::string prism =
       "MeshVersionFormatted 2\nDimension 3\nVertices\n10\n"
       "0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n1 0 1 0\n0 1 1 0\n"
       "5 0 0 0\n6 0 0 0\n5 1 0 0\n5 0 1 0\n";
-  const std::string p2 = "TetrahedraP2\n1\n7 8 9 10 7 8 9 10 7 8 1\n";
+  const std::string p2 = "TetrahedraP2\n1\n7 8 9 10 7 8 9 10 7 8 5\n";
   writeFile(dir + "/p.mesh", prism + "Pentahedra\n1\n1 2 3 4 5 6 2\n" + p2 + "End\n");
   auto r = importMedit(dir + "/p.mesh", ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
-  EXPECT_EQ(r->mesh.numTets(), 3u);
-  EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 0.5, 1e-12);
-  ASSERT_EQ(r->report.warnings.size(), 1u);
-  EXPECT_NE(r->report.warnings[0].find("skipped 1 TetrahedraP2 elements (line 18): higher-order elements are not read"),
-            std::string::npos)
-      << r->report.warnings[0];
+  EXPECT_EQ(r->mesh.numTets(), 4u);
+  EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 0.5 + 1.0 / 6.0, 1e-12);
+  EXPECT_EQ(
+      r->report.warnings,
+      std::vector<std::string>{
+          "1 TetrahedraP2 elements kept by their 4 corners; their mid-edge nodes are kept as unreferenced points"});
+  // The P2 tetrahedron, last, keeps its reference.
+  const Field* ref = test::findField(r->mesh.cell_fields, "ref");
+  ASSERT_NE(ref, nullptr);
+  EXPECT_EQ(ref->get(3, 0), 5);
+  // Only P2 tetrahedra: a mesh of their corners.
   writeFile(dir + "/only_p2.mesh", prism + p2 + "End\n");
-  expectError(importMedit(dir + "/only_p2.mesh", ImportOptions{}),
-              "no linear volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids), only 1 TetrahedraP2 elements "
-              "(line 15), which are not read");
+  auto only = importMedit(dir + "/only_p2.mesh", ImportOptions{});
+  ASSERT_TRUE(only.isOk()) << only.status().message();
+  EXPECT_EQ(only->mesh.numTets(), 1u);
+  EXPECT_NEAR(computeMeshStats(only->mesh).total_volume, 1.0 / 6.0, 1e-12);
+  // HexahedraQ2 (27 nodes) are not read: with nothing else, an error that names them.
+  std::string q2 = "HexahedraQ2\n1\n";
+  for (int k = 0; k < 27; ++k) q2 += std::to_string(k % 10 + 1) + " ";
+  writeFile(dir + "/only_q2.mesh", prism + q2 + "3\nEnd\n");
+  expectError(importMedit(dir + "/only_q2.mesh", ImportOptions{}),
+              "no volume elements it reads (Tetrahedra, TetrahedraP2, Hexahedra, Prisms or Pyramids), only 1 "
+              "HexahedraQ2 elements (line 15), which are not read");
 }
 
 TEST(MeditErrors, BadHexahedra) {
@@ -535,7 +550,8 @@ TEST(MeditErrors, BadHexahedra) {
   std::string surface = kMeditHexes;
   surface = surface.substr(0, surface.find("Hexahedra")) + "End\n";
   writeFile(p, surface);
-  expectError(importMedit(p, ImportOptions{}), "no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids)");
+  expectError(importMedit(p, ImportOptions{}),
+              "no volume elements (Tetrahedra, TetrahedraP2, Hexahedra, Prisms or Pyramids)");
 }
 
 // --- Tetrahedral OFF ------------------------------------------------------------------------------

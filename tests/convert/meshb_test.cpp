@@ -267,42 +267,53 @@ TEST(MeshbImport, ContentDecidesBetweenAsciiAndBinary) {
   }
 }
 
+// TetrahedraP2 elements are kept by their 4 corners, with a warning; HexahedraQ2 ones are skipped
+// with a warning (an error when nothing else is left).
 TEST(MeshbImport, QuadraticElementsAreSkippedWithAWarning) {
   const std::string dir = tempDir("meshb-p2");
-  MeshbWriter w(2, false);
-  w.begin(3);
-  w.int32(3);
-  w.begin(4);
-  w.integer(4);
-  const double c[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  for (const auto& p : c) {
-    for (double v : p) w.real(v);
-    w.integer(0);
-  }
-  const size_t p2_at = w.size();
-  w.begin(30);  // TetrahedraP2
-  w.integer(1);
-  for (int k = 0; k < 11; ++k) w.integer(1);
-  const size_t before_tets = w.size();
-  w.begin(8);
-  w.integer(1);
-  for (int v : {1, 2, 3, 4, 6}) w.integer(v);
-  const std::string bytes = w.end();
-  writeFile(dir + "/p2.meshb", bytes);
+  size_t q2_at = 0;
+  auto file = [&](bool with_p2) {
+    MeshbWriter w(2, false);
+    w.begin(3);
+    w.int32(3);
+    w.begin(4);
+    w.integer(4);
+    const double c[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (const auto& p : c) {
+      for (double v : p) w.real(v);
+      w.integer(0);
+    }
+    if (with_p2) {
+      w.begin(30);  // TetrahedraP2: 4 corners, 6 mid-edge nodes (any vertices here), a reference
+      w.integer(1);
+      for (int v : {1, 2, 3, 4, 1, 2, 3, 4, 1, 2, 7}) w.integer(v);
+    }
+    q2_at = w.size();
+    w.begin(33);  // HexahedraQ2: 27 nodes and a reference
+    w.integer(1);
+    for (int k = 0; k < 28; ++k) w.integer(k % 4 + 1);
+    return w.end();
+  };
+  writeFile(dir + "/p2.meshb", file(true));
   auto r = importMesh({dir + "/p2.meshb"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
   EXPECT_EQ(r->mesh.numTets(), 1u);
-  ASSERT_EQ(r->report.warnings.size(), 1u);
-  EXPECT_NE(r->report.warnings[0].find("skipped TetrahedraP2 at byte offset " + std::to_string(p2_at)),
+  EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 1.0 / 6.0, 1e-12);
+  ASSERT_EQ(r->report.warnings.size(), 2u) << ::testing::PrintToString(r->report.warnings);
+  EXPECT_NE(r->report.warnings[0].find("skipped HexahedraQ2 at byte offset " + std::to_string(q2_at)),
             std::string::npos)
       << r->report.warnings[0];
-  // Without the tetrahedron (the P2 record then ends the file): an error that names what was skipped.
-  std::string only = bytes.substr(0, before_tets);
-  writeFile(dir + "/only.meshb", only);
+  EXPECT_EQ(r->report.warnings[1],
+            "1 TetrahedraP2 elements kept by their 4 corners; their mid-edge nodes are kept as unreferenced points");
+  const Field* ref = test::findField(r->mesh.cell_fields, "ref");
+  ASSERT_NE(ref, nullptr);
+  EXPECT_EQ(ref->get(0, 0), 7);
+  // Without the P2 tetrahedron: an error that names what was skipped.
+  writeFile(dir + "/only.meshb", file(false));
   auto e = importMesh({dir + "/only.meshb"}, ImportOptions{});
   ASSERT_FALSE(e.isOk());
   EXPECT_NE(
-      e.status().message().find("only TetrahedraP2 (byte offset " + std::to_string(p2_at) + "), which are not read"),
+      e.status().message().find("only HexahedraQ2 (byte offset " + std::to_string(q2_at) + "), which are not read"),
       std::string::npos)
       << e.status().message();
 }
