@@ -244,13 +244,21 @@ TEST_P(Datasets, StoredLevelsDecodeToTheInMemoryResult) {
 // tree is decoded beside the level's streams (streamSimplified), and a read gives what applying the
 // merges to level 0 gives, whatever the threads, at merge counts within the tree and past it
 // (clamped to the whole tree, or refused without the clamp, as before).
+// Blunt fin converted to level 0 with its whole merge tree and no other level (--levels 0), once per
+// test binary (tempDir removes it at the end).
+const std::string& bluntFinLevel0Only() {
+  static const std::string path = [] {
+    const std::string p = tempDir("stream_simplified") + "/bluntfin.gtn";
+    const RunResult made = runGtn("convert " + dataPath("plot3d/bluntfinxyz.bin") + " " +
+                                  dataPath("plot3d/bluntfinq.bin") + " -o " + p + " --levels 0 -q");
+    EXPECT_EQ(made.exit_code, 0) << made.err;
+    return p;
+  }();
+  return path;
+}
+
 TEST(StreamSimplified, GridTreeDecodedBesideItsLevelGivesTheMergesOfLevel0) {
-  const std::string dir = tempDir("stream_simplified_grid");
-  const std::string path = dir + "/bluntfin.gtn";
-  const RunResult made = runGtn("convert " + dataPath("plot3d/bluntfinxyz.bin") + " " +
-                                dataPath("plot3d/bluntfinq.bin") + " -o " + path + " --levels 0 -q");
-  ASSERT_EQ(made.exit_code, 0) << made.err;
-  auto r = GtnReader::open(path);
+  auto r = GtnReader::open(bluntFinLevel0Only());
   ASSERT_TRUE(r.isOk()) << r.status().message();
   ASSERT_EQ((*r)->levels(), 1u);
   auto payload = (*r)->mergeTreePayload(0);
@@ -289,7 +297,6 @@ TEST(StreamSimplified, GridTreeDecodedBesideItsLevelGivesTheMergesOfLevel0) {
           << st.message();
     }
   }
-  std::filesystem::remove_all(dir);
 }
 
 // A sink that takes a level whole (as TetMeshBuilder does) gets a grid's simplified level whole from
@@ -310,12 +317,7 @@ TEST(StreamSimplified, AGridLevelGivenWholeIsSimplifiedWhole) {
     int whole_levels = 0, event_levels = 0;
   };
   struct EventSink : TetMeshBuilder {};  // not exactly TetMeshBuilder: takes the events
-  const std::string dir = tempDir("stream_simplified_whole");
-  const std::string path = dir + "/bluntfin.gtn";
-  const RunResult made = runGtn("convert " + dataPath("plot3d/bluntfinxyz.bin") + " " +
-                                dataPath("plot3d/bluntfinq.bin") + " -o " + path + " --levels 0 -q");
-  ASSERT_EQ(made.exit_code, 0) << made.err;
-  auto r = GtnReader::open(path);
+  auto r = GtnReader::open(bluntFinLevel0Only());
   ASSERT_TRUE(r.isOk()) << r.status().message();
   // Each tetrahedron with its orientation, each boundary triangle, by their points' coordinates.
   auto oriented = [](const TetMesh& m) {
@@ -356,7 +358,6 @@ TEST(StreamSimplified, AGridLevelGivenWholeIsSimplifiedWhole) {
     EXPECT_TRUE(triangles(whole.mesh(), whole.boundary()) == triangles(events.mesh(), events.boundary()));
     EXPECT_EQ(whole.boundary().size(), events.header().boundary_triangles);
   }
-  std::filesystem::remove_all(dir);
 }
 
 INSTANTIATE_TEST_SUITE_P(Simplify, Datasets, ::testing::Values("spx", "cornell", "bluntfin", "combustion"));
