@@ -275,12 +275,12 @@ StatusOr<uint64_t> mergesForRatio(GtnReader& reader, double ratio) {
   return free + static_cast<uint64_t>(std::llround(std::min(1.0, ratio) * static_cast<double>(points - free)));
 }
 
-StatusOr<LevelTree> levelMergeTree(GtnReader& reader, size_t i, uint64_t max_merges, const DecodeFields* fields) {
+namespace {
+// levelMergeTree with level i's payload read already, and its header.
+StatusOr<LevelTree> levelMergeTreeOf(GtnReader& reader, size_t i, uint64_t max_merges, const DecodeFields* fields,
+                                     const std::vector<uint8_t>& payload, const MergeTreeHeader& h) {
   const std::string what = reader.file().path + ", level " + std::to_string(i);
-  GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(i));
-  if (!payload) return usageError(what + " stores no merge tree: cannot simplify beyond the stored levels");
   const uint64_t points = reader.level(i).header.points;
-  GTN_ASSIGN_OR_RETURN(MergeTreeHeader h, readMergeTreeHeader(*payload, points, what));
   LevelTree out;
   out.level = i;
   std::vector<uint32_t> ids;  // the next level's ids of the level's vertices, where the tree needs them
@@ -288,9 +288,18 @@ StatusOr<LevelTree> levelMergeTree(GtnReader& reader, size_t i, uint64_t max_mer
     out.decoded = std::make_unique<TetMeshBuilder>();
     GTN_RETURN_IF_ERROR(reader.decodeLevel(i, *out.decoded, nullptr, fields, h.needs_next_ids ? &ids : nullptr));
   }
-  GTN_ASSIGN_OR_RETURN(out.tree, decodeMergeTree(*payload, points, what, out.decoded ? &out.decoded->mesh() : nullptr,
+  GTN_ASSIGN_OR_RETURN(out.tree, decodeMergeTree(payload, points, what, out.decoded ? &out.decoded->mesh() : nullptr,
                                                  max_merges, h.needs_next_ids ? &ids : nullptr));
   return out;
+}
+}  // namespace
+
+StatusOr<LevelTree> levelMergeTree(GtnReader& reader, size_t i, uint64_t max_merges, const DecodeFields* fields) {
+  const std::string what = reader.file().path + ", level " + std::to_string(i);
+  GTN_ASSIGN_OR_RETURN(auto payload, reader.mergeTreePayload(i));
+  if (!payload) return usageError(what + " stores no merge tree: cannot simplify beyond the stored levels");
+  GTN_ASSIGN_OR_RETURN(MergeTreeHeader h, readMergeTreeHeader(*payload, reader.level(i).header.points, what));
+  return levelMergeTreeOf(reader, i, max_merges, fields, *payload, h);
 }
 
 Status emitLevel(GtnReader& reader, const LevelTree& level, MeshSink& sink, const DecodeFields* fields) {
@@ -328,13 +337,29 @@ class SimplifierOnceTreeIsReady : public MeshSink {
     return filter_->beginLevel(header);
   }
   Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) override {
+    GTN_RETURN_IF_ERROR(begun());
     return filter_->vertex(id, xyz, values);
   }
-  Status boundaryTriangle(const uint32_t v[3]) override { return filter_->boundaryTriangle(v); }
-  Status endBoundary() override { return filter_->endBoundary(); }
-  Status tet(const uint32_t v[4], const uint8_t* cell_values) override { return filter_->tet(v, cell_values); }
-  Status retireVertex(uint32_t id) override { return filter_->retireVertex(id); }
-  Status endLevel() override { return filter_->endLevel(); }
+  Status boundaryTriangle(const uint32_t v[3]) override {
+    GTN_RETURN_IF_ERROR(begun());
+    return filter_->boundaryTriangle(v);
+  }
+  Status endBoundary() override {
+    GTN_RETURN_IF_ERROR(begun());
+    return filter_->endBoundary();
+  }
+  Status tet(const uint32_t v[4], const uint8_t* cell_values) override {
+    GTN_RETURN_IF_ERROR(begun());
+    return filter_->tet(v, cell_values);
+  }
+  Status retireVertex(uint32_t id) override {
+    GTN_RETURN_IF_ERROR(begun());
+    return filter_->retireVertex(id);
+  }
+  Status endLevel() override {
+    GTN_RETURN_IF_ERROR(begun());
+    return filter_->endLevel();
+  }
   bool takesWholeLevel() const override { return out_.takesWholeLevel(); }
   Status wholeLevel(const LevelHeader& header, TetMesh&& mesh,
                     std::vector<std::array<uint32_t, 3>>&& boundary) override {
@@ -344,6 +369,9 @@ class SimplifierOnceTreeIsReady : public MeshSink {
   }
 
  private:
+  Status begun() const {
+    return filter_ ? Status::ok() : invalidData("simplification: a level's event before its beginning");
+  }
   std::function<StatusOr<const MergeTree*>()> ready_;
   const SimplifyPlan& plan_;
   MeshSink& out_;
@@ -386,7 +414,7 @@ Status streamSimplified(GtnReader& reader, uint64_t target_merges, MeshSink& sin
     if (!waited) GTN_RETURN_IF_ERROR(fitPlanToTree(reader, **tree, target_merges, clamp, plan, plan_out));
     return st;
   }
-  GTN_ASSIGN_OR_RETURN(LevelTree level, levelMergeTree(reader, plan.level, plan.extra_merges, fields));
+  GTN_ASSIGN_OR_RETURN(LevelTree level, levelMergeTreeOf(reader, plan.level, plan.extra_merges, fields, *payload, h));
   GTN_RETURN_IF_ERROR(fitPlanToTree(reader, level.tree, target_merges, clamp, plan, plan_out));
   StreamSimplifier filter(level.tree, plan.extra_merges, sink);
   return emitLevel(reader, level, filter, fields);
