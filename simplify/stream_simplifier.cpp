@@ -109,9 +109,6 @@ Status StreamSimplifier::wholeLevel(const LevelHeader& header, TetMesh&& mesh,
   if (np != header.points || mesh.numTets() != header.tets || boundary.size() != header.boundary_triangles ||
       mesh.coords.size() != 3 * np)
     return invalidData("simplification: the level given whole disagrees with its header");
-  for (const Tet& t : mesh.tets)
-    if (std::max({t[0], t[1], t[2], t[3]}) >= np)
-      return invalidData("simplification: a tetrahedron refers to a vertex beyond the level");
   for (const auto& f : boundary)
     if (std::max({f[0], f[1], f[2]}) >= np)
       return invalidData("simplification: a boundary triangle refers to a vertex beyond the level");
@@ -141,9 +138,17 @@ Status StreamSimplifier::wholeLevel(const LevelHeader& header, TetMesh&& mesh,
   resizePopulated(out.tets, out_header_.tets);
   std::vector<uint32_t> kept_cell;  // per output tetrahedron, its input one (for the cell fields)
   if (!mesh.cell_fields.empty()) resizePopulated(kept_cell, out_header_.tets);
-  std::atomic<bool> overflow{false};
+  std::atomic<bool> overflow{false}, beyond{false};
   const size_t tets = compactInOrder(
-      nt, [&](size_t t) { return distinct(mapped(mesh.tets[t])); },
+      nt,
+      [&](size_t t) {
+        const Tet& q = mesh.tets[t];
+        if (std::max({q[0], q[1], q[2], q[3]}) >= np) {
+          beyond.store(true, std::memory_order_relaxed);
+          return false;
+        }
+        return distinct(mapped(q));
+      },
       [&](size_t t, size_t at) {
         if (at >= out.tets.size()) {
           overflow.store(true, std::memory_order_relaxed);
@@ -152,6 +157,7 @@ Status StreamSimplifier::wholeLevel(const LevelHeader& header, TetMesh&& mesh,
         out.tets[at] = mapped(mesh.tets[t]);
         if (!kept_cell.empty()) kept_cell[at] = static_cast<uint32_t>(t);
       });
+  if (beyond.load()) return invalidData("simplification: a tetrahedron refers to a vertex beyond the level");
   dropped_tets_ = nt - tets;
   if (overflow.load() || tets != out_header_.tets)
     return invalidData("simplification: " + std::to_string(tets) + " tetrahedra, the merge tree implies " +
