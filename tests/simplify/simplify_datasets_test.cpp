@@ -17,6 +17,7 @@
 #include "mesh/predicates.h"
 #include "simplify/levels.h"
 #include "simplify/ranking.h"
+#include "simplify/stream_simplifier.h"
 #include "simplify_test_util.h"
 #include "test_util.h"
 
@@ -358,6 +359,45 @@ TEST(StreamSimplified, AGridLevelGivenWholeIsSimplifiedWhole) {
     EXPECT_TRUE(triangles(whole.mesh(), whole.boundary()) == triangles(events.mesh(), events.boundary()));
     EXPECT_EQ(whole.boundary().size(), events.header().boundary_triangles);
   }
+}
+
+// StreamSimplifier::wholeLevel on its own: blunt fin's level 0 given whole gives what applying the
+// merges gives; a level with a tetrahedron beyond its points, or a tree whose removed counts disagree
+// with the level, is refused as the event path refuses it.
+TEST(StreamSimplified, WholeLevelRefusesWhatTheEventsRefuse) {
+  auto r = GtnReader::open(bluntFinLevel0Only());
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  TetMeshBuilder level0;
+  ASSERT_TRUE((*r)->decodeLevel(0, level0).isOk());
+  auto payload = (*r)->mergeTreePayload(0);
+  ASSERT_TRUE(payload.isOk() && payload->has_value());
+  auto tree = decodeMergeTree(**payload, level0.header().points, "level 0", nullptr);
+  ASSERT_TRUE(tree.isOk()) << tree.status().message();
+  const uint64_t n = tree->merges / 2;
+  auto run = [&](const MergeTree& t, TetMesh mesh) {
+    TetMeshBuilder out;
+    StreamSimplifier filter(t, n, out);
+    auto boundary = level0.boundary();
+    const Status st = filter.wholeLevel(level0.header(), std::move(mesh), std::move(boundary));
+    return std::make_pair(st, std::move(out.mesh()));
+  };
+  auto [ok, simplified] = run(*tree, level0.mesh());
+  ASSERT_TRUE(ok.isOk()) << ok.message();
+  auto want = applyMerges(level0.mesh(), *tree, n);
+  ASSERT_TRUE(want.isOk());
+  EXPECT_TRUE(canonicalMesh(simplified) == canonicalMesh(*want));
+  TetMesh beyond = level0.mesh();
+  beyond.tets[beyond.tets.size() / 2][1] = static_cast<uint32_t>(beyond.numPoints());
+  const Status b = run(*tree, std::move(beyond)).first;
+  EXPECT_EQ(b.code(), StatusCode::kInvalidData);
+  EXPECT_NE(b.message().find("refers to a vertex beyond the level"), std::string::npos) << b.message();
+  MergeTree miscounted = *tree;
+  for (size_t v = 0; v < miscounted.points(); ++v)
+    if (miscounted.rank[v] == 1) miscounted.removed[v] += 1;
+  miscounted.checked = false;
+  const Status m = run(miscounted, level0.mesh()).first;
+  EXPECT_EQ(m.code(), StatusCode::kInvalidData);
+  EXPECT_NE(m.message().find("the merge tree implies"), std::string::npos) << m.message();
 }
 
 INSTANTIATE_TEST_SUITE_P(Simplify, Datasets, ::testing::Values("spx", "cornell", "bluntfin", "combustion"));
