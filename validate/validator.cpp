@@ -7,6 +7,8 @@
 
 #include <cctype>
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include "codec/merge_tree_coder.h"
@@ -90,6 +92,49 @@ void compareWithSource(const TetMesh& level0, const TetMesh& source, ValidationR
   }
 }
 
+// Why the level's stored bounding box is not the box of its points, or empty: the smallest and largest
+// x, y, z of all its points, or of the points its tetrahedra use (a level of several pieces boxes the
+// vertices its pieces use). Region reads (--box) and the renderer's framing trust it. A level with no
+// point, or with a coordinate that is not finite (reported as such), is not compared.
+std::string boundingBoxMismatch(const TetMesh& mesh, const LevelHeader& h) {
+  const size_t np = mesh.numPoints();
+  if (np == 0) return "";
+  for (double x : mesh.coords)
+    if (!std::isfinite(x)) return "";
+  double all_min[3], all_max[3], used_min[3], used_max[3];
+  for (int a = 0; a < 3; ++a) {
+    all_min[a] = used_min[a] = HUGE_VAL;
+    all_max[a] = used_max[a] = -HUGE_VAL;
+  }
+  std::vector<char> used(np, 0);
+  for (const Tet& t : mesh.tets)
+    for (uint32_t v : t)
+      if (v < np) used[v] = 1;
+  for (size_t v = 0; v < np; ++v)
+    for (int a = 0; a < 3; ++a) {
+      const double x = mesh.coords[3 * v + a];
+      all_min[a] = std::min(all_min[a], x);
+      all_max[a] = std::max(all_max[a], x);
+      if (!used[v]) continue;
+      used_min[a] = std::min(used_min[a], x);
+      used_max[a] = std::max(used_max[a], x);
+    }
+  auto same = [&](const double* mn, const double* mx) {
+    for (int a = 0; a < 3; ++a)
+      if (h.bbox_min[a] != mn[a] || h.bbox_max[a] != mx[a]) return false;
+    return true;
+  };
+  if (same(all_min, all_max) || same(used_min, used_max)) return "";
+  auto box = [](const double* mn, const double* mx) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "[%.17g, %.17g] x [%.17g, %.17g] x [%.17g, %.17g]", mn[0], mx[0], mn[1], mx[1],
+                  mn[2], mx[2]);
+    return std::string(buf);
+  };
+  return "the header's bounding box " + box(h.bbox_min, h.bbox_max) + " is not the box of the level's points " +
+         box(all_min, all_max) + "; region reads (--box) and rendering rely on it";
+}
+
 void validateDecoded(const DecodedFile& file, const ValidateOptions& options, ValidationReport& report) {
   if (file.levels.empty() || file.levels.front().level != 0) {
     report.add(IssueCode::kNoLevels, "/levels", "/levels", "the file holds no level 0");
@@ -108,6 +153,8 @@ void validateDecoded(const DecodedFile& file, const ValidateOptions& options, Va
                      std::to_string(level.mesh.numPoints()) + ", " + std::to_string(level.mesh.numTets()) + " and " +
                      std::to_string(level.boundary.size()));
     }
+    if (const std::string why = boundingBoxMismatch(level.mesh, h); !why.empty())
+      report.add(IssueCode::kBoundingBoxMismatch, scope, scope + "/bbox", why);
     MeshCheckStats stats;
     const bool ok = checkMesh(level.mesh, scope, report, &stats);
     if (ok) checkStoredBoundary(level.mesh, level.boundary, scope, report);

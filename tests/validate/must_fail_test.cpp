@@ -125,6 +125,11 @@ DecodedFile decodedOf(const TetMesh& mesh) {
   const FaceAdjacency adj = computeFaceAdjacency(mesh);
   l.boundary = boundaryTriangles(mesh, adj);
   l.header.boundary_triangles = l.boundary.size();
+  const MeshStats stats = computeMeshStats(mesh);
+  for (int a = 0; a < 3; ++a) {
+    l.header.bbox_min[a] = stats.bbox_min[a];
+    l.header.bbox_max[a] = stats.bbox_max[a];
+  }
   f.levels.push_back(std::move(l));
   return f;
 }
@@ -226,6 +231,11 @@ std::map<std::string, Case> cases() {
   c["LEVEL_COUNT_MISMATCH"].decoded = [] {
     DecodedFile f = decodedOf(base().mesh);
     f.levels[0].header.tets += 1;
+    return reportOf(f);
+  };
+  c["BOUNDING_BOX_MISMATCH"].decoded = [] {
+    DecodedFile f = decodedOf(base().mesh);
+    f.levels[0].header.bbox_max[1] += 1.0;  // a box taller than the points
     return reportOf(f);
   };
   c["BOUNDARY_MISMATCH"].decoded = [] {
