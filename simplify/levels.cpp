@@ -318,9 +318,9 @@ Status fitPlanToTree(GtnReader& reader, const MergeTree& tree, uint64_t target_m
     if (plan_out) *plan_out = plan;
   }
   if (plan.extra_merges > tree.merges)
-    return usageError(reader.file().path + ", level " + std::to_string(plan.level) + ": " +
-                      std::to_string(target_merges) + " merges requested, the merge tree has " +
-                      std::to_string(reader.level(plan.level).header.merges + tree.merges));
+    return usageError(reader.file().path + ": " + std::to_string(target_merges) +
+                      " merges requested, the merge tree has " +
+                      std::to_string(reader.level(plan.level).header.merges + tree.merges) + " in all");
   return Status::ok();
 }
 
