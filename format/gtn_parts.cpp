@@ -9,6 +9,7 @@
 //   down 4: whether part 0 wrote the file
 #include "format/gtn_parts.h"
 
+#include <cerrno>
 #include <cstring>
 
 #include "codec/pieces_check.h"
@@ -550,13 +551,13 @@ Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std
         GtnStreamWriter w(
             [&](std::span<const uint8_t> b) -> Status {
               if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size())
-                return ioError(path + ": write failed");
+                return ioError(path + ": write failed: " + std::strerror(errno));
               return Status::ok();
             },
             wo);
         GTN_RETURN_IF_ERROR(w.begin(level.header, 1));
         Status s = w.addLevel(level, 0.0, std::nullopt);
-        if (!s.isOk()) return Status(s.code(), path + ": " + s.message());
+        if (!s.isOk()) return s.message().rfind(path + ": ", 0) == 0 ? s : Status(s.code(), path + ": " + s.message());
         return w.finish();
       });
     }

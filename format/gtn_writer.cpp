@@ -1,4 +1,6 @@
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
@@ -510,7 +512,8 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
   return writeFileAtomically(path, [&](std::FILE* f) -> Status {
     GtnStreamWriter w(
         [&](std::span<const uint8_t> b) -> Status {
-          if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size()) return ioError(path + ": write failed");
+          if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size())
+            return ioError(path + ": write failed: " + std::strerror(errno));
           return Status::ok();
         },
         options);
@@ -528,7 +531,8 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
       const EncodedInput& e = bounded || chained ? encoded[i] : one;
       if (i == 0) GTN_RETURN_IF_ERROR(w.begin(e.level.header, count));
       Status st = w.addLevel(e.level, levels[i].ratio, e.tree);
-      if (!st.isOk()) return Status(st.code(), path + ": " + st.message());
+      if (!st.isOk())
+        return st.message().rfind(path + ": ", 0) == 0 ? st : Status(st.code(), path + ": " + st.message());
     }
     return w.finish();
   });
