@@ -40,7 +40,8 @@ const char* severityName(Severity severity);  // "error", "warning", "info"
   X(kBoundaryMismatch, "BOUNDARY_MISMATCH", kError, "decoding",                                                        \
     "levels whose stored boundary surface differs from the boundary of their tetrahedra")                              \
   X(kBoundingBoxMismatch, "BOUNDING_BOX_MISMATCH", kError, "decoding",                                                 \
-    "levels whose stored bounding box is not the box of their points")                                                 \
+    "levels whose stored bounding box is not the box of their points, or pieces whose box misses one of their "        \
+    "vertices")                                                                                                        \
   /* mesh: each decoded level is a valid tetrahedral mesh */                                                           \
   X(kIndexOutOfRange, "INDEX_OUT_OF_RANGE", kError, "mesh", "tetrahedra referring to a vertex that does not exist")    \
   X(kRepeatedVertex, "REPEATED_VERTEX", kError, "mesh", "tetrahedra using the same vertex twice")                      \

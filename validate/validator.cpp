@@ -135,6 +135,39 @@ std::string boundingBoxMismatch(const TetMesh& mesh, const LevelHeader& h) {
          box(all_min, all_max) + "; region reads (--box) and rendering rely on it";
 }
 
+// A level of several pieces lists its tetrahedra piece by piece: each piece's stored box (LHDR) must
+// hold the vertices of its tetrahedra, or a region read (--box) skips a piece that meets the region.
+void checkPieceBoxes(const GtnLevelInfo& li, const TetMesh& mesh, const std::string& scope, ValidationReport& report) {
+  if (li.pieces.size() < 2) return;  // one piece: its box is the level's
+  uint64_t total = 0;
+  for (const PieceInfo& p : li.pieces) total += p.tets;
+  if (total != mesh.numTets()) return;  // reported as LEVEL_COUNT_MISMATCH
+  uint64_t first = 0;
+  for (size_t p = 0; p < li.pieces.size(); ++p) {
+    const PieceInfo& info = li.pieces[p];
+    for (uint64_t t = first; t < first + info.tets; ++t) {
+      for (uint32_t v : mesh.tets[t]) {
+        if (v >= mesh.numPoints()) continue;  // INDEX_OUT_OF_RANGE
+        const double* x = mesh.point(v);
+        bool inside = true;
+        for (int a = 0; a < 3; ++a)
+          inside = inside && !(x[a] < info.bbox_min[a]) && !(x[a] > info.bbox_max[a]);  // NaN: not compared
+        if (inside) continue;
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "[%.17g, %.17g] x [%.17g, %.17g] x [%.17g, %.17g]", info.bbox_min[0],
+                      info.bbox_max[0], info.bbox_min[1], info.bbox_max[1], info.bbox_min[2], info.bbox_max[2]);
+        report.add(IssueCode::kBoundingBoxMismatch, scope, scope + "/pieces/" + std::to_string(p),
+                   "piece " + std::to_string(p) + "'s bounding box " + buf + " does not hold vertex " +
+                       std::to_string(v) + " of its tetrahedron " + std::to_string(t) +
+                       "; a region read (--box) skips the piece where the region misses the box");
+        t = first + info.tets;  // one report per piece
+        break;
+      }
+    }
+    first += info.tets;
+  }
+}
+
 void validateDecoded(const DecodedFile& file, const ValidateOptions& options, ValidationReport& report) {
   if (file.levels.empty() || file.levels.front().level != 0) {
     report.add(IssueCode::kNoLevels, "/levels", "/levels", "the file holds no level 0");
@@ -345,6 +378,7 @@ StatusOr<ValidationReport> validateGtnFile(const std::string& path, const Valida
       if (i == 0) break;
       continue;
     }
+    checkPieceBoxes(reader.level(i), builder.mesh(), scope, report);
     DecodedLevel level;
     level.level = static_cast<uint32_t>(i);
     level.header = reader.level(i).header;

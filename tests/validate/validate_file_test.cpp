@@ -9,12 +9,39 @@
 
 #include <nlohmann/json.hpp>
 
+#include "codec/pieces.h"
 #include "convert/import.h"
+#include "format/gtn_file.h"
 #include "mesh/mesh_stats.h"
 #include "validate/validate_fixtures.h"
 
 namespace gtn::test {
 namespace {
+
+// A level of several pieces whose piece table gives a piece a box that misses some of its vertices
+// (the file otherwise intact): gtn validate says which piece, since a region read would skip it.
+TEST(ValidateFile, APieceBoxThatMissesItsVerticesIsReported) {
+  const std::string dir = tempDir("validate-piece-box");
+  const TetMesh mesh = makeGrid(16, 14, 12);
+  auto encoded = encodePieces(mesh, EncodeOptions{}, kMinPieceTets);
+  ASSERT_TRUE(encoded.isOk()) << encoded.status().message();
+  ASSERT_GE(encoded->pieces.size(), 3u);
+  for (const bool shrunk : {false, true}) {
+    SCOPED_TRACE(shrunk ? "piece 1's box shrunk" : "as encoded");
+    auto level = std::make_shared<PiecedLevel>(*encoded);
+    if (shrunk) level->pieces[1].bbox_max[0] = level->pieces[1].bbox_min[0];
+    GtnLevelInput in;
+    in.mesh = &mesh;
+    in.encoded = level;
+    GtnWriteOptions wo;
+    const std::string path = dir + (shrunk ? "/shrunk.gtn" : "/pieces.gtn");
+    ASSERT_TRUE(writeGtnFile(path, {in}, wo).isOk());
+    StatusOr<ValidationReport> r = validateGtnFile(path, {});
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    EXPECT_EQ(r->count(IssueCode::kBoundingBoxMismatch), shrunk ? 1u : 0u) << r->toText(path);
+    if (shrunk) EXPECT_NE(r->toText(path).find("/levels/0/pieces/1"), std::string::npos) << r->toText(path);
+  }
+}
 
 TEST(ValidateFile, GridWithLevelsIsClean) {
   const std::string dir = tempDir("validate-grid");
