@@ -92,6 +92,14 @@ void compareWithSource(const TetMesh& level0, const TetMesh& source, ValidationR
   }
 }
 
+// A box as "[x0, x1] x [y0, y1] x [z0, z1]", every digit of each bound.
+std::string boxText(const double mn[3], const double mx[3]) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "[%.17g, %.17g] x [%.17g, %.17g] x [%.17g, %.17g]", mn[0], mx[0], mn[1], mx[1], mn[2],
+                mx[2]);
+  return buf;
+}
+
 // Why the level's stored bounding box is not the box of its points, or empty: the smallest and largest
 // x, y, z of all its points, or of the points its tetrahedra use (a level of several pieces boxes the
 // vertices its pieces use). Region reads (--box) and the renderer's framing trust it. A level with no
@@ -125,14 +133,8 @@ std::string boundingBoxMismatch(const TetMesh& mesh, const LevelHeader& h) {
     return true;
   };
   if (same(all_min, all_max) || same(used_min, used_max)) return "";
-  auto box = [](const double* mn, const double* mx) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "[%.17g, %.17g] x [%.17g, %.17g] x [%.17g, %.17g]", mn[0], mx[0], mn[1], mx[1],
-                  mn[2], mx[2]);
-    return std::string(buf);
-  };
-  return "the header's bounding box " + box(h.bbox_min, h.bbox_max) + " is not the box of the level's points " +
-         box(all_min, all_max) + "; region reads (--box) and rendering rely on it";
+  return "the header's bounding box " + boxText(h.bbox_min, h.bbox_max) + " is not the box of the level's points " +
+         boxText(all_min, all_max) + "; region reads (--box) and rendering rely on it";
 }
 
 // A level of several pieces lists its tetrahedra piece by piece: each piece's stored box (LHDR) must
@@ -142,29 +144,28 @@ void checkPieceBoxes(const GtnLevelInfo& li, const TetMesh& mesh, const std::str
   uint64_t total = 0;
   for (const PieceInfo& p : li.pieces) total += p.tets;
   if (total != mesh.numTets()) return;  // reported as LEVEL_COUNT_MISMATCH
+  // Whether vertex v lies in the piece's box (a vertex out of range or a NaN coordinate is reported
+  // by the mesh checks).
+  auto inside = [&](const PieceInfo& info, uint32_t v) {
+    if (v >= mesh.numPoints()) return true;
+    const double* x = mesh.point(v);
+    for (int a = 0; a < 3; ++a)
+      if (x[a] < info.bbox_min[a] || x[a] > info.bbox_max[a]) return false;
+    return true;
+  };
   uint64_t first = 0;
-  for (size_t p = 0; p < li.pieces.size(); ++p) {
+  for (size_t p = 0; p < li.pieces.size(); first += li.pieces[p].tets, ++p) {
     const PieceInfo& info = li.pieces[p];
     for (uint64_t t = first; t < first + info.tets; ++t) {
-      for (uint32_t v : mesh.tets[t]) {
-        if (v >= mesh.numPoints()) continue;  // INDEX_OUT_OF_RANGE
-        const double* x = mesh.point(v);
-        bool inside = true;
-        for (int a = 0; a < 3; ++a)
-          inside = inside && !(x[a] < info.bbox_min[a]) && !(x[a] > info.bbox_max[a]);  // NaN: not compared
-        if (inside) continue;
-        char buf[200];
-        std::snprintf(buf, sizeof buf, "[%.17g, %.17g] x [%.17g, %.17g] x [%.17g, %.17g]", info.bbox_min[0],
-                      info.bbox_max[0], info.bbox_min[1], info.bbox_max[1], info.bbox_min[2], info.bbox_max[2]);
-        report.add(IssueCode::kBoundingBoxMismatch, scope, scope + "/pieces/" + std::to_string(p),
-                   "piece " + std::to_string(p) + "'s bounding box " + buf + " does not hold vertex " +
-                       std::to_string(v) + " of its tetrahedron " + std::to_string(t) +
-                       "; a region read (--box) skips the piece where the region misses the box");
-        t = first + info.tets;  // one report per piece
-        break;
-      }
+      const auto out =
+          std::find_if(mesh.tets[t].begin(), mesh.tets[t].end(), [&](uint32_t v) { return !inside(info, v); });
+      if (out == mesh.tets[t].end()) continue;
+      report.add(IssueCode::kBoundingBoxMismatch, scope, scope + "/pieces/" + std::to_string(p),
+                 "piece " + std::to_string(p) + "'s bounding box " + boxText(info.bbox_min, info.bbox_max) +
+                     " does not hold vertex " + std::to_string(*out) + " of its tetrahedron " + std::to_string(t) +
+                     "; a region read (--box) skips the piece where the region misses the box");
+      break;  // one report per piece
     }
-    first += info.tets;
   }
 }
 
