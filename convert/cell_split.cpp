@@ -895,7 +895,8 @@ void splitCell(const VtkCells& cells, size_t c, int split, Splitter& splitter, s
 
 // The warnings of the split: cells reduced to their corners, hexahedra split into 6 rather than 5,
 // cells coned from another vertex or around an added point, pieces dropped as flat.
-void reportSplit(const CellCensus& census, const Splitter& splitter, int split, ImportReport* report) {
+void reportSplit(const CellCensus& census, const Splitter& splitter, int split, bool faces_shared,
+                 ImportReport* report) {
   if (census.quadratic)
     report->warnings.push_back(std::to_string(census.quadratic) +
                                " quadratic tetrahedra (VTK_QUADRATIC_TETRA) reduced to their 4 corners; their "
@@ -913,7 +914,7 @@ void reportSplit(const CellCensus& census, const Splitter& splitter, int split, 
   if (splitter.five_inverted_)
     report->warnings.push_back(std::to_string(splitter.five_inverted_) + " of " + std::to_string(hexes) +
                                " hexahedra split into 6 tetrahedra: not convex, 5 would invert some");
-  if (splitter.rewound_)
+  if (splitter.rewound_ && !faces_shared)
     report->warnings.push_back(std::to_string(splitter.rewound_) +
                                " polyhedra (VTK_POLYHEDRON) whose faces do not all wind the same way split with "
                                "those faces turned to wind outward, as the others do");
@@ -949,7 +950,7 @@ Status splitVtkCells(const std::string& path, const VtkCells& cells, size_t num_
     if (type == kVtkPolyhedron) splitter.polyhedron(census.streams[next_stream++], static_cast<uint32_t>(c));
     else splitCell(cells, c, split, splitter, tets, tet_cell);
   }
-  reportSplit(census, splitter, split, report);
+  reportSplit(census, splitter, split, cells.faces_shared, report);
   return Status::ok();
 }
 

@@ -47,6 +47,9 @@ struct VtkCells {
   std::vector<int64_t> connectivity;
   std::vector<int64_t> faces;
   std::vector<int64_t> face_offsets;
+  // Faces listed once for the two cells they bound (Exodus NFACED): each winds outward for one of
+  // them only, so a polyhedron whose faces the split turns to wind alike is not reported.
+  bool faces_shared = false;
 };
 
 // Points added inside cells (splitVtkCells, GridHexSplitter): point k has coordinates

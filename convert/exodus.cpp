@@ -6,7 +6,9 @@
 // stay float32); the element blocks of volume elements (TETRA, HEX, WEDGE, PYRAMID and their
 // higher-order forms, whose corners come first and are kept; the other nodes stay as points that no
 // tetrahedron uses) are split into tetrahedra as the VTK importers split their cells
-// (cell_split.h: Exodus numbers the corners of these four as VTK does). The cell field "block_id"
+// (cell_split.h: Exodus numbers the corners of these four as VTK does), and so are NFACED blocks
+// (polyhedra, each a list of faces of the file's face blocks, NSIDED or of one face type), as VTK
+// polyhedra whose faces the split winds alike. The cell field "block_id"
 // holds each element's block id. Of one time step (ImportOptions::exodus_time_step, the last one by
 // default), the nodal variables become point fields and the element variables cell fields, in the
 // file's word size; variables named NAMEX, NAMEY, NAMEZ (or NAMEx, NAMEy, NAMEz) one after the other
@@ -16,8 +18,9 @@
 // library does not find (a warning), except nodal variables stored as meshio stores them
 // (netcdfNodal). Global variables of the step become
 // metadata ("exodus.global.NAME"). What is not read is said in a warning each: blocks of lower
-// dimension (triangles, quadrilaterals, shells, bars, ...) and polyhedra, node sets, side sets and the
-// other sets, edge and face blocks, element attributes and the variables of sets.
+// dimension (triangles, quadrilaterals, shells, bars, NSIDED polygons, ...), node sets, side sets and
+// the other sets, edge blocks and face blocks (but as NFACED elements' faces), element attributes
+// and the variables of sets.
 #include <dlfcn.h>
 #include <exodusII.h>
 #include <sys/stat.h>
@@ -48,6 +51,7 @@ struct ExodusApi {
   decltype(&::ex_get_block_param) ex_get_block_param = nullptr;
   decltype(&::ex_get_conn) ex_get_conn = nullptr;
   decltype(&::ex_get_coord) ex_get_coord = nullptr;
+  decltype(&::ex_get_entity_count_per_polyhedra) ex_get_entity_count_per_polyhedra = nullptr;
   decltype(&::ex_get_err) ex_get_err = nullptr;
   decltype(&::ex_get_ids) ex_get_ids = nullptr;
   decltype(&::ex_get_init_ext) ex_get_init_ext = nullptr;
@@ -91,6 +95,7 @@ const ExodusApi* exodusApi(std::string* why) {
     load(api.ex_get_block_param, "ex_get_block_param");
     load(api.ex_get_conn, "ex_get_conn");
     load(api.ex_get_coord, "ex_get_coord");
+    load(api.ex_get_entity_count_per_polyhedra, "ex_get_entity_count_per_polyhedra");
     load(api.ex_get_err, "ex_get_err");
     load(api.ex_get_ids, "ex_get_ids");
     load(api.ex_get_init_ext, "ex_get_init_ext");
@@ -172,6 +177,78 @@ bool volumeType(const std::string& type, VolumeType* out) {
   else if (starts("PYRA")) *out = {kVtkPyramid, 5};
   else return false;
   return true;
+}
+
+// The faces of the file's face blocks, which NFACED elements (polyhedra) list by number: face f
+// (numbered from 1 across the blocks, in the order of their ids) has the nodes
+// nodes[offsets[f - 1] .. offsets[f]) (numbered from 0). A face block is NSIDED (each face's node
+// count stored) or of one face type (TRI3, QUAD4, ...: its nodes per face).
+struct FaceTable {
+  std::vector<int64_t> offsets{0};
+  std::vector<int64_t> nodes;
+  size_t size() const { return offsets.size() - 1; }
+};
+
+// `fits` checks a count the file announces against its size (importExodus).
+template <class Fits>
+StatusOr<FaceTable> readFaceBlocks(const ExodusApi& api, const std::string& path, int exoid, int64_t num_face_blk,
+                                   int64_t num_nodes, const Fits& fits) {
+  FaceTable table;
+  GTN_RETURN_IF_ERROR(fits(num_face_blk, 1, "face blocks"));
+  if (num_face_blk > INT32_MAX)
+    return unsupported(path + ": " + std::to_string(num_face_blk) + " face blocks; at most 2^31-1 are supported");
+  std::vector<int64_t> ids(static_cast<size_t>(num_face_blk));
+  if (num_face_blk > 0 && api.ex_get_ids(exoid, EX_FACE_BLOCK, ids.data()) < 0)
+    return invalidData(path + ": cannot read the face block ids (ex_get_ids: " + exodusError(api) + ")");
+  std::vector<int> counts;
+  std::vector<int64_t> conn;
+  for (const int64_t id : ids) {
+    ex_block param{};
+    param.id = id;
+    param.type = EX_FACE_BLOCK;
+    const std::string where = "face block " + std::to_string(id);
+    if (api.ex_get_block_param(exoid, &param) < 0)
+      return invalidData(path + ": cannot read " + where + " (ex_get_block_param: " + exodusError(api) + ")");
+    param.topology[MAX_STR_LENGTH] = '\0';
+    const bool nsided = upper(trimmed(param.topology)).rfind("NSIDED", 0) == 0;
+    const int64_t faces = param.num_entry, per = param.num_nodes_per_entry;
+    if (faces < 0 || per < 0) return invalidData(path + ": " + where + " has a negative count");
+    if (faces == 0) continue;
+    GTN_RETURN_IF_ERROR(fits(faces, 4, where + " faces"));
+    // An NSIDED block's node count is its total; another's, each face's.
+    GTN_RETURN_IF_ERROR(fits(per, 4, where + " nodes per face"));
+    const int64_t total = nsided ? per : faces * per;
+    GTN_RETURN_IF_ERROR(fits(total, 4, where + " face nodes"));
+    if (!nsided && per < 3)
+      return invalidData(path + ": " + where + " (" + trimmed(param.topology) + ") has " + std::to_string(per) +
+                         " nodes per face; a face has at least 3");
+    conn.assign(static_cast<size_t>(total), 0);
+    if (total > 0 && api.ex_get_conn(exoid, EX_FACE_BLOCK, id, conn.data(), nullptr, nullptr) < 0)
+      return invalidData(path + ": cannot read the nodes of " + where + " (ex_get_conn: " + exodusError(api) + ")");
+    counts.assign(static_cast<size_t>(faces), static_cast<int>(std::min<int64_t>(per, INT32_MAX)));
+    if (nsided && api.ex_get_entity_count_per_polyhedra(exoid, EX_FACE_BLOCK, id, counts.data()) < 0)
+      return invalidData(path + ": cannot read the node counts of " + where +
+                         " (ex_get_entity_count_per_polyhedra: " + exodusError(api) + ")");
+    int64_t at = 0;
+    for (int64_t f = 0; f < faces; ++f) {
+      const int n = counts[static_cast<size_t>(f)];
+      if (n < 3 || n > total - at)
+        return invalidData(path + ": " + where + ", face " + std::to_string(f + 1) + " has " + std::to_string(n) +
+                           " nodes (at least 3, within the block's " + std::to_string(total) + ")");
+      for (int i = 0; i < n; ++i, ++at) {
+        const int64_t v = conn[static_cast<size_t>(at)];
+        if (v < 1 || v > num_nodes)
+          return invalidData(path + ": " + where + ", face " + std::to_string(f + 1) + " refers to node " +
+                             std::to_string(v) + "; nodes are numbered 1 to " + std::to_string(num_nodes));
+        table.nodes.push_back(v - 1);
+      }
+      table.offsets.push_back(static_cast<int64_t>(table.nodes.size()));
+    }
+    if (at != total)
+      return invalidData(path + ": " + where + ": its faces' node counts add up to " + std::to_string(at) + ", not " +
+                         std::to_string(total));
+  }
+  return table;
 }
 
 // Reads `names` (count names of `type`) with the database's name length.
@@ -557,6 +634,69 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
   std::map<std::string, int64_t> skipped;  // element type -> elements skipped
   std::map<std::string, int64_t> higher_order;
   int64_t total_elements = 0;
+  // NFACED blocks (polyhedra): the face blocks' faces, read at the first one, how many polyhedra
+  // each face bounds so far, and each polyhedron's cell with the end of its face stream.
+  FaceTable face_table;
+  std::vector<uint8_t> face_uses;
+  bool faces_read = false;
+  std::vector<std::pair<size_t, int64_t>> polyhedron_ends;
+  std::vector<int64_t> polyhedron_points;
+  // An NFACED block's elements as VTK polyhedra: each one's face stream (the face count, then each
+  // face's node count and nodes) and its distinct nodes as its connectivity.
+  auto readPolyhedra = [&](Block& blk, int64_t total_faces, const std::string& where) -> Status {
+    GTN_RETURN_IF_ERROR(fits(blk.elements, 4, where + " elements"));
+    GTN_RETURN_IF_ERROR(fits(total_faces, 4, where + " element faces"));
+    if (cells.types.size() + static_cast<uint64_t>(blk.elements) >= UINT32_MAX)
+      return unsupported(path + ": more than 2^32-2 volume elements");
+    std::vector<int> per(static_cast<size_t>(blk.elements), 0);
+    if (api.ex_get_entity_count_per_polyhedra(exoid, EX_ELEM_BLOCK, blk.id, per.data()) < 0)
+      return invalidData(path + ": cannot read the face counts of " + where +
+                         " (ex_get_entity_count_per_polyhedra: " + exodusError(api) + ")");
+    std::vector<int64_t> conn(static_cast<size_t>(total_faces));
+    if (total_faces > 0 && api.ex_get_conn(exoid, EX_ELEM_BLOCK, blk.id, nullptr, nullptr, conn.data()) < 0)
+      return invalidData(path + ": cannot read the faces of " + where + " (ex_get_conn: " + exodusError(api) + ")");
+    blk.volume = true;
+    blk.first_cell = cells.types.size();
+    int64_t at = 0;
+    for (int64_t e = 0; e < blk.elements; ++e) {
+      const std::string element = where + ", element " + std::to_string(e + 1);
+      const int n = per[static_cast<size_t>(e)];
+      if (n < 4 || n > total_faces - at)
+        return invalidData(path + ": " + element + " has " + std::to_string(n) +
+                           " faces (at least 4, within the block's " + std::to_string(total_faces) + ")");
+      cells.faces.push_back(n);
+      polyhedron_points.clear();
+      for (int k = 0; k < n; ++k, ++at) {
+        const int64_t face = conn[static_cast<size_t>(at)];
+        if (face < 1 || static_cast<uint64_t>(face) > face_table.size())
+          return invalidData(path + ": " + element + " refers to face " + std::to_string(face) + "; " +
+                             (face_table.size() == 0 ? std::string("the file has no faces")
+                                                     : "faces are numbered 1 to " + std::to_string(face_table.size())));
+        // A face bounds at most two cells; the bound also keeps the face streams within twice the
+        // face blocks' size.
+        if (face_uses[static_cast<size_t>(face - 1)]++ == 2)
+          return invalidData(path + ": " + element + " is the third polyhedron to list face " + std::to_string(face) +
+                             "; a face bounds at most two cells");
+        const int64_t begin = face_table.offsets[static_cast<size_t>(face - 1)];
+        const int64_t end = face_table.offsets[static_cast<size_t>(face)];
+        cells.faces.push_back(end - begin);
+        cells.faces.insert(cells.faces.end(), face_table.nodes.begin() + begin, face_table.nodes.begin() + end);
+        polyhedron_points.insert(polyhedron_points.end(), face_table.nodes.begin() + begin,
+                                 face_table.nodes.begin() + end);
+      }
+      std::sort(polyhedron_points.begin(), polyhedron_points.end());
+      polyhedron_points.erase(std::unique(polyhedron_points.begin(), polyhedron_points.end()), polyhedron_points.end());
+      cells.connectivity.insert(cells.connectivity.end(), polyhedron_points.begin(), polyhedron_points.end());
+      polyhedron_ends.emplace_back(cells.types.size(), static_cast<int64_t>(cells.faces.size()));
+      cells.types.push_back(kVtkPolyhedron);
+      cells.offsets.push_back(static_cast<int64_t>(cells.connectivity.size()));
+      cell_block.push_back(static_cast<int32_t>(std::clamp<int64_t>(blk.id, INT32_MIN, INT32_MAX)));
+    }
+    if (at != total_faces)
+      return invalidData(path + ": " + where + ": its elements' face counts add up to " + std::to_string(at) +
+                         ", not " + std::to_string(total_faces));
+    return Status::ok();
+  };
   for (size_t b = 0; b < blocks.size(); ++b) {
     Block& blk = blocks[b];
     blk.id = ids[b];
@@ -576,6 +716,15 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
       return invalidData(path + ": " + where + " has a negative count");
     if (blk.elements == 0) continue;
     total_elements += blk.elements;
+    if (upper(blk.type).rfind("NFACED", 0) == 0) {
+      if (!faces_read) {
+        GTN_ASSIGN_OR_RETURN(face_table, readFaceBlocks(api, path, exoid, init.num_face_blk, init.num_nodes, fits));
+        face_uses.assign(face_table.size(), 0);
+        faces_read = true;
+      }
+      GTN_RETURN_IF_ERROR(readPolyhedra(blk, param.num_faces_per_entry, where));
+      continue;
+    }
     if (!volumeType(blk.type, &blk.vt)) {
       skipped[blk.type.empty() ? "untyped" : blk.type] += blk.elements;
       continue;
@@ -612,10 +761,16 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     }
   }
   const size_t num_cells = cells.types.size();
+  if (!polyhedron_ends.empty()) {
+    // Exodus lists a face once for the two cells it bounds: it winds outward for one of them only.
+    cells.faces_shared = true;
+    cells.face_offsets.assign(num_cells, -1);
+    for (const auto& [cell, end] : polyhedron_ends) cells.face_offsets[cell] = end;
+  }
   if (num_cells == 0) {
     std::string what;
     for (const auto& [type, n] : skipped) what += (what.empty() ? "" : ", ") + std::to_string(n) + " " + type;
-    return unsupported(path + ": no volume elements (TETRA, HEX, WEDGE, PYRAMID)" +
+    return unsupported(path + ": no volume elements (TETRA, HEX, WEDGE, PYRAMID, NFACED)" +
                        (what.empty() ? std::string(": the file has no elements") : ", only " + what));
   }
   if (!skipped.empty()) {
@@ -627,7 +782,7 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
     }
     warnings.push_back("skipped " + plural(total, "element", "elements") + " of " + std::to_string(total_elements) +
                        " that are not linear volume elements (" + what +
-                       "): only TETRA, HEX, WEDGE and PYRAMID blocks become tetrahedra");
+                       "): only TETRA, HEX, WEDGE, PYRAMID and NFACED blocks become tetrahedra");
   }
   for (const auto& [type, n] : higher_order)
     warnings.push_back(std::to_string(n) + " " + type +
@@ -799,9 +954,13 @@ StatusOr<ImportResult> importExodus(const std::string& path, const ImportOptions
       warnings.push_back("skipped " + plural(attributes, "element attribute", "element attributes") +
                          " of the volume blocks (not read)");
     const std::pair<int64_t, const char*> others[] = {
-        {init.num_node_sets, "node sets"},  {init.num_side_sets, "side sets"}, {init.num_elem_sets, "element sets"},
-        {init.num_edge_sets, "edge sets"},  {init.num_face_sets, "face sets"}, {init.num_edge_blk, "edge blocks"},
-        {init.num_face_blk, "face blocks"},
+        {init.num_node_sets, "node sets"},
+        {init.num_side_sets, "side sets"},
+        {init.num_elem_sets, "element sets"},
+        {init.num_edge_sets, "edge sets"},
+        {init.num_face_sets, "face sets"},
+        {init.num_edge_blk, "edge blocks"},
+        {faces_read ? 0 : init.num_face_blk, "face blocks"},
     };
     for (const auto& [n, what] : others)
       if (n > 0) warnings.push_back("skipped " + std::to_string(n) + " " + what + " (not read)");

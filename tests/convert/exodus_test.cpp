@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "convert/import.h"
@@ -477,6 +478,126 @@ TEST(ExodusImport, TimeStepOnOtherFormatsIsIgnoredWithAWarning) {
   EXPECT_FALSE(hasWarning(plain->report, "--time-step")) << allWarnings(plain->report);
 }
 
+// ---- NFACED blocks (polyhedra, whose faces are those of the face blocks). ----
+
+// Two unit cubes side by side (x in [0,1] and [1,2]) as NFACED elements over one face block, and a
+// HEX8 on top of the first. The faces are listed once each, in no consistent winding (the face
+// x = 1, shared, runs the same way for both cubes, as Exodus stores it), the second cube's faces
+// in another order. `quad_faces`: the face block is of type QUAD4 rather than NSIDED. `bad`: 1 =
+// the second cube lists face 12 (there are 11), 2 = a third cube lists the shared face again, 3 =
+// the face counts add up to less than the block's total.
+struct NfacedOptions {
+  bool quad_faces = false;
+  int bad = 0;
+};
+
+void writeNfaced(const std::string& path, const NfacedOptions& o) {
+  int comp_ws = 8, io_ws = 8;
+  const int exoid = ex_create(path.c_str(), EX_CLOBBER, &comp_ws, &io_ws);
+  ASSERT_GE(exoid, 0) << path;
+  const bool third = o.bad == 2;
+  ex_init_params p{};
+  std::snprintf(p.title, sizeof p.title, "polyhedra");
+  p.num_dim = 3;
+  p.num_nodes = 16;
+  p.num_face = 11;
+  p.num_face_blk = 1;
+  p.num_elem = third ? 4 : 3;
+  p.num_elem_blk = 2;
+  check(ex_put_init_ext(exoid, &p), "ex_put_init_ext");
+  const double x[16] = {0, 1, 1, 0, 0, 1, 1, 0, 2, 2, 2, 2, 0, 1, 1, 0};
+  const double y[16] = {0, 0, 1, 1, 0, 0, 1, 1, 0, 1, 0, 1, 0, 0, 1, 1};
+  const double z[16] = {0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 1, 1, 2, 2, 2, 2};
+  check(ex_put_coord(exoid, x, y, z), "ex_put_coord");
+  const int faces[44] = {1, 2, 3, 4, 5,  6, 7, 8,  1,  2, 6, 5, 4,  3, 7, 8,  1,  4, 8, 5,  2,  3,
+                         7, 6, 2, 9, 10, 3, 6, 11, 12, 7, 2, 9, 11, 6, 3, 10, 12, 7, 9, 10, 12, 11};
+  const int face_nodes[11] = {4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4};
+  check(ex_put_block(exoid, EX_FACE_BLOCK, 10, o.quad_faces ? "QUAD4" : "NSIDED", 11, o.quad_faces ? 4 : 44, 0, 0, 0),
+        "face block");
+  check(ex_put_conn(exoid, EX_FACE_BLOCK, 10, faces, nullptr, nullptr), "face nodes");
+  if (!o.quad_faces) check(ex_put_entity_count_per_polyhedra(exoid, EX_FACE_BLOCK, 10, face_nodes), "face counts");
+  const int hex[8] = {5, 6, 7, 8, 13, 14, 15, 16};
+  check(ex_put_block(exoid, EX_ELEM_BLOCK, 50, "HEX8", 1, 8, 0, 0, 0), "hex block");
+  check(ex_put_conn(exoid, EX_ELEM_BLOCK, 50, hex, nullptr, nullptr), "hex nodes");
+  std::vector<int> cube_faces = {1, 2, 3, 4, 5, 6, 11, 8, 6, 7, 10, 9};
+  std::vector<int> counts = {6, 6};
+  if (o.bad == 1) cube_faces[6] = 12;
+  if (third) {
+    cube_faces.insert(cube_faces.end(), {1, 2, 3, 4, 5, 6});
+    counts.push_back(6);
+  }
+  if (o.bad == 3) counts[1] = 5;
+  check(ex_put_block(exoid, EX_ELEM_BLOCK, 100, "NFACED", static_cast<int64_t>(counts.size()), 0, 0,
+                     static_cast<int64_t>(cube_faces.size()), 0),
+        "polyhedron block");
+  check(ex_put_conn(exoid, EX_ELEM_BLOCK, 100, nullptr, nullptr, cube_faces.data()), "polyhedron faces");
+  check(ex_put_entity_count_per_polyhedra(exoid, EX_ELEM_BLOCK, 100, counts.data()), "polyhedron face counts");
+  check(ex_put_variable_param(exoid, EX_ELEM_BLOCK, 1), "element variable count");
+  const char* names[] = {"stress"};
+  check(ex_put_variable_names(exoid, EX_ELEM_BLOCK, 1, const_cast<char**>(names)), "element names");
+  const double time = 1, hex_stress = 5, cube_stress[3] = {10, 20, 30};
+  check(ex_put_time(exoid, 1, &time), "ex_put_time");
+  check(ex_put_var(exoid, 1, EX_ELEM_BLOCK, 1, 50, 1, &hex_stress), "hex stress");
+  check(ex_put_var(exoid, 1, EX_ELEM_BLOCK, 1, 100, static_cast<int64_t>(counts.size()), cube_stress), "stress");
+  check(ex_close(exoid), "ex_close");
+}
+
+TEST(ExodusImport, NfacedPolyhedraBecomeTetrahedra) {
+  const std::string dir = tempDir("exodus-nfaced");
+  for (bool quad_faces : {false, true}) {
+    const std::string path = dir + (quad_faces ? "/quad.exo" : "/nsided.exo");
+    writeNfaced(path, NfacedOptions{.quad_faces = quad_faces});
+    auto r = load(path);
+    ASSERT_TRUE(r.isOk()) << r.status().message();
+    const TetMesh& m = r->mesh;
+    EXPECT_EQ(m.numPoints(), 16u);
+    // A cube is coned from its smallest vertex over the fans of the three faces without it.
+    ASSERT_EQ(m.numTets(), 18u);
+    const MeshStats s = computeMeshStats(m);
+    EXPECT_NEAR(s.total_volume, 3.0, 1e-12);
+    EXPECT_EQ(s.inverted, 0u);
+    EXPECT_EQ(s.zero_volume, 0u);
+    EXPECT_EQ(r->report.flipped, 0u);
+    // Each tetrahedron lies in its cell: the hexahedron's, then each cube's, in the file's order.
+    const Field* id = findField(m.cell_fields, "block_id");
+    const Field* stress = findField(m.cell_fields, "stress");
+    ASSERT_NE(id, nullptr);
+    ASSERT_NE(stress, nullptr);
+    EXPECT_EQ(runs(*stress), (std::vector<double>{5, 10, 20}));
+    for (size_t t = 0; t < m.numTets(); ++t) {
+      const double cube = stress->get(t, 0) / 10;  // 0.5 (the hexahedron), 1 or 2
+      EXPECT_EQ(id->get(t, 0), cube < 1 ? 50 : 100) << t;
+      for (uint32_t v : m.tets[t]) {
+        const double* p = &m.coords[3 * v];
+        if (cube < 1) EXPECT_GE(p[2], 1.0) << t;
+        else EXPECT_TRUE(p[2] <= 1 && p[0] >= cube - 1 && p[0] <= cube) << t;
+      }
+    }
+    // The face block is read, and the turned faces are how Exodus stores them: neither is reported.
+    for (const std::string& w : r->report.warnings) {
+      EXPECT_EQ(w.find("face block"), std::string::npos) << w;
+      EXPECT_EQ(w.find("wind"), std::string::npos) << w;
+    }
+    const auto cli = runGtn("convert '" + path + "' -o '" + dir + "/p.gtn' -q");
+    ASSERT_EQ(cli.exit_code, 0) << cli.err;
+    const auto valid = runGtn("validate '" + dir + "/p.gtn'");
+    EXPECT_EQ(valid.exit_code, 0) << valid.out << valid.err;
+  }
+  const std::pair<int, std::string> errors[] = {
+      {1, "/bad.exo: element block 100 (NFACED), element 2 refers to face 12; faces are numbered 1 to 11"},
+      {2,
+       "/bad.exo: element block 100 (NFACED), element 3 is the third polyhedron to list face 6; a face bounds at "
+       "most two cells"},
+      {3, "/bad.exo: element block 100 (NFACED): its elements' face counts add up to 11, not 12"},
+  };
+  for (const auto& [bad, message] : errors) {
+    writeNfaced(dir + "/bad.exo", NfacedOptions{.bad = bad});
+    auto r = load(dir + "/bad.exo");
+    ASSERT_FALSE(r.isOk()) << bad;
+    EXPECT_EQ(r.status().message(), dir + message);
+  }
+}
+
 // ---- VTK's Exodus reader and meshio read the same files. ----
 
 const char* kClientScript = R"PY(
@@ -708,7 +829,8 @@ TEST(ExodusErrors, NoVolume) {
   ASSERT_GE(ex_close(id), 0);
   r = load(dir + "/shell.exo");
   ASSERT_FALSE(r.isOk());
-  EXPECT_EQ(r.status().message(), dir + "/shell.exo: no volume elements (TETRA, HEX, WEDGE, PYRAMID), only 1 SHELL4");
+  EXPECT_EQ(r.status().message(),
+            dir + "/shell.exo: no volume elements (TETRA, HEX, WEDGE, PYRAMID, NFACED), only 1 SHELL4");
 }
 
 }  // namespace
