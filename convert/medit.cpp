@@ -41,7 +41,6 @@ constexpr SkippedSection kSkipped[] = {
     {"EdgesP2", 4},
     {"TrianglesP2", 7},
     {"QuadrilateralsQ2", 10},
-    {"HexahedraQ2", 28, true},
     {"Corners", 1},
     {"Ridges", 1},
     {"RequiredVertices", 1},
@@ -289,7 +288,7 @@ Status MeditReader::readVolumeSection(const MeditVolumeKeyword& kw) {
   const int64_t np = have_vertices_ ? static_cast<int64_t>(mesh.numPoints()) : kMaxItems;
   cells_.reserve(kw, n, &mesh);
   for (size_t e = 0; e < n; ++e) {
-    uint32_t corners[10];
+    uint32_t corners[kMeditMaxNodes];
     for (int k = 0; k < kw.nodes; ++k) {
       GTN_ASSIGN_OR_RETURN(const int64_t v, reader_.readInt("a vertex number"));
       if (v < 1 || v > np) {

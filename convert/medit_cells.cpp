@@ -1,10 +1,13 @@
 #include "convert/medit_cells.h"
 
+#include <algorithm>
+#include <iterator>
+
 #include "convert/vtk_common.h"
 
 namespace gtn {
 
-const MeditVolumeKeyword kMeditVolumeKeywords[kMeditVolumeKinds] = {
+constexpr MeditVolumeKeyword kMeditVolumeKeywords[kMeditVolumeKinds] = {
     {"Tetrahedra", "tetrahedron", 4, kVtkTetra, 4},
     {"Hexahedra", "hexahedron", 8, kVtkHexahedron, 8},
     {"Prisms", "prism", 6, kVtkWedge, 6},
@@ -12,7 +15,13 @@ const MeditVolumeKeyword kMeditVolumeKeywords[kMeditVolumeKinds] = {
     // Its corners join the other elements (as VTK tetrahedra), not the Tetrahedra: a solution's
     // SolAtTetrahedra values are the Tetrahedra's.
     {"TetrahedraP2", "P2 tetrahedron", 4, kVtkTetra, 10},
+    {"HexahedraQ2", "Q2 hexahedron", 8, kVtkHexahedron, 27},
+    {"PrismsP2", "P2 prism", 6, kVtkWedge, 18},
+    {"PyramidsP2", "P2 pyramid", 5, kVtkPyramid, 14},
 };
+
+static_assert(std::all_of(std::begin(kMeditVolumeKeywords), std::end(kMeditVolumeKeywords),
+                          [](const MeditVolumeKeyword& k) { return k.nodes <= kMeditMaxNodes; }));
 
 void MeditCells::addSection(const MeditVolumeKeyword& kw, const std::string& where) {
   const size_t index = static_cast<size_t>(&kw - kMeditVolumeKeywords);
@@ -46,28 +55,36 @@ void MeditCells::add(const MeditVolumeKeyword& kw, const uint32_t* corners, int3
     tet_refs.push_back(ref);
     return;
   }
-  if (kw.nodes > kw.corners) ++reduced;
+  if (kw.nodes > kw.corners) ++reduced[&kw - kMeditVolumeKeywords];
   for (int k = 0; k < kw.corners; ++k) others.connectivity.push_back(corners[k]);
   others.types.push_back(kw.vtk_type);
   others.offsets.push_back(static_cast<int64_t>(others.connectivity.size()));
   other_refs.push_back(ref);
 }
 
+namespace {
+constexpr const char* kMeditVolumeNames =
+    "Tetrahedra, Hexahedra, Prisms or Pyramids, or their TetrahedraP2, HexahedraQ2, PrismsP2 and PyramidsP2 forms";
+}  // namespace
+
 std::string noVolumeElements(const std::string& skipped) {
   return skipped.empty()
-             ? "no volume elements (Tetrahedra, TetrahedraP2, Hexahedra, Prisms or Pyramids): a surface mesh is not a "
-               "volume mesh"
-             : "no volume elements it reads (Tetrahedra, TetrahedraP2, Hexahedra, Prisms or Pyramids), only " +
-                   skipped + ", which are not read";
+             ? "no volume elements (" + std::string(kMeditVolumeNames) + "): a surface mesh is not a volume mesh"
+             : "no volume elements it reads (" + std::string(kMeditVolumeNames) + "), only " + skipped +
+                   ", which are not read";
 }
 
 Status finishMeditImport(const std::string& path, const char* format, MeditCells* cells, const ImportOptions& options,
                          ImportResult* result) {
   TetMesh& mesh = result->mesh;
-  if (cells->reduced > 0)
-    result->report.warnings.push_back(std::to_string(cells->reduced) +
-                                      " TetrahedraP2 elements kept by their 4 corners; their mid-edge nodes are kept "
-                                      "as unreferenced points");
+  for (size_t i = 0; i < kMeditVolumeKinds; ++i) {
+    const MeditVolumeKeyword& kw = kMeditVolumeKeywords[i];
+    if (cells->reduced[i] == 0) continue;
+    result->report.warnings.push_back(std::to_string(cells->reduced[i]) + " " + kw.name + " elements kept by their " +
+                                      std::to_string(kw.corners) + " corners; their " +
+                                      (kw.vtk_type == kVtkTetra ? "mid-edge" : "other") +
+                                      " nodes are kept as unreferenced points");
+  }
   const bool tets_only = cells->other_refs.empty();
   if (!tets_only) GTN_RETURN_IF_ERROR(readMeditSolutions(options.medit_solutions, tets_only, result));
   if (tets_only) {

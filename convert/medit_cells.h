@@ -23,7 +23,8 @@ namespace gtn {
 // A Medit keyword that holds volume elements: its name, the vertex numbers per element (a reference
 // number follows them), how many of them are the corners the element keeps (the first ones: a
 // TetrahedraP2 element lists its 4 corners, then its 6 mid-edge nodes, which stay as unreferenced
-// points) and the VTK cell type with the same corner order.
+// points; HexahedraQ2, PrismsP2 and PyramidsP2 elements list the corners of Hexahedra, Prisms and
+// Pyramids in their order, then their other nodes) and the VTK cell type with the same corner order.
 struct MeditVolumeKeyword {
   const char* name;
   const char* singular;
@@ -31,9 +32,10 @@ struct MeditVolumeKeyword {
   int vtk_type;
   int nodes;
 };
-// Tetrahedra, Hexahedra, Prisms, Pyramids, TetrahedraP2.
-inline constexpr size_t kMeditVolumeKinds = 5;
+// Tetrahedra, Hexahedra, Prisms, Pyramids, TetrahedraP2, HexahedraQ2, PrismsP2, PyramidsP2.
+inline constexpr size_t kMeditVolumeKinds = 8;
 extern const MeditVolumeKeyword kMeditVolumeKeywords[kMeditVolumeKinds];
+inline constexpr int kMeditMaxNodes = 27;  // the most nodes of an element (HexahedraQ2)
 
 // The volume elements read so far. Tetrahedra go straight to mesh.tets (their references to
 // tet_refs); the other elements wait in `others`, 0-based, until finishMeditImport splits them.
@@ -48,7 +50,9 @@ struct MeditCells {
   std::vector<int32_t> other_refs;
   std::string sections[kMeditVolumeKinds];  // per keyword of kMeditVolumeKeywords, where its sections begin ("line 7")
   int section_count[kMeditVolumeKinds] = {};
-  uint64_t reduced = 0;  // elements with more nodes than corners (TetrahedraP2), kept by their corners
+  // Per keyword of kMeditVolumeKeywords: its elements with more nodes than corners (TetrahedraP2,
+  // HexahedraQ2, ...), kept by their corners.
+  uint64_t reduced[kMeditVolumeKinds] = {};
   // The largest vertex number read before the Vertices section, and where: the element ("tetrahedron
   // 5") and a place (a line, or a byte offset) for the error.
   int64_t late_vertex = 0;

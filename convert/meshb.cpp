@@ -27,7 +27,7 @@ namespace gtn {
 namespace {
 
 constexpr uint32_t kDimension = 3, kVertices = 4, kTetrahedra = 8, kPrisms = 9, kHexahedra = 10, kPyramids = 49,
-                   kTetrahedraP2 = 30;
+                   kTetrahedraP2 = 30, kHexahedraQ2 = 33, kPrismsP2 = 86, kPyramidsP2 = 87;
 
 // Volume elements the reader skips (higher-order and polyhedral ones): skipping them loses volume,
 // so a warning names them.
@@ -36,9 +36,8 @@ struct SkippedVolume {
   const char* name;
 };
 constexpr SkippedVolume kSkippedVolumes[] = {
-    {33, "HexahedraQ2"},  {46, "Polyhedra"},    {86, "PrismsP2"},    {87, "PyramidsP2"},
-    {96, "TetrahedraP3"}, {97, "TetrahedraP4"}, {98, "HexahedraQ3"}, {99, "HexahedraQ4"},
-    {100, "PyramidsP3"},  {101, "PyramidsP4"},  {102, "PrismsP3"},   {103, "PrismsP4"},
+    {46, "Polyhedra"},   {96, "TetrahedraP3"}, {97, "TetrahedraP4"}, {98, "HexahedraQ3"}, {99, "HexahedraQ4"},
+    {100, "PyramidsP3"}, {101, "PyramidsP4"},  {102, "PrismsP3"},    {103, "PrismsP4"},
 };
 
 // libMeshb's keyword names by code (GmfKwdCod; "" for the codes it reserves).
@@ -167,6 +166,9 @@ const MeditVolumeKeyword* volumeKeyword(uint32_t code) {
     case kPrisms: return &kMeditVolumeKeywords[2];
     case kPyramids: return &kMeditVolumeKeywords[3];
     case kTetrahedraP2: return &kMeditVolumeKeywords[4];
+    case kHexahedraQ2: return &kMeditVolumeKeywords[5];
+    case kPrismsP2: return &kMeditVolumeKeywords[6];
+    case kPyramidsP2: return &kMeditVolumeKeywords[7];
     default: return nullptr;
   }
 }
@@ -254,7 +256,7 @@ Status MeshbReader::readElements(const MeditVolumeKeyword& kw, uint64_t end) {
   const int64_t np = have_vertices_ ? static_cast<int64_t>(mesh.numPoints()) : int64_t{UINT32_MAX} - 1;
   cells_.reserve(kw, n, &mesh);
   for (uint64_t e = 0; e < n; ++e) {
-    uint32_t corners[10];
+    uint32_t corners[kMeditMaxNodes];
     for (int k = 0; k < kw.nodes; ++k) {
       const uint64_t v_at = in_.position();
       const int64_t v = in_.integer();

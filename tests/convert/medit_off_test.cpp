@@ -497,10 +497,9 @@ End
   EXPECT_TRUE(m.tets[0] == (Tet{0, 1, 2, 3}));
 }
 
-// Pentahedra is an old name of Prisms; TetrahedraP2 elements are kept by their 4 corners (their
-// mid-edge nodes stay as unreferenced points, as other formats' quadratic tetrahedra do), with a
-// warning; other higher-order elements are not read, and a warning says their volume is missing (an
-// error when nothing else is left).
+// Pentahedra is an old name of Prisms; TetrahedraP2, HexahedraQ2, PrismsP2 and PyramidsP2 elements
+// are kept by their corners (their other nodes stay as unreferenced points, as other formats'
+// quadratic cells' do), with a warning.
 TEST(MeditImport, PentahedraAndQuadraticVolumeElements) {
   const std::string dir = tempDir("medit-pentahedra");
   const std::string prism =
@@ -527,13 +526,39 @@ TEST(MeditImport, PentahedraAndQuadraticVolumeElements) {
   ASSERT_TRUE(only.isOk()) << only.status().message();
   EXPECT_EQ(only->mesh.numTets(), 1u);
   EXPECT_NEAR(computeMeshStats(only->mesh).total_volume, 1.0 / 6.0, 1e-12);
-  // HexahedraQ2 (27 nodes) are not read: with nothing else, an error that names them.
-  std::string q2 = "HexahedraQ2\n1\n";
-  for (int k = 0; k < 27; ++k) q2 += std::to_string(k % 10 + 1) + " ";
-  writeFile(dir + "/only_q2.mesh", prism + q2 + "3\nEnd\n");
-  expectError(importMedit(dir + "/only_q2.mesh", ImportOptions{}),
-              "no volume elements it reads (Tetrahedra, TetrahedraP2, Hexahedra, Prisms or Pyramids), only 1 "
-              "HexahedraQ2 elements (line 15), which are not read");
+  // A Q2 hexahedron (the unit cube), a P2 prism and a P2 pyramid, each listing its linear form's
+  // corners first (their other nodes: vertex 20, away from them).
+  std::string q2 =
+      "MeshVersionFormatted 2\nDimension 3\nVertices\n20\n"
+      "0 0 0 0\n1 0 0 0\n1 1 0 0\n0 1 0 0\n0 0 1 0\n1 0 1 0\n1 1 1 0\n0 1 1 0\n"
+      "2 0 0 0\n3 0 0 0\n2 1 0 0\n2 0 1 0\n3 0 1 0\n2 1 1 0\n"
+      "4 0 0 0\n5 0 0 0\n5 1 0 0\n4 1 0 0\n4.5 0.5 1 0\n9 9 9 0\n";
+  auto element = [](const char* keyword, std::vector<int> corners, int nodes, int ref) {
+    std::string e = std::string(keyword) + "\n1\n";
+    corners.resize(static_cast<size_t>(nodes), 20);
+    for (int v : corners) e += std::to_string(v) + " ";
+    return e + std::to_string(ref) + "\n";
+  };
+  q2 += element("HexahedraQ2", {1, 2, 3, 4, 5, 6, 7, 8}, 27, 3) + element("PrismsP2", {9, 10, 11, 12, 13, 14}, 18, 4) +
+        element("PyramidsP2", {15, 16, 17, 18, 19}, 14, 5) + "End\n";
+  writeFile(dir + "/q2.mesh", q2);
+  auto higher = importMedit(dir + "/q2.mesh", ImportOptions{});
+  ASSERT_TRUE(higher.isOk()) << higher.status().message();
+  const TetMesh& m = higher->mesh;
+  ASSERT_EQ(m.numTets(), 6u + 3u + 2u);
+  EXPECT_NEAR(computeMeshStats(m).total_volume, 1.0 + 0.5 + 1.0 / 3.0, 1e-12);
+  EXPECT_EQ(higher->report.warnings,
+            (std::vector<std::string>{
+                "1 HexahedraQ2 elements kept by their 8 corners; their other nodes are kept as unreferenced points",
+                "1 PrismsP2 elements kept by their 6 corners; their other nodes are kept as unreferenced points",
+                "1 PyramidsP2 elements kept by their 5 corners; their other nodes are kept as unreferenced points"}));
+  const Field* refs = test::findField(m.cell_fields, "ref");
+  ASSERT_NE(refs, nullptr);
+  for (size_t t = 0; t < m.numTets(); ++t) {
+    const int want = t < 6 ? 3 : t < 9 ? 4 : 5;
+    EXPECT_EQ(refs->get(t, 0), want) << t;
+    for (uint32_t v : m.tets[t]) EXPECT_NE(v, 19u) << t;  // no tetrahedron uses the other nodes
+  }
 }
 
 TEST(MeditErrors, BadHexahedra) {
@@ -551,7 +576,8 @@ TEST(MeditErrors, BadHexahedra) {
   surface = surface.substr(0, surface.find("Hexahedra")) + "End\n";
   writeFile(p, surface);
   expectError(importMedit(p, ImportOptions{}),
-              "no volume elements (Tetrahedra, TetrahedraP2, Hexahedra, Prisms or Pyramids)");
+              "no volume elements (Tetrahedra, Hexahedra, Prisms or Pyramids, or their TetrahedraP2, HexahedraQ2, "
+              "PrismsP2 and PyramidsP2 forms)");
 }
 
 // --- Tetrahedral OFF ------------------------------------------------------------------------------

@@ -267,9 +267,9 @@ TEST(MeshbImport, ContentDecidesBetweenAsciiAndBinary) {
   }
 }
 
-// TetrahedraP2 elements are kept by their 4 corners, with a warning; HexahedraQ2 ones are skipped
-// with a warning (an error when nothing else is left).
-TEST(MeshbImport, QuadraticElementsAreSkippedWithAWarning) {
+// TetrahedraP2 and HexahedraQ2 elements are kept by their corners, with a warning; TetrahedraP3
+// ones are skipped with a warning (an error when nothing else is left).
+TEST(MeshbImport, QuadraticElementsKeepTheirCornersHigherOrderOnesAreSkipped) {
   const std::string dir = tempDir("meshb-p2");
   size_t q2_at = 0;
   auto file = [&](bool with_p2) {
@@ -277,8 +277,9 @@ TEST(MeshbImport, QuadraticElementsAreSkippedWithAWarning) {
     w.begin(3);
     w.int32(3);
     w.begin(4);
-    w.integer(4);
-    const double c[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    w.integer(12);
+    const double c[12][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}, {2, 0, 0},
+                             {2, 1, 0}, {1, 1, 0}, {1, 0, 1}, {2, 0, 1}, {2, 1, 1}, {1, 1, 1}};
     for (const auto& p : c) {
       for (double v : p) w.real(v);
       w.integer(0);
@@ -289,31 +290,41 @@ TEST(MeshbImport, QuadraticElementsAreSkippedWithAWarning) {
       for (int v : {1, 2, 3, 4, 1, 2, 3, 4, 1, 2, 7}) w.integer(v);
     }
     q2_at = w.size();
-    w.begin(33);  // HexahedraQ2: 27 nodes and a reference
+    w.begin(96);  // TetrahedraP3: 20 nodes and a reference
     w.integer(1);
-    for (int k = 0; k < 28; ++k) w.integer(k % 4 + 1);
+    for (int k = 0; k < 21; ++k) w.integer(k % 4 + 1);
+    if (with_p2) {
+      w.begin(33);  // HexahedraQ2: the corners of the cube [1,2] x [0,1] x [0,1], 19 other nodes, a reference
+      w.integer(1);
+      for (int v : {5, 6, 7, 8, 9, 10, 11, 12}) w.integer(v);
+      for (int k = 0; k < 19; ++k) w.integer(1);
+      w.integer(8);
+    }
     return w.end();
   };
   writeFile(dir + "/p2.meshb", file(true));
   auto r = importMesh({dir + "/p2.meshb"}, ImportOptions{});
   ASSERT_TRUE(r.isOk()) << r.status().message();
-  EXPECT_EQ(r->mesh.numTets(), 1u);
-  EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 1.0 / 6.0, 1e-12);
-  ASSERT_EQ(r->report.warnings.size(), 2u) << ::testing::PrintToString(r->report.warnings);
-  EXPECT_NE(r->report.warnings[0].find("skipped HexahedraQ2 at byte offset " + std::to_string(q2_at)),
+  EXPECT_EQ(r->mesh.numTets(), 7u);
+  EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 1.0 / 6.0 + 1.0, 1e-12);
+  ASSERT_EQ(r->report.warnings.size(), 3u) << ::testing::PrintToString(r->report.warnings);
+  EXPECT_NE(r->report.warnings[0].find("skipped TetrahedraP3 at byte offset " + std::to_string(q2_at)),
             std::string::npos)
       << r->report.warnings[0];
   EXPECT_EQ(r->report.warnings[1],
             "1 TetrahedraP2 elements kept by their 4 corners; their mid-edge nodes are kept as unreferenced points");
+  EXPECT_EQ(r->report.warnings[2],
+            "1 HexahedraQ2 elements kept by their 8 corners; their other nodes are kept as unreferenced points");
   const Field* ref = test::findField(r->mesh.cell_fields, "ref");
   ASSERT_NE(ref, nullptr);
   EXPECT_EQ(ref->get(0, 0), 7);
+  for (size_t t = 1; t < 7; ++t) EXPECT_EQ(ref->get(t, 0), 8) << t;
   // Without the P2 tetrahedron: an error that names what was skipped.
   writeFile(dir + "/only.meshb", file(false));
   auto e = importMesh({dir + "/only.meshb"}, ImportOptions{});
   ASSERT_FALSE(e.isOk());
   EXPECT_NE(
-      e.status().message().find("only HexahedraQ2 (byte offset " + std::to_string(q2_at) + "), which are not read"),
+      e.status().message().find("only TetrahedraP3 (byte offset " + std::to_string(q2_at) + "), which are not read"),
       std::string::npos)
       << e.status().message();
 }
