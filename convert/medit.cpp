@@ -93,6 +93,41 @@ std::string skippedWhat(const SkippedSection& s) {
   return "not read";
 }
 
+// The number of values on the first entry's line of a section whose count was just read (`rest`:
+// the text after the count), where the count ends its line; -1 where an entry follows it on its
+// line. gmsh writes second-order quadrilaterals and hexahedra under the linear keywords
+// (Quadrilaterals with 9 nodes, Hexahedra with 27), one element per line: that line tells them apart.
+int64_t firstEntryWidth(std::string_view rest) {
+  size_t i = 0;
+  auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; };
+  while (i < rest.size() && blank(rest[i])) ++i;
+  if (i < rest.size() && rest[i] != '\n' && rest[i] != '#') return -1;
+  // The next line that holds a value.
+  for (;;) {
+    while (i < rest.size() && rest[i] != '\n') ++i;
+    if (i >= rest.size()) return 0;
+    ++i;
+    while (i < rest.size() && blank(rest[i])) ++i;
+    if (i < rest.size() && rest[i] != '\n' && rest[i] != '#') break;
+  }
+  int64_t values = 0;
+  while (i < rest.size() && rest[i] != '\n' && rest[i] != '#') {
+    ++values;
+    while (i < rest.size() && !blank(rest[i]) && rest[i] != '\n') ++i;
+    while (i < rest.size() && blank(rest[i])) ++i;
+  }
+  return values;
+}
+
+// The values per entry that a skipped section of lower-dimensional elements may hold besides its own
+// (the nodes and reference of its second-order forms, as gmsh writes them under the linear keyword).
+std::vector<int64_t> secondOrderValues(std::string_view keyword) {
+  if (keyword == "Edges") return {4};
+  if (keyword == "Triangles") return {7};
+  if (keyword == "Quadrilaterals") return {9, 10};
+  return {};
+}
+
 // The entries of one keyword's skipped sections: how many, and where the first began.
 struct SkippedEntries {
   const SkippedSection* section;
@@ -280,10 +315,25 @@ Status MeditReader::readVertexRef(size_t i, size_t n, Field* ref, std::vector<do
   return Status::ok();
 }
 
-Status MeditReader::readVolumeSection(const MeditVolumeKeyword& kw) {
+Status MeditReader::readVolumeSection(const MeditVolumeKeyword& linear_kw) {
   TetMesh& mesh = result_.mesh;
-  cells_.addSection(kw, "line " + std::to_string(reader_.line()));
-  GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader_, kw.nodes + 1, kw.name));
+  const std::string where = "line " + std::to_string(reader_.line());
+  GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader_, linear_kw.nodes + 1, linear_kw.name));
+  // A linear keyword whose first element has the nodes of its second-order form (gmsh's writer):
+  // the section is read as that form.
+  const MeditVolumeKeyword* chosen = &linear_kw;
+  const size_t index = static_cast<size_t>(&linear_kw - kMeditVolumeKeywords);
+  if (index < 4 && count > 0) {
+    const MeditVolumeKeyword& higher = kMeditVolumeKeywords[index + 4];
+    if (firstEntryWidth(reader_.rest()) == higher.nodes + 1) {
+      chosen = &higher;
+      result_.report.warnings.push_back(
+          "the " + std::string(linear_kw.name) + " section (" + where + ") holds " + std::to_string(higher.nodes) +
+          " nodes per element (second-order elements, as gmsh writes them): read as " + higher.name);
+    }
+  }
+  const MeditVolumeKeyword& kw = *chosen;
+  cells_.addSection(kw, where);
   const size_t n = static_cast<size_t>(count);
   const int64_t np = have_vertices_ ? static_cast<int64_t>(mesh.numPoints()) : kMaxItems;
   cells_.reserve(kw, n, &mesh);
@@ -336,7 +386,7 @@ Status MeditReader::skipUnknownSection(std::string_view keyword) {
 // by its values or by its lines, and noted for its warning.
 Status MeditReader::skipSection(const SkippedSection& section) {
   if (dimension_ != 3) return reader_.error(std::string(section.keyword) + " before a 'Dimension 3' line");
-  const int64_t values = section.values < 0 ? dimension_ : section.values;
+  int64_t values = section.values < 0 ? dimension_ : section.values;
   const size_t line = reader_.line();
   const std::string entries = std::string(section.keyword) + " entries";
   std::string_view tok;
@@ -351,6 +401,11 @@ Status MeditReader::skipSection(const SkippedSection& section) {
     return Status::ok();
   }
   GTN_ASSIGN_OR_RETURN(const int64_t count, readCount(reader_, std::max<int64_t>(values, 1), section.keyword));
+  if (section.skip == Skip::kValues && count > 0) {
+    const int64_t width = firstEntryWidth(reader_.rest());
+    for (const int64_t v : secondOrderValues(section.keyword))
+      if (width == v && count <= kMaxItems / v) values = v;
+  }
   if (section.skip == Skip::kLines) {
     reader_.skipLine();  // the rest of the count's line
     for (int64_t i = 0; i < count; ++i) {

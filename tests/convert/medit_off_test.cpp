@@ -561,6 +561,41 @@ TEST(MeditImport, PentahedraAndQuadraticVolumeElements) {
   }
 }
 
+// gmsh writes second-order hexahedra and quadrilaterals under the linear keywords, one element per
+// line (Hexahedra with 27 nodes, Quadrilaterals with 9): the first element's line tells them apart.
+TEST(MeditImport, SecondOrderElementsUnderLinearKeywordsAsGmshWritesThem) {
+  const std::string dir = tempDir("medit-gmsh-q2");
+  std::string text =
+      "MeshVersionFormatted 2\nDimension\n3\nVertices\n9\n"
+      "0 0 0 1\n1 0 0 1\n1 1 0 1\n0 1 0 1\n0 0 1 1\n1 0 1 1\n1 1 1 1\n0 1 1 1\n0.5 0.5 0.5 1\n"
+      "Quadrilaterals\n2\n";
+  for (int q = 0; q < 2; ++q) text += " 1 2 3 4 9 9 9 9 9 5\n";
+  text += "Hexahedra\n1\n 1 2 3 4 5 6 7 8";
+  for (int k = 0; k < 19; ++k) text += " 9";
+  text += " 3\nEnd\n";
+  writeFile(dir + "/q2.mesh", text);
+  auto r = importMedit(dir + "/q2.mesh", ImportOptions{});
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->mesh.numTets(), 6u);
+  EXPECT_NEAR(computeMeshStats(r->mesh).total_volume, 1.0, 1e-12);
+  EXPECT_TRUE(test::hasWarning(r->report,
+                               "the Hexahedra section (line 19) holds 27 nodes per element (second-order elements, as "
+                               "gmsh writes them): read as HexahedraQ2"))
+      << ::testing::PrintToString(r->report.warnings);
+  EXPECT_TRUE(test::hasWarning(r->report, "skipped 2 Quadrilaterals (line 15)"))
+      << ::testing::PrintToString(r->report.warnings);
+  // The same elements with their linear nodes only are read as before, without that warning.
+  const std::string linear =
+      "MeshVersionFormatted 2\nDimension\n3\nVertices\n8\n"
+      "0 0 0 1\n1 0 0 1\n1 1 0 1\n0 1 0 1\n0 0 1 1\n1 0 1 1\n1 1 1 1\n0 1 1 1\n"
+      "Quadrilaterals\n1\n 1 2 3 4 5\nHexahedra\n1\n 1 2 3 4 5 6 7 8 3\nEnd\n";
+  writeFile(dir + "/q1.mesh", linear);
+  auto l = importMedit(dir + "/q1.mesh", ImportOptions{});
+  ASSERT_TRUE(l.isOk()) << l.status().message();
+  EXPECT_EQ(l->mesh.numTets(), 6u);
+  for (const std::string& w : l->report.warnings) EXPECT_EQ(w.find("second-order"), std::string::npos) << w;
+}
+
 TEST(MeditErrors, BadHexahedra) {
   const std::string dir = tempDir("medit-hex-errors");
   const std::string p = dir + "/h.mesh";
