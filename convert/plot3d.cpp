@@ -1681,6 +1681,17 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
                                           grid_path, grid_bytes, Kind::kGrid, grid_detection,
                                           [](const Fit&) { return true; }, nullptr, &warnings));
   if (!grid.found) {
+    // A Q (solution) file given first, where the grid belongs.
+    if (!meta) {
+      const Detection as_q = detect(grid_bytes, Kind::kQ, constraints);
+      const std::vector<Fit>& fits = as_q.exact.empty() ? as_q.zero_tail : as_q.exact;
+      if (!fits.empty())
+        return invalidData(grid_path + ": a PLOT3D Q (solution) file (" +
+                           describeLayout(fits.front().layout, Kind::kQ) + ", grids " +
+                           blocksText(fits.front().blocks) +
+                           "), not a grid file: give the grid file first, then the Q file (gtn convert GRID.xyz "
+                           "SOLUTION.q -o OUT.gtn)");
+    }
     const Status st = noFitError(grid_path, grid_bytes, Kind::kGrid, grid_detection);
     const std::string fixed = meta ? describeConstraints(constraints) : "";
     if (fixed.empty()) return st;
@@ -1751,6 +1762,19 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
       std::string fbytes = raw;
       GTN_ASSIGN_OR_RETURN(Selected f, for_grid(second_path, &fbytes, Kind::kFunction, &df, &f_text));
       if (!f.found) {
+        // The grid given second: a file that reads as a grid of the same dimensions.
+        const Detection as_grid = detect(raw, Kind::kGrid, constraints);
+        for (const Fit& g : as_grid.exact) {
+          if (g.blocks.size() != blocks.size() ||
+              !std::equal(blocks.begin(), blocks.end(), g.blocks.begin(),
+                          [](const BlockDims& a, const BlockDims& b) { return std::equal(a.n, a.n + 3, b.n); }))
+            continue;
+          return invalidData(second_path + ": a PLOT3D grid file (" + describeLayout(g.layout, Kind::kGrid) +
+                             ", grids " + blocksText(g.blocks) + "), not a Q or function file for the grid " +
+                             grid_path +
+                             ", which may be the Q file: give the grid file first, then the Q file (gtn "
+                             "convert GRID.xyz SOLUTION.q -o OUT.gtn)");
+        }
         if (!q_text.isOk() && !f_text.isOk())
           return invalidData(second_path + ": neither an ASCII PLOT3D Q file nor a function file for the grid " +
                              grid_path + " (" + blocksText(blocks) + "); as a Q file: " + q_text.message() +

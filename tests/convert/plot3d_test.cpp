@@ -124,6 +124,27 @@ TEST(Plot3dImport, BluntFinSplitFiveMatchesTableOne) {
   EXPECT_EQ(*r->mesh.findMetadata("plot3d.re"), "2100000");
 }
 
+// The Q file given before its grid: blunt fin's Q file reads as no grid, and is recognised as a Q
+// file; the combustion chamber's Q file happens to read as a grid (with IBLANK), and then its grid
+// file is recognised as a grid of the same dimensions. Both errors say to give the grid first.
+TEST(Plot3dErrors, QFileBeforeItsGridSaysWhichComesFirst) {
+  const std::string advice = "give the grid file first, then the Q file (gtn convert GRID.xyz SOLUTION.q -o OUT.gtn)";
+  const std::string fin_q = dataPath("plot3d/bluntfinq.bin");
+  auto fin = importFiles({fin_q, dataPath("plot3d/bluntfinxyz.bin")});
+  ASSERT_FALSE(fin.isOk());
+  EXPECT_EQ(fin.status().message(), fin_q +
+                                        ": a PLOT3D Q (solution) file (big-endian, no record markers, single grid, "
+                                        "float32, grids 40x32x32), not a grid file: " +
+                                        advice);
+  const std::string comb_q = dataPath("plot3d/combq.bin"), comb_xyz = dataPath("plot3d/combxyz.bin");
+  auto comb = importFiles({comb_q, comb_xyz});
+  ASSERT_FALSE(comb.isOk());
+  EXPECT_EQ(comb.status().message(), comb_xyz +
+                                         ": a PLOT3D grid file (big-endian, no record markers, single grid, 3D, "
+                                         "float32, no IBLANK, grids 57x33x25), not a Q or function file for the grid " +
+                                         comb_q + ", which may be the Q file: " + advice);
+}
+
 TEST(Plot3dImport, CombustionChamberBothSplits) {
   const std::string xyz = dataPath("plot3d/combxyz.bin"), q = dataPath("plot3d/combq.bin");
   auto five = importFiles({xyz, q}, 5);
