@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <numeric>
 #include <utility>
 
 #include <tbb/blocked_range.h>
@@ -26,7 +27,6 @@ namespace gtn {
 
 namespace {
 
-constexpr uint32_t kDead = kNoIndex;      // tets_[t][0] of a collapsed tetrahedron
 constexpr uint32_t kOmega = 0xFFFFFFFEu;  // the virtual vertex coning the boundary
 constexpr double kFlipMargin = 1e-3;
 constexpr double kLocalWeight = 1.0 / 16;  // see ranking.h
@@ -226,8 +226,8 @@ void sortUnique(std::vector<T>& v) {
 // local face. Every face holds v, so ordering by the other two orders the sorted triples alike.
 struct StarFace {
   uint64_t key;
-  uint32_t t, j;
-  bool operator<(const StarFace& o) const { return key != o.key ? key < o.key : (t != o.t ? t < o.t : j < o.j); }
+  uint32_t i, j;  // the tetrahedron's place in the star, the face's local index
+  bool operator<(const StarFace& o) const { return key != o.key ? key < o.key : (i != o.i ? i < o.i : j < o.j); }
 };
 
 // What evaluating one vertex needs besides the mesh: scratch buffers reused from one vertex to the
@@ -263,6 +263,7 @@ struct Workspace {
   uint32_t stamp = 0;
 
   std::vector<uint32_t> corners, targets;
+  std::vector<Tet> star_tets;  // the tetrahedra of `corners`, as the merges have made them
   // The star of the vertex being evaluated, one array per quantity so that the volumes after a merge
   // are computed for all its tetrahedra at once. Per tetrahedron: the other three vertices, the
   // inward normal n of their face and d, with volume(p) = (n . p - d) / 6, the density sum of the
@@ -297,6 +298,7 @@ struct Lane {
     sequence = {};
     best = sorted = {};
     corners = corners_w = recompute = now = {};
+    star_tets = star_tets_w = {};
     faces = faces_w = {};
     tris_a = tris_b = whole_a = whole_b = {};
     edges_a = edges_b = {};
@@ -324,6 +326,7 @@ struct Lane {
   std::vector<Candidate> sorted;  // a rejected vertex's candidates
   // Scratch buffers of validate and merge.
   std::vector<uint32_t> corners, corners_w, recompute, now;
+  std::vector<Tet> star_tets, star_tets_w;  // the tetrahedra of corners and corners_w
   std::vector<BoundaryFace> faces, faces_w;
   std::vector<Tri> tris_a, tris_b, whole_a, whole_b;
   std::vector<Edge> edges_a, edges_b;
@@ -402,14 +405,16 @@ class Ranker {
   void startLane(Lane& L);
   // Merges until the lane's queue is empty or its error limit is reached (startLane first).
   void runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress);
-  void gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners);
+  // v's live corners, and their tetrahedra as the merges have made them (each read once here: the
+  // evaluations read them many times).
+  void gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners, std::vector<Tet>& tets);
   // Moves run[0, n)'s corners of live tetrahedra to its front, in order; returns how many.
   uint32_t keepLive(uint32_t* run, uint32_t n) const {
     uint32_t m = 0;
     for (uint32_t i = 0; i < n; ++i) {
       const uint32_t c = run[i];
       run[m] = c;
-      m += tets_[c >> 2][0] != kDead;
+      m += !dead_[c >> 2];
     }
     return m;
   }
@@ -422,14 +427,14 @@ class Ranker {
       for (uint32_t v : L.members) f(v);
     }
   }
-  void gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
-                           Workspace& ws) const;
+  void gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, const std::vector<Tet>& tets,
+                           std::vector<BoundaryFace>& faces, Workspace& ws) const;
   void candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Workspace& ws);
   bool validate(Lane& L, uint32_t v, uint32_t w);
   // The triangles of Lk(u) in the complex with the boundary coned to kOmega (each one's vertices
   // ascending; a triangle twice only where the mesh is not a manifold).
-  void linkTriangles(const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces, bool boundary,
-                     std::vector<Tri>& tris) const;
+  void linkTriangles(const std::vector<uint32_t>& corners, const std::vector<Tet>& tets,
+                     const std::vector<BoundaryFace>& faces, bool boundary, std::vector<Tri>& tris) const;
   void merge(Lane& L, uint32_t v, uint32_t w, float error);
   // Evaluates the vertices of `list` again (distinct) and queues each one's best target.
   void recompute(Lane& L, const std::vector<uint32_t>& list);
@@ -441,7 +446,17 @@ class Ranker {
   RankingOptions options_;
   double mass_scale_ = 1, area_scale_ = 1;
 
-  std::vector<Tet> tets_;
+  // The tetrahedra as the merges so far have made them, read through the mesh's rather than copied
+  // (16 bytes a tetrahedron, a fifth of a large convert's peak of memory): vertex k of tetrahedron t
+  // is up_[mesh_.tets[t][k]] (tet(t)), and dead_[t] marks the collapsed ones. A merge v -> w points
+  // the vertex that each tetrahedron of v's star names at v's place to w, so that every vertex a live
+  // tetrahedron names is one step from the vertex it stands for now.
+  std::vector<uint32_t> up_;
+  std::vector<uint8_t> dead_;
+  Tet tet(size_t t) const {
+    const Tet& m = mesh_.tets[t];
+    return {up_[m[0]], up_[m[1]], up_[m[2]], up_[m[3]]};
+  }
   // Per vertex: where its list of corners begins in its lane's pool, and its length.
   std::vector<uint64_t> star_begin_;
   std::vector<uint32_t> star_len_;
@@ -502,17 +517,17 @@ void Ranker::init(const RankingFaces* faces) {
     }
     area_scale_ = area > 0 && std::isfinite(area) ? area : 1.0;
   }
-  tets_.clear();
-  reservePopulated(tets_, nt);
-  tets_.assign(tets.begin(), tets.end());
+  resizePopulated(up_, np);
+  std::iota(up_.begin(), up_.end(), 0u);
+  assignPopulated(dead_, nt, uint8_t{0});
   star_size_.assign(np, 0);
-  for (const Tet& q : tets_)
+  for (const Tet& q : tets)
     for (uint32_t v : q) ++star_size_[v];
   star_begin_.assign(np, 0);
   star_len_.assign(np, 0);
   double mass = 0, volume = 0;
   for (size_t t = 0; t < nt; ++t) {
-    const Tet& q = tets_[t];
+    const Tet& q = tets[t];
     const double vol = signedVolume(pos(q[0]), pos(q[1]), pos(q[2]), pos(q[3]));
     const double rho = 0.25 * (density_[q[0]] + density_[q[1]] + density_[q[2]] + density_[q[3]]);
     mass += std::fabs(rho * vol);
@@ -568,9 +583,9 @@ void Ranker::partition(uint32_t parts, double shift) {
 
 size_t Ranker::liveTets() const {
   std::atomic<size_t> live{0};
-  parallelBlocks(tets_.size(), [&](size_t t0, size_t t1) {
+  parallelBlocks(dead_.size(), [&](size_t t0, size_t t1) {
     size_t n = 0;
-    for (size_t t = t0; t < t1; ++t) n += tets_[t][0] != kDead;
+    for (size_t t = t0; t < t1; ++t) n += !dead_[t];
     live.fetch_add(n, std::memory_order_relaxed);
   });
   return live.load();
@@ -578,10 +593,10 @@ size_t Ranker::liveTets() const {
 
 void Ranker::markSeams() {
   seam_.assign(mesh_.numPoints(), 0);
-  parallelBlocks(tets_.size(), [&](size_t t0, size_t t1) {
+  parallelBlocks(dead_.size(), [&](size_t t0, size_t t1) {
     for (size_t t = t0; t < t1; ++t) {
-      const Tet& q = tets_[t];
-      if (q[0] == kDead) continue;
+      if (dead_[t]) continue;
+      const Tet q = tet(t);
       const uint8_t p = part_[q[0]];
       if (part_[q[1]] != p || part_[q[2]] != p || part_[q[3]] != p)
         for (uint32_t v : q) setFlag(seam_[v]);
@@ -639,10 +654,11 @@ void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vect
   tbb::this_task_arena::isolate([&] {
     tbb::parallel_for(uint32_t{0}, groups, [&](uint32_t g) {
       const uint64_t lo = np * g / groups, hi = np * (g + 1) / groups;
-      for (size_t t = 0; t < tets_.size(); ++t) {
-        if (tets_[t][0] == kDead) continue;
+      for (size_t t = 0; t < dead_.size(); ++t) {
+        if (dead_[t]) continue;
+        const Tet q = tet(t);
         for (int k = 0; k < 4; ++k) {
-          const uint32_t v = tets_[t][k];
+          const uint32_t v = q[k];
           if (part ? group_of_part[(*part)[v]] != g : (v < lo || v >= hi)) continue;
           Lane& L = *lanes[part ? (*part)[v] : 0];
           L.pool[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
@@ -699,11 +715,13 @@ void Ranker::runLane(Lane& L, uint64_t merged_before, const ProgressFn* progress
   }
 }
 
-void Ranker::gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners) {
+void Ranker::gatherStar(Lane& L, uint32_t v, std::vector<uint32_t>& corners, std::vector<Tet>& tets) {
   uint32_t* run = L.pool.data() + star_begin_[v];
   const uint32_t m = keepLive(run, star_len_[v]);
   star_len_[v] = m;
   corners.assign(run, run + m);
+  tets.resize(m);
+  for (uint32_t i = 0; i < m; ++i) tets[i] = tet(run[i] >> 2);
 }
 
 void Ranker::compactStars(Lane& L) {
@@ -722,7 +740,7 @@ void Ranker::compactStars(Lane& L) {
     for (uint32_t i = 0; i < n; ++i) {
       const uint32_t c = pool[begin + i];
       pool[used + m] = c;
-      m += tets_[c >> 2][0] != kDead;
+      m += !dead_[c >> 2];
     }
     star_begin_[v] = used;
     star_len_[v] = m;
@@ -732,26 +750,26 @@ void Ranker::compactStars(Lane& L) {
   ++L.compactions;
 }
 
-void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, std::vector<BoundaryFace>& faces,
-                                 Workspace& ws) const {
+void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corners, const std::vector<Tet>& tets,
+                                 std::vector<BoundaryFace>& faces, Workspace& ws) const {
   faces.clear();
   if (!boundary_[v]) return;
   // Faces containing v: three per tetrahedron; those seen once are on the boundary.
   std::vector<StarFace>& keys = ws.face_keys;
   keys.clear();
-  for (uint32_t c : corners) {
-    const uint32_t t = c >> 2;
-    const int k = c & 3;
+  for (uint32_t i = 0; i < corners.size(); ++i) {
+    const int k = corners[i] & 3;
+    const Tet& q = tets[i];
     for (int j = 0; j < 4; ++j) {
       if (j == k) continue;
       uint32_t other[2];
       int n = 0;
       for (int m = 0; m < 3; ++m) {
-        const uint32_t u = tets_[t][kTetFace[j][m]];
+        const uint32_t u = q[kTetFace[j][m]];
         if (u != v && n < 2) other[n++] = u;
       }
       const uint32_t x = std::min(other[0], other[1]), y = std::max(other[0], other[1]);
-      keys.push_back({(uint64_t{x} << 32) | y, t, static_cast<uint32_t>(j)});
+      keys.push_back({(uint64_t{x} << 32) | y, i, static_cast<uint32_t>(j)});
     }
   }
   std::sort(keys.begin(), keys.end());
@@ -759,9 +777,9 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
     size_t j = i + 1;
     while (j < keys.size() && keys[j].key == keys[i].key) ++j;
     if (j - i == 1) {
-      const uint32_t t = keys[i].t;
       const int f = static_cast<int>(keys[i].j);
-      uint32_t tri[3] = {tets_[t][kTetFace[f][0]], tets_[t][kTetFace[f][1]], tets_[t][kTetFace[f][2]]};
+      const Tet& q = tets[keys[i].i];
+      uint32_t tri[3] = {q[kTetFace[f][0]], q[kTetFace[f][1]], q[kTetFace[f][2]]};
       while (tri[0] != v) std::rotate(tri, tri + 1, tri + 3);
       BoundaryFace bf;
       bf.x = tri[1];
@@ -777,7 +795,7 @@ void Ranker::gatherBoundaryFaces(uint32_t v, const std::vector<uint32_t>& corner
 void Ranker::candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Workspace& ws) {
   out.clear();
   if (!alive_[v] || frozen_[v] || pinned_[v] || crowded(v) || (L.restricted && seam_[v])) return;
-  gatherStar(L, v, ws.corners);
+  gatherStar(L, v, ws.corners, ws.star_tets);
   if (ws.corners.empty()) return;
   const double* pv = pos(v);
   const double rho_v = density_[v];
@@ -786,10 +804,9 @@ void Ranker::candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Worksp
   for (auto* a : {&ws.nx, &ws.ny, &ws.nz, &ws.d, &ws.od, &ws.vol, &ws.mass, &ws.vol_w}) a->resize(ns);
   ws.targets.clear();
   for (size_t i = 0; i < ns; ++i) {
-    const uint32_t c = ws.corners[i];
-    const uint32_t t = c >> 2;
-    const int k = c & 3;
-    const uint32_t a = tets_[t][kTetFace[k][0]], b = tets_[t][kTetFace[k][1]], d = tets_[t][kTetFace[k][2]];
+    const int k = ws.corners[i] & 3;
+    const Tet& q = ws.star_tets[i];
+    const uint32_t a = q[kTetFace[k][0]], b = q[kTetFace[k][1]], d = q[kTetFace[k][2]];
     ws.star_o[i] = {a, b, d};
     double nout[3];
     triNormal(pos(a), pos(b), pos(d), nout);
@@ -803,7 +820,7 @@ void Ranker::candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Worksp
     ws.mass[i] = 0.25 * (rho_v + ws.od[i]) * ws.vol[i];
     if (!boundary_[v]) ws.targets.insert(ws.targets.end(), {a, b, d});
   }
-  gatherBoundaryFaces(v, ws.corners, ws.faces, ws);
+  gatherBoundaryFaces(v, ws.corners, ws.star_tets, ws.faces, ws);
   double face_area = 0;
   if (boundary_[v]) {
     for (const BoundaryFace& f : ws.faces) {
@@ -891,13 +908,13 @@ void Ranker::candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Worksp
   }
 }
 
-void Ranker::linkTriangles(const std::vector<uint32_t>& corners, const std::vector<BoundaryFace>& faces, bool boundary,
-                           std::vector<Tri>& tris) const {
+void Ranker::linkTriangles(const std::vector<uint32_t>& corners, const std::vector<Tet>& tets,
+                           const std::vector<BoundaryFace>& faces, bool boundary, std::vector<Tri>& tris) const {
   tris.clear();
-  for (uint32_t c : corners) {
-    const uint32_t t = c >> 2;
-    const int k = c & 3;
-    uint32_t a = tets_[t][(k + 1) & 3], b = tets_[t][(k + 2) & 3], d = tets_[t][(k + 3) & 3];
+  for (size_t i = 0; i < corners.size(); ++i) {
+    const int k = corners[i] & 3;
+    const Tet& q = tets[i];
+    uint32_t a = q[(k + 1) & 3], b = q[(k + 2) & 3], d = q[(k + 3) & 3];
     if (a > b) std::swap(a, b);
     if (b > d) std::swap(b, d);
     if (a > b) std::swap(a, b);
@@ -913,17 +930,17 @@ bool Ranker::validate(Lane& L, uint32_t v, uint32_t w) {
     return false;
   if (boundary_[v] && !boundary_[w]) return false;
   if (L.restricted && (seam_[v] || seam_[w])) return false;
-  gatherStar(L, v, L.corners);
-  gatherStar(L, w, L.corners_w);
-  gatherBoundaryFaces(v, L.corners, L.faces, *L.ws);
-  gatherBoundaryFaces(w, L.corners_w, L.faces_w, *L.ws);
+  gatherStar(L, v, L.corners, L.star_tets);
+  gatherStar(L, w, L.corners_w, L.star_tets_w);
+  gatherBoundaryFaces(v, L.corners, L.star_tets, L.faces, *L.ws);
+  gatherBoundaryFaces(w, L.corners_w, L.star_tets_w, L.faces_w, *L.ws);
   // Tetrahedra around the edge vw and the vertices of Lk(vw).
   size_t edge_tets = 0;
   L.lk_verts.clear();
   const bool same = samePosition(v, w);
-  for (uint32_t c : L.corners) {
-    const Tet& q = tets_[c >> 2];
-    const int k = c & 3;
+  for (size_t i = 0; i < L.corners.size(); ++i) {
+    const Tet& q = L.star_tets[i];
+    const int k = L.corners[i] & 3;
     if (q[0] == w || q[1] == w || q[2] == w || q[3] == w) {
       ++edge_tets;
       for (uint32_t x : q) {
@@ -958,34 +975,34 @@ bool Ranker::validate(Lane& L, uint32_t v, uint32_t w) {
   // is on the boundary, the tetrahedron across the other one inherits the boundary triangle: the
   // streamed triangle keeps T's orientation, the mesh's takes the neighbour's. They agree when both
   // are positively oriented (a flat tetrahedron's orientation is arbitrary), so require that.
-  for (uint32_t c : L.corners) {
-    const uint32_t t = c >> 2;
-    const Tet& q = tets_[t];
+  for (size_t i = 0; i < L.corners.size(); ++i) {
+    const uint32_t t = L.corners[i] >> 2;
+    const Tet& q = L.star_tets[i];
     if (q[0] != w && q[1] != w && q[2] != w && q[3] != w) continue;
     uint32_t xy[2], m = 0;
     for (uint32_t z : q) {
       if (z != v && z != w) xy[m++] = z;
     }
-    auto across = [&](const std::vector<uint32_t>& star) -> uint32_t {
-      for (uint32_t cc : star) {
-        const uint32_t r = cc >> 2;
-        if (r == t) continue;
-        const Tet& p = tets_[r];
+    // The tetrahedron of a star (corners and their tetrahedra) across (x, y) from t, and where it is.
+    auto across = [&](const std::vector<uint32_t>& star, const std::vector<Tet>& star_tets) -> const Tet* {
+      for (size_t j = 0; j < star.size(); ++j) {
+        if (star[j] >> 2 == t) continue;
+        const Tet& p = star_tets[j];
         bool has_x = false, has_y = false;
         for (uint32_t z : p) {
           has_x |= z == xy[0];
           has_y |= z == xy[1];
         }
-        if (has_x && has_y) return r;
+        if (has_x && has_y) return &p;
       }
-      return kNoIndex;
+      return nullptr;
     };
-    const uint32_t nv = across(L.corners), nw = across(L.corners_w);
-    if (nv != kNoIndex && nw != kNoIndex) continue;
+    const Tet* nv = across(L.corners, L.star_tets);
+    const Tet* nw = across(L.corners_w, L.star_tets_w);
+    if (nv && nw) continue;
     if (orient3d(pos(q[0]), pos(q[1]), pos(q[2]), pos(q[3])) <= 0) return false;
-    const uint32_t n = nv != kNoIndex ? nv : nw;
-    if (n != kNoIndex) {
-      const Tet& p = tets_[n];
+    if (const Tet* n = nv ? nv : nw) {
+      const Tet& p = *n;
       if (orient3d(pos(p[0]), pos(p[1]), pos(p[2]), pos(p[3])) <= 0) return false;
     }
   }
@@ -993,8 +1010,8 @@ bool Ranker::validate(Lane& L, uint32_t v, uint32_t w) {
   sortUnique(L.lk_verts);
   const size_t lk_v = L.lk_verts.size() + (edge_faces > 0 ? 1 : 0);
   const size_t lk_e = edge_tets + edge_faces;
-  linkTriangles(L.corners, L.faces, boundary_[v], L.tris_a);
-  linkTriangles(L.corners_w, L.faces_w, boundary_[w], L.tris_b);
+  linkTriangles(L.corners, L.star_tets, L.faces, boundary_[v], L.tris_a);
+  linkTriangles(L.corners_w, L.star_tets_w, L.faces_w, boundary_[w], L.tris_b);
   // Common vertices first, by marks (Lk(v)'s at `s`, those Lk(w) has too at s + 1): a common edge or
   // triangle has only common vertices, so the edges and triangles compared are those few, sorted.
   Workspace& ws = *L.ws;
@@ -1044,24 +1061,30 @@ bool Ranker::validate(Lane& L, uint32_t v, uint32_t w) {
 }
 
 void Ranker::merge(Lane& L, uint32_t v, uint32_t w, float error) {
-  gatherStar(L, v, L.corners);
+  gatherStar(L, v, L.corners, L.star_tets);
   L.recompute.clear();
   L.recompute.push_back(w);
   uint32_t removed = 0;
-  for (uint32_t c : L.corners) {
-    Tet& q = tets_[c >> 2];
+  for (size_t i = 0; i < L.corners.size(); ++i) {
+    const uint32_t c = L.corners[i];
+    const Tet& q = L.star_tets[i];
     for (uint32_t x : q) {
       if (x != v) L.recompute.push_back(x);
     }
     if (q[0] == w || q[1] == w || q[2] == w || q[3] == w) {
       for (uint32_t x : q) --star_size_[x];
-      q[0] = kDead;
+      dead_[c >> 2] = 1;
       ++removed;
-    } else {
-      q[c & 3] = w;
-      ++star_size_[w];
     }
   }
+  // Then v's place in the tetrahedra that stay names w (after the loop above, which reads v there:
+  // tetrahedra of the star may name v by the same vertex).
+  for (uint32_t c : L.corners) {
+    if (dead_[c >> 2]) continue;
+    up_[mesh_.tets[c >> 2][c & 3]] = w;
+    ++star_size_[w];
+  }
+  up_[v] = w;
   star_size_[v] = 0;  // its tetrahedra are w's now, or gone: lists built from the tetrahedra size by it
   // w's list becomes v's corners, then its own (the killed ones are dropped when next gathered).
   {
@@ -1400,9 +1423,9 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     size_t next = 0;
     // The first vertex y of the tetrahedra around x with stop(y) (kNoIndex: none).
     auto inStar = [&](uint32_t x, auto&& stop) {
-      gatherStar(L, x, L.corners);
-      for (uint32_t c : L.corners)
-        for (uint32_t y : tets_[c >> 2])
+      gatherStar(L, x, L.corners, L.star_tets);
+      for (const Tet& q : L.star_tets)
+        for (uint32_t y : q)
           if (stop(y)) return y;
       return kNoIndex;
     };
