@@ -43,10 +43,13 @@ struct EncodedLevel {
   std::vector<std::vector<uint8_t>> point_fields;  // one stream per header.point_fields entry
   std::vector<std::vector<uint8_t>> cell_fields;   // one stream per header.cell_fields entry
   // vertex_order[source vertex index] = the id the decoder gives that vertex (its emission order);
-  // tet_order[source tetrahedron index] = the tetrahedron's position in the decoded stream.
+  // tet_order[source tetrahedron index] = the tetrahedron's position in the decoded stream; empty
+  // where that is the source's order (a structured piece, whose 8 bytes a tetrahedron of identity
+  // stayed in memory through a large convert): tetPosition() reads either.
   // Callers use these to store per-vertex data (the merge tree) in decoding order.
   std::vector<uint32_t> vertex_order;
   std::vector<uint64_t> tet_order;
+  uint64_t tetPosition(size_t t) const { return tet_order.empty() ? t : tet_order[t]; }
   // Vertices introduced while coding the boundary: the decoder's ids 0 .. boundary_points - 1.
   uint64_t boundary_points = 0;
 };

@@ -334,7 +334,7 @@ PiecedLevel onePieceLevel(EncodedLevel e, uint8_t kind) {
   // A structured piece gives every vertex before the boundary triangles.
   l.pieces[0].own_boundary_points = kind == kPieceStructured ? e.header.points : e.boundary_points;
   // A structured piece's checks and decoding read the level's renumbering, not the piece's: moved, not
-  // copied (8 bytes a tetrahedron).
+  // copied (its tetrahedron order is the identity, left empty).
   if (kind == kPieceStructured) {
     l.vertex_order = std::move(e.vertex_order);
     l.tet_order = std::move(e.tet_order);

@@ -61,9 +61,11 @@ struct PiecedLevel {
   std::vector<EncodedLevel> encoded;               // one per piece (its own header: the piece's counts)
   std::vector<SeamClass> classes;                  // in class order (by piece list, lexicographic)
   std::vector<std::vector<uint8_t>> seam_streams;  // one per class: its vertices' coordinates and values
-  // vertex_order[source vertex] = its global id; tet_order[source tetrahedron] = its global position.
+  // vertex_order[source vertex] = its global id; tet_order[source tetrahedron] = its global position,
+  // empty for a grid (isGrid(): its tetrahedra keep the source's order; tetPosition() reads either).
   std::vector<uint32_t> vertex_order;
   std::vector<uint64_t> tet_order;
+  uint64_t tetPosition(size_t t) const { return tet_order.empty() ? t : tet_order[t]; }
   // 1: a one-piece level whose streams name the next level's vertices as seam vertices, in that
   // level's vertex numbering, instead of storing their values (LHDR base; spec section 7.7).
   uint8_t base = 0;

@@ -62,7 +62,7 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
            std::to_string(level.encoded.size()) + " encodings";
   if (level.pieces.size() == 1 && level.pieces[0].kind == 0) return losslessMismatch(source, level.encoded[0]);
   const size_t np = source.numPoints(), nt = source.numTets();
-  if (level.vertex_order.size() != np || level.tet_order.size() != nt)
+  if (level.vertex_order.size() != np || (level.tet_order.size() != nt && !(level.isGrid() && level.tet_order.empty())))
     return "the encoder's renumbering does not cover the source";
   const PiecedLevelView view = piecedViewOf(level);
   auto decoded = decodePieces(view, {}, "the encoded level");
@@ -82,11 +82,13 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
     if (d >= np || seen[d]) return "the encoder's vertex order is not a permutation";
     seen[d] = 1;
   }
-  std::vector<char> placed(nt, 0);
-  for (size_t t = 0; t < nt; ++t) {
-    const uint64_t d = level.tet_order[t];
-    if (d >= nt || placed[d]) return "the encoder's tetrahedron order is not a permutation";
-    placed[d] = 1;
+  if (!level.tet_order.empty()) {
+    std::vector<char> placed(nt, 0);
+    for (size_t t = 0; t < nt; ++t) {
+      const uint64_t d = level.tet_order[t];
+      if (d >= nt || placed[d]) return "the encoder's tetrahedron order is not a permutation";
+      placed[d] = 1;
+    }
   }
   auto pointDifference = [&](size_t v) -> const char* {
     const uint32_t d = level.vertex_order[v];
@@ -98,7 +100,7 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
     return "source point " + std::to_string(v) + " (decoded " + std::to_string(level.vertex_order[v]) + ")" +
            pointDifference(v);
   auto tetDifference = [&](size_t t) -> const char* {
-    const uint64_t d = level.tet_order[t];
+    const uint64_t d = level.tetPosition(t);
     int perm[4], inversions = 0;
     for (int i = 0; i < 4; ++i) {
       perm[i] = -1;
@@ -113,7 +115,7 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
     return nullptr;
   };
   if (const size_t t = firstWith(nt, tetDifference); t < nt)
-    return "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(level.tet_order[t]) + ")" +
+    return "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(level.tetPosition(t)) + ")" +
            tetDifference(t);
   return "";
 }

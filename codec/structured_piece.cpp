@@ -296,11 +296,10 @@ StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const Structur
   out.connectivity = std::move(*piece);
   out.point_fields.resize(mesh.point_fields.size());
   out.cell_fields.resize(mesh.cell_fields.size());
-  // The mesh's points are the layout's vertices in order and its tetrahedra gridTets (matchGridLayout).
+  // The mesh's points are the layout's vertices in order and its tetrahedra gridTets (matchGridLayout):
+  // tet_order stays empty, the identity.
   out.vertex_order.resize(np);
   for (size_t v = 0; v < np; ++v) out.vertex_order[v] = static_cast<uint32_t>(v);
-  out.tet_order.resize(nt);
-  for (size_t t = 0; t < nt; ++t) out.tet_order[t] = t;
   return out;
 }
 

@@ -148,6 +148,15 @@ TEST(Pieces, AStructuredBlockLargerThanTheDefaultBoundStaysOnePiece) {
   };
   EXPECT_LT(bytes(*level), bytes(*cut));
   EXPECT_EQ(piecedLosslessMismatch(m, *level), "");
+  // Its tetrahedra keep the source's order: no order of 8 bytes a tetrahedron is kept, and the check
+  // still compares each tetrahedron with the one at its own place.
+  EXPECT_TRUE(level->tet_order.empty());
+  EXPECT_EQ(level->tetPosition(12345), 12345u);
+  {
+    TetMesh turned = m;
+    std::swap(turned.tets[777][0], turned.tets[777][1]);
+    EXPECT_EQ(piecedLosslessMismatch(turned, *level), "source tetrahedron 777 (decoded 777) is reversed");
+  }
   StatusOr<DecodedPieces> decoded = decodePieces(piecedViewOf(*level), {}, "block");
   ASSERT_TRUE(decoded.isOk()) << decoded.status().message();
   expectSameMesh(m, ordersOf(*level), decoded->mesh, decoded->boundary);
