@@ -1,4 +1,4 @@
-// Large buffers: a decoder's output, the ranking's copies of the mesh and star lists, the face
+// Large buffers: a decoder's output, the ranking's star lists and per-tetrahedron flags, the face
 // adjacency. Their pages are mapped in one system call, as huge pages where the system allows them.
 //
 // Memory new to the process is mapped a page at a time, on the first write to each 4 KiB page: a

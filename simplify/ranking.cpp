@@ -490,8 +490,8 @@ void Ranker::init(const RankingFaces* faces) {
     boundary_.assign(np, 0);
     frozen_.assign(np, 0);
     pinned_.assign(np, 0);
-    // The face adjacency first, and gone before the ranking's own copies of the mesh are made: the
-    // peak memory is the larger of the two, not their sum.
+    // The face adjacency first, and gone before the ranking's star lists are made: the peak memory
+    // is the larger of the two, not their sum.
     const FaceAdjacency adj = computeFaceAdjacency(mesh_);
     double area = 0;
     for (size_t t = 0; t < nt; ++t) {
