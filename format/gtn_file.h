@@ -134,6 +134,13 @@ class GtnStreamWriter {
   std::vector<uint8_t> scratch_;
 };
 
+// The output of a GtnStreamWriter that writes to the open file `f`. Its failures ("write failed: No
+// space left on device") name no file: the writer's caller names it once, with namedByOutput.
+GtnStreamWriter::Output fileOutput(std::FILE* f);
+// `st` with the output `path` before its message ("-": standard output), where it failed: for the
+// failures of a GtnStreamWriter and its output, which name no file.
+Status namedByOutput(const std::string& path, Status st);
+
 // Assembles a whole file in memory from encoded levels, one piece each (tests, tools). `merge_trees` is empty or has
 // one optional payload per level; `ratios` likewise (missing entries: 0).
 StatusOr<std::vector<uint8_t>> assembleGtn(const std::vector<const EncodedLevel*>& levels,

@@ -548,17 +548,10 @@ Status writeGtnFromParts(const std::string& path, const TetMesh& part, const std
       level.header.level = 0;
       level.header.merges = 0;
       st = writeFileAtomically(path, [&](std::FILE* f) -> Status {
-        GtnStreamWriter w(
-            [&](std::span<const uint8_t> b) -> Status {
-              if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size())
-                return ioError(path + ": write failed: " + std::strerror(errno));
-              return Status::ok();
-            },
-            wo);
-        GTN_RETURN_IF_ERROR(w.begin(level.header, 1));
-        Status s = w.addLevel(level, 0.0, std::nullopt);
-        if (!s.isOk()) return s.message().rfind(path + ": ", 0) == 0 ? s : Status(s.code(), path + ": " + s.message());
-        return w.finish();
+        GtnStreamWriter w(fileOutput(f), wo);
+        GTN_RETURN_IF_ERROR(namedByOutput(path, w.begin(level.header, 1)));
+        GTN_RETURN_IF_ERROR(namedByOutput(path, w.addLevel(level, 0.0, std::nullopt)));
+        return namedByOutput(path, w.finish());
       });
     }
     // Down 4: the outcome.

@@ -193,6 +193,19 @@ Status GtnStreamWriter::finish() {
   return Status::ok();
 }
 
+GtnStreamWriter::Output fileOutput(std::FILE* f) {
+  return [f](std::span<const uint8_t> b) -> Status {
+    if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size())
+      return ioError(std::string("write failed: ") + std::strerror(errno));
+    return Status::ok();
+  };
+}
+
+Status namedByOutput(const std::string& path, Status st) {
+  if (st.isOk()) return st;
+  return Status(st.code(), (path == "-" ? std::string("standard output") : path) + ": " + st.message());
+}
+
 StatusOr<std::vector<uint8_t>> assembleGtn(const std::vector<const EncodedLevel*>& levels,
                                            const GtnWriteOptions& options, const std::vector<double>& ratios,
                                            const std::vector<std::optional<std::vector<uint8_t>>>& merge_trees) {
@@ -494,7 +507,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
       const uint64_t offset = counter.offset();
       if (failed.isOk()) failed = counter.addLevel(e->level, levels[i].ratio, e->tree);
       if (!failed.isOk()) {
-        failed = Status(failed.code(), path + ": " + failed.message());
+        failed = namedByOutput(path, failed);
         break;
       }
       const uint64_t bytes = counter.offset() - offset;
@@ -510,13 +523,7 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
     for (size_t i = 0; i < count; ++i) GTN_RETURN_IF_ERROR(checks[i]);
   }
   return writeFileAtomically(path, [&](std::FILE* f) -> Status {
-    GtnStreamWriter w(
-        [&](std::span<const uint8_t> b) -> Status {
-          if (!b.empty() && std::fwrite(b.data(), 1, b.size(), f) != b.size())
-            return ioError(path + ": write failed: " + std::strerror(errno));
-          return Status::ok();
-        },
-        options);
+    GtnStreamWriter w(fileOutput(f), options);
     for (size_t i = 0; i < count; ++i) {
       EncodedInput one;
       if (!bounded && !chained) {
@@ -529,12 +536,10 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
         GTN_RETURN_IF_ERROR(checkDecodesBack(path, levels[i], *mesh, i, one.level, options));
       }
       const EncodedInput& e = bounded || chained ? encoded[i] : one;
-      if (i == 0) GTN_RETURN_IF_ERROR(w.begin(e.level.header, count));
-      Status st = w.addLevel(e.level, levels[i].ratio, e.tree);
-      if (!st.isOk())
-        return st.message().rfind(path + ": ", 0) == 0 ? st : Status(st.code(), path + ": " + st.message());
+      if (i == 0) GTN_RETURN_IF_ERROR(namedByOutput(path, w.begin(e.level.header, count)));
+      GTN_RETURN_IF_ERROR(namedByOutput(path, w.addLevel(e.level, levels[i].ratio, e.tree)));
     }
-    return w.finish();
+    return namedByOutput(path, w.finish());
   });
 }
 

@@ -140,7 +140,9 @@ inline void expectSameMesh(const TetMesh& src, const EncodedLevel& enc, const Te
   ASSERT_EQ(decoded.numPoints(), src.numPoints());
   ASSERT_EQ(decoded.numTets(), src.numTets());
   ASSERT_EQ(enc.vertex_order.size(), src.numPoints());
-  if (!enc.tet_order.empty()) ASSERT_EQ(enc.tet_order.size(), src.numTets());  // empty: the identity
+  if (!enc.tet_order.empty()) {  // empty: the identity
+    ASSERT_EQ(enc.tet_order.size(), src.numTets());
+  }
   EXPECT_EQ(decoded.coord_type, src.coord_type);
   std::vector<uint8_t> seen(src.numPoints(), 0);
   for (size_t v = 0; v < src.numPoints(); ++v) {
