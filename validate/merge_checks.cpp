@@ -146,18 +146,18 @@ class Replay {
  public:
   Replay(const TetMesh& mesh, const MergeForest& forest, ValidationReport& report, MergeReplayStats& st)
       : mesh_(mesh), forest_(forest), report_(report), st_(st), np_(mesh.numPoints()) {
-    tets_ = mesh.tets;
-    alive_.assign(tets_.size(), 1);
-    flat_.assign(tets_.size(), 0);
+    const std::vector<Tet>& tets = mesh.tets;
+    alive_.assign(tets.size(), 1);
+    flat_.assign(tets.size(), 0);
     inc_.resize(np_);
     geometry_ok_ = true;
     for (size_t p = 0; p < np_ && geometry_ok_; ++p) {
       const double* x = mesh.point(p);
       geometry_ok_ = std::isfinite(x[0]) && std::isfinite(x[1]) && std::isfinite(x[2]);
     }
-    for (size_t t = 0; t < tets_.size(); ++t) {
-      for (uint32_t v : tets_[t]) inc_[v].push_back(static_cast<uint32_t>(t));
-      if (geometry_ok_) flat_[t] = orientation(tets_[t]) <= 0;
+    for (size_t t = 0; t < tets.size(); ++t) {
+      for (uint32_t v : tets[t]) inc_[v].push_back(static_cast<uint32_t>(t));
+      if (geometry_ok_) flat_[t] = orientation(tets[t]) <= 0;
     }
     const FaceAdjacency adj = computeFaceAdjacency(mesh);
     btris_ = boundaryTriangles(mesh, adj);
@@ -185,6 +185,13 @@ class Replay {
     return r;
   }
 
+  // Tetrahedron x of level 0 as the merges so far have made it: its vertices' representatives (level
+  // 0's tetrahedra are read through the merges, not copied: 16 bytes a tetrahedron of a large file).
+  Tet tet(size_t x) {
+    const Tet& m = mesh_.tets[x];
+    return {find(m[0]), find(m[1]), find(m[2]), find(m[3])};
+  }
+
   void apply(uint64_t rank, uint32_t c, uint32_t target_parent) {
     const uint32_t t = find(target_parent);
     const std::string what =
@@ -196,7 +203,7 @@ class Replay {
     bool adjacent = false;
     uint64_t removed = 0;
     for (uint32_t x : list) {
-      if (contains(tets_[x], t)) {
+      if (contains(tet(x), t)) {
         adjacent = true;
         ++removed;
         alive_[x] = 0;
@@ -230,11 +237,10 @@ class Replay {
                     what + (is_boundary_[t] ? ": not along a boundary edge" : ": the target is interior"));
       }
     }
+    // From here on c stands for t in every tetrahedron.
+    rep_[c] = t;
     for (uint32_t x : moved_) {
-      Tet& tet = tets_[x];
-      for (uint32_t& v : tet) {
-        if (v == c) v = t;
-      }
+      const Tet tet = this->tet(x);
       inc_[t].push_back(x);
       if (!geometry_ok_ || !check) {
         if (geometry_ok_) flat_[x] = orientation(tet) <= 0;
@@ -300,9 +306,10 @@ class Replay {
     }
     std::vector<std::array<uint64_t, 2>> replay_tets;
     std::vector<uint8_t> cells;
-    for (size_t x = 0; x < tets_.size(); ++x) {
+    for (size_t x = 0; x < alive_.size(); ++x) {
       if (!alive_[x]) continue;
-      const uint64_t vk[4] = {keys0[tets_[x][0]], keys0[tets_[x][1]], keys0[tets_[x][2]], keys0[tets_[x][3]]};
+      const Tet q = tet(x);
+      const uint64_t vk[4] = {keys0[q[0]], keys0[q[1]], keys0[q[2]], keys0[q[3]]};
       cellBytes(mesh_, x, cells);
       replay_tets.push_back(tetKey(vk, !geometry_ok_ || flat_[x], cells.data(), cells.size()));
     }
@@ -335,7 +342,7 @@ class Replay {
     std::unordered_map<uint64_t, uint32_t> count;  // face (two other vertices) -> live tetrahedra
     auto faceKey = [](uint32_t a, uint32_t b) { return a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a); };
     for (uint32_t x : moved_) {
-      const Tet& tet = tets_[x];
+      const Tet tet = this->tet(x);
       uint32_t others[3], n = 0;
       for (uint32_t v : tet) {
         if (v != t) others[n++] = v;
@@ -345,7 +352,7 @@ class Replay {
     std::vector<uint32_t>& list = inc_[t];
     list.erase(std::remove_if(list.begin(), list.end(), [&](uint32_t x) { return !alive_[x]; }), list.end());
     for (uint32_t x : list) {
-      const Tet& tet = tets_[x];
+      const Tet tet = this->tet(x);
       uint32_t others[3], n = 0;
       for (uint32_t v : tet) {
         if (v != t && n < 3) others[n++] = v;
@@ -372,7 +379,6 @@ class Replay {
   MergeReplayStats& st_;
   size_t np_;
   bool geometry_ok_ = true;
-  std::vector<Tet> tets_;
   std::vector<uint8_t> alive_, flat_;
   std::vector<std::vector<uint32_t>> inc_;
   std::vector<Triangle> btris_;
