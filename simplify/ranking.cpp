@@ -310,7 +310,7 @@ struct Lane {
   // linked list. Corners of collapsed tetrahedra are dropped lazily, by gatherStar (each evaluation
   // rewrites only its own vertex's run). A merge writes the target's new list after the used part of
   // the pool (the source's corners, then its own: the order every sum over a star follows). The pool
-  // keeps room for a quarter more than its corners, and when a new list does not fit, the runs are
+  // keeps room for an eighth more than its corners, and when a new list does not fit, the runs are
   // moved down over the abandoned ones, in place, in the order they lie (compactStars).
   std::vector<uint32_t> pool;
   uint64_t used = 0;  // pool[0, used) holds the runs, live and abandoned
@@ -620,7 +620,7 @@ void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>& from, 
     star_begin_[v] = total;
     total += star_len_[v];
   });
-  assignPopulated(L.pool, total + std::max<uint64_t>(total / 4, kMinStarSlack), 0u);
+  assignPopulated(L.pool, total + std::max<uint64_t>(total / 8, kMinStarSlack), 0u);
   L.peak = L.pool.size();
   L.used = total;
   forMembers(L, [&](uint32_t v) {
@@ -639,7 +639,7 @@ void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vect
         star_len_[v] = 0;
         total += star_size_[v];
       });
-      assignPopulated(L->pool, total + std::max<uint64_t>(total / 4, kMinStarSlack), 0u);
+      assignPopulated(L->pool, total + std::max<uint64_t>(total / 8, kMinStarSlack), 0u);
       L->peak = L->pool.size();
       L->used = total;
     });
