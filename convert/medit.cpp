@@ -322,9 +322,8 @@ Status MeditReader::readVolumeSection(const MeditVolumeKeyword& linear_kw) {
   // A linear keyword whose first element has the nodes of its second-order form (gmsh's writer):
   // the section is read as that form.
   const MeditVolumeKeyword* chosen = &linear_kw;
-  const size_t index = static_cast<size_t>(&linear_kw - kMeditVolumeKeywords);
-  if (index < 4 && count > 0) {
-    const MeditVolumeKeyword& higher = kMeditVolumeKeywords[index + 4];
+  if (const MeditVolumeKeyword* second = secondOrderForm(linear_kw); second && count > 0) {
+    const MeditVolumeKeyword& higher = *second;
     if (firstEntryWidth(reader_.rest()) == higher.nodes + 1) {
       chosen = &higher;
       result_.report.warnings.push_back(

@@ -22,6 +22,19 @@ constexpr MeditVolumeKeyword kMeditVolumeKeywords[kMeditVolumeKinds] = {
 
 static_assert(std::all_of(std::begin(kMeditVolumeKeywords), std::end(kMeditVolumeKeywords),
                           [](const MeditVolumeKeyword& k) { return k.nodes <= kMeditMaxNodes; }));
+// The table lists the four linear keywords, then their second-order forms in the same order.
+constexpr size_t kMeditLinearKinds = 4;
+static_assert(std::all_of(std::begin(kMeditVolumeKeywords), std::begin(kMeditVolumeKeywords) + kMeditLinearKinds,
+                          [](const MeditVolumeKeyword& k) {
+                            const MeditVolumeKeyword& q = (&k)[kMeditLinearKinds];
+                            return k.nodes == k.corners && q.corners == k.corners && q.vtk_type == k.vtk_type &&
+                                   q.nodes > q.corners;
+                          }));
+
+const MeditVolumeKeyword* secondOrderForm(const MeditVolumeKeyword& linear) {
+  const size_t index = static_cast<size_t>(&linear - kMeditVolumeKeywords);
+  return index < kMeditLinearKinds ? &kMeditVolumeKeywords[index + kMeditLinearKinds] : nullptr;
+}
 
 void MeditCells::addSection(const MeditVolumeKeyword& kw, const std::string& where) {
   const size_t index = static_cast<size_t>(&kw - kMeditVolumeKeywords);

@@ -36,6 +36,9 @@ struct MeditVolumeKeyword {
 inline constexpr size_t kMeditVolumeKinds = 8;
 extern const MeditVolumeKeyword kMeditVolumeKeywords[kMeditVolumeKinds];
 inline constexpr int kMeditMaxNodes = 27;  // the most nodes of an element (HexahedraQ2)
+// The second-order form of a linear keyword (Tetrahedra: TetrahedraP2, Hexahedra: HexahedraQ2, ...),
+// or null for a second-order one.
+const MeditVolumeKeyword* secondOrderForm(const MeditVolumeKeyword& linear);
 
 // The volume elements read so far. Tetrahedra go straight to mesh.tets (their references to
 // tet_refs); the other elements wait in `others`, 0-based, until finishMeditImport splits them.

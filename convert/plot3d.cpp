@@ -1639,6 +1639,10 @@ void splitCells(const std::vector<BlockDims>& blocks, const std::vector<int32_t>
 
 }  // namespace
 
+// What the errors of a Q file given before its grid advise.
+constexpr const char* kGridFirst =
+    "give the grid file first, then the Q file (gtn convert GRID.xyz SOLUTION.q -o OUT.gtn)";
+
 StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, const ImportOptions& options) {
   if (inputs.empty()) return usageError("no PLOT3D input given");
   if (options.split != 5 && options.split != 6)
@@ -1688,9 +1692,7 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
       if (!fits.empty())
         return invalidData(grid_path + ": a PLOT3D Q (solution) file (" +
                            describeLayout(fits.front().layout, Kind::kQ) + ", grids " +
-                           blocksText(fits.front().blocks) +
-                           "), not a grid file: give the grid file first, then the Q file (gtn convert GRID.xyz "
-                           "SOLUTION.q -o OUT.gtn)");
+                           blocksText(fits.front().blocks) + "), not a grid file: " + kGridFirst);
     }
     const Status st = noFitError(grid_path, grid_bytes, Kind::kGrid, grid_detection);
     const std::string fixed = meta ? describeConstraints(constraints) : "";
@@ -1771,9 +1773,7 @@ StatusOr<ImportResult> importPlot3d(const std::vector<std::string>& inputs, cons
             continue;
           return invalidData(second_path + ": a PLOT3D grid file (" + describeLayout(g.layout, Kind::kGrid) +
                              ", grids " + blocksText(g.blocks) + "), not a Q or function file for the grid " +
-                             grid_path +
-                             ", which may be the Q file: give the grid file first, then the Q file (gtn "
-                             "convert GRID.xyz SOLUTION.q -o OUT.gtn)");
+                             grid_path + ", which may be the Q file: " + kGridFirst);
         }
         if (!q_text.isOk() && !f_text.isOk())
           return invalidData(second_path + ": neither an ASCII PLOT3D Q file nor a function file for the grid " +

@@ -9,7 +9,6 @@
 //   down 4: whether part 0 wrote the file
 #include "format/gtn_parts.h"
 
-#include <cerrno>
 #include <cstring>
 
 #include "codec/pieces_check.h"
