@@ -16,8 +16,9 @@ median speed-up with all threads, with [min-max] over the rounds. Every file a s
 write must have the same bytes, whatever the thread count or round.
 
 Sizes are nodes per side: 64 (1.5 million tetrahedra), 128 (12.2 million), 200 (47.3 million).
-The 200 size's convert takes about 180-190 s with 2 threads on a 2-core machine (330-350 s of CPU
-time), and about 4.6 GB of memory; --sizes chooses a subset.
+The 200 size's convert takes about 195-225 s with 2 threads on a 2-core machine (335-385 s of CPU
+time, and about that much wall time with 1 thread), and about 3.5 GB of memory, so each of its
+rounds takes about ten minutes; --sizes chooses a subset.
 
     python3 bench/scale/bench_scale.py --build build --sizes 64,128 [--reps 3] [--validate]
     cmake --build build --target bench-scale      # the sizes in GTN_BENCH_SCALE_SIZES (default all three)
@@ -28,6 +29,7 @@ import argparse
 import json
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -124,13 +126,9 @@ def main():
         if not a.work:
             shutil.rmtree(work, ignore_errors=True)
 
-    def median(xs):
-        xs = sorted(xs)
-        m = len(xs) // 2
-        return xs[m] if len(xs) % 2 else 0.5 * (xs[m - 1] + xs[m])
-
     def spread(xs, fmt):
-        return (fmt % median(xs)) + (" [" + fmt % min(xs) + "-" + fmt % max(xs) + "]" if len(xs) > 1 else "")
+        rng = " [" + fmt % min(xs) + "-" + fmt % max(xs) + "]" if len(xs) > 1 else ""
+        return fmt % statistics.median(xs) + rng
 
     def of(n, t, key):
         return [r[key] for r in runs if r["nodes"] == n and r["threads"] == t]
@@ -149,13 +147,15 @@ def main():
             fb = of(n, t, "file_bytes")[0]
             line = "| %d^3 | %d | %d | %s | %s | %.2f | %.0f | %s | %s | %.0f | %.0f" % (
                 n, tets, t, spread(of(n, t, "convert_wall_s"), "%.1f"), spread(of(n, t, "convert_cpu_s"), "%.1f"),
-                1e6 * median(of(n, t, "convert_cpu_s")) / tets, max(of(n, t, "convert_peak_rss_bytes")) / tets,
+                1e6 * statistics.median(of(n, t, "convert_cpu_s")) / tets,
+                max(of(n, t, "convert_peak_rss_bytes")) / tets,
                 spread(of(n, t, "decode_wall_s"), "%.2f"), spread(of(n, t, "decode_s"), "%.3f"),
-                1e9 * median(of(n, t, "decode_s")) / tets, max(of(n, t, "decode_peak_rss_bytes")) / tets)
+                1e9 * statistics.median(of(n, t, "decode_s")) / tets,
+                max(of(n, t, "decode_peak_rss_bytes")) / tets)
             if a.validate:
                 line += " | %s | %.0f" % (spread(of(n, t, "validate_wall_s"), "%.1f"),
                                           max(of(n, t, "validate_peak_rss_bytes")) / tets)
-            same = all(r["same_bytes_all_runs"] for r in runs if r["nodes"] == n)
+            same = of(n, t, "same_bytes_all_runs")[0]
             print(line + " | %d | %.2f | %s |" % (fb, 8.0 * fb / tets, "yes" if same else "NO"))
     if len(thread_counts) > 1:
         t = thread_counts[-1]
@@ -181,6 +181,7 @@ def main():
         with open(a.json, "w") as f:
             json.dump({"all_threads": all_threads, "reps": a.reps, "runs": runs}, f, indent=2)
             f.write("\n")
+
 
 if __name__ == "__main__":
     main()
