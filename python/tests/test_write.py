@@ -190,7 +190,9 @@ def test_threads_bounds_tbb_for_the_call(converted, tmp_path):
             gatun.write(tmp_path / f"t{threads}.gtn", mesh.points, mesh.tets, point_data=mesh.point_data,
                         levels=1, threads=threads)
 
-    assert other_threads_ticks(lambda: write(1)) == 0
+    # A worker that wakes for a moment can be charged a whole clock tick, now and then: a limit that
+    # works leaves some call of three with no tick on another thread; one that does not, none.
+    assert min(other_threads_ticks(lambda: write(1)) for _ in range(3)) == 0
     assert other_threads_ticks(lambda: write(None)) > 0
     # The same file whatever the threads (the provenance names the output, so compare levels).
     a, b = gatun.info(tmp_path / "t1.gtn"), gatun.info(tmp_path / "tNone.gtn")
