@@ -261,6 +261,10 @@ struct Workspace {
   }
   std::vector<uint32_t> mark;
   uint32_t stamp = 0;
+  // The storage of the pools of the lanes this thread runs one after another (Ranker::withPartPool):
+  // kept for the next lane rather than freed, which the allocator would not give back to the system
+  // (pools of a few MB each, of sizes that differ, fragment its free memory).
+  std::vector<uint32_t> spare_pool;
 
   std::vector<uint32_t> corners, targets;
   std::vector<Tet> star_tets;  // the tetrahedra of `corners`, as the merges have made them
@@ -291,19 +295,6 @@ constexpr size_t kParallelEvaluations = 64;
 // ranking runs in parts (RankingOptions::parts), one part's, whose merges touch no other part.
 struct Lane {
   explicit Lane(size_t points) : heap(points) {}
-  // Everything but the pool (which the next lanes are built from).
-  void keepOnlyPool() {
-    heap = CandidateHeap(0);
-    members = {};
-    sequence = {};
-    best = sorted = {};
-    corners = corners_w = recompute = now = {};
-    star_tets = star_tets_w = {};
-    faces = faces_w = {};
-    tris_a = tris_b = whole_a = whole_b = {};
-    edges_a = edges_b = {};
-    lk_verts = {};
-  }
   CandidateHeap heap;
   // The corners (4 * tet + local index) of the vertices whose lists this pool holds: a vertex's list
   // is a contiguous run, so that gathering a star reads independent words instead of chasing a
@@ -389,17 +380,32 @@ class Ranker {
   size_t liveTets() const;
   // seam_: the vertices of the live tetrahedra whose vertices lie in more than one part of part_.
   void markSeams();
-  // Fills a lane's pool with its members' lists (every vertex's when it has none) from the previous
-  // lanes' pools (`from`, the parts they were for, and where each vertex's run began there), after
-  // dropDeadCorners.
-  void buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>& from, const std::vector<uint8_t>& from_part,
-                 const std::vector<uint64_t>& from_begin);
-  // Fills the pools of `lanes` (the lanes of the parts of `part`; without `part`, one lane of every
-  // vertex) with their members' lists, each vertex's live corners in ascending order, in one pass
-  // over the tetrahedra.
-  void buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vector<uint8_t>* part);
-  // Drops the corners of collapsed tetrahedra from every vertex's run in `lanes`, the lanes of `part`.
-  void dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>& part);
+  // Fills the pool of L, a lane of every vertex, with every vertex's list, its live corners in
+  // ascending order, from the tetrahedra.
+  void buildWholePool(Lane& L);
+  // The live tetrahedra around the vertices of each part of part_ (`parts` parts), ascending: a
+  // tetrahedron is listed for every part one of its vertices is in. Lanes that make their pools as
+  // they start (buildPoolOfPart) read them, so that only the running lanes' pools are held.
+  struct PartTets {
+    std::vector<uint64_t> begin;  // part p's tetrahedra are tets[begin[p], begin[p + 1])
+    std::vector<uint32_t> tets;
+  };
+  PartTets partTets(uint32_t parts) const;
+  // Fills the pool of L, the lane of part p of part_, with its members' lists, each vertex's live
+  // corners in ascending order, from the part's tetrahedra.
+  void buildPoolOfPart(Lane& L, uint32_t p, const PartTets& around);
+  // Calls f() with L's pool made (buildPoolOfPart) in the storage the calling thread keeps for its
+  // lanes (Workspace::spare_pool), which gets it back after: a lane of a round of parts holds its
+  // pool only while it runs. A part's merges touch no tetrahedron of another part's lists, so a
+  // pool made while other parts merge is the one made before they started.
+  template <class F>
+  void withPartPool(Lane& L, uint32_t p, const PartTets& around, F&& f) {
+    Workspace& ws = thread_ws_.local();
+    L.pool.swap(ws.spare_pool);
+    buildPoolOfPart(L, p, around);
+    f();
+    L.pool.swap(ws.spare_pool);
+  }
   // Evaluates the lane's live vertices and queues their best candidates (their results stay in
   // L.best until the lane's next evaluation).
   void startLane(Lane& L);
@@ -604,53 +610,21 @@ void Ranker::markSeams() {
   });
 }
 
-void Ranker::dropDeadCorners(const std::vector<std::unique_ptr<Lane>>& lanes, const std::vector<uint8_t>& part) {
-  // Each vertex's run alone: in parallel.
-  parallelBlocks(mesh_.numPoints(), [&](size_t v0, size_t v1) {
-    for (size_t v = v0; v < v1; ++v)
-      star_len_[v] = keepLive(lanes[part[v]]->pool.data() + star_begin_[v], star_len_[v]);
-  });
-}
-
-void Ranker::buildPool(Lane& L, const std::vector<std::unique_ptr<Lane>>& from, const std::vector<uint8_t>& from_part,
-                       const std::vector<uint64_t>& from_begin) {
-  // Each listed vertex's run at its place in the pool, in vertex order: its live corners, in order.
+void Ranker::buildWholePool(Lane& L) {
   uint64_t total = 0;
   forMembers(L, [&](uint32_t v) {
     star_begin_[v] = total;
-    total += star_len_[v];
+    star_len_[v] = 0;
+    total += star_size_[v];
   });
   assignPopulated(L.pool, total + std::max<uint64_t>(total / 8, kMinStarSlack), 0u);
   L.peak = L.pool.size();
   L.used = total;
-  forMembers(L, [&](uint32_t v) {
-    const Lane& src = *from[from_part[v]];
-    std::copy_n(src.pool.data() + from_begin[v], star_len_[v], L.pool.data() + star_begin_[v]);
-  });
-}
-
-void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vector<uint8_t>* part) {
-  tbb::this_task_arena::isolate([&] {
-    tbb::parallel_for(size_t{0}, lanes.size(), [&](size_t i) {
-      Lane* L = lanes[i];
-      uint64_t total = 0;
-      forMembers(*L, [&](uint32_t v) {
-        star_begin_[v] = total;
-        star_len_[v] = 0;
-        total += star_size_[v];
-      });
-      assignPopulated(L->pool, total + std::max<uint64_t>(total / 8, kMinStarSlack), 0u);
-      L->peak = L->pool.size();
-      L->used = total;
-    });
-  });
-  // The corners in groups of vertices, one group a thread: each reads every tetrahedron and writes
-  // its own vertices' runs, in the tetrahedra's order (the same runs for any number of groups).
-  // The groups: the parts' lanes in turn, or the whole mesh's vertices in equal ranges.
+  // The corners in groups of vertices of equal ranges, one group a thread: each reads every
+  // tetrahedron and writes its own vertices' runs, in the tetrahedra's order (the same runs for any
+  // number of groups).
   const uint64_t np = mesh_.numPoints();
   const uint32_t groups = static_cast<uint32_t>(std::clamp<int>(tbb::this_task_arena::max_concurrency(), 1, 64));
-  std::array<uint8_t, kMaxParts> group_of_part{};
-  for (uint32_t p = 0; p < kMaxParts; ++p) group_of_part[p] = static_cast<uint8_t>(p % groups);
   tbb::this_task_arena::isolate([&] {
     tbb::parallel_for(uint32_t{0}, groups, [&](uint32_t g) {
       const uint64_t lo = np * g / groups, hi = np * (g + 1) / groups;
@@ -659,13 +633,74 @@ void Ranker::buildPoolsFromTets(const std::vector<Lane*>& lanes, const std::vect
         const Tet q = tet(t);
         for (int k = 0; k < 4; ++k) {
           const uint32_t v = q[k];
-          if (part ? group_of_part[(*part)[v]] != g : (v < lo || v >= hi)) continue;
-          Lane& L = *lanes[part ? (*part)[v] : 0];
-          L.pool[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
+          if (v >= lo && v < hi) L.pool[star_begin_[v] + star_len_[v]++] = static_cast<uint32_t>(4 * t + k);
         }
       }
     });
   });
+}
+
+Ranker::PartTets Ranker::partTets(uint32_t parts) const {
+  // In blocks of tetrahedra: each block counts its tetrahedra of every part, then writes them at its
+  // place within each part's list, so that every list is in ascending order whatever the threads.
+  constexpr size_t kPartBlock = size_t{1} << 16;
+  const size_t nt = dead_.size();
+  const size_t blocks = (nt + kPartBlock - 1) / kPartBlock;
+  auto eachPart = [&](size_t t, auto&& f) {  // f(p) once for each part of t's vertices
+    const Tet q = tet(t);
+    uint8_t seen[4];
+    int n = 0;
+    for (int k = 0; k < 4; ++k) {
+      const uint8_t p = part_[q[k]];
+      if (std::find(seen, seen + n, p) != seen + n) continue;
+      seen[n++] = p;
+      f(p);
+    }
+  };
+  std::vector<uint64_t> at(blocks * parts, 0);  // per block and part: its count, then its first place
+  auto eachBlock = [&](auto&& f) {
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(size_t{0}, blocks, [&](size_t b) {
+        uint64_t* mine = at.data() + b * parts;
+        for (size_t t = b * kPartBlock, end = std::min(nt, t + kPartBlock); t < end; ++t)
+          if (!dead_[t]) eachPart(t, [&](uint8_t p) { f(mine[p], t); });
+      });
+    });
+  };
+  eachBlock([](uint64_t& count, size_t) { ++count; });
+  PartTets out;
+  out.begin.assign(parts + 1, 0);
+  uint64_t total = 0;
+  for (uint32_t p = 0; p < parts; ++p) {
+    out.begin[p] = total;
+    for (size_t b = 0; b < blocks; ++b) {
+      const uint64_t count = at[b * parts + p];
+      at[b * parts + p] = total;
+      total += count;
+    }
+  }
+  out.begin[parts] = total;
+  resizePopulated(out.tets, total);
+  eachBlock([&](uint64_t& place, size_t t) { out.tets[place++] = static_cast<uint32_t>(t); });
+  return out;
+}
+
+void Ranker::buildPoolOfPart(Lane& L, uint32_t p, const PartTets& around) {
+  uint64_t total = 0;
+  forMembers(L, [&](uint32_t v) {
+    star_begin_[v] = total;
+    star_len_[v] = 0;
+    total += star_size_[v];
+  });
+  assignPopulated(L.pool, total + std::max<uint64_t>(total / 8, kMinStarSlack), 0u);
+  L.peak = L.pool.size();
+  L.used = total;
+  for (uint64_t i = around.begin[p]; i < around.begin[p + 1]; ++i) {
+    const uint32_t t = around.tets[i];
+    const Tet q = tet(t);
+    for (int k = 0; k < 4; ++k)
+      if (part_[q[k]] == p) L.pool[star_begin_[q[k]] + star_len_[q[k]]++] = 4 * t + static_cast<uint32_t>(k);
+  }
 }
 
 void Ranker::startLane(Lane& L) {
@@ -1186,32 +1221,22 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
   std::vector<uint32_t> order;
   std::vector<RankingRound> made_rounds;
   uint64_t popped = 0, rejected = 0, restaled = 0, pool_peak = 0, compactions = 0;
-  auto count = [&](const Lane& L, uint64_t lanes_alike) {
+  auto count = [&](const Lane& L) {
     popped += L.popped;
     rejected += L.rejected;
     restaled += L.stale;
-    pool_peak = std::max(pool_peak, L.peak * lanes_alike);
+    pool_peak = std::max(pool_peak, L.peak);
     compactions += L.compactions;
-  };
-  // The last round's lanes, whose pools the next lanes are built from, and their parts.
-  std::vector<std::unique_ptr<Lane>> lanes;
-  std::vector<uint8_t> lane_part;
-  std::vector<uint64_t> lane_begin;
-  auto leaveLanes = [&] {  // before part_ and star_begin_ change
-    dropDeadCorners(lanes, part_);
-    lane_part = part_;
-    lane_begin = star_begin_;
   };
   // One round in `round_parts` parts, their cuts shifted by `shift` (partition).
   auto runRound = [&](uint32_t round_parts, double shift) {
-    if (!lanes.empty()) leaveLanes();
     partition(round_parts, shift);
     const size_t round_begin = order.size();
-    std::vector<std::unique_ptr<Lane>> next_lanes;
+    std::vector<std::unique_ptr<Lane>> lanes;
     for (uint32_t p = 0; p < round_parts; ++p) {
-      next_lanes.push_back(std::make_unique<Lane>(0));
-      next_lanes.back()->restricted = true;
-      next_lanes.back()->parallel = false;
+      lanes.push_back(std::make_unique<Lane>(0));
+      lanes.back()->restricted = true;
+      lanes.back()->parallel = false;
     }
     // A part's heap holds only its own vertices (a merge in a round of parts touches no other part's),
     // numbered within the part: one array of the vertices' numbers for every part, not one of every
@@ -1219,29 +1244,26 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     part_index_.assign(np, 0);
     for (uint32_t v = 0; v < np; ++v) {
       if (!alive_[v]) continue;
-      std::vector<uint32_t>& members = next_lanes[part_[v]]->members;
+      std::vector<uint32_t>& members = lanes[part_[v]]->members;
       part_index_[v] = static_cast<uint32_t>(members.size());
       members.push_back(v);
     }
-    for (auto& L : next_lanes) L->heap = CandidateHeap(L->members.size(), part_index_.data());
-    std::vector<Lane*> built;
-    for (auto& L : next_lanes) built.push_back(L.get());
+    for (auto& L : lanes) L->heap = CandidateHeap(L->members.size(), part_index_.data());
     // Per part, an estimate of the work at hand: its vertices, then (below) its likely merges.
     std::vector<uint64_t> cost(round_parts);
-    for (uint32_t p = 0; p < round_parts; ++p) cost[p] = next_lanes[p]->members.size();
-    if (lanes.empty()) {
-      buildPoolsFromTets(built, &part_);
-    } else {
-      // Each lane's pool from the last round's, in parallel (a lane writes its own pool and its own
-      // vertices' runs).
-      tbb::this_task_arena::isolate([&] {
-        forEachLongestFirst(cost, [&](size_t p) { buildPool(*next_lanes[p], lanes, lane_part, lane_begin); });
-      });
-    }
-    lanes = std::move(next_lanes);
-    // The parts on the threads, the costliest first.
+    for (uint32_t p = 0; p < round_parts; ++p) cost[p] = lanes[p]->members.size();
+    // Each lane's pool, made from the tetrahedra around its part as the lane starts, twice (to
+    // evaluate its vertices, then to merge), in ascending order of the corners: the pools of the
+    // lanes running, not of every part, are held at once.
+    const PartTets around = partTets(round_parts);
+    // The parts on the threads, the costliest first, each with its pool.
     auto eachPart = [&](const std::vector<uint64_t>& cost, auto&& fn) {
-      tbb::this_task_arena::isolate([&] { forEachLongestFirst(cost, [&](size_t p) { fn(*lanes[p]); }); });
+      tbb::this_task_arena::isolate([&] {
+        forEachLongestFirst(cost, [&](size_t p) {
+          Lane& L = *lanes[p];
+          withPartPool(L, static_cast<uint32_t>(p), around, [&] { fn(L); });
+        });
+      });
     };
     // Every part's vertices evaluated first: the round's bound on the error is a quantile of their
     // best candidates' errors (the same whatever the threads), so that the parts stop at about the
@@ -1284,10 +1306,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
       }
     }
     made_rounds.push_back(RankingRound{order.size() - round_begin, round_parts, part_, bound});
-    for (const auto& L : lanes) {
-      count(*L, round_parts);
-      L->keepOnlyPool();
-    }
+    for (const auto& L : lanes) count(*L);
     std::fill(stale_.begin(), stale_.end(), 0);
     reportProgress(progress, "rank merges", static_cast<double>(order.size()) / static_cast<double>(np));
   };
@@ -1309,23 +1328,17 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     }
     series = nextRankingSeries(series, liveTets());
   }
-  // The whole mesh's queue, from the last round's lanes or from the tetrahedra.
+  // The whole mesh's queue, its pool from the tetrahedra left.
   const uint64_t part_merges = order.size();
+  for (Workspace& ws : thread_ws_) ws.spare_pool = {};
+  part_ = seam_ = {};
   Lane whole(np);
-  if (lanes.empty()) {
-    buildPoolsFromTets({&whole}, nullptr);
-  } else {
-    leaveLanes();
-    buildPool(whole, lanes, lane_part, lane_begin);
-    lanes.clear();
-    part_ = seam_ = lane_part = {};
-    lane_begin = {};
-  }
+  buildWholePool(whole);
   startTail();
   startLane(whole);
   runLane(whole, part_merges, &progress);
   order.insert(order.end(), whole.sequence.begin(), whole.sequence.end());
-  count(whole, 1);
+  count(whole);
   for (size_t i = 0; i < order.size(); ++i) tree_.rank[order[i]] = static_cast<uint32_t>(i + 1);
   tree_.merges = order.size();
   if (stats) {
@@ -1639,9 +1652,9 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     for (uint32_t v = 0; v < np; ++v)
       if (alive_[v]) lanes[part_[v]]->members.push_back(v);
     for (uint64_t i = 0; i < rr.merges; ++i, ++next) lane_merges[part_[by_rank[next]]].push_back(by_rank[next]);
-    std::vector<Lane*> built;
-    for (auto& L : lanes) built.push_back(L.get());
-    buildPoolsFromTets(built, &part_);
+    // Each lane makes its pool as it starts, from its part's tetrahedra, and drops it when done: the
+    // pools of the lanes running, not of every part, are held at once.
+    const PartTets around = partTets(rr.parts);
     std::fill(stamp.begin(), stamp.end(), 0);
     std::vector<std::vector<std::vector<Made>>> lane_batches(rr.parts);
     std::vector<BatchStats> lane_stats(rr.parts);
@@ -1650,7 +1663,10 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     for (uint32_t p = 0; p < rr.parts; ++p) cost[p] = lane_merges[p].size();
     tbb::this_task_arena::isolate([&] {
       forEachLongestFirst(cost, [&](size_t p) {
-        batchLane(*lanes[p], lane_merges[p], lanes[p]->members.size(), all_clean, lane_batches[p], lane_stats[p]);
+        Lane& L = *lanes[p];
+        withPartPool(L, static_cast<uint32_t>(p), around, [&] {
+          batchLane(L, lane_merges[p], L.members.size(), all_clean, lane_batches[p], lane_stats[p]);
+        });
       });
     });
     for (const BatchStats& s : lane_stats) {
@@ -1660,10 +1676,11 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     appendBatches(lane_batches);
   }
   // The merges after the rounds, on the whole mesh.
+  for (Workspace& ws : thread_ws_) ws.spare_pool = {};
   lanes.clear();
   part_ = seam_ = {};
   Lane whole(0);
-  buildPoolsFromTets({&whole}, nullptr);
+  buildWholePool(whole);
   std::fill(stamp.begin(), stamp.end(), 0);
   {
     std::vector<std::vector<std::vector<Made>>> whole_batches(1);

@@ -149,7 +149,7 @@ struct RankingStats {
   uint32_t parts = 1;                        // parts ranked first (RankingOptions::parts)
   uint64_t part_merges = 0;                  // merges made in the parts, before the whole mesh's queue
   uint64_t evaluations = 0;                  // candidate errors computed
-  uint64_t star_pool_corners = 0;            // the room the stars' corner lists took, at most (4 bytes each)
+  uint64_t star_pool_corners = 0;            // the room the largest pool of corner lists took (4 bytes each)
   uint64_t star_compactions = 0;             // times the corner lists were moved down over abandoned ones
   std::vector<RankingRound> rounds;          // the rounds of parts, in order (batchMerges follows them)
   RankingFaces faces;                        // for batchMerges
