@@ -69,27 +69,31 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   tbb::task_group encoding;
   const WaitOnExit join_encoding{encoding};
   bool encoding_level0 = false;
-  auto encodeLevel0 = [&] {
+  // `then_check`: level 0's check follows its encoding on the same thread (checkLevel0 then has
+  // nothing left to start).
+  auto encodeLevel0 = [&](bool then_check) {
     if (encoding_level0) return;
     encoding_level0 = true;
-    encoding.run([&] {
+    then_check = then_check && !checking_level0 && wo.verify && o.levels != 0;
+    checking_level0 = checking_level0 || then_check;
+    encoding.run([&, then_check] {
       auto e = encodePieces(mesh, EncodeOptions{}, wo.piece_tets);
       if (e.isOk()) level0 = std::make_shared<PiecedLevel>(std::move(e).value());
       else encoded = e.status();
+      if (then_check) structure.checkLevel0();
     });
   };
   RankingStats ranked;
   // Level 0's encoding and check run beside the ranking's tail, after the fine rounds of many parts,
   // whose star lists are gone by then (the check's face adjacency beside them, or beside the
   // batches', was the peak of a large convert's memory, and the encoding beside the first round took
-  // a thread from it).
+  // a thread from it). They run one after the other: each holds a face adjacency of the mesh (16
+  // bytes a tetrahedron) and more, and the two at once beside the ranking were a large convert's
+  // peak of memory.
   RankingOptions ranking_options = o.ranking;
-  ranking_options.beside_ranking_tail = [&] {
-    encodeLevel0();
-    checkLevel0();
-  };
+  ranking_options.beside_ranking_tail = [&] { encodeLevel0(true); };
   StatusOr<MergeTree> ranking = rankMerges(mesh, ranking_options, &ranked, wo.progress);
-  encodeLevel0();  // where the ranking did not start it
+  encodeLevel0(false);  // where the ranking did not start it
   encoding.wait();
   GTN_RETURN_IF_ERROR(encoded);
   if (!ranking.isOk()) return ranking.status();
