@@ -58,10 +58,18 @@ struct GroupFace {
 // cost most of the encoder's set-up in cache misses, and sorting each group most of the rest.
 // Vertices beyond `points` (a damaged mesh) share one last group rather than sizing the groups by
 // them.
-FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots) {
-  FaceAdjacency adj;
+//
+// Calls paired(slot, other_slot) for each slot of a face in exactly two tetrahedra (both ways),
+// boundary(slot) for a face in one, in_three(slot) for each slot of a face in three or more, from
+// the threads matching the groups (each slot once); returns the counts of FaceAdjacency.
+namespace {
+struct FaceCounts {
+  uint64_t faces = 0, boundary_faces = 0, non_manifold_faces = 0;
+};
+template <class Paired, class Boundary, class InThree>
+FaceCounts matchFaces(const TetMesh& mesh, uint64_t pass_slots, const Paired& paired, const Boundary& boundary,
+                      const InThree& in_three) {
   const size_t nt = mesh.tets.size();
-  assignPopulated(adj.neighbor, 4 * nt, kNoNeighbor);
   const size_t groups = mesh.numPoints() + 1;
   auto groupOf = [&](uint32_t v) { return std::min<size_t>(v, groups - 1); };
   std::vector<uint32_t> start(groups + 1, 0);
@@ -146,16 +154,17 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots) {
           for (const GroupFace& f : faces) {
             if (f.count == 1) {
               ++count_boundary;
+              boundary(f.first);
             } else if (f.count == 2) {
-              adj.neighbor[f.first] = f.second / 4;
-              adj.neighbor[f.second] = f.first / 4;
+              paired(f.first, f.second);
+              paired(f.second, f.first);
             } else {
               ++count_non_manifold;
             }
           }
           if (non_manifold)
             for (uint32_t i = 0; i < n; ++i)
-              if (faces[face_of[i]].count > 2) adj.neighbor[slots[start[g] - base + i]] = kNonManifold;
+              if (faces[face_of[i]].count > 2) in_three(slots[start[g] - base + i]);
         }
         all_faces += count_faces;
         boundary_faces += count_boundary;
@@ -163,10 +172,41 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots) {
       });
     });
   }
-  adj.faces = all_faces;
-  adj.boundary_faces = boundary_faces;
-  adj.non_manifold_faces = non_manifold_faces;
+  return FaceCounts{all_faces, boundary_faces, non_manifold_faces};
+}
+}  // namespace
+
+FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots) {
+  FaceAdjacency adj;
+  assignPopulated(adj.neighbor, 4 * mesh.tets.size(), kNoNeighbor);
+  uint32_t* neighbor = adj.neighbor.data();
+  const FaceCounts c = matchFaces(
+      mesh, pass_slots, [&](uint32_t slot, uint32_t other) { neighbor[slot] = other / 4; }, [](uint32_t) {},
+      [&](uint32_t slot) { neighbor[slot] = kNonManifold; });
+  adj.faces = c.faces;
+  adj.boundary_faces = c.boundary_faces;
+  adj.non_manifold_faces = c.non_manifold_faces;
   return adj;
+}
+
+FaceClasses classifyFaces(const TetMesh& mesh, const std::vector<uint8_t>* flat, uint64_t pass_slots) {
+  FaceClasses out;
+  assignPopulated(out.mask, mesh.tets.size(), uint16_t{0});
+  // A tetrahedron's faces are in groups that other threads may match at the same time.
+  auto set = [&](uint32_t t, uint16_t bits) {
+    std::atomic_ref<uint16_t>(out.mask[t]).fetch_or(bits, std::memory_order_relaxed);
+  };
+  const FaceCounts c = matchFaces(
+      mesh, pass_slots,
+      [&](uint32_t slot, uint32_t other) {
+        if (flat && (*flat)[other / 4]) set(slot / 4, FaceClasses::kNextToFlat);
+      },
+      [&](uint32_t slot) { set(slot / 4, static_cast<uint16_t>(FaceClasses::kBoundary << (slot % 4))); },
+      [&](uint32_t slot) { set(slot / 4, static_cast<uint16_t>(FaceClasses::kNonManifold << (slot % 4))); });
+  out.faces = c.faces;
+  out.boundary_faces = c.boundary_faces;
+  out.non_manifold_faces = c.non_manifold_faces;
+  return out;
 }
 
 std::vector<Triangle> boundaryTriangles(const TetMesh& mesh, const FaceAdjacency& adjacency) {

@@ -328,33 +328,48 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
   report.setTotal(IssueCode::kInvertedTet, scope, nt);
   report.setTotal(IssueCode::kZeroVolumeTet, scope, nt);
 
-  // Duplicate tetrahedra (same vertex set).
+  // Duplicate tetrahedra (same vertex set), reported in the order of their sorted vertices, then of
+  // their indices. The tetrahedra are grouped by their smallest vertex (a counting sort, 4 bytes a
+  // tetrahedron; equal ones share it) and each group is sorted on its own: a sort of every
+  // tetrahedron's sorted vertices and index took 20 bytes a tetrahedron, a large mesh's peak.
   {
-    std::vector<std::pair<Tet, uint32_t>> sorted(nt);
-    for (size_t t = 0; t < nt; ++t) {
-      Tet s = mesh.tets[t];
-      std::sort(s.begin(), s.end());
-      sorted[t] = {s, static_cast<uint32_t>(t)};
-    }
-    std::sort(sorted.begin(), sorted.end());
-    for (size_t i = 1; i < sorted.size(); ++i) {
-      if (sorted[i].first == sorted[i - 1].first) {
-        report.add(IssueCode::kDuplicateTet, scope, tetPath(scope, sorted[i].second),
-                   "tetrahedron " + std::to_string(sorted[i].second) + " repeats tetrahedron " +
-                       std::to_string(sorted[i - 1].second));
+    auto minOf = [](const Tet& q) { return std::min(std::min(q[0], q[1]), std::min(q[2], q[3])); };
+    std::vector<uint32_t> end(np + 1, 0);  // group v: [end[v - 1], end[v]) once filled (end[-1] = 0)
+    for (const Tet& q : mesh.tets) ++end[minOf(q) + 1];
+    for (size_t v = 0; v < np; ++v) end[v + 1] += end[v];
+    std::vector<uint32_t> by_min(nt);
+    for (size_t t = 0; t < nt; ++t) by_min[end[minOf(mesh.tets[t])]++] = static_cast<uint32_t>(t);
+    std::vector<std::pair<Tet, uint32_t>> group;
+    for (size_t v = 0, begin = 0; v < np; begin = end[v++]) {
+      if (end[v] - begin < 2) continue;
+      group.clear();
+      for (size_t i = begin; i < end[v]; ++i) {
+        Tet s = mesh.tets[by_min[i]];
+        std::sort(s.begin(), s.end());
+        group.emplace_back(s, by_min[i]);
+      }
+      std::sort(group.begin(), group.end());
+      for (size_t i = 1; i < group.size(); ++i) {
+        if (group[i].first == group[i - 1].first) {
+          report.add(IssueCode::kDuplicateTet, scope, tetPath(scope, group[i].second),
+                     "tetrahedron " + std::to_string(group[i].second) + " repeats tetrahedron " +
+                         std::to_string(group[i - 1].second));
+        }
       }
     }
     report.setTotal(IssueCode::kDuplicateTet, scope, nt);
   }
 
-  // Faces and the boundary surface.
-  const FaceAdjacency adj = computeFaceAdjacency(mesh);
+  // Faces and the boundary surface, from what the checks need of the face adjacency (2 bytes a
+  // tetrahedron: the adjacency's 16 were the peak of a large mesh's check).
+  const FaceClasses adj = classifyFaces(mesh, st.zero_volume > 0 ? &flat : nullptr);
+  auto faceIs = [&](size_t t, int k, uint16_t bit) { return (adj.mask[t] & (bit << k)) != 0; };
   st.faces = adj.faces;
   st.boundary_faces = adj.boundary_faces;
   if (adj.non_manifold_faces > 0) {
     std::vector<std::string> paths;
-    for (size_t slot = 0; slot < adj.neighbor.size() && paths.size() < ValidationReport::kMaxPaths; ++slot) {
-      if (adj.neighbor[slot] == kNonManifold)
+    for (size_t slot = 0; slot < 4 * nt && paths.size() < ValidationReport::kMaxPaths; ++slot) {
+      if (faceIs(slot / 4, static_cast<int>(slot % 4), FaceClasses::kNonManifold))
         paths.push_back(tetPath(scope, slot / 4) + "/faces/" + std::to_string(slot % 4));
     }
     report.addMany(IssueCode::kNonManifoldFace, scope, adj.non_manifold_faces, paths);
@@ -370,21 +385,14 @@ bool checkMesh(const TetMesh& mesh, const std::string& scope, ValidationReport& 
   // A zero-volume tetrahedron has no orientation to normalise, so the faces around one may disagree
   // with their neighbours: edges of boundary triangles of a flat tetrahedron or of a face-neighbour of
   // one are not checked for orientation (ZERO_VOLUME_TET already reports the cause).
-  auto nearFlat = [&](size_t t) {
-    if (flat[t]) return true;
-    for (int k = 0; k < 4; ++k) {
-      const uint32_t n = adj.neighbor[4 * t + k];
-      if (n < nt && flat[n]) return true;
-    }
-    return false;
-  };
+  auto nearFlat = [&](size_t t) { return flat[t] || (adj.mask[t] & FaceClasses::kNextToFlat) != 0; };
   std::vector<DirEdge> dir_edges;
   dir_edges.reserve(3 * adj.boundary_faces);
   std::vector<BoundaryFace> boundary;
   boundary.reserve(adj.boundary_faces);
   for (size_t t = 0; t < nt; ++t) {
     for (int k = 0; k < 4; ++k) {
-      if (adj.neighbor[4 * t + k] != kNoNeighbor) continue;
+      if (!faceIs(t, k, FaceClasses::kBoundary)) continue;
       const bool exempt = st.zero_volume > 0 && nearFlat(t);
       const Triangle tri = {mesh.tets[t][kTetFace[k][0]], mesh.tets[t][kTetFace[k][1]], mesh.tets[t][kTetFace[k][2]]};
       addTriangleEdges(tri, exempt, dir_edges);

@@ -152,6 +152,47 @@ TEST(Faces, ThreadsGiveTheSameAdjacency) {
   }
 }
 
+// classifyFaces is what a check needs of the adjacency (mesh_checks.cpp): each tetrahedron's boundary
+// and non-manifold faces, and whether a face-neighbour is one `flat` marks, as computeFaceAdjacency's
+// neighbours say, with its counts, for any number of passes and threads.
+TEST(Faces, ClassesAreTheAdjacencys) {
+  TetMesh m = structuredGrid(14, 5, 1.0);
+  const uint32_t np = static_cast<uint32_t>(m.numPoints());
+  m.tets.push_back({0, 1, np + 5, np + 9});  // two vertices past the points
+  m.tets.push_back(m.tets[40]);              // its faces in three tetrahedra
+  m.tets.push_back(m.tets[40]);
+  const size_t nt = m.numTets();
+  std::vector<uint8_t> flat(nt, 0);
+  for (size_t t = 5; t < nt; t += 97) flat[t] = 1;
+  const FaceAdjacency adj = computeFaceAdjacency(m);
+  ASSERT_GT(adj.non_manifold_faces, 0u);
+  auto expectTheAdjacencys = [&](const FaceClasses& c, bool with_flat) {
+    ASSERT_EQ(c.mask.size(), nt);
+    EXPECT_EQ(c.faces, adj.faces);
+    EXPECT_EQ(c.boundary_faces, adj.boundary_faces);
+    EXPECT_EQ(c.non_manifold_faces, adj.non_manifold_faces);
+    size_t next_to_flat = 0;
+    for (size_t t = 0; t < nt; ++t) {
+      bool near = false;
+      for (int k = 0; k < 4; ++k) {
+        const uint32_t n = adj.neighbor[4 * t + k];
+        EXPECT_EQ((c.mask[t] >> k) & 1, n == kNoNeighbor ? 1 : 0) << "tetrahedron " << t << " face " << k;
+        EXPECT_EQ((c.mask[t] >> (4 + k)) & 1, n == kNonManifold ? 1 : 0) << "tetrahedron " << t << " face " << k;
+        near = near || (n < nt && flat[n]);
+      }
+      EXPECT_EQ((c.mask[t] & FaceClasses::kNextToFlat) != 0, with_flat && near) << "tetrahedron " << t;
+      next_to_flat += near;
+    }
+    EXPECT_GT(next_to_flat, 10u);
+  };
+  expectTheAdjacencys(classifyFaces(m), false);
+  expectTheAdjacencys(classifyFaces(m, &flat), true);
+  expectTheAdjacencys(classifyFaces(m, &flat, 100), true);
+  FaceClasses one_thread;
+  tbb::task_arena(1).execute([&] { one_thread = classifyFaces(m, &flat); });
+  expectTheAdjacencys(one_thread, true);
+}
+
 // Every interior face of a grid is found from both sides.
 TEST(Faces, GridNeighboursAreMutual) {
   const TetMesh m = structuredGrid(5, 5);
