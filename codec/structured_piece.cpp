@@ -262,11 +262,16 @@ StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const Structur
     }
     layout.cell_values_per_cell = per_cell;
   }
-  // The boundary from the grid, which the decoder computes so: it must be what the generic face
-  // adjacency finds (it is, for a mesh with no face in three tetrahedra).
-  // (The adjacency, 16 bytes a tetrahedron, is gone before the piece is coded.)
+  // The boundary from the grid, which the decoder computes so. A block of rule cells alone (no alias,
+  // no exception) is a conforming tetrahedralization of its box: no face is in three tetrahedra and
+  // its boundary is the box's, which gridBoundary gives for every rule (the tests compare it with the
+  // face adjacency's). Aliases and exceptions can make either false, so there it must be what the
+  // generic face adjacency finds (it is, for a mesh with no face in three tetrahedra); the adjacency,
+  // 16 bytes a tetrahedron, is gone before the piece is coded, and a large grid of rule cells does
+  // without it.
+  const bool rule_cells_only = layout.aliases.empty() && layout.exceptions.empty();
   std::vector<Triangle> generic;
-  {
+  if (!rule_cells_only) {
     const FaceAdjacency adj = computeFaceAdjacency(mesh);
     if (adj.non_manifold_faces > 0)
       return unsupported(what + ": " + std::to_string(adj.non_manifold_faces) +
@@ -274,7 +279,7 @@ StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const Structur
     generic = boundaryTriangles(mesh, adj);
   }
   GTN_ASSIGN_OR_RETURN(auto boundary, gridBoundary(layout, what));
-  {
+  if (!rule_cells_only) {
     auto canonical = [](std::vector<Triangle>& v) {
       for (Triangle& t : v) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
       std::sort(v.begin(), v.end());
