@@ -153,9 +153,25 @@ TEST(Pieces, AStructuredBlockLargerThanTheDefaultBoundStaysOnePiece) {
   EXPECT_TRUE(level->tet_order.empty());
   EXPECT_EQ(level->tetPosition(12345), 12345u);
   {
+    // The check compares the decoder's events with the source as they come (nothing decoded is
+    // held), and names the first difference.
     TetMesh turned = m;
     std::swap(turned.tets[777][0], turned.tets[777][1]);
     EXPECT_EQ(piecedLosslessMismatch(turned, *level), "source tetrahedron 777 (decoded 777) is reversed");
+    turned.tets[778][2] = turned.tets[900][0];
+    EXPECT_EQ(piecedLosslessMismatch(turned, *level), "source tetrahedron 777 (decoded 777) is reversed");
+    TetMesh moved = turned;
+    moved.coords[3 * 4321 + 1] += 0.5;
+    moved.coords[3 * 5000] += 0.5;
+    EXPECT_EQ(piecedLosslessMismatch(moved, *level), "source point 4321 (decoded 4321) moved");
+    std::swap(turned.tets[777][0], turned.tets[777][1]);
+    EXPECT_EQ(piecedLosslessMismatch(turned, *level), "source tetrahedron 778 (decoded 778) has other vertices");
+    TetMesh fewer = m;
+    fewer.tets.pop_back();
+    EXPECT_EQ(piecedLosslessMismatch(fewer, *level),
+              std::to_string(m.numPoints()) + " points and " + std::to_string(m.numTets()) +
+                  " tetrahedra decoded, the source has " + std::to_string(m.numPoints()) + " and " +
+                  std::to_string(fewer.numTets()));
   }
   StatusOr<DecodedPieces> decoded = decodePieces(piecedViewOf(*level), {}, "block");
   ASSERT_TRUE(decoded.isOk()) << decoded.status().message();
@@ -174,6 +190,14 @@ TEST(Pieces, AStructuredBlockLargerThanTheDefaultBoundStaysOnePiece) {
   ASSERT_TRUE(whole.isOk()) << whole.status().message();
   ASSERT_EQ(whole->pieces.size(), 1u);
   EXPECT_EQ(whole->pieces[0].kind, 1);
+  // A grid's field values are compared too.
+  ASSERT_FALSE(small.point_fields.empty());
+  EXPECT_EQ(piecedLosslessMismatch(small, *whole), "");
+  {
+    Field& f = small.point_fields.back();
+    f.bytes[7 * f.components * f.valueSize()] ^= 1;
+  }
+  EXPECT_EQ(piecedLosslessMismatch(small, *whole), "source point 7 (decoded 7) has other field values");
 }
 
 TEST(Pieces, TheMeshStreamOfAStitchedLevelFollowsTheStreamOrder) {
