@@ -221,4 +221,16 @@ std::vector<Triangle> boundaryTriangles(const TetMesh& mesh, const FaceAdjacency
   return out;
 }
 
+std::vector<Triangle> boundaryTriangles(const TetMesh& mesh, const FaceClasses& classes) {
+  std::vector<Triangle> out;
+  out.reserve(classes.boundary_faces);
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) {
+      if (!(classes.mask[t] & (FaceClasses::kBoundary << k))) continue;
+      out.push_back({mesh.tets[t][kTetFace[k][0]], mesh.tets[t][kTetFace[k][1]], mesh.tets[t][kTetFace[k][2]]});
+    }
+  }
+  return out;
+}
+
 }  // namespace gtn

@@ -59,5 +59,7 @@ using Triangle = std::array<uint32_t, 3>;
 // Boundary triangles, outward oriented when the tetrahedra are positively oriented, in tetrahedron
 // order (tetrahedron index, then local face).
 std::vector<Triangle> boundaryTriangles(const TetMesh& mesh, const FaceAdjacency& adjacency);
+// The same from the faces' classes.
+std::vector<Triangle> boundaryTriangles(const TetMesh& mesh, const FaceClasses& classes);
 
 }  // namespace gtn

@@ -454,7 +454,7 @@ void checkStoredBoundary(const TetMesh& mesh, const std::vector<Triangle>& store
                          ValidationReport& report) {
   // Where a face is in three or more tetrahedra the boundary is not defined (NON_MANIFOLD_FACE says
   // why), so the stored one is not checked against it: one code per defect.
-  const FaceAdjacency adj = computeFaceAdjacency(mesh);
+  const FaceClasses adj = classifyFaces(mesh);
   if (adj.non_manifold_faces > 0) return;
   // A stored surface with a hole is reported as such rather than as a mismatch (one code per defect).
   std::vector<DirEdge> stored_edges;
