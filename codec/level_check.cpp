@@ -4,6 +4,7 @@
 #include <limits>
 #include <vector>
 
+#include "codec/structured_piece.h"
 #include "mesh/mesh_stream.h"
 
 namespace gtn {
@@ -14,23 +15,27 @@ namespace {
 // decoder then stops too: the sink's error ends the decode).
 class LosslessCheckSink : public MeshSink {
  public:
-  LosslessCheckSink(const TetMesh& source, const EncodedLevel& encoded) : src_(source), enc_(encoded) {}
+  // `tet_order` null: the tetrahedra come in the source's order (a structured piece's).
+  LosslessCheckSink(const TetMesh& source, const std::vector<uint32_t>& vertex_order,
+                    const std::vector<uint64_t>* tet_order)
+      : src_(source), vertex_order_(vertex_order), tet_order_(tet_order) {}
 
   // "" after a decode that gave the source back.
   Status prepare() {
     const size_t np = src_.numPoints(), nt = src_.numTets();
-    if (enc_.vertex_order.size() != np || enc_.tet_order.size() != nt)
+    if (vertex_order_.size() != np || (tet_order_ && tet_order_->size() != nt))
       return mismatch("the encoder's renumbering does not cover the source");
     if (np >= kNone || nt >= kNone) return mismatch("more points or tetrahedra than the check can number");
     vertex_src_.assign(np, kNone);
     for (size_t v = 0; v < np; ++v) {
-      const uint32_t d = enc_.vertex_order[v];
+      const uint32_t d = vertex_order_[v];
       if (d >= np || vertex_src_[d] != kNone) return mismatch("the encoder's vertex order is not a permutation");
       vertex_src_[d] = static_cast<uint32_t>(v);
     }
+    if (!tet_order_) return Status::ok();
     tet_src_.assign(nt, kNone);
     for (size_t t = 0; t < nt; ++t) {
-      const uint64_t d = enc_.tet_order[t];
+      const uint64_t d = (*tet_order_)[t];
       if (d >= nt || tet_src_[d] != kNone) return mismatch("the encoder's tetrahedron order is not a permutation");
       tet_src_[d] = static_cast<uint32_t>(t);
     }
@@ -65,8 +70,8 @@ class LosslessCheckSink : public MeshSink {
   Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
   Status endBoundary() override { return Status::ok(); }
   Status tet(const uint32_t v[4], const uint8_t* cell_values) override {
-    if (tets_ >= tet_src_.size()) return mismatch("more tetrahedra decoded than the source has");
-    const uint32_t t = tet_src_[tets_];
+    if (tets_ >= src_.numTets()) return mismatch("more tetrahedra decoded than the source has");
+    const uint64_t t = tet_order_ ? tet_src_[tets_] : tets_;
     const uint64_t decoded = tets_++;
     auto which = [&] {
       return "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(decoded) + ")";
@@ -74,7 +79,7 @@ class LosslessCheckSink : public MeshSink {
     int perm[4], inversions = 0;
     for (int i = 0; i < 4; ++i) {
       perm[i] = -1;
-      const uint32_t want = enc_.vertex_order[src_.tets[t][i]];
+      const uint32_t want = vertex_order_[src_.tets[t][i]];
       for (int j = 0; j < 4; ++j)
         if (v[j] == want) perm[i] = j;
       if (perm[i] < 0) return mismatch(which() + " has other vertices");
@@ -116,7 +121,8 @@ class LosslessCheckSink : public MeshSink {
   }
 
   const TetMesh& src_;
-  const EncodedLevel& enc_;
+  const std::vector<uint32_t>& vertex_order_;
+  const std::vector<uint64_t>* tet_order_;
   std::vector<uint32_t> vertex_src_;  // decoded vertex id -> source point
   std::vector<uint32_t> tet_src_;     // decoded position -> source tetrahedron
   uint64_t vertices_ = 0, tets_ = 0;
@@ -125,14 +131,30 @@ class LosslessCheckSink : public MeshSink {
 
 }  // namespace
 
-std::string losslessMismatch(const TetMesh& source, const EncodedLevel& encoded, const SeamValues* seams) {
-  LosslessCheckSink sink(source, encoded);
+namespace {
+// Runs `decode` into a LosslessCheckSink and says what differs ("" when nothing does).
+template <class Decode>
+std::string checkDecode(LosslessCheckSink& sink, const Decode& decode) {
   if (Status st = sink.prepare(); !st.isOk()) return st.message();
-  const Status st = decodeLevel(encoded.header, payloadOf(encoded), sink, nullptr, "the encoded level", nullptr, seams);
+  const Status st = decode(sink);
   if (!sink.difference().empty()) return sink.difference();
   if (!st.isOk()) return "it does not decode: " + st.message();
   if (Status end = sink.finish(); !end.isOk()) return end.message();
   return "";
+}
+}  // namespace
+
+std::string losslessMismatch(const TetMesh& source, const EncodedLevel& encoded, const SeamValues* seams) {
+  LosslessCheckSink sink(source, encoded.vertex_order, &encoded.tet_order);
+  return checkDecode(sink, [&](MeshSink& s) {
+    return decodeLevel(encoded.header, payloadOf(encoded), s, nullptr, "the encoded level", nullptr, seams);
+  });
+}
+
+std::string structuredLosslessMismatch(const TetMesh& source, const LevelHeader& header, std::span<const uint8_t> piece,
+                                       const std::vector<uint32_t>& vertex_order) {
+  LosslessCheckSink sink(source, vertex_order, nullptr);
+  return checkDecode(sink, [&](MeshSink& s) { return decodeStructuredPiece(header, piece, s, "the encoded level"); });
 }
 
 }  // namespace gtn

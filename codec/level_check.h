@@ -3,7 +3,9 @@
 // would not give its source back; the compression benchmark and the tests use it too.
 #pragma once
 
+#include <span>
 #include <string>
+#include <vector>
 
 #include "codec/level_codec.h"
 #include "mesh/tet_mesh.h"
@@ -18,5 +20,11 @@ namespace gtn {
 // the level decodes back exactly, else the first difference found (or the decoder's error).
 // `seams`: the seam values the level names (a piece's seam vertices, or the next level's vertices).
 std::string losslessMismatch(const TetMesh& source, const EncodedLevel& encoded, const SeamValues* seams = nullptr);
+
+// The same for a level coded as one structured piece (codec/structured_piece.h): `piece` decoded with
+// `header` (the piece's, as a reader derives it), each source point emitted as vertex
+// vertex_order[point], the tetrahedra in the source's order.
+std::string structuredLosslessMismatch(const TetMesh& source, const LevelHeader& header, std::span<const uint8_t> piece,
+                                       const std::vector<uint32_t>& vertex_order);
 
 }  // namespace gtn

@@ -7,7 +7,6 @@
 #include <cstring>
 
 #include "codec/level_check.h"
-#include "codec/structured_piece.h"
 #include "mesh/index.h"
 
 namespace gtn {
@@ -42,104 +41,6 @@ size_t firstWith(size_t n, const Difference& difference) {
       [](size_t a, size_t b) { return std::min(a, b); });
 }
 
-// Compares a level of one structured piece with its source as the decoder emits it (vertex events
-// in id order, then the tetrahedra in the source's order): nothing of the decoded level is held
-// (its tetrahedra alone take 16 bytes each, and a large grid's check beside its merge tree's
-// encoding was a convert's peak of memory). Reports what piecedLosslessMismatch's whole-mesh
-// comparison reports: the first source point that differs, else the first tetrahedron.
-class CompareSink : public MeshSink {
- public:
-  CompareSink(const TetMesh& source, const PiecedLevel& level, const std::vector<uint32_t>& source_of)
-      : source_(source), level_(level), source_of_(source_of) {}
-  Status beginLevel(const LevelHeader& header) override {
-    offset_.clear();
-    size_t at = 0;
-    for (const FieldDesc& f : header.point_fields) {
-      offset_.push_back(at);
-      at += f.itemBytes();
-    }
-    cell_offset_.clear();
-    at = 0;
-    for (const FieldDesc& f : header.cell_fields) {
-      cell_offset_.push_back(at);
-      at += f.itemBytes();
-    }
-    return Status::ok();
-  }
-  Status vertex(uint32_t id, const double xyz[3], const uint8_t* values) override {
-    if (id != points_ || id >= source_of_.size()) return fail("vertex events out of order");
-    ++points_;
-    const uint32_t v = source_of_[id];
-    const char* why = nullptr;
-    if (std::memcmp(xyz, source_.point(v), 3 * sizeof(double)) != 0) why = " moved";
-    else if (!sameValues(source_.point_fields, offset_, v, values)) why = " has other field values";
-    if (why && v < first_point_) {
-      first_point_ = v;
-      point_why_ = why;
-    }
-    return Status::ok();
-  }
-  Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
-  Status endBoundary() override { return Status::ok(); }
-  Status tet(const uint32_t got[4], const uint8_t* cell_values) override {
-    const uint64_t t = tets_++;
-    if (t >= source_.numTets() || !tet_why_.empty()) return Status::ok();
-    int perm[4], inversions = 0;
-    for (int i = 0; i < 4; ++i) {
-      perm[i] = -1;
-      const uint32_t want = level_.vertex_order[source_.tets[t][i]];
-      for (int j = 0; j < 4; ++j)
-        if (got[j] == want) perm[i] = j;
-      if (perm[i] < 0) return tetDiffers(t, " has other vertices");
-      for (int j = 0; j < i; ++j) inversions += perm[j] > perm[i];
-    }
-    if (inversions % 2) return tetDiffers(t, " is reversed");
-    if (!sameValues(source_.cell_fields, cell_offset_, t, cell_values)) return tetDiffers(t, " has other field values");
-    return Status::ok();
-  }
-  Status retireVertex(uint32_t) override { return Status::ok(); }
-  Status endLevel() override { return Status::ok(); }
-
-  bool failed() const { return !failure_.empty(); }
-  // "" when every event matched the source and the counts are the source's.
-  std::string mismatch() const {
-    if (!failure_.empty()) return failure_;
-    if (points_ != source_.numPoints() || tets_ != source_.numTets())
-      return std::to_string(points_) + " points and " + std::to_string(tets_) + " tetrahedra decoded, the source has " +
-             std::to_string(source_.numPoints()) + " and " + std::to_string(source_.numTets());
-    if (point_why_)
-      return "source point " + std::to_string(first_point_) + " (decoded " +
-             std::to_string(level_.vertex_order[first_point_]) + ")" + point_why_;
-    return tet_why_;
-  }
-
- private:
-  // Whether item `i` of `fields` is the concatenated items at `values` (at `offsets`).
-  static bool sameValues(const std::vector<Field>& fields, const std::vector<size_t>& offsets, size_t i,
-                         const uint8_t* values) {
-    for (size_t f = 0; f < fields.size(); ++f) {
-      const size_t n = fields[f].components * fields[f].valueSize();
-      if (std::memcmp(&fields[f].bytes[i * n], values + offsets[f], n) != 0) return false;
-    }
-    return true;
-  }
-  Status tetDiffers(uint64_t t, const char* why) {
-    tet_why_ = "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(t) + ")" + why;
-    return Status::ok();
-  }
-  Status fail(const std::string& why) {
-    failure_ = why;
-    return invalidData(why);
-  }
-  const TetMesh& source_;
-  const PiecedLevel& level_;
-  const std::vector<uint32_t>& source_of_;
-  std::vector<size_t> offset_, cell_offset_;
-  uint64_t points_ = 0, tets_ = 0;
-  uint32_t first_point_ = UINT32_MAX;
-  const char* point_why_ = nullptr;
-  std::string tet_why_, failure_;
-};
 }  // namespace
 
 PiecedLevelView piecedViewOf(const PiecedLevel& level) {
@@ -167,27 +68,10 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
   const PiecedLevelView view = piecedViewOf(level);
   if (level.pieces.size() == 1 && level.pieces[0].kind == kPieceStructured && level.isGrid() &&
       level.tet_order.empty()) {
-    // Compared as it decodes (CompareSink), its vertices by their source points.
-    const LevelHeader ph = pieceHeader(level.header, level.pieces[0]);
-    if (ph.coord_type != source.coord_type) return "the coordinate type changed";
-    auto sameDescs = [](const std::vector<FieldDesc>& a, const std::vector<Field>& b) {
-      if (a.size() != b.size()) return false;
-      for (size_t f = 0; f < a.size(); ++f)
-        if (a[f].name != b[f].name || a[f].type != b[f].type || a[f].components != b[f].components) return false;
-      return true;
-    };
-    if (!sameDescs(ph.point_fields, source.point_fields) || !sameDescs(ph.cell_fields, source.cell_fields))
-      return "field names, types or components changed";
-    std::vector<uint32_t> source_of(np, kNoIndex);
-    for (size_t v = 0; v < np; ++v) {
-      const uint32_t d = level.vertex_order[v];
-      if (d >= np || source_of[d] != kNoIndex) return "the encoder's vertex order is not a permutation";
-      source_of[d] = static_cast<uint32_t>(v);
-    }
-    CompareSink sink(source, level, source_of);
-    const Status st = decodeStructuredPiece(ph, view.payloads[0].streams.connectivity, sink, "the encoded level");
-    if (!st.isOk() && !sink.failed()) return "it does not decode: " + st.message();
-    return sink.mismatch();
+    // Compared with the source as it decodes: no decoded copy is held (its tetrahedra alone take 16
+    // bytes each, and a large grid's check beside its merge tree's encoding was a convert's peak).
+    return structuredLosslessMismatch(source, pieceHeader(level.header, level.pieces[0]),
+                                      view.payloads[0].streams.connectivity, level.vertex_order);
   }
   auto decoded = decodePieces(view, {}, "the encoded level");
   if (!decoded.isOk()) return "it does not decode: " + decoded.status().message();

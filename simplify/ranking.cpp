@@ -380,6 +380,9 @@ class Ranker {
   size_t liveTets() const;
   // seam_: the vertices of the live tetrahedra whose vertices lie in more than one part of part_.
   void markSeams();
+  // Places each member's run in L's pool, as long as its live tetrahedra (star_size_), with an eighth
+  // more room (at least kMinStarSlack) for the merges' appends; the runs are empty.
+  void sizePool(Lane& L);
   // Fills the pool of L, a lane of every vertex, with every vertex's list, its live corners in
   // ascending order, from the tetrahedra.
   void buildWholePool(Lane& L);
@@ -610,7 +613,7 @@ void Ranker::markSeams() {
   });
 }
 
-void Ranker::buildWholePool(Lane& L) {
+void Ranker::sizePool(Lane& L) {
   uint64_t total = 0;
   forMembers(L, [&](uint32_t v) {
     star_begin_[v] = total;
@@ -620,6 +623,10 @@ void Ranker::buildWholePool(Lane& L) {
   assignPopulated(L.pool, total + std::max<uint64_t>(total / 8, kMinStarSlack), 0u);
   L.peak = L.pool.size();
   L.used = total;
+}
+
+void Ranker::buildWholePool(Lane& L) {
+  sizePool(L);
   // The corners in groups of vertices of equal ranges, one group a thread: each reads every
   // tetrahedron and writes its own vertices' runs, in the tetrahedra's order (the same runs for any
   // number of groups).
@@ -686,15 +693,7 @@ Ranker::PartTets Ranker::partTets(uint32_t parts) const {
 }
 
 void Ranker::buildPoolOfPart(Lane& L, uint32_t p, const PartTets& around) {
-  uint64_t total = 0;
-  forMembers(L, [&](uint32_t v) {
-    star_begin_[v] = total;
-    star_len_[v] = 0;
-    total += star_size_[v];
-  });
-  assignPopulated(L.pool, total + std::max<uint64_t>(total / 8, kMinStarSlack), 0u);
-  L.peak = L.pool.size();
-  L.used = total;
+  sizePool(L);
   for (uint64_t i = around.begin[p]; i < around.begin[p + 1]; ++i) {
     const uint32_t t = around.tets[i];
     const Tet q = tet(t);
