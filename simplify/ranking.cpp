@@ -451,7 +451,10 @@ class Ranker {
   void compactStars(Lane& L);
 
   const TetMesh& mesh_;
+  // The density at each point; empty: 1 everywhere (volume only, and the batches, which never rank),
+  // without an array of ones (8 bytes a point).
   std::vector<double> density_;
+  double density(uint32_t x) const { return density_.empty() ? 1.0 : density_[x]; }
   RankingOptions options_;
   double mass_scale_ = 1, area_scale_ = 1;
 
@@ -538,7 +541,7 @@ void Ranker::init(const RankingFaces* faces) {
   for (size_t t = 0; t < nt; ++t) {
     const Tet& q = tets[t];
     const double vol = signedVolume(pos(q[0]), pos(q[1]), pos(q[2]), pos(q[3]));
-    const double rho = 0.25 * (density_[q[0]] + density_[q[1]] + density_[q[2]] + density_[q[3]]);
+    const double rho = 0.25 * (density(q[0]) + density(q[1]) + density(q[2]) + density(q[3]));
     mass += std::fabs(rho * vol);
     volume += std::fabs(vol);
   }
@@ -832,7 +835,7 @@ void Ranker::candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Worksp
   gatherStar(L, v, ws.corners, ws.star_tets);
   if (ws.corners.empty()) return;
   const double* pv = pos(v);
-  const double rho_v = density_[v];
+  const double rho_v = density(v);
   const size_t ns = ws.corners.size();
   ws.star_o.resize(ns);
   for (auto* a : {&ws.nx, &ws.ny, &ws.nz, &ws.d, &ws.od, &ws.vol, &ws.mass, &ws.vol_w}) a->resize(ns);
@@ -849,7 +852,7 @@ void Ranker::candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Worksp
     ws.ny[i] = n[1];
     ws.nz[i] = n[2];
     ws.d[i] = dot(n, pos(a));
-    ws.od[i] = density_[a] + density_[b] + density_[d];
+    ws.od[i] = density(a) + density(b) + density(d);
     ws.vol[i] = (dot(n, pv) - ws.d[i]) / 6.0;
     ws.mass[i] = 0.25 * (rho_v + ws.od[i]) * ws.vol[i];
     if (!boundary_[v]) ws.targets.insert(ws.targets.end(), {a, b, d});
@@ -886,7 +889,7 @@ void Ranker::candidates(Lane& L, uint32_t v, std::vector<Candidate>& out, Worksp
     ++ws.evaluations;
     const bool same = samePosition(v, w);
     const double* pw = pos(w);
-    const double rho_w = density_[w];
+    const double rho_w = density(w);
     // The volume of every star tetrahedron with v moved to w, in one pass that the compiler
     // vectorizes (the same arithmetic, element by element); then the sums, in the star's order.
     const double p0 = pw[0], p1 = pw[1], p2 = pw[2];
@@ -1781,8 +1784,9 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
   } else if (options.field != "none") {
     field = mesh.findPointField(options.field);
   }
-  std::vector<double> density(mesh.numPoints(), 1.0);
+  std::vector<double> density;
   if (field && field->components > 0) {
+    density.resize(mesh.numPoints());
     for (size_t i = 0; i < density.size(); ++i) {
       const double d = field->get(i, 0);
       density[i] = std::isfinite(d) ? d : 0.0;
@@ -1817,7 +1821,7 @@ StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, co
   RankingOptions options;
   options.w_density = ranked.w_density;
   options.w_geometry = ranked.w_geometry;
-  Ranker ranker(mesh, std::vector<double>(mesh.numPoints(), 1.0), options);
+  Ranker ranker(mesh, {}, options);
   BatchStats local;
   MergeTree tree = ranker.batch(ranked, keys, divisor, rounds, faces, &local);
   local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
