@@ -40,7 +40,6 @@ size_t firstWith(size_t n, const Difference& difference) {
       },
       [](size_t a, size_t b) { return std::min(a, b); });
 }
-
 }  // namespace
 
 PiecedLevelView piecedViewOf(const PiecedLevel& level) {
@@ -66,8 +65,7 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
   if (level.vertex_order.size() != np || (level.tet_order.size() != nt && !(level.isGrid() && level.tet_order.empty())))
     return "the encoder's renumbering does not cover the source";
   const PiecedLevelView view = piecedViewOf(level);
-  if (level.pieces.size() == 1 && level.pieces[0].kind == kPieceStructured && level.isGrid() &&
-      level.tet_order.empty()) {
+  if (level.isGrid() && level.tet_order.empty()) {
     // Compared with the source as it decodes: no decoded copy is held (its tetrahedra alone take 16
     // bytes each, and a large grid's check beside its merge tree's encoding was a convert's peak).
     return structuredLosslessMismatch(source, pieceHeader(level.header, level.pieces[0]),

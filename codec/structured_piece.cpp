@@ -266,17 +266,17 @@ StatusOr<EncodedLevel> encodeStructuredPiece(const TetMesh& mesh, const Structur
   // no exception) is a conforming tetrahedralization of its box: no face is in three tetrahedra and
   // its boundary is the box's, which gridBoundary gives for every rule (the tests compare it with the
   // face adjacency's). Aliases and exceptions can make either false, so there it must be what the
-  // generic face adjacency finds (it is, for a mesh with no face in three tetrahedra); the adjacency,
-  // 16 bytes a tetrahedron, is gone before the piece is coded, and a large grid of rule cells does
-  // without it.
+  // generic face matching finds (it is, for a mesh with no face in three tetrahedra); the faces'
+  // classes, 2 bytes a tetrahedron, are gone before the piece is coded, and a large grid of rule
+  // cells does without them.
   const bool rule_cells_only = layout.aliases.empty() && layout.exceptions.empty();
   std::vector<Triangle> generic;
   if (!rule_cells_only) {
-    const FaceAdjacency adj = computeFaceAdjacency(mesh);
-    if (adj.non_manifold_faces > 0)
-      return unsupported(what + ": " + std::to_string(adj.non_manifold_faces) +
+    const FaceClasses faces = classifyFaces(mesh);
+    if (faces.non_manifold_faces > 0)
+      return unsupported(what + ": " + std::to_string(faces.non_manifold_faces) +
                          " faces are shared by three or more tetrahedra (non-manifold)");
-    generic = boundaryTriangles(mesh, adj);
+    generic = boundaryTriangles(mesh, faces);
   }
   GTN_ASSIGN_OR_RETURN(auto boundary, gridBoundary(layout, what));
   if (!rule_cells_only) {

@@ -50,57 +50,44 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, o.ranking));
   // Level 0 is encoded while the merges are ranked, beside the ranking's tail (the coarse rounds of
   // few parts and the whole mesh's queue, one thread's work, after the rounds of parts that keep every
-  // thread busy): on another thread where TBB has one, after the ranking where it has not. A level 0 that fails to encode fails the conversion then, before its
-  // own errors are looked at (the encoder's refusal says why no option stores it). Where mip levels
-  // will be checked, level 0's own errors (the ones a mip level may keep) are found on another thread
-  // too, beside the same tail (below).
+  // thread busy): on another thread where TBB has one, after the ranking where it has not. A level 0
+  // that fails to encode fails the conversion then, before its own errors are looked at (the
+  // encoder's refusal says why no option stores it). Where mip levels will be checked, level 0's own
+  // errors (the ones a mip level may keep) are found next, by the same task: the encoding and the
+  // check each hold a face adjacency's worth of memory or more, and the two at once beside the
+  // ranking were a large convert's peak. The tail comes after the fine rounds of many parts (the
+  // encoding beside the first round took a thread from it).
   LevelStructureCheck structure(mesh, path);
-  // Waited for on every return from here (check() waits for it too, and `structure` must outlive it).
-  tbb::task_group checking;
-  const WaitOnExit join{checking};
-  bool checking_level0 = false;
-  auto checkLevel0 = [&] {
-    if (checking_level0 || !wo.verify || o.levels == 0) return;
-    checking_level0 = true;
-    checking.run([&] { structure.checkLevel0(); });
-  };
+  const bool check_level0 = wo.verify && o.levels != 0;
   std::shared_ptr<PiecedLevel> level0;
   Status encoded = Status::ok();
+  // Waited for on every return from here (`structure` must outlive it).
   tbb::task_group encoding;
   const WaitOnExit join_encoding{encoding};
   bool encoding_level0 = false;
-  // `then_check`: level 0's check follows its encoding on the same thread (checkLevel0 then has
-  // nothing left to start).
-  auto encodeLevel0 = [&](bool then_check) {
+  auto encodeLevel0 = [&] {
     if (encoding_level0) return;
     encoding_level0 = true;
-    then_check = then_check && !checking_level0 && wo.verify && o.levels != 0;
-    checking_level0 = checking_level0 || then_check;
-    encoding.run([&, then_check] {
+    encoding.run([&] {
       auto e = encodePieces(mesh, EncodeOptions{}, wo.piece_tets);
-      if (e.isOk()) level0 = std::make_shared<PiecedLevel>(std::move(e).value());
-      else encoded = e.status();
-      if (then_check) structure.checkLevel0();
+      if (!e.isOk()) {
+        encoded = e.status();
+        return;
+      }
+      level0 = std::make_shared<PiecedLevel>(std::move(e).value());
+      if (check_level0) structure.checkLevel0();
     });
   };
   RankingStats ranked;
-  // Level 0's encoding and check run beside the ranking's tail, after the fine rounds of many parts,
-  // whose star lists are gone by then (the check's face adjacency beside them, or beside the
-  // batches', was the peak of a large convert's memory, and the encoding beside the first round took
-  // a thread from it). They run one after the other: each holds a face adjacency of the mesh (16
-  // bytes a tetrahedron) and more, and the two at once beside the ranking were a large convert's
-  // peak of memory.
   RankingOptions ranking_options = o.ranking;
-  ranking_options.beside_ranking_tail = [&] { encodeLevel0(true); };
+  ranking_options.beside_ranking_tail = encodeLevel0;
   StatusOr<MergeTree> ranking = rankMerges(mesh, ranking_options, &ranked, wo.progress);
-  encodeLevel0(false);  // where the ranking did not start it
+  encodeLevel0();  // where the ranking did not start it
+  // The check's face adjacency beside the batches was a convert's peak of memory: the check ends
+  // before them.
   encoding.wait();
   GTN_RETURN_IF_ERROR(encoded);
   if (!ranking.isOk()) return ranking.status();
-  checkLevel0();  // where the ranking did not start it
-  // The check's face adjacency beside the batches was a convert's peak of memory: the check ends
-  // before them (beside a short tail of the ranking, it may still run).
-  checking.wait();
   MergeTree tree = std::move(ranking).value();
   MergeTreeForm level0_form;
   if (o.merge_tree && level0) {
