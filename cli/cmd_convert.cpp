@@ -36,7 +36,9 @@ struct ConvertArgs {
 };
 
 // Level 0, its mip levels and merge trees as the options ask (validate/write_gtn.h).
-Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWriteOptions& wo) {
+// `mesh` the writer may change while it works (a large grid's tetrahedra released while the merges are
+// ranked, GtnConvertOptions::release_grid_tets); as it was when this returns.
+Status writeGtnWithLevels(const ConvertArgs& a, TetMesh& mesh, const GtnWriteOptions& wo) {
   GtnConvertOptions o;
   o.levels = a.levels;
   o.merge_tree = !a.no_merge_tree;
@@ -44,7 +46,7 @@ Status writeGtnWithLevels(const ConvertArgs& a, const TetMesh& mesh, const GtnWr
   o.ranking = a.ranking;
   o.keep_invalid = a.keep_invalid;
   std::vector<std::string> warnings;
-  Status st = gtn::writeGtnWithLevels(a.output, mesh, o, wo, a.inputs[0], &warnings);
+  Status st = gtn::writeGtnWithLevels(a.output, &mesh, o, wo, a.inputs[0], &warnings);
   for (const std::string& w : warnings) warn(w);
   return st;
 }

@@ -1443,6 +1443,38 @@ bool isGridTets(const GridLayout& l, const std::vector<Tet>& tets) {
 }
 }  // namespace
 
+RuleGridTets::RuleGridTets(const GridLayout& l) {
+  const CellGeometry g(l);
+  tets_ = l.cells() * l.split;
+  per_ = l.split;
+  ci_ = g.ci;
+  cj_ = g.cj;
+  ni_ = g.ni;
+  nj_ = g.nj;
+  nk_ = g.nk;
+  parity_ = l.parity;
+  per_magic_ = magic(per_);
+  ci_magic_ = magic(ci_);
+  cj_magic_ = magic(cj_);
+  const int a2 = l.left_handed ? 3 : 2, a3 = l.left_handed ? 2 : 3;
+  for (int odd = 0; odd < 2; ++odd) {
+    const auto rule = gridRuleTets(l.split, odd != 0);
+    for (size_t r = 0; r < rule.size(); ++r) {
+      const auto& t = rule[r];
+      offsets_[odd * 6 + r] = {static_cast<uint32_t>(g.cornerOffset(t[0])), static_cast<uint32_t>(g.cornerOffset(t[1])),
+                               static_cast<uint32_t>(g.cornerOffset(t[a2])),
+                               static_cast<uint32_t>(g.cornerOffset(t[a3]))};
+    }
+  }
+}
+
+bool RuleGridTets::sameAs(const std::vector<Tet>& tets) const {
+  if (tets.size() != tets_) return false;
+  for (uint64_t t = 0; t < tets_; ++t)
+    if (tets[t] != (*this)[t]) return false;
+  return true;
+}
+
 std::vector<Tet> gridTets(const GridLayout& l) {
   std::vector<Tet> out;
   reservePopulated(out, l.tets());

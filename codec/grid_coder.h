@@ -66,6 +66,44 @@ Status checkGridLayout(const GridLayout& layout, const std::string& what);
 // pass checkGridLayout.
 std::vector<Tet> gridTets(const GridLayout& layout);
 
+// The tetrahedra of a layout of rule cells alone (no alias, no exception; one that passes
+// checkGridLayout), each made from its index as gridTets makes it, in about as long as a read of a
+// tetrahedron held in memory: for a caller that releases a grid's tetrahedra (16 bytes each) while
+// it reads them in an order of its own (simplify/ranking.h's RankingOptions::grid_tets).
+class RuleGridTets {
+ public:
+  explicit RuleGridTets(const GridLayout& layout);
+  uint64_t size() const { return tets_; }
+  // The points they name: the block's nodes, 0 .. points() - 1.
+  uint64_t points() const { return ni_ * nj_ * nk_; }
+  // Tetrahedron t (t < size()), as gridTets(layout)[t].
+  Tet operator[](uint64_t t) const {
+    const uint64_t cell = divide(t, per_magic_);
+    const uint64_t r = t - cell * per_;
+    const uint64_t q = divide(cell, ci_magic_);  // cell = i + ci * (j + cj * k)
+    const uint64_t i = cell - q * ci_;
+    const uint64_t k = divide(q, cj_magic_);
+    const uint64_t j = q - k * cj_;
+    const uint32_t base = static_cast<uint32_t>(i + ni_ * (j + nj_ * k));
+    const uint32_t* o = offsets_[((i + j + k + parity_) & 1) * 6 + r].data();
+    return {base + o[0], base + o[1], base + o[2], base + o[3]};
+  }
+  // Whether `tets` are exactly these.
+  bool sameAs(const std::vector<Tet>& tets) const;
+
+ private:
+  // n / d for n and d below 2^32, by a multiplication (Lemire, Kaser and Kurz: the magic number is
+  // 2^64 / d rounded up; 0 stands for d = 1, whose 2^64 does not fit).
+  static uint64_t magic(uint64_t d) { return UINT64_MAX / d + 1; }
+  static uint64_t divide(uint64_t n, uint64_t m) {
+    return m == 0 ? n : static_cast<uint64_t>((static_cast<unsigned __int128>(m) * n) >> 64);
+  }
+  uint64_t tets_ = 0, per_ = 6, ci_ = 1, cj_ = 1, ni_ = 2, nj_ = 2, nk_ = 2, parity_ = 0;
+  uint64_t per_magic_ = 0, ci_magic_ = 0, cj_magic_ = 0;
+  // Per parity (even, odd) and rule tetrahedron: its corners' node offsets from the cell's corner 0.
+  std::array<std::array<uint32_t, 4>, 12> offsets_{};
+};
+
 // The split rule's tetrahedra of a cell, as corner numbers 0..7 (split 5 or 6, odd: the 5-split's
 // odd cells), before the left-handed exchange.
 std::span<const std::array<uint8_t, 4>> gridRuleTets(int split, bool odd);

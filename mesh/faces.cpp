@@ -189,7 +189,7 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots) {
   return adj;
 }
 
-FaceClasses classifyFaces(const TetMesh& mesh, const std::vector<uint8_t>* flat, uint64_t pass_slots) {
+FaceClasses classifyFaces(const TetMesh& mesh, const std::vector<uint8_t>* flat, uint64_t pass_slots, bool alike) {
   FaceClasses out;
   assignPopulated(out.mask, mesh.tets.size(), uint16_t{0});
   // A tetrahedron's faces are in groups that other threads may match at the same time.
@@ -200,6 +200,8 @@ FaceClasses classifyFaces(const TetMesh& mesh, const std::vector<uint8_t>* flat,
       mesh, pass_slots,
       [&](uint32_t slot, uint32_t other) {
         if (flat && (*flat)[other / 4]) set(slot / 4, FaceClasses::kNextToFlat);
+        if (alike && !facesOpposite(mesh.tets[slot / 4], static_cast<int>(slot % 4), mesh.tets[other / 4]))
+          set(slot / 4, FaceClasses::kAlike);
       },
       [&](uint32_t slot) { set(slot / 4, static_cast<uint16_t>(FaceClasses::kBoundary << (slot % 4))); },
       [&](uint32_t slot) { set(slot / 4, static_cast<uint16_t>(FaceClasses::kNonManifold << (slot % 4))); });

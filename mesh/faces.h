@@ -39,15 +39,18 @@ FaceAdjacency computeFaceAdjacency(const TetMesh& mesh, uint64_t pass_slots = 0)
 // What a check needs of the face adjacency, in 2 bytes a tetrahedron instead of 16: per tetrahedron,
 // which of its faces are in no other tetrahedron (bit kBoundary << k for face k), which are in three
 // or more (kNonManifold << k), and whether a tetrahedron shares a face with one that `flat` marks
-// (kNextToFlat; never without `flat`); and the counts of FaceAdjacency. `pass_slots` as above.
+// (kNextToFlat; never without `flat`); with `alike`, whether a tetrahedron has a face that the
+// other tetrahedron on it lists in the same direction (kAlike: facesOpposite is false; never
+// without `alike`); and the counts of FaceAdjacency. `pass_slots` as above.
 struct FaceClasses {
-  static constexpr uint16_t kBoundary = 1, kNonManifold = 16, kNextToFlat = 256;
+  static constexpr uint16_t kBoundary = 1, kNonManifold = 16, kNextToFlat = 256, kAlike = 512;
   std::vector<uint16_t> mask;
   uint64_t faces = 0;
   uint64_t boundary_faces = 0;
   uint64_t non_manifold_faces = 0;
 };
-FaceClasses classifyFaces(const TetMesh& mesh, const std::vector<uint8_t>* flat = nullptr, uint64_t pass_slots = 0);
+FaceClasses classifyFaces(const TetMesh& mesh, const std::vector<uint8_t>* flat = nullptr, uint64_t pass_slots = 0,
+                          bool alike = false);
 
 // Whether face k of tetrahedron a and the same triangle as a face of tetrahedron b run in opposite
 // directions (a's outward listing against b's), as they do in a consistently oriented mesh; b must

@@ -16,6 +16,7 @@
 #include <tbb/task_arena.h>
 
 #include "codec/edge_points.h"
+#include "codec/grid_coder.h"
 #include "mesh/faces.h"
 #include "mesh/fresh_memory.h"
 #include "mesh/index.h"
@@ -355,6 +356,8 @@ class Ranker {
  public:
   Ranker(const TetMesh& mesh, std::vector<double> density, const RankingOptions& options)
       : mesh_(mesh),
+        grid_(options.grid_tets),
+        nt_(options.grid_tets ? options.grid_tets->size() : mesh.numTets()),
         density_(std::move(density)),
         options_(options),
         thread_ws_([points = mesh.numPoints()] { return Workspace(points); }) {}
@@ -451,6 +454,10 @@ class Ranker {
   void compactStars(Lane& L);
 
   const TetMesh& mesh_;
+  // The source's tetrahedra: the mesh's, or made from their indices (RankingOptions::grid_tets).
+  const RuleGridTets* grid_;
+  size_t nt_;
+  Tet srcTet(size_t t) const { return grid_ ? (*grid_)[t] : mesh_.tets[t]; }
   // The density at each point; empty: 1 everywhere (volume only, and the batches, which never rank),
   // without an array of ones (8 bytes a point).
   std::vector<double> density_;
@@ -460,13 +467,13 @@ class Ranker {
 
   // The tetrahedra as the merges so far have made them, read through the mesh's rather than copied
   // (16 bytes a tetrahedron, a fifth of a large convert's peak of memory): vertex k of tetrahedron t
-  // is up_[mesh_.tets[t][k]] (tet(t)), and dead_[t] marks the collapsed ones. A merge v -> w points
+  // is up_[srcTet(t)[k]] (tet(t)), and dead_[t] marks the collapsed ones. A merge v -> w points
   // the vertex that each tetrahedron of v's star names at v's place to w, so that every vertex a live
   // tetrahedron names is one step from the vertex it stands for now.
   std::vector<uint32_t> up_;
   std::vector<uint8_t> dead_;
   Tet tet(size_t t) const {
-    const Tet& m = mesh_.tets[t];
+    const Tet m = srcTet(t);
     return {up_[m[0]], up_[m[1]], up_[m[2]], up_[m[3]]};
   }
   // Per vertex: where its list of corners begins in its lane's pool, and its length.
@@ -490,8 +497,7 @@ class Ranker {
 
 void Ranker::init(const RankingFaces* faces) {
   const size_t np = mesh_.numPoints();
-  const size_t nt = mesh_.numTets();
-  const std::vector<Tet>& tets = mesh_.tets;
+  const size_t nt = nt_;
   alive_.assign(np, 1);
   if (faces && faces->boundary.size() == np && faces->frozen.size() == np && faces->pinned.size() == np) {
     boundary_ = faces->boundary;
@@ -499,47 +505,25 @@ void Ranker::init(const RankingFaces* faces) {
     pinned_ = faces->pinned;
     area_scale_ = faces->area_scale;
   } else {
-    boundary_.assign(np, 0);
-    frozen_.assign(np, 0);
-    pinned_.assign(np, 0);
-    // The face adjacency first, and gone before the ranking's star lists are made: the peak memory
-    // is the larger of the two, not their sum.
-    const FaceAdjacency adj = computeFaceAdjacency(mesh_);
-    double area = 0;
-    for (size_t t = 0; t < nt; ++t) {
-      for (int k = 0; k < 4; ++k) {
-        const uint32_t nb = adj.neighbor[4 * t + k];
-        if (nb < nt) {
-          // A face listed in the same direction by both its tetrahedra (a flat one whose orientation
-          // the file chose against its neighbours'): neither may change, see ranking.h.
-          if (!facesOpposite(tets[t], k, tets[nb]))
-            for (uint32_t x : tets[t]) pinned_[x] = 1;
-          continue;
-        }
-        const uint32_t a = tets[t][kTetFace[k][0]], b = tets[t][kTetFace[k][1]], c = tets[t][kTetFace[k][2]];
-        if (nb == kNonManifold) {
-          frozen_[a] = frozen_[b] = frozen_[c] = 1;
-          continue;
-        }
-        boundary_[a] = boundary_[b] = boundary_[c] = 1;
-        double n[3];
-        triNormal(pos(a), pos(b), pos(c), n);
-        area += 0.5 * norm(n);
-      }
-    }
-    area_scale_ = area > 0 && std::isfinite(area) ? area : 1.0;
+    // Made first, and their face matching gone before the ranking's star lists are made: the peak
+    // memory is the larger of the two, not their sum.
+    RankingFaces made = rankingFaces(mesh_);
+    boundary_ = std::move(made.boundary);
+    frozen_ = std::move(made.frozen);
+    pinned_ = std::move(made.pinned);
+    area_scale_ = made.area_scale;
   }
   resizePopulated(up_, np);
   std::iota(up_.begin(), up_.end(), 0u);
   assignPopulated(dead_, nt, uint8_t{0});
   star_size_.assign(np, 0);
-  for (const Tet& q : tets)
-    for (uint32_t v : q) ++star_size_[v];
+  for (size_t t = 0; t < nt; ++t)
+    for (uint32_t v : srcTet(t)) ++star_size_[v];
   star_begin_.assign(np, 0);
   star_len_.assign(np, 0);
   double mass = 0, volume = 0;
   for (size_t t = 0; t < nt; ++t) {
-    const Tet& q = tets[t];
+    const Tet q = srcTet(t);
     const double vol = signedVolume(pos(q[0]), pos(q[1]), pos(q[2]), pos(q[3]));
     const double rho = 0.25 * (density(q[0]) + density(q[1]) + density(q[2]) + density(q[3]));
     mass += std::fabs(rho * vol);
@@ -1118,7 +1102,7 @@ void Ranker::merge(Lane& L, uint32_t v, uint32_t w, float error) {
   // tetrahedra of the star may name v by the same vertex).
   for (uint32_t c : L.corners) {
     if (dead_[c >> 2]) continue;
-    up_[mesh_.tets[c >> 2][c & 3]] = w;
+    up_[srcTet(c >> 2)[c & 3]] = w;
     ++star_size_[w];
   }
   up_[v] = w;
@@ -1210,11 +1194,10 @@ float roundErrorBound(const std::vector<std::unique_ptr<Lane>>& lanes) {
 }
 
 MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
-  init();
+  init(options_.faces);
   const size_t np = mesh_.numPoints();
   stale_.assign(options_.lazy ? np : 0, 0);
-  const uint32_t parts =
-      std::min<uint32_t>(options_.parts != 0 ? options_.parts : autoParts(mesh_.numTets()), kMaxParts);
+  const uint32_t parts = std::min<uint32_t>(options_.parts != 0 ? options_.parts : autoParts(nt_), kMaxParts);
   // In parts: each part merges vertices that have no neighbour in another part, which touches
   // nothing another part reads or writes, so the parts run in parallel, up to the round's bound on
   // the error; their merges are then interleaved by error (each part's in its own order). Further
@@ -1725,6 +1708,36 @@ void mergeEdgePointsFirst(const TetMesh& mesh, MergeTree& tree) {
 
 }  // namespace
 
+RankingFaces rankingFaces(const TetMesh& mesh) {
+  const size_t np = mesh.numPoints();
+  RankingFaces out;
+  out.boundary.assign(np, 0);
+  out.frozen.assign(np, 0);
+  out.pinned.assign(np, 0);
+  const FaceClasses classes = classifyFaces(mesh, nullptr, 0, true);
+  double area = 0;
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const uint16_t m = classes.mask[t];
+    if (m == 0) continue;
+    const Tet& q = mesh.tets[t];
+    // A face listed in the same direction by both its tetrahedra (a flat one whose orientation the
+    // file chose against its neighbours'): neither may change, see ranking.h.
+    if (m & FaceClasses::kAlike)
+      for (uint32_t x : q) out.pinned[x] = 1;
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t a = q[kTetFace[k][0]], b = q[kTetFace[k][1]], c = q[kTetFace[k][2]];
+      if (m & (FaceClasses::kNonManifold << k)) out.frozen[a] = out.frozen[b] = out.frozen[c] = 1;
+      if (!(m & (FaceClasses::kBoundary << k))) continue;
+      out.boundary[a] = out.boundary[b] = out.boundary[c] = 1;
+      double n[3];
+      triNormal(mesh.point(a), mesh.point(b), mesh.point(c), n);
+      area += 0.5 * norm(n);
+    }
+  }
+  out.area_scale = area > 0 && std::isfinite(area) ? area : 1.0;
+  return out;
+}
+
 // The series of rounds (ranking.h): P, P - 1, ... parts (kMaxRounds rounds at most, 2 parts at
 // least). Many small parts (a fine series, P >= 2 kAutoParts) leave many seams, and one part fewer
 // moves the cuts of a large P little: the vertices along them would be left to the whole mesh's
@@ -1750,8 +1763,17 @@ std::string defaultFieldNote(const RankingStats& stats) {
 }
 
 Status checkRankingOptions(const TetMesh& mesh, const RankingOptions& options) {
-  if (mesh.numPoints() >= 0xFFFFFFF0u || mesh.numTets() >= 0x3FFFFFFFu)
+  const size_t tets = options.grid_tets ? options.grid_tets->size() : mesh.numTets();
+  if (mesh.numPoints() >= 0xFFFFFFF0u || tets >= 0x3FFFFFFFu)
     return unsupported("simplification: mesh too large for 32-bit vertex and corner ids");
+  if (options.grid_tets) {
+    const size_t np = mesh.numPoints();
+    if ((!mesh.tets.empty() && mesh.tets.size() != tets) || options.grid_tets->points() != np)
+      return usageError("simplification: a grid's tetrahedra given for a mesh of other points or tetrahedra");
+    if (!options.faces || options.faces->boundary.size() != np || options.faces->frozen.size() != np ||
+        options.faces->pinned.size() != np)
+      return usageError("simplification: a grid's tetrahedra given without the mesh's face flags");
+  }
   if (!options.field.empty() && options.field != "none" && !mesh.findPointField(options.field)) {
     std::string names;
     for (const Field& f : mesh.point_fields) names += (names.empty() ? "" : ", ") + f.name;
@@ -1767,7 +1789,9 @@ Status checkRankingOptions(const TetMesh& mesh, const RankingOptions& options) {
 StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& options, RankingStats* stats,
                                const ProgressFn& progress) {
   const auto start = std::chrono::steady_clock::now();
-  GTN_RETURN_IF_ERROR(mesh.checkConsistency("simplification input"));
+  // A mesh whose tetrahedra were released (RankingOptions::grid_tets) was checked with them; its cell
+  // fields no longer match a count of tetrahedra.
+  if (!options.grid_tets) GTN_RETURN_IF_ERROR(mesh.checkConsistency("simplification input"));
   GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, options));
   const Field* field = nullptr;
   std::vector<std::string> constant_fields;
@@ -1799,7 +1823,8 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
   tree.w_density = options.w_density;
   tree.w_geometry = options.w_geometry;
   computeErrorQuantiles(tree);
-  if (options.max_merges > tree.merges) mergeEdgePointsFirst(mesh, tree);
+  // A grid of rule cells (RankingOptions::grid_tets) uses every point.
+  if (options.max_merges > tree.merges && !options.grid_tets) mergeEdgePointsFirst(mesh, tree);
   if (stats) {
     *stats = std::move(local);
     stats->merges = tree.merges;
@@ -1813,7 +1838,7 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
 
 StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const std::vector<uint64_t>& keys,
                                 uint32_t divisor, BatchStats* stats, const std::vector<RankingRound>& rounds,
-                                const RankingFaces* faces) {
+                                const RankingFaces* faces, const RuleGridTets* grid_tets) {
   const auto start = std::chrono::steady_clock::now();
   GTN_RETURN_IF_ERROR(ranked.check("merge tree"));
   if (ranked.points() != mesh.numPoints() || keys.size() != mesh.numPoints())
@@ -1821,6 +1846,9 @@ StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, co
   RankingOptions options;
   options.w_density = ranked.w_density;
   options.w_geometry = ranked.w_geometry;
+  options.faces = faces;
+  options.grid_tets = grid_tets;
+  GTN_RETURN_IF_ERROR(checkRankingOptions(mesh, options));
   Ranker ranker(mesh, {}, options);
   BatchStats local;
   MergeTree tree = ranker.batch(ranked, keys, divisor, rounds, faces, &local);

@@ -94,6 +94,22 @@
 
 namespace gtn {
 
+class RuleGridTets;  // codec/grid_coder.h
+
+// What the ranking learns of the mesh's faces before its first merge: the vertices on the boundary,
+// those on a face of three or more tetrahedra (never merged), those on a face both its tetrahedra
+// list in the same direction (never merged away), and the boundary's area (the geometric error's
+// scale). batchMerges takes them from the ranking of the same mesh (RankingStats::faces) instead of
+// matching the faces again.
+struct RankingFaces {
+  std::vector<uint8_t> boundary, frozen, pinned;  // per point
+  double area_scale = 1;
+};
+
+// The ranking's face flags of `mesh` (from mesh/faces.h's classifyFaces: 2 bytes a tetrahedron
+// while they are made, besides the face matching's own).
+RankingFaces rankingFaces(const TetMesh& mesh);
+
 struct RankingOptions {
   // Point field that gives the density: "" = the first point field whose first component is not
   // constant (mesh_stats.h's defaultPointField; volume only when every one is), "none" = volume only.
@@ -114,6 +130,12 @@ struct RankingOptions {
   // threads idle: the whole mesh's queue is one thread's work, and the coarse rounds' few parts
   // differ in size.
   std::function<void()> beside_ranking_tail{};
+  // The face flags where the caller has them (rankingFaces of the same mesh); made otherwise.
+  const RankingFaces* faces = nullptr;
+  // The mesh's tetrahedra where its caller has released them (mesh.tets empty) to hold 16 bytes a
+  // tetrahedron less while the merges are ranked and batched: a grid of rule cells, each tetrahedron
+  // made from its index (codec/grid_coder.h). `faces` must then be given. The tree is the same.
+  const RuleGridTets* grid_tets = nullptr;
 };
 
 // The part count of the series of rounds after a series in `parts` parts, with `live_tets` tetrahedra
@@ -128,16 +150,6 @@ struct RankingRound {
   uint32_t parts = 0;
   std::vector<uint8_t> part;
   float error_limit = 0;
-};
-
-// What the ranking learns of the mesh's faces before its first merge: the vertices on the boundary,
-// those on a face of three or more tetrahedra (never merged), those on a face both its tetrahedra
-// list in the same direction (never merged away), and the boundary's area (the geometric error's
-// scale). batchMerges takes them from the ranking of the same mesh (RankingStats::faces) instead of
-// computing the face adjacency again.
-struct RankingFaces {
-  std::vector<uint8_t> boundary, frozen, pinned;  // per point
-  double area_scale = 1;
 };
 
 struct RankingStats {
@@ -193,7 +205,8 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
 // together, in the order of their passes and within a pass by key (then the deferred ones, by
 // rank). Any interleaving of merges of distinct parts is a valid order, since they commute. The
 // merges after the rounds are batched on the whole mesh. The tree depends on the rounds, never on
-// the number of threads. `faces`, where given, are the ranking's of the same mesh (RankingStats::faces).
+// the number of threads. `faces`, where given, are the ranking's of the same mesh (RankingStats::faces);
+// `grid_tets` as RankingOptions::grid_tets (then `faces` must be given).
 struct BatchStats {
   uint64_t batches = 0;
   uint64_t deferred = 0;    // merges the passes left (then merged by rank)
@@ -206,6 +219,7 @@ struct BatchStats {
 };
 StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const std::vector<uint64_t>& keys,
                                 uint32_t divisor, BatchStats* stats = nullptr,
-                                const std::vector<RankingRound>& rounds = {}, const RankingFaces* faces = nullptr);
+                                const std::vector<RankingRound>& rounds = {}, const RankingFaces* faces = nullptr,
+                                const RuleGridTets* grid_tets = nullptr);
 
 }  // namespace gtn

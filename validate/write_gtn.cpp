@@ -1,7 +1,10 @@
 #include "validate/write_gtn.h"
 
+#include <optional>
+
 #include <tbb/task_group.h>
 
+#include "codec/grid_coder.h"
 #include "codec/pieces.h"
 #include "mesh/wait_on_exit.h"
 #include "simplify/levels.h"
@@ -25,8 +28,43 @@ Status refuseOrWarnOfLevel0Errors(LevelStructureCheck& check, const GtnConvertOp
   return Status::ok();
 }
 
-Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& o, const GtnWriteOptions& wo,
-                   const std::string& source, std::vector<std::string>* warnings) {
+// A grid's tetrahedra released (GtnConvertOptions::release_grid_tets) and made again from its
+// layout: by restore(), or, where an error returns first, as the writer returns.
+class ReleasedTets {
+ public:
+  ReleasedTets(TetMesh* mesh, GridLayout layout) : mesh_(mesh), layout_(std::move(layout)), tets_(layout_) {
+    std::vector<Tet>().swap(mesh_->tets);
+  }
+  ReleasedTets(const ReleasedTets&) = delete;
+  ReleasedTets& operator=(const ReleasedTets&) = delete;
+  ~ReleasedTets() { restore(); }
+  const RuleGridTets& tets() const { return tets_; }
+  void restore() {
+    if (mesh_) mesh_->tets = gridTets(layout_);
+    mesh_ = nullptr;
+  }
+
+ private:
+  TetMesh* mesh_;
+  GridLayout layout_;
+  RuleGridTets tets_;
+};
+
+// The layout of `mesh` where it is one grid of rule cells, the block from point 0 with no alias and
+// no exception, whose tetrahedra RuleGridTets makes exactly (checked, tetrahedron by tetrahedron).
+std::optional<GridLayout> ruleGridOf(const TetMesh& mesh) {
+  if (mesh.blocks.size() != 1) return std::nullopt;
+  const StructuredBlock& b = mesh.blocks[0];
+  const uint64_t nodes = uint64_t{b.dims[0]} * b.dims[1] * b.dims[2];
+  if (b.first_point != 0 || !b.aliases.empty() || nodes != mesh.numPoints()) return std::nullopt;
+  StatusOr<GridLayout> layout = matchGridLayout(mesh, b.dims);
+  if (!layout.isOk() || !layout->aliases.empty() || !layout->exceptions.empty()) return std::nullopt;
+  if (!RuleGridTets(*layout).sameAs(mesh.tets)) return std::nullopt;
+  return std::move(layout).value();
+}
+
+Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned, const GtnConvertOptions& o,
+                   const GtnWriteOptions& wo, const std::string& source, std::vector<std::string>* warnings) {
   // Mip levels are made from the merge tree and checked against it (a validator reports levels without
   // one): without a tree, level 0 alone.
   if (!o.merge_tree && o.levels > 0)
@@ -81,6 +119,23 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   RankingStats ranked;
   RankingOptions ranking_options = o.ranking;
   ranking_options.beside_ranking_tail = encodeLevel0;
+  // A large grid of rule cells: level 0 encoded and checked first, then its tetrahedra released until
+  // the merges are batched (GtnConvertOptions::release_grid_tets).
+  std::optional<ReleasedTets> released;
+  RankingFaces grid_faces;
+  if (owned == &mesh && mesh.numTets() >= o.release_grid_tets && !o.ranking.grid_tets) {
+    if (std::optional<GridLayout> layout = ruleGridOf(mesh)) {
+      encodeLevel0();
+      encoding.wait();
+      GTN_RETURN_IF_ERROR(encoded);
+      if (level0 && level0->isGrid()) {
+        grid_faces = rankingFaces(mesh);
+        released.emplace(owned, std::move(*layout));
+        ranking_options.faces = &grid_faces;
+        ranking_options.grid_tets = &released->tets();
+      }
+    }
+  }
   StatusOr<MergeTree> ranking = rankMerges(mesh, ranking_options, &ranked, wo.progress);
   encodeLevel0();  // where the ranking did not start it
   // The check's face adjacency beside the batches was a convert's peak of memory: the check ends
@@ -92,12 +147,15 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
   MergeTreeForm level0_form;
   if (o.merge_tree && level0) {
     reportProgress(wo.progress, "batch merges", 0.0);
-    GTN_ASSIGN_OR_RETURN(StoredMergeTree stored, storedMergeTree(mesh, tree, *level0, &ranked));
+    GTN_ASSIGN_OR_RETURN(StoredMergeTree stored,
+                         storedMergeTree(mesh, tree, *level0, &ranked, released ? &released->tets() : nullptr));
     tree = std::move(stored.tree);
     level0_form = stored.level0_form;
     ranked.rounds = {};
     ranked.faces = {};
   }
+  grid_faces = {};
+  if (released) released->restore();
   if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
     warnings->push_back(source + ": " + note);
   LevelOptions lo;
@@ -199,7 +257,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, const GtnConver
 }  // namespace
 
 StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0,
-                                          const RankingStats* ranking) {
+                                          const RankingStats* ranking, const RuleGridTets* grid_tets) {
   // A structured level 0 (a grid, never naming the next level's vertices) stores the whole tree, which
   // readers decode to simplify it on the fly at every ratio finer than the stored levels: its parents
   // are coded as grid places (the block's dims and the decoding ids decide the candidates), or as
@@ -226,18 +284,32 @@ StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& 
   static const std::vector<RankingRound> kNoRounds;
   GTN_ASSIGN_OR_RETURN(
       out.tree, batchMerges(mesh, ranked, keys, kDefaultBatchDivisor, nullptr, ranking ? ranking->rounds : kNoRounds,
-                            ranking ? &ranking->faces : nullptr));
+                            ranking ? &ranking->faces : nullptr, grid_tets));
   return out;
 }
 
-Status writeGtnWithLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& options,
-                          const GtnWriteOptions& write_options, const std::string& source,
-                          std::vector<std::string>* warnings) {
-  Status st = writeLevels(path, mesh, options, write_options, source, warnings);
+namespace {
+Status writeWithLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned, const GtnConvertOptions& options,
+                       const GtnWriteOptions& write_options, const std::string& source,
+                       std::vector<std::string>* warnings) {
+  Status st = writeLevels(path, mesh, owned, options, write_options, source, warnings);
   // The encoder's refusals are about the mesh: name it.
   if (!st.isOk() && st.message().rfind("encodeLevel: ", 0) == 0)
     st = Status(st.code(), source + ": cannot be encoded: " + st.message().substr(13));
   return st;
+}
+}  // namespace
+
+Status writeGtnWithLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& options,
+                          const GtnWriteOptions& write_options, const std::string& source,
+                          std::vector<std::string>* warnings) {
+  return writeWithLevels(path, mesh, nullptr, options, write_options, source, warnings);
+}
+
+Status writeGtnWithLevels(const std::string& path, TetMesh* mesh, const GtnConvertOptions& options,
+                          const GtnWriteOptions& write_options, const std::string& source,
+                          std::vector<std::string>* warnings) {
+  return writeWithLevels(path, *mesh, mesh, options, write_options, source, warnings);
 }
 
 }  // namespace gtn

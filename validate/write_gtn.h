@@ -29,6 +29,14 @@ struct GtnConvertOptions {
   // boundary whose faces disagree in orientation): refused, nothing written, unless this is set (then
   // written with a warning). Checked where the writer verifies (GtnWriteOptions::verify).
   bool keep_invalid = false;
+  // Where the caller lets the writer change the mesh while it works (the overload of
+  // writeGtnWithLevels that takes a pointer), a grid of rule cells of this many tetrahedra or more
+  // (a structured block with no alias and no exception, as level 0's structured piece codes it) has
+  // its tetrahedra released while the merges are ranked and batched, read from their indices instead
+  // (RankingOptions::grid_tets), and made again after: 16 bytes a tetrahedron less at a large
+  // convert's peak of memory. Level 0 is then encoded and checked before the ranking rather than
+  // beside its tail. The file is the same.
+  uint64_t release_grid_tets = uint64_t{1} << 22;
 };
 
 // Writes `mesh` (orientation normalised, e.g. by an importer) to `path`. `source` names the mesh in
@@ -48,9 +56,15 @@ struct StoredMergeTree {
   MergeTreeForm level0_form;
 };
 StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& ranked, const PiecedLevel& level0,
-                                          const RankingStats* ranking = nullptr);
+                                          const RankingStats* ranking = nullptr,
+                                          const RuleGridTets* grid_tets = nullptr);
 
 Status writeGtnWithLevels(const std::string& path, const TetMesh& mesh, const GtnConvertOptions& options,
+                          const GtnWriteOptions& write_options, const std::string& source,
+                          std::vector<std::string>* warnings = nullptr);
+// The same for a mesh the writer may change while it works (GtnConvertOptions::release_grid_tets):
+// `mesh` is as it was given when this returns, on an error too.
+Status writeGtnWithLevels(const std::string& path, TetMesh* mesh, const GtnConvertOptions& options,
                           const GtnWriteOptions& write_options, const std::string& source,
                           std::vector<std::string>* warnings = nullptr);
 

@@ -181,6 +181,30 @@ TEST(GridCoder, RuleTablesAreTheImportersGridSplitter) {
   EXPECT_TRUE(std::equal(odd.begin(), odd.end(), tets.begin()));
 }
 
+TEST(GridCoder, RuleGridTetsAreGridTetsByIndex) {
+  // Every split, parity and handedness, thin blocks (a dimension of 2: one cell across) included.
+  for (const GridLayout& l : {grid(9, 7, 6, 5, 0), grid(9, 7, 6, 5, 1), grid(8, 7, 5, 6), grid(6, 5, 4, 5, 1, true),
+                              grid(5, 4, 4, 6, 0, true), grid(2, 2, 2, 5, 0), grid(2, 3, 2, 6), grid(4, 2, 3, 5, 1),
+                              grid(3, 5, 2, 5, 0, true), grid(301, 257, 3, 6)}) {
+    SCOPED_TRACE("dims " + std::to_string(l.dims[0]) + " " + std::to_string(l.dims[1]) + " " +
+                 std::to_string(l.dims[2]) + " split " + std::to_string(l.split) + " parity " +
+                 std::to_string(l.parity) + (l.left_handed ? " left" : ""));
+    const std::vector<Tet> tets = gridTets(l);
+    const RuleGridTets rule(l);
+    ASSERT_EQ(rule.size(), tets.size());
+    EXPECT_EQ(rule.points(), l.nodes());
+    for (size_t t = 0; t < tets.size(); ++t) ASSERT_EQ(rule[t], tets[t]) << "tetrahedron " << t;
+    EXPECT_TRUE(rule.sameAs(tets));
+    // One vertex changed, one tetrahedron missing: not the same.
+    std::vector<Tet> changed = tets;
+    changed[changed.size() / 2][1] ^= 1;
+    EXPECT_FALSE(rule.sameAs(changed));
+    changed = tets;
+    changed.pop_back();
+    EXPECT_FALSE(rule.sameAs(changed));
+  }
+}
+
 TEST(GridCoder, SplitFiveBothParitiesAndSplitSix) {
   for (const GridLayout& l : {grid(9, 7, 6, 5, 0), grid(9, 7, 6, 5, 1), grid(8, 7, 5, 6)}) {
     SCOPED_TRACE("split " + std::to_string(l.split) + " parity " + std::to_string(l.parity));

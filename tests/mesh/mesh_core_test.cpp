@@ -161,33 +161,40 @@ TEST(Faces, ClassesAreTheAdjacencys) {
   m.tets.push_back({0, 1, np + 5, np + 9});  // two vertices past the points
   m.tets.push_back(m.tets[40]);              // its faces in three tetrahedra
   m.tets.push_back(m.tets[40]);
+  std::swap(m.tets[100][2], m.tets[100][3]);  // listed against its neighbours: its faces alike with theirs
   const size_t nt = m.numTets();
   std::vector<uint8_t> flat(nt, 0);
   for (size_t t = 5; t < nt; t += 97) flat[t] = 1;
   const FaceAdjacency adj = computeFaceAdjacency(m);
   ASSERT_GT(adj.non_manifold_faces, 0u);
-  auto expectTheAdjacencys = [&](const FaceClasses& c, bool with_flat) {
+  auto expectTheAdjacencys = [&](const FaceClasses& c, bool with_flat, bool with_alike = false) {
     ASSERT_EQ(c.mask.size(), nt);
     EXPECT_EQ(c.faces, adj.faces);
     EXPECT_EQ(c.boundary_faces, adj.boundary_faces);
     EXPECT_EQ(c.non_manifold_faces, adj.non_manifold_faces);
-    size_t next_to_flat = 0;
+    size_t next_to_flat = 0, alike = 0;
     for (size_t t = 0; t < nt; ++t) {
-      bool near = false;
+      bool near = false, same = false;
       for (int k = 0; k < 4; ++k) {
         const uint32_t n = adj.neighbor[4 * t + k];
         EXPECT_EQ((c.mask[t] >> k) & 1, n == kNoNeighbor ? 1 : 0) << "tetrahedron " << t << " face " << k;
         EXPECT_EQ((c.mask[t] >> (4 + k)) & 1, n == kNonManifold ? 1 : 0) << "tetrahedron " << t << " face " << k;
         near = near || (n < nt && flat[n]);
+        same = same || (n < nt && !facesOpposite(m.tets[t], k, m.tets[n]));
       }
       EXPECT_EQ((c.mask[t] & FaceClasses::kNextToFlat) != 0, with_flat && near) << "tetrahedron " << t;
+      EXPECT_EQ((c.mask[t] & FaceClasses::kAlike) != 0, with_alike && same) << "tetrahedron " << t;
       next_to_flat += near;
+      alike += same;
     }
     EXPECT_GT(next_to_flat, 10u);
+    EXPECT_EQ(alike, 5u);  // the swapped one and its four neighbours
   };
   expectTheAdjacencys(classifyFaces(m), false);
   expectTheAdjacencys(classifyFaces(m, &flat), true);
   expectTheAdjacencys(classifyFaces(m, &flat, 100), true);
+  expectTheAdjacencys(classifyFaces(m, &flat, 100, true), true, true);
+  expectTheAdjacencys(classifyFaces(m, nullptr, 0, true), false, true);
   FaceClasses one_thread;
   tbb::task_arena(1).execute([&] { one_thread = classifyFaces(m, &flat); });
   expectTheAdjacencys(one_thread, true);

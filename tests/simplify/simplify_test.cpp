@@ -8,6 +8,7 @@
 
 #include <tbb/global_control.h>
 
+#include "codec/grid_coder.h"
 #include "format/file_io.h"
 #include "format/gtn_reader.h"
 
@@ -784,6 +785,83 @@ TEST(Levels, ConvertWritesTheSameBytesForAnyThreadCount) {
     ASSERT_TRUE(writeGtnWithLevels(path, g.mesh, GtnConvertOptions{}, GtnWriteOptions{}, "grid").isOk());
     EXPECT_EQ(bytesOf(path), sequential);
   }
+  std::filesystem::remove(path);
+}
+
+// A large grid of rule cells has its tetrahedra released while the merges are ranked and batched,
+// read from their indices (RuleGridTets): the trees, the file and, after, the mesh are the same.
+TEST(Levels, AGridsTetrahedraReleasedWhileRankedGiveTheSameFile) {
+  TetMesh m = makeGrid(14, 12, 10);
+  StructuredBlock block;
+  block.dims[0] = 15, block.dims[1] = 13, block.dims[2] = 11;
+  m.blocks.push_back(block);
+  const std::vector<Tet> tets = m.tets;
+  GtnConvertOptions o;
+  o.ranking.parts = 4;  // in rounds of parts, as a large mesh is ranked
+  // The ranking and the batches alone, from the tetrahedra and from the grid.
+  auto layout = matchGridLayout(m, block.dims);
+  ASSERT_TRUE(layout.isOk()) << layout.status().message();
+  ASSERT_TRUE(layout->exceptions.empty());
+  const RuleGridTets grid(*layout);
+  ASSERT_TRUE(grid.sameAs(m.tets));
+  RankingStats held_stats, released_stats;
+  auto held = rankMerges(m, o.ranking, &held_stats);
+  ASSERT_TRUE(held.isOk()) << held.status().message();
+  const RankingFaces faces = rankingFaces(m);
+  TetMesh bare = m;
+  bare.tets.clear();
+  RankingOptions from_grid = o.ranking;
+  from_grid.grid_tets = &grid;
+  EXPECT_FALSE(rankMerges(bare, from_grid, nullptr).isOk()) << "a grid's tetrahedra need the face flags";
+  from_grid.faces = &faces;
+  auto released = rankMerges(bare, from_grid, &released_stats);
+  ASSERT_TRUE(released.isOk()) << released.status().message();
+  ASSERT_GT(held_stats.rounds.size(), 1u);
+  EXPECT_EQ(released->parent, held->parent);
+  EXPECT_EQ(released->rank, held->rank);
+  EXPECT_EQ(released->removed, held->removed);
+  EXPECT_EQ(released->error, held->error);
+  std::vector<uint64_t> keys(m.numPoints());
+  for (size_t v = 0; v < keys.size(); ++v) keys[v] = batchKeyOfId(static_cast<uint32_t>(v));
+  auto batched = batchMerges(m, *held, keys, 0, nullptr, held_stats.rounds, &held_stats.faces);
+  auto batched_grid = batchMerges(bare, *held, keys, 0, nullptr, held_stats.rounds, &held_stats.faces, &grid);
+  ASSERT_TRUE(batched.isOk() && batched_grid.isOk());
+  EXPECT_EQ(batched_grid->parent, batched->parent);
+  EXPECT_EQ(batched_grid->rank, batched->rank);
+  EXPECT_EQ(batched_grid->batches, batched->batches);
+  // The writer: the same bytes with the tetrahedra held and released, which the progress sees.
+  const std::string path = ::testing::TempDir() + "/released.gtn";
+  ASSERT_TRUE(writeGtnWithLevels(path, m, o, GtnWriteOptions{}, "grid").isOk());
+  auto want = readWholeFile(path);
+  ASSERT_TRUE(want.isOk()) << want.status().message();
+  for (const uint64_t from : {uint64_t{0}, uint64_t{1} << 40}) {
+    SCOPED_TRACE("released from " + std::to_string(from) + " tetrahedra");
+    o.release_grid_tets = from;
+    bool seen_released = false, seen_held = false;
+    GtnWriteOptions wo;
+    wo.progress = [&](const std::string& stage, double) {
+      if (stage != "batch merges" && stage != "rank merges") return;
+      (m.tets.empty() ? seen_released : seen_held) = true;
+    };
+    ASSERT_TRUE(writeGtnWithLevels(path, &m, o, wo, "grid").isOk());
+    EXPECT_EQ(seen_released, from == 0);
+    EXPECT_TRUE(seen_held);  // the ranking's first report comes before
+    EXPECT_TRUE(m.tets == tets);
+    auto got = readWholeFile(path);
+    ASSERT_TRUE(got.isOk()) << got.status().message();
+    EXPECT_TRUE(*got == *want);
+  }
+  // A grid with a cell off the rule (an exception) keeps its tetrahedra.
+  std::swap(m.tets[7][0], m.tets[7][1]);
+  std::swap(m.tets[7][2], m.tets[7][3]);
+  const std::vector<Tet> changed = m.tets;
+  o.release_grid_tets = 0;
+  bool seen_released = false;
+  GtnWriteOptions wo;
+  wo.progress = [&](const std::string&, double) { seen_released = seen_released || m.tets.empty(); };
+  ASSERT_TRUE(writeGtnWithLevels(path, &m, o, wo, "grid").isOk());
+  EXPECT_FALSE(seen_released);
+  EXPECT_TRUE(m.tets == changed);
   std::filesystem::remove(path);
 }
 
