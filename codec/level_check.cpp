@@ -16,13 +16,19 @@ namespace {
 class LosslessCheckSink : public MeshSink {
  public:
   // `tet_order` null: the tetrahedra come in the source's order (a structured piece's).
+  // `grid`, where given: the source's tetrahedra, made from their indices (the mesh's released).
   LosslessCheckSink(const TetMesh& source, const std::vector<uint32_t>& vertex_order,
-                    const std::vector<uint64_t>* tet_order)
-      : src_(source), vertex_order_(vertex_order), tet_order_(tet_order) {}
+                    const std::vector<uint64_t>* tet_order, const RuleGridTets* grid = nullptr)
+      : src_(source),
+        vertex_order_(vertex_order),
+        tet_order_(tet_order),
+        grid_(grid),
+        nt_(grid ? grid->size() : source.numTets()) {}
 
   // "" after a decode that gave the source back.
   Status prepare() {
-    const size_t np = src_.numPoints(), nt = src_.numTets();
+    const size_t np = src_.numPoints(), nt = nt_;
+    if (grid_ && grid_->points() != np) return mismatch("the grid's tetrahedra name other points than the source's");
     if (vertex_order_.size() != np || (tet_order_ && tet_order_->size() != nt))
       return mismatch("the encoder's renumbering does not cover the source");
     if (np >= kNone || nt >= kNone) return mismatch("more points or tetrahedra than the check can number");
@@ -42,10 +48,10 @@ class LosslessCheckSink : public MeshSink {
     return Status::ok();
   }
   Status finish() const {
-    if (vertices_ != src_.numPoints() || tets_ != src_.numTets())
+    if (vertices_ != src_.numPoints() || tets_ != nt_)
       return mismatch(std::to_string(vertices_) + " points and " + std::to_string(tets_) +
                       " tetrahedra decoded, the source has " + std::to_string(src_.numPoints()) + " and " +
-                      std::to_string(src_.numTets()));
+                      std::to_string(nt_));
     return Status::ok();
   }
 
@@ -70,16 +76,17 @@ class LosslessCheckSink : public MeshSink {
   Status boundaryTriangle(const uint32_t*) override { return Status::ok(); }
   Status endBoundary() override { return Status::ok(); }
   Status tet(const uint32_t v[4], const uint8_t* cell_values) override {
-    if (tets_ >= src_.numTets()) return mismatch("more tetrahedra decoded than the source has");
+    if (tets_ >= nt_) return mismatch("more tetrahedra decoded than the source has");
     const uint64_t t = tet_order_ ? tet_src_[tets_] : tets_;
     const uint64_t decoded = tets_++;
     auto which = [&] {
       return "source tetrahedron " + std::to_string(t) + " (decoded " + std::to_string(decoded) + ")";
     };
     int perm[4], inversions = 0;
+    const Tet source_tet = grid_ ? (*grid_)[t] : src_.tets[t];
     for (int i = 0; i < 4; ++i) {
       perm[i] = -1;
-      const uint32_t want = vertex_order_[src_.tets[t][i]];
+      const uint32_t want = vertex_order_[source_tet[i]];
       for (int j = 0; j < 4; ++j)
         if (v[j] == want) perm[i] = j;
       if (perm[i] < 0) return mismatch(which() + " has other vertices");
@@ -123,6 +130,8 @@ class LosslessCheckSink : public MeshSink {
   const TetMesh& src_;
   const std::vector<uint32_t>& vertex_order_;
   const std::vector<uint64_t>* tet_order_;
+  const RuleGridTets* grid_;
+  size_t nt_;
   std::vector<uint32_t> vertex_src_;  // decoded vertex id -> source point
   std::vector<uint32_t> tet_src_;     // decoded position -> source tetrahedron
   uint64_t vertices_ = 0, tets_ = 0;
@@ -152,8 +161,8 @@ std::string losslessMismatch(const TetMesh& source, const EncodedLevel& encoded,
 }
 
 std::string structuredLosslessMismatch(const TetMesh& source, const LevelHeader& header, std::span<const uint8_t> piece,
-                                       const std::vector<uint32_t>& vertex_order) {
-  LosslessCheckSink sink(source, vertex_order, nullptr);
+                                       const std::vector<uint32_t>& vertex_order, const RuleGridTets* tets) {
+  LosslessCheckSink sink(source, vertex_order, nullptr, tets);
   return checkDecode(sink, [&](MeshSink& s) { return decodeStructuredPiece(header, piece, s, "the encoded level"); });
 }
 

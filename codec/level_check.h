@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "codec/grid_coder.h"
 #include "codec/level_codec.h"
 #include "mesh/tet_mesh.h"
 
@@ -23,8 +24,9 @@ std::string losslessMismatch(const TetMesh& source, const EncodedLevel& encoded,
 
 // The same for a level coded as one structured piece (codec/structured_piece.h): `piece` decoded with
 // `header` (the piece's, as a reader derives it), each source point emitted as vertex
-// vertex_order[point], the tetrahedra in the source's order.
+// vertex_order[point], the tetrahedra in the source's order. `tets`, where given, are the source's
+// tetrahedra where its caller has released them (codec/grid_coder.h's RuleGridTets).
 std::string structuredLosslessMismatch(const TetMesh& source, const LevelHeader& header, std::span<const uint8_t> piece,
-                                       const std::vector<uint32_t>& vertex_order);
+                                       const std::vector<uint32_t>& vertex_order, const RuleGridTets* tets = nullptr);
 
 }  // namespace gtn

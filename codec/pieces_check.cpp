@@ -56,12 +56,14 @@ PiecedLevelView piecedViewOf(const PiecedLevel& level) {
   return v;
 }
 
-std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& level) {
+std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& level, const RuleGridTets* tets) {
+  if (tets && !(level.isGrid() && level.tet_order.empty()))
+    return "a grid's tetrahedra given for a level that is not one structured piece";
   if (level.encoded.size() != level.pieces.size() || level.pieces.empty())
     return "the level has " + std::to_string(level.pieces.size()) + " pieces and " +
            std::to_string(level.encoded.size()) + " encodings";
   if (level.pieces.size() == 1 && level.pieces[0].kind == 0) return losslessMismatch(source, level.encoded[0]);
-  const size_t np = source.numPoints(), nt = source.numTets();
+  const size_t np = source.numPoints(), nt = tets ? tets->size() : source.numTets();
   if (level.vertex_order.size() != np || (level.tet_order.size() != nt && !(level.isGrid() && level.tet_order.empty())))
     return "the encoder's renumbering does not cover the source";
   const PiecedLevelView view = piecedViewOf(level);
@@ -69,7 +71,7 @@ std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& lev
     // Compared with the source as it decodes: no decoded copy is held (its tetrahedra alone take 16
     // bytes each, and a large grid's check beside its merge tree's encoding was a convert's peak).
     return structuredLosslessMismatch(source, pieceHeader(level.header, level.pieces[0]),
-                                      view.payloads[0].streams.connectivity, level.vertex_order);
+                                      view.payloads[0].streams.connectivity, level.vertex_order, tets);
   }
   auto decoded = decodePieces(view, {}, "the encoded level");
   if (!decoded.isOk()) return "it does not decode: " + decoded.status().message();

@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "codec/grid_coder.h"
 #include "codec/pieces.h"
 #include "mesh/tet_mesh.h"
 
@@ -19,8 +20,10 @@ PiecedLevelView piecedViewOf(const PiecedLevel& level);
 // bit-identical coordinates and point-field values; each source tetrahedron at
 // level.tet_order[tetrahedron], its vertices an even permutation of the source's, with bit-identical
 // cell-field values. One piece is checked as losslessMismatch checks it. Returns "" when the level
-// decodes back exactly, else the first difference found (or the decoder's error).
-std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& level);
+// decodes back exactly, else the first difference found (or the decoder's error). `tets`, where given,
+// are the source's tetrahedra where its caller has released them (codec/grid_coder.h's RuleGridTets;
+// for a level of one structured piece).
+std::string piecedLosslessMismatch(const TetMesh& source, const PiecedLevel& level, const RuleGridTets* tets = nullptr);
 
 // Whether the pieces of a part (codec/pieces.h, "A level held in parts"), decoded from the level as
 // the file holds it, give back the part exactly: `view` holds every piece's info, every class and seam

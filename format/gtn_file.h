@@ -19,6 +19,8 @@
 
 namespace gtn {
 
+class RuleGridTets;  // codec/grid_coder.h
+
 // One level to write. For level 0 `merges` is 0; for mip level i it is the number of merge-tree merges
 // already applied to obtain `mesh`. `merge_tree` (optional) produces the level's merge-tree chunk
 // payload given the level's vertex_order (PiecedLevel::vertex_order: source vertex -> global id, so
@@ -53,6 +55,12 @@ struct GtnLevelInput {
   // that the level decodes back (before that check; only for the levels it writes, perhaps on another
   // thread while the next level is encoded). A failure fails the write.
   std::function<Status(const TetMesh&)> check_mesh;
+  // Optional, with `encoded` (one structured piece): the tetrahedra of `mesh`, made from their indices,
+  // where the caller has released the mesh's (validate/write_gtn.h's GtnConvertOptions::
+  // release_grid_tets); the writer reads them from here. The caller holds a reference to `encoded`,
+  // so that the writer copies it rather than encode `mesh` again. Not for a level that may name the
+  // next level's vertices (no next_index).
+  const RuleGridTets* grid_tets = nullptr;
 };
 
 struct GtnWriteOptions {

@@ -273,7 +273,7 @@ Status checkDecodesBack(const std::string& path, const GtnLevelInput& level, con
                         const PiecedLevel& e, const GtnWriteOptions& options) {
   if (!options.verify) return Status::ok();
   if (level.check_mesh) GTN_RETURN_IF_ERROR(level.check_mesh(mesh));
-  const std::string why = piecedLosslessMismatch(mesh, e);
+  const std::string why = piecedLosslessMismatch(mesh, e, level.grid_tets);
   if (why.empty()) return Status::ok();
   return invalidData(path + ": level " + std::to_string(i) + " would not decode back to its mesh (" + why +
                      "), so the file was not written; this is a bug in gtn's encoder, please report it with the input");
@@ -332,17 +332,22 @@ Status writeGtnFile(const std::string& path, const std::vector<GtnLevelInput>& l
   if (options.piece_tets < kMinPieceTets)
     return usageError(path + ": a piece holds at most " + std::to_string(options.piece_tets) +
                       " tetrahedra; the bound must be at least " + std::to_string(kMinPieceTets));
-  for (size_t i = 0; i < levels.size(); ++i)
+  for (size_t i = 0; i < levels.size(); ++i) {
     if (!levels[i].mesh && !levels[i].make_mesh)
       return usageError(path + ": level " + std::to_string(i) + " has no mesh");
+    if (levels[i].grid_tets && (!levels[i].encoded || !levels[i].encoded->isGrid() || levels[i].next_index))
+      return usageError(path + ": level " + std::to_string(i) +
+                        " has its tetrahedra apart, but no structured encoding, or may name the next level's vertices");
+  }
   // With a storage bound every level is encoded first (the encoded streams are small); without one,
   // one level is encoded at a time, so the encoder's memory is released before the next level.
   const bool bounded = options.level_storage_limit > 0.0 && levels.size() > 1;
   // Progress: the share of all levels' tetrahedra before level i (level 0 takes most of the time).
   std::vector<double> before(levels.size() + 1, 0.0);
   for (size_t i = 0; i < levels.size(); ++i)
-    before[i + 1] =
-        before[i] + static_cast<double>(levels[i].mesh ? levels[i].mesh->numTets() : levels[i].expected_tets);
+    before[i + 1] = before[i] + static_cast<double>(levels[i].grid_tets ? levels[i].grid_tets->size()
+                                                    : levels[i].mesh    ? levels[i].mesh->numTets()
+                                                                        : levels[i].expected_tets);
   auto progress = [&](const char* what, size_t i) {
     reportProgress(
         options.progress,

@@ -24,8 +24,8 @@ std::vector<uint32_t> computeAncestors(const MergeTree& tree, uint64_t n) {
   return ancestor;
 }
 
-StatusOr<TetMesh> applyMerges(const TetMesh& mesh, const MergeTree& tree, uint64_t n,
-                              std::vector<uint32_t>* new_index) {
+StatusOr<TetMesh> applyMerges(const TetMesh& mesh, const MergeTree& tree, uint64_t n, std::vector<uint32_t>* new_index,
+                              const RuleGridTets* grid_tets) {
   if (tree.points() != mesh.numPoints())
     return invalidData("merge tree has " + std::to_string(tree.points()) + " vertices, the mesh " +
                        std::to_string(mesh.numPoints()));
@@ -49,8 +49,11 @@ StatusOr<TetMesh> applyMerges(const TetMesh& mesh, const MergeTree& tree, uint64
       out.point_fields[i].copyItem(mesh.point_fields[i], v, index[v]);
   }
   std::vector<size_t> kept_tets;
-  for (size_t t = 0; t < mesh.numTets(); ++t) {
-    Tet q = mesh.tets[t];
+  if (grid_tets && ((!mesh.tets.empty() && mesh.tets.size() != grid_tets->size()) || grid_tets->points() != np))
+    return usageError("applyMerges: a grid's tetrahedra given for a mesh of other points or tetrahedra");
+  const size_t nt = grid_tets ? grid_tets->size() : mesh.numTets();
+  for (size_t t = 0; t < nt; ++t) {
+    Tet q = grid_tets ? (*grid_tets)[t] : mesh.tets[t];
     for (uint32_t& x : q) x = ancestor[x];
     if (q[0] == q[1] || q[0] == q[2] || q[0] == q[3] || q[1] == q[2] || q[1] == q[3] || q[2] == q[3]) continue;
     for (uint32_t& x : q) x = index[x];

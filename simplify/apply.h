@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "codec/grid_coder.h"
 #include "codec/merge_tree_coder.h"
 #include "mesh/tet_mesh.h"
 
@@ -19,8 +20,10 @@ std::vector<uint32_t> computeAncestors(const MergeTree& tree, uint64_t n);
 // tetrahedra with two equal vertices dropped, surviving vertices compacted in their original order,
 // tetrahedra and cell fields kept in their original order. new_index (optional) receives, per source
 // vertex, its index in the result or MergeTree::kRoot when it was merged away.
+// `grid_tets`, where given, are the mesh's tetrahedra where its caller has released them (mesh.tets
+// empty; simplify/ranking.h's RankingOptions::grid_tets).
 StatusOr<TetMesh> applyMerges(const TetMesh& mesh, const MergeTree& tree, uint64_t n,
-                              std::vector<uint32_t>* new_index = nullptr);
+                              std::vector<uint32_t>* new_index = nullptr, const RuleGridTets* grid_tets = nullptr);
 
 // The rest of the tree after the first n merges, in the numbering new_index gives (applyMerges):
 // ranks shifted down by n, merged-away vertices dropped.

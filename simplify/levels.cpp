@@ -30,10 +30,12 @@ MipLevelBuilder::MipLevelBuilder(const TetMesh& source, const MergeTree& tree, b
 }
 
 StatusOr<MipLevelBuilder> MipLevelBuilder::create(const TetMesh& source, const MergeTree& tree,
-                                                  const LevelOptions& options) {
+                                                  const LevelOptions& options, const RuleGridTets* source_tets) {
   if (tree.points() != source.numPoints()) return invalidData("mip levels: merge tree does not match the mesh");
   GTN_RETURN_IF_ERROR(tree.check("mip levels: merge tree"));
   MipLevelBuilder out(source, tree, options.merge_tree);
+  out.source_tets_ = source_tets;
+  out.source_tet_count_ = source_tets ? source_tets->size() : source.numTets();
   out.merges_.push_back(0);
   out.ratios_.push_back(0.0);
   // Counted over the vertices tetrahedra use: the merges of the others come first and count for nothing.
@@ -44,7 +46,7 @@ StatusOr<MipLevelBuilder> MipLevelBuilder::create(const TetMesh& source, const M
     const uint64_t n = free + levelMerges(i, points, tree.merges - free);
     if (n <= out.merges_.back()) break;  // the tree is exhausted
     if (options.levels < 0 && points - (n - free) < options.min_points) break;
-    if (options.levels < 0 && source.numTets() - tree.tetsRemovedUpTo(n) < options.min_tets) break;
+    if (options.levels < 0 && out.source_tet_count_ - tree.tetsRemovedUpTo(n) < options.min_tets) break;
     out.merges_.push_back(n);
     out.ratios_.push_back(points ? static_cast<double>(n - free) / static_cast<double>(points) : 0.0);
   }
@@ -58,7 +60,7 @@ StatusOr<const TetMesh*> MipLevelBuilder::level(size_t i) {
   if (meshes_.size() == 1 && skip_to_ > 1 && i > 0) {
     // Level skip_to_ straight from the source: the levels between are placeholders.
     std::vector<uint32_t> index;
-    GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(*source_, *tree_, merges_[skip_to_], &index));
+    GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(*source_, *tree_, merges_[skip_to_], &index, source_tets_));
     finest_tree_ = std::make_shared<const MergeTree>(remainingTree(*tree_, merges_[skip_to_], index));
     for (size_t k = 1; k < skip_to_; ++k) {
       trees_.push_back(nullptr);
@@ -77,7 +79,8 @@ StatusOr<const TetMesh*> MipLevelBuilder::level(size_t i) {
     const TetMesh& finer = next == 1 ? *source_ : *meshes_.back();
     const uint64_t step = merges_[next] - merges_[next - 1];
     std::vector<uint32_t> index;
-    GTN_ASSIGN_OR_RETURN(TetMesh mesh, applyMerges(finer, *finest_tree_, step, &index));
+    GTN_ASSIGN_OR_RETURN(TetMesh mesh,
+                         applyMerges(finer, *finest_tree_, step, &index, next == 1 ? source_tets_ : nullptr));
     finest_tree_ = std::make_shared<const MergeTree>(remainingTree(*finest_tree_, step, index));
     trees_.push_back(keep_trees_ ? finest_tree_ : nullptr);
     next_index_.push_back(std::move(index));
@@ -87,7 +90,7 @@ StatusOr<const TetMesh*> MipLevelBuilder::level(size_t i) {
 }
 
 uint64_t MipLevelBuilder::tetsOf(size_t i) const {
-  return i < count() ? source_->numTets() - tree_->tetsRemovedUpTo(merges_[i]) : 0;
+  return i < count() ? source_tet_count_ - tree_->tetsRemovedUpTo(merges_[i]) : 0;
 }
 
 StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree, const LevelOptions& options) {

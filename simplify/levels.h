@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "codec/grid_coder.h"
 #include "codec/merge_tree_coder.h"
 #include "format/gtn_file.h"
 #include "mesh/mesh_stream.h"
@@ -64,7 +65,10 @@ StatusOr<MipLevels> buildMipLevels(const TetMesh& source, const MergeTree& tree,
 // and trees it returns stay valid (and unchanged) while it lives, whatever is built after them.
 class MipLevelBuilder {
  public:
-  static StatusOr<MipLevelBuilder> create(const TetMesh& source, const MergeTree& tree, const LevelOptions& options);
+  // `source_tets`, where given, are the source's tetrahedra where its caller has released them
+  // (applyMerges); they must outlive the builder.
+  static StatusOr<MipLevelBuilder> create(const TetMesh& source, const MergeTree& tree, const LevelOptions& options,
+                                          const RuleGridTets* source_tets = nullptr);
 
   size_t count() const { return merges_.size(); }                  // levels, level 0 included
   const std::vector<uint64_t>& merges() const { return merges_; }  // N_i
@@ -93,6 +97,8 @@ class MipLevelBuilder {
   MipLevelBuilder(const TetMesh& source, const MergeTree& tree, bool keep_trees);
 
   const TetMesh* source_;
+  const RuleGridTets* source_tets_ = nullptr;
+  uint64_t source_tet_count_ = 0;
   const MergeTree* tree_;
   bool keep_trees_;
   size_t skip_to_ = 1;

@@ -364,7 +364,7 @@ class Ranker {
 
   MergeTree run(RankingStats* stats, const ProgressFn& progress);
   // batchMerges (ranking.h) on a Ranker of the same mesh.
-  MergeTree batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor,
+  MergeTree batch(const MergeTree& ranked, const BatchKeys& keys, uint32_t divisor,
                   const std::vector<RankingRound>& rounds, const RankingFaces* faces, BatchStats* stats);
 
  private:
@@ -479,11 +479,13 @@ class Ranker {
   // Per vertex: where its list of corners begins in its lane's pool, and its length.
   std::vector<uint64_t> star_begin_;
   std::vector<uint32_t> star_len_;
-  std::vector<uint8_t> boundary_, frozen_, alive_;
+  // The face flags (RankingFaces): the caller's where it gave them, else made by init (own_faces_).
+  RankingFaces own_faces_;
+  const uint8_t *boundary_ = nullptr, *frozen_ = nullptr, *pinned_ = nullptr;
+  std::vector<uint8_t> alive_;
   // Lazy evaluation (RankingOptions::lazy): per vertex, whether its queued candidate was computed
   // before a merge changed its star, and is recomputed when it comes to the top.
   std::vector<uint8_t> stale_;
-  std::vector<uint8_t> pinned_;      // never merged away (may be merged onto): next to a face oriented alike twice
   std::vector<uint32_t> star_size_;  // live tetrahedra around each vertex (kMaxStar)
   bool crowded(uint32_t v) const { return star_size_[v] > kMaxStar; }
   // Ranking in parts: each vertex's part, and whether it shares a tetrahedron with another part's.
@@ -499,20 +501,17 @@ void Ranker::init(const RankingFaces* faces) {
   const size_t np = mesh_.numPoints();
   const size_t nt = nt_;
   alive_.assign(np, 1);
-  if (faces && faces->boundary.size() == np && faces->frozen.size() == np && faces->pinned.size() == np) {
-    boundary_ = faces->boundary;
-    frozen_ = faces->frozen;
-    pinned_ = faces->pinned;
-    area_scale_ = faces->area_scale;
-  } else {
+  if (!faces || faces->boundary.size() != np || faces->frozen.size() != np || faces->pinned.size() != np) {
     // Made first, and their face matching gone before the ranking's star lists are made: the peak
     // memory is the larger of the two, not their sum.
-    RankingFaces made = rankingFaces(mesh_);
-    boundary_ = std::move(made.boundary);
-    frozen_ = std::move(made.frozen);
-    pinned_ = std::move(made.pinned);
-    area_scale_ = made.area_scale;
+    own_faces_ = rankingFaces(mesh_);
+    faces = &own_faces_;
   }
+  // Read where they are (pinned: never merged away, but may be merged onto; see ranking.h).
+  boundary_ = faces->boundary.data();
+  frozen_ = faces->frozen.data();
+  pinned_ = faces->pinned.data();
+  area_scale_ = faces->area_scale;
   resizePopulated(up_, np);
   std::iota(up_.begin(), up_.end(), 0u);
   assignPopulated(dead_, nt, uint8_t{0});
@@ -1337,7 +1336,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
     stats->parts = parts;
     stats->part_merges = part_merges;
     stats->rounds = std::move(made_rounds);
-    stats->faces = RankingFaces{std::move(boundary_), std::move(frozen_), std::move(pinned_), area_scale_};
+    stats->faces = std::move(own_faces_);  // empty where the caller gave them
   }
   return std::move(tree_);
 }
@@ -1345,7 +1344,7 @@ MergeTree Ranker::run(RankingStats* stats, const ProgressFn& progress) {
 // The most passes in key order a batch makes (batchMerges).
 constexpr uint32_t kBatchPasses = 8;
 
-MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& keys, uint32_t divisor,
+MergeTree Ranker::batch(const MergeTree& ranked, const BatchKeys& keys, uint32_t divisor,
                         const std::vector<RankingRound>& rounds, const RankingFaces* faces, BatchStats* stats) {
   init(faces);
   replaying_ = true;
@@ -1364,7 +1363,10 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     }
     return x;
   };
-  auto byKey = [&](uint32_t a, uint32_t b) { return keys[a] < keys[b] || (keys[a] == keys[b] && a < b); };
+  auto byKey = [&](uint32_t a, uint32_t b) {
+    const uint64_t ka = keys[a], kb = keys[b];
+    return ka < kb || (ka == kb && a < b);
+  };
   std::vector<uint32_t> order;
   order.reserve(ranked.merges);
   BatchStats st;
@@ -1384,19 +1386,10 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
   }
   const uint32_t d = divisor ? divisor : kDefaultBatchDivisor;
   uint64_t unmerged = np - free;
-  // Per vertex, written only by the lane that holds it: its rank while it is the child of a merge of
-  // the lane's batch not made yet, else kNoIndex; the largest rank of the batch's merges tried so far
-  // whose child's star held it (late); the vertex a merge of the batch waits for, and the count of
-  // the lane's merges made when its checks last failed with the parent it then had (kNoIndex: none);
-  // the count of the lane's merges made when one last changed a tetrahedron around it (stamp: a check
-  // that failed is not made again while nothing around it changed).
-  auto perVertex = [np](uint32_t value) {
-    std::vector<uint32_t> v;
-    assignPopulated(v, np, value);
-    return v;
-  };
-  std::vector<uint32_t> pending = perVertex(kNoIndex), late = perVertex(0), blocker = perVertex(kNoIndex),
-                        failed = perVertex(kNoIndex), failed_root = perVertex(kNoIndex), stamp = perVertex(0);
+  // Each lane's vertices' places in its list of vertices (batchLane's `verts`), written by the lane
+  // as it starts (a vertex is in one lane at a time).
+  std::vector<uint32_t> place;
+  assignPopulated(place, np, kNoIndex);
   // A merge made by a lane: its place in the batch's order (the pass, or the sweep after the passes,
   // then the key, or the rank), and its child.
   struct Made {
@@ -1412,9 +1405,26 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
   // Batches the merges `merges` (by rank) of lane L, whose vertices not merged yet number `left`,
   // into `out` (each batch's merges as made): see ranking.h. `clean` = every batch before them ended
   // where the ranking's prefix does.
-  auto batchLane = [&](Lane& L, const std::vector<uint32_t>& merges, uint64_t left, bool clean,
-                       std::vector<std::vector<Made>>& out, BatchStats& bs) {
+  auto batchLane = [&](Lane& L, const std::vector<uint32_t>& verts, const std::vector<uint32_t>& merges, uint64_t left,
+                       bool clean, std::vector<std::vector<Made>>& out, BatchStats& bs) {
     L.ws = &thread_ws_.local();
+    // Per vertex of the lane (`verts`, ascending: the vertices its merges and their stars hold), at
+    // its place: its rank while it is the child of a merge of the lane's batch not made yet, else
+    // kNoIndex; the largest rank of the batch's merges tried so far whose child's star held it
+    // (late); the vertex a merge of the batch waits for, and the count of the lane's merges made when
+    // its checks last failed with the parent it then had (kNoIndex: none); the count of the lane's
+    // merges made when one last changed a tetrahedron around it (stamp: a check that failed is not
+    // made again while nothing around it changed). Held by the running lanes only, not for every
+    // vertex. A vertex of another lane (a star across a part's cut, where the batches' mesh differs
+    // from the ranking's) has the last place, shared, whose marks only make the checks run again.
+    const uint32_t n = static_cast<uint32_t>(verts.size());
+    for (uint32_t i = 0; i < n; ++i) std::atomic_ref<uint32_t>(place[verts[i]]).store(i, std::memory_order_relaxed);
+    auto at = [&](uint32_t y) {
+      const uint32_t i = std::atomic_ref<uint32_t>(place[y]).load(std::memory_order_relaxed);
+      return i < n && verts[i] == y ? i : n;
+    };
+    std::vector<uint32_t> pending(n + 1, kNoIndex), late(n + 1, 0), blocker(n + 1, kNoIndex), failed(n + 1, kNoIndex),
+        failed_root(n + 1, kNoIndex), stamp(n + 1, 0);
     std::vector<uint32_t> carry, batch, deferred, still, touched;
     std::vector<Made>* made_into = nullptr;
     uint32_t clock = 0;
@@ -1429,7 +1439,7 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     };
     auto apply = [&](uint32_t v, uint32_t w, uint32_t stage, uint64_t key) {
       ++clock;
-      inStar(v, [&](uint32_t y) { return stamp[y] = clock, false; });
+      inStar(v, [&](uint32_t y) { return stamp[at(y)] = clock, false; });
       merge(L, v, w, ranked.error.empty() ? 0.0f : ranked.error[v]);
       up[v] = w;
       made_into->push_back(Made{stage, key, v});
@@ -1461,10 +1471,10 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     // is made.
     auto waitsFor = [&](uint32_t v) {
       const uint32_t r = ranked.rank[v];
-      return inStar(v, [&](uint32_t y) { return pending[y] < r; });
+      return inStar(v, [&](uint32_t y) { return pending[at(y)] < r; });
     };
     auto changedSince = [&](uint32_t v, uint32_t w, uint32_t t) {
-      auto changed = [&](uint32_t y) { return stamp[y] > t; };
+      auto changed = [&](uint32_t y) { return stamp[at(y)] > t; };
       return inStar(v, changed) != kNoIndex || inStar(w, changed) != kNoIndex;
     };
     // A merge in the very neighbourhood the ranking made it in is allowed as it was then, and is made
@@ -1478,14 +1488,15 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
       const uint32_t r = ranked.rank[v];
       const uint32_t w = ranked.parent[v];
       if (!ranked_so_far || root(w) != w || (L.restricted && (seam_[v] || seam_[w]))) return false;
-      auto differs = [&](uint32_t y) { return pending[y] < r || late[y] > r; };
+      auto differs = [&](uint32_t y) { return pending[at(y)] < r || late[at(y)] > r; };
       return inStar(v, differs) == kNoIndex && inStar(w, differs) == kNoIndex;
     };
     auto markLate = [&](uint32_t v) {
       const uint32_t r = ranked.rank[v];
       inStar(v, [&](uint32_t y) {
-        if (late[y] == 0) touched.push_back(y);
-        late[y] = std::max(late[y], r);
+        uint32_t& l = late[at(y)];
+        if (l == 0) touched.push_back(y);
+        l = std::max(l, r);
         return false;
       });
     };
@@ -1497,7 +1508,7 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
       while (batch.size() < want && next < merges.size()) batch.push_back(merges[next++]);
       out.emplace_back();
       made_into = &out.back();
-      for (uint32_t v : batch) pending[v] = ranked.rank[v];
+      for (uint32_t v : batch) pending[at(v)] = ranked.rank[v];
       ranked_so_far = clean && bs.carried == 0 && bs.retargeted == 0 && bs.dropped == 0;
       // Passes in key order, each making the merges that need not wait and are allowed, while one does.
       deferred = batch;
@@ -1510,17 +1521,17 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
         still.clear();
         for (uint32_t v : deferred) {
           const uint32_t r = ranked.rank[v];
-          if (blocker[v] != kNoIndex && pending[blocker[v]] < r) {
+          if (blocker[at(v)] != kNoIndex && pending[at(blocker[at(v)])] < r) {
             still.push_back(v);
             continue;
           }
           const uint32_t w = root(ranked.parent[v]);
-          if (failed[v] != kNoIndex && failed_root[v] == w && !changedSince(v, w, failed[v])) {
+          if (failed[at(v)] != kNoIndex && failed_root[at(v)] == w && !changedSince(v, w, failed[at(v)])) {
             still.push_back(v);
             continue;
           }
-          blocker[v] = waitsFor(v);
-          if (blocker[v] != kNoIndex) {
+          blocker[at(v)] = waitsFor(v);
+          if (blocker[at(v)] != kNoIndex) {
             still.push_back(v);
             continue;
           }
@@ -1529,13 +1540,13 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
             apply(v, ranked.parent[v], passes, keys[v]);
             ++bs.unchecked;
           } else if (!tryMerge(v, passes, keys[v])) {
-            failed[v] = clock;
-            failed_root[v] = w;
+            failed[at(v)] = clock;
+            failed_root[at(v)] = w;
             still.push_back(v);
             continue;
           }
           ++made;
-          pending[v] = kNoIndex;
+          pending[at(v)] = kNoIndex;
         }
         deferred.swap(still);
         ++bs.passes;
@@ -1559,12 +1570,12 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
             continue;
           }
           progress = true;
-          pending[v] = kNoIndex;
+          pending[at(v)] = kNoIndex;
         }
         deferred.swap(still);
       }
-      for (uint32_t v : batch) pending[v] = blocker[v] = failed[v] = kNoIndex;
-      for (uint32_t y : touched) late[y] = 0;
+      for (uint32_t v : batch) pending[at(v)] = blocker[at(v)] = failed[at(v)] = kNoIndex;
+      for (uint32_t y : touched) late[at(y)] = 0;
       touched.clear();
       // Those whose parent the new order made invalid: another target, where one is allowed.
       still.clear();
@@ -1640,7 +1651,6 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
     // Each lane makes its pool as it starts, from its part's tetrahedra, and drops it when done: the
     // pools of the lanes running, not of every part, are held at once.
     const PartTets around = partTets(rr.parts);
-    std::fill(stamp.begin(), stamp.end(), 0);
     std::vector<std::vector<std::vector<Made>>> lane_batches(rr.parts);
     std::vector<BatchStats> lane_stats(rr.parts);
     // The parts on the threads, those of the most merges first.
@@ -1650,7 +1660,7 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
       forEachLongestFirst(cost, [&](size_t p) {
         Lane& L = *lanes[p];
         withPartPool(L, static_cast<uint32_t>(p), around, [&] {
-          batchLane(L, lane_merges[p], L.members.size(), all_clean, lane_batches[p], lane_stats[p]);
+          batchLane(L, L.members, lane_merges[p], L.members.size(), all_clean, lane_batches[p], lane_stats[p]);
         });
       });
     });
@@ -1666,12 +1676,14 @@ MergeTree Ranker::batch(const MergeTree& ranked, const std::vector<uint64_t>& ke
   part_ = seam_ = {};
   Lane whole(0);
   buildWholePool(whole);
-  std::fill(stamp.begin(), stamp.end(), 0);
   {
     std::vector<std::vector<std::vector<Made>>> whole_batches(1);
     BatchStats s;
     const std::vector<uint32_t> rest(by_rank.begin() + static_cast<std::ptrdiff_t>(next), by_rank.end());
-    batchLane(whole, rest, unmerged, all_clean, whole_batches[0], s);
+    std::vector<uint32_t> alive;
+    for (uint32_t v = 0; v < np; ++v)
+      if (alive_[v]) alive.push_back(v);
+    batchLane(whole, alive, rest, unmerged, all_clean, whole_batches[0], s);
     add(st, s);
     appendBatches(whole_batches);
   }
@@ -1836,9 +1848,9 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
   return tree;
 }
 
-StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const std::vector<uint64_t>& keys,
-                                uint32_t divisor, BatchStats* stats, const std::vector<RankingRound>& rounds,
-                                const RankingFaces* faces, const RuleGridTets* grid_tets) {
+StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const BatchKeys& keys, uint32_t divisor,
+                                BatchStats* stats, const std::vector<RankingRound>& rounds, const RankingFaces* faces,
+                                const RuleGridTets* grid_tets) {
   const auto start = std::chrono::steady_clock::now();
   GTN_RETURN_IF_ERROR(ranked.check("merge tree"));
   if (ranked.points() != mesh.numPoints() || keys.size() != mesh.numPoints())

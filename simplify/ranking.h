@@ -164,7 +164,7 @@ struct RankingStats {
   uint64_t star_pool_corners = 0;            // the room the largest pool of corner lists took (4 bytes each)
   uint64_t star_compactions = 0;             // times the corner lists were moved down over abandoned ones
   std::vector<RankingRound> rounds;          // the rounds of parts, in order (batchMerges follows them)
-  RankingFaces faces;                        // for batchMerges
+  RankingFaces faces;                        // for batchMerges; empty where RankingOptions::faces gave them
   std::string field;                         // density field used ("" = volume)
   std::vector<std::string> constant_fields;  // the default skipped these point fields (constant)
 };
@@ -207,6 +207,22 @@ StatusOr<MergeTree> rankMerges(const TetMesh& mesh, const RankingOptions& option
 // merges after the rounds are batched on the whole mesh. The tree depends on the rounds, never on
 // the number of threads. `faces`, where given, are the ranking's of the same mesh (RankingStats::faces);
 // `grid_tets` as RankingOptions::grid_tets (then `faces` must be given).
+// The keys the batches order merges by (above), per vertex: given, or made from the vertices'
+// decoding ids (codec/merge_tree_coder.h's batchKeyOfId), which holds no array of keys (8 bytes a
+// vertex). Refers to the caller's vector, which must outlive it.
+class BatchKeys {
+ public:
+  BatchKeys(const std::vector<uint64_t>& keys) : keys_(&keys) {}  // NOLINT: a vector of keys is keys
+  static BatchKeys ofIds(const std::vector<uint32_t>& ids) { return BatchKeys(&ids); }
+  size_t size() const { return keys_ ? keys_->size() : ids_->size(); }
+  uint64_t operator[](uint32_t v) const { return keys_ ? (*keys_)[v] : batchKeyOfId((*ids_)[v]); }
+
+ private:
+  explicit BatchKeys(const std::vector<uint32_t>* ids) : ids_(ids) {}
+  const std::vector<uint64_t>* keys_ = nullptr;
+  const std::vector<uint32_t>* ids_ = nullptr;
+};
+
 struct BatchStats {
   uint64_t batches = 0;
   uint64_t deferred = 0;    // merges the passes left (then merged by rank)
@@ -217,9 +233,8 @@ struct BatchStats {
   uint64_t dropped = 0;     // merges left out (their children stay roots)
   double seconds = 0;
 };
-StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const std::vector<uint64_t>& keys,
-                                uint32_t divisor, BatchStats* stats = nullptr,
-                                const std::vector<RankingRound>& rounds = {}, const RankingFaces* faces = nullptr,
-                                const RuleGridTets* grid_tets = nullptr);
+StatusOr<MergeTree> batchMerges(const TetMesh& mesh, const MergeTree& ranked, const BatchKeys& keys, uint32_t divisor,
+                                BatchStats* stats = nullptr, const std::vector<RankingRound>& rounds = {},
+                                const RankingFaces* faces = nullptr, const RuleGridTets* grid_tets = nullptr);
 
 }  // namespace gtn

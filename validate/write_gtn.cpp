@@ -120,7 +120,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned,
   RankingOptions ranking_options = o.ranking;
   ranking_options.beside_ranking_tail = encodeLevel0;
   // A large grid of rule cells: level 0 encoded and checked first, then its tetrahedra released until
-  // the merges are batched (GtnConvertOptions::release_grid_tets).
+  // the file is written (GtnConvertOptions::release_grid_tets).
   std::optional<ReleasedTets> released;
   RankingFaces grid_faces;
   if (owned == &mesh && mesh.numTets() >= o.release_grid_tets && !o.ranking.grid_tets) {
@@ -137,7 +137,8 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned,
     }
   }
   StatusOr<MergeTree> ranking = rankMerges(mesh, ranking_options, &ranked, wo.progress);
-  encodeLevel0();  // where the ranking did not start it
+  if (released) ranked.faces = std::move(grid_faces);  // the batches read them from there
+  encodeLevel0();                                      // where the ranking did not start it
   // The check's face adjacency beside the batches was a convert's peak of memory: the check ends
   // before them.
   encoding.wait();
@@ -154,8 +155,9 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned,
     ranked.rounds = {};
     ranked.faces = {};
   }
-  grid_faces = {};
-  if (released) released->restore();
+  // Level 0's tetrahedra: the mesh's, or made from their indices while they are released.
+  const RuleGridTets* tets0 = released ? &released->tets() : nullptr;
+  const uint64_t tet_count = tets0 ? tets0->size() : mesh.numTets();
   if (const std::string note = defaultFieldNote(ranked); !note.empty() && warnings)
     warnings->push_back(source + ": " + note);
   LevelOptions lo;
@@ -165,7 +167,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned,
   // the storage bound is never made), and each level written is checked where the writer verifies it
   // (part of the verification: every level the simplifier made and the file stores is a valid mesh).
   // The first level past the bound is made and encoded (its bytes decide) but not checked.
-  GTN_ASSIGN_OR_RETURN(MipLevelBuilder levels, MipLevelBuilder::create(mesh, tree, lo));
+  GTN_ASSIGN_OR_RETURN(MipLevelBuilder levels, MipLevelBuilder::create(mesh, tree, lo, tets0));
   const size_t count = levels.count();
   // Levels stop where the merge tree does (a small or flat mesh has few merges): say so rather than
   // write fewer levels than asked for without a word.
@@ -183,12 +185,12 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned,
     // which are not stored: the floor leaves out levels, it does not let a finer one in.
     LevelOptions unfloored = lo;
     unfloored.min_tets = 0;
-    GTN_ASSIGN_OR_RETURN(MipLevelBuilder all, MipLevelBuilder::create(mesh, tree, unfloored));
+    GTN_ASSIGN_OR_RETURN(MipLevelBuilder all, MipLevelBuilder::create(mesh, tree, unfloored, tets0));
     uint64_t chain = 0;
     first = count;
     for (size_t i = all.count(); i-- > 1;) {
       chain += all.tetsOf(i);
-      if (chain * kStructuredLevelShare > mesh.numTets()) break;
+      if (chain * kStructuredLevelShare > tet_count) break;
       first = std::min(i, count);
     }
     // The finer levels are never made: the first stored one comes from level 0 in one pass.
@@ -209,7 +211,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned,
       // A level keeps about as many tetrahedra per point as level 0 (progress only).
       in.expected_tets = mesh.numPoints() == 0
                              ? 0
-                             : static_cast<uint64_t>(static_cast<double>(mesh.numTets()) *
+                             : static_cast<uint64_t>(static_cast<double>(tet_count) *
                                                      static_cast<double>(mesh.numPoints() - in.merges) /
                                                      static_cast<double>(mesh.numPoints()));
       in.make_mesh = [&, i]() -> StatusOr<const TetMesh*> {
@@ -250,9 +252,22 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned,
         return levels.nextIndex(i);
       };
   }
+  // Released tetrahedra stay so while the file is written, unless level 0 may name the next level's
+  // vertices (the writer would encode it again from the mesh); the writer reads them from the grid,
+  // and this function keeps a reference to level 0's encoding, so that the writer copies it rather
+  // than encode the mesh.
+  std::shared_ptr<PiecedLevel> level0_held;
+  if (released && (inputs[0].next_index || !inputs[0].encoded || !inputs[0].encoded->isGrid())) released->restore();
+  if (released && mesh.tets.empty()) {
+    level0_held = inputs[0].encoded;
+    inputs[0].grid_tets = tets0;
+  }
   // Level 0's own errors (checked on another thread meanwhile) decide before anything is written.
   if (wo.verify) GTN_RETURN_IF_ERROR(refuseOrWarnOfLevel0Errors(structure, o, source, warnings));
-  return writeGtnFile(path, inputs, bounded);
+  Status written = writeGtnFile(path, inputs, bounded);
+  level0_held.reset();
+  inputs.clear();
+  return written;
 }
 }  // namespace
 
@@ -278,9 +293,13 @@ StatusOr<StoredMergeTree> storedMergeTree(const TetMesh& mesh, const MergeTree& 
     for (uint64_t g = 0; in_order && g < nodes; ++g) in_order = level0.vertex_order[g] == g;
     if (in_order) out.level0_form.grid = {b.dims[0], b.dims[1], b.dims[2]};
   }
-  std::vector<uint64_t> keys(mesh.numPoints());
-  for (size_t v = 0; v < keys.size(); ++v)
-    keys[v] = structured ? batchKeyOfId(level0.vertex_order[v]) : batchKeyOfPoint(mesh.point(v));
+  // A structured level's keys come from its decoding ids as the batches read them (no array of them).
+  std::vector<uint64_t> point_keys;
+  if (!structured) {
+    point_keys.resize(mesh.numPoints());
+    for (size_t v = 0; v < point_keys.size(); ++v) point_keys[v] = batchKeyOfPoint(mesh.point(v));
+  }
+  const BatchKeys keys = structured ? BatchKeys::ofIds(level0.vertex_order) : BatchKeys(point_keys);
   static const std::vector<RankingRound> kNoRounds;
   GTN_ASSIGN_OR_RETURN(
       out.tree, batchMerges(mesh, ranked, keys, kDefaultBatchDivisor, nullptr, ranking ? ranking->rounds : kNoRounds,

@@ -1,6 +1,7 @@
 // A level as pieces (codec/pieces.h): lossless through pieces and seams, stitching, subsets, the
 // mesh stream of a stitched level, determinism and corrupt input.
 #include "codec/pieces.h"
+#include "codec/grid_coder.h"
 #include "codec/pieces_check.h"
 
 #include <gtest/gtest.h>
@@ -169,6 +170,21 @@ TEST(Pieces, AStructuredBlockLargerThanTheDefaultBoundStaysOnePiece) {
     TetMesh fewer = m;
     fewer.tets.pop_back();
     EXPECT_EQ(piecedLosslessMismatch(fewer, *level), "more tetrahedra decoded than the source has");
+    // The source's tetrahedra released (a large convert's), made from their indices: the same check.
+    auto layout = matchGridLayout(m, block.dims);
+    ASSERT_TRUE(layout.isOk()) << layout.status().message();
+    const RuleGridTets rule(*layout);
+    TetMesh bare = m;
+    bare.tets.clear();
+    EXPECT_EQ(piecedLosslessMismatch(bare, *level, &rule), "");
+    moved.tets.clear();
+    EXPECT_EQ(piecedLosslessMismatch(moved, *level, &rule), "source point 4321 (decoded 4321) moved");
+    GridLayout other = *layout;
+    other.parity ^= 1;  // another rule's tetrahedra
+    const RuleGridTets wrong(other);
+    EXPECT_EQ(piecedLosslessMismatch(bare, *level, &wrong), "source tetrahedron 0 (decoded 0) has other vertices");
+    EXPECT_EQ(piecedLosslessMismatch(bare, *cut, &rule),
+              "a grid's tetrahedra given for a level that is not one structured piece");
   }
   StatusOr<DecodedPieces> decoded = decodePieces(piecedViewOf(*level), {}, "block");
   ASSERT_TRUE(decoded.isOk()) << decoded.status().message();
