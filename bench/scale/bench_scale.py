@@ -17,7 +17,7 @@ write must have the same bytes, whatever the thread count or round.
 
 Sizes are nodes per side: 64 (1.5 million tetrahedra), 128 (12.2 million), 200 (47.3 million).
 The 200 size's convert takes about 185-225 s with 2 threads on a 2-core machine (330-385 s of CPU
-time, and about that much wall time with 1 thread), and about 2.9 GB of memory, so each of its
+time, and about that much wall time with 1 thread), and about 1.9 GB of memory, so each of its
 rounds takes about ten minutes; --sizes chooses a subset.
 
     python3 bench/scale/bench_scale.py --build build --sizes 64,128 [--reps 3] [--validate]
