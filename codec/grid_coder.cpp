@@ -1666,19 +1666,10 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
 
   // A value stream with each component's form and predictor measured: each candidate coded alone,
   // the smallest kept (a component's models are its own, so it costs in the stream what it costs
-  // alone, but for the declarations' models). The streams are independent: they are made in
-  // parallel (below), each with its own scratch, and reported in stream order.
-  struct ValueStreamOut {
-    uint8_t form = 0;
-    std::vector<uint8_t> bytes;
-    std::vector<uint8_t> predictors;
-    std::vector<std::string> forms;
-  };
+  // alone, but for the declarations' models).
+  std::vector<double> scratch;
   auto valueStream = [&](ScalarType type, uint32_t comps, const uint8_t* src, size_t stride,
-                         const std::string& name) -> StatusOr<ValueStreamOut> {
-    ValueStreamOut result;
-    ValueStreamOut* rep = &result;  // this stream's part of the report
-    std::vector<double> scratch;
+                         const std::string& name) -> StatusOr<std::pair<uint8_t, std::vector<uint8_t>>> {
     std::vector<Form> chosen(comps);
     const size_t size = scalarSize(type);
     for (uint32_t cc = 0; cc < comps; ++cc) {
@@ -1706,8 +1697,8 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
           if (bytes < best) best = bytes, chosen[cc] = f;
         }
       }
-      rep->predictors.push_back(chosen[cc].predictor);
-      rep->forms.push_back(chosen[cc].describe());
+      rep.predictors.push_back(chosen[cc].predictor);
+      rep.forms.push_back(chosen[cc].describe());
     }
     std::vector<uint8_t> out;
     EntropyCoder<true> c(&out);
@@ -1724,48 +1715,24 @@ StatusOr<std::vector<uint8_t>> encodeGridPiece(const GridLayout& layout, const T
         form = 1;
       }
     }
-    result.form = form;
-    result.bytes = std::move(out);
-    return result;
+    rep.stream_forms.push_back(form);
+    return std::make_pair(form, std::move(out));
   };
 
   std::vector<uint8_t> coords(V * 3 * scalarSize(mesh.coord_type));
   for (uint64_t i = 0; i < V * 3; ++i)
     storeCoordinate(mesh.coord_type, mesh.coords[i], &coords[i * scalarSize(mesh.coord_type)]);
-  // GEOM, then each point field's PFLD, on the threads, the largest first (mesh/longest_first.h).
-  struct StreamJob {
-    ScalarType type;
-    uint32_t comps;
-    const uint8_t* src;
-    size_t stride;
-    const char* name;
-  };
-  std::vector<StreamJob> jobs = {{mesh.coord_type, 3, coords.data(), 3 * scalarSize(mesh.coord_type), "GEOM"}};
-  for (const Field& f : mesh.point_fields)
-    jobs.push_back({f.type, f.components, f.bytes.data(), f.components * f.valueSize(), "PFLD"});
-  std::vector<uint64_t> cost;
-  for (const StreamJob& j : jobs) cost.push_back(V * j.stride);
-  std::vector<std::optional<StatusOr<ValueStreamOut>>> made(jobs.size());
-  forEachLongestFirst(cost, [&](size_t i) {
-    const StreamJob& j = jobs[i];
-    made[i] = valueStream(j.type, j.comps, j.src, j.stride, j.name);
-  });
-  std::vector<uint8_t> forms{0, 0};  // EXCP, GRID, then GEOM's and the fields'
-  std::vector<std::vector<uint8_t>> value_streams, cfld;
-  for (auto& m : made) {
-    if (!m->isOk()) return m->status();
-    ValueStreamOut& out = m->value();
-    forms.push_back(out.form);
-    rep.predictors.insert(rep.predictors.end(), out.predictors.begin(), out.predictors.end());
-    rep.forms.insert(rep.forms.end(), out.forms.begin(), out.forms.end());
-    rep.stream_forms.push_back(out.form);
-    value_streams.push_back(std::move(out.bytes));
+  GTN_ASSIGN_OR_RETURN(auto geom_stream,
+                       valueStream(mesh.coord_type, 3, coords.data(), 3 * scalarSize(mesh.coord_type), "GEOM"));
+  std::vector<uint8_t> geom = std::move(geom_stream.second);
+  std::vector<uint8_t> forms{0, 0, geom_stream.first};  // EXCP, GRID, GEOM, then the fields'
+  std::vector<std::vector<uint8_t>> pfld, cfld;
+  for (const Field& f : mesh.point_fields) {
+    GTN_ASSIGN_OR_RETURN(auto s,
+                         valueStream(f.type, f.components, f.bytes.data(), (f.components * f.valueSize()), "PFLD"));
+    forms.push_back(s.first);
+    pfld.push_back(std::move(s.second));
   }
-  made.clear();
-  std::vector<uint8_t> geom = std::move(value_streams[0]);
-  std::vector<std::vector<uint8_t>> pfld(std::make_move_iterator(value_streams.begin() + 1),
-                                         std::make_move_iterator(value_streams.end()));
-  value_streams.clear();
   forms.resize(3 + pfld.size() + mesh.cell_fields.size(), 0);
   for (const Field& f : mesh.cell_fields) {
     std::vector<Form> forms(f.components);

@@ -32,10 +32,12 @@ struct GtnConvertOptions {
   // Where the caller lets the writer change the mesh while it works (the overload of
   // writeGtnWithLevels that takes a pointer), a grid of rule cells of this many tetrahedra or more
   // (a structured block with no alias and no exception, as level 0's structured piece codes it) has
-  // its tetrahedra released while the merges are ranked and batched, read from their indices instead
-  // (RankingOptions::grid_tets), and made again after: 16 bytes a tetrahedron less at a large
-  // convert's peak of memory. Level 0 is then encoded and checked before the ranking rather than
-  // beside its tail. The file is the same.
+  // its tetrahedra released from the ranking until the file is written, each one made from its index
+  // where it is read (RankingOptions::grid_tets, GtnLevelInput::grid_tets), and made again before
+  // writeGtnWithLevels returns: 16 bytes a tetrahedron less at a large convert's peak of memory.
+  // Level 0 is then encoded and checked before the ranking rather than beside its tail, and a level 0
+  // that may name the next level's vertices (levels asked for) gets them back before the file is
+  // written. The file is the same.
   uint64_t release_grid_tets = uint64_t{1} << 22;
 };
 
