@@ -1521,17 +1521,18 @@ MergeTree Ranker::batch(const MergeTree& ranked, const BatchKeys& keys, uint32_t
         still.clear();
         for (uint32_t v : deferred) {
           const uint32_t r = ranked.rank[v];
-          if (blocker[at(v)] != kNoIndex && pending[at(blocker[at(v)])] < r) {
+          const uint32_t i = at(v);
+          if (blocker[i] != kNoIndex && pending[at(blocker[i])] < r) {
             still.push_back(v);
             continue;
           }
           const uint32_t w = root(ranked.parent[v]);
-          if (failed[at(v)] != kNoIndex && failed_root[at(v)] == w && !changedSince(v, w, failed[at(v)])) {
+          if (failed[i] != kNoIndex && failed_root[i] == w && !changedSince(v, w, failed[i])) {
             still.push_back(v);
             continue;
           }
-          blocker[at(v)] = waitsFor(v);
-          if (blocker[at(v)] != kNoIndex) {
+          blocker[i] = waitsFor(v);
+          if (blocker[i] != kNoIndex) {
             still.push_back(v);
             continue;
           }
@@ -1540,13 +1541,13 @@ MergeTree Ranker::batch(const MergeTree& ranked, const BatchKeys& keys, uint32_t
             apply(v, ranked.parent[v], passes, keys[v]);
             ++bs.unchecked;
           } else if (!tryMerge(v, passes, keys[v])) {
-            failed[at(v)] = clock;
-            failed_root[at(v)] = w;
+            failed[i] = clock;
+            failed_root[i] = w;
             still.push_back(v);
             continue;
           }
           ++made;
-          pending[at(v)] = kNoIndex;
+          pending[i] = kNoIndex;
         }
         deferred.swap(still);
         ++bs.passes;
@@ -1574,7 +1575,10 @@ MergeTree Ranker::batch(const MergeTree& ranked, const BatchKeys& keys, uint32_t
         }
         deferred.swap(still);
       }
-      for (uint32_t v : batch) pending[at(v)] = blocker[at(v)] = failed[at(v)] = kNoIndex;
+      for (uint32_t v : batch) {
+        const uint32_t i = at(v);
+        pending[i] = blocker[i] = failed[i] = kNoIndex;
+      }
       for (uint32_t y : touched) late[at(y)] = 0;
       touched.clear();
       // Those whose parent the new order made invalid: another target, where one is allowed.

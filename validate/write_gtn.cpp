@@ -29,7 +29,8 @@ Status refuseOrWarnOfLevel0Errors(LevelStructureCheck& check, const GtnConvertOp
 }
 
 // A grid's tetrahedra released (GtnConvertOptions::release_grid_tets) and made again from its
-// layout: by restore(), or, where an error returns first, as the writer returns.
+// layout: by restore() where level 0 needs them back before the file is written, else as
+// writeLevels returns (on an error too).
 class ReleasedTets {
  public:
   ReleasedTets(TetMesh* mesh, GridLayout layout) : mesh_(mesh), layout_(std::move(layout)), tets_(layout_) {
@@ -94,7 +95,8 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned,
   // errors (the ones a mip level may keep) are found next, by the same task: the encoding and the
   // check each hold a face adjacency's worth of memory or more, and the two at once beside the
   // ranking were a large convert's peak. The tail comes after the fine rounds of many parts (the
-  // encoding beside the first round took a thread from it).
+  // encoding beside the first round took a thread from it). A large grid whose tetrahedra are
+  // released (below) has both done before the ranking instead, while they are there.
   LevelStructureCheck structure(mesh, path);
   const bool check_level0 = wo.verify && o.levels != 0;
   std::shared_ptr<PiecedLevel> level0;
@@ -257,7 +259,7 @@ Status writeLevels(const std::string& path, const TetMesh& mesh, TetMesh* owned,
   // and this function keeps a reference to level 0's encoding, so that the writer copies it rather
   // than encode the mesh.
   std::shared_ptr<PiecedLevel> level0_held;
-  if (released && (inputs[0].next_index || !inputs[0].encoded || !inputs[0].encoded->isGrid())) released->restore();
+  if (released && inputs[0].next_index) released->restore();
   if (released && mesh.tets.empty()) {
     level0_held = inputs[0].encoded;
     inputs[0].grid_tets = tets0;
